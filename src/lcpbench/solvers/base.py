@@ -72,3 +72,35 @@ def lcp_residuals(M, q: np.ndarray, z: np.ndarray) -> dict[str, float]:
         "min_w": float(np.min(w, initial=0.0)) / scale,
         "complementarity": abs(float(z @ w)) / scale,
     }
+
+
+@dataclass
+class StepSolution:
+    """Solution of one contact step in node heights (the QP view).
+
+    Attributes
+    ----------
+    u : ndarray
+        Heights of the free nodes (mm); the gaps are ``upper − u``.
+    reaction_upper, reaction_lower : ndarray
+        Reactions of the upper and lower walls (N, >= 0): the QP multipliers.
+    status, iterations, solve_time, setup_time, message :
+        As for :class:`LCPSolution`.
+    active_upper, active_lower : ndarray of bool or None
+        The contact set, for warm starts.
+    """
+
+    u: np.ndarray
+    reaction_upper: np.ndarray
+    reaction_lower: np.ndarray
+    status: Status
+    iterations: int = 0
+    solve_time: float = 0.0
+    setup_time: float = 0.0
+    message: str = ""
+    active_upper: np.ndarray | None = None
+    active_lower: np.ndarray | None = None
+
+    @property
+    def solved(self) -> bool:
+        return self.status is Status.SOLVED

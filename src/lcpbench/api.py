@@ -1,0 +1,82 @@
+"""The library call: ``lcpbench.solve(scene) -> ContactResult``."""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from .errors import ProblemError
+from .model.driver import METHODS, DriverOutput, run_driver
+from .model.result import ContactResult, build_result
+from .problems.scenes import ActuatorScene
+from .solvers import step_solver
+
+
+def _check_tol(tol) -> float:
+    try:
+        tol = float(tol)
+    except (TypeError, ValueError) as exc:
+        raise ProblemError(f"tol must be a number in [1e-14, 1) rad, got {tol!r}") from exc
+    if not (math.isfinite(tol) and 1e-14 <= tol < 1):
+        raise ProblemError(f"tol must be in [1e-14, 1) rad, got {tol:g}")
+    return tol
+
+
+def solve(
+    scene,
+    solver: str = "auto",
+    tol: float = 1e-3,
+    *,
+    method: str = "globalised",
+    max_outer: int = 200,
+) -> ContactResult:
+    """Find the constrained equilibrium of a scene.
+
+    Parameters
+    ----------
+    scene : ActuatorScene or CantileverScene
+    solver : name of the contact-step back-end ("auto", "active-set", "lemke").
+    tol : convergence threshold on max|α̂ − α| (rad), eq. (32); paper: 1e-3.
+    method : "globalised" (line search on the exact energy; default) or
+        "undamped" (the paper's Fig. 3 iteration, for comparison).
+    max_outer : limit on contact steps.
+
+    Returns
+    -------
+    ContactResult
+        Never raises on non-convergence: ``converged`` is False with a reason.
+    """
+    tol = _check_tol(tol)
+    if method not in METHODS:
+        raise ProblemError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    if not (isinstance(max_outer, (int, np.integer)) and max_outer >= 1):
+        raise ProblemError(f"max_outer must be an integer >= 1, got {max_outer!r}")
+    step = step_solver(solver)
+    if isinstance(scene, ActuatorScene) and scene.links == "auto":
+        from .model.discretisation import auto_links
+
+        scene = scene.with_links(auto_links(scene, solver=solver))
+    t0 = time.perf_counter()
+    chain = scene.chain()
+    if _clears_walls(scene, chain):
+        out = DriverOutput(chain.rest_alpha.copy(), np.zeros(chain.free_nodes.size),
+                           np.zeros(chain.free_nodes.size), True, "no contact: the "
+                           "unconstrained arc clears every wall and there is no load")
+    else:
+        out = run_driver(chain, step, tol=tol, max_outer=max_outer, method=method)
+    elapsed = time.perf_counter() - t0
+    name = "active-set" if solver == "auto" else solver
+    return build_result(scene, chain, out, solver=name, method=method, tol=tol,
+                        time_s=elapsed)
+
+
+def _clears_walls(scene, chain) -> bool:
+    """Is the unconstrained shape itself the answer (no load, no wall reached)?"""
+    if np.any(chain.link_load != 0):
+        return False
+    from .model.chain import heights
+
+    u = heights(chain, chain.rest_alpha)
+    return bool(np.all(u < chain.upper) and np.all(u > chain.lower))

@@ -1,0 +1,169 @@
+"""The nonlinear driver: re-linearise and solve contact steps until α stops moving.
+
+Two schemes (Fig. 3 of the paper):
+
+``method="undamped"`` — the paper's: α ← α̂ of eq. (21) after every step,
+until max|α̂ − α| < tol. Each step is a Gauss–Newton step on the energy; taken
+in full it can leave the region where the linearisation is valid (links
+passing vertical, 1/cos α blowing up), which is why it is kept: benchmarks
+show where it breaks.
+
+``method="globalised"`` (default) — the same steps, made safe. The iterate is
+kept exactly feasible: a chain given by its node heights u (inverse kinematics
+per link, the pins exactly on y = 0), starting from the unconstrained arc
+clipped to the walls. The step û − u of the contact QP is a descent direction
+of the true nonlinear energy on the convex set {walls respected}, so a
+backtracking (Armijo) line search on that energy along u + t(û − u) converges
+to a KKT point of the exact problem. Near the solution full steps are taken
+and the scheme is the paper's.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ..problems.scenes import Chain
+from ..solvers.base import Status, StepSolution
+from .chain import alpha_from_heights, energy, heights
+from .step import ContactStep, assemble_step
+
+StepSolver = Callable[[ContactStep, "StepSolution | None"], StepSolution]
+
+METHODS = ("globalised", "undamped")
+
+
+@dataclass
+class StepRecord:
+    """What one outer iteration did."""
+
+    iterations: int
+    status: str
+    solve_time: float
+    assemble_time: float
+    step_length: float
+    max_dalpha: float
+    energy: float
+
+
+@dataclass
+class DriverOutput:
+    alpha: np.ndarray
+    reaction_upper: np.ndarray
+    reaction_lower: np.ndarray
+    converged: bool
+    reason: str
+    steps: list[StepRecord] = field(default_factory=list)
+
+
+def _fail(alpha, n, steps, reason) -> DriverOutput:
+    zero = np.zeros(n)
+    return DriverOutput(alpha, zero, zero.copy(), False, reason, steps)
+
+
+def run_driver(
+    chain: Chain,
+    solver: StepSolver,
+    *,
+    tol: float = 1e-3,
+    max_outer: int = 200,
+    method: str = "globalised",
+) -> DriverOutput:
+    """Iterate contact steps to the equilibrium of ``chain``.
+
+    Returns the final link angles and the reactions of the last step, with
+    ``converged`` and a reason; never raises on non-convergence.
+    """
+    if method == "undamped":
+        return _undamped(chain, solver, tol, max_outer)
+    if method != "globalised":
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    return _globalised(chain, solver, tol, max_outer)
+
+
+def _solve_step(chain, alpha, solver, warm, steps):
+    t0 = time.perf_counter()
+    step = assemble_step(chain, alpha)
+    t_asm = time.perf_counter() - t0
+    sol = solver(step, warm)
+    return step, sol, t_asm
+
+
+def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int) -> DriverOutput:
+    n = chain.free_nodes.size
+    steps: list[StepRecord] = []
+    u = np.clip(heights(chain, chain.rest_alpha), chain.lower, chain.upper)
+    alpha = alpha_from_heights(chain, u, chain.rest_alpha)
+    if alpha is None:
+        return _fail(chain.rest_alpha, n, steps, "cannot fit the chain between the walls")
+    E = energy(chain, alpha)
+    warm: StepSolution | None = None
+    for _ in range(max_outer):
+        step, sol, t_asm = _solve_step(chain, alpha, solver, warm, steps)
+        if sol.status not in (Status.SOLVED, Status.INACCURATE):
+            steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
+                                    0.0, np.nan, E))
+            return _fail(alpha, n, steps, f"contact step not solved ({sol.status.value}: "
+                                          f"{sol.message})")
+        dalpha = float(np.max(np.abs(step.predict_alpha(sol.u) - alpha), initial=0.0))
+        d = sol.u - u
+        slope = float(step.gradient(u) @ d)
+        noise = 1e-12 * (abs(E) + float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6)
+        t = 1.0
+        while True:
+            trial = alpha_from_heights(chain, u + t * d, alpha)
+            if trial is not None:
+                E_t = energy(chain, trial)
+                if E_t <= E + 1e-4 * t * min(slope, 0.0) + noise:
+                    break
+            t *= 0.5
+            if t < 1e-12:
+                steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time,
+                                        t_asm, 0.0, dalpha, E))
+                return _fail(alpha, n, steps, "line search failed: no decrease of the energy "
+                                              "along the step")
+        u, alpha, E = u + t * d, trial, E_t
+        steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
+                                t, dalpha, E))
+        warm = sol
+        if dalpha < tol:
+            reason = "converged" if sol.solved else "converged (last step inaccurate)"
+            return DriverOutput(alpha, sol.reaction_upper, sol.reaction_lower, True, reason,
+                                steps)
+    return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
+                                  f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
+
+
+def _undamped(chain: Chain, solver: StepSolver, tol: float, max_outer: int) -> DriverOutput:
+    n = chain.free_nodes.size
+    steps: list[StepRecord] = []
+    alpha = chain.rest_alpha.copy()
+    branch = np.sign(np.cos(alpha))
+    warm: StepSolution | None = None
+    for _ in range(max_outer):
+        step, sol, t_asm = _solve_step(chain, alpha, solver, warm, steps)
+        if sol.status not in (Status.SOLVED, Status.INACCURATE):
+            steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
+                                    1.0, np.nan, np.nan))
+            return _fail(alpha, n, steps, f"contact step not solved ({sol.status.value}: "
+                                          f"{sol.message})")
+        new = step.predict_alpha(sol.u)
+        dalpha = float(np.max(np.abs(new - alpha), initial=0.0))
+        steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm, 1.0,
+                                dalpha, np.nan))
+        if not np.all(np.isfinite(new)):
+            return _fail(alpha, n, steps, "diverged: non-finite link angles")
+        if np.any(np.sign(np.cos(new)) != branch):
+            return _fail(new, n, steps, "diverged: a link passed the vertical, where the "
+                                        "linearisation of eq. (20) is singular")
+        alpha = new
+        warm = sol
+        if dalpha < tol:
+            reason = "converged" if sol.solved else "converged (last step inaccurate)"
+            return DriverOutput(alpha, sol.reaction_upper, sol.reaction_lower, True, reason,
+                                steps)
+    return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
+                                  f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")

@@ -1,0 +1,184 @@
+"""The contact result and its certificate, judged on the exact nonlinear geometry."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from ..problems.scenes import Chain
+from .chain import joint_angles, node_positions, torque_residual
+from .driver import DriverOutput, StepRecord
+
+
+@dataclass
+class Certificate:
+    """How well a configuration and its reactions satisfy the exact problem.
+
+    Computed from the final link angles by exact forward kinematics and
+    statics — not from the linearised step — so it says the same thing
+    whichever back-end or scheme produced the answer.
+
+    Attributes
+    ----------
+    min_gap : smallest distance of any node to a wall (mm); < 0 is penetration.
+    min_force : smallest reaction (N); < 0 would be a wall pulling.
+    complementarity : largest |g_i R_i| over the nodes (N·mm).
+    closure : |y| of the right pin, which must lie on y = 0 (mm); 0 for a free end.
+    torque_residual : per joint, spring torque k(φ − φ*) minus the moment the
+        forces demand (N·mm).
+    max_torque_residual : its largest magnitude (N·mm).
+    relative_torque_residual : that, over the largest spring torque.
+    """
+
+    min_gap: float
+    min_force: float
+    complementarity: float
+    closure: float
+    torque_residual: np.ndarray
+    max_torque_residual: float
+    relative_torque_residual: float
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["torque_residual"] = self.torque_residual.tolist()
+        return d
+
+
+def certify(chain: Chain, alpha: np.ndarray, upper: np.ndarray, lower: np.ndarray) -> Certificate:
+    """The certificate of link angles ``alpha`` with wall reactions ``upper``, ``lower`` (N)."""
+    x, y = node_positions(chain, alpha)
+    yf = y[chain.free_nodes]
+    gaps = [chain.wall - yf] if np.isfinite(chain.wall) else []
+    forces = [upper]
+    if chain.channel:
+        gaps.append(yf + chain.wall)
+        forces.append(lower)
+    gap = np.concatenate(gaps) if gaps else np.array([np.inf])
+    force = np.concatenate(forces)
+    comp = float(np.max(np.abs(gap * force), initial=0.0)) if gaps else 0.0
+    closure = abs(float(y[-1])) if chain.free_nodes[-1] < chain.links else 0.0
+    res = torque_residual(chain, alpha, lower - upper)
+    spring = chain.joint_stiffness * np.abs(joint_angles(chain, alpha) - chain.rest_joint)
+    worst = float(np.max(np.abs(res), initial=0.0))
+    ref = float(np.max(spring, initial=0.0))
+    return Certificate(
+        min_gap=float(np.min(gap)),
+        min_force=float(np.min(force, initial=0.0)),
+        complementarity=comp,
+        closure=closure,
+        torque_residual=res,
+        max_torque_residual=worst,
+        relative_torque_residual=worst / ref if ref > 0 else worst,
+    )
+
+
+@dataclass
+class ContactResult:
+    """The equilibrium of a scene: shape, gaps, forces and how it was found.
+
+    Per-node arrays (gaps, forces) run over the free nodes: the interior
+    nodes 2..N for the actuator, 2..N+1 for the cantilever.
+
+    Attributes
+    ----------
+    x, y : node coordinates (mm), nodes 1..N+1.
+    alpha : link angles (rad).
+    gaps : distance of each free node below the upper wall, h − y (mm).
+    forces : reaction of the upper wall at each free node (N, pushing away).
+    gaps_lower, forces_lower : the same for the lower wall of a channel (else None).
+    total_force : sum of ``forces`` (N).
+    outer_iterations : contact steps taken.
+    steps : per-step inner statistics.
+    converged, reason : whether max|α̂ − α| < tol was reached, and why not.
+    certificate : :class:`Certificate` from the exact geometry.
+    solver, method, tol, time_s : how it was computed; wall time of the solve (s).
+    """
+
+    scene: object
+    links: int
+    x: np.ndarray
+    y: np.ndarray
+    alpha: np.ndarray
+    gaps: np.ndarray
+    forces: np.ndarray
+    gaps_lower: np.ndarray | None
+    forces_lower: np.ndarray | None
+    total_force: float
+    outer_iterations: int
+    steps: list[StepRecord]
+    converged: bool
+    reason: str
+    certificate: Certificate
+    solver: str
+    method: str
+    tol: float
+    time_s: float = 0.0
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def inner_iterations(self) -> int:
+        return int(sum(s.iterations for s in self.steps))
+
+    @property
+    def span(self) -> float:
+        """x-distance between the two ends (mm)."""
+        return float(self.x[-1] - self.x[0])
+
+    @property
+    def contact_nodes(self) -> np.ndarray:
+        """Free-node indices carrying a reaction above 1e-9 of the total."""
+        return np.flatnonzero(self.forces > 1e-9 * max(self.total_force, 1e-300))
+
+    def to_dict(self) -> dict:
+        """A JSON-ready summary (the fields of ``lcpbench solve --json``)."""
+        scene = asdict(self.scene) if hasattr(self.scene, "__dataclass_fields__") else {}
+        scene.pop("extra", None)
+        out = {
+            "scene": {**scene, "links": self.links},
+            "total_force": self.total_force,
+            "forces": self.forces.tolist(),
+            "gaps": self.gaps.tolist(),
+            "x": self.x.tolist(),
+            "y": self.y.tolist(),
+            "alpha": self.alpha.tolist(),
+            "converged": self.converged,
+            "reason": self.reason,
+            "outer_iterations": self.outer_iterations,
+            "inner_iterations": self.inner_iterations,
+            "steps": [asdict(s) for s in self.steps],
+            "solver": self.solver,
+            "method": self.method,
+            "tol": self.tol,
+            "time_s": self.time_s,
+            "certificate": self.certificate.to_dict(),
+        }
+        if self.forces_lower is not None:
+            out["forces_lower"] = self.forces_lower.tolist()
+            out["gaps_lower"] = self.gaps_lower.tolist()
+            out["total_force_lower"] = float(self.forces_lower.sum())
+        return out
+
+
+def build_result(scene, chain: Chain, out: DriverOutput, **how) -> ContactResult:
+    x, y = node_positions(chain, out.alpha)
+    yf = y[chain.free_nodes]
+    cert = certify(chain, out.alpha, out.reaction_upper, out.reaction_lower)
+    return ContactResult(
+        scene=scene,
+        links=chain.links,
+        x=x,
+        y=y,
+        alpha=out.alpha,
+        gaps=chain.wall - yf,
+        forces=out.reaction_upper,
+        gaps_lower=yf + chain.wall if chain.channel else None,
+        forces_lower=out.reaction_lower if chain.channel else None,
+        total_force=float(out.reaction_upper.sum()),
+        outer_iterations=len(out.steps),
+        steps=out.steps,
+        converged=out.converged,
+        reason=out.reason,
+        certificate=cert,
+        **how,
+    )

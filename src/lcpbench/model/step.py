@@ -1,0 +1,267 @@
+"""The contact step, assembled from the energy of the chain (banded, O(N)).
+
+At a configuration α the node heights are linearised as in eq. (20),
+
+    α̂_i = (û_{i+1} − û_i) / (a cos α_i) − v_i,   v_i = tan α_i − α_i   (eq. 21),
+
+so the joint angles φ̂ = J û + φ₀ are affine in the free node heights û and
+the energy ½ Σ k (φ̂ − φ*)² − fᵀû is the quadratic
+
+    ½ ûᵀ H û + cᵀ û,   H = Jᵀ diag(k) J,   c = Jᵀ k (φ₀ − φ*) − f.
+
+Each joint touches three consecutive nodes, so H is pentadiagonal. In gap
+coordinates g = h̄ − û this is the paper's LCP: K = H and z = −K h̄ − c
+(eqs. 29–31). :mod:`lcpbench.model.dense` assembles the same K and z
+literally from eqs. (3)–(31); a test checks they agree.
+
+A :class:`ContactStep` is the bound-constrained QP
+
+    minimise ½ uᵀ H u + cᵀ u   subject to   lower <= u <= upper,
+
+whose bounds are the walls (±inf where a node cannot reach a wall). Its
+multipliers are the reactions. It can also state itself as a standard LCP.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import solveh_banded
+
+from ..problems.scenes import Chain
+
+
+@dataclass
+class ContactStep:
+    """One linearised contact step (a convex, bound-constrained QP).
+
+    Attributes
+    ----------
+    bands : ndarray (3, n)
+        H in lower banded storage (``scipy.linalg.solveh_banded`` with
+        ``lower=True``): ``bands[k, i] = H[i + k, i]``.
+    linear : ndarray (n,)
+        c, the linear term (N).
+    lower, upper : ndarray (n,)
+        Bounds on the free node heights u (mm): the walls.
+    alpha : ndarray (N,)
+        The configuration the step was linearised at.
+    """
+
+    bands: np.ndarray
+    linear: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    alpha: np.ndarray
+    inv_a_cos: np.ndarray  # 1 / (a cos α_i), the slope of eq. (21)
+    v: np.ndarray  # tan α − α (eq. 24)
+    free_nodes: np.ndarray
+    links: int
+    # J in stencil form (for the factored gradient): joint j touches shifted
+    # nodes base[j] + (0, 1, 2) with coefficients coef[j]; φ̂ = J u + phi0.
+    base: np.ndarray
+    coef: np.ndarray
+    phi0: np.ndarray
+    stiffness: np.ndarray
+    rest_joint: np.ndarray
+    nodal_load: np.ndarray
+
+    @property
+    def size(self) -> int:
+        return self.linear.size
+
+    # -- linear algebra on H --------------------------------------------------
+    def matvec(self, u: np.ndarray) -> np.ndarray:
+        """H @ u using the bands."""
+        b = self.bands
+        out = b[0] * u
+        out[1:] += b[1, :-1] * u[:-1]
+        out[:-1] += b[1, :-1] * u[1:]
+        out[2:] += b[2, :-2] * u[:-2]
+        out[:-2] += b[2, :-2] * u[2:]
+        return out
+
+    def joint_angles(self, u: np.ndarray) -> np.ndarray:
+        """φ̂ = J u + φ₀, the linearised joint angles at heights u."""
+        y = np.zeros(self.links + 2)
+        y[self.free_nodes + 1] = u
+        b, c = self.base, self.coef
+        return c[:, 0] * y[b] + c[:, 1] * y[b + 1] + c[:, 2] * y[b + 2] + self.phi0
+
+    def gradient(self, u: np.ndarray) -> np.ndarray:
+        """H u + c, computed in factored form Jᵀ k (J u + φ₀ − φ*) − f.
+
+        Equal to ``matvec(u) + linear`` in exact arithmetic, but it never forms
+        the large, cancelling terms of H u: its round-off scales with the
+        spring torques, not with |H||u|. At a solution it is minus the
+        reactions (the upper wall pushes down).
+        """
+        m = self.stiffness * (self.joint_angles(u) - self.rest_joint)
+        g = np.zeros(self.links + 2)
+        np.add.at(g, self.base, self.coef[:, 0] * m)
+        np.add.at(g, self.base + 1, self.coef[:, 1] * m)
+        np.add.at(g, self.base + 2, self.coef[:, 2] * m)
+        return g[self.free_nodes + 1] - self.nodal_load
+
+    def gradient_scale(self, u: np.ndarray) -> np.ndarray:
+        """Size of the terms summed in :meth:`gradient` (for round-off tolerances)."""
+        y = np.zeros(self.links + 2)
+        y[self.free_nodes + 1] = np.abs(u)
+        b, c = self.base, np.abs(self.coef)
+        phi = c[:, 0] * y[b] + c[:, 1] * y[b + 1] + c[:, 2] * y[b + 2]
+        m = self.stiffness * (phi + np.abs(self.phi0) + np.abs(self.rest_joint))
+        g = np.zeros(self.links + 2)
+        np.add.at(g, b, c[:, 0] * m)
+        np.add.at(g, b + 1, c[:, 1] * m)
+        np.add.at(g, b + 2, c[:, 2] * m)
+        return g[self.free_nodes + 1] + np.abs(self.nodal_load) + np.finfo(float).tiny
+
+    def dense_hessian(self) -> np.ndarray:
+        n = self.size
+        H = np.diag(self.bands[0])
+        for k in (1, 2):
+            off = np.diag(self.bands[k, : n - k], -k)
+            H += off + off.T
+        return H
+
+    def unconstrained_minimiser(self) -> np.ndarray:
+        return solveh_banded(self.bands, -self.linear, lower=True, check_finite=False)
+
+    # -- back to the chain ----------------------------------------------------
+    def predict_alpha(self, u: np.ndarray) -> np.ndarray:
+        """α̂ from the linearised kinematics, eq. (21)."""
+        y = np.zeros(self.links + 1)
+        y[self.free_nodes] = u
+        return np.diff(y) * self.inv_a_cos - self.v
+
+    # -- the LCP forms --------------------------------------------------------
+    def lcp(self, rows: str = "contact") -> LCPForm:
+        """The step as a standard LCP ``w = M ζ + q``, ``0 <= ζ ⟂ w >= 0``.
+
+        ``rows="contact"`` keeps only the nodes that can reach a wall and
+        condenses the others out (M stays pentadiagonal); ``rows="all"`` puts
+        every free node against the upper wall height, as the paper does
+        (eqs. 28–31; needs a finite upper wall at every node, so it is for
+        comparisons only). With a lower wall (the channel) the unknowns are
+        ζ = [g; R_lower] and w = [R_upper; g_lower], M = [[K, I], [−I, 0]].
+        """
+        H, c = self.dense_hessian(), self.linear
+        if rows == "all":
+            top = np.full(self.size, np.nanmin(np.where(np.isfinite(self.upper), self.upper, np.nan)))
+            C = np.arange(self.size)
+        elif rows == "contact":
+            C = np.flatnonzero(np.isfinite(self.upper))
+            top = self.upper[C]
+        else:
+            raise ValueError(f"rows must be 'contact' or 'all', got {rows!r}")
+        F = np.setdiff1d(np.arange(self.size), C)
+        S = H[np.ix_(C, C)]
+        ct = c[C]
+        if F.size:
+            HFF = H[np.ix_(F, F)]
+            X = np.linalg.solve(HFF, np.column_stack([H[np.ix_(F, C)], c[F]]))
+            S = S - H[np.ix_(C, F)] @ X[:, :-1]
+            ct = ct - H[np.ix_(C, F)] @ X[:, -1]
+        K = 0.5 * (S + S.T)
+        z = -K @ top - ct
+        has_lower = np.isfinite(self.lower[C])
+        if not has_lower.any():
+            return LCPForm(M=K, q=z, rows=C, heights=top, condense=F, n_gap=C.size)
+        if not has_lower.all():
+            raise NotImplementedError("a lower wall on only some contact rows")
+        m = C.size
+        bottom = self.lower[C]
+        M = np.block([[K, np.eye(m)], [-np.eye(m), np.zeros((m, m))]])
+        q = np.concatenate([z, top - bottom])
+        return LCPForm(M=M, q=q, rows=C, heights=top, condense=F, n_gap=m)
+
+    def from_lcp(self, form: LCPForm, zeta: np.ndarray) -> np.ndarray:
+        """Free node heights u from an LCP solution (recovers condensed nodes)."""
+        u = np.empty(self.size)
+        u[form.rows] = form.heights - zeta[: form.n_gap]
+        F = form.condense
+        if F.size:
+            H = self.dense_hessian()
+            rhs = -self.linear[F] - H[np.ix_(F, form.rows)] @ u[form.rows]
+            u[F] = np.linalg.solve(H[np.ix_(F, F)], rhs)
+        return u
+
+
+@dataclass
+class LCPForm:
+    """A contact step as a standard LCP (see :meth:`ContactStep.lcp`)."""
+
+    M: np.ndarray
+    q: np.ndarray
+    rows: np.ndarray  # free-node indices of the gap unknowns
+    heights: np.ndarray  # upper wall height of each gap row (mm)
+    condense: np.ndarray  # free-node indices eliminated from the LCP
+    n_gap: int
+
+
+def _joint_stencils(chain: Chain, inv_a_cos: np.ndarray):
+    """For each joint: the first of its three nodes and the coefficients on them.
+
+    φ̂_j = α̂_r − α̂_l; link i contributes −1/(a cos α_i) at node i and
+    +1/(a cos α_i) at node i+1. Node indices are shifted by +1 so that a
+    clamp (l = −1) can use a dummy node 0.
+    """
+    left, right = chain.joint_links[:, 0], chain.joint_links[:, 1]
+    wl = np.where(left >= 0, inv_a_cos[np.maximum(left, 0)], 0.0)
+    wr = inv_a_cos[right]
+    if np.any((left >= 0) & (right != left + 1)):
+        raise ValueError("joints must join consecutive links")
+    base = right  # shifted index of node (right − 1)
+    coef = np.column_stack([wl, -wl - wr, wr])
+    return base, coef
+
+
+def assemble_step(chain: Chain, alpha: np.ndarray) -> ContactStep:
+    """The contact step at configuration α, from the energy of the chain, in O(N)."""
+    cos = np.cos(alpha)
+    inv_a_cos = 1.0 / (chain.link_length * cos)
+    v = np.tan(alpha) - alpha
+    base, coef = _joint_stencils(chain, inv_a_cos)
+    left = chain.joint_links[:, 0]
+    right = chain.joint_links[:, 1]
+    phi0 = -v[right] + np.where(left >= 0, v[np.maximum(left, 0)], 0.0)
+    k = chain.joint_stiffness
+    size = chain.links + 2  # shifted node indices: dummy, nodes 0..N
+    diag = np.zeros(size)
+    off1 = np.zeros(size)
+    off2 = np.zeros(size)
+    lin = np.zeros(size)
+    t = k * (phi0 - chain.rest_joint)
+    for m in range(3):
+        np.add.at(diag, base + m, k * coef[:, m] ** 2)
+        np.add.at(lin, base + m, coef[:, m] * t)
+    for m in range(2):
+        np.add.at(off1, base + m, k * coef[:, m] * coef[:, m + 1])
+    np.add.at(off2, base, k * coef[:, 0] * coef[:, 2])
+    free = chain.free_nodes + 1
+    if np.any(np.diff(free) != 1):
+        raise ValueError("free nodes must be contiguous")
+    sl = slice(free[0], free[-1] + 1)
+    n = free.size
+    bands = np.zeros((3, n))
+    bands[0] = diag[sl]
+    bands[1, : n - 1] = off1[sl][: n - 1]
+    bands[2, : n - 2] = off2[sl][: n - 2]
+    return ContactStep(
+        bands=bands,
+        linear=lin[sl] - chain.nodal_load,
+        lower=chain.lower.copy(),
+        upper=chain.upper.copy(),
+        alpha=np.asarray(alpha, dtype=float).copy(),
+        inv_a_cos=inv_a_cos,
+        v=v,
+        free_nodes=chain.free_nodes,
+        links=chain.links,
+        base=base,
+        coef=coef,
+        phi0=phi0,
+        stiffness=k,
+        rest_joint=chain.rest_joint,
+        nodal_load=chain.nodal_load,
+    )

@@ -1,0 +1,311 @@
+"""Tests of the dense Lemke solver.
+
+Expected answers come from hand derivation, from an independent brute-force
+enumeration of the 2^n complementary bases, or from LCP theory (a feasible
+LCP with a positive semidefinite M is solved by Lemke; an infeasible one
+ends on a ray) -- never from the solver's own output.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from lcpbench.solvers.base import LCPSolution, Status, lcp_residuals
+from lcpbench.solvers.lemke import lemke
+
+
+def enumerate_lcp(M: np.ndarray, q: np.ndarray, tol: float = 1e-9) -> list[np.ndarray]:
+    """All solutions found among the 2^n complementary bases (independent method)."""
+    n = q.size
+    scale = max(1.0, np.abs(q).max())
+    sols = []
+    for mask in itertools.product([False, True], repeat=n):
+        a = np.flatnonzero(mask)
+        z = np.zeros(n)
+        if a.size:
+            try:
+                z[a] = np.linalg.solve(M[np.ix_(a, a)], -q[a])
+            except np.linalg.LinAlgError:
+                continue
+        w = M @ z + q
+        if z.min() >= -tol * scale and w.min() >= -tol * scale:
+            sols.append(z)
+    return sols
+
+
+def assert_valid(sol: LCPSolution, M: np.ndarray, q: np.ndarray) -> None:
+    """``sol`` is SOLVED and its ``z`` solves the LCP to tight tolerances."""
+    assert sol.status is Status.SOLVED, sol.message
+    res = lcp_residuals(M, q, sol.z)
+    assert res["min_z"] >= -1e-10
+    assert res["min_w"] >= -1e-8
+    assert res["complementarity"] <= 1e-8 * max(1.0, np.abs(sol.z).max())
+    assert res["natural"] <= 1e-8
+    np.testing.assert_allclose(sol.w, M @ sol.z + q, atol=1e-10 * max(1, np.abs(q).max()))
+
+
+# --- 1. small hand-derivable problems -------------------------------------------------------
+
+
+def test_identity_by_hand():
+    # w = z + q: z = max(-q, 0), w = max(q, 0).
+    M, q = np.eye(2), np.array([-1.0, 2.0])
+    sol = lemke(M, q)
+    assert_valid(sol, M, q)
+    np.testing.assert_allclose(sol.z, [1.0, 0.0], atol=1e-14)
+    np.testing.assert_allclose(sol.w, [0.0, 2.0], atol=1e-14)
+    assert sol.iterations == 2  # z0 in, then z1 in / z0 out
+
+
+def test_2x2_p_matrix_by_hand_and_enumeration():
+    # M = [[2, 1], [1, 2]], q = [-5, -6]: both z > 0 gives z = [4/3, 7/3].
+    M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-5.0, -6.0])
+    sol = lemke(M, q)
+    assert_valid(sol, M, q)
+    np.testing.assert_allclose(sol.z, [4 / 3, 7 / 3], rtol=1e-12)
+    # M = [[2, 1], [1, 2]], q = [1, -4]: z = [0, 2], w = [3, 0].
+    q2 = np.array([1.0, -4.0])
+    (ref,) = enumerate_lcp(M, q2)  # P-matrix: exactly one solution
+    np.testing.assert_allclose(ref, [0.0, 2.0])
+    np.testing.assert_allclose(lemke(M, q2).z, ref, atol=1e-12)
+
+
+def test_nonsymmetric_p_matrix_against_enumeration():
+    M = np.array([[1.0, 2.0, 0.0], [0.0, 1.0, 3.0], [4.0, 0.0, 1.0]])  # triangular-ish, P
+    for q in ([-1.0, -1.0, -1.0], [2.0, -3.0, 1.0], [-5.0, 1.0, -2.0]):
+        q = np.array(q)
+        sols = enumerate_lcp(M, q)
+        assert len(sols) >= 1
+        sol = lemke(M, q)
+        assert_valid(sol, M, q)
+        assert any(np.allclose(sol.z, s, atol=1e-10) for s in sols)
+
+
+# --- 2. trivial case ------------------------------------------------------------------------
+
+
+def test_nonnegative_q_gives_zero():
+    M = np.array([[1.0, -3.0], [2.0, 0.5]])
+    q = np.array([0.0, 4.0])
+    sol = lemke(M, q)
+    assert sol.status is Status.SOLVED and sol.iterations == 0
+    np.testing.assert_array_equal(sol.z, 0.0)
+    np.testing.assert_array_equal(sol.w, q)
+
+
+# --- 3. random SPD problems against enumeration ---------------------------------------------
+
+
+@settings(max_examples=60, deadline=None)
+@given(n=st.integers(1, 8), seed=st.integers(0, 2**32 - 1))
+def test_random_spd_matches_enumeration(n, seed):
+    rng = np.random.default_rng(seed)
+    A = rng.normal(size=(n, n))
+    M = A @ A.T / n + 0.1 * np.eye(n)
+    q = rng.normal(size=n) * rng.choice([1e-2, 1.0, 1e2])
+    (ref,) = enumerate_lcp(M, q)  # SPD => P-matrix => unique solution
+    sol = lemke(M, q)
+    assert_valid(sol, M, q)
+    np.testing.assert_allclose(sol.z, ref, atol=1e-8 * max(1.0, np.abs(ref).max()))
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(9, 12), seed=st.integers(0, 2**32 - 1))
+def test_random_spd_larger_is_valid(n, seed):
+    rng = np.random.default_rng(seed)
+    A = rng.normal(size=(n, n))
+    M = A @ A.T / n + 0.1 * np.eye(n)
+    q = rng.normal(size=n)
+    assert_valid(lemke(M, q), M, q)
+
+
+# --- 4. degenerate / tie-prone problems -----------------------------------------------------
+
+
+def test_all_ratios_tie_identity():
+    # q = -1: every row ties in the first ratio test; answer z = 1, w = 0.
+    n = 6
+    M, q = np.eye(n), -np.ones(n)
+    sol = lemke(M, q)
+    assert_valid(sol, M, q)
+    np.testing.assert_allclose(sol.z, 1.0, atol=1e-12)
+
+
+def test_rank_one_duplicated_columns():
+    # M = 1 1' (PSD, all columns equal), q = -1: solutions are {z >= 0, sum z = 1}, w = 0.
+    n = 4
+    M, q = np.ones((n, n)), -np.ones(n)
+    sol = lemke(M, q)
+    assert_valid(sol, M, q)
+    assert math.isclose(sol.z.sum(), 1.0, rel_tol=1e-12)
+    np.testing.assert_allclose(sol.w, 0.0, atol=1e-12)
+
+
+def test_zeros_in_q_degenerate():
+    # q has zeros and repeated entries; M SPD so the solution is unique.
+    M = np.array([[2.0, -1.0, 0.0, 0.0], [-1.0, 2.0, -1.0, 0.0],
+                  [0.0, -1.0, 2.0, -1.0], [0.0, 0.0, -1.0, 2.0]])
+    for q in ([0.0, -1.0, 0.0, -1.0], [-1.0, 0.0, 0.0, -1.0], [0.0, 0.0, -1.0, 0.0]):
+        q = np.array(q)
+        (ref,) = enumerate_lcp(M, q)
+        sol = lemke(M, q)
+        assert_valid(sol, M, q)
+        np.testing.assert_allclose(sol.z, ref, atol=1e-12)
+
+
+@settings(max_examples=80, deadline=None)
+@given(n=st.integers(1, 8), k=st.integers(1, 8), seed=st.integers(0, 2**32 - 1))
+def test_degenerate_psd_with_planted_solution(n, k, seed):
+    """Singular integer PSD M, q planted from a complementary (z*, w*) with many double zeros.
+
+    Theory: a feasible LCP with PSD M is solved by Lemke (with anti-cycling), and for
+    symmetric PSD M the vector w is the same at every solution, so w == w*.
+    """
+    rng = np.random.default_rng(seed)
+    B = rng.integers(-2, 3, size=(n, min(k, n))).astype(float)
+    B[:, 0] = B[:, -1]  # a duplicated column => extra singularity
+    M = B @ B.T
+    kind = rng.integers(0, 3, size=n)  # 0: z=w=0 (degenerate), 1: z>0, 2: w>0
+    z_star = np.where(kind == 1, rng.integers(1, 3, size=n), 0).astype(float)
+    w_star = np.where(kind == 2, rng.integers(1, 3, size=n), 0).astype(float)
+    q = w_star - M @ z_star
+    sol = lemke(M, q)
+    assert_valid(sol, M, q)
+    np.testing.assert_allclose(sol.w, w_star, atol=1e-8 * max(1.0, np.abs(q).max()))
+
+
+# Found by a random search over degenerate LCPs with a planted solution: with a naive
+# tie-break (first / last tied row) Lemke cycles on these until the pivot budget runs out.
+CYCLING_PRONE = [
+    ([[1, 1, -2, -1, 2], [-2, 0, 2, 2, -2], [2, -2, 2, -2, -2], [-1, 2, 0, 2, -2],
+      [2, 1, 1, -1, -1]],
+     [-4, 4, 1, -2, -4]),
+    ([[-1, -1, 1, -1, -2, -1], [1, -1, 1, 0, 2, 0], [1, 0, -1, 1, -2, -1],
+      [1, 1, 1, -2, 2, -2], [1, 0, 1, 0, -1, 2], [2, 2, -1, 2, -1, 0]],
+     [2, -3, -2, 0, -3, -6]),
+    ([[0, -1, -1, 2, 0, -1], [-2, -1, -1, 0, 1, -2], [2, 2, 2, 1, 1, 1],
+      [1, -2, 0, 1, 1, -1], [-2, 0, 1, 1, -2, 2], [0, 1, 2, 2, 2, -1]],
+     [0, 0, -2, -2, 6, -2]),
+]
+
+
+@pytest.mark.parametrize("M, q", CYCLING_PRONE)
+def test_cycling_prone_examples_solved(M, q):
+    M, q = np.array(M, dtype=float), np.array(q, dtype=float)
+    sols = enumerate_lcp(M, q)
+    assert sols  # feasible: each has a solution
+    sol = lemke(M, q)
+    assert_valid(sol, M, q)
+    assert any(np.allclose(sol.z, s, atol=1e-10) for s in sols)
+
+
+# --- 5. no solution: secondary ray ----------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "M, q",
+    [
+        ([[-1.0]], [-1.0]),  # w = -z - 1 < 0 for all z >= 0
+        ([[0.0, 0.0], [0.0, 0.0]], [-1.0, 1.0]),  # w1 = -1
+        ([[0.0, 1.0], [-1.0, 0.0]], [-1.0, -1.0]),  # skew (PSD): w2 = -z1 - 1 < 0
+        ([[1.0, -1.0], [-1.0, 1.0]], [-1.0, -1.0]),  # PSD: w1 + w2 = -2 < 0
+    ],
+)
+def test_infeasible_ends_on_ray(M, q):
+    M, q = np.array(M), np.array(q)
+    assert enumerate_lcp(M, q) == []
+    sol = lemke(M, q)
+    assert sol.status is Status.RAY
+    assert sol.message
+
+
+# --- 6. pivot budget ------------------------------------------------------------------------
+
+
+def test_max_pivots_exhausted():
+    M, q = np.eye(3), -np.ones(3)  # needs 4 pivots
+    sol = lemke(M, q, max_pivots=1)
+    assert sol.status is Status.MAX_ITER and sol.iterations == 1
+    assert lemke(M, q, max_pivots=4).status is Status.SOLVED
+
+
+# --- 7. statuses, bad input, covering -------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "M, q",
+    [
+        (np.eye(2), [np.nan, -1.0]),
+        (np.eye(2), [-np.inf, -1.0]),
+        ([[1.0, np.nan], [0.0, 1.0]], [-1.0, -1.0]),
+    ],
+)
+def test_non_finite_input_fails_cleanly(M, q):
+    sol = lemke(np.array(M), np.array(q))
+    assert isinstance(sol.status, Status)
+    assert sol.status is Status.FAILED and sol.message
+
+
+def test_overflow_fails_cleanly():
+    sol = lemke(np.array([[1e-200]]), np.array([-1e200]))  # z = 1e400 overflows
+    assert sol.status is Status.FAILED and sol.message
+
+
+def test_failed_verification_is_inaccurate(monkeypatch):
+    # The final check, not the pivoting, decides SOLVED: an impossible tolerance downgrades.
+    import lcpbench.solvers.lemke as mod
+
+    monkeypatch.setattr(mod, "RESIDUAL_TOL", -1.0)
+    sol = mod.lemke(np.eye(2), np.array([-1.0, 2.0]))
+    assert sol.status is Status.INACCURATE and "residual" in sol.message
+
+
+def test_shape_mismatch_raises():
+    with pytest.raises(ValueError):
+        lemke(np.eye(2), np.ones(3))
+    with pytest.raises(ValueError):
+        lemke(np.eye(2), -np.ones(2), covering=np.array([1.0, 0.0]))
+
+
+def test_custom_covering_vector():
+    M = np.array([[2.0, 1.0], [1.0, 2.0]])
+    q = np.array([-5.0, -6.0])
+    sol = lemke(M, q, covering=np.array([0.5, 3.0]))
+    assert_valid(sol, M, q)
+    np.testing.assert_allclose(sol.z, [4 / 3, 7 / 3], rtol=1e-12)
+
+
+@settings(max_examples=60, deadline=None)
+@given(n=st.integers(1, 6), seed=st.integers(0, 2**32 - 1))
+def test_never_wrongly_solved_on_arbitrary_matrices(n, seed):
+    # Arbitrary (possibly non-P, non-PSD) M: any status is allowed, but SOLVED must be right.
+    rng = np.random.default_rng(seed)
+    M, q = rng.normal(size=(n, n)), rng.normal(size=n)
+    sol = lemke(M, q)
+    assert isinstance(sol.status, Status)
+    if sol.status is Status.SOLVED:
+        assert_valid(sol, M, q)
+
+
+# --- performance ----------------------------------------------------------------------------
+
+
+def test_pentadiagonal_spd_n139_is_fast():
+    n = 139
+    M = (6.01 * np.eye(n) - 4 * np.eye(n, k=1) - 4 * np.eye(n, k=-1)
+         + np.eye(n, k=2) + np.eye(n, k=-2))  # (second difference)^2 + 0.01 I: SPD
+    q = np.zeros(n)
+    q[60:80] = -1.0  # a localised load: about 25 pivots
+    lemke(M, q)  # warm-up
+    t = time.perf_counter()
+    sol = lemke(M, q)
+    elapsed = time.perf_counter() - t
+    assert_valid(sol, M, q)
+    assert elapsed < 0.1, elapsed  # a few ms expected; loose bound for slow CI machines
