@@ -66,6 +66,10 @@ def solve(
                            "unconstrained arc clears every wall and there is no load")
     else:
         out = run_driver(chain, step, tol=tol, max_outer=max_outer, method=method)
+        if not out.converged and getattr(scene, "theta", 0) > 180:
+            out.reason = ("theta > 180 deg: the end links start beyond the vertical, where the "
+                          "linearisation of eq. (20) is singular; lcpbench converges for "
+                          f"theta <= 180 deg ({out.reason})")
     elapsed = time.perf_counter() - t0
     name = "active-set" if solver == "auto" else solver
     return build_result(scene, chain, out, solver=name, method=method, tol=tol,

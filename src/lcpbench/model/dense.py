@@ -94,3 +94,35 @@ def paper_step(
 def paper_predict_alpha(step: PaperStep, u: np.ndarray, alpha: np.ndarray, a: float) -> np.ndarray:
     """α̂ from eq. (21): (1/a) M û − v."""
     return step.M @ u / a - (np.tan(alpha) - alpha)
+
+
+def solve_paper_dense(scene, *, tol: float = 1e-3, max_outer: int = 200):
+    """The paper's whole method, literally: dense eqs. (3)–(31), Lemke, undamped Fig. 3.
+
+    Every interior node is a contact row against the wall at h. Returns
+    ``(alpha, reactions, outer_iterations, converged)``. This is the "dense
+    path" that the banded, globalised :func:`lcpbench.solve` is compared
+    against; it is for the single-wall actuator scene only.
+    """
+    from ..solvers.lemke import lemke
+
+    chain = scene.chain()
+    a = scene.length / chain.links
+    alpha = chain.rest_alpha.copy()
+    R = np.zeros(chain.links - 1)
+    for it in range(1, max_outer + 1):
+        p = paper_step(alpha, EI=scene.EI, length=scene.length, weight=scene.weight,
+                       height=scene.height, rest_joint=chain.rest_joint)
+        sol = lemke(p.K, p.z)
+        if not sol.solved:
+            return alpha, R, it, False
+        R = sol.w
+        u = scene.height - sol.z  # eq. (28)
+        new = paper_predict_alpha(p, u, alpha, a)
+        change = float(np.max(np.abs(new - alpha)))
+        alpha = new
+        if not np.all(np.isfinite(alpha)):
+            return alpha, R, it, False
+        if change < tol:
+            return alpha, R, it, True
+    return alpha, R, max_outer, False

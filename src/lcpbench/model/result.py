@@ -28,7 +28,7 @@ class Certificate:
     torque_residual : per joint, spring torque k(φ − φ*) minus the moment the
         forces demand (N·mm).
     max_torque_residual : its largest magnitude (N·mm).
-    relative_torque_residual : that, over the largest spring torque.
+    relative_torque_residual : that, over the largest spring torque (at least EI/ℓ).
     """
 
     min_gap: float
@@ -61,7 +61,8 @@ def certify(chain: Chain, alpha: np.ndarray, upper: np.ndarray, lower: np.ndarra
     res = torque_residual(chain, alpha, lower - upper)
     spring = chain.joint_stiffness * np.abs(joint_angles(chain, alpha) - chain.rest_joint)
     worst = float(np.max(np.abs(res), initial=0.0))
-    ref = float(np.max(spring, initial=0.0))
+    # over the largest spring torque, but never less than the chain's own scale EI/ℓ
+    ref = max(float(np.max(spring, initial=0.0)), chain.force_scale * chain.length)
     return Certificate(
         min_gap=float(np.min(gap)),
         min_force=float(np.min(force, initial=0.0)),
@@ -69,7 +70,7 @@ def certify(chain: Chain, alpha: np.ndarray, upper: np.ndarray, lower: np.ndarra
         closure=closure,
         torque_residual=res,
         max_torque_residual=worst,
-        relative_torque_residual=worst / ref if ref > 0 else worst,
+        relative_torque_residual=worst / ref,
     )
 
 

@@ -98,10 +98,7 @@ class ContactStep:
         reactions (the upper wall pushes down).
         """
         m = self.stiffness * (self.joint_angles(u) - self.rest_joint)
-        g = np.zeros(self.links + 2)
-        np.add.at(g, self.base, self.coef[:, 0] * m)
-        np.add.at(g, self.base + 1, self.coef[:, 1] * m)
-        np.add.at(g, self.base + 2, self.coef[:, 2] * m)
+        g = _scatter(self.base, self.coef, m, self.links + 2)
         return g[self.free_nodes + 1] - self.nodal_load
 
     def gradient_scale(self, u: np.ndarray) -> np.ndarray:
@@ -111,10 +108,7 @@ class ContactStep:
         b, c = self.base, np.abs(self.coef)
         phi = c[:, 0] * y[b] + c[:, 1] * y[b + 1] + c[:, 2] * y[b + 2]
         m = self.stiffness * (phi + np.abs(self.phi0) + np.abs(self.rest_joint))
-        g = np.zeros(self.links + 2)
-        np.add.at(g, b, c[:, 0] * m)
-        np.add.at(g, b + 1, c[:, 1] * m)
-        np.add.at(g, b + 2, c[:, 2] * m)
+        g = _scatter(b, c, m, self.links + 2)
         return g[self.free_nodes + 1] + np.abs(self.nodal_load) + np.finfo(float).tiny
 
     def dense_hessian(self) -> np.ndarray:
@@ -200,6 +194,15 @@ class LCPForm:
     n_gap: int
 
 
+def _scatter(base: np.ndarray, coef: np.ndarray, m: np.ndarray, size: int) -> np.ndarray:
+    """Jᵀ m for the stencil form of J (joints on consecutive nodes: plain slices)."""
+    g = np.zeros(size)
+    b0, nj = int(base[0]), base.size
+    for k in range(3):
+        g[b0 + k : b0 + k + nj] += coef[:, k] * m
+    return g
+
+
 def _joint_stencils(chain: Chain, inv_a_cos: np.ndarray):
     """For each joint: the first of its three nodes and the coefficients on them.
 
@@ -210,8 +213,8 @@ def _joint_stencils(chain: Chain, inv_a_cos: np.ndarray):
     left, right = chain.joint_links[:, 0], chain.joint_links[:, 1]
     wl = np.where(left >= 0, inv_a_cos[np.maximum(left, 0)], 0.0)
     wr = inv_a_cos[right]
-    if np.any((left >= 0) & (right != left + 1)):
-        raise ValueError("joints must join consecutive links")
+    if np.any((left >= 0) & (right != left + 1)) or np.any(np.diff(right) != 1):
+        raise ValueError("joints must join consecutive links, in order")
     base = right  # shifted index of node (right − 1)
     coef = np.column_stack([wl, -wl - wr, wr])
     return base, coef
@@ -233,12 +236,13 @@ def assemble_step(chain: Chain, alpha: np.ndarray) -> ContactStep:
     off2 = np.zeros(size)
     lin = np.zeros(size)
     t = k * (phi0 - chain.rest_joint)
+    b0, nj = int(base[0]), base.size
     for m in range(3):
-        np.add.at(diag, base + m, k * coef[:, m] ** 2)
-        np.add.at(lin, base + m, coef[:, m] * t)
+        diag[b0 + m : b0 + m + nj] += k * coef[:, m] ** 2
+        lin[b0 + m : b0 + m + nj] += coef[:, m] * t
     for m in range(2):
-        np.add.at(off1, base + m, k * coef[:, m] * coef[:, m + 1])
-    np.add.at(off2, base, k * coef[:, 0] * coef[:, 2])
+        off1[b0 + m : b0 + m + nj] += k * coef[:, m] * coef[:, m + 1]
+    off2[b0 : b0 + nj] += k * coef[:, 0] * coef[:, 2]
     free = chain.free_nodes + 1
     if np.any(np.diff(free) != 1):
         raise ValueError("free nodes must be contiguous")

@@ -1,0 +1,210 @@
+"""The ``lcpbench`` command line: JSON contract, human summary, plot, errors."""
+
+from __future__ import annotations
+
+import json
+import math
+import subprocess
+import sys
+
+import pytest
+
+import lcpbench
+from lcpbench.cli import main, sanitise
+
+N = 40  # keep the CLI tests fast
+
+
+def run_json(capsys, args):
+    code = main(args)
+    out = capsys.readouterr()
+    data = json.loads(out.out)  # exactly one JSON document on stdout
+    assert isinstance(data, dict)
+    return code, data, out.err
+
+
+def test_solve_json_default_scene(capsys):
+    code, d, err = run_json(capsys, ["solve", "--links", str(N), "--json"])
+    assert code == 0
+    assert err == ""
+    for key in ("total_force", "forces", "gaps", "x", "y", "converged", "outer_iterations",
+                "solver", "time_s", "certificate", "scene", "reason"):
+        assert key in d, key
+    assert d["converged"] is True
+    assert d["scene"]["links"] == N
+    assert len(d["forces"]) == N - 1 == len(d["gaps"])
+    assert len(d["x"]) == N + 1 == len(d["y"])
+    assert d["total_force"] > 0
+    assert math.isclose(d["total_force"], math.fsum(d["forces"]), rel_tol=1e-12)
+    assert min(d["gaps"]) >= -1e-9
+    assert min(d["forces"]) >= 0
+    assert "forces_lower" not in d
+
+
+def test_solve_json_no_contact(capsys):
+    # a shallow arc (height r(1 - cos 15 deg) ~ 3.9 mm) below a wall at 5 mm, no gravity
+    code, d, _ = run_json(
+        capsys, ["solve", "--theta", "30", "--height", "5", "--links", str(N),
+                 "--weight", "0", "--json"])
+    assert code == 0
+    assert d["converged"] is True
+    assert d["total_force"] == 0
+    assert all(f == 0 for f in d["forces"])
+    assert min(d["gaps"]) > 0
+
+
+def test_solve_json_channel(capsys):
+    code, d, _ = run_json(capsys, ["solve", "--links", str(N), "--channel", "--json"])
+    assert code == 0
+    assert d["scene"]["channel"] is True
+    assert len(d["forces_lower"]) == N - 1 == len(d["gaps_lower"])
+    assert min(d["gaps_lower"]) >= -1e-9
+
+
+def test_solve_json_matches_library(capsys):
+    """The CLI passes its options through to the scene and solve() unchanged."""
+    args = ["--theta", "120", "--height", "2.5", "--length", "25", "--EI", "40",
+            "--weight", "1e-4", "--tol", "1e-6", "--solver", "lemke"]
+    code, d, _ = run_json(capsys, ["solve", "--links", "30", *args, "--json"])
+    ref = lcpbench.solve(
+        lcpbench.ActuatorScene(theta=120, height=2.5, links=30, length=25, EI=40,
+                               weight=1e-4),
+        solver="lemke", tol=1e-6)
+    assert code == 0
+    assert d["solver"] == "lemke" and d["tol"] == 1e-6
+    assert d["scene"] == {"theta": 120.0, "height": 2.5, "links": 30, "length": 25.0,
+                          "EI": 40.0, "weight": 1e-4, "channel": False}
+    assert math.isclose(d["total_force"], ref.total_force, rel_tol=1e-9)
+
+
+def test_solve_method_undamped(capsys):
+    code, d, _ = run_json(capsys, ["solve", "--links", str(N), "--method", "undamped", "--json"])
+    assert code == 0
+    assert d["method"] == "undamped"
+    assert d["converged"] is True
+
+
+def test_solve_human_output(capsys):
+    code = main(["solve", "--links", str(N)])
+    out = capsys.readouterr().out
+    ref = lcpbench.solve(lcpbench.ActuatorScene(links=N))
+    assert code == 0
+    assert "converged" in out and "yes" in out
+    assert f"{1e3 * ref.total_force:.6g} mN" in out
+    assert "certificate" in out
+    assert len(out.splitlines()) <= 15
+
+
+def test_solve_not_converged_exit_1(capsys):
+    # theta > 180 deg: the end links start past the vertical, where the
+    # height parametrisation of the contact step breaks down (see report).
+    code = main(["solve", "--theta", "250", "--height", "2", "--links", str(N)])
+    out = capsys.readouterr().out
+    assert code == 1
+    assert "converged" in out and "no (" in out
+
+
+def test_json_sanitise_non_finite():
+    d = sanitise({"a": math.nan, "b": [1.0, math.inf, -math.inf], "c": {"d": 2}})
+    assert d == {"a": None, "b": [1.0, None, None], "c": {"d": 2}}
+    json.dumps(d, allow_nan=False)
+
+
+def test_solve_plot_png(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    path = tmp_path / "s.png"
+    code = main(["solve", "--links", str(N), "--channel", "--plot", str(path)])
+    assert code == 0
+    data = path.read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n"
+    assert len(data) > 1000
+    assert str(path) in capsys.readouterr().out
+
+
+def test_solve_plot_without_matplotlib(tmp_path, capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)  # import now raises ImportError
+    path = tmp_path / "s.png"
+    code = main(["solve", "--links", str(N), "--plot", str(path)])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.count("\n") == 1 and err.startswith("lcpbench: error:")
+    assert "pip install 'lcpbench[plot]'" in err
+    assert not path.exists()
+
+
+@pytest.mark.parametrize(
+    "argv, names",
+    [
+        (["solve", "--height", "-1"], "height"),
+        (["solve", "--height", "0"], "height"),
+        (["solve", "--height", "nan"], "height"),
+        (["solve", "--theta", "400"], "theta"),
+        (["solve", "--theta", "inf"], "theta"),
+        (["solve", "--theta", "abc"], "theta"),
+        (["solve", "--links", "2"], "links"),
+        (["solve", "--links", "many"], "links"),
+        (["solve", "--length", "-3"], "length"),
+        (["solve", "--EI", "0"], "EI"),
+        (["solve", "--weight", "-1"], "weight"),
+        (["solve", "--tol", "0"], "tol"),
+        (["solve", "--tol", "nan"], "tol"),
+        (["solve", "--solver", "nope"], "solver"),
+        (["solve", "--method", "newton"], "method"),
+        (["solve", "--bogus"], "--bogus"),
+        (["validate", "cantilever", "--links", "3"], "links"),
+        (["validate", "beam"], "beam"),
+        (["validate"], None),
+        ([], None),
+    ],
+)
+def test_bad_input_one_line_exit_2(capsys, argv, names):
+    code = main(argv)
+    out = capsys.readouterr()
+    assert code == 2
+    lines = out.err.splitlines()
+    assert len(lines) == 1, out.err
+    assert lines[0].startswith("lcpbench: error: ")
+    assert lines[0].strip() != "lcpbench: error:"
+    assert "Traceback" not in out.err and "usage:" not in out.err
+    if names is not None:
+        assert names in lines[0]
+    assert out.out == ""
+
+
+def test_version(capsys):
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out.strip() == f"lcpbench {lcpbench.__version__}"
+
+
+def test_validate_cantilever_json(capsys):
+    code, d, _ = run_json(capsys, ["validate", "cantilever", "--links", str(N), "--json"])
+    assert code == 0
+    for key in ("model_force", "theory_force", "relative_error", "links", "converged"):
+        assert key in d, key
+    assert d["links"] == N
+    assert d["theory_force"] > 0
+    assert math.isclose(d["relative_error"],
+                        (d["model_force"] - d["theory_force"]) / d["theory_force"],
+                        rel_tol=1e-12)
+    assert abs(d["relative_error"]) < 0.02
+
+
+def test_validate_cantilever_human(capsys):
+    code = main(["validate", "cantilever", "--links", str(N)])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "model force" in out and "theory force" in out
+    assert "mN" in out and "%" in out
+
+
+def test_subprocess_bad_input():
+    proc = subprocess.run(
+        [sys.executable, "-m", "lcpbench.cli", "solve", "--height", "-1"],
+        capture_output=True, text=True, timeout=60,
+    )
+    assert proc.returncode == 2
+    assert proc.stdout == ""
+    lines = proc.stderr.splitlines()
+    assert len(lines) == 1, proc.stderr
+    assert lines[0].startswith("lcpbench: error: ") and "height" in lines[0]
+    assert "Traceback" not in proc.stderr
