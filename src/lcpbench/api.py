@@ -72,8 +72,26 @@ def solve(
                           f"theta <= 180 deg ({out.reason})")
     elapsed = time.perf_counter() - t0
     name = "active-set" if solver == "auto" else solver
-    return build_result(scene, chain, out, solver=name, method=method, tol=tol,
-                        time_s=elapsed)
+    res = build_result(scene, chain, out, solver=name, method=method, tol=tol, time_s=elapsed)
+    _audit(res, chain)
+    return res
+
+
+def _audit(res: ContactResult, chain) -> None:
+    """Never call an answer converged that the exact-geometry certificate rejects."""
+    if not res.converged:
+        return
+    c = res.certificate
+    problems = []
+    if c.relative_torque_residual > max(10 * res.tol, 1e-6):
+        problems.append(f"torque residual {c.relative_torque_residual:.1e} (relative)")
+    if c.min_gap < -1e-6 * chain.length:
+        problems.append(f"penetration {c.min_gap:.1e} mm")
+    if c.closure > 1e-6 * chain.length:
+        problems.append(f"chain not closed by {c.closure:.1e} mm")
+    if problems:
+        res.converged = False
+        res.reason = "the certificate rejects the answer: " + ", ".join(problems)
 
 
 def _clears_walls(scene, chain) -> bool:

@@ -180,3 +180,17 @@ def test_non_convergence_is_reported_not_raised():
 def test_public_names():
     assert lcpbench.ActuatorScene(theta=150, height=3.0, links=140, length=30.0, EI=32.01,
                                   weight=2.45e-4, channel=False)
+
+
+def test_large_N_flat_contact_region_is_not_mistaken_for_contact():
+    """N = 2000: the reactions in the flat region are ~μ = 4e-6 N, near round-off of |H u|.
+
+    Regression: a loose round-off test once kept nodes that should sag off the
+    wall in contact and called it converged. Both schemes must agree and pass
+    the exact-geometry certificate.
+    """
+    scene = ActuatorScene(theta=150, height=3, links=2000)
+    a = solve(scene, tol=1e-8)
+    b = solve(scene, tol=1e-8, method="undamped")
+    assert_certified(a, rel_torque=1e-6)
+    assert a.total_force == pytest.approx(b.total_force, rel=1e-7)

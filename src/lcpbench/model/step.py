@@ -63,6 +63,9 @@ class ContactStep:
     base: np.ndarray
     coef: np.ndarray
     phi0: np.ndarray
+    origin: np.ndarray  # u₀, heights of the free nodes at the linearisation point
+    alpha0: np.ndarray  # α̂(u₀): α, except the last link when the chain is not closed
+    phi_origin: np.ndarray  # φ̂(u₀), computed from α̂(u₀) directly (no cancellation)
     stiffness: np.ndarray
     rest_joint: np.ndarray
     nodal_load: np.ndarray
@@ -82,15 +85,22 @@ class ContactStep:
         out[:-2] += b[2, :-2] * u[2:]
         return out
 
-    def joint_angles(self, u: np.ndarray) -> np.ndarray:
-        """φ̂ = J u + φ₀, the linearised joint angles at heights u."""
+    def _J(self, du: np.ndarray) -> np.ndarray:
         y = np.zeros(self.links + 2)
-        y[self.free_nodes + 1] = u
+        y[self.free_nodes + 1] = du
         b, c = self.base, self.coef
-        return c[:, 0] * y[b] + c[:, 1] * y[b + 1] + c[:, 2] * y[b + 2] + self.phi0
+        return c[:, 0] * y[b] + c[:, 1] * y[b + 1] + c[:, 2] * y[b + 2]
+
+    def joint_angles(self, u: np.ndarray) -> np.ndarray:
+        """φ̂ = φ̂(u₀) + J (u − u₀), the linearised joint angles at heights u.
+
+        Written about the linearisation point so that round-off scales with the
+        increment u − u₀, not with the heights themselves.
+        """
+        return self.phi_origin + self._J(u - self.origin)
 
     def gradient(self, u: np.ndarray) -> np.ndarray:
-        """H u + c, computed in factored form Jᵀ k (J u + φ₀ − φ*) − f.
+        """H u + c, computed in factored form Jᵀ k (φ̂(u) − φ*) − f.
 
         Equal to ``matvec(u) + linear`` in exact arithmetic, but it never forms
         the large, cancelling terms of H u: its round-off scales with the
@@ -104,10 +114,10 @@ class ContactStep:
     def gradient_scale(self, u: np.ndarray) -> np.ndarray:
         """Size of the terms summed in :meth:`gradient` (for round-off tolerances)."""
         y = np.zeros(self.links + 2)
-        y[self.free_nodes + 1] = np.abs(u)
+        y[self.free_nodes + 1] = np.abs(u - self.origin)
         b, c = self.base, np.abs(self.coef)
         phi = c[:, 0] * y[b] + c[:, 1] * y[b + 1] + c[:, 2] * y[b + 2]
-        m = self.stiffness * (phi + np.abs(self.phi0) + np.abs(self.rest_joint))
+        m = self.stiffness * (phi + np.abs(self.phi_origin) + np.abs(self.rest_joint))
         g = _scatter(b, c, m, self.links + 2)
         return g[self.free_nodes + 1] + np.abs(self.nodal_load) + np.finfo(float).tiny
 
@@ -124,10 +134,10 @@ class ContactStep:
 
     # -- back to the chain ----------------------------------------------------
     def predict_alpha(self, u: np.ndarray) -> np.ndarray:
-        """α̂ from the linearised kinematics, eq. (21)."""
+        """α̂ from the linearised kinematics, eq. (21), written about u₀."""
         y = np.zeros(self.links + 1)
-        y[self.free_nodes] = u
-        return np.diff(y) * self.inv_a_cos - self.v
+        y[self.free_nodes] = u - self.origin
+        return self.alpha0 + np.diff(y) * self.inv_a_cos
 
     # -- the LCP forms --------------------------------------------------------
     def lcp(self, rows: str = "contact") -> LCPForm:
@@ -243,6 +253,15 @@ def assemble_step(chain: Chain, alpha: np.ndarray) -> ContactStep:
     for m in range(2):
         off1[b0 + m : b0 + m + nj] += k * coef[:, m] * coef[:, m + 1]
     off2[b0 : b0 + nj] += k * coef[:, 0] * coef[:, 2]
+    # The linearisation point: u₀ = heights by forward kinematics. If the chain is
+    # not closed on a pinned right end (the undamped iteration), the last link's
+    # linearised angle at u₀ differs from α_N by the closure error.
+    y = np.concatenate(([0.0], np.cumsum(chain.link_length * np.sin(alpha))))
+    origin = y[chain.free_nodes]
+    alpha0 = np.asarray(alpha, dtype=float).copy()
+    if chain.free_nodes[-1] < chain.links:
+        alpha0[-1] += -y[-1] * inv_a_cos[-1]
+    phi_origin = alpha0[right] - np.where(left >= 0, alpha0[np.maximum(left, 0)], 0.0)
     free = chain.free_nodes + 1
     if np.any(np.diff(free) != 1):
         raise ValueError("free nodes must be contiguous")
@@ -265,6 +284,9 @@ def assemble_step(chain: Chain, alpha: np.ndarray) -> ContactStep:
         base=base,
         coef=coef,
         phi0=phi0,
+        origin=origin,
+        alpha0=alpha0,
+        phi_origin=phi_origin,
         stiffness=k,
         rest_joint=chain.rest_joint,
         nodal_load=chain.nodal_load,

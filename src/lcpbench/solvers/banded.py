@@ -174,7 +174,7 @@ def step_certificate(step, sol: StepSolution) -> float:
     if not (np.all(np.isfinite(u)) and np.all(np.isfinite(ru)) and np.all(np.isfinite(rl))):
         return np.inf
     grad = step.gradient(u)
-    size = _abs_matvec(step.bands, u) + np.abs(step.linear) + ru + rl
+    size = step.gradient_scale(u) + ru + rl
     force = max(float(np.max(size, initial=0.0)), np.finfo(float).tiny)
     stat = np.max(np.abs(grad + ru - rl), initial=0.0) / force
     span = 1.0 + np.max(np.abs(u), initial=0.0)
