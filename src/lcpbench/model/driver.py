@@ -84,6 +84,11 @@ def run_driver(
     return _globalised(chain, solver, tol, max_outer)
 
 
+def _converged(alpha, sol: StepSolution, steps) -> DriverOutput:
+    reason = "converged" if sol.solved else "converged (last step inaccurate)"
+    return DriverOutput(alpha, sol.reaction_upper, sol.reaction_lower, True, reason, steps)
+
+
 def _solve_step(chain, alpha, solver, warm, steps):
     t0 = time.perf_counter()
     step = assemble_step(chain, alpha)
@@ -130,9 +135,7 @@ def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int) ->
                                 t, dalpha, E))
         warm = sol
         if dalpha < tol:
-            reason = "converged" if sol.solved else "converged (last step inaccurate)"
-            return DriverOutput(alpha, sol.reaction_upper, sol.reaction_lower, True, reason,
-                                steps)
+            return _converged(alpha, sol, steps)
     return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
                                   f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
 
@@ -162,8 +165,6 @@ def _undamped(chain: Chain, solver: StepSolver, tol: float, max_outer: int) -> D
         alpha = new
         warm = sol
         if dalpha < tol:
-            reason = "converged" if sol.solved else "converged (last step inaccurate)"
-            return DriverOutput(alpha, sol.reaction_upper, sol.reaction_lower, True, reason,
-                                steps)
+            return _converged(alpha, sol, steps)
     return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
                                   f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")

@@ -77,13 +77,7 @@ class ContactStep:
     # -- linear algebra on H --------------------------------------------------
     def matvec(self, u: np.ndarray) -> np.ndarray:
         """H @ u using the bands."""
-        b = self.bands
-        out = b[0] * u
-        out[1:] += b[1, :-1] * u[:-1]
-        out[:-1] += b[1, :-1] * u[1:]
-        out[2:] += b[2, :-2] * u[:-2]
-        out[:-2] += b[2, :-2] * u[2:]
-        return out
+        return banded_matvec(self.bands, u)
 
     def _J(self, du: np.ndarray) -> np.ndarray:
         y = np.zeros(self.links + 2)
@@ -202,6 +196,16 @@ class LCPForm:
     heights: np.ndarray  # upper wall height of each gap row (mm)
     condense: np.ndarray  # free-node indices eliminated from the LCP
     n_gap: int
+
+
+def banded_matvec(bands: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """H @ u for symmetric pentadiagonal H in lower banded storage."""
+    out = bands[0] * u
+    out[1:] += bands[1, :-1] * u[:-1]
+    out[:-1] += bands[1, :-1] * u[1:]
+    out[2:] += bands[2, :-2] * u[:-2]
+    out[:-2] += bands[2, :-2] * u[2:]
+    return out
 
 
 def _scatter(base: np.ndarray, coef: np.ndarray, m: np.ndarray, size: int) -> np.ndarray:

@@ -40,17 +40,6 @@ def _sub_bands(bands: np.ndarray, idx: np.ndarray) -> np.ndarray:
     return sub
 
 
-def _abs_matvec(bands: np.ndarray, u: np.ndarray) -> np.ndarray:
-    b = np.abs(bands)
-    au = np.abs(u)
-    out = b[0] * au
-    out[1:] += b[1, :-1] * au[:-1]
-    out[:-1] += b[1, :-1] * au[1:]
-    out[2:] += b[2, :-2] * au[:-2]
-    out[:-2] += b[2, :-2] * au[2:]
-    return out
-
-
 def solve_banded_qp(
     step,
     *,
