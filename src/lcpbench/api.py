@@ -60,7 +60,7 @@ def solve(
         scene = scene.with_links(auto_links(scene, solver=solver))
     t0 = time.perf_counter()
     chain = scene.chain()
-    if _clears_walls(scene, chain):
+    if _clears_walls(chain):
         out = DriverOutput(chain.rest_alpha.copy(), np.zeros(chain.free_nodes.size),
                            np.zeros(chain.free_nodes.size), True, "no contact: the "
                            "unconstrained arc clears every wall and there is no load")
@@ -94,7 +94,7 @@ def _audit(res: ContactResult, chain) -> None:
         res.reason = "the certificate rejects the answer: " + ", ".join(problems)
 
 
-def _clears_walls(scene, chain) -> bool:
+def _clears_walls(chain) -> bool:
     """Is the unconstrained shape itself the answer (no load, no wall reached)?"""
     if np.any(chain.link_load != 0):
         return False

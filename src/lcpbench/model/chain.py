@@ -88,12 +88,12 @@ def joint_moments(
         force[n] = -(chain.link_load @ xc + force @ x) / x[n]
     at = chain.joint_links[:, 1]  # node of each joint
     # Σ_{q>p} F_q (x_q − x_p) and Σ_{i>=p} P_i (xc_i − x_p) via suffix sums.
-    f_sum = np.cumsum((force)[::-1])[::-1]  # Σ_{q>=p} F_q
+    f_sum = np.cumsum(force[::-1])[::-1]  # Σ_{q>=p} F_q
     fx_sum = np.cumsum((force * x)[::-1])[::-1]
     p_sum = np.cumsum(chain.link_load[::-1])[::-1]
     px_sum = np.cumsum((chain.link_load * xc)[::-1])[::-1]
     xp = x[at]
-    nodes = (fx_sum[at + 1] - xp * f_sum[at + 1]) if n > 0 else 0.0
+    nodes = fx_sum[at] - xp * f_sum[at]  # the force at the joint's own node has no lever arm
     links = px_sum[at] - xp * p_sum[at]
     return nodes + links
 

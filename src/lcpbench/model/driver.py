@@ -84,12 +84,18 @@ def run_driver(
     return _globalised(chain, solver, tol, max_outer)
 
 
+def _step_failed(alpha, n, steps, sol: StepSolution, t_asm: float, E: float) -> DriverOutput:
+    steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm, 0.0,
+                            np.nan, E))
+    return _fail(alpha, n, steps, f"contact step not solved ({sol.status.value}: {sol.message})")
+
+
 def _converged(alpha, sol: StepSolution, steps) -> DriverOutput:
     reason = "converged" if sol.solved else "converged (last step inaccurate)"
     return DriverOutput(alpha, sol.reaction_upper, sol.reaction_lower, True, reason, steps)
 
 
-def _solve_step(chain, alpha, solver, warm, steps):
+def _solve_step(chain, alpha, solver, warm):
     t0 = time.perf_counter()
     step = assemble_step(chain, alpha)
     t_asm = time.perf_counter() - t0
@@ -107,12 +113,9 @@ def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int) ->
     E = energy(chain, alpha)
     warm: StepSolution | None = None
     for _ in range(max_outer):
-        step, sol, t_asm = _solve_step(chain, alpha, solver, warm, steps)
+        step, sol, t_asm = _solve_step(chain, alpha, solver, warm)
         if sol.status not in (Status.SOLVED, Status.INACCURATE):
-            steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
-                                    0.0, np.nan, E))
-            return _fail(alpha, n, steps, f"contact step not solved ({sol.status.value}: "
-                                          f"{sol.message})")
+            return _step_failed(alpha, n, steps, sol, t_asm, E)
         dalpha = float(np.max(np.abs(step.predict_alpha(sol.u) - alpha), initial=0.0))
         d = sol.u - u
         slope = float(step.gradient(u) @ d)
@@ -147,12 +150,9 @@ def _undamped(chain: Chain, solver: StepSolver, tol: float, max_outer: int) -> D
     branch = np.sign(np.cos(alpha))
     warm: StepSolution | None = None
     for _ in range(max_outer):
-        step, sol, t_asm = _solve_step(chain, alpha, solver, warm, steps)
+        step, sol, t_asm = _solve_step(chain, alpha, solver, warm)
         if sol.status not in (Status.SOLVED, Status.INACCURATE):
-            steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
-                                    1.0, np.nan, np.nan))
-            return _fail(alpha, n, steps, f"contact step not solved ({sol.status.value}: "
-                                          f"{sol.message})")
+            return _step_failed(alpha, n, steps, sol, t_asm, np.nan)
         new = step.predict_alpha(sol.u)
         dalpha = float(np.max(np.abs(new - alpha), initial=0.0))
         steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm, 1.0,

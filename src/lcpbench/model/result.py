@@ -134,7 +134,6 @@ class ContactResult:
     def to_dict(self) -> dict:
         """A JSON-ready summary (the fields of ``lcpbench solve --json``)."""
         scene = asdict(self.scene) if hasattr(self.scene, "__dataclass_fields__") else {}
-        scene.pop("extra", None)
         out = {
             "scene": {**scene, "links": self.links},
             "total_force": self.total_force,

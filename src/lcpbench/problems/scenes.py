@@ -19,7 +19,7 @@ Two scenes:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -261,7 +261,6 @@ class CantileverScene:
     links: int = DEFAULT_LINKS
     length: float = DEFAULT_LENGTH
     EI: float = DEFAULT_EI
-    extra: dict = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self):
         load = _finite("load", self.load)

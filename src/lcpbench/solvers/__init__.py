@@ -8,6 +8,10 @@ active set on the banded Hessian, O(N) per change; the default) and ``lemke``
 
 from __future__ import annotations
 
+import time
+
+import numpy as np
+
 from ..errors import SolverNotFound
 from .base import LCPSolution, Status, StepSolution
 from .banded import solve_banded_qp, step_certificate
@@ -21,10 +25,6 @@ def _active_set(step, warm):
 
 
 def _lemke(step, warm):
-    import time
-
-    import numpy as np
-
     from .lemke import lemke
 
     t0 = time.perf_counter()
