@@ -31,17 +31,24 @@ def solve(
     *,
     method: str = "globalised",
     max_outer: int = 200,
+    settings: str = "default",
+    scaled: bool = True,
 ) -> ContactResult:
     """Find the constrained equilibrium of a scene.
 
     Parameters
     ----------
     scene : ActuatorScene or CantileverScene
-    solver : name of the contact-step back-end ("auto", "active-set", "lemke").
+    solver : name of the contact-step back-end ("auto" = active-set; ``lcpbench
+        solvers`` lists them all).
     tol : convergence threshold on max|α̂ − α| (rad), eq. (32); paper: 1e-3.
     method : "globalised" (line search on the exact energy; default) or
         "undamped" (the paper's Fig. 3 iteration, for comparison).
     max_outer : limit on contact steps.
+    settings : accuracy profile of the back-end: "default" (its own defaults),
+        "low" (1e-3), "mid" (1e-6) or "high" (1e-9).
+    scaled : hand the back-end the nondimensionalised step (default) or the
+        raw one (mm, N), to see what scaling does.
 
     Returns
     -------
@@ -53,7 +60,7 @@ def solve(
         raise ProblemError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     if not (isinstance(max_outer, (int, np.integer)) and max_outer >= 1):
         raise ProblemError(f"max_outer must be an integer >= 1, got {max_outer!r}")
-    step = step_solver(solver)
+    step = step_solver(solver, settings, bool(scaled))
     if isinstance(scene, ActuatorScene) and scene.links == "auto":
         from .model.discretisation import auto_links
 

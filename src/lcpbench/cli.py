@@ -2,7 +2,11 @@
 
 ::
 
-    lcpbench solve --theta 150 --height 3 [--links N|auto] [--channel] [--json] [--plot F.png]
+    lcpbench solve --theta 150 --height 3 [--links N|auto] [--channel] [--solver NAME]
+                   [--settings default|low|mid|high] [--raw] [--json] [--plot F.png]
+    lcpbench solvers [--json]
+    lcpbench export --theta 150 --height 3 [scene options] --format dat|npz --out FILE
+    lcpbench lcp FILE [--solver NAME] [--settings PROFILE] [--json]
     lcpbench validate cantilever [--links N] [--json]
     lcpbench --version
 
@@ -25,6 +29,7 @@ from . import __version__
 from .api import solve
 from .errors import LcpbenchError
 from .model.driver import METHODS
+from .solvers.base import PROFILES
 from .problems.scenes import (
     DEFAULT_EI,
     DEFAULT_LENGTH,
@@ -91,6 +96,31 @@ def _int_arg(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
 
 
+def _add_scene_options(s) -> None:
+    s.add_argument("--theta", type=float, default=DEFAULT_THETA, metavar="DEG",
+                   help=f"unconstrained bend angle, degrees in (0, 360) (default {DEFAULT_THETA:g})")
+    s.add_argument("--height", type=float, default=DEFAULT_HEIGHT, metavar="MM",
+                   help=f"wall height above the pins, mm (default {DEFAULT_HEIGHT:g})")
+    s.add_argument("--links", type=_links_arg, default=DEFAULT_LINKS, metavar="N|auto",
+                   help=f"number of links, or 'auto' (default {DEFAULT_LINKS})")
+    s.add_argument("--length", type=float, default=DEFAULT_LENGTH, metavar="MM",
+                   help=f"section length, mm (default {DEFAULT_LENGTH:g})")
+    s.add_argument("--EI", type=float, default=DEFAULT_EI, metavar="NMM2",
+                   help=f"bending stiffness, N*mm^2 (default {DEFAULT_EI:g})")
+    s.add_argument("--weight", type=float, default=DEFAULT_WEIGHT, metavar="NPMM",
+                   help=f"weight per length, N/mm; 0 turns gravity off (default {DEFAULT_WEIGHT:g})")
+    s.add_argument("--channel", action="store_true",
+                   help="a second wall at -height (the paper's fixture)")
+
+
+def _add_solver_options(s, default: str = DEFAULT_SOLVER) -> None:
+    s.add_argument("--solver", default=default, metavar="NAME",
+                   help=f"back-end (default {default}; `lcpbench solvers` lists them)")
+    s.add_argument("--settings", choices=tuple(PROFILES), default="default",
+                   help="accuracy profile: the solver's own defaults, or a generic "
+                        "tolerance low 1e-3, mid 1e-6, high 1e-9 (default: default)")
+
+
 def build_parser() -> ArgumentParser:
     parser = ArgumentParser(
         prog=PROG,
@@ -106,30 +136,51 @@ def build_parser() -> ArgumentParser:
         help="constrained equilibrium of an actuator section against a wall",
         description="Solve one ActuatorScene and report the contact force and its certificate.",
     )
-    s.add_argument("--theta", type=float, default=DEFAULT_THETA, metavar="DEG",
-                   help=f"unconstrained bend angle, degrees in (0, 360) (default {DEFAULT_THETA:g})")
-    s.add_argument("--height", type=float, default=DEFAULT_HEIGHT, metavar="MM",
-                   help=f"wall height above the pins, mm (default {DEFAULT_HEIGHT:g})")
-    s.add_argument("--links", type=_links_arg, default=DEFAULT_LINKS, metavar="N|auto",
-                   help=f"number of links, or 'auto' (default {DEFAULT_LINKS})")
-    s.add_argument("--length", type=float, default=DEFAULT_LENGTH, metavar="MM",
-                   help=f"section length, mm (default {DEFAULT_LENGTH:g})")
-    s.add_argument("--EI", type=float, default=DEFAULT_EI, metavar="NMM2",
-                   help=f"bending stiffness, N*mm^2 (default {DEFAULT_EI:g})")
-    s.add_argument("--weight", type=float, default=DEFAULT_WEIGHT, metavar="NPMM",
-                   help=f"weight per length, N/mm; 0 turns gravity off (default {DEFAULT_WEIGHT:g})")
-    s.add_argument("--channel", action="store_true",
-                   help="a second wall at -height (the paper's fixture)")
+    _add_scene_options(s)
     s.add_argument("--tol", type=float, default=DEFAULT_TOL, metavar="RAD",
                    help=f"convergence threshold on max|d alpha|, rad (default {DEFAULT_TOL:g})")
-    s.add_argument("--solver", default=DEFAULT_SOLVER, metavar="NAME",
-                   help=f"contact-step back-end: auto, active-set, lemke (default {DEFAULT_SOLVER})")
+    _add_solver_options(s)
+    s.add_argument("--raw", action="store_true",
+                   help="hand the back-end the raw step (mm, N) instead of the "
+                        "nondimensionalised one")
     s.add_argument("--method", choices=METHODS, default=DEFAULT_METHOD,
                    help=f"outer iteration (default {DEFAULT_METHOD})")
     s.add_argument("--json", action="store_true", help="print the result as one JSON object")
     s.add_argument("--plot", metavar="FILE.png",
                    help="draw the shape, walls and reactions (needs matplotlib)")
     s.set_defaults(handler=_cmd_solve)
+
+    ls = commands.add_parser(
+        "solvers", help="list every back-end, installed or not, with its capabilities",
+        description="List every back-end: availability, version, form, storage, warm "
+                    "start, method and how to install it.")
+    ls.add_argument("--json", action="store_true", help="print one JSON array")
+    ls.set_defaults(handler=_cmd_solvers)
+
+    e = commands.add_parser(
+        "export", help="write the contact step at the converged configuration as an LCP file",
+        description="Solve a scene, then write the contact step at its converged "
+                    "configuration as an LCP (w = M z + q; z = gaps, w = reactions).")
+    _add_scene_options(e)
+    e.add_argument("--tol", type=float, default=DEFAULT_TOL, metavar="RAD",
+                   help=f"convergence threshold of the solve, rad (default {DEFAULT_TOL:g})")
+    e.add_argument("--format", choices=("dat", "npz"), default=None,
+                   help="Siconos .dat (dense, column-major) or numpy .npz (M, q); "
+                        "default: from the suffix of --out")
+    e.add_argument("--out", required=True, metavar="FILE", help="where to write")
+    e.add_argument("--raw", action="store_true",
+                   help="physical units (mm, N) instead of the nondimensionalised step "
+                        "(gaps / length, reactions / (EI/length^2))")
+    e.set_defaults(handler=_cmd_export)
+
+    lp = commands.add_parser(
+        "lcp", help="solve an LCP file (.dat or .npz) with any back-end",
+        description="Solve 0 <= z _|_ M z + q >= 0 from a Siconos .dat or a .npz file and "
+                    "print z, w, status, iterations, time and residuals.")
+    lp.add_argument("file", metavar="FILE", help="a .dat (Siconos) or .npz (M, q) file")
+    _add_solver_options(lp, default="lemke")
+    lp.add_argument("--json", action="store_true", help="print the result as one JSON object")
+    lp.set_defaults(handler=_cmd_lcp)
 
     v = commands.add_parser(
         "validate",
@@ -235,10 +286,9 @@ def _cmd_solve(args) -> int:
         except ImportError:
             _error_line("--plot needs matplotlib: pip install 'lcpbench[plot]'")
             return 2
-    scene = ActuatorScene(theta=args.theta, height=args.height, links=args.links,
-                          length=args.length, EI=args.EI, weight=args.weight,
-                          channel=args.channel)
-    result = solve(scene, solver=args.solver, tol=args.tol, method=args.method)
+    scene = _scene_from(args)
+    result = solve(scene, solver=args.solver, tol=args.tol, method=args.method,
+                   settings=args.settings, scaled=not args.raw)
     plot_error = None
     if args.plot is not None:
         from .bench.plot import plot_shape
@@ -256,6 +306,92 @@ def _cmd_solve(args) -> int:
         _error_line(plot_error)
         return 2
     return 0 if result.converged else 1
+
+
+def _scene_from(args) -> ActuatorScene:
+    return ActuatorScene(theta=args.theta, height=args.height, links=args.links,
+                         length=args.length, EI=args.EI, weight=args.weight,
+                         channel=args.channel)
+
+
+def _cmd_solvers(args) -> int:
+    from .solvers.registry import backends, plugin_errors
+
+    rows = [b.capabilities() for b in backends().values()]
+    if args.json:
+        _print_json(rows)
+        return 0
+    head = ("name", "installed", "version", "form", "storage", "warm", "method", "install")
+    table = [[r["name"], "yes" if r["available"] else "no", r["version"] or "-", r["form"],
+              r["storage"], "yes" if r["warm_start"] else "no", r["method"], r["install"]]
+             for r in rows]
+    widths = [max(len(str(x)) for x in col) for col in zip(head, *table)]
+    for line in [head, *table]:
+        print("  ".join(f"{str(x):<{w}}" for x, w in zip(line, widths)).rstrip())
+    for err in plugin_errors():
+        print(f"plug-in not loaded: {err}", file=sys.stderr)
+    return 0
+
+
+def _cmd_export(args) -> int:
+    from .model.step import assemble_step
+    from .problems.lcpfile import write_lcp
+    from .solvers.runner import step_lcp
+
+    fmt = args.format
+    if fmt is None:
+        suffix = args.out.rsplit(".", 1)[-1].lower() if "." in args.out else ""
+        if suffix not in ("dat", "npz"):
+            _error_line(f"--out {args.out}: give a .dat or .npz suffix, or --format dat|npz")
+            return 2
+        fmt = suffix
+    scene = _scene_from(args)
+    result = solve(scene, tol=args.tol)
+    if not result.converged:
+        _error_line(f"the scene did not converge ({result.reason}); nothing written")
+        return 1
+    chain = result.scene.chain()
+    step = assemble_step(chain, result.alpha)
+    form, M, q, _, _ = step_lcp(step, scaled=not args.raw)
+    write_lcp(args.out, M, q, fmt=fmt)
+    units = "mm and N" if args.raw else "gaps / length, reactions / (EI/length^2)"
+    print(f"wrote {args.out}: LCP of size {q.size} (contact rows of nodes "
+          f"{_node_ranges(chain.free_nodes[form.rows] + 1)}; {units})")
+    return 0
+
+
+def _cmd_lcp(args) -> int:
+    from .problems.lcpfile import read_lcp
+    from .solvers.runner import solve_lcp
+
+    prob = read_lcp(args.file)
+    sol = solve_lcp(prob.M, prob.q, args.solver, args.settings)
+    res = sol.extra.get("residuals", {})
+    out = {
+        "file": args.file, "size": int(prob.q.size), "solver": sol.extra.get("backend"),
+        "settings": args.settings, "status": sol.status.value, "message": sol.message,
+        "iterations": sol.iterations, "solve_time_s": sol.solve_time,
+        "setup_time_s": sol.setup_time, "time_source": sol.extra.get("time_source", "solver"),
+        "residuals": res, "z": sol.z, "w": sol.w,
+    }
+    if args.json:
+        _print_json(out)
+    else:
+        with np.printoptions(precision=6, threshold=20, edgeitems=5, linewidth=100):
+            rows = [
+                ("problem", f"{args.file} (n = {prob.q.size})"),
+                ("solver", f"{out['solver']} (settings {args.settings})"),
+                ("status", sol.status.value + (f" ({sol.message})" if sol.message else "")),
+                ("iterations", str(sol.iterations)),
+                ("time", f"solve {1e6 * sol.solve_time:.1f} us, setup "
+                         f"{1e6 * sol.setup_time:.1f} us ({out['time_source']})"),
+                ("residuals", ", ".join(f"{k} {v:.3g}" for k, v in res.items()) or "n/a"),
+                ("z", str(np.asarray(sol.z))),
+                ("w", str(np.asarray(sol.w))),
+            ]
+        width = max(len(k) for k, _ in rows)
+        print("\n".join(f"{k:<{width}}  {v}" for k, v in rows))
+    return 0 if sol.solved else 1
 
 
 def _cmd_validate_cantilever(args) -> int:
@@ -287,7 +423,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         args = parser.parse_args(argv)
         if args.handler is None:
-            what = "CASE (cantilever)" if args.command == "validate" else "COMMAND (solve, validate)"
+            what = "CASE (cantilever)" if args.command == "validate" else "COMMAND (solve, solvers, export, lcp, validate)"
             args.parser.error(f"missing {what}; see '{args.parser.prog} --help'")
         return args.handler(args)
     except _Exit as exc:
@@ -295,6 +431,9 @@ def main(argv: list[str] | None = None) -> int:
     except LcpbenchError as exc:
         _error_line(exc)
         return 2
+    except BrokenPipeError:  # output piped into `head` and the like
+        sys.stderr.close()
+        return 0
 
 
 if __name__ == "__main__":

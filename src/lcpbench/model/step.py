@@ -69,6 +69,9 @@ class ContactStep:
     stiffness: np.ndarray
     rest_joint: np.ndarray
     nodal_load: np.ndarray
+    # Nondimensionalisation (DESIGN: lengths by ℓ, forces by EI/ℓ²)
+    length_scale: float = 1.0
+    force_scale: float = 1.0
 
     @property
     def size(self) -> int:
@@ -294,4 +297,6 @@ def assemble_step(chain: Chain, alpha: np.ndarray) -> ContactStep:
         stiffness=k,
         rest_joint=chain.rest_joint,
         nodal_load=chain.nodal_load,
+        length_scale=chain.length,
+        force_scale=chain.force_scale,
     )

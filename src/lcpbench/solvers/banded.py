@@ -26,17 +26,22 @@ EPS = np.finfo(float).eps
 
 
 def _sub_bands(bands: np.ndarray, idx: np.ndarray) -> np.ndarray:
-    """Lower banded storage of the principal submatrix H[idx, idx] (still pentadiagonal)."""
+    """Lower banded storage of the principal submatrix H[idx, idx] (idx sorted).
+
+    A principal submatrix of a matrix of bandwidth b has bandwidth at most b:
+    its entry (p + k, p) is H[idx[p + k], idx[p]], read from the bands when
+    the two indices are at most b apart.
+    """
+    b = bands.shape[0] - 1
     m = idx.size
-    sub = np.zeros((3, m))
+    sub = np.zeros((max(min(b, m - 1), 0) + 1, m))
     sub[0] = bands[0, idx]
-    if m > 1:
-        gap = idx[1:] - idx[:-1]
-        left = idx[:-1]
-        sub[1, : m - 1] = np.where(gap == 1, bands[1, left], np.where(gap == 2, bands[2, left], 0.0))
-    if m > 2:
-        gap2 = idx[2:] - idx[:-2]
-        sub[2, : m - 2] = np.where(gap2 == 2, bands[2, idx[:-2]], 0.0)
+    for k in range(1, sub.shape[0]):
+        gap = idx[k:] - idx[:-k]
+        ok = gap <= b
+        vals = np.zeros(m - k)
+        vals[ok] = bands[gap[ok], idx[:-k][ok]]
+        sub[k, : m - k] = vals
     return sub
 
 
@@ -175,3 +180,81 @@ def step_certificate(step, sol: StepSolution) -> float:
     comp_lo = np.abs(np.where(np.isfinite(g_lo), g_lo, 0.0) * rl)
     comp = max(np.max(comp_up, initial=0.0), np.max(comp_lo, initial=0.0)) / (force * span)
     return float(max(stat, feas, neg, comp))
+
+
+# -- the back-end interface ---------------------------------------------------
+class _BandedBoxQP:
+    """A general :class:`~lcpbench.solvers.base.BoxQP` in the shape the active
+    set needs (bands, gradient, a round-off scale of the gradient)."""
+
+    def __init__(self, qp):
+        self.P = qp.P
+        self.linear = np.asarray(qp.c, dtype=float)
+        self.lower = np.asarray(qp.lower, dtype=float)
+        self.upper = np.asarray(qp.upper, dtype=float)
+        self.bands = qp.bands if qp.bands is not None else dense_to_bands(qp.dense())
+        self.absP = abs(self.P)
+
+    @property
+    def size(self) -> int:
+        return self.linear.size
+
+    def gradient(self, u):
+        return self.P @ u + self.linear
+
+    def gradient_scale(self, u):
+        return self.absP @ np.abs(u) + np.abs(self.linear) + np.finfo(float).tiny
+
+    def unconstrained_minimiser(self):
+        return solveh_banded(self.bands, -self.linear, lower=True, check_finite=False)
+
+
+def dense_to_bands(P: np.ndarray) -> np.ndarray:
+    """Lower banded storage of a symmetric matrix, at its actual bandwidth."""
+    n = P.shape[0]
+    rows, cols = np.nonzero(np.tril(P))
+    b = int(np.max(rows - cols, initial=0))
+    bands = np.zeros((b + 1, n))
+    for k in range(b + 1):
+        bands[k, : n - k] = np.diagonal(P, -k)
+    return bands
+
+
+def _warm_sets(warm, n):
+    if warm is None:
+        return None, None, None
+    x = getattr(warm, "u", None)
+    if x is None:
+        x = warm.x
+    up = getattr(warm, "active_upper", None)
+    lo = getattr(warm, "active_lower", None)
+    return x, up, lo
+
+
+def solve_step(step, settings, warm=None, **options) -> StepSolution:
+    """The contact step by the active set on its own banded, factored form.
+
+    The method is scale-invariant (its tests are relative to the size of the
+    terms that cancel), so it always works on the step in physical units.
+    """
+    x, up, lo = _warm_sets(warm, step.size)
+    max_iter = settings.max_iter if settings.max_iter else None
+    return solve_banded_qp(step, start=x, active_upper=up, active_lower=lo, max_iter=max_iter)
+
+
+def solve_qp(qp, settings, warm=None, **options):
+    """Any bound-constrained QP with positive-definite P (banded or not)."""
+    from .base import QPResult
+
+    t0 = time.perf_counter()
+    try:
+        prob = _BandedBoxQP(qp)
+    except (LinAlgError, ValueError) as exc:
+        return QPResult.failure(qp.size, Status.FAILED, f"{type(exc).__name__}: {exc}")
+    setup = time.perf_counter() - t0
+    x, _, _ = _warm_sets(warm, qp.size)
+    max_iter = settings.max_iter if settings.max_iter else None
+    sol = solve_banded_qp(prob, start=x, max_iter=max_iter)
+    y = sol.reaction_upper - sol.reaction_lower
+    return QPResult(sol.u, y, sol.status, sol.iterations, sol.solve_time, setup, sol.message,
+                    time_source="solver")

@@ -78,6 +78,9 @@ def lcp_residuals(M, q: np.ndarray, z: np.ndarray) -> dict[str, float]:
 class StepSolution:
     """Solution of one contact step in node heights (the QP view).
 
+    The step's counterpart of :class:`LCPSolution`: the same status set, the
+    same solver-reported counts and times, plus lcpbench's own residuals.
+
     Attributes
     ----------
     u : ndarray
@@ -100,7 +103,107 @@ class StepSolution:
     message: str = ""
     active_upper: np.ndarray | None = None
     active_lower: np.ndarray | None = None
+    time_source: str = "solver"  # "solver": reported by it; "wall": measured around it
+    build_time: float = 0.0  # lcpbench's time to build the back-end's form (s)
+    # filled in by lcpbench (solvers.runner), the same for every back-end:
+    backend: str = ""
+    settings: str = ""
+    scaled: bool = True
+    residuals: dict = field(default_factory=dict)
+    reaction_net: np.ndarray | None = None  # R = K g + z from the gaps (N)
+    wall_time: float = 0.0
 
     @property
     def solved(self) -> bool:
         return self.status is Status.SOLVED
+
+
+# -- settings profiles --------------------------------------------------------
+@dataclass(frozen=True)
+class Settings:
+    """One generic accuracy request, translated by each back-end into its own
+    parameters.
+
+    ``tol`` is a tolerance on the residuals of the (nondimensionalised)
+    problem: primal and dual feasibility and complementarity, absolute and
+    relative alike. ``None`` means "the solver's own defaults".
+    """
+
+    name: str
+    tol: float | None
+    max_iter: int | None = None
+    time_limit: float | None = None  # seconds, where the solver supports it
+
+
+PROFILES: dict[str, Settings] = {
+    "default": Settings("default", None),
+    "low": Settings("low", 1e-3),
+    "mid": Settings("mid", 1e-6),
+    "high": Settings("high", 1e-9),
+}
+
+
+# -- the QP view of a problem -------------------------------------------------
+@dataclass
+class BoxQP:
+    """``minimise ½ xᵀPx + cᵀx  subject to  lower <= x <= upper``.
+
+    Bounds may be ±inf (no constraint on that row). ``P`` is symmetric
+    positive (semi)definite, stored as a full (both triangles)
+    ``scipy.sparse.csc_matrix``; :meth:`dense` gives it as an array.
+    ``bands`` is P in lower banded storage when P is banded (the contact
+    step: pentadiagonal), for structure-exploiting back-ends.
+    """
+
+    P: "object"
+    c: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    bands: np.ndarray | None = None
+
+    @property
+    def size(self) -> int:
+        return self.c.size
+
+    def dense(self) -> np.ndarray:
+        P = self.P
+        return P.toarray() if hasattr(P, "toarray") else np.asarray(P, dtype=float)
+
+    def constrained_rows(self) -> np.ndarray:
+        """Indices of rows with at least one finite bound."""
+        return np.flatnonzero(np.isfinite(self.lower) | np.isfinite(self.upper))
+
+
+@dataclass
+class QPWarm:
+    """A warm start for a QP back-end: primal x and signed bound multiplier y."""
+
+    x: np.ndarray
+    y: np.ndarray | None = None
+
+
+@dataclass
+class QPResult:
+    """What a QP back-end returns, before lcpbench judges it.
+
+    ``y`` is the signed bound multiplier with the convention
+    ``P x + c + y = 0``: ``y_i > 0`` where the upper bound pushes, ``y_i < 0``
+    where the lower bound does (OSQP's convention for ``A = I``).
+    Times are seconds; ``time_source`` says whether the solver reported them
+    ("solver") or lcpbench measured wall time around the call ("wall").
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    status: Status
+    iterations: int = 0
+    solve_time: float = 0.0
+    setup_time: float = 0.0
+    message: str = ""
+    time_source: str = "solver"
+    extra: dict = field(default_factory=dict)
+
+    @classmethod
+    def failure(cls, n: int, status: Status, message: str, **kw) -> "QPResult":
+        nan = np.full(n, np.nan)
+        return cls(nan, nan.copy(), status, message=message, **kw)

@@ -196,3 +196,12 @@ def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
         sol.status = Status.INACCURATE
         sol.message = f"natural residual {res['natural']:.3g} > {RESIDUAL_TOL:g}"
     return sol
+
+
+def solve_lcp(M, q, settings, warm=None, **options) -> LCPSolution:
+    """The back-end interface. Lemke is exact: the accuracy profile does not
+    change its pivots; ``settings.max_iter`` is the pivot budget. A warm start
+    is ignored (Lemke always starts from the artificial basis)."""
+    if settings.max_iter:
+        options.setdefault("max_pivots", settings.max_iter)
+    return lemke(M, q, **options)

@@ -1,0 +1,292 @@
+"""The registry of back-ends: what exists, what is installed, what it can do.
+
+Every back-end is a :class:`Backend` record: capabilities as data, the
+lcpbench module that adapts it, and the top-level Python modules it needs.
+Listing the registry never imports a native library: availability is decided
+with :func:`importlib.util.find_spec` (as cvxpy does), or by a cheap check
+function for the Siconos bridge. The adapter module is imported only when the
+back-end is first used.
+
+Third-party back-ends plug in through the entry-point group
+``lcpbench.solvers``: an entry point loads to a :class:`Backend` or a list of
+them, whose ``module`` provides ``solve_lcp`` (form "lcp") or ``solve_qp``
+(form "qp") with the signatures of the built-in adapters.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.metadata
+import importlib.util
+from dataclasses import dataclass, field
+from functools import lru_cache
+
+from ..errors import ProblemError, SolverNotFound
+from .base import PROFILES, Settings
+
+FORMS = ("lcp", "qp")
+STORAGES = ("dense", "sparse", "banded")
+ENTRY_POINT_GROUP = "lcpbench.solvers"
+
+
+@dataclass(frozen=True)
+class Backend:
+    """One back-end and its capabilities.
+
+    Attributes
+    ----------
+    name : the name users pass as ``solver=``.
+    form : "lcp" (works on ``w = M z + q``) or "qp" (works on the
+        bound-constrained QP; an LCP file is handed over as
+        ``min ½ zᵀMz + qᵀz, z >= 0``, which needs symmetric M).
+    storage : "dense", "sparse" or "banded" matrices.
+    warm_start : does it accept a starting point (used across outer steps).
+    method : "pivoting" (exact, finite), "active-set" (exact, finite),
+        "iterative" (first-order), "interior-point", "augmented-lagrangian"
+        or "modelling" (a modelling layer that picks a solver).
+    module : the lcpbench module with ``solve_lcp`` / ``solve_qp``.
+    requires : top-level modules that must be importable.
+    extra : the pip extra of lcpbench that installs it (None: built in).
+    distribution : the distribution whose version is reported.
+    options : keyword arguments for the module's solve function.
+    check : "module:function" returning availability, instead of ``requires``.
+    """
+
+    name: str
+    form: str
+    storage: str
+    warm_start: bool
+    method: str
+    module: str
+    description: str = ""
+    requires: tuple[str, ...] = ()
+    extra: str | None = None
+    distribution: str | None = None
+    options: dict = field(default_factory=dict, hash=False, compare=False)
+    check: str | None = None
+    fallback: str | None = None  # back-end to run when this one cannot certify a step
+
+    def __post_init__(self):
+        if self.form not in FORMS:
+            raise ValueError(f"Backend {self.name!r}: form must be one of {FORMS}")
+        if self.storage not in STORAGES:
+            raise ValueError(f"Backend {self.name!r}: storage must be one of {STORAGES}")
+
+    @property
+    def exact(self) -> bool:
+        """Finite methods that end on an exact basis (pivoting, active set)."""
+        return self.method in ("pivoting", "active-set")
+
+    def available(self) -> bool:
+        """Installed? Decided without importing any native library."""
+        if self.check:
+            return bool(_call(self.check))
+        return all(_has_module(m) for m in self.requires)
+
+    def version(self) -> str | None:
+        if self.check and not self.available():
+            return None
+        dist = self.distribution
+        if dist is None:
+            return None
+        if dist.startswith("call:"):
+            return _call(dist[5:])
+        try:
+            return importlib.metadata.version(dist)
+        except importlib.metadata.PackageNotFoundError:
+            return None
+
+    def install_hint(self) -> str:
+        if self.extra is None:
+            return "built in"
+        if self.extra.startswith("apt:"):
+            return f"apt-get install {self.extra[4:]}"
+        return f"pip install 'lcpbench[{self.extra}]'"
+
+    def load(self):
+        """The adapter module (imports the native library lazily, at solve time)."""
+        return importlib.import_module(self.module)
+
+    def capabilities(self) -> dict:
+        """Capabilities and installation state as plain data (for ``lcpbench solvers``)."""
+        ok = self.available()
+        return {
+            "name": self.name, "available": ok, "version": self.version() if ok else None,
+            "form": self.form, "storage": self.storage, "warm_start": self.warm_start,
+            "method": self.method, "exact": self.exact, "install": self.install_hint(),
+            "description": self.description,
+        }
+
+
+def _has_module(name: str) -> bool:
+    try:
+        return importlib.util.find_spec(name) is not None
+    except (ImportError, ValueError):
+        return False
+
+
+def _call(target: str):
+    """Call ``"module:function"``; a check that cannot run means "not available"."""
+    mod, _, fn = target.partition(":")
+    try:
+        return getattr(importlib.import_module(mod), fn)()
+    except Exception:
+        return None
+
+
+def _own(name, form, storage, warm, method, module, description, **kw) -> Backend:
+    return Backend(name, form, storage, warm, method, module, description,
+                   distribution="lcpbench", **kw)
+
+
+def _builtin() -> list[Backend]:
+    out = [
+        _own("active-set", "qp", "banded", True, "active-set", "lcpbench.solvers.banded",
+             "primal active set on the banded Cholesky factor, O(N) per change; "
+             "falls back to Lemke when it cannot certify", fallback="lemke"),
+        _own("lemke", "lcp", "dense", False, "pivoting", "lcpbench.solvers.lemke",
+             "Lemke's complementary pivoting, lexicographic anti-cycling rule"),
+        _own("pgs", "lcp", "dense", True, "iterative", "lcpbench.solvers.pgs",
+             "projected Gauss-Seidel"),
+        _own("psor", "lcp", "dense", True, "iterative", "lcpbench.solvers.pgs",
+             "projected successive over-relaxation (PGS with omega = 1.5)",
+             options={"omega": 1.5}),
+        Backend("osqp", "qp", "sparse", True, "iterative", "lcpbench.solvers.qp_osqp",
+                "OSQP 1.x (ADMM), native API", requires=("osqp",), extra="osqp",
+                distribution="osqp"),
+        Backend("clarabel", "qp", "sparse", False, "interior-point",
+                "lcpbench.solvers.qp_clarabel", "Clarabel interior point, native API",
+                requires=("clarabel",), extra="clarabel", distribution="clarabel"),
+        Backend("proxsuite-dense", "qp", "dense", True, "augmented-lagrangian",
+                "lcpbench.solvers.qp_proxsuite", "ProxQP (ProxSuite), dense back-end",
+                requires=("proxsuite",), extra="proxsuite", distribution="proxsuite",
+                options={"variant": "dense"}),
+        Backend("proxsuite-sparse", "qp", "sparse", True, "augmented-lagrangian",
+                "lcpbench.solvers.qp_proxsuite", "ProxQP (ProxSuite), sparse back-end",
+                requires=("proxsuite",), extra="proxsuite", distribution="proxsuite",
+                options={"variant": "sparse"}),
+        Backend("cvxpy", "qp", "sparse", False, "modelling", "lcpbench.solvers.qp_cvxpy",
+                "the QP stated in cvxpy, solved by the solver cvxpy picks",
+                requires=("cvxpy",), extra="cvxpy", distribution="cvxpy"),
+    ]
+    out += _qpsolvers_backends()
+    for method, label in (("lemke", "Lemke"), ("pgs", "projected Gauss-Seidel"),
+                          ("newton-min", "Newton on the min function"),
+                          ("newton-fb", "Newton on Fischer-Burmeister, line search")):
+        out.append(Backend(
+            f"siconos-{method}", "lcp", "dense", method != "lemke",
+            "pivoting" if method == "lemke" else "iterative",
+            "lcpbench.solvers.siconos_bridge", f"Siconos numerics (C): {label}, via a "
+            "subprocess bridge to the system Python", extra="apt:python3-siconos",
+            distribution="call:lcpbench.solvers.siconos_bridge:version",
+            check="lcpbench.solvers.siconos_bridge:available", options={"method": method}))
+    return out
+
+
+#: qpsolvers back-ends that have a native lcpbench adapter (not duplicated).
+_NATIVE = {"osqp", "clarabel", "proxqp"}
+#: How each qpsolvers solver is classified (method, storage).
+_QPSOLVERS_KIND = {
+    "daqp": ("active-set", "dense"), "quadprog": ("active-set", "dense"),
+    "qpoases": ("active-set", "dense"), "highs": ("active-set", "sparse"),
+    "piqp": ("interior-point", "sparse"), "cvxopt": ("interior-point", "dense"),
+    "ecos": ("interior-point", "sparse"), "mosek": ("interior-point", "sparse"),
+    "gurobi": ("interior-point", "sparse"), "hpipm": ("interior-point", "dense"),
+    "qpswift": ("interior-point", "sparse"), "kvxopt": ("interior-point", "dense"),
+    "scs": ("iterative", "sparse"), "qpalm": ("augmented-lagrangian", "sparse"),
+    "sip": ("interior-point", "sparse"), "jaxopt_osqp": ("iterative", "dense"),
+}
+
+
+def _qpsolvers_backends() -> list[Backend]:
+    try:
+        from .qp_qpsolvers import KNOWN_SOLVERS  # pure Python: a table, no native imports
+    except ImportError:  # pragma: no cover - the adapter ships with lcpbench
+        return []
+
+    out = []
+    for solver, module in sorted(KNOWN_SOLVERS.items()):
+        if solver in _NATIVE:
+            continue
+        method, storage = _QPSOLVERS_KIND.get(solver, ("iterative", "sparse"))
+        out.append(Backend(
+            f"qpsolvers-{solver}", "qp", storage, True, method, "lcpbench.solvers.qp_qpsolvers",
+            f"{solver} through qpsolvers", requires=("qpsolvers", module.split(".")[0]),
+            extra="qpsolvers", distribution="qpsolvers", options={"solver": solver}))
+    return out
+
+
+@lru_cache(maxsize=1)
+def _plugins() -> tuple[tuple[Backend, ...], tuple[str, ...]]:
+    """Back-ends from the ``lcpbench.solvers`` entry points (and load errors)."""
+    found: list[Backend] = []
+    errors: list[str] = []
+    for ep in importlib.metadata.entry_points(group=ENTRY_POINT_GROUP):
+        try:
+            obj = ep.load()
+            obj = obj() if callable(obj) and not isinstance(obj, Backend) else obj
+            items = [obj] if isinstance(obj, Backend) else list(obj)
+            if not all(isinstance(b, Backend) for b in items):
+                raise TypeError("the entry point must give a Backend or a list of them")
+            found.extend(items)
+        except Exception as exc:  # a broken plugin must not break the registry
+            errors.append(f"{ep.name}: {type(exc).__name__}: {exc}")
+    return tuple(found), tuple(errors)
+
+
+@lru_cache(maxsize=1)
+def _all() -> dict[str, Backend]:
+    table = {b.name: b for b in _builtin()}
+    for b in _plugins()[0]:
+        table.setdefault(b.name, b)  # a plugin cannot shadow a built-in name
+    return table
+
+
+def backends() -> dict[str, Backend]:
+    """Every known back-end, installed or not, by name."""
+    return dict(_all())
+
+
+def plugin_errors() -> tuple[str, ...]:
+    return _plugins()[1]
+
+
+def available_backends() -> list[str]:
+    return [name for name, b in _all().items() if b.available()]
+
+
+DEFAULT = "active-set"
+
+
+def get_backend(name: str) -> Backend:
+    """The back-end called ``name``; "auto" is the default (active-set).
+
+    Raises
+    ------
+    SolverNotFound
+        For an unknown name or one that is not installed, naming the installed
+        back-ends and how to install the missing one.
+    """
+    if name == "auto":
+        name = DEFAULT
+    table = _all()
+    b = table.get(name)
+    if b is not None and b.available():
+        return b
+    installed = ", ".join(available_backends())
+    if b is None:
+        raise SolverNotFound(f"unknown solver {name!r}; installed: auto, {installed} "
+                             "(`lcpbench solvers` lists all)")
+    raise SolverNotFound(f"solver {name!r} is not installed ({b.install_hint()}); "
+                         f"installed: {installed}")
+
+
+def get_settings(settings: str | Settings) -> Settings:
+    """A settings profile by name (default, low, mid, high) or a Settings object."""
+    if isinstance(settings, Settings):
+        return settings
+    try:
+        return PROFILES[settings]
+    except (KeyError, TypeError):
+        raise ProblemError(f"settings must be one of {', '.join(PROFILES)}, "
+                           f"got {settings!r}") from None
