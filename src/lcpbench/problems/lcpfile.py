@@ -1,0 +1,353 @@
+"""Read and write LCP files: Siconos ``.dat`` and numpy ``.npz``.
+
+An LCP: find ``z >= 0`` with ``w = M z + q >= 0`` and ``z'w = 0``.
+
+Siconos ``.dat`` (the test collection of Siconos numerics): whitespace-separated
+numbers, anything after ``#`` a comment::
+
+    n                        size of the problem
+    storage                  0 = dense, 1 = sparse block
+    size0 size1              matrix dimensions
+    -- dense (0) --
+    size0 size1              repeated
+    size0*size1 numbers      M, COLUMN-MAJOR: M[i, j] = values[i + j*size0]
+    -- sparse block (1) --   (Siconos ``SBM_new_from_file``)
+    nbblocks                 number of stored blocks (0: M = 0, nothing follows)
+    nb0 nb1                  number of block rows and block columns
+    nb0 integers             cumulative row sizes: block row r ends at row sizes0[r]
+    nb1 integers             cumulative column sizes
+    filled1 filled2          lengths of the two index arrays
+    filled1 integers         row pointers: block row r holds blocks ptr[r]..ptr[r+1]-1
+    filled2 integers         block column of each stored block
+    per stored block k, in order: the integer k, then its entries COLUMN-MAJOR
+    -- both --
+    n numbers                q
+
+Free text after ``q`` (a note, as in several Siconos files) is ignored, as
+Siconos ignores it; extra *numbers* after ``q`` are a count error. The block
+layout was worked out from the ``*_block.dat`` files of the Siconos
+collection and checked against their dense siblings (``lcp_ortiz`` is
+non-symmetric, so it also pins down the column-major order inside a block).
+
+``.npz``: arrays named ``M`` (n x n) and ``q`` (n).
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import zipfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from lcpbench.errors import ProblemError
+
+#: Formats understood by :func:`read_lcp` and :func:`write_lcp`, by suffix.
+FORMATS = ("dat", "npz")
+
+_INT = re.compile(r"[+-]?\d+\Z")
+
+
+@dataclass
+class LCPProblem:
+    """An LCP ``w = M z + q``, ``0 <= z`` perp ``w >= 0`` with dense ``M``.
+
+    Attributes
+    ----------
+    M : ndarray, shape (n, n)
+    q : ndarray, shape (n,)
+    name : str
+        Usually the file's stem.
+    """
+
+    M: np.ndarray
+    q: np.ndarray
+    name: str = ""
+
+    @property
+    def size(self) -> int:
+        """The number of complementarity pairs ``n``."""
+        return int(self.q.size)
+
+
+def _format_of(path: Path, fmt: str | None) -> str:
+    if fmt is None:
+        fmt = path.suffix.lower().lstrip(".")
+        if fmt not in FORMATS:
+            raise ProblemError(f"{path}: unknown LCP file suffix {path.suffix!r}; "
+                               f"expected one of {', '.join('.' + f for f in FORMATS)}")
+        return fmt
+    if fmt not in FORMATS:
+        raise ProblemError(f"unknown LCP file format {fmt!r}; expected one of "
+                           f"{', '.join(FORMATS)} or None (from the suffix)")
+    return fmt
+
+
+def _check_arrays(M, q, where: str) -> tuple[np.ndarray, np.ndarray]:
+    """Dense float ``M`` (n x n) and ``q`` (n), finite, or ProblemError naming ``where``."""
+    try:
+        M = np.asarray(M.toarray() if hasattr(M, "toarray") else M)
+        q = np.asarray(q)
+        if np.iscomplexobj(M) or np.iscomplexobj(q):
+            raise ValueError("complex values")
+        M, q = np.array(M, dtype=float), np.array(q, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ProblemError(f"{where}: M and q must be real numeric arrays ({exc})") from exc
+    if M.ndim != 2 or M.shape[0] != M.shape[1] or M.shape[0] == 0:
+        raise ProblemError(f"{where}: M must be a non-empty square matrix, got shape {M.shape}")
+    if q.ndim != 1 or q.size != M.shape[0]:
+        raise ProblemError(f"{where}: q must be a vector of length {M.shape[0]}, "
+                           f"got shape {q.shape}")
+    if not (np.all(np.isfinite(M)) and np.all(np.isfinite(q))):
+        raise ProblemError(f"{where}: M and q must be finite (found NaN or inf)")
+    return M, q
+
+
+# -- Siconos .dat ---------------------------------------------------------------------------
+class _Tokens:
+    """The whitespace-separated tokens of a text file, comments dropped, with line numbers."""
+
+    def __init__(self, path: Path, text: str):
+        self.path = path
+        self.toks: list[tuple[str, int]] = []
+        for lineno, line in enumerate(text.splitlines(), start=1):
+            self.toks.extend((t, lineno) for t in line.split("#", 1)[0].split())
+        self.pos = 0
+
+    def error(self, what: str) -> ProblemError:
+        return ProblemError(f"{self.path}: {what}")
+
+    def _next(self, what: str) -> tuple[str, int]:
+        if self.pos >= len(self.toks):
+            raise self.error(f"file ends early: expected {what}")
+        tok = self.toks[self.pos]
+        self.pos += 1
+        return tok
+
+    def integer(self, what: str, low: int = 0) -> int:
+        tok, line = self._next(what)
+        if not _INT.match(tok):
+            raise self.error(f"line {line}: expected an integer for {what}, got {tok!r}")
+        value = int(tok)
+        if value < low:
+            raise self.error(f"line {line}: {what} must be >= {low}, got {value}")
+        return value
+
+    def integers(self, count: int, what: str, low: int = 0) -> list[int]:
+        return [self.integer(what, low) for _ in range(count)]
+
+    def floats(self, count: int, what: str) -> np.ndarray:
+        end = self.pos + count
+        if end > len(self.toks):
+            hint = " (M or q too short?)" if what == "q" else ""
+            raise self.error(f"file ends early: {what} needs {count} numbers, "
+                             f"found {len(self.toks) - self.pos}{hint}")
+        chunk = self.toks[self.pos:end]
+        try:
+            values = np.array([float(t) for t, _ in chunk])
+        except ValueError:
+            tok, line = next((t, ln) for t, ln in chunk if not _is_float(t))
+            raise self.error(f"line {line}: non-numeric token {tok!r} in {what}") from None
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            tok, line = chunk[int(bad[0])]
+            raise self.error(f"line {line}: non-finite value {tok!r} in {what}")
+        self.pos = end
+        return values
+
+    def check_end(self) -> None:
+        """Free text may follow ``q``; further numbers mean a wrong count."""
+        if self.pos < len(self.toks):
+            tok, line = self.toks[self.pos]
+            if _is_float(tok):
+                extra = sum(1 for t, _ in self.toks[self.pos:] if _is_float(t))
+                raise self.error(f"line {line}: {extra} extra number(s) after q "
+                                 "(wrong n or matrix size?)")
+
+
+def _is_float(tok: str) -> bool:
+    try:
+        float(tok)
+    except ValueError:
+        return False
+    return True
+
+
+def _read_block(tk: _Tokens, size0: int, size1: int) -> np.ndarray:
+    """The sparse block matrix (Siconos ``SBM_new_from_file``) as a dense array."""
+    M = np.zeros((size0, size1))
+    nblocks = tk.integer("the number of blocks")
+    if nblocks == 0:
+        return M
+    nb0 = tk.integer("the number of block rows", 1)
+    nb1 = tk.integer("the number of block columns", 1)
+    ends0 = tk.integers(nb0, "a cumulative block row size", 1)
+    ends1 = tk.integers(nb1, "a cumulative block column size", 1)
+    for ends, size, kind in ((ends0, size0, "row"), (ends1, size1, "column")):
+        if any(b <= a for a, b in zip(ends, ends[1:])) or ends[-1] != size:
+            raise tk.error(f"cumulative block {kind} sizes {ends} must increase "
+                           f"strictly up to {size}")
+    filled1 = tk.integer("filled1 (length of the row pointers)", 2)
+    filled2 = tk.integer("filled2 (length of the column indices)", 1)
+    if filled1 > nb0 + 1 or filled2 != nblocks:
+        raise tk.error(f"index lengths filled1={filled1}, filled2={filled2} do not fit "
+                       f"{nb0} block rows and {nblocks} blocks")
+    ptr = tk.integers(filled1, "a block row pointer")
+    if ptr[0] != 0 or ptr[-1] != nblocks or any(b < a for a, b in zip(ptr, ptr[1:])):
+        raise tk.error(f"block row pointers {ptr} must rise from 0 to {nblocks}")
+    bcol = tk.integers(filled2, "a block column index")
+    if max(bcol) >= nb1:
+        raise tk.error(f"block column index {max(bcol)} out of range (< {nb1})")
+    starts0, starts1 = [0, *ends0[:-1]], [0, *ends1[:-1]]
+    for r in range(filled1 - 1):
+        cols = bcol[ptr[r]:ptr[r + 1]]
+        if len(set(cols)) != len(cols):
+            raise tk.error(f"block row {r} stores block column(s) more than once: {cols}")
+        for k in range(ptr[r], ptr[r + 1]):
+            label = tk.integer(f"the number of block {k}")
+            if label != k:
+                raise tk.error(f"blocks out of order: expected block number {k}, got {label}")
+            c = bcol[k]
+            rows = slice(starts0[r], ends0[r])
+            cols_ = slice(starts1[c], ends1[c])
+            nr, nc = ends0[r] - starts0[r], ends1[c] - starts1[c]
+            values = tk.floats(nr * nc, f"block {k} ({nr}x{nc})")
+            M[rows, cols_] = values.reshape((nr, nc), order="F")
+    return M
+
+
+def _read_dat(path: Path, text: str) -> LCPProblem:
+    tk = _Tokens(path, text)
+    n = tk.integer("the problem size n", 1)
+    storage = tk.integer("the storage code (0 dense, 1 sparse block)")
+    if storage not in (0, 1):
+        raise tk.error(f"unknown storage code {storage}; expected 0 (dense) or "
+                       "1 (sparse block)")
+    size0 = tk.integer("the matrix row count", 1)
+    size1 = tk.integer("the matrix column count", 1)
+    if (size0, size1) != (n, n):
+        raise tk.error(f"matrix is {size0}x{size1} but n = {n}; an LCP needs an n x n matrix")
+    if storage == 0:
+        again = (tk.integer("the repeated row count"), tk.integer("the repeated column count"))
+        if again != (size0, size1):
+            raise tk.error(f"repeated dense size {again[0]}x{again[1]} differs from "
+                           f"{size0}x{size1}")
+        M = tk.floats(n * n, f"the {n}x{n} matrix").reshape((n, n), order="F")
+    else:
+        M = _read_block(tk, size0, size1)
+    q = tk.floats(n, "q")
+    tk.check_end()
+    return LCPProblem(M=M, q=q, name=path.stem)
+
+
+def _read_npz(path: Path) -> LCPProblem:
+    # The file is opened here (not by np.load) so it is closed even when np.load fails.
+    with open(path, "rb") as fh:
+        try:
+            data = np.load(fh, allow_pickle=False)
+        except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+            raise ProblemError(f"{path}: not a readable .npz archive ({exc})") from exc
+        if not isinstance(data, np.lib.npyio.NpzFile):
+            raise ProblemError(f"{path}: a single .npy array, not an .npz archive of M and q")
+        with data:
+            missing = [k for k in ("M", "q") if k not in data.files]
+            if missing:
+                raise ProblemError(f"{path}: missing array(s) {', '.join(missing)}; "
+                                   f"found {', '.join(data.files) or 'none'}")
+            try:
+                M, q = data["M"], data["q"]
+            except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+                raise ProblemError(f"{path}: cannot read arrays M and q ({exc})") from exc
+    M, q = _check_arrays(M, q, str(path))
+    return LCPProblem(M=M, q=q, name=path.stem)
+
+
+def read_lcp(path: str | os.PathLike, *, fmt: str | None = None) -> LCPProblem:
+    """Read an LCP from a Siconos ``.dat`` file or an ``.npz`` archive.
+
+    Parameters
+    ----------
+    path : str or path-like
+    fmt : {'dat', 'npz'}, optional
+        Format; default from the file's suffix.
+
+    Returns
+    -------
+    LCPProblem
+        Dense ``M`` (n x n, in the file's column-major order) and ``q``;
+        ``name`` is the file's stem.
+
+    Raises
+    ------
+    ProblemError
+        One line naming the file and the fault: missing or unreadable file,
+        unknown suffix or format, unknown storage code, non-integer header,
+        non-numeric or non-finite entries, too few numbers or extra numbers
+        after ``q``, inconsistent sizes or block structure.
+    """
+    path = Path(path)
+    fmt = _format_of(path, fmt)
+    try:
+        if fmt == "npz":
+            return _read_npz(path)
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ProblemError(f"{path}: no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ProblemError(f"{path}: cannot read ({exc})") from exc
+    return _read_dat(path, text)
+
+
+def write_lcp(path: str | os.PathLike, M, q, *, fmt: str | None = None) -> Path:
+    """Write an LCP as a Siconos ``.dat`` file or an ``.npz`` archive.
+
+    Parameters
+    ----------
+    path : str or path-like
+        Written exactly as given (no suffix is appended).
+    M : array_like, shape (n, n)
+        Dense or scipy sparse (densified).
+    q : array_like, shape (n,)
+    fmt : {'dat', 'npz'}, optional
+        Format; default from the suffix of ``path``.
+
+    Returns
+    -------
+    Path
+        The path written.
+
+    Notes
+    -----
+    ``.dat`` is written with dense storage (0), one column of ``M`` per line
+    (column-major), every number as ``%.17g`` so :func:`read_lcp` returns the
+    same floats bit for bit. The descriptive ``#`` comment goes after ``q``:
+    Siconos' own reader stops there, so the file stays readable by Siconos,
+    whereas a comment before ``n`` would break it.
+
+    Raises
+    ------
+    ProblemError
+        On an unknown format, bad shapes or non-finite values, or when the
+        file cannot be written (e.g. its directory does not exist).
+    """
+    path = Path(path)
+    fmt = _format_of(path, fmt)
+    M, q = _check_arrays(M, q, f"write_lcp({str(path)!r})")
+    n = q.size
+    try:
+        if fmt == "npz":
+            with open(path, "wb") as fh:  # a file object: numpy appends no suffix
+                np.savez(fh, M=M, q=q)
+        else:
+            lines = [str(n), "0", str(n), str(n), f"{n}\t{n}"]
+            lines += [" ".join("%.17g" % v for v in col) for col in M.T]
+            lines.append(" ".join("%.17g" % v for v in q))
+            lines.append("")
+            lines.append(f"# LCP n={n} written by lcpbench: Siconos format, dense storage "
+                         "(0), M column-major (one column per line), then q")
+            path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    except OSError as exc:
+        raise ProblemError(f"{path}: cannot write ({exc.strerror or exc})") from exc
+    return path
