@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,7 +18,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lcpbench.solvers.base import LCPSolution, Status, lcp_residuals
-from lcpbench.solvers.lemke import lemke
+from lcpbench.solvers.lemke import _lexmin_row, lemke
 
 
 def enumerate_lcp(M: np.ndarray, q: np.ndarray, tol: float = 1e-9) -> list[np.ndarray]:
@@ -203,6 +204,48 @@ def test_cycling_prone_examples_solved(M, q):
     sol = lemke(M, q)
     assert_valid(sol, M, q)
     assert any(np.allclose(sol.z, s, atol=1e-10) for s in sols)
+
+
+def test_round_off_in_an_exact_zero_column_does_not_decide_the_order():
+    # Rows 0-2 tie on the right-hand side; on B^{-1} column 0 they are exactly 0 in exact
+    # arithmetic but hold round-off (~1e-17, rows of size ~1); column 1 is the first real
+    # difference and row 2 has the least ratio there (0.15 < 0.18 < 0.45).
+    n = 3
+    tab = np.array([[-3.7e-17, 0.45, 1.0, 0.0],
+                    [-7.3e-17, 0.18, -1.0, 0.0],
+                    [-1.0e-18, 0.15, 1.0, 0.0]])
+    rows, a = np.arange(3), np.ones(3)
+    assert _lexmin_row(tab, rows, a, n, -1, 1.0) == 2
+    # a genuine (not round-off) difference in column 0 still decides it
+    tab[1, 0] = -1e-3
+    assert _lexmin_row(tab, rows, a, n, -1, 1.0) == 1
+
+
+PEER = Path(__file__).resolve().parents[1] / "data" / "siconos-lcp"  # copy of the Siconos LCP collection
+needs_peer = pytest.mark.skipif(not PEER.is_dir(), reason="peer Siconos data not present")
+
+
+@needs_peer
+def test_siconos_tobenna_solved():
+    """n = 40, q with 32 zeros: a deeply degenerate problem where the lexicographic test has to
+    look past B^{-1} columns that are exactly zero (round-off only) in floating point; taking
+    that round-off for a real difference broke the lexicographic order and Lemke cycled.
+    An exact rational run of the same rules takes 127 pivots (Siconos 4.4 reports 126)."""
+    from lcpbench.problems.lcpfile import read_lcp
+
+    prob = read_lcp(PEER / "lcp_tobenna.dat")
+    M, q = np.asarray(prob.M, dtype=float), np.asarray(prob.q, dtype=float)
+    sol = lemke(M, q)
+    assert sol.status is Status.SOLVED, sol.message
+    assert 40 <= sol.iterations < 500
+    # independent check with numpy, relative to the size of the terms summed in M z + q
+    z = sol.z
+    w = M @ z + q
+    floor = float((np.abs(M) @ np.abs(z) + np.abs(q)).max())
+    assert z.min() >= 0.0
+    assert w.min() >= -1e-12 * floor
+    assert abs(z @ w) <= 1e-12 * floor * np.abs(z).sum()
+    assert np.abs(np.minimum(z, w)).max() <= 1e-12 * floor  # complementary row by row
 
 
 # --- 5. no solution: secondary ray ----------------------------------------------------------

@@ -3,7 +3,7 @@
 Skipped as a whole when Siconos is not installed for the system interpreter
 (``apt-get install python3-siconos``). Expected answers come from hand
 derivation, from LCP theory, or from the facts documented with the peer
-collection in /work/shared/peer-data/siconos-lcp/README.md -- never from the
+collection in tests/data/siconos-lcp/README.md -- never from the
 bridge's own output.
 """
 
@@ -25,7 +25,7 @@ if not sb.available():
     pytest.skip("siconos not installed for the system python "
                 "(apt-get install python3-siconos)", allow_module_level=True)
 
-PEER = Path("/work/shared/peer-data/siconos-lcp")
+PEER = Path(__file__).resolve().parents[1] / "data" / "siconos-lcp"  # copy of the Siconos LCP collection
 DEFAULT = PROFILES["default"]
 METHODS = list(sb.METHODS)
 #: What the bridge accepts as SOLVED under the default settings.

@@ -33,40 +33,53 @@ RESIDUAL_TOL = 1e-8
 CLIP_RTOL = 1e-12
 
 
-def _ties(col: np.ndarray, a: np.ndarray) -> np.ndarray:
+def _ties(col: np.ndarray, a: np.ndarray, noise: np.ndarray) -> np.ndarray:
     """Mask of rows whose ratio ``col / a`` ties with the minimum, per column.
 
-    ``col`` is 1-D or 2-D (rows x columns); ties use a relative tolerance.
+    ``col`` is 1-D or 2-D (rows x columns). ``noise[i]`` is the magnitude of
+    the quantities row ``i`` of ``col`` was computed from (the size of its
+    round-off, up to a factor). Row ``i`` ties with the minimising row ``j``
+    if their ratios differ by at most ``TIE_RTOL`` times ``|min|`` plus both
+    rows' noise over ``a``. The noise must not be taken from ``col`` itself:
+    an entry that is exactly zero in exact arithmetic holds round-off only,
+    and a tolerance relative to that round-off would let it decide the order.
     """
-    ratios = col / (a[:, None] if col.ndim == 2 else a)
+    two_d = col.ndim == 2
+    ratios = col / (a[:, None] if two_d else a)
+    j = ratios.argmin(axis=0)
     m = ratios.min(axis=0)
-    scale = np.abs(col).max(axis=0) / a.max()
-    return ratios <= m + TIE_RTOL * (np.abs(m) + scale)
+    err = noise / a
+    slack = TIE_RTOL * (np.abs(m) + err[j] + (err[:, None] if two_d else err))
+    return ratios <= m + slack
 
 
 def _lexmin_row(tab: np.ndarray, rows: np.ndarray, a: np.ndarray, n: int,
-                prefer: int) -> int:
+                prefer: int, qnorm: float) -> int:
     """Row of the lexicographic minimum ratio among candidate ``rows``.
 
     Ratios are ``tab[i, k] / a_i`` taken first on the right-hand side column
     (``k = n``), then on the ``B^{-1}`` columns ``k = 0 .. n-1`` in order,
     keeping at each stage only the rows tied (to a relative tolerance) with
-    the minimum. If ``prefer`` (the row of ``z0``, or -1) survives the first
-    stage, it wins. Columns on which all remaining rows tie are skipped in
-    one vectorised step, so deep degeneracy costs no Python loop over ``n``.
+    the minimum. The tolerance is relative to the size of the whole row of
+    ``B^{-1}`` (times ``qnorm = |q|_inf`` for the right-hand side), the scale
+    of the round-off in its entries. If ``prefer`` (the row of ``z0``, or -1)
+    survives the first stage, it wins. Columns on which all remaining rows
+    tie are skipped in one vectorised step, so deep degeneracy costs no
+    Python loop over ``n``.
     """
-    keep = _ties(tab[rows, n], a)
-    rows, a = rows[keep], a[keep]
+    noise = np.abs(tab[rows, :n]).max(axis=1)
+    keep = _ties(tab[rows, n], a, noise * qnorm)
+    rows, a, noise = rows[keep], a[keep], noise[keep]
     if prefer in rows:
         return prefer
     k = 0
     while rows.size > 1 and k < n:
-        tied = _ties(tab[rows, k:n], a)
+        tied = _ties(tab[rows, k:n], a, noise)
         split = np.flatnonzero(~tied.all(axis=0))
         if split.size == 0:
             break
         keep = tied[:, split[0]]
-        rows, a = rows[keep], a[keep]
+        rows, a, noise = rows[keep], a[keep], noise[keep]
         k += int(split[0]) + 1
     return int(rows[0])
 
@@ -133,6 +146,7 @@ def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
     if np.all(q >= 0):
         return result(np.zeros(n), Status.SOLVED, 0, 0.0)
 
+    qnorm = float(np.abs(q).max())
     z0 = 2 * n  # variable index of the artificial (w: 0..n-1, z: n..2n-1)
     tab = np.hstack([np.eye(n), q[:, None]])  # [B^{-1} | B^{-1} q]
     binv = tab[:, :n]
@@ -143,7 +157,7 @@ def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
         with np.errstate(divide="raise", over="raise", invalid="raise"):
             # Initial pivot: z0 enters (column -d), the lexicographically most violated row leaves.
             a = -d
-            r = _lexmin_row(tab, np.arange(n), d, n, -1)
+            r = _lexmin_row(tab, np.arange(n), d, n, -1, qnorm)
             entering = z0
             while True:
                 if it >= max_pivots:
@@ -172,7 +186,7 @@ def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
                            f"{kind}[{entering % n}] (LCP may be infeasible)")
                     break
                 zrow = np.flatnonzero(basis == z0)
-                r = _lexmin_row(tab, rows, a[rows], n, int(zrow[0]) if zrow.size else -1)
+                r = _lexmin_row(tab, rows, a[rows], n, int(zrow[0]) if zrow.size else -1, qnorm)
     except (np.linalg.LinAlgError, FloatingPointError) as exc:
         status, msg = Status.FAILED, f"arithmetic failure after {it} pivots: {exc}"
     t = time.perf_counter() - t0
