@@ -17,7 +17,7 @@ from lcpbench.errors import ProblemError
 from lcpbench.problems.lcpfile import LCPProblem, read_lcp, write_lcp
 from lcpbench.solvers.lemke import lemke
 
-PEER = Path(__file__).resolve().parents[1] / "data" / "siconos-lcp"  # copy of the Siconos LCP collection
+PEER = Path(__file__).resolve().parents[1] / "data" / "siconos-lcp"  # Siconos LCPs
 PEER_FILES = sorted(PEER.glob("*.dat"))
 BLOCK_PAIRS = [("lcp_deudeu", 2), ("lcp_ortiz", 4), ("lcp_trivial", 9)]
 

@@ -221,7 +221,7 @@ def test_round_off_in_an_exact_zero_column_does_not_decide_the_order():
     assert _lexmin_row(tab, rows, a, n, -1, 1.0) == 1
 
 
-PEER = Path(__file__).resolve().parents[1] / "data" / "siconos-lcp"  # copy of the Siconos LCP collection
+PEER = Path(__file__).resolve().parents[1] / "data" / "siconos-lcp"  # Siconos LCPs
 needs_peer = pytest.mark.skipif(not PEER.is_dir(), reason="peer Siconos data not present")
 
 

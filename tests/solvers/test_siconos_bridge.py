@@ -25,7 +25,7 @@ if not sb.available():
     pytest.skip("siconos not installed for the system python "
                 "(apt-get install python3-siconos)", allow_module_level=True)
 
-PEER = Path(__file__).resolve().parents[1] / "data" / "siconos-lcp"  # copy of the Siconos LCP collection
+PEER = Path(__file__).resolve().parents[1] / "data" / "siconos-lcp"  # Siconos LCPs
 DEFAULT = PROFILES["default"]
 METHODS = list(sb.METHODS)
 #: What the bridge accepts as SOLVED under the default settings.

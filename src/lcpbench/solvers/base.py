@@ -7,10 +7,16 @@ A back-end never raises on non-convergence; it returns a status.
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
 from dataclasses import dataclass, field
 from enum import Enum
 
 import numpy as np
+import scipy.sparse as sp
+
+from ..errors import ProblemError
 
 
 class Status(str, Enum):
@@ -207,3 +213,61 @@ class QPResult:
     def failure(cls, n: int, status: Status, message: str, **kw) -> "QPResult":
         nan = np.full(n, np.nan)
         return cls(nan, nan.copy(), status, message=message, **kw)
+
+
+@contextlib.contextmanager
+def c_stdout_to_stderr():
+    """Send what native code prints on file descriptor 1 to stderr meanwhile.
+
+    Some solvers print from C even when told to be quiet (OSQP 1.1:
+    "Polishing not needed"); on stdout that would corrupt ``--json`` output.
+    """
+    try:
+        sys.stdout.flush()
+        saved = os.dup(1)
+    except (OSError, ValueError, AttributeError):  # no real fd 1 (embedded, captured)
+        yield
+        return
+    try:
+        os.dup2(2, 1)
+        yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+# -- shared by the QP back-ends -------------------------------------------------
+def prepare_box_qp(qp: BoxQP):
+    """Validated ``(P, c, lower, upper)``: P as float csc, the rest float arrays.
+
+    Shared by the QP back-ends. Raises
+    :class:`ProblemError` on programmer errors (shapes, NaN); an empty box
+    (``lower > upper``) is not an error but an infeasible problem.
+    """
+    n = qp.size
+    c = np.asarray(qp.c, dtype=float).ravel()
+    lower = np.asarray(qp.lower, dtype=float).ravel()
+    upper = np.asarray(qp.upper, dtype=float).ravel()
+    if lower.shape != (n,) or upper.shape != (n,):
+        raise ProblemError(f"bounds must have length {n}")
+    if getattr(qp.P, "shape", None) != (n, n):
+        raise ProblemError(f"P must be {n} x {n}, got {getattr(qp.P, 'shape', None)}")
+    if np.isnan(c).any() or np.isnan(lower).any() or np.isnan(upper).any():
+        raise ProblemError("NaN in c or bounds")
+    P = sp.csc_matrix(qp.P, dtype=float)
+    return P, c, lower, upper
+
+
+def empty_box_result(n: int, lower: np.ndarray, upper: np.ndarray) -> QPResult | None:
+    """INFEASIBLE result when some ``lower_i > upper_i``, else None.
+
+    For a box QP this is the complete infeasibility test, so back-ends answer
+    it exactly instead of letting a solver spin to its iteration limit (ProxQP
+    does not detect it and runs ~1e5 iterations).
+    """
+    bad = np.flatnonzero(lower > upper)
+    if bad.size == 0:
+        return None
+    return QPResult.failure(n, Status.INFEASIBLE,
+                            f"lower > upper on rows {bad[:10].tolist()}: the box is empty",
+                            extra={"detected_by": "lcpbench"})
