@@ -13,7 +13,6 @@ then reviewed by hand: every "unsolved" must have a reason in its "why".
 from __future__ import annotations
 
 import argparse
-import itertools
 import json
 import sys
 from pathlib import Path
@@ -22,28 +21,10 @@ import numpy as np
 
 from lcpbench.problems.lcpfile import read_lcp
 from lcpbench.solvers import available_backends, solve_lcp
+from lcpbench.solvers.enumeration import has_solution
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data" / "siconos-lcp"
-
-
-def has_solution(M, q):
-    n = q.size
-    if n > 16:
-        return None
-    tol = 1e-9 * max(1.0, np.abs(q).max())
-    for k in range(n + 1):
-        for S in itertools.combinations(range(n), k):
-            S = list(S)
-            z = np.zeros(n)
-            if S:
-                try:
-                    z[S] = np.linalg.solve(M[np.ix_(S, S)], -q[S])
-                except np.linalg.LinAlgError:
-                    continue
-            if z.min() >= -tol and (M @ z + q).min() >= -tol:
-                return True
-    return False
 
 
 def main(argv=None) -> int:

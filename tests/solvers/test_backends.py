@@ -8,7 +8,6 @@ set confirmed by Lemke on the contact step).
 
 from __future__ import annotations
 
-import itertools
 import json
 from pathlib import Path
 
@@ -22,32 +21,13 @@ from lcpbench.model.step import assemble_step
 from lcpbench.problems.lcpfile import read_lcp
 from lcpbench.solvers import available_backends, get_backend, solve_lcp, solve_step
 from lcpbench.solvers.base import Settings, Status
+from lcpbench.solvers.enumeration import enumerate_lcp
 
 BACKENDS = available_backends()
 PEER = Path(__file__).resolve().parents[1] / "data" / "siconos-lcp"  # copy of shared/peer-data
 EXPECTED = json.loads((Path(__file__).parent / "data" / "siconos_expected.json").read_text())
 #: Finite, exact methods: they must solve every solvable problem of their class.
 EXACT = {"active-set", "lemke", "siconos-lemke"}
-
-
-def enumerate_lcp(M, q):
-    """All solutions by enumeration of complementary bases (n small; independent)."""
-    n = q.size
-    out = []
-    for k in range(n + 1):
-        for S in itertools.combinations(range(n), k):
-            S = list(S)
-            z = np.zeros(n)
-            if S:
-                try:
-                    z[S] = np.linalg.solve(M[np.ix_(S, S)], -q[S])
-                except np.linalg.LinAlgError:
-                    continue
-            w = M @ z + q
-            tol = 1e-9 * max(1.0, np.abs(q).max())
-            if z.min() >= -tol and w.min() >= -tol:
-                out.append(z)
-    return out
 
 
 def check_solved_is_right(sol, M, q, z_ref=None, atol=1e-5):

@@ -8,7 +8,6 @@ ends on a ray) -- never from the solver's own output.
 
 from __future__ import annotations
 
-import itertools
 import math
 from pathlib import Path
 
@@ -18,26 +17,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lcpbench.solvers.base import LCPSolution, Status, lcp_residuals
+from lcpbench.solvers.enumeration import enumerate_lcp
 from lcpbench.solvers.lemke import _lexmin_row, lemke
-
-
-def enumerate_lcp(M: np.ndarray, q: np.ndarray, tol: float = 1e-9) -> list[np.ndarray]:
-    """All solutions found among the 2^n complementary bases (independent method)."""
-    n = q.size
-    scale = max(1.0, np.abs(q).max())
-    sols = []
-    for mask in itertools.product([False, True], repeat=n):
-        a = np.flatnonzero(mask)
-        z = np.zeros(n)
-        if a.size:
-            try:
-                z[a] = np.linalg.solve(M[np.ix_(a, a)], -q[a])
-            except np.linalg.LinAlgError:
-                continue
-        w = M @ z + q
-        if z.min() >= -tol * scale and w.min() >= -tol * scale:
-            sols.append(z)
-    return sols
 
 
 def assert_valid(sol: LCPSolution, M: np.ndarray, q: np.ndarray) -> None:

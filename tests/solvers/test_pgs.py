@@ -9,8 +9,6 @@ solver's own output.
 
 from __future__ import annotations
 
-import itertools
-
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -19,26 +17,8 @@ from hypothesis import strategies as st
 
 from lcpbench.errors import ProblemError
 from lcpbench.solvers.base import PROFILES, Settings, Status, lcp_residuals
+from lcpbench.solvers.enumeration import enumerate_lcp
 from lcpbench.solvers.pgs import pgs, solve_lcp
-
-
-def enumerate_lcp(M: np.ndarray, q: np.ndarray, tol: float = 1e-9) -> list[np.ndarray]:
-    """All solutions among the 2^n complementary bases: solve M_SS z_S = -q_S, check signs."""
-    n = q.size
-    scale = max(1.0, np.abs(q).max())
-    sols = []
-    for mask in itertools.product([False, True], repeat=n):
-        a = np.flatnonzero(mask)
-        z = np.zeros(n)
-        if a.size:
-            try:
-                z[a] = np.linalg.solve(M[np.ix_(a, a)], -q[a])
-            except np.linalg.LinAlgError:
-                continue
-        w = M @ z + q
-        if z.min() >= -tol * scale and w.min() >= -tol * scale:
-            sols.append(z)
-    return sols
 
 
 def random_spd(rng: np.random.Generator, n: int) -> np.ndarray:

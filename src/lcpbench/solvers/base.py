@@ -8,6 +8,7 @@ A back-end never raises on non-convergence; it returns a status.
 from __future__ import annotations
 
 import contextlib
+import importlib
 import os
 import sys
 from dataclasses import dataclass, field
@@ -271,3 +272,26 @@ def empty_box_result(n: int, lower: np.ndarray, upper: np.ndarray) -> QPResult |
     return QPResult.failure(n, Status.INFEASIBLE,
                             f"lower > upper on rows {bad[:10].tolist()}: the box is empty",
                             extra={"detected_by": "lcpbench"})
+
+
+def open_box_qp(qp: BoxQP, module: str):
+    """Validate ``qp`` and import the solver's module, for a QP back-end.
+
+    Returns ``((P, c, lower, upper, mod), None)``, or ``(None, result)`` with
+    the result to return at once: INFEASIBLE for an empty box, FAILED when
+    the solver is not importable.
+    """
+    P, c, lower, upper = prepare_box_qp(qp)
+    empty = empty_box_result(c.size, lower, upper)
+    if empty is not None:
+        return None, empty
+    try:
+        top, *rest = module.split(".")
+        mod = importlib.import_module(top)
+        for attr in rest:  # e.g. proxsuite.proxqp: an attribute of a native module
+            mod = getattr(mod, attr)
+    except (ImportError, AttributeError) as exc:
+        pip = module.split(".")[0]
+        return None, QPResult.failure(c.size, Status.FAILED,
+                                      f"{pip} not importable ({exc}); pip install {pip}")
+    return (P, c, lower, upper, mod), None

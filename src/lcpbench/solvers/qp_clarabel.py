@@ -21,7 +21,7 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from .base import BoxQP, QPResult, QPWarm, Settings, Status, empty_box_result, prepare_box_qp
+from .base import BoxQP, QPResult, QPWarm, Settings, Status, open_box_qp
 
 DIST = "clarabel"
 
@@ -91,16 +91,11 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None,
         Raw Clarabel settings (attributes of ``DefaultSettings``), applied after
         the translation.
     """
-    P, c, lower, upper = prepare_box_qp(qp)
+    opened, early = open_box_qp(qp, "clarabel")
+    if early is not None:
+        return early
+    P, c, lower, upper, clarabel = opened
     n = c.size
-    empty = empty_box_result(n, lower, upper)
-    if empty is not None:
-        return empty
-    try:
-        import clarabel
-    except ImportError as exc:
-        return QPResult.failure(n, Status.FAILED,
-                                f"clarabel not importable ({exc}); pip install clarabel")
 
     iu = np.flatnonzero(np.isfinite(upper))
     il = np.flatnonzero(np.isfinite(lower))

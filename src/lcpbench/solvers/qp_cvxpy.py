@@ -53,7 +53,7 @@ import warnings
 import numpy as np
 
 from . import qp_clarabel, qp_osqp
-from .base import BoxQP, QPResult, QPWarm, Settings, Status, empty_box_result, prepare_box_qp
+from .base import BoxQP, QPResult, QPWarm, Settings, Status, open_box_qp
 
 DIST = "cvxpy"
 
@@ -132,16 +132,11 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None,
         ``solver`` (a cvxpy solver name, default: cvxpy's choice); the rest
         is passed to ``prob.solve`` after the translation (it wins).
     """
-    P, c, lower, upper = prepare_box_qp(qp)
+    opened, early = open_box_qp(qp, "cvxpy")
+    if early is not None:
+        return early
+    P, c, lower, upper, cp = opened
     n = c.size
-    empty = empty_box_result(n, lower, upper)
-    if empty is not None:
-        return empty
-    try:
-        import cvxpy as cp
-    except ImportError as exc:
-        return QPResult.failure(n, Status.FAILED,
-                                f"cvxpy not importable ({exc}); pip install cvxpy")
 
     options = dict(options)
     solver = options.pop("solver", None)

@@ -25,8 +25,7 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from .base import (BoxQP, QPResult, QPWarm, Settings, Status, c_stdout_to_stderr,
-                   empty_box_result, prepare_box_qp)
+from .base import BoxQP, QPResult, QPWarm, Settings, Status, c_stdout_to_stderr, open_box_qp
 
 DIST = "osqp"
 
@@ -105,15 +104,11 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None,
     QPResult
         Never raises on solver trouble; ``status`` says what happened.
     """
-    P, c, lower, upper = prepare_box_qp(qp)
+    opened, early = open_box_qp(qp, "osqp")
+    if early is not None:
+        return early
+    P, c, lower, upper, osqp = opened
     n = c.size
-    empty = empty_box_result(n, lower, upper)
-    if empty is not None:
-        return empty
-    try:
-        import osqp
-    except ImportError as exc:
-        return QPResult.failure(n, Status.FAILED, f"osqp not importable ({exc}); pip install osqp")
 
     rows = qp.constrained_rows()
     m = rows.size

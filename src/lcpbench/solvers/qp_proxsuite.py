@@ -32,7 +32,7 @@ import importlib.metadata
 import numpy as np
 import scipy.sparse as sp
 
-from .base import BoxQP, QPResult, QPWarm, Settings, Status, empty_box_result, prepare_box_qp
+from .base import BoxQP, QPResult, QPWarm, Settings, Status, open_box_qp
 
 DIST = "proxsuite"
 VARIANTS = ("dense", "sparse")
@@ -103,16 +103,11 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None, *,
     """
     if variant not in VARIANTS:
         raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
-    P, c, lower, upper = prepare_box_qp(qp)
+    opened, early = open_box_qp(qp, "proxsuite.proxqp")
+    if early is not None:
+        return early
+    P, c, lower, upper, proxqp = opened
     n = c.size
-    empty = empty_box_result(n, lower, upper)
-    if empty is not None:
-        return empty
-    try:
-        from proxsuite import proxqp
-    except ImportError as exc:
-        return QPResult.failure(n, Status.FAILED,
-                                f"proxsuite not importable ({exc}); pip install proxsuite")
 
     native_box = variant == "dense" and box
     rows = np.arange(n) if native_box else qp.constrained_rows()

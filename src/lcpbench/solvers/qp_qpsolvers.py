@@ -69,7 +69,7 @@ import scipy.sparse as sp
 
 from ..errors import SolverNotFound
 from . import qp_clarabel, qp_osqp, qp_proxsuite
-from .base import BoxQP, QPResult, QPWarm, Settings, Status, empty_box_result, prepare_box_qp
+from .base import BoxQP, QPResult, QPWarm, Settings, Status, open_box_qp
 
 DIST = "qpsolvers"
 
@@ -262,16 +262,11 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None, *,
     if solver is None or solver not in KNOWN_SOLVERS:
         raise SolverNotFound(f"qpsolvers back-end needs solver= one of {', '.join(KNOWN_SOLVERS)};"
                              f" installed here: {', '.join(installed_solvers()) or 'none'}")
-    P, c, lower, upper = prepare_box_qp(qp)
+    opened, early = open_box_qp(qp, "qpsolvers")
+    if early is not None:
+        return early
+    P, c, lower, upper, qpsolvers = opened
     n = c.size
-    empty = empty_box_result(n, lower, upper)
-    if empty is not None:
-        return empty
-    try:
-        import qpsolvers
-    except ImportError as exc:
-        return QPResult.failure(n, Status.FAILED,
-                                f"qpsolvers not importable ({exc}); pip install qpsolvers")
     if solver not in qpsolvers.available_solvers:
         return QPResult.failure(
             n, Status.FAILED, f"qpsolvers solver {solver!r} unavailable (module "

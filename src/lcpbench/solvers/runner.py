@@ -28,9 +28,9 @@ import scipy.sparse as sp
 from scipy.linalg import solveh_banded
 
 from ..errors import ProblemError
-from .base import BoxQP, LCPSolution, QPWarm, Settings, Status, StepSolution, lcp_residuals
 from ..model.step import banded_matvec
 from .banded import _sub_bands
+from .base import BoxQP, LCPSolution, QPWarm, Settings, Status, StepSolution, lcp_residuals
 from .registry import Backend, get_backend, get_settings
 
 EPS = np.finfo(float).eps
