@@ -68,9 +68,10 @@ NEEDS_A_BOUND = {"cvxpy-SCS"}
 #: residuals and the duality gap, which bound y_i * gap_i, not the distance to
 #: x*: on a weakly active bound (tiny y_i) x is off by up to
 #: ~sqrt(tol / lambda_min(P)) ~ 1e-3 at 'mid' (seen: 1e-3 PIQP, 5e-4 Clarabel,
-#: 2e-4 sparse ProxQP), and PIQP's unscaled bound violation reaches 2e-5. All
-#: agree to 1e-5 at 'high'.
-LOOSE_AT_MID = (5e-3, 5e-5, 1e-5)
+#: 2e-4 sparse ProxQP), and PIQP's unscaled bound violation reaches 2e-5. The
+#: same bound at 'high' is sqrt(1e-9 / 0.5) ~ 4.5e-5 (seen: 3.8e-5, Clarabel, on a
+#: bound active with a zero multiplier), hence 1e-4.
+LOOSE_AT_MID = (5e-3, 5e-5, 1e-4)
 ACCURACY = {name: LOOSE_AT_MID for name in BACKENDS
             if any(k in name.lower() for k in ("clarabel", "piqp", "proxsuite", "proxqp"))}
 #: back-end -> why the random tests may fail on it (data; not strict: hypothesis
@@ -252,7 +253,8 @@ def _random_grid():
 
 
 @pytest.mark.parametrize("name", _random_grid())
-@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=20, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow])
 @given(qp=random_box_qps())
 def test_random_spd_mid(name, qp):
     assume(name not in NEEDS_A_BOUND or qp.constrained_rows().size > 0)
@@ -260,7 +262,8 @@ def test_random_spd_mid(name, qp):
 
 
 @pytest.mark.parametrize("name", _random_grid())
-@settings(max_examples=10, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=10, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow])
 @given(qp=random_box_qps())
 def test_random_spd_high(name, qp):
     assume(name not in NEEDS_A_BOUND or qp.constrained_rows().size > 0)
