@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import importlib
+import importlib.metadata
 import os
 import sys
 from dataclasses import dataclass, field
@@ -295,3 +296,21 @@ def open_box_qp(qp: BoxQP, module: str):
         return None, QPResult.failure(c.size, Status.FAILED,
                                       f"{pip} not importable ({exc}); pip install {pip}")
     return (P, c, lower, upper, mod), None
+
+
+def dist_version(dist: str) -> str | None:
+    """Installed version of a distribution, without importing it; None if absent."""
+    try:
+        return importlib.metadata.version(dist)
+    except importlib.metadata.PackageNotFoundError:
+        return None
+
+
+def iteration_limits(settings: Settings) -> dict:
+    """``max_iter`` and ``time_limit`` of a profile, where set (for the adapters)."""
+    out = {}
+    if settings.max_iter is not None:
+        out["max_iter"] = int(settings.max_iter)
+    if settings.time_limit is not None:
+        out["time_limit"] = float(settings.time_limit)
+    return out

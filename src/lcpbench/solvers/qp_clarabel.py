@@ -15,13 +15,21 @@ Clarabel; ``warm`` is accepted and ignored.
 
 from __future__ import annotations
 
-import importlib.metadata
 import time
 
 import numpy as np
 import scipy.sparse as sp
 
-from .base import BoxQP, QPResult, QPWarm, Settings, Status, open_box_qp
+from .base import (
+    BoxQP,
+    QPResult,
+    QPWarm,
+    Settings,
+    Status,
+    dist_version,
+    iteration_limits,
+    open_box_qp,
+)
 
 DIST = "clarabel"
 
@@ -45,10 +53,7 @@ STATUS_MAP = {
 
 def version() -> str | None:
     """Installed version of the ``clarabel`` distribution, or None."""
-    try:
-        return importlib.metadata.version(DIST)
-    except importlib.metadata.PackageNotFoundError:
-        return None
+    return dist_version(DIST)
 
 
 def map_status(status) -> Status:
@@ -69,10 +74,7 @@ def translate(settings: Settings) -> dict:
     if settings.tol is not None:
         tol = max(float(settings.tol), MIN_TOL)
         opts.update(tol_gap_abs=tol, tol_gap_rel=tol, tol_feas=tol)
-    if settings.max_iter is not None:
-        opts["max_iter"] = int(settings.max_iter)
-    if settings.time_limit is not None:
-        opts["time_limit"] = float(settings.time_limit)
+    opts.update(iteration_limits(settings))
     return opts
 
 

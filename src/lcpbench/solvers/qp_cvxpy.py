@@ -46,14 +46,21 @@ Any other solver gets no tolerance keyword (``extra["tolerance_applied"]``).
 
 from __future__ import annotations
 
-import importlib.metadata
 import time
 import warnings
 
 import numpy as np
 
 from . import qp_clarabel, qp_osqp
-from .base import BoxQP, QPResult, QPWarm, Settings, Status, open_box_qp
+from .base import (
+    BoxQP,
+    QPResult,
+    QPWarm,
+    Settings,
+    Status,
+    dist_version,
+    open_box_qp,
+)
 
 DIST = "cvxpy"
 
@@ -84,10 +91,7 @@ STATUS_MAP = {
 
 def version() -> str | None:
     """Installed version of the ``cvxpy`` distribution, or None."""
-    try:
-        return importlib.metadata.version(DIST)
-    except importlib.metadata.PackageNotFoundError:
-        return None
+    return dist_version(DIST)
 
 
 def translate(settings: Settings, solver: str) -> dict:

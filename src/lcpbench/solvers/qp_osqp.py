@@ -19,13 +19,22 @@ part of answering the QP) -- seconds, reported by OSQP itself.
 
 from __future__ import annotations
 
-import importlib.metadata
 import time
 
 import numpy as np
 import scipy.sparse as sp
 
-from .base import BoxQP, QPResult, QPWarm, Settings, Status, c_stdout_to_stderr, open_box_qp
+from .base import (
+    BoxQP,
+    QPResult,
+    QPWarm,
+    Settings,
+    Status,
+    c_stdout_to_stderr,
+    dist_version,
+    iteration_limits,
+    open_box_qp,
+)
 
 DIST = "osqp"
 
@@ -46,10 +55,7 @@ STATUS_MAP = {
 
 def version() -> str | None:
     """Installed version of the ``osqp`` distribution, or None."""
-    try:
-        return importlib.metadata.version(DIST)
-    except importlib.metadata.PackageNotFoundError:
-        return None
+    return dist_version(DIST)
 
 
 def map_status(status: str) -> Status:
@@ -78,10 +84,7 @@ def translate(settings: Settings) -> dict:
         tol = float(settings.tol)
         opts.update(eps_abs=tol, eps_rel=tol, polishing=tol <= 1e-6,
                     max_iter=_max_iter_for(tol))
-    if settings.max_iter is not None:
-        opts["max_iter"] = int(settings.max_iter)
-    if settings.time_limit is not None:
-        opts["time_limit"] = float(settings.time_limit)
+    opts.update(iteration_limits(settings))
     return opts
 
 

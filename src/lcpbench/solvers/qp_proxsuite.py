@@ -27,12 +27,18 @@ warm-start the multipliers too.
 
 from __future__ import annotations
 
-import importlib.metadata
-
 import numpy as np
 import scipy.sparse as sp
 
-from .base import BoxQP, QPResult, QPWarm, Settings, Status, open_box_qp
+from .base import (
+    BoxQP,
+    QPResult,
+    QPWarm,
+    Settings,
+    Status,
+    dist_version,
+    open_box_qp,
+)
 
 DIST = "proxsuite"
 VARIANTS = ("dense", "sparse")
@@ -52,10 +58,7 @@ STATUS_MAP = {
 
 def version() -> str | None:
     """Installed version of the ``proxsuite`` distribution, or None."""
-    try:
-        return importlib.metadata.version(DIST)
-    except importlib.metadata.PackageNotFoundError:
-        return None
+    return dist_version(DIST)
 
 
 def map_status(status) -> Status:

@@ -59,7 +59,6 @@ jaxopt_osqp. ``extra["tolerance_applied"]`` says which case a run was in.
 
 from __future__ import annotations
 
-import importlib.metadata
 import time
 import warnings
 from importlib.util import find_spec
@@ -69,7 +68,15 @@ import scipy.sparse as sp
 
 from ..errors import SolverNotFound
 from . import qp_clarabel, qp_osqp, qp_proxsuite
-from .base import BoxQP, QPResult, QPWarm, Settings, Status, open_box_qp
+from .base import (
+    BoxQP,
+    QPResult,
+    QPWarm,
+    Settings,
+    Status,
+    dist_version,
+    open_box_qp,
+)
 
 DIST = "qpsolvers"
 
@@ -154,10 +161,7 @@ _SCS_STATUS = {1: Status.SOLVED, 2: Status.INACCURATE, -1: Status.INFEASIBLE,
 
 def version() -> str | None:
     """Installed version of the ``qpsolvers`` distribution, or None."""
-    try:
-        return importlib.metadata.version(DIST)
-    except importlib.metadata.PackageNotFoundError:
-        return None
+    return dist_version(DIST)
 
 
 def installed_solvers() -> list[str]:

@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 from functools import lru_cache
 
 from ..errors import ProblemError, SolverNotFound
-from .base import PROFILES, Settings
+from .base import PROFILES, Settings, dist_version
 
 FORMS = ("lcp", "qp")
 STORAGES = ("dense", "sparse", "banded")
@@ -91,10 +91,7 @@ class Backend:
             return None
         if dist.startswith("call:"):
             return _call(dist[5:])
-        try:
-            return importlib.metadata.version(dist)
-        except importlib.metadata.PackageNotFoundError:
-            return None
+        return dist_version(dist)
 
     def install_hint(self) -> str:
         if self.extra is None:
