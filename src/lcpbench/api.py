@@ -11,7 +11,7 @@ from .errors import ProblemError
 from .model.driver import METHODS, DriverOutput, run_driver
 from .model.result import ContactResult, build_result
 from .problems.scenes import ActuatorScene
-from .solvers import step_solver
+from .solvers import make_step_solver
 
 
 def _check_tol(tol) -> float:
@@ -60,7 +60,7 @@ def solve(
         raise ProblemError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     if not (isinstance(max_outer, (int, np.integer)) and max_outer >= 1):
         raise ProblemError(f"max_outer must be an integer >= 1, got {max_outer!r}")
-    step = step_solver(solver, settings, bool(scaled))
+    step = make_step_solver(solver, settings, bool(scaled))
     if isinstance(scene, ActuatorScene) and scene.links == "auto":
         from .model.discretisation import auto_links
 

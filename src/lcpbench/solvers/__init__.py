@@ -18,14 +18,8 @@ from .base import PROFILES, BoxQP, LCPSolution, QPResult, Settings, Status, Step
 from .registry import Backend, available_backends, backends, get_backend, get_settings
 from .runner import make_step_solver, solve_lcp, solve_step, step_residuals
 
-
-def step_solver(name: str, settings: str | Settings = "default", scaled: bool = True):
-    """The driver's ``(step, warm) -> StepSolution`` for back-end ``name``."""
-    return make_step_solver(name, settings, scaled)
-
-
 __all__ = [
     "PROFILES", "Backend", "BoxQP", "LCPSolution", "QPResult", "Settings", "Status",
     "StepSolution", "available_backends", "backends", "get_backend", "get_settings",
-    "make_step_solver", "solve_lcp", "solve_step", "step_residuals", "step_solver",
+    "make_step_solver", "solve_lcp", "solve_step", "step_residuals",
 ]
