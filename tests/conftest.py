@@ -12,3 +12,7 @@ from hypothesis import settings
 settings.register_profile("repeatable", derandomize=True)
 settings.register_profile("explore", derandomize=False)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "repeatable"))
+
+# solver="auto" reads back-end selections cached in a results store; the tests
+# must not depend on whatever store the machine happens to hold.
+os.environ["LCPBENCH_STORE"] = os.path.join(os.path.dirname(__file__), "no-such-store.sqlite")

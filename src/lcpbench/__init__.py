@@ -6,6 +6,7 @@
 """
 
 from .api import solve
+from .bench.select import Selection, select_backend
 from .errors import LcpbenchError, ProblemError, SolverNotFound
 from .model.result import Certificate, ContactResult
 from .problems.scenes import ActuatorScene, CantileverScene
@@ -18,7 +19,9 @@ __all__ = [
     "Certificate",
     "ContactResult",
     "LcpbenchError",
+    "Selection",
     "ProblemError",
     "SolverNotFound",
+    "select_backend",
     "solve",
 ]

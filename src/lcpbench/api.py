@@ -39,8 +39,12 @@ def solve(
     Parameters
     ----------
     scene : ActuatorScene or CantileverScene
-    solver : name of the contact-step back-end ("auto" = active-set; ``lcpbench
-        solvers`` lists them all).
+    solver : name of the contact-step back-end (``lcpbench solvers`` lists them
+        all), or "auto": the back-end :func:`lcpbench.select_backend` chose for
+        this kind of scene at the force accuracy that ``tol`` gives
+        (min(1e-3, 100·tol)), read from the probes cached in the store
+        (``$LCPBENCH_STORE`` or ``results/lcpbench.sqlite``) and never probing;
+        with nothing cached, the built-in active set.
     tol : convergence threshold on max|α̂ − α| (rad), eq. (32); paper: 1e-3.
     method : "globalised" (line search on the exact energy; default) or
         "undamped" (the paper's Fig. 3 iteration, for comparison).
@@ -60,11 +64,21 @@ def solve(
         raise ProblemError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     if not (isinstance(max_outer, (int, np.integer)) and max_outer >= 1):
         raise ProblemError(f"max_outer must be an integer >= 1, got {max_outer!r}")
-    step = make_step_solver(solver, settings, bool(scaled))
+    make_step_solver(solver, settings, bool(scaled))  # validates solver and settings first
     if isinstance(scene, ActuatorScene) and scene.links == "auto":
         from .model.discretisation import auto_links
 
         scene = scene.with_links(auto_links(scene, solver=solver))
+    name, why = solver, None
+    if solver == "auto":
+        name = "active-set"
+        if isinstance(scene, ActuatorScene):
+            from .bench.select import auto_backend
+
+            name, chosen, why = auto_backend(scene, tol)
+            if settings == "default":
+                settings = chosen
+    step = make_step_solver(name, settings, bool(scaled))
     t0 = time.perf_counter()
     chain = scene.chain()
     if _clears_walls(chain):
@@ -78,8 +92,10 @@ def solve(
                           "linearisation of eq. (20) is singular; lcpbench converges for "
                           f"theta <= 180 deg ({out.reason})")
     elapsed = time.perf_counter() - t0
-    name = "active-set" if solver == "auto" else solver
     res = build_result(scene, chain, out, solver=name, method=method, tol=tol, time_s=elapsed)
+    res.extra["settings"] = settings if isinstance(settings, str) else "custom"
+    if why is not None:
+        res.extra["auto"] = why
     _audit(res, chain)
     return res
 

@@ -27,7 +27,10 @@ import numpy as np
 
 from . import __version__
 from .api import solve
-from .errors import LcpbenchError
+from .bench.harness import DEFAULT_TIME_LIMIT
+from .bench.report import DEFAULT_OUT
+from .bench.store import DEFAULT_STORE
+from .errors import LcpbenchError, ProblemError
 from .model.driver import METHODS
 from .solvers.base import PROFILES
 from .problems.scenes import (
@@ -181,6 +184,92 @@ def build_parser() -> ArgumentParser:
     _add_solver_options(lp, default="lemke")
     lp.add_argument("--json", action="store_true", help="print the result as one JSON object")
     lp.set_defaults(handler=_cmd_lcp)
+
+    sw = commands.add_parser(
+        "sweep", help="run a grid of scenes over back-ends and settings into the results store",
+        description="Run every scene of a theta x height grid (and optionally N, EI, w, "
+                    "length) with every back-end and settings profile, plus the root-finding "
+                    "baseline, into an SQLite store; then write the report. A killed sweep "
+                    "resumes where it stopped when run again. With no arguments: the paper's "
+                    "grid (theta 10-180 by 10, h 2-7 mm by 1, N = 140) over every installed "
+                    "back-end.")
+    sw.add_argument("--theta", default="10:180:10", metavar="A:B:STEP",
+                    help="bend angles, degrees: start:stop:step (stop included), a comma list "
+                         "or one value (default 10:180:10)")
+    sw.add_argument("--height", default="2:7:1", metavar="A:B:STEP",
+                    help="wall heights, mm (default 2:7:1)")
+    sw.add_argument("--links", default=str(DEFAULT_LINKS), metavar="LIST",
+                    help=f"numbers of links (default {DEFAULT_LINKS})")
+    sw.add_argument("--EI", default=None, metavar="LIST", help="bending stiffnesses, N*mm^2 "
+                    f"(default {DEFAULT_EI:g})")
+    sw.add_argument("--weight", default=None, metavar="LIST",
+                    help=f"weights per length, N/mm (default {DEFAULT_WEIGHT:g})")
+    sw.add_argument("--length", default=None, metavar="LIST",
+                    help=f"section lengths, mm (default {DEFAULT_LENGTH:g})")
+    sw.add_argument("--channel", action="store_true", help="two walls, at +h and -h")
+    sw.add_argument("--solvers", default="all", metavar="A,B,..",
+                    help="back-ends to run (default: every installed one)")
+    sw.add_argument("--settings", default="default,high", metavar="P,Q,..",
+                    help="settings profiles among default, low, mid, high (default "
+                         "default,high)")
+    sw.add_argument("--tol", type=float, default=None, metavar="RAD",
+                    help="driver tolerance of every run (default: per profile, 1e-3 for "
+                         "default and low, 1e-6 mid, 1e-9 high)")
+    sw.add_argument("--method", choices=METHODS, default=DEFAULT_METHOD,
+                    help=f"outer iteration (default {DEFAULT_METHOD})")
+    sw.add_argument("--baseline", choices=("analytic", "fd", "both", "none"),
+                    default="analytic",
+                    help="the root-finding baseline: analytic Jacobian (default), finite "
+                         "differences as fsolve would (slow), both, or none")
+    sw.add_argument("--store", default=str(DEFAULT_STORE), metavar="PATH",
+                    help=f"SQLite results store (default {DEFAULT_STORE})")
+    sw.add_argument("--out", default=str(DEFAULT_OUT), metavar="DIR",
+                    help=f"where the report goes (default {DEFAULT_OUT})")
+    sw.add_argument("--no-report", action="store_true", help="do not write the report")
+    sw.add_argument("--jobs", type=_int_arg, default=None, metavar="K",
+                    help="worker processes (default: the number of cores, at most 4)")
+    sw.add_argument("--time-limit", type=float, default=DEFAULT_TIME_LIMIT, metavar="S",
+                    help=f"seconds per solve before it is killed and recorded as a timeout "
+                         f"(default {DEFAULT_TIME_LIMIT:g})")
+    sw.add_argument("--rerun", action="store_true",
+                    help="recompute runs that are already in the store")
+    sw.add_argument("--quiet", action="store_true", help="no progress bar")
+    sw.set_defaults(handler=_cmd_sweep)
+
+    rp = commands.add_parser(
+        "report", help="tables, CSV and figures from a results store",
+        description="Build the comparison tables, the paper's Table II, the CSV of every "
+                    "run and the figures from the store alone (nothing is solved).")
+    rp.add_argument("--store", default=str(DEFAULT_STORE), metavar="PATH",
+                    help=f"SQLite results store (default {DEFAULT_STORE})")
+    rp.add_argument("--out", default=str(DEFAULT_OUT), metavar="DIR",
+                    help=f"output folder (default {DEFAULT_OUT})")
+    rp.add_argument("--table2-height", type=float, default=None, metavar="MM",
+                    help="wall height of the Table II-style table (default: the smallest)")
+    rp.add_argument("--no-plots", action="store_true", help="tables and CSV only")
+    rp.set_defaults(handler=_cmd_report)
+
+    se = commands.add_parser(
+        "select", help="the fastest back-end that meets an accuracy on this kind of scene",
+        description="Probe every installed back-end and settings profile on four scenes of "
+                    "this kind (N, length, EI, w, channel), cache the runs in the store, and "
+                    "print the fastest one whose total-force error is within --tol on all of "
+                    "them.")
+    se.add_argument("--tol", type=float, default=1e-6, metavar="REL",
+                    help="largest relative error of the total force (default 1e-6)")
+    se.add_argument("--time-budget", type=float, default=None, metavar="S",
+                    help="largest mean time of one solve, seconds (default: none)")
+    _add_scene_options(se)
+    se.add_argument("--solvers", default="all", metavar="A,B,..",
+                    help="candidate back-ends (default: every installed one)")
+    se.add_argument("--store", default=None, metavar="PATH",
+                    help=f"where the probes are cached (default $LCPBENCH_STORE or "
+                         f"{DEFAULT_STORE})")
+    se.add_argument("--jobs", type=_int_arg, default=None, metavar="K",
+                    help="worker processes (default: the number of cores, at most 4)")
+    se.add_argument("--json", action="store_true", help="print the selection as JSON")
+    se.add_argument("--quiet", action="store_true", help="no progress bar")
+    se.set_defaults(handler=_cmd_select)
 
     v = commands.add_parser(
         "validate",
@@ -394,6 +483,166 @@ def _cmd_lcp(args) -> int:
     return 0 if sol.solved else 1
 
 
+def _float_list(text, name) -> tuple | None:
+    from .bench.grid import parse_range
+
+    return None if text is None else parse_range(text, name)
+
+
+def _positive_number(value, name) -> float:
+    if not (math.isfinite(value) and value > 0):
+        raise ProblemError(f"{name} must be a number > 0, got {value:g}")
+    return value
+
+
+def _cmd_sweep(args) -> int:
+    from .bench.grid import Grid, parse_range
+    from .bench.harness import default_workers, plan_sweep, sweep
+    from .bench.store import Store
+    from .solvers.registry import available_backends, get_backend, get_settings
+
+    grid_kw = {"theta": parse_range(args.theta, "theta"),
+               "height": parse_range(args.height, "height"),
+               "links": parse_range(args.links, "links", integer=True),
+               "channel": args.channel}
+    for name in ("EI", "weight", "length"):
+        values = _float_list(getattr(args, name), name)
+        if values is not None:
+            grid_kw[name] = values
+    grid = Grid(**grid_kw)
+    scenes = grid.scenes()  # validates every scene before anything runs
+    if args.solvers.strip() == "all":
+        solvers = available_backends()
+    else:
+        solvers = list(dict.fromkeys(x.strip() for x in args.solvers.split(",") if x.strip()))
+        if not solvers:
+            raise ProblemError("solvers must list at least one back-end, or be 'all'")
+        for name in solvers:
+            get_backend(name)  # unknown or not installed: SolverNotFound, exit 2
+    settings = list(dict.fromkeys(x.strip() for x in args.settings.split(",") if x.strip()))
+    if not settings:
+        raise ProblemError("settings must list at least one of default, low, mid, high")
+    for p in settings:
+        get_settings(p)
+    if args.tol is not None:
+        from .api import _check_tol
+
+        _check_tol(args.tol)
+    jobs_n = default_workers() if args.jobs is None else args.jobs
+    if jobs_n < 1:
+        raise ProblemError(f"jobs must be an integer >= 1, got {jobs_n}")
+    limit = _positive_number(args.time_limit, "time-limit")
+    baselines = {"analytic": ["baseline"], "fd": ["baseline-fd"],
+                 "both": ["baseline", "baseline-fd"], "none": []}[args.baseline]
+    jobs = plan_sweep(scenes, solvers, settings, tol=args.tol, method=args.method,
+                      baselines=baselines)
+    with Store(args.store) as store:
+        bar = _progress(args.quiet)
+        try:
+            plan = sweep(store, jobs, workers=jobs_n, time_limit=limit, rerun=args.rerun,
+                         progress=bar.update if bar else None)
+        except KeyboardInterrupt:
+            if bar:
+                bar.close()
+            _error_line(f"interrupted: {store.count()} runs are safe in {args.store}; run the "
+                        "same command again to resume")
+            return 130
+        if bar:
+            bar.close()
+        print(f"{len(plan.todo)} runs computed, {plan.done} already in {args.store} "
+              f"({len(scenes)} scenes x {len(solvers)} back-ends x {len(settings)} settings"
+              f" + {len(baselines)} baseline(s) + references; {jobs_n} worker(s))")
+        if not args.no_report:
+            return _write_report(store, args.out, limit, None, plots=True)
+    return 0
+
+
+class _Bar:
+    """A tqdm progress bar with an ETA, fed by the sweep's progress callback."""
+
+    def __init__(self):
+        from tqdm import tqdm
+
+        self.bar = None
+        self.tqdm = tqdm
+        self.failed = 0
+
+    def update(self, done, total, job, row) -> None:
+        if self.bar is None:
+            self.bar = self.tqdm(total=total, initial=done - 1, unit="run", file=sys.stderr,
+                                 dynamic_ncols=True, desc="sweep")
+        if row.get("status") != "solved":
+            self.failed += 1
+        self.bar.set_postfix_str(f"{job.backend} {job.settings}; not solved {self.failed}",
+                                 refresh=False)
+        self.bar.update(1)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def _progress(quiet: bool):
+    return None if quiet else _Bar()
+
+
+def _write_report(store, out, time_limit, table2_height, plots: bool) -> int:
+    from .bench.report import build_report
+
+    if plots:
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            plots = False
+            print("matplotlib is not installed: tables only (pip install 'lcpbench[plot]')",
+                  file=sys.stderr)
+    try:
+        info = build_report(store, out, time_limit=time_limit, plots=plots,
+                            table2_height=table2_height)
+    except OSError as exc:
+        raise ProblemError(f"out {out}: cannot write the report there ({exc})") from exc
+    print(f"report of {info['runs']} runs in {info['out']}/report.md")
+    return 0
+
+
+def _cmd_report(args) -> int:
+    from .bench.store import Store
+
+    with Store(args.store, create=False) as store:
+        return _write_report(store, args.out, DEFAULT_TIME_LIMIT, args.table2_height,
+                             plots=not args.no_plots)
+
+
+def _cmd_select(args) -> int:
+    from .bench.harness import default_workers
+    from .bench.select import select_backend
+
+    scene = _scene_from(args)
+    if scene.links == "auto":
+        raise ProblemError("links must be a number for select (the kind of scene is N, "
+                           "length, EI, w and channel)")
+    candidates = None if args.solvers.strip() == "all" else [
+        x.strip() for x in args.solvers.split(",") if x.strip()]
+    workers = default_workers() if args.jobs is None else args.jobs
+    if workers < 1:
+        raise ProblemError(f"jobs must be an integer >= 1, got {workers}")
+    bar = _progress(args.quiet)
+    try:
+        sel = select_backend(scene, tol=args.tol, time_budget=args.time_budget,
+                             store=args.store, candidates=candidates, workers=workers,
+                             progress=bar.update if bar else None)
+    finally:
+        if bar:
+            bar.close()
+    if args.json:
+        _print_json(sel.to_dict())
+    elif sel.backend is None:
+        print(f"no back-end: {sel.reason}")
+    else:
+        print(f"{sel.backend} --settings {sel.settings}: {sel.reason}")
+    return 0 if sel.backend is not None else 1
+
+
 def _cmd_validate_cantilever(args) -> int:
     from .model.validation import cantilever_validation
 
@@ -423,7 +672,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         args = parser.parse_args(argv)
         if args.handler is None:
-            what = "CASE (cantilever)" if args.command == "validate" else "COMMAND (solve, solvers, export, lcp, validate)"
+            what = ("CASE (cantilever)" if args.command == "validate" else
+                    "COMMAND (solve, solvers, export, lcp, sweep, report, select, validate)")
             args.parser.error(f"missing {what}; see '{args.parser.prog} --help'")
         return args.handler(args)
     except _Exit as exc:

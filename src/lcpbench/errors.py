@@ -17,3 +17,7 @@ class ProblemError(LcpbenchError, ValueError):
 
 class SolverNotFound(LcpbenchError, LookupError):
     """An unknown back-end name, or one whose library is not installed."""
+
+
+class StoreError(LcpbenchError):
+    """A results store that cannot be opened, read or written (never overwritten silently)."""

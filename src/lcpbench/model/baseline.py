@@ -93,6 +93,7 @@ from ..problems.scenes import ActuatorScene, Chain
 from .chain import node_positions, torque_residual
 
 METHODS = ("hybr", "lm")
+JACOBIANS = ("analytic", "fd")  # "fd": MINPACK's forward differences, fsolve's default
 
 GEOMETRY_TOL = 1e-6  # mm: closure, midspan height and penetration
 RESIDUAL_TOL = 1e-8  # dimensionless residual (moments / (EI/ℓ), lengths / ℓ)
@@ -395,6 +396,7 @@ def solve_baseline(
     x0=None,
     max_nfev: int | None = None,
     time_limit: float | None = None,
+    jacobian: str = "analytic",
 ) -> BaselineResult:
     """Solve the paper's single-reaction nonlinear system (Appendix A) for a scene.
 
@@ -412,6 +414,9 @@ def solve_baseline(
         previous :class:`BaselineResult` of the same N (warm start).
     max_nfev : limit on residual evaluations (None: MINPACK's default).
     time_limit : wall-clock limit (s) on the root finding.
+    jacobian : "analytic" (exact, default) or "fd" (forward differences by
+        MINPACK, what ``fsolve`` does unless given a Jacobian: the paper's
+        baseline as it was most likely run).
 
     Returns
     -------
@@ -419,6 +424,8 @@ def solve_baseline(
         Never raises on non-convergence; see ``converged``, ``valid``, ``status``.
     """
     tol, time_limit = _check_options(scene, method, tol, max_nfev, time_limit)
+    if jacobian not in JACOBIANS:
+        raise ProblemError(f"jacobian must be one of {', '.join(JACOBIANS)}, got {jacobian!r}")
     if scene.links == "auto":
         from .discretisation import auto_links
 
@@ -439,7 +446,8 @@ def solve_baseline(
     elif max_nfev is not None:
         options["maxfev"] = int(max_nfev)
     try:
-        sol = root(watched.fun, z0, jac=watched.jac, method=method, options=options)
+        jac = watched.jac if jacobian == "analytic" else None
+        sol = root(watched.fun, z0, jac=jac, method=method, options=options)
         z, status, message = sol.x, _scipy_status(method, sol), str(sol.message)
         # scipy's own counts (ours also include its shape-check call)
         watched.nfev = int(getattr(sol, "nfev", watched.nfev))
@@ -448,8 +456,10 @@ def solve_baseline(
         z = watched.last if watched.last is not None else z0
         status, message = stop.status, stop.message
     elapsed = time.perf_counter() - t0
-    return _judge(scene, chain, system, watched, z, status, message, method, tol,
-                  elapsed, setup)
+    out = _judge(scene, chain, system, watched, z, status, message, method, tol,
+                 elapsed, setup)
+    out.extra["jacobian"] = jacobian
+    return out
 
 
 def _judge(scene, chain, system, watched, z, status, message, method, tol, elapsed, setup):

@@ -1,0 +1,128 @@
+"""Test sets of the benchmark: grids of scenes over θ × h (× N, EI, w, ℓ).
+
+A grid is data: tuples of values per parameter, expanded into
+:class:`~lcpbench.problems.scenes.ActuatorScene` objects in a fixed order.
+Ranges come from the command line as ``start:stop:step`` (stop included,
+like the paper's "10° to 180° by 10°"), a comma list ``2,3,5`` or one value.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+from dataclasses import asdict, dataclass
+
+from ..errors import ProblemError
+from ..problems.scenes import (
+    DEFAULT_EI,
+    DEFAULT_LENGTH,
+    DEFAULT_LINKS,
+    DEFAULT_WEIGHT,
+    ActuatorScene,
+)
+
+MAX_POINTS = 10_000  # per range: a typo like 0:180:1e-6 is an error, not a hang
+
+
+def parse_range(text: str, name: str, *, integer: bool = False) -> tuple[float, ...]:
+    """Values of a ``start:stop:step`` range (stop included), a comma list, or a number.
+
+    Raises :class:`ProblemError` naming ``name`` for anything else: a
+    decreasing or empty range (``10:5:1``), a step <= 0, a non-number
+    (``a:b``), or more than :data:`MAX_POINTS` values.
+    """
+    text = str(text).strip()
+    allowed = (f"{name} must be a number, a comma list (2,3,5) or a range start:stop:step "
+               "with start <= stop and step > 0")
+    try:
+        if ":" in text:
+            parts = text.split(":")
+            if len(parts) not in (2, 3):
+                raise ValueError
+            start, stop = float(parts[0]), float(parts[1])
+            step = float(parts[2]) if len(parts) == 3 else 1.0
+            if not all(math.isfinite(v) for v in (start, stop, step)):
+                raise ValueError
+            if step <= 0 or stop < start:
+                raise ProblemError(f"{allowed}, got {text!r}")
+            count = int(math.floor((stop - start) / step * (1 + 1e-12) + 1e-9)) + 1
+            if count > MAX_POINTS:
+                raise ProblemError(f"{name} range {text!r} has {count} points; at most "
+                                   f"{MAX_POINTS} are allowed")
+            values = [start + k * step for k in range(count)]
+            values = [round(v, 12) for v in values]
+        else:
+            values = [float(v) for v in text.split(",") if v.strip()]
+            if not values or not all(math.isfinite(v) for v in values):
+                raise ValueError
+    except ValueError:
+        raise ProblemError(f"{allowed}, got {text!r}") from None
+    if integer:
+        if any(v != int(v) for v in values):
+            raise ProblemError(f"{name} must be integers, got {text!r}")
+        values = [int(v) for v in values]
+    return tuple(dict.fromkeys(values))  # drop repeats, keep order
+
+
+@dataclass(frozen=True)
+class Grid:
+    """A grid of actuator scenes: every combination of the listed values.
+
+    Attributes
+    ----------
+    theta : bend angles θ (degrees).
+    height : wall heights h (mm).
+    links : numbers of links N.
+    EI : bending stiffnesses (N·mm²).
+    weight : weights per length w (N/mm).
+    length : section lengths ℓ (mm).
+    channel : two walls (±h) instead of one.
+    """
+
+    theta: tuple[float, ...]
+    height: tuple[float, ...]
+    links: tuple[int, ...] = (DEFAULT_LINKS,)
+    EI: tuple[float, ...] = (DEFAULT_EI,)
+    weight: tuple[float, ...] = (DEFAULT_WEIGHT,)
+    length: tuple[float, ...] = (DEFAULT_LENGTH,)
+    channel: bool = False
+
+    def __post_init__(self):
+        for name in ("theta", "height", "links", "EI", "weight", "length"):
+            if len(getattr(self, name)) == 0:
+                raise ProblemError(f"the grid is empty: {name} has no values")
+
+    def scenes(self) -> list[ActuatorScene]:
+        """Every scene of the grid (validated), θ varying fastest."""
+        combos = itertools.product(self.links, self.length, self.EI, self.weight,
+                                   self.height, self.theta)
+        return [ActuatorScene(theta=t, height=h, links=n, length=ell, EI=ei, weight=w,
+                              channel=self.channel)
+                for n, ell, ei, w, h, t in combos]
+
+    def __len__(self) -> int:
+        return math.prod(len(getattr(self, k)) for k in
+                         ("theta", "height", "links", "EI", "weight", "length"))
+
+
+#: The paper's grid (Sec. IV, Fig. 8a): θ 10°–180° by 10°, h 2–7 mm by 1, N = 140.
+PAPER_GRID = Grid(theta=parse_range("10:180:10", "theta"), height=parse_range("2:7:1", "height"))
+
+
+def scene_key(scene: ActuatorScene) -> str:
+    """A canonical text key of a scene (its parameters as sorted JSON)."""
+    d = asdict(scene)
+    d["links"] = int(d["links"])
+    for k in ("theta", "height", "length", "EI", "weight"):
+        d[k] = float(repr_float(d[k]))
+    return json.dumps(d, sort_keys=True)
+
+
+def repr_float(v: float) -> str:
+    """Shortest text that reads back to ``v`` after rounding to 12 significant digits."""
+    return repr(float(f"{float(v):.12g}"))
+
+
+def scene_from_key(key: str) -> ActuatorScene:
+    return ActuatorScene(**json.loads(key))

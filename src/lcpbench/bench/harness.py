@@ -1,0 +1,447 @@
+"""The sweep harness: scenes × back-ends × settings (+ the baseline) into the store.
+
+A sweep is a list of jobs. Each job runs in a worker process with a time
+limit: a back-end that hangs is killed and costs one ``timeout`` row, one
+that crashes its process costs one ``crashed`` row, and the sweep goes on.
+Only the parent writes to the store, one committed row per finished job, so
+a sweep killed at any moment restarts where it stopped (jobs whose rows are
+already in the store are skipped).
+
+Kinds of job
+------------
+``ref``       the per-scene reference: the built-in active set at settings
+              ``high`` and driver tolerance :data:`REFERENCE_TOL`, checked by
+              re-solving its last contact step with Lemke (a different
+              algorithm on the dense condensed LCP); computed once per scene.
+``run``       ``lcpbench.solve(scene, solver=backend, settings=..., tol=...)``.
+``baseline``  the paper's root-finding baseline (Appendix A) with an analytic
+              (``baseline``) or finite-difference (``baseline-fd``) Jacobian.
+
+The driver tolerance of a run follows its settings profile unless given
+(:data:`PROFILE_TOL`): a profile is a target accuracy for the whole solve,
+not only for the contact step.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import pickle
+import struct
+import subprocess
+import sys
+import time
+import traceback
+from collections import deque
+from dataclasses import dataclass, field
+from multiprocessing.connection import wait
+from typing import Callable, Iterable, Iterator
+
+import numpy as np
+
+from ..errors import ProblemError
+from .grid import Grid, scene_from_key, scene_key
+from .store import Store
+
+#: driver tolerance (rad) per settings profile; "default" keeps the paper's 1e-3
+PROFILE_TOL = {"default": 1e-3, "low": 1e-3, "mid": 1e-6, "high": 1e-9}
+REFERENCE_TOL = 1e-11  # rad, driver tolerance of the reference
+BASELINES = {"baseline": "analytic", "baseline-fd": "fd"}
+BASELINE_TOL = 1e-10
+DEFAULT_TIME_LIMIT = 60.0  # s per job
+
+
+@dataclass(frozen=True)
+class Job:
+    """One unit of work: a reference, a run of a back-end, or a baseline solve."""
+
+    kind: str  # "ref", "run" or "baseline"
+    scene: str  # scene_key
+    backend: str = "active-set"
+    settings: str = "-"
+    tol: float = 0.0
+    method: str = "globalised"
+
+    @property
+    def key(self) -> tuple:
+        return (self.scene, self.backend, self.settings, self.tol, self.method)
+
+
+@dataclass
+class SweepPlan:
+    """The jobs of a sweep, split into what is stored already and what is left."""
+
+    jobs: list[Job]
+    todo: list[Job] = field(default_factory=list)
+
+    @property
+    def done(self) -> int:
+        return len(self.jobs) - len(self.todo)
+
+
+def plan_sweep(grid: Grid | Iterable, backends: list[str], settings: list[str], *,
+               tol: float | None = None, method: str = "globalised",
+               baselines: Iterable[str] = ("baseline",)) -> list[Job]:
+    """Every job of a sweep, in a fixed order: references, then scene by scene."""
+    scenes = grid.scenes() if isinstance(grid, Grid) else list(grid)
+    if not scenes:
+        raise ProblemError("the grid is empty: no scenes to run")
+    for b in baselines:
+        if b not in BASELINES:
+            raise ProblemError(f"baseline must be one of {', '.join(BASELINES)}, got {b!r}")
+    keys = [scene_key(s) for s in scenes]
+    jobs = [Job("ref", k, "reference", "high", REFERENCE_TOL, "globalised") for k in keys]
+    for k in keys:
+        for b in baselines:
+            jobs.append(Job("baseline", k, b, "-", BASELINE_TOL, "hybr"))
+        for name in backends:
+            for p in settings:
+                jobs.append(Job("run", k, name, p, PROFILE_TOL[p] if tol is None else tol,
+                                method))
+    return jobs
+
+
+# -- what a worker does ---------------------------------------------------------------
+def execute(job: Job, time_limit: float | None = None) -> dict:
+    """Run one job and return its row for the store (never raises)."""
+    t0 = time.perf_counter()
+    try:
+        scene = scene_from_key(job.scene)
+        if job.kind == "ref":
+            row = _reference(scene)
+        elif job.kind == "baseline":
+            row = _baseline(scene, job, time_limit)
+        else:
+            row = _run(scene, job)
+    except Exception as exc:  # a back-end that raises costs one row, not the sweep
+        row = failed_row("error", f"{type(exc).__name__}: {exc}",
+                         time.perf_counter() - t0)
+        row["traceback"] = traceback.format_exc(limit=5)
+    return row
+
+
+def _solution_row(res) -> dict:
+    cert = res.certificate.to_dict()
+    cert.pop("torque_residual", None)
+    return {
+        "status": "solved" if res.converged else "not_converged",
+        "converged": bool(res.converged),
+        "reason": res.reason,
+        "total_force": float(res.total_force),
+        "outer_iterations": int(res.outer_iterations),
+        "inner_iterations": int(res.inner_iterations),
+        "wall_time": float(res.time_s),
+        "solver_time": float(sum(s.solve_time for s in res.steps)),
+        "certificate": cert,
+        "forces": res.forces, "gaps": res.gaps, "x": res.x, "y": res.y,
+    }
+
+
+_WARM: set[tuple[str, str]] = set()
+WARMUP_SCENE = {"theta": 150.0, "height": 3.0, "links": 20}
+
+
+def warm_up(backend: str, settings: str) -> None:
+    """One untimed solve of a small scene per (back-end, settings) and process.
+
+    The first call of a back-end pays for importing its library, JIT and
+    caches (cvxpy's first solve took 0.5 s more than its second); a benchmark
+    of the solve must not charge that to the first scene of the grid.
+    """
+    if (backend, settings) in _WARM:
+        return
+    _WARM.add((backend, settings))
+    from ..api import solve
+    from ..problems.scenes import ActuatorScene
+
+    try:
+        solve(ActuatorScene(**WARMUP_SCENE), solver=backend, settings=settings)
+    except Exception:  # noqa: BLE001 - the timed run will report it
+        pass
+
+
+def _run(scene, job: Job) -> dict:
+    from ..api import solve
+
+    warm_up(job.backend, job.settings)
+    res = solve(scene, solver=job.backend, tol=job.tol, settings=job.settings,
+                method=job.method)
+    return _solution_row(res)
+
+
+def _reference(scene) -> dict:
+    from ..api import solve
+    from ..model.step import assemble_step
+    from ..solvers.runner import solve_step
+
+    res = solve(scene, solver="active-set", tol=REFERENCE_TOL, settings="high")
+    tol = REFERENCE_TOL
+    if not res.converged:  # round-off can stop the tightest tolerance: relax, and say so
+        for tol in (1e-10, 1e-9, 1e-8):
+            res = solve(scene, solver="active-set", tol=tol, settings="high")
+            if res.converged:
+                break
+    row = _solution_row(res)
+    row["tol"] = tol
+    # The check: the last contact step again, by Lemke on the dense condensed LCP.
+    check = float("nan")
+    if res.converged:
+        step = assemble_step(scene.with_links(res.links).chain(), res.alpha)
+        sol = solve_step(step, "lemke", "high")
+        if sol.solved:
+            scale = max(abs(res.total_force), scene.EI / scene.length**2)
+            check = abs(float(sol.reaction_upper.sum()) - res.total_force) / scale
+    row["check_error"] = check
+    return row
+
+
+def _baseline(scene, job: Job, time_limit) -> dict:
+    from ..model.baseline import solve_baseline
+
+    if ("baseline", "") not in _WARM:
+        _WARM.add(("baseline", ""))
+        solve_baseline(scene.with_links(WARMUP_SCENE["links"]), tol=job.tol)
+    res = solve_baseline(scene, tol=job.tol, method=job.method,
+                         jacobian=BASELINES[job.backend], time_limit=time_limit)
+    chain = scene.chain()
+    gaps = chain.wall - res.y[chain.free_nodes]
+    return {
+        "status": "solved" if res.valid else _BASELINE_STATUS.get(
+            str(res.status).split(":")[0], "not_converged"),
+        "converged": bool(res.valid),
+        "reason": res.message,
+        "total_force": float(res.total_force) if res.valid else 0.0,
+        "outer_iterations": int(res.iterations),
+        "inner_iterations": int(res.jacobian_evaluations),
+        "wall_time": float(res.time_s + res.setup_time_s),
+        "solver_time": float(res.time_s),
+        "certificate": {"max_penetration": res.max_penetration, "closure": res.closure,
+                        "residual_norm": res.residual_norm,
+                        "relative_torque_residual": res.relative_torque_residual},
+        "forces": res.forces, "gaps": gaps, "x": res.x, "y": res.y,
+    }
+
+
+_BASELINE_STATUS = {"bad solution": "invalid", "no convergence": "not_converged",
+                    "max evaluations": "max_iterations", "time limit": "timeout",
+                    "diverged": "diverged"}
+
+
+def failed_row(status: str, reason: str, wall_time: float) -> dict:
+    """The row of a job that produced no answer (error, timeout, crash)."""
+    return {"status": status, "converged": False, "reason": reason, "total_force": 0.0,
+            "outer_iterations": 0, "inner_iterations": 0, "wall_time": float(wall_time),
+            "solver_time": float("nan"), "certificate": None}
+
+
+# -- the worker pool --------------------------------------------------------------------
+# Workers are plain subprocesses (`python -m lcpbench.bench.harness`), not
+# multiprocessing children: nothing of the caller's __main__ is re-imported,
+# and a worker killed at its time limit takes nothing else with it. Jobs and
+# rows travel as length-prefixed pickles on the worker's stdin and on a copy
+# of its stdout; the worker's own fd 1 is pointed at stderr, so solver
+# libraries that print cannot corrupt the protocol.
+def _send(fh, obj) -> None:
+    data = pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL)
+    fh.write(struct.pack("<Q", len(data)) + data)
+    fh.flush()
+
+
+def _recv(fh):
+    head = fh.read(8)
+    if len(head) < 8:
+        raise EOFError("worker closed its pipe")
+    (size,) = struct.unpack("<Q", head)
+    data = fh.read(size)
+    if len(data) < size:
+        raise EOFError("worker closed its pipe mid-message")
+    return pickle.loads(data)
+
+
+def _worker_main() -> None:
+    import signal
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C
+    out = os.fdopen(os.dup(1), "wb")
+    os.dup2(2, 1)
+    inp = sys.stdin.buffer
+    while True:
+        try:
+            msg = _recv(inp)
+        except EOFError:
+            return
+        if msg is None:
+            return
+        job, time_limit = msg
+        row = execute(job, time_limit)
+        try:
+            _send(out, row)
+        except (BrokenPipeError, OSError):  # the parent is gone
+            return
+
+
+#: One BLAS/OpenMP thread per worker: the sweep's parallelism is its processes.
+#: Threaded BLAS in two workers on two cores oversubscribes them (Siconos's
+#: Newton-min ran 4x slower), and the thread count changes the rounding, so
+#: fixing it also makes a parallel sweep give the same numbers as a serial one.
+SINGLE_THREAD = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+                 "VECLIB_MAXIMUM_THREADS", "NUMEXPR_NUM_THREADS")
+
+
+def worker_environment() -> dict:
+    env = dict(os.environ)
+    env.update({k: "1" for k in SINGLE_THREAD})
+    return env
+
+
+class _Worker:
+    def __init__(self):
+        stderr = None if os.environ.get("LCPBENCH_WORKER_STDERR") else subprocess.DEVNULL
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "lcpbench.bench.harness"], env=worker_environment(),
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=stderr)
+        self.job: Job | None = None
+        self.started = 0.0
+
+    def give(self, job: Job, time_limit: float) -> None:
+        self.job, self.started = job, time.monotonic()
+        _send(self.proc.stdin, (job, time_limit))
+
+    def kill(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+        self.proc.wait()
+        for fh in (self.proc.stdin, self.proc.stdout):
+            try:
+                fh.close()
+            except OSError:
+                pass
+
+    def stop(self) -> None:
+        """A clean exit for an idle worker (killed if it does not go)."""
+        try:
+            _send(self.proc.stdin, None)
+            self.proc.wait(2.0)
+        except (OSError, subprocess.TimeoutExpired):
+            pass
+        self.kill()
+
+
+def run_jobs(jobs: list[Job], *, workers: int = 1, time_limit: float = DEFAULT_TIME_LIMIT
+             ) -> Iterator[tuple[Job, dict]]:
+    """Run ``jobs`` on ``workers`` processes; yield (job, row) as each finishes.
+
+    A job past ``time_limit`` seconds has its process killed (and replaced)
+    and yields a ``timeout`` row; a process that dies yields ``crashed``.
+    """
+    if not jobs:
+        return
+    pending = deque(jobs)
+    pool = [_Worker() for _ in range(max(1, min(workers, len(jobs))))]
+    try:
+        while pending or any(w.job is not None for w in pool):
+            for w in pool:
+                if w.job is None and pending:
+                    w.give(pending.popleft(), time_limit)
+            busy = [w for w in pool if w.job is not None]
+            timeout = max(0.0, min(w.started + time_limit for w in busy) - time.monotonic())
+            ready = wait([w.proc.stdout for w in busy], timeout=timeout + 0.05)
+            for i, w in enumerate(pool):
+                job = w.job
+                if job is None:
+                    continue
+                if w.proc.stdout in ready:
+                    try:
+                        row = _recv(w.proc.stdout)
+                    except (EOFError, OSError, pickle.UnpicklingError):
+                        w.kill()
+                        pool[i] = _Worker()
+                        yield job, failed_row("crashed", "the worker process died (exit code "
+                                              f"{w.proc.returncode})",
+                                              time.monotonic() - w.started)
+                        continue
+                    w.job = None
+                    yield job, row
+                elif time.monotonic() - w.started > time_limit:
+                    w.kill()
+                    pool[i] = _Worker()
+                    yield job, failed_row("timeout", "killed after the time limit of "
+                                          f"{time_limit:g} s", time_limit)
+    finally:
+        for w in pool:
+            if w.job is None:
+                w.stop()
+            else:
+                w.kill()
+
+
+# -- a sweep ------------------------------------------------------------------------------
+def _scene_columns(key: str) -> dict:
+    d = json.loads(key)
+    return {k: d[k] for k in ("theta", "height", "links", "length", "EI", "weight", "channel")}
+
+
+def _versions(names: Iterable[str]) -> dict[str, str]:
+    """The version of each back-end's library (scipy's for the baselines)."""
+    import scipy
+
+    from .. import __version__
+    from ..solvers.registry import get_backend
+
+    return {n: (f"scipy {scipy.__version__}" if n in BASELINES
+                else f"lcpbench {__version__}" if n == "reference"
+                else get_backend(n).version() or "?") for n in names}
+
+
+def sweep(store: Store, jobs: list[Job], *, workers: int = 1,
+          time_limit: float = DEFAULT_TIME_LIMIT, rerun: bool = False,
+          progress: Callable[[int, int, Job, dict], None] | None = None) -> SweepPlan:
+    """Run the jobs that are not in ``store`` yet (all of them with ``rerun``).
+
+    Every finished job is committed at once. ``progress(done, total, job,
+    row)`` is called after each. Returns the plan (what was skipped and run).
+    """
+    have_runs = set() if rerun else store.run_keys()
+    have_refs = set() if rerun else store.ref_keys()
+    todo = [j for j in jobs
+            if (j.scene not in have_refs if j.kind == "ref" else j.key not in have_runs)]
+    plan = SweepPlan(jobs, todo)
+    versions = _versions({j.backend for j in todo})
+    done = plan.done
+    for job, row in run_jobs(todo, workers=workers, time_limit=time_limit):
+        row.update(_scene_columns(job.scene))
+        row["created"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+        if job.kind == "ref":
+            row["scene"] = job.scene
+            row.setdefault("tol", job.tol)
+            row.setdefault("check_error", float("nan"))
+            store.put_ref(row, replace=rerun)
+        else:
+            row.update(scene=job.scene, backend=job.backend, settings=job.settings,
+                       tol=job.tol, method=job.method, version=versions[job.backend])
+            store.put_run(row, replace=rerun)
+        done += 1
+        if progress is not None:
+            progress(done, len(jobs), job, row)
+    return plan
+
+
+def default_workers() -> int:
+    """Both cores of a 2-core machine; at most 4 by default."""
+    return max(1, min(4, os.cpu_count() or 1))
+
+
+def error_of(total_force: float, reference: float, force_scale: float) -> float:
+    """The force error of a run: |F − F_ref| / max(|F_ref|, EI/ℓ²).
+
+    Relative where the reference force exceeds the chain's own force unit
+    EI/ℓ², in that unit below it (so no-contact scenes, F_ref = 0, are judged
+    too).
+    """
+    if not np.isfinite(total_force):
+        return float("inf")
+    return abs(total_force - reference) / max(abs(reference), force_scale)
+
+
+if __name__ == "__main__":
+    _worker_main()

@@ -1,0 +1,157 @@
+"""Metrics of the benchmark, computed from stored runs only.
+
+Error of a run
+    |F − F_ref| / max(|F_ref|, EI/ℓ²): the total-force error against the
+    scene's reference, relative where the force exceeds the chain's own
+    force unit EI/ℓ² and in that unit below it (so no-contact scenes count).
+Success
+    the run converged (certificate accepted) and its error is at most
+    :func:`success_tol` of its driver tolerance: min(1e-3, 100·tol). 1e-3 is
+    the paper's own agreement criterion (0.1 % of total force, Fig. 26);
+    100·tol is what an exact contact solver reaches at driver tolerance
+    tol on the paper's scenes (measured: 7e-5 at 1e-3, 4e-8 at 1e-6,
+    2e-11 at 1e-9 rad for the reference scene).
+Shifted geometric mean
+    exp(mean(log(v + s))) − s, as in qpbenchmark (shift s = 10): of times
+    in milliseconds, and of errors in units of the success tolerance.
+    Unsuccessful runs count at the time limit and at an error of 1
+    (100 %) or their own, whichever is larger, as qpbenchmark penalises
+    failures.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .harness import DEFAULT_TIME_LIMIT, error_of
+
+SHIFT = 10.0
+
+
+def shifted_geometric_mean(values, shift: float = SHIFT) -> float:
+    v = np.asarray(list(values), float)
+    if v.size == 0:
+        return float("nan")
+    if np.any(v < 0):
+        raise ValueError("shifted geometric mean of negative values")
+    return float(np.exp(np.mean(np.log(v + shift))) - shift)
+
+
+def success_tol(tol: float) -> float:
+    """The force error a run at driver tolerance ``tol`` (rad) may have and count as a success."""
+    return min(1e-3, 100.0 * tol)
+
+
+@dataclass
+class Evaluated:
+    """One stored run judged against its scene's reference."""
+
+    row: dict
+    error: float  # inf when there is no reference
+    success: bool
+
+    @property
+    def backend(self) -> str:
+        return self.row["backend"]
+
+    @property
+    def settings(self) -> str:
+        return self.row["settings"]
+
+
+def evaluate(runs: list[dict], refs: dict[str, dict]) -> list[Evaluated]:
+    """Judge every run against the reference of its scene."""
+    out = []
+    for r in runs:
+        ref = refs.get(r["scene"])
+        if ref is None or not ref["converged"]:
+            out.append(Evaluated(r, float("inf"), False))
+            continue
+        err = error_of(r["total_force"], ref["total_force"], r["EI"] / r["length"] ** 2)
+        ok = bool(r["converged"]) and err <= success_tol(r["tol"])
+        out.append(Evaluated(r, err, ok))
+    return out
+
+
+def summarise(evaluated: list[Evaluated], *, time_limit: float = DEFAULT_TIME_LIMIT
+              ) -> list[dict]:
+    """Per (back-end, settings): success, times, errors, iterations, speed-up over the baseline.
+
+    Rows are sorted by back-end then settings (default, low, mid, high), the
+    baselines last.
+    """
+    baseline_time = {e.row["scene"]: e.row["wall_time"] for e in evaluated
+                     if e.backend == "baseline" and e.success}
+    groups: dict[tuple, list[Evaluated]] = {}
+    for e in evaluated:
+        groups.setdefault((e.backend, e.settings), []).append(e)
+    rows = []
+    for (backend, settings), es in groups.items():
+        ok = [e for e in es if e.success]
+        t_ms = [1e3 * (e.row["wall_time"] if e.success else time_limit) for e in es]
+        tol = es[0].row["tol"]
+        err_units = [max(e.error, 0.0 if e.success else 1.0) / success_tol(e.row["tol"])
+                     for e in es]
+        errors = [e.error for e in es if math.isfinite(e.error)]
+        speedups = [baseline_time[e.row["scene"]] / e.row["wall_time"] for e in ok
+                    if e.row["scene"] in baseline_time and e.row["wall_time"] > 0]
+        rows.append({
+            "backend": backend,
+            "settings": settings,
+            "tol": tol,
+            "runs": len(es),
+            "success": len(ok) / len(es),
+            "converged": sum(bool(e.row["converged"]) for e in es) / len(es),
+            "wrong_but_converged": sum(bool(e.row["converged"]) and not e.success for e in es),
+            "time_sgm_ms": shifted_geometric_mean(t_ms),
+            "time_median_ms": float(np.median([1e3 * e.row["wall_time"] for e in ok]))
+            if ok else float("nan"),
+            "error_sgm": shifted_geometric_mean(err_units),
+            "error_median": float(np.median(errors)) if errors else float("nan"),
+            "error_max": float(max((e.error for e in ok), default=float("nan"))),
+            "outer_mean": float(np.mean([e.row["outer_iterations"] for e in ok]))
+            if ok else float("nan"),
+            "inner_mean": float(np.mean([e.row["inner_iterations"] for e in ok]))
+            if ok else float("nan"),
+            "speedup_vs_baseline": float(np.exp(np.mean(np.log(speedups))))
+            if speedups else float("nan"),
+        })
+    order = {"default": 0, "low": 1, "mid": 2, "high": 3}
+    rows.sort(key=lambda r: (r["backend"].startswith("baseline"), r["backend"],
+                             order.get(r["settings"], 9)))
+    best_t = min((r["time_sgm_ms"] for r in rows), default=float("nan"))
+    best_e = min((r["error_sgm"] for r in rows), default=float("nan"))
+    for r in rows:
+        r["time_sgm_rel"] = r["time_sgm_ms"] / best_t if best_t > 0 else float("nan")
+        r["error_sgm_rel"] = (r["error_sgm"] + SHIFT) / (best_e + SHIFT)
+    return rows
+
+
+def time_table(evaluated: list[Evaluated], height: float, settings: str = "default"
+               ) -> tuple[list[float], dict[str, dict[float, float | None]], float]:
+    """Table II of the paper: wall time per bend angle at one height, over the fastest.
+
+    Returns (bend angles, {back-end: {θ: time / fastest or None if not a
+    success}}, fastest time in ms). Back-ends run at ``settings``; the
+    baselines are included as they are.
+    """
+    cells: dict[str, dict[float, float | None]] = {}
+    best = math.inf
+    thetas: set[float] = set()
+    for e in evaluated:
+        r = e.row
+        if not math.isclose(r["height"], height) or (
+                e.settings not in (settings, "-")):
+            continue
+        thetas.add(r["theta"])
+        t = r["wall_time"] if e.success else None
+        cells.setdefault(e.backend, {})[r["theta"]] = t
+        if t is not None:
+            best = min(best, t)
+    for row in cells.values():
+        for th, t in row.items():
+            row[th] = None if t is None else t / best
+    return sorted(thetas), cells, 1e3 * best

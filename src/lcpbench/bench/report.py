@@ -1,0 +1,186 @@
+"""``lcpbench report``: markdown tables, CSV and figures, built from the store only.
+
+Nothing here solves anything: a report can be rebuilt at any time from a
+store, and two stores with the same runs give the same tables (apart from
+the times, which are measurements).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import platform
+from pathlib import Path
+
+from .harness import DEFAULT_TIME_LIMIT
+from .metrics import SHIFT, evaluate, success_tol, summarise, time_table
+from .store import Store
+
+DEFAULT_OUT = Path("results") / "sweep"
+
+
+def _fmt(v, spec: str = ".3g", missing: str = "—") -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return missing
+    return format(v, spec)
+
+
+def _table(head: list[str], rows: list[list[str]], align: str | None = None) -> str:
+    align = align or "l" + "r" * (len(head) - 1)
+    sep = ["---:" if a == "r" else "---" for a in align]
+    lines = ["| " + " | ".join(head) + " |", "| " + " | ".join(sep) + " |"]
+    lines += ["| " + " | ".join(r) + " |" for r in rows]
+    return "\n".join(lines)
+
+
+def comparison_table(summary: list[dict]) -> str:
+    """The headline table, qpbenchmark style."""
+    head = ["back-end", "settings", "tol (rad)", "success", "wrong but converged",
+            f"time sgm (×best, shift {SHIFT:g} ms)", "median time (ms)",
+            f"error sgm (×best, shift {SHIFT:g})", "median error", "max error (successes)",
+            "outer it.", "inner it.", "× faster than baseline"]
+    rows = []
+    for r in summary:
+        rows.append([
+            f"`{r['backend']}`", r["settings"], _fmt(r["tol"], ".0e"),
+            f"{100 * r['success']:.0f} %", str(r["wrong_but_converged"]),
+            _fmt(r["time_sgm_rel"], ".1f"), _fmt(r["time_median_ms"], ".3g"),
+            _fmt(r["error_sgm_rel"], ".2f"), _fmt(r["error_median"], ".1e"),
+            _fmt(r["error_max"], ".1e"), _fmt(r["outer_mean"], ".1f"),
+            _fmt(r["inner_mean"], ".0f"),
+            _fmt(r["speedup_vs_baseline"], ".1f"),
+        ])
+    return _table(head, rows, "llr" + "r" * (len(head) - 3))
+
+
+def table_two(evaluated, height: float, settings: str = "default") -> str:
+    thetas, cells, best_ms = time_table(evaluated, height, settings)
+    if not cells:
+        return f"(no runs at h = {height:g} mm)"
+    head = ["back-end"] + [f"{t:g}°" for t in thetas]
+    order = sorted(cells, key=lambda b: (b.startswith("baseline"), b))
+    rows = [[f"`{b}`"] + [_fmt(cells[b].get(t), ".3g", "fail") if t in cells[b] else ""
+                          for t in thetas] for b in order]
+    return (_table(head, rows)
+            + f"\n\nTimes over the fastest successful solve in the table ({best_ms:.3g} ms); "
+              "'fail' marks a run that was not a success (see the error criterion).")
+
+
+def failures(evaluated) -> str:
+    """How each back-end failed, counted by status."""
+    counts: dict[tuple, dict[str, int]] = {}
+    for e in evaluated:
+        if e.success:
+            continue
+        why = e.row["status"] if e.row["status"] != "solved" else "converged, error too large"
+        c = counts.setdefault((e.backend, e.settings), {})
+        c[why] = c.get(why, 0) + 1
+    if not counts:
+        return "Every run was a success."
+    rows = [[f"`{b}`", s, ", ".join(f"{k} {v}" for k, v in sorted(c.items()))]
+            for (b, s), c in sorted(counts.items())]
+    return _table(["back-end", "settings", "unsuccessful runs by status"], rows, "lll")
+
+
+def build_report(store: Store, out: str | os.PathLike = DEFAULT_OUT, *,
+                 time_limit: float = DEFAULT_TIME_LIMIT, plots: bool = True,
+                 table2_height: float | None = None) -> dict:
+    """Write report.md, runs.csv, summary.json and the figures into ``out``.
+
+    Returns the summary (one dict per back-end and settings).
+    """
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    runs = store.runs()
+    refs = store.refs()
+    evaluated = evaluate(runs, refs)
+    summary = summarise(evaluated, time_limit=time_limit)
+    store.export_csv(out / "runs.csv")
+    (out / "summary.json").write_text(json.dumps(_clean(summary), indent=1) + "\n")
+
+    heights = sorted({r["height"] for r in runs})
+    h2 = table2_height if table2_height is not None else (heights[0] if heights else 0.0)
+    figures = []
+    if plots and runs:
+        from .plot import plot_forces, plot_shapes, plot_work_precision
+
+        plot_work_precision(summary, evaluated, out / "work-precision.png")
+        plot_forces(refs, evaluated, out / "force-vs-theta.png")
+        plot_shapes(refs, out / "shapes.png")
+        figures = ["work-precision.png", "force-vs-theta.png", "shapes.png"]
+    (out / "report.md").write_text(_markdown(store, runs, refs, evaluated, summary, h2,
+                                             figures, time_limit))
+    return {"summary": summary, "runs": len(runs), "refs": len(refs), "out": str(out)}
+
+
+def _grid_text(runs) -> str:
+    def span(key):
+        vals = sorted({r[key] for r in runs})
+        return ", ".join(f"{v:g}" for v in vals) if len(vals) <= 8 else \
+            f"{vals[0]:g} … {vals[-1]:g} ({len(vals)} values)"
+    return (f"θ = {span('theta')} °; h = {span('height')} mm; N = {span('links')}; "
+            f"ℓ = {span('length')} mm; EI = {span('EI')} N·mm²; w = {span('weight')} N/mm")
+
+
+def _markdown(store, runs, refs, evaluated, summary, h2, figures, time_limit) -> str:
+    scenes = {r["scene"] for r in runs}
+    bad_refs = [k for k, r in refs.items() if not r["converged"]]
+    checks = [r["check_error"] for r in refs.values()
+              if r["check_error"] is not None and math.isfinite(r["check_error"])]
+    lines = [
+        "# lcpbench sweep report",
+        "",
+        f"Built by `lcpbench report` from `{store.path.name}`: {len(runs)} runs over "
+        f"{len(scenes)} scenes ({_grid_text(runs) if runs else 'no runs'}).",
+        f"Machine: {platform.machine()}, {os.cpu_count()} cores, Python "
+        f"{platform.python_version()}. Times are wall times of one solve in a worker "
+        "process (scene to result, including assembly), measured once.",
+        "",
+        "**Reference.** Per scene, the built-in active set at settings `high` and driver "
+        "tolerance 1e-11 rad, its last contact step re-solved by Lemke on the dense LCP: "
+        f"largest disagreement {max(checks):.1e} of the total force." if checks else
+        "**Reference.** none stored.",
+        "" if not bad_refs else f"Scenes without a converged reference: {len(bad_refs)} "
+                                "(their runs count as unsuccessful).",
+        "",
+        "**Error** of a run: |F − F_ref| / max(|F_ref|, EI/ℓ²) on the total force. "
+        "**Success**: converged (the certificate accepts it) and error ≤ min(1e-3, 100·tol), "
+        "with tol the driver tolerance of the run (1e-3 rad for `default`, the paper's). "
+        f"Shifted geometric means (shift {SHIFT:g}) as in qpbenchmark: times in ms, errors "
+        "in units of that success threshold; unsuccessful runs count at the time limit "
+        f"({time_limit:g} s) and at an error of at least 100 %. ×best: 1.0 is the best "
+        "back-end. '× faster than baseline': geometric mean over the scenes where both "
+        "succeed of baseline time / back-end time.",
+        "",
+        "## Back-ends compared",
+        "",
+        comparison_table(summary),
+        "",
+        "## Unsuccessful runs",
+        "",
+        failures(evaluated),
+        "",
+        f"## Computation time per bend angle at h = {h2:g} mm (the paper's Table II)",
+        "",
+        table_two(evaluated, h2),
+        "",
+    ]
+    for f in figures:
+        lines += [f"![{f[:-4]}]({f})", ""]
+    lines += ["Every run, with its reference force: [runs.csv](runs.csv); the table above as "
+              "data: [summary.json](summary.json).", ""]
+    return "\n".join(lines)
+
+
+def _clean(obj):
+    if isinstance(obj, dict):
+        return {k: _clean(v) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [_clean(v) for v in obj]
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+__all__ = ["DEFAULT_OUT", "build_report", "comparison_table", "success_tol", "table_two"]

@@ -1,0 +1,269 @@
+"""Back-end selection: the fastest back-end that meets an accuracy on a kind of scene.
+
+A *kind* of scene is what changes the numerics: N, ℓ, EI, w and one wall or
+two. Its probe set is four contact scenes of that kind at fixed fractions of
+ℓ (θ = 90°, 150°, 180° and two wall heights), so every scene of a kind shares
+one set of probes. Each candidate (back-end, settings) runs every probe
+through the sweep harness into the store: the probes are cached there, and a
+second selection for the same kind and accuracy solves nothing.
+
+The choice: among the candidates that converged on every probe with a force
+error (against the probe's reference) at most ``tol`` and, if given, a mean
+time within ``time_budget``, the one with the smallest geometric-mean time.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ProblemError
+from ..problems.scenes import ActuatorScene
+from .grid import Grid, scene_key
+from .harness import DEFAULT_TIME_LIMIT, Job, error_of, plan_sweep, sweep
+from .store import DEFAULT_STORE, Store
+
+#: probe scenes of a kind: (θ in degrees, h / ℓ)
+PROBES = ((90.0, 0.1), (150.0, 0.1), (180.0, 2.0 / 30.0), (150.0, 5.0 / 30.0))
+FALLBACK = ("active-set", "default")
+STORE_ENV = "LCPBENCH_STORE"
+
+
+@dataclass
+class Selection:
+    """The chosen back-end and why.
+
+    Attributes
+    ----------
+    backend, settings : the choice (None when no candidate qualifies).
+    tol : the force accuracy asked for (relative error of the total force).
+    driver_tol : the driver tolerance the probes ran at (rad).
+    time_s : geometric-mean wall time of one solve over the probes (s).
+    error : largest force error over the probes.
+    reason : one line saying why.
+    evidence : per candidate: converged probes, worst error, mean time.
+    """
+
+    backend: str | None
+    settings: str | None
+    tol: float
+    driver_tol: float
+    time_s: float
+    error: float
+    reason: str
+    evidence: list[dict] = field(default_factory=list)
+
+    def to_dict(self) -> dict:
+        return {k: getattr(self, k) for k in
+                ("backend", "settings", "tol", "driver_tol", "time_s", "error", "reason",
+                 "evidence")}
+
+
+def probe_scenes(scene_or_grid) -> list[ActuatorScene]:
+    """The probe scenes of every kind of scene in ``scene_or_grid``."""
+    if isinstance(scene_or_grid, Grid):
+        scenes = scene_or_grid.scenes()
+    elif isinstance(scene_or_grid, ActuatorScene):
+        scenes = [scene_or_grid]
+    elif isinstance(scene_or_grid, (list, tuple)) and scene_or_grid and all(
+            isinstance(s, ActuatorScene) for s in scene_or_grid):
+        scenes = list(scene_or_grid)
+    else:
+        raise ProblemError("scene_or_grid must be an ActuatorScene, a list of them or a "
+                           f"Grid, got {type(scene_or_grid).__name__}")
+    kinds = {}
+    for s in scenes:
+        if s.links == "auto":
+            raise ProblemError("links='auto' must be resolved before selecting a back-end")
+        kinds[(int(s.links), s.length, s.EI, s.weight, bool(s.channel))] = s
+    probes = []
+    for (links, length, ei, w, channel) in kinds:
+        for theta, frac in PROBES:
+            probes.append(ActuatorScene(theta=theta, height=round(frac * length, 12),
+                                        links=links, length=length, EI=ei, weight=w,
+                                        channel=channel))
+    return probes
+
+
+def _check(tol, time_budget) -> tuple[float, float | None]:
+    try:
+        tol = float(tol)
+    except (TypeError, ValueError):
+        raise ProblemError(f"tol must be a number in [1e-12, 0.1], got {tol!r}") from None
+    if not (math.isfinite(tol) and 1e-12 <= tol <= 0.1):
+        raise ProblemError(f"tol must be in [1e-12, 0.1] (relative force error), got {tol:g}")
+    if time_budget is not None:
+        try:
+            time_budget = float(time_budget)
+        except (TypeError, ValueError):
+            raise ProblemError(f"time_budget must be a number of seconds > 0, got "
+                               f"{time_budget!r}") from None
+        if not (math.isfinite(time_budget) and time_budget > 0):
+            raise ProblemError(f"time_budget must be > 0 s, got {time_budget:g}")
+    return tol, time_budget
+
+
+def driver_tol_for(tol: float) -> float:
+    """Driver tolerance (rad) of the probes for a force accuracy ``tol``.
+
+    An exact contact solver reaches a force error of about tol/10 at driver
+    tolerance tol on the probe scenes (measured: 7e-5 at 1e-3 rad, 4e-8 at
+    1e-6, 2e-11 at 1e-9), so the probes run at min(tol, 1e-3).
+    """
+    return min(tol, 1e-3)
+
+
+def select_backend(scene_or_grid, tol: float = 1e-6, time_budget: float | None = None, *,
+                   store: Store | str | os.PathLike | None = None,
+                   candidates: list[str] | None = None,
+                   settings: tuple[str, ...] = ("default", "low", "mid", "high"),
+                   probe: bool = True, workers: int = 1,
+                   progress=None) -> Selection:
+    """The fastest back-end that meets the accuracy ``tol`` on this kind of scene.
+
+    Parameters
+    ----------
+    scene_or_grid : ActuatorScene, list of scenes, or Grid.
+    tol : largest relative total-force error allowed on every probe.
+    time_budget : largest geometric-mean time of one solve (s), or None.
+    store : a Store or a path (default: ``$LCPBENCH_STORE`` or
+        ``results/lcpbench.sqlite``); the probes are cached there.
+    candidates : back-end names (default: every installed one).
+    settings : the profiles tried for each back-end.
+    probe : run the probes that are not cached (False: use the cache only,
+        and answer with what it holds).
+    workers : processes for the probes.
+
+    Returns
+    -------
+    Selection
+        ``backend`` is None when no candidate qualifies (the reason says why).
+    """
+    from ..solvers.registry import available_backends, get_backend, get_settings
+
+    tol, time_budget = _check(tol, time_budget)
+    probes = probe_scenes(scene_or_grid)
+    names = available_backends() if candidates is None else list(candidates)
+    for n in names:
+        get_backend(n)
+    for p in settings:
+        get_settings(p)
+    dtol = driver_tol_for(tol)
+    jobs = plan_sweep(probes, names, list(settings), tol=dtol, baselines=())
+    limit = DEFAULT_TIME_LIMIT if time_budget is None else min(DEFAULT_TIME_LIMIT,
+                                                                max(1.0, 20 * time_budget))
+    own = not isinstance(store, Store)
+    if own:
+        path = default_store_path() if store is None else Path(store)
+        if not probe and not path.exists():
+            return _fallback(tol, dtol, "no probes cached (no store at "
+                                        f"{path}); run `lcpbench select` to measure them")
+        store = Store(path, create=probe)
+    try:
+        if probe:
+            sweep(store, jobs, workers=workers, time_limit=limit, progress=progress)
+        return _choose(store, jobs, probes, tol, dtol, time_budget)
+    finally:
+        if own:
+            store.close()
+
+
+def default_store_path() -> Path:
+    return Path(os.environ.get(STORE_ENV) or DEFAULT_STORE)
+
+
+def _fallback(tol, dtol, why) -> Selection:
+    return Selection(None, None, tol, dtol, math.nan, math.nan, why)
+
+
+def _choose(store: Store, jobs: list[Job], probes, tol, dtol, time_budget) -> Selection:
+    keys = {scene_key(s) for s in probes}
+    refs = {k: r for k, r in store.refs(arrays=False).items() if k in keys}
+    rows = {(r["scene"], r["backend"], r["settings"], r["tol"], r["method"]): r
+            for r in store.runs(arrays=False, where="WHERE tol = ?", params=(dtol,))
+            if r["scene"] in keys}
+    missing_refs = [k for k in keys if k not in refs or not refs[k]["converged"]]
+    if missing_refs:
+        return _fallback(tol, dtol, f"{len(missing_refs)} probe reference(s) missing or "
+                                    "not converged; probe again")
+    evidence = []
+    for (backend, settings) in dict.fromkeys((j.backend, j.settings) for j in jobs
+                                             if j.kind == "run"):
+        mine = [rows.get(j.key) for j in jobs
+                if j.kind == "run" and (j.backend, j.settings) == (backend, settings)]
+        if any(r is None for r in mine):
+            evidence.append({"backend": backend, "settings": settings, "probes": len(mine),
+                             "cached": sum(r is not None for r in mine), "ok": False,
+                             "why": "not all probes cached"})
+            continue
+        errors = [error_of(r["total_force"], refs[r["scene"]]["total_force"],
+                           r["EI"] / r["length"] ** 2) for r in mine]
+        conv = sum(bool(r["converged"]) for r in mine)
+        t = float(np.exp(np.mean(np.log([max(r["wall_time"], 1e-9) for r in mine]))))
+        worst = max(errors)
+        ok = conv == len(mine) and worst <= tol
+        why = ("" if ok else f"converged on {conv}/{len(mine)} probes" if conv < len(mine)
+               else f"force error {worst:.1e} > {tol:.0e}")
+        if ok and time_budget is not None and t > time_budget:
+            ok, why = False, f"time {t:.3g} s > budget {time_budget:g} s"
+        evidence.append({"backend": backend, "settings": settings, "probes": len(mine),
+                         "converged": conv, "error": worst, "time_s": t, "ok": ok,
+                         "why": why})
+    good = sorted((e for e in evidence if e["ok"]), key=lambda e: e["time_s"])
+    if not good:
+        if all(e.get("why") == "not all probes cached" for e in evidence):
+            return _fallback(tol, dtol, "no probes cached for this kind of scene; run "
+                                        "`lcpbench select` to measure them")
+        return Selection(None, None, tol, dtol, math.nan, math.nan,
+                         f"no back-end met a force error of {tol:.0e} on all {len(probes)} "
+                         "probes" + (f" within {time_budget:g} s" if time_budget else ""),
+                         evidence)
+    best = good[0]
+    runner_up = next((e for e in good if e["backend"] != best["backend"]), None)
+    reason = (f"fastest of {len(good)} (back-end, settings) pairs that met a force error of "
+              f"{tol:.0e} on all {len(probes)} probes: {1e3 * best['time_s']:.3g} ms per "
+              f"solve, worst error {best['error']:.1e}")
+    if runner_up is not None:
+        reason += (f"; next {runner_up['backend']} ({runner_up['settings']}) "
+                   f"{runner_up['time_s'] / best['time_s']:.2f}x slower")
+    return Selection(best["backend"], best["settings"], tol, dtol, best["time_s"],
+                     best["error"], reason, evidence)
+
+
+_AUTO_CACHE: dict[tuple, tuple[str, str]] = {}
+
+
+def auto_backend(scene, driver_tol: float) -> tuple[str, str, str]:
+    """What ``solver="auto"`` uses: the cached selection for this kind of scene, if any.
+
+    Looks only at the store (``$LCPBENCH_STORE`` or ``results/lcpbench.sqlite``),
+    never probes. Returns (back-end, settings, why); without cached probes,
+    the built-in active set (an exact method, O(N) per change).
+    """
+    from .metrics import success_tol
+
+    path = default_store_path()
+    tol = success_tol(driver_tol)
+    try:
+        stamp = path.stat().st_mtime_ns
+    except OSError:
+        return (*FALLBACK, "no cached back-end selection; active-set is exact")
+    kind = (str(path), stamp, int(scene.links), scene.length, scene.EI, scene.weight,
+            bool(scene.channel), tol)
+    if kind not in _AUTO_CACHE:
+        try:
+            sel = select_backend(scene, tol=tol, store=path, probe=False)
+        except Exception:  # noqa: BLE001 - a broken cache must not break solve()
+            sel = None
+        if sel is None or sel.backend is None:
+            _AUTO_CACHE[kind] = FALLBACK
+        else:
+            _AUTO_CACHE[kind] = (sel.backend, sel.settings)
+    backend, settings = _AUTO_CACHE[kind]
+    why = ("selected from the cached probes" if (backend, settings) != FALLBACK
+           else "no cached back-end selection; active-set is exact")
+    return backend, settings, why
