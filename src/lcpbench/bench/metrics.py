@@ -105,7 +105,7 @@ def summarise(evaluated: list[Evaluated], *, time_limit: float = DEFAULT_TIME_LI
             "runs": len(es),
             "success": len(ok) / len(es),
             "converged": sum(bool(e.row["converged"]) for e in es) / len(es),
-            "wrong_but_converged": sum(bool(e.row["converged"]) and not e.success for e in es),
+            "converged_but_off": sum(bool(e.row["converged"]) and not e.success for e in es),
             "time_sgm_ms": shifted_geometric_mean(t_ms),
             "time_median_ms": float(np.median([1e3 * e.row["wall_time"] for e in ok]))
             if ok else float("nan"),

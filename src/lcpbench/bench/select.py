@@ -220,7 +220,8 @@ def _choose(store: Store, jobs: list[Job], probes, tol, dtol, time_budget) -> Se
                                         "`lcpbench select` to measure them")
         return Selection(None, None, tol, dtol, math.nan, math.nan,
                          f"no back-end met a force error of {tol:.0e} on all {len(probes)} "
-                         "probes" + (f" within {time_budget:g} s" if time_budget else ""),
+                         "probes" + (f" within the time budget of {time_budget:g} s" if time_budget
+                                     else ""),
                          evidence)
     best = good[0]
     runner_up = next((e for e in good if e["backend"] != best["backend"]), None)

@@ -175,11 +175,17 @@ class Store:
                     f"({', '.join('?' * len(cols))})", values)
 
     # -- reading ------------------------------------------------------------------
+    def _query(self, sql: str) -> list[tuple]:
+        try:
+            return self.db.execute(sql).fetchall()
+        except sqlite3.DatabaseError as exc:
+            raise StoreError(f"store {self.path}: cannot read it ({exc})") from exc
+
     def run_keys(self) -> set[tuple]:
-        return set(self.db.execute(f"SELECT {', '.join(RUN_KEY)} FROM runs"))
+        return set(self._query(f"SELECT {', '.join(RUN_KEY)} FROM runs"))
 
     def ref_keys(self) -> set[str]:
-        return {r[0] for r in self.db.execute("SELECT scene FROM refs")}
+        return {r[0] for r in self._query("SELECT scene FROM refs")}
 
     def runs(self, *, arrays: bool = True, where: str = "", params: tuple = ()) -> list[dict]:
         """Every run as a dict (arrays as numpy arrays when ``arrays``), in a fixed order."""
@@ -189,11 +195,15 @@ class Store:
         return {r["scene"]: r for r in self._rows("refs", ("scene",), arrays, "", ())}
 
     def _rows(self, table, order, arrays, where, params) -> list[dict]:
-        cur = self.db.execute(f"SELECT * FROM {table} {where} ORDER BY {', '.join(order)}",
-                              params)
-        names = [d[0] for d in cur.description]
+        try:
+            cur = self.db.execute(f"SELECT * FROM {table} {where} ORDER BY "
+                                  f"{', '.join(order)}", params)
+            names = [d[0] for d in cur.description]
+            records = cur.fetchall()
+        except sqlite3.DatabaseError as exc:
+            raise StoreError(f"store {self.path}: cannot read it ({exc})") from exc
         out = []
-        for values in cur:
+        for values in records:
             row = dict(zip(names, values))
             for a in ARRAYS:
                 row[a] = _array(row[a]) if arrays else None
@@ -201,7 +211,7 @@ class Store:
         return out
 
     def count(self, table: str = "runs") -> int:
-        return int(self.db.execute(f"SELECT COUNT(*) FROM {table}").fetchone()[0])
+        return int(self._query(f"SELECT COUNT(*) FROM {table}")[0][0])
 
     def export_csv(self, path: str | os.PathLike) -> int:
         """Write every run, joined with its reference force, as CSV; returns the row count."""

@@ -1,0 +1,119 @@
+"""`lcpbench sweep` killed with SIGKILL and restarted gives the uninterrupted run's table."""
+
+import json
+import os
+import signal
+import sqlite3
+import subprocess
+import sys
+import time
+
+import pytest
+
+from lcpbench.bench.metrics import evaluate, summarise
+from lcpbench.bench.store import Store
+
+# 6 scenes x (3 back-ends + baseline) + 6 references = 30 jobs; PGS spends its
+# whole sweep budget on every N = 140 step (~0.6 s), so the sweep lasts a few
+# seconds and can be killed in the middle.
+ARGS = ["sweep", "--theta", "120:180:30", "--height", "3,5", "--links", "140",
+        "--solvers", "active-set,lemke,pgs", "--settings", "default", "--jobs", "2",
+        "--quiet"]
+RUNS = 6 * 4
+TIMES = ("time_sgm_ms", "time_median_ms", "time_sgm_rel", "speedup_vs_baseline")
+
+
+def _cmd(store, out):
+    return [sys.executable, "-m", "lcpbench.cli", *ARGS, "--store", str(store), "--out",
+            str(out)]
+
+
+def _count(path) -> int:
+    try:
+        with sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=5) as db:
+            return db.execute("SELECT COUNT(*) FROM runs").fetchone()[0]
+    except sqlite3.Error:
+        return 0
+
+
+def _table(store_path, out):
+    with Store(store_path) as st:
+        runs = st.runs()
+        summary = summarise(evaluate(runs, st.refs()))
+    stored = {(r["scene"], r["backend"], r["settings"]): (r["status"], r["total_force"],
+              r["outer_iterations"], r["inner_iterations"], tuple(r["forces"]))
+              for r in runs}
+    report = json.loads((out / "summary.json").read_text())
+    for row in [*summary, *report]:
+        for k in TIMES:
+            row.pop(k, None)
+    return len(runs), stored, summary, report
+
+
+def test_sigkill_then_restart_gives_the_same_table(tmp_path):
+    killed, clean = tmp_path / "killed.sqlite", tmp_path / "clean.sqlite"
+    proc = subprocess.Popen(_cmd(killed, tmp_path / "rk"), start_new_session=True,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 120
+    while _count(killed) < 4 and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    os.killpg(proc.pid, signal.SIGKILL)  # the sweep and its workers, without warning
+    proc.wait()
+    partial = _count(killed)
+    assert 4 <= partial < RUNS, "the sweep was not killed in the middle"
+
+    again = subprocess.run(_cmd(killed, tmp_path / "rk"), capture_output=True, text=True)
+    assert again.returncode == 0, again.stderr
+    assert f"{partial}" in again.stdout or "already in" in again.stdout
+    whole = subprocess.run(_cmd(clean, tmp_path / "rc"), capture_output=True, text=True)
+    assert whole.returncode == 0, whole.stderr
+
+    n_killed, rows_killed, sum_killed, rep_killed = _table(killed, tmp_path / "rk")
+    n_clean, rows_clean, sum_clean, rep_clean = _table(clean, tmp_path / "rc")
+    assert n_killed == n_clean == RUNS  # nothing lost, nothing twice
+    assert rows_killed == rows_clean  # every run: same status, forces and iterations
+    same = json.dumps  # NaN-aware: NaN != NaN, but its text is the same
+    assert same(sum_killed, sort_keys=True) == same(sum_clean, sort_keys=True)  # the table
+    assert same(rep_killed, sort_keys=True) == same(rep_clean, sort_keys=True)
+    assert (tmp_path / "rk" / "report.md").exists()
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--theta", "10:5:1"], "theta must be"),
+    (["--height", "a:b"], "height must be"),
+    (["--links", "3"], "links"),
+    (["--solvers", "nope"], "nope"),
+    (["--settings", "fast"], "settings must be one of"),
+    (["--jobs", "0"], "jobs must be"),
+    (["--time-limit", "-1"], "time-limit must be"),
+    (["--tol", "2"], "tol must be"),
+])
+def test_bad_sweep_input_is_one_line_and_exit_2(tmp_path, args, message, capsys):
+    from lcpbench.cli import main
+
+    code = main(["sweep", "--store", str(tmp_path / "s.sqlite"), "--quiet", *args])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert len(err.strip().splitlines()) == 1 and message in err
+    assert not (tmp_path / "s.sqlite").exists()  # nothing ran, nothing was created
+
+
+def test_corrupt_store_is_exit_2_and_untouched(tmp_path, capsys):
+    from lcpbench.cli import main
+
+    store = tmp_path / "s.sqlite"
+    store.write_bytes(b"garbage" * 100)
+    for argv in (["sweep", "--theta", "150", "--height", "3", "--solvers", "active-set",
+                  "--quiet"], ["report"]):
+        code = main([*argv, "--store", str(store), "--out", str(tmp_path / "o")])
+        err = capsys.readouterr().err
+        assert code == 2 and len(err.strip().splitlines()) == 1
+        assert "left as it is" in err
+        assert store.read_bytes() == b"garbage" * 100
+
+
+def test_report_needs_an_existing_store(tmp_path, capsys):
+    from lcpbench.cli import main
+
+    assert main(["report", "--store", str(tmp_path / "none.sqlite")]) == 2
+    assert "no such file" in capsys.readouterr().err

@@ -1,0 +1,80 @@
+"""Back-end selection: qualified, fastest, cached in the store, used by solver='auto'."""
+
+import pytest
+
+import lcpbench
+from lcpbench.bench import select as sel_mod
+from lcpbench.bench.select import probe_scenes, select_backend
+from lcpbench.bench.store import Store
+from lcpbench.errors import ProblemError
+
+SCENE = lcpbench.ActuatorScene(theta=120.0, height=3.0, links=30)
+CANDIDATES = ["active-set", "lemke", "pgs"]
+
+
+@pytest.fixture(scope="module")
+def selected(tmp_path_factory):
+    path = tmp_path_factory.mktemp("sel") / "s.sqlite"
+    s = select_backend(SCENE, tol=1e-3, store=path, candidates=CANDIDATES,
+                       settings=("default", "high"), workers=2)
+    return path, s
+
+
+def test_probes_depend_on_the_kind_only():
+    a = probe_scenes(SCENE)
+    b = probe_scenes(lcpbench.ActuatorScene(theta=40.0, height=6.0, links=30))
+    assert a == b and len(a) == 4
+    assert all(p.arc_height > p.height for p in a)  # every probe is in contact
+    with pytest.raises(ProblemError, match="scene_or_grid"):
+        probe_scenes("theta=150")
+
+
+def test_selection_meets_the_accuracy_and_is_the_fastest(selected):
+    _, s = selected
+    assert s.backend in ("active-set", "lemke") and s.error <= 1e-3
+    ok = [e for e in s.evidence if e["ok"]]
+    assert s.time_s == min(e["time_s"] for e in ok)
+    for e in s.evidence:  # qualified means: converged on every probe, within tol
+        if e["ok"]:
+            assert e["converged"] == e["probes"] == 4 and e["error"] <= 1e-3
+        else:
+            assert e["why"]
+    assert "fastest" in s.reason
+
+
+def test_probes_are_cached_in_the_store(selected):
+    path, s = selected
+    with Store(path) as st:
+        n = st.count()
+    again = select_backend(SCENE, tol=1e-3, store=path, candidates=CANDIDATES,
+                           settings=("default", "high"))
+    with Store(path) as st:
+        assert st.count() == n  # nothing solved the second time
+    assert (again.backend, again.settings) == (s.backend, s.settings)
+
+
+def test_impossible_budget_selects_nothing(selected):
+    path, _ = selected
+    s = select_backend(SCENE, tol=1e-3, time_budget=1e-9, store=path,
+                       candidates=CANDIDATES, settings=("default", "high"))
+    assert s.backend is None and "budget" in s.reason
+
+
+def test_bad_input():
+    with pytest.raises(ProblemError, match="tol"):
+        select_backend(SCENE, tol=0.0, probe=False)
+    with pytest.raises(ProblemError, match="time_budget"):
+        select_backend(SCENE, tol=1e-3, time_budget=-1, probe=False)
+
+
+def test_auto_uses_the_cached_selection(selected, monkeypatch):
+    path, s = selected
+    monkeypatch.setenv(sel_mod.STORE_ENV, str(path))
+    sel_mod._AUTO_CACHE.clear()
+    res = lcpbench.solve(SCENE.with_links(30), solver="auto", tol=1e-3)
+    assert res.solver == s.backend and res.converged
+    assert "cached" in res.extra["auto"]
+    # another kind of scene (N = 40) has no cached probes: the active set
+    res = lcpbench.solve(SCENE.with_links(40), solver="auto", tol=1e-3)
+    assert res.solver == "active-set" and "no cached" in res.extra["auto"]
+    sel_mod._AUTO_CACHE.clear()
