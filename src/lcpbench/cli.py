@@ -32,7 +32,6 @@ from .bench.report import DEFAULT_OUT
 from .bench.store import DEFAULT_STORE
 from .errors import LcpbenchError, ProblemError
 from .model.driver import METHODS
-from .solvers.base import PROFILES
 from .problems.scenes import (
     DEFAULT_EI,
     DEFAULT_LENGTH,
@@ -41,6 +40,7 @@ from .problems.scenes import (
     MIN_LINKS,
     ActuatorScene,
 )
+from .solvers.base import PROFILES
 
 PROG = "lcpbench"
 

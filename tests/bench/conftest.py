@@ -7,7 +7,6 @@ kills its process has to be a real installed plug-in: a module and a
 """
 
 import os
-import sys
 import textwrap
 
 import pytest

@@ -342,8 +342,8 @@ def write_lcp(path: str | os.PathLike, M, q, *, fmt: str | None = None) -> Path:
                 np.savez(fh, M=M, q=q)
         else:
             lines = [str(n), "0", str(n), str(n), f"{n}\t{n}"]
-            lines += [" ".join("%.17g" % v for v in col) for col in M.T]
-            lines.append(" ".join("%.17g" % v for v in q))
+            lines += [" ".join(f"{v:.17g}" for v in col) for col in M.T]
+            lines.append(" ".join(f"{v:.17g}" for v in q))
             lines.append("")
             lines.append(f"# LCP n={n} written by lcpbench: Siconos format, dense storage "
                          "(0), M column-major (one column per line), then q")

@@ -163,7 +163,7 @@ class BoxQP:
     step: pentadiagonal), for structure-exploiting back-ends.
     """
 
-    P: "object"
+    P: object
     c: np.ndarray
     lower: np.ndarray
     upper: np.ndarray
@@ -212,7 +212,7 @@ class QPResult:
     extra: dict = field(default_factory=dict)
 
     @classmethod
-    def failure(cls, n: int, status: Status, message: str, **kw) -> "QPResult":
+    def failure(cls, n: int, status: Status, message: str, **kw) -> QPResult:
         nan = np.full(n, np.nan)
         return cls(nan, nan.copy(), status, message=message, **kw)
 

@@ -21,7 +21,7 @@ and reactions by EI/ℓ², so the numbers compare across scenes.
 from __future__ import annotations
 
 import time
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 import scipy.sparse as sp

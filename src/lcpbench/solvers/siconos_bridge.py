@@ -33,7 +33,7 @@ import subprocess
 import tempfile
 import threading
 import time
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -111,7 +111,7 @@ def available() -> bool:
     return _package_dir(system_python()) is not None
 
 
-@lru_cache(maxsize=None)
+@cache
 def _version_of(pkg: str) -> str | None:
     if pkg.startswith(_DEBIAN_DIST + "/"):
         v = _dpkg_version("python3-siconos")
