@@ -277,3 +277,37 @@ def test_lcp_human_output(capsys):
     out = capsys.readouterr().out
     assert code == 0
     assert "solved" in out and "iterations  64" in out
+
+
+def test_solve_from_pressure(capsys):
+    # eq. (40): theta_1 = 0.81 P + 9.78; at P = 137.9 kPa, 0.81 * 137.9 + 9.78 = 121.479 deg
+    code, d, _ = run_json(capsys, ["solve", "--pressure", "137.9", "--actuator", "1",
+                                   "--links", str(N), "--json"])
+    assert code == 0 and math.isclose(d["scene"]["theta"], 121.479, rel_tol=1e-12)
+    # a user's own fit: theta = 1.0 * 100 + 20 = 120 deg
+    code, d, _ = run_json(capsys, ["solve", "--pressure", "100", "--fit", "1.0,20",
+                                   "--links", str(N), "--json"])
+    assert code == 0 and math.isclose(d["scene"]["theta"], 120.0)
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--pressure", "100", "--theta", "90"], "not both"),
+    (["--pressure", "500"], "pressure must be in"),
+    (["--pressure", "100", "--actuator", "7"], "actuator must be one of"),
+    (["--pressure", "100", "--fit", "1,x"], "fit must be"),
+    (["--fit", "1,2"], "--fit needs --pressure"),
+])
+def test_bad_pressure_input(capsys, args, message):
+    assert main(["solve", *args]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and message in err
+
+
+def test_select_cli(tmp_path, capsys):
+    args = ["select", "--tol", "1e-3", "--links", "20", "--solvers", "active-set,lemke",
+            "--store", str(tmp_path / "s.sqlite"), "--quiet", "--jobs", "2"]
+    code, d, _ = run_json(capsys, [*args, "--json"])
+    assert code == 0 and d["backend"] in ("active-set", "lemke") and d["error"] <= 1e-3
+    assert main(args) == 0  # cached the second time; one line with the reason
+    out = capsys.readouterr().out.strip()
+    assert out.startswith(d["backend"]) and len(out.splitlines()) == 1

@@ -100,8 +100,16 @@ def _int_arg(text: str) -> int:
 
 
 def _add_scene_options(s) -> None:
-    s.add_argument("--theta", type=float, default=DEFAULT_THETA, metavar="DEG",
+    s.add_argument("--theta", type=float, default=None, metavar="DEG",
                    help=f"unconstrained bend angle, degrees in (0, 360) (default {DEFAULT_THETA:g})")
+    s.add_argument("--pressure", type=float, default=None, metavar="KPA",
+                   help="input pressure instead of --theta: theta from the actuator's "
+                        "calibration (eqs. 40-42 of the paper, kPa)")
+    s.add_argument("--actuator", default="1", metavar="1|2|3",
+                   help="which of the paper's calibrations --pressure uses (default 1)")
+    s.add_argument("--fit", default=None, metavar="SLOPE,INTERCEPT",
+                   help="your own calibration theta = SLOPE * P + INTERCEPT (degrees, P in "
+                        "the unit of --pressure) instead of --actuator")
     s.add_argument("--height", type=float, default=DEFAULT_HEIGHT, metavar="MM",
                    help=f"wall height above the pins, mm (default {DEFAULT_HEIGHT:g})")
     s.add_argument("--links", type=_links_arg, default=DEFAULT_LINKS, metavar="N|auto",
@@ -398,9 +406,26 @@ def _cmd_solve(args) -> int:
 
 
 def _scene_from(args) -> ActuatorScene:
-    return ActuatorScene(theta=args.theta, height=args.height, links=args.links,
-                         length=args.length, EI=args.EI, weight=args.weight,
-                         channel=args.channel)
+    kw = {"height": args.height, "links": args.links, "length": args.length, "EI": args.EI,
+          "weight": args.weight, "channel": args.channel}
+    if args.pressure is None:
+        if args.fit is not None:
+            raise ProblemError("--fit needs --pressure")
+        theta = DEFAULT_THETA if args.theta is None else args.theta
+        return ActuatorScene(theta=theta, **kw)
+    from .problems.calibrations import linear_calibration, scene_from_pressure
+
+    if args.theta is not None:
+        raise ProblemError("give --theta or --pressure, not both (the calibration sets theta)")
+    actuator = args.actuator
+    if args.fit is not None:
+        try:
+            slope, intercept = (float(v) for v in args.fit.split(","))
+        except ValueError:
+            raise ProblemError(f"fit must be SLOPE,INTERCEPT (two numbers), got "
+                               f"{args.fit!r}") from None
+        actuator = linear_calibration(slope, intercept)
+    return scene_from_pressure(args.pressure, actuator, **kw)
 
 
 def _cmd_solvers(args) -> int:
