@@ -201,10 +201,14 @@ def build_parser() -> ArgumentParser:
                     "resumes where it stopped when run again. With no arguments: the paper's "
                     "grid (theta 10-180 by 10, h 2-7 mm by 1, N = 140) over every installed "
                     "back-end.")
-    sw.add_argument("--theta", default="10:180:10", metavar="A:B:STEP",
+    sw.add_argument("--grid", choices=("paper", "hard"), default="paper",
+                    help="paper: the theta x height grid below (default); hard: the "
+                         "hard-case suite (theta 170-180, h down to 0.02 l, N up to 2000, "
+                         "grazing, no contact, heavy, EI 1-1000, channel)")
+    sw.add_argument("--theta", default=None, metavar="A:B:STEP",
                     help="bend angles, degrees: start:stop:step (stop included), a comma list "
                          "or one value (default 10:180:10)")
-    sw.add_argument("--height", default="2:7:1", metavar="A:B:STEP",
+    sw.add_argument("--height", default=None, metavar="A:B:STEP",
                     help="wall heights, mm (default 2:7:1)")
     sw.add_argument("--links", default=str(DEFAULT_LINKS), metavar="LIST",
                     help=f"numbers of links (default {DEFAULT_LINKS})")
@@ -223,8 +227,9 @@ def build_parser() -> ArgumentParser:
     sw.add_argument("--tol", type=float, default=None, metavar="RAD",
                     help="driver tolerance of every run (default: per profile, 1e-3 for "
                          "default and low, 1e-6 mid, 1e-9 high)")
-    sw.add_argument("--method", choices=METHODS, default=DEFAULT_METHOD,
-                    help=f"outer iteration (default {DEFAULT_METHOD})")
+    sw.add_argument("--method", default=DEFAULT_METHOD, metavar="M[,M]",
+                    help=f"outer iteration(s): globalised, undamped or both, comma-separated "
+                         f"(default {DEFAULT_METHOD})")
     sw.add_argument("--baseline", choices=("analytic", "fd", "both", "none"),
                     default="analytic",
                     help="the root-finding baseline: analytic Jacobian (default), finite "
@@ -526,16 +531,26 @@ def _cmd_sweep(args) -> int:
     from .bench.store import Store
     from .solvers.registry import available_backends, get_backend, get_settings
 
-    grid_kw = {"theta": parse_range(args.theta, "theta"),
-               "height": parse_range(args.height, "height"),
-               "links": parse_range(args.links, "links", integer=True),
-               "channel": args.channel}
-    for name in ("EI", "weight", "length"):
-        values = _float_list(getattr(args, name), name)
-        if values is not None:
-            grid_kw[name] = values
-    grid = Grid(**grid_kw)
-    scenes = grid.scenes()  # validates every scene before anything runs
+    if args.grid == "hard":
+        from .bench.grid import hard_scenes
+
+        given = [f"--{n}" for n in ("theta", "height", "EI", "weight", "length")
+                 if getattr(args, n) is not None] + (["--channel"] if args.channel else [])
+        if given or args.links != str(DEFAULT_LINKS):
+            raise ProblemError("--grid hard is a fixed list of scenes; it takes no "
+                               f"{', '.join(given) or '--links'}")
+        scenes = hard_scenes()
+    else:
+        grid_kw = {"theta": parse_range(args.theta or "10:180:10", "theta"),
+                   "height": parse_range(args.height or "2:7:1", "height"),
+                   "links": parse_range(args.links, "links", integer=True),
+                   "channel": args.channel}
+        for name in ("EI", "weight", "length"):
+            values = _float_list(getattr(args, name), name)
+            if values is not None:
+                grid_kw[name] = values
+        scenes = Grid(**grid_kw).scenes()  # validates every scene before anything runs
+    methods = [m.strip() for m in args.method.split(",") if m.strip()]
     if args.solvers.strip() == "all":
         solvers = available_backends()
     else:
@@ -559,7 +574,7 @@ def _cmd_sweep(args) -> int:
     limit = _positive_number(args.time_limit, "time-limit")
     baselines = {"analytic": ["baseline"], "fd": ["baseline-fd"],
                  "both": ["baseline", "baseline-fd"], "none": []}[args.baseline]
-    jobs = plan_sweep(scenes, solvers, settings, tol=args.tol, method=args.method,
+    jobs = plan_sweep(scenes, solvers, settings, tol=args.tol, method=methods,
                       baselines=baselines)
     with Store(args.store) as store:
         bar = _progress(args.quiet)

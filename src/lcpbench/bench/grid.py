@@ -126,3 +126,41 @@ def repr_float(v: float) -> str:
 
 def scene_from_key(key: str) -> ActuatorScene:
     return ActuatorScene(**json.loads(key))
+
+
+def _grazing_height(theta: float, links: int) -> float:
+    """Height of the highest node of the weightless unconstrained chain (mm)."""
+    from ..model.chain import heights
+
+    chain = ActuatorScene(theta=theta, height=1e3, links=links, weight=0.0).chain()
+    return float(heights(chain, chain.rest_alpha).max())
+
+
+def hard_scenes() -> list[ActuatorScene]:
+    """The hard-case suite (issue 5): where back-ends and the undamped driver break.
+
+    θ from 170° to 180°; h down to 0.02·ℓ; N from 10 to 2000; grazing contact
+    (the wall 1e-9 mm above and below the highest node of a weightless arc);
+    no contact; a heavy chain that sags off the wall; EI from 1 to 1000
+    N·mm²; the two-wall channel.
+    """
+    ell = DEFAULT_LENGTH
+    graze = _grazing_height(120.0, DEFAULT_LINKS)
+    return [
+        ActuatorScene(theta=170.0, height=3.0),
+        ActuatorScene(theta=175.0, height=3.0),
+        ActuatorScene(theta=180.0, height=3.0),
+        ActuatorScene(theta=180.0, height=1.0),
+        ActuatorScene(theta=150.0, height=0.02 * ell),
+        ActuatorScene(theta=180.0, height=0.02 * ell),
+        ActuatorScene(theta=180.0, height=0.02 * ell, links=10),
+        ActuatorScene(theta=150.0, height=3.0, links=2000),
+        ActuatorScene(theta=180.0, height=0.02 * ell, links=2000),
+        ActuatorScene(theta=120.0, height=graze + 1e-9, weight=0.0),  # grazing, just clear
+        ActuatorScene(theta=120.0, height=graze - 1e-9, weight=0.0),  # grazing, just touching
+        ActuatorScene(theta=40.0, height=3.0),  # no contact
+        ActuatorScene(theta=150.0, height=3.0, weight=0.05),  # heavy: sags off the wall
+        ActuatorScene(theta=150.0, height=3.0, EI=1.0),
+        ActuatorScene(theta=150.0, height=3.0, EI=1000.0),
+        ActuatorScene(theta=180.0, height=1.0, channel=True),
+    ]

@@ -80,9 +80,18 @@ class SweepPlan:
 
 
 def plan_sweep(grid: Grid | Iterable, backends: list[str], settings: list[str], *,
-               tol: float | None = None, method: str = "globalised",
+               tol: float | None = None, method: str | Iterable[str] = "globalised",
                baselines: Iterable[str] = ("baseline",)) -> list[Job]:
-    """Every job of a sweep, in a fixed order: references, then scene by scene."""
+    """Every job of a sweep, in a fixed order: references, then scene by scene.
+
+    ``method`` is one driver scheme or several (each back-end runs with each).
+    """
+    from ..model.driver import METHODS
+
+    methods = [method] if isinstance(method, str) else list(method)
+    for m in methods:
+        if m not in METHODS:
+            raise ProblemError(f"method must be among {', '.join(METHODS)}, got {m!r}")
     scenes = grid.scenes() if isinstance(grid, Grid) else list(grid)
     if not scenes:
         raise ProblemError("the grid is empty: no scenes to run")
@@ -94,10 +103,11 @@ def plan_sweep(grid: Grid | Iterable, backends: list[str], settings: list[str], 
     for k in keys:
         for b in baselines:
             jobs.append(Job("baseline", k, b, "-", BASELINE_TOL, "hybr"))
-        for name in backends:
-            for p in settings:
-                jobs.append(Job("run", k, name, p, PROFILE_TOL[p] if tol is None else tol,
-                                method))
+        for m in methods:
+            for name in backends:
+                for p in settings:
+                    jobs.append(Job("run", k, name, p,
+                                    PROFILE_TOL[p] if tol is None else tol, m))
     return jobs
 
 
