@@ -132,6 +132,13 @@ def _add_solver_options(s, default: str = DEFAULT_SOLVER) -> None:
                         "tolerance low 1e-3, mid 1e-6, high 1e-9 (default: default)")
 
 
+def _add_store_options(s) -> None:
+    s.add_argument("--store", default=str(DEFAULT_STORE), metavar="PATH",
+                   help=f"SQLite results store (default {DEFAULT_STORE})")
+    s.add_argument("--out", default=str(DEFAULT_OUT), metavar="DIR",
+                   help=f"where the report goes (default {DEFAULT_OUT})")
+
+
 def build_parser() -> ArgumentParser:
     parser = ArgumentParser(
         prog=PROG,
@@ -234,10 +241,7 @@ def build_parser() -> ArgumentParser:
                     default="analytic",
                     help="the root-finding baseline: analytic Jacobian (default), finite "
                          "differences as fsolve would (slow), both, or none")
-    sw.add_argument("--store", default=str(DEFAULT_STORE), metavar="PATH",
-                    help=f"SQLite results store (default {DEFAULT_STORE})")
-    sw.add_argument("--out", default=str(DEFAULT_OUT), metavar="DIR",
-                    help=f"where the report goes (default {DEFAULT_OUT})")
+    _add_store_options(sw)
     sw.add_argument("--no-report", action="store_true", help="do not write the report")
     sw.add_argument("--jobs", type=_int_arg, default=None, metavar="K",
                     help="worker processes (default: the number of cores, at most 4)")
@@ -253,10 +257,7 @@ def build_parser() -> ArgumentParser:
         "report", help="tables, CSV and figures from a results store",
         description="Build the comparison tables, the paper's Table II, the CSV of every "
                     "run and the figures from the store alone (nothing is solved).")
-    rp.add_argument("--store", default=str(DEFAULT_STORE), metavar="PATH",
-                    help=f"SQLite results store (default {DEFAULT_STORE})")
-    rp.add_argument("--out", default=str(DEFAULT_OUT), metavar="DIR",
-                    help=f"output folder (default {DEFAULT_OUT})")
+    _add_store_options(rp)
     rp.add_argument("--table2-height", type=float, default=None, metavar="MM",
                     help="wall height of the Table II-style table (default: the smallest)")
     rp.add_argument("--no-plots", action="store_true", help="tables and CSV only")
