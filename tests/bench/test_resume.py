@@ -20,7 +20,8 @@ ARGS = ["sweep", "--theta", "120:180:30", "--height", "3,5", "--links", "140",
         "--solvers", "active-set,lemke,pgs", "--settings", "default", "--jobs", "2",
         "--quiet"]
 RUNS = 6 * 4
-TIMES = ("time_sgm_ms", "time_median_ms", "time_sgm_rel", "speedup_vs_baseline")
+TIMES = ("time_sgm_ms", "time_median_ms", "time_sgm_rel", "speedup_vs_baseline",
+         "speedup_vs_baseline_fd")
 
 
 def _cmd(store, out):

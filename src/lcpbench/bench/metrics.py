@@ -40,6 +40,10 @@ def shifted_geometric_mean(values, shift: float = SHIFT) -> float:
     return float(np.exp(np.mean(np.log(v + shift))) - shift)
 
 
+def _geomean(values) -> float:
+    return float(np.exp(np.mean(np.log(values)))) if values else float("nan")
+
+
 def success_tol(tol: float) -> float:
     """The force error a run at driver tolerance ``tol`` (rad) may have and count as a success."""
     return min(1e-3, 100.0 * tol)
@@ -83,8 +87,8 @@ def summarise(evaluated: list[Evaluated], *, time_limit: float = DEFAULT_TIME_LI
     Rows are sorted by back-end then settings (default, low, mid, high), the
     baselines last.
     """
-    baseline_time = {e.row["scene"]: e.row["wall_time"] for e in evaluated
-                     if e.backend == "baseline" and e.success}
+    baseline_time = {b: {e.row["scene"]: e.row["wall_time"] for e in evaluated
+                         if e.backend == b and e.success} for b in ("baseline", "baseline-fd")}
     groups: dict[tuple, list[Evaluated]] = {}
     for e in evaluated:
         groups.setdefault((e.backend, e.settings), []).append(e)
@@ -96,8 +100,9 @@ def summarise(evaluated: list[Evaluated], *, time_limit: float = DEFAULT_TIME_LI
         err_units = [max(e.error, 0.0 if e.success else 1.0) / success_tol(e.row["tol"])
                      for e in es]
         errors = [e.error for e in es if math.isfinite(e.error)]
-        speedups = [baseline_time[e.row["scene"]] / e.row["wall_time"] for e in ok
-                    if e.row["scene"] in baseline_time and e.row["wall_time"] > 0]
+        speedups = {b: [times[e.row["scene"]] / e.row["wall_time"] for e in ok
+                        if e.row["scene"] in times and e.row["wall_time"] > 0]
+                    for b, times in baseline_time.items()}
         rows.append({
             "backend": backend,
             "settings": settings,
@@ -116,8 +121,8 @@ def summarise(evaluated: list[Evaluated], *, time_limit: float = DEFAULT_TIME_LI
             if ok else float("nan"),
             "inner_mean": float(np.mean([e.row["inner_iterations"] for e in ok]))
             if ok else float("nan"),
-            "speedup_vs_baseline": float(np.exp(np.mean(np.log(speedups))))
-            if speedups else float("nan"),
+            "speedup_vs_baseline": _geomean(speedups["baseline"]),
+            "speedup_vs_baseline_fd": _geomean(speedups["baseline-fd"]),
         })
     order = {"default": 0, "low": 1, "mid": 2, "high": 3}
     rows.sort(key=lambda r: (r["backend"].startswith("baseline"), r["backend"],
