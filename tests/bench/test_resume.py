@@ -17,8 +17,8 @@ from lcpbench.bench.store import Store
 # whole sweep budget on every N = 140 step (~0.6 s), so the sweep lasts a few
 # seconds and can be killed in the middle.
 ARGS = ["sweep", "--theta", "120:180:30", "--height", "3,5", "--links", "140",
-        "--solvers", "active-set,lemke,pgs", "--settings", "default", "--jobs", "2",
-        "--quiet"]
+        "--solvers", "active-set,lemke,pgs", "--settings", "default", "--baseline",
+        "analytic", "--jobs", "2", "--quiet"]
 RUNS = 6 * 4
 TIMES = ("time_sgm_ms", "time_median_ms", "time_sgm_rel", "speedup_vs_baseline",
          "speedup_vs_baseline_fd")
