@@ -238,9 +238,9 @@ def build_parser() -> ArgumentParser:
                     help=f"outer iteration(s): globalised, undamped or both, comma-separated "
                          f"(default {DEFAULT_METHOD})")
     sw.add_argument("--baseline", choices=("analytic", "fd", "both", "none"),
-                    default="analytic",
-                    help="the root-finding baseline: analytic Jacobian (default), finite "
-                         "differences as fsolve would (slow), both, or none")
+                    default="both",
+                    help="the root-finding baseline: analytic Jacobian, finite differences "
+                         "as fsolve would (about 1 s per scene), both (default), or none")
     _add_store_options(sw)
     sw.add_argument("--no-report", action="store_true", help="do not write the report")
     sw.add_argument("--jobs", type=_int_arg, default=None, metavar="K",
@@ -284,6 +284,17 @@ def build_parser() -> ArgumentParser:
     se.add_argument("--json", action="store_true", help="print the selection as JSON")
     se.add_argument("--quiet", action="store_true", help="no progress bar")
     se.set_defaults(handler=_cmd_select)
+
+    rr = commands.add_parser(
+        "reproduce", help="regenerate the paper's figures and tables into results/paper",
+        description="Figs. 5-8, 10, 24, 26-27 and Tables I-II of the paper from the model, "
+                    "each as a PNG with the numbers behind it, and a README that puts our "
+                    "numbers beside the paper's.")
+    rr.add_argument("--out", default="results/paper", metavar="DIR",
+                    help="output folder (default results/paper)")
+    rr.add_argument("--quick", action="store_true",
+                    help="coarser grids and smaller N: a smoke run in seconds")
+    rr.set_defaults(handler=_cmd_reproduce)
 
     v = commands.add_parser(
         "validate",
@@ -684,6 +695,34 @@ def _cmd_select(args) -> int:
     return 0 if sel.backend is not None else 1
 
 
+def _cmd_reproduce(args) -> int:
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        _error_line("reproduce draws figures: pip install 'lcpbench[plot]'")
+        return 2
+    from tqdm import tqdm
+
+    from .bench.reproduce import reproduce
+
+    bar = tqdm(unit="stage", file=sys.stderr, desc="reproduce", dynamic_ncols=True)
+
+    def progress(done, total, stage):
+        bar.total = total
+        bar.set_postfix_str(stage, refresh=False)
+        bar.update(done - bar.n)
+
+    try:
+        info = reproduce(args.out, quick=args.quick, progress=progress)
+    except OSError as exc:
+        raise ProblemError(f"out {args.out}: cannot write there ({exc})") from exc
+    finally:
+        bar.close()
+    print(f"wrote the paper's figures and tables to {args.out}/ "
+          f"({len(info.get('files', []))} files); see {args.out}/README.md")
+    return 0
+
+
 def _cmd_validate_cantilever(args) -> int:
     from .model.validation import cantilever_validation
 
@@ -714,7 +753,7 @@ def main(argv: list[str] | None = None) -> int:
         args = parser.parse_args(argv)
         if args.handler is None:
             what = ("CASE (cantilever)" if args.command == "validate" else
-                    "COMMAND (solve, solvers, export, lcp, sweep, report, select, validate)")
+                    "COMMAND (solve, solvers, export, lcp, sweep, report, select, reproduce, validate)")
             args.parser.error(f"missing {what}; see '{args.parser.prog} --help'")
         return args.handler(args)
     except _Exit as exc:
