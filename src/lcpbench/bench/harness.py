@@ -272,9 +272,28 @@ def _recv(fh):
     return pickle.loads(data)
 
 
+def _die_with_parent() -> None:
+    """Linux: have the kernel SIGKILL this worker when the sweep process dies.
+
+    Without it a worker of a killed sweep finishes (or hangs in) its current
+    job before it notices the closed pipe.
+    """
+    import ctypes
+    import signal
+
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, int(signal.SIGKILL))  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):  # not Linux: the closed pipe still ends the worker
+        pass
+    if os.getppid() == 1:  # the parent died before prctl took effect
+        os._exit(0)
+
+
 def _worker_main() -> None:
     import signal
 
+    _die_with_parent()
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent handles Ctrl-C
     out = os.fdopen(os.dup(1), "wb")
     os.dup2(2, 1)
