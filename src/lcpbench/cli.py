@@ -603,6 +603,7 @@ def _cmd_sweep(args) -> int:
             bar.close()
         print(f"{len(plan.todo)} runs computed, {plan.done} already in {args.store} "
               f"({len(scenes)} scenes x {len(solvers)} back-ends x {len(settings)} settings"
+              f"{f' x {len(methods)} drivers' if len(methods) > 1 else ''}"
               f" + {len(baselines)} baseline(s) + references; {jobs_n} worker(s))")
         if not args.no_report:
             return _write_report(store, args.out, limit, None, plots=True)

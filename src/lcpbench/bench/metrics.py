@@ -82,7 +82,7 @@ def evaluate(runs: list[dict], refs: dict[str, dict]) -> list[Evaluated]:
 
 def summarise(evaluated: list[Evaluated], *, time_limit: float = DEFAULT_TIME_LIMIT
               ) -> list[dict]:
-    """Per (back-end, settings): success, times, errors, iterations, speed-up over the baseline.
+    """Per (back-end, settings, method): success, times, errors, iterations, speed-ups.
 
     Rows are sorted by back-end then settings (default, low, mid, high), the
     baselines last.
@@ -91,9 +91,9 @@ def summarise(evaluated: list[Evaluated], *, time_limit: float = DEFAULT_TIME_LI
                          if e.backend == b and e.success} for b in ("baseline", "baseline-fd")}
     groups: dict[tuple, list[Evaluated]] = {}
     for e in evaluated:
-        groups.setdefault((e.backend, e.settings), []).append(e)
+        groups.setdefault((e.backend, e.settings, e.row["method"]), []).append(e)
     rows = []
-    for (backend, settings), es in groups.items():
+    for (backend, settings, method), es in groups.items():
         ok = [e for e in es if e.success]
         t_ms = [1e3 * (e.row["wall_time"] if e.success else time_limit) for e in es]
         tol = es[0].row["tol"]
@@ -106,6 +106,7 @@ def summarise(evaluated: list[Evaluated], *, time_limit: float = DEFAULT_TIME_LI
         rows.append({
             "backend": backend,
             "settings": settings,
+            "method": method,
             "tol": tol,
             "runs": len(es),
             "success": len(ok) / len(es),
@@ -126,7 +127,7 @@ def summarise(evaluated: list[Evaluated], *, time_limit: float = DEFAULT_TIME_LI
         })
     order = {"default": 0, "low": 1, "mid": 2, "high": 3}
     rows.sort(key=lambda r: (r["backend"].startswith("baseline"), r["backend"],
-                             order.get(r["settings"], 9)))
+                             order.get(r["settings"], 9), r["method"]))
     best_t = min((r["time_sgm_ms"] for r in rows), default=float("nan"))
     best_e = min((r["error_sgm"] for r in rows), default=float("nan"))
     for r in rows:
@@ -149,7 +150,7 @@ def time_table(evaluated: list[Evaluated], height: float, settings: str = "defau
     for e in evaluated:
         r = e.row
         if not math.isclose(r["height"], height) or (
-                e.settings not in (settings, "-")):
+                e.settings not in (settings, "-")) or r["method"] == "undamped":
             continue
         thetas.add(r["theta"])
         t = r["wall_time"] if e.success else None

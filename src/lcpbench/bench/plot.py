@@ -103,10 +103,12 @@ def plot_work_precision(summary: list[dict], evaluated, path) -> None:
     order = {"default": 0, "low": 1, "mid": 2, "high": 3}
     by_backend: dict[str, list] = {}
     for e in evaluated:
-        if not e.row["converged"] or not math.isfinite(e.error):
-            continue
+        if (not e.row["converged"] or not math.isfinite(e.error)
+                or e.row["method"] not in ("globalised", "hybr", "lm")):
+            continue  # the undamped driver's runs are in the tables, not in this figure
         by_backend.setdefault(e.backend, {}).setdefault(e.settings, []).append(e)
-    success = {(r["backend"], r["settings"]): r["success"] for r in summary}
+    success = {(r["backend"], r["settings"]): r["success"] for r in summary
+               if r["method"] in ("globalised", "hybr", "lm")}
     markers = "osD^v<>ph*X"
     for k, (backend, per) in enumerate(sorted(by_backend.items())):
         pts = []

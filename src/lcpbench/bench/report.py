@@ -43,10 +43,14 @@ def comparison_table(summary: list[dict]) -> str:
     fd = any(math.isfinite(r.get("speedup_vs_baseline_fd", math.nan)) for r in summary)
     if fd:
         head.append("× faster than baseline-fd")
+    methods = len({r["method"] for r in summary if not r["backend"].startswith("baseline")})
+    if methods > 1:
+        head.insert(2, "driver")
     rows = []
     for r in summary:
         rows.append([
-            f"`{r['backend']}`", r["settings"], _fmt(r["tol"], ".0e"),
+            f"`{r['backend']}`", r["settings"]] + ([r["method"]] if methods > 1 else []) + [
+            _fmt(r["tol"], ".0e"),
             f"{100 * r['success']:.0f} %", str(r["converged_but_off"]),
             _fmt(r["time_sgm_rel"], ".1f"), _fmt(r["time_median_ms"], ".3g"),
             _fmt(r["error_sgm_rel"], ".2f"), _fmt(r["error_median"], ".1e"),
@@ -54,7 +58,8 @@ def comparison_table(summary: list[dict]) -> str:
             _fmt(r["inner_mean"], ".0f"),
             _fmt(r["speedup_vs_baseline"], ".1f"),
         ] + ([_fmt(r["speedup_vs_baseline_fd"], ".0f")] if fd else []))
-    return _table(head, rows, "llr" + "r" * (len(head) - 3))
+    lead = "lll" if methods > 1 else "ll"
+    return _table(head, rows, lead + "r" * (len(head) - len(lead)))
 
 
 def table_two(evaluated, height: float, settings: str = "default") -> str:
@@ -77,13 +82,14 @@ def failures(evaluated) -> str:
         if e.success:
             continue
         why = e.row["status"] if e.row["status"] != "solved" else "converged, error too large"
-        c = counts.setdefault((e.backend, e.settings), {})
+        c = counts.setdefault((e.backend, e.settings, e.row["method"]), {})
         c[why] = c.get(why, 0) + 1
     if not counts:
         return "Every run was a success."
-    rows = [[f"`{b}`", s, ", ".join(f"{k} {v}" for k, v in sorted(c.items()))]
-            for (b, s), c in sorted(counts.items())]
-    return _table(["back-end", "settings", "unsuccessful runs by status"], rows, "lll")
+    rows = [[f"`{b}`", s, m, ", ".join(f"{k} {v}" for k, v in sorted(c.items()))]
+            for (b, s, m), c in sorted(counts.items())]
+    return _table(["back-end", "settings", "driver", "unsuccessful runs by status"], rows,
+                  "llll")
 
 
 def build_report(store: Store, out: str | os.PathLike = DEFAULT_OUT, *,
