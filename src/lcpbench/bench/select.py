@@ -183,9 +183,10 @@ def _fallback(tol, dtol, why) -> Selection:
 def _choose(store: Store, jobs: list[Job], probes, tol, dtol, time_budget) -> Selection:
     keys = {scene_key(s) for s in probes}
     refs = {k: r for k, r in store.refs(arrays=False).items() if k in keys}
+    marks = ", ".join("?" * len(keys))
     rows = {(r["scene"], r["backend"], r["settings"], r["tol"], r["method"]): r
-            for r in store.runs(arrays=False, where="WHERE tol = ?", params=(dtol,))
-            if r["scene"] in keys}
+            for r in store.runs(arrays=False, where=f"WHERE tol = ? AND scene IN ({marks})",
+                                params=(dtol, *sorted(keys)))}
     missing_refs = [k for k in keys if k not in refs or not refs[k]["converged"]]
     if missing_refs:
         return _fallback(tol, dtol, f"{len(missing_refs)} probe reference(s) missing or "
