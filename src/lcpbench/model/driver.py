@@ -57,6 +57,19 @@ class DriverOutput:
     converged: bool
     reason: str
     steps: list[StepRecord] = field(default_factory=list)
+    last_step: StepSolution | None = None  # for a continuation start of the next scene
+
+
+@dataclass
+class DriverStart:
+    """Where a continuation starts: a neighbouring scene's answer (same chain size).
+
+    ``alpha`` are its link angles; ``warm`` its last contact step, handed to
+    back-ends that accept a warm start.
+    """
+
+    alpha: np.ndarray
+    warm: StepSolution | None = None
 
 
 def _fail(alpha, n, steps, reason) -> DriverOutput:
@@ -71,17 +84,22 @@ def run_driver(
     tol: float = 1e-3,
     max_outer: int = 200,
     method: str = "globalised",
+    start: DriverStart | None = None,
 ) -> DriverOutput:
     """Iterate contact steps to the equilibrium of ``chain``.
 
     Returns the final link angles and the reactions of the last step, with
-    ``converged`` and a reason; never raises on non-convergence.
+    ``converged`` and a reason; never raises on non-convergence. ``start``
+    (globalised scheme only) begins from a neighbouring scene's answer instead
+    of the clipped unconstrained arc.
     """
     if method == "undamped":
+        if start is not None:
+            raise ValueError("a continuation start needs method='globalised'")
         return _undamped(chain, solver, tol, max_outer)
     if method != "globalised":
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-    return _globalised(chain, solver, tol, max_outer)
+    return _globalised(chain, solver, tol, max_outer, start)
 
 
 def _step_failed(alpha, n, steps, sol: StepSolution, t_asm: float, E: float) -> DriverOutput:
@@ -92,7 +110,8 @@ def _step_failed(alpha, n, steps, sol: StepSolution, t_asm: float, E: float) -> 
 
 def _converged(alpha, sol: StepSolution, steps) -> DriverOutput:
     reason = "converged" if sol.solved else "converged (last step inaccurate)"
-    return DriverOutput(alpha, sol.reaction_upper, sol.reaction_lower, True, reason, steps)
+    return DriverOutput(alpha, sol.reaction_upper, sol.reaction_lower, True, reason, steps,
+                        last_step=sol)
 
 
 def _solve_step(chain, alpha, solver, warm):
@@ -103,15 +122,27 @@ def _solve_step(chain, alpha, solver, warm):
     return step, sol, t_asm
 
 
-def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int) -> DriverOutput:
+def _feasible_start(chain: Chain, alpha0: np.ndarray):
+    """Node heights clipped to the walls, and the chain through them (None if none fits)."""
+    u = np.clip(heights(chain, alpha0), chain.lower, chain.upper)
+    return u, alpha_from_heights(chain, u, alpha0)
+
+
+def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int,
+                start: DriverStart | None = None) -> DriverOutput:
     n = chain.free_nodes.size
     steps: list[StepRecord] = []
-    u = np.clip(heights(chain, chain.rest_alpha), chain.lower, chain.upper)
-    alpha = alpha_from_heights(chain, u, chain.rest_alpha)
+    warm: StepSolution | None = None
+    alpha = None
+    if start is not None:  # a neighbour's answer, clipped to this scene's walls
+        u, alpha = _feasible_start(chain, np.asarray(start.alpha, float))
+        warm = start.warm
+    if alpha is None:
+        u, alpha = _feasible_start(chain, chain.rest_alpha)
+        warm = None
     if alpha is None:
         return _fail(chain.rest_alpha, n, steps, "cannot fit the chain between the walls")
     E = energy(chain, alpha)
-    warm: StepSolution | None = None
     for _ in range(max_outer):
         step, sol, t_asm = _solve_step(chain, alpha, solver, warm)
         if sol.status not in (Status.SOLVED, Status.INACCURATE):
