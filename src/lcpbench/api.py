@@ -70,7 +70,7 @@ def solve(
         raise ProblemError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     if not (isinstance(max_outer, (int, np.integer)) and max_outer >= 1):
         raise ProblemError(f"max_outer must be an integer >= 1, got {max_outer!r}")
-    make_step_solver(solver, settings, bool(scaled))  # validates solver and settings first
+    step = make_step_solver(solver, settings, bool(scaled))  # validates them first
     if isinstance(scene, ActuatorScene) and scene.links == "auto":
         from .model.discretisation import auto_links
 
@@ -84,7 +84,7 @@ def solve(
             name, chosen, why = auto_backend(scene, tol)
             if settings == "default":
                 settings = chosen
-    step = make_step_solver(name, settings, bool(scaled))
+            step = make_step_solver(name, settings, bool(scaled))
     t0 = time.perf_counter()
     chain = scene.chain()
     if _clears_walls(chain):

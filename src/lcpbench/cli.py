@@ -31,6 +31,7 @@ from .bench.harness import DEFAULT_TIME_LIMIT
 from .bench.report import DEFAULT_OUT
 from .bench.store import DEFAULT_STORE
 from .errors import LcpbenchError, ProblemError
+from .jsonsafe import sanitise
 from .model.driver import METHODS
 from .problems.scenes import (
     DEFAULT_EI,
@@ -316,21 +317,6 @@ def build_parser() -> ArgumentParser:
 
 
 # -- output helpers -----------------------------------------------------------
-def sanitise(obj):
-    """A JSON-ready copy of ``obj``: NaN/±inf become None, numpy becomes Python."""
-    if isinstance(obj, dict):
-        return {str(k): sanitise(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [sanitise(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return sanitise(obj.tolist())
-    if isinstance(obj, np.generic):
-        obj = obj.item()
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    return obj
-
-
 def _print_json(obj) -> None:
     print(json.dumps(sanitise(obj), allow_nan=False))
 

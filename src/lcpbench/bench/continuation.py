@@ -51,11 +51,7 @@ def predict(history: list[tuple[ActuatorScene, ContactResult]], scene: ActuatorS
     d0, d1 = _step(s0, s1), _step(s1, scene)
     if not r0.converged or d0 is None or d0[0] != d1[0] or d0[1] == 0:
         return r1
-    alpha = r1.alpha + (r1.alpha - r0.alpha) * (d1[1] / d0[1])
-    guess = ContactResult.__new__(ContactResult)
-    guess.__dict__.update(r1.__dict__)
-    guess.alpha = alpha
-    return guess
+    return replace(r1, alpha=r1.alpha + (r1.alpha - r0.alpha) * (d1[1] / d0[1]))
 
 
 def solve_sequence(scenes: Sequence[ActuatorScene], *, predictor: str = "secant",

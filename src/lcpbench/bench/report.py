@@ -13,6 +13,7 @@ import os
 import platform
 from pathlib import Path
 
+from ..jsonsafe import sanitise
 from .harness import DEFAULT_TIME_LIMIT
 from .metrics import SHIFT, evaluate, success_tol, summarise, time_table
 from .store import Store
@@ -106,7 +107,7 @@ def build_report(store: Store, out: str | os.PathLike = DEFAULT_OUT, *,
     evaluated = evaluate(runs, refs)
     summary = summarise(evaluated, time_limit=time_limit)
     store.export_csv(out / "runs.csv")
-    (out / "summary.json").write_text(json.dumps(_clean(summary), indent=1) + "\n")
+    (out / "summary.json").write_text(json.dumps(sanitise(summary), indent=1) + "\n")
 
     heights = sorted({r["height"] for r in runs})
     h2 = table2_height if table2_height is not None else (heights[0] if heights else 0.0)
@@ -181,16 +182,6 @@ def _markdown(store, runs, refs, evaluated, summary, h2, figures, time_limit) ->
     lines += ["Every run, with its reference force: [runs.csv](runs.csv); the table above as "
               "data: [summary.json](summary.json).", ""]
     return "\n".join(lines)
-
-
-def _clean(obj):
-    if isinstance(obj, dict):
-        return {k: _clean(v) for k, v in obj.items()}
-    if isinstance(obj, list):
-        return [_clean(v) for v in obj]
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    return obj
 
 
 __all__ = ["DEFAULT_OUT", "build_report", "comparison_table", "success_tol", "table_two"]
