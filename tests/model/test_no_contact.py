@@ -1,0 +1,79 @@
+"""Issue 6, target 6: a scene that touches no wall is answered without any LCP.
+
+The unconstrained shape of a loaded chain is the equilibrium of the chain
+without walls (banded solves only); when it clears every wall it is the
+answer. Checked against the exact energy minimiser with the walls in place
+(SLSQP, an independent method), and by a step solver that fails the test if
+the driver ever calls it.
+"""
+
+import numpy as np
+import pytest
+
+import lcpbench
+import lcpbench.api as api
+from lcpbench import ActuatorScene
+from lcpbench.model.energy_reference import minimise_energy
+
+
+@pytest.fixture
+def no_lcp(monkeypatch):
+    """Any contact step handed to a back-end fails the test."""
+    real = api.make_step_solver
+
+    def guarded(solver, settings, scaled):
+        real(solver, settings, scaled)  # still validates the names
+
+        def step(*_):
+            raise AssertionError("a contact step (LCP) was solved")
+
+        return step
+
+    monkeypatch.setattr(api, "make_step_solver", guarded)
+
+
+CLEAR = [
+    pytest.param({"theta": 40, "height": 3, "links": 40}, id="arc-clears-gravity-on"),
+    pytest.param({"theta": 30, "height": 3, "links": 40, "channel": True, "weight": 1e-3},
+                 id="channel-clears"),
+    # the arc crosses the wall at h = 3 mm, the heavy chain sags below it
+    pytest.param({"theta": 150, "height": 3, "links": 40, "weight": 0.05}, id="heavy-sags-off"),
+]
+
+
+@pytest.mark.parametrize("kwargs", CLEAR)
+def test_clearing_scene_needs_no_lcp_and_is_the_energy_minimiser(kwargs, no_lcp):
+    scene = ActuatorScene(**kwargs)
+    res = lcpbench.solve(scene, solver="lemke", tol=1e-10)
+    assert res.converged, res.reason
+    assert res.reason.startswith("no contact")
+    assert res.total_force == 0 and res.inner_iterations == 0
+    assert res.certificate.min_gap > 0
+    ref = minimise_energy(scene)  # with its walls: no wall is active there either
+    assert ref.success, ref.message
+    assert ref.total_force == 0
+    assert np.max(np.abs(res.alpha - ref.alpha)) < 1e-7
+    assert np.allclose(res.y, ref.y, atol=1e-8 * scene.length)
+
+
+def test_a_scene_that_touches_is_still_solved_with_its_walls():
+    scene = ActuatorScene(theta=150, height=3, links=40)  # the paper's scene: contact
+    res = lcpbench.solve(scene, solver="active-set", tol=1e-10)
+    assert res.converged and res.total_force > 0
+    assert not res.reason.startswith("no contact")
+    assert res.inner_iterations > 0
+
+
+def test_every_back_end_gives_the_same_clearing_answer():
+    """No LCP is solved, so back-ends that fail on contact (PGS at N = 140) agree exactly."""
+    scene = ActuatorScene(theta=30, height=5)
+    a = lcpbench.solve(scene, solver="active-set")
+    b = lcpbench.solve(scene, solver="pgs")
+    assert a.converged and b.converged
+    assert np.array_equal(a.alpha, b.alpha)
+
+
+def test_chain_that_cannot_hang_is_not_answered_by_the_free_path():
+    """4000x the paper's weight: no wall-free equilibrium on the branch; the driver says so."""
+    res = lcpbench.solve(ActuatorScene(theta=150, height=3, links=100, weight=1.0), tol=1e-9)
+    assert not res.converged and res.total_force == 0
