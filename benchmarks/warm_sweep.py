@@ -1,12 +1,12 @@
 """Issue 6, target 5: continuation across a sweep against cold starts, on the paper grid.
 
-Each line of the grid (θ 10°…180° at one h) is solved in order three ways:
+Each line of the grid (θ 10°…180° at one h) is solved in order four ways:
 cold (every scene from the clipped unconstrained arc), from the previous
-scene's answer, and from the secant extrapolation through the previous two
-(`lcpbench.bench.continuation`). Reports the total outer iterations, the wall
-time, and the largest total-force difference from the cold answers, at the
-paper's tolerance (1e-3 rad) and at 1e-10 rad (where the answers must agree
-to 1e-8).
+scene's answer, and from the secant or quadratic extrapolation through the
+previous two or three (`lcpbench.bench.continuation`). Reports the total outer
+iterations, the wall time, and the largest total-force difference from the
+cold answers, from the paper's tolerance (1e-3 rad) to 1e-10 rad (where the
+answers must agree to 1e-8).
 
     python benchmarks/warm_sweep.py [--solver active-set] [--out results/warm-sweep.md]
 """
@@ -20,6 +20,9 @@ from pathlib import Path
 import lcpbench
 from lcpbench.bench.continuation import largest_difference, solve_sequence, total_outer
 from lcpbench.bench.grid import PAPER_GRID
+
+#: the paper's tolerance, two between, and one where warm and cold must agree to 1e-8
+TOLS = (1e-3, 1e-6, 1e-8, 1e-10)
 
 
 def run(predictor: str, tol: float, solver: str):
@@ -38,9 +41,9 @@ def main() -> None:
     ap.add_argument("--out", default="results/warm-sweep.md")
     args = ap.parse_args()
     rows = []
-    for tol in (1e-3, 1e-10):
+    for tol in TOLS:
         cold, t_cold = run("none", tol, args.solver)
-        for predictor in ("none", "previous", "secant"):
+        for predictor in ("none", "previous", "secant", "quadratic"):
             res, t = (cold, t_cold) if predictor == "none" else run(predictor, tol, args.solver)
             rows.append((tol, predictor, total_outer(res), total_outer(cold) / total_outer(res),
                          t, t_cold / t, largest_difference(cold, res),
@@ -50,7 +53,8 @@ def main() -> None:
         f"Made by `python benchmarks/warm_sweep.py --solver {args.solver}`: the 108 scenes of "
         "the paper grid as 6 lines in θ (10°…180° at each h = 2…7 mm), N = 140, solved in "
         "order. *previous*: each scene starts from the last answer; *secant*: from the "
-        "straight-line extrapolation through the last two. Force difference: the largest "
+        "straight-line extrapolation through the last two; *quadratic*: from the parabola "
+        "through the last three. Force difference: the largest "
         "|F − F_cold| / max(F_cold, EI/ℓ²) over the grid. Times: one run, wall clock.", "",
         "| tol (rad) | start | outer iterations | fewer than cold | time (s) | faster than "
         "cold | force difference from cold | converged |",
@@ -59,9 +63,16 @@ def main() -> None:
     for tol, p, outer, ratio, t, speed, diff, conv, n in rows:
         lines.append(f"| {tol:.0e} | {p if p != 'none' else 'cold'} | {outer} | {ratio:.2f}× | "
                      f"{t:.2f} | {speed:.2f}× | {diff:.1e} | {conv}/{n} |")
-    lines += ["", "At 1e-3 rad each answer carries the driver's own truncation (about 1e-4 "
-              "of the force, against a 1e-11 reference), so cold and warm answers differ by "
-              "that much; at 1e-10 rad they are the same equilibrium to round-off."]
+    lines += ["", "Each answer carries the driver's own truncation, of the order of the "
+              "tolerance (about 1e-4 of the force at 1e-3 rad, against a 1e-11 reference), so "
+              "cold and warm answers differ by that much; from 1e-8 rad on they agree to 1e-8. "
+              "The paper's sequence of LCPs converges linearly, gaining about two decades per "
+              "outer iteration (its step is not the exact Newton step of the energy), and "
+              "every scene spends one iteration to see its last step fall below the "
+              "tolerance: a cold start needs about 5.5 iterations per scene at 1e-8 rad, a "
+              "perfect prediction still 1 to 2, and the quadratic predictor's first step "
+              "is typically 1e-6 rad (3 iterations). So the saving shrinks as the tolerance "
+              "tightens."]
     text = "\n".join(lines) + "\n"
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(text)

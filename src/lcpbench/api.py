@@ -91,10 +91,11 @@ def solve(
             step = make_step_solver(name, settings, bool(scaled))
     t0 = time.perf_counter()
     chain = scene.chain()
-    out = _without_contact(chain, tol, max_outer)
+    begin = _driver_start(start, chain, method)
+    out = _without_contact(chain, tol, max_outer, begin)
     if out is None:
         out = run_driver(chain, step, tol=tol, max_outer=max_outer, method=method,
-                         start=_driver_start(start, chain, method))
+                         start=begin)
         if not out.converged and getattr(scene, "theta", 0) > 180:
             out.reason = ("theta > 180 deg: the end links start beyond the vertical, where the "
                           "linearisation of eq. (20) is singular; lcpbench converges for "
@@ -161,14 +162,16 @@ def _free_step(step, warm) -> StepSolution:
     return StepSolution(u, np.zeros(n), np.zeros(n), status, 0, time.perf_counter() - t0)
 
 
-def _without_contact(chain, tol: float, max_outer: int) -> DriverOutput | None:
+def _without_contact(chain, tol: float, max_outer: int,
+                     start: DriverStart | None = None) -> DriverOutput | None:
     """The answer of a scene that touches no wall, found without any LCP (or None).
 
     With no load, the unconstrained arc is the answer when it clears every
     wall. With a load (gravity) the unconstrained shape is the equilibrium of
     the chain without walls, found by the same globalised driver with each
     step a banded solve; if it clears every wall it is the answer, otherwise
-    None (the scene is solved with its walls). It is looked for when the arc
+    None (the scene is solved with its walls). A continuation's ``start``
+    (a neighbour's shape) starts that search too. It is looked for when the arc
     clears the walls, or when the first step of that search (one banded solve
     at the arc, ~0.1 ms at N = 140) already does: a heavy chain can sag off a
     wall its arc crosses.
@@ -186,7 +189,9 @@ def _without_contact(chain, tol: float, max_outer: int) -> DriverOutput | None:
                             "no contact: the unconstrained arc clears every wall and there "
                             "is no load")
     free = replace(chain, upper=np.full(n, np.inf), lower=np.full(n, -np.inf))
-    out = run_driver(free, _free_step, tol=tol, max_outer=max_outer)
+    if start is not None:  # a neighbour's shape (its contact set means nothing here)
+        start = DriverStart(start.alpha, None)
+    out = run_driver(free, _free_step, tol=tol, max_outer=max_outer, start=start)
     if not (out.converged and _clears(chain, out.alpha)):
         return None
     out.reason = ("no contact: the equilibrium without walls clears every wall (found by "

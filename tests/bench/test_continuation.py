@@ -1,5 +1,6 @@
 """Continuation: a neighbour's answer as the start gives the same equilibrium, in fewer steps."""
 
+import numpy as np
 import pytest
 
 import lcpbench
@@ -16,13 +17,13 @@ LINE = [lcpbench.ActuatorScene(theta=t, height=3.0, links=40) for t in range(100
 @pytest.fixture(scope="module")
 def tight():
     kw = {"solver": "active-set", "tol": 1e-10}
-    return {p: solve_sequence(LINE, predictor=p, **kw) for p in ("none", "previous", "secant")}
+    return {p: solve_sequence(LINE, predictor=p, **kw) for p in ("none", "previous", "secant", "quadratic")}
 
 
 def test_same_equilibrium_to_1e_8(tight):
     cold = tight["none"]
     assert all(r.converged for rs in tight.values() for r in rs)
-    for p in ("previous", "secant"):
+    for p in ("previous", "secant", "quadratic"):
         assert largest_difference(cold, tight[p]) < 1e-8
         for a, b in zip(cold, tight[p]):
             assert abs(a.alpha - b.alpha).max() < 1e-8  # rad
@@ -54,3 +55,28 @@ def test_bad_starts_are_refused():
         lcpbench.solve(LINE[1], start=res.alpha)
     with pytest.raises(ProblemError, match="predictor"):
         solve_sequence(LINE, predictor="magic")
+
+
+def test_quadratic_predictor_reproduces_a_parabola_exactly(tight):
+    """Lagrange extrapolation through three answers at unequal steps in θ is exact for
+    angles that are quadratic in θ (and the secant for linear ones)."""
+    from dataclasses import replace
+
+    base = tight["none"][0]
+    rng = np.random.default_rng(0)
+    a, b, c = (rng.standard_normal(base.alpha.size) for _ in range(3))
+    thetas = [100.0, 110.0, 130.0]  # unequal steps
+    history = [(lcpbench.ActuatorScene(theta=t, height=3.0, links=40),
+                replace(base, alpha=a + b * t + c * t**2)) for t in thetas]
+    target = lcpbench.ActuatorScene(theta=145.0, height=3.0, links=40)
+    guess = predict(history, target, "quadratic")
+    exact = a + b * 145.0 + c * 145.0**2
+    assert np.allclose(guess.alpha, exact, rtol=1e-10, atol=1e-10 * np.abs(c).max() * 145**2)
+    lin = [(s, replace(r, alpha=a + b * s.theta)) for s, r in history]
+    assert np.allclose(predict(lin, target, "secant").alpha, a + b * 145.0, rtol=1e-12)
+    # a break in the line (another height) leaves only the answers after it
+    broken = [(lcpbench.ActuatorScene(theta=100.0, height=4.0, links=40), history[0][1])]
+    broken += history[1:]
+    two = predict(broken, target, "quadratic")
+    expected = history[2][1].alpha + (history[2][1].alpha - history[1][1].alpha) * (15 / 20)
+    assert np.allclose(two.alpha, expected, rtol=1e-12)

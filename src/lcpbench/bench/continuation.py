@@ -22,7 +22,9 @@ from ..errors import ProblemError
 from ..model.result import ContactResult
 from ..problems.scenes import ActuatorScene
 
-PREDICTORS = ("secant", "previous", "none")
+PREDICTORS = ("quadratic", "secant", "previous", "none")
+#: answers each predictor extrapolates through (polynomial degree + 1)
+_POINTS = {"quadratic": 3, "secant": 2, "previous": 1}
 
 
 def _step(a: ActuatorScene, b: ActuatorScene) -> tuple[str, float] | None:
@@ -37,32 +39,61 @@ def _step(a: ActuatorScene, b: ActuatorScene) -> tuple[str, float] | None:
     return None
 
 
+def _line_points(history, scene, most: int):
+    """The last solved scenes on the same line as ``scene`` (newest first, at most
+    ``most``, all converged, the same parameter moving between each), and that
+    parameter (None: only the newest, or nothing)."""
+    s1, r1 = history[-1]
+    d = _step(s1, scene)
+    if not r1.converged or r1.links != scene.links or d is None:
+        return [], None
+    param, pts = d[0], [(s1, r1)]
+    for s, r in reversed(history[:-1]):
+        if len(pts) == most:
+            break
+        d = _step(s, pts[-1][0])
+        if not r.converged or d is None or d[0] != param or d[1] == 0:
+            break
+        pts.append((s, r))
+    return pts, param
+
+
 def predict(history: list[tuple[ActuatorScene, ContactResult]], scene: ActuatorScene,
-            predictor: str = "secant") -> ContactResult | None:
-    """A start for ``scene`` from the solved scenes before it (None: start cold)."""
+            predictor: str = "quadratic") -> ContactResult | None:
+    """A start for ``scene`` from the solved scenes before it (None: start cold).
+
+    "previous": the last answer. "secant" and "quadratic": the polynomial
+    through the last two or three answers on the line (Lagrange, in the
+    moving parameter, unequal steps allowed), evaluated at ``scene``; fewer
+    points where the line has fewer.
+    """
     if predictor == "none" or not history:
         return None
-    s1, r1 = history[-1]
-    if not r1.converged or r1.links != scene.links or _step(s1, scene) is None:
+    pts, param = _line_points(history, scene, _POINTS[predictor])
+    if not pts:
         return None
-    if predictor == "previous" or len(history) < 2:
+    r1 = pts[0][1]
+    if len(pts) == 1:
         return r1
-    s0, r0 = history[-2]
-    d0, d1 = _step(s0, s1), _step(s1, scene)
-    if not r0.converged or d0 is None or d0[0] != d1[0] or d0[1] == 0:
-        return r1
-    return replace(r1, alpha=r1.alpha + (r1.alpha - r0.alpha) * (d1[1] / d0[1]))
+    t = getattr(scene, param)
+    ts = [getattr(s, param) for s, _ in pts]
+    alpha = 0.0
+    for i, (_, r) in enumerate(pts):
+        w = math.prod((t - ts[j]) / (ts[i] - ts[j]) for j in range(len(pts)) if j != i)
+        alpha = alpha + w * r.alpha
+    return replace(r1, alpha=alpha)
 
 
-def solve_sequence(scenes: Sequence[ActuatorScene], *, predictor: str = "secant",
+def solve_sequence(scenes: Sequence[ActuatorScene], *, predictor: str = "quadratic",
                    progress: Callable[[int, int], None] | None = None,
                    **solve_kw) -> list[ContactResult]:
     """Solve ``scenes`` in order, each started from its predecessors (``lcpbench.solve``
     keyword arguments in ``solve_kw``; the globalised driver).
 
-    ``predictor``: "secant" (extrapolate through the previous two answers when
-    one of θ or h moves along the line), "previous" (the last answer), or
-    "none" (every scene cold).
+    ``predictor``: "quadratic" (the parabola through the previous three
+    answers when one of θ or h moves along the line; default), "secant" (the
+    straight line through the previous two), "previous" (the last answer),
+    or "none" (every scene cold).
     """
     if predictor not in PREDICTORS:
         raise ProblemError(f"predictor must be one of {', '.join(PREDICTORS)}, got "
