@@ -82,11 +82,35 @@ class ContactStep:
         """H @ u using the bands."""
         return banded_matvec(self.bands, u)
 
-    def _J(self, du: np.ndarray) -> np.ndarray:
+    def __post_init__(self):
+        # Free nodes and joints are contiguous (assemble_step checks): slices, not
+        # index arrays, in the O(N) kernels below (at N ~ 100 each numpy call
+        # and each fancy index, not the arithmetic, is the cost).
+        f = np.asarray(self.free_nodes)
+        self._free = slice(int(f[0]) + 1, int(f[-1]) + 2) if f.size else slice(0, 0)
+        b0, nj = (int(self.base[0]), int(self.base.size)) if self.base.size else (0, 0)
+        self._cols = tuple(slice(b0 + k, b0 + k + nj) for k in range(3))
+        self._abs_coef = np.abs(self.coef)
+        self._phi_size = np.abs(self.phi_origin) + np.abs(self.rest_joint)
+        self._abs_load = np.abs(self.nodal_load) + np.finfo(float).tiny
+
+    def _J(self, du: np.ndarray, coef: np.ndarray | None = None) -> np.ndarray:
         y = np.zeros(self.links + 2)
-        y[self.free_nodes + 1] = du
-        b, c = self.base, self.coef
-        return c[:, 0] * y[b] + c[:, 1] * y[b + 1] + c[:, 2] * y[b + 2]
+        y[self._free] = du
+        c = self.coef if coef is None else coef
+        s0, s1, s2 = self._cols
+        out = c[:, 0] * y[s0]
+        out += c[:, 1] * y[s1]
+        out += c[:, 2] * y[s2]
+        return out
+
+    def _JT(self, m: np.ndarray, coef: np.ndarray | None = None) -> np.ndarray:
+        """Jᵀ m on the free nodes."""
+        g = np.zeros(self.links + 2)
+        c = self.coef if coef is None else coef
+        for k, sl in enumerate(self._cols):
+            g[sl] += c[:, k] * m
+        return g[self._free]
 
     def joint_angles(self, u: np.ndarray) -> np.ndarray:
         """φ̂ = φ̂(u₀) + J (u − u₀), the linearised joint angles at heights u.
@@ -104,19 +128,22 @@ class ContactStep:
         spring torques, not with |H||u|. At a solution it is minus the
         reactions (the upper wall pushes down).
         """
-        m = self.stiffness * (self.joint_angles(u) - self.rest_joint)
-        g = _scatter(self.base, self.coef, m, self.links + 2)
-        return g[self.free_nodes + 1] - self.nodal_load
+        m = self._J(u - self.origin)
+        m += self.phi_origin
+        m -= self.rest_joint
+        m *= self.stiffness
+        g = self._JT(m)
+        g -= self.nodal_load
+        return g
 
     def gradient_scale(self, u: np.ndarray) -> np.ndarray:
         """Size of the terms summed in :meth:`gradient` (for round-off tolerances)."""
-        y = np.zeros(self.links + 2)
-        y[self.free_nodes + 1] = np.abs(u - self.origin)
-        b, c = self.base, np.abs(self.coef)
-        phi = c[:, 0] * y[b] + c[:, 1] * y[b + 1] + c[:, 2] * y[b + 2]
-        m = self.stiffness * (phi + np.abs(self.phi_origin) + np.abs(self.rest_joint))
-        g = _scatter(b, c, m, self.links + 2)
-        return g[self.free_nodes + 1] + np.abs(self.nodal_load) + np.finfo(float).tiny
+        m = self._J(np.abs(u - self.origin), self._abs_coef)
+        m += self._phi_size
+        m *= self.stiffness
+        g = self._JT(m, self._abs_coef)
+        g += self._abs_load
+        return g
 
     def dense_hessian(self) -> np.ndarray:
         n = self.size
@@ -209,15 +236,6 @@ def banded_matvec(bands: np.ndarray, u: np.ndarray) -> np.ndarray:
     out[2:] += bands[2, :-2] * u[:-2]
     out[:-2] += bands[2, :-2] * u[2:]
     return out
-
-
-def _scatter(base: np.ndarray, coef: np.ndarray, m: np.ndarray, size: int) -> np.ndarray:
-    """Jᵀ m for the stencil form of J (joints on consecutive nodes: plain slices)."""
-    g = np.zeros(size)
-    b0, nj = int(base[0]), base.size
-    for k in range(3):
-        g[b0 + k : b0 + k + nj] += coef[:, k] * m
-    return g
 
 
 def _joint_stencils(chain: Chain, inv_a_cos: np.ndarray):
