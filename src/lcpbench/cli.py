@@ -27,7 +27,7 @@ import numpy as np
 
 from . import __version__
 from .api import solve
-from .bench.harness import DEFAULT_TIME_LIMIT
+from .bench.harness import CONTINUATION, DEFAULT_TIME_LIMIT
 from .bench.report import DEFAULT_OUT
 from .bench.store import DEFAULT_STORE
 from .errors import LcpbenchError, ProblemError
@@ -208,7 +208,10 @@ def build_parser() -> ArgumentParser:
                     "baseline, into an SQLite store; then write the report. A killed sweep "
                     "resumes where it stopped when run again. With no arguments: the paper's "
                     "grid (theta 10-180 by 10, h 2-7 mm by 1, N = 140) over every installed "
-                    "back-end.")
+                    "back-end. With --continuation each back-end solves every line of the "
+                    "grid (all parameters but theta equal) in order of theta, each scene "
+                    "started from its neighbours' answers; those runs are stored as driver "
+                    "globalised+secant (or +previous), apart from the cold ones.")
     sw.add_argument("--grid", choices=("paper", "hard"), default="paper",
                     help="paper: the theta x height grid below (default); hard: the "
                          "hard-case suite (theta 170-180, h down to 0.02 l, N up to 2000, "
@@ -238,6 +241,17 @@ def build_parser() -> ArgumentParser:
     sw.add_argument("--method", default=DEFAULT_METHOD, metavar="M[,M]",
                     help=f"outer iteration(s): globalised, undamped or both, comma-separated "
                          f"(default {DEFAULT_METHOD})")
+    sw.add_argument("--continuation", nargs="?", const="quadratic", default=None,
+                    choices=CONTINUATION, metavar="PREDICTOR",
+                    help="warm-start along theta: run each back-end over each line of "
+                         "scenes (every parameter but theta equal), theta ascending, each "
+                         "scene started from the extrapolation of the previous answers: "
+                         "quadratic (the parabola through the last three; the default when "
+                         "given without a value), secant (the line through the last two) or "
+                         "previous (the last answer); stored as driver "
+                         "globalised+PREDICTOR, so a cold sweep into the same store "
+                         "compares with it in the report. Globalised driver only; the time "
+                         "limit of a line is --time-limit per scene")
     sw.add_argument("--baseline", choices=("analytic", "fd", "both", "none"),
                     default="both",
                     help="the root-finding baseline: analytic Jacobian, finite differences "
@@ -549,6 +563,9 @@ def _cmd_sweep(args) -> int:
                 grid_kw[name] = values
         scenes = Grid(**grid_kw).scenes()  # validates every scene before anything runs
     methods = [m.strip() for m in args.method.split(",") if m.strip()]
+    if args.continuation is not None and "undamped" in methods:
+        raise ProblemError("--continuation needs the globalised driver; it cannot be used "
+                           "with --method undamped")
     if args.solvers.strip() == "all":
         solvers = available_backends()
     else:
@@ -573,7 +590,7 @@ def _cmd_sweep(args) -> int:
     baselines = {"analytic": ["baseline"], "fd": ["baseline-fd"],
                  "both": ["baseline", "baseline-fd"], "none": []}[args.baseline]
     jobs = plan_sweep(scenes, solvers, settings, tol=args.tol, method=methods,
-                      baselines=baselines)
+                      baselines=baselines, continuation=args.continuation)
     with Store(args.store) as store:
         bar = _progress(args.quiet)
         try:
@@ -587,9 +604,12 @@ def _cmd_sweep(args) -> int:
             return 130
         if bar:
             bar.close()
-        print(f"{len(plan.todo)} runs computed, {plan.done} already in {args.store} "
+        lines = sum(j.kind == "line" for j in jobs) // max(1, len(solvers) * len(settings))
+        along = (f" by {args.continuation} continuation along {lines} line(s) in theta"
+                 if args.continuation else "")
+        print(f"{plan.rows_todo} runs computed, {plan.rows_done} already in {args.store} "
               f"({len(scenes)} scenes x {len(solvers)} back-ends x {len(settings)} settings"
-              f"{f' x {len(methods)} drivers' if len(methods) > 1 else ''}"
+              f"{f' x {len(methods)} drivers' if len(methods) > 1 else ''}{along}"
               f" + {len(baselines)} baseline(s) + references; {jobs_n} worker(s))")
         if not args.no_report:
             return _write_report(store, args.out, limit, None, plots=True)

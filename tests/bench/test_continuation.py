@@ -8,6 +8,7 @@ from lcpbench.bench.continuation import (
     largest_difference,
     predict,
     solve_sequence,
+    total_outer,
 )
 from lcpbench.errors import ProblemError
 
@@ -80,3 +81,27 @@ def test_quadratic_predictor_reproduces_a_parabola_exactly(tight):
     two = predict(broken, target, "quadratic")
     expected = history[2][1].alpha + (history[2][1].alpha - history[1][1].alpha) * (15 / 20)
     assert np.allclose(two.alpha, expected, rtol=1e-12)
+
+
+def test_a_failed_warm_start_is_redone_cold_and_its_cost_counted(monkeypatch):
+    import lcpbench.bench.continuation as cont
+
+    real = cont.solve
+
+    def warm_fails(scene, start=None, **kw):
+        res = real(scene, start=start, **kw)
+        if start is not None:
+            res.converged, res.reason = False, "made to fail"
+        return res
+
+    monkeypatch.setattr(cont, "solve", warm_fails)
+    line = LINE[:3]
+    out = solve_sequence(line, predictor="secant", solver="active-set", tol=1e-8)
+    cold = [lcpbench.solve(s, solver="active-set", tol=1e-8) for s in line]
+    assert all(r.converged for r in out)
+    assert [r.extra["continuation"] for r in out] == ["cold"] + ["secant, failed; cold"] * 2
+    # the answers are the cold ones; the totals include the failed attempts
+    assert all(abs(a.total_force - b.total_force) == 0 for a, b in zip(out, cold))
+    lost = sum(r.extra["discarded"]["outer_iterations"] for r in out[1:])
+    assert lost >= 2
+    assert total_outer(out) == sum(r.outer_iterations for r in cold) + lost

@@ -105,9 +105,16 @@ def solve_sequence(scenes: Sequence[ActuatorScene], *, predictor: str = "quadrat
     for k, scene in enumerate(scenes):
         start = predict(history, scene, predictor)
         res = solve(scene, start=start, **solve_kw)
+        label = "cold" if start is None else predictor
         if start is not None and not res.converged:  # never worse than a cold start
+            failed = res
             res = solve(scene, **solve_kw)
-        res.extra["continuation"] = "cold" if start is None else predictor
+            label = f"{predictor}, failed; cold"
+            res.extra["discarded"] = {  # the failed attempt's cost, for honest totals
+                "outer_iterations": failed.outer_iterations,
+                "inner_iterations": failed.inner_iterations,
+                "time_s": failed.time_s, "reason": failed.reason}
+        res.extra["continuation"] = label
         history.append((scene, res))
         out.append(res)
         if progress is not None:
@@ -116,7 +123,9 @@ def solve_sequence(scenes: Sequence[ActuatorScene], *, predictor: str = "quadrat
 
 
 def total_outer(results: Sequence[ContactResult]) -> int:
-    return int(sum(r.outer_iterations for r in results))
+    """Outer iterations of a line, failed warm starts (redone cold) included."""
+    return int(sum(r.outer_iterations + r.extra.get("discarded", {}).get("outer_iterations", 0)
+                   for r in results))
 
 
 def largest_difference(a: Sequence[ContactResult], b: Sequence[ContactResult]) -> float:

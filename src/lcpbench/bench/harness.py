@@ -16,6 +16,13 @@ Kinds of job
 ``run``       ``lcpbench.solve(scene, solver=backend, settings=..., tol=...)``.
 ``baseline``  the paper's root-finding baseline (Appendix A) with an analytic
               (``baseline``) or finite-difference (``baseline-fd``) Jacobian.
+``line``      continuation (``--continuation``): one back-end × settings × tol
+              over a line of scenes that differ only in θ, θ ascending, solved
+              in order by :func:`~lcpbench.bench.continuation.solve_sequence`,
+              each scene started from its predecessors' answers. One row per
+              scene, method ``globalised+quadratic`` (or ``+secant``,
+              ``+previous``), so they
+              never mix with the cold runs in the store.
 
 The driver tolerance of a run follows its settings profile unless given
 (:data:`PROFILE_TOL`): a profile is a target accuracy for the whole solve,
@@ -24,6 +31,7 @@ not only for the contact step.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import pickle
@@ -52,28 +60,52 @@ REFERENCE_TOL = 1e-11  # rad, driver tolerance of the reference
 #: Levenberg-Marquardt (fsolve's other algorithm), which converges, slowly.
 BASELINES = {"baseline": ("analytic", "hybr"), "baseline-fd": ("fd", "lm")}
 BASELINE_TOL = 1e-10
-DEFAULT_TIME_LIMIT = 60.0  # s per job
+DEFAULT_TIME_LIMIT = 60.0  # s per job (per scene for a line)
+#: predictors of a continuation sweep (bench.continuation); the rows' method is
+#: "globalised+<predictor>"
+CONTINUATION = ("quadratic", "secant", "previous")
 
 
 @dataclass(frozen=True)
 class Job:
-    """One unit of work: a reference, a run of a back-end, or a baseline solve."""
+    """One unit of work: a reference, a run of a back-end, a baseline solve, or a
+    line of scenes solved by continuation (``kind="line"``: ``scenes`` holds the
+    line's scene keys in order, ``scene`` the first of them, ``method``
+    "globalised+<predictor>").
+    """
 
-    kind: str  # "ref", "run" or "baseline"
-    scene: str  # scene_key
+    kind: str  # "ref", "run", "baseline" or "line"
+    scene: str  # scene_key (a line: its first scene)
     backend: str = "active-set"
     settings: str = "-"
     tol: float = 0.0
     method: str = "globalised"
+    scenes: tuple[str, ...] = ()  # a line's scene keys, θ ascending
 
     @property
     def key(self) -> tuple:
         return (self.scene, self.backend, self.settings, self.tol, self.method)
 
+    @property
+    def keys(self) -> list[tuple]:
+        """The store key of every row the job writes (one, or one per scene of a line)."""
+        if self.kind != "line":
+            return [self.key]
+        return [(s, self.backend, self.settings, self.tol, self.method) for s in self.scenes]
+
+    @property
+    def size(self) -> int:
+        """How many rows the job writes."""
+        return len(self.scenes) if self.kind == "line" else 1
+
 
 @dataclass
 class SweepPlan:
-    """The jobs of a sweep, split into what is stored already and what is left."""
+    """The jobs of a sweep, split into what is stored already and what is left.
+
+    ``done`` and ``todo`` count jobs; a line job is several rows, so
+    ``rows``, ``rows_done`` and ``rows_todo`` count rows (store entries).
+    """
 
     jobs: list[Job]
     todo: list[Job] = field(default_factory=list)
@@ -82,13 +114,49 @@ class SweepPlan:
     def done(self) -> int:
         return len(self.jobs) - len(self.todo)
 
+    @property
+    def rows(self) -> int:
+        return sum(j.size for j in self.jobs)
+
+    @property
+    def rows_todo(self) -> int:
+        return sum(j.size for j in self.todo)
+
+    @property
+    def rows_done(self) -> int:
+        return self.rows - self.rows_todo
+
+
+def continuation_method(predictor: str) -> str:
+    """The method label of a continuation run: "globalised+secant" and the like."""
+    return f"globalised+{predictor}"
+
+
+def _lines(scenes: list) -> list[list]:
+    """Scenes grouped into lines: equal in every parameter but θ, θ ascending.
+
+    Lines come in the order of their first scene; repeated scenes are dropped.
+    """
+    groups: dict[str, dict] = {}
+    for s in scenes:
+        key = scene_key(s)
+        rest = json.loads(key)
+        rest.pop("theta")
+        groups.setdefault(json.dumps(rest, sort_keys=True), {}).setdefault(key, s)
+    return [sorted(g.values(), key=lambda s: s.theta) for g in groups.values()]
+
 
 def plan_sweep(grid: Grid | Iterable, backends: list[str], settings: list[str], *,
                tol: float | None = None, method: str | Iterable[str] = "globalised",
-               baselines: Iterable[str] = ("baseline",)) -> list[Job]:
+               baselines: Iterable[str] = ("baseline",),
+               continuation: str | None = None) -> list[Job]:
     """Every job of a sweep, in a fixed order: references, then scene by scene.
 
     ``method`` is one driver scheme or several (each back-end runs with each).
+    ``continuation`` ("quadratic", "secant" or "previous"): the back-end runs become line
+    jobs, one per back-end × settings and per line of scenes (all parameters
+    but θ equal, θ ascending), run after the references; method
+    "globalised+<continuation>". It needs the globalised driver only.
     """
     from ..model.driver import METHODS
 
@@ -96,17 +164,35 @@ def plan_sweep(grid: Grid | Iterable, backends: list[str], settings: list[str], 
     for m in methods:
         if m not in METHODS:
             raise ProblemError(f"method must be among {', '.join(METHODS)}, got {m!r}")
+    if continuation is not None:
+        if continuation not in CONTINUATION:
+            raise ProblemError(f"continuation must be one of {', '.join(CONTINUATION)}, got "
+                               f"{continuation!r}")
+        if set(methods) != {"globalised"}:
+            raise ProblemError("--continuation needs the globalised driver: a warm start "
+                               "is not defined for --method undamped")
     scenes = grid.scenes() if isinstance(grid, Grid) else list(grid)
     if not scenes:
         raise ProblemError("the grid is empty: no scenes to run")
     for b in baselines:
         if b not in BASELINES:
             raise ProblemError(f"baseline must be one of {', '.join(BASELINES)}, got {b!r}")
-    keys = [scene_key(s) for s in scenes]
+    keys = list(dict.fromkeys(scene_key(s) for s in scenes))
     jobs = [Job("ref", k, "reference", "high", REFERENCE_TOL, "globalised") for k in keys]
+    if continuation is not None:
+        label = continuation_method(continuation)
+        for line in _lines(scenes):
+            line_keys = tuple(scene_key(s) for s in line)
+            for name in backends:
+                for p in settings:
+                    jobs.append(Job("line", line_keys[0], name, p,
+                                    PROFILE_TOL[p] if tol is None else tol, label,
+                                    line_keys))
     for k in keys:
         for b in baselines:
             jobs.append(Job("baseline", k, b, "-", BASELINE_TOL, BASELINES[b][1]))
+        if continuation is not None:
+            continue
         for m in methods:
             for name in backends:
                 for p in settings:
@@ -116,10 +202,16 @@ def plan_sweep(grid: Grid | Iterable, backends: list[str], settings: list[str], 
 
 
 # -- what a worker does ---------------------------------------------------------------
-def execute(job: Job, time_limit: float | None = None) -> dict:
-    """Run one job and return its row for the store (never raises)."""
+def execute(job: Job, time_limit: float | None = None) -> dict | list[dict]:
+    """Run one job and return its row for the store (never raises).
+
+    A line job returns a list of rows, one per scene in order, or one failure
+    row (a dict) for the whole line if it raised.
+    """
     t0 = time.perf_counter()
     try:
+        if job.kind == "line":
+            return _line(job)
         scene = scene_from_key(job.scene)
         if job.kind == "ref":
             row = _reference(scene)
@@ -181,6 +273,34 @@ def _run(scene, job: Job) -> dict:
     res = solve(scene, solver=job.backend, tol=job.tol, settings=job.settings,
                 method=job.method)
     return _solution_row(res)
+
+
+def _line(job: Job) -> list[dict]:
+    """A line of scenes by continuation: one row per scene, each its own solve's numbers.
+
+    ``wall_time`` and the iterations of a row are those of the scene's own
+    solve inside the line (``ContactResult.time_s``), as for a cold run.
+    """
+    from .continuation import solve_sequence
+
+    predictor = job.method.split("+", 1)[1]
+    warm_up(job.backend, job.settings)
+    scenes = [scene_from_key(k) for k in job.scenes]
+    results = solve_sequence(scenes, predictor=predictor, solver=job.backend, tol=job.tol,
+                             settings=job.settings, method="globalised")
+    rows = []
+    for res in results:
+        row = _solution_row(res)
+        row["continuation"] = res.extra.get("continuation", "?")  # not a store column
+        # a warm start that failed and was redone cold: its work counts too
+        lost = res.extra.get("discarded")
+        if lost:
+            row["outer_iterations"] += int(lost["outer_iterations"])
+            row["inner_iterations"] += int(lost["inner_iterations"])
+            row["wall_time"] += float(lost["time_s"])
+            row["reason"] += f" (after a failed warm start: {lost['reason']})"
+        rows.append(row)
+    return rows
 
 
 def _reference(scene) -> dict:
@@ -360,12 +480,20 @@ class _Worker:
         self.kill()
 
 
+def job_time_limit(job: Job, time_limit: float) -> float:
+    """The time limit of a job: ``time_limit`` per row (per scene of a line)."""
+    return time_limit * job.size
+
+
 def run_jobs(jobs: list[Job], *, workers: int = 1, time_limit: float = DEFAULT_TIME_LIMIT
-             ) -> Iterator[tuple[Job, dict]]:
+             ) -> Iterator[tuple[Job, dict | list[dict]]]:
     """Run ``jobs`` on ``workers`` processes; yield (job, row) as each finishes.
 
-    A job past ``time_limit`` seconds has its process killed (and replaced)
-    and yields a ``timeout`` row; a process that dies yields ``crashed``.
+    A job past its time limit (``time_limit`` seconds, times the number of
+    scenes for a line) has its process killed (and replaced) and yields a
+    ``timeout`` row; a process that dies yields ``crashed``. A line job that
+    finishes yields a list of rows, one per scene; one that fails yields one
+    failure row (a dict).
     """
     if not jobs:
         return
@@ -377,7 +505,8 @@ def run_jobs(jobs: list[Job], *, workers: int = 1, time_limit: float = DEFAULT_T
                 if w.job is None and pending:
                     w.give(pending.popleft(), time_limit)
             busy = [w for w in pool if w.job is not None]
-            timeout = max(0.0, min(w.started + time_limit for w in busy) - time.monotonic())
+            timeout = max(0.0, min(w.started + job_time_limit(w.job, time_limit)
+                                   for w in busy) - time.monotonic())
             ready = wait([w.proc.stdout for w in busy], timeout=timeout + 0.05)
             for i, w in enumerate(pool):
                 job = w.job
@@ -395,11 +524,13 @@ def run_jobs(jobs: list[Job], *, workers: int = 1, time_limit: float = DEFAULT_T
                         continue
                     w.job = None
                     yield job, row
-                elif time.monotonic() - w.started > time_limit:
+                elif time.monotonic() - w.started > (limit := job_time_limit(job, time_limit)):
                     w.kill()
                     pool[i] = _Worker()
-                    yield job, failed_row("timeout", "killed after the time limit of "
-                                          f"{time_limit:g} s", time_limit)
+                    what = (f"{limit:g} s ({time_limit:g} s per scene)"
+                            if job.kind == "line" else f"{limit:g} s")
+                    yield job, failed_row("timeout", f"killed after the time limit of {what}",
+                                          limit)
     finally:
         for w in pool:
             if w.job is None:
@@ -426,36 +557,73 @@ def _versions(names: Iterable[str]) -> dict[str, str]:
                 else get_backend(n).version() or "?") for n in names}
 
 
+def _line_rows(job: Job, result: dict | list[dict], have_runs: set) -> list[tuple]:
+    """(scene key, row, replace) for each row a finished line job stores.
+
+    A finished line replaces every row of the line (the continuation made
+    them together). A line that failed (timeout, crash, error: one dict)
+    costs one failure row for each of its scenes not stored yet; stored ones
+    stay.
+    """
+    if isinstance(result, list) and len(result) == job.size:
+        return [(k, row, True) for k, row in zip(job.scenes, result)]
+    if isinstance(result, list):  # cannot happen; never store rows against wrong scenes
+        result = failed_row("error", f"the line returned {len(result)} rows for "
+                            f"{job.size} scenes", 0.0)
+    out = []
+    for k, key in zip(job.scenes, job.keys):
+        if key in have_runs:
+            continue
+        row = dict(result)
+        row["wall_time"] = float(result["wall_time"]) / job.size
+        row["reason"] = f"{result['reason']}, for the continuation line of {job.size} scenes"
+        out.append((k, row, False))
+    return out
+
+
 def sweep(store: Store, jobs: list[Job], *, workers: int = 1,
           time_limit: float = DEFAULT_TIME_LIMIT, rerun: bool = False,
           progress: Callable[[int, int, Job, dict], None] | None = None) -> SweepPlan:
     """Run the jobs that are not in ``store`` yet (all of them with ``rerun``).
 
     Every finished job is committed at once. ``progress(done, total, job,
-    row)`` is called after each. Returns the plan (what was skipped and run).
+    row)`` is called after each stored row, with ``done`` and ``total``
+    counting rows (a line job is one row per scene; it is then passed with
+    ``scene`` set to that row's scene). A line job is skipped only when all
+    its rows are stored; a partly stored line is run again in full and its
+    rows replaced. Returns the plan (what was skipped and run).
     """
     have_runs = set() if rerun else store.run_keys()
     have_refs = set() if rerun else store.ref_keys()
     todo = [j for j in jobs
-            if (j.scene not in have_refs if j.kind == "ref" else j.key not in have_runs)]
+            if (j.scene not in have_refs if j.kind == "ref"
+                else not all(k in have_runs for k in j.keys))]
     plan = SweepPlan(jobs, todo)
     versions = _versions({j.backend for j in todo})
-    done = plan.done
-    for job, row in run_jobs(todo, workers=workers, time_limit=time_limit):
-        row.update(_scene_columns(job.scene))
-        row["created"] = time.strftime("%Y-%m-%dT%H:%M:%S%z")
-        if job.kind == "ref":
-            row["scene"] = job.scene
-            row.setdefault("tol", job.tol)
-            row.setdefault("check_error", float("nan"))
-            store.put_ref(row, replace=rerun)
+    done, total = plan.rows_done, plan.rows
+    for job, result in run_jobs(todo, workers=workers, time_limit=time_limit):
+        created = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+        if job.kind == "line":
+            entries = _line_rows(job, result, have_runs)
+            done += job.size - len(entries)  # stored rows a failed line left alone
         else:
-            row.update(scene=job.scene, backend=job.backend, settings=job.settings,
-                       tol=job.tol, method=job.method, version=versions[job.backend])
-            store.put_run(row, replace=rerun)
-        done += 1
-        if progress is not None:
-            progress(done, len(jobs), job, row)
+            entries = [(job.scene, result, rerun)]
+        for key, row, replace in entries:
+            row.update(_scene_columns(key))
+            row["created"] = created
+            if job.kind == "ref":
+                row["scene"] = key
+                row.setdefault("tol", job.tol)
+                row.setdefault("check_error", float("nan"))
+                store.put_ref(row, replace=replace)
+            else:
+                row.update(scene=key, backend=job.backend, settings=job.settings,
+                           tol=job.tol, method=job.method, version=versions[job.backend])
+                store.put_run(row, replace=replace or rerun)
+            done += 1
+            if progress is not None:
+                progress(done, total, job if key == job.scene else
+                         dataclasses.replace(job, scene=key), row)
     return plan
 
 

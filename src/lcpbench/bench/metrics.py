@@ -17,6 +17,11 @@ Shifted geometric mean
     Unsuccessful runs count at the time limit and at an error of 1
     (100 %) or their own, whichever is larger, as qpbenchmark penalises
     failures.
+Continuation against cold
+    per (back-end, settings, tol) stored both cold (method ``globalised``)
+    and by continuation (``globalised+secant`` and the like): over the
+    scenes where both converged, the total outer iterations of each, their
+    ratio, and the largest |F_cold − F_cont| / max(|F_cold|, EI/ℓ²).
 """
 
 from __future__ import annotations
@@ -29,6 +34,8 @@ import numpy as np
 from .harness import DEFAULT_TIME_LIMIT, error_of
 
 SHIFT = 10.0
+#: the methods of cold runs Table II shows: the globalised driver and the baselines
+COLD_METHODS = ("globalised", "hybr", "lm")
 
 
 def shifted_geometric_mean(values, shift: float = SHIFT) -> float:
@@ -150,8 +157,8 @@ def time_table(evaluated: list[Evaluated], height: float, settings: str = "defau
     for e in evaluated:
         r = e.row
         if not math.isclose(r["height"], height) or (
-                e.settings not in (settings, "-")) or r["method"] == "undamped":
-            continue
+                e.settings not in (settings, "-")) or r["method"] not in COLD_METHODS:
+            continue  # the globalised driver, cold (and the baselines) only
         thetas.add(r["theta"])
         t = r["wall_time"] if e.success else None
         cells.setdefault(e.backend, {})[r["theta"]] = t
@@ -161,3 +168,42 @@ def time_table(evaluated: list[Evaluated], height: float, settings: str = "defau
         for th, t in row.items():
             row[th] = None if t is None else t / best
     return sorted(thetas), cells, 1e3 * best
+
+
+def continuation_pairs(runs: list[dict]) -> list[dict]:
+    """Continuation runs against the cold runs of the same back-end, settings and tol.
+
+    One dict per (back-end, settings, tol, continuation method) that has cold
+    ``globalised`` runs too: over the scenes both have (``scenes``) and where
+    both converged (``compared``), the total outer iterations cold and by
+    continuation, ``ratio`` = cold / continuation (> 1: continuation took
+    fewer), the total wall times, and the largest force difference
+    |F_cold − F_cont| / max(|F_cold|, EI/ℓ²).
+    """
+    by: dict[tuple, dict[str, dict]] = {}
+    for r in runs:
+        by.setdefault((r["backend"], r["settings"], r["tol"], r["method"]), {})[r["scene"]] = r
+    out = []
+    for (backend, settings, tol, method), cont in sorted(by.items()):
+        if not method.startswith("globalised+"):
+            continue
+        cold = by.get((backend, settings, tol, "globalised"))
+        if not cold:
+            continue
+        both = [k for k in cont if k in cold]
+        ok = [k for k in both if cold[k]["converged"] and cont[k]["converged"]]
+        outer_cold = sum(int(cold[k]["outer_iterations"]) for k in ok)
+        outer_cont = sum(int(cont[k]["outer_iterations"]) for k in ok)
+        diff = max((error_of(cont[k]["total_force"], cold[k]["total_force"],
+                             cold[k]["EI"] / cold[k]["length"] ** 2) for k in ok),
+                   default=float("nan"))
+        out.append({
+            "backend": backend, "settings": settings, "tol": tol, "method": method,
+            "scenes": len(both), "compared": len(ok),
+            "outer_cold": outer_cold, "outer_continuation": outer_cont,
+            "ratio": outer_cold / outer_cont if outer_cont > 0 else float("nan"),
+            "time_cold_s": float(sum(cold[k]["wall_time"] for k in ok)),
+            "time_continuation_s": float(sum(cont[k]["wall_time"] for k in ok)),
+            "force_difference_max": diff,
+        })
+    return out

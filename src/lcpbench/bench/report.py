@@ -15,7 +15,14 @@ from pathlib import Path
 
 from ..jsonsafe import sanitise
 from .harness import DEFAULT_TIME_LIMIT
-from .metrics import SHIFT, evaluate, success_tol, summarise, time_table
+from .metrics import (
+    SHIFT,
+    continuation_pairs,
+    evaluate,
+    success_tol,
+    summarise,
+    time_table,
+)
 from .store import Store
 
 DEFAULT_OUT = Path("results") / "sweep"
@@ -93,12 +100,37 @@ def failures(evaluated) -> str:
                   "llll")
 
 
+def continuation_table(pairs: list[dict]) -> str:
+    """Continuation against cold runs, per back-end, settings and tol."""
+    head = ["back-end", "settings", "tol (rad)", "continuation", "scenes (both converged)",
+            "outer it. cold", "outer it. continuation", "cold / continuation",
+            "time cold (s)", "time continuation (s)", "max force difference"]
+    rows = [[f"`{p['backend']}`", p["settings"], _fmt(p["tol"], ".0e"),
+             p["method"].split("+", 1)[1], f"{p['scenes']} ({p['compared']})",
+             str(p["outer_cold"]), str(p["outer_continuation"]), _fmt(p["ratio"], ".2f"),
+             _fmt(p["time_cold_s"], ".3g"), _fmt(p["time_continuation_s"], ".3g"),
+             _fmt(p["force_difference_max"], ".1e")] for p in pairs]
+    return _table(head, rows, "llrl" + "r" * 7)
+
+
+def _attach_continuation(summary: list[dict], pairs: list[dict]) -> None:
+    """Each continuation row of the summary gets its comparison with cold runs."""
+    for r in summary:
+        for p in pairs:
+            if (p["backend"], p["settings"], p["method"], p["tol"]) == (
+                    r["backend"], r["settings"], r["method"], r["tol"]):
+                r["continuation"] = {k: v for k, v in p.items()
+                                     if k not in ("backend", "settings", "method")}
+
+
 def build_report(store: Store, out: str | os.PathLike = DEFAULT_OUT, *,
                  time_limit: float = DEFAULT_TIME_LIMIT, plots: bool = True,
                  table2_height: float | None = None) -> dict:
     """Write report.md, runs.csv, summary.json and the figures into ``out``.
 
-    Returns the summary (one dict per back-end and settings).
+    Returns the summary (one dict per back-end and settings) and the
+    continuation-against-cold comparison (:func:`~.metrics.continuation_pairs`,
+    also under "continuation" in the summary.json row of each continuation run).
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -106,6 +138,8 @@ def build_report(store: Store, out: str | os.PathLike = DEFAULT_OUT, *,
     refs = store.refs()
     evaluated = evaluate(runs, refs)
     summary = summarise(evaluated, time_limit=time_limit)
+    pairs = continuation_pairs(runs)
+    _attach_continuation(summary, pairs)
     store.export_csv(out / "runs.csv")
     (out / "summary.json").write_text(json.dumps(sanitise(summary), indent=1) + "\n")
 
@@ -120,8 +154,9 @@ def build_report(store: Store, out: str | os.PathLike = DEFAULT_OUT, *,
         plot_shapes(refs, out / "shapes.png")
         figures = ["work-precision.png", "force-vs-theta.png", "shapes.png"]
     (out / "report.md").write_text(_markdown(store, runs, refs, evaluated, summary, h2,
-                                             figures, time_limit))
-    return {"summary": summary, "runs": len(runs), "refs": len(refs), "out": str(out)}
+                                             figures, time_limit, pairs))
+    return {"summary": summary, "runs": len(runs), "refs": len(refs), "out": str(out),
+            "continuation": pairs}
 
 
 def _grid_text(runs) -> str:
@@ -133,7 +168,8 @@ def _grid_text(runs) -> str:
             f"ℓ = {span('length')} mm; EI = {span('EI')} N·mm²; w = {span('weight')} N/mm")
 
 
-def _markdown(store, runs, refs, evaluated, summary, h2, figures, time_limit) -> str:
+def _markdown(store, runs, refs, evaluated, summary, h2, figures, time_limit,
+              pairs=()) -> str:
     scenes = {r["scene"] for r in runs}
     bad_refs = [k for k, r in refs.items() if not r["converged"]]
     checks = [r["check_error"] for r in refs.values()
@@ -177,6 +213,22 @@ def _markdown(store, runs, refs, evaluated, summary, h2, figures, time_limit) ->
         table_two(evaluated, h2),
         "",
     ]
+    if pairs:
+        lines += [
+            "## Continuation against cold starts",
+            "",
+            "Runs of `lcpbench sweep --continuation` (driver `globalised+quadratic`, "
+            "`+secant` or `+previous`: the scenes of each line in θ solved in order, each started from "
+            "its neighbours' answers) against the cold `globalised` runs of the same "
+            "back-end, settings and tol, over the scenes where both converged. Force "
+            "difference: |F_cold − F_cont| / max(|F_cold|, EI/ℓ²); each is within the "
+            "driver tolerance of the same equilibrium, so expect differences up to about "
+            "100·tol. Times and iterations: each scene's own solve, summed; a warm "
+            "solve that failed and was redone cold counts with both attempts.",
+            "",
+            continuation_table(pairs),
+            "",
+        ]
     for f in figures:
         lines += [f"![{f[:-4]}]({f})", ""]
     lines += ["Every run, with its reference force: [runs.csv](runs.csv); the table above as "
@@ -184,4 +236,5 @@ def _markdown(store, runs, refs, evaluated, summary, h2, figures, time_limit) ->
     return "\n".join(lines)
 
 
-__all__ = ["DEFAULT_OUT", "build_report", "comparison_table", "success_tol", "table_two"]
+__all__ = ["DEFAULT_OUT", "build_report", "comparison_table", "continuation_table",
+           "success_tol", "table_two"]
