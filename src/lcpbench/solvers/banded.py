@@ -234,8 +234,11 @@ def _run_maxima(v: np.ndarray, slack: float) -> np.ndarray:
     viol = v > slack
     if not np.count_nonzero(viol):
         return viol
-    w = np.full(v.size + 2, -np.inf)
-    w[1:-1][viol] = v[viol]
+    # A node that is not violated has v <= slack < v of a violated neighbour, so it
+    # never wins the comparisons: v itself can stand in the padded buffer.
+    w = np.empty(v.size + 2)
+    w[0] = w[-1] = -np.inf
+    w[1:-1] = v
     mid = w[1:-1]
     return viol & (mid >= w[:-2]) & (mid > w[2:])
 
