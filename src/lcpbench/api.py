@@ -142,12 +142,12 @@ def _audit(res: ContactResult, chain) -> None:
         res.reason = "the certificate rejects the answer: " + ", ".join(problems)
 
 
-def _clears(chain, alpha) -> bool:
-    """Does the chain at ``alpha`` stay strictly between its walls?"""
+def _overlap(chain, alpha) -> float:
+    """How far the chain at ``alpha`` crosses its walls (mm; < 0: strictly between them)."""
     from .model.chain import heights
 
     u = heights(chain, alpha)
-    return bool(np.all(u < chain.upper) and np.all(u > chain.lower))
+    return float(max(np.max(u - chain.upper), np.max(chain.lower - u)))
 
 
 #: Skip the wall-free search when the arc crosses a wall by more than this many
@@ -161,14 +161,6 @@ def _beam_sag(chain) -> float:
     """5 w ℓ⁴ / (384 EI) for the chain's total load (EI = force_scale · ℓ²)."""
     load = float(np.sum(np.abs(chain.link_load)))
     return 5.0 / 384.0 * load * chain.length / chain.force_scale
-
-
-def _overlap(chain) -> float:
-    """How far the unconstrained arc crosses its walls (mm; <= 0: it clears them)."""
-    from .model.chain import heights
-
-    u = heights(chain, chain.rest_alpha)
-    return float(max(np.max(u - chain.upper), np.max(chain.lower - u)))
 
 
 def _free_step(step, warm) -> StepSolution:
@@ -199,8 +191,9 @@ def _without_contact(chain, tol: float, max_outer: int,
     """
     n = chain.free_nodes.size
     loaded = bool(np.any(chain.link_load != 0))
-    if not _clears(chain, chain.rest_alpha):
-        if not loaded or _overlap(chain) > _SAG_BOUND * _beam_sag(chain):
+    overlap = _overlap(chain, chain.rest_alpha)
+    if overlap >= 0:  # the arc touches or crosses a wall
+        if not loaded or overlap > _SAG_BOUND * _beam_sag(chain):
             return None
         first = _free_step(assemble_step(chain, chain.rest_alpha), None).u
         if not (np.all(first < chain.upper) and np.all(first > chain.lower)):  # NaN: False
@@ -213,7 +206,7 @@ def _without_contact(chain, tol: float, max_outer: int,
     if start is not None:  # a neighbour's shape (its contact set means nothing here)
         start = DriverStart(start.alpha, None)
     out = run_driver(free, _free_step, tol=tol, max_outer=max_outer, start=start)
-    if not (out.converged and _clears(chain, out.alpha)):
+    if not (out.converged and _overlap(chain, out.alpha) < 0):
         return None
     out.reason = ("no contact: the equilibrium without walls clears every wall (found by "
                   "banded solves, no LCP)")
