@@ -10,6 +10,7 @@ import numpy as np
 from scipy.linalg import LinAlgError
 
 from .errors import ProblemError
+from .model.chain import heights
 from .model.driver import METHODS, DriverOutput, DriverStart, run_driver
 from .model.result import ContactResult, build_result
 from .model.step import assemble_step
@@ -142,11 +143,9 @@ def _audit(res: ContactResult, chain) -> None:
         res.reason = "the certificate rejects the answer: " + ", ".join(problems)
 
 
-def _overlap(chain, alpha) -> float:
-    """How far the chain at ``alpha`` crosses its walls (mm; < 0: strictly between them)."""
-    from .model.chain import heights
-
-    u = heights(chain, alpha)
+def _overlap(chain, u) -> float:
+    """How far free-node heights ``u`` cross the walls (mm; < 0: strictly between
+    them; NaN if u has a NaN)."""
     return float(max(np.max(u - chain.upper), np.max(chain.lower - u)))
 
 
@@ -191,12 +190,12 @@ def _without_contact(chain, tol: float, max_outer: int,
     """
     n = chain.free_nodes.size
     loaded = bool(np.any(chain.link_load != 0))
-    overlap = _overlap(chain, chain.rest_alpha)
+    overlap = _overlap(chain, heights(chain, chain.rest_alpha))
     if overlap >= 0:  # the arc touches or crosses a wall
         if not loaded or overlap > _SAG_BOUND * _beam_sag(chain):
             return None
         first = _free_step(assemble_step(chain, chain.rest_alpha), None).u
-        if not (np.all(first < chain.upper) and np.all(first > chain.lower)):  # NaN: False
+        if not _overlap(chain, first) < 0:  # NaN (no minimiser) included
             return None
     elif not loaded:
         return DriverOutput(chain.rest_alpha.copy(), np.zeros(n), np.zeros(n), True,
@@ -206,7 +205,7 @@ def _without_contact(chain, tol: float, max_outer: int,
     if start is not None:  # a neighbour's shape (its contact set means nothing here)
         start = DriverStart(start.alpha, None)
     out = run_driver(free, _free_step, tol=tol, max_outer=max_outer, start=start)
-    if not (out.converged and _overlap(chain, out.alpha) < 0):
+    if not (out.converged and _overlap(chain, heights(chain, out.alpha)) < 0):
         return None
     out.reason = ("no contact: the equilibrium without walls clears every wall (found by "
                   "banded solves, no LCP)")

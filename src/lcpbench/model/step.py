@@ -118,7 +118,9 @@ class ContactStep:
         Written about the linearisation point so that round-off scales with the
         increment u − u₀, not with the heights themselves.
         """
-        return self.phi_origin + self._J(u - self.origin)
+        phi = self._J(u - self.origin)
+        phi += self.phi_origin
+        return phi
 
     def gradient(self, u: np.ndarray) -> np.ndarray:
         """H u + c, computed in factored form Jᵀ k (φ̂(u) − φ*) − f.
@@ -128,8 +130,7 @@ class ContactStep:
         spring torques, not with |H||u|. At a solution it is minus the
         reactions (the upper wall pushes down).
         """
-        m = self._J(u - self.origin)
-        m += self.phi_origin
+        m = self.joint_angles(u)
         m -= self.rest_joint
         m *= self.stiffness
         g = self._JT(m)
