@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import solveh_banded
 
+from ..linalg import banded_matvec
 from ..problems.scenes import Chain
 
 
@@ -228,15 +229,6 @@ class LCPForm:
     condense: np.ndarray  # free-node indices eliminated from the LCP
     n_gap: int
 
-
-def banded_matvec(bands: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """H @ u for symmetric pentadiagonal H in lower banded storage."""
-    out = bands[0] * u
-    out[1:] += bands[1, :-1] * u[:-1]
-    out[:-1] += bands[1, :-1] * u[1:]
-    out[2:] += bands[2, :-2] * u[:-2]
-    out[:-2] += bands[2, :-2] * u[2:]
-    return out
 
 
 def _joint_stencils(chain: Chain, inv_a_cos: np.ndarray):

@@ -48,6 +48,7 @@ import numpy as np
 from scipy.linalg import LinAlgError, solveh_banded
 from scipy.linalg.lapack import dpbsv, dpbtrs
 
+from ..linalg import dense_to_bands, sub_bands
 from .base import Status, StepSolution
 
 EPS = np.finfo(float).eps
@@ -55,25 +56,6 @@ METHODS = ("dual", "primal")
 #: Step fractions of the dual walk closer than this are ties (released together).
 TIE = 1e-6
 
-
-def _sub_bands(bands: np.ndarray, idx: np.ndarray) -> np.ndarray:
-    """Lower banded storage of the principal submatrix H[idx, idx] (idx sorted).
-
-    A principal submatrix of a matrix of bandwidth b has bandwidth at most b:
-    its entry (p + k, p) is H[idx[p + k], idx[p]], read from the bands when
-    the two indices are at most b apart.
-    """
-    b = bands.shape[0] - 1
-    m = idx.size
-    sub = np.zeros((max(min(b, m - 1), 0) + 1, m))
-    sub[0] = bands[0, idx]
-    for k in range(1, sub.shape[0]):
-        gap = idx[k:] - idx[:-k]
-        ok = gap <= b
-        vals = np.zeros(m - k)
-        vals[ok] = bands[gap[ok], idx[:-k][ok]]
-        sub[k, : m - k] = vals
-    return sub
 
 
 def solve_banded_qp(
@@ -374,7 +356,7 @@ def _primal(step, start, W_up, W_lo, max_iter, t0, rtol, done=0) -> StepSolution
         idx = np.flatnonzero(free)
         p = np.zeros(n)
         p[idx] = solveh_banded(
-            _sub_bands(step.bands, idx), -step.gradient(u)[idx], lower=True,
+            sub_bands(step.bands, idx), -step.gradient(u)[idx], lower=True,
             check_finite=False,
         )
         if not np.all(np.isfinite(p)):
@@ -496,16 +478,6 @@ class _BandedBoxQP:
     def unconstrained_minimiser(self):
         return solveh_banded(self.bands, -self.linear, lower=True, check_finite=False)
 
-
-def dense_to_bands(P: np.ndarray) -> np.ndarray:
-    """Lower banded storage of a symmetric matrix, at its actual bandwidth."""
-    n = P.shape[0]
-    rows, cols = np.nonzero(np.tril(P))
-    b = int(np.max(rows - cols, initial=0))
-    bands = np.zeros((b + 1, n))
-    for k in range(b + 1):
-        bands[k, : n - k] = np.diagonal(P, -k)
-    return bands
 
 
 def _warm_sets(warm, n):

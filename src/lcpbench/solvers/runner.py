@@ -28,8 +28,7 @@ import scipy.sparse as sp
 from scipy.linalg import solveh_banded
 
 from ..errors import ProblemError
-from ..model.step import banded_matvec
-from .banded import _sub_bands
+from ..linalg import banded_matvec, sub_bands
 from .base import BoxQP, LCPSolution, QPWarm, Settings, Status, StepSolution, lcp_residuals
 from .registry import Backend, get_backend, get_settings
 
@@ -187,7 +186,7 @@ def _complete_heights(step, u: np.ndarray) -> np.ndarray:
         return u
     u = u.copy()
     grad = step.gradient(u)
-    u[F] -= solveh_banded(_sub_bands(step.bands, F), grad[F], lower=True, check_finite=False)
+    u[F] -= solveh_banded(sub_bands(step.bands, F), grad[F], lower=True, check_finite=False)
     return u
 
 
