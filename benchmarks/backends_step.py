@@ -25,7 +25,8 @@ import numpy as np
 
 from lcpbench import ActuatorScene, solve
 from lcpbench.model.step import assemble_step
-from lcpbench.solvers import available_backends, solve_step
+from lcpbench.model.step_solver import solve_step
+from lcpbench.solvers import available_backends
 
 
 def exact_step(theta=150.0, height=3.0, links=140):

@@ -21,8 +21,8 @@ import numpy as np
 
 import lcpbench
 from lcpbench.model.step import assemble_step
+from lcpbench.model.step_solver import solve_step, step_lcp
 from lcpbench.solvers.registry import available_backends
-from lcpbench.solvers.runner import solve_step, step_lcp
 
 ITERATIVE = ["pgs", "psor", "osqp", "qpsolvers-scs", "clarabel", "siconos-pgs",
              "siconos-newton-min", "siconos-newton-fb"]

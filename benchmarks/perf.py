@@ -45,13 +45,13 @@ import numpy as np
 
 import lcpbench
 from lcpbench import ActuatorScene
-from lcpbench.model.baseline import solve_baseline
+from lcpbench.baseline import solve_baseline
 from lcpbench.model.dense import solve_paper_dense
 from lcpbench.model.driver import run_driver
 from lcpbench.model.step import assemble_step
-from lcpbench.solvers import available_backends, get_backend, solve_lcp, solve_step
+from lcpbench.model.step_solver import solve_step, step_lcp, step_residuals
+from lcpbench.solvers import available_backends, get_backend, solve_lcp
 from lcpbench.solvers.banded import solve_banded_qp
-from lcpbench.solvers.runner import step_lcp, step_residuals
 
 SCENE = dict(theta=150.0, height=3.0, links=140)
 TOL = 1e-3

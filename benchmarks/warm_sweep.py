@@ -3,7 +3,7 @@
 Each line of the grid (θ 10°…180° at one h) is solved in order four ways:
 cold (every scene from the clipped unconstrained arc), from the previous
 scene's answer, and from the secant or quadratic extrapolation through the
-previous two or three (`lcpbench.bench.continuation`). Reports the total outer
+previous two or three (`lcpbench.studies.continuation`). Reports the total outer
 iterations, the wall time, and the largest total-force difference from the
 cold answers, from the paper's tolerance (1e-3 rad) to 1e-10 rad (where the
 answers must agree to 1e-8).
@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 import lcpbench
-from lcpbench.bench.continuation import largest_difference, solve_sequence, total_outer
+from lcpbench.studies.continuation import largest_difference, solve_sequence, total_outer
 from lcpbench.bench.grid import PAPER_GRID
 
 #: the paper's tolerance, two between, and one where warm and cold must agree to 1e-8

@@ -3,25 +3,47 @@
 >>> import lcpbench
 >>> result = lcpbench.solve(lcpbench.ActuatorScene(theta=150, height=3.0))
 >>> result.total_force  # doctest: +SKIP
+
+The names below are loaded on first use (PEP 562): ``import lcpbench`` costs
+next to nothing, ``lcpbench.solve`` loads the model and the solver registry
+(numpy and scipy), and only ``lcpbench.select_backend`` loads the benchmark
+harness. Plotting and the native solver libraries load when a figure or a
+back-end needs them.
 """
 
-from .api import solve
-from .bench.select import Selection, select_backend
-from .errors import LcpbenchError, ProblemError, SolverNotFound
-from .model.result import Certificate, ContactResult
-from .problems.scenes import ActuatorScene, CantileverScene
+from importlib import import_module
+from importlib.metadata import PackageNotFoundError, version
 
-__version__ = "0.1.0"
+try:
+    __version__ = version("lcpbench")
+except PackageNotFoundError:  # running from a source tree that was never installed
+    __version__ = "0+unknown"
 
-__all__ = [
-    "ActuatorScene",
-    "CantileverScene",
-    "Certificate",
-    "ContactResult",
-    "LcpbenchError",
-    "Selection",
-    "ProblemError",
-    "SolverNotFound",
-    "select_backend",
-    "solve",
-]
+#: public name -> module that defines it
+_EXPORTS = {
+    "solve": "lcpbench.api",
+    "ActuatorScene": "lcpbench.problems.scenes",
+    "CantileverScene": "lcpbench.problems.scenes",
+    "Certificate": "lcpbench.model.result",
+    "ContactResult": "lcpbench.model.result",
+    "LcpbenchError": "lcpbench.errors",
+    "ProblemError": "lcpbench.errors",
+    "SolverNotFound": "lcpbench.errors",
+    "Selection": "lcpbench.solvers.selection",
+    "select_backend": "lcpbench.bench.select",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'lcpbench' has no attribute {name!r}")
+    value = getattr(import_module(module), name)
+    globals()[name] = value  # later look-ups skip this function
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_EXPORTS))

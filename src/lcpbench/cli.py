@@ -423,6 +423,17 @@ def _cmd_solve(args) -> int:
 
 
 def _scene_from(args) -> ActuatorScene:
+    scene = _scene_as_given(args)
+    if scene.links != "auto" or getattr(args, "command", None) == "select":
+        return scene
+    from .studies.discretisation import auto_links
+
+    n = auto_links(scene)
+    print(f"links auto: the discretisation study (Sec. III-D) picked N = {n}", file=sys.stderr)
+    return scene.with_links(n)
+
+
+def _scene_as_given(args) -> ActuatorScene:
     kw = {"height": args.height, "links": args.links, "length": args.length, "EI": args.EI,
           "weight": args.weight, "channel": args.channel}
     if args.pressure is None:
@@ -466,8 +477,8 @@ def _cmd_solvers(args) -> int:
 
 def _cmd_export(args) -> int:
     from .model.step import assemble_step
+    from .model.step_solver import step_lcp
     from .problems.lcpfile import write_lcp
-    from .solvers.runner import step_lcp
 
     fmt = args.format
     if fmt is None:
@@ -580,9 +591,9 @@ def _cmd_sweep(args) -> int:
     for p in settings:
         get_settings(p)
     if args.tol is not None:
-        from .api import _check_tol
+        from .api import check_tol
 
-        _check_tol(args.tol)
+        check_tol(args.tol)
     jobs_n = default_workers() if args.jobs is None else args.jobs
     if jobs_n < 1:
         raise ProblemError(f"jobs must be an integer >= 1, got {jobs_n}")
@@ -731,7 +742,7 @@ def _cmd_reproduce(args) -> int:
 
 
 def _cmd_validate_cantilever(args) -> int:
-    from .model.validation import cantilever_validation
+    from .studies.validation import cantilever_validation
 
     out = cantilever_validation(args.links)
     if args.json:

@@ -1,9 +1,8 @@
-"""Back-end selection: qualified, fastest, cached in the store, used by solver='auto'."""
+"""Back-end selection: qualified, fastest, cached in the store, passed to solve() explicitly."""
 
 import pytest
 
 import lcpbench
-from lcpbench.bench import select as sel_mod
 from lcpbench.bench.select import probe_scenes, select_backend
 from lcpbench.bench.store import Store
 from lcpbench.errors import ProblemError
@@ -67,14 +66,18 @@ def test_bad_input():
         select_backend(SCENE, tol=1e-3, time_budget=-1, probe=False)
 
 
-def test_auto_uses_the_cached_selection(selected, monkeypatch):
-    path, s = selected
-    monkeypatch.setenv(sel_mod.STORE_ENV, str(path))
-    sel_mod._AUTO_CACHE.clear()
-    res = lcpbench.solve(SCENE.with_links(30), solver="auto", tol=1e-3)
-    assert res.solver == s.backend and res.converged
-    assert "cached" in res.extra["auto"]
-    # another kind of scene (N = 40) has no cached probes: the active set
-    res = lcpbench.solve(SCENE.with_links(40), solver="auto", tol=1e-3)
-    assert res.solver == "active-set" and "no cached" in res.extra["auto"]
-    sel_mod._AUTO_CACHE.clear()
+def test_solve_uses_an_explicit_selection(selected):
+    _, s = selected
+    assert s.backend is not None
+    res = lcpbench.solve(SCENE, solver=s, tol=1e-3)
+    assert res.solver == s.backend and res.extra["settings"] == s.settings
+    assert res.converged and res.extra["auto"].startswith("selected")
+
+
+def test_a_selection_without_a_backend_is_refused(selected):
+    path, _ = selected
+    none = select_backend(SCENE, tol=1e-3, time_budget=1e-9, store=path,
+                          candidates=CANDIDATES, settings=("default",), probe=False)
+    assert none.backend is None
+    with pytest.raises(ProblemError, match="chose no back-end"):
+        lcpbench.solve(SCENE, solver=none)

@@ -18,8 +18,9 @@ from hypothesis import strategies as st
 
 from lcpbench import ActuatorScene, solve
 from lcpbench.model.step import assemble_step
+from lcpbench.model.step_solver import solve_step
 from lcpbench.problems.lcpfile import read_lcp
-from lcpbench.solvers import available_backends, get_backend, solve_lcp, solve_step
+from lcpbench.solvers import available_backends, get_backend, solve_lcp
 from lcpbench.solvers.base import Settings, Status
 from lcpbench.solvers.enumeration import enumerate_lcp
 

@@ -19,8 +19,9 @@ from hypothesis import strategies as st
 from lcpbench import ActuatorScene, solve
 from lcpbench.model.driver import run_driver
 from lcpbench.model.step import assemble_step
+from lcpbench.model.step_solver import solve_step
 from lcpbench.problems.scenes import CantileverScene
-from lcpbench.solvers import banded, solve_step
+from lcpbench.solvers import banded
 from lcpbench.solvers.banded import solve_banded_qp
 from lcpbench.solvers.base import Status
 from lcpbench.solvers.enumeration import enumerate_lcp

@@ -18,7 +18,7 @@ Kinds of job
               (``baseline``) or finite-difference (``baseline-fd``) Jacobian.
 ``line``      continuation (``--continuation``): one back-end × settings × tol
               over a line of scenes that differ only in θ, θ ascending, solved
-              in order by :func:`~lcpbench.bench.continuation.solve_sequence`,
+              in order by :func:`~lcpbench.studies.continuation.solve_sequence`,
               each scene started from its predecessors' answers. One row per
               scene, method ``globalised+quadratic`` (or ``+secant``,
               ``+previous``), so they
@@ -281,7 +281,7 @@ def _line(job: Job) -> list[dict]:
     ``wall_time`` and the iterations of a row are those of the scene's own
     solve inside the line (``ContactResult.time_s``), as for a cold run.
     """
-    from .continuation import solve_sequence
+    from ..studies.continuation import solve_sequence
 
     predictor = job.method.split("+", 1)[1]
     warm_up(job.backend, job.settings)
@@ -306,7 +306,7 @@ def _line(job: Job) -> list[dict]:
 def _reference(scene) -> dict:
     from ..api import solve
     from ..model.step import assemble_step
-    from ..solvers.runner import solve_step
+    from ..model.step_solver import solve_step
 
     res = solve(scene, solver="active-set", tol=REFERENCE_TOL, settings="high")
     tol = REFERENCE_TOL
@@ -330,7 +330,7 @@ def _reference(scene) -> dict:
 
 
 def _baseline(scene, job: Job, time_limit) -> dict:
-    from ..model.baseline import solve_baseline
+    from ..baseline import solve_baseline
 
     if ("baseline", "") not in _WARM:
         _WARM.add(("baseline", ""))

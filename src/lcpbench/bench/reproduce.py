@@ -45,11 +45,11 @@ import numpy as np
 from scipy.optimize import brentq
 
 from ..api import solve
-from ..model.baseline import BaselineSystem, solve_baseline
+from ..baseline import BaselineSystem, solve_baseline
 from ..model.chain import node_positions
-from ..model.discretisation import discretisation_study
+from ..studies.discretisation import discretisation_study
 from ..model.result import ContactResult
-from ..model.validation import cantilever_validation, observed_order
+from ..studies.validation import cantilever_validation, observed_order
 from ..problems.calibrations import (
     COMPARISON_PRESSURE_RANGES,
     KPA_PER_PSI,
@@ -942,7 +942,7 @@ Files: `fig5-discretisation.png` (left: the change against N at h =
 {d['plot_height']:g} mm, the paper's Fig. 5; right: the N the rule picks per
 scene), `fig5-discretisation.csv` (force and change at every N),
 `fig5-discretisation.json`. Grid: {grid}; N from 10 in steps of 10; the rule
-is `lcpbench.model.discretisation.discretisation_study` at 0.01 %. The paper
+is `lcpbench.studies.discretisation.discretisation_study` at 0.01 %. The paper
 shows Fig. 5 as a plot (h = 3 mm); its text gives the rule, the N it chose
 (140) and the rate ("about three").
 
@@ -1219,7 +1219,7 @@ def _readme_baseline(s: dict) -> str:
               else "Not every scene in contact is valid there.")
     return f"""## Figs. 26–27, Tables I–II: the LCP against the root-finding baseline
 
-The baseline is the paper's appendix model (`lcpbench.model.baseline`). It
+The baseline is the paper's appendix model (`lcpbench.baseline`). It
 has one reaction, at the midspan node, and 3N + 2 exact equilibrium
 equations. MINPACK solves them through scipy, with an analytic Jacobian or
 with forward differences (what `fsolve` does unless it is given a

@@ -16,51 +16,20 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import ProblemError
 from ..problems.scenes import ActuatorScene
+from ..solvers.selection import Selection
 from .grid import Grid, scene_key
 from .harness import DEFAULT_TIME_LIMIT, Job, error_of, plan_sweep, sweep
 from .store import DEFAULT_STORE, Store
 
 #: probe scenes of a kind: (θ in degrees, h / ℓ)
 PROBES = ((90.0, 0.1), (150.0, 0.1), (180.0, 2.0 / 30.0), (150.0, 5.0 / 30.0))
-FALLBACK = ("active-set", "default")
 STORE_ENV = "LCPBENCH_STORE"
-
-
-@dataclass
-class Selection:
-    """The chosen back-end and why.
-
-    Attributes
-    ----------
-    backend, settings : the choice (None when no candidate qualifies).
-    tol : the force accuracy asked for (relative error of the total force).
-    driver_tol : the driver tolerance the probes ran at (rad).
-    time_s : geometric-mean wall time of one solve over the probes (s).
-    error : largest force error over the probes.
-    reason : one line saying why.
-    evidence : per candidate: converged probes, worst error, mean time.
-    """
-
-    backend: str | None
-    settings: str | None
-    tol: float
-    driver_tol: float
-    time_s: float
-    error: float
-    reason: str
-    evidence: list[dict] = field(default_factory=list)
-
-    def to_dict(self) -> dict:
-        return {k: getattr(self, k) for k in
-                ("backend", "settings", "tol", "driver_tol", "time_s", "error", "reason",
-                 "evidence")}
 
 
 def probe_scenes(scene_or_grid) -> list[ActuatorScene]:
@@ -234,38 +203,3 @@ def _choose(store: Store, jobs: list[Job], probes, tol, dtol, time_budget) -> Se
                    f"{runner_up['time_s'] / best['time_s']:.2f}x slower")
     return Selection(best["backend"], best["settings"], tol, dtol, best["time_s"],
                      best["error"], reason, evidence)
-
-
-_AUTO_CACHE: dict[tuple, tuple[str, str]] = {}
-
-
-def auto_backend(scene, driver_tol: float) -> tuple[str, str, str]:
-    """What ``solver="auto"`` uses: the cached selection for this kind of scene, if any.
-
-    Looks only at the store (``$LCPBENCH_STORE`` or ``results/lcpbench.sqlite``),
-    never probes. Returns (back-end, settings, why); without cached probes,
-    the built-in active set (an exact method, O(N) per change).
-    """
-    from .metrics import success_tol
-
-    path = default_store_path()
-    tol = success_tol(driver_tol)
-    try:
-        stamp = path.stat().st_mtime_ns
-    except OSError:
-        return (*FALLBACK, "no cached back-end selection; active-set is exact")
-    kind = (str(path), stamp, int(scene.links), scene.length, scene.EI, scene.weight,
-            bool(scene.channel), tol)
-    if kind not in _AUTO_CACHE:
-        try:
-            sel = select_backend(scene, tol=tol, store=path, probe=False)
-        except Exception:  # noqa: BLE001 - a broken cache must not break solve()
-            sel = None
-        if sel is None or sel.backend is None:
-            _AUTO_CACHE[kind] = FALLBACK
-        else:
-            _AUTO_CACHE[kind] = (sel.backend, sel.settings)
-    backend, settings = _AUTO_CACHE[kind]
-    why = ("selected from the cached probes" if (backend, settings) != FALLBACK
-           else "no cached back-end selection; active-set is exact")
-    return backend, settings, why

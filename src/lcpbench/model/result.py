@@ -182,3 +182,20 @@ def build_result(scene, chain: Chain, out: DriverOutput, **how) -> ContactResult
         certificate=cert,
         **how,
     )
+
+
+def audit(res: ContactResult, chain: Chain) -> None:
+    """Never call an answer converged that the exact-geometry certificate rejects."""
+    if not res.converged:
+        return
+    c = res.certificate
+    problems = []
+    if c.relative_torque_residual > max(10 * res.tol, 1e-6):
+        problems.append(f"torque residual {c.relative_torque_residual:.1e} (relative)")
+    if c.min_gap < -1e-6 * chain.length:
+        problems.append(f"penetration {c.min_gap:.1e} mm")
+    if c.closure > 1e-6 * chain.length:
+        problems.append(f"chain not closed by {c.closure:.1e} mm")
+    if problems:
+        res.converged = False
+        res.reason = "the certificate rejects the answer: " + ", ".join(problems)

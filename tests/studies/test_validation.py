@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from lcpbench import ActuatorScene, CantileverScene, solve
-from lcpbench.model.discretisation import discretisation_study
-from lcpbench.model.validation import cantilever_validation, observed_order
+from lcpbench.studies.discretisation import discretisation_study
+from lcpbench.studies.validation import cantilever_validation, observed_order
 
 
 def test_cantilever_within_0p1_percent_of_beam_theory_at_N140():

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 
+from ..api import solve
 from ..problems.scenes import CantileverScene
 
 
@@ -17,7 +18,6 @@ def cantilever_validation(links: int = 140, *, tol: float = 1e-10, **scene) -> d
     differ by the geometric nonlinearity as N → ∞ as well as by the
     discretisation. Returns the fields of ``lcpbench validate cantilever``.
     """
-    from ..api import solve
 
     sc = CantileverScene(links=links, **scene)
     res = solve(sc, tol=tol)

@@ -89,8 +89,9 @@ import numpy as np
 from scipy.optimize import root
 
 from ..errors import ProblemError
+from ..model.chain import node_positions, torque_residual
 from ..problems.scenes import ActuatorScene, Chain
-from .chain import node_positions, torque_residual
+from ..studies.discretisation import auto_links
 
 METHODS = ("hybr", "lm")
 JACOBIANS = ("analytic", "fd")  # "fd": MINPACK's forward differences, fsolve's default
@@ -403,8 +404,8 @@ def solve_baseline(
     Parameters
     ----------
     scene : ActuatorScene
-        ``links="auto"`` is resolved as :func:`lcpbench.solve` resolves it, so
-        both models see the same N. A channel's lower wall is not part of the
+        ``links="auto"`` is resolved by :func:`baseline_links`: the Sec. III-D
+        rule on the baseline's own answers (the LCP path never picks its N). A channel's lower wall is not part of the
         model; the answer is only ``valid`` if no node crosses it.
     tol : relative step tolerance handed to MINPACK (``xtol``; also ``ftol``
         for "lm"). The answer is accepted if the dimensionless residual is
@@ -427,9 +428,7 @@ def solve_baseline(
     if jacobian not in JACOBIANS:
         raise ProblemError(f"jacobian must be one of {', '.join(JACOBIANS)}, got {jacobian!r}")
     if scene.links == "auto":
-        from .discretisation import auto_links
-
-        scene = scene.with_links(auto_links(scene))
+        scene = scene.with_links(baseline_links(scene, method=method, jacobian=jacobian))
     t_setup = time.perf_counter()
     chain = scene.chain()
     system = BaselineSystem(chain, scene.height)
@@ -543,3 +542,22 @@ def _judge(scene, chain, system, watched, z, status, message, method, tol, elaps
         relative_torque_residual=rel_torque,
         setup_time_s=setup,
     )
+
+
+def baseline_links(scene: ActuatorScene, *, threshold: float = 0.01, method: str = "hybr",
+                   jacobian: str = "analytic") -> int:
+    """The baseline's own N: the Sec. III-D rule (refine N by 10 until the total
+    force changes by less than ``threshold`` percent) on its own answers.
+
+    Raises ProblemError when the baseline has no valid answer at some N (its
+    single-reaction model does not fit the scene).
+    """
+
+    def total_force(s):
+        res = solve_baseline(s, method=method, jacobian=jacobian)
+        if not (res.converged and res.valid):
+            raise ProblemError(f"baseline_links: the baseline has no valid answer at "
+                               f"links={s.links} ({res.status}: {res.message})")
+        return res.total_force
+
+    return auto_links(scene, threshold=threshold, total_force=total_force)

@@ -8,8 +8,10 @@ function of one scene (used by ``links="auto"``) or of several (the grid).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
+from ..api import solve
 from ..errors import ProblemError
 
 
@@ -32,22 +34,30 @@ def discretisation_study(
     max_links: int = 2000,
     solver: str = "auto",
     tol: float = 1e-8,
+    total_force: Callable[[object], float] | None = None,
 ) -> DiscretisationStudy:
     """Refine N by ``step`` until |ΔF|/F < ``threshold`` percent (Sec. III-D).
 
     A scene without contact (F = 0 at two successive N) stops at once.
+    ``total_force(scene)`` gives the model's total reaction F (N) at the N of
+    ``scene`` or raises ProblemError; by default the LCP model
+    (:func:`lcpbench.solve` with ``solver`` at ``tol``). The root-finding
+    baseline passes its own, so each model picks its own N.
     """
-    from ..api import solve
+    if total_force is None:
+        def total_force(s):
+            res = solve(s, solver=solver, tol=tol)
+            if not res.converged:
+                raise ProblemError(f"discretisation study: no convergence at links={s.links}: "
+                                   f"{res.reason}")
+            return res.total_force
 
     if not (step >= 1 and start >= 4 and threshold > 0):
         raise ProblemError("start must be >= 4, step >= 1 and threshold > 0")
     study = DiscretisationStudy()
     prev = None
     for n in range(start, max_links + 1, step):
-        res = solve(scene.with_links(n), solver=solver, tol=tol)
-        if not res.converged:
-            raise ProblemError(f"discretisation study: no convergence at links={n}: {res.reason}")
-        force = res.total_force
+        force = total_force(scene.with_links(n))
         study.links.append(n)
         study.total_force.append(force)
         if prev is not None:
@@ -61,9 +71,11 @@ def discretisation_study(
     return study
 
 
-def auto_links(scene, *, solver: str = "auto", threshold: float = 0.01) -> int:
+def auto_links(scene, *, solver: str = "auto", threshold: float = 0.01,
+               total_force: Callable[[object], float] | None = None) -> int:
     """The smallest N (in steps of 10) meeting the Sec. III-D force tolerance."""
-    study = discretisation_study(scene, solver=solver, threshold=threshold)
+    study = discretisation_study(scene, solver=solver, threshold=threshold,
+                                 total_force=total_force)
     if study.chosen is None:
         raise ProblemError(
             f"links='auto': the force did not settle to {threshold}% by N = {study.links[-1]}"

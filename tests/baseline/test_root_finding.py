@@ -7,7 +7,7 @@ import pytest
 from scipy.optimize import fsolve
 
 from lcpbench import ActuatorScene, CantileverScene, ProblemError, solve
-from lcpbench.model.baseline import BaselineSystem, solve_baseline
+from lcpbench.baseline import BaselineSystem, solve_baseline
 from lcpbench.model.chain import node_positions, torque_residual
 
 PAPER = {"theta": 150.0, "links": 140}  # Fig. 26 / 27: l = 30 mm, EI = 32.01 N mm^2, N = 140

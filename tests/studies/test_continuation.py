@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 import lcpbench
-from lcpbench.bench.continuation import (
+from lcpbench.studies.continuation import (
     largest_difference,
     predict,
     solve_sequence,
@@ -84,7 +84,7 @@ def test_quadratic_predictor_reproduces_a_parabola_exactly(tight):
 
 
 def test_a_failed_warm_start_is_redone_cold_and_its_cost_counted(monkeypatch):
-    import lcpbench.bench.continuation as cont
+    import lcpbench.studies.continuation as cont
 
     real = cont.solve
 

@@ -1,0 +1,201 @@
+"""The contact step handed to a back-end, and judged by lcpbench (step → back-end).
+
+Scaling. The contact step is handed over nondimensionalised (lengths by ℓ,
+forces by EI/ℓ², DESIGN.md): heights ũ = u/ℓ, reactions R̃ = R/(EI/ℓ²), so
+P̃ = P ℓ/F and c̃ = c/F. ``scaled=False`` hands over the raw step (mm, N).
+
+Residuals of a contact step (:func:`step_residuals`) are those of its LCP —
+gaps g and reactions R = K g + z, ``||min(g, R)||_inf``, the smallest g and R
+and ``|gᵀR|`` — evaluated in O(N) from the gaps alone: the heights of nodes
+with no wall row are re-solved exactly (the LCP condenses them out), and R is
+minus the energy gradient, computed in factored form. Gaps are divided by ℓ
+and reactions by EI/ℓ², so the numbers compare across scenes. The acceptance
+rule is the solvers' one (:func:`lcpbench.solvers.judge.verdict`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.linalg import solveh_banded
+
+from ..linalg import banded_matvec, sub_bands
+from ..solvers.base import BoxQP, QPWarm, Settings, Status, StepSolution
+from ..solvers.judge import accept_tol, verdict
+from ..solvers.registry import Backend, get_backend, get_settings
+from ..solvers.runner import fallback_message
+
+
+def step_scales(step, scaled: bool) -> tuple[float, float]:
+    """(length, force) units of the form handed to the back-end."""
+    if not scaled:
+        return 1.0, 1.0
+    return float(step.length_scale), float(step.force_scale)
+
+
+def step_qp(step, scaled: bool = True) -> BoxQP:
+    """The step as a bound-constrained QP, in the units of ``step_scales``."""
+    L, F = step_scales(step, scaled)
+    n = step.size
+    b = step.bands * (L / F)
+    diags = [b[0], b[1, : n - 1], b[2, : n - 2]]
+    P = sp.diags([diags[2], diags[1], diags[0], diags[1], diags[2]], [-2, -1, 0, 1, 2],
+                 shape=(n, n), format="csc")
+    return BoxQP(P, step.linear / F, step.lower / L, step.upper / L, bands=b)
+
+
+def step_lcp(step, scaled: bool = True):
+    """The step as an LCP (the condensed contact form) and its unit vectors.
+
+    Returns ``(form, M̃, q̃, dz, dw)`` with ``z = dz ⊙ z̃`` and ``w = dw ⊙ w̃``:
+    gaps in units of ℓ and reactions in units of EI/ℓ² (the channel's second
+    block swaps the two).
+    """
+    form = step.lcp("contact")
+    L, F = step_scales(step, scaled)
+    m, k = form.n_gap, form.q.size
+    dz = np.concatenate([np.full(m, L), np.full(k - m, F)])
+    dw = np.concatenate([np.full(m, F), np.full(k - m, L)])
+    M = form.M * dz[None, :] / dw[:, None]
+    q = form.q / dw
+    return form, M, q, dz, dw
+
+
+def _complete_heights(step, u: np.ndarray) -> np.ndarray:
+    """Re-solve exactly the heights of the nodes that have no wall row."""
+    rows = np.isfinite(step.upper) | np.isfinite(step.lower)
+    F = np.flatnonzero(~rows)
+    if F.size == 0:
+        return u
+    u = u.copy()
+    grad = step.gradient(u)
+    u[F] -= solveh_banded(sub_bands(step.bands, F), grad[F], lower=True, check_finite=False)
+    return u
+
+
+def step_residuals(step, u: np.ndarray) -> tuple[dict, np.ndarray]:
+    """lcpbench's residuals of a step answer, and the reactions R = K g + z.
+
+    Returns ``(residuals, R)``; R is the net reaction on every free node in
+    newtons (positive: the upper wall pushes down), zero up to round-off on
+    nodes with no wall row.
+    """
+    nan = {"natural": np.inf, "min_gap": -np.inf, "min_reaction": -np.inf,
+           "complementarity": np.inf}
+    if not np.all(np.isfinite(u)):
+        return nan, np.full(step.size, np.nan)
+    u = _complete_heights(step, np.asarray(u, dtype=float))
+    R = -step.gradient(u)
+    L, F = float(step.length_scale), float(step.force_scale)
+    up, lo = np.isfinite(step.upper), np.isfinite(step.lower)
+    g_up = (step.upper[up] - u[up]) / L
+    g_lo = (u[lo] - step.lower[lo]) / L
+    # one-sided rows: R itself (a negative R is a sign error); two-sided: split
+    r_up = np.where(lo, np.maximum(R, 0.0), R)[up] / F
+    r_lo = np.where(up, np.maximum(-R, 0.0), -R)[lo] / F
+    nat = max(np.max(np.abs(np.minimum(g_up, r_up)), initial=0.0),
+              np.max(np.abs(np.minimum(g_lo, r_lo)), initial=0.0))
+    size = banded_matvec(np.abs(step.bands), np.abs(u)) + np.abs(step.linear)
+    res = {
+        "natural": float(nat),
+        "min_gap": float(min(np.min(g_up, initial=np.inf), np.min(g_lo, initial=np.inf))),
+        "min_reaction": float(min(np.min(r_up, initial=np.inf), np.min(r_lo, initial=np.inf))),
+        "complementarity": float(abs(g_up @ r_up) + abs(g_lo @ r_lo)),
+        "term_size": float(np.max(size[up | lo], initial=0.0)) / F,
+    }
+    return res, R
+
+
+def solve_step(step, solver: str | Backend = "auto", settings: str | Settings = "default",
+               *, scaled: bool = True, warm: StepSolution | None = None) -> StepSolution:
+    """Solve one contact step with any back-end; never raises on solver trouble."""
+    backend = solver if isinstance(solver, Backend) else get_backend(solver)
+    s = get_settings(settings)
+    t0 = time.perf_counter()
+    try:
+        sol = _run_step(backend, step, s, scaled, warm)
+    except Exception as exc:
+        n = step.size
+        sol = StepSolution(np.full(n, np.nan), np.zeros(n), np.zeros(n), Status.FAILED,
+                           message=f"{backend.name} raised {type(exc).__name__}: {exc}")
+    sol.backend, sol.settings, sol.scaled = backend.name, s.name, scaled
+    _judge(step, sol, s)
+    if sol.status is not Status.SOLVED and backend.fallback:
+        first = sol
+        sol = solve_step(step, backend.fallback, s, scaled=scaled)
+        sol.message = fallback_message(backend, first, sol)
+        sol.iterations += first.iterations
+        sol.solve_time += first.solve_time
+        sol.backend = f"{backend.name}>{backend.fallback}"
+    sol.wall_time = time.perf_counter() - t0
+    return sol
+
+
+def _judge(step, sol: StepSolution, s: Settings) -> None:
+    res, R = step_residuals(step, sol.u)
+    sol.residuals, sol.reaction_net = res, R
+    status, why = verdict(sol.status, res["natural"], accept_tol(s, res.get("term_size", 0.0)))
+    if why:
+        sol.status, sol.message = status, why
+
+
+def _run_step(backend: Backend, step, s: Settings, scaled: bool, warm) -> StepSolution:
+    mod = backend.load()
+    n = step.size
+    if hasattr(mod, "solve_step"):
+        return mod.solve_step(step, s, warm, **backend.options)
+    L, F = step_scales(step, scaled)
+    if backend.form == "qp":
+        t0 = time.perf_counter()
+        qp = step_qp(step, scaled)
+        build = time.perf_counter() - t0
+        qwarm = None
+        if warm is not None and backend.warm_start and np.all(np.isfinite(warm.u)):
+            qwarm = QPWarm(warm.u / L, (warm.reaction_upper - warm.reaction_lower) / F)
+        res = mod.solve_qp(qp, s, qwarm, **backend.options)
+        y = res.y * F
+        return StepSolution(res.x * L, np.maximum(y, 0.0), np.maximum(-y, 0.0), res.status,
+                            res.iterations, res.solve_time, res.setup_time, res.message,
+                            time_source=res.time_source, build_time=build)
+    t0 = time.perf_counter()
+    form, M, q, dz, dw = step_lcp(step, scaled)
+    build = time.perf_counter() - t0
+    z0 = None
+    if warm is not None and backend.warm_start and np.all(np.isfinite(warm.u)):
+        gaps = form.heights - warm.u[form.rows]
+        z0 = np.concatenate([gaps, warm.reaction_lower[form.rows]])[: q.size] / dz
+        z0 = np.maximum(z0, 0.0)
+    res = mod.solve_lcp(M, q, s, z0, **backend.options)
+    if not np.all(np.isfinite(res.z)):
+        return StepSolution(np.full(n, np.nan), np.zeros(n), np.zeros(n),
+                            res.status if res.status is not Status.SOLVED else Status.FAILED,
+                            res.iterations, res.solve_time, res.setup_time, res.message,
+                            build_time=build)
+    z, w = res.z * dz, res.w * dw
+    u = step.from_lcp(form, z)
+    r_up, r_lo = np.zeros(n), np.zeros(n)
+    m = form.n_gap
+    r_up[form.rows] = w[:m]
+    if q.size > m:
+        r_lo[form.rows] = z[m:]
+    upper = np.zeros(n, bool)
+    upper[form.rows] = z[:m] <= 0.0
+    return StepSolution(u, r_up, r_lo, res.status, res.iterations, res.solve_time,
+                        res.setup_time, res.message, active_upper=upper,
+                        time_source=res.extra.get("time_source", "solver"), build_time=build)
+
+
+def make_step_solver(solver: str = "auto", settings: str | Settings = "default",
+                     scaled: bool = True) -> Callable:
+    """A ``(step, warm) -> StepSolution`` callable for the driver."""
+    backend = get_backend(solver)
+    s = get_settings(settings)
+
+    def run(step, warm):
+        return solve_step(step, backend, s, scaled=scaled, warm=warm)
+
+    run.backend = backend
+    return run

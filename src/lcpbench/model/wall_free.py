@@ -1,0 +1,86 @@
+"""The wall-free path: a scene that touches no wall is answered without any LCP.
+
+With no load the unconstrained arc is the answer when it clears every wall.
+With a load (gravity) the unconstrained shape is the equilibrium of the chain
+without walls, found by the same globalised driver (Fig. 3, line-searched)
+with each step a banded solve of K u = −z (eq. 30 with no reactions); if it
+clears every wall it is the answer. Otherwise the scene is solved with its
+walls.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+from scipy.linalg import LinAlgError
+
+from ..problems.scenes import Chain
+from ..solvers.base import Status, StepSolution
+from .chain import heights
+from .driver import DriverOutput, DriverStart, run_driver
+from .step import assemble_step
+
+#: Skip the wall-free search when the arc crosses a wall by more than this many
+#: times the mid-span sag of a straight pinned beam under the same load
+#: (5 w ℓ⁴ / 384 EI): the arc will not sag off it. A heuristic that only saves
+#: time: a scene it sends to the contact solve still gets the right answer.
+SAG_BOUND = 10.0
+
+
+def wall_overlap(chain: Chain, u: np.ndarray) -> float:
+    """How far free-node heights ``u`` cross the walls (mm; < 0: strictly
+    between them; NaN if u has a NaN)."""
+    return float(max(np.max(u - chain.upper), np.max(chain.lower - u)))
+
+
+def beam_sag(chain: Chain) -> float:
+    """5 w ℓ⁴ / (384 EI) for the chain's total load (EI = force_scale · ℓ²), mm."""
+    load = float(np.sum(np.abs(chain.link_load)))
+    return 5.0 / 384.0 * load * chain.length / chain.force_scale
+
+
+def free_step(step, warm) -> StepSolution:
+    """The step of a chain with no walls: its unconstrained minimiser (a banded
+    solve; no LCP). ``warm`` is ignored."""
+    t0 = time.perf_counter()
+    n = step.size
+    try:
+        u, status = step.unconstrained_minimiser(), Status.SOLVED
+    except (LinAlgError, ValueError):  # not positive definite: no minimiser
+        u, status = np.full(n, np.nan), Status.FAILED
+    return StepSolution(u, np.zeros(n), np.zeros(n), status, 0, time.perf_counter() - t0)
+
+
+def solve_without_contact(chain: Chain, tol: float, max_outer: int,
+                          start: DriverStart | None = None) -> DriverOutput | None:
+    """The answer of a scene that touches no wall, found without any LCP (or None).
+
+    A continuation's ``start`` (a neighbour's shape) starts the search too.
+    It is looked for when the arc clears the walls, or when the first step of
+    that search (one banded solve at the arc, ~0.1 ms at N = 140) already
+    does: a heavy chain can sag off a wall its arc crosses.
+    """
+    n = chain.free_nodes.size
+    loaded = bool(np.any(chain.link_load != 0))
+    overlap = wall_overlap(chain, heights(chain, chain.rest_alpha))
+    if overlap >= 0:  # the arc touches or crosses a wall
+        if not loaded or overlap > SAG_BOUND * beam_sag(chain):
+            return None
+        first = free_step(assemble_step(chain, chain.rest_alpha), None).u
+        if not wall_overlap(chain, first) < 0:  # NaN (no minimiser) included
+            return None
+    elif not loaded:
+        return DriverOutput(chain.rest_alpha.copy(), np.zeros(n), np.zeros(n), True,
+                            "no contact: the unconstrained arc clears every wall and there "
+                            "is no load")
+    free = replace(chain, upper=np.full(n, np.inf), lower=np.full(n, -np.inf))
+    if start is not None:  # a neighbour's shape (its contact set means nothing here)
+        start = DriverStart(start.alpha, None)
+    out = run_driver(free, free_step, tol=tol, max_outer=max_outer, start=start)
+    if not (out.converged and wall_overlap(chain, heights(chain, out.alpha)) < 0):
+        return None
+    out.reason = ("no contact: the equilibrium without walls clears every wall (found by "
+                  "banded solves, no LCP)")
+    return out

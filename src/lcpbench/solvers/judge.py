@@ -1,0 +1,46 @@
+"""The one acceptance rule: when lcpbench calls a back-end's answer SOLVED.
+
+A back-end reports its own status; lcpbench then recomputes the residuals
+from the primal unknowns alone (:func:`lcpbench.solvers.base.lcp_residuals`
+for an LCP, the contact step's own residuals in :mod:`lcpbench.model`) and
+keeps SOLVED only when the scaled natural residual ``||min(z, w)||_inf`` is
+at most :func:`accept_tol`. Every caller (LCP runner, contact-step runner,
+the Siconos bridge) uses :func:`verdict`, so there is one rule.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .base import Settings, Status
+
+EPS = np.finfo(float).eps
+#: A solution is accepted as SOLVED when its scaled natural residual is at most
+#: ACCEPT_FACTOR × the requested tolerance ("default" requests DEFAULT_TOL), or
+#: the round-off floor, whichever is larger.
+ACCEPT_FACTOR = 10.0
+DEFAULT_TOL = 1e-6
+#: The round-off floor in units of eps × S, where S = max_i Σ_j |M_ij z_j| + |q_i|
+#: is the size of the terms that make up w = M z + q: even the exact solution,
+#: rounded to doubles, has a residual of up to eps × S. At N = 140 (cond K ~ 1e8)
+#: S ~ 4e6 in scaled units, so "high" (1e-9) is limited by this floor (~2e-7).
+FLOOR_ULPS = 256
+
+
+def accept_tol(settings: Settings, size: float = 0.0) -> float:
+    """Largest natural residual accepted as SOLVED; ``size`` is S above."""
+    request = settings.tol if settings.tol is not None else DEFAULT_TOL
+    return max(ACCEPT_FACTOR * request, FLOOR_ULPS * EPS * size)
+
+
+def verdict(status: Status, natural: float, bound: float) -> tuple[Status, str]:
+    """The status lcpbench reports for a back-end's ``status`` and residual.
+
+    A SOLVED whose natural residual exceeds ``bound`` (or is NaN) becomes
+    INACCURATE with a message saying so; any other status is kept. The
+    judge only ever demotes: it never promotes a back-end's failure.
+    """
+    if status is Status.SOLVED and not natural <= bound:
+        return Status.INACCURATE, (f"lcpbench's natural residual {natural:.2e} exceeds "
+                                   f"{bound:.1e}")
+    return status, ""

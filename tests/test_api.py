@@ -1,0 +1,71 @@
+"""The library call reads no file: the same scene takes the same path anywhere."""
+
+import os
+import subprocess
+import sys
+import textwrap
+
+import pytest
+
+import lcpbench
+from lcpbench.errors import ProblemError
+
+PROBE = textwrap.dedent("""
+    import json, lcpbench
+    r = lcpbench.solve(lcpbench.ActuatorScene(theta=150, height=3.0, links=40))
+    print(json.dumps([r.solver, r.extra["settings"], r.outer_iterations, r.inner_iterations,
+                      r.total_force]))
+""")
+
+
+def _run_in(folder) -> str:
+    env = {**os.environ, "LCPBENCH_STORE": str(folder / "results" / "lcpbench.sqlite")}
+    out = subprocess.run([sys.executable, "-c", PROBE], cwd=folder, env=env, check=True,
+                         capture_output=True, text=True, timeout=120)
+    return out.stdout.strip()
+
+
+def test_solve_takes_the_same_path_in_any_directory(tmp_path):
+    """One folder holds a store whose cached probes favour another back-end
+    (a file named like the default store, and $LCPBENCH_STORE pointing at it);
+    the other is empty. The default call must not notice."""
+    from lcpbench.bench.select import select_backend
+
+    holder, empty = tmp_path / "holder", tmp_path / "empty"
+    (holder / "results").mkdir(parents=True)
+    empty.mkdir()
+    scene = lcpbench.ActuatorScene(theta=150, height=3.0, links=40)
+    sel = select_backend(scene, tol=1e-3, store=holder / "results" / "lcpbench.sqlite",
+                         candidates=["lemke"], settings=("default",), workers=1)
+    assert sel.backend == "lemke"  # the store really holds a different choice
+    a, b = _run_in(holder), _run_in(empty)
+    assert a == b
+    assert '"active-set"' in a
+
+
+HEAVY = ("lcpbench.bench", "sqlite3", "subprocess", "matplotlib", "multiprocessing")
+
+
+def test_import_loads_no_benchmark_code():
+    """``import lcpbench`` loads none of HEAVY; a solve loads no benchmark,
+    database or plotting code (subprocess is then loaded by scipy itself,
+    scipy._lib._testutils, not by lcpbench)."""
+    code = ("import sys, lcpbench; heavy = %r; a = [m for m in heavy if m in sys.modules]; "
+            "lcpbench.solve(lcpbench.ActuatorScene(theta=150, height=3.0, links=20)); "
+            "b = [m for m in heavy if m in sys.modules]; print(a, b)" % (HEAVY,))
+    out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
+                         text=True, timeout=120)
+    before, after = (eval(part + "]") for part in out.stdout.strip()[:-1].split("] "))
+    assert before == []
+    assert set(after) <= {"subprocess"}
+
+
+@pytest.mark.parametrize("scene", [None, {}, "theta=150", 3.0])
+def test_a_non_scene_is_refused(scene):
+    with pytest.raises(ProblemError, match="scene must be"):
+        lcpbench.solve(scene)
+
+
+def test_links_auto_is_a_study_not_a_hidden_solve():
+    with pytest.raises(ProblemError, match="auto_links"):
+        lcpbench.solve(lcpbench.ActuatorScene(theta=150, height=3.0, links="auto"))
