@@ -18,8 +18,8 @@ import time
 from pathlib import Path
 
 import lcpbench
-from lcpbench.studies.continuation import largest_difference, solve_sequence, total_outer
 from lcpbench.bench.grid import PAPER_GRID
+from lcpbench.studies.continuation import largest_difference, solve_sequence, total_outer
 
 #: the paper's tolerance, two between, and one where warm and cold must agree to 1e-8
 TOLS = (1e-3, 1e-6, 1e-8, 1e-10)

@@ -52,7 +52,7 @@ def test_import_loads_no_benchmark_code():
     scipy._lib._testutils, not by lcpbench)."""
     code = ("import sys, lcpbench; heavy = %r; a = [m for m in heavy if m in sys.modules]; "
             "lcpbench.solve(lcpbench.ActuatorScene(theta=150, height=3.0, links=20)); "
-            "b = [m for m in heavy if m in sys.modules]; print(a, b)" % (HEAVY,))
+            "b = [m for m in heavy if m in sys.modules]; print(a, b)").replace("%r", repr(HEAVY))
     out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
                          text=True, timeout=120)
     before, after = (eval(part + "]") for part in out.stdout.strip()[:-1].split("] "))

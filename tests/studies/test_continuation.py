@@ -4,13 +4,13 @@ import numpy as np
 import pytest
 
 import lcpbench
+from lcpbench.errors import ProblemError
 from lcpbench.studies.continuation import (
     largest_difference,
     predict,
     solve_sequence,
     total_outer,
 )
-from lcpbench.errors import ProblemError
 
 LINE = [lcpbench.ActuatorScene(theta=t, height=3.0, links=40) for t in range(100, 181, 10)]
 

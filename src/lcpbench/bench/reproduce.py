@@ -47,9 +47,7 @@ from scipy.optimize import brentq
 from ..api import solve
 from ..baseline import BaselineSystem, solve_baseline
 from ..model.chain import node_positions
-from ..studies.discretisation import discretisation_study
 from ..model.result import ContactResult
-from ..studies.validation import cantilever_validation, observed_order
 from ..problems.calibrations import (
     COMPARISON_PRESSURE_RANGES,
     KPA_PER_PSI,
@@ -67,6 +65,8 @@ from ..problems.scenes import (
     CantileverScene,
     Chain,
 )
+from ..studies.discretisation import discretisation_study
+from ..studies.validation import cantilever_validation, observed_order
 
 DEFAULT_OUT = Path("results") / "paper"
 SOLVER = "active-set"  # exact; the figures must not depend on a cached selection
