@@ -144,7 +144,7 @@ def plot_forces(refs: dict, evaluated, path) -> None:
     fig = _figure()
     ax = fig.add_subplot()
     by_h: dict[float, list] = {}
-    for key, r in refs.items():
+    for r in refs.values():
         if r["converged"]:
             by_h.setdefault(r["height"], []).append((r["theta"], 1e3 * r["total_force"]))
     base: dict[float, list] = {}

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, is_dataclass
 
 import numpy as np
 
@@ -133,7 +133,8 @@ class ContactResult:
 
     def to_dict(self) -> dict:
         """A JSON-ready summary (the fields of ``lcpbench solve --json``)."""
-        scene = asdict(self.scene) if hasattr(self.scene, "__dataclass_fields__") else {}
+        scene = asdict(self.scene) if is_dataclass(self.scene) and not isinstance(
+            self.scene, type) else {}
         out = {
             "scene": {**scene, "links": self.links},
             "total_force": self.total_force,
@@ -153,7 +154,7 @@ class ContactResult:
             "time_s": self.time_s,
             "certificate": self.certificate.to_dict(),
         }
-        if self.forces_lower is not None:
+        if self.forces_lower is not None and self.gaps_lower is not None:
             out["forces_lower"] = self.forces_lower.tolist()
             out["gaps_lower"] = self.gaps_lower.tolist()
             out["total_force_lower"] = float(self.forces_lower.sum())

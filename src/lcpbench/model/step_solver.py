@@ -197,5 +197,5 @@ def make_step_solver(solver: str = "auto", settings: str | Settings = "default",
     def run(step, warm):
         return solve_step(step, backend, s, scaled=scaled, warm=warm)
 
-    run.backend = backend
+    run.backend = backend  # type: ignore[attr-defined]  # read by the harness
     return run
