@@ -1,0 +1,265 @@
+"""What every command module of the ``lcpbench`` command line shares.
+
+The parser class whose errors are one line on stderr, the small argument
+types, and the output helpers (JSON, aligned key/value tables, node ranges,
+the progress bar). Nothing here imports numpy, the bench or matplotlib at
+module level, so ``import lcpbench.cli`` stays cheap.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+PROG = "lcpbench"
+
+
+class ParserExit(Exception):
+    """Raised by the parser instead of exiting, so ``main`` can return a status.
+
+    Parameters
+    ----------
+    status : int
+        The exit status the parser asked for.
+    """
+
+    def __init__(self, status: int):
+        super().__init__(status)
+        self.status = status
+
+
+def error_line(message: object) -> None:
+    """Print ``lcpbench: error: <message>`` on stderr, folded to exactly one line.
+
+    Parameters
+    ----------
+    message : object
+        What went wrong; its ``str`` is printed with white space folded.
+    """
+    text = " ".join(str(message).split())  # exactly one line
+    print(f"{PROG}: error: {text}", file=sys.stderr)
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """An argparse parser whose errors are one line on stderr and status 2."""
+
+    def error(self, message: str):  # noqa: D102 - argparse API
+        error_line(message)
+        raise ParserExit(2)
+
+    def exit(self, status: int = 0, message: str | None = None):  # noqa: D102
+        if message:
+            print(message, end="" if message.endswith("\n") else "\n", file=sys.stderr)
+        raise ParserExit(status)
+
+
+def int_arg(text: str) -> int:
+    """Argument type: an integer, with a one-line message otherwise.
+
+    Parameters
+    ----------
+    text : str
+        The word given on the command line.
+
+    Returns
+    -------
+    int
+        Its value.
+    """
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+
+
+def add_json_option(parser, what: str = "the result as one JSON object") -> None:
+    """Add ``--json`` (print *what* instead of the human summary).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The sub-command's parser.
+    what : str
+        The end of the help text, after "print".
+    """
+    parser.add_argument("--json", action="store_true", help=f"print {what}")
+
+
+def add_jobs_option(parser) -> None:
+    """Add ``--jobs K``, the number of worker processes (see :func:`worker_count`).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The sub-command's parser.
+    """
+    parser.add_argument("--jobs", type=int_arg, default=None, metavar="K",
+                        help="worker processes (default: the number of cores, at most 4)")
+
+
+def print_json(obj) -> None:
+    """Print *obj* as one strict JSON document (non-finite numbers sanitised).
+
+    Parameters
+    ----------
+    obj : object
+        Anything :func:`lcpbench.jsonsafe.sanitise` accepts.
+    """
+    from ..jsonsafe import sanitise
+
+    print(json.dumps(sanitise(obj), allow_nan=False))
+
+
+def format_rows(rows) -> str:
+    """Key/value rows as aligned lines: the keys padded to the widest.
+
+    Parameters
+    ----------
+    rows : sequence of (str, str)
+        The label and the value of each line.
+
+    Returns
+    -------
+    str
+        The lines joined by newlines.
+    """
+    width = max(len(k) for k, _ in rows)
+    return "\n".join(f"{k:<{width}}  {v}" for k, v in rows)
+
+
+def node_ranges(nodes) -> str:
+    """'20-22 (3 nodes)' from sorted 1-based node numbers; 'none' if empty.
+
+    Parameters
+    ----------
+    nodes : iterable of int
+        Sorted 1-based node numbers.
+
+    Returns
+    -------
+    str
+        The runs of consecutive nodes and their count.
+    """
+    nodes = [int(n) for n in nodes]
+    if not nodes:
+        return "none"
+    runs, start, prev = [], nodes[0], nodes[0]
+    for n in nodes[1:]:
+        if n != prev + 1:
+            runs.append((start, prev))
+            start = n
+        prev = n
+    runs.append((start, prev))
+    text = ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in runs)
+    return f"{text} ({len(nodes)} node{'s' if len(nodes) != 1 else ''})"
+
+
+def has_matplotlib() -> bool:
+    """Whether matplotlib can be imported (the figures need it).
+
+    Returns
+    -------
+    bool
+        True when ``import matplotlib`` succeeds.
+    """
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+class ProgressBar:
+    """A tqdm progress bar with an ETA, fed by the sweep's progress callback."""
+
+    def __init__(self):
+        from tqdm import tqdm
+
+        self.bar = None
+        self.tqdm = tqdm
+        self.failed = 0
+
+    def update(self, done, total, job, row) -> None:
+        """Advance by one run; count the runs that were not solved.
+
+        Parameters
+        ----------
+        done, total : int
+            Runs finished (this one included) and planned.
+        job : object
+            The job just finished (its ``backend`` and ``settings`` are shown).
+        row : dict
+            Its stored row (its ``status`` is counted).
+        """
+        if self.bar is None:
+            self.bar = self.tqdm(total=total, initial=done - 1, unit="run", file=sys.stderr,
+                                 dynamic_ncols=True, desc="sweep")
+        if row.get("status") != "solved":
+            self.failed += 1
+        self.bar.set_postfix_str(f"{job.backend} {job.settings}; not solved {self.failed}",
+                                 refresh=False)
+        self.bar.update(1)
+
+    def close(self) -> None:
+        """Close the bar if it was ever shown."""
+        if self.bar is not None:
+            self.bar.close()
+
+
+def progress_bar(quiet: bool) -> ProgressBar | None:
+    """A progress bar, or None with ``--quiet``.
+
+    Parameters
+    ----------
+    quiet : bool
+        The ``--quiet`` flag.
+
+    Returns
+    -------
+    ProgressBar or None
+    """
+    return None if quiet else ProgressBar()
+
+
+def names_list(text: str) -> list[str]:
+    """The distinct non-empty items of a comma list, in order.
+
+    Parameters
+    ----------
+    text : str
+        For example ``"lemke, pgs,lemke"``.
+
+    Returns
+    -------
+    list of str
+        For example ``["lemke", "pgs"]``.
+    """
+    return list(dict.fromkeys(x.strip() for x in text.split(",") if x.strip()))
+
+
+def worker_count(jobs: int | None) -> int:
+    """The number of worker processes: ``--jobs``, or the harness's default.
+
+    Parameters
+    ----------
+    jobs : int or None
+        The ``--jobs`` value.
+
+    Returns
+    -------
+    int
+        At least 1.
+
+    Raises
+    ------
+    ProblemError
+        When *jobs* is below 1.
+    """
+    from ..bench.harness import default_workers
+    from ..errors import ProblemError
+
+    n = default_workers() if jobs is None else jobs
+    if n < 1:
+        raise ProblemError(f"jobs must be an integer >= 1, got {n}")
+    return n

@@ -1,0 +1,177 @@
+"""The scene and back-end options shared by ``solve``, ``export`` and ``select``.
+
+One block of arguments describes an :class:`~lcpbench.problems.scenes.ActuatorScene`
+(``--theta`` or ``--pressure`` with ``--actuator``/``--fit``, ``--height``,
+``--links``, ``--length``, ``--EI``, ``--weight``, ``--channel``);
+:func:`scene_from` turns the parsed block back into the scene. The defaults
+are read from their owners (the scene's dataclass fields and the signature of
+:func:`lcpbench.solve`) rather than repeated here.
+"""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+import sys
+
+from ..api import solve
+from ..errors import ProblemError
+from ..problems.scenes import (
+    DEFAULT_EI,
+    DEFAULT_LENGTH,
+    DEFAULT_LINKS,
+    DEFAULT_WEIGHT,
+    MIN_LINKS,
+    ActuatorScene,
+)
+from ..solvers.base import PROFILES
+
+_FIELDS = ActuatorScene.__dataclass_fields__
+DEFAULT_THETA = _FIELDS["theta"].default
+DEFAULT_HEIGHT = _FIELDS["height"].default
+_SOLVE = inspect.signature(solve).parameters
+DEFAULT_TOL = _SOLVE["tol"].default
+DEFAULT_SOLVER = _SOLVE["solver"].default
+DEFAULT_METHOD = _SOLVE["method"].default
+
+
+def links_arg(text: str) -> int | str:
+    """Argument type of ``--links``: an integer or ``'auto'``.
+
+    Parameters
+    ----------
+    text : str
+        The word given on the command line.
+
+    Returns
+    -------
+    int or str
+        The number of links, or ``"auto"``.
+    """
+    if text == "auto":
+        return text
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"links must be an integer >= {MIN_LINKS} or 'auto', got {text!r}"
+        ) from None
+
+
+def add_scene_options(parser) -> None:
+    """Add the options that describe one actuator scene.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The sub-command's parser; :func:`scene_from` reads the result.
+    """
+    a = parser.add_argument
+    a("--theta", type=float, default=None, metavar="DEG",
+      help=f"unconstrained bend angle, degrees in (0, 360) (default {DEFAULT_THETA:g})")
+    a("--pressure", type=float, default=None, metavar="KPA",
+      help="input pressure instead of --theta: theta from the actuator's "
+           "calibration (eqs. 40-42 of the paper, kPa)")
+    a("--actuator", default="1", metavar="1|2|3",
+      help="which of the paper's calibrations --pressure uses (default 1)")
+    a("--fit", default=None, metavar="SLOPE,INTERCEPT",
+      help="your own calibration theta = SLOPE * P + INTERCEPT (degrees, P in "
+           "the unit of --pressure) instead of --actuator")
+    a("--height", type=float, default=DEFAULT_HEIGHT, metavar="MM",
+      help=f"wall height above the pins, mm (default {DEFAULT_HEIGHT:g})")
+    a("--links", type=links_arg, default=DEFAULT_LINKS, metavar="N|auto",
+      help=f"number of links, or 'auto' (default {DEFAULT_LINKS})")
+    a("--length", type=float, default=DEFAULT_LENGTH, metavar="MM",
+      help=f"section length, mm (default {DEFAULT_LENGTH:g})")
+    a("--EI", type=float, default=DEFAULT_EI, metavar="NMM2",
+      help=f"bending stiffness, N*mm^2 (default {DEFAULT_EI:g})")
+    a("--weight", type=float, default=DEFAULT_WEIGHT, metavar="NPMM",
+      help=f"weight per length, N/mm; 0 turns gravity off (default {DEFAULT_WEIGHT:g})")
+    a("--channel", action="store_true", help="a second wall at -height (the paper's fixture)")
+
+
+def add_tol_option(parser, what: str = "convergence threshold on max|d alpha|") -> None:
+    """Add ``--tol RAD``, the driver's convergence threshold.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The sub-command's parser.
+    what : str
+        The start of the help text.
+    """
+    parser.add_argument("--tol", type=float, default=DEFAULT_TOL, metavar="RAD",
+                        help=f"{what}, rad (default {DEFAULT_TOL:g})")
+
+
+def add_solver_options(parser, default: str = DEFAULT_SOLVER) -> None:
+    """Add ``--solver NAME`` and ``--settings PROFILE``.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The sub-command's parser.
+    default : str
+        The default back-end.
+    """
+    parser.add_argument("--solver", default=default, metavar="NAME",
+                        help=f"back-end (default {default}; `lcpbench solvers` lists them)")
+    parser.add_argument("--settings", choices=tuple(PROFILES), default="default",
+                        help="accuracy profile: the solver's own defaults, or a generic "
+                             "tolerance low 1e-3, mid 1e-6, high 1e-9 (default: default)")
+
+
+def scene_from(args, *, resolve_links: bool = True) -> ActuatorScene:
+    """The scene described by the options of :func:`add_scene_options`.
+
+    ``--links auto`` runs the discretisation study of Sec. III-D (several
+    solves) and says on stderr which N it picked, unless ``resolve_links`` is
+    False (``select`` refuses it: its kind of scene includes N).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    ActuatorScene
+        With theta from ``--theta``, or from ``--pressure`` through the
+        calibration of ``--actuator`` or ``--fit``.
+
+    Raises
+    ------
+    ProblemError
+        When the options contradict each other or a value is out of range.
+    """
+    scene = _scene_as_given(args)
+    if scene.links != "auto" or not resolve_links:
+        return scene
+    from ..studies.discretisation import auto_links
+
+    n = auto_links(scene)
+    print(f"links auto: the discretisation study (Sec. III-D) picked N = {n}", file=sys.stderr)
+    return scene.with_links(n)
+
+
+def _scene_as_given(args) -> ActuatorScene:
+    kw = {"height": args.height, "links": args.links, "length": args.length, "EI": args.EI,
+          "weight": args.weight, "channel": args.channel}
+    if args.pressure is None:
+        if args.fit is not None:
+            raise ProblemError("--fit needs --pressure")
+        theta = DEFAULT_THETA if args.theta is None else args.theta
+        return ActuatorScene(theta=theta, **kw)
+    from ..problems.calibrations import linear_calibration, scene_from_pressure
+
+    if args.theta is not None:
+        raise ProblemError("give --theta or --pressure, not both (the calibration sets theta)")
+    actuator = args.actuator
+    if args.fit is not None:
+        try:
+            slope, intercept = (float(v) for v in args.fit.split(","))
+        except ValueError:
+            raise ProblemError(f"fit must be SLOPE,INTERCEPT (two numbers), got "
+                               f"{args.fit!r}") from None
+        actuator = linear_calibration(slope, intercept)
+    return scene_from_pressure(args.pressure, actuator, **kw)

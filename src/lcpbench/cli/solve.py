@@ -1,0 +1,285 @@
+"""Commands that solve one problem: ``solve``, ``export``, ``lcp`` and ``validate``.
+
+::
+
+    lcpbench solve --theta 150 --height 3 [--links N|auto] [--channel] [--solver NAME]
+                   [--settings default|low|mid|high] [--raw] [--json] [--plot F.png]
+    lcpbench export --theta 150 --height 3 [scene options] --format dat|npz --out FILE
+    lcpbench lcp FILE [--solver NAME] [--settings PROFILE] [--json]
+    lcpbench validate cantilever [--links N] [--json]
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..api import solve
+from ..model.driver import METHODS
+from ..problems.scenes import DEFAULT_LINKS
+from ._common import (
+    ArgumentParser,
+    add_json_option,
+    error_line,
+    format_rows,
+    has_matplotlib,
+    int_arg,
+    node_ranges,
+    print_json,
+)
+from ._scene_args import (
+    DEFAULT_METHOD,
+    add_scene_options,
+    add_solver_options,
+    add_tol_option,
+    scene_from,
+)
+
+
+def register(subparsers) -> None:
+    """Add ``solve``, ``export``, ``lcp`` and ``validate`` to the command line.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The top-level parser's sub-commands.
+    """
+    s = subparsers.add_parser(
+        "solve",
+        help="constrained equilibrium of an actuator section against a wall",
+        description="Solve one ActuatorScene and report the contact force and its certificate.",
+    )
+    add_scene_options(s)
+    add_tol_option(s)
+    add_solver_options(s)
+    s.add_argument("--raw", action="store_true",
+                   help="hand the back-end the raw step (mm, N) instead of the "
+                        "nondimensionalised one")
+    s.add_argument("--method", choices=METHODS, default=DEFAULT_METHOD,
+                   help=f"outer iteration (default {DEFAULT_METHOD})")
+    add_json_option(s)
+    s.add_argument("--plot", metavar="FILE.png",
+                   help="draw the shape, walls and reactions (needs matplotlib)")
+    s.set_defaults(func=cmd_solve)
+
+    e = subparsers.add_parser(
+        "export", help="write the contact step at the converged configuration as an LCP file",
+        description="Solve a scene, then write the contact step at its converged "
+                    "configuration as an LCP (w = M z + q; z = gaps, w = reactions).")
+    add_scene_options(e)
+    add_tol_option(e, "convergence threshold of the solve")
+    e.add_argument("--format", choices=("dat", "npz"), default=None,
+                   help="Siconos .dat (dense, column-major) or numpy .npz (M, q); "
+                        "default: from the suffix of --out")
+    e.add_argument("--out", required=True, metavar="FILE", help="where to write")
+    e.add_argument("--raw", action="store_true",
+                   help="physical units (mm, N) instead of the nondimensionalised step "
+                        "(gaps / length, reactions / (EI/length^2))")
+    e.set_defaults(func=cmd_export)
+
+    lp = subparsers.add_parser(
+        "lcp", help="solve an LCP file (.dat or .npz) with any back-end",
+        description="Solve 0 <= z _|_ M z + q >= 0 from a Siconos .dat or a .npz file and "
+                    "print z, w, status, iterations, time and residuals.")
+    lp.add_argument("file", metavar="FILE", help="a .dat (Siconos) or .npz (M, q) file")
+    add_solver_options(lp, default="lemke")
+    add_json_option(lp)
+    lp.set_defaults(func=cmd_lcp)
+
+    v = subparsers.add_parser(
+        "validate",
+        help="validation against beam theory",
+        description="Compare the model against a closed-form reference.",
+    )
+    cases = v.add_subparsers(dest="case", metavar="CASE", parser_class=ArgumentParser)
+    c = cases.add_parser(
+        "cantilever",
+        help="clamped-free beam under a uniform load against a wall (Sec. III-G)",
+    )
+    c.add_argument("--links", type=int_arg, default=DEFAULT_LINKS, metavar="N",
+                   help=f"number of links (default {DEFAULT_LINKS})")
+    add_json_option(c)
+    c.set_defaults(func=cmd_validate_cantilever)
+
+
+# -- output -------------------------------------------------------------------
+def contacts(forces, free_nodes) -> list[int]:
+    """The 1-based numbers of the nodes that carry a force.
+
+    Parameters
+    ----------
+    forces : array_like
+        Reactions on the free nodes, N.
+    free_nodes : array_like of int
+        0-based indices of the free nodes.
+
+    Returns
+    -------
+    list of int
+        Nodes whose force exceeds 1e-9 of the total.
+    """
+    forces = np.asarray(forces, float)
+    total = float(forces.sum())
+    idx = np.flatnonzero(forces > 1e-9 * max(total, 1e-300))
+    return (np.asarray(free_nodes)[idx] + 1).tolist()  # 1-based node numbers
+
+
+def summary(result, extra=()) -> str:
+    """The human summary of a solve: scene, forces, iterations, certificate.
+
+    Parameters
+    ----------
+    result : ContactResult
+        What :func:`lcpbench.solve` returned.
+    extra : sequence of (str, str)
+        More rows to append.
+
+    Returns
+    -------
+    str
+        Aligned key/value lines.
+    """
+    sc = result.scene
+    cert = result.certificate
+    free = sc.chain().free_nodes  # solve() resolved links="auto" in result.scene
+    scene = (f"theta={sc.theta:g} deg, h={sc.height:g} mm, N={result.links}, "
+             f"length={sc.length:g} mm, EI={sc.EI:g} N*mm^2, w={sc.weight:g} N/mm"
+             + (", channel" if sc.channel else ""))
+    rows = [
+        ("scene", scene),
+        ("converged", ("yes" if result.converged else "no") + f" ({result.reason})"),
+        ("total force", f"{1e3 * result.total_force:.6g} mN ({result.total_force:.6g} N)"),
+        ("contact nodes", node_ranges(contacts(result.forces, free))),
+    ]
+    if result.forces_lower is not None:
+        lower = float(np.sum(result.forces_lower))
+        rows += [
+            ("lower wall", f"{1e3 * lower:.6g} mN ({lower:.6g} N)"),
+            ("lower contacts", node_ranges(contacts(result.forces_lower, free))),
+        ]
+    rows += [
+        ("iterations", f"{result.outer_iterations} outer, {result.inner_iterations} inner "
+                       f"({result.solver}, {result.method}, tol {result.tol:g} rad)"),
+        ("time", f"{result.time_s:.3g} s"),
+        ("certificate", f"min gap {cert.min_gap:.3g} mm, min force {cert.min_force:.3g} N, "
+                        f"complementarity {cert.complementarity:.3g} N*mm, "
+                        f"closure {cert.closure:.3g} mm"),
+        ("", f"max torque residual {cert.max_torque_residual:.3g} N*mm "
+             f"({cert.relative_torque_residual:.3g} relative)"),
+        *extra,
+    ]
+    return format_rows(rows)
+
+
+# -- commands -----------------------------------------------------------------
+def cmd_solve(args) -> int:
+    """``lcpbench solve``: 0 converged, 1 not converged, 2 bad input or plot error."""
+    if args.plot is not None and not has_matplotlib():
+        error_line("--plot needs matplotlib: pip install 'lcpbench[plot]'")
+        return 2
+    scene = scene_from(args)
+    result = solve(scene, solver=args.solver, tol=args.tol, method=args.method,
+                   settings=args.settings, scaled=not args.raw)
+    plot_error = None
+    if args.plot is not None:
+        from ..bench.plot import plot_shape
+
+        try:
+            plot_shape(result, args.plot)
+        except (OSError, ValueError) as exc:
+            plot_error = f"--plot {args.plot}: {exc}"
+    if args.json:
+        print_json(result.to_dict())
+    else:
+        extra = [("plot", args.plot)] if args.plot is not None and plot_error is None else []
+        print(summary(result, extra))
+    if plot_error is not None:  # the result is printed all the same
+        error_line(plot_error)
+        return 2
+    return 0 if result.converged else 1
+
+
+def cmd_export(args) -> int:
+    """``lcpbench export``: write the converged contact step as a .dat or .npz LCP."""
+    from ..model.step import assemble_step
+    from ..model.step_solver import step_lcp
+    from ..problems.lcpfile import write_lcp
+
+    fmt = args.format
+    if fmt is None:
+        suffix = args.out.rsplit(".", 1)[-1].lower() if "." in args.out else ""
+        if suffix not in ("dat", "npz"):
+            error_line(f"--out {args.out}: give a .dat or .npz suffix, or --format dat|npz")
+            return 2
+        fmt = suffix
+    scene = scene_from(args)
+    result = solve(scene, tol=args.tol)
+    if not result.converged:
+        error_line(f"the scene did not converge ({result.reason}); nothing written")
+        return 1
+    chain = result.scene.chain()
+    step = assemble_step(chain, result.alpha)
+    form, M, q, _, _ = step_lcp(step, scaled=not args.raw)
+    write_lcp(args.out, M, q, fmt=fmt)
+    units = "mm and N" if args.raw else "gaps / length, reactions / (EI/length^2)"
+    print(f"wrote {args.out}: LCP of size {q.size} (contact rows of nodes "
+          f"{node_ranges(chain.free_nodes[form.rows] + 1)}; {units})")
+    return 0
+
+
+def cmd_lcp(args) -> int:
+    """``lcpbench lcp``: solve an LCP file; 0 solved, 1 not."""
+    from ..problems.lcpfile import read_lcp
+    from ..solvers.runner import solve_lcp
+
+    prob = read_lcp(args.file)
+    sol = solve_lcp(prob.M, prob.q, args.solver, args.settings)
+    res = sol.extra.get("residuals", {})
+    out = {
+        "file": args.file, "size": int(prob.q.size), "solver": sol.extra.get("backend"),
+        "settings": args.settings, "status": sol.status.value, "message": sol.message,
+        "iterations": sol.iterations, "solve_time_s": sol.solve_time,
+        "setup_time_s": sol.setup_time, "time_source": sol.extra.get("time_source", "solver"),
+        "residuals": res, "z": sol.z, "w": sol.w,
+    }
+    if args.json:
+        print_json(out)
+    else:
+        with np.printoptions(precision=6, threshold=20, edgeitems=5, linewidth=100):
+            rows = [
+                ("problem", f"{args.file} (n = {prob.q.size})"),
+                ("solver", f"{out['solver']} (settings {args.settings})"),
+                ("status", sol.status.value + (f" ({sol.message})" if sol.message else "")),
+                ("iterations", str(sol.iterations)),
+                ("time", f"solve {1e6 * sol.solve_time:.1f} us, setup "
+                         f"{1e6 * sol.setup_time:.1f} us ({out['time_source']})"),
+                ("residuals", ", ".join(f"{k} {v:.3g}" for k, v in res.items()) or "n/a"),
+                ("z", str(np.asarray(sol.z))),
+                ("w", str(np.asarray(sol.w))),
+            ]
+        print(format_rows(rows))
+    return 0 if sol.solved else 1
+
+
+def cmd_validate_cantilever(args) -> int:
+    """``lcpbench validate cantilever``: the model against linear beam theory."""
+    from ..studies.validation import cantilever_validation
+
+    out = cantilever_validation(args.links)
+    if args.json:
+        print_json(out)
+    else:
+        err = out["relative_error"]
+        rows = [
+            ("case", f"cantilever, uniform load against a wall (Sec. III-G), N={out['links']}"),
+            ("model force", f"{1e3 * out['model_force']:.6g} mN"),
+            ("theory force", f"{1e3 * out['theory_force']:.6g} mN (linear beam theory)"),
+            ("relative error", "n/a (no contact in theory)" if not math.isfinite(err)
+             else f"{100 * err:+.4g} %"),
+            ("converged", ("yes" if out["converged"] else "no")
+             + f" ({out['outer_iterations']} outer iterations)"),
+            ("contact nodes", node_ranges(out["contact_nodes"])),
+        ]
+        print(format_rows(rows))
+    return 0 if out["converged"] else 1

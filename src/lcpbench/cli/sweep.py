@@ -1,0 +1,300 @@
+"""Commands over the results store: ``sweep``, ``report`` and ``select``.
+
+::
+
+    lcpbench sweep [--grid paper|hard] [--theta A:B:STEP] [--height A:B:STEP] ...
+                   [--solvers A,B] [--settings P,Q] [--continuation [PREDICTOR]]
+                   [--store PATH] [--out DIR] [--jobs K] [--time-limit S]
+    lcpbench report [--store PATH] [--out DIR] [--table2-height MM] [--no-plots]
+    lcpbench select [scene options] [--tol REL] [--time-budget S] [--solvers A,B]
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+
+from ..bench.harness import CONTINUATION, DEFAULT_TIME_LIMIT
+from ..bench.report import DEFAULT_OUT
+from ..bench.store import DEFAULT_STORE
+from ..errors import ProblemError
+from ..problems.scenes import DEFAULT_EI, DEFAULT_LENGTH, DEFAULT_LINKS, DEFAULT_WEIGHT
+from ._common import (
+    add_jobs_option,
+    add_json_option,
+    error_line,
+    has_matplotlib,
+    names_list,
+    print_json,
+    progress_bar,
+    worker_count,
+)
+from ._scene_args import DEFAULT_METHOD, add_scene_options, scene_from
+
+
+def _add_store_options(parser) -> None:
+    parser.add_argument("--store", default=str(DEFAULT_STORE), metavar="PATH",
+                        help=f"SQLite results store (default {DEFAULT_STORE})")
+    parser.add_argument("--out", default=str(DEFAULT_OUT), metavar="DIR",
+                        help=f"where the report goes (default {DEFAULT_OUT})")
+
+
+def register(subparsers) -> None:
+    """Add ``sweep``, ``report`` and ``select`` to the command line.
+
+    Parameters
+    ----------
+    subparsers : argparse._SubParsersAction
+        The top-level parser's sub-commands.
+    """
+    sw = subparsers.add_parser(
+        "sweep", help="run a grid of scenes over back-ends and settings into the results store",
+        description="Run every scene of a theta x height grid (and optionally N, EI, w, "
+                    "length) with every back-end and settings profile, plus the root-finding "
+                    "baseline, into an SQLite store; then write the report. A killed sweep "
+                    "resumes where it stopped when run again. With no arguments: the paper's "
+                    "grid (theta 10-180 by 10, h 2-7 mm by 1, N = 140) over every installed "
+                    "back-end. With --continuation each back-end solves every line of the "
+                    "grid (all parameters but theta equal) in order of theta, each scene "
+                    "started from its neighbours' answers; those runs are stored as driver "
+                    "globalised+secant (or +previous), apart from the cold ones.")
+    sw.add_argument("--grid", choices=("paper", "hard"), default="paper",
+                    help="paper: the theta x height grid below (default); hard: the "
+                         "hard-case suite (theta 170-180, h down to 0.02 l, N up to 2000, "
+                         "grazing, no contact, heavy, EI 1-1000, channel)")
+    sw.add_argument("--theta", default=None, metavar="A:B:STEP",
+                    help="bend angles, degrees: start:stop:step (stop included), a comma list "
+                         "or one value (default 10:180:10)")
+    sw.add_argument("--height", default=None, metavar="A:B:STEP",
+                    help="wall heights, mm (default 2:7:1)")
+    sw.add_argument("--links", default=str(DEFAULT_LINKS), metavar="LIST",
+                    help=f"numbers of links (default {DEFAULT_LINKS})")
+    sw.add_argument("--EI", default=None, metavar="LIST", help="bending stiffnesses, N*mm^2 "
+                    f"(default {DEFAULT_EI:g})")
+    sw.add_argument("--weight", default=None, metavar="LIST",
+                    help=f"weights per length, N/mm (default {DEFAULT_WEIGHT:g})")
+    sw.add_argument("--length", default=None, metavar="LIST",
+                    help=f"section lengths, mm (default {DEFAULT_LENGTH:g})")
+    sw.add_argument("--channel", action="store_true", help="two walls, at +h and -h")
+    sw.add_argument("--solvers", default="all", metavar="A,B,..",
+                    help="back-ends to run (default: every installed one)")
+    sw.add_argument("--settings", default="default,high", metavar="P,Q,..",
+                    help="settings profiles among default, low, mid, high (default "
+                         "default,high)")
+    sw.add_argument("--tol", type=float, default=None, metavar="RAD",
+                    help="driver tolerance of every run (default: per profile, 1e-3 for "
+                         "default and low, 1e-6 mid, 1e-9 high)")
+    sw.add_argument("--method", default=DEFAULT_METHOD, metavar="M[,M]",
+                    help=f"outer iteration(s): globalised, undamped or both, comma-separated "
+                         f"(default {DEFAULT_METHOD})")
+    sw.add_argument("--continuation", nargs="?", const="quadratic", default=None,
+                    choices=CONTINUATION, metavar="PREDICTOR",
+                    help="warm-start along theta: run each back-end over each line of "
+                         "scenes (every parameter but theta equal), theta ascending, each "
+                         "scene started from the extrapolation of the previous answers: "
+                         "quadratic (the parabola through the last three; the default when "
+                         "given without a value), secant (the line through the last two) or "
+                         "previous (the last answer); stored as driver "
+                         "globalised+PREDICTOR, so a cold sweep into the same store "
+                         "compares with it in the report. Globalised driver only; the time "
+                         "limit of a line is --time-limit per scene")
+    sw.add_argument("--baseline", choices=("analytic", "fd", "both", "none"),
+                    default="both",
+                    help="the root-finding baseline: analytic Jacobian, finite differences "
+                         "as fsolve would (about 1 s per scene), both (default), or none")
+    _add_store_options(sw)
+    sw.add_argument("--no-report", action="store_true", help="do not write the report")
+    add_jobs_option(sw)
+    sw.add_argument("--time-limit", type=float, default=DEFAULT_TIME_LIMIT, metavar="S",
+                    help=f"seconds per solve before it is killed and recorded as a timeout "
+                         f"(default {DEFAULT_TIME_LIMIT:g})")
+    sw.add_argument("--rerun", action="store_true",
+                    help="recompute runs that are already in the store")
+    sw.add_argument("--quiet", action="store_true", help="no progress bar")
+    sw.set_defaults(func=cmd_sweep)
+
+    rp = subparsers.add_parser(
+        "report", help="tables, CSV and figures from a results store",
+        description="Build the comparison tables, the paper's Table II, the CSV of every "
+                    "run and the figures from the store alone (nothing is solved).")
+    _add_store_options(rp)
+    rp.add_argument("--table2-height", type=float, default=None, metavar="MM",
+                    help="wall height of the Table II-style table (default: the smallest)")
+    rp.add_argument("--no-plots", action="store_true", help="tables and CSV only")
+    rp.set_defaults(func=cmd_report)
+
+    se = subparsers.add_parser(
+        "select", help="the fastest back-end that meets an accuracy on this kind of scene",
+        description="Probe every installed back-end and settings profile on four scenes of "
+                    "this kind (N, length, EI, w, channel), cache the runs in the store, and "
+                    "print the fastest one whose total-force error is within --tol on all of "
+                    "them.")
+    se.add_argument("--tol", type=float, default=1e-6, metavar="REL",
+                    help="largest relative error of the total force (default 1e-6)")
+    se.add_argument("--time-budget", type=float, default=None, metavar="S",
+                    help="largest mean time of one solve, seconds (default: none)")
+    add_scene_options(se)
+    se.add_argument("--solvers", default="all", metavar="A,B,..",
+                    help="candidate back-ends (default: every installed one)")
+    se.add_argument("--store", default=None, metavar="PATH",
+                    help=f"where the probes are cached (default $LCPBENCH_STORE or "
+                         f"{DEFAULT_STORE})")
+    add_jobs_option(se)
+    add_json_option(se, "the selection as JSON")
+    se.add_argument("--quiet", action="store_true", help="no progress bar")
+    se.set_defaults(func=cmd_select)
+
+
+# -- sweep --------------------------------------------------------------------
+def _float_list(text, name) -> tuple | None:
+    from ..bench.grid import parse_range
+
+    return None if text is None else parse_range(text, name)
+
+
+def _positive_number(value, name) -> float:
+    if not (math.isfinite(value) and value > 0):
+        raise ProblemError(f"{name} must be a number > 0, got {value:g}")
+    return value
+
+
+def _sweep_scenes(args) -> list:
+    """The scenes of ``--grid``, validated before anything runs."""
+    from ..bench.grid import Grid, hard_scenes, parse_range
+
+    if args.grid == "hard":
+        given = [f"--{n}" for n in ("theta", "height", "EI", "weight", "length")
+                 if getattr(args, n) is not None] + (["--channel"] if args.channel else [])
+        if given or args.links != str(DEFAULT_LINKS):
+            raise ProblemError("--grid hard is a fixed list of scenes; it takes no "
+                               f"{', '.join(given) or '--links'}")
+        return hard_scenes()
+    grid_kw = {"theta": parse_range(args.theta or "10:180:10", "theta"),
+               "height": parse_range(args.height or "2:7:1", "height"),
+               "links": parse_range(args.links, "links", integer=True),
+               "channel": args.channel}
+    for name in ("EI", "weight", "length"):
+        values = _float_list(getattr(args, name), name)
+        if values is not None:
+            grid_kw[name] = values
+    return Grid(**grid_kw).scenes()  # validates every scene before anything runs
+
+
+def _sweep_backends(args) -> tuple[list[str], list[str]]:
+    """The back-ends and settings profiles of ``--solvers`` and ``--settings``, checked."""
+    from ..solvers.registry import available_backends, get_backend, get_settings
+
+    if args.solvers.strip() == "all":
+        solvers = available_backends()
+    else:
+        solvers = names_list(args.solvers)
+        if not solvers:
+            raise ProblemError("solvers must list at least one back-end, or be 'all'")
+        for name in solvers:
+            get_backend(name)  # unknown or not installed: SolverNotFound, exit 2
+    settings = names_list(args.settings)
+    if not settings:
+        raise ProblemError("settings must list at least one of default, low, mid, high")
+    for p in settings:
+        get_settings(p)
+    return solvers, settings
+
+
+def cmd_sweep(args) -> int:
+    """``lcpbench sweep``: run the grid into the store, then write the report."""
+    from ..api import check_tol
+    from ..bench.harness import plan_sweep, sweep
+    from ..bench.store import Store
+
+    scenes = _sweep_scenes(args)
+    methods = [m.strip() for m in args.method.split(",") if m.strip()]
+    if args.continuation is not None and "undamped" in methods:
+        raise ProblemError("--continuation needs the globalised driver; it cannot be used "
+                           "with --method undamped")
+    solvers, settings = _sweep_backends(args)
+    if args.tol is not None:
+        check_tol(args.tol)
+    jobs_n = worker_count(args.jobs)
+    limit = _positive_number(args.time_limit, "time-limit")
+    baselines = {"analytic": ["baseline"], "fd": ["baseline-fd"],
+                 "both": ["baseline", "baseline-fd"], "none": []}[args.baseline]
+    jobs = plan_sweep(scenes, solvers, settings, tol=args.tol, method=methods,
+                      baselines=baselines, continuation=args.continuation)
+    with Store(args.store) as store:
+        bar = progress_bar(args.quiet)
+        try:
+            plan = sweep(store, jobs, workers=jobs_n, time_limit=limit, rerun=args.rerun,
+                         progress=bar.update if bar else None)
+        except KeyboardInterrupt:
+            if bar:
+                bar.close()
+            error_line(f"interrupted: {store.count()} runs are safe in {args.store}; run the "
+                       "same command again to resume")
+            return 130
+        if bar:
+            bar.close()
+        lines = sum(j.kind == "line" for j in jobs) // max(1, len(solvers) * len(settings))
+        along = (f" by {args.continuation} continuation along {lines} line(s) in theta"
+                 if args.continuation else "")
+        print(f"{plan.rows_todo} runs computed, {plan.rows_done} already in {args.store} "
+              f"({len(scenes)} scenes x {len(solvers)} back-ends x {len(settings)} settings"
+              f"{f' x {len(methods)} drivers' if len(methods) > 1 else ''}{along}"
+              f" + {len(baselines)} baseline(s) + references; {jobs_n} worker(s))")
+        if not args.no_report:
+            return _write_report(store, args.out, limit, None, plots=True)
+    return 0
+
+
+# -- report -------------------------------------------------------------------
+def _write_report(store, out, time_limit, table2_height, plots: bool) -> int:
+    from ..bench.report import build_report
+
+    if plots and not has_matplotlib():
+        plots = False
+        print("matplotlib is not installed: tables only (pip install 'lcpbench[plot]')",
+              file=sys.stderr)
+    try:
+        info = build_report(store, out, time_limit=time_limit, plots=plots,
+                            table2_height=table2_height)
+    except OSError as exc:
+        raise ProblemError(f"out {out}: cannot write the report there ({exc})") from exc
+    print(f"report of {info['runs']} runs in {info['out']}/report.md")
+    return 0
+
+
+def cmd_report(args) -> int:
+    """``lcpbench report``: tables, CSV and figures from the store alone."""
+    from ..bench.store import Store
+
+    with Store(args.store, create=False) as store:
+        return _write_report(store, args.out, DEFAULT_TIME_LIMIT, args.table2_height,
+                             plots=not args.no_plots)
+
+
+# -- select -------------------------------------------------------------------
+def cmd_select(args) -> int:
+    """``lcpbench select``: 0 with a back-end that meets ``--tol``, 1 with none."""
+    from ..bench.select import select_backend
+
+    scene = scene_from(args, resolve_links=False)
+    if scene.links == "auto":
+        raise ProblemError("links must be a number for select (the kind of scene is N, "
+                           "length, EI, w and channel)")
+    candidates = None if args.solvers.strip() == "all" else [
+        x.strip() for x in args.solvers.split(",") if x.strip()]
+    workers = worker_count(args.jobs)
+    bar = progress_bar(args.quiet)
+    try:
+        sel = select_backend(scene, tol=args.tol, time_budget=args.time_budget,
+                             store=args.store, candidates=candidates, workers=workers,
+                             progress=bar.update if bar else None)
+    finally:
+        if bar:
+            bar.close()
+    if args.json:
+        print_json(sel.to_dict())
+    elif sel.backend is None:
+        print(f"no back-end: {sel.reason}")
+    else:
+        print(f"{sel.backend} --settings {sel.settings}: {sel.reason}")
+    return 0 if sel.backend is not None else 1

@@ -1,0 +1,33 @@
+"""The ``solvers`` listing and the store commands (``select``) of the command line."""
+
+from __future__ import annotations
+
+import json
+
+from lcpbench.cli import main
+
+
+def test_solvers_lists_every_backend(capsys):
+    from lcpbench.solvers import backends
+
+    assert main(["solvers"]) == 0
+    out = capsys.readouterr().out
+    for name in backends():
+        assert name in out
+    assert main(["solvers", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)
+    assert {r["name"] for r in rows} == set(backends())
+    for r in rows:
+        assert {"available", "version", "form", "storage", "warm_start", "method",
+                "install"} <= set(r)
+
+
+def test_select_cli(tmp_path, capsys):
+    args = ["select", "--tol", "1e-3", "--links", "20", "--solvers", "active-set,lemke",
+            "--store", str(tmp_path / "s.sqlite"), "--quiet", "--jobs", "2"]
+    code = main([*args, "--json"])
+    d = json.loads(capsys.readouterr().out)  # exactly one JSON document on stdout
+    assert code == 0 and d["backend"] in ("active-set", "lemke") and d["error"] <= 1e-3
+    assert main(args) == 0  # cached the second time; one line with the reason
+    out = capsys.readouterr().out.strip()
+    assert out.startswith(d["backend"]) and len(out.splitlines()) == 1
