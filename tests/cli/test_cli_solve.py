@@ -287,3 +287,20 @@ def test_bad_pressure_input(capsys, args, message):
     assert main(["solve", *args]) == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and message in err
+
+
+def test_links_auto_runs_the_study_and_says_which_n(capsys):
+    """--links auto: the CLI runs the Sec. III-D study and solves at the N it
+    picks; the answer equals a solve at that N given directly."""
+    import json
+
+    from lcpbench.cli import main
+
+    assert main(["solve", "--theta", "150", "--height", "3", "--links", "auto", "--json"]) == 0
+    out = capsys.readouterr()
+    n = int(out.err.split("picked N = ")[1].split()[0])
+    auto = json.loads(out.out)
+    assert auto["scene"]["links"] == n and 10 <= n <= 140
+    assert main(["solve", "--theta", "150", "--height", "3", "--links", str(n), "--json"]) == 0
+    direct = json.loads(capsys.readouterr().out)
+    assert direct["total_force"] == auto["total_force"]
