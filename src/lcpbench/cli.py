@@ -27,9 +27,9 @@ import numpy as np
 
 from . import __version__
 from .api import solve
-from .bench.harness import CONTINUATION, DEFAULT_TIME_LIMIT
 from .bench.report import DEFAULT_OUT
 from .bench.store import DEFAULT_STORE
+from .bench.sweep import CONTINUATION, DEFAULT_TIME_LIMIT
 from .errors import LcpbenchError, ProblemError
 from .jsonsafe import sanitise
 from .model.driver import METHODS
@@ -539,8 +539,8 @@ def _positive_number(value, name) -> float:
 
 def _cmd_sweep(args) -> int:
     from .bench.grid import Grid, parse_range
-    from .bench.harness import default_workers, plan_sweep, sweep
     from .bench.store import Store
+    from .bench.sweep import default_workers, plan_sweep, sweep
     from .solvers.registry import available_backends, get_backend, get_settings
 
     if args.grid == "hard":
@@ -673,8 +673,8 @@ def _cmd_report(args) -> int:
 
 
 def _cmd_select(args) -> int:
-    from .bench.harness import default_workers
     from .bench.select import select_backend
+    from .bench.sweep import default_workers
 
     scene = _scene_from(args)
     if scene.links == "auto":

@@ -1,9 +1,8 @@
-"""Back-end selection: qualified, fastest, cached in the store, used by solver='auto'."""
+"""Back-end selection: qualified, fastest, cached in the store."""
 
 import pytest
 
 import lcpbench
-from lcpbench.bench import select as sel_mod
 from lcpbench.bench.select import probe_scenes, select_backend
 from lcpbench.bench.store import Store
 from lcpbench.errors import ProblemError
@@ -65,16 +64,3 @@ def test_bad_input():
         select_backend(SCENE, tol=0.0, probe=False)
     with pytest.raises(ProblemError, match="time_budget"):
         select_backend(SCENE, tol=1e-3, time_budget=-1, probe=False)
-
-
-def test_auto_uses_the_cached_selection(selected, monkeypatch):
-    path, s = selected
-    monkeypatch.setenv(sel_mod.STORE_ENV, str(path))
-    sel_mod._AUTO_CACHE.clear()
-    res = lcpbench.solve(SCENE.with_links(30), solver="auto", tol=1e-3)
-    assert res.solver == s.backend and res.converged
-    assert "cached" in res.extra["auto"]
-    # another kind of scene (N = 40) has no cached probes: the active set
-    res = lcpbench.solve(SCENE.with_links(40), solver="auto", tol=1e-3)
-    assert res.solver == "active-set" and "no cached" in res.extra["auto"]
-    sel_mod._AUTO_CACHE.clear()
