@@ -228,3 +228,12 @@ def _choose(store: Store, jobs: list[Job], probes, tol, dtol, time_budget) -> Se
                    f"{runner_up['time_s'] / best['time_s']:.2f}x slower")
     return Selection(best["backend"], best["settings"], tol, dtol, best["time_s"],
                      best["error"], reason, evidence)
+
+
+def auto_backend(scene, driver_tol: float) -> tuple[str, str, str]:
+    """Transitional, no I/O: the built-in active set, what api.py's fixed rule gives.
+
+    The store-reading selection is gone; api.py's ``solver="auto"`` still
+    imports this name until its own fixed rule lands (then delete this).
+    """
+    return "active-set", "default", "no cached back-end selection; active-set is exact"
