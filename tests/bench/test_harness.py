@@ -3,15 +3,10 @@
 import numpy as np
 import pytest
 
-from lcpbench.bench.harness import (
-    PROFILE_TOL,
-    REFERENCE_TOL,
-    error_of,
-    plan_sweep,
-    sweep,
-)
-from lcpbench.bench.metrics import success_tol
+from lcpbench.bench.jobs import PROFILE_TOL, REFERENCE_TOL
+from lcpbench.bench.metrics import error_of, success_tol
 from lcpbench.bench.store import Store
+from lcpbench.bench.sweep import plan_sweep, sweep
 from lcpbench.problems.scenes import ActuatorScene
 
 # Two scenes of N = 30: one in contact at h >= 4 mm, where the paper's baseline

@@ -5,8 +5,8 @@ import math
 import pytest
 
 from lcpbench.bench.grid import Grid
-from lcpbench.bench.harness import error_of, plan_sweep, sweep
 from lcpbench.bench.metrics import (
+    error_of,
     evaluate,
     shifted_geometric_mean,
     success_tol,
@@ -15,6 +15,7 @@ from lcpbench.bench.metrics import (
 )
 from lcpbench.bench.report import build_report
 from lcpbench.bench.store import Store
+from lcpbench.bench.sweep import plan_sweep, sweep
 
 
 def test_shifted_geometric_mean_by_hand():

@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 
 from lcpbench.bench.grid import Grid, hard_scenes, scene_key
-from lcpbench.bench.harness import error_of, plan_sweep, sweep
-from lcpbench.bench.metrics import evaluate, success_tol, time_table
+from lcpbench.bench.metrics import error_of, evaluate, success_tol, time_table
 from lcpbench.bench.report import build_report
 from lcpbench.bench.store import Store
+from lcpbench.bench.sweep import plan_sweep, sweep
 from lcpbench.cli import main
 from lcpbench.errors import ProblemError
 from lcpbench.problems.scenes import ActuatorScene
@@ -73,7 +73,7 @@ def test_plan_has_one_line_job_per_line_backend_and_settings():
         thetas = [json.loads(k)["theta"] for k in j.scenes]
         assert thetas == sorted(THETAS)
         assert all(_rest(k) == _rest(j.scenes[0]) for k in j.scenes)
-        assert j.method == LABEL and j.scene == j.scenes[0] and j.size == 5
+        assert j.label == LABEL and j.scene == j.scenes[0] and j.size == 5
     # the line rows are exactly the cold runs' (scene, back-end, settings, tol)
     row_keys = [k[:4] for j in lines for k in j.keys]
     assert len(row_keys) == len(set(row_keys))
@@ -96,7 +96,7 @@ def test_plan_groups_a_list_of_scenes_into_lines():
     assert sorted(covered) == sorted(scene_key(s) for s in scenes)
     for j in lines:
         thetas = [json.loads(k)["theta"] for k in j.scenes]
-        assert thetas == sorted(thetas) and j.method == "globalised+previous"
+        assert thetas == sorted(thetas) and j.label == "globalised+previous"
     assert max(j.size for j in lines) > 1 and min(j.size for j in lines) == 1
 
 

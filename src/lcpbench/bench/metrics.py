@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .harness import DEFAULT_TIME_LIMIT, error_of
+from .jobs import DEFAULT_TIME_LIMIT
 
 SHIFT = 10.0
 #: the methods of cold runs Table II shows: the globalised driver and the baselines
@@ -39,6 +39,7 @@ COLD_METHODS = ("globalised", "hybr", "lm")
 
 
 def shifted_geometric_mean(values, shift: float = SHIFT) -> float:
+    """exp(mean(log(v + shift))) − shift; NaN for no values (shift 0: the plain geometric mean)."""
     v = np.asarray(list(values), float)
     if v.size == 0:
         return float("nan")
@@ -47,13 +48,31 @@ def shifted_geometric_mean(values, shift: float = SHIFT) -> float:
     return float(np.exp(np.mean(np.log(v + shift))) - shift)
 
 
-def _geomean(values) -> float:
-    return float(np.exp(np.mean(np.log(values)))) if values else float("nan")
+def geometric_mean(values) -> float:
+    """The plain geometric mean (of positive values), NaN for none."""
+    return shifted_geometric_mean(values, 0.0)
+
+
+def error_of(total_force: float, reference: float, force_scale: float) -> float:
+    """The force error of a run: |F − F_ref| / max(|F_ref|, EI/ℓ²).
+
+    Relative where the reference force exceeds the chain's own force unit
+    EI/ℓ², in that unit below it (so no-contact scenes, F_ref = 0, are judged
+    too).
+    """
+    if not np.isfinite(total_force):
+        return float("inf")
+    return abs(total_force - reference) / max(abs(reference), force_scale)
 
 
 def success_tol(tol: float) -> float:
     """The force error a run at driver tolerance ``tol`` (rad) may have and count as a success."""
     return min(1e-3, 100.0 * tol)
+
+
+def succeeded(converged: bool, error: float, force_tol: float) -> bool:
+    """The success rule: the run converged and its force error is at most ``force_tol``."""
+    return bool(converged) and error <= force_tol
 
 
 @dataclass
@@ -82,7 +101,7 @@ def evaluate(runs: list[dict], refs: dict[str, dict]) -> list[Evaluated]:
             out.append(Evaluated(r, float("inf"), False))
             continue
         err = error_of(r["total_force"], ref["total_force"], r["EI"] / r["length"] ** 2)
-        ok = bool(r["converged"]) and err <= success_tol(r["tol"])
+        ok = succeeded(r["converged"], err, success_tol(r["tol"]))
         out.append(Evaluated(r, err, ok))
     return out
 
@@ -129,8 +148,8 @@ def summarise(evaluated: list[Evaluated], *, time_limit: float = DEFAULT_TIME_LI
             if ok else float("nan"),
             "inner_mean": float(np.mean([e.row["inner_iterations"] for e in ok]))
             if ok else float("nan"),
-            "speedup_vs_baseline": _geomean(speedups["baseline"]),
-            "speedup_vs_baseline_fd": _geomean(speedups["baseline-fd"]),
+            "speedup_vs_baseline": geometric_mean(speedups["baseline"]),
+            "speedup_vs_baseline_fd": geometric_mean(speedups["baseline-fd"]),
         })
     order = {"default": 0, "low": 1, "mid": 2, "high": 3}
     rows.sort(key=lambda r: (r["backend"].startswith("baseline"), r["backend"],

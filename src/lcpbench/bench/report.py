@@ -14,7 +14,7 @@ import platform
 from pathlib import Path
 
 from ..jsonsafe import sanitise
-from .harness import DEFAULT_TIME_LIMIT
+from .jobs import DEFAULT_TIME_LIMIT
 from .metrics import (
     SHIFT,
     continuation_pairs,

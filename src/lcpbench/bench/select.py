@@ -18,14 +18,14 @@ import math
 import os
 from pathlib import Path
 
-import numpy as np
-
 from ..errors import ProblemError
 from ..problems.scenes import ActuatorScene
 from ..solvers.selection import Selection
 from .grid import Grid, scene_key
-from .harness import DEFAULT_TIME_LIMIT, Job, error_of, plan_sweep, sweep
+from .jobs import Job, RunJob
+from .metrics import error_of, geometric_mean, succeeded
 from .store import DEFAULT_STORE, Store
+from .sweep import DEFAULT_TIME_LIMIT, plan_sweep, sweep
 
 #: probe scenes of a kind: (θ in degrees, h / ℓ)
 PROBES = ((90.0, 0.1), (150.0, 0.1), (180.0, 2.0 / 30.0), (150.0, 5.0 / 30.0))
@@ -127,7 +127,7 @@ def select_backend(scene_or_grid, tol: float = 1e-6, time_budget: float | None =
                                                                 max(1.0, 20 * time_budget))
     own = not isinstance(store, Store)
     if own:
-        path = default_store_path() if store is None else Path(store)
+        path = Path(os.environ.get(STORE_ENV) or DEFAULT_STORE) if store is None else Path(store)
         if not probe and not path.exists():
             return _fallback(tol, dtol, "no probes cached (no store at "
                                         f"{path}); run `lcpbench select` to measure them")
@@ -139,10 +139,6 @@ def select_backend(scene_or_grid, tol: float = 1e-6, time_budget: float | None =
     finally:
         if own:
             store.close()
-
-
-def default_store_path() -> Path:
-    return Path(os.environ.get(STORE_ENV) or DEFAULT_STORE)
 
 
 def _fallback(tol, dtol, why) -> Selection:
@@ -161,10 +157,9 @@ def _choose(store: Store, jobs: list[Job], probes, tol, dtol, time_budget) -> Se
         return _fallback(tol, dtol, f"{len(missing_refs)} probe reference(s) missing or "
                                     "not converged; probe again")
     evidence = []
-    for (backend, settings) in dict.fromkeys((j.backend, j.settings) for j in jobs
-                                             if j.kind == "run"):
-        mine = [rows.get(j.key) for j in jobs
-                if j.kind == "run" and (j.backend, j.settings) == (backend, settings)]
+    runs = [j for j in jobs if isinstance(j, RunJob)]
+    for (backend, settings) in dict.fromkeys((j.backend, j.settings) for j in runs):
+        mine = [rows.get(j.key) for j in runs if (j.backend, j.settings) == (backend, settings)]
         if any(r is None for r in mine):
             evidence.append({"backend": backend, "settings": settings, "probes": len(mine),
                              "cached": sum(r is not None for r in mine), "ok": False,
@@ -173,9 +168,9 @@ def _choose(store: Store, jobs: list[Job], probes, tol, dtol, time_budget) -> Se
         errors = [error_of(r["total_force"], refs[r["scene"]]["total_force"],
                            r["EI"] / r["length"] ** 2) for r in mine]
         conv = sum(bool(r["converged"]) for r in mine)
-        t = float(np.exp(np.mean(np.log([max(r["wall_time"], 1e-9) for r in mine]))))
+        t = geometric_mean([max(r["wall_time"], 1e-9) for r in mine])
         worst = max(errors)
-        ok = conv == len(mine) and worst <= tol
+        ok = all(succeeded(r["converged"], e, tol) for r, e in zip(mine, errors))
         why = ("" if ok else f"converged on {conv}/{len(mine)} probes" if conv < len(mine)
                else f"force error {worst:.1e} > {tol:.0e}")
         if ok and time_budget is not None and t > time_budget:

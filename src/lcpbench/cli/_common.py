@@ -256,7 +256,7 @@ def worker_count(jobs: int | None) -> int:
     ProblemError
         When *jobs* is below 1.
     """
-    from ..bench.harness import default_workers
+    from ..bench.sweep import default_workers
     from ..errors import ProblemError
 
     n = default_workers() if jobs is None else jobs

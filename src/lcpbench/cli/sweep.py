@@ -14,9 +14,9 @@ from __future__ import annotations
 import math
 import sys
 
-from ..bench.harness import CONTINUATION, DEFAULT_TIME_LIMIT
 from ..bench.report import DEFAULT_OUT
 from ..bench.store import DEFAULT_STORE
+from ..bench.sweep import CONTINUATION, DEFAULT_TIME_LIMIT
 from ..errors import ProblemError
 from ..problems.scenes import DEFAULT_EI, DEFAULT_LENGTH, DEFAULT_LINKS, DEFAULT_WEIGHT
 from ._common import (
@@ -203,8 +203,9 @@ def _sweep_backends(args) -> tuple[list[str], list[str]]:
 def cmd_sweep(args) -> int:
     """``lcpbench sweep``: run the grid into the store, then write the report."""
     from ..api import check_tol
-    from ..bench.harness import plan_sweep, sweep
     from ..bench.store import Store
+    from ..bench.jobs import LineJob
+    from ..bench.sweep import plan_sweep, sweep
 
     scenes = _sweep_scenes(args)
     methods = [m.strip() for m in args.method.split(",") if m.strip()]
@@ -233,7 +234,7 @@ def cmd_sweep(args) -> int:
             return 130
         if bar:
             bar.close()
-        lines = sum(j.kind == "line" for j in jobs) // max(1, len(solvers) * len(settings))
+        lines = sum(isinstance(j, LineJob) for j in jobs) // max(1, len(solvers) * len(settings))
         along = (f" by {args.continuation} continuation along {lines} line(s) in theta"
                  if args.continuation else "")
         print(f"{plan.rows_todo} runs computed, {plan.rows_done} already in {args.store} "

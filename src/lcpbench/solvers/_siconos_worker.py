@@ -1,34 +1,38 @@
 """Worker run by the SYSTEM interpreter to call Siconos numerics LCP solvers.
 
 This file is a script, not part of the lcpbench import graph: it is executed
-as ``/usr/bin/python3 _siconos_worker.py`` by
-:mod:`lcpbench.solvers.siconos_bridge` and imports only the standard library
-(``json``, ``os``, ``sys``, ``time``), numpy and siconos -- never lcpbench,
-which is not installed for that interpreter.
+as ``/usr/bin/python3 -I _siconos_worker.py`` by
+:mod:`lcpbench.solvers.siconos_bridge` and imports only the standard library,
+numpy, siconos and, by file path, :mod:`lcpbench.worker` (standard library
+only) -- never the lcpbench package, which is not installed for that
+interpreter.
 
-Protocol (binary, over stdin / a private copy of stdout)
---------------------------------------------------------
-On start the worker writes one JSON line, ``{"ok": true, "version": ...,
-"import_time": ...}`` or ``{"ok": false, "error": ...}``.
+Protocol (length-prefixed messages of :mod:`lcpbench.worker`)
+-------------------------------------------------------------
+Every message is one JSON line followed by raw little-endian float64 data.
+On start the worker sends ``{"ok": true, "version": ..., "import_time": ...}``
+or ``{"ok": false, "error": ...}``.
 
-Each request is one JSON line followed by raw little-endian float64 data::
+A request::
 
     {"op": "solve", "method": "LEMKE", "tol": null | float,
      "max_iter": null | int, "problems": [{"n": n, "warm": bool}, ...]}
     then per problem: M (n*n, column-major: Siconos's own dense storage,
     which it copies fastest), q (n), and z0 (n) if "warm"
 
-The reply is one JSON line ``{"ok": true, "results": [...]}`` (one dict per
-problem: ``info`` (as the Siconos driver returns it), ``solver_info`` (the
-solver's own, before the driver's error check), ``iterations``, ``residu``, ``tol``,
+The reply is ``{"ok": true, "results": [...]}`` (one dict per problem:
+``info`` (as the Siconos driver returns it), ``solver_info`` (the solver's
+own, before the driver's error check), ``iterations``, ``residu``, ``tol``,
 ``max_iter``, ``solve_time``, ``setup_time``, ``error``; for Lemke
-``gap_min``/``gap_max`` of ``w_basic - (M z + q)``) followed by z (n)
-and w (n) of every problem. ``{"op": "ping"}`` answers the start line again;
+``gap_min``/``gap_max`` of ``w_basic - (M z + q)``) followed by z (n) and w
+(n) of every problem. ``{"op": "ping"}`` answers the start message again;
 ``{"op": "exit"}`` or end of input stops the worker.
 
 Siconos's C code prints to file descriptor 1 (e.g. NewtonMin on
 non-convergence), so the protocol uses a duplicate of the original stdout and
-fd 1 is redirected to stderr before siconos is imported.
+fd 1 is redirected to stderr before siconos is imported
+(:func:`lcpbench.worker.child_channel`). The worker dies with the process
+that started it (:func:`lcpbench.worker.die_with_parent`).
 """
 
 import json
@@ -38,39 +42,44 @@ import time
 
 import numpy as np
 
-_PROTO = None  # the protocol's output: a private duplicate of the original stdout
-_IN = None  # the protocol's input: stdin, binary
+_CHANNEL = None  # (input, output) of the protocol, set in main()
 
 
-def _setup_streams():
-    """Keep stdout for the protocol and send everything else printed to stderr.
+def _load_worker_module():
+    """lcpbench/worker.py, loaded by path (lcpbench is not importable here)."""
+    import importlib.util
 
-    Done in :func:`main` only, so importing this module has no side effects.
-    """
-    global _PROTO, _IN
-    _PROTO = os.fdopen(os.dup(1), "wb", buffering=0)
-    os.dup2(2, 1)
-    sys.stdout = sys.stderr
-    _IN = sys.stdin.buffer
+    path = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
+                        "worker.py")
+    spec = importlib.util.spec_from_file_location("_lcpbench_worker", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+_W = None  # the lcpbench.worker module
 
 
 def _send(header, arrays=()):
     data = [json.dumps(header).encode() + b"\n"]
     data.extend(np.ascontiguousarray(a, dtype="<f8").tobytes() for a in arrays)
-    _PROTO.write(b"".join(data))
+    _W.write_message(_CHANNEL[1], b"".join(data))
 
 
-def _read_array(shape, order="C"):
-    """Read ``prod(shape)`` little-endian float64 numbers from stdin."""
-    out = np.empty(shape, dtype="<f8", order=order)
-    view = memoryview(out.reshape(-1, order="A")).cast("B")
-    got = 0
-    while got < len(view):
-        k = _IN.readinto(view[got:])
-        if not k:
-            raise EOFError("end of input inside a request")
-        got += k
-    return out
+class _Reader:
+    """Arrays read one after the other from a request's float64 data."""
+
+    def __init__(self, data):
+        self.data, self.at = data, 0
+
+    def array(self, shape, order="C"):
+        n = int(np.prod(shape))
+        end = self.at + 8 * n
+        if end > len(self.data):
+            raise EOFError("request shorter than its header says")
+        flat = np.frombuffer(self.data[self.at:end], dtype="<f8")
+        self.at = end
+        return np.array(flat.reshape(shape, order=order), order=order)
 
 
 def _solve_one(sn, solver_id, M, q, z0, tol, max_iter, lemke=False):
@@ -120,7 +129,10 @@ def _solve_one(sn, solver_id, M, q, z0, tol, max_iter, lemke=False):
 
 
 def main():
-    _setup_streams()
+    global _CHANNEL, _W
+    _W = _load_worker_module()
+    _W.die_with_parent()
+    _CHANNEL = _W.child_channel()
     t0 = time.perf_counter()
     try:
         import siconos
@@ -133,9 +145,11 @@ def main():
              "python": sys.version.split()[0]}
     _send(hello)
     while True:
-        line = _IN.readline()
-        if not line:
+        msg = _W.read_message(_CHANNEL[0])
+        if msg is None:
             return 0
+        i = msg.find(b"\n")
+        line, data = (msg, b"") if i < 0 else (msg[:i], memoryview(msg)[i + 1:])
         req = json.loads(line)
         op = req.get("op")
         if op == "exit":
@@ -147,11 +161,12 @@ def main():
             _send({"ok": False, "error": f"unknown op {op!r}"})
             continue
         problems = []
+        reader = _Reader(data)
         for p in req["problems"]:
             n = int(p["n"])
-            M = _read_array((n, n), order="F")
-            q = _read_array((n,))
-            z0 = _read_array((n,)) if p.get("warm") else None
+            M = reader.array((n, n), order="F")
+            q = reader.array((n,))
+            z0 = reader.array((n,)) if p.get("warm") else None
             problems.append((M, q, z0))
         solver_id = getattr(sn, "SICONOS_LCP_" + str(req["method"]), None)
         if solver_id is None:

@@ -4,8 +4,10 @@ Siconos (INRIA's C library for nonsmooth problems) installs for the *system*
 interpreter -- Debian's ``python3-siconos`` puts it in
 ``/usr/lib/python3/dist-packages`` -- not for the project's Python. So the
 solvers are run by a persistent worker process (``_siconos_worker.py``,
-executed by :func:`system_python`) that speaks a small binary protocol over
-its stdin/stdout: one JSON header line, then raw little-endian float64 arrays.
+executed by :func:`system_python` through :class:`lcpbench.worker.WorkerProcess`,
+the package's one subprocess worker) that exchanges length-prefixed messages
+over its stdin/stdout: one JSON header line, then raw little-endian float64
+arrays.
 
 The worker is started lazily on the first call, reused by later calls
 (guarded by a lock, so threads share it safely), restarted if it died, and
@@ -28,8 +30,6 @@ import gzip
 import json
 import os
 import re
-import select
-import subprocess
 import tempfile
 import threading
 import time
@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from lcpbench.solvers.base import LCPSolution, Settings, Status, lcp_residuals
+from lcpbench.worker import WorkerDied, WorkerProcess
 
 #: Our method names -> the worker's names (the suffix of ``SICONOS_LCP_*``).
 METHODS: dict[str, str] = {
@@ -158,35 +159,46 @@ def version() -> str | None:
 
 
 # -- the worker -----------------------------------------------------------------
-class _WorkerDied(Exception):
-    pass
+_WorkerDied = WorkerDied
+
+
+def _pack(header: dict, arrays=()) -> bytes:
+    """A message of the worker's protocol: a JSON line, then raw float64 arrays."""
+    parts = [json.dumps(header).encode() + b"\n"]
+    parts += [np.ascontiguousarray(a, dtype="<f8").tobytes() for a in arrays]
+    return b"".join(parts)
+
+
+def _unpack(msg: bytes) -> tuple[dict, np.ndarray]:
+    i = msg.find(b"\n")
+    if i < 0:
+        raise ValueError("a reply without its header line")
+    data = msg[i + 1:]
+    if len(data) % 8:
+        raise ValueError("a reply whose data is not float64")
+    return json.loads(msg[:i]), np.frombuffer(data, dtype="<f8").astype(float)
 
 
 class _Worker:
-    """One running worker process and its pipes."""
+    """One running worker process (:class:`lcpbench.worker.WorkerProcess`) and its stderr."""
 
     def __init__(self, python: str):
         self.python = python
         self.err = tempfile.TemporaryFile()
         t0 = time.perf_counter()
-        self.proc = subprocess.Popen(
-            # -I: isolated mode, so the project's PYTHONPATH / user site cannot
-            # leak into the system interpreter and the script's own directory
-            # is not put on sys.path.
-            [python, "-I", str(_WORKER_SCRIPT)], stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE, stderr=self.err, bufsize=0, close_fds=True,
-        )
-        self.owner = os.getpid()
-        self.buf = bytearray()
+        # isolated (-I), so the project's PYTHONPATH / user site cannot leak into
+        # the system interpreter and the script's own directory is not on sys.path
+        self.proc = WorkerProcess([str(_WORKER_SCRIPT)], python=python, stderr=self.err,
+                                  isolated=True)
         try:
-            self.hello = self.read_header(time.monotonic() + STARTUP_TIMEOUT)
+            self.hello, _ = _unpack(self.proc.recv(time.monotonic() + STARTUP_TIMEOUT))
         except BaseException:
             self.kill(force=True)
             raise
         self.start_time = time.perf_counter() - t0
 
     def alive(self) -> bool:
-        return self.owner == os.getpid() and self.proc.poll() is None
+        return self.proc.alive()
 
     def stderr_tail(self, limit: int = 600) -> str:
         try:
@@ -199,91 +211,29 @@ class _Worker:
     def kill(self, force: bool = False) -> None:
         """Stop the worker: close its input and wait briefly, or (``force``,
         for a hung or misbehaving worker) SIGKILL it at once."""
-        if self.owner != os.getpid():
+        if self.proc.owner != os.getpid():
             return  # a forked child must not kill its parent's worker
-        if self.proc.poll() is None:
-            try:
-                if force:
-                    raise subprocess.TimeoutExpired(self.proc.args, 0)
-                self.proc.stdin.close()
-                self.proc.wait(timeout=1.0)
-            except (OSError, ValueError, subprocess.TimeoutExpired):
-                self.proc.kill()
-                self.proc.wait()
-        for f in (self.proc.stdout, self.proc.stdin):
-            try:
-                f.close()
-            except OSError:
-                pass
+        if force:
+            self.proc.kill()
+        else:
+            self.proc.stop(1.0)
         self.err.close()
 
-    # reading with a deadline
-    def _fill(self, deadline: float) -> None:
-        fd = self.proc.stdout.fileno()
-        left = deadline - time.monotonic()
-        if left <= 0:
-            raise TimeoutError
-        ready, _, _ = select.select([fd], [], [], left)
-        if not ready:
-            raise TimeoutError
-        chunk = os.read(fd, 1 << 20)
-        if not chunk:
-            raise _WorkerDied
-        self.buf += chunk
+    def request(self, header: dict, payload: list[np.ndarray], deadline: float
+                ) -> tuple[dict, np.ndarray]:
+        """Send a request and return the reply's header and its float64 data.
 
-    def read_header(self, deadline: float) -> dict:
-        while (i := self.buf.find(b"\n")) < 0:
-            self._fill(deadline)
-        line, self.buf = bytes(self.buf[:i]), self.buf[i + 1:]
-        return json.loads(line)
-
-    def read_floats(self, n: int, deadline: float) -> np.ndarray:
-        nbytes = 8 * n
-        while len(self.buf) < nbytes:
-            self._fill(deadline)
-        out = np.frombuffer(bytes(self.buf[:nbytes]), dtype="<f8").astype(float)
-        del self.buf[:nbytes]
-        return out
-
-    def request(self, header: dict, payload: list[np.ndarray], deadline: float) -> dict:
-        """Send a request and read the reply's header line.
-
-        The worker's stdin is non-blocking and written under ``select``, so
-        a hung worker cannot block the caller past ``deadline``. The worker's
-        stderr file is emptied first, so a crash report shows this request's
-        messages only.
+        Neither writing nor reading blocks past ``deadline``, so a hung worker
+        cannot block the caller. The worker's stderr file is emptied first,
+        so a crash report shows this request's messages only.
         """
         try:
             self.err.seek(0)
             self.err.truncate()
         except (OSError, ValueError):
             pass
-        pending = [memoryview(json.dumps(header).encode() + b"\n")]
-        pending += [memoryview(np.ascontiguousarray(a, dtype="<f8")).cast("B") for a in payload]
-        pending = [v for v in pending if len(v)]
-        wfd, rfd = self.proc.stdin.fileno(), self.proc.stdout.fileno()
-        os.set_blocking(wfd, False)
-        while pending:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                raise TimeoutError
-            readable, writable, _ = select.select([rfd], [wfd], [], left)
-            if readable:  # early output can only be an error or EOF
-                chunk = os.read(rfd, 1 << 20)
-                if not chunk:
-                    raise _WorkerDied
-                self.buf += chunk
-            if writable:
-                try:
-                    k = os.write(wfd, pending[0][:1 << 20])
-                except BlockingIOError:
-                    k = 0
-                except OSError as exc:  # BrokenPipeError: the worker is gone
-                    raise _WorkerDied from exc
-                pending[0] = pending[0][k:]
-                if not len(pending[0]):
-                    pending.pop(0)
-        return self.read_header(deadline)
+        self.proc.send(_pack(header, payload), deadline)
+        return _unpack(self.proc.recv(deadline))
 
 
 _LOCK = threading.Lock()
@@ -516,21 +466,22 @@ def solve_many(problems, settings: Settings, *, method: str = "lemke",
         t0 = time.perf_counter()
         deadline = time.monotonic() + timeout
         try:
-            reply = worker.request(header, payload, deadline)
+            reply, data = worker.request(header, payload, deadline)
             if not reply.get("ok"):
                 return [_failed(q.size, f"siconos worker: {reply.get('error')}") for _, q in probs]
-            answers = []
+            if data.size != 2 * sum(q.size for _, q in probs):
+                raise ValueError(f"{data.size} numbers for {len(probs)} problems")
+            answers, at = [], 0
             for (_, q), res in zip(probs, reply["results"]):
-                z = worker.read_floats(q.size, deadline)
-                w = worker.read_floats(q.size, deadline)
-                answers.append((z, w, res))
+                z, w = data[at:at + q.size], data[at + q.size:at + 2 * q.size]
+                at += 2 * q.size
+                answers.append((z.copy(), w.copy(), res))
         except (TimeoutError, _WorkerDied, OSError, ValueError) as exc:
             if isinstance(exc, TimeoutError):
                 reason = f"siconos worker exceeded the {timeout:g} s timeout and was killed"
-            elif isinstance(exc, ValueError) and worker.proc.poll() is None:
+            elif isinstance(exc, ValueError) and worker.proc.returncode is None:
                 reason = f"siconos worker sent a malformed reply ({exc}); killed"
             else:
-                worker.proc.poll()
                 code = worker.proc.returncode
                 tail = worker.stderr_tail()
                 reason = (f"siconos worker died (exit code {code})"
