@@ -203,8 +203,8 @@ def _sweep_backends(args) -> tuple[list[str], list[str]]:
 def cmd_sweep(args) -> int:
     """``lcpbench sweep``: run the grid into the store, then write the report."""
     from ..api import check_tol
-    from ..bench.store import Store
     from ..bench.jobs import LineJob
+    from ..bench.store import Store
     from ..bench.sweep import plan_sweep, sweep
 
     scenes = _sweep_scenes(args)
