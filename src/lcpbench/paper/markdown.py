@@ -1,9 +1,18 @@
-"""Formatting helpers of the regenerated README (numbers, tables, scene lists)."""
+"""Formatting helpers of the regenerated README, and its templates.
+
+The README's prose lives in ``lcpbench/paper/templates/*.md`` (package data),
+one :class:`string.Template` per section (``$name`` placeholders, ``$$`` for a
+dollar sign); :func:`render` fills one in. The section functions of
+:mod:`lcpbench.paper.readme_model` and :mod:`lcpbench.paper.readme_baseline`
+compute the values.
+"""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterable
+from importlib import resources
+from string import Template
 
 #: The test module whose tests the README names as evidence ("Shown by").
 TESTS = "tests/paper/test_reproduce.py"
@@ -33,3 +42,13 @@ def scene_list(pairs: Iterable) -> str:
     return ", ".join(f"(θ = {t:g}°, h = {h:g} mm)" for t, h, *_ in pairs) or "none"
 
 
+
+
+def render(name: str, **values: object) -> str:
+    """Fill in the template ``templates/<name>``; every placeholder must be given.
+
+    Values are turned into text with ``str`` (the callers pass strings already
+    formatted where a format matters).
+    """
+    text = resources.files(__package__).joinpath("templates", name).read_text(encoding="utf-8")
+    return Template(text).substitute(values)
