@@ -88,12 +88,19 @@ def fig8_section(d: dict) -> str:
             for h in d["first_contact_theta"]]
     worst = max((f["max_deviation"] for f in list(fb.values()) + list(d["fits_c"].values())),
                 default=math.nan)
+    head_table = [
+        'h (mm)',
+        'first θ in contact in (a) (°)',
+        '(b) slope (mN per N·mm²)',
+        '(b) intercept (mN)',
+        '(b) max deviation from the line',
+    ]
     return render(
         "fig8.md",
         links=d['links'],
         worst=num(worst, '.0e'),
         force_at_150_h2_mN=num(d['force_at_150_h2_mN'], '.4g'),
-        table=md_table(['h (mm)', 'first θ in contact in (a) (°)', '(b) slope (mN per N·mm²)', '(b) intercept (mN)', '(b) max deviation from the line'], rows),
+        table=md_table(head_table, rows),
         undamped_failures=scene_list(d['undamped_failures']),
         undamped_max_relative_difference=num(d['undamped_max_relative_difference'], '.1e'),
         TESTS=TESTS,
