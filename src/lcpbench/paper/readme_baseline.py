@@ -16,6 +16,18 @@ from .markdown import TESTS, md_table, millinewtons, num, render, scene_list
 
 
 def baseline_section(s: dict) -> str:
+    """The Figs. 26-27 and Tables I-II section: the LCP against the appendix's baseline.
+
+    Parameters
+    ----------
+    s : dict
+        The run's summary (stages ``fig26``, ``fig27``, ``table1``, ``table2``).
+
+    Returns
+    -------
+    str
+        Markdown, filled in from ``templates/baseline.md``.
+    """
     f26, f27, t1, t2 = s["fig26"], s["fig27"], s["table1"], s["table2"]
     rows26 = [[f"{float(h):g}", num(v["max_disagreement_percent"], ".2g"),
                f"{v['converged']}/{v['scenes']}", f"{v['valid']}/{v['scenes']}",
@@ -119,6 +131,18 @@ def baseline_section(s: dict) -> str:
 
 
 def errata_section(e: dict) -> str:
+    """The errata section: what the eq. (13) misprint of γ would change.
+
+    Parameters
+    ----------
+    e : dict
+        What :func:`~lcpbench.paper.baseline_figures.errata_gravity` returned.
+
+    Returns
+    -------
+    str
+        Markdown, filled in from ``templates/errata.md``.
+    """
     rows = [[f"{r['theta']:g}", f"{r['height']:g}", millinewtons(r["force"]),
              millinewtons(r["force_printed_gamma"]), f"{100 * r['relative_change']:+.2f} %",
              millinewtons(r["force_no_weight"])] for r in e["rows"]]
@@ -137,6 +161,18 @@ def errata_section(e: dict) -> str:
 
 
 def differences(s: dict) -> str:
+    """The numbered list of where our numbers differ from the paper's, and why.
+
+    Parameters
+    ----------
+    s : dict
+        The run's summary (every stage).
+
+    Returns
+    -------
+    str
+        Markdown, filled in from ``templates/differences.md``.
+    """
     f5, c, t2, f26, f24, e = (s["fig5"], s["cantilever"], s["table2"], s["fig26"],
                               s["fig24"], s["errata"])
     paper = PAPER["table2"]

@@ -16,6 +16,20 @@ from .markdown import TESTS, md_table, millinewtons, num, render, scene_list
 
 
 def fig5_section(d: dict, quick: bool) -> str:
+    """The Fig. 5 / Sec. III-D section: the N the 0.01 % rule picks, and the rate.
+
+    Parameters
+    ----------
+    d : dict
+        What :func:`~lcpbench.paper.figures.fig5_discretisation` returned.
+    quick : bool
+        Whether the run used the coarse grid.
+
+    Returns
+    -------
+    str
+        Markdown, filled in from ``templates/fig5.md``.
+    """
     p = PAPER["fig5"]
     contact = [s for s in d["scenes"] if s["contact"] and s["chosen"] is not None]
     worst = [s for s in contact if s["chosen"] == d["grid_links"]]
@@ -67,6 +81,18 @@ def fig5_section(d: dict, quick: bool) -> str:
 
 
 def shapes_section(d: dict) -> str:
+    """The Figs. 6 and 7 section: constrained shapes against θ and h.
+
+    Parameters
+    ----------
+    d : dict
+        What :func:`~lcpbench.paper.figures.fig6_7_shapes` returned.
+
+    Returns
+    -------
+    str
+        Markdown, filled in from ``templates/shapes.md``.
+    """
     rows = [[f"{s['theta']:g}", f"{s['height']:g}", millinewtons(s["total_force"]),
              f"{s['span']:.3f}", f"{s['free_span']:.3f}", f"{s['touch_width']:.2f}",
              f"{s['max_y']:.4f}"] for s in d["fig6"] + d["fig7"]]
@@ -80,6 +106,18 @@ def shapes_section(d: dict) -> str:
 
 
 def fig8_section(d: dict) -> str:
+    """The Fig. 8 section: total force against θ, h and EI (Sec. III-F).
+
+    Parameters
+    ----------
+    d : dict
+        What :func:`~lcpbench.paper.figures.fig8_forces` returned.
+
+    Returns
+    -------
+    str
+        Markdown, filled in from ``templates/fig8.md``.
+    """
     fb = d["fits_b"]
     rows = [[f"{float(h):g}", num(d["first_contact_theta"].get(h), "g"),
              num(1e3 * fb[h]["slope"], ".4g") if h in fb else "—",
@@ -108,6 +146,18 @@ def fig8_section(d: dict) -> str:
 
 
 def cantilever_section(d: dict) -> str:
+    """The Sec. III-G / Fig. 10 section: the cantilever against beam theory (eqs. 33-37).
+
+    Parameters
+    ----------
+    d : dict
+        What :func:`~lcpbench.paper.figures.cantilever` returned.
+
+    Returns
+    -------
+    str
+        Markdown, filled in from ``templates/cantilever.md``.
+    """
     p = PAPER["cantilever"]
     rows = [
         ["model tip reaction", f"{p['model_mN']} mN", millinewtons(d["model_force"]),
@@ -146,6 +196,18 @@ def cantilever_section(d: dict) -> str:
 
 
 def fig24_section(d: dict) -> str:
+    """The Fig. 24 section (model side): force against pressure, eqs. (40)-(42).
+
+    Parameters
+    ----------
+    d : dict
+        What :func:`~lcpbench.paper.figures.fig24_pressure` returned.
+
+    Returns
+    -------
+    str
+        Markdown, filled in from ``templates/fig24.md``.
+    """
     rows = []
     for o in d["onset"]:
         lo, hi = o["band_at_max_pressure"]
