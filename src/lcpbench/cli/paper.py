@@ -39,7 +39,7 @@ def cmd_reproduce(args) -> int:
         return 2
     from tqdm import tqdm
 
-    from ..bench.reproduce import reproduce
+    from ..paper.reproduce import reproduce
 
     bar = tqdm(unit="stage", file=sys.stderr, desc="reproduce", dynamic_ncols=True)
 

@@ -1,6 +1,6 @@
 """The figures of ``lcpbench reproduce``, one function per figure of the paper.
 
-Each function takes the rows that :mod:`lcpbench.bench.reproduce` also writes
+Each function takes the rows that :mod:`lcpbench.paper.reproduce` also writes
 as CSV, so a figure can be redrawn from its numbers. They draw on a bare
 :class:`matplotlib.figure.Figure` with the Agg canvas (no pyplot, no global
 backend), like :mod:`lcpbench.bench.plot`.
