@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from lcpbench import ActuatorScene
-from lcpbench.studies.discretisation import discretisation_study
 from lcpbench.paper.reproduce import reproduce
+from lcpbench.studies.discretisation import discretisation_study
 
 ELL, EI, W = 30.0, 32.01, 2.45e-4  # the paper's defaults (Sec. III-D, IV-B)
 SAG = 5 * W * ELL**4 / (384 * EI)  # mid-span sag of a straight 30 mm beam under w (< 0.1 mm)

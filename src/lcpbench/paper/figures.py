@@ -22,9 +22,7 @@ from scipy.optimize import brentq
 
 from ..api import solve
 from ..model.chain import node_positions
-from ..studies.discretisation import discretisation_study
 from ..model.result import ContactResult
-from ..studies.validation import cantilever_validation, observed_order
 from ..problems.calibrations import (
     COMPARISON_PRESSURE_RANGES,
     KPA_PER_PSI,
@@ -41,6 +39,8 @@ from ..problems.scenes import (
     CantileverScene,
     Chain,
 )
+from ..studies.discretisation import discretisation_study
+from ..studies.validation import cantilever_validation, observed_order
 from .data import PAPER, RULE_THRESHOLD, SOLVER, TOL, Plan
 from .output import Output
 from .plots import plot_cantilever, plot_fig5, plot_fig8, plot_fig24, plot_shapes
