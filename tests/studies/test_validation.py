@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from lcpbench import ActuatorScene, CantileverScene, solve
-from lcpbench.studies.discretisation import discretisation_study
+from lcpbench.studies.discretisation import auto_links, discretisation_study
 from lcpbench.studies.validation import cantilever_validation, observed_order
 
 
@@ -53,8 +53,13 @@ def test_discretisation_study_follows_the_sec_IIID_rule():
     assert study.chosen == study.links[-1]
 
 
-def test_links_auto_uses_the_study():
+def test_auto_links_is_the_study_rule():
+    """auto_links picks the first N whose force changed by < 0.01 % from N - 10
+    (Sec. III-D), checked against solves at that N and the N before it."""
     scene = ActuatorScene(theta=150, height=3, links="auto")
-    res = solve(scene)
+    n = auto_links(scene)
     study = discretisation_study(ActuatorScene(theta=150, height=3))
-    assert res.links == study.chosen
+    assert n == study.chosen
+    f_n = solve(scene.with_links(n), tol=1e-8).total_force
+    f_prev = solve(scene.with_links(n - 10), tol=1e-8).total_force
+    assert abs(f_n - f_prev) / max(abs(f_n), abs(f_prev)) < 1e-4
