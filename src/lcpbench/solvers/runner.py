@@ -74,7 +74,7 @@ def _check_lcp(M, q):
             kind = {"c": "complex", "b": "bool"}.get(a.dtype.kind, str(a.dtype))
             raise ProblemError(f"{name} must be a real numeric array (int or float), "
                                f"got dtype {kind}")
-    M, q = M.astype(float), q.astype(float).ravel()
+    M, q = M.astype(float, copy=False), q.astype(float, copy=False).ravel()
     if M.ndim != 2 or M.shape != (q.size, q.size):
         raise ProblemError(f"M must be square of size len(q) = {q.size}, got shape {M.shape}")
     if q.size == 0:
