@@ -1,5 +1,13 @@
 """Test-suite configuration.
 
+BLAS runs on one thread for the whole test run, in this process and in every
+subprocess it starts (sweep workers, the Siconos worker): the path of a
+Newton-type method through a nearly singular system depends on the order of
+the floating-point sums, hence on the BLAS thread count, and a test must not
+depend on the machine it runs on. The variables are set before numpy is
+imported (pytest imports this file before any test module); threadpoolctl, if
+installed, also limits pools already loaded by a plug-in.
+
 Hypothesis runs derandomized by default, so CI sees the same examples every
 run (a red run is reproducible, a green one is not luck). Set
 ``HYPOTHESIS_PROFILE=explore`` to search with fresh random examples.
@@ -7,7 +15,20 @@ run (a red run is reproducible, a green one is not luck). Set
 
 import os
 
-from hypothesis import settings
+#: Thread-count variables of the BLAS/OpenMP builds numpy and the solvers use.
+BLAS_THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
+                         "BLIS_NUM_THREADS", "VECLIB_MAXIMUM_THREADS", "NUMEXPR_NUM_THREADS")
+for _name in BLAS_THREAD_VARIABLES:
+    os.environ[_name] = "1"
+
+try:  # pools loaded before this file (by a plug-in) ignore the variables above
+    from threadpoolctl import threadpool_limits
+except ImportError:  # optional: the variables suffice when numpy is not yet loaded
+    _BLAS_LIMIT = None
+else:
+    _BLAS_LIMIT = threadpool_limits(limits=1)  # kept alive for the whole run
+
+from hypothesis import settings  # noqa: E402  (after the thread pinning, on purpose)
 
 settings.register_profile("repeatable", derandomize=True)
 settings.register_profile("explore", derandomize=False)

@@ -14,6 +14,7 @@ import pytest
 import scipy.sparse as sp
 
 from lcpbench.errors import ProblemError
+from lcpbench.problems import lcpfile
 from lcpbench.problems.lcpfile import LCPProblem, read_lcp, write_lcp
 from lcpbench.solvers.lemke import lemke
 
@@ -268,3 +269,59 @@ def test_write_rejects_bad_input(tmp_path, M, q, kw, match):
 def test_write_unknown_suffix_raises(tmp_path):
     with pytest.raises(ProblemError, match=r"unknown LCP file suffix '\.txt'"):
         write_lcp(tmp_path / "p.txt", np.eye(2), np.ones(2))
+
+
+# -- size guards: refused before anything is allocated ----------------------------------
+def test_sparse_block_dat_declaring_a_huge_size_is_refused(tmp_path):
+    # n = 60000: a dense M of 60000² x 8 bytes = 26.8 GiB, declared in a 60-byte file
+    path = tmp_path / "huge_block.dat"
+    path.write_text("60000\n1\n60000 60000\n1\n1 1\n60000\n60000\n2 1\n0 1\n0\n0\n1.0\n")
+    with pytest.raises(ProblemError) as info:
+        read_lcp(path)
+    msg = str(info.value)
+    assert "n = 60000" in msg and "26.8 GiB" in msg
+    assert f"at most n = {lcpfile.MAX_SIZE}" in msg
+
+
+def test_dense_dat_at_the_limit_plus_one_is_refused_from_its_header(tmp_path):
+    path = tmp_path / "big.dat"
+    n = lcpfile.MAX_SIZE + 1
+    path.write_text(f"{n}\n0\n{n} {n}\n{n} {n}\n1.0\n")
+    with pytest.raises(ProblemError, match=f"n = {n}"):
+        read_lcp(path)
+
+
+def _npy_header_only(shape) -> bytes:
+    """The bytes of a .npy file whose header declares ``shape`` (float64) and no data."""
+    import io
+
+    buf = io.BytesIO()
+    np.lib.format.write_array_header_1_0(
+        buf, {"descr": "<f8", "fortran_order": False, "shape": shape})
+    return buf.getvalue()
+
+
+@pytest.mark.parametrize("shape_M,shape_q,bad", [
+    ((2**30, 2**30), (2**30,), "M"),  # 8 EiB declared
+    ((2, 2), (10**12,), "q"),
+])
+def test_npz_header_declaring_a_huge_array_is_refused(tmp_path, shape_M, shape_q, bad):
+    import zipfile
+
+    path = tmp_path / "huge.npz"
+    with zipfile.ZipFile(path, "w") as zf:
+        zf.writestr("M.npy", _npy_header_only(shape_M))
+        zf.writestr("q.npy", _npy_header_only(shape_q))
+    with pytest.raises(ProblemError) as info:
+        read_lcp(path)
+    msg = str(info.value)
+    assert f"array {bad} declares shape" in msg and "GiB" in msg
+    assert f"n <= {lcpfile.MAX_SIZE}" in msg
+
+
+def test_npz_of_normal_size_still_reads(tmp_path):
+    M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-1.0, 1.0])
+    path = write_lcp(tmp_path / "ok.npz", M, q)
+    prob = read_lcp(path)
+    np.testing.assert_array_equal(prob.M, M)
+    np.testing.assert_array_equal(prob.q, q)

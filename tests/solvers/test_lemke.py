@@ -335,3 +335,25 @@ def test_pentadiagonal_spd_n139_like_the_contact_step():
                    bounds=[(0, None)] * n, method="L-BFGS-B",
                    options={"ftol": 1e-15, "gtol": 1e-12, "maxiter": 10000})
     assert np.allclose(sol.z, ref.x, atol=1e-5 * np.abs(ref.x).max())
+
+
+# -- size guard -------------------------------------------------------------------------
+def test_tableau_over_the_memory_bound_is_failed_before_allocating():
+    from lcpbench.solvers import lemke as lemke_mod
+
+    n = lemke_mod._max_size() + 1
+    assert lemke_mod.tableau_bytes(n) > lemke_mod.MAX_TABLEAU_BYTES
+    assert lemke_mod.tableau_bytes(n - 1) <= lemke_mod.MAX_TABLEAU_BYTES
+    M = np.broadcast_to(np.float64(1.0), (n, n))  # a view: no n x n memory
+    sol = lemke(M, -np.ones(n))
+    assert sol.status is Status.FAILED
+    assert f"n = {n}" in sol.message and "GiB" in sol.message and "limit" in sol.message
+    assert sol.iterations == 0
+
+
+def test_size_guard_message_at_the_documented_maximum():
+    from lcpbench.solvers import lemke as lemke_mod
+
+    msg = lemke_mod.too_large(100_000)  # the scenes' largest N
+    assert msg.startswith("problem too large for dense Lemke: n = 100000 needs a 74.51 GiB")
+    assert lemke_mod.too_large(140) is None

@@ -74,12 +74,17 @@ NEEDS_A_BOUND = {"cvxpy-SCS"}
 LOOSE_AT_MID = (5e-3, 5e-5, 1e-4)
 ACCURACY = {name: LOOSE_AT_MID for name in BACKENDS
             if any(k in name.lower() for k in ("clarabel", "piqp", "proxsuite", "proxqp"))}
-#: back-end -> why the random tests may fail on it (data; not strict: hypothesis
-#: does not hit the bad case every run).
+#: (back-end, profile) -> why the random tests fail on it. Strict: the examples are
+#: derandomized (the same on every machine and run), so an xpass means the expectation
+#: is out of date. cvxpy-PROXQP at 'high' is not listed: it passes the 10 examples
+#: drawn here, though a separate run over 200 fresh random QPs of the same
+#: strategy found 6 where it declares 'solved'
+#: with complementarity up to 1.5e-4 and x off by 1.2e-4 -- the same missing
+#: duality-gap check, at a smaller scale.
 XFAIL_RANDOM = {
-    "cvxpy-PROXQP": "cvxpy's ProxQP interface passes only eps_abs/eps_rel, so ProxQP runs "
-                    "without its duality-gap check and declares 'solved' up to 7e-2 away "
-                    "from x* at 'mid' (1e-4 at 'high')",
+    ("cvxpy-PROXQP", "mid"):
+        "cvxpy's ProxQP interface passes only eps_abs/eps_rel, so ProxQP runs without "
+        "its duality-gap check and declares 'solved' up to 7e-2 away from x* at 'mid'",
 }
 
 def run(name: str, qp: BoxQP, profile: str = "mid", warm: QPWarm | None = None) -> QPResult:
@@ -246,13 +251,13 @@ def _check_random(name: str, qp: BoxQP, profile: str) -> None:
     assert r["complementarity"] <= kkt_tol * scale, r
 
 
-def _random_grid():
+def _random_grid(profile: str):
     return [pytest.param(name, id=name, marks=(
-        (pytest.mark.xfail(reason=XFAIL_RANDOM[name], strict=False),)
-        if name in XFAIL_RANDOM else ())) for name in BACKENDS]
+        (pytest.mark.xfail(reason=XFAIL_RANDOM[name, profile], strict=True),)
+        if (name, profile) in XFAIL_RANDOM else ())) for name in BACKENDS]
 
 
-@pytest.mark.parametrize("name", _random_grid())
+@pytest.mark.parametrize("name", _random_grid("mid"))
 @settings(max_examples=20, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow])
 @given(qp=random_box_qps())
@@ -261,7 +266,7 @@ def test_random_spd_mid(name, qp):
     _check_random(name, qp, "mid")
 
 
-@pytest.mark.parametrize("name", _random_grid())
+@pytest.mark.parametrize("name", _random_grid("high"))
 @settings(max_examples=10, deadline=None, derandomize=True,
           suppress_health_check=[HealthCheck.too_slow])
 @given(qp=random_box_qps())

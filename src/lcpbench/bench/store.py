@@ -7,32 +7,57 @@ opened. A run is identified by (scene, back-end, settings, tol, method): a
 restarted sweep skips what is already there, and ``replace=True`` (the
 CLI's ``--rerun``) overwrites it. Nothing else ever overwrites a row.
 
-A file that is not an lcpbench store (not SQLite, another program's
-database, another schema version, a failed integrity check) raises
-:class:`~lcpbench.errors.StoreError` and is left untouched.
+A file that is not an lcpbench store raises
+:class:`~lcpbench.errors.StoreError` in one line and is left untouched (its
+bytes and modification time: it is inspected through a read-only
+connection): not SQLite, a failed integrity check, an empty file (0 bytes),
+an SQLite database with no tables, or with only views or other programs'
+tables, a ``meta`` table of another shape, a newer schema version, or
+missing ``runs``/``refs`` tables.
+
+Sweeps take an exclusive lock (:meth:`Store.lock`): ``flock`` on
+``<store>.lock`` beside the store, which records who holds it (pid, host,
+start time, owner, sweep id). A second sweep on the same store gets a
+StoreError naming the holder, or waits with ``wait=True``. The kernel drops
+the lock when its process dies, so a stale lock file never blocks. Every run
+written while the lock is held carries its ``sweep_id``, so a report can
+count only what one sweep wrote (``Store.runs(sweep_id=...)``).
 
 Tables
 ------
 ``runs``        one row per (scene, back-end, settings, tol, method): status,
-                forces, gaps, shape, iterations, times, certificate.
+                forces, gaps, shape, iterations, times, certificate, and the
+                ``sweep_id`` of the sweep that wrote it (NULL: written
+                without a lock, or before schema 2).
 ``refs``        the per-scene high-accuracy reference, computed once.
+``sweeps``      one row per locked sweep: id, owner, pid, host, start time.
 ``meta``        schema version and when the store was created.
+
+Schema versions: 1 (no ``sweep_id``, no ``sweeps``) is read as it is and
+migrated to 2 in one transaction the first time it is written to (a run, or
+a lock); a version above :data:`SCHEMA_VERSION` is refused.
 """
 
 from __future__ import annotations
 
 import csv
+import fcntl
 import json
 import os
+import socket
 import sqlite3
 import time
+import uuid
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import StoreError
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+#: Older versions this lcpbench reads, and migrates when it writes.
+READABLE_VERSIONS = (1, 2)
 DEFAULT_STORE = Path("results") / "lcpbench.sqlite"
 
 RUN_KEY = ("scene", "backend", "settings", "tol", "method")
@@ -54,8 +79,11 @@ CREATE TABLE IF NOT EXISTS runs (
     status TEXT NOT NULL, converged INTEGER NOT NULL, reason TEXT, total_force REAL,
     outer_iterations INTEGER, inner_iterations INTEGER, wall_time REAL, solver_time REAL,
     certificate TEXT, version TEXT, created TEXT,
-    forces BLOB, gaps BLOB, x BLOB, y BLOB,
+    forces BLOB, gaps BLOB, x BLOB, y BLOB, sweep_id TEXT,
     PRIMARY KEY ({", ".join(RUN_KEY)})
+);
+CREATE TABLE IF NOT EXISTS sweeps (
+    sweep_id TEXT PRIMARY KEY, owner TEXT, pid INTEGER, host TEXT, started TEXT
 );
 CREATE TABLE IF NOT EXISTS refs (
     scene TEXT PRIMARY KEY,
@@ -65,6 +93,22 @@ CREATE TABLE IF NOT EXISTS refs (
     forces BLOB, gaps BLOB, x BLOB, y BLOB
 );
 """
+
+_MIGRATE_1_TO_2 = """
+BEGIN;
+ALTER TABLE runs ADD COLUMN sweep_id TEXT;
+CREATE TABLE IF NOT EXISTS sweeps (
+    sweep_id TEXT PRIMARY KEY, owner TEXT, pid INTEGER, host TEXT, started TEXT
+);
+UPDATE meta SET value = '2' WHERE key = 'schema';
+COMMIT;
+"""
+#: Columns an existing store must have, per table (a subset check).
+_REQUIRED = {
+    "meta": ("key", "value"),
+    "runs": (*RUN_KEY, *SCENE_COLUMNS, *RUN_SCALARS, *ARRAYS),
+    "refs": ("scene", *SCENE_COLUMNS, *REF_SCALARS, *ARRAYS),
+}
 
 
 def _blob(values) -> bytes | None:
@@ -79,62 +123,198 @@ class Store:
     """An lcpbench results store at ``path`` (created, with its folder, if absent).
 
     Use as a context manager, or call :meth:`close`.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The SQLite file.
+    create : bool
+        Create the store if the file does not exist (else StoreError).
+
+    Attributes
+    ----------
+    schema : int
+        The schema version of the file (1 until first written to, then 2).
+    sweep_id : str or None
+        The id of the sweep holding :meth:`lock` through this object; stamped
+        on every run :meth:`put_run` writes meanwhile.
     """
 
     def __init__(self, path: str | os.PathLike = DEFAULT_STORE, *, create: bool = True):
         self.path = Path(path)
+        self.sweep_id: str | None = None
+        self.schema = SCHEMA_VERSION
+        where = f"store {self.path}"
         if self.path.is_dir():
-            raise StoreError(f"store {self.path}: is a folder; give a file path (e.g. "
+            raise StoreError(f"{where}: is a folder; give a file path (e.g. "
                              f"{self.path / 'lcpbench.sqlite'})")
-        exists = self.path.exists() and self.path.stat().st_size > 0
+        exists = self.path.exists()
         if not exists and not create:
-            raise StoreError(f"store {self.path}: no such file (run `lcpbench sweep` first)")
-        if not exists:
+            raise StoreError(f"{where}: no such file (run `lcpbench sweep` first)")
+        if exists:
+            if self.path.stat().st_size == 0:
+                raise StoreError(f"{where}: an empty file (0 bytes), not an lcpbench store; "
+                                 "it was left as it is: remove it or pass another --store")
+            self.schema = self._inspect()
+        else:
             try:
                 self.path.parent.mkdir(parents=True, exist_ok=True)
             except OSError as exc:
-                raise StoreError(f"store {self.path}: cannot create its folder ({exc})") from exc
+                raise StoreError(f"{where}: cannot create its folder ({exc})") from exc
         try:
             self.db = sqlite3.connect(self.path, timeout=30.0)
         except sqlite3.Error as exc:
-            raise StoreError(f"store {self.path}: cannot open it ({exc})") from exc
+            raise StoreError(f"{where}: cannot open it ({exc})") from exc
         try:
-            self._check_or_create(exists)
+            if not exists:
+                self._create()
         except BaseException:
             self.db.close()
             raise
 
     # -- opening ------------------------------------------------------------------
-    def _check_or_create(self, exists: bool) -> None:
+    def _inspect(self) -> int:
+        """Check an existing file is an lcpbench store without writing to it; its schema."""
         where = f"store {self.path}"
+        left = "it was left as it is: move it away or pass another --store"
+        hot = any(Path(f"{self.path}{s}").exists() for s in ("-journal", "-wal"))
         try:
-            ok = self.db.execute("PRAGMA quick_check").fetchone()[0]
-            tables = {r[0] for r in self.db.execute(
-                "SELECT name FROM sqlite_master WHERE type = 'table'")}
-        except sqlite3.DatabaseError as exc:
-            raise StoreError(f"{where}: not a readable SQLite file ({exc}); it was left as "
-                             "it is: move it away or pass another --store") from exc
-        if ok != "ok":
-            raise StoreError(f"{where}: fails SQLite's integrity check ({ok}); it was left "
-                             "as it is: move it away or pass another --store")
-        if exists and tables and "meta" not in tables:
-            raise StoreError(f"{where}: an SQLite file that is not an lcpbench store "
-                             f"(tables {', '.join(sorted(tables))}); it was left as it is")
-        if "meta" in tables:
-            row = self.db.execute("SELECT value FROM meta WHERE key = 'schema'").fetchone()
-            if row is None or row[0] != str(SCHEMA_VERSION):
-                found = "none" if row is None else row[0]
-                raise StoreError(f"{where}: schema version {found}, this lcpbench writes "
-                                 f"{SCHEMA_VERSION}; it was left as it is: move it away or "
-                                 "pass another --store")
-            return
+            # read-only, so a foreign file is never modified; a hot journal (a commit
+            # cut short by a kill) needs a writable connection to be rolled back
+            uri = self.path.resolve().as_uri() + ("" if hot else "?mode=ro")
+            db = sqlite3.connect(uri, uri=True, timeout=30.0)
+        except sqlite3.Error as exc:
+            raise StoreError(f"{where}: cannot open it ({exc})") from exc
+        try:
+            try:
+                ok = db.execute("PRAGMA quick_check").fetchone()[0]
+                objects = db.execute("SELECT type, name FROM sqlite_master "
+                                     "WHERE name NOT LIKE 'sqlite_%'").fetchall()
+                tables = {name for kind, name in objects if kind == "table"}
+                columns = {t: [r[1] for r in db.execute(f"PRAGMA table_info({t})")]
+                           for t in _REQUIRED if t in tables}
+            except sqlite3.DatabaseError as exc:
+                raise StoreError(f"{where}: not a readable SQLite file ({exc}); "
+                                 f"{left}") from exc
+            if ok != "ok":
+                raise StoreError(f"{where}: fails SQLite's integrity check ({ok}); {left}")
+            if "meta" not in tables:
+                found = ", ".join(f"{k} {n}" for k, n in sorted(objects)) or "nothing"
+                raise StoreError(f"{where}: an SQLite file that is not an lcpbench store "
+                                 f"(holds {found}); {left}")
+            if columns["meta"] != list(_REQUIRED["meta"]):
+                raise StoreError(f"{where}: its meta table has columns "
+                                 f"({', '.join(columns['meta'])}), not (key, value): not an "
+                                 f"lcpbench store; {left}")
+            row = db.execute("SELECT value FROM meta WHERE key = 'schema'").fetchone()
+            found = "none" if row is None else str(row[0])
+            if found not in {str(v) for v in READABLE_VERSIONS}:
+                raise StoreError(f"{where}: schema version {found}, this lcpbench reads "
+                                 f"{', '.join(map(str, READABLE_VERSIONS))}; {left}")
+            for table, need in _REQUIRED.items():
+                missing = [c for c in need if c not in columns.get(table, [])]
+                if missing:
+                    what = (f"no {table} table" if table not in columns else
+                            f"table {table} lacks column(s) {', '.join(missing)}")
+                    raise StoreError(f"{where}: not a complete lcpbench store ({what}); {left}")
+            return int(found)
+        finally:
+            db.close()
+
+    def _create(self) -> None:
         try:
             with self.db:
                 self.db.executescript(_SCHEMA)
                 self.db.execute("INSERT INTO meta VALUES ('schema', ?)", (str(SCHEMA_VERSION),))
                 self.db.execute("INSERT INTO meta VALUES ('created', ?)", (_now(),))
         except sqlite3.Error as exc:
-            raise StoreError(f"{where}: cannot write to it ({exc})") from exc
+            raise StoreError(f"store {self.path}: cannot write to it ({exc})") from exc
+
+    def _upgrade(self) -> None:
+        """Migrate a schema-1 store to the current schema (one transaction)."""
+        if self.schema == SCHEMA_VERSION:
+            return
+        try:
+            self.db.executescript(_MIGRATE_1_TO_2)
+        except sqlite3.Error as exc:
+            if self.db.in_transaction:
+                self.db.rollback()
+            raise StoreError(f"store {self.path}: cannot migrate it from schema version "
+                             f"{self.schema} to {SCHEMA_VERSION} ({exc})") from exc
+        self.schema = SCHEMA_VERSION
+
+    # -- the sweep lock -----------------------------------------------------------
+    @property
+    def lock_path(self) -> Path:
+        """The lock file beside the store: ``<store>.lock``."""
+        return self.path.with_name(self.path.name + ".lock")
+
+    @contextmanager
+    def lock(self, owner: str = "lcpbench sweep", *, wait: bool = False):
+        """Hold the store's exclusive sweep lock; yields the new ``sweep_id``.
+
+        Parameters
+        ----------
+        owner : str
+            What holds the lock, shown to whoever finds it taken.
+        wait : bool
+            Block until the lock is free instead of raising.
+
+        Yields
+        ------
+        str
+            The sweep's id, also set as :attr:`sweep_id` (and recorded in the
+            ``sweeps`` table) until the block ends.
+
+        Raises
+        ------
+        StoreError
+            ``"store X is locked by pid N on host H (owner, started T); ..."``
+            when another sweep holds it and ``wait`` is False, or the lock file
+            cannot be created.
+        """
+        try:
+            fh = open(self.lock_path, "a+")
+        except OSError as exc:
+            raise StoreError(f"store {self.path}: cannot create its lock file "
+                             f"{self.lock_path} ({exc.strerror or exc})") from exc
+        try:
+            try:
+                fcntl.flock(fh, fcntl.LOCK_EX | (0 if wait else fcntl.LOCK_NB))
+            except BlockingIOError:
+                raise StoreError(f"store {self.path} is locked by {self._holder()}; wait for "
+                                 "it to finish, or use --wait") from None
+            sweep_id = uuid.uuid4().hex
+            info = {"pid": os.getpid(), "host": socket.gethostname(), "owner": owner,
+                    "started": _now(), "sweep_id": sweep_id}
+            fh.seek(0)
+            fh.truncate()
+            fh.write(json.dumps(info) + "\n")
+            fh.flush()
+            self._upgrade()
+            self._write("INSERT INTO sweeps (sweep_id, owner, pid, host, started) "
+                        "VALUES (?, ?, ?, ?, ?)", (sweep_id, owner, info["pid"], info["host"],
+                                                   info["started"]))
+            self.sweep_id = sweep_id
+            try:
+                yield sweep_id
+            finally:
+                self.sweep_id = None
+                fh.seek(0)
+                fh.truncate()
+        finally:
+            fh.close()  # closing the file releases the flock
+
+    def _holder(self) -> str:
+        """Who holds the lock, from the lock file (best effort)."""
+        try:
+            info = json.loads(self.lock_path.read_text() or "{}")
+        except (OSError, ValueError):
+            info = {}
+        if not info:
+            return "another process (no details recorded yet)"
+        return (f"pid {info.get('pid', '?')} on host {info.get('host', '?')} "
+                f"({info.get('owner', '?')}, started {info.get('started', '?')})")
 
     def close(self) -> None:
         self.db.close()
@@ -159,7 +339,9 @@ class Store:
         Returns False, writing nothing, when the run is already there and
         ``replace`` is False.
         """
-        cols = (*RUN_KEY, *SCENE_COLUMNS, *RUN_SCALARS, *ARRAYS)
+        self._upgrade()
+        row = {**row, "sweep_id": row.get("sweep_id", self.sweep_id)}
+        cols = (*RUN_KEY, *SCENE_COLUMNS, *RUN_SCALARS, *ARRAYS, "sweep_id")
         values = tuple(_blob(row.get(c)) if c in ARRAYS else _cell(row.get(c)) for c in cols)
         verb = "INSERT OR REPLACE" if replace else "INSERT OR IGNORE"
         before = self.db.total_changes
@@ -168,6 +350,7 @@ class Store:
         return self.db.total_changes > before
 
     def put_ref(self, row: dict, *, replace: bool = False) -> None:
+        self._upgrade()
         cols = ("scene", *SCENE_COLUMNS, *REF_SCALARS, *ARRAYS)
         values = tuple(_blob(row.get(c)) if c in ARRAYS else _cell(row.get(c)) for c in cols)
         verb = "INSERT OR REPLACE" if replace else "INSERT OR IGNORE"
@@ -187,9 +370,31 @@ class Store:
     def ref_keys(self) -> set[str]:
         return {r[0] for r in self._query("SELECT scene FROM refs")}
 
-    def runs(self, *, arrays: bool = True, where: str = "", params: tuple = ()) -> list[dict]:
-        """Every run as a dict (arrays as numpy arrays when ``arrays``), in a fixed order."""
-        return self._rows("runs", RUN_KEY, arrays, where, params)
+    def runs(self, *, arrays: bool = True, where: str = "", params: tuple = (),
+             sweep_id: str | None = None) -> list[dict]:
+        """Every run as a dict (arrays as numpy arrays when ``arrays``), in a fixed order.
+
+        ``where``/``params``: an SQL ``WHERE`` clause and its values. ``sweep_id``:
+        only the runs that sweep wrote (none, on a schema-1 store). Each row has
+        a ``sweep_id`` key (None for runs written without a lock).
+        """
+        if sweep_id is not None:
+            if self.schema < 2:
+                return []
+            where = f"{where} AND sweep_id = ?" if where else "WHERE sweep_id = ?"
+            params = (*params, sweep_id)
+        rows = self._rows("runs", RUN_KEY, arrays, where, params)
+        for r in rows:
+            r.setdefault("sweep_id", None)
+        return rows
+
+    def sweeps(self) -> list[dict]:
+        """The locked sweeps recorded in the store, oldest first (none on schema 1)."""
+        if self.schema < 2:
+            return []
+        cols = ("sweep_id", "owner", "pid", "host", "started")
+        return [dict(zip(cols, r)) for r in self._query(
+            f"SELECT {', '.join(cols)} FROM sweeps ORDER BY started, rowid")]
 
     def refs(self, *, arrays: bool = True) -> dict[str, dict]:
         return {r["scene"]: r for r in self._rows("refs", ("scene",), arrays, "", ())}
@@ -210,8 +415,11 @@ class Store:
             out.append(row)
         return out
 
-    def count(self, table: str = "runs") -> int:
-        return int(self._query(f"SELECT COUNT(*) FROM {table}")[0][0])
+    def count(self, table: str = "runs", *, sweep_id: str | None = None) -> int:
+        """Rows of ``table``; of ``runs``, only those of ``sweep_id`` if given."""
+        if sweep_id is None:
+            return int(self._query(f"SELECT COUNT(*) FROM {table}")[0][0])
+        return len(self.runs(arrays=False, sweep_id=sweep_id))
 
     def export_csv(self, path: str | os.PathLike) -> int:
         """Write every run, joined with its reference force, as CSV; returns the row count."""

@@ -34,7 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ProblemError
-from .scenes import DEFAULT_EI, DEFAULT_WEIGHT, ActuatorScene, _finite
+from .checks import check_number, describe
+from .scenes import DEFAULT_EI, DEFAULT_WEIGHT, EI_RANGE, WEIGHT_RANGE, ActuatorScene
 
 KPA_PER_PSI = 6.894757293168361  # 1 psi in kPa
 
@@ -56,11 +57,11 @@ Number = float | np.ndarray
 def _as_float_array(name: str, value, what: str) -> np.ndarray:
     """``value`` as a float array, or ProblemError naming ``name`` (strings are refused)."""
     try:
-        if isinstance(value, (str, bytes)):
-            raise TypeError
+        if isinstance(value, (str, bytes)) or np.asarray(value).dtype.kind not in "iuf":
+            raise TypeError  # strings, bools, complex values, None and objects
         arr = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as exc:
-        raise ProblemError(f"{name} must be {what}, got {value!r}") from exc
+        raise ProblemError(f"{name} must be {what}, got {describe(value)}") from exc
     if arr.size == 0 or not np.all(np.isfinite(arr)):
         raise ProblemError(f"{name} must be {what}, got {value!r}")
     return arr
@@ -69,11 +70,10 @@ def _as_float_array(name: str, value, what: str) -> np.ndarray:
 def _range(name: str, value, centre: float, unit: str) -> tuple[float, float] | None:
     if value is None:
         return None
-    try:
-        lo, hi = (float(v) for v in value)
-    except (TypeError, ValueError) as exc:
+    if isinstance(value, (str, bytes)) or np.ndim(value) != 1 or len(value) != 2:
         raise ProblemError(f"{name} must be a pair (min, max) in {unit} or None, "
-                           f"got {value!r}") from exc
+                           f"got {describe(value)}")
+    lo, hi = (check_number(f"{name}[{k}]", v, unit=unit) for k, v in enumerate(value))
     if not (math.isfinite(lo) and math.isfinite(hi) and lo <= centre <= hi):
         raise ProblemError(f"{name} must be finite (min, max) {unit} with min <= {centre:g} "
                            f"<= max, got ({lo:g}, {hi:g})")
@@ -121,34 +121,28 @@ class Calibration:
     def __post_init__(self):
         if not isinstance(self.name, str) or not self.name:
             raise ProblemError(f"name must be a non-empty string, got {self.name!r}")
-        slope = _finite("slope", self.slope)
+        slope = check_number("slope", self.slope, unit="degrees per unit pressure")
         if slope == 0:
             raise ProblemError("slope must be nonzero degrees per unit pressure (a constant "
                                "bend angle cannot be inverted), got 0")
         object.__setattr__(self, "slope", slope)
-        object.__setattr__(self, "intercept", _finite("intercept", self.intercept))
+        object.__setattr__(self, "intercept", check_number("intercept", self.intercept,
+                                                                unit="degrees"))
         if not isinstance(self.pressure_unit, str) or not self.pressure_unit:
             raise ProblemError(f"pressure_unit must be a non-empty string, "
                                f"got {self.pressure_unit!r}")
         for name in ("p_min", "p_max"):
             value = getattr(self, name)
-            try:
-                value = float(value)
-            except (TypeError, ValueError) as exc:
-                raise ProblemError(f"{name} must be a number, got {value!r}") from exc
-            if math.isnan(value):
-                raise ProblemError(f"{name} must be a number, got nan")
-            object.__setattr__(self, name, value)
+            if not (isinstance(value, (float, np.floating)) and math.isinf(value)):
+                value = check_number(name, value, alternative="±inf (no limit)")
+            object.__setattr__(self, name, float(value))
         if not self.p_min < self.p_max:
             raise ProblemError(f"p_min must be < p_max, got p_min={self.p_min:g}, "
                                f"p_max={self.p_max:g} {self.pressure_unit}")
-        EI = _finite("EI", self.EI)
-        if EI <= 0:
-            raise ProblemError(f"EI must be > 0 N·mm², got {EI:g}")
+        EI = check_number("EI", self.EI, low=EI_RANGE[0], high=EI_RANGE[1], unit="N·mm²")
         object.__setattr__(self, "EI", EI)
-        weight = _finite("weight", self.weight)
-        if weight < 0:
-            raise ProblemError(f"weight must be >= 0 N/mm, got {weight:g}")
+        weight = check_number("weight", self.weight, low=WEIGHT_RANGE[0], high=WEIGHT_RANGE[1],
+                              unit="N/mm")
         object.__setattr__(self, "weight", weight)
         object.__setattr__(self, "EI_range", _range("EI_range", self.EI_range, EI, "N·mm²"))
         object.__setattr__(self, "weight_range",

@@ -30,6 +30,15 @@ collection and checked against their dense siblings (``lcp_ortiz`` is
 non-symmetric, so it also pins down the column-major order inside a block).
 
 ``.npz``: arrays named ``M`` (n x n) and ``q`` (n).
+
+Size limit
+----------
+``M`` is read into a dense float64 array, so a file may declare at most
+:data:`MAX_SIZE` = 16384 complementarity pairs (M then takes 2 GiB). The
+size is checked as soon as it is known — the header of a ``.dat`` file, the
+``.npy`` headers inside an ``.npz`` archive — before anything is allocated:
+a file declaring more is refused with a ProblemError that gives the declared
+size, the memory it would need and the limit (never a MemoryError).
 """
 
 from __future__ import annotations
@@ -48,6 +57,21 @@ from lcpbench.errors import ProblemError
 FORMATS = ("dat", "npz")
 
 _INT = re.compile(r"[+-]?\d+\Z")
+
+#: Largest n read into a dense n x n float64 M (16384² x 8 bytes = 2 GiB).
+MAX_SIZE = 16384
+
+
+def _gib(nbytes: float) -> str:
+    return f"{nbytes / 2**30:.3g} GiB"
+
+
+def check_size(n: int, where: str) -> None:
+    """ProblemError unless an LCP of size ``n`` fits :data:`MAX_SIZE` (before allocating)."""
+    if n > MAX_SIZE:
+        raise ProblemError(
+            f"{where}: declares an LCP of size n = {n} (a dense M of {_gib(8.0 * n * n)}); "
+            f"lcpbench reads at most n = {MAX_SIZE} ({_gib(8.0 * MAX_SIZE**2)})")
 
 
 @dataclass
@@ -221,6 +245,7 @@ def _read_block(tk: _Tokens, size0: int, size1: int) -> np.ndarray:
 def _read_dat(path: Path, text: str) -> LCPProblem:
     tk = _Tokens(path, text)
     n = tk.integer("the problem size n", 1)
+    check_size(n, str(path))
     storage = tk.integer("the storage code (0 dense, 1 sparse block)")
     if storage not in (0, 1):
         raise tk.error(f"unknown storage code {storage}; expected 0 (dense) or "
@@ -256,12 +281,34 @@ def _read_npz(path: Path) -> LCPProblem:
             if missing:
                 raise ProblemError(f"{path}: missing array(s) {', '.join(missing)}; "
                                    f"found {', '.join(data.files) or 'none'}")
+            _check_npz_headers(data, path)
             try:
                 M, q = data["M"], data["q"]
             except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
                 raise ProblemError(f"{path}: cannot read arrays M and q ({exc})") from exc
     M, q = _check_arrays(M, q, str(path))
     return LCPProblem(M=M, q=q, name=path.stem)
+
+
+def _check_npz_headers(data, path: Path) -> None:
+    """Refuse M or q whose ``.npy`` header declares more than :data:`MAX_SIZE` rows."""
+    for key in ("M", "q"):
+        try:
+            with data.zip.open(f"{key}.npy") as fh:
+                version = np.lib.format.read_magic(fh)
+                read = (np.lib.format.read_array_header_1_0 if version == (1, 0)
+                        else np.lib.format.read_array_header_2_0)
+                shape, _, dtype = read(fh)
+        except (OSError, ValueError, EOFError, KeyError, zipfile.BadZipFile) as exc:
+            raise ProblemError(f"{path}: cannot read the header of array {key} ({exc})") from exc
+        if any(int(d) > MAX_SIZE for d in shape) or len(shape) > 2:
+            size = max(int(d) for d in shape) if shape else 0
+            nbytes = float(np.prod([float(d) for d in shape])) * dtype.itemsize
+            raise ProblemError(
+                f"{path}: array {key} declares shape {tuple(shape)} ({_gib(nbytes)}); "
+                f"lcpbench reads LCPs of size n <= {MAX_SIZE} (M at most "
+                f"{_gib(8.0 * MAX_SIZE**2)})" if size > MAX_SIZE else
+                f"{path}: array {key} must have at most 2 dimensions, got shape {tuple(shape)}")
 
 
 def read_lcp(path: str | os.PathLike, *, fmt: str | None = None) -> LCPProblem:

@@ -24,6 +24,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import ProblemError
+from .checks import check_flag, check_number
 
 MIN_LINKS = 4
 MAX_LINKS = 100_000
@@ -35,36 +36,28 @@ DEFAULT_WEIGHT = 2.45e-4  # N/mm
 DEFAULT_LINKS = 140
 
 
-def _finite(name: str, value: float) -> float:
-    try:
-        value = float(value)
-    except (TypeError, ValueError) as exc:
-        raise ProblemError(f"{name} must be a number, got {value!r}") from exc
-    if not math.isfinite(value):
-        raise ProblemError(f"{name} must be finite, got {value}")
-    return value
+#: Allowed ranges of the scene fields, in the user's units. Wide enough for every
+#: scene in the paper, the tests and the benchmark grids (ℓ 10-90 mm, EI 1-1000,
+#: h from 0.02 ℓ to 1e3 mm, N up to 1e5); narrow enough that the
+#: nondimensionalised problem (lengths by ℓ, forces by EI/ℓ²) stays far from
+#: overflow and underflow in double precision.
+LENGTH_RANGE = (1e-3, 1e5)  # mm
+HEIGHT_RANGE = (1e-6, 1e6)  # mm: h > 0 (the pins sit on y = 0), at least 1 nm
+EI_RANGE = (1e-6, 1e9)  # N·mm²
+WEIGHT_RANGE = (0.0, 1e3)  # N/mm; 0 turns gravity off
+LOAD_RANGE = (0.0, 1e6)  # N/mm (the cantilever's distributed load)
 
 
-def _positive(name: str, value: float, unit: str) -> float:
-    value = _finite(name, value)
-    if value <= 0:
-        raise ProblemError(f"{name} must be > 0 {unit}, got {value:g}")
-    return value
+def _links(value, *, auto: bool = True) -> int | str:
+    """N: an integer in [MIN_LINKS, MAX_LINKS], or 'auto' when ``auto``."""
+    if auto and isinstance(value, str) and value == "auto":
+        return value
+    return check_number("links", value, low=MIN_LINKS, high=MAX_LINKS, integer=True,
+                        alternative="'auto'" if auto else "")
 
 
-def _links(value) -> int | str:
-    if isinstance(value, str):
-        if value == "auto":
-            return value
-        raise ProblemError(f"links must be an integer >= {MIN_LINKS} or 'auto', got {value!r}")
-    if isinstance(value, bool) or not float(value).is_integer():
-        raise ProblemError(f"links must be an integer >= {MIN_LINKS} or 'auto', got {value!r}")
-    n = int(value)
-    if not MIN_LINKS <= n <= MAX_LINKS:
-        raise ProblemError(
-            f"links must be between {MIN_LINKS} and {MAX_LINKS} (to form a chain), got {n}"
-        )
-    return n
+def _in(name: str, value, bounds: tuple[float, float], unit: str) -> float:
+    return check_number(name, value, low=bounds[0], high=bounds[1], unit=unit)
 
 
 @dataclass(frozen=True)
@@ -143,20 +136,27 @@ class ActuatorScene:
     theta : float
         Unconstrained bend angle θ in degrees, in (0, 360).
     height : float
-        Wall height h above the pin line (mm), > 0. With ``channel=True`` a
-        second wall sits at −h.
+        Wall height h above the pin line (mm), in [1e-6, 1e6] (h > 0: the pins
+        sit on y = 0). With ``channel=True`` a second wall sits at −h.
     links : int or "auto"
-        Number of links N (>= 4), or "auto" for the discretisation study of
+        Number of links N (an integer in [4, 100000]), or "auto" for the discretisation study of
         Sec. III-D (the smallest N whose force changes by < 0.01 %).
     length : float
-        Section length ℓ (mm).
+        Section length ℓ (mm), in [1e-3, 1e5].
     EI : float
-        Bending stiffness (N·mm²).
+        Bending stiffness (N·mm²), in [1e-6, 1e9].
     weight : float
-        Weight per length w (N/mm), >= 0; 0 turns gravity off. It acts away
+        Weight per length w (N/mm), in [0, 1e3]; 0 turns gravity off. It acts away
         from the wall (the direction of the reaction), as in eqs. (3), (8).
     channel : bool
-        Two walls, at +h and −h (the paper's fixture).
+        Two walls, at +h and −h (the paper's fixture); a real bool.
+
+    Raises
+    ------
+    ProblemError
+        For any field of the wrong type (bools for numbers, strings, arrays,
+        complex values, None) or outside its range, naming the field and
+        what is allowed (see :mod:`lcpbench.problems.checks`).
     """
 
     theta: float = 150.0
@@ -168,26 +168,15 @@ class ActuatorScene:
     channel: bool = False
 
     def __post_init__(self):
-        theta = _finite("theta", self.theta)
-        if not 0.0 < theta < 360.0:
-            raise ProblemError(f"theta must be in (0, 360) degrees, got {theta:g}")
+        theta = check_number("theta", self.theta, low=0.0, high=360.0, low_open=True,
+                             high_open=True, unit="degrees")
         object.__setattr__(self, "theta", theta)
-        height = _finite("height", self.height)
-        if height <= 0:
-            raise ProblemError(
-                f"height must be > 0 mm (the pins sit on y = 0, so a wall at {height:g} "
-                "already crosses them)"
-            )
-        object.__setattr__(self, "height", height)
+        object.__setattr__(self, "height", _in("height", self.height, HEIGHT_RANGE, "mm"))
         object.__setattr__(self, "links", _links(self.links))
-        object.__setattr__(self, "length", _positive("length", self.length, "mm"))
-        object.__setattr__(self, "EI", _positive("EI", self.EI, "N·mm²"))
-        weight = _finite("weight", self.weight)
-        if weight < 0:
-            raise ProblemError(f"weight must be >= 0 N/mm, got {weight:g}")
-        object.__setattr__(self, "weight", weight)
-        if not isinstance(self.channel, (bool, np.bool_)):
-            raise ProblemError(f"channel must be True or False, got {self.channel!r}")
+        object.__setattr__(self, "length", _in("length", self.length, LENGTH_RANGE, "mm"))
+        object.__setattr__(self, "EI", _in("EI", self.EI, EI_RANGE, "N·mm²"))
+        object.__setattr__(self, "weight", _in("weight", self.weight, WEIGHT_RANGE, "N/mm"))
+        object.__setattr__(self, "channel", check_flag("channel", self.channel))
 
     # -- geometry of the unconstrained arc (eq. 2) ---------------------------
     @property
@@ -242,10 +231,12 @@ class CantileverScene:
     Parameters
     ----------
     load : float
-        Distributed load F (N/mm) pushing the beam toward the wall, >= 0.
+        Distributed load F (N/mm) pushing the beam toward the wall, in [0, 1e6].
     height : float
-        Distance h from the undeformed beam to the wall (mm), > 0.
-    links, length, EI :
+        Distance h from the undeformed beam to the wall (mm), in [1e-6, 1e6].
+    links : int
+        As for :class:`ActuatorScene`, but not "auto".
+    length, EI :
         As for :class:`ActuatorScene`.
 
     Notes
@@ -263,17 +254,11 @@ class CantileverScene:
     EI: float = DEFAULT_EI
 
     def __post_init__(self):
-        load = _finite("load", self.load)
-        if load < 0:
-            raise ProblemError(f"load must be >= 0 N/mm, got {load:g}")
-        object.__setattr__(self, "load", load)
-        object.__setattr__(self, "height", _positive("height", self.height, "mm"))
-        links = _links(self.links)
-        if links == "auto":
-            raise ProblemError("links must be an integer for the cantilever scene")
-        object.__setattr__(self, "links", links)
-        object.__setattr__(self, "length", _positive("length", self.length, "mm"))
-        object.__setattr__(self, "EI", _positive("EI", self.EI, "N·mm²"))
+        object.__setattr__(self, "load", _in("load", self.load, LOAD_RANGE, "N/mm"))
+        object.__setattr__(self, "height", _in("height", self.height, HEIGHT_RANGE, "mm"))
+        object.__setattr__(self, "links", _links(self.links, auto=False))
+        object.__setattr__(self, "length", _in("length", self.length, LENGTH_RANGE, "mm"))
+        object.__setattr__(self, "EI", _in("EI", self.EI, EI_RANGE, "N·mm²"))
 
     def chain(self) -> Chain:
         n = int(self.links)

@@ -31,6 +31,35 @@ TIE_RTOL = 1e-9
 RESIDUAL_TOL = 1e-8
 #: Round-off (relative to the problem scale) clipped from negative z and w.
 CLIP_RTOL = 1e-12
+#: Largest dense tableau ``[B^{-1} | B^{-1} q]`` (n x (n+1) float64) Lemke allocates:
+#: 2 GiB, n <= 16383. A larger problem is FAILED at once, with a message, before
+#: any allocation (at n = 1e5 the tableau alone would be 74.5 GiB, and the O(n)
+#: pivots of O(n²) each would take hours).
+MAX_TABLEAU_BYTES = 2 * 2**30
+
+
+def tableau_bytes(n: int) -> int:
+    """Bytes of Lemke's dense tableau for an LCP of size ``n``."""
+    return 8 * n * (n + 1)
+
+
+def too_large(n: int) -> str | None:
+    """Why an LCP of size ``n`` is refused (tableau over :data:`MAX_TABLEAU_BYTES`), or None."""
+    need = tableau_bytes(n)
+    if need <= MAX_TABLEAU_BYTES:
+        return None
+    return (f"problem too large for dense Lemke: n = {n} needs a {need / 2**30:.4g} GiB "
+            f"tableau, over the limit of {MAX_TABLEAU_BYTES / 2**30:.3g} GiB "
+            f"(n <= {_max_size()})")
+
+
+def _max_size() -> int:
+    n = int((MAX_TABLEAU_BYTES / 8) ** 0.5)
+    while tableau_bytes(n + 1) <= MAX_TABLEAU_BYTES:
+        n += 1
+    while tableau_bytes(n) > MAX_TABLEAU_BYTES:
+        n -= 1
+    return n
 
 
 def _ties(col: np.ndarray, a: np.ndarray, noise: np.ndarray) -> np.ndarray:
@@ -115,7 +144,8 @@ def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
     LCPSolution
         SOLVED only if the recomputed scaled natural residual is at most
         ``1e-8``; otherwise INACCURATE, RAY (secondary ray: no eligible pivot
-        row), MAX_ITER or FAILED (non-finite data or arithmetic). ``extra``
+        row), MAX_ITER or FAILED (non-finite data or arithmetic, or a
+        tableau over :data:`MAX_TABLEAU_BYTES`, refused before allocating). ``extra``
         holds ``z0``, the artificial variable's final value.
 
     Raises
@@ -134,6 +164,10 @@ def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
         raise ValueError("covering must be a strictly positive vector of length n")
     if max_pivots is None:
         max_pivots = max(100, 50 * n)
+    refused = too_large(n)
+    if refused:
+        return LCPSolution(z=np.full(n, np.nan), w=np.full(n, np.nan), status=Status.FAILED,
+                           message=refused, extra={"z0": float("nan")})
 
     def result(z, status, it, t, msg="", z0=0.0):
         with np.errstate(all="ignore"):

@@ -29,13 +29,26 @@ def _failed_lcp(n: int, message: str, status: Status = Status.FAILED) -> LCPSolu
 
 # -- LCPs ---------------------------------------------------------------------
 def _check_lcp(M, q):
+    """Dense real ``M`` (n x n, n >= 1) and ``q`` (n), finite, or one ProblemError.
+
+    Refused rather than cast: complex entries (the imaginary part would be
+    dropped), booleans, strings and objects; a 0x0 M (no problem to solve).
+    """
     try:
-        M = np.asarray(M.toarray() if hasattr(M, "toarray") else M, dtype=float)
-        q = np.asarray(q, dtype=float).ravel()
+        M = np.asarray(M.toarray() if hasattr(M, "toarray") else M)
+        q = np.asarray(q)
     except (TypeError, ValueError) as exc:
-        raise ProblemError(f"M and q must be numeric arrays ({exc})") from exc
+        raise ProblemError(f"M and q must be real numeric arrays ({exc})") from exc
+    for name, a in (("M", M), ("q", q)):
+        if a.dtype.kind not in "iuf":
+            kind = {"c": "complex", "b": "bool"}.get(a.dtype.kind, str(a.dtype))
+            raise ProblemError(f"{name} must be a real numeric array (int or float), "
+                               f"got dtype {kind}")
+    M, q = M.astype(float, copy=False), q.astype(float, copy=False).ravel()
     if M.ndim != 2 or M.shape != (q.size, q.size):
         raise ProblemError(f"M must be square of size len(q) = {q.size}, got shape {M.shape}")
+    if q.size == 0:
+        raise ProblemError("M must be at least 1x1, got shape (0, 0)")
     if not (np.all(np.isfinite(M)) and np.all(np.isfinite(q))):
         raise ProblemError("M and q must be finite")
     return M, q
