@@ -69,3 +69,27 @@ def test_a_non_scene_is_refused(scene):
 def test_links_auto_is_a_study_not_a_hidden_solve():
     with pytest.raises(ProblemError, match="auto_links"):
         lcpbench.solve(lcpbench.ActuatorScene(theta=150, height=3.0, links="auto"))
+
+
+@pytest.mark.parametrize("scaled", ["no", 1, None])
+def test_scaled_must_be_a_real_bool(scaled):
+    with pytest.raises(ProblemError, match="scaled must be True or False"):
+        lcpbench.solve(lcpbench.ActuatorScene(theta=150, height=3.0, links=20), scaled=scaled)
+
+
+def test_a_dense_backend_refuses_a_huge_step_before_allocating():
+    """N = 20000: M would be 20000² doubles (3.2 GB). The step comes back FAILED
+    with the size in the message, without forming M."""
+    import tracemalloc
+
+    from lcpbench.model.step import assemble_step
+    from lcpbench.model.step_solver import solve_step
+
+    chain = lcpbench.ActuatorScene(theta=150, height=3.0, links=20000).chain()
+    step = assemble_step(chain, chain.rest_alpha)
+    tracemalloc.start()
+    sol = solve_step(step, "lemke")
+    peak = tracemalloc.get_traced_memory()[1]
+    tracemalloc.stop()
+    assert sol.status.value == "failed" and "GiB" in sol.message
+    assert peak < 100e6

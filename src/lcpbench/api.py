@@ -19,7 +19,7 @@ from .model.driver import METHODS, DriverStart, run_driver
 from .model.result import ContactResult, audit, build_result
 from .model.step_solver import make_step_solver
 from .model.wall_free import solve_without_contact
-from .problems.scenes import ActuatorScene, CantileverScene
+from .problems.checks import check_flag, check_scene
 from .solvers.selection import Selection
 
 #: What ``solver="auto"`` runs: the dual active set on the banded step. It is
@@ -99,9 +99,8 @@ def solve(
     ContactResult
         Never raises on non-convergence: ``converged`` is False with a reason.
     """
-    if not isinstance(scene, (ActuatorScene, CantileverScene)):
-        raise ProblemError(f"scene must be an ActuatorScene or CantileverScene, got "
-                           f"{type(scene).__name__}")
+    check_scene(scene)
+    scaled = check_flag("scaled", scaled)
     tol = check_tol(tol)
     if method not in METHODS:
         raise ProblemError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
@@ -109,7 +108,7 @@ def solve(
                                            and max_outer >= 1):
         raise ProblemError(f"max_outer must be an integer >= 1, got {max_outer!r}")
     name, settings, why = _backend_of(solver, settings)
-    step = make_step_solver(name, settings, bool(scaled))  # validates them first
+    step = make_step_solver(name, settings, scaled)  # validates them first
     if getattr(scene, "links", None) == "auto":
         raise ProblemError("links='auto' is resolved by the discretisation study (Sec. III-D), "
                            "which runs several solves: use lcpbench.studies.discretisation."

@@ -31,3 +31,17 @@ def test_select_cli(tmp_path, capsys):
     assert main(args) == 0  # cached the second time; one line with the reason
     out = capsys.readouterr().out.strip()
     assert out.startswith(d["backend"]) and len(out.splitlines()) == 1
+
+
+def test_a_second_sweep_on_a_locked_store_exits_2_naming_the_holder(tmp_path, capsys):
+    from lcpbench.bench.store import Store
+    from lcpbench.cli import main
+
+    path = tmp_path / "s.sqlite"
+    with Store(path) as store, store.lock("lcpbench sweep"):
+        code = main(["sweep", "--theta", "150", "--height", "3", "--links", "20",
+                     "--solvers", "active-set", "--settings", "default", "--baseline", "none",
+                     "--store", str(path), "--out", str(tmp_path / "out"), "--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1
+    assert "locked by pid" in err[0]

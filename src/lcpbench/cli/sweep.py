@@ -111,6 +111,9 @@ def register(subparsers) -> None:
     sw.add_argument("--rerun", action="store_true",
                     help="recompute runs that are already in the store")
     sw.add_argument("--quiet", action="store_true", help="no progress bar")
+    sw.add_argument("--wait", action="store_true",
+                    help="wait for another sweep on the same store to finish (default: exit 2 "
+                         "and say who holds it)")
     sw.set_defaults(func=cmd_sweep)
 
     rp = subparsers.add_parser(
@@ -221,7 +224,7 @@ def cmd_sweep(args) -> int:
                  "both": ["baseline", "baseline-fd"], "none": []}[args.baseline]
     jobs = plan_sweep(scenes, solvers, settings, tol=args.tol, method=methods,
                       baselines=baselines, continuation=args.continuation)
-    with Store(args.store) as store:
+    with Store(args.store) as store, store.lock("lcpbench sweep", wait=args.wait) as sweep_id:
         bar = progress_bar(args.quiet)
         try:
             plan = sweep(store, jobs, workers=jobs_n, time_limit=limit, rerun=args.rerun,
@@ -237,7 +240,8 @@ def cmd_sweep(args) -> int:
         lines = sum(isinstance(j, LineJob) for j in jobs) // max(1, len(solvers) * len(settings))
         along = (f" by {args.continuation} continuation along {lines} line(s) in theta"
                  if args.continuation else "")
-        print(f"{plan.rows_todo} runs computed, {plan.rows_done} already in {args.store} "
+        mine = store.count(sweep_id=sweep_id)
+        print(f"{mine} runs computed by this sweep, {plan.rows_done} already in {args.store} "
               f"({len(scenes)} scenes x {len(solvers)} back-ends x {len(settings)} settings"
               f"{f' x {len(methods)} drivers' if len(methods) > 1 else ''}{along}"
               f" + {len(baselines)} baseline(s) + references; {jobs_n} worker(s))")

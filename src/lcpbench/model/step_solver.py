@@ -25,6 +25,7 @@ from scipy.linalg import solveh_banded
 from ..linalg import banded_matvec, sub_bands
 from ..solvers.base import BoxQP, QPWarm, Settings, Status, StepSolution
 from ..solvers.judge import accept_tol, verdict
+from ..solvers.lemke import too_large
 from ..solvers.registry import Backend, get_backend, get_settings
 from ..solvers.runner import fallback_message
 
@@ -160,6 +161,9 @@ def _run_step(backend: Backend, step, s: Settings, scaled: bool, warm) -> StepSo
         return StepSolution(res.x * L, np.maximum(y, 0.0), np.maximum(-y, 0.0), res.status,
                             res.iterations, res.solve_time, res.setup_time, res.message,
                             time_source=res.time_source, build_time=build)
+    if backend.storage == "dense" and (why := too_large(n)):  # before M is formed
+        return StepSolution(np.full(n, np.nan), np.zeros(n), np.zeros(n), Status.FAILED,
+                            message=why)
     t0 = time.perf_counter()
     form, M, q, dz, dw = step_lcp(step, scaled)
     build = time.perf_counter() - t0
