@@ -493,9 +493,9 @@ def markdown(res: dict, cmd: str) -> str:
         "tolerances where they agree to 1e-8 (why: docs/performance.md) |",
         "| 6. no LCP for a scene that touches no wall; rows only at reachable nodes; "
         "`links=\"auto\"` | `tests/model/test_no_contact.py`, `problems.scenes.reachable`, "
-        "`model.discretisation.auto_links` | | met; `auto` is an option, not the default "
+        "`studies.discretisation.auto_links` | | met; `auto` is an option, not the default "
         "(docs/performance.md) |",
-        "| 7. `--jobs` gives the serial results | `tests/bench/test_harness.py` | | met |",
+        "| 7. `--jobs` gives the serial results | `tests/bench/test_sweep.py` | | met |",
     ]
     L += [
         "",

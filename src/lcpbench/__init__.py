@@ -11,12 +11,13 @@ harness. Plotting and the native solver libraries load when a figure or a
 back-end needs them.
 """
 
-from importlib import import_module
-from importlib.metadata import PackageNotFoundError, version
+from importlib import import_module as _import_module
+from importlib.metadata import PackageNotFoundError as _PackageNotFoundError
+from importlib.metadata import version as _version
 
 try:
-    __version__ = version("lcpbench")
-except PackageNotFoundError:  # running from a source tree that was never installed
+    __version__ = _version("lcpbench")
+except _PackageNotFoundError:  # running from a source tree that was never installed
     __version__ = "0+unknown"
 
 #: public name -> module that defines it
@@ -40,7 +41,7 @@ def __getattr__(name: str):
     module = _EXPORTS.get(name)
     if module is None:
         raise AttributeError(f"module 'lcpbench' has no attribute {name!r}")
-    value = getattr(import_module(module), name)
+    value = getattr(_import_module(module), name)
     globals()[name] = value  # later look-ups skip this function
     return value
 

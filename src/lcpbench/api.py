@@ -20,13 +20,11 @@ from .model.result import ContactResult, audit, build_result
 from .model.step_solver import make_step_solver
 from .model.wall_free import solve_without_contact
 from .problems.checks import check_flag, check_scene
+from .solvers.registry import DEFAULT
 from .solvers.selection import Selection
 
-#: What ``solver="auto"`` runs: the dual active set on the banded step. It is
-#: exact (its answer is the LCP's to round-off, checked by lcpbench's judge)
-#: and never failed on the paper grid or the hard suite (results/sweep,
-#: results/hard), so no measurement is needed to pick it.
-AUTO_BACKEND = "active-set"
+#: The paper's driver tolerance (rad), the default of :func:`solve`.
+PAPER_TOL = 1e-3
 
 
 def check_tol(tol) -> float:
@@ -53,14 +51,14 @@ def _backend_of(solver, settings):
         raise ProblemError(f"solver must be a back-end name, 'auto' or a Selection, got "
                            f"{type(solver).__name__}")
     if solver == "auto":
-        return AUTO_BACKEND, settings, "auto: the built-in active set (exact)"
+        return DEFAULT, settings, "auto: the built-in active set (exact)"
     return solver, settings, None
 
 
 def solve(
     scene,
     solver: str | Selection = "auto",
-    tol: float = 1e-3,
+    tol: float | None = None,
     *,
     method: str = "globalised",
     max_outer: int = 200,
@@ -80,7 +78,10 @@ def solve(
         all), "auto" (the built-in active set: a fixed rule, nothing is read),
         or a :class:`Selection` from :func:`lcpbench.select_backend`, whose
         back-end and settings are used.
-    tol : convergence threshold on max|α̂ − α| (rad), eq. (32); paper: 1e-3.
+    tol : convergence threshold on max|α̂ − α| (rad), eq. (32). Default: the
+        paper's 1e-3 (``PAPER_TOL``), or with a Selection the driver
+        tolerance its probes ran at (``selection.driver_tol``), so the
+        selected force accuracy is reached.
     method : "globalised" (line search on the exact energy; default) or
         "undamped" (the paper's Fig. 3 iteration, for comparison).
     max_outer : limit on contact steps.
@@ -101,6 +102,8 @@ def solve(
     """
     check_scene(scene)
     scaled = check_flag("scaled", scaled)
+    if tol is None:
+        tol = solver.driver_tol if isinstance(solver, Selection) else PAPER_TOL
     tol = check_tol(tol)
     if method not in METHODS:
         raise ProblemError(f"method must be one of {', '.join(METHODS)}, got {method!r}")

@@ -171,3 +171,23 @@ def test_failures_are_recorded_not_raised():
 def test_bad_input_raises_problem_error(scene, kwargs, match):
     with pytest.raises(ProblemError, match=match):
         solve_baseline(scene, **kwargs)
+
+
+def test_the_baseline_picks_its_own_n_by_the_sec_iii_d_rule():
+    """links='auto' in the baseline: the first N (steps of 10) whose baseline
+    force differs from N - 10's by < 0.01 %, checked on the baseline's own
+    answers at N and N - 10 (and N - 10 failing the rule against N - 20)."""
+    from lcpbench.baseline import baseline_links
+
+    scene = ActuatorScene(theta=150.0, height=5.0)
+    n = baseline_links(scene)
+    f = {k: solve_baseline(scene.with_links(k)).total_force for k in (n - 20, n - 10, n)
+         if k >= 10}
+
+    def change(a, b):
+        return abs(f[a] - f[b]) / max(abs(f[a]), abs(f[b]))
+
+    assert change(n, n - 10) < 1e-4
+    if n - 20 in f:
+        assert change(n - 10, n - 20) >= 1e-4
+    assert solve_baseline(scene.with_links("auto")).links == n

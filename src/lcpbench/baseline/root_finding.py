@@ -428,7 +428,8 @@ def solve_baseline(
     if jacobian not in JACOBIANS:
         raise ProblemError(f"jacobian must be one of {', '.join(JACOBIANS)}, got {jacobian!r}")
     if scene.links == "auto":
-        scene = scene.with_links(baseline_links(scene, method=method, jacobian=jacobian))
+        scene = scene.with_links(baseline_links(scene, method=method, jacobian=jacobian,
+                                                tol=tol, time_limit=time_limit))
     t_setup = time.perf_counter()
     chain = scene.chain()
     system = BaselineSystem(chain, scene.height)
@@ -545,7 +546,8 @@ def _judge(scene, chain, system, watched, z, status, message, method, tol, elaps
 
 
 def baseline_links(scene: ActuatorScene, *, threshold: float = 0.01, method: str = "hybr",
-                   jacobian: str = "analytic") -> int:
+                   jacobian: str = "analytic", tol: float = 1e-10,
+                   time_limit: float | None = None) -> int:
     """The baseline's own N: the Sec. III-D rule (refine N by 10 until the total
     force changes by less than ``threshold`` percent) on its own answers.
 
@@ -554,7 +556,8 @@ def baseline_links(scene: ActuatorScene, *, threshold: float = 0.01, method: str
     """
 
     def total_force(s):
-        res = solve_baseline(s, method=method, jacobian=jacobian)
+        res = solve_baseline(s, method=method, jacobian=jacobian, tol=tol,
+                             time_limit=time_limit)
         if not (res.converged and res.valid):
             raise ProblemError(f"baseline_links: the baseline has no valid answer at "
                                f"links={s.links} ({res.status}: {res.message})")

@@ -12,7 +12,7 @@ Kinds of job
     analytic (``baseline``) or finite-difference (``baseline-fd``) Jacobian.
 :class:`LineJob`  continuation (``--continuation``): one back-end × settings ×
     tol over a line of scenes that differ only in θ, θ ascending, solved in
-    order by :func:`~lcpbench.bench.continuation.solve_sequence`, each scene
+    order by :func:`~lcpbench.studies.continuation.solve_sequence`, each scene
     started from its predecessors' answers. One row per scene, method
     ``globalised+quadratic`` (or ``+secant``, ``+previous``), so they never mix
     with the cold runs in the store.

@@ -38,7 +38,7 @@ from .pool import run_jobs
 from .rows import scene_columns
 from .store import Store
 
-#: predictors of a continuation sweep (bench.continuation); the rows' method is
+#: predictors of a continuation sweep (studies.continuation); the rows' method is
 #: "globalised+<predictor>"
 CONTINUATION = ("quadratic", "secant", "previous")
 

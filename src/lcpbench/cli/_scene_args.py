@@ -14,7 +14,7 @@ import argparse
 import inspect
 import sys
 
-from ..api import solve
+from ..api import PAPER_TOL, solve
 from ..errors import ProblemError
 from ..problems.scenes import (
     DEFAULT_EI,
@@ -30,7 +30,7 @@ _FIELDS = ActuatorScene.__dataclass_fields__
 DEFAULT_THETA = _FIELDS["theta"].default
 DEFAULT_HEIGHT = _FIELDS["height"].default
 _SOLVE = inspect.signature(solve).parameters
-DEFAULT_TOL = _SOLVE["tol"].default
+DEFAULT_TOL = PAPER_TOL
 DEFAULT_SOLVER = _SOLVE["solver"].default
 DEFAULT_METHOD = _SOLVE["method"].default
 
@@ -147,9 +147,15 @@ def scene_from(args, *, resolve_links: bool = True) -> ActuatorScene:
     scene = _scene_as_given(args)
     if scene.links != "auto" or not resolve_links:
         return scene
+    from ..api import check_tol
+    from ..solvers.registry import get_backend
     from ..studies.discretisation import auto_links
 
-    n = auto_links(scene)
+    solver = getattr(args, "solver", "auto")
+    get_backend(solver)  # a bad --solver or --tol fails before the study's solves
+    if getattr(args, "tol", None) is not None:
+        check_tol(args.tol)
+    n = auto_links(scene, solver=solver)
     print(f"links auto: the discretisation study (Sec. III-D) picked N = {n}", file=sys.stderr)
     return scene.with_links(n)
 

@@ -142,7 +142,7 @@ def summary(result, extra=()) -> str:
     """
     sc = result.scene
     cert = result.certificate
-    free = sc.chain().free_nodes  # solve() resolved links="auto" in result.scene
+    free = sc.chain().free_nodes  # the scene as solved (links resolved)
     scene = (f"theta={sc.theta:g} deg, h={sc.height:g} mm, N={result.links}, "
              f"length={sc.length:g} mm, EI={sc.EI:g} N*mm^2, w={sc.weight:g} N/mm"
              + (", channel" if sc.channel else ""))

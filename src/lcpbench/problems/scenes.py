@@ -195,7 +195,8 @@ class ActuatorScene:
     def chain(self) -> Chain:
         """The Hencky bar chain of this scene (needs an integer ``links``)."""
         if self.links == "auto":
-            raise ProblemError("links='auto' must be resolved first (lcpbench.solve does this)")
+            raise ProblemError("links='auto' must be resolved first "
+                               "(lcpbench.studies.discretisation.auto_links gives N)")
         n = int(self.links)
         a = self.length / n
         th = math.radians(self.theta)

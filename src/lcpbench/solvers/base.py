@@ -113,7 +113,7 @@ class StepSolution:
     active_lower: np.ndarray | None = None
     time_source: str = "solver"  # "solver": reported by it; "wall": measured around it
     build_time: float = 0.0  # lcpbench's time to build the back-end's form (s)
-    # filled in by lcpbench (solvers.runner), the same for every back-end:
+    # filled in by lcpbench (model.step_solver), the same for every back-end:
     backend: str = ""
     settings: str = ""
     scaled: bool = True

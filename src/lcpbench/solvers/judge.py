@@ -4,8 +4,12 @@ A back-end reports its own status; lcpbench then recomputes the residuals
 from the primal unknowns alone (:func:`lcpbench.solvers.base.lcp_residuals`
 for an LCP, the contact step's own residuals in :mod:`lcpbench.model`) and
 keeps SOLVED only when the scaled natural residual ``||min(z, w)||_inf`` is
-at most :func:`accept_tol`. Every caller (LCP runner, contact-step runner,
-the Siconos bridge) uses :func:`verdict`, so there is one rule.
+at most :func:`accept_tol`. Both runners (LCPs in :mod:`.runner`, contact
+steps in :mod:`lcpbench.model.step_solver`) apply :func:`verdict` to every
+back-end's answer, so there is one rule for what lcpbench calls SOLVED. A
+back-end's own status mapping (Lemke's self-check, the Siconos bridge's
+reading of Siconos' ``info``) is that back-end's word, which the verdict can
+only demote, never promote.
 """
 
 from __future__ import annotations
