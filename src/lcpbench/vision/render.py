@@ -219,7 +219,7 @@ def render(centerline_mm, *, px_per_mm: float = 15.0, diameter: float = 3.0,
     tag = cv2.GaussianBlur(tag, (0, 0), max(0.5 * shrink, 0.3))
     corners = to_px([[mx, my + marker_mm], [mx + marker_mm, my + marker_mm],
                      [mx + marker_mm, my], [mx, my]])  # TL, TR, BR, BL as drawn
-    a = cv2.getAffineTransform(np.float32([[0, 0], [side, 0], [0, side]]),
+    a = cv2.getAffineTransform(np.float32([[-.5, -.5], [side - .5, -.5], [-.5, side - .5]]),
                                np.float32(corners[[0, 1, 3]]))
     x0, y0 = np.floor(corners.min(axis=0)).astype(int) - 2
     x1, y1 = np.ceil(corners.max(axis=0)).astype(int) + 3
