@@ -326,6 +326,9 @@ def build_parser() -> ArgumentParser:
     c.add_argument("--json", action="store_true", help="print the result as one JSON object")
     c.set_defaults(handler=_cmd_validate_cantilever)
     v.set_defaults(handler=None, parser=v)
+    from .vision.commands import register as register_vision  # no OpenCV import until run
+
+    register_vision(commands)
     parser.set_defaults(handler=None, parser=parser)
     return parser
 
