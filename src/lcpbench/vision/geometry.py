@@ -48,6 +48,8 @@ def fit_circle(points: np.ndarray) -> Circle:
     q = p - mean
     scale = float(np.sqrt((q ** 2).sum(axis=1).mean())) or 1.0
     q = q / scale
+    if np.linalg.svd(q, compute_uv=False)[-1] < 1e-9 * np.sqrt(len(q)):
+        raise VisionError("the points lie on a straight line: no circle to fit")
     a = np.column_stack([q, np.ones(len(q))])
     b = (q ** 2).sum(axis=1)
     sol, *_ = np.linalg.lstsq(a, b, rcond=None)

@@ -85,7 +85,7 @@ def plot_measurement(meas, out, truth: dict | None = None) -> None:
     b.set_ylabel("y (mm)")
     b.set_aspect("equal")
     b.grid(alpha=0.3)
-    b.legend(fontsize=7, loc="best")
+    b.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
     _save(fig, out)
 
 
@@ -153,7 +153,7 @@ def plot_comparison(cmp, out) -> None:
     a.set_title(f"(a) θ = {cmp.theta_deg:.1f}°, h = {cmp.height_mm:g} mm, "
                 f"force {1e3 * cmp.force_n:.2f} mN")
     a.grid(alpha=0.3)
-    a.legend(fontsize=8, loc="lower center")
+    a.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3)
     idx = np.arange(len(cmp.distances_mm))
     b.plot(idx, cmp.distances_mm, "-", color="tab:blue")
     b.set_xlabel("point pair index (0 = left pin)")
