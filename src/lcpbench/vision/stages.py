@@ -184,7 +184,7 @@ def find_bearings(img: np.ndarray, px_per_mm: float, marker: Marker | None = Non
     brightness image (V < 0.4 of the local background), away from the marker,
     at least ``min_diameter_mm`` across and round (area ≥ 0.8 of the enclosing
     circle); the two largest are the bearings, their centres the blobs'
-    centroids. A centroid averages thousands of edge pixels (≈ 0.02 px), where a
+    centroids. A centroid averages every edge pixel (≈ 0.05 px on rendered discs); a
     Hough accumulator is quantised to its bin.
     """
     v = img.max(axis=2).astype(np.float32)
