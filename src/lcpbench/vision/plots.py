@@ -60,6 +60,11 @@ def plot_measurement(meas, out, truth: dict | None = None) -> None:
     if len(meas.inflection_points_mm):
         ipx = to_px(meas.inflection_points_mm, meas.bearings, meas.px_per_mm)
         a.plot(ipx[:, 0], ipx[:, 1], "s", color="red", ms=6, label="inflection points")
+    h, w = meas.image.shape[:2]
+    bar = 10 * meas.px_per_mm
+    x0, y0 = w - bar - 0.04 * w, h - 0.05 * h
+    a.plot([x0, x0 + bar], [y0, y0], "-", color="k", lw=3)
+    a.text(x0 + bar / 2, y0 - 0.015 * h, "10 mm", ha="center", va="bottom", fontsize=8)
     a.set_title("(a) undistorted photograph: detected features")
     a.set_xlabel("x (px)")
     a.set_ylabel("y (px)")
@@ -85,7 +90,9 @@ def plot_measurement(meas, out, truth: dict | None = None) -> None:
     b.set_ylabel("y (mm)")
     b.set_aspect("equal")
     b.grid(alpha=0.3)
-    b.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2)
+    # below the flat panel (b), in figure coordinates, clear of its axis label
+    fig.legend(*b.get_legend_handles_labels(), fontsize=7, loc="lower right",
+               bbox_to_anchor=(0.99, 0.03), ncol=2)
     _save(fig, out)
 
 
