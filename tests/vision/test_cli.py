@@ -146,3 +146,13 @@ def test_import_lcpbench_does_not_load_opencv():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, env=os.environ | {"PYTHONPATH": os.pathsep.join(sys.path)})
     assert out.stdout.strip() in ("[]", "['lcpbench.vision.commands', 'lcpbench.vision.errors']")
+
+
+def test_measure_with_a_user_hsv_range(photo, capsys):
+    _, path, cal, _, truth = photo
+    # the tube is orange (OpenCV hue ~ 11): a hand-set range around it
+    assert main(["vision", "measure", str(path), "--calib", str(cal), "--json",
+                 "--hsv-lower", "0,70,50", "--hsv-upper", "30,255,255"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["hsv_range"] == [[0, 70, 50], [30, 255, 255]]
+    assert out["middle"]["theta_deg"] == pytest.approx(truth["theta_deg"], rel=0.015)
