@@ -32,6 +32,7 @@ class Comparison:
     result: object
     theta_deg: float
     height_mm: float
+    radius_mm: float = 1.5
 
     def to_dict(self) -> dict:
         d, pc = self.distances_mm, self.percent
@@ -117,7 +118,7 @@ def compare(meas: Measurement, theta_deg: float, height: float, *, diameter_mm: 
     span = float(model[:, 0].max() - model[:, 0].min())
     return Comparison(reg.distances, 100 * reg.distances / span, span,
                       float(res.total_force), model, reg.moved, reg, res, float(theta_deg),
-                      float(height))
+                      float(height), diameter_mm / 2)
 
 
 def theta_from_pressure(pressure: float, fit: str | None, actuator: str = "1") -> float:

@@ -151,6 +151,12 @@ def plot_comparison(cmp, out) -> None:
            label="photographed centerline (after ICP)")
     a.plot(cmp.model_mm[:, 0], cmp.model_mm[:, 1], ".", color="tab:blue", ms=3,
            label=f"model, N = {len(cmp.model_mm) - 1} (lcpbench.solve)")
+    from .geometry import offset_curve
+
+    for k, sgn in enumerate((1, -1)):
+        e = offset_curve(cmp.model_mm, sgn * cmp.radius_mm)
+        a.plot(e[:, 0], e[:, 1], "-", color="0.5", lw=0.8,
+               label=f"model tube surface (±{cmp.radius_mm:g} mm)" if k == 0 else None)
     xs = [cmp.model_mm[:, 0].min() - 2, cmp.model_mm[:, 0].max() + 2]
     for k, h in enumerate((cmp.height_mm, -cmp.height_mm)):
         a.plot(xs, [h, h], "k-", lw=2, label="wall faces (±h)" if k == 0 else None)
@@ -160,7 +166,7 @@ def plot_comparison(cmp, out) -> None:
     a.set_title(f"(a) θ = {cmp.theta_deg:.1f}°, h = {cmp.height_mm:g} mm, "
                 f"force {1e3 * cmp.force_n:.2f} mN")
     a.grid(alpha=0.3)
-    a.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.2), ncol=3)
+    a.legend(fontsize=7, loc="lower center", bbox_to_anchor=(0.5, 0.06), ncol=2)
     idx = np.arange(len(cmp.distances_mm))
     b.plot(idx, cmp.distances_mm, "-", color="tab:blue")
     b.set_xlabel("point pair index (0 = left pin)")
