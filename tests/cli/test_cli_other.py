@@ -23,7 +23,7 @@ def test_solvers_lists_every_backend(capsys):
 
 
 def test_select_cli(tmp_path, capsys):
-    args = ["select", "--tol", "1e-3", "--links", "20", "--solvers", "active-set,lemke",
+    args = ["select", "--force-tol", "1e-3", "--links", "20", "--solvers", "active-set,lemke",
             "--store", str(tmp_path / "s.sqlite"), "--quiet", "--jobs", "2"]
     code = main([*args, "--json"])
     d = json.loads(capsys.readouterr().out)  # exactly one JSON document on stdout

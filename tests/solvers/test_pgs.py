@@ -87,7 +87,7 @@ def test_first_sweep_is_gauss_seidel_not_jacobi():
 def test_both_active_converges_to_hand_solution():
     # Both z > 0: M z = -q gives z = [4/3, 7/3], w = 0.
     M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-5.0, -6.0])
-    sol = pgs(M, q, tol=1e-12)
+    sol = pgs(M, q, eps=1e-12)
     assert_solves(sol, M, q, atol=1e-11)
     np.testing.assert_allclose(sol.z, [4 / 3, 7 / 3], rtol=1e-11)
     assert sol.extra["omega"] == 1.0 and sol.extra["residual"] <= 1e-12
@@ -98,7 +98,7 @@ def test_rate_is_the_gauss_seidel_contraction():
     # 2x2 SPD [[a, b], [b, a]] with both z > 0: PGS is plain Gauss-Seidel, whose error
     # contracts by (b/a)^2 per sweep. [[2, 1], [1, 2]]: 1/4.
     M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-5.0, -6.0])
-    assert pgs(M, q, tol=1e-12).extra["rate"] == pytest.approx(0.25, rel=0.02)
+    assert pgs(M, q, eps=1e-12).extra["rate"] == pytest.approx(0.25, rel=0.02)
 
 
 def test_ill_conditioned_solved_z_is_only_as_good_as_residual_over_one_minus_rate():
@@ -107,7 +107,7 @@ def test_ill_conditioned_solved_z_is_only_as_good_as_residual_over_one_minus_rat
     e = 1e-3
     M, q = np.array([[1.0, 1 - e], [1 - e, 1.0]]), -np.ones(2)
     z_star = np.ones(2) / (2 - e)
-    sol = pgs(M, q, tol=1e-6)
+    sol = pgs(M, q, eps=1e-6)
     assert sol.solved
     assert sol.extra["rate"] == pytest.approx((1 - e) ** 2, rel=1e-6)
     err = np.abs(sol.z - z_star).max() / z_star.max()
@@ -127,7 +127,7 @@ def test_random_spd_matches_enumeration(n, seed, omega):
     M = random_spd(rng, n)
     q = rng.normal(size=n) * rng.choice([1e-2, 1.0, 1e2])
     (ref,) = enumerate_lcp(M, q)  # SPD => P-matrix => exactly one solution
-    sol = pgs(M, q, omega=omega, tol=1e-12)
+    sol = pgs(M, q, omega=omega, eps=1e-12)
     assert_solves(sol, M, q, atol=1e-9)
     cond = np.linalg.cond(M)
     np.testing.assert_allclose(sol.z, ref, atol=1e-10 * cond * max(1.0, np.abs(ref).max()))
@@ -138,7 +138,7 @@ def test_sor_reaches_the_same_answer():
     M = random_spd(rng, 6)
     q = rng.normal(size=6)
     (ref,) = enumerate_lcp(M, q)
-    gs, sor = pgs(M, q, tol=1e-12), pgs(M, q, omega=1.5, tol=1e-12)
+    gs, sor = pgs(M, q, eps=1e-12), pgs(M, q, omega=1.5, eps=1e-12)
     for sol in (gs, sor):
         assert_solves(sol, M, q, atol=1e-10)
         np.testing.assert_allclose(sol.z, ref, atol=1e-9)
@@ -150,9 +150,9 @@ def test_banded_spd_and_sparse_input():
     n = 30
     M = 2.5 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1)
     q = np.sin(np.arange(n)) - 0.2
-    dense = pgs(M, q, tol=1e-12)
+    dense = pgs(M, q, eps=1e-12)
     assert_solves(dense, M, q, atol=1e-10)
-    sparse = pgs(sp.csr_matrix(M), q, tol=1e-12)
+    sparse = pgs(sp.csr_matrix(M), q, eps=1e-12)
     np.testing.assert_array_equal(sparse.z, dense.z)
     assert sparse.iterations == dense.iterations
 
@@ -165,15 +165,15 @@ def test_scale_invariance(seed):
     rng = np.random.default_rng(seed)
     M = random_spd(rng, 8)
     q = rng.normal(size=8)
-    base = pgs(M, q, tol=1e-9)
+    base = pgs(M, q, eps=1e-9)
     assert base.solved
     for s in (1e-6, 1e6):
-        scaled = pgs(s * M, s * q, tol=1e-9)
+        scaled = pgs(s * M, s * q, eps=1e-9)
         assert scaled.solved and scaled.iterations == base.iterations
         np.testing.assert_allclose(scaled.z, base.z, rtol=1e-12, atol=1e-13)
         assert scaled.extra["residual"] == pytest.approx(base.extra["residual"], rel=1e-6)
     # A power of two scales without rounding: bit-identical iterates.
-    exact = pgs(2.0**-30 * M, 2.0**-30 * q, tol=1e-9)
+    exact = pgs(2.0**-30 * M, 2.0**-30 * q, eps=1e-9)
     np.testing.assert_array_equal(exact.z, base.z)
 
 
@@ -184,14 +184,14 @@ def test_symmetric_diagonal_scaling_maps_iterates():
     q = rng.normal(size=5)
     d = 2.0 ** np.array([-20, -3, 0, 5, 18])
     for k in (1, 4, 25):
-        plain = pgs(M, q, tol=0.0, max_sweeps=k)
-        scaled = pgs(d[:, None] * M * d[None, :], d * q, tol=0.0, max_sweeps=k)
+        plain = pgs(M, q, eps=0.0, max_sweeps=k)
+        scaled = pgs(d[:, None] * M * d[None, :], d * q, eps=0.0, max_sweeps=k)
         np.testing.assert_array_equal(scaled.z, plain.z / d)
     # A moderate scaling is still solved to the same answer. (The test takes a max over
     # rows, so wildly different d_i -- like the 2^38 spread above -- loosen it on the
     # rows measured in the smaller units; that is documented, not tested.)
     d = 2.0 ** np.array([-3, -1, 0, 2, 3])
-    sol = pgs(d[:, None] * M * d[None, :], d * q, tol=1e-12)
+    sol = pgs(d[:, None] * M * d[None, :], d * q, eps=1e-12)
     assert sol.solved
     (ref,) = enumerate_lcp(M, q)
     np.testing.assert_allclose(sol.z * d, ref, atol=1e-9)
@@ -241,7 +241,7 @@ def test_never_solved_with_a_wrong_answer(n, seed):
     M = rng.normal(size=(n, n)) * 2
     M[np.diag_indices(n)] = rng.uniform(0.5, 2.0, size=n)
     q = rng.normal(size=n)
-    sol = pgs(M, q, tol=1e-10, max_sweeps=300)
+    sol = pgs(M, q, eps=1e-10, max_sweeps=300)
     assert sol.status in (Status.SOLVED, Status.MAX_ITER, Status.FAILED)
     if sol.solved:
         w = M @ sol.z + q
@@ -271,9 +271,9 @@ def test_time_limit_stops_after_a_sweep():
 def test_adapter_translates_settings():
     M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-5.0, -6.0])
     default = solve_lcp(M, q, PROFILES["default"])
-    assert default.solved and default.extra["tol"] == 1e-8
+    assert default.solved and default.extra["eps"] == 1e-8
     low, high = solve_lcp(M, q, PROFILES["low"]), solve_lcp(M, q, PROFILES["high"])
-    assert low.extra["tol"] == 1e-3 and high.extra["tol"] == 1e-9
+    assert low.extra["eps"] == 1e-3 and high.extra["eps"] == 1e-9
     assert low.iterations < high.iterations
     capped = solve_lcp(M, q, Settings("cap", 1e-12, max_iter=2))
     assert capped.status is Status.MAX_ITER and capped.iterations == 2
@@ -304,7 +304,7 @@ def test_adapter_rejects_unknown_option():
     (np.eye(2), np.ones(2), {"omega": 2.0}, r"omega must be .* \(0, 2\)"),
     (np.eye(2), np.ones(2), {"omega": float("nan")}, "omega"),
     (np.eye(2), np.ones(2), {"omega": "1"}, "omega"),
-    (np.eye(2), np.ones(2), {"tol": -1e-3}, "tol must be"),
+    (np.eye(2), np.ones(2), {"eps": -1e-3}, "eps must be"),
     (np.eye(2), np.ones(2), {"max_sweeps": -1}, "max_sweeps must be"),
     (np.eye(2), np.ones(2), {"max_sweeps": 2.5}, "max_sweeps must be"),
     (np.eye(2), np.ones(2), {"z0": np.ones(3)}, "z0 must have length 2"),

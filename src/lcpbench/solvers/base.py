@@ -132,13 +132,15 @@ class Settings:
     """One generic accuracy request, translated by each back-end into its own
     parameters.
 
-    ``tol`` is a tolerance on the residuals of the (nondimensionalised)
+    ``eps`` is a tolerance on the residuals of the (nondimensionalised)
     problem: primal and dual feasibility and complementarity, absolute and
-    relative alike. ``None`` means "the solver's own defaults".
+    relative alike (each back-end's own ``eps_abs``/``tol``/``feastol``...).
+    ``None`` means "the solver's own defaults". It is not the driver's
+    ``tol`` (rad), which bounds the change of the link angles α.
     """
 
     name: str
-    tol: float | None
+    eps: float | None
     max_iter: int | None = None
     time_limit: float | None = None  # seconds, where the solver supports it
 

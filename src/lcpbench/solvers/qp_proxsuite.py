@@ -78,8 +78,8 @@ def translate(settings: Settings) -> dict:
     check, 10 000 iterations).
     """
     opts: dict = {}
-    if settings.tol is not None:
-        tol = float(settings.tol)
+    if settings.eps is not None:
+        tol = float(settings.eps)
         opts.update(eps_abs=tol, eps_rel=tol, check_duality_gap=True,
                     eps_duality_gap_abs=tol, eps_duality_gap_rel=tol)
     if settings.max_iter is not None:

@@ -399,9 +399,9 @@ def solve_many(problems, settings: Settings, *, method: str = "lemke",
     problems : sequence of (M, q)
         Dense (or scipy sparse, densified) matrices and vectors; sizes may differ.
     settings : Settings
-        ``tol`` None keeps Siconos's default tolerance (``dparam[TOL]``: 1e-6
+        ``eps`` None keeps Siconos's default tolerance (``dparam[TOL]``: 1e-6
         for Lemke, PGS and NewtonMin, 1e-10 for NewtonFB), else it is set to
-        ``settings.tol``; ``max_iter`` None keeps Siconos's default iteration
+        ``settings.eps``; ``max_iter`` None keeps Siconos's default iteration
         limit (``iparam[MAX_ITER]``: 10000 for Lemke pivots and PGS sweeps,
         1000 for the Newton methods). ``time_limit`` is not supported by
         Siconos and is ignored; use ``timeout``.
@@ -414,7 +414,7 @@ def solve_many(problems, settings: Settings, *, method: str = "lemke",
         worker is killed and every problem not yet answered gets FAILED.
     accept_tol : float, optional
         Largest lcpbench natural residual accepted as SOLVED, default
-        ``ACCEPT_SLACK * max(ACCEPT_TOL, settings.tol)``.
+        ``ACCEPT_SLACK * max(ACCEPT_TOL, settings.eps)``.
 
     Returns
     -------
@@ -439,7 +439,7 @@ def solve_many(problems, settings: Settings, *, method: str = "lemke",
             if warms[i].shape != q.shape:
                 raise ValueError(f"warm start {i} has shape {warms[i].shape}, expected {q.shape}")
     if accept_tol is None:
-        accept_tol = ACCEPT_SLACK * max(ACCEPT_TOL, settings.tol or 0.0)
+        accept_tol = ACCEPT_SLACK * max(ACCEPT_TOL, settings.eps or 0.0)
     if not probs:
         return []
 
@@ -447,7 +447,7 @@ def solve_many(problems, settings: Settings, *, method: str = "lemke",
     if not available():
         return [_failed(q.size, NOT_INSTALLED) for _, q in probs]
 
-    header = {"op": "solve", "method": METHODS[method], "tol": settings.tol,
+    header = {"op": "solve", "method": METHODS[method], "tol": settings.eps,
               "max_iter": settings.max_iter,
               "problems": [{"n": q.size, "warm": z0 is not None}
                            for (_, q), z0 in zip(probs, warms)]}
@@ -510,7 +510,7 @@ def solve_lcp(M, q, settings: Settings, warm=None, *, method: str = "lemke",
     q : array_like, shape (n,)
         LCP vector.
     settings : Settings
-        ``tol`` None keeps Siconos's defaults, else sets its tolerance
+        ``eps`` None keeps Siconos's defaults, else sets its tolerance
         ``dparam[SICONOS_DPARAM_TOL]``; ``max_iter`` sets
         ``iparam[SICONOS_IPARAM_MAX_ITER]`` (pivots for Lemke). For Lemke the
         tolerance only enters Siconos's a-posteriori error check.
@@ -525,7 +525,7 @@ def solve_lcp(M, q, settings: Settings, warm=None, *, method: str = "lemke",
         Seconds allowed for the round trip; a worker that exceeds it is killed.
     accept_tol : float, optional
         Largest lcpbench natural residual (:func:`lcp_residuals`) accepted as
-        SOLVED; default ``10 * max(1e-6, settings.tol)`` (the factor covers
+        SOLVED; default ``10 * max(1e-6, settings.eps)`` (the factor covers
         the difference between Siconos's 2-norm error and our max-norm).
 
     Returns
