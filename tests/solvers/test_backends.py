@@ -145,10 +145,10 @@ def contact_step():
     ref = solve_step(step, "active-set", "high")
     check = solve_step(step, "lemke", "high")
     rows = np.isfinite(step.upper)
-    f_ref = ref.reaction_net[rows].sum()
+    f_ref = ref.forces_net[rows].sum()
     # two exact methods, two different forms (banded QP, condensed LCP), agree
     assert ref.solved and check.solved
-    assert abs(check.reaction_net[rows].sum() - f_ref) <= 1e-9 * f_ref
+    assert abs(check.forces_net[rows].sum() - f_ref) <= 1e-9 * f_ref
     return step, ref, rows, f_ref
 
 
@@ -164,7 +164,7 @@ def test_contact_step(contact_step, backend, scaled):
     if backend in EXACT:
         assert sol.status is Status.SOLVED, sol.message
     if sol.status is Status.SOLVED:
-        err = abs(sol.reaction_net[rows].sum() - f_ref) / f_ref
+        err = abs(sol.forces_net[rows].sum() - f_ref) / f_ref
         assert err <= 1e-6, f"{backend}: total force off by {err:.1e}, marked solved"
         assert sol.residuals["min_gap"] >= -1e-9
         np.testing.assert_allclose(sol.u, ref.u, atol=1e-6 * step.length_scale)

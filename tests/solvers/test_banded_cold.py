@@ -106,7 +106,7 @@ def random_banded_spd(rng, n, b, gram=False):
 
 def assert_kkt(qp, sol, rtol=1e-10):
     """Feasible, reactions >= 0, complementary and stationary, to round-off."""
-    u, ru, rl = sol.u, sol.reaction_upper, sol.reaction_lower
+    u, ru, rl = sol.u, sol.forces_upper, sol.forces_lower
     g = qp.gradient(u)
     force = max(float(np.max(qp.gradient_scale(u))), 1e-300)
     span = 1.0 + np.abs(u).max()
@@ -149,8 +149,8 @@ def test_hand_made(case, method):
     sol = solve_banded_qp(qp, method=method)
     assert sol.status is Status.SOLVED, sol.message
     np.testing.assert_allclose(sol.u, u, atol=1e-12)
-    np.testing.assert_allclose(sol.reaction_upper, ru, atol=1e-12)
-    np.testing.assert_allclose(sol.reaction_lower, rl, atol=1e-12)
+    np.testing.assert_allclose(sol.forces_upper, ru, atol=1e-12)
+    np.testing.assert_allclose(sol.forces_lower, rl, atol=1e-12)
     assert_kkt(qp, sol)
 
 
@@ -241,8 +241,8 @@ def test_paper_step_cold(paper_step):
     assert dual.status is Status.SOLVED and primal.status is Status.SOLVED
     assert np.array_equal(dual.active_upper, primal.active_upper)
     np.testing.assert_allclose(dual.u, primal.u, atol=1e-12 * step.length_scale)
-    np.testing.assert_allclose(dual.reaction_upper, primal.reaction_upper,
-                               atol=1e-9 * primal.reaction_upper.max())
+    np.testing.assert_allclose(dual.forces_upper, primal.forces_upper,
+                               atol=1e-9 * primal.forces_upper.max())
     lemke = solve_step(step, "lemke", "high")
     assert lemke.solved
     np.testing.assert_allclose(dual.u, lemke.u, atol=1e-9 * step.length_scale)
