@@ -17,6 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from lcpbench import ActuatorScene, solve
+from lcpbench.errors import ProblemError
 from lcpbench.model.driver import run_driver
 from lcpbench.model.step import assemble_step
 from lcpbench.model.step_solver import solve_step
@@ -313,7 +314,7 @@ def test_iteration_limit_is_a_status(paper_step):
 
 
 def test_unknown_method():
-    with pytest.raises(ValueError, match="method"):
+    with pytest.raises(ProblemError, match="method"):
         solve_banded_qp(DenseBoxQP([[1.0]], [0.0], [-INF], [1.0]), method="simplex")
 
 

@@ -22,7 +22,7 @@ import scipy.sparse as sp
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from lcpbench.errors import SolverNotFound
+from lcpbench.errors import ProblemError, SolverNotFound
 from lcpbench.solvers import qp_clarabel, qp_cvxpy, qp_osqp, qp_proxsuite, qp_qpsolvers
 from lcpbench.solvers.base import PROFILES, BoxQP, QPResult, QPWarm, Settings, Status
 
@@ -416,7 +416,7 @@ def test_qpsolvers_unknown_and_missing_solver():
 def test_bad_input_raises():
     with pytest.raises(ValueError):
         qp_osqp.solve_qp(box_qp(np.eye(2), [1.0, 1.0], [0.0], [1.0]), PROFILES["mid"])
-    with pytest.raises(ValueError):
+    with pytest.raises(ProblemError, match="variant"):
         qp_proxsuite.solve_qp(box_qp([[1.0]], [1.0], [0.0], [1.0]), PROFILES["mid"],
                               variant="banded")
 

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import ProblemError
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from .chain import alpha_from_heights, energy, heights
@@ -99,10 +100,10 @@ def run_driver(
     """
     if method == "undamped":
         if start is not None:
-            raise ValueError("a continuation start needs method='globalised'")
+            raise ProblemError("a continuation start needs method='globalised'")
         return _undamped(chain, solver, tol, max_outer)
     if method != "globalised":
-        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+        raise ProblemError(f"method must be one of {METHODS}, got {method!r}")
     return _globalised(chain, solver, tol, max_outer, start)
 
 

@@ -48,6 +48,7 @@ import numpy as np
 from scipy.linalg import LinAlgError, solveh_banded
 from scipy.linalg.lapack import dpbsv, dpbtrs
 
+from ..errors import ProblemError
 from ..linalg import dense_to_bands, sub_bands
 from .base import Status, StepSolution
 
@@ -93,7 +94,7 @@ def solve_banded_qp(
         primal safeguard took over from the dual method.
     """
     if method not in METHODS:
-        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+        raise ProblemError(f"method must be one of {METHODS}, got {method!r}")
     t0 = time.perf_counter()
     lo, hi = step.lower, step.upper
     n = step.size

@@ -38,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from lcpbench.errors import ProblemError
 from lcpbench.solvers.base import LCPSolution, Settings, Status, lcp_residuals
 from lcpbench.worker import WorkerDied, WorkerProcess
 
@@ -304,7 +305,7 @@ def _as_problem(M, q) -> tuple[np.ndarray, np.ndarray]:
     q = np.asarray(q, dtype=float).ravel()
     n = q.size
     if n == 0 or M.shape != (n, n):
-        raise ValueError(f"M has shape {M.shape}, expected ({n}, {n}) with n >= 1")
+        raise ProblemError(f"M has shape {M.shape}, expected ({n}, {n}) with n >= 1")
     return M, q
 
 
@@ -423,21 +424,21 @@ def solve_many(problems, settings: Settings, *, method: str = "lemke",
 
     Raises
     ------
-    ValueError
+    ProblemError
         Unknown ``method`` or inconsistent shapes (caller errors).
     """
     global _WORKER
     if method not in METHODS:
-        raise ValueError(f"unknown siconos method {method!r}; available: {', '.join(METHODS)}")
+        raise ProblemError(f"unknown siconos method {method!r}; available: {', '.join(METHODS)}")
     probs = [_as_problem(M, q) for M, q in problems]
     warms = [None] * len(probs) if warm is None else list(warm)
     if len(warms) != len(probs):
-        raise ValueError("warm must have one entry per problem")
+        raise ProblemError("warm must have one entry per problem")
     for i, ((_, q), z0) in enumerate(zip(probs, warms)):
         if z0 is not None:
             warms[i] = np.asarray(z0, dtype=float).ravel()
             if warms[i].shape != q.shape:
-                raise ValueError(f"warm start {i} has shape {warms[i].shape}, expected {q.shape}")
+                raise ProblemError(f"warm start {i} has shape {warms[i].shape}, expected {q.shape}")
     if accept_tol is None:
         accept_tol = ACCEPT_SLACK * max(ACCEPT_TOL, settings.eps or 0.0)
     if not probs:
@@ -547,7 +548,7 @@ def solve_lcp(M, q, settings: Settings, warm=None, *, method: str = "lemke",
 
     Raises
     ------
-    ValueError
+    ProblemError
         Unknown ``method`` or inconsistent shapes (caller errors, not solver ones).
     """
     return solve_many([(M, q)], settings, method=method,
