@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from known_answers import CONTACT_QP_KNOWN, PAPER_SCENE
 
 from lcpbench import ActuatorScene, solve
 from lcpbench.errors import ProblemError
@@ -120,26 +121,8 @@ def assert_kkt(qp, sol, rtol=1e-10):
     assert np.abs(gap_lo * rl).max() <= rtol * force * span
 
 
-# -- hand-made problems ------------------------------------------------------------
-HAND = {
-    # 1-D: minimiser 2 beyond the wall at 1; reaction = -(2·1 - 4) = 2
-    "one-node": ([[2.0]], [-4.0], [-INF], [1.0], [1.0], [2.0], [0.0]),
-    # 2x2: u* = (5/3, -5/6) crosses the upper wall 1 of node 0 only; with u0 = 1,
-    # 2 u1 + 1 = 0 gives u1 = -0.5 and the reaction -(2·1 + 1·(-0.5) - 2.5) = 1
-    "two-nodes": ([[2.0, 1.0], [1.0, 2.0]], [-2.5, 0.0], [-INF, -INF], [1.0, INF],
-                  [1.0, -0.5], [1.0, 0.0], [0.0, 0.0]),
-    # a channel: node 0 pushed up to 1, node 2 pushed down to -1, node 1 free
-    "channel": ([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 2.0]], [-10.0, 0.0, 10.0],
-                [-1.0, -1.0, -1.0], [1.0, 1.0, 1.0], [1.0, 0.0, -1.0], [8.0, 0.0, 0.0],
-                [0.0, 0.0, 8.0]),
-    # no wall reachable: the unconstrained minimiser, no face solve
-    "no-contact": ([[4.0, 1.0], [1.0, 3.0]], [1.0, 2.0], [-INF, -INF], [10.0, 10.0],
-                   list(np.linalg.solve([[4.0, 1.0], [1.0, 3.0]], [-1.0, -2.0])), [0.0, 0.0],
-                   [0.0, 0.0]),
-    # degenerate: the unconstrained minimiser sits exactly on the wall (zero reaction)
-    "degenerate": ([[2.0, 0.0], [0.0, 2.0]], [-2.0, -4.0], [-INF, -INF], [1.0, 1.0],
-                   [1.0, 1.0], [0.0, 2.0], [0.0, 0.0]),
-}
+# -- hand-made problems (known_answers.CONTACT_QP_KNOWN) ---------------------------
+HAND = CONTACT_QP_KNOWN
 
 
 @pytest.mark.parametrize("case", sorted(HAND))
@@ -228,7 +211,7 @@ def test_complementarity_to_round_off(n, seed, reach, gram):
 # -- the contact step -----------------------------------------------------------------
 @pytest.fixture(scope="module")
 def paper_step():
-    scene = ActuatorScene(theta=150, height=3.0, links=140)
+    scene = ActuatorScene(**PAPER_SCENE)
     result = solve(scene, solver="active-set", tol=1e-10)
     return assemble_step(result.scene.chain(), result.alpha)
 

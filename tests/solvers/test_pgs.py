@@ -14,6 +14,7 @@ import pytest
 import scipy.sparse as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from known_answers import BOTH_ACTIVE, SECOND_ACTIVE
 
 from lcpbench.errors import ProblemError
 from lcpbench.solvers.base import PROFILES, Settings, Status, lcp_residuals
@@ -64,19 +65,19 @@ def test_q_zero_is_solved_by_zero():
 def test_one_constraint_active_by_hand():
     # M = [[2, 1], [1, 2]], q = [1, -4]. Sweep 1 from z = 0: w_0 = 1 > 0 keeps z_0 = 0;
     # w_1 = -4 gives z_1 = 4 / 2 = 2. Then w = [3, 0]: solved exactly after one sweep.
-    M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([1.0, -4.0])
+    M, q = SECOND_ACTIVE.arrays()
     sol = pgs(M, q)
     assert_solves(sol, M, q)
     assert sol.iterations == 1
-    np.testing.assert_array_equal(sol.z, [0.0, 2.0])
-    np.testing.assert_array_equal(sol.w, [3.0, 0.0])
+    np.testing.assert_array_equal(sol.z, SECOND_ACTIVE.z)
+    np.testing.assert_array_equal(sol.w, SECOND_ACTIVE.w)
 
 
 def test_first_sweep_is_gauss_seidel_not_jacobi():
     # M = [[2, 1], [1, 2]], q = [-5, -6], z = 0. Row 0: z_0 = 5/2. Row 1 sees the new z_0:
     # w_1 = 2.5 - 6 = -3.5, z_1 = 1.75 (Jacobi would give 3). With omega = 1.5:
     # z_0 = 1.5 * 5/2 = 3.75, w_1 = 3.75 - 6 = -2.25, z_1 = 1.5 * 2.25 / 2 = 1.6875.
-    M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-5.0, -6.0])
+    M, q = BOTH_ACTIVE.arrays()
     one = pgs(M, q, max_sweeps=1)
     assert one.status is Status.MAX_ITER and one.iterations == 1
     np.testing.assert_array_equal(one.z, [2.5, 1.75])
@@ -86,10 +87,10 @@ def test_first_sweep_is_gauss_seidel_not_jacobi():
 
 def test_both_active_converges_to_hand_solution():
     # Both z > 0: M z = -q gives z = [4/3, 7/3], w = 0.
-    M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-5.0, -6.0])
+    M, q = BOTH_ACTIVE.arrays()
     sol = pgs(M, q, eps=1e-12)
     assert_solves(sol, M, q, atol=1e-11)
-    np.testing.assert_allclose(sol.z, [4 / 3, 7 / 3], rtol=1e-11)
+    np.testing.assert_allclose(sol.z, BOTH_ACTIVE.z, rtol=1e-11)
     assert sol.extra["omega"] == 1.0 and sol.extra["residual"] <= 1e-12
     assert sol.solve_time >= 0 and sol.setup_time >= 0
 
@@ -97,7 +98,7 @@ def test_both_active_converges_to_hand_solution():
 def test_rate_is_the_gauss_seidel_contraction():
     # 2x2 SPD [[a, b], [b, a]] with both z > 0: PGS is plain Gauss-Seidel, whose error
     # contracts by (b/a)^2 per sweep. [[2, 1], [1, 2]]: 1/4.
-    M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-5.0, -6.0])
+    M, q = BOTH_ACTIVE.arrays()
     assert pgs(M, q, eps=1e-12).extra["rate"] == pytest.approx(0.25, rel=0.02)
 
 
@@ -254,22 +255,22 @@ def test_never_solved_with_a_wrong_answer(n, seed):
 
 
 def test_warm_start_at_solution_takes_no_sweep_and_negative_warm_is_clipped():
-    M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([1.0, -4.0])
-    sol = pgs(M, q, z0=[0.0, 2.0])
+    M, q = SECOND_ACTIVE.arrays()
+    sol = pgs(M, q, z0=list(SECOND_ACTIVE.z))
     assert sol.solved and sol.iterations == 0
     clipped = pgs(M, q, z0=[-5.0, -1.0], max_sweeps=0)  # projected to 0, not yet swept
     np.testing.assert_array_equal(clipped.z, [0.0, 0.0])
 
 
 def test_time_limit_stops_after_a_sweep():
-    M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-5.0, -6.0])
+    M, q = BOTH_ACTIVE.arrays()
     sol = pgs(M, q, time_limit=0.0)
     assert sol.status is Status.MAX_ITER and sol.iterations == 1
     assert "time limit" in sol.message
 
 
 def test_adapter_translates_settings():
-    M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-5.0, -6.0])
+    M, q = BOTH_ACTIVE.arrays()
     default = solve_lcp(M, q, PROFILES["default"])
     assert default.solved and default.extra["eps"] == 1e-8
     low, high = solve_lcp(M, q, PROFILES["low"]), solve_lcp(M, q, PROFILES["high"])
@@ -279,7 +280,7 @@ def test_adapter_translates_settings():
     assert capped.status is Status.MAX_ITER and capped.iterations == 2
     sor = solve_lcp(M, q, PROFILES["mid"], omega=1.3)
     assert sor.solved and sor.extra["omega"] == 1.3
-    warm = solve_lcp(M, q, PROFILES["mid"], warm=np.array([4 / 3, 7 / 3]))
+    warm = solve_lcp(M, q, PROFILES["mid"], warm=np.array(BOTH_ACTIVE.z))
     assert warm.solved and warm.iterations == 0
     clipped = solve_lcp(M, q, Settings("zero", 1e-6, max_iter=0), warm=np.array([-1.0, 1.0]))
     np.testing.assert_array_equal(clipped.z, [0.0, 1.0])
