@@ -9,6 +9,7 @@ set confirmed by Lemke on the contact step).
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
