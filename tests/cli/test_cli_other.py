@@ -28,6 +28,7 @@ def test_select_cli(tmp_path, capsys):
     code = main([*args, "--json"])
     d = json.loads(capsys.readouterr().out)  # exactly one JSON document on stdout
     assert code == 0 and d["backend"] in ("active-set", "lemke") and d["error"] <= 1e-3
+    assert d["force_tol"] == 1e-3 and d["driver_tol"] == 1e-3  # relative force error; rad
     assert main(args) == 0  # cached the second time; one line with the reason
     out = capsys.readouterr().out.strip()
     assert out.startswith(d["backend"]) and len(out.splitlines()) == 1
