@@ -36,22 +36,22 @@ def exact_step(theta=150.0, height=3.0, links=140):
     ref = solve_step(step, "active-set", "high")
     check = solve_step(step, "lemke", "high")
     assert ref.solved and check.solved
-    f_ref, f_chk = ref.reaction_net.sum(), check.reaction_net.sum()
+    f_ref, f_chk = ref.forces_net.sum(), check.forces_net.sum()
     assert abs(f_ref - f_chk) <= 1e-9 * abs(f_ref), (f_ref, f_chk)
     return step, ref
 
 
 def measure(step, ref, backend, settings, scaled, repeat):
     rows = np.isfinite(step.upper)
-    f_ref = float(ref.reaction_net[rows].sum())
+    f_ref = float(ref.forces_net[rows].sum())
     times, wall = [], []
     for _ in range(repeat):
         sol = solve_step(step, backend, settings, scaled=scaled)
         times.append(sol.solve_time)
         wall.append(sol.wall_time)
-    ok = sol.reaction_net is not None and np.all(np.isfinite(sol.reaction_net))
-    f_gap = float(sol.reaction_net[rows].sum()) if ok else np.nan
-    f_mul = float((sol.reaction_upper - sol.reaction_lower)[rows].sum())
+    ok = sol.forces_net is not None and np.all(np.isfinite(sol.forces_net))
+    f_gap = float(sol.forces_net[rows].sum()) if ok else np.nan
+    f_mul = float((sol.forces_upper - sol.forces_lower)[rows].sum())
     return {
         "backend": backend, "settings": settings, "scaled": scaled,
         "status": sol.status.value, "message": sol.message, "iterations": sol.iterations,
@@ -134,7 +134,7 @@ def main(argv=None) -> int:
                 rows.append(r)
     rows_ = np.isfinite(step.upper)
     meta = {"theta": 150, "height": 3, "links": 140,
-            "force_N": float(ref.reaction_net[rows_].sum()),
+            "force_N": float(ref.forces_net[rows_].sum()),
             "contact_rows": int(rows_.sum()), "repeat": args.repeat,
             "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}, "
                        f"python {platform.python_version()}",

@@ -35,7 +35,7 @@ def test_solve_takes_the_same_path_in_any_directory(tmp_path):
     (holder / "results").mkdir(parents=True)
     empty.mkdir()
     scene = lcpbench.ActuatorScene(theta=150, height=3.0, links=40)
-    sel = select_backend(scene, tol=1e-3, store=holder / "results" / "lcpbench.sqlite",
+    sel = select_backend(scene, force_tol=1e-3, store=holder / "results" / "lcpbench.sqlite",
                          candidates=["lemke"], settings=("default",), workers=1)
     assert sel.backend == "lemke"  # the store really holds a different choice
     a, b = _run_in(holder), _run_in(empty)

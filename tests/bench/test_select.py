@@ -14,7 +14,7 @@ CANDIDATES = ["active-set", "lemke", "pgs"]
 @pytest.fixture(scope="module")
 def selected(tmp_path_factory):
     path = tmp_path_factory.mktemp("sel") / "s.sqlite"
-    s = select_backend(SCENE, tol=1e-3, store=path, candidates=CANDIDATES,
+    s = select_backend(SCENE, force_tol=1e-3, store=path, candidates=CANDIDATES,
                        settings=("default", "high"), workers=2)
     return path, s
 
@@ -33,7 +33,7 @@ def test_selection_meets_the_accuracy_and_is_the_fastest(selected):
     assert s.backend in ("active-set", "lemke") and s.error <= 1e-3
     ok = [e for e in s.evidence if e["ok"]]
     assert s.time_s == min(e["time_s"] for e in ok)
-    for e in s.evidence:  # qualified means: converged on every probe, within tol
+    for e in s.evidence:  # qualified means: converged on every probe, within force_tol
         if e["ok"]:
             assert e["converged"] == e["probes"] == 4 and e["error"] <= 1e-3
         else:
@@ -45,7 +45,7 @@ def test_probes_are_cached_in_the_store(selected):
     path, s = selected
     with Store(path) as st:
         n = st.count()
-    again = select_backend(SCENE, tol=1e-3, store=path, candidates=CANDIDATES,
+    again = select_backend(SCENE, force_tol=1e-3, store=path, candidates=CANDIDATES,
                            settings=("default", "high"))
     with Store(path) as st:
         assert st.count() == n  # nothing solved the second time
@@ -54,16 +54,16 @@ def test_probes_are_cached_in_the_store(selected):
 
 def test_impossible_budget_selects_nothing(selected):
     path, _ = selected
-    s = select_backend(SCENE, tol=1e-3, time_budget=1e-9, store=path,
+    s = select_backend(SCENE, force_tol=1e-3, time_budget=1e-9, store=path,
                        candidates=CANDIDATES, settings=("default", "high"))
     assert s.backend is None and "budget" in s.reason
 
 
 def test_bad_input():
-    with pytest.raises(ProblemError, match="tol"):
-        select_backend(SCENE, tol=0.0, probe=False)
+    with pytest.raises(ProblemError, match="force_tol"):
+        select_backend(SCENE, force_tol=0.0, probe=False)
     with pytest.raises(ProblemError, match="time_budget"):
-        select_backend(SCENE, tol=1e-3, time_budget=-1, probe=False)
+        select_backend(SCENE, force_tol=1e-3, time_budget=-1, probe=False)
 
 
 def test_solve_uses_an_explicit_selection(selected):
@@ -76,7 +76,7 @@ def test_solve_uses_an_explicit_selection(selected):
 
 def test_a_selection_without_a_backend_is_refused(selected):
     path, _ = selected
-    none = select_backend(SCENE, tol=1e-3, time_budget=1e-9, store=path,
+    none = select_backend(SCENE, force_tol=1e-3, time_budget=1e-9, store=path,
                           candidates=CANDIDATES, settings=("default",), probe=False)
     assert none.backend is None
     with pytest.raises(ProblemError, match="chose no back-end"):

@@ -23,11 +23,12 @@ def test_solvers_lists_every_backend(capsys):
 
 
 def test_select_cli(tmp_path, capsys):
-    args = ["select", "--tol", "1e-3", "--links", "20", "--solvers", "active-set,lemke",
+    args = ["select", "--force-tol", "1e-3", "--links", "20", "--solvers", "active-set,lemke",
             "--store", str(tmp_path / "s.sqlite"), "--quiet", "--jobs", "2"]
     code = main([*args, "--json"])
     d = json.loads(capsys.readouterr().out)  # exactly one JSON document on stdout
     assert code == 0 and d["backend"] in ("active-set", "lemke") and d["error"] <= 1e-3
+    assert d["force_tol"] == 1e-3 and d["driver_tol"] == 1e-3  # relative force error; rad
     assert main(args) == 0  # cached the second time; one line with the reason
     out = capsys.readouterr().out.strip()
     assert out.startswith(d["backend"]) and len(out.splitlines()) == 1

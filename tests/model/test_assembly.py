@@ -156,6 +156,6 @@ def test_lcp_form_and_qp_form_have_the_same_solution(channel):
     assert np.allclose(u, qp.u, atol=1e-9)
     r = np.zeros(step.size)
     r[form.rows] = sol.w[: form.n_gap]
-    assert np.allclose(r, qp.reaction_upper, atol=1e-9 * max(1, r.max()))
+    assert np.allclose(r, qp.forces_upper, atol=1e-9 * max(1, r.max()))
     # rows only where a node can reach the wall: never the ones within h of a pin
     assert np.all(np.isinf(step.upper[: int(scene.height / (scene.length / scene.links)) - 1]))

@@ -194,3 +194,14 @@ def test_large_N_flat_contact_region_is_not_mistaken_for_contact():
     b = solve(scene, tol=1e-8, method="undamped")
     assert_certified(a, rel_torque=1e-6)
     assert a.total_force == pytest.approx(b.total_force, rel=1e-7)
+
+
+def test_bad_driver_input_is_a_problem_error():
+    from lcpbench.errors import ProblemError
+    from lcpbench.model.driver import DriverStart, run_driver
+
+    chain = ActuatorScene(theta=150, height=3, links=20).chain()
+    with pytest.raises(ProblemError, match="method must be one of"):
+        run_driver(chain, None, method="newton")
+    with pytest.raises(ProblemError, match="continuation start"):
+        run_driver(chain, None, method="undamped", start=DriverStart(np.zeros(20)))

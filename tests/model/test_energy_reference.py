@@ -143,7 +143,7 @@ def test_cantilever_has_no_closure_and_matches_the_driver():
 
 def test_slsqp_alone_is_close_and_reports_itself():
     scene = ActuatorScene(theta=150, height=3, links=30)
-    raw = minimise_energy(scene, polish=False, tol=1e-16)
+    raw = minimise_energy(scene, polish=False, ftol=1e-16)
     polished = minimise_energy(scene)
     assert not raw.polished and raw.newton_iterations == 0 and raw.nit > 0
     assert np.max(np.abs(raw.alpha - polished.alpha)) < 1e-7

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from lcpbench import ActuatorScene
+from lcpbench.errors import ProblemError
 from lcpbench.paper.reproduce import reproduce
 from lcpbench.studies.discretisation import discretisation_study
 
@@ -79,7 +80,7 @@ def test_quick_run_writes_every_file_in_well_under_a_minute(run):
 
 
 def test_unknown_stage_is_refused(tmp_path):
-    with pytest.raises(ValueError, match="fig99"):
+    with pytest.raises(ProblemError, match="fig99"):
         reproduce(tmp_path, quick=True, stages=["fig99"])
 
 

@@ -15,6 +15,8 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from known_answers import CYCLING_PRONE as ALL_CYCLING_PRONE
+from known_answers import LCP_KNOWN, PAPER_SCENE, SICONOS_EXPECTED, SICONOS_LCP_DIR
 
 from lcpbench import ActuatorScene, solve
 from lcpbench.model.step import assemble_step
@@ -25,8 +27,8 @@ from lcpbench.solvers.base import Settings, Status, lcp_residuals
 from lcpbench.solvers.enumeration import enumerate_lcp
 
 BACKENDS = available_backends()
-PEER = Path(__file__).resolve().parents[1] / "data" / "siconos-lcp"  # copy of shared/peer-data
-EXPECTED = json.loads((Path(__file__).parent / "data" / "siconos_expected.json").read_text())
+PEER = SICONOS_LCP_DIR  # copy of shared/peer-data
+EXPECTED = json.loads(SICONOS_EXPECTED.read_text())
 #: Finite, exact methods: they must solve every solvable problem of their class.
 EXACT = {"active-set", "lemke", "siconos-lemke"}
 
@@ -46,24 +48,11 @@ def check_solved_is_right(sol, M, q, z_ref=None, atol=1e-5):
     return True
 
 
-# -- small problems with hand-derived answers -------------------------------------------
-KNOWN = {
-    # 2x2 SPD, first constraint active: 2 z1 - 1 = 0, w2 = z1 + 1 = 1.5
-    "one-active": ([[2.0, 1.0], [1.0, 2.0]], [-1.0, 1.0], [0.5, 0.0]),
-    # diagonal: z_i = max(0, -q_i / M_ii)
-    "diagonal": ([[1.0, 0, 0], [0, 2.0, 0], [0, 0, 4.0]], [-1.0, 2.0, -8.0], [1.0, 0.0, 2.0]),
-    # degenerate: at z = (1, 0), w = (0, 0): both of the second pair vanish
-    "degenerate": ([[2.0, 1.0], [1.0, 2.0]], [-2.0, -1.0], [1.0, 0.0]),
-    # no contact: q >= 0 gives z = 0
-    "no-contact": ([[2.0, -1.0, 0], [-1.0, 2.0, -1.0], [0, -1.0, 2.0]], [1.0, 0.5, 3.0],
-                   [0.0, 0.0, 0.0]),
-}
-
-
+# -- small problems with hand-derived answers (known_answers.LCP_KNOWN) ----------------
 @pytest.mark.parametrize("backend", BACKENDS)
-@pytest.mark.parametrize("case", sorted(KNOWN))
+@pytest.mark.parametrize("case", sorted(LCP_KNOWN))
 def test_known_answers(backend, case):
-    M, q, z = (np.array(x, dtype=float) for x in KNOWN[case])
+    M, q, z = (np.array(x, dtype=float) for x in LCP_KNOWN[case])
     sol = solve_lcp(M, q, backend, "mid")
     solved = check_solved_is_right(sol, M, q, z)
     # a well-conditioned 2x2/3x3 SPD problem: every back-end must solve it, except
@@ -113,13 +102,8 @@ def test_degenerate_psd(backend, seed):
 
 
 # Degenerate non-symmetric problems on which Lemke with a naive tie-break cycles
-# (found by random search; see tests/solvers/test_lemke.py).
-CYCLING_PRONE = [
-    ([[1, 1, -2, -1, 2], [-2, 0, 2, 2, -2], [2, -2, 2, -2, -2], [-1, 2, 0, 2, -2],
-      [2, 1, 1, -1, -1]], [-4, 4, 1, -2, -4]),
-    ([[0, -1, -1, 2, 0, -1], [-2, -1, -1, 0, 1, -2], [2, 2, 2, 1, 1, 1],
-      [1, -2, 0, 1, 1, -1], [-2, 0, 1, 1, -2, 2], [0, 1, 2, 2, 2, -1]], [0, 0, -2, -2, 6, -2]),
-]
+# (known_answers.CYCLING_PRONE; these two of them).
+CYCLING_PRONE = [ALL_CYCLING_PRONE[0], ALL_CYCLING_PRONE[2]]
 
 
 @pytest.mark.parametrize("backend", BACKENDS)
@@ -139,16 +123,16 @@ def test_cycling_prone(backend, k):
 # -- the N = 140 contact step -----------------------------------------------------------
 @pytest.fixture(scope="module")
 def contact_step():
-    scene = ActuatorScene(theta=150, height=3.0, links=140)
+    scene = ActuatorScene(**PAPER_SCENE)
     result = solve(scene, tol=1e-10)
     step = assemble_step(result.scene.chain(), result.alpha)
     ref = solve_step(step, "active-set", "high")
     check = solve_step(step, "lemke", "high")
     rows = np.isfinite(step.upper)
-    f_ref = ref.reaction_net[rows].sum()
+    f_ref = ref.forces_net[rows].sum()
     # two exact methods, two different forms (banded QP, condensed LCP), agree
     assert ref.solved and check.solved
-    assert abs(check.reaction_net[rows].sum() - f_ref) <= 1e-9 * f_ref
+    assert abs(check.forces_net[rows].sum() - f_ref) <= 1e-9 * f_ref
     return step, ref, rows, f_ref
 
 
@@ -164,7 +148,7 @@ def test_contact_step(contact_step, backend, scaled):
     if backend in EXACT:
         assert sol.status is Status.SOLVED, sol.message
     if sol.status is Status.SOLVED:
-        err = abs(sol.reaction_net[rows].sum() - f_ref) / f_ref
+        err = abs(sol.forces_net[rows].sum() - f_ref) / f_ref
         assert err <= 1e-6, f"{backend}: total force off by {err:.1e}, marked solved"
         assert sol.residuals["min_gap"] >= -1e-9
         np.testing.assert_allclose(sol.u, ref.u, atol=1e-6 * step.length_scale)

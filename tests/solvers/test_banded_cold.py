@@ -15,8 +15,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from known_answers import CONTACT_QP_KNOWN, PAPER_SCENE
 
 from lcpbench import ActuatorScene, solve
+from lcpbench.errors import ProblemError
 from lcpbench.model.driver import run_driver
 from lcpbench.model.step import assemble_step
 from lcpbench.model.step_solver import solve_step
@@ -106,7 +108,7 @@ def random_banded_spd(rng, n, b, gram=False):
 
 def assert_kkt(qp, sol, rtol=1e-10):
     """Feasible, reactions >= 0, complementary and stationary, to round-off."""
-    u, ru, rl = sol.u, sol.reaction_upper, sol.reaction_lower
+    u, ru, rl = sol.u, sol.forces_upper, sol.forces_lower
     g = qp.gradient(u)
     force = max(float(np.max(qp.gradient_scale(u))), 1e-300)
     span = 1.0 + np.abs(u).max()
@@ -119,26 +121,8 @@ def assert_kkt(qp, sol, rtol=1e-10):
     assert np.abs(gap_lo * rl).max() <= rtol * force * span
 
 
-# -- hand-made problems ------------------------------------------------------------
-HAND = {
-    # 1-D: minimiser 2 beyond the wall at 1; reaction = -(2·1 - 4) = 2
-    "one-node": ([[2.0]], [-4.0], [-INF], [1.0], [1.0], [2.0], [0.0]),
-    # 2x2: u* = (5/3, -5/6) crosses the upper wall 1 of node 0 only; with u0 = 1,
-    # 2 u1 + 1 = 0 gives u1 = -0.5 and the reaction -(2·1 + 1·(-0.5) - 2.5) = 1
-    "two-nodes": ([[2.0, 1.0], [1.0, 2.0]], [-2.5, 0.0], [-INF, -INF], [1.0, INF],
-                  [1.0, -0.5], [1.0, 0.0], [0.0, 0.0]),
-    # a channel: node 0 pushed up to 1, node 2 pushed down to -1, node 1 free
-    "channel": ([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 2.0]], [-10.0, 0.0, 10.0],
-                [-1.0, -1.0, -1.0], [1.0, 1.0, 1.0], [1.0, 0.0, -1.0], [8.0, 0.0, 0.0],
-                [0.0, 0.0, 8.0]),
-    # no wall reachable: the unconstrained minimiser, no face solve
-    "no-contact": ([[4.0, 1.0], [1.0, 3.0]], [1.0, 2.0], [-INF, -INF], [10.0, 10.0],
-                   list(np.linalg.solve([[4.0, 1.0], [1.0, 3.0]], [-1.0, -2.0])), [0.0, 0.0],
-                   [0.0, 0.0]),
-    # degenerate: the unconstrained minimiser sits exactly on the wall (zero reaction)
-    "degenerate": ([[2.0, 0.0], [0.0, 2.0]], [-2.0, -4.0], [-INF, -INF], [1.0, 1.0],
-                   [1.0, 1.0], [0.0, 2.0], [0.0, 0.0]),
-}
+# -- hand-made problems (known_answers.CONTACT_QP_KNOWN) ---------------------------
+HAND = CONTACT_QP_KNOWN
 
 
 @pytest.mark.parametrize("case", sorted(HAND))
@@ -149,8 +133,8 @@ def test_hand_made(case, method):
     sol = solve_banded_qp(qp, method=method)
     assert sol.status is Status.SOLVED, sol.message
     np.testing.assert_allclose(sol.u, u, atol=1e-12)
-    np.testing.assert_allclose(sol.reaction_upper, ru, atol=1e-12)
-    np.testing.assert_allclose(sol.reaction_lower, rl, atol=1e-12)
+    np.testing.assert_allclose(sol.forces_upper, ru, atol=1e-12)
+    np.testing.assert_allclose(sol.forces_lower, rl, atol=1e-12)
     assert_kkt(qp, sol)
 
 
@@ -227,7 +211,7 @@ def test_complementarity_to_round_off(n, seed, reach, gram):
 # -- the contact step -----------------------------------------------------------------
 @pytest.fixture(scope="module")
 def paper_step():
-    scene = ActuatorScene(theta=150, height=3.0, links=140)
+    scene = ActuatorScene(**PAPER_SCENE)
     result = solve(scene, solver="active-set", tol=1e-10)
     return assemble_step(result.scene.chain(), result.alpha)
 
@@ -241,8 +225,8 @@ def test_paper_step_cold(paper_step):
     assert dual.status is Status.SOLVED and primal.status is Status.SOLVED
     assert np.array_equal(dual.active_upper, primal.active_upper)
     np.testing.assert_allclose(dual.u, primal.u, atol=1e-12 * step.length_scale)
-    np.testing.assert_allclose(dual.reaction_upper, primal.reaction_upper,
-                               atol=1e-9 * primal.reaction_upper.max())
+    np.testing.assert_allclose(dual.forces_upper, primal.forces_upper,
+                               atol=1e-9 * primal.forces_upper.max())
     lemke = solve_step(step, "lemke", "high")
     assert lemke.solved
     np.testing.assert_allclose(dual.u, lemke.u, atol=1e-9 * step.length_scale)
@@ -313,7 +297,7 @@ def test_iteration_limit_is_a_status(paper_step):
 
 
 def test_unknown_method():
-    with pytest.raises(ValueError, match="method"):
+    with pytest.raises(ProblemError, match="method"):
         solve_banded_qp(DenseBoxQP([[1.0]], [0.0], [-INF], [1.0]), method="simplex")
 
 

@@ -9,12 +9,12 @@ ends on a ray) -- never from the solver's own output.
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from known_answers import BOTH_ACTIVE, CYCLING_PRONE, IDENTITY, SECOND_ACTIVE, SICONOS_LCP_DIR
 
 from lcpbench.solvers.base import LCPSolution, Status, lcp_residuals
 from lcpbench.solvers.enumeration import enumerate_lcp
@@ -37,24 +37,24 @@ def assert_valid(sol: LCPSolution, M: np.ndarray, q: np.ndarray) -> None:
 
 def test_identity_by_hand():
     # w = z + q: z = max(-q, 0), w = max(q, 0).
-    M, q = np.eye(2), np.array([-1.0, 2.0])
+    M, q = IDENTITY.arrays()
     sol = lemke(M, q)
     assert_valid(sol, M, q)
-    np.testing.assert_allclose(sol.z, [1.0, 0.0], atol=1e-14)
-    np.testing.assert_allclose(sol.w, [0.0, 2.0], atol=1e-14)
+    np.testing.assert_allclose(sol.z, IDENTITY.z, atol=1e-14)
+    np.testing.assert_allclose(sol.w, IDENTITY.w, atol=1e-14)
     assert sol.iterations == 2  # z0 in, then z1 in / z0 out
 
 
 def test_2x2_p_matrix_by_hand_and_enumeration():
     # M = [[2, 1], [1, 2]], q = [-5, -6]: both z > 0 gives z = [4/3, 7/3].
-    M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-5.0, -6.0])
+    M, q = BOTH_ACTIVE.arrays()
     sol = lemke(M, q)
     assert_valid(sol, M, q)
-    np.testing.assert_allclose(sol.z, [4 / 3, 7 / 3], rtol=1e-12)
+    np.testing.assert_allclose(sol.z, BOTH_ACTIVE.z, rtol=1e-12)
     # M = [[2, 1], [1, 2]], q = [1, -4]: z = [0, 2], w = [3, 0].
-    q2 = np.array([1.0, -4.0])
+    q2 = SECOND_ACTIVE.arrays()[1]
     (ref,) = enumerate_lcp(M, q2)  # P-matrix: exactly one solution
-    np.testing.assert_allclose(ref, [0.0, 2.0])
+    np.testing.assert_allclose(ref, SECOND_ACTIVE.z)
     np.testing.assert_allclose(lemke(M, q2).z, ref, atol=1e-12)
 
 
@@ -162,19 +162,7 @@ def test_degenerate_psd_with_planted_solution(n, k, seed):
     np.testing.assert_allclose(sol.w, w_star, atol=1e-8 * max(1.0, np.abs(q).max()))
 
 
-# Found by a random search over degenerate LCPs with a planted solution: with a naive
-# tie-break (first / last tied row) Lemke cycles on these until the pivot budget runs out.
-CYCLING_PRONE = [
-    ([[1, 1, -2, -1, 2], [-2, 0, 2, 2, -2], [2, -2, 2, -2, -2], [-1, 2, 0, 2, -2],
-      [2, 1, 1, -1, -1]],
-     [-4, 4, 1, -2, -4]),
-    ([[-1, -1, 1, -1, -2, -1], [1, -1, 1, 0, 2, 0], [1, 0, -1, 1, -2, -1],
-      [1, 1, 1, -2, 2, -2], [1, 0, 1, 0, -1, 2], [2, 2, -1, 2, -1, 0]],
-     [2, -3, -2, 0, -3, -6]),
-    ([[0, -1, -1, 2, 0, -1], [-2, -1, -1, 0, 1, -2], [2, 2, 2, 1, 1, 1],
-      [1, -2, 0, 1, 1, -1], [-2, 0, 1, 1, -2, 2], [0, 1, 2, 2, 2, -1]],
-     [0, 0, -2, -2, 6, -2]),
-]
+# known_answers.CYCLING_PRONE: Lemke with a naive tie-break cycles on these.
 
 
 @pytest.mark.parametrize("M, q", CYCLING_PRONE)
@@ -202,7 +190,7 @@ def test_round_off_in_an_exact_zero_column_does_not_decide_the_order():
     assert _lexmin_row(tab, rows, a, n, -1, 1.0) == 1
 
 
-PEER = Path(__file__).resolve().parents[1] / "data" / "siconos-lcp"  # Siconos LCPs
+PEER = SICONOS_LCP_DIR  # Siconos LCPs
 needs_peer = pytest.mark.skipif(not PEER.is_dir(), reason="peer Siconos data not present")
 
 

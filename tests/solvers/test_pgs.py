@@ -14,6 +14,7 @@ import pytest
 import scipy.sparse as sp
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from known_answers import BOTH_ACTIVE, SECOND_ACTIVE
 
 from lcpbench.errors import ProblemError
 from lcpbench.solvers.base import PROFILES, Settings, Status, lcp_residuals
@@ -64,19 +65,19 @@ def test_q_zero_is_solved_by_zero():
 def test_one_constraint_active_by_hand():
     # M = [[2, 1], [1, 2]], q = [1, -4]. Sweep 1 from z = 0: w_0 = 1 > 0 keeps z_0 = 0;
     # w_1 = -4 gives z_1 = 4 / 2 = 2. Then w = [3, 0]: solved exactly after one sweep.
-    M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([1.0, -4.0])
+    M, q = SECOND_ACTIVE.arrays()
     sol = pgs(M, q)
     assert_solves(sol, M, q)
     assert sol.iterations == 1
-    np.testing.assert_array_equal(sol.z, [0.0, 2.0])
-    np.testing.assert_array_equal(sol.w, [3.0, 0.0])
+    np.testing.assert_array_equal(sol.z, SECOND_ACTIVE.z)
+    np.testing.assert_array_equal(sol.w, SECOND_ACTIVE.w)
 
 
 def test_first_sweep_is_gauss_seidel_not_jacobi():
     # M = [[2, 1], [1, 2]], q = [-5, -6], z = 0. Row 0: z_0 = 5/2. Row 1 sees the new z_0:
     # w_1 = 2.5 - 6 = -3.5, z_1 = 1.75 (Jacobi would give 3). With omega = 1.5:
     # z_0 = 1.5 * 5/2 = 3.75, w_1 = 3.75 - 6 = -2.25, z_1 = 1.5 * 2.25 / 2 = 1.6875.
-    M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-5.0, -6.0])
+    M, q = BOTH_ACTIVE.arrays()
     one = pgs(M, q, max_sweeps=1)
     assert one.status is Status.MAX_ITER and one.iterations == 1
     np.testing.assert_array_equal(one.z, [2.5, 1.75])
@@ -86,10 +87,10 @@ def test_first_sweep_is_gauss_seidel_not_jacobi():
 
 def test_both_active_converges_to_hand_solution():
     # Both z > 0: M z = -q gives z = [4/3, 7/3], w = 0.
-    M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-5.0, -6.0])
-    sol = pgs(M, q, tol=1e-12)
+    M, q = BOTH_ACTIVE.arrays()
+    sol = pgs(M, q, eps=1e-12)
     assert_solves(sol, M, q, atol=1e-11)
-    np.testing.assert_allclose(sol.z, [4 / 3, 7 / 3], rtol=1e-11)
+    np.testing.assert_allclose(sol.z, BOTH_ACTIVE.z, rtol=1e-11)
     assert sol.extra["omega"] == 1.0 and sol.extra["residual"] <= 1e-12
     assert sol.solve_time >= 0 and sol.setup_time >= 0
 
@@ -97,8 +98,8 @@ def test_both_active_converges_to_hand_solution():
 def test_rate_is_the_gauss_seidel_contraction():
     # 2x2 SPD [[a, b], [b, a]] with both z > 0: PGS is plain Gauss-Seidel, whose error
     # contracts by (b/a)^2 per sweep. [[2, 1], [1, 2]]: 1/4.
-    M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-5.0, -6.0])
-    assert pgs(M, q, tol=1e-12).extra["rate"] == pytest.approx(0.25, rel=0.02)
+    M, q = BOTH_ACTIVE.arrays()
+    assert pgs(M, q, eps=1e-12).extra["rate"] == pytest.approx(0.25, rel=0.02)
 
 
 def test_ill_conditioned_solved_z_is_only_as_good_as_residual_over_one_minus_rate():
@@ -107,7 +108,7 @@ def test_ill_conditioned_solved_z_is_only_as_good_as_residual_over_one_minus_rat
     e = 1e-3
     M, q = np.array([[1.0, 1 - e], [1 - e, 1.0]]), -np.ones(2)
     z_star = np.ones(2) / (2 - e)
-    sol = pgs(M, q, tol=1e-6)
+    sol = pgs(M, q, eps=1e-6)
     assert sol.solved
     assert sol.extra["rate"] == pytest.approx((1 - e) ** 2, rel=1e-6)
     err = np.abs(sol.z - z_star).max() / z_star.max()
@@ -127,7 +128,7 @@ def test_random_spd_matches_enumeration(n, seed, omega):
     M = random_spd(rng, n)
     q = rng.normal(size=n) * rng.choice([1e-2, 1.0, 1e2])
     (ref,) = enumerate_lcp(M, q)  # SPD => P-matrix => exactly one solution
-    sol = pgs(M, q, omega=omega, tol=1e-12)
+    sol = pgs(M, q, omega=omega, eps=1e-12)
     assert_solves(sol, M, q, atol=1e-9)
     cond = np.linalg.cond(M)
     np.testing.assert_allclose(sol.z, ref, atol=1e-10 * cond * max(1.0, np.abs(ref).max()))
@@ -138,7 +139,7 @@ def test_sor_reaches_the_same_answer():
     M = random_spd(rng, 6)
     q = rng.normal(size=6)
     (ref,) = enumerate_lcp(M, q)
-    gs, sor = pgs(M, q, tol=1e-12), pgs(M, q, omega=1.5, tol=1e-12)
+    gs, sor = pgs(M, q, eps=1e-12), pgs(M, q, omega=1.5, eps=1e-12)
     for sol in (gs, sor):
         assert_solves(sol, M, q, atol=1e-10)
         np.testing.assert_allclose(sol.z, ref, atol=1e-9)
@@ -150,9 +151,9 @@ def test_banded_spd_and_sparse_input():
     n = 30
     M = 2.5 * np.eye(n) - np.eye(n, k=1) - np.eye(n, k=-1)
     q = np.sin(np.arange(n)) - 0.2
-    dense = pgs(M, q, tol=1e-12)
+    dense = pgs(M, q, eps=1e-12)
     assert_solves(dense, M, q, atol=1e-10)
-    sparse = pgs(sp.csr_matrix(M), q, tol=1e-12)
+    sparse = pgs(sp.csr_matrix(M), q, eps=1e-12)
     np.testing.assert_array_equal(sparse.z, dense.z)
     assert sparse.iterations == dense.iterations
 
@@ -165,15 +166,15 @@ def test_scale_invariance(seed):
     rng = np.random.default_rng(seed)
     M = random_spd(rng, 8)
     q = rng.normal(size=8)
-    base = pgs(M, q, tol=1e-9)
+    base = pgs(M, q, eps=1e-9)
     assert base.solved
     for s in (1e-6, 1e6):
-        scaled = pgs(s * M, s * q, tol=1e-9)
+        scaled = pgs(s * M, s * q, eps=1e-9)
         assert scaled.solved and scaled.iterations == base.iterations
         np.testing.assert_allclose(scaled.z, base.z, rtol=1e-12, atol=1e-13)
         assert scaled.extra["residual"] == pytest.approx(base.extra["residual"], rel=1e-6)
     # A power of two scales without rounding: bit-identical iterates.
-    exact = pgs(2.0**-30 * M, 2.0**-30 * q, tol=1e-9)
+    exact = pgs(2.0**-30 * M, 2.0**-30 * q, eps=1e-9)
     np.testing.assert_array_equal(exact.z, base.z)
 
 
@@ -184,14 +185,14 @@ def test_symmetric_diagonal_scaling_maps_iterates():
     q = rng.normal(size=5)
     d = 2.0 ** np.array([-20, -3, 0, 5, 18])
     for k in (1, 4, 25):
-        plain = pgs(M, q, tol=0.0, max_sweeps=k)
-        scaled = pgs(d[:, None] * M * d[None, :], d * q, tol=0.0, max_sweeps=k)
+        plain = pgs(M, q, eps=0.0, max_sweeps=k)
+        scaled = pgs(d[:, None] * M * d[None, :], d * q, eps=0.0, max_sweeps=k)
         np.testing.assert_array_equal(scaled.z, plain.z / d)
     # A moderate scaling is still solved to the same answer. (The test takes a max over
     # rows, so wildly different d_i -- like the 2^38 spread above -- loosen it on the
     # rows measured in the smaller units; that is documented, not tested.)
     d = 2.0 ** np.array([-3, -1, 0, 2, 3])
-    sol = pgs(d[:, None] * M * d[None, :], d * q, tol=1e-12)
+    sol = pgs(d[:, None] * M * d[None, :], d * q, eps=1e-12)
     assert sol.solved
     (ref,) = enumerate_lcp(M, q)
     np.testing.assert_allclose(sol.z * d, ref, atol=1e-9)
@@ -241,7 +242,7 @@ def test_never_solved_with_a_wrong_answer(n, seed):
     M = rng.normal(size=(n, n)) * 2
     M[np.diag_indices(n)] = rng.uniform(0.5, 2.0, size=n)
     q = rng.normal(size=n)
-    sol = pgs(M, q, tol=1e-10, max_sweeps=300)
+    sol = pgs(M, q, eps=1e-10, max_sweeps=300)
     assert sol.status in (Status.SOLVED, Status.MAX_ITER, Status.FAILED)
     if sol.solved:
         w = M @ sol.z + q
@@ -254,32 +255,32 @@ def test_never_solved_with_a_wrong_answer(n, seed):
 
 
 def test_warm_start_at_solution_takes_no_sweep_and_negative_warm_is_clipped():
-    M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([1.0, -4.0])
-    sol = pgs(M, q, z0=[0.0, 2.0])
+    M, q = SECOND_ACTIVE.arrays()
+    sol = pgs(M, q, z0=list(SECOND_ACTIVE.z))
     assert sol.solved and sol.iterations == 0
     clipped = pgs(M, q, z0=[-5.0, -1.0], max_sweeps=0)  # projected to 0, not yet swept
     np.testing.assert_array_equal(clipped.z, [0.0, 0.0])
 
 
 def test_time_limit_stops_after_a_sweep():
-    M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-5.0, -6.0])
+    M, q = BOTH_ACTIVE.arrays()
     sol = pgs(M, q, time_limit=0.0)
     assert sol.status is Status.MAX_ITER and sol.iterations == 1
     assert "time limit" in sol.message
 
 
 def test_adapter_translates_settings():
-    M, q = np.array([[2.0, 1.0], [1.0, 2.0]]), np.array([-5.0, -6.0])
+    M, q = BOTH_ACTIVE.arrays()
     default = solve_lcp(M, q, PROFILES["default"])
-    assert default.solved and default.extra["tol"] == 1e-8
+    assert default.solved and default.extra["eps"] == 1e-8
     low, high = solve_lcp(M, q, PROFILES["low"]), solve_lcp(M, q, PROFILES["high"])
-    assert low.extra["tol"] == 1e-3 and high.extra["tol"] == 1e-9
+    assert low.extra["eps"] == 1e-3 and high.extra["eps"] == 1e-9
     assert low.iterations < high.iterations
     capped = solve_lcp(M, q, Settings("cap", 1e-12, max_iter=2))
     assert capped.status is Status.MAX_ITER and capped.iterations == 2
     sor = solve_lcp(M, q, PROFILES["mid"], omega=1.3)
     assert sor.solved and sor.extra["omega"] == 1.3
-    warm = solve_lcp(M, q, PROFILES["mid"], warm=np.array([4 / 3, 7 / 3]))
+    warm = solve_lcp(M, q, PROFILES["mid"], warm=np.array(BOTH_ACTIVE.z))
     assert warm.solved and warm.iterations == 0
     clipped = solve_lcp(M, q, Settings("zero", 1e-6, max_iter=0), warm=np.array([-1.0, 1.0]))
     np.testing.assert_array_equal(clipped.z, [0.0, 1.0])
@@ -304,7 +305,7 @@ def test_adapter_rejects_unknown_option():
     (np.eye(2), np.ones(2), {"omega": 2.0}, r"omega must be .* \(0, 2\)"),
     (np.eye(2), np.ones(2), {"omega": float("nan")}, "omega"),
     (np.eye(2), np.ones(2), {"omega": "1"}, "omega"),
-    (np.eye(2), np.ones(2), {"tol": -1e-3}, "tol must be"),
+    (np.eye(2), np.ones(2), {"eps": -1e-3}, "eps must be"),
     (np.eye(2), np.ones(2), {"max_sweeps": -1}, "max_sweeps must be"),
     (np.eye(2), np.ones(2), {"max_sweeps": 2.5}, "max_sweeps must be"),
     (np.eye(2), np.ones(2), {"z0": np.ones(3)}, "z0 must have length 2"),

@@ -21,8 +21,9 @@ import scipy.optimize
 import scipy.sparse as sp
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
+from known_answers import BOX_QP_KNOWN
 
-from lcpbench.errors import SolverNotFound
+from lcpbench.errors import ProblemError, SolverNotFound
 from lcpbench.solvers import qp_clarabel, qp_cvxpy, qp_osqp, qp_proxsuite, qp_qpsolvers
 from lcpbench.solvers.base import PROFILES, BoxQP, QPResult, QPWarm, Settings, Status
 
@@ -115,29 +116,7 @@ def kkt(qp: BoxQP, x: np.ndarray, y: np.ndarray) -> dict[str, float]:
 
 # --- (a) hand-derived answers -------------------------------------------------------------
 # Each case: P, c, lower, upper, x*, y* (y* from P x* + c + y* = 0 by hand).
-HAND = {
-    # ½·2x² - 4x, x <= 1: unconstrained 2 -> x = 1, y = -(2 - 4) = 2 > 0 (upper pushes)
-    "1d-upper": ([[2.0]], [-4.0], [-INF], [1.0], [1.0], [2.0]),
-    # ½·2x² + 4x, x >= -1: x = -1, y = -(-2 + 4) = -2 < 0 (lower pushes)
-    "1d-lower": ([[2.0]], [4.0], [-1.0], [INF], [-1.0], [-2.0]),
-    # interior of a two-sided box: x = 0.5, y = 0
-    "1d-inside": ([[2.0]], [-1.0], [-1.0], [1.0], [0.5], [0.0]),
-    # no bound at all: x = -c/P = -0.5, y = 0
-    "1d-free": ([[4.0]], [2.0], [-INF], [INF], [-0.5], [0.0]),
-    # coupled, x0 <= 0.5 active, x1 free: 2 x1 + 0.5 + 3 = 0 -> x1 = -1.75;
-    # y0 = -(2·0.5 - 1.75 - 3) = 3.75
-    "2d-upper-free": ([[2.0, 1.0], [1.0, 2.0]], [-3.0, 3.0], [-INF, -INF], [0.5, INF],
-                      [0.5, -1.75], [3.75, 0.0]),
-    # coupled, upper active on x0 and lower on x1: grad at (1, -1) is (-3, 3)
-    "2d-upper-lower": ([[2.0, 1.0], [1.0, 2.0]], [-4.0, 4.0], [-INF, -1.0], [1.0, INF],
-                       [1.0, -1.0], [3.0, -3.0]),
-    # 3 rows: upper active, lower active, a row without bound
-    "3d-mixed": (np.diag([1.0, 1.0, 2.0]), [-1.0, 1.0, 1.0], [-INF, -0.5, -INF],
-                 [0.5, INF, INF], [0.5, -0.5, -0.5], [0.5, -0.5, 0.0]),
-    # positive SEMIdefinite P, both bounds active: y = -(P x + c) = (0.5, -1)
-    "psd": (np.diag([1.0, 0.0]), [-1.0, 1.0], [-INF, -1.0], [0.5, INF],
-            [0.5, -1.0], [0.5, -1.0]),
-}
+HAND = BOX_QP_KNOWN
 
 
 def _grid(cases):
@@ -416,7 +395,7 @@ def test_qpsolvers_unknown_and_missing_solver():
 def test_bad_input_raises():
     with pytest.raises(ValueError):
         qp_osqp.solve_qp(box_qp(np.eye(2), [1.0, 1.0], [0.0], [1.0]), PROFILES["mid"])
-    with pytest.raises(ValueError):
+    with pytest.raises(ProblemError, match="variant"):
         qp_proxsuite.solve_qp(box_qp([[1.0]], [1.0], [0.0], [1.0]), PROFILES["mid"],
                               variant="banded")
 

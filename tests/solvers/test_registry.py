@@ -71,8 +71,8 @@ def test_missing_solver_names_the_extra(monkeypatch):
 
 
 def test_settings_profiles():
-    assert [PROFILES[k].tol for k in ("low", "mid", "high")] == [1e-3, 1e-6, 1e-9]
-    assert PROFILES["default"].tol is None
+    assert [PROFILES[k].eps for k in ("low", "mid", "high")] == [1e-3, 1e-6, 1e-9]
+    assert PROFILES["default"].eps is None
     assert get_settings("mid") is PROFILES["mid"]
     custom = Settings("custom", 1e-4)
     assert get_settings(custom) is custom

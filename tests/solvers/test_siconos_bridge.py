@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from lcpbench.errors import ProblemError
 from lcpbench.solvers import siconos_bridge as sb
 from lcpbench.solvers.base import PROFILES, Settings, Status, lcp_residuals
 
@@ -139,7 +140,7 @@ def test_warm_start_is_used_by_pgs():
 
 
 def test_unknown_method_is_a_caller_error():
-    with pytest.raises(ValueError):
+    with pytest.raises(ProblemError):
         sb.solve_lcp(np.eye(2), -np.ones(2), DEFAULT, method="simplex")
 
 

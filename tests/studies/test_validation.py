@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from known_answers import CANTILEVER_THEORY_FORCE
 
 from lcpbench import ActuatorScene, CantileverScene, solve
 from lcpbench.studies.discretisation import auto_links, discretisation_study
@@ -10,7 +11,7 @@ from lcpbench.studies.validation import cantilever_validation, observed_order
 
 def test_cantilever_within_0p1_percent_of_beam_theory_at_N140():
     v = cantilever_validation(140)
-    assert v["theory_force"] == pytest.approx(7.69e-3, rel=1e-3)  # eqs. (34)-(37); paper: 7.7 mN
+    assert v["theory_force"] == pytest.approx(CANTILEVER_THEORY_FORCE, rel=1e-3)  # eqs. (34)-(37)
     assert abs(v["relative_error"]) < 1e-3  # the paper's own model was 2.6 % off
     assert v["contact_nodes"] == [141]  # theory: a single reaction at the free end
 

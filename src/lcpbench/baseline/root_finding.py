@@ -108,7 +108,7 @@ class BaselineResult:
     ----------
     alpha : link angles α̂ (rad), (N,).
     reaction : the midspan reaction R (N), pushing away from the wall.
-    forces : reaction per free node (nodes 2..N, N), like
+    forces : the reaction R per free node (nodes 2..N, N), like
         :attr:`ContactResult.forces`: zero except at the midspan node(s).
     total_force : sum of ``forces`` (= ``reaction``) (N).
     converged : the equations are solved (scipy's success, re-checked on the

@@ -341,6 +341,6 @@ def reference_row(scene) -> dict:
         sol = solve_step(step, "lemke", "high")
         if sol.solved:
             scale = max(abs(res.total_force), scene.EI / scene.length**2)
-            check = abs(float(sol.reaction_upper.sum()) - res.total_force) / scale
+            check = abs(float(sol.forces_upper.sum()) - res.total_force) / scale
     row["check_error"] = check
     return row

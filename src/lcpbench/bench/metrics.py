@@ -65,9 +65,10 @@ def error_of(total_force: float, reference: float, force_scale: float) -> float:
     return abs(total_force - reference) / max(abs(reference), force_scale)
 
 
-def success_tol(tol: float) -> float:
-    """The force error a run at driver tolerance ``tol`` (rad) may have and count as a success."""
-    return min(1e-3, 100.0 * tol)
+def success_tol(driver_tol: float) -> float:
+    """The force error a run at driver tolerance ``driver_tol`` (rad) may have and count as a
+    success: min(1e-3, 100 · driver_tol), a relative error of the total reaction F."""
+    return min(1e-3, 100.0 * driver_tol)
 
 
 def succeeded(converged: bool, error: float, force_tol: float) -> bool:

@@ -8,7 +8,7 @@ through the sweep harness into the store: the probes are cached there, and a
 second selection for the same kind and accuracy solves nothing.
 
 The choice: among the candidates that converged on every probe with a force
-error (against the probe's reference) at most ``tol`` and, if given, a mean
+error (against the probe's reference) at most ``force_tol`` and, if given, a mean
 time within ``time_budget``, the one with the smallest geometric-mean time.
 """
 
@@ -58,13 +58,15 @@ def probe_scenes(scene_or_grid) -> list[ActuatorScene]:
     return probes
 
 
-def _check(tol, time_budget) -> tuple[float, float | None]:
+def _check(force_tol, time_budget) -> tuple[float, float | None]:
     try:
-        tol = float(tol)
+        force_tol = float(force_tol)
     except (TypeError, ValueError):
-        raise ProblemError(f"tol must be a number in [1e-12, 0.1], got {tol!r}") from None
-    if not (math.isfinite(tol) and 1e-12 <= tol <= 0.1):
-        raise ProblemError(f"tol must be in [1e-12, 0.1] (relative force error), got {tol:g}")
+        raise ProblemError(f"force_tol must be a number in [1e-12, 0.1], got {force_tol!r}"
+                           ) from None
+    if not (math.isfinite(force_tol) and 1e-12 <= force_tol <= 0.1):
+        raise ProblemError("force_tol must be in [1e-12, 0.1] (relative force error), got "
+                           f"{force_tol:g}")
     if time_budget is not None:
         try:
             time_budget = float(time_budget)
@@ -73,31 +75,32 @@ def _check(tol, time_budget) -> tuple[float, float | None]:
                                f"{time_budget!r}") from None
         if not (math.isfinite(time_budget) and time_budget > 0):
             raise ProblemError(f"time_budget must be > 0 s, got {time_budget:g}")
-    return tol, time_budget
+    return force_tol, time_budget
 
 
-def driver_tol_for(tol: float) -> float:
-    """Driver tolerance (rad) of the probes for a force accuracy ``tol``.
+def driver_tol_for(force_tol: float) -> float:
+    """Driver tolerance (rad) of the probes for a force accuracy ``force_tol``.
 
-    An exact contact solver reaches a force error of about tol/10 at driver
-    tolerance tol on the probe scenes (measured: 7e-5 at 1e-3 rad, 4e-8 at
-    1e-6, 2e-11 at 1e-9), so the probes run at min(tol, 1e-3).
+    An exact contact solver reaches a force error of about x/10 at driver
+    tolerance x rad on the probe scenes (measured: 7e-5 at 1e-3 rad, 4e-8 at
+    1e-6, 2e-11 at 1e-9), so the probes run at min(force_tol, 1e-3) rad.
     """
-    return min(tol, 1e-3)
+    return min(force_tol, 1e-3)
 
 
-def select_backend(scene_or_grid, tol: float = 1e-6, time_budget: float | None = None, *,
+def select_backend(scene_or_grid, force_tol: float = 1e-6, time_budget: float | None = None, *,
                    store: Store | str | os.PathLike | None = None,
                    candidates: list[str] | None = None,
                    settings: tuple[str, ...] = ("default", "low", "mid", "high"),
                    probe: bool = True, workers: int = 1,
                    progress=None) -> Selection:
-    """The fastest back-end that meets the accuracy ``tol`` on this kind of scene.
+    """The fastest back-end that meets the accuracy ``force_tol`` on this kind of scene.
 
     Parameters
     ----------
     scene_or_grid : ActuatorScene, list of scenes, or Grid.
-    tol : largest relative total-force error allowed on every probe.
+    force_tol : largest relative error of the total reaction F = ΣR (eq. 30) allowed
+        on every probe, against the probe's reference (not a driver tolerance).
     time_budget : largest geometric-mean time of one solve (s), or None.
     store : a Store or a path (default: ``$LCPBENCH_STORE`` or
         ``results/lcpbench.sqlite``); the probes are cached there.
@@ -114,14 +117,14 @@ def select_backend(scene_or_grid, tol: float = 1e-6, time_budget: float | None =
     """
     from ..solvers.registry import available_backends, get_backend, get_settings
 
-    tol, time_budget = _check(tol, time_budget)
+    force_tol, time_budget = _check(force_tol, time_budget)
     probes = probe_scenes(scene_or_grid)
     names = available_backends() if candidates is None else list(candidates)
     for n in names:
         get_backend(n)
     for p in settings:
         get_settings(p)
-    dtol = driver_tol_for(tol)
+    dtol = driver_tol_for(force_tol)
     jobs = plan_sweep(probes, names, list(settings), tol=dtol, baselines=())
     limit = DEFAULT_TIME_LIMIT if time_budget is None else min(DEFAULT_TIME_LIMIT,
                                                                 max(1.0, 20 * time_budget))
@@ -129,23 +132,23 @@ def select_backend(scene_or_grid, tol: float = 1e-6, time_budget: float | None =
     if own:
         path = Path(os.environ.get(STORE_ENV) or DEFAULT_STORE) if store is None else Path(store)
         if not probe and not path.exists():
-            return _fallback(tol, dtol, "no probes cached (no store at "
+            return _fallback(force_tol, dtol, "no probes cached (no store at "
                                         f"{path}); run `lcpbench select` to measure them")
         store = Store(path, create=probe)
     try:
         if probe:
             sweep(store, jobs, workers=workers, time_limit=limit, progress=progress)
-        return _choose(store, jobs, probes, tol, dtol, time_budget)
+        return _choose(store, jobs, probes, force_tol, dtol, time_budget)
     finally:
         if own:
             store.close()
 
 
-def _fallback(tol, dtol, why) -> Selection:
-    return Selection(None, None, tol, dtol, math.nan, math.nan, why)
+def _fallback(force_tol, dtol, why) -> Selection:
+    return Selection(None, None, force_tol, dtol, math.nan, math.nan, why)
 
 
-def _choose(store: Store, jobs: list[Job], probes, tol, dtol, time_budget) -> Selection:
+def _choose(store: Store, jobs: list[Job], probes, force_tol, dtol, time_budget) -> Selection:
     keys = {scene_key(s) for s in probes}
     refs = {k: r for k, r in store.refs(arrays=False).items() if k in keys}
     marks = ", ".join("?" * len(keys))
@@ -154,7 +157,7 @@ def _choose(store: Store, jobs: list[Job], probes, tol, dtol, time_budget) -> Se
                                 params=(dtol, *sorted(keys)))}
     missing_refs = [k for k in keys if k not in refs or not refs[k]["converged"]]
     if missing_refs:
-        return _fallback(tol, dtol, f"{len(missing_refs)} probe reference(s) missing or "
+        return _fallback(force_tol, dtol, f"{len(missing_refs)} probe reference(s) missing or "
                                     "not converged; probe again")
     evidence = []
     runs = [j for j in jobs if isinstance(j, RunJob)]
@@ -170,9 +173,9 @@ def _choose(store: Store, jobs: list[Job], probes, tol, dtol, time_budget) -> Se
         conv = sum(bool(r["converged"]) for r in mine)
         t = geometric_mean([max(r["wall_time"], 1e-9) for r in mine])
         worst = max(errors)
-        ok = all(succeeded(r["converged"], e, tol) for r, e in zip(mine, errors))
+        ok = all(succeeded(r["converged"], e, force_tol) for r, e in zip(mine, errors))
         why = ("" if ok else f"converged on {conv}/{len(mine)} probes" if conv < len(mine)
-               else f"force error {worst:.1e} > {tol:.0e}")
+               else f"force error {worst:.1e} > {force_tol:.0e}")
         if ok and time_budget is not None and t > time_budget:
             ok, why = False, f"time {t:.3g} s > budget {time_budget:g} s"
         evidence.append({"backend": backend, "settings": settings, "probes": len(mine),
@@ -181,20 +184,20 @@ def _choose(store: Store, jobs: list[Job], probes, tol, dtol, time_budget) -> Se
     good = sorted((e for e in evidence if e["ok"]), key=lambda e: e["time_s"])
     if not good:
         if all(e.get("why") == "not all probes cached" for e in evidence):
-            return _fallback(tol, dtol, "no probes cached for this kind of scene; run "
+            return _fallback(force_tol, dtol, "no probes cached for this kind of scene; run "
                                         "`lcpbench select` to measure them")
-        return Selection(None, None, tol, dtol, math.nan, math.nan,
-                         f"no back-end met a force error of {tol:.0e} on all {len(probes)} "
+        return Selection(None, None, force_tol, dtol, math.nan, math.nan,
+                         f"no back-end met a force error of {force_tol:.0e} on all {len(probes)} "
                          "probes" + (f" within the time budget of {time_budget:g} s" if time_budget
                                      else ""),
                          evidence)
     best = good[0]
     runner_up = next((e for e in good if e["backend"] != best["backend"]), None)
     reason = (f"fastest of {len(good)} (back-end, settings) pairs that met a force error of "
-              f"{tol:.0e} on all {len(probes)} probes: {1e3 * best['time_s']:.3g} ms per "
+              f"{force_tol:.0e} on all {len(probes)} probes: {1e3 * best['time_s']:.3g} ms per "
               f"solve, worst error {best['error']:.1e}")
     if runner_up is not None:
         reason += (f"; next {runner_up['backend']} ({runner_up['settings']}) "
                    f"{runner_up['time_s'] / best['time_s']:.2f}x slower")
-    return Selection(best["backend"], best["settings"], tol, dtol, best["time_s"],
+    return Selection(best["backend"], best["settings"], force_tol, dtol, best["time_s"],
                      best["error"], reason, evidence)

@@ -6,7 +6,7 @@
                    [--solvers A,B] [--settings P,Q] [--continuation [PREDICTOR]]
                    [--store PATH] [--out DIR] [--jobs K] [--time-limit S]
     lcpbench report [--store PATH] [--out DIR] [--table2-height MM] [--no-plots]
-    lcpbench select [scene options] [--tol REL] [--time-budget S] [--solvers A,B]
+    lcpbench select [scene options] [--force-tol REL] [--time-budget S] [--solvers A,B]
 """
 
 from __future__ import annotations
@@ -130,9 +130,9 @@ def register(subparsers) -> None:
         "select", help="the fastest back-end that meets an accuracy on this kind of scene",
         description="Probe every installed back-end and settings profile on four scenes of "
                     "this kind (N, length, EI, w, channel), cache the runs in the store, and "
-                    "print the fastest one whose total-force error is within --tol on all of "
+                    "print the fastest one whose total-force error is within --force-tol on all of "
                     "them.")
-    se.add_argument("--tol", type=float, default=1e-6, metavar="REL",
+    se.add_argument("--force-tol", type=float, default=1e-6, metavar="REL",
                     help="largest relative error of the total force (default 1e-6)")
     se.add_argument("--time-budget", type=float, default=None, metavar="S",
                     help="largest mean time of one solve, seconds (default: none)")
@@ -278,7 +278,7 @@ def cmd_report(args) -> int:
 
 # -- select -------------------------------------------------------------------
 def cmd_select(args) -> int:
-    """``lcpbench select``: 0 with a back-end that meets ``--tol``, 1 with none."""
+    """``lcpbench select``: 0 with a back-end that meets ``--force-tol``, 1 with none."""
     from ..bench.select import select_backend
 
     scene = scene_from(args, resolve_links=False)
@@ -290,7 +290,7 @@ def cmd_select(args) -> int:
     workers = worker_count(args.jobs)
     bar = progress_bar(args.quiet)
     try:
-        sel = select_backend(scene, tol=args.tol, time_budget=args.time_budget,
+        sel = select_backend(scene, force_tol=args.force_tol, time_budget=args.time_budget,
                              store=args.store, candidates=candidates, workers=workers,
                              progress=bar.update if bar else None)
     finally:

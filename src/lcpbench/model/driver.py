@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import ProblemError
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from .chain import alpha_from_heights, energy, heights
@@ -51,9 +52,13 @@ class StepRecord:
 
 @dataclass
 class DriverOutput:
+    """What the driver hands to the result: link angles α (rad), the wall
+    reactions R (eq. 30) of the last step per free node (N, upper and lower
+    wall), whether max|α̂ − α| < tol was reached and why not."""
+
     alpha: np.ndarray
-    reaction_upper: np.ndarray
-    reaction_lower: np.ndarray
+    forces_upper: np.ndarray
+    forces_lower: np.ndarray
     converged: bool
     reason: str
     steps: list[StepRecord] = field(default_factory=list)
@@ -95,10 +100,10 @@ def run_driver(
     """
     if method == "undamped":
         if start is not None:
-            raise ValueError("a continuation start needs method='globalised'")
+            raise ProblemError("a continuation start needs method='globalised'")
         return _undamped(chain, solver, tol, max_outer)
     if method != "globalised":
-        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+        raise ProblemError(f"method must be one of {METHODS}, got {method!r}")
     return _globalised(chain, solver, tol, max_outer, start)
 
 
@@ -110,7 +115,7 @@ def _step_failed(alpha, n, steps, sol: StepSolution, t_asm: float, E: float) -> 
 
 def _converged(alpha, sol: StepSolution, steps) -> DriverOutput:
     reason = "converged" if sol.solved else "converged (last step inaccurate)"
-    return DriverOutput(alpha, sol.reaction_upper, sol.reaction_lower, True, reason, steps,
+    return DriverOutput(alpha, sol.forces_upper, sol.forces_lower, True, reason, steps,
                         last_step=sol)
 
 

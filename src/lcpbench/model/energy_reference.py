@@ -312,7 +312,7 @@ def _polish(chain, rows, alpha, lam, mu):
 def minimise_energy(
     chain_or_scene,
     *,
-    tol: float = 1e-12,
+    ftol: float = 1e-12,
     maxiter: int = 1000,
     polish: bool = True,
     check: float = 1e-9,
@@ -324,14 +324,14 @@ def minimise_energy(
     chain_or_scene : Chain or a scene with ``.chain()``
         What to solve (an :class:`~lcpbench.problems.scenes.ActuatorScene`,
         a :class:`~lcpbench.problems.scenes.CantileverScene`, or their chain).
-    tol : float
+    ftol : float
         SLSQP's ``ftol`` on the dimensionless energy (energy over EI/ℓ).
     maxiter : int
         SLSQP iteration limit.
     polish : bool
         Refine SLSQP's answer by Newton's method on the KKT system of its
         active set (default). Without it the answer is SLSQP's alone, good to
-        about sqrt(tol) in the angles.
+        about sqrt(ftol) in the angles.
     check : float
         ``success`` requires ``kkt_residual <= check``.
 
@@ -364,7 +364,7 @@ def minimise_energy(
         jac=lambda al: energy_gradient(chain, al) / e0,
         method="SLSQP",
         constraints=constraints,
-        options={"ftol": tol, "maxiter": maxiter},
+        options={"ftol": ftol, "maxiter": maxiter},
     )
     alpha = np.asarray(res.x, dtype=float)
     m_eq = 1 if _pinned_right(chain) else 0

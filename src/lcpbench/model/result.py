@@ -86,9 +86,11 @@ class ContactResult:
     x, y : node coordinates (mm), nodes 1..N+1.
     alpha : link angles (rad).
     gaps : distance of each free node below the upper wall, h − y (mm).
-    forces : reaction of the upper wall at each free node (N, pushing away).
+    forces : the reaction R of eq. (30): the upper wall's force on each free
+        node (N, >= 0, pushing away from the wall). lcpbench's one name for R
+        (``forces_upper`` in the step and driver types).
     gaps_lower, forces_lower : the same for the lower wall of a channel (else None).
-    total_force : sum of ``forces`` (N).
+    total_force : F = ΣR, the sum of ``forces`` (N).
     outer_iterations : contact steps taken.
     steps : per-step inner statistics.
     converged, reason : whether max|α̂ − α| < tol was reached, and why not.
@@ -164,7 +166,7 @@ class ContactResult:
 def build_result(scene, chain: Chain, out: DriverOutput, **how) -> ContactResult:
     x, y = node_positions(chain, out.alpha)
     yf = y[chain.free_nodes]
-    cert = certify(chain, out.alpha, out.reaction_upper, out.reaction_lower)
+    cert = certify(chain, out.alpha, out.forces_upper, out.forces_lower)
     return ContactResult(
         scene=scene,
         links=chain.links,
@@ -172,10 +174,10 @@ def build_result(scene, chain: Chain, out: DriverOutput, **how) -> ContactResult
         y=y,
         alpha=out.alpha,
         gaps=chain.wall - yf,
-        forces=out.reaction_upper,
+        forces=out.forces_upper,
         gaps_lower=yf + chain.wall if chain.channel else None,
-        forces_lower=out.reaction_lower if chain.channel else None,
-        total_force=float(out.reaction_upper.sum()),
+        forces_lower=out.forces_lower if chain.channel else None,
+        total_force=float(out.forces_upper.sum()),
         outer_iterations=len(out.steps),
         steps=out.steps,
         converged=out.converged,

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import solveh_banded
 
+from ..errors import ProblemError
 from ..linalg import banded_matvec
 from ..problems.scenes import Chain
 
@@ -184,7 +185,7 @@ class ContactStep:
             C = np.flatnonzero(np.isfinite(self.upper))
             top = self.upper[C]
         else:
-            raise ValueError(f"rows must be 'contact' or 'all', got {rows!r}")
+            raise ProblemError(f"rows must be 'contact' or 'all', got {rows!r}")
         F = np.setdiff1d(np.arange(self.size), C)
         S = H[np.ix_(C, C)]
         ct = c[C]
@@ -242,7 +243,7 @@ def _joint_stencils(chain: Chain, inv_a_cos: np.ndarray):
     wl = np.where(left >= 0, inv_a_cos[np.maximum(left, 0)], 0.0)
     wr = inv_a_cos[right]
     if np.any((left >= 0) & (right != left + 1)) or np.any(np.diff(right) != 1):
-        raise ValueError("joints must join consecutive links, in order")
+        raise ProblemError("joints must join consecutive links, in order")
     base = right  # shifted index of node (right − 1)
     coef = np.column_stack([wl, -wl - wr, wr])
     return base, coef
@@ -282,7 +283,7 @@ def assemble_step(chain: Chain, alpha: np.ndarray) -> ContactStep:
     phi_origin = alpha0[right] - np.where(left >= 0, alpha0[np.maximum(left, 0)], 0.0)
     free = chain.free_nodes + 1
     if np.any(np.diff(free) != 1):
-        raise ValueError("free nodes must be contiguous")
+        raise ProblemError("free nodes must be contiguous")
     sl = slice(free[0], free[-1] + 1)
     n = free.size
     bands = np.zeros((3, n))

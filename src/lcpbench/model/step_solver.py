@@ -137,7 +137,7 @@ def solve_step(step, solver: str | Backend = "auto", settings: str | Settings = 
 
 def _judge(step, sol: StepSolution, s: Settings) -> None:
     res, R = step_residuals(step, sol.u)
-    sol.residuals, sol.reaction_net = res, R
+    sol.residuals, sol.forces_net = res, R
     status, why = verdict(sol.status, res["natural"], accept_tol(s, res.get("term_size", 0.0)))
     if why:
         sol.status, sol.message = status, why
@@ -155,7 +155,7 @@ def _run_step(backend: Backend, step, s: Settings, scaled: bool, warm) -> StepSo
         build = time.perf_counter() - t0
         qwarm = None
         if warm is not None and backend.warm_start and np.all(np.isfinite(warm.u)):
-            qwarm = QPWarm(warm.u / L, (warm.reaction_upper - warm.reaction_lower) / F)
+            qwarm = QPWarm(warm.u / L, (warm.forces_upper - warm.forces_lower) / F)
         res = mod.solve_qp(qp, s, qwarm, **backend.options)
         y = res.y * F
         return StepSolution(res.x * L, np.maximum(y, 0.0), np.maximum(-y, 0.0), res.status,
@@ -170,7 +170,7 @@ def _run_step(backend: Backend, step, s: Settings, scaled: bool, warm) -> StepSo
     z0 = None
     if warm is not None and backend.warm_start and np.all(np.isfinite(warm.u)):
         gaps = form.heights - warm.u[form.rows]
-        z0 = np.concatenate([gaps, warm.reaction_lower[form.rows]])[: q.size] / dz
+        z0 = np.concatenate([gaps, warm.forces_lower[form.rows]])[: q.size] / dz
         z0 = np.maximum(z0, 0.0)
     res = mod.solve_lcp(M, q, s, z0, **backend.options)
     if not np.all(np.isfinite(res.z)):

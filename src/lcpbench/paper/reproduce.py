@@ -37,6 +37,7 @@ import time
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
+from ..errors import ProblemError
 from .baseline_figures import (
     errata_gravity,
     fig26_disagreement,
@@ -102,8 +103,8 @@ def reproduce(
     chosen = [name for name, _ in STAGES] if stages is None else list(stages)
     unknown = sorted(set(chosen) - {name for name, _ in STAGES})
     if unknown:
-        raise ValueError(f"unknown stage(s) {', '.join(unknown)}; the stages are "
-                         + ", ".join(name for name, _ in STAGES))
+        raise ProblemError(f"unknown stage(s) {', '.join(unknown)}; the stages are "
+                           + ", ".join(name for name, _ in STAGES))
     everything = len(set(chosen)) == len(STAGES)
     total = len(chosen) + int(everything)
     summary: dict = {}

@@ -48,6 +48,7 @@ import numpy as np
 from scipy.linalg import LinAlgError, solveh_banded
 from scipy.linalg.lapack import dpbsv, dpbtrs
 
+from ..errors import ProblemError
 from ..linalg import dense_to_bands, sub_bands
 from .base import Status, StepSolution
 
@@ -93,7 +94,7 @@ def solve_banded_qp(
         primal safeguard took over from the dual method.
     """
     if method not in METHODS:
-        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+        raise ProblemError(f"method must be one of {METHODS}, got {method!r}")
     t0 = time.perf_counter()
     lo, hi = step.lower, step.upper
     n = step.size
@@ -395,7 +396,7 @@ def _finish(step, u, W_up, W_lo, iterations, t0, rtol, grad=None) -> StepSolutio
     r_lo = np.where(W_lo, np.maximum(grad, 0.0), 0.0)
     elapsed = time.perf_counter() - t0
     sol = StepSolution(
-        u=u, reaction_upper=r_up, reaction_lower=r_lo, status=Status.SOLVED,
+        u=u, forces_upper=r_up, forces_lower=r_lo, status=Status.SOLVED,
         iterations=iterations, solve_time=elapsed,
         active_upper=W_up.copy(), active_lower=W_lo.copy(),
     )
@@ -409,7 +410,7 @@ def _finish(step, u, W_up, W_lo, iterations, t0, rtol, grad=None) -> StepSolutio
 def _fail(step, u, iterations, t0, message) -> StepSolution:
     n = step.size
     return StepSolution(
-        u=u, reaction_upper=np.zeros(n), reaction_lower=np.zeros(n), status=Status.FAILED,
+        u=u, forces_upper=np.zeros(n), forces_lower=np.zeros(n), status=Status.FAILED,
         iterations=iterations, solve_time=time.perf_counter() - t0, message=message,
     )
 
@@ -423,7 +424,7 @@ def step_certificate(step, sol: StepSolution) -> float:
     (Written with array methods and few temporaries: at N ~ 100 each numpy
     call, not its arithmetic, is the cost.)
     """
-    u, ru, rl = sol.u, sol.reaction_upper, sol.reaction_lower
+    u, ru, rl = sol.u, sol.forces_upper, sol.forces_lower
     if not (np.isfinite(u).all() and np.isfinite(ru).all() and np.isfinite(rl).all()):
         return np.inf
     if u.size == 0:
@@ -515,6 +516,6 @@ def solve_qp(qp, settings, warm=None, **options):
     x, _, _ = _warm_sets(warm, qp.size)
     max_iter = settings.max_iter if settings.max_iter else None
     sol = solve_banded_qp(prob, start=x, max_iter=max_iter)
-    y = sol.reaction_upper - sol.reaction_lower
+    y = sol.forces_upper - sol.forces_lower
     return QPResult(sol.u, y, sol.status, sol.iterations, sol.solve_time, setup, sol.message,
                     time_source="solver")

@@ -1,7 +1,10 @@
 """The one result type of every LCP back-end, and the shared status set.
 
 An LCP here is: find ``z >= 0`` with ``w = M z + q >= 0`` and ``z'w = 0``.
-In the contact step ``z`` is the gap vector g and ``w`` the reaction R.
+In the contact step ``z`` is the gap vector g and ``w`` the reaction R
+(eq. 30); ``z`` and ``w`` are the LCP's own letters and stay so in the
+solvers. The step and result types call R ``forces`` (:class:`StepSolution`
+``forces_upper``/``forces_lower``/``forces_net``, ``ContactResult.forces``).
 A back-end never raises on non-convergence; it returns a status.
 """
 
@@ -93,8 +96,9 @@ class StepSolution:
     ----------
     u : ndarray
         Heights of the free nodes (mm); the gaps are ``upper − u``.
-    reaction_upper, reaction_lower : ndarray
-        Reactions of the upper and lower walls (N, >= 0): the QP multipliers.
+    forces_upper, forces_lower : ndarray
+        Reactions R (eq. 30) of the upper and lower walls at each free node
+        (N, >= 0): the QP multipliers.
     status, iterations, solve_time, setup_time, message :
         As for :class:`LCPSolution`.
     active_upper, active_lower : ndarray of bool or None
@@ -102,8 +106,8 @@ class StepSolution:
     """
 
     u: np.ndarray
-    reaction_upper: np.ndarray
-    reaction_lower: np.ndarray
+    forces_upper: np.ndarray
+    forces_lower: np.ndarray
     status: Status
     iterations: int = 0
     solve_time: float = 0.0
@@ -118,7 +122,7 @@ class StepSolution:
     settings: str = ""
     scaled: bool = True
     residuals: dict = field(default_factory=dict)
-    reaction_net: np.ndarray | None = None  # R = K g + z from the gaps (N)
+    forces_net: np.ndarray | None = None  # net R = K g + z (eq. 30) from the gaps (N)
     wall_time: float = 0.0
 
     @property
@@ -132,13 +136,15 @@ class Settings:
     """One generic accuracy request, translated by each back-end into its own
     parameters.
 
-    ``tol`` is a tolerance on the residuals of the (nondimensionalised)
+    ``eps`` is a tolerance on the residuals of the (nondimensionalised)
     problem: primal and dual feasibility and complementarity, absolute and
-    relative alike. ``None`` means "the solver's own defaults".
+    relative alike (each back-end's own ``eps_abs``/``tol``/``feastol``...).
+    ``None`` means "the solver's own defaults". It is not the driver's
+    ``tol`` (rad), which bounds the change of the link angles α.
     """
 
     name: str
-    tol: float | None
+    eps: float | None
     max_iter: int | None = None
     time_limit: float | None = None  # seconds, where the solver supports it
 

@@ -14,8 +14,8 @@ from collections.abc import Iterator
 import numpy as np
 
 
-def complementary_solutions(M, q, tol: float = 1e-9) -> Iterator[np.ndarray]:
-    """Yield every solution z found among the complementary bases (feasible to tol)."""
+def complementary_solutions(M, q, eps: float = 1e-9) -> Iterator[np.ndarray]:
+    """Yield every solution z found among the complementary bases (feasible to eps)."""
     M = np.asarray(M, dtype=float)
     q = np.asarray(q, dtype=float).ravel()
     n = q.size
@@ -29,17 +29,17 @@ def complementary_solutions(M, q, tol: float = 1e-9) -> Iterator[np.ndarray]:
             except np.linalg.LinAlgError:
                 continue
         w = M @ z + q
-        if z.min(initial=0.0) >= -tol * scale and w.min(initial=0.0) >= -tol * scale:
+        if z.min(initial=0.0) >= -eps * scale and w.min(initial=0.0) >= -eps * scale:
             yield z
 
 
-def enumerate_lcp(M, q, tol: float = 1e-9) -> list[np.ndarray]:
+def enumerate_lcp(M, q, eps: float = 1e-9) -> list[np.ndarray]:
     """All solutions found among the 2^n complementary bases."""
-    return list(complementary_solutions(M, q, tol))
+    return list(complementary_solutions(M, q, eps))
 
 
-def has_solution(M, q, tol: float = 1e-9, max_size: int = 16) -> bool | None:
+def has_solution(M, q, eps: float = 1e-9, max_size: int = 16) -> bool | None:
     """Whether the LCP has a solution; None when n > max_size (too many bases)."""
     if np.asarray(q).size > max_size:
         return None
-    return next(complementary_solutions(M, q, tol), None) is not None
+    return next(complementary_solutions(M, q, eps), None) is not None

@@ -33,7 +33,7 @@ FLOOR_ULPS = 256
 
 def accept_tol(settings: Settings, size: float = 0.0) -> float:
     """Largest natural residual accepted as SOLVED; ``size`` is S above."""
-    request = settings.tol if settings.tol is not None else DEFAULT_TOL
+    request = settings.eps if settings.eps is not None else DEFAULT_TOL
     return max(ACCEPT_FACTOR * request, FLOOR_ULPS * EPS * size)
 
 

@@ -34,8 +34,8 @@ from scipy.linalg.blas import daxpy
 from lcpbench.errors import ProblemError
 from lcpbench.solvers.base import LCPSolution, Settings, Status
 
-#: Tolerance used by :func:`solve_lcp` when ``Settings.tol`` is None.
-DEFAULT_TOL = 1e-8
+#: Tolerance used by :func:`solve_lcp` when ``Settings.eps`` is None.
+DEFAULT_EPS = 1e-8
 #: Sweep budget used by :func:`solve_lcp` when ``Settings.max_iter`` is None.
 DEFAULT_MAX_SWEEPS = 10_000  # ~1 s at n = 140; the contact step needs far more (cond ~1e8)
 #: Sweeps over which ``extra["rate"]`` averages the residual's contraction.
@@ -68,7 +68,7 @@ def _is_number(x) -> bool:
     return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool)
 
 
-def _validate(M, q, omega, tol, max_sweeps, z0, time_limit):
+def _validate(M, q, omega, eps, max_sweeps, z0, time_limit):
     """Convert and check the inputs; raise ProblemError on caller errors."""
     M = _as_real(M, "M")
     if M.ndim != 2 or M.shape[0] != M.shape[1] or M.shape[0] == 0:
@@ -83,8 +83,8 @@ def _validate(M, q, omega, tol, max_sweeps, z0, time_limit):
         raise ProblemError("q must be finite (found NaN or inf)")
     if not (_is_number(omega) and 0.0 < float(omega) < 2.0):
         raise ProblemError(f"omega must be a number in the open interval (0, 2), got {omega!r}")
-    if not (_is_number(tol) and 0.0 <= float(tol) < np.inf):
-        raise ProblemError(f"tol must be a finite number >= 0, got {tol!r}")
+    if not (_is_number(eps) and 0.0 <= float(eps) < np.inf):
+        raise ProblemError(f"eps must be a finite number >= 0, got {eps!r}")
     if isinstance(max_sweeps, bool) or not isinstance(max_sweeps, (int, np.integer)) \
             or max_sweeps < 0:
         raise ProblemError(f"max_sweeps must be an integer >= 0, got {max_sweeps!r}")
@@ -100,7 +100,7 @@ def _validate(M, q, omega, tol, max_sweeps, z0, time_limit):
         if not np.all(np.isfinite(z)):
             raise ProblemError("z0 must be finite (found NaN or inf)")
         z = np.maximum(z, 0.0)
-    return M, q, float(omega), float(tol), int(max_sweeps), z
+    return M, q, float(omega), float(eps), int(max_sweeps), z
 
 
 def _column_segments(M: np.ndarray, w: np.ndarray):
@@ -115,7 +115,7 @@ def _column_segments(M: np.ndarray, w: np.ndarray):
     return cols, segs
 
 
-def pgs(M, q, *, omega: float = 1.0, tol: float = 1e-10, max_sweeps: int = 100_000,
+def pgs(M, q, *, omega: float = 1.0, eps: float = 1e-10, max_sweeps: int = 100_000,
         z0=None, time_limit: float | None = None) -> LCPSolution:
     """Solve an LCP by projected Gauss–Seidel / projected SOR.
 
@@ -129,7 +129,7 @@ def pgs(M, q, *, omega: float = 1.0, tol: float = 1e-10, max_sweeps: int = 100_0
     omega : float
         Relaxation factor in the open interval (0, 2); 1 is plain PGS,
         ``omega > 1`` over-relaxation (projected SOR).
-    tol : float
+    eps : float
         Relative tolerance of the stopping test (below), ``>= 0``.
     max_sweeps : int
         Sweep budget; reaching it gives MAX_ITER.
@@ -143,7 +143,7 @@ def pgs(M, q, *, omega: float = 1.0, tol: float = 1e-10, max_sweeps: int = 100_0
     LCPSolution
         ``iterations`` counts sweeps (0 if the initial iterate already passes
         the test). ``w`` is recomputed as ``M z + q``. ``extra`` holds
-        ``omega``, ``tol``, ``residual`` (the final relative residual
+        ``omega``, ``eps``, ``residual`` (the final relative residual
         ``r / s`` of the stopping test) and ``rate``, the mean contraction
         of that residual per sweep over the last (up to 100) sweeps (NaN
         without a sweep).
@@ -152,7 +152,7 @@ def pgs(M, q, *, omega: float = 1.0, tol: float = 1e-10, max_sweeps: int = 100_0
     ------
     ProblemError
         If ``M`` is not square, ``q`` or ``z0`` has the wrong length, any
-        input is non-finite, ``omega`` is outside (0, 2) or ``tol``,
+        input is non-finite, ``omega`` is outside (0, 2) or ``eps``,
         ``max_sweeps`` or ``time_limit`` is invalid (caller errors).
 
     Notes
@@ -160,7 +160,7 @@ def pgs(M, q, *, omega: float = 1.0, tol: float = 1e-10, max_sweeps: int = 100_0
     Stopping test, evaluated on ``w = M z + q`` recomputed at the end of the
     sweep (``z >= 0`` holds by construction)::
 
-        r = max_i |min(z_i, w_i / M_ii)|  <=  tol * s,
+        r = max_i |min(z_i, w_i / M_ii)|  <=  eps * s,
         s = max(max_i |z_i|, max_i |q_i / M_ii|).
 
     ``min(z_i, w_i / M_ii)`` is the length of a projected step of row ``i``
@@ -186,7 +186,7 @@ def pgs(M, q, *, omega: float = 1.0, tol: float = 1e-10, max_sweeps: int = 100_0
     sweep budget or the time limit is exhausted.
     """
     t_setup = time.perf_counter()
-    M, q, omega, tol, max_sweeps, z = _validate(M, q, omega, tol, max_sweeps, z0, time_limit)
+    M, q, omega, eps, max_sweeps, z = _validate(M, q, omega, eps, max_sweeps, z0, time_limit)
     n = q.size
     diag = M.diagonal().copy()
 
@@ -195,7 +195,7 @@ def pgs(M, q, *, omega: float = 1.0, tol: float = 1e-10, max_sweeps: int = 100_0
             w = M @ z + q
         return LCPSolution(z=z, w=w, status=status, iterations=sweeps, solve_time=t_solve,
                            setup_time=setup, message=message,
-                           extra={"omega": omega, "tol": tol, "residual": residual,
+                           extra={"omega": omega, "eps": eps, "residual": residual,
                                   "rate": rate})
 
     bad = np.flatnonzero(~(diag > 0.0))
@@ -226,7 +226,7 @@ def pgs(M, q, *, omega: float = 1.0, tol: float = 1e-10, max_sweeps: int = 100_0
     t0 = time.perf_counter()
     exact_w()
     res = relative_residual()
-    if res <= tol:
+    if res <= eps:
         return result(Status.SOLVED, 0, time.perf_counter() - t0, residual=res)
 
     history = deque([res], maxlen=RATE_WINDOW + 1)
@@ -256,7 +256,7 @@ def pgs(M, q, *, omega: float = 1.0, tol: float = 1e-10, max_sweeps: int = 100_0
                 break
             res = relative_residual()
         history.append(res)
-        if res <= tol:
+        if res <= eps:
             status, message = Status.SOLVED, ""
             break
         if time_limit is not None and time.perf_counter() - t0 > time_limit:
@@ -264,7 +264,7 @@ def pgs(M, q, *, omega: float = 1.0, tol: float = 1e-10, max_sweeps: int = 100_0
             break
     t_solve = time.perf_counter() - t0
     if status is Status.MAX_ITER:
-        message += f" (relative residual {res:.3g} > tol {tol:g})"
+        message += f" (relative residual {res:.3g} > eps {eps:g})"
     rate = float("nan")
     if len(history) > 1 and history[0] > 0 and np.isfinite(history[0]):
         rate = (history[-1] / history[0]) ** (1.0 / (len(history) - 1))
@@ -279,7 +279,7 @@ def solve_lcp(M, q, settings: Settings, warm=None, **options) -> LCPSolution:
     M, q : array_like
         The LCP.
     settings : Settings
-        ``tol`` becomes the relative tolerance of the stopping test (None:
+        ``eps`` becomes the relative tolerance of the stopping test (None:
         ``1e-8``); ``max_iter`` the sweep budget (None: 10 000);
         ``time_limit`` is passed on.
     warm : array_like, optional
@@ -296,8 +296,8 @@ def solve_lcp(M, q, settings: Settings, warm=None, **options) -> LCPSolution:
     if unknown:
         raise ProblemError(f"unknown PGS option(s) {', '.join(unknown)}; allowed: "
                            f"{', '.join(OPTIONS)}")
-    tol = DEFAULT_TOL if settings.tol is None else settings.tol
+    eps = DEFAULT_EPS if settings.eps is None else settings.eps
     max_sweeps = DEFAULT_MAX_SWEEPS if settings.max_iter is None else settings.max_iter
     # pgs validates ``warm`` and clips it to z >= 0.
-    return pgs(M, q, omega=options.get("omega", 1.0), tol=tol, max_sweeps=max_sweeps,
+    return pgs(M, q, omega=options.get("omega", 1.0), eps=eps, max_sweeps=max_sweeps,
                z0=warm, time_limit=settings.time_limit)

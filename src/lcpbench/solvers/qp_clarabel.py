@@ -71,8 +71,8 @@ def translate(settings: Settings) -> dict:
     leaves Clarabel's defaults (1e-8 everywhere, 200 iterations).
     """
     opts: dict = {}
-    if settings.tol is not None:
-        tol = max(float(settings.tol), MIN_TOL)
+    if settings.eps is not None:
+        tol = max(float(settings.eps), MIN_TOL)
         opts.update(tol_gap_abs=tol, tol_gap_rel=tol, tol_feas=tol)
     opts.update(iteration_limits(settings))
     return opts

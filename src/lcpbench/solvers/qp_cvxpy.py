@@ -111,8 +111,8 @@ def translate(settings: Settings, solver: str) -> dict:
         return opts
     opts: dict = {}
     keys, iter_key = TOLERANCE_KEYS.get(solver, ((), None))
-    if settings.tol is not None:
-        tol = max(float(settings.tol), _FLOORS.get(solver, 0.0))
+    if settings.eps is not None:
+        tol = max(float(settings.eps), _FLOORS.get(solver, 0.0))
         opts.update({k: tol for k in keys})
         if solver == "HIGHS":  # its Hessian regularisation (1e-7) limits accuracy
             opts["qp_regularization_value"] = min(1e-7, tol)
@@ -200,6 +200,6 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None,
         extra={"solver": solver, "solver_status": prob.status, "objective": prob.value,
                "iterations_reported": stats.num_iters is not None,
                "native_setup_time": stats.setup_time, "wall_total": t2 - t0,
-               "tolerance_applied": settings.tol is not None and bool(translate(settings, solver)),
+               "tolerance_applied": settings.eps is not None and bool(translate(settings, solver)),
                "kwargs": kwargs, "warnings": [str(w.message) for w in caught]},
     )

@@ -80,8 +80,8 @@ def translate(settings: Settings) -> dict:
     defaults (eps 1e-3, 4000 iterations, no polishing).
     """
     opts: dict = {}
-    if settings.tol is not None:
-        tol = float(settings.tol)
+    if settings.eps is not None:
+        tol = float(settings.eps)
         opts.update(eps_abs=tol, eps_rel=tol, polishing=tol <= 1e-6,
                     max_iter=_max_iter_for(tol))
     opts.update(iteration_limits(settings))

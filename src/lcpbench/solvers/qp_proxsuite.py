@@ -30,6 +30,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ..errors import ProblemError
 from .base import (
     BoxQP,
     QPResult,
@@ -78,8 +79,8 @@ def translate(settings: Settings) -> dict:
     check, 10 000 iterations).
     """
     opts: dict = {}
-    if settings.tol is not None:
-        tol = float(settings.tol)
+    if settings.eps is not None:
+        tol = float(settings.eps)
         opts.update(eps_abs=tol, eps_rel=tol, check_duality_gap=True,
                     eps_duality_gap_abs=tol, eps_duality_gap_rel=tol)
     if settings.max_iter is not None:
@@ -105,7 +106,7 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None, *,
         Raw ProxQP settings (attributes of ``qp.settings``), applied last.
     """
     if variant not in VARIANTS:
-        raise ValueError(f"variant must be one of {VARIANTS}, got {variant!r}")
+        raise ProblemError(f"variant must be one of {VARIANTS}, got {variant!r}")
     opened, early = open_box_qp(qp, "proxsuite.proxqp")
     if early is not None:
         return early

@@ -188,8 +188,8 @@ def translate(settings: Settings, solver: str) -> dict:
         return qp_proxsuite.translate(settings)
     opts: dict = {}
     keys, iter_key = TOLERANCE_KEYS.get(solver, ((), None))
-    if settings.tol is not None:
-        tol = max(float(settings.tol), _FLOORS.get(solver, 0.0))
+    if settings.eps is not None:
+        tol = max(float(settings.eps), _FLOORS.get(solver, 0.0))
         opts.update({k: tol for k in keys})
         if solver == "highs":
             opts["qp_regularization_value"] = min(HIGHS_QP_REGULARIZATION, tol)
@@ -340,7 +340,7 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None, *,
     extra = {"solver": solver, "found": bool(sol.found), "objective": sol.obj,
              "dense": use_dense, "box_as_rows": G is not None,
              "iterations_reported": iters is not None,
-             "tolerance_applied": settings.tol is not None and solver not in IGNORES_TOLERANCE,
+             "tolerance_applied": settings.eps is not None and solver not in IGNORES_TOLERANCE,
              "wall_total": wall, "warnings": [str(w.message) for w in caught],
              "kwargs": {k: v for k, v in kwargs.items() if k != "z"}}
     info = extras.get("info")

@@ -17,7 +17,8 @@ class Selection:
     Attributes
     ----------
     backend, settings : the choice (None when no candidate qualifies).
-    tol : the force accuracy asked for (relative error of the total force).
+    force_tol : the force accuracy asked for: the largest relative error of the
+        total reaction F = ΣR (eq. 30) over the probes.
     driver_tol : the driver tolerance the probes ran at (rad).
     time_s : geometric-mean wall time of one solve over the probes (s).
     error : largest force error over the probes.
@@ -27,7 +28,7 @@ class Selection:
 
     backend: str | None
     settings: str | None
-    tol: float
+    force_tol: float
     driver_tol: float
     time_s: float
     error: float
@@ -36,5 +37,5 @@ class Selection:
 
     def to_dict(self) -> dict:
         return {k: getattr(self, k) for k in
-                ("backend", "settings", "tol", "driver_tol", "time_s", "error", "reason",
+                ("backend", "settings", "force_tol", "driver_tol", "time_s", "error", "reason",
                  "evidence")}

@@ -38,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 
+from lcpbench.errors import ProblemError
 from lcpbench.solvers.base import LCPSolution, Settings, Status, lcp_residuals
 from lcpbench.worker import WorkerDied, WorkerProcess
 
@@ -304,7 +305,7 @@ def _as_problem(M, q) -> tuple[np.ndarray, np.ndarray]:
     q = np.asarray(q, dtype=float).ravel()
     n = q.size
     if n == 0 or M.shape != (n, n):
-        raise ValueError(f"M has shape {M.shape}, expected ({n}, {n}) with n >= 1")
+        raise ProblemError(f"M has shape {M.shape}, expected ({n}, {n}) with n >= 1")
     return M, q
 
 
@@ -399,9 +400,9 @@ def solve_many(problems, settings: Settings, *, method: str = "lemke",
     problems : sequence of (M, q)
         Dense (or scipy sparse, densified) matrices and vectors; sizes may differ.
     settings : Settings
-        ``tol`` None keeps Siconos's default tolerance (``dparam[TOL]``: 1e-6
+        ``eps`` None keeps Siconos's default tolerance (``dparam[TOL]``: 1e-6
         for Lemke, PGS and NewtonMin, 1e-10 for NewtonFB), else it is set to
-        ``settings.tol``; ``max_iter`` None keeps Siconos's default iteration
+        ``settings.eps``; ``max_iter`` None keeps Siconos's default iteration
         limit (``iparam[MAX_ITER]``: 10000 for Lemke pivots and PGS sweeps,
         1000 for the Newton methods). ``time_limit`` is not supported by
         Siconos and is ignored; use ``timeout``.
@@ -414,7 +415,7 @@ def solve_many(problems, settings: Settings, *, method: str = "lemke",
         worker is killed and every problem not yet answered gets FAILED.
     accept_tol : float, optional
         Largest lcpbench natural residual accepted as SOLVED, default
-        ``ACCEPT_SLACK * max(ACCEPT_TOL, settings.tol)``.
+        ``ACCEPT_SLACK * max(ACCEPT_TOL, settings.eps)``.
 
     Returns
     -------
@@ -423,23 +424,23 @@ def solve_many(problems, settings: Settings, *, method: str = "lemke",
 
     Raises
     ------
-    ValueError
+    ProblemError
         Unknown ``method`` or inconsistent shapes (caller errors).
     """
     global _WORKER
     if method not in METHODS:
-        raise ValueError(f"unknown siconos method {method!r}; available: {', '.join(METHODS)}")
+        raise ProblemError(f"unknown siconos method {method!r}; available: {', '.join(METHODS)}")
     probs = [_as_problem(M, q) for M, q in problems]
     warms = [None] * len(probs) if warm is None else list(warm)
     if len(warms) != len(probs):
-        raise ValueError("warm must have one entry per problem")
+        raise ProblemError("warm must have one entry per problem")
     for i, ((_, q), z0) in enumerate(zip(probs, warms)):
         if z0 is not None:
             warms[i] = np.asarray(z0, dtype=float).ravel()
             if warms[i].shape != q.shape:
-                raise ValueError(f"warm start {i} has shape {warms[i].shape}, expected {q.shape}")
+                raise ProblemError(f"warm start {i} has shape {warms[i].shape}, expected {q.shape}")
     if accept_tol is None:
-        accept_tol = ACCEPT_SLACK * max(ACCEPT_TOL, settings.tol or 0.0)
+        accept_tol = ACCEPT_SLACK * max(ACCEPT_TOL, settings.eps or 0.0)
     if not probs:
         return []
 
@@ -447,7 +448,7 @@ def solve_many(problems, settings: Settings, *, method: str = "lemke",
     if not available():
         return [_failed(q.size, NOT_INSTALLED) for _, q in probs]
 
-    header = {"op": "solve", "method": METHODS[method], "tol": settings.tol,
+    header = {"op": "solve", "method": METHODS[method], "tol": settings.eps,
               "max_iter": settings.max_iter,
               "problems": [{"n": q.size, "warm": z0 is not None}
                            for (_, q), z0 in zip(probs, warms)]}
@@ -510,7 +511,7 @@ def solve_lcp(M, q, settings: Settings, warm=None, *, method: str = "lemke",
     q : array_like, shape (n,)
         LCP vector.
     settings : Settings
-        ``tol`` None keeps Siconos's defaults, else sets its tolerance
+        ``eps`` None keeps Siconos's defaults, else sets its tolerance
         ``dparam[SICONOS_DPARAM_TOL]``; ``max_iter`` sets
         ``iparam[SICONOS_IPARAM_MAX_ITER]`` (pivots for Lemke). For Lemke the
         tolerance only enters Siconos's a-posteriori error check.
@@ -525,7 +526,7 @@ def solve_lcp(M, q, settings: Settings, warm=None, *, method: str = "lemke",
         Seconds allowed for the round trip; a worker that exceeds it is killed.
     accept_tol : float, optional
         Largest lcpbench natural residual (:func:`lcp_residuals`) accepted as
-        SOLVED; default ``10 * max(1e-6, settings.tol)`` (the factor covers
+        SOLVED; default ``10 * max(1e-6, settings.eps)`` (the factor covers
         the difference between Siconos's 2-norm error and our max-norm).
 
     Returns
@@ -547,7 +548,7 @@ def solve_lcp(M, q, settings: Settings, warm=None, *, method: str = "lemke",
 
     Raises
     ------
-    ValueError
+    ProblemError
         Unknown ``method`` or inconsistent shapes (caller errors, not solver ones).
     """
     return solve_many([(M, q)], settings, method=method,
