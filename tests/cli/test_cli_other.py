@@ -24,7 +24,7 @@ def test_solvers_lists_every_backend(capsys):
 
 def test_select_cli(tmp_path, capsys):
     args = ["select", "--force-tol", "1e-3", "--links", "20", "--solvers", "active-set,lemke",
-            "--store", str(tmp_path / "s.sqlite"), "--quiet", "--jobs", "2"]
+            "--store", str(tmp_path / "s.sqlite"), "--quiet", "--jobs", "2", "--oversubscribe"]
     code = main([*args, "--json"])
     d = json.loads(capsys.readouterr().out)  # exactly one JSON document on stdout
     assert code == 0 and d["backend"] in ("active-set", "lemke") and d["error"] <= 1e-3
@@ -46,3 +46,20 @@ def test_a_second_sweep_on_a_locked_store_exits_2_naming_the_holder(tmp_path, ca
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1
     assert "locked by pid" in err[0]
+
+
+def test_jobs_above_the_core_count_need_oversubscribe(capsys):
+    """More workers than cores would store the times of processes sharing a
+    core: refused with one line unless --oversubscribe."""
+    import os
+
+    from lcpbench.cli import main
+    from lcpbench.cli._common import worker_count
+
+    cores = os.cpu_count() or 1
+    assert main(["sweep", "--jobs", str(cores + 1), "--solvers", "active-set",
+                 "--baseline", "none"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "--oversubscribe" in err[0] and f"{cores} cores" in err[0]
+    assert worker_count(cores + 1, oversubscribe=True) == cores + 1
+    assert worker_count(cores) == cores

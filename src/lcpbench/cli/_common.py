@@ -95,7 +95,11 @@ def add_jobs_option(parser) -> None:
         The sub-command's parser.
     """
     parser.add_argument("--jobs", type=int_arg, default=None, metavar="K",
-                        help="worker processes (default: the number of cores, at most 4)")
+                        help="worker processes (default: the number of cores, at most 4; "
+                             "never more than the cores unless --oversubscribe)")
+    parser.add_argument("--oversubscribe", action="store_true",
+                        help="allow --jobs above the number of cores (the stored times are "
+                             "then those of processes sharing cores)")
 
 
 def print_json(obj) -> None:
@@ -238,13 +242,19 @@ def names_list(text: str) -> list[str]:
     return list(dict.fromkeys(x.strip() for x in text.split(",") if x.strip()))
 
 
-def worker_count(jobs: int | None) -> int:
+def worker_count(jobs: int | None, oversubscribe: bool = False) -> int:
     """The number of worker processes: ``--jobs``, or the harness's default.
+
+    More workers than cores would store the times of processes sharing a
+    core, so ``--jobs`` is refused above the core count unless
+    ``oversubscribe`` is given.
 
     Parameters
     ----------
     jobs : int or None
         The ``--jobs`` value.
+    oversubscribe : bool
+        The ``--oversubscribe`` flag.
 
     Returns
     -------
@@ -254,12 +264,18 @@ def worker_count(jobs: int | None) -> int:
     Raises
     ------
     ProblemError
-        When *jobs* is below 1.
+        When *jobs* is below 1, or above the core count without *oversubscribe*.
     """
+    import os
+
     from ..bench.sweep import default_workers
     from ..errors import ProblemError
 
     n = default_workers() if jobs is None else jobs
     if n < 1:
         raise ProblemError(f"jobs must be an integer >= 1, got {n}")
+    cores = os.cpu_count() or 1
+    if n > cores and not oversubscribe:
+        raise ProblemError(f"jobs must be at most the {cores} cores of this machine, got {n} "
+                           "(add --oversubscribe to run more workers than cores)")
     return n

@@ -218,7 +218,7 @@ def cmd_sweep(args) -> int:
     solvers, settings = _sweep_backends(args)
     if args.tol is not None:
         check_tol(args.tol)
-    jobs_n = worker_count(args.jobs)
+    jobs_n = worker_count(args.jobs, args.oversubscribe)
     limit = _positive_number(args.time_limit, "time-limit")
     baselines = {"analytic": ["baseline"], "fd": ["baseline-fd"],
                  "both": ["baseline", "baseline-fd"], "none": []}[args.baseline]
@@ -287,7 +287,7 @@ def cmd_select(args) -> int:
                            "length, EI, w and channel)")
     candidates = None if args.solvers.strip() == "all" else [
         x.strip() for x in args.solvers.split(",") if x.strip()]
-    workers = worker_count(args.jobs)
+    workers = worker_count(args.jobs, args.oversubscribe)
     bar = progress_bar(args.quiet)
     try:
         sel = select_backend(scene, force_tol=args.force_tol, time_budget=args.time_budget,
