@@ -19,7 +19,7 @@ from .model.driver import METHODS, DriverStart, run_driver
 from .model.result import ContactResult, audit, build_result
 from .model.step_solver import make_step_solver
 from .model.wall_free import solve_without_contact
-from .problems.checks import check_flag, check_scene
+from .problems.checks import check_flag, check_number, check_scene
 from .solvers.registry import DEFAULT
 from .solvers.selection import Selection
 
@@ -33,12 +33,7 @@ def check_tol(tol) -> float:
     ``tol`` bounds max|α̂ − α| between contact steps (eq. 32; the paper's
     1e-3 rad); allowed: a real number in [1e-14, 1).
     """
-    if isinstance(tol, bool) or not isinstance(tol, (int, float, np.integer, np.floating)):
-        raise ProblemError(f"tol must be a number in [1e-14, 1) rad, got {tol!r}")
-    tol = float(tol)
-    if not (math.isfinite(tol) and 1e-14 <= tol < 1):
-        raise ProblemError(f"tol must be in [1e-14, 1) rad, got {tol:g}")
-    return tol
+    return float(check_number("tol", tol, low=1e-14, high=1.0, high_open=True, unit="rad"))
 
 
 def _backend_of(solver, settings):
