@@ -19,6 +19,7 @@ import os
 from pathlib import Path
 
 from ..errors import ProblemError
+from ..problems.checks import check_number
 from ..problems.scenes import ActuatorScene
 from ..solvers.selection import Selection
 from .grid import Grid, scene_key
@@ -59,22 +60,10 @@ def probe_scenes(scene_or_grid) -> list[ActuatorScene]:
 
 
 def _check(force_tol, time_budget) -> tuple[float, float | None]:
-    try:
-        force_tol = float(force_tol)
-    except (TypeError, ValueError):
-        raise ProblemError(f"force_tol must be a number in [1e-12, 0.1], got {force_tol!r}"
-                           ) from None
-    if not (math.isfinite(force_tol) and 1e-12 <= force_tol <= 0.1):
-        raise ProblemError("force_tol must be in [1e-12, 0.1] (relative force error), got "
-                           f"{force_tol:g}")
+    force_tol = check_number("force_tol", force_tol, low=1e-12, high=0.1,
+                             unit="(relative force error)")
     if time_budget is not None:
-        try:
-            time_budget = float(time_budget)
-        except (TypeError, ValueError):
-            raise ProblemError(f"time_budget must be a number of seconds > 0, got "
-                               f"{time_budget!r}") from None
-        if not (math.isfinite(time_budget) and time_budget > 0):
-            raise ProblemError(f"time_budget must be > 0 s, got {time_budget:g}")
+        time_budget = check_number("time_budget", time_budget, low=0.0, low_open=True, unit="s")
     return force_tol, time_budget
 
 
