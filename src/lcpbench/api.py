@@ -16,7 +16,7 @@ import numpy as np
 
 from .errors import ProblemError
 from .model.driver import METHODS, DriverStart, run_driver
-from .model.result import ContactResult, audit, build_result
+from .model.result import ContactResult, build_result
 from .model.step_solver import make_step_solver
 from .model.wall_free import solve_without_contact
 from .problems.checks import check_flag, check_number, check_scene
@@ -128,7 +128,6 @@ def solve(
     res.extra["settings"] = settings if isinstance(settings, str) else "custom"
     if why is not None:
         res.extra["auto"] = why
-    audit(res, chain)
     return res
 
 

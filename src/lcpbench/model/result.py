@@ -9,6 +9,7 @@ import numpy as np
 from ..problems.scenes import Chain
 from .chain import joint_angles, node_positions, torque_residual
 from .driver import DriverOutput, StepRecord
+from .judge import Judgement, judge
 
 
 @dataclass
@@ -88,13 +89,22 @@ class ContactResult:
     gaps : distance of each free node below the upper wall, h − y (mm).
     forces : the reaction R of eq. (30): the upper wall's force on each free
         node (N, >= 0, pushing away from the wall). lcpbench's one name for R
-        (``forces_upper`` in the step and driver types).
+        (``forces_upper`` in the step and driver types). Computed by lcpbench
+        as R = K g + z from the last step's primal gaps, whichever back-end
+        solved it; the back-end's own multipliers are ``multipliers``.
     gaps_lower, forces_lower : the same for the lower wall of a channel (else None).
     total_force : F = ΣR, the sum of ``forces`` (N).
     outer_iterations : contact steps taken.
     steps : per-step inner statistics.
-    converged, reason : whether max|α̂ − α| < tol was reached, and why not.
+    converged, reason : whether lcpbench's judge accepts the answer
+        (:mod:`lcpbench.model.judge`: the driver's criterion, every step
+        solved, signs, complementarity, geometry, and a force error bound
+        within min(1e-3, 100·tol)), and why not.
     certificate : :class:`Certificate` from the exact geometry.
+    multipliers, multipliers_lower : the back-end's own reactions of the last
+        step (N), for comparison only (None when no step was solved).
+    judgement : the :class:`~lcpbench.model.judge.Judgement` behind ``converged``;
+        ``force_error_bound`` is its bound on the relative error of F.
     solver, method, tol, time_s : how it was computed; wall time of the solve (s).
     """
 
@@ -118,6 +128,22 @@ class ContactResult:
     tol: float
     time_s: float = 0.0
     extra: dict = field(default_factory=dict)
+    multipliers: np.ndarray | None = None
+    multipliers_lower: np.ndarray | None = None
+    judgement: Judgement | None = None
+
+    @property
+    def force_error_bound(self) -> float:
+        """lcpbench's a-posteriori bound on the error of ``total_force``, relative to
+        max(|F|, EI/ℓ²) (:mod:`lcpbench.model.judge`); NaN if not judged that far."""
+        return self.judgement.force_error_bound if self.judgement else float("nan")
+
+    def __repr__(self) -> str:
+        return (f"ContactResult(N={self.links}, F={1e3 * self.total_force:.6g} mN on "
+                f"{self.contact_nodes.size} contact nodes, converged={self.converged}, "
+                f"force_error_bound={self.force_error_bound:.1e}, solver={self.solver!r}, "
+                f"outer={self.outer_iterations}, time={1e3 * self.time_s:.3g} ms, "
+                f"reason={self.reason!r})")
 
     @property
     def inner_iterations(self) -> int:
@@ -130,8 +156,11 @@ class ContactResult:
 
     @property
     def contact_nodes(self) -> np.ndarray:
-        """Free-node indices carrying a reaction above 1e-9 of the total."""
-        return np.flatnonzero(self.forces > 1e-9 * max(self.total_force, 1e-300))
+        """Free-node indices whose upper-wall reaction exceeds the judge's contact
+        threshold, NODE_SHARE·τ·F₀ (below it a reaction is below the accuracy asked
+        for, :mod:`lcpbench.model.judge`)."""
+        eps = self.judgement.contact_threshold if self.judgement else 0.0
+        return np.flatnonzero(self.forces > eps)
 
     def to_dict(self) -> dict:
         """A JSON-ready summary (the fields of ``lcpbench solve --json``)."""
@@ -155,6 +184,9 @@ class ContactResult:
             "tol": self.tol,
             "time_s": self.time_s,
             "certificate": self.certificate.to_dict(),
+            "force_error_bound": self.force_error_bound,
+            "judgement": self.judgement.to_dict() if self.judgement else None,
+            "multipliers": None if self.multipliers is None else self.multipliers.tolist(),
         }
         if self.forces_lower is not None and self.gaps_lower is not None:
             out["forces_lower"] = self.forces_lower.tolist()
@@ -164,9 +196,14 @@ class ContactResult:
 
 
 def build_result(scene, chain: Chain, out: DriverOutput, **how) -> ContactResult:
+    """The result of a driver run, judged by :func:`lcpbench.model.judge.judge`."""
     x, y = node_positions(chain, out.alpha)
     yf = y[chain.free_nodes]
     cert = certify(chain, out.alpha, out.forces_upper, out.forces_lower)
+    verdict = judge(chain, out.alpha, out.forces_upper, out.forces_lower, tol=how["tol"],
+                    driver_converged=out.converged, driver_reason=out.reason,
+                    step_statuses=[s.status for s in out.steps],
+                    step_sizes=[s.max_dalpha for s in out.steps], certificate=cert)
     return ContactResult(
         scene=scene,
         links=chain.links,
@@ -180,25 +217,11 @@ def build_result(scene, chain: Chain, out: DriverOutput, **how) -> ContactResult
         total_force=float(out.forces_upper.sum()),
         outer_iterations=len(out.steps),
         steps=out.steps,
-        converged=out.converged,
-        reason=out.reason,
+        converged=verdict.converged,
+        reason=verdict.reason,
         certificate=cert,
+        multipliers=out.multipliers_upper,
+        multipliers_lower=out.multipliers_lower if chain.channel else None,
+        judgement=verdict,
         **how,
     )
-
-
-def audit(res: ContactResult, chain: Chain) -> None:
-    """Never call an answer converged that the exact-geometry certificate rejects."""
-    if not res.converged:
-        return
-    c = res.certificate
-    problems = []
-    if c.relative_torque_residual > max(10 * res.tol, 1e-6):
-        problems.append(f"torque residual {c.relative_torque_residual:.1e} (relative)")
-    if c.min_gap < -1e-6 * chain.length:
-        problems.append(f"penetration {c.min_gap:.1e} mm")
-    if c.closure > 1e-6 * chain.length:
-        problems.append(f"chain not closed by {c.closure:.1e} mm")
-    if problems:
-        res.converged = False
-        res.reason = "the certificate rejects the answer: " + ", ".join(problems)

@@ -1,0 +1,328 @@
+"""The result judge: when lcpbench calls a contact result converged.
+
+:mod:`lcpbench.solvers.judge` decides whether one contact step is SOLVED. This
+module decides whether a whole answer — the final link angles α and the wall
+reactions R (eq. 30) — is the equilibrium of the scene to the accuracy asked
+for. Every back-end's answer goes through the same checks, computed by
+lcpbench from the primal unknowns; a back-end's own word (its status, its
+multipliers) is never enough.
+
+The accuracy asked for is the report's success rule (docs/bench.md): a
+relative error of the total reaction F = ΣR of at most
+
+    τ = force_tol(tol) = min(1e-3, 100 · tol),
+
+measured in the force unit F₀ = max(|F|, EI/ℓ²), so that a scene without
+contact (F = 0) is judged too. Lengths are measured in the section length ℓ.
+
+``converged`` requires all of the following; an answer that misses one is
+``converged=False`` with a reason naming the check. Nothing is relabelled.
+
+1. **driver**: the outer iteration stopped by its criterion max|Δα| < tol.
+2. **last step**: the contact step whose reactions are reported was SOLVED by
+   lcpbench's residuals (not INACCURATE). Earlier steps may be inexact: they
+   only move the iterate, which the line search and the checks below judge;
+   their count is kept in the judgement (``inexact_steps``).
+3. **sign**: min R ≥ −ε_R, no wall pulls (ε_R = NODE_SHARE · τ · F₀, or the
+   round-off of R = K g + z, 256 ε S with S the size of its terms, if larger).
+4. **complementarity**: at every node, min(R_i/F₀, g_i/ℓ) ≤ NODE_SHARE · τ:
+   a node that carries a reaction touches its wall.
+5. **penetration**: min g ≥ −min(1e-6, NODE_SHARE · τ) · ℓ on the exact
+   geometry.
+6. **closure, torque**: the exact-geometry certificate
+   (:func:`lcpbench.model.result.certify`): the right pin on y = 0 to 1e-6 ℓ,
+   the joint torques in balance to max(10 tol, 1e-6) of the spring torques.
+7. **force error bound**: lcpbench takes one more contact step itself at the
+   final α (the *judge step*), solved exactly by block principal pivoting
+   from the answer's contact set, independent of every back-end. If the
+   answer's forces are F_k and the judge step's F_{k+1}, and the outer
+   iteration contracts by ρ per step, F_k − F* ≈ (F_k − F_{k+1}) / (1 − ρ).
+   With ρ estimated from the last two step sizes (at least ½, at most 0.99),
+
+       force_error_bound = |F_k − F_{k+1}| / ((1 − ρ) F₀) + round-off,
+
+   and the same per node (max_i |R_i − R'_i|), which must be at most τ for
+   the total and NODE_FACTOR·τ per node (or NODE_FACTOR times the round-off
+   of a reaction, 256 ε S, where that is larger: per-node forces are certified
+   down to round-off only). This
+   is an a-posteriori estimate under linear contraction, not a proof: it is
+   what turns "α stopped moving" into "F is within τ".
+
+The contact set reported with a result counts nodes whose reaction exceeds
+ε_R (so no 5e-10 N "contacts"). Every threshold is in :data:`THRESHOLDS` and
+docs/solvers.md.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+from scipy.linalg import LinAlgError, solveh_banded
+
+from ..linalg import banded_matvec, sub_bands
+from ..problems.scenes import Chain
+from .chain import heights
+from .step import ContactStep, assemble_step
+
+EPS = np.finfo(float).eps
+#: the success rule's parts: τ = min(FORCE_TOL_CAP, FORCE_TOL_PER_RAD · tol)
+FORCE_TOL_CAP = 1e-3
+FORCE_TOL_PER_RAD = 100.0
+#: per-node checks (sign, complementarity, contact threshold) at this share of τ
+NODE_SHARE = 0.1
+#: per-node force error bound, in units of τ F₀: node forces converge more slowly
+#: than their sum (force shifts between neighbouring contact nodes: on the default
+#: scene at tol 1e-3 the nodes are 8e-4 F₀ off while F is 7e-5 off), and the
+#: success rule is on F; a node 13 % off is still caught
+NODE_FACTOR = 10.0
+#: the round-off of a reaction recomputed from rounded gaps, R = K g + z, in ulps
+#: of S = max_i (|K| |g| + |z|)_i: the step judge's floor (solvers.judge)
+FLOOR_ULPS = 256
+#: penetration and closure of the exact geometry, in units of ℓ, at most
+GEOMETRY_TOL = 1e-6
+#: round-off of a reaction, in units of ε × the size of the terms summed for it
+ROUNDOFF_ULPS = 64
+#: the contraction estimate ρ is kept in [RHO_MIN, RHO_MAX]
+RHO_MIN, RHO_MAX = 0.5, 0.99
+#: step sizes max|Δα| below this (rad) are round-off, not contraction
+STEP_NOISE = 1e4 * EPS
+#: block principal pivoting rounds of the judge step before it gives up
+PIVOT_ROUNDS = 30
+
+THRESHOLDS = {
+    "force_tol": "min(1e-3, 100·tol), relative to F₀ = max(|F|, EI/ℓ²)",
+    "last step": "SOLVED by lcpbench's residuals",
+    "sign": "min R >= -max(NODE_SHARE·τ·F₀, FLOOR_ULPS·ε·S)",
+    "complementarity": "max_i min(R_i/F₀, g_i/ℓ) <= NODE_SHARE·τ",
+    "penetration": "min g >= -min(GEOMETRY_TOL, NODE_SHARE·τ)·ℓ",
+    "closure": "|y_right| <= GEOMETRY_TOL·ℓ",
+    "torque": "relative torque residual <= max(10·tol, 1e-6)",
+    "force_error_bound": "<= τ for F; per node <= NODE_FACTOR·max(τ, FLOOR_ULPS·ε·S/F₀)",
+    "contact": "R_i > NODE_SHARE·τ·F₀",
+}
+
+
+def force_tol(tol: float) -> float:
+    """τ: the relative force error a result at driver tolerance ``tol`` (rad) may have,
+    min(1e-3, 100·tol). 1e-3 is the paper's agreement criterion (Fig. 26); 100·tol
+    is what an exact step solver reaches at driver tolerance tol."""
+    return min(FORCE_TOL_CAP, FORCE_TOL_PER_RAD * float(tol))
+
+
+@dataclass
+class JudgeStep:
+    """The judge's own contact step at the final α, solved exactly.
+
+    ``forces_upper``/``forces_lower``: its reactions R' (N); ``rounds``: block
+    principal pivoting rounds; ``dalpha``: max|α̂' − α| it would move the chain.
+    """
+
+    forces_upper: np.ndarray
+    forces_lower: np.ndarray
+    rounds: int
+    dalpha: float
+    roundoff: np.ndarray  # per node on a wall, the round-off of its reaction R' (N)
+    worst_roundoff: float  # the largest over every node (N)
+    term_size: float  # S = max_i (|H| |u| + |c|)_i (N): the terms of R = K g + z
+
+
+@dataclass
+class Judgement:
+    """The verdict on one answer, with the numbers behind it.
+
+    ``force_error_bound`` is relative to ``force_unit`` F₀ (NaN when the judge
+    did not get that far); ``failed`` names the checks that failed.
+    """
+
+    converged: bool
+    reason: str
+    force_tol: float
+    force_unit: float
+    force_error_bound: float = float("nan")
+    node_error_bound: float = float("nan")
+    contraction: float = float("nan")
+    contact_threshold: float = 0.0
+    judge_total_force: float = float("nan")
+    judge_rounds: int = 0
+    inexact_steps: int = 0
+    failed: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+
+def split_reactions(chain: Chain, net: np.ndarray, u: np.ndarray):
+    """Upper and lower wall reactions from the net reaction ``net`` (N, + pushes down).
+
+    One wall: all of it is the upper wall's (a negative value is that wall
+    pulling). A channel: each node's reaction belongs to the wall it is nearer
+    to, with its sign kept, so a pulling wall stays visible.
+    """
+    net = np.asarray(net, dtype=float)
+    if not chain.channel:
+        return net.copy(), np.zeros_like(net)
+    near_upper = u >= 0.5 * (chain.upper + chain.lower)
+    return np.where(near_upper, net, 0.0), np.where(near_upper, 0.0, -net)
+
+
+def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
+    """The step's exact solution by block principal pivoting from contact sets up/lo.
+
+    Returns ``(u, net reaction, rounds, round-off of each wall reaction, the
+    largest round-off of any node)`` or None if it did not settle.
+    Nodes in ``up`` sit on the upper wall, in ``lo`` on the lower; the others
+    are solved for (a banded solve, refined once in factored form). A wall
+    that pulls by more than ``pull`` (N) releases its node; a node more than
+    pull / H_ii (mm) through a wall joins its set (the height error that costs
+    ``pull`` of force), or more than the round-off where that is larger, so
+    that at large N rounding cannot make it cycle. The step's Hessian is positive definite,
+    so the LCP has one solution; the round cap only guards against cycling.
+    """
+    up, lo = up.copy(), lo.copy()
+    for rounds in range(1, PIVOT_ROUNDS + 1):
+        u = step.origin.copy()
+        u[up] = step.upper[up]
+        u[lo] = step.lower[lo]
+        free = np.flatnonzero(~(up | lo))
+        if free.size:
+            try:
+                bands = sub_bands(step.bands, free)
+                for _ in range(2):  # solve, then refine with the factored gradient
+                    u[free] -= solveh_banded(bands, step.gradient(u)[free], lower=True,
+                                             check_finite=False)
+            except (LinAlgError, ValueError):
+                return None
+        net = -step.gradient(u)
+        # R' is the factored gradient (round-off ~ ε × its terms), not K g + z
+        roundoff = ROUNDOFF_ULPS * EPS * step.gradient_scale(u)
+        slack = np.maximum(roundoff, pull)
+        # a height error δ costs H_ii δ of force: ``pull`` in force is pull / H_ii in height
+        reach = np.maximum(ROUNDOFF_ULPS * EPS * (np.abs(u) + step.length_scale),
+                           pull / step.bands[0])
+        release_up = up & (net < -slack)
+        release_lo = lo & (net > slack)
+        join_up = ~up & ~lo & (u > step.upper + reach)
+        join_lo = ~up & ~lo & (u < step.lower - reach)
+        if not (release_up.any() or release_lo.any() or join_up.any() or join_lo.any()):
+            return u, net, rounds, np.where(up | lo, roundoff, 0.0), float(np.max(roundoff))
+        up = (up & ~release_up) | join_up
+        lo = (lo & ~release_lo) | join_lo
+    return None
+
+
+def judge_step(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
+               forces_lower: np.ndarray, *, pull: float = 0.0) -> JudgeStep | None:
+    """One more contact step at ``alpha``, solved by the judge (None if it cannot).
+
+    It starts from the answer's contact set: the nodes whose reaction exceeds
+    ``pull`` and those whose gap costs less than ``pull`` of force to close.
+    """
+    step = assemble_step(chain, alpha)
+    touch = np.maximum(pull / step.bands[0], 1e3 * EPS * chain.length)
+    up = (step.upper - step.origin <= touch) | (forces_upper > pull)
+    lo = (step.origin - step.lower <= touch) | (forces_lower > pull)
+    up &= ~lo | (step.upper - step.origin <= step.origin - step.lower)  # the nearer wall
+    lo &= ~up
+    found = _pivot_step(step, up, lo, pull)
+    if found is None:
+        return None
+    u, net, rounds, roundoff, worst = found
+    upper, lower = split_reactions(chain, net, u)
+    dalpha = float(np.max(np.abs(step.predict_alpha(u) - alpha), initial=0.0))
+    size = banded_matvec(np.abs(step.bands), np.abs(u)) + np.abs(step.linear)
+    return JudgeStep(upper, lower, rounds, dalpha, roundoff, worst,
+                     float(np.max(size, initial=0.0)))
+
+
+def _contraction(step_sizes: list[float], judge_dalpha: float) -> float:
+    """ρ from the last step sizes: the larger of the last two ratios, in [½, 0.99].
+
+    Step sizes at the round-off of an angle (below STEP_NOISE rad) are left out:
+    the ratio of two rounding errors says nothing about the contraction.
+    """
+    sizes = [s for s in [*step_sizes, judge_dalpha] if np.isfinite(s) and s > STEP_NOISE]
+    ratios = [b / a for a, b in zip(sizes[:-1], sizes[1:]) if a > 0][-2:]
+    rho = max(ratios, default=RHO_MIN)
+    return float(min(max(rho, RHO_MIN), RHO_MAX))
+
+
+def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
+          forces_lower: np.ndarray, *, tol: float, driver_converged: bool,
+          driver_reason: str, step_statuses: list[str], step_sizes: list[float],
+          certificate) -> Judgement:
+    """Judge an answer: link angles ``alpha`` and reactions R (N) on the free nodes.
+
+    ``step_statuses`` are lcpbench's verdicts of the contact steps taken,
+    ``step_sizes`` their max|Δα|; ``certificate`` the exact-geometry
+    :class:`~lcpbench.model.result.Certificate` of the answer.
+    """
+    tau = force_tol(tol)
+    F_up, F_lo = float(np.sum(forces_upper)), float(np.sum(forces_lower))
+    F0 = max(abs(F_up), abs(F_lo), chain.force_scale)
+    eps_R = NODE_SHARE * tau * F0
+    verdict = Judgement(False, driver_reason, tau, F0, contact_threshold=eps_R)
+    if not driver_converged:
+        verdict.failed.append("driver")
+        return verdict
+    L = chain.length
+    fails: list[str] = []
+    verdict.inexact_steps = sum(s != "solved" for s in step_statuses)
+    if step_statuses and step_statuses[-1] != "solved":
+        fails.append(f"last step: the contact step whose reactions are reported was "
+                     f"{step_statuses[-1]} by lcpbench's residuals")
+    u = heights(chain, alpha)
+    g_up, g_lo = chain.upper - u, u - chain.lower
+    with np.errstate(invalid="ignore"):
+        comp = max(float(np.max(np.minimum(forces_upper / F0, g_up / L), initial=0.0)),
+                   float(np.max(np.minimum(forces_lower / F0, g_lo / L), initial=0.0)))
+    if comp > NODE_SHARE * tau:
+        fails.append(f"complementarity: a node carries a reaction {comp:.1e} F₀ while "
+                     f"{comp:.1e} ℓ from its wall (allowed {NODE_SHARE * tau:.1e})")
+    pen = min(GEOMETRY_TOL, NODE_SHARE * tau) * L
+    if certificate.min_gap < -pen:
+        fails.append(f"penetration: {-certificate.min_gap:.1e} mm through a wall "
+                     f"(allowed {pen:.1e} mm)")
+    if certificate.closure > GEOMETRY_TOL * L:
+        fails.append(f"closure: the right pin is {certificate.closure:.1e} mm off y = 0")
+    if certificate.relative_torque_residual > max(10 * tol, 1e-6):
+        fails.append(f"torque: relative torque residual "
+                     f"{certificate.relative_torque_residual:.1e}")
+    js = judge_step(chain, alpha, forces_upper, forces_lower, pull=eps_R)
+    floor_R = FLOOR_ULPS * EPS * js.term_size if js is not None else 0.0
+    R_min = float(min(np.min(forces_upper, initial=0.0), np.min(forces_lower, initial=0.0)))
+    if R_min < -max(eps_R, floor_R):
+        fails.append(f"sign: a wall pulls with {R_min:.2e} N (allowed down to "
+                     f"{-max(eps_R, floor_R):.1e} N)")
+    if js is None:
+        fails.append("force error bound: the judge step did not settle")
+    else:
+        rho = _contraction(step_sizes, js.dalpha)
+        kappa = 1.0 / (1.0 - rho)
+        # the judge's own round-off: its wall reactions', and the residual left on the
+        # free nodes, which the chain carries to the walls
+        floor = (float(np.sum(js.roundoff)) + js.worst_roundoff) / F0
+        d_up = forces_upper - js.forces_upper
+        d_lo = forces_lower - js.forces_lower
+        total = kappa * max(abs(float(np.sum(d_up))), abs(float(np.sum(d_lo)))) / F0 + floor
+        node = kappa * float(np.max(np.abs(np.concatenate([d_up, d_lo])), initial=0.0)) / F0
+        # per node, certified down to the round-off of R = K g + z only
+        node_allowed = max(NODE_FACTOR * tau, NODE_FACTOR * floor_R / F0)
+        verdict.force_error_bound, verdict.node_error_bound = total, node
+        verdict.contraction = rho
+        verdict.judge_total_force = float(np.sum(js.forces_upper))
+        verdict.judge_rounds = js.rounds
+        if not total <= tau:
+            fails.append(f"force error bound: the total force may be {total:.1e} F₀ off "
+                         f"(allowed {tau:.1e}; one more exact step moves it to "
+                         f"{verdict.judge_total_force:.6g} N)")
+        elif not node <= node_allowed:
+            fails.append(f"force error bound: a node's force may be {node:.1e} F₀ off "
+                         f"(allowed {node_allowed:.1e})")
+    verdict.failed = [f.split(":")[0] for f in fails]
+    if fails:
+        verdict.reason = "not accepted by lcpbench's judge: " + "; ".join(fails)
+        return verdict
+    verdict.converged = True
+    verdict.reason = driver_reason
+    return verdict
