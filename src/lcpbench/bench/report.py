@@ -15,6 +15,7 @@ from pathlib import Path
 
 from ..jsonsafe import sanitise
 from .jobs import DEFAULT_TIME_LIMIT
+from .profiles import profiles_section
 from .metrics import (
     SHIFT,
     continuation_pairs,
@@ -153,10 +154,25 @@ def build_report(store: Store, out: str | os.PathLike = DEFAULT_OUT, *,
         plot_forces(refs, evaluated, out / "force-vs-theta.png")
         plot_shapes(refs, out / "shapes.png")
         figures = ["work-precision.png", "force-vs-theta.png", "shapes.png"]
+    profile_figures = _write_profiles(evaluated, out, plots and bool(runs))
     (out / "report.md").write_text(_markdown(store, runs, refs, evaluated, summary, h2,
-                                             figures, time_limit, pairs))
+                                             figures, time_limit, pairs)
+                                   + profiles_section(profile_figures))
     return {"summary": summary, "runs": len(runs), "refs": len(refs), "out": str(out),
             "continuation": pairs}
+
+
+def _write_profiles(evaluated, out: Path, plots: bool) -> list[str]:
+    """profiles.csv (every performance and data profile) and, with ``plots``, their figures."""
+    from .profiles import profiles_of, write_csv
+
+    profiles = profiles_of(evaluated)
+    write_csv(profiles, out / "profiles.csv")
+    if not (plots and profiles):
+        return []
+    from .profile_plot import plot_profiles
+
+    return plot_profiles(profiles, out)
 
 
 def _grid_text(runs) -> str:
