@@ -102,7 +102,7 @@ def test_profile_properties(rows):
         for tau in (1.0, 1.5, 4.0, 1e6):
             assert q.at(name, tau) == pytest.approx(p.at(name, tau))
     d = data_profile(cost, names)
-    for j, name in enumerate(names):
+    for j in range(S):
         assert np.all(np.diff(d.values[j]) >= 0)
         assert d.values[j][-1] == pytest.approx(np.mean(np.isfinite(cost[:, j])))
     # a data profile is absolute: dropping a solver changes no other curve

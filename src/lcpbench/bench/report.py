@@ -15,7 +15,6 @@ from pathlib import Path
 
 from ..jsonsafe import sanitise
 from .jobs import DEFAULT_TIME_LIMIT
-from .profiles import profiles_section
 from .metrics import (
     SHIFT,
     continuation_pairs,
@@ -24,6 +23,7 @@ from .metrics import (
     summarise,
     time_table,
 )
+from .profiles import profiles_section
 from .store import Store
 
 DEFAULT_OUT = Path("results") / "sweep"
