@@ -223,6 +223,7 @@ def read_csv(path: str | os.PathLike) -> list[Profile]:
 def profiles_section(figures: list[str]) -> str:
     """The report's section on the profiles: what they are, and their figures."""
     lines = [
+        "",
         "## Performance and data profiles",
         "",
         "Dolan–Moré performance profiles: ρ_s(τ) is the share of scenes on which solver s "
