@@ -161,7 +161,8 @@ def _versions(names: Iterable[str]) -> dict[str, str]:
 
 def sweep(store: Store, jobs: list[Job], *, workers: int = 1,
           time_limit: float = DEFAULT_TIME_LIMIT, rerun: bool = False,
-          progress: Callable[[int, int, Job, dict], None] | None = None) -> SweepPlan:
+          progress: Callable[[int, int, Job, dict], None] | None = None,
+          runner: Callable | None = None) -> SweepPlan:
     """Run the jobs that are not in ``store`` yet (all of them with ``rerun``).
 
     Every finished row is committed at once. ``progress(done, total, job,
@@ -170,8 +171,9 @@ def sweep(store: Store, jobs: list[Job], *, workers: int = 1,
     ``scene`` set to that row's scene). A line job is skipped only when all
     its rows are stored; a partly stored line is run again in full and its
     rows replaced. A job that failed as a whole (error, timeout, crash)
-    stores failure rows only where nothing is stored yet. Returns the plan
-    (what was skipped and run).
+    stores failure rows only where nothing is stored yet. ``runner``: what
+    runs the jobs, :func:`~.pool.run_jobs` (the local pool) by default, or
+    :func:`~.cluster.dask_runner`'s. Returns the plan (what was skipped and run).
     """
     have_runs = set() if rerun else store.run_keys()
     have_refs = set() if rerun else store.ref_keys()
@@ -186,7 +188,7 @@ def sweep(store: Store, jobs: list[Job], *, workers: int = 1,
         record = machine_record(workers=workers, repeat=max((j.repeat for j in todo),
                                                             default=1))
         store.put_machine(store.sweep_id, record)
-    for job, result in run_jobs(todo, workers=workers, time_limit=time_limit):
+    for job, result in (runner or run_jobs)(todo, workers=workers, time_limit=time_limit):
         created = time.strftime("%Y-%m-%dT%H:%M:%S%z")
         # a finished line replaces every row of the line (the continuation made
         # them together); a failed job leaves stored rows alone

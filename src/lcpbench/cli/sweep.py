@@ -112,6 +112,11 @@ def register(subparsers) -> None:
     sw.add_argument("--time-limit", type=float, default=DEFAULT_TIME_LIMIT, metavar="S",
                     help=f"seconds per solve before it is killed and recorded as a timeout "
                          f"(default {DEFAULT_TIME_LIMIT:g})")
+    sw.add_argument("--dask", nargs="?", const="local", default=None, metavar="ADDRESS",
+                    help="run the jobs on Dask distributed: a local cluster of --jobs "
+                         "workers, or the scheduler at ADDRESS (tcp://HOST:PORT); each task "
+                         "runs its jobs in the pool's isolated worker with the time limit "
+                         "(pip install 'lcpbench[cluster]')")
     sw.add_argument("--repeat", type=int_arg, default=DEFAULT_REPEAT, metavar="K",
                     help=f"solves timed per run: a converged run's times are the median of "
                          f"K, their spread is stored (default {DEFAULT_REPEAT}; 1 times "
@@ -230,6 +235,16 @@ def cmd_sweep(args) -> int:
     limit = _positive_number(args.time_limit, "time-limit")
     if args.repeat < 1:
         raise ProblemError(f"repeat must be an integer >= 1, got {args.repeat}")
+    runner = None
+    if args.dask is not None:
+        import importlib.util
+
+        from ..bench.cluster import dask_runner
+
+        if importlib.util.find_spec("distributed") is None:
+            raise ProblemError("--dask needs Dask distributed: pip install "
+                               "'lcpbench[cluster]'")
+        runner = dask_runner(args.dask)
     baselines = {"analytic": ["baseline"], "fd": ["baseline-fd"],
                  "both": ["baseline", "baseline-fd"], "none": []}[args.baseline]
     jobs = plan_sweep(scenes, solvers, settings, tol=args.tol, method=methods,
@@ -239,7 +254,7 @@ def cmd_sweep(args) -> int:
         bar = progress_bar(args.quiet)
         try:
             plan = sweep(store, jobs, workers=jobs_n, time_limit=limit, rerun=args.rerun,
-                         progress=bar.update if bar else None)
+                         progress=bar.update if bar else None, runner=runner)
         except KeyboardInterrupt:
             if bar:
                 bar.close()
