@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 from typing import ClassVar
 
 from .grid import scene_from_key
-from .rows import baseline_row, failed_row, solution_row
+from .rows import baseline_row, failed_row, repeated, solution_row
 
 #: driver tolerance (rad) per settings profile; "default" keeps the paper's 1e-3
 PROFILE_TOL = {"default": 1e-3, "low": 1e-3, "mid": 1e-6, "high": 1e-9}
@@ -77,6 +77,8 @@ class Job:
     backend: str
     settings: str
     tol: float  # the driver tolerance (rad); the baseline's own tolerance
+    #: solves timed per row (a converged run is repeated; its times are the median)
+    repeat: int = field(default=1, kw_only=True, compare=False)
 
     @property
     def label(self) -> str:
@@ -103,8 +105,8 @@ class Job:
         return len(self.scene_keys)
 
     def time_limit(self, per_row: float) -> float:
-        """The job's time limit: ``per_row`` seconds per row (per scene of a line)."""
-        return per_row * self.size
+        """The job's time limit: ``per_row`` seconds per row (per scene of a line) and repeat."""
+        return per_row * self.size * max(1, self.repeat)
 
     def describe_limit(self, per_row: float) -> str:
         return f"{self.time_limit(per_row):g} s"
@@ -191,9 +193,13 @@ class RunJob(Job):
         from ..api import solve
 
         warm_up(self.backend, self.settings)
-        res = solve(scene_from_key(self.scene), solver=self.backend, tol=self.tol,
-                    settings=self.settings, method=self.driver)
-        return [solution_row(res)]
+        scene = scene_from_key(self.scene)
+
+        def once():
+            return solution_row(solve(scene, solver=self.backend, tol=self.tol,
+                                      settings=self.settings, method=self.driver))
+
+        return [repeated(once(), once, self.repeat)]
 
 
 @dataclass(frozen=True)
@@ -224,9 +230,12 @@ class BaselineJob(Job):
         if ("baseline", "") not in _WARM:
             _WARM.add(("baseline", ""))
             solve_baseline(scene.with_links(WARMUP_SCENE["links"]), tol=self.tol)
-        res = solve_baseline(scene, tol=self.tol, method=self.minpack_method,
-                             jacobian=self.jacobian, time_limit=time_limit)
-        return [baseline_row(scene, res)]
+        def once():
+            return baseline_row(scene, solve_baseline(
+                scene, tol=self.tol, method=self.minpack_method, jacobian=self.jacobian,
+                time_limit=time_limit))
+
+        return [repeated(once(), once, self.repeat)]
 
 
 @dataclass(frozen=True)
@@ -262,12 +271,20 @@ class LineJob(Job):
         """One row per scene, each its own solve's numbers.
 
         ``wall_time`` and the iterations of a row are those of the scene's own
-        solve inside the line (``ContactResult.time_s``), as for a cold run.
+        solve inside the line (``ContactResult.time_s``), as for a cold run;
+        with ``repeat`` K the whole line is solved K times and each scene's
+        times are its median over them.
         """
-        from ..studies.continuation import solve_sequence
-
         warm_up(self.backend, self.settings)
         scenes = [scene_from_key(k) for k in self.scenes]
+        runs = [self._line(scenes) for _ in range(max(1, self.repeat))]
+        # the line solved ``repeat`` times; each scene's times the median over them
+        return [repeated(rows[0], iter(rows[1:]).__next__, len(rows))
+                for rows in zip(*runs)]
+
+    def _line(self, scenes) -> list[dict]:
+        from ..studies.continuation import solve_sequence
+
         results = solve_sequence(scenes, predictor=self.predictor, solver=self.backend,
                                  tol=self.tol, settings=self.settings, method="globalised")
         rows = []

@@ -15,6 +15,7 @@ from pathlib import Path
 
 from ..jsonsafe import sanitise
 from .jobs import DEFAULT_TIME_LIMIT
+from .machine import machine_section
 from .metrics import (
     SHIFT,
     continuation_pairs,
@@ -23,6 +24,7 @@ from .metrics import (
     summarise,
     time_table,
 )
+from .profiles import profiles_section
 from .store import Store
 
 DEFAULT_OUT = Path("results") / "sweep"
@@ -153,10 +155,33 @@ def build_report(store: Store, out: str | os.PathLike = DEFAULT_OUT, *,
         plot_forces(refs, evaluated, out / "force-vs-theta.png")
         plot_shapes(refs, out / "shapes.png")
         figures = ["work-precision.png", "force-vs-theta.png", "shapes.png"]
+    profile_figures = _write_profiles(evaluated, out, plots and bool(runs))
     (out / "report.md").write_text(_markdown(store, runs, refs, evaluated, summary, h2,
-                                             figures, time_limit, pairs))
+                                             figures, time_limit, pairs)
+                                   + profiles_section(profile_figures)
+                                   + machine_section(store.sweeps(), runs))
     return {"summary": summary, "runs": len(runs), "refs": len(refs), "out": str(out),
             "continuation": pairs}
+
+
+def _write_profiles(evaluated, out: Path, plots: bool) -> list[str]:
+    """profiles.csv (every performance and data profile) and, with ``plots``, their figures."""
+    from .profiles import profiles_of, write_csv
+
+    profiles = profiles_of(evaluated)
+    write_csv(profiles, out / "profiles.csv")
+    if not (plots and profiles):
+        return []
+    from .profile_plot import plot_profiles
+
+    return plot_profiles(profiles, out)
+
+
+def _repeats_text(runs) -> str:
+    reps = sorted({int(r.get("repeats") or 1) for r in runs if r.get("converged")})
+    if reps in ([], [1]):
+        return "measured once"
+    return f"the median of {' or '.join(map(str, reps))} solves for a converged run"
 
 
 def _grid_text(runs) -> str:
@@ -181,7 +206,8 @@ def _markdown(store, runs, refs, evaluated, summary, h2, figures, time_limit,
         f"{len(scenes)} scenes ({_grid_text(runs) if runs else 'no runs'}).",
         f"Machine: {platform.machine()}, {os.cpu_count()} cores, Python "
         f"{platform.python_version()}. Times are wall times of one solve in a worker "
-        "process (scene to result, including assembly), measured once.",
+        f"process (scene to result, including assembly), {_repeats_text(runs)} "
+        "(the machine each sweep ran on: \"Machine and timing\" below).",
         "",
         "**Reference.** Per scene, the built-in active set at settings `high` and driver "
         "tolerance 1e-11 rad, its last contact step re-solved by Lemke on the dense LCP: "

@@ -18,7 +18,7 @@ import numpy as np
 
 #: the fields every row has
 ROW_FIELDS = ("status", "converged", "reason", "total_force", "outer_iterations",
-              "inner_iterations", "wall_time", "solver_time", "certificate")
+              "inner_iterations", "wall_time", "solver_time", "setup_time", "certificate")
 #: the fields of a certificate (Certificate.to_dict() without "torque_residual")
 CERTIFICATE_FIELDS = ("min_gap", "min_force", "complementarity", "closure",
                       "max_torque_residual", "relative_torque_residual")
@@ -44,6 +44,9 @@ def solution_row(res) -> dict:
         "inner_iterations": int(res.inner_iterations),
         "wall_time": float(res.time_s),
         "solver_time": float(sum(s.solve_time for s in res.steps)),
+        # setup: assembling each step, building the back-end's form, its own setup
+        "setup_time": float(sum(s.assemble_time + getattr(s, "setup_time", 0.0)
+                                for s in res.steps)),
         "certificate": certificate_dict(res.certificate),
         "forces": res.forces, "gaps": res.gaps, "x": res.x, "y": res.y,
     }
@@ -80,6 +83,7 @@ def baseline_row(scene, res) -> dict:
         "inner_iterations": int(res.jacobian_evaluations),
         "wall_time": float(res.time_s + res.setup_time_s),
         "solver_time": float(res.time_s),
+        "setup_time": float(res.setup_time_s),
         "certificate": _baseline_certificate(scene, chain, res),
         "forces": res.forces, "gaps": gaps, "x": res.x, "y": res.y,
     }
@@ -89,7 +93,41 @@ def failed_row(status: str, reason: str, wall_time: float) -> dict:
     """The row of a job that produced no answer (error, timeout, crash)."""
     return {"status": status, "converged": False, "reason": reason, "total_force": 0.0,
             "outer_iterations": 0, "inner_iterations": 0, "wall_time": float(wall_time),
-            "solver_time": float("nan"), "certificate": None}
+            "solver_time": float("nan"), "setup_time": float("nan"), "certificate": None}
+
+
+#: the times of a row that a repeat measures again; each becomes the median of the repeats
+TIMES = ("wall_time", "solver_time", "setup_time")
+
+
+def repeated(first: dict, again, repeat: int) -> dict:
+    """``first`` with its times the median of ``repeat`` measurements.
+
+    ``again()`` computes the same row once more. Only a converged run is
+    repeated (a failure costs the time limit in the metrics, whatever its
+    time). The row keeps the first answer and gets ``repeats`` (how many
+    solves were timed) and ``wall_time_min``/``wall_time_max`` (their
+    spread); a repeat whose answer differs (total force, iterations) is
+    named in ``reason``.
+    """
+    row = dict(first)
+    rows = [first]
+    if first.get("converged") and repeat > 1:
+        rows += [again() for _ in range(repeat - 1)]
+    for key in TIMES:
+        vals = [float(r[key]) for r in rows if r.get(key) is not None]
+        if vals:
+            row[key] = float(np.median(vals))
+    walls = [float(r["wall_time"]) for r in rows]
+    row["repeats"] = len(rows)
+    row["wall_time_min"], row["wall_time_max"] = min(walls), max(walls)
+    differ = [i for i, r in enumerate(rows[1:], 2)
+              if (r["total_force"], r["outer_iterations"], r["inner_iterations"]) !=
+              (first["total_force"], first["outer_iterations"], first["inner_iterations"])]
+    if differ:
+        row["reason"] = (f"{first['reason']} (repeat(s) {', '.join(map(str, differ))} gave "
+                         "another answer; the first is kept)")
+    return row
 
 
 def scene_columns(key: str) -> dict:

@@ -30,12 +30,16 @@ Tables
                 ``sweep_id`` of the sweep that wrote it (NULL: written
                 without a lock, or before schema 2).
 ``refs``        the per-scene high-accuracy reference, computed once.
-``sweeps``      one row per locked sweep: id, owner, pid, host, start time.
+``sweeps``      one row per locked sweep: id, owner, pid, host, start time,
+                and its machine record (JSON, :mod:`.machine`).
 ``meta``        schema version and when the store was created.
 
-Schema versions: 1 (no ``sweep_id``, no ``sweeps``) is read as it is and
-migrated to 2 in one transaction the first time it is written to (a run, or
-a lock); a version above :data:`SCHEMA_VERSION` is refused.
+Schema versions: 1 (no ``sweep_id``, no ``sweeps``) and 2 (no timing
+columns ``setup_time``, ``repeats``, ``wall_time_min``, ``wall_time_max``,
+no ``sweeps.machine``) are read as they are (the missing columns read as
+None: not measured) and migrated to 3, one transaction per version, the first
+time they are written to (a run, or a lock); a version above
+:data:`SCHEMA_VERSION` is refused.
 """
 
 from __future__ import annotations
@@ -55,9 +59,9 @@ import numpy as np
 
 from ..errors import StoreError
 
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 #: Older versions this lcpbench reads, and migrates when it writes.
-READABLE_VERSIONS = (1, 2)
+READABLE_VERSIONS = (1, 2, 3)
 DEFAULT_STORE = Path("results") / "lcpbench.sqlite"
 
 RUN_KEY = ("scene", "backend", "settings", "tol", "method")
@@ -67,6 +71,8 @@ RUN_SCALARS = (
     "status", "converged", "reason", "total_force", "outer_iterations", "inner_iterations",
     "wall_time", "solver_time", "certificate", "version", "created",
 )
+#: schema 3: the setup part of the wall time, and the repeats (wall_time is their median)
+TIMING_COLUMNS = ("setup_time", "repeats", "wall_time_min", "wall_time_max")
 REF_SCALARS = ("total_force", "converged", "tol", "check_error", "wall_time", "reason",
                "created")
 
@@ -80,10 +86,12 @@ CREATE TABLE IF NOT EXISTS runs (
     outer_iterations INTEGER, inner_iterations INTEGER, wall_time REAL, solver_time REAL,
     certificate TEXT, version TEXT, created TEXT,
     forces BLOB, gaps BLOB, x BLOB, y BLOB, sweep_id TEXT,
+    setup_time REAL, repeats INTEGER, wall_time_min REAL, wall_time_max REAL,
     PRIMARY KEY ({", ".join(RUN_KEY)})
 );
 CREATE TABLE IF NOT EXISTS sweeps (
-    sweep_id TEXT PRIMARY KEY, owner TEXT, pid INTEGER, host TEXT, started TEXT
+    sweep_id TEXT PRIMARY KEY, owner TEXT, pid INTEGER, host TEXT, started TEXT,
+    machine TEXT
 );
 CREATE TABLE IF NOT EXISTS refs (
     scene TEXT PRIMARY KEY,
@@ -103,6 +111,17 @@ CREATE TABLE IF NOT EXISTS sweeps (
 UPDATE meta SET value = '2' WHERE key = 'schema';
 COMMIT;
 """
+_MIGRATE_2_TO_3 = """
+BEGIN;
+ALTER TABLE runs ADD COLUMN setup_time REAL;
+ALTER TABLE runs ADD COLUMN repeats INTEGER;
+ALTER TABLE runs ADD COLUMN wall_time_min REAL;
+ALTER TABLE runs ADD COLUMN wall_time_max REAL;
+ALTER TABLE sweeps ADD COLUMN machine TEXT;
+UPDATE meta SET value = '3' WHERE key = 'schema';
+COMMIT;
+"""
+_MIGRATIONS = {1: _MIGRATE_1_TO_2, 2: _MIGRATE_2_TO_3}
 #: Columns an existing store must have, per table (a subset check).
 _REQUIRED = {
     "meta": ("key", "value"),
@@ -232,16 +251,15 @@ class Store:
 
     def _upgrade(self) -> None:
         """Migrate a schema-1 store to the current schema (one transaction)."""
-        if self.schema == SCHEMA_VERSION:
-            return
-        try:
-            self.db.executescript(_MIGRATE_1_TO_2)
-        except sqlite3.Error as exc:
-            if self.db.in_transaction:
-                self.db.rollback()
-            raise StoreError(f"store {self.path}: cannot migrate it from schema version "
-                             f"{self.schema} to {SCHEMA_VERSION} ({exc})") from exc
-        self.schema = SCHEMA_VERSION
+        while self.schema < SCHEMA_VERSION:
+            try:
+                self.db.executescript(_MIGRATIONS[self.schema])
+            except sqlite3.Error as exc:
+                if self.db.in_transaction:
+                    self.db.rollback()
+                raise StoreError(f"store {self.path}: cannot migrate it from schema version "
+                                 f"{self.schema} to {SCHEMA_VERSION} ({exc})") from exc
+            self.schema += 1
 
     # -- the sweep lock -----------------------------------------------------------
     @property
@@ -341,7 +359,7 @@ class Store:
         """
         self._upgrade()
         row = {**row, "sweep_id": row.get("sweep_id", self.sweep_id)}
-        cols = (*RUN_KEY, *SCENE_COLUMNS, *RUN_SCALARS, *ARRAYS, "sweep_id")
+        cols = (*RUN_KEY, *SCENE_COLUMNS, *RUN_SCALARS, *ARRAYS, "sweep_id", *TIMING_COLUMNS)
         values = tuple(_blob(row.get(c)) if c in ARRAYS else _cell(row.get(c)) for c in cols)
         verb = "INSERT OR REPLACE" if replace else "INSERT OR IGNORE"
         before = self.db.total_changes
@@ -386,15 +404,27 @@ class Store:
         rows = self._rows("runs", RUN_KEY, arrays, where, params)
         for r in rows:
             r.setdefault("sweep_id", None)
+            for c in TIMING_COLUMNS:  # stores before schema 3: not measured
+                r.setdefault(c, None)
         return rows
 
     def sweeps(self) -> list[dict]:
         """The locked sweeps recorded in the store, oldest first (none on schema 1)."""
         if self.schema < 2:
             return []
-        cols = ("sweep_id", "owner", "pid", "host", "started")
-        return [dict(zip(cols, r)) for r in self._query(
+        cols = ("sweep_id", "owner", "pid", "host", "started") + (
+            ("machine",) if self.schema >= 3 else ())
+        out = [dict(zip(cols, r)) for r in self._query(
             f"SELECT {', '.join(cols)} FROM sweeps ORDER BY started, rowid")]
+        for d in out:
+            d["machine"] = json.loads(d["machine"]) if d.get("machine") else None
+        return out
+
+    def put_machine(self, sweep_id: str, record: dict) -> None:
+        """Record (or update) the machine record of a locked sweep (schema 3)."""
+        self._upgrade()
+        self._write("UPDATE sweeps SET machine = ? WHERE sweep_id = ?",
+                    (json.dumps(record), sweep_id))
 
     def refs(self, *, arrays: bool = True) -> dict[str, dict]:
         return {r["scene"]: r for r in self._rows("refs", ("scene",), arrays, "", ())}
@@ -425,7 +455,7 @@ class Store:
         """Write every run, joined with its reference force, as CSV; returns the row count."""
         rows = self.runs(arrays=False)
         refs = self.refs(arrays=False)
-        cols = [*RUN_KEY, *SCENE_COLUMNS, *RUN_SCALARS, "reference_force"]
+        cols = [*RUN_KEY, *SCENE_COLUMNS, *RUN_SCALARS, *TIMING_COLUMNS, "reference_force"]
         cols.remove("certificate")
         with open(path, "w", newline="") as fh:
             writer = csv.writer(fh)

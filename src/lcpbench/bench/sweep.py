@@ -91,7 +91,7 @@ def _lines(scenes: list) -> list[list]:
 def plan_sweep(grid: Grid | Iterable, backends: list[str], settings: list[str], *,
                tol: float | None = None, method: str | Iterable[str] = "globalised",
                baselines: Iterable[str] = ("baseline",),
-               continuation: str | None = None) -> list[Job]:
+               continuation: str | None = None, repeat: int = 1) -> list[Job]:
     """Every job of a sweep, in a fixed order: references, then scene by scene.
 
     ``method`` is one driver scheme or several (each back-end runs with each).
@@ -99,6 +99,8 @@ def plan_sweep(grid: Grid | Iterable, backends: list[str], settings: list[str], 
     jobs, one per back-end × settings and per line of scenes (all parameters
     but θ equal, θ ascending), run after the references; method
     "globalised+<continuation>". It needs the globalised driver only.
+    ``repeat``: solves timed per run (back-ends and baselines; a converged
+    run's times are the median of ``repeat``, the spread is stored).
     """
     from ..model.driver import METHODS
 
@@ -113,6 +115,8 @@ def plan_sweep(grid: Grid | Iterable, backends: list[str], settings: list[str], 
         if set(methods) != {"globalised"}:
             raise ProblemError("--continuation needs the globalised driver: a warm start "
                                "is not defined for --method undamped")
+    if isinstance(repeat, bool) or not isinstance(repeat, int) or repeat < 1:
+        raise ProblemError(f"repeat must be an integer >= 1, got {repeat!r}")
     scenes = grid.scenes() if isinstance(grid, Grid) else list(grid)
     if not scenes:
         raise ProblemError("the grid is empty: no scenes to run")
@@ -128,17 +132,18 @@ def plan_sweep(grid: Grid | Iterable, backends: list[str], settings: list[str], 
                 for p in settings:
                     jobs.append(LineJob(line_keys[0], name, p,
                                         PROFILE_TOL[p] if tol is None else tol,
-                                        predictor=continuation, scenes=line_keys))
+                                        predictor=continuation, scenes=line_keys,
+                                        repeat=repeat))
     for k in keys:
         for b in baselines:
-            jobs.append(BaselineJob(k, b))
+            jobs.append(BaselineJob(k, b, repeat=repeat))
         if continuation is not None:
             continue
         for m in methods:
             for name in backends:
                 for p in settings:
                     jobs.append(RunJob(k, name, p, PROFILE_TOL[p] if tol is None else tol,
-                                       driver=m))
+                                       driver=m, repeat=repeat))
     return jobs
 
 
@@ -156,7 +161,8 @@ def _versions(names: Iterable[str]) -> dict[str, str]:
 
 def sweep(store: Store, jobs: list[Job], *, workers: int = 1,
           time_limit: float = DEFAULT_TIME_LIMIT, rerun: bool = False,
-          progress: Callable[[int, int, Job, dict], None] | None = None) -> SweepPlan:
+          progress: Callable[[int, int, Job, dict], None] | None = None,
+          runner: Callable | None = None) -> SweepPlan:
     """Run the jobs that are not in ``store`` yet (all of them with ``rerun``).
 
     Every finished row is committed at once. ``progress(done, total, job,
@@ -165,8 +171,9 @@ def sweep(store: Store, jobs: list[Job], *, workers: int = 1,
     ``scene`` set to that row's scene). A line job is skipped only when all
     its rows are stored; a partly stored line is run again in full and its
     rows replaced. A job that failed as a whole (error, timeout, crash)
-    stores failure rows only where nothing is stored yet. Returns the plan
-    (what was skipped and run).
+    stores failure rows only where nothing is stored yet. ``runner``: what
+    runs the jobs, :func:`~.pool.run_jobs` (the local pool) by default, or
+    :func:`~.cluster.dask_runner`'s. Returns the plan (what was skipped and run).
     """
     have_runs = set() if rerun else store.run_keys()
     have_refs = set() if rerun else store.ref_keys()
@@ -174,7 +181,14 @@ def sweep(store: Store, jobs: list[Job], *, workers: int = 1,
     plan = SweepPlan(jobs, todo)
     versions = _versions({j.backend for j in todo})
     done, total = plan.rows_done, plan.rows
-    for job, result in run_jobs(todo, workers=workers, time_limit=time_limit):
+    record = None
+    if store.sweep_id is not None:  # a locked sweep: its machine record, start and end
+        from .machine import load_average, machine_record
+
+        record = machine_record(workers=workers, repeat=max((j.repeat for j in todo),
+                                                            default=1))
+        store.put_machine(store.sweep_id, record)
+    for job, result in (runner or run_jobs)(todo, workers=workers, time_limit=time_limit):
         created = time.strftime("%Y-%m-%dT%H:%M:%S%z")
         # a finished line replaces every row of the line (the continuation made
         # them together); a failed job leaves stored rows alone
@@ -192,6 +206,9 @@ def sweep(store: Store, jobs: list[Job], *, workers: int = 1,
             if progress is not None:
                 progress(done, total, job if scene == job.scene else
                          dataclasses.replace(job, scene=scene), row)
+    if record is not None and store.sweep_id is not None:
+        record["load_end"] = load_average()
+        store.put_machine(store.sweep_id, record)
     return plan
 
 

@@ -35,7 +35,7 @@ from ._common import PROG, ArgumentParser, ParserExit, error_line
 __all__ = ["PROG", "build_parser", "main"]
 
 # The command groups, in the order of `lcpbench --help`.
-GROUPS = ("solve", "solvers", "sweep", "paper")
+GROUPS = ("solve", "solvers", "sweep", "export", "paper")
 
 
 def _optional_groups() -> list:

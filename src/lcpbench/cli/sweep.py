@@ -4,7 +4,7 @@
 
     lcpbench sweep [--grid paper|hard] [--theta A:B:STEP] [--height A:B:STEP] ...
                    [--solvers A,B] [--settings P,Q] [--continuation [PREDICTOR]]
-                   [--store PATH] [--out DIR] [--jobs K] [--time-limit S]
+                   [--store PATH] [--out DIR] [--jobs K] [--time-limit S] [--repeat K]
     lcpbench report [--store PATH] [--out DIR] [--table2-height MM] [--no-plots]
     lcpbench select [scene options] [--force-tol REL] [--time-budget S] [--solvers A,B]
 """
@@ -24,12 +24,16 @@ from ._common import (
     add_json_option,
     error_line,
     has_matplotlib,
+    int_arg,
     names_list,
     print_json,
     progress_bar,
     worker_count,
 )
 from ._scene_args import DEFAULT_METHOD, add_scene_options, scene_from
+
+#: solves timed per run of ``lcpbench sweep`` (issue 16: one timing carried 2x noise)
+DEFAULT_REPEAT = 3
 
 
 def _add_store_options(parser) -> None:
@@ -108,6 +112,15 @@ def register(subparsers) -> None:
     sw.add_argument("--time-limit", type=float, default=DEFAULT_TIME_LIMIT, metavar="S",
                     help=f"seconds per solve before it is killed and recorded as a timeout "
                          f"(default {DEFAULT_TIME_LIMIT:g})")
+    sw.add_argument("--dask", nargs="?", const="local", default=None, metavar="ADDRESS",
+                    help="run the jobs on Dask distributed: a local cluster of --jobs "
+                         "workers, or the scheduler at ADDRESS (tcp://HOST:PORT); each task "
+                         "runs its jobs in the pool's isolated worker with the time limit "
+                         "(pip install 'lcpbench[cluster]')")
+    sw.add_argument("--repeat", type=int_arg, default=DEFAULT_REPEAT, metavar="K",
+                    help=f"solves timed per run: a converged run's times are the median of "
+                         f"K, their spread is stored (default {DEFAULT_REPEAT}; 1 times "
+                         f"each run once)")
     sw.add_argument("--rerun", action="store_true",
                     help="recompute runs that are already in the store")
     sw.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -220,15 +233,28 @@ def cmd_sweep(args) -> int:
         check_tol(args.tol)
     jobs_n = worker_count(args.jobs, args.oversubscribe)
     limit = _positive_number(args.time_limit, "time-limit")
+    if args.repeat < 1:
+        raise ProblemError(f"repeat must be an integer >= 1, got {args.repeat}")
+    runner = None
+    if args.dask is not None:
+        import importlib.util
+
+        from ..bench.cluster import dask_runner
+
+        if importlib.util.find_spec("distributed") is None:
+            raise ProblemError("--dask needs Dask distributed: pip install "
+                               "'lcpbench[cluster]'")
+        runner = dask_runner(args.dask)
     baselines = {"analytic": ["baseline"], "fd": ["baseline-fd"],
                  "both": ["baseline", "baseline-fd"], "none": []}[args.baseline]
     jobs = plan_sweep(scenes, solvers, settings, tol=args.tol, method=methods,
-                      baselines=baselines, continuation=args.continuation)
+                      baselines=baselines, continuation=args.continuation,
+                      repeat=args.repeat)
     with Store(args.store) as store, store.lock("lcpbench sweep", wait=args.wait) as sweep_id:
         bar = progress_bar(args.quiet)
         try:
             plan = sweep(store, jobs, workers=jobs_n, time_limit=limit, rerun=args.rerun,
-                         progress=bar.update if bar else None)
+                         progress=bar.update if bar else None, runner=runner)
         except KeyboardInterrupt:
             if bar:
                 bar.close()
@@ -244,7 +270,8 @@ def cmd_sweep(args) -> int:
         print(f"{mine} runs computed by this sweep, {plan.rows_done} already in {args.store} "
               f"({len(scenes)} scenes x {len(solvers)} back-ends x {len(settings)} settings"
               f"{f' x {len(methods)} drivers' if len(methods) > 1 else ''}{along}"
-              f" + {len(baselines)} baseline(s) + references; {jobs_n} worker(s))")
+              f" + {len(baselines)} baseline(s) + references; {jobs_n} worker(s), "
+              f"times the median of {args.repeat})")
         if not args.no_report:
             return _write_report(store, args.out, limit, None, plots=True)
     return 0

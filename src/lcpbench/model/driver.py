@@ -51,6 +51,7 @@ class StepRecord:
     step_length: float
     max_dalpha: float
     energy: float
+    setup_time: float = 0.0  # the back-end's setup and lcpbench's building of its form (s)
 
 
 @dataclass
@@ -115,7 +116,7 @@ def run_driver(
 
 def _step_failed(alpha, n, steps, sol: StepSolution, t_asm: float, E: float) -> DriverOutput:
     steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm, 0.0,
-                            np.nan, E))
+                            np.nan, E, _setup(sol)))
     return _fail(alpha, n, steps, f"contact step not solved ({sol.status.value}: {sol.message})")
 
 
@@ -137,6 +138,12 @@ def _converged(chain: Chain, step: ContactStep, alpha, sol: StepSolution, steps
     reason = "converged" if sol.solved else "converged (last step inaccurate)"
     return DriverOutput(alpha, upper, lower, True, reason, steps, last_step=sol,
                         multipliers_upper=sol.forces_upper, multipliers_lower=sol.forces_lower)
+
+
+def _setup(sol) -> float:
+    """A step's setup time: the back-end's own setup and lcpbench's building of its form."""
+    return float(getattr(sol, "setup_time", 0.0) or 0.0) + float(
+        getattr(sol, "build_time", 0.0) or 0.0)
 
 
 def _solve_step(chain, alpha, solver, warm):
@@ -186,12 +193,12 @@ def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int,
             t *= 0.5
             if t < 1e-12:
                 steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time,
-                                        t_asm, 0.0, dalpha, E))
+                                        t_asm, 0.0, dalpha, E, _setup(sol)))
                 return _fail(alpha, n, steps, "line search failed: no decrease of the energy "
                                               "along the step")
         u, alpha, E = u + t * d, trial, E_t
         steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
-                                t, dalpha, E))
+                                t, dalpha, E, _setup(sol)))
         warm = sol
         if dalpha < tol:
             return _converged(chain, step, alpha, sol, steps)
@@ -212,7 +219,7 @@ def _undamped(chain: Chain, solver: StepSolver, tol: float, max_outer: int) -> D
         new = step.predict_alpha(sol.u)
         dalpha = float(np.max(np.abs(new - alpha), initial=0.0))
         steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm, 1.0,
-                                dalpha, np.nan))
+                                dalpha, np.nan, _setup(sol)))
         if not np.all(np.isfinite(new)):
             return _fail(alpha, n, steps, "diverged: non-finite link angles")
         if np.any(np.sign(np.cos(new)) != branch):

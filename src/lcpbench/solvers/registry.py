@@ -166,6 +166,10 @@ def _builtin() -> list[Backend]:
                 "the QP stated in cvxpy, solved by the solver cvxpy picks",
                 requires=("cvxpy",), extra="cvxpy", distribution="cvxpy"),
     ]
+    out.append(Backend(
+        "quantecon-lemke", "lcp", "dense", False, "pivoting", "lcpbench.solvers.peer_quantecon",
+        "QuantEcon's Lemke (numba, lexicographic rule): quantecon.optimize.lcp_lemke",
+        requires=("quantecon",), extra="peer", distribution="quantecon"))
     out += _qpsolvers_backends()
     for method, label in (("lemke", "Lemke"), ("pgs", "projected Gauss-Seidel"),
                           ("newton-min", "Newton on the min function"),

@@ -1,0 +1,72 @@
+"""Figures of the performance and data profiles (:mod:`.profiles`).
+
+One figure per kind and measure (``perf-profile-time.png``,
+``data-profile-outer.png``, ...), one panel per settings profile. Drawn on a
+bare :class:`matplotlib.figure.Figure` with the Agg canvas, as in
+:mod:`.plot`; matplotlib is imported only here.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .profiles import MEASURES, Profile
+
+
+def figure_name(kind: str, measure: str) -> str:
+    return f"{'perf' if kind == 'performance' else 'data'}-profile-{measure}.png"
+
+
+def plot_profiles(profiles: list[Profile], out: str | Path) -> list[str]:
+    """Draw every (kind, measure) of ``profiles`` into ``out``; returns the file names."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    out = Path(out)
+    names = []
+    keys = list(dict.fromkeys((p.kind, p.measure) for p in profiles))
+    for kind, measure in keys:
+        panels = [p for p in profiles if (p.kind, p.measure) == (kind, measure)]
+        rows = max(len(p.solvers) for p in panels) // 3 + 1  # legend rows under a panel
+        fig = Figure(figsize=(5.6 * len(panels), 4.2 + 0.17 * rows), layout="constrained")
+        FigureCanvasAgg(fig)
+        axes = fig.subplots(1, len(panels), squeeze=False)[0]
+        for ax, p in zip(axes, panels):
+            _panel(ax, p)
+        names.append(figure_name(kind, measure))
+        fig.savefig(out / names[-1], dpi=110)
+    return names
+
+
+def _panel(ax, p: Profile) -> None:
+    hi = float(p.x[-1]) * 2.0 if p.x.size else 2.0
+    lo = 1.0 if p.kind == "performance" else max(float(p.x[0]) / 2.0, 1e-12)
+    from matplotlib import colormaps
+
+    colours = colormaps["tab20"]
+    for s, name in enumerate(p.solvers):
+        xs = np.concatenate([[lo], p.x, [hi]])
+        ys = np.concatenate([[0.0 if p.kind == "data" else p.values[s, 0]], p.values[s],
+                             [p.values[s, -1]]])
+        base = name.startswith("baseline")
+        # 20 distinct colours, then the same colours dotted; the baselines dashed grey
+        ax.step(xs, ys, where="post", lw=1.4, label=name,
+                color=("0.2" if name == "baseline" else "0.55") if base else colours(s % 20),
+                ls="--" if base else ("-" if s < 20 else ":"))
+    ax.set_xscale("log", base=2 if p.kind == "performance" else 10)
+    ax.set_ylim(-0.02, 1.02)
+    ax.set_xlim(lo, hi)
+    unit = MEASURES[p.measure][3]
+    if p.kind == "performance":
+        ax.set_xlabel(f"τ (ratio to the best, {unit})")
+        ax.set_ylabel("ρ(τ): share of problems within τ of the best")
+    else:
+        per = " / (N + 1)" if p.measure == "inner" else ""
+        ax.set_xlabel(f"κ: budget, {unit}{per}")
+        ax.set_ylabel("d(κ): share of problems solved")
+    ax.set_title(f"settings {p.group} ({p.problems} scenes)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=6.5, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=3,
+              frameon=False)
