@@ -31,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..model.judge import force_tol
 from .jobs import DEFAULT_TIME_LIMIT
 
 SHIFT = 10.0
@@ -67,8 +68,9 @@ def error_of(total_force: float, reference: float, force_scale: float) -> float:
 
 def success_tol(driver_tol: float) -> float:
     """The force error a run at driver tolerance ``driver_tol`` (rad) may have and count as a
-    success: min(1e-3, 100 · driver_tol), a relative error of the total reaction F."""
-    return min(1e-3, 100.0 * driver_tol)
+    success: min(1e-3, 100 · driver_tol), a relative error of the total reaction F. The
+    same τ that lcpbench's result judge certifies (:func:`lcpbench.model.judge.force_tol`)."""
+    return force_tol(driver_tol)
 
 
 def succeeded(converged: bool, error: float, force_tol: float) -> bool:
