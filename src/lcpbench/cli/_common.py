@@ -183,9 +183,11 @@ class ProgressBar:
         self.bar = None
         self.tqdm = tqdm
         self.failed = 0
+        self.expected = 0
 
     def update(self, done, total, job, row) -> None:
-        """Advance by one run; count the runs that were not solved.
+        """Advance by one run; count the runs that were not solved (and how many of
+        those are documented expected failures, :mod:`lcpbench.bench.expected`).
 
         Parameters
         ----------
@@ -200,9 +202,12 @@ class ProgressBar:
             self.bar = self.tqdm(total=total, initial=done - 1, unit="run", file=sys.stderr,
                                  dynamic_ncols=True, desc="sweep")
         if row.get("status") != "solved":
+            from ..bench.expected import is_expected
+
             self.failed += 1
-        self.bar.set_postfix_str(f"{job.backend} {job.settings}; not solved {self.failed}",
-                                 refresh=False)
+            self.expected += is_expected(job.backend, job.settings, str(row.get("status")))
+        self.bar.set_postfix_str(f"{job.backend} {job.settings}; not solved {self.failed} "
+                                 f"({self.expected} expected)", refresh=False)
         self.bar.update(1)
 
     def close(self) -> None:

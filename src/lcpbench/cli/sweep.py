@@ -14,7 +14,6 @@ from __future__ import annotations
 import math
 import sys
 
-from ..bench.report import DEFAULT_OUT
 from ..bench.store import DEFAULT_STORE
 from ..bench.sweep import CONTINUATION, DEFAULT_TIME_LIMIT
 from ..errors import ProblemError
@@ -35,8 +34,11 @@ from ._scene_args import DEFAULT_METHOD, add_scene_options, scene_from
 def _add_store_options(parser) -> None:
     parser.add_argument("--store", default=str(DEFAULT_STORE), metavar="PATH",
                         help=f"SQLite results store (default {DEFAULT_STORE})")
-    parser.add_argument("--out", default=str(DEFAULT_OUT), metavar="DIR",
-                        help=f"where the report goes (default {DEFAULT_OUT})")
+    parser.add_argument("--out", default=None, metavar="DIR",
+                        help="where the report goes (default: beside the store, a folder "
+                             "named after it: results/lcpbench.sqlite -> "
+                             "results/lcpbench-report; the committed standard report is "
+                             "rewritten only with --out results/sweep)")
 
 
 def register(subparsers) -> None:
@@ -104,6 +106,8 @@ def register(subparsers) -> None:
                          "as fsolve would (about 1 s per scene), both (default), or none")
     _add_store_options(sw)
     sw.add_argument("--no-report", action="store_true", help="do not write the report")
+    sw.add_argument("--all", action="store_true",
+                    help="report every run in the store (default: the runs of this sweep)")
     add_jobs_option(sw)
     sw.add_argument("--time-limit", type=float, default=DEFAULT_TIME_LIMIT, metavar="S",
                     help=f"seconds per solve before it is killed and recorded as a timeout "
@@ -206,7 +210,7 @@ def _sweep_backends(args) -> tuple[list[str], list[str]]:
 def cmd_sweep(args) -> int:
     """``lcpbench sweep``: run the grid into the store, then write the report."""
     from ..api import check_tol
-    from ..bench.jobs import LineJob
+    from ..bench.jobs import LineJob, ReferenceJob
     from ..bench.store import Store
     from ..bench.sweep import plan_sweep, sweep
 
@@ -225,6 +229,7 @@ def cmd_sweep(args) -> int:
     jobs = plan_sweep(scenes, solvers, settings, tol=args.tol, method=methods,
                       baselines=baselines, continuation=args.continuation)
     with Store(args.store) as store, store.lock("lcpbench sweep", wait=args.wait) as sweep_id:
+        _print_backends(solvers, explicit=args.solvers.strip() != "all")
         bar = progress_bar(args.quiet)
         try:
             plan = sweep(store, jobs, workers=jobs_n, time_limit=limit, rerun=args.rerun,
@@ -246,13 +251,32 @@ def cmd_sweep(args) -> int:
               f"{f' x {len(methods)} drivers' if len(methods) > 1 else ''}{along}"
               f" + {len(baselines)} baseline(s) + references; {jobs_n} worker(s))")
         if not args.no_report:
-            return _write_report(store, args.out, limit, None, plots=True)
+            keys = None if args.all else {k for j in jobs if not isinstance(j, ReferenceJob)
+                                          for k in j.keys}
+            return _write_report(store, args.out, limit, None, plots=True, keys=keys)
     return 0
 
 
+def _print_backends(solvers: list[str], explicit: bool) -> None:
+    """Say which back-ends the sweep runs and which it skips, and why (stderr)."""
+    from ..solvers.registry import backends
+
+    print(f"running {len(solvers)} back-end(s): {', '.join(solvers)}", file=sys.stderr)
+    skipped: dict[str, list[str]] = {}
+    for name, b in backends().items():
+        if name not in solvers:
+            why = (f"not installed ({b.install_hint()})" if not b.available() else
+                   "not in --solvers" if explicit else "")
+            skipped.setdefault(why, []).append(name)
+    for why, names in skipped.items():
+        print(f"skipping {', '.join(names)}" + (f": {why}" if why else ""), file=sys.stderr)
+
+
 # -- report -------------------------------------------------------------------
-def _write_report(store, out, time_limit, table2_height, plots: bool) -> int:
-    from ..bench.report import build_report
+def _write_report(store, out, time_limit, table2_height, plots: bool, keys=None) -> int:
+    from ..bench.report import build_report, default_out
+
+    out = out if out is not None else default_out(store.path)
 
     if plots and not has_matplotlib():
         plots = False
@@ -260,10 +284,12 @@ def _write_report(store, out, time_limit, table2_height, plots: bool) -> int:
               file=sys.stderr)
     try:
         info = build_report(store, out, time_limit=time_limit, plots=plots,
-                            table2_height=table2_height)
+                            table2_height=table2_height, keys=keys)
     except OSError as exc:
         raise ProblemError(f"out {out}: cannot write the report there ({exc})") from exc
-    print(f"report of {info['runs']} runs in {info['out']}/report.md")
+    also = (f" (of {info['stored']} in the store; --all or `lcpbench report` for all)"
+            if info["stored"] != info["runs"] else "")
+    print(f"report of {info['runs']} runs{also} in {info['out']}/report.md")
     return 0
 
 
