@@ -29,7 +29,7 @@ def register(subparsers) -> None:
                     help="output folder (default results/reproduced, not tracked; the "
                          "committed figures are regenerated only when asked: --out "
                          "results/paper). A file is rewritten only if its numbers changed "
-                         "beyond round-off (relative 1e-8)")
+                         "beyond round-off (relative 1e-6)")
     rr.add_argument("--quick", action="store_true",
                     help="coarser grids and smaller N: a smoke run in seconds")
     rr.set_defaults(func=cmd_reproduce)
