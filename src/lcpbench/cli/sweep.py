@@ -230,7 +230,8 @@ def cmd_sweep(args) -> int:
                       baselines=baselines, continuation=args.continuation)
     with Store(args.store) as store, store.lock("lcpbench sweep", wait=args.wait) as sweep_id:
         _print_backends(solvers, explicit=args.solvers.strip() != "all")
-        bar = progress_bar(args.quiet)
+        bar = progress_bar(args.quiet, None if args.quiet else
+                           _phase_sizes(store, jobs, args.rerun))
         try:
             plan = sweep(store, jobs, workers=jobs_n, time_limit=limit, rerun=args.rerun,
                          progress=bar.update if bar else None)
@@ -251,10 +252,24 @@ def cmd_sweep(args) -> int:
               f"{f' x {len(methods)} drivers' if len(methods) > 1 else ''}{along}"
               f" + {len(baselines)} baseline(s) + references; {jobs_n} worker(s))")
         if not args.no_report:
+            print("writing the report ...", file=sys.stderr, flush=True)
             keys = None if args.all else {k for j in jobs if not isinstance(j, ReferenceJob)
                                           for k in j.keys}
             return _write_report(store, args.out, limit, None, plots=True, keys=keys)
     return 0
+
+
+def _phase_sizes(store, jobs, rerun: bool) -> dict[str, int]:
+    """Rows still to compute per progress phase (references, runs)."""
+    from ._common import phase_of
+
+    have_runs = set() if rerun else store.run_keys()
+    have_refs = set() if rerun else store.ref_keys()
+    sizes: dict[str, int] = {"references": 0, "runs": 0}
+    for j in jobs:
+        if not j.is_stored(have_runs, have_refs):
+            sizes[phase_of(j)] += j.size
+    return sizes
 
 
 def _print_backends(solvers: list[str], explicit: bool) -> None:
