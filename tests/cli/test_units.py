@@ -89,3 +89,20 @@ def test_cli_unknown_unit_is_one_line_exit_2(capsys):
     assert main(["solve", "--height", "3in"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "unknown unit 'in'" in err[0]
+
+
+def test_sweep_ranges_take_units(tmp_path, capsys):
+    """`sweep --height 0.003m --theta 2.618rad` is the scene of --height 3 --theta 150.0002."""
+    from lcpbench.bench.store import Store
+
+    store = tmp_path / "s.sqlite"
+    base = ["sweep", "--links", "20", "--solvers", "active-set", "--settings", "default",
+            "--baseline", "none", "--jobs", "1", "--quiet", "--no-report", "--store", str(store)]
+    assert main([*base, "--height", "0.002m,3mm", "--theta", "90deg:150deg:60deg"]) == 0
+    capsys.readouterr()
+    with Store(store) as st:
+        scenes = {(r["theta"], r["height"]) for r in st.runs(arrays=False)}
+    assert scenes == {(90.0, 2.0), (150.0, 2.0), (90.0, 3.0), (150.0, 3.0)}
+    assert main([*base, "--height", "3furlongs"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "unknown unit 'furlongs'" in err[0]

@@ -66,9 +66,11 @@ def register(subparsers) -> None:
                          "grazing, no contact, heavy, EI 1-1000, channel)")
     sw.add_argument("--theta", default=None, metavar="A:B:STEP",
                     help="bend angles, degrees: start:stop:step (stop included), a comma list "
-                         "or one value (default 10:180:10)")
+                         "or one value; items may carry units: 90deg:180deg:30deg, 2.6rad "
+                         "(default 10:180:10)")
     sw.add_argument("--height", default=None, metavar="A:B:STEP",
-                    help="wall heights, mm (default 2:7:1)")
+                    help="wall heights, mm, or with units: 2mm:7mm:1mm, 0.002m,0.003m "
+                         "(default 2:7:1)")
     sw.add_argument("--links", default=str(DEFAULT_LINKS), metavar="LIST",
                     help=f"numbers of links (default {DEFAULT_LINKS})")
     sw.add_argument("--EI", default=None, metavar="LIST", help="bending stiffnesses, N*mm^2 "
@@ -153,10 +155,38 @@ def register(subparsers) -> None:
 
 
 # -- sweep --------------------------------------------------------------------
+#: the unit table (cli/_units.py) of each sweep list that takes unit suffixes
+_RANGE_UNITS = {"theta": "angle", "height": "length", "length": "length",
+                "EI": "stiffness", "weight": "weight"}
+
+
+def _in_model_units(text: str | None, name: str) -> str | None:
+    """A range or list whose items may carry units (``2mm:7mm:1mm``, ``0.17rad,2.6rad``),
+    rewritten in the model's units for :func:`~lcpbench.bench.grid.parse_range`."""
+    import argparse
+    import re
+
+    from ._units import parse_quantity
+
+    if text is None or name not in _RANGE_UNITS:
+        return text
+    items = re.split(r"([:,])", str(text))
+    out = []
+    for item in items:
+        if item in (":", ",") or not item.strip() or not re.search(r"[^\d.eE+\-\s]", item):
+            out.append(item)  # separators, blanks and bare numbers: as they are
+            continue
+        try:
+            out.append(repr(float(parse_quantity(item, _RANGE_UNITS[name], name))))
+        except argparse.ArgumentTypeError as exc:
+            raise ProblemError(str(exc)) from None
+    return "".join(out)
+
+
 def _float_list(text, name) -> tuple | None:
     from ..bench.grid import parse_range
 
-    return None if text is None else parse_range(text, name)
+    return None if text is None else parse_range(_in_model_units(text, name), name)
 
 
 def _positive_number(value, name) -> float:
@@ -176,8 +206,10 @@ def _sweep_scenes(args) -> list:
             raise ProblemError("--grid hard is a fixed list of scenes; it takes no "
                                f"{', '.join(given) or '--links'}")
         return hard_scenes()
-    grid_kw = {"theta": parse_range(args.theta or "10:180:10", "theta"),
-               "height": parse_range(args.height or "2:7:1", "height"),
+    grid_kw = {"theta": parse_range(_in_model_units(args.theta or "10:180:10", "theta"),
+                                    "theta"),
+               "height": parse_range(_in_model_units(args.height or "2:7:1", "height"),
+                                     "height"),
                "links": parse_range(args.links, "links", integer=True),
                "channel": args.channel}
     for name in ("EI", "weight", "length"):
