@@ -282,7 +282,8 @@ def cmd_sweep(args) -> int:
         print(f"{mine} runs computed by this sweep, {plan.rows_done} already in {args.store} "
               f"({len(scenes)} scenes x {len(solvers)} back-ends x {len(settings)} settings"
               f"{f' x {len(methods)} drivers' if len(methods) > 1 else ''}{along}"
-              f" + {len(baselines)} baseline(s) + references; {jobs_n} worker(s))")
+              f" + {len(baselines)} baseline(s) + references; {jobs_n} worker(s))",
+              flush=True)
         if not args.no_report:
             print("writing the report ...", file=sys.stderr, flush=True)
             keys = None if args.all else {k for j in jobs if not isinstance(j, ReferenceJob)
