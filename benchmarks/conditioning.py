@@ -53,12 +53,52 @@ def iterations(step, backends) -> dict:
     return out
 
 
+def plot(data: dict, path) -> None:
+    """Condition numbers (left) and iterations of the iterative back-ends (right) against N."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    by_n, backends, slope = data["by_links"], data["backends"], data["cond_K_slope"]
+    links = [r["links"] for r in by_n]
+    fig = Figure(figsize=(11.5, 4), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot(1, 2, 1)
+    ax.loglog(links, [r["cond_K"] for r in by_n], "o-", label="cond(K)")
+    ax.loglog(links, [r["cond_M_scaled"] for r in by_n], "s--", label="cond(M), scaled")
+    ax.set_xlabel("N")
+    ax.set_ylabel("2-norm condition number (σ_max / σ_min)")
+    ax.set_title(f"condition numbers (cond(K) ~ N^{slope:.2f})", fontsize=9)
+    ax.legend(fontsize=8)
+    ax.grid(True, which="both", alpha=0.3)
+    ax = fig.add_subplot(1, 2, 2)
+    for k, b in enumerate(backends):
+        its = [r["iterations"][f"{b}|scaled"] for r in by_n]
+        ok = [i["status"] == "solved" for i in its]
+        ax.loglog(links, [max(i["iterations"], 1) for i in its], "-", color=f"C{k}", label=b)
+        ax.loglog([n for n, o in zip(links, ok) if o],
+                  [max(i["iterations"], 1) for i, o in zip(its, ok) if o], "o", color=f"C{k}")
+        ax.loglog([n for n, o in zip(links, ok) if not o],
+                  [max(i["iterations"], 1) for i, o in zip(its, ok) if not o], "x",
+                  color=f"C{k}")
+    ax.set_xlabel("N")
+    ax.set_ylabel("iterations at `mid` (x: not solved)")
+    fig.legend(handles=ax.get_lines()[::3], fontsize=7, loc="outside right upper")
+    ax.grid(True, which="both", alpha=0.3)
+    fig.savefig(path, dpi=130)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--links", default="10,20,40,80,140,280")
     ap.add_argument("--thetas", default="60,90,120,150,180")
     ap.add_argument("--out", default="results/conditioning")
+    ap.add_argument("--plot-only", action="store_true",
+                    help="redraw the figure from OUT.json without computing anything")
     args = ap.parse_args()
+    if args.plot_only:
+        out = Path(args.out)
+        plot(json.loads(out.with_suffix(".json").read_text()), out.with_suffix(".png"))
+        return
     links = [int(v) for v in args.links.split(",")]
     thetas = [float(v) for v in args.thetas.split(",")]
     backends = [b for b in ITERATIVE if b in available_backends()]
@@ -113,33 +153,7 @@ def main() -> None:
     text = "\n".join(L) + "\n"
     out.with_suffix(".md").write_text(text)
 
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(10, 4), layout="constrained")
-    FigureCanvasAgg(fig)
-    ax = fig.add_subplot(1, 2, 1)
-    ax.loglog(links, [r["cond_K"] for r in by_n], "o-", label="cond(K)")
-    ax.loglog(links, [r["cond_M_scaled"] for r in by_n], "s--", label="cond(M), scaled")
-    ax.set_xlabel("N")
-    ax.set_title(f"condition numbers (cond(K) ~ N^{slope:.2f})", fontsize=9)
-    ax.legend(fontsize=8)
-    ax.grid(True, which="both", alpha=0.3)
-    ax = fig.add_subplot(1, 2, 2)
-    for k, b in enumerate(backends):
-        its = [r["iterations"][f"{b}|scaled"] for r in by_n]
-        ok = [i["status"] == "solved" for i in its]
-        ax.loglog(links, [max(i["iterations"], 1) for i in its], "-", color=f"C{k}", label=b)
-        ax.loglog([n for n, o in zip(links, ok) if o],
-                  [max(i["iterations"], 1) for i, o in zip(its, ok) if o], "o", color=f"C{k}")
-        ax.loglog([n for n, o in zip(links, ok) if not o],
-                  [max(i["iterations"], 1) for i, o in zip(its, ok) if not o], "x",
-                  color=f"C{k}")
-    ax.set_xlabel("N")
-    ax.set_ylabel("iterations at `mid` (x: not solved)")
-    ax.legend(fontsize=7)
-    ax.grid(True, which="both", alpha=0.3)
-    fig.savefig(out.with_suffix(".png"), dpi=130)
+    plot(data, out.with_suffix(".png"))
     print(text)
 
 

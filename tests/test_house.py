@@ -34,7 +34,9 @@ def test_layer_contracts_hold():
 
 
 def test_ruff_is_clean():
-    ruff = shutil.which("ruff")
+    # beside this Python first: the README's command runs .venv/bin/python without
+    # activating the venv, so .venv/bin is not on PATH
+    ruff = shutil.which("ruff", path=str(Path(sys.executable).parent)) or shutil.which("ruff")
     if ruff is None:
         pytest.skip("ruff is not installed (pip install 'lcpbench[dev]')")
     out = _run(ruff, "check", "src", "tests", "benchmarks")

@@ -63,3 +63,22 @@ def test_jobs_above_the_core_count_need_oversubscribe(capsys):
     assert len(err) == 1 and "--oversubscribe" in err[0] and f"{cores} cores" in err[0]
     assert worker_count(cores + 1, oversubscribe=True) == cores + 1
     assert worker_count(cores) == cores
+
+
+def test_progress_has_one_bar_per_phase_and_counts_expected_failures(tmp_path):
+    """Issue 15: references and runs get their own bars (their own ETA); failures the
+    docs expect (PGS not converging) are counted apart from the others."""
+    from lcpbench.bench.jobs import ReferenceJob, RunJob
+    from lcpbench.cli._common import ProgressBar
+
+    bar = ProgressBar({"references": 2, "runs": 3})
+    ref, pgs, act = ReferenceJob("s1"), RunJob("s1", "pgs", "high", 1e-9), \
+        RunJob("s1", "active-set", "high", 1e-9)
+    bar.update(1, 5, ref, {"converged": 1})
+    bar.update(2, 5, pgs, {"status": "not_converged"})
+    bar.update(3, 5, act, {"status": "not_converged"})
+    bar.update(4, 5, act, {"status": "solved"})
+    assert bar.bars["references"].total == 2 and bar.bars["references"].n == 1
+    assert bar.bars["runs"].total == 3 and bar.bars["runs"].n == 3
+    assert (bar.failed, bar.expected) == (2, 1)
+    bar.close()

@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import lcpbench
@@ -304,3 +305,21 @@ def test_links_auto_runs_the_study_and_says_which_n(capsys):
     assert main(["solve", "--theta", "150", "--height", "3", "--links", str(n), "--json"]) == 0
     direct = json.loads(capsys.readouterr().out)
     assert direct["total_force"] == auto["total_force"]
+
+
+def test_lcp_json_says_its_residuals_are_scaled(capsys):
+    """`lcp --json` gives the scale it divided by, and the scaled natural residual times it
+    is the plain max |min(z, Mz + q)| computed here from z."""
+    from lcpbench.problems.lcpfile import read_lcp
+
+    path = PEER + "/lcp_mmc.dat"  # |q|_inf = 4.36; PGS at low leaves a residual
+    prob = read_lcp(path)
+    main(["lcp", "--solver", "pgs", "--settings", "low", "--json", path])
+    out = json.loads(capsys.readouterr().out)
+    assert "max(1, |q|_inf)" in out["residuals_scaled"]
+    scale = max(1.0, float(np.abs(prob.q).max()))
+    assert out["residual_scale"] == scale > 4
+    z = np.asarray(out["z"])
+    natural = np.abs(np.minimum(z, prob.M @ z + prob.q)).max()
+    assert natural > 1e-6  # a residual to compare
+    assert out["residuals"]["natural"] * scale == pytest.approx(natural, rel=1e-9, abs=1e-300)

@@ -42,22 +42,42 @@ def plot_shape(result, path) -> None:
     for i, yw in enumerate(walls):
         ax.axhline(yw, color="0.25", lw=1.5, zorder=1, label="wall" if i == 0 else None)
 
-    # Reactions: arrows from the wall into the body (−y from the upper wall,
-    # +y from the lower), the largest about h/2 long.
+    # Reactions: one arrow per group of neighbouring contact nodes (at N = 140 two
+    # touching nodes are 0.2 mm apart and their arrows would merge), from the wall
+    # into the body, length to scale (the scale bar), labelled with its force and
+    # node count; a tick on the wall marks every contact node.
     free = chain.free_nodes
     sets = [(np.asarray(result.forces, float), h, -1.0)]
     if channel and result.forces_lower is not None:
         sets.append((np.asarray(result.forces_lower, float), -h, 1.0))
-    fmax = max((float(f.max(initial=0.0)) for f, _, _ in sets), default=0.0)
+    groups = [(g, yw, sign) for f, yw, sign in sets
+              for g in reaction_groups(f, x[free])]
+    fmax = max((g["force"] for g, _, _ in groups), default=0.0)
+    bar_top = -np.inf
     if fmax > 0:
-        scale = 0.5 * h / fmax
-        for k, (f, yw, sign) in enumerate(sets):
-            idx = np.flatnonzero(f > 1e-9 * fmax)
-            if idx.size == 0:
-                continue
-            ax.quiver(x[free[idx]], np.full(idx.size, yw), np.zeros(idx.size),
-                      sign * scale * f[idx], angles="xy", scale_units="xy", scale=1.0,
-                      color="C3", width=0.004, zorder=4, label="reaction" if k == 0 else None)
+        unit = _nice(fmax)  # the scale bar's force (N)
+        scale = 0.5 * max(h, 1.0) / unit  # mm of arrow per N
+        gx = sorted(g["x"] for g, _, _ in groups)
+        crowded = any(b - a < 0.15 * (hi - lo) for a, b in zip(gx, gx[1:]))
+        for k, (g, yw, sign) in enumerate(groups):
+            # neighbouring labels go left and right of their arrows, not over each other
+            ha = ("right" if k % 2 == 0 else "left") if crowded else "center"
+            ax.annotate("", xy=(g["x"], yw + sign * scale * g["force"]), xytext=(g["x"], yw),
+                        arrowprops={"arrowstyle": "-|>", "color": "C3", "lw": 1.5}, zorder=4)
+            ax.plot(g["nodes_x"], np.full(len(g["nodes_x"]), yw), "|", color="C3", ms=6,
+                    zorder=5, label="contact node" if k == 0 else None)
+            n = len(g["nodes_x"])
+            ax.annotate(f"{1e3 * g['force']:.4g} mN" + (f"\n({n} nodes)" if n > 1 else ""),
+                        (g["x"], yw + sign * scale * g["force"]), fontsize=7, color="C3",
+                        ha=ha, va="top" if sign < 0 else "bottom",
+                        xytext=(0, -3 * sign if sign > 0 else -3), textcoords="offset points")
+        # the scale bar, top left
+        bx, by = lo + 0.02 * (hi - lo), max(float(np.max(y0)), h) + 0.05 * max(h, 1.0)
+        ax.annotate("", xy=(bx, by), xytext=(bx, by + scale * unit),
+                    arrowprops={"arrowstyle": "-|>", "color": "C3", "lw": 1.5})
+        bar_top = by + scale * unit
+        ax.text(bx + 0.01 * (hi - lo), by + 0.5 * scale * unit,
+                f"scale: {1e3 * unit:g} mN", fontsize=7, color="C3", va="center")
 
     total = 1e3 * float(result.total_force)
     title = f"total force {total:.4g} mN"
@@ -70,7 +90,7 @@ def plot_shape(result, path) -> None:
     ax.set_title(title, fontsize=10)
     ax.set_xlim(lo - pad, hi + pad)
     ymin = min(float(np.min(y)), float(np.min(y0)), -h if channel else 0.0)
-    ymax = max(float(np.max(y)), float(np.max(y0)), h)
+    ymax = max(float(np.max(y)), float(np.max(y0)), h, bar_top)
     ypad = 0.1 * (ymax - ymin) if ymax > ymin else 1.0
     ax.set_ylim(ymin - ypad, ymax + ypad)
     ax.set_aspect("equal", adjustable="box")
@@ -78,6 +98,33 @@ def plot_shape(result, path) -> None:
     ax.set_ylabel("y (mm)")
     ax.legend(loc="best", fontsize=8)
     fig.savefig(path, dpi=150)
+
+
+def reaction_groups(forces, node_x, rel: float = 1e-9) -> list[dict]:
+    """Contact nodes grouped into runs of neighbours (consecutive free nodes).
+
+    Each group: ``force`` (the sum, N), ``x`` (the force-weighted position,
+    mm), ``nodes`` (free-node indices) and ``nodes_x``. A node is in contact
+    when its reaction is above ``rel`` times the largest.
+    """
+    f = np.asarray(forces, float)
+    fmax = float(f.max(initial=0.0))
+    if fmax <= 0:
+        return []
+    idx = np.flatnonzero(f > rel * fmax)
+    runs = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1)
+    xs = np.asarray(node_x, float)
+    return [{"force": float(f[r].sum()), "x": float(np.average(xs[r], weights=f[r])),
+             "nodes": r.tolist(), "nodes_x": xs[r].tolist()} for r in runs if r.size]
+
+
+def _nice(value: float) -> float:
+    """A round number (1, 2 or 5 × 10^k) near half of ``value``: a scale bar's length."""
+    import math
+
+    target = 0.5 * value
+    k = math.floor(math.log10(target))
+    return min((m * 10.0 ** k for m in (1, 2, 5, 10)), key=lambda v: abs(v - target))
 
 
 def _figure(size=(7.0, 4.5)):
@@ -89,120 +136,287 @@ def _figure(size=(7.0, 4.5)):
     return fig
 
 
-def plot_work_precision(summary: list[dict], evaluated, path) -> None:
-    """Time against achieved error, one curve per back-end across its settings.
+#: the marker of each settings profile in the work-precision figure
+SETTINGS_MARKERS = {"default": "o", "low": "v", "mid": "D", "high": "s", "-": "P"}
+#: where an exact (zero) median error is drawn; the axis labels it "0"
+ERROR_FLOOR = 1e-16
+_DRIVERS = ("globalised", "hybr", "lm")
 
-    A point is one (back-end, settings): the median force error over the
-    scenes (x) against the median wall time of one solve (y), both over the
-    runs that converged; its marker is filled when every run was a success.
+
+def work_precision_points(summary: list[dict], evaluated) -> dict[str, list[dict]]:
+    """The points of the work-precision figure, per back-end, settings in order.
+
+    A point is one (back-end, settings) over every scene of the report, the
+    globalised driver (and the baselines' own): ``error`` is the median force
+    error with every unsuccessful run counted as an infinite error, so it is
+    ``inf`` (drawn apart, as failed) when half the runs or more failed; ``time``
+    is the median wall time (ms) of the successful runs (None if none);
+    ``success`` the fraction of successful runs.
     """
     import math
 
-    fig = _figure((8.0, 5.5))
-    ax = fig.add_subplot()
     order = {"default": 0, "low": 1, "mid": 2, "high": 3}
-    by_backend: dict[str, list] = {}
+    groups: dict[tuple, list] = {}
     for e in evaluated:
-        if (not e.row["converged"] or not math.isfinite(e.error)
-                or e.row["method"] not in ("globalised", "hybr", "lm")):
-            continue  # the undamped driver's runs are in the tables, not in this figure
-        by_backend.setdefault(e.backend, {}).setdefault(e.settings, []).append(e)
+        if e.row["method"] in _DRIVERS:
+            groups.setdefault((e.backend, e.settings), []).append(e)
     success = {(r["backend"], r["settings"]): r["success"] for r in summary
-               if r["method"] in ("globalised", "hybr", "lm")}
-    markers = "osD^v<>ph*X"
-    for k, (backend, per) in enumerate(sorted(by_backend.items())):
-        pts = []
-        for settings in sorted(per, key=lambda s: order.get(s, 9)):
-            es = per[settings]
-            err = float(np.median([max(e.error, 1e-16) for e in es]))
-            t = float(np.median([1e3 * e.row["wall_time"] for e in es]))
-            pts.append((err, t, settings))
-        color = f"C{k % 10}"
-        marker = markers[k // 10 % len(markers)]
-        ax.plot([p[0] for p in pts], [p[1] for p in pts], "-", color=color, lw=1.0,
-                alpha=0.7)
-        for err, t, settings in pts:
-            full = success.get((backend, settings), 0.0) == 1.0
-            ax.plot([err], [t], marker, color=color, ms=6,
-                    mfc=color if full else "white")
-        ax.annotate(backend, (pts[-1][0], pts[-1][1]), fontsize=7, color=color,
-                    xytext=(3, 2), textcoords="offset points")
+               if r["method"] in _DRIVERS}
+    out: dict[str, list[dict]] = {}
+    for (backend, settings), es in groups.items():
+        errors = sorted(e.error if e.success and math.isfinite(e.error) else math.inf
+                        for e in es)
+        n = len(errors)
+        median = errors[n // 2] if n % 2 else 0.5 * (errors[n // 2 - 1] + errors[n // 2])
+        ok_ms = [1e3 * e.row["wall_time"] for e in es if e.success]
+        out.setdefault(backend, []).append({
+            "settings": settings, "error": median, "runs": n,
+            "time": float(np.median(ok_ms)) if ok_ms else None,
+            "success": success.get((backend, settings), len(ok_ms) / n)})
+    for pts in out.values():
+        pts.sort(key=lambda p: order.get(p["settings"], 9))
+    return out
+
+
+def plot_work_precision(summary: list[dict], evaluated, path) -> None:
+    """Time against achieved error, one line per back-end across its settings.
+
+    x: the median force error over every scene, failures counted as infinite
+    (:func:`work_precision_points`); a back-end that failed on half the scenes
+    or more has no median error and is drawn in the "failed" column at the
+    right, never at a made-up error. y: median time of its successful runs.
+    Marker shape: the settings profile; filled: every run a success. Names are
+    in the legend (a table), not on the plot, so nothing overlaps.
+    """
+    import math
+
+    from matplotlib.lines import Line2D
+
+    pts_by = work_precision_points(summary, evaluated)
+    fig = _figure((10.0, 6.0))
+    ax = fig.add_subplot()
+    finite = [p["error"] for ps in pts_by.values() for p in ps
+              if math.isfinite(p["error"]) and p["error"] > 0]
+    x_fail = 10 ** (math.ceil(math.log10(max(finite))) + 1.5) if finite else 1.0
+    x_floor = ERROR_FLOOR
+    cmap = _cmap(len(pts_by))
+    handles = []
+    for k, (backend, pts) in enumerate(sorted(pts_by.items())):
+        color = cmap(k)
+        style = "-" if k < 20 else "--"
+        drawn = [p for p in pts if p["time"] is not None]
+        xs = [x_fail if not math.isfinite(p["error"]) else max(p["error"], x_floor)
+              for p in drawn]
+        ys = [p["time"] for p in drawn]
+        ax.plot(xs, ys, style, color=color, lw=1.0, alpha=0.7)
+        for x, y, p in zip(xs, ys, drawn):
+            full = p["success"] == 1.0
+            ax.plot([x], [y], SETTINGS_MARKERS.get(p["settings"], "*"), color=color, ms=7,
+                    mfc=color if full else "white", mew=1.3)
+        rate = ", ".join(f"{p['settings']} {100 * p['success']:.0f} %" for p in pts)
+        handles.append(Line2D([], [], color=color, ls=style, label=f"{backend} ({rate})"))
     ax.set_xscale("log")
     ax.set_yscale("log")
-    ax.set_xlabel("median force error |F − F_ref| / max(F_ref, EI/ℓ²)  (converged runs)")
-    ax.set_ylabel("median time per solve (ms)")
-    ax.set_title("Work-precision: each curve is one back-end across settings "
-                 "(filled: every run a success)", fontsize=9)
+    ax.axvspan(x_fail / 10 ** 0.75, x_fail * 10 ** 0.75, color="0.9", zorder=0)
+    ax.set_xlim(x_floor / 10, x_fail * 10 ** 0.75)
+    ticks = [t for t in ax.get_xticks() if x_floor <= t < x_fail / 10 ** 0.75]
+    ax.set_xticks([*ticks, x_fail])
+    ax.set_xticklabels([("0 (exact)" if t == x_floor else f"1e{round(math.log10(t))}")
+                        for t in ticks] + ["failed\n(≥ half\nthe runs)"], fontsize=8)
+    ax.set_xlabel("median total-force error |F − F_ref| / max(F_ref, EI/ℓ²) over every "
+                  "scene (an unsuccessful run counts as infinite)")
+    ax.set_ylabel("median time per successful solve (ms)")
+    ax.set_title("Work-precision: one line per back-end, from its default to its high "
+                 "settings", fontsize=10)
     ax.grid(True, which="major", alpha=0.3)
+    keys = [Line2D([], [], ls="", marker=m, color="0.3", mfc="0.3",
+                   label=f"settings {s}" if s != "-" else "baseline (no settings)")
+            for s, m in SETTINGS_MARKERS.items()
+            if any(p["settings"] == s for ps in pts_by.values() for p in ps)]
+    keys += [Line2D([], [], ls="", marker="o", color="0.3", mfc="0.3",
+                    label="filled: every run a success"),
+             Line2D([], [], ls="", marker="o", color="0.3", mfc="white",
+                    label="open: some runs unsuccessful")]
+    first = ax.legend(handles=keys, fontsize=7, loc="upper left", title="markers",
+                      title_fontsize=7)
+    ax.add_artist(first)
+    fig.legend(handles=handles, fontsize=7, loc="outside right upper",
+               title="back-end (success per settings)", title_fontsize=7)
     fig.savefig(path, dpi=130)
+
+
+def _cmap(n: int):
+    """Distinct colours for ``n`` lines (tab10 up to 10, tab20 beyond)."""
+    from matplotlib import colormaps
+
+    cmap = colormaps["tab10" if n <= 10 else "tab20"]
+    return lambda k: cmap(k % cmap.N)
+
+
+#: the scene parameters of a line of the force figure, with their units
+_PARAMS = (("height", "h", "mm"), ("links", "N", ""), ("length", "ℓ", "mm"),
+           ("EI", "EI", "N·mm²"), ("weight", "w", "N/mm"), ("channel", "channel", ""))
+
+
+def _param_text(name: str, value, digits: int = 6) -> str:
+    for key, sym, unit in _PARAMS:
+        if key == name:
+            if key == "channel":
+                return "channel" if value else "one wall"
+            return f"{sym} = {value:.{digits}g}" + (f" {unit}" if unit else "")
+    return f"{name} = {value}"
+
+
+def _digits(values) -> int:
+    """Significant digits that print distinct ``values`` distinctly (6 at least)."""
+    values = {v for v in values if isinstance(v, float)}
+    for d in range(6, 18):
+        if len({f"{v:.{d}g}" for v in values}) == len(values):
+            return d
+    return 17
+
+
+def force_lines(refs: dict) -> tuple[list[dict], dict]:
+    """The lines of the force-against-θ figure: scenes equal in everything but θ.
+
+    Returns the lines (each ``params``, ``thetas``, ``forces`` in mN, θ
+    ascending, and a ``label`` naming the parameters that differ between
+    lines, with units) and the parameters common to every line (for the
+    title). Scenes that differ in anything but θ are never joined.
+    """
+    import json
+
+    groups: dict[str, dict] = {}
+    for r in refs.values():
+        if not r["converged"]:
+            continue
+        params = json.loads(r["scene"])
+        theta = params.pop("theta")
+        key = json.dumps(params, sort_keys=True)
+        g = groups.setdefault(key, {"params": params, "pts": []})
+        g["pts"].append((theta, 1e3 * r["total_force"]))
+    names = [k for k, _, _ in _PARAMS]
+    varying = [n for n in names if len({json.dumps(g["params"].get(n)) for g in
+                                        groups.values()}) > 1]
+    common = {n: v for n, v in (next(iter(groups.values()))["params"].items()
+                                if groups else []) if n not in varying}
+    digits = {n: _digits(g["params"].get(n) for g in groups.values()) for n in varying}
+    lines = []
+    for g in sorted(groups.values(), key=lambda g: [g["params"].get(n, 0) for n in names]):
+        pts = sorted(g["pts"])
+        lines.append({"params": g["params"], "thetas": [p[0] for p in pts],
+                      "forces": [p[1] for p in pts],
+                      "label": ", ".join(_param_text(n, g["params"][n], digits[n])
+                                         for n in varying)
+                      or "reference"})
+    return lines, common
 
 
 def plot_forces(refs: dict, evaluated, path) -> None:
-    """Total force against θ for each h (the reference), with the baseline's valid answers."""
+    """Total force against θ, one line per set of scenes equal in all but θ.
+
+    The line's label names what differs between lines (with units), the title
+    what they share; a scene alone on its line is a marker without a line.
+    The root-finding baseline's valid answers are crosses on their scene.
+    """
     import json
 
-    fig = _figure()
+    lines, common = force_lines(refs)
+    fig = _figure((12.0, 5.0) if len(lines) > 6 else (9.0, 5.0))
     ax = fig.add_subplot()
-    by_h: dict[float, list] = {}
-    for r in refs.values():
-        if r["converged"]:
-            by_h.setdefault(r["height"], []).append((r["theta"], 1e3 * r["total_force"]))
-    base: dict[float, list] = {}
+    base: dict[str, list] = {}
     for e in evaluated:
         if e.backend == "baseline" and e.row["converged"]:
-            base.setdefault(e.row["height"], []).append(
+            params = json.loads(e.row["scene"])
+            params.pop("theta")
+            base.setdefault(json.dumps(params, sort_keys=True), []).append(
                 (e.row["theta"], 1e3 * e.row["total_force"]))
-    for k, h in enumerate(sorted(by_h)):
-        pts = sorted(by_h[h])
-        ax.plot([p[0] for p in pts], [p[1] for p in pts], "-o", ms=3, color=f"C{k}",
-                label=f"h = {h:g} mm")
-        if h in base:
-            b = sorted(base[h])
-            ax.plot([p[0] for p in b], [p[1] for p in b], "x", ms=6, color=f"C{k}")
-    ax.plot([], [], "x", color="0.3", label="root-finding baseline (valid answers)")
+    cmap = _cmap(len(lines))
+    for k, line in enumerate(lines):
+        style = "-o" if len(line["thetas"]) > 1 else "o"
+        ax.plot(line["thetas"], line["forces"], style, ms=4, color=cmap(k),
+                label=line["label"])
+        b = base.get(json.dumps(line["params"], sort_keys=True))
+        if b:
+            b = sorted(b)
+            ax.plot([p[0] for p in b], [p[1] for p in b], "x", ms=7, color=cmap(k))
+    if base:
+        ax.plot([], [], "x", color="0.3", label="root-finding baseline (valid answers)")
     ax.set_xlabel("bend angle θ (degrees)")
     ax.set_ylabel("total contact force (mN)")
-    first = next(iter(refs.values()), None)
-    if first is not None:
-        scene = json.loads(first["scene"])
-        ax.set_title(f"N = {scene['links']}, ℓ = {scene['length']:g} mm, "
-                     f"EI = {scene['EI']:g} N·mm², w = {scene['weight']:g} N/mm "
-                     "(reference solves)", fontsize=9)
+    shared = ", ".join(_param_text(n, v) for n, v in common.items())
+    ax.set_title(f"Reference solves{': ' + shared if shared else ''}", fontsize=9)
     ax.grid(True, alpha=0.3)
-    ax.legend(fontsize=8)
+    fig.legend(fontsize=7, loc="outside right upper")
     fig.savefig(path, dpi=130)
 
 
-def plot_shapes(refs: dict, path, theta: float | None = None, height: float | None = None
-                ) -> None:
-    """Constrained shapes: against h at one θ (left), against θ at one h (right)."""
+def shape_panels(refs: dict, theta: float | None = None, height: float | None = None
+                 ) -> tuple[dict, list[tuple[str, list[dict], list[str]]]]:
+    """The two panels of the shapes figure: against h at one θ, against θ at one h.
+
+    Only scenes equal in every other parameter are used (those of the most
+    common N, ℓ, EI, w and walls, returned as the first item, for the
+    title); each panel is (title, reference rows, legend labels with units).
+    """
+    import json
+    from collections import Counter
+
     rows = [r for r in refs.values() if r["converged"] and r["y"] is not None]
     if not rows:
-        return
+        return {}, []
+
+    def rest(r):
+        p = json.loads(r["scene"])
+        return json.dumps({k: v for k, v in p.items() if k not in ("theta", "height")},
+                          sort_keys=True)
+    common = Counter(rest(r) for r in rows).most_common(1)[0][0]
+    rows = [r for r in rows if rest(r) == common]
     thetas = sorted({r["theta"] for r in rows})
     heights = sorted({r["height"] for r in rows})
     theta = theta if theta is not None else min(thetas, key=lambda t: abs(t - 150.0))
     height = height if height is not None else heights[0]
-    fig = _figure((11.0, 4.0))
-    for k, (title, sel, label) in enumerate([
-        (f"θ = {theta:g}°, against h", [r for r in rows if r["theta"] == theta],
-         lambda r: f"h = {r['height']:g}"),
-        (f"h = {height:g} mm, against θ", [r for r in rows if r["height"] == height],
-         lambda r: f"{r['theta']:g}°"),
-    ]):
+    left = sorted((r for r in rows if r["theta"] == theta), key=lambda r: r["height"])
+    right = sorted((r for r in rows if r["height"] == height), key=lambda r: r["theta"])
+    if len(right) > 9:  # keep the figure readable
+        right = right[:: max(1, len(right) // 9)]
+    return json.loads(common), [
+        (f"θ = {theta:g}°, against the wall height h", left,
+         [f"h = {r['height']:g} mm" for r in left]),
+        (f"h = {height:g} mm, against the bend angle θ", right,
+         [f"θ = {r['theta']:g}°" for r in right]),
+    ]
+
+
+def plot_shapes(refs: dict, path, theta: float | None = None, height: float | None = None
+                ) -> None:
+    """Constrained shapes: against h at one θ (left), against θ at one h (right).
+
+    Panels from :func:`shape_panels`; the y-axis spans the curves and walls
+    drawn, stretched (the shapes are flat: a few mm over 30 mm), legends carry units.
+    """
+    shared, panels = shape_panels(refs, theta, height)
+    if not panels:
+        return
+    fig = _figure((12.0, 4.2))
+    fig.suptitle(", ".join(_param_text(k, shared[k]) for k, _, _ in _PARAMS if k in shared
+                           and k != "height"), fontsize=9)
+    for k, (title, sel, labels) in enumerate(panels):
         ax = fig.add_subplot(1, 2, k + 1)
-        sel = sorted(sel, key=lambda r: (r["height"], r["theta"]))
-        if k == 1 and len(sel) > 9:  # keep the figure readable
-            sel = sel[:: max(1, len(sel) // 9)]
-        for j, r in enumerate(sel):
-            ax.plot(r["x"], r["y"], "-", lw=1.2, color=f"C{j % 10}", label=label(r))
+        for j, (r, label) in enumerate(zip(sel, labels)):
+            ax.plot(r["x"], r["y"], "-", lw=1.2, color=f"C{j % 10}", label=label)
             if k == 0:
                 ax.axhline(r["height"], color=f"C{j % 10}", lw=0.6, ls=":")
-        if k == 1:
-            ax.axhline(height, color="0.25", lw=1.2)
-        ax.set_title(title, fontsize=9)
+        if k == 1 and sel:
+            ax.axhline(sel[0]["height"], color="0.25", lw=1.2, label="wall")
+        if sel:
+            ys = np.concatenate([np.asarray(r["y"], float) for r in sel] + [[0.0]])
+            top = max(float(ys.max()), max(r["height"] for r in sel))
+            bottom = min(float(ys.min()), 0.0)
+            pad = 0.08 * (top - bottom) if top > bottom else 1.0
+            ax.set_ylim(bottom - pad, top + pad)
+        ax.set_title(title + (" (dotted: each wall)" if k == 0 else ""), fontsize=9)
         ax.set_xlabel("x (mm)")
-        ax.set_ylabel("y (mm)")
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.legend(fontsize=6, ncol=2)
+        ax.set_ylabel("y (mm, stretched: not to the scale of x)")
+        ax.legend(fontsize=6, ncol=2, loc="lower center")
     fig.savefig(path, dpi=130)

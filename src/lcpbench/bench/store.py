@@ -451,9 +451,10 @@ class Store:
             return int(self._query(f"SELECT COUNT(*) FROM {table}")[0][0])
         return len(self.runs(arrays=False, sweep_id=sweep_id))
 
-    def export_csv(self, path: str | os.PathLike) -> int:
-        """Write every run, joined with its reference force, as CSV; returns the row count."""
-        rows = self.runs(arrays=False)
+    def export_csv(self, path: str | os.PathLike, runs: list[dict] | None = None) -> int:
+        """Write every run (or only ``runs``, rows of :meth:`runs`), joined with its
+        reference force, as CSV; returns the row count."""
+        rows = self.runs(arrays=False) if runs is None else [dict(r) for r in runs]
         refs = self.refs(arrays=False)
         cols = [*RUN_KEY, *SCENE_COLUMNS, *RUN_SCALARS, *TIMING_COLUMNS, "reference_force"]
         cols.remove("certificate")

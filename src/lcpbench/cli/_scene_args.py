@@ -25,6 +25,7 @@ from ..problems.scenes import (
     ActuatorScene,
 )
 from ..solvers.base import PROFILES
+from ._units import implausible, quantity_type
 
 _FIELDS = ActuatorScene.__dataclass_fields__
 DEFAULT_THETA = _FIELDS["theta"].default
@@ -67,8 +68,9 @@ def add_scene_options(parser) -> None:
         The sub-command's parser; :func:`scene_from` reads the result.
     """
     a = parser.add_argument
-    a("--theta", type=float, default=None, metavar="DEG",
-      help=f"unconstrained bend angle, degrees in (0, 360) (default {DEFAULT_THETA:g})")
+    a("--theta", type=quantity_type("angle", "theta"), default=None, metavar="DEG",
+      help=f"unconstrained bend angle in (0, 360) degrees; a bare number is degrees, or "
+           f"give the unit: 150deg, 2.618rad (default {DEFAULT_THETA:g})")
     a("--pressure", type=float, default=None, metavar="KPA",
       help="input pressure instead of --theta: theta from the actuator's "
            "calibration (eqs. 40-42 of the paper, kPa)")
@@ -77,16 +79,20 @@ def add_scene_options(parser) -> None:
     a("--fit", default=None, metavar="SLOPE,INTERCEPT",
       help="your own calibration theta = SLOPE * P + INTERCEPT (degrees, P in "
            "the unit of --pressure) instead of --actuator")
-    a("--height", type=float, default=DEFAULT_HEIGHT, metavar="MM",
-      help=f"wall height above the pins, mm (default {DEFAULT_HEIGHT:g})")
+    a("--height", type=quantity_type("length", "height"), default=DEFAULT_HEIGHT,
+      metavar="MM", help=f"wall height above the pins; a bare number is mm, or give the "
+                         f"unit: 3mm, 0.003m (default {DEFAULT_HEIGHT:g})")
     a("--links", type=links_arg, default=DEFAULT_LINKS, metavar="N|auto",
       help=f"number of links, or 'auto' (default {DEFAULT_LINKS})")
-    a("--length", type=float, default=DEFAULT_LENGTH, metavar="MM",
-      help=f"section length, mm (default {DEFAULT_LENGTH:g})")
-    a("--EI", type=float, default=DEFAULT_EI, metavar="NMM2",
-      help=f"bending stiffness, N*mm^2 (default {DEFAULT_EI:g})")
-    a("--weight", type=float, default=DEFAULT_WEIGHT, metavar="NPMM",
-      help=f"weight per length, N/mm; 0 turns gravity off (default {DEFAULT_WEIGHT:g})")
+    a("--length", type=quantity_type("length", "length"), default=DEFAULT_LENGTH,
+      metavar="MM", help=f"section length; bare: mm, or 30mm, 0.03m (default "
+                         f"{DEFAULT_LENGTH:g})")
+    a("--EI", type=quantity_type("stiffness", "EI"), default=DEFAULT_EI, metavar="NMM2",
+      help=f"bending stiffness; bare: N*mm^2, or 32.01N*mm^2, 3.2e-5N*m^2 (default "
+           f"{DEFAULT_EI:g})")
+    a("--weight", type=quantity_type("weight", "weight"), default=DEFAULT_WEIGHT,
+      metavar="NPMM", help=f"weight per length; bare: N/mm, or 0.245N/m; 0 turns gravity "
+                           f"off (default {DEFAULT_WEIGHT:g})")
     a("--channel", action="store_true", help="a second wall at -height (the paper's fixture)")
 
 
@@ -161,6 +167,8 @@ def scene_from(args, *, resolve_links: bool = True) -> ActuatorScene:
 
 
 def _scene_as_given(args) -> ActuatorScene:
+    for warning in implausible(args.theta, args.height, args.length):
+        print(f"lcpbench: warning: {warning}", file=sys.stderr)
     kw = {"height": args.height, "links": args.links, "length": args.length, "EI": args.EI,
           "weight": args.weight, "channel": args.channel}
     if args.pressure is None:

@@ -21,12 +21,15 @@ def register(subparsers) -> None:
         The top-level parser's sub-commands.
     """
     rr = subparsers.add_parser(
-        "reproduce", help="regenerate the paper's figures and tables into results/paper",
+        "reproduce", help="regenerate the paper's figures and tables (results/reproduced)",
         description="Figs. 5-8, 10, 24, 26-27 and Tables I-II of the paper from the model, "
                     "each as a PNG with the numbers behind it, and a README that puts our "
                     "numbers beside the paper's.")
-    rr.add_argument("--out", default="results/paper", metavar="DIR",
-                    help="output folder (default results/paper)")
+    rr.add_argument("--out", default="results/reproduced", metavar="DIR",
+                    help="output folder (default results/reproduced, not tracked; the "
+                         "committed figures are regenerated only when asked: --out "
+                         "results/paper). A file is rewritten only if its numbers changed "
+                         "beyond round-off (relative 1e-6)")
     rr.add_argument("--quick", action="store_true",
                     help="coarser grids and smaller N: a smoke run in seconds")
     rr.set_defaults(func=cmd_reproduce)
@@ -54,6 +57,7 @@ def cmd_reproduce(args) -> int:
         raise ProblemError(f"out {args.out}: cannot write there ({exc})") from exc
     finally:
         bar.close()
-    print(f"wrote the paper's figures and tables to {args.out}/ "
-          f"({len(info.get('files', []))} files); see {args.out}/README.md")
+    print(f"the paper's figures and tables in {args.out}/: {len(info['written'])} files "
+          f"written, {len(info['unchanged'])} unchanged (the same numbers to round-off, "
+          f"left as they were); see {args.out}/README.md")
     return 0

@@ -14,7 +14,6 @@ from __future__ import annotations
 import math
 import sys
 
-from ..bench.report import DEFAULT_OUT
 from ..bench.store import DEFAULT_STORE
 from ..bench.sweep import CONTINUATION, DEFAULT_TIME_LIMIT
 from ..errors import ProblemError
@@ -39,8 +38,11 @@ DEFAULT_REPEAT = 3
 def _add_store_options(parser) -> None:
     parser.add_argument("--store", default=str(DEFAULT_STORE), metavar="PATH",
                         help=f"SQLite results store (default {DEFAULT_STORE})")
-    parser.add_argument("--out", default=str(DEFAULT_OUT), metavar="DIR",
-                        help=f"where the report goes (default {DEFAULT_OUT})")
+    parser.add_argument("--out", default=None, metavar="DIR",
+                        help="where the report goes (default: beside the store, a folder "
+                             "named after it: results/lcpbench.sqlite -> "
+                             "results/lcpbench-report; the committed standard report is "
+                             "rewritten only with --out results/sweep)")
 
 
 def register(subparsers) -> None:
@@ -68,9 +70,11 @@ def register(subparsers) -> None:
                          "grazing, no contact, heavy, EI 1-1000, channel)")
     sw.add_argument("--theta", default=None, metavar="A:B:STEP",
                     help="bend angles, degrees: start:stop:step (stop included), a comma list "
-                         "or one value (default 10:180:10)")
+                         "or one value; items may carry units: 90deg:180deg:30deg, 2.6rad "
+                         "(default 10:180:10)")
     sw.add_argument("--height", default=None, metavar="A:B:STEP",
-                    help="wall heights, mm (default 2:7:1)")
+                    help="wall heights, mm, or with units: 2mm:7mm:1mm, 0.002m,0.003m "
+                         "(default 2:7:1)")
     sw.add_argument("--links", default=str(DEFAULT_LINKS), metavar="LIST",
                     help=f"numbers of links (default {DEFAULT_LINKS})")
     sw.add_argument("--EI", default=None, metavar="LIST", help="bending stiffnesses, N*mm^2 "
@@ -108,6 +112,8 @@ def register(subparsers) -> None:
                          "as fsolve would (about 1 s per scene), both (default), or none")
     _add_store_options(sw)
     sw.add_argument("--no-report", action="store_true", help="do not write the report")
+    sw.add_argument("--all", action="store_true",
+                    help="report every run in the store (default: the runs of this sweep)")
     add_jobs_option(sw)
     sw.add_argument("--time-limit", type=float, default=DEFAULT_TIME_LIMIT, metavar="S",
                     help=f"seconds per solve before it is killed and recorded as a timeout "
@@ -162,10 +168,38 @@ def register(subparsers) -> None:
 
 
 # -- sweep --------------------------------------------------------------------
+#: the unit table (cli/_units.py) of each sweep list that takes unit suffixes
+_RANGE_UNITS = {"theta": "angle", "height": "length", "length": "length",
+                "EI": "stiffness", "weight": "weight"}
+
+
+def _in_model_units(text: str | None, name: str) -> str | None:
+    """A range or list whose items may carry units (``2mm:7mm:1mm``, ``0.17rad,2.6rad``),
+    rewritten in the model's units for :func:`~lcpbench.bench.grid.parse_range`."""
+    import argparse
+    import re
+
+    from ._units import parse_quantity
+
+    if text is None or name not in _RANGE_UNITS:
+        return text
+    items = re.split(r"([:,])", str(text))
+    out = []
+    for item in items:
+        if item in (":", ",") or not item.strip() or not re.search(r"[^\d.eE+\-\s]", item):
+            out.append(item)  # separators, blanks and bare numbers: as they are
+            continue
+        try:
+            out.append(repr(float(parse_quantity(item, _RANGE_UNITS[name], name))))
+        except argparse.ArgumentTypeError as exc:
+            raise ProblemError(str(exc)) from None
+    return "".join(out)
+
+
 def _float_list(text, name) -> tuple | None:
     from ..bench.grid import parse_range
 
-    return None if text is None else parse_range(text, name)
+    return None if text is None else parse_range(_in_model_units(text, name), name)
 
 
 def _positive_number(value, name) -> float:
@@ -185,8 +219,10 @@ def _sweep_scenes(args) -> list:
             raise ProblemError("--grid hard is a fixed list of scenes; it takes no "
                                f"{', '.join(given) or '--links'}")
         return hard_scenes()
-    grid_kw = {"theta": parse_range(args.theta or "10:180:10", "theta"),
-               "height": parse_range(args.height or "2:7:1", "height"),
+    grid_kw = {"theta": parse_range(_in_model_units(args.theta or "10:180:10", "theta"),
+                                    "theta"),
+               "height": parse_range(_in_model_units(args.height or "2:7:1", "height"),
+                                     "height"),
                "links": parse_range(args.links, "links", integer=True),
                "channel": args.channel}
     for name in ("EI", "weight", "length"):
@@ -219,7 +255,7 @@ def _sweep_backends(args) -> tuple[list[str], list[str]]:
 def cmd_sweep(args) -> int:
     """``lcpbench sweep``: run the grid into the store, then write the report."""
     from ..api import check_tol
-    from ..bench.jobs import LineJob
+    from ..bench.jobs import LineJob, ReferenceJob
     from ..bench.store import Store
     from ..bench.sweep import plan_sweep, sweep
 
@@ -251,7 +287,9 @@ def cmd_sweep(args) -> int:
                       baselines=baselines, continuation=args.continuation,
                       repeat=args.repeat)
     with Store(args.store) as store, store.lock("lcpbench sweep", wait=args.wait) as sweep_id:
-        bar = progress_bar(args.quiet)
+        _print_backends(solvers, explicit=args.solvers.strip() != "all")
+        bar = progress_bar(args.quiet, None if args.quiet else
+                           _phase_sizes(store, jobs, args.rerun))
         try:
             plan = sweep(store, jobs, workers=jobs_n, time_limit=limit, rerun=args.rerun,
                          progress=bar.update if bar else None, runner=runner)
@@ -271,15 +309,48 @@ def cmd_sweep(args) -> int:
               f"({len(scenes)} scenes x {len(solvers)} back-ends x {len(settings)} settings"
               f"{f' x {len(methods)} drivers' if len(methods) > 1 else ''}{along}"
               f" + {len(baselines)} baseline(s) + references; {jobs_n} worker(s), "
-              f"times the median of {args.repeat})")
+              f"times the median of {args.repeat})", flush=True)
         if not args.no_report:
-            return _write_report(store, args.out, limit, None, plots=True)
+            print("writing the report ...", file=sys.stderr, flush=True)
+            keys = None if args.all else {k for j in jobs if not isinstance(j, ReferenceJob)
+                                          for k in j.keys}
+            return _write_report(store, args.out, limit, None, plots=True, keys=keys)
     return 0
 
 
+def _phase_sizes(store, jobs, rerun: bool) -> dict[str, int]:
+    """Rows still to compute per progress phase (references, runs)."""
+    from ._common import phase_of
+
+    have_runs = set() if rerun else store.run_keys()
+    have_refs = set() if rerun else store.ref_keys()
+    sizes: dict[str, int] = {"references": 0, "runs": 0}
+    for j in jobs:
+        if not j.is_stored(have_runs, have_refs):
+            sizes[phase_of(j)] += j.size
+    return sizes
+
+
+def _print_backends(solvers: list[str], explicit: bool) -> None:
+    """Say which back-ends the sweep runs and which it skips, and why (stderr)."""
+    from ..solvers.registry import backends
+
+    print(f"running {len(solvers)} back-end(s): {', '.join(solvers)}", file=sys.stderr)
+    skipped: dict[str, list[str]] = {}
+    for name, b in backends().items():
+        if name not in solvers:
+            why = (f"not installed ({b.install_hint()})" if not b.available() else
+                   "not in --solvers" if explicit else "")
+            skipped.setdefault(why, []).append(name)
+    for why, names in skipped.items():
+        print(f"skipping {', '.join(names)}" + (f": {why}" if why else ""), file=sys.stderr)
+
+
 # -- report -------------------------------------------------------------------
-def _write_report(store, out, time_limit, table2_height, plots: bool) -> int:
-    from ..bench.report import build_report
+def _write_report(store, out, time_limit, table2_height, plots: bool, keys=None) -> int:
+    from ..bench.report import build_report, default_out
+
+    out = out if out is not None else default_out(store.path)
 
     if plots and not has_matplotlib():
         plots = False
@@ -287,10 +358,12 @@ def _write_report(store, out, time_limit, table2_height, plots: bool) -> int:
               file=sys.stderr)
     try:
         info = build_report(store, out, time_limit=time_limit, plots=plots,
-                            table2_height=table2_height)
+                            table2_height=table2_height, keys=keys)
     except OSError as exc:
         raise ProblemError(f"out {out}: cannot write the report there ({exc})") from exc
-    print(f"report of {info['runs']} runs in {info['out']}/report.md")
+    also = (f" (of {info['stored']} in the store; --all or `lcpbench report` for all)"
+            if info["stored"] != info["runs"] else "")
+    print(f"report of {info['runs']} runs{also} in {info['out']}/report.md")
     return 0
 
 

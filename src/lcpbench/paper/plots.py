@@ -166,8 +166,17 @@ def plot_cantilever(rows: list[dict], data: dict, path) -> None:
 
 
 def plot_fig24(rows: list[dict], data: dict, path) -> None:
-    """Fig. 24 (top): model force against pressure per actuator, band from EI and w extremes."""
+    """Fig. 24 (top): model force against pressure per actuator, band from EI and w extremes.
+
+    The band's range of EI and w is in each panel's legend.
+    """
+    from matplotlib.patches import Patch
+
     heights = sorted({r["height"] for r in rows})
+    (ei_lo, w_hi), (ei_hi, w_lo) = data["corners"]["lo"], data["corners"]["hi"]
+    band = Patch(color="0.5", alpha=0.3,
+                 label=f"shaded: EI {ei_lo:g}–{ei_hi:g} N·mm², w {w_lo:g}–{w_hi:g} N/mm "
+                       "(Sec. V-E)")
     fig = _figure((15.0, 4.5))
     for k, h in enumerate(heights):
         ax = fig.add_subplot(1, len(heights), k + 1)
@@ -185,7 +194,8 @@ def plot_fig24(rows: list[dict], data: dict, path) -> None:
         ax.set_xlabel("pressure P (kPa)")
         ax.set_ylabel("model total force (mN)")
         ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7, loc="upper left")
+        handles, _ = ax.get_legend_handles_labels()
+        ax.legend(handles=[*handles, band], fontsize=7, loc="upper left")
     fig.savefig(path, dpi=130)
 
 

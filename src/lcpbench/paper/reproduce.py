@@ -99,27 +99,31 @@ def reproduce(
     plan = QUICK if quick else FULL
     root = Path(out_dir)
     root.mkdir(parents=True, exist_ok=True)
-    out = Output(root)
     chosen = [name for name, _ in STAGES] if stages is None else list(stages)
     unknown = sorted(set(chosen) - {name for name, _ in STAGES})
     if unknown:
         raise ProblemError(f"unknown stage(s) {', '.join(unknown)}; the stages are "
                            + ", ".join(name for name, _ in STAGES))
+    out = Output(root)
     everything = len(set(chosen)) == len(STAGES)
     total = len(chosen) + int(everything)
     summary: dict = {}
     stage_s: dict[str, float] = {}
     t_start = time.perf_counter()
     done = 0
-    for name, fn in STAGES:
-        if name not in chosen:
-            continue
-        t0 = time.perf_counter()
-        summary[name] = fn(plan, out)
-        stage_s[name] = time.perf_counter() - t0
-        done += 1
-        if progress is not None:
-            progress(done, total, name)
+    try:
+        for name, fn in STAGES:
+            if name not in chosen:
+                continue
+            t0 = time.perf_counter()
+            summary[name] = fn(plan, out)
+            stage_s[name] = time.perf_counter() - t0
+            done += 1
+            if progress is not None:
+                progress(done, total, name)
+    except BaseException:
+        out.finish()  # keep what the finished stages computed
+        raise
     elapsed = time.perf_counter() - t_start
     meta = {"quick": quick, "elapsed_s": elapsed, "stage_s": stage_s, "solver": SOLVER,
             "tol": TOL, "links": plan.links,
@@ -137,7 +141,9 @@ def reproduce(
         done += 1
         if progress is not None:
             progress(done, total, "readme")
+    out.finish()
     return {"out_dir": str(root), "quick": quick, "files": list(out.files),
+            "written": list(out.written), "unchanged": list(out.unchanged),
             "elapsed_s": elapsed, "stage_s": stage_s, "summary": summary}
 
 
