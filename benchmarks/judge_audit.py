@@ -55,13 +55,14 @@ def random_scenes(count: int, seed: int) -> list[ActuatorScene]:
     return scenes
 
 
-def counts(evaluated) -> dict[tuple[str, str], dict[str, int]]:
-    """Per (back-end, settings): accurate / wrong (converged, off) / not converged."""
+def counts(evaluated, good_refs: set) -> dict[tuple[str, str], dict[str, int]]:
+    """Per (back-end, settings): accurate / wrong (converged, off) / not converged, and the
+    runs of scenes whose reference did not converge (not judged)."""
     out: dict[tuple[str, str], dict[str, int]] = {}
     for e in evaluated:
         c = out.setdefault((e.backend, e.settings), {"accurate": 0, "wrong": 0,
                                                      "not converged": 0, "no reference": 0})
-        if not math.isfinite(e.error) and e.row["converged"]:
+        if not math.isfinite(e.error) and e.row["scene"] not in good_refs:
             c["no reference"] += 1
         elif e.success:
             c["accurate"] += 1
@@ -79,12 +80,13 @@ def markdown(table: dict, args, elapsed: float, load: tuple, wrong_examples: lis
              f" in {elapsed / 60:.1f} min, load average at start "
              f"{load[0]:.2f}. \"wrong\" = marked converged but off the reference by more than "
              "the success rule min(1e-3, 100·tol) (docs/bench.md).", "",
-             "| back-end | settings | accurate | wrong | not converged |",
-             "|---|---|---:|---:|---:|"]
+             "| back-end | settings | accurate | wrong | not converged | no reference |",
+             "|---|---|---:|---:|---:|---:|"]
     total_wrong = 0
     for (b, s), c in sorted(table.items()):
         total_wrong += c["wrong"]
-        lines.append(f"| {b} | {s} | {c['accurate']} | {c['wrong']} | {c['not converged']} |")
+        lines.append(f"| {b} | {s} | {c['accurate']} | {c['wrong']} | {c['not converged']} "
+                     f"| {c['no reference']} |")
     lines += ["", f"**Total wrong: {total_wrong}.**", ""]
     if wrong_examples:
         lines += ["Wrong runs (first 20): back-end/settings, scene, error, reason", ""]
@@ -121,7 +123,7 @@ def main(argv=None) -> int:
                 and r["backend"] in names and r["settings"] in args.profiles]
         refs = store.refs(arrays=False)
     evaluated = evaluate(runs, refs)
-    table = counts(evaluated)
+    table = counts(evaluated, {k for k, r in refs.items() if r["converged"]})
     wrong = [f"{e.backend}/{e.settings} {e.row['scene']}: error {e.error:.2e}"
              for e in evaluated if e.row["converged"] and not e.success
              and math.isfinite(e.error)]
