@@ -77,8 +77,10 @@ def solve(
         paper's 1e-3 (``PAPER_TOL``), or with a Selection the driver
         tolerance its probes ran at (``selection.driver_tol``), so the
         selected force accuracy is reached.
-    method : "globalised" (line search on the exact energy; default) or
-        "undamped" (the paper's Fig. 3 iteration, for comparison).
+    method : "globalised" (line search on the exact energy; default),
+        "newton" (the same with the exact Hessian, H + T of
+        :mod:`lcpbench.model.newton`: quadratic convergence near the answer)
+        or "undamped" (the paper's Fig. 3 iteration, for comparison).
     max_outer : limit on contact steps.
     settings : accuracy profile of the back-end: "default" (its own defaults),
         "low" (1e-3), "mid" (1e-6) or "high" (1e-9).
@@ -137,8 +139,8 @@ def _driver_start(start, chain, method: str):
     if not isinstance(start, ContactResult):
         raise ProblemError(f"start must be a ContactResult of a neighbouring scene, got "
                            f"{type(start).__name__}")
-    if method != "globalised":
-        raise ProblemError("start (continuation) needs method='globalised'")
+    if method == "undamped":
+        raise ProblemError("start (continuation) needs method='globalised' or 'newton'")
     if start.links != chain.links or \
             not math.isclose(getattr(start.scene, "length", chain.length), chain.length):
         raise ProblemError(f"start must have the same links and length as the scene "

@@ -202,6 +202,6 @@ def test_bad_driver_input_is_a_problem_error():
 
     chain = ActuatorScene(theta=150, height=3, links=20).chain()
     with pytest.raises(ProblemError, match="method must be one of"):
-        run_driver(chain, None, method="newton")
+        run_driver(chain, None, method="newtonian")
     with pytest.raises(ProblemError, match="continuation start"):
         run_driver(chain, None, method="undamped", start=DriverStart(np.zeros(20)))

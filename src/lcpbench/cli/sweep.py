@@ -93,7 +93,7 @@ def register(subparsers) -> None:
                     help="driver tolerance of every run (default: per profile, 1e-3 for "
                          "default and low, 1e-6 mid, 1e-9 high)")
     sw.add_argument("--method", default=DEFAULT_METHOD, metavar="M[,M]",
-                    help=f"outer iteration(s): globalised, undamped or both, comma-separated "
+                    help=f"outer iteration(s): globalised, newton, undamped, comma-separated "
                          f"(default {DEFAULT_METHOD})")
     sw.add_argument("--continuation", nargs="?", const="quadratic", default=None,
                     choices=CONTINUATION, metavar="PREDICTOR",

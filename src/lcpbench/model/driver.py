@@ -1,6 +1,6 @@
 """The nonlinear driver: re-linearise and solve contact steps until α stops moving.
 
-Two schemes (Fig. 3 of the paper):
+Three schemes (the first two are Fig. 3 of the paper):
 
 ``method="undamped"`` — the paper's: α ← α̂ of eq. (21) after every step,
 until max|α̂ − α| < tol. Each step is a Gauss–Newton step on the energy; taken
@@ -16,6 +16,10 @@ of the true nonlinear energy on the convex set {walls respected}, so a
 backtracking (Armijo) line search on that energy along u + t(û − u) converges
 to a KKT point of the exact problem. Near the solution full steps are taken
 and the scheme is the paper's.
+
+``method="newton"`` — the globalised scheme with the exact Hessian of the
+energy, H + T (:mod:`lcpbench.model.newton`), wherever it is positive
+definite: quadratic instead of linear convergence near the answer.
 """
 
 from __future__ import annotations
@@ -32,12 +36,13 @@ from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from .chain import alpha_from_heights, energy, heights
 from .judge import EPS, ROUNDOFF_ULPS, split_reactions
+from .newton import newton_step
 from .step import ContactStep, assemble_step
 from .step_solver import complete_heights, step_residuals
 
 StepSolver = Callable[[ContactStep, "StepSolution | None"], StepSolution]
 
-METHODS = ("globalised", "undamped")
+METHODS = ("globalised", "undamped", "newton")
 
 
 @dataclass
@@ -102,16 +107,16 @@ def run_driver(
 
     Returns the final link angles and the reactions of the last step, with
     ``converged`` and a reason; never raises on non-convergence. ``start``
-    (globalised scheme only) begins from a neighbouring scene's answer instead
+    (globalised and Newton schemes) begins from a neighbouring scene's answer instead
     of the clipped unconstrained arc.
     """
     if method == "undamped":
         if start is not None:
             raise ProblemError("a continuation start needs method='globalised'")
         return _undamped(chain, solver, tol, max_outer)
-    if method != "globalised":
+    if method not in ("globalised", "newton"):
         raise ProblemError(f"method must be one of {METHODS}, got {method!r}")
-    return _globalised(chain, solver, tol, max_outer, start)
+    return _globalised(chain, solver, tol, max_outer, start, newton=method == "newton")
 
 
 def _step_failed(alpha, n, steps, sol: StepSolution, t_asm: float, E: float) -> DriverOutput:
@@ -146,9 +151,11 @@ def _setup(sol) -> float:
         getattr(sol, "build_time", 0.0) or 0.0)
 
 
-def _solve_step(chain, alpha, solver, warm):
+def _solve_step(chain, alpha, solver, warm, newton=False):
     t0 = time.perf_counter()
     step = assemble_step(chain, alpha)
+    if newton:
+        step, _ = newton_step(step, chain)
     t_asm = time.perf_counter() - t0
     sol = solver(step, warm)
     return step, sol, t_asm
@@ -161,7 +168,7 @@ def _feasible_start(chain: Chain, alpha0: np.ndarray):
 
 
 def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int,
-                start: DriverStart | None = None) -> DriverOutput:
+                start: DriverStart | None = None, newton: bool = False) -> DriverOutput:
     n = chain.free_nodes.size
     steps: list[StepRecord] = []
     warm: StepSolution | None = None
@@ -176,7 +183,7 @@ def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int,
         return _fail(chain.rest_alpha, n, steps, "cannot fit the chain between the walls")
     E = energy(chain, alpha)
     for _ in range(max_outer):
-        step, sol, t_asm = _solve_step(chain, alpha, solver, warm)
+        step, sol, t_asm = _solve_step(chain, alpha, solver, warm, newton)
         if sol.status not in (Status.SOLVED, Status.INACCURATE):
             return _step_failed(alpha, n, steps, sol, t_asm, E)
         dalpha = float(np.max(np.abs(step.predict_alpha(sol.u) - alpha), initial=0.0))

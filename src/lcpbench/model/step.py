@@ -74,6 +74,9 @@ class ContactStep:
     # Nondimensionalisation (DESIGN: lengths by ℓ, forces by EI/ℓ²)
     length_scale: float = 1.0
     force_scale: float = 1.0
+    # The Newton step's curvature term T (lower banded, in ``bands`` already);
+    # None for the paper's Gauss–Newton step (:mod:`lcpbench.model.newton`)
+    geometric: np.ndarray | None = None
 
     @property
     def size(self) -> int:
@@ -137,6 +140,8 @@ class ContactStep:
         m *= self.stiffness
         g = self._JT(m)
         g -= self.nodal_load
+        if self.geometric is not None:  # the Newton step: + T (u − u₀)
+            g += banded_matvec(self.geometric, u - self.origin)
         return g
 
     def gradient_scale(self, u: np.ndarray) -> np.ndarray:
@@ -146,6 +151,8 @@ class ContactStep:
         m *= self.stiffness
         g = self._JT(m, self._abs_coef)
         g += self._abs_load
+        if self.geometric is not None:
+            g += banded_matvec(np.abs(self.geometric), np.abs(u - self.origin))
         return g
 
     def dense_hessian(self) -> np.ndarray:
