@@ -162,7 +162,9 @@ def split_reactions(chain: Chain, net: np.ndarray, u: np.ndarray):
     net = np.asarray(net, dtype=float)
     if not chain.channel:
         return net.copy(), np.zeros_like(net)
-    near_upper = u >= 0.5 * (chain.upper + chain.lower)
+    with np.errstate(invalid="ignore"):  # inf - inf where a node reaches no wall
+        mid = 0.5 * (chain.upper + chain.lower)
+    near_upper = np.where(np.isfinite(mid), u >= mid, np.isfinite(chain.upper))
     return np.where(near_upper, net, 0.0), np.where(near_upper, 0.0, -net)
 
 
