@@ -471,7 +471,7 @@ def _contact_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
     bad = False
     for i in range(n):
         bad = bad or lo[i] > hi[i]
-        if warm_flags & 1:  # the previous answer's heights: the walls it is on
+        if warm_flags & 1 and not np.isnan(warm_u[i]):  # the walls the last answer is on
             ui = min(max(warm_u[i], lo[i]), hi[i])
             W_up[i] = np.isfinite(hi[i]) and ui >= hi[i]
             W_lo[i] = np.isfinite(lo[i]) and ui <= lo[i]
