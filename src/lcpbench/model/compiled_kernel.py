@@ -213,7 +213,8 @@ def _matvec(bands, x):
 # -- banded Cholesky (LAPACK dpbtf2 / dpbtrs, lower, bandwidth 2) ------------------
 @njit(cache=True)
 def _factor(ab):
-    """In place; False when a leading minor is not positive definite."""
+    """In place on rows 0-2 (the bands); row 3 gets 1 / L_jj, so that the solves
+    multiply instead of divide. False when a leading minor is not positive definite."""
     n = ab.shape[1]
     for j in range(n):
         ajj = ab[0, j]
@@ -223,6 +224,7 @@ def _factor(ab):
         ab[0, j] = ajj
         kn = min(2, n - 1 - j)
         r = 1.0 / ajj
+        ab[3, j] = r
         for p in range(1, kn + 1):
             ab[p, j] *= r
         for q in range(1, kn + 1):  # the trailing rank-1 update (dsyr)
@@ -237,7 +239,7 @@ def _resolve(ab, x):
     """Overwrites x with the solution of L Lᵀ x = x."""
     n = x.size
     for j in range(n):
-        x[j] = x[j] / ab[0, j]
+        x[j] = x[j] * ab[3, j]
         t = x[j]
         for p in range(1, min(2, n - 1 - j) + 1):
             x[j + p] -= t * ab[p, j]
@@ -245,7 +247,7 @@ def _resolve(ab, x):
         t = x[j]
         for p in range(min(2, n - 1 - j), 0, -1):
             t -= ab[p, j] * x[j + p]
-        x[j] = t / ab[0, j]
+        x[j] = t * ab[3, j]
     return x
 
 
@@ -253,7 +255,7 @@ def _resolve(ab, x):
 def _face_factor(bands, fixed):
     """H with the rows and columns of the ``fixed`` nodes replaced by the identity, factored."""
     n = fixed.size
-    face = np.empty((3, n))
+    face = np.empty((4, n))
     for kk in range(3):
         for i in range(n):
             keep = (not fixed[i]) and (i + kk < n) and (not fixed[i + kk])
@@ -285,7 +287,8 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp):
     has_lo = False
     for i in range(n):
         has_lo = has_lo or np.isfinite(lo[i])
-    fac = bands.copy()
+    fac = np.empty((4, n))
+    fac[:3] = bands
     if not _factor(fac):
         return BAIL_NOT_PD, linear, linear, linear, 0
     u = _resolve(fac, -linear)
