@@ -106,10 +106,7 @@ def _assemble(alpha, a, jl, jr, k, rest, fs, n, nodal_load):
         t[j] = k[j] * (phi0 - rest[j])
     b0 = jr[0]
     size = links + 2
-    diag = np.zeros(size)
-    off1 = np.zeros(size)
-    off2 = np.zeros(size)
-    lin = np.zeros(size)
+    diag, off1, off2, lin = np.zeros(size), np.zeros(size), np.zeros(size), np.zeros(size)
     for m in range(3):
         for j in range(nj):
             diag[b0 + m + j] += k[j] * coef[j, m] ** 2
@@ -212,11 +209,13 @@ def _matvec(bands, x):
 
 # -- banded Cholesky (LAPACK dpbtf2 / dpbtrs, lower, bandwidth 2) ------------------
 @njit(cache=True)
-def _factor(ab):
+def _factor(ab, start=0):
     """In place on rows 0-2 (the bands); row 3 gets 1 / L_jj, so that the solves
-    multiply instead of divide. False when a leading minor is not positive definite."""
+    multiply instead of divide. Columns before ``start`` are already factored
+    (and their updates applied). False when a leading minor is not positive
+    definite."""
     n = ab.shape[1]
-    for j in range(n):
+    for j in range(start, n):
         ajj = ab[0, j]
         if not ajj > 0.0:
             return False
@@ -252,18 +251,29 @@ def _resolve(ab, x):
 
 
 @njit(cache=True)
-def _face_factor(bands, fixed):
-    """H with the rows and columns of the ``fixed`` nodes replaced by the identity, factored."""
+def _refactor(fac, bands, fixed, c0):
+    """Factor H with the rows and columns of the ``fixed`` nodes replaced by the
+    identity, from column ``c0`` on (``c0 = 0``: all of it). ``fac`` holds the
+    factor of a face that differs from ``fixed`` only at nodes >= c0 + 2, so its
+    columns before c0 stand (a column reads the nodes up to two below it); the
+    same operations in the same order as a full factorisation, so the same bits."""
     n = fixed.size
-    face = np.empty((4, n))
     for kk in range(3):
-        for i in range(n):
+        for i in range(c0, n):
             keep = (not fixed[i]) and (i + kk < n) and (not fixed[i + kk])
-            face[kk, i] = bands[kk, i] * (1.0 if keep else 0.0)
-    for i in range(n):
+            fac[kk, i] = bands[kk, i] * (1.0 if keep else 0.0)
+    for i in range(c0, n):
         if fixed[i]:
-            face[0, i] += 1.0
-    return face, _factor(face)
+            fac[0, i] += 1.0
+    for j in range(max(0, c0 - 2), c0):  # the updates of the factored columns
+        kn = min(2, n - 1 - j)
+        for q in range(1, kn + 1):
+            if j + q < c0:
+                continue
+            tq = -fac[q, j]
+            for p in range(q, kn + 1):
+                fac[p - q, j + q] += fac[p, j] * tq
+    return _factor(fac, c0)
 
 
 @njit(cache=True)
@@ -288,15 +298,13 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp):
     for i in range(n):
         has_lo = has_lo or np.isfinite(lo[i])
     fac = np.empty((4, n))
-    fac[:3] = bands
-    if not _factor(fac):
+    factored = np.zeros(n, np.bool_)  # the face ``fac`` holds (none fixed: H itself)
+    if not _refactor(fac, bands, factored, 0):
         return BAIL_NOT_PD, linear, linear, linear, 0
     u = _resolve(fac, -linear)
     g = np.zeros(n)
     slack = 32 * EPS * (1.0 + np.max(np.abs(u)))
-    sigma = np.zeros(n)
-    wall = np.zeros(n)
-    S = np.zeros(n, np.bool_)
+    sigma, wall, S = np.zeros(n), np.zeros(n), np.zeros(n, np.bool_)
     warm = False
     for i in range(n):
         warm = warm or warm_up[i] or warm_lo[i]
@@ -359,9 +367,15 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp):
         for i in range(n):
             if S[i]:
                 r[i] = 0.0
-        fac, ok = _face_factor(bands, S)
-        if not ok:
-            return BAIL_NOT_PD, u, g, sigma, it
+        first = n  # the first node whose wall changed since the last factorisation
+        for i in range(n):
+            if S[i] != factored[i]:
+                first = i
+                break
+        if first < n:
+            if not _refactor(fac, bands, S, max(0, first - 2)):
+                return BAIL_NOT_PD, u, g, sigma, it
+            factored[:] = S
         d -= _resolve(fac, r)
         g_face = g + _matvec(bands, d)
         s = np.inf
@@ -381,9 +395,7 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp):
                     S[i] = False
             at_face_minimiser = False
             continue
-        u = u + d
-        g = g_face
-        at_face_minimiser = True
+        u, g, at_face_minimiser = u + d, g_face, True
 
 
 @njit(cache=True)
@@ -397,12 +409,8 @@ def _certificate(u, ru, rl, lo, hi, gp):
         return 0.0
     grad = _grad(u, gp)
     size = _grad_scale(u, gp)
-    force = TINY
-    stat = 0.0
-    span = 1.0 + np.max(np.abs(u))
-    feas = 0.0
-    neg = 0.0
-    comp = 0.0
+    force, span = TINY, 1.0 + np.max(np.abs(u))
+    stat = feas = neg = comp = 0.0
     for i in range(n):
         force = max(force, size[i] + ru[i] + rl[i])
     for i in range(n):
@@ -429,8 +437,8 @@ def _residuals(u, bands, linear, lo, hi, gp, L, F):
     u2 = u.copy()
     if some_free:  # the nodes with no wall row, re-solved exactly
         grad = _grad(u2, gp)
-        fac, ok = _face_factor(bands, rows)
-        if not ok:
+        fac = np.empty((4, n))
+        if not _refactor(fac, bands, rows, 0):
             return False, np.zeros(5), grad
         for i in range(n):
             if rows[i]:
@@ -469,9 +477,7 @@ def _contact_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
     bands, linear, inv, coef, origin, alpha0, phi_origin = _assemble(
         alpha, a, jl, jr, k, rest, fs, n, nodal_load)
     gp = (coef, jr[0], fs, alpha.size, origin, phi_origin, k, rest, nodal_load)
-    W_up = np.zeros(n, np.bool_)
-    W_lo = np.zeros(n, np.bool_)
-    bad = False
+    W_up, W_lo, bad = np.zeros(n, np.bool_), np.zeros(n, np.bool_), False
     for i in range(n):
         bad = bad or lo[i] > hi[i]
         if warm_flags & 1 and not np.isnan(warm_u[i]):  # the walls the last answer is on
@@ -489,8 +495,7 @@ def _contact_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
     code, u, grad, sigma, it = _dual(bands, linear, lo, hi, W_up, W_lo, max_iter, gp)
     if code != 0:
         return code, u, u, u, sigma, it, inv, alpha0, origin, gp, empty, u
-    r_up = np.zeros(n)
-    r_lo = np.zeros(n)
+    r_up, r_lo = np.zeros(n), np.zeros(n)
     for i in range(n):
         u[i] = min(max(u[i], lo[i]), hi[i])
         if sigma[i] > 0:
@@ -511,10 +516,7 @@ def _record(rec, count, it, t, dalpha, E):
         bigger = np.empty((4, 2 * rec.shape[1]))
         bigger[:, :count] = rec
         rec = bigger
-    rec[0, count] = it
-    rec[1, count] = t
-    rec[2, count] = dalpha
-    rec[3, count] = E
+    rec[0, count], rec[1, count], rec[2, count], rec[3, count] = it, t, dalpha, E
     return rec, count + 1
 
 
@@ -535,10 +537,7 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
     n = lo.size
     links = rest_alpha.size
     rec = np.empty((4, min(max_outer, 64)))
-    count = 0
-    zero = np.zeros(n)
-    none = np.zeros(5)
-    ok = False
+    count, zero, none, ok = 0, np.zeros(n), np.zeros(5), False
     alpha = rest_alpha.copy()
     u = zero
     if start_alpha.size == links:  # a neighbour's answer, clipped to the walls
@@ -556,16 +555,14 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
     noise_k = 0.0
     for j in range(k.size):
         noise_k += abs(k[j])
-    trial = alpha
-    E_t = E
+    trial, E_t = alpha, E
     for _ in range(max_outer):
         code, su, r_up, r_lo, sigma, it, inv, alpha0, origin, gp, res, R = _contact_step(
             alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
             warm_u, warm_up, warm_lo, warm_flags, max_iter, request)
         if code != 0:
             return code, alpha, zero, zero, u, sigma, rec, count, none, zero
-        dalpha = 0.0
-        prev = 0.0
+        dalpha = prev = 0.0
         for i in range(links):  # predict_alpha, eq. (21), about u0
             node = i + 1 - (fs - 1)
             cur = su[node] - origin[node] if 0 <= node < n else 0.0
