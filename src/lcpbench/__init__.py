@@ -23,6 +23,7 @@ except _PackageNotFoundError:  # running from a source tree that was never insta
 #: public name -> module that defines it
 _EXPORTS = {
     "solve": "lcpbench.api",
+    "solve_many": "lcpbench.studies.batch",
     "ActuatorScene": "lcpbench.problems.scenes",
     "CantileverScene": "lcpbench.problems.scenes",
     "Certificate": "lcpbench.model.result",

@@ -15,7 +15,8 @@ import time
 import numpy as np
 
 from .errors import ProblemError
-from .model.driver import METHODS, DriverStart, run_driver
+from .model.compiled import check_engine, drive
+from .model.driver import METHODS, DriverStart
 from .model.result import ContactResult, build_result
 from .model.step_solver import make_step_solver
 from .model.wall_free import solve_without_contact
@@ -60,6 +61,7 @@ def solve(
     settings: str = "default",
     scaled: bool = True,
     start: ContactResult | None = None,
+    engine: str = "auto",
 ) -> ContactResult:
     """Find the constrained equilibrium of a scene.
 
@@ -91,6 +93,12 @@ def solve(
         the first iterate and its last contact step warm-starts back-ends that
         take one. Globalised scheme only; the answer is the same equilibrium
         to the tolerance (tests check 1e-8 at tight tol).
+    engine : "auto" (default: the default back-end with the globalised driver
+        runs in one compiled kernel, :mod:`lcpbench.model.compiled`; every
+        other solve in numpy), "compiled" (the kernel, or ProblemError where
+        it does not apply) or "numpy" (the readable reference). Both engines
+        take the same path and give the same answer to round-off;
+        ``result.extra["engine"]`` says which one ran.
 
     Returns
     -------
@@ -107,6 +115,7 @@ def solve(
     if isinstance(max_outer, bool) or not (isinstance(max_outer, (int, np.integer))
                                            and max_outer >= 1):
         raise ProblemError(f"max_outer must be an integer >= 1, got {max_outer!r}")
+    engine = check_engine(engine)
     name, settings, why = _backend_of(solver, settings)
     step = make_step_solver(name, settings, scaled)  # validates them first
     if getattr(scene, "links", None) == "auto":
@@ -117,9 +126,10 @@ def solve(
     chain = scene.chain()
     begin = _driver_start(start, chain, method)
     out = solve_without_contact(chain, tol, max_outer, begin)
+    used = "numpy"
     if out is None:
-        out = run_driver(chain, step, tol=tol, max_outer=max_outer, method=method,
-                         start=begin)
+        out, used = drive(chain, step, backend=name, settings=settings, engine=engine,
+                          tol=tol, max_outer=max_outer, method=method, start=begin)
         if not out.converged and getattr(scene, "theta", 0) > 180:
             out.reason = ("theta > 180 deg: the end links start beyond the vertical, where the "
                           "linearisation of eq. (20) is singular; lcpbench converges for "
@@ -128,6 +138,7 @@ def solve(
     res = build_result(scene, chain, out, solver=name, method=method, tol=tol, time_s=elapsed)
     res.extra["last_step"] = out.last_step  # what a continuation hands the next scene
     res.extra["settings"] = settings if isinstance(settings, str) else "custom"
+    res.extra["engine"] = used
     if why is not None:
         res.extra["auto"] = why
     return res

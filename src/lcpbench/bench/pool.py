@@ -22,6 +22,7 @@ from collections import deque
 from collections.abc import Iterator
 from multiprocessing.connection import wait
 
+from ..model.compiled import warm_up as load_kernel
 from ..worker import (
     WorkerDied,
     WorkerProcess,
@@ -109,6 +110,7 @@ def run_jobs(jobs: list[Job], *, workers: int = 1, time_limit: float = DEFAULT_T
     """
     if not jobs:
         return
+    load_kernel()  # the compiled kernel into numba's cache before any job is timed
     pending = deque(jobs)
     pool = [_Worker() for _ in range(max(1, min(workers, len(jobs))))]
     try:

@@ -31,14 +31,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ProblemError
-from ..linalg import banded_matvec
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from .chain import alpha_from_heights, energy, heights
-from .judge import EPS, ROUNDOFF_ULPS, split_reactions
+from .judge import split_reactions
 from .newton import newton_step
 from .step import ContactStep, assemble_step
-from .step_solver import complete_heights, step_residuals
+from .step_solver import step_residuals
 
 StepSolver = Callable[[ContactStep, "StepSolution | None"], StepSolution]
 
@@ -130,21 +129,17 @@ def _step_failed(alpha, n, steps, sol: StepSolution, t_asm: float, E: float) -> 
     return _fail(alpha, n, steps, f"contact step not solved ({sol.status.value}: {sol.message})")
 
 
-def _converged(chain: Chain, step: ContactStep, alpha, sol: StepSolution, steps
-               ) -> DriverOutput:
-    """The driver's criterion is met: R from the last step's primal, the multipliers beside."""
+def _converged(chain: Chain, alpha, sol: StepSolution, steps,
+               step: ContactStep | None = None) -> DriverOutput:
+    """The driver's criterion is met: R = K g + z from the last step's primal (its
+    ``forces_net``, or computed from ``step``), the back-end's multipliers beside it.
+    Round-off in R is the judge's to clean (:mod:`lcpbench.model.judge`)."""
     net = sol.forces_net
-    if net is None or not np.all(np.isfinite(net)):
+    if (net is None or not np.all(np.isfinite(net))) and step is not None:
         net = step_residuals(step, sol.u)[1]
-    u = complete_heights(step, sol.u)
-    # Values within round-off are zero, not reactions: on a wall (g = 0 exactly) the
-    # round-off of the factored gradient; off it, that of R = K g + z from rounded
-    # heights, a few ulps of the size of its terms S_i = (|K| |g| + |z|)_i.
-    on_wall = (u >= step.upper) | (u <= step.lower)
-    size = np.where(on_wall, step.gradient_scale(u),
-                    banded_matvec(np.abs(step.bands), np.abs(u)) + np.abs(step.linear))
-    net = np.where(np.abs(net) <= ROUNDOFF_ULPS * EPS * size, 0.0, net)
-    upper, lower = split_reactions(chain, net, u)
+    if net is None:
+        net = sol.forces_upper - sol.forces_lower
+    upper, lower = split_reactions(chain, net, sol.u)
     reason = "converged" if sol.solved else "converged (last step inaccurate)"
     return DriverOutput(alpha, upper, lower, True, reason, steps, last_step=sol,
                         multipliers_upper=sol.forces_upper, multipliers_lower=sol.forces_lower)
@@ -214,7 +209,7 @@ def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int,
                                 t, dalpha, E, _setup(sol)))
         warm = sol
         if dalpha < tol:
-            return _converged(chain, step, alpha, sol, steps)
+            return _converged(chain, alpha, sol, steps, step)
     return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
                                   f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
 
@@ -241,6 +236,6 @@ def _undamped(chain: Chain, solver: StepSolver, tol: float, max_outer: int) -> D
         alpha = new
         warm = sol
         if dalpha < tol:
-            return _converged(chain, step, alpha, sol, steps)
+            return _converged(chain, alpha, sol, steps, step)
     return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
                                   f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")

@@ -204,6 +204,12 @@ def build_result(scene, chain: Chain, out: DriverOutput, **how) -> ContactResult
                     driver_converged=out.converged, driver_reason=out.reason,
                     step_statuses=[s.status for s in out.steps],
                     step_sizes=[s.max_dalpha for s in out.steps], certificate=cert)
+    if verdict.forces_upper is not None and not (
+            np.array_equal(verdict.forces_upper, out.forces_upper)
+            and np.array_equal(verdict.forces_lower, out.forces_lower)):
+        # R with its round-off set to zero, and the certificate of what is reported
+        out.forces_upper, out.forces_lower = verdict.forces_upper, verdict.forces_lower
+        cert = certify(chain, out.alpha, out.forces_upper, out.forces_lower)
     return ContactResult(
         scene=scene,
         links=chain.links,

@@ -1,0 +1,182 @@
+"""The compiled engine: the default solve in one numba kernel, Python entered once.
+
+``lcpbench.solve(scene)`` with the default back-end (the dual active set,
+``solver="auto"`` or ``"active-set"``) and the globalised driver runs
+:func:`lcpbench.model.compiled_kernel.solve_chain`: assembly of the banded
+step, the dual active set with its refinement and certificate, the judge's
+natural residual, the Armijo search on the exact energy and the outer loop,
+in one call. ``engine="numpy"`` runs the numpy reference
+(:func:`lcpbench.model.driver.run_driver` with the step solver), which
+documents the algorithm; both take the same path to round-off (tests).
+
+numba is imported, and the kernel loaded from numba's on-disk cache (or
+compiled, the first time), at the first solve that uses it, never at
+``import lcpbench``.
+
+Where the kernel cannot follow the reference (the primal safeguard of the
+active set, a step the certificate or the judge rejects, so the reference
+would hand it to Lemke) it stops and the whole solve is run by the numpy
+reference, so the answer is always the reference's. The DriverOutput is
+built by the driver's own helpers and judged afterwards by the same Python
+certificate and judge (:mod:`lcpbench.model.judge`) as every other back-end.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..errors import ProblemError
+from ..problems.scenes import Chain
+from ..solvers.base import Status, StepSolution
+from ..solvers.judge import DEFAULT_TOL
+from ..solvers.registry import DEFAULT, get_settings
+from .driver import DriverOutput, DriverStart, StepRecord, _converged, _fail, run_driver
+
+#: ``engine`` of :func:`lcpbench.solve`: "auto" (the kernel where it applies, numpy
+#: elsewhere), "compiled" (the kernel, or ProblemError where it does not apply),
+#: "numpy" (the reference).
+ENGINES = ("auto", "compiled", "numpy")
+
+_BAIL = {
+    10: "crossed walls (the primal active set)",
+    11: "a face that is not positive definite",
+    12: "a working set repeated (round-off)",
+    13: "the face-solve limit",
+    14: "the step certificate rejected the step",
+    15: "lcpbench's judge rejected the step",
+}
+
+
+def check_engine(engine) -> str:
+    if not isinstance(engine, str) or engine not in ENGINES:
+        raise ProblemError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
+    return engine
+
+
+def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
+    """Whether the kernel runs this solve: the default back-end, the globalised
+    driver, and (given ``chain``) a chain of consecutive joints and free nodes."""
+    if backend not in (DEFAULT, "auto") or method != "globalised":
+        return False
+    if chain is None:
+        return True
+    left, right = chain.joint_links[:, 0], chain.joint_links[:, 1]
+    f = chain.free_nodes
+    return bool(right.size and f.size and np.all(np.diff(right) == 1)
+                and np.all((left < 0) | (right == left + 1)) and np.all(np.diff(f) == 1)
+                and f[0] >= 1)
+
+
+def _kernel():
+    from . import compiled_kernel  # imports numba; loads or compiles the kernel
+
+    return compiled_kernel
+
+
+def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "auto",
+          tol: float, max_outer: int, method: str, start: DriverStart | None
+          ) -> tuple[DriverOutput, str]:
+    """The driver's answer and the engine that produced it ("compiled" or "numpy").
+
+    The one place where the compiled kernel is chosen: ``engine="numpy"``, a
+    back-end other than the default or another ``method`` run
+    :func:`~lcpbench.model.driver.run_driver` with ``step_solver``.
+    """
+    engine = check_engine(engine)
+    if engine != "numpy" and applies(backend, method, chain):
+        out, why = run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
+                                settings=settings)
+        if out is not None:
+            return out, "compiled"
+        used = f"numpy (the compiled kernel stopped: {why})"
+    elif engine == "compiled":
+        raise ProblemError(f"engine='compiled' runs the default back-end ({DEFAULT}) with "
+                           f"method='globalised'; got solver {backend!r}, method {method!r}")
+    else:
+        used = "numpy"
+    out = run_driver(chain, step_solver, tol=tol, max_outer=max_outer, method=method,
+                     start=start)
+    return out, used
+
+
+def _warm(start: DriverStart | None, n: int):
+    """(start α, warm heights, upper mask, lower mask, flags) for the kernel."""
+    empty_f, empty_b = np.zeros(n), np.zeros(n, bool)
+    if start is None:
+        return np.zeros(0), empty_f, empty_b, empty_b, 0
+    alpha = np.ascontiguousarray(start.alpha, dtype=float)
+    w = start.warm
+    if w is None:
+        return alpha, empty_f, empty_b, empty_b, 0
+    flags, u, up, lo = 0, empty_f, empty_b, empty_b
+    if w.u is not None and np.size(w.u) == n:
+        u, flags = np.ascontiguousarray(w.u, dtype=float), flags | 1
+    if w.active_upper is not None and np.size(w.active_upper) == n:
+        up, flags = np.ascontiguousarray(w.active_upper, dtype=bool), flags | 2
+    if w.active_lower is not None and np.size(w.active_lower) == n:
+        lo, flags = np.ascontiguousarray(w.active_lower, dtype=bool), flags | 4
+    return alpha, u, up, lo, flags
+
+
+def run_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
+                 start: DriverStart | None = None, settings="default"
+                 ) -> tuple[DriverOutput | None, str]:
+    """The globalised driver with the dual active set, in the compiled kernel.
+
+    Returns ``(output, "")``, or ``(None, why)`` when the kernel left the
+    reference's path (the caller then runs the numpy reference). Each step
+    record's ``solve_time`` is the kernel's wall time shared evenly over the
+    steps (assembly included; ``assemble_time`` is 0): the kernel does not
+    time its parts.
+    """
+    k = _kernel()
+    s = get_settings(settings)
+    n = chain.free_nodes.size
+    request = s.eps if s.eps is not None else DEFAULT_TOL
+    max_iter = s.max_iter if s.max_iter else 20 * n + 50
+    f64 = np.ascontiguousarray
+    s_alpha, w_u, w_up, w_lo, flags = _warm(start, n)
+    t0 = time.perf_counter()
+    (code, alpha, r_up, r_lo, u, sigma, rec, count, res, R) = k.solve_chain(
+        f64(chain.rest_alpha, dtype=float), float(chain.link_length),
+        f64(chain.joint_links[:, 0], dtype=np.int64), f64(chain.joint_links[:, 1], dtype=np.int64),
+        f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float),
+        f64(chain.link_load, dtype=float), f64(chain.nodal_load, dtype=float),
+        int(chain.free_nodes[0]) + 1, f64(chain.lower, dtype=float),
+        f64(chain.upper, dtype=float), float(chain.length), float(chain.force_scale),
+        float(tol), int(max_outer), s_alpha, w_u, w_up, w_lo, flags, int(max_iter),
+        float(request))
+    elapsed = time.perf_counter() - t0
+    if code in _BAIL:
+        return None, _BAIL[code]
+    share = elapsed / max(count, 1)
+    steps = [StepRecord(int(rec[0, i]), Status.SOLVED.value, share, 0.0, float(rec[1, i]),
+                        float(rec[2, i]), float(rec[3, i])) for i in range(count)]
+    if code == k.CONVERGED:
+        sol = StepSolution(u, r_up, r_lo, Status.SOLVED, iterations=steps[-1].iterations,
+                           solve_time=share, active_upper=sigma > 0, active_lower=sigma < 0,
+                           time_source="wall", backend=DEFAULT, settings=s.name,
+                           residuals=dict(zip(("natural", "min_gap", "min_reaction",
+                                               "complementarity", "term_size"),
+                                              map(float, res), strict=True)),
+                           forces_net=R)
+        return _converged(chain, alpha, sol, steps), ""
+    if code == k.NO_FIT:
+        return _fail(chain.rest_alpha, n, steps, "cannot fit the chain between the walls"), ""
+    if code == k.LINE_SEARCH:
+        return _fail(alpha, n, steps, "line search failed: no decrease of the energy along "
+                                      "the step"), ""
+    return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
+                                  f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)"), ""
+
+
+def warm_up() -> None:
+    """Load the kernel by one tiny solve, compiling it into numba's on-disk cache
+    the first time (about a minute). Call it before starting processes that
+    solve under a time limit (the sweep's workers), so that no job pays for
+    the compilation."""
+    from ..problems.scenes import ActuatorScene
+
+    run_compiled(ActuatorScene(theta=150, height=3.0, links=8).chain(), tol=1e-3)
