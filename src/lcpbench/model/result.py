@@ -204,11 +204,11 @@ def build_result(scene, chain: Chain, out: DriverOutput, **how) -> ContactResult
                     driver_converged=out.converged, driver_reason=out.reason,
                     step_statuses=[s.status for s in out.steps],
                     step_sizes=[s.max_dalpha for s in out.steps], certificate=cert)
-    if verdict.forces_upper is not None and not (
-            np.array_equal(verdict.forces_upper, out.forces_upper)
-            and np.array_equal(verdict.forces_lower, out.forces_lower)):
+    upper, lower = verdict.forces_upper, verdict.forces_lower
+    if upper is not None and lower is not None and not (
+            np.array_equal(upper, out.forces_upper) and np.array_equal(lower, out.forces_lower)):
         # R with its round-off set to zero, and the certificate of what is reported
-        out.forces_upper, out.forces_lower = verdict.forces_upper, verdict.forces_lower
+        out.forces_upper, out.forces_lower = upper, lower
         cert = certify(chain, out.alpha, out.forces_upper, out.forces_lower)
     return ContactResult(
         scene=scene,
