@@ -56,6 +56,7 @@ docs/solvers.md.
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 import numpy as np
 from scipy.linalg import LinAlgError, solveh_banded
@@ -157,10 +158,12 @@ class Judgement:
     # the answer's reactions with round-off set to zero (None: not judged that far)
     forces_upper: np.ndarray | None = field(default=None, repr=False)
     forces_lower: np.ndarray | None = field(default=None, repr=False)
+    certificate: Any = field(default=None, repr=False)  # the Certificate it judged
 
     def to_dict(self) -> dict:
         d = asdict(self)
-        d.pop("forces_upper"), d.pop("forces_lower")
+        for key in ("forces_upper", "forces_lower", "certificate"):
+            d.pop(key)
         return d
 
 
@@ -289,7 +292,9 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
 
     ``step_statuses`` are lcpbench's verdicts of the contact steps taken,
     ``step_sizes`` their max|Δα|; ``certificate`` the exact-geometry
-    :class:`~lcpbench.model.result.Certificate` of the answer.
+    :class:`~lcpbench.model.result.Certificate` of the answer, or a callable
+    ``(upper, lower) -> Certificate`` that the judge calls on the reactions it
+    reports (round-off set to zero); the one it used is ``judgement.certificate``.
     """
     tau = force_tol(tol)
     F_up, F_lo = float(np.sum(forces_upper)), float(np.sum(forces_lower))
@@ -298,6 +303,8 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
     verdict = Judgement(False, driver_reason, tau, F0, contact_threshold=eps_R)
     if not driver_converged:
         verdict.failed.append("driver")
+        verdict.certificate = (certificate(forces_upper, forces_lower) if callable(certificate)
+                               else certificate)
         return verdict
     L = chain.length
     fails: list[str] = []
@@ -306,6 +313,9 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
         forces_upper = np.where(np.abs(forces_upper) <= js.noise, 0.0, forces_upper)
         forces_lower = np.where(np.abs(forces_lower) <= js.noise, 0.0, forces_lower)
         verdict.forces_upper, verdict.forces_lower = forces_upper, forces_lower
+    if callable(certificate):
+        certificate = certificate(forces_upper, forces_lower)
+    verdict.certificate = certificate
     verdict.inexact_steps = sum(s != "solved" for s in step_statuses)
     if step_statuses and step_statuses[-1] != "solved":
         fails.append(f"last step: the contact step whose reactions are reported was "

@@ -199,17 +199,15 @@ def build_result(scene, chain: Chain, out: DriverOutput, **how) -> ContactResult
     """The result of a driver run, judged by :func:`lcpbench.model.judge.judge`."""
     x, y = node_positions(chain, out.alpha)
     yf = y[chain.free_nodes]
-    cert = certify(chain, out.alpha, out.forces_upper, out.forces_lower)
     verdict = judge(chain, out.alpha, out.forces_upper, out.forces_lower, tol=how["tol"],
                     driver_converged=out.converged, driver_reason=out.reason,
                     step_statuses=[s.status for s in out.steps],
-                    step_sizes=[s.max_dalpha for s in out.steps], certificate=cert)
-    upper, lower = verdict.forces_upper, verdict.forces_lower
-    if upper is not None and lower is not None and not (
-            np.array_equal(upper, out.forces_upper) and np.array_equal(lower, out.forces_lower)):
-        # R with its round-off set to zero, and the certificate of what is reported
-        out.forces_upper, out.forces_lower = upper, lower
-        cert = certify(chain, out.alpha, out.forces_upper, out.forces_lower)
+                    step_sizes=[s.max_dalpha for s in out.steps],
+                    certificate=lambda up, lo: certify(chain, out.alpha, up, lo))
+    cert = verdict.certificate
+    if verdict.forces_upper is not None and verdict.forces_lower is not None:
+        # R with its round-off set to zero (the certificate is of these)
+        out.forces_upper, out.forces_lower = verdict.forces_upper, verdict.forces_lower
     return ContactResult(
         scene=scene,
         links=chain.links,
