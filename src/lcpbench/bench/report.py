@@ -216,7 +216,7 @@ def build_report(store: Store, out: str | os.PathLike | None = None, *,
         figures = ["work-precision.png", "force-vs-theta.png", "shapes.png"]
     profile_figures = _write_profiles(evaluated, out, plots and bool(runs))
     scope = (f"the {len(runs)} runs of the sweep that built it ({stored} in the store; "
-             "`lcpbench report` reports them all)" if keys is not None
+             "`lcpbench report --all` reports them all)" if keys is not None
              else f"{len(runs)} runs")
     (out / "report.md").write_text(_markdown(store, runs, refs, evaluated, summary, h2,
                                              figures, time_limit, pairs, scope)

@@ -5,7 +5,7 @@
     lcpbench sweep [--grid paper|hard] [--theta A:B:STEP] [--height A:B:STEP] ...
                    [--solvers A,B] [--settings P,Q] [--continuation [PREDICTOR]]
                    [--store PATH] [--out DIR] [--jobs K] [--time-limit S] [--repeat K]
-    lcpbench report [--store PATH] [--out DIR] [--table2-height MM] [--no-plots]
+    lcpbench report [--store PATH] [--out DIR] [--all] [--table2-height MM] [--no-plots]
     lcpbench select [scene options] [--force-tol REL] [--time-budget S] [--solvers A,B]
 """
 
@@ -143,6 +143,9 @@ def register(subparsers) -> None:
     rp.add_argument("--table2-height", type=float, default=None, metavar="MM",
                     help="wall height of the Table II-style table (default: the smallest)")
     rp.add_argument("--no-plots", action="store_true", help="tables and CSV only")
+    rp.add_argument("--all", action="store_true",
+                    help="report every run in the store (default: the runs of the last "
+                         "`lcpbench sweep` into it: its grid, back-ends and settings)")
     rp.set_defaults(func=cmd_report)
 
     se = subparsers.add_parser(
@@ -286,7 +289,9 @@ def cmd_sweep(args) -> int:
     jobs = plan_sweep(scenes, solvers, settings, tol=args.tol, method=methods,
                       baselines=baselines, continuation=args.continuation,
                       repeat=args.repeat)
+    planned = {k for j in jobs if not isinstance(j, ReferenceJob) for k in j.keys}
     with Store(args.store) as store, store.lock("lcpbench sweep", wait=args.wait) as sweep_id:
+        store.put_plan(sweep_id, planned)  # what `lcpbench report` covers by default
         _print_backends(solvers, explicit=args.solvers.strip() != "all")
         bar = progress_bar(args.quiet, None if args.quiet else
                            _phase_sizes(store, jobs, args.rerun))
@@ -312,9 +317,8 @@ def cmd_sweep(args) -> int:
               f"times the median of {args.repeat})", flush=True)
         if not args.no_report:
             print("writing the report ...", file=sys.stderr, flush=True)
-            keys = None if args.all else {k for j in jobs if not isinstance(j, ReferenceJob)
-                                          for k in j.keys}
-            return _write_report(store, args.out, limit, None, plots=True, keys=keys)
+            return _write_report(store, args.out, limit, None, plots=True,
+                                 keys=None if args.all else planned)
     return 0
 
 
@@ -361,7 +365,7 @@ def _write_report(store, out, time_limit, table2_height, plots: bool, keys=None)
                             table2_height=table2_height, keys=keys)
     except OSError as exc:
         raise ProblemError(f"out {out}: cannot write the report there ({exc})") from exc
-    also = (f" (of {info['stored']} in the store; --all or `lcpbench report` for all)"
+    also = (f" (of {info['stored']} in the store; --all for all)"
             if info["stored"] != info["runs"] else "")
     print(f"report of {info['runs']} runs{also} in {info['out']}/report.md")
     return 0
@@ -372,8 +376,15 @@ def cmd_report(args) -> int:
     from ..bench.store import Store
 
     with Store(args.store, create=False) as store:
+        plan = None if args.all else store.last_plan()
+        if plan is not None:
+            print(f"reporting the runs of the last sweep (started {plan[1]}); --all for "
+                  "every run in the store", file=sys.stderr)
+        elif not args.all:
+            print("no sweep plan recorded in this store: reporting every run in it",
+                  file=sys.stderr)
         return _write_report(store, args.out, DEFAULT_TIME_LIMIT, args.table2_height,
-                             plots=not args.no_plots)
+                             plots=not args.no_plots, keys=None if plan is None else plan[2])
 
 
 # -- select -------------------------------------------------------------------
