@@ -137,12 +137,16 @@ def skipped_backends(present) -> str:
     installed: not asked for by this sweep.
     """
     from ..solvers.registry import backends
+    from .expected import never_converges
 
     missing: dict[str, list[str]] = {}
     for name, b in backends().items():
         if name in present:
             continue
         why = (f"not installed: {b.install_hint()}" if not b.available()
+               else "installed, not in these runs; documented not to converge on a "
+                    "contact step, so the main job leaves it out (`lcpbench sweep "
+                    "--standard` runs it)" if never_converges(name)
                else "installed, not in these runs")
         missing.setdefault(why, []).append(name)
     if not missing:
