@@ -38,7 +38,7 @@ DEFAULT_REPEAT = 3
 #: minutes on two cores (issue 15): the documented never-converging back-ends
 #: (:func:`~lcpbench.bench.expected.never_converges`), settings ``high``, the
 #: finite-difference baseline and repeated timings are what make the standard run
-#: take an hour. Explicit options override either.
+#: take many times longer. Explicit options override either.
 MAIN_JOB = {"settings": "default", "baseline": "analytic", "repeat": 1, "solvers": "main"}
 STANDARD_RUN = {"settings": "default,high", "baseline": "both", "repeat": DEFAULT_REPEAT,
                 "solvers": "all"}
@@ -74,7 +74,8 @@ def register(subparsers) -> None:
                     "the analytic-Jacobian baseline, each run timed once (about 2 minutes "
                     "on 2 cores). --standard: the standard run (every installed back-end, "
                     "settings default and high, both baselines, times the median of 3; "
-                    "about an hour). With --continuation each back-end solves every line of the "
+                    "many times longer: PGS runs out its sweeps on every scene with contact, "
+                    "the finite-difference baseline takes seconds a scene). With --continuation each back-end solves every line of the "
                     "grid (all parameters but theta equal) in order of theta, each scene "
                     "started from its neighbours' answers; those runs are stored as driver "
                     "globalised+secant (or +previous), apart from the cold ones.")
