@@ -354,7 +354,8 @@ def cmd_sweep(args) -> int:
               f"({len(scenes)} scenes x {len(solvers)} back-ends x {len(settings)} settings"
               f"{f' x {len(methods)} drivers' if len(methods) > 1 else ''}{along}"
               f" + {len(baselines)} baseline(s) + references; {jobs_n} worker(s), "
-              f"times the median of {args.repeat})", flush=True)
+              + (f"times the median of {args.repeat})" if args.repeat > 1
+                 else "each run timed once)"), flush=True)
         if not args.no_report:
             print("writing the report ...", file=sys.stderr, flush=True)
             return _write_report(store, args.out, limit, None, plots=True,
