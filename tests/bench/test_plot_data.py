@@ -145,3 +145,30 @@ def test_force_line_labels_tell_close_heights_apart():
     refs = dict([_ref(120.0, 0.0, height=7.162037), _ref(120.0, 0.001, height=7.162045)])
     lines, _ = force_lines(refs)
     assert len({ln["label"] for ln in lines}) == 2
+
+
+@pytest.mark.parametrize("kw", [dict(theta=180, height=7.0, channel=True),
+                                dict(theta=150, height=3.0, channel=True),
+                                dict(theta=150, height=3.0), dict(theta=10, height=7.0)])
+def test_solve_plot_has_no_white_bands_and_keeps_labels_inside(tmp_path, kw):
+    """The figure takes the data's aspect: the equal-aspect axes fill it (a channel at
+    h = 7 mm used to fill half its width), and every force label stays in the axes."""
+    import lcpbench
+    from lcpbench.bench.plot import plot_shape
+
+    res = lcpbench.solve(lcpbench.ActuatorScene(links=40, **kw))
+    fig = plot_shape(res, tmp_path / "s.png")
+    ax = fig.axes[0]
+    box = ax.get_position()  # after the draw of savefig: the box equal aspect left
+    assert box.width > 0.8 and box.height > 0.6
+    # equal aspect still: mm per inch the same along x and y
+    w_in, h_in = fig.get_size_inches()
+    x0, x1 = ax.get_xlim()
+    y0, y1 = ax.get_ylim()
+    assert (x1 - x0) / (box.width * w_in) == pytest.approx((y1 - y0) / (box.height * h_in),
+                                                           rel=1e-6)
+    renderer = fig.canvas.get_renderer()
+    frame = ax.get_window_extent(renderer)
+    for text in ax.texts:
+        b = text.get_window_extent(renderer)
+        assert b.y0 >= frame.y0 - 1 and b.y1 <= frame.y1 + 1, text.get_text()

@@ -98,3 +98,55 @@ def test_report_counts_expected_and_unexpected(tmp_path):
     assert base["status"] == "invalid"
     md = (tmp_path / "r" / "report.md").read_text()
     assert "1 unsuccessful runs: **1 expected**" in md and "**0 unexpected**" in md
+
+
+def test_standalone_report_covers_the_last_sweep_unless_all(tmp_path, capsys):
+    store = str(tmp_path / "s.sqlite")
+    assert main(["sweep", "--theta", "120", "--solvers", "active-set", "--store", store,
+                 "--no-report", *SMALL]) == 0
+    assert main(["sweep", "--theta", "150,160", "--solvers", "lemke", "--store", store,
+                 "--no-report", *SMALL]) == 0
+    capsys.readouterr()
+    out = tmp_path / "last"
+    assert main(["report", "--store", store, "--out", str(out), "--no-plots"]) == 0
+    with (out / "runs.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    # the second sweep's grid (two scenes) and back-end, nothing of the first
+    assert sorted((r["backend"], float(r["theta"])) for r in rows) == [
+        ("lemke", 150.0), ("lemke", 160.0)]
+    captured = capsys.readouterr()
+    assert "report of 2 runs (of 3 in the store; --all for all)" in captured.out
+    assert "the last sweep" in captured.err
+    everything = tmp_path / "all"
+    assert main(["report", "--store", store, "--out", str(everything), "--no-plots",
+                 "--all"]) == 0
+    with (everything / "runs.csv").open() as f:
+        assert sorted(r["backend"] for r in csv.DictReader(f)) == [
+            "active-set", "lemke", "lemke"]
+
+
+def test_report_of_a_store_without_plans_reports_everything(tmp_path, capsys):
+    from lcpbench.bench.grid import Grid
+    from lcpbench.bench.sweep import plan_sweep, sweep
+
+    path = tmp_path / "s.sqlite"
+    jobs = plan_sweep(Grid(theta=(150.0,), height=(3.0,), links=(20,)), ["active-set"],
+                      ["default"], baselines=())
+    with Store(path) as st:  # the library's sweep, no CLI: no plan recorded
+        sweep(st, jobs, workers=1)
+        assert st.last_plan() is None
+    assert main(["report", "--store", str(path), "--out", str(tmp_path / "r"),
+                 "--no-plots"]) == 0
+    assert "no sweep plan recorded" in capsys.readouterr().err
+
+
+def test_plan_round_trips_keys_product_or_not(tmp_path):
+    keys = {(s, b, p, t, "globalised") for s in ("a", "b") for b in ("x", "y")
+            for p, t in (("default", 1e-3), ("high", 1e-9))}
+    odd = {("c", "z", "-", 1e-10, "hybr")}
+    with Store(tmp_path / "s.sqlite") as st:
+        st.put_plan("one", keys)
+        assert st.last_plan()[2] == keys
+        st.put_plan("two", keys | odd)  # not a product of scenes and combinations
+        sweep_id, _, got = st.last_plan()
+        assert sweep_id == "two" and got == keys | odd

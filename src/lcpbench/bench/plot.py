@@ -9,13 +9,14 @@ from __future__ import annotations
 import numpy as np
 
 
-def plot_shape(result, path) -> None:
+def plot_shape(result, path):
     """Draw a :class:`~lcpbench.model.result.ContactResult` to ``path`` (PNG, PDF, SVG, ...).
 
     The constrained shape over the unconstrained one, the wall(s) as horizontal
     lines (at +h, and −h for a channel) and the reactions as arrows from the
     wall at the contact nodes, the largest about h/2 long; the total force in
-    mN is in the title. Axes in mm, equal aspect.
+    mN is in the title. Axes in mm, equal aspect, in a figure of the data's
+    aspect ratio (no white bands beside the axes). Returns the Figure.
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
@@ -54,6 +55,7 @@ def plot_shape(result, path) -> None:
               for g in reaction_groups(f, x[free])]
     fmax = max((g["force"] for g, _, _ in groups), default=0.0)
     bar_top = -np.inf
+    labels: list[tuple[float, float, int]] = []  # (arrow tip y, direction, text lines)
     if fmax > 0:
         unit = _nice(fmax)  # the scale bar's force (N)
         scale = 0.5 * max(h, 1.0) / unit  # mm of arrow per N
@@ -67,6 +69,7 @@ def plot_shape(result, path) -> None:
             ax.plot(g["nodes_x"], np.full(len(g["nodes_x"]), yw), "|", color="C3", ms=6,
                     zorder=5, label="contact node" if k == 0 else None)
             n = len(g["nodes_x"])
+            labels.append((yw + sign * scale * g["force"], sign, 2 if n > 1 else 1))
             ax.annotate(f"{1e3 * g['force']:.4g} mN" + (f"\n({n} nodes)" if n > 1 else ""),
                         (g["x"], yw + sign * scale * g["force"]), fontsize=7, color="C3",
                         ha=ha, va="top" if sign < 0 else "bottom",
@@ -92,12 +95,39 @@ def plot_shape(result, path) -> None:
     ymin = min(float(np.min(y)), float(np.min(y0)), -h if channel else 0.0)
     ymax = max(float(np.max(y)), float(np.max(y0)), h, bar_top)
     ypad = 0.1 * (ymax - ymin) if ymax > ymin else 1.0
-    ax.set_ylim(ymin - ypad, ymax + ypad)
+    ymin, ymax = ymin - ypad, ymax + ypad
+    # room for the force labels beyond the arrow tips (7-pt lines, ~0.13 in each)
+    mm_per_in = ((hi - lo) + 2 * pad) / 6.0
+    for tip, sign, lines in labels:
+        if sign < 0:
+            ymin = min(ymin, tip - (0.13 * lines + 0.08) * mm_per_in)
+        else:
+            ymax = max(ymax, tip + (0.13 * lines + 0.08) * mm_per_in)
+    ax.set_ylim(ymin, ymax)
     ax.set_aspect("equal", adjustable="box")
     ax.set_xlabel("x (mm)")
     ax.set_ylabel("y (mm)")
     ax.legend(loc="best", fontsize=8)
+    # The figure takes the data's aspect ratio: with equal axes in a fixed 7 x 4 in
+    # figure, a tall scene (a channel, large h) left white bands beside the axes.
+    fig.set_size_inches(*_equal_aspect_size((hi - lo) + 2 * pad, ymax - ymin))
     fig.savefig(path, dpi=150)
+    return fig
+
+
+def _equal_aspect_size(width: float, height: float, *, axes_width: float = 6.0,
+                       max_axes_height: float = 6.5) -> tuple[float, float]:
+    """Figure size (in) whose axes box fits data ``width`` x ``height`` at equal aspect.
+
+    The axes are ``axes_width`` wide (narrower when the height would exceed
+    ``max_axes_height``), plus room for the labels (0.9 in) and the title (0.8 in).
+    """
+    ratio = height / width if width > 0 else 1.0
+    aw = axes_width
+    ah = aw * ratio
+    if ah > max_axes_height:
+        ah, aw = max_axes_height, max_axes_height / ratio
+    return aw + 0.9, max(ah, 1.0) + 0.8
 
 
 def reaction_groups(forces, node_x, rel: float = 1e-9) -> list[dict]:

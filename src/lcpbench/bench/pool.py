@@ -139,6 +139,8 @@ def run_jobs(jobs: list[Job], *, workers: int = 1, time_limit: float = DEFAULT_T
                         continue
                     if rows is not None:
                         w.job = None
+                        if pending:  # busy again before the caller stores these rows
+                            w.give(pending.popleft(), time_limit)
                         yield job, rows
                         continue
                 limit = job.time_limit(time_limit)

@@ -137,12 +137,16 @@ def skipped_backends(present) -> str:
     installed: not asked for by this sweep.
     """
     from ..solvers.registry import backends
+    from .expected import never_converges
 
     missing: dict[str, list[str]] = {}
     for name, b in backends().items():
         if name in present:
             continue
         why = (f"not installed: {b.install_hint()}" if not b.available()
+               else "installed, not in these runs; documented not to converge on a "
+                    "contact step, so the main job leaves it out (`lcpbench sweep "
+                    "--standard` runs it)" if never_converges(name)
                else "installed, not in these runs")
         missing.setdefault(why, []).append(name)
     if not missing:
@@ -216,7 +220,7 @@ def build_report(store: Store, out: str | os.PathLike | None = None, *,
         figures = ["work-precision.png", "force-vs-theta.png", "shapes.png"]
     profile_figures = _write_profiles(evaluated, out, plots and bool(runs))
     scope = (f"the {len(runs)} runs of the sweep that built it ({stored} in the store; "
-             "`lcpbench report` reports them all)" if keys is not None
+             "`lcpbench report --all` reports them all)" if keys is not None
              else f"{len(runs)} runs")
     (out / "report.md").write_text(_markdown(store, runs, refs, evaluated, summary, h2,
                                              figures, time_limit, pairs, scope)

@@ -33,6 +33,10 @@ Tables
 ``sweeps``      one row per locked sweep: id, owner, pid, host, start time,
                 and its machine record (JSON, :mod:`.machine`).
 ``meta``        schema version and when the store was created.
+``plans``       what each ``lcpbench sweep`` set out to run (its run keys, as
+                scenes × (back-end, settings, tol, method)), so ``lcpbench
+                report`` can cover the runs of the last sweep. Optional: made
+                on first use, absent in older stores (no schema change).
 
 Schema versions: 1 (no ``sweep_id``, no ``sweeps``) and 2 (no timing
 columns ``setup_time``, ``repeats``, ``wall_time_min``, ``wall_time_max``,
@@ -99,6 +103,12 @@ CREATE TABLE IF NOT EXISTS refs (
     total_force REAL, converged INTEGER, tol REAL, check_error REAL, wall_time REAL,
     reason TEXT, created TEXT,
     forces BLOB, gaps BLOB, x BLOB, y BLOB
+);
+"""
+
+_PLANS = """
+CREATE TABLE IF NOT EXISTS plans (
+    sweep_id TEXT PRIMARY KEY, started TEXT, scenes TEXT NOT NULL, combos TEXT NOT NULL
 );
 """
 
@@ -425,6 +435,42 @@ class Store:
         self._upgrade()
         self._write("UPDATE sweeps SET machine = ? WHERE sweep_id = ?",
                     (json.dumps(record), sweep_id))
+
+    def put_plan(self, sweep_id: str, keys) -> None:
+        """Record the run keys a sweep set out to compute (for :meth:`last_plan`).
+
+        Stored compactly as its scenes and its (back-end, settings, tol, method)
+        combinations when the keys are exactly their product (every sweep's
+        are), else as the full list of keys.
+        """
+        keys = {tuple(k) for k in keys}
+        scenes = sorted({k[0] for k in keys})
+        combos = sorted({k[1:] for k in keys}, key=repr)
+        if len(keys) != len(scenes) * len(combos):  # not a product: every key
+            scenes, combos = [], sorted(keys, key=repr)
+        self._upgrade()
+        try:
+            with self.db:
+                self.db.executescript(_PLANS)
+                self.db.execute("INSERT OR REPLACE INTO plans VALUES (?, ?, ?, ?)",
+                                (sweep_id, _now(), json.dumps(scenes), json.dumps(combos)))
+        except sqlite3.Error as exc:
+            raise StoreError(f"store {self.path}: cannot write to it ({exc})") from exc
+
+    def last_plan(self) -> tuple[str, str, set[tuple]] | None:
+        """(sweep id, when it started, its run keys) of the newest recorded sweep
+        plan, or None (a store without plans: older, or written without the CLI)."""
+        if not self._query("SELECT name FROM sqlite_master WHERE type = 'table' "
+                           "AND name = 'plans'"):
+            return None
+        rows = self._query("SELECT sweep_id, started, scenes, combos FROM plans "
+                           "ORDER BY started DESC, rowid DESC LIMIT 1")
+        if not rows:
+            return None
+        sweep_id, started, scenes, combos = rows[0]
+        scenes, combos = json.loads(scenes), [tuple(c) for c in json.loads(combos)]
+        keys = ({(s, *c) for s in scenes for c in combos} if scenes else set(combos))
+        return sweep_id, started, keys
 
     def refs(self, *, arrays: bool = True) -> dict[str, dict]:
         return {r["scene"]: r for r in self._rows("refs", ("scene",), arrays, "", ())}

@@ -131,6 +131,8 @@ class ContactResult:
     multipliers: np.ndarray | None = None
     multipliers_lower: np.ndarray | None = None
     judgement: Judgement | None = None
+    #: 0-based indices into ``x``, ``y`` of the nodes of ``forces`` and ``gaps``
+    free_nodes: np.ndarray | None = None
 
     @property
     def force_error_bound(self) -> float:
@@ -144,6 +146,27 @@ class ContactResult:
                 f"force_error_bound={self.force_error_bound:.1e}, solver={self.solver!r}, "
                 f"outer={self.outer_iterations}, time={1e3 * self.time_s:.3g} ms, "
                 f"reason={self.reason!r})")
+
+    def summary(self) -> str:
+        """A few lines of text: scene, verdict, F and the contact nodes, the judge's
+        force error bound, the certificate and what it cost."""
+        from .result_view import summary_text
+
+        return summary_text(self)
+
+    def _repr_html_(self) -> str:
+        from .result_view import summary_html
+
+        return summary_html(self)
+
+    def nodes(self, *, frame: bool | None = None):
+        """A tidy table, one row per free node: node number i, x, y (mm), gap h − y
+        (mm), reaction R (N), contact (and the lower wall's gap and reaction in a
+        channel). A pandas DataFrame indexed by node when pandas is installed (or
+        ``frame=True``), else (or ``frame=False``) a dict of numpy columns."""
+        from .result_view import node_table
+
+        return node_table(self, frame=frame)
 
     @property
     def inner_iterations(self) -> int:
@@ -227,5 +250,6 @@ def build_result(scene, chain: Chain, out: DriverOutput, **how) -> ContactResult
         multipliers=out.multipliers_upper,
         multipliers_lower=out.multipliers_lower if chain.channel else None,
         judgement=verdict,
+        free_nodes=np.asarray(chain.free_nodes, dtype=int),
         **how,
     )
