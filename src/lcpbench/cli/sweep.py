@@ -6,7 +6,7 @@
                    [--solvers A,B] [--settings P,Q] [--continuation [PREDICTOR]]
                    [--store PATH] [--out DIR] [--jobs K] [--time-limit S] [--repeat K]
     lcpbench report [--store PATH] [--out DIR] [--table2-height MM] [--no-plots]
-    lcpbench select [scene options] [--force-tol REL] [--time-budget S] [--solvers A,B]
+    lcpbench select [scene options] [--force-tol REL] [--time-budget S] [--solvers A,B] [--repeat K]
 """
 
 from __future__ import annotations
@@ -161,6 +161,13 @@ def register(subparsers) -> None:
     se.add_argument("--store", default=None, metavar="PATH",
                     help=f"where the probes are cached (default $LCPBENCH_STORE or "
                          f"{DEFAULT_STORE})")
+    se.add_argument("--repeat", type=int_arg, default=3, metavar="K",
+                    help="timings of each converged probe run, its time their median "
+                         "(default 3)")
+    se.add_argument("--evidence", action="append", default=None, metavar="CSV|none",
+                    help="runs.csv of an earlier sweep whose failures rule candidates out "
+                         "before probing (default: the committed results/sweep/runs.csv "
+                         "when present; 'none': only the store's own runs)")
     add_jobs_option(se)
     add_json_option(se, "the selection as JSON")
     se.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -377,6 +384,21 @@ def cmd_report(args) -> int:
 
 
 # -- select -------------------------------------------------------------------
+def _evidence(values: list[str] | None) -> list[str] | None:
+    """``--evidence``: None (the default files), [] for 'none', else the files (must exist)."""
+    import os
+
+    if values is None:
+        return None
+    if any(v.strip().lower() == "none" for v in values):
+        return []
+    for v in values:
+        if not os.path.isfile(v):
+            raise ProblemError(f"--evidence must be a runs.csv file or 'none', got {v!r} "
+                               "(no such file)")
+    return list(values)
+
+
 def cmd_select(args) -> int:
     """``lcpbench select``: 0 with a back-end that meets ``--force-tol``, 1 with none."""
     from ..bench.select import select_backend
@@ -392,7 +414,8 @@ def cmd_select(args) -> int:
     try:
         sel = select_backend(scene, force_tol=args.force_tol, time_budget=args.time_budget,
                              store=args.store, candidates=candidates, workers=workers,
-                             progress=bar.update if bar else None)
+                             progress=bar.update if bar else None, repeat=args.repeat,
+                             evidence=_evidence(args.evidence))
     finally:
         if bar:
             bar.close()
