@@ -143,6 +143,9 @@ def register(subparsers) -> None:
     rp.add_argument("--table2-height", type=float, default=None, metavar="MM",
                     help="wall height of the Table II-style table (default: the smallest)")
     rp.add_argument("--no-plots", action="store_true", help="tables and CSV only")
+    rp.add_argument("--format", choices=("lcpbench", "qpbenchmark"), default="lcpbench",
+                    help="qpbenchmark: only qpbenchmark_results.csv, every run in "
+                         "qpbenchmark's results schema (default: the full report)")
     rp.set_defaults(func=cmd_report)
 
     se = subparsers.add_parser(
@@ -379,8 +382,28 @@ def cmd_report(args) -> int:
     from ..bench.store import Store
 
     with Store(args.store, create=False) as store:
+        if args.format == "qpbenchmark":
+            return _write_qpbenchmark(store, args.out)
         return _write_report(store, args.out, DEFAULT_TIME_LIMIT, args.table2_height,
                              plots=not args.no_plots)
+
+
+def _write_qpbenchmark(store, out) -> int:
+    """``report --format qpbenchmark``: the runs in qpbenchmark's results CSV."""
+    from pathlib import Path
+
+    from ..bench.report import default_out
+    from ..bench.testset import SWEEP_RESULTS, run_result_rows, write_results
+
+    folder = Path(out if out is not None else default_out(store.path))
+    rows = run_result_rows(store.runs(arrays=False))
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        write_results(rows, folder / SWEEP_RESULTS)
+    except OSError as exc:
+        raise ProblemError(f"out {folder}: cannot write there ({exc})") from exc
+    print(f"{len(rows)} runs in qpbenchmark's results schema in {folder / SWEEP_RESULTS}")
+    return 0
 
 
 # -- select -------------------------------------------------------------------
