@@ -43,3 +43,61 @@ def test_time_limits_and_crashes_hold_inside_dask_tasks(tmp_path, misbehaving_ba
         status = {r["backend"]: r["status"] for r in st.runs(arrays=False)}
     assert status == {"test-hang": "timeout", "test-crash": "crashed",
                       "test-raise": "not_converged", "active-set": "solved"}
+
+
+# -- a Dask sweep whose client is SIGKILLed resumes to the serial rows -----------------------
+RESUME_ARGS = ["sweep", "--theta", "120,150", "--height", "3", "--links", "20",
+               "--solvers", "active-set,lemke", "--settings", "default", "--baseline", "none",
+               "--repeat", "1", "--dask", "--jobs", "2", "--oversubscribe", "--quiet",
+               "--no-report"]
+RESUME_RUNS = 2 * 2  # 2 scenes x 2 back-ends (and 2 references), one job a task
+
+
+def _count(path) -> int:
+    import sqlite3
+
+    try:
+        with sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=5) as db:
+            return db.execute("SELECT COUNT(*) FROM runs").fetchone()[0]
+    except sqlite3.Error:
+        return 0
+
+
+def test_a_dask_sweep_resumes_after_a_sigkill_of_its_client(tmp_path):
+    """The client (the one store writer) is killed without warning after its first row;
+    its cluster's processes are left orphaned until the end. The same command again
+    finishes the sweep, and the store holds exactly the rows of a serial sweep."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    killed = tmp_path / "killed.sqlite"
+    cmd = [sys.executable, "-m", "lcpbench.cli", *RESUME_ARGS, "--store", str(killed)]
+    proc = subprocess.Popen(cmd, start_new_session=True, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 120
+        while _count(killed) < 1 and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.005)
+        os.kill(proc.pid, signal.SIGKILL)  # the client only, mid-sweep
+        proc.wait()
+        partial = _count(killed)
+        assert 1 <= partial < RESUME_RUNS, "the client was not killed in the middle"
+        again = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+        assert again.returncode == 0, again.stderr
+    finally:
+        try:  # the orphaned cluster of the killed client
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+    grid = Grid(theta=(120.0, 150.0), height=(3.0,), links=(20,))
+    with Store(tmp_path / "serial.sqlite") as st:
+        sweep(st, plan_sweep(grid, ["active-set", "lemke"], ["default"], baselines=()),
+              workers=1)
+    rows_killed, refs_killed = _rows(killed)
+    rows_serial, refs_serial = _rows(tmp_path / "serial.sqlite")
+    assert len(rows_killed) == RESUME_RUNS  # nothing lost, nothing twice
+    assert rows_killed == rows_serial
+    assert refs_killed == refs_serial

@@ -55,16 +55,31 @@ def _client(address: str | None, workers: int, processes: bool):
         raise ProblemError(f"dask: cannot reach the scheduler at {addr} ({exc})") from exc
 
 
-def dask_runner(address: str | None = None, *, chunk: int = 1, processes: bool = True
-                ) -> Callable[..., Iterator[tuple[Job, Rows]]]:
+#: the most jobs in one Dask task when the chunk is automatic
+MAX_CHUNK = 64
+
+
+def auto_chunk(jobs: int, workers: int) -> int:
+    """Jobs per Dask task: about four tasks per worker, at most :data:`MAX_CHUNK`.
+
+    Each task starts one worker subprocess (importing lcpbench and the back-ends
+    costs about a second), so a task of one job would spend longer starting
+    than solving (0.28 s per run of the standard sweep, see docs/bench.md).
+    """
+    return max(1, min(MAX_CHUNK, -(-jobs // (4 * max(1, workers)))))
+
+
+def dask_runner(address: str | None = None, *, chunk: int | None = None,
+                processes: bool = True) -> Callable[..., Iterator[tuple[Job, Rows]]]:
     """A ``run_jobs``-shaped runner for :func:`~.sweep.sweep` on Dask.
 
     ``address``: a scheduler (``tcp://host:port``, ``dask://host:port`` or
     ``host:port``), or None/"local" for a :class:`distributed.LocalCluster` of
     the sweep's ``workers`` (processes, or threads with ``processes=False``;
-    each task starts its own subprocess either way). ``chunk``: jobs per task.
+    each task starts its own subprocess either way). ``chunk``: jobs per task
+    (None: :func:`auto_chunk`). A task's rows reach the store when the task ends.
     """
-    if chunk < 1:
+    if chunk is not None and chunk < 1:
         raise ProblemError(f"chunk must be >= 1, got {chunk}")
 
     def runner(jobs: list[Job], *, workers: int = 1, time_limit: float
@@ -75,7 +90,8 @@ def dask_runner(address: str | None = None, *, chunk: int = 1, processes: bool =
 
         client, cluster = _client(address, workers, processes)
         try:
-            chunks = [jobs[i:i + chunk] for i in range(0, len(jobs), chunk)]
+            size = chunk or auto_chunk(len(jobs), workers)
+            chunks = [jobs[i:i + size] for i in range(0, len(jobs), size)]
             futures = {client.submit(run_chunk, c, time_limit, pure=False): c
                        for c in chunks}
             started = time.monotonic()

@@ -221,6 +221,75 @@ def write_results(rows: list[dict], path: str | os.PathLike) -> None:
                         for k in RESULT_COLUMNS})
 
 
+#: the file ``lcpbench report --format qpbenchmark`` writes
+SWEEP_RESULTS = "qpbenchmark_results.csv"
+#: the cold driver schemes: their runs keep the back-end's name as the solver
+_COLD = ("globalised", "hybr", "lm")
+
+
+def _scaled_residuals(row: dict) -> tuple[float, float, float]:
+    """(primal, dual, gap) of a whole answer from its certificate, in the step's units.
+
+    Lengths over ℓ, forces over EI/ℓ², moments over EI/ℓ (the exported steps'
+    scaling): primal = penetration of a wall or the pin off y = 0; dual = a
+    pulling wall or the torque residual relative to the largest spring torque
+    (stationarity of the energy); gap = the largest |gᵢRᵢ|. Infinite without an
+    answer, as qpbenchmark writes a solution not found.
+    """
+    import json
+
+    cert = row.get("certificate")
+    if isinstance(cert, str):
+        cert = json.loads(cert)
+    if not cert:
+        return math.inf, math.inf, math.inf
+    L, EI = float(row["length"]), float(row["EI"])
+    F = EI / L**2
+    vals = [float(cert.get(k, math.nan)) for k in ("min_gap", "closure", "min_force",
+                                                   "relative_torque_residual",
+                                                   "complementarity")]
+    if not all(math.isfinite(v) for v in vals):
+        return math.inf, math.inf, math.inf
+    min_gap, closure, min_force, rel_torque, compl = vals
+    return (max(0.0, -min_gap, abs(closure)) / L, max(0.0, -min_force / F, rel_torque),
+            abs(compl) / (F * L))
+
+
+def run_result_rows(runs: list[dict]) -> list[dict]:
+    """Stored sweep runs as qpbenchmark result rows (one per run).
+
+    ``problem``: the scene's name (:func:`problem_name`, kind ``solve``: the
+    whole contact solve, every step); ``solver``: the back-end, with the driver
+    scheme in brackets when it is not the cold one (``active-set[globalised+quadratic]``);
+    ``settings``: qpbenchmark's names of the profiles (the baselines'
+    ``default``), with ``@tol=`` appended where a run's driver tolerance is not
+    its profile's; ``runtime``: the stored wall time (s); ``found``: lcpbench's
+    judge accepted it (``converged``); residuals by :func:`_scaled_residuals`.
+    """
+    from .grid import scene_from_key
+    from .jobs import PROFILE_TOL
+
+    out, seen = [], set()
+    for r in runs:
+        solver = r["backend"] if r["method"] in _COLD else f"{r['backend']}[{r['method']}]"
+        profile = r["settings"] if r["settings"] in SETTINGS_NAMES else "default"
+        settings = SETTINGS_NAMES[profile]
+        if r["settings"] in PROFILE_TOL and float(r["tol"]) != PROFILE_TOL[r["settings"]]:
+            settings += f"@tol={float(r['tol']):g}"
+        row = {"problem": problem_name(scene_from_key(r["scene"]), "solve"),
+               "solver": solver, "settings": settings, "runtime": float(r["wall_time"]),
+               "found": bool(r["converged"])}
+        key = (row["problem"], solver, settings)
+        if key in seen:
+            raise ProblemError(f"two runs are one qpbenchmark row {key}: report a store of "
+                               "one driver tolerance per profile")
+        seen.add(key)
+        row["primal_residual"], row["dual_residual"], row["duality_gap"] = (
+            _scaled_residuals(r))
+        out.append(row)
+    return out
+
+
 def read_results(path: str | os.PathLike) -> list[dict]:
     """The rows of a qpbenchmark results CSV, typed as qpbenchmark types them."""
     with open(path, newline="") as fh:

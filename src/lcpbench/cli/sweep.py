@@ -5,8 +5,8 @@
     lcpbench sweep [--grid paper|hard] [--theta A:B:STEP] [--height A:B:STEP] ...
                    [--solvers A,B] [--settings P,Q] [--continuation [PREDICTOR]]
                    [--store PATH] [--out DIR] [--jobs K] [--time-limit S] [--repeat K]
-    lcpbench report [--store PATH] [--out DIR] [--all] [--table2-height MM] [--no-plots]
-    lcpbench select [scene options] [--force-tol REL] [--time-budget S] [--solvers A,B]
+    lcpbench report [--store PATH] [--out DIR] [--all] [--format F] [--table2-height MM] [--no-plots]
+    lcpbench select [scene options] [--force-tol REL] [--time-budget S] [--solvers A,B] [--repeat K]
 """
 
 from __future__ import annotations
@@ -168,6 +168,9 @@ def register(subparsers) -> None:
     rp.add_argument("--all", action="store_true",
                     help="report every run in the store (default: the runs of the last "
                          "`lcpbench sweep` into it: its grid, back-ends and settings)")
+    rp.add_argument("--format", choices=("lcpbench", "qpbenchmark"), default="lcpbench",
+                    help="qpbenchmark: only qpbenchmark_results.csv, every run in "
+                         "qpbenchmark's results schema (default: the full report)")
     rp.set_defaults(func=cmd_report)
 
     se = subparsers.add_parser(
@@ -186,6 +189,13 @@ def register(subparsers) -> None:
     se.add_argument("--store", default=None, metavar="PATH",
                     help=f"where the probes are cached (default $LCPBENCH_STORE or "
                          f"{DEFAULT_STORE})")
+    se.add_argument("--repeat", type=int_arg, default=3, metavar="K",
+                    help="timings of each converged probe run, its time their median "
+                         "(default 3)")
+    se.add_argument("--evidence", action="append", default=None, metavar="CSV|none",
+                    help="runs.csv of an earlier sweep whose failures rule candidates out "
+                         "before probing (default: the committed results/sweep/runs.csv "
+                         "when present; 'none': only the store's own runs)")
     add_jobs_option(se)
     add_json_option(se, "the selection as JSON")
     se.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -421,6 +431,8 @@ def cmd_report(args) -> int:
     from ..bench.store import Store
 
     with Store(args.store, create=False) as store:
+        if args.format == "qpbenchmark":
+            return _write_qpbenchmark(store, args.out)
         plan = None if args.all else store.last_plan()
         if plan is not None:
             print(f"reporting the runs of the last sweep (started {plan[1]}); --all for "
@@ -432,7 +444,40 @@ def cmd_report(args) -> int:
                              plots=not args.no_plots, keys=None if plan is None else plan[2])
 
 
+def _write_qpbenchmark(store, out) -> int:
+    """``report --format qpbenchmark``: the runs in qpbenchmark's results CSV."""
+    from pathlib import Path
+
+    from ..bench.report import default_out
+    from ..bench.testset import SWEEP_RESULTS, run_result_rows, write_results
+
+    folder = Path(out if out is not None else default_out(store.path))
+    rows = run_result_rows(store.runs(arrays=False))
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        write_results(rows, folder / SWEEP_RESULTS)
+    except OSError as exc:
+        raise ProblemError(f"out {folder}: cannot write there ({exc})") from exc
+    print(f"{len(rows)} runs in qpbenchmark's results schema in {folder / SWEEP_RESULTS}")
+    return 0
+
+
 # -- select -------------------------------------------------------------------
+def _evidence(values: list[str] | None) -> list[str] | None:
+    """``--evidence``: None (the default files), [] for 'none', else the files (must exist)."""
+    import os
+
+    if values is None:
+        return None
+    if any(v.strip().lower() == "none" for v in values):
+        return []
+    for v in values:
+        if not os.path.isfile(v):
+            raise ProblemError(f"--evidence must be a runs.csv file or 'none', got {v!r} "
+                               "(no such file)")
+    return list(values)
+
+
 def cmd_select(args) -> int:
     """``lcpbench select``: 0 with a back-end that meets ``--force-tol``, 1 with none."""
     from ..bench.select import select_backend
@@ -448,7 +493,8 @@ def cmd_select(args) -> int:
     try:
         sel = select_backend(scene, force_tol=args.force_tol, time_budget=args.time_budget,
                              store=args.store, candidates=candidates, workers=workers,
-                             progress=bar.update if bar else None)
+                             progress=bar.update if bar else None, repeat=args.repeat,
+                             evidence=_evidence(args.evidence))
     finally:
         if bar:
             bar.close()

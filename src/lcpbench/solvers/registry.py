@@ -173,10 +173,15 @@ def _builtin() -> list[Backend]:
     out += _qpsolvers_backends()
     for method, label in (("lemke", "Lemke"), ("pgs", "projected Gauss-Seidel"),
                           ("newton-min", "Newton on the min function"),
-                          ("newton-fb", "Newton on Fischer-Burmeister, line search")):
+                          ("newton-fb", "Newton on Fischer-Burmeister, line search"),
+                          ("enum", "enumeration of complementary bases (n <= 20)"),
+                          ("murty", "Murty's least-index pivoting"),
+                          ("bard", "Bard's pivoting"),
+                          ("pathsearch", "path search (pivoting along a homotopy)")):
+        exact = method in ("lemke", "enum", "murty", "bard", "pathsearch")
         out.append(Backend(
-            f"siconos-{method}", "lcp", "dense", method != "lemke",
-            "pivoting" if method == "lemke" else "iterative",
+            f"siconos-{method}", "lcp", "dense", method in ("pgs", "newton-min", "newton-fb"),
+            "pivoting" if exact else "iterative",
             "lcpbench.solvers.siconos_bridge", f"Siconos numerics (C): {label}, via a "
             "subprocess bridge to the system Python", extra="apt:python3-siconos",
             distribution="call:lcpbench.solvers.siconos_bridge:version",

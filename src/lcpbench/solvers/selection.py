@@ -23,7 +23,14 @@ class Selection:
     time_s : geometric-mean wall time of one solve over the probes (s).
     error : largest force error over the probes.
     reason : one line saying why.
-    evidence : per candidate: converged probes, worst error, mean time.
+    evidence : per candidate: converged probes, worst error, mean time (or
+        why it was ruled out or dropped, and at which stage).
+    confidence : the choice against the fastest other back-end that qualified:
+        ``versus``, ``ratio`` (how many times slower it is, geometric mean
+        over the probes), ``se`` (its standard error from the scatter over
+        the probes and the spread of the repeats), ``tied``.
+    ties : the candidates within the noise of the fastest, the choice among
+        them made by preferring the simpler profile, then an exact back-end.
     """
 
     backend: str | None
@@ -34,8 +41,10 @@ class Selection:
     error: float
     reason: str
     evidence: list[dict] = field(default_factory=list)
+    confidence: dict | None = None
+    ties: list[dict] = field(default_factory=list)
 
     def to_dict(self) -> dict:
         return {k: getattr(self, k) for k in
                 ("backend", "settings", "force_tol", "driver_tol", "time_s", "error", "reason",
-                 "evidence")}
+                 "evidence", "confidence", "ties")}

@@ -17,7 +17,14 @@ stopped at interpreter exit. A call that crashes the worker or runs past its
 Back-ends (our name -> Siconos solver ``SICONOS_LCP_<name>``), see
 :data:`METHODS`: ``lemke`` (lexicographic Lemke), ``pgs`` (projected
 Gauss-Seidel), ``newton-min`` (semismooth Newton on min(z, w)), ``newton-fb``
-(Newton on the Fischer-Burmeister function with a line search).
+(Newton on the Fischer-Burmeister function with a line search), ``enum``
+(enumeration of complementary bases, n ≤ :data:`ENUM_MAX_N`), and the
+pivot rules ``murty`` (least index), ``bard`` and ``pathsearch``.
+Not here: ``PATH`` (the Debian build has no PATH library: SICONOS_LCP_PATH
+returns info 1 after 0 iterations on every problem, even a 2×2 SPD one),
+``PIVOT`` with the path-search rule (aborts the process on a 12×12 SPD
+problem: an assertion in lcp_pivot_covering_vector) and ``PIVOT_LUMOD``
+(fails that 12×12 SPD problem).
 
 Install with ``apt-get install python3-siconos``.
 """
@@ -48,7 +55,13 @@ METHODS: dict[str, str] = {
     "pgs": "PGS",
     "newton-min": "NEWTONMIN",
     "newton-fb": "NEWTON_FB_FBLSA",
+    "enum": "ENUM",
+    "murty": "MURTY",
+    "bard": "BARD",
+    "pathsearch": "PATHSEARCH",
 }
+#: Largest n enumerated: 2^n complementary bases (2^20 ≈ 1e6 small solves).
+ENUM_MAX_N = 20
 
 #: Floor of the lcpbench natural residual accepted as SOLVED.
 ACCEPT_TOL = 1e-6
@@ -443,6 +456,16 @@ def solve_many(problems, settings: Settings, *, method: str = "lemke",
         accept_tol = ACCEPT_SLACK * max(ACCEPT_TOL, settings.eps or 0.0)
     if not probs:
         return []
+    if method == "enum" and any(q.size > ENUM_MAX_N for _, q in probs):
+        # one batch, one method: too large for any is answered for each, nothing sent
+        big = [q.size > ENUM_MAX_N for _, q in probs]
+        small = [(p, z0) for p, z0, b in zip(problems, warms, big) if not b]
+        done = iter(solve_many([p for p, _ in small], settings, method=method,
+                               warm=[z0 for _, z0 in small], timeout=timeout,
+                               accept_tol=accept_tol))
+        return [_failed(q.size, f"siconos enum: n = {q.size} > {ENUM_MAX_N}, 2^n complementary "
+                                "bases are beyond reach") if b else next(done)
+                for (_, q), b in zip(probs, big)]
 
     python = system_python()
     if not available():
@@ -521,7 +544,8 @@ def solve_lcp(M, q, settings: Settings, warm=None, *, method: str = "lemke",
         NewtonFB start from it; Lemke and NewtonMin ignore it (Lemke starts
         from its artificial basis, NewtonMin from z = w = 1).
     method : str
-        ``"lemke"``, ``"pgs"``, ``"newton-min"`` or ``"newton-fb"``.
+        A key of :data:`METHODS` (``"lemke"``, ``"pgs"``, ``"newton-min"``,
+        ``"newton-fb"``, ``"enum"``, ``"murty"``, ``"bard"``, ``"pathsearch"``).
     timeout : float
         Seconds allowed for the round trip; a worker that exceeds it is killed.
     accept_tol : float, optional
@@ -556,5 +580,5 @@ def solve_lcp(M, q, settings: Settings, warm=None, *, method: str = "lemke",
                       accept_tol=accept_tol)[0]
 
 
-__all__ = ["METHODS", "available", "version", "system_python", "solve_lcp",
+__all__ = ["ENUM_MAX_N", "METHODS", "available", "version", "system_python", "solve_lcp",
            "solve_many", "shutdown", "worker_info"]
