@@ -87,7 +87,11 @@ def test_repeated_sweep_stores_setup_solve_spread_and_machine(tmp_path):
     for r in runs:  # a converged run is timed three times, a failure once
         assert r["repeats"] == (3 if r["converged"] else 1)
         assert r["wall_time_min"] <= r["wall_time"] <= r["wall_time_max"]
-        assert 0.0 < r["setup_time"] < r["wall_time_max"]
+        # the compiled kernel (the active set's default path) times no parts: its
+        # setup (assembly) is inside its one call, stored as 0
+        assert 0.0 <= r["setup_time"] < r["wall_time_max"]
+        if r["backend"] == "lemke":
+            assert r["setup_time"] > 0.0  # building the dense LCP
     text = machine_section([sw], runs)
     assert "Machine and timing" in text and "`lemke`" in text
     rows = {(t["backend"], t["method"]): t for t in timing_rows(runs)}
