@@ -153,7 +153,7 @@ def test_solve_plot_without_matplotlib(tmp_path, capsys, monkeypatch):
         (["solve", "--tol", "0"], "tol"),
         (["solve", "--tol", "nan"], "tol"),
         (["solve", "--solver", "nope"], "solver"),
-        (["solve", "--method", "newton"], "method"),
+        (["solve", "--method", "newtonian"], "method"),
         (["solve", "--bogus"], "--bogus"),
         (["solve", "--settings", "ultra"], "settings"),
         (["lcp", "/no/such/file.dat"], "file.dat"),

@@ -1,0 +1,45 @@
+"""The README's standard-run table, from the committed results/sweep/summary.json.
+
+    python benchmarks/readme_table.py [results/sweep/summary.json]
+
+prints the markdown table (back-end, settings, driver, success, converged off
+the reference, median time, median force error, speed-ups), ordered by success
+then median time, so the README's numbers come from committed results.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+
+
+def _fmt(v, spec):
+    return "—" if v is None or (isinstance(v, float) and not math.isfinite(v)) else format(v, spec)
+
+
+def table(rows: list[dict]) -> str:
+    head = ("| back-end | settings | driver | success | converged, off the reference | "
+            "median time (ms) | median force error | × faster than baseline (analytic / fd) |\n"
+            "|---|---|---|---:|---:|---:|---:|---:|")
+    order = sorted(rows, key=lambda r: (r["backend"].startswith("baseline"), -r["success"],
+                                        r["time_median_ms"] if math.isfinite(
+                                            r["time_median_ms"]) else 1e9))
+    lines = [head]
+    for r in order:
+        driver = r["method"].replace("globalised+", "continuation (") + (
+            ")" if "+" in r["method"] else "")
+        speed = (f"{_fmt(r['speedup_vs_baseline'], '.0f')} / "
+                 f"{_fmt(r['speedup_vs_baseline_fd'], '.0f')}")
+        if r["backend"].startswith("baseline"):
+            speed = "—"
+        lines.append(f"| `{r['backend']}` | {r['settings']} | {driver} | "
+                     f"{100 * r['success']:.0f} % | {r['converged_but_off']} | "
+                     f"{_fmt(r['time_median_ms'], '.3g')} | {_fmt(r['error_median'], '.1e')} | "
+                     f"{speed} |")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    path = sys.argv[1] if len(sys.argv) > 1 else "results/sweep/summary.json"
+    print(table(json.load(open(path))))
