@@ -43,10 +43,9 @@ from ..errors import ProblemError
 from ..problems.checks import check_number
 from ..problems.scenes import ActuatorScene
 from ..solvers.selection import Selection
-from .grid import Grid, scene_from_key, scene_key
-from .jobs import ReferenceJob, RunJob, warm_up
+from .grid import Grid, scene_key
+from .jobs import ReferenceJob, RunJob
 from .metrics import error_of, geometric_mean, succeeded
-from .rows import repeated, solution_row
 from .select_evidence import COMMITTED_RUNS, compare, kind_of, preference, read_runs_csv, ruled_out
 from .store import DEFAULT_STORE, Store
 from .sweep import DEFAULT_TIME_LIMIT, sweep
@@ -78,19 +77,8 @@ class ProbeJob(RunJob):
 
     repeat_under: float = field(default=REPEAT_UNDER, kw_only=True, compare=False)
 
-    def _run(self, time_limit):
-        from ..api import solve
-
-        warm_up(self.backend, self.settings)
-        scene = scene_from_key(self.scene)
-
-        def once():
-            return solution_row(solve(scene, solver=self.backend, tol=self.tol,
-                                      settings=self.settings, method=self.driver))
-
-        first = once()
-        n = self.repeat if first["wall_time"] < self.repeat_under else 1
-        return [repeated(first, once, n)]
+    def repeats(self, first: dict) -> int:
+        return self.repeat if first["wall_time"] < self.repeat_under else 1
 
 
 def probe_scenes(scene_or_grid) -> list[ActuatorScene]:
