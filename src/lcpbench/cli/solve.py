@@ -167,9 +167,20 @@ def summary(result, extra=()) -> str:
                         f"closure {cert.closure:.3g} mm"),
         ("", f"max torque residual {cert.max_torque_residual:.3g} N*mm "
              f"({cert.relative_torque_residual:.3g} relative)"),
+        *_judge_rows(result),
         *extra,
     ]
     return format_rows(rows)
+
+
+def _judge_rows(result) -> list[tuple[str, str]]:
+    """The result judge's bound beside the rule it was held to (model/judge.py)."""
+    j = result.judgement
+    if j is None or not np.isfinite(j.force_error_bound):
+        return []
+    return [("force error", f"<= {j.force_error_bound:.2g} x {1e3 * j.force_unit:.6g} mN "
+                            f"(the judge's bound; allowed {j.force_tol:.2g}); one more "
+                            f"exact step gives {1e3 * j.judge_total_force:.6g} mN")]
 
 
 # -- commands -----------------------------------------------------------------
