@@ -168,7 +168,8 @@ def test_ruled_out_documented_looser_profiles_and_collected_failures():
              for s in ("default", "low", "high")]
     out = ruled_out(pairs, {KIND}, 1e-6, 1e-6, [])
     assert {("pgs", s) for s in ("default", "low", "high")} <= set(out)  # documented
-    assert ("osqp", "default") in out  # documented: misses 0.1 % at its own defaults
+    # a partial expectation (the judge refuses OSQP on some scenes) rules nothing out
+    assert ("osqp", "default") not in out
     assert ("osqp", "low") in out and ("clarabel", "low") in out  # eps 1e-3 > 1e-6
     assert not any(b == "active-set" for b, _ in out)  # exact: eps does not apply
     assert ("clarabel", "high") not in out and ("clarabel", "default") not in out

@@ -11,8 +11,13 @@ README.md and docs/ state and explain.
 - The root-finding baselines give ``invalid`` where one midspan reaction is
   not the answer: no contact (a pulling wall) and h ≤ 3 mm (a shape through
   the wall, the paper's Fig. 27b) (docs/bench.md "The baseline").
-- OSQP at its own defaults (settings ``default``) lands outside 0.1 % of
-  the total force (README "Results").
+- Clarabel, OSQP, ProxSuite (dense and sparse) and SCS end ``not_converged``
+  on part of the scenes: lcpbench's result judge refuses their answer where
+  their last contact step does not pass lcpbench's residual test or the force
+  error bound (README "Results", docs/solvers.md "The result judge"). They
+  succeed on the rest, so this is a *partial* expectation: it labels such a
+  failure expected, but neither leaves the back-end out of the main job nor
+  rules it out of selection.
 - Siconos' enumeration and its Murty, Bard and path-search pivot rules do
   not converge on the N = 140 contact step (docs/solvers.md).
 """
@@ -39,6 +44,7 @@ class Expectation:
     why: str
     settings: str | None = None
     min_links: int | None = None
+    partial: bool = False  # fails on some scenes only (never_converges and select ignore it)
 
 
 _NO_CONTACT_STEP = "does not converge on a contact step, cond(K) ≈ 1e8 (README, Results)"
@@ -56,9 +62,11 @@ EXPECTED: tuple[Expectation, ...] = (
                      ("murty", "the least-index rule reaches its 10000-pivot limit"),
                      ("bard", "Bard's rule cycles to its 10000-pivot limit"),
                      ("pathsearch", "the judge refuses its inaccurate last step"))),
-    Expectation("osqp", frozenset({OFF_REFERENCE}),
-                "ADMM at its own default accuracy misses 0.1 % of the force (README, Results)",
-                settings="default"),
+    *(Expectation(b, frozenset({"not_converged"}),
+                  "the result judge refuses an answer whose last step fails lcpbench's "
+                  "residual test or whose force error bound misses the success rule "
+                  "(README, Results; docs/solvers.md)", partial=True)
+      for b in ("clarabel", "osqp", "proxsuite-dense", "proxsuite-sparse", "qpsolvers-scs")),
 )
 
 
@@ -86,7 +94,8 @@ def never_converges(backend: str) -> Expectation | None:
     (PGS runs out its 10⁴ sweeps on every scene with contact) to confirm what is
     documented; the standard run keeps them."""
     for e in EXPECTED:
-        if e.backend == backend and e.settings is None and e.statuses == {"not_converged"}:
+        if (e.backend == backend and e.settings is None and not e.partial
+                and e.statuses == {"not_converged"}):
             return e
     return None
 

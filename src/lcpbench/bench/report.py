@@ -123,9 +123,11 @@ def failures(evaluated) -> str:
     n_exp = sum(v[0] for v in split.values())
     n_unexp = sum(v[1] for v in split.values())
     lead = (f"{n_exp + n_unexp} unsuccessful runs: **{n_exp} expected** (documented: "
-            "PGS/SOR and Newton-min do not converge on a contact step; the baselines are "
-            "invalid without contact or at h ≤ 3 mm; OSQP at its defaults misses 0.1 % of "
-            f"the force; see `lcpbench.bench.expected`), **{n_unexp} unexpected**.\n\n")
+            "PGS/SOR, Newton-min and Siconos' enumeration and pivot rules do not converge "
+            "on a contact step; the baselines are invalid without contact or at h ≤ 3 mm; "
+            "the result judge refuses Clarabel, OSQP, ProxSuite and SCS where their last "
+            "step fails lcpbench's residual test; see `lcpbench.bench.expected`), "
+            f"**{n_unexp} unexpected**.\n\n")
     return lead + _table(["back-end", "settings", "driver", "unsuccessful runs by status",
                           "expected", "unexpected"], rows, "llllrr")
 
