@@ -139,10 +139,9 @@ def test_no_tiny_contacts_are_reported(exact):
 
 def grazing_scene():
     """θ = 180°, N = 140, w = 0, the wall 1 µm below the top of the arc."""
-    scene = ActuatorScene(theta=180, height=1.0, links=140, weight=0.0)
     top = float(np.max(solve(ActuatorScene(theta=180, height=100.0, links=140,
                                            weight=0.0)).y))
-    return ActuatorScene(theta=180, height=top - 1e-3, links=140, weight=0.0), scene
+    return ActuatorScene(theta=180, height=top - 1e-3, links=140, weight=0.0)
 
 
 GRAZING_BACKENDS = ["active-set", "clarabel", "osqp", "proxsuite-dense", "lemke"]
@@ -150,7 +149,7 @@ GRAZING_BACKENDS = ["active-set", "clarabel", "osqp", "proxsuite-dense", "lemke"
 
 @pytest.fixture(scope="module")
 def grazing():
-    scene, _ = grazing_scene()
+    scene = grazing_scene()
     return scene, reference_force(scene)
 
 

@@ -135,10 +135,10 @@ def _converged(chain: Chain, alpha, sol: StepSolution, steps,
     ``forces_net``, or computed from ``step``), the back-end's multipliers beside it.
     Round-off in R is the judge's to clean (:mod:`lcpbench.model.judge`)."""
     net = sol.forces_net
-    if (net is None or not np.all(np.isfinite(net))) and step is not None:
+    if net is None or not np.all(np.isfinite(net)):
+        if step is None:
+            raise ValueError("a converged step needs its forces_net or its ContactStep")
         net = step_residuals(step, sol.u)[1]
-    if net is None:
-        net = sol.forces_upper - sol.forces_lower
     upper, lower = split_reactions(chain, net, sol.u)
     reason = "converged" if sol.solved else "converged (last step inaccurate)"
     return DriverOutput(alpha, upper, lower, True, reason, steps, last_step=sol,

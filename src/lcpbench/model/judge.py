@@ -187,7 +187,8 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
     """The step's exact solution by block principal pivoting from contact sets up/lo.
 
     Returns ``(u, net reaction, rounds, round-off of each wall reaction, the
-    largest round-off of any node)`` or None if it did not settle.
+    largest round-off of any node, S = max_i (|H||u| + |c|)_i)`` or None if it
+    did not settle.
     Nodes in ``up`` sit on the upper wall, in ``lo`` on the lower; the others
     are solved for (a banded solve, refined once in factored form). A wall
     that pulls by more than ``pull`` (N) releases its node; a node more than
@@ -228,7 +229,8 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
         change = release_up | release_lo | join_up | join_lo
         count = int(np.count_nonzero(change))
         if count == 0:
-            return u, net, rounds, np.where(up | lo, roundoff, 0.0), float(np.max(roundoff))
+            return (u, net, rounds, np.where(up | lo, roundoff, 0.0), float(np.max(roundoff)),
+                    float(np.max(size, initial=0.0)))
         # Júdice–Pires: exchange every infeasible node while their number falls; after
         # STALL rounds without progress, only the first one (Murty's least-index rule,
         # finite for the P-matrix of a positive definite step)
@@ -264,12 +266,10 @@ def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0) -> JudgeSt
     found = _pivot_step(step, up, lo, pull)
     if found is None:
         return None
-    u, net, rounds, roundoff, worst = found
+    u, net, rounds, roundoff, worst, term_size = found
     upper, lower = split_reactions(chain, net, u)
     dalpha = float(np.max(np.abs(step.predict_alpha(u) - alpha), initial=0.0))
-    size = banded_matvec(np.abs(step.bands), np.abs(u)) + np.abs(step.linear)
-    return JudgeStep(upper, lower, rounds, dalpha, roundoff, worst, noise,
-                     float(np.max(size, initial=0.0)))
+    return JudgeStep(upper, lower, rounds, dalpha, roundoff, worst, noise, term_size)
 
 
 def _contraction(step_sizes: list[float], judge_dalpha: float) -> float:

@@ -65,7 +65,7 @@ def step_lcp(step, scaled: bool = True):
     return form, M, q, dz, dw
 
 
-def complete_heights(step, u: np.ndarray) -> np.ndarray:
+def _complete_heights(step, u: np.ndarray) -> np.ndarray:
     """Re-solve exactly the heights of the nodes that have no wall row."""
     rows = np.isfinite(step.upper) | np.isfinite(step.lower)
     F = np.flatnonzero(~rows)
@@ -88,7 +88,7 @@ def step_residuals(step, u: np.ndarray) -> tuple[dict, np.ndarray]:
            "complementarity": np.inf}
     if not np.all(np.isfinite(u)):
         return nan, np.full(step.size, np.nan)
-    u = complete_heights(step, np.asarray(u, dtype=float))
+    u = _complete_heights(step, np.asarray(u, dtype=float))
     R = -step.gradient(u)
     L, F = float(step.length_scale), float(step.force_scale)
     up, lo = np.isfinite(step.upper), np.isfinite(step.lower)
