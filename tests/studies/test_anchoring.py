@@ -66,6 +66,7 @@ def test_anchoring_study_quick_run_writes_its_files(tmp_path):
              "anchoring.json", "README.md", "anchoring-force-pressure.png",
              "anchoring-shapes.png"}
     assert names <= {p.name for p in tmp_path.iterdir()}
+    assert set(info["written"]) == names  # a fresh folder: every file is new
     summary = json.loads((tmp_path / "anchoring.json").read_text())
     assert summary["all_converged"] and summary["quick"]
     for c in summary["contact_pressures"]:  # all three touch after the single model does
