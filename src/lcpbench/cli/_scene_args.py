@@ -82,8 +82,9 @@ def add_scene_options(parser) -> None:
     a("--height", type=quantity_type("length", "height"), default=DEFAULT_HEIGHT,
       metavar="MM", help=f"wall height above the pins; a bare number is mm, or give the "
                          f"unit: 3mm, 0.003m (default {DEFAULT_HEIGHT:g})")
-    a("--links", type=links_arg, default=DEFAULT_LINKS, metavar="N|auto",
-      help=f"number of links, or 'auto' (default {DEFAULT_LINKS})")
+    a("--links", type=links_arg, default=None, metavar="N|auto",
+      help=f"number of links, or 'auto' (default {DEFAULT_LINKS}; with --sections N over "
+           f"the whole length, default {DEFAULT_LINKS} per {DEFAULT_LENGTH:g} mm)")
     a("--length", type=quantity_type("length", "length"), default=DEFAULT_LENGTH,
       metavar="MM", help=f"section length; bare: mm, or 30mm, 0.03m (default "
                          f"{DEFAULT_LENGTH:g})")
@@ -94,6 +95,29 @@ def add_scene_options(parser) -> None:
       metavar="NPMM", help=f"weight per length; bare: N/mm, or 0.245N/m; 0 turns gravity "
                            f"off (default {DEFAULT_WEIGHT:g})")
     a("--channel", action="store_true", help="a second wall at -height (the paper's fixture)")
+
+
+def add_section_options(parser) -> None:
+    """Add ``--sections`` and ``--gravity``: a row of sections instead of one.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The sub-command's parser; :func:`scene_from` reads the result.
+    """
+    from ..problems.sections import SECTIONS_SYNTAX
+
+    parser.add_argument(
+        "--sections", default=None, metavar="SPEC",
+        help=f"a row of bending sections pinned at its two ends (SectionedScene): "
+             f"{SECTIONS_SYNTAX}; e.g. 150:30,-90:20:40 (fields left out take --length, "
+             f"--EI, --weight). 'anchoring' is the paper's 3-section actuator (Fig. 1b): "
+             f"sections -theta, +theta, -theta of --length each, theta from --theta or "
+             f"--pressure, always in the channel (walls at +-height)")
+    parser.add_argument(
+        "--gravity", choices=("away", "toward"), default="away",
+        help="with --sections: the self-weight acts away from the upper wall (default, the "
+             "paper's model) or toward it")
 
 
 def add_tol_option(parser, what: str = "convergence threshold on max|d alpha|") -> None:
@@ -127,7 +151,7 @@ def add_solver_options(parser, default: str = DEFAULT_SOLVER) -> None:
                              "tolerance low 1e-3, mid 1e-6, high 1e-9 (default: default)")
 
 
-def scene_from(args, *, resolve_links: bool = True) -> ActuatorScene:
+def scene_from(args, *, resolve_links: bool = True):
     """The scene described by the options of :func:`add_scene_options`.
 
     ``--links auto`` runs the discretisation study of Sec. III-D (several
@@ -141,9 +165,10 @@ def scene_from(args, *, resolve_links: bool = True) -> ActuatorScene:
 
     Returns
     -------
-    ActuatorScene
+    ActuatorScene or SectionedScene
         With theta from ``--theta``, or from ``--pressure`` through the
-        calibration of ``--actuator`` or ``--fit``.
+        calibration of ``--actuator`` or ``--fit``; a SectionedScene with
+        ``--sections`` (where the parser has it).
 
     Raises
     ------
@@ -166,11 +191,49 @@ def scene_from(args, *, resolve_links: bool = True) -> ActuatorScene:
     return scene.with_links(n)
 
 
-def _scene_as_given(args) -> ActuatorScene:
+def _scene_as_given(args):
+    sections = getattr(args, "sections", None)
+    if sections is not None and sections.strip() != "anchoring":
+        return _sectioned(args, sections)
+    if getattr(args, "gravity", "away") != "away" and sections is None:
+        raise ProblemError("--gravity needs --sections (the single section's weight acts "
+                           "away from the wall, as in the paper)")
     for warning in implausible(args.theta, args.height, args.length):
         print(f"lcpbench: warning: {warning}", file=sys.stderr)
-    kw = {"height": args.height, "links": args.links, "length": args.length, "EI": args.EI,
+    links = DEFAULT_LINKS if args.links is None else args.links
+    kw = {"height": args.height, "links": links, "length": args.length, "EI": args.EI,
           "weight": args.weight, "channel": args.channel}
+    if sections is not None:  # the anchoring preset: theta as for one section
+        if args.links == "auto":
+            raise ProblemError("--links auto is for one section; give N (a multiple of 3) "
+                               "with --sections anchoring")
+        one = _single(args, {**kw, "links": DEFAULT_LINKS})
+        from ..problems.sections import anchoring_actuator
+
+        return anchoring_actuator(one.theta, args.height, links=args.links,
+                                  length=args.length, EI=args.EI, weight=args.weight,
+                                  gravity=_GRAVITY[args.gravity])
+    return _single(args, kw)
+
+
+_GRAVITY = {"away": "-y", "toward": "+y"}
+
+
+def _sectioned(args, text: str):
+    """``--sections THETA:LENGTH,...``: the SectionedScene it describes."""
+    from ..problems.sections import SectionedScene, parse_sections
+
+    if args.theta is not None or args.pressure is not None:
+        raise ProblemError("--sections gives every section its own theta: drop --theta and "
+                           "--pressure (or use --sections anchoring)")
+    if args.links == "auto":
+        raise ProblemError("--links auto is for one section; give N with --sections")
+    secs = parse_sections(text, length=args.length, EI=args.EI, weight=args.weight)
+    return SectionedScene(sections=secs, height=args.height, links=args.links,
+                          channel=args.channel, gravity=_GRAVITY[args.gravity])
+
+
+def _single(args, kw: dict) -> ActuatorScene:
     if args.pressure is None:
         if args.fit is not None:
             raise ProblemError("--fit needs --pressure")

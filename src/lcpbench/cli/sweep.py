@@ -2,7 +2,7 @@
 
 ::
 
-    lcpbench sweep [--grid paper|hard] [--theta A:B:STEP] [--height A:B:STEP] ...
+    lcpbench sweep [--grid paper|hard|anchoring] [--theta A:B:STEP] [--height A:B:STEP] ...
                    [--solvers A,B] [--settings P,Q] [--continuation [PREDICTOR]]
                    [--store PATH] [--out DIR] [--jobs K] [--time-limit S] [--repeat K]
     lcpbench report [--store PATH] [--out DIR] [--all] [--format F] [--table2-height MM] [--no-plots]
@@ -79,10 +79,15 @@ def register(subparsers) -> None:
                     "grid (all parameters but theta equal) in order of theta, each scene "
                     "started from its neighbours' answers; those runs are stored as driver "
                     "globalised+secant (or +previous), apart from the cold ones.")
-    sw.add_argument("--grid", choices=("paper", "hard"), default="paper",
+    sw.add_argument("--grid", choices=("paper", "hard", "anchoring"), default="paper",
                     help="paper: the theta x height grid below (default); hard: the "
                          "hard-case suite (theta 170-180, h down to 0.02 l, N up to 2000, "
-                         "grazing, no contact, heavy, EI 1-1000, channel)")
+                         "grazing, no contact, heavy, EI 1-1000, channel); anchoring: the "
+                         "paper's 3-section actuator (sections -theta, +theta, -theta of "
+                         "--length each, pinned at its two ends, in the channel of walls at "
+                         "+-height) over theta x height (default theta 60:180:20, height "
+                         "4.5,5.5,6.5, links 420 over the whole actuator, a multiple of 3; "
+                         "no baseline: the appendix's baseline models one section)")
     sw.add_argument("--theta", default=None, metavar="A:B:STEP",
                     help="bend angles, degrees: start:stop:step (stop included), a comma list "
                          "or one value; items may carry units: 90deg:180deg:30deg, 2.6rad "
@@ -90,8 +95,9 @@ def register(subparsers) -> None:
     sw.add_argument("--height", default=None, metavar="A:B:STEP",
                     help="wall heights, mm, or with units: 2mm:7mm:1mm, 0.002m,0.003m "
                          "(default 2:7:1)")
-    sw.add_argument("--links", default=str(DEFAULT_LINKS), metavar="LIST",
-                    help=f"numbers of links (default {DEFAULT_LINKS})")
+    sw.add_argument("--links", default=None, metavar="LIST",
+                    help=f"numbers of links (default {DEFAULT_LINKS}; --grid anchoring: "
+                         f"{3 * DEFAULT_LINKS} over the whole actuator)")
     sw.add_argument("--EI", default=None, metavar="LIST", help="bending stiffnesses, N*mm^2 "
                     f"(default {DEFAULT_EI:g})")
     sw.add_argument("--weight", default=None, metavar="LIST",
@@ -245,20 +251,33 @@ def _positive_number(value, name) -> float:
 
 def _sweep_scenes(args) -> list:
     """The scenes of ``--grid``, validated before anything runs."""
+    from ..bench import grid as grids
     from ..bench.grid import Grid, hard_scenes, parse_range
 
     if args.grid == "hard":
         given = [f"--{n}" for n in ("theta", "height", "EI", "weight", "length")
                  if getattr(args, n) is not None] + (["--channel"] if args.channel else [])
-        if given or args.links != str(DEFAULT_LINKS):
+        if given or args.links is not None:
             raise ProblemError("--grid hard is a fixed list of scenes; it takes no "
                                f"{', '.join(given) or '--links'}")
         return hard_scenes()
+    if args.grid == "anchoring":
+        kw = {"theta": parse_range(_in_model_units(args.theta or grids.ANCHORING_THETA,
+                                                   "theta"), "theta"),
+              "height": parse_range(_in_model_units(args.height or grids.ANCHORING_HEIGHT,
+                                                    "height"), "height"),
+              "links": parse_range(args.links or str(grids.ANCHORING_LINKS), "links",
+                                   integer=True)}
+        for name in ("EI", "weight", "length"):
+            values = _float_list(getattr(args, name), name)
+            if values is not None:
+                kw[name] = values
+        return grids.anchoring_scenes(**kw)  # validates every scene before anything runs
     grid_kw = {"theta": parse_range(_in_model_units(args.theta or "10:180:10", "theta"),
                                     "theta"),
                "height": parse_range(_in_model_units(args.height or "2:7:1", "height"),
                                      "height"),
-               "links": parse_range(args.links, "links", integer=True),
+               "links": parse_range(args.links or str(DEFAULT_LINKS), "links", integer=True),
                "channel": args.channel}
     for name in ("EI", "weight", "length"):
         values = _float_list(getattr(args, name), name)
@@ -305,6 +324,14 @@ def cmd_sweep(args) -> int:
     from ..bench.store import Store
     from ..bench.sweep import plan_sweep, sweep
 
+    if args.grid == "anchoring":
+        if args.baseline not in (None, "none"):
+            raise ProblemError("--grid anchoring has no baseline: the appendix's root-finding "
+                               "baseline models one section (use --baseline none)")
+        if args.continuation is not None:
+            raise ProblemError("--continuation runs along theta of one-section grids; not "
+                               "with --grid anchoring")
+        args.baseline = "none"
     _apply_preset(args)
     scenes = _sweep_scenes(args)
     methods = [m.strip() for m in args.method.split(",") if m.strip()]

@@ -344,8 +344,46 @@ def _nearest(sections, total: float, n: int) -> str:
     return "the nearest that do: N = " + " or ".join(map(str, near))
 
 
-#: The paper's anchoring actuator (Fig. 1b, Sec. IV-C): three identical 30 mm sections.
-ANCHORING_SECTIONS = 3
+#: The section layouts known by name (``lcpbench solve --sections NAME``).
+PRESETS = ("anchoring",)
+SECTIONS_SYNTAX = ("THETA:LENGTH[:EI[:WEIGHT]] per section, comma-separated (degrees, mm, "
+                   "N*mm^2, N/mm; theta > 0 bends toward the upper wall), or "
+                   + " or ".join(repr(p) for p in PRESETS))
+
+
+def parse_sections(text: str, *, length: float = DEFAULT_LENGTH, EI: float = DEFAULT_EI,
+                   weight: float = DEFAULT_WEIGHT) -> tuple[Section, ...]:
+    """Sections from the compact text ``"150:30,-150:30:20,150"`` (θ[:ℓ[:EI[:w]]] each).
+
+    A field left out takes ``length``, ``EI`` or ``weight``. Raises
+    ProblemError naming ``sections`` (and the item) for anything else.
+    """
+    if not isinstance(text, str) or not text.strip():
+        raise ProblemError(f"sections must be {SECTIONS_SYNTAX}, got {describe(text)}")
+    out = []
+    for k, item in enumerate(text.split(",")):
+        fields = item.strip().split(":")
+        try:
+            if not 1 <= len(fields) <= 4 or not all(f.strip() for f in fields):
+                raise ValueError
+            values = [float(f) for f in fields]
+        except ValueError:
+            raise ProblemError(f"sections must be {SECTIONS_SYNTAX}; item {k + 1} is "
+                               f"{item.strip()!r}") from None
+        out.append(_section(k, tuple(values + [length, EI, weight][len(values) - 1:])))
+    return tuple(out)
+
+
+def sections_text(scene: SectionedScene) -> str:
+    """The compact text of a scene's sections (θ:ℓ, with :EI:w where not the defaults)."""
+    parts = []
+    for s in scene.sections:
+        item = f"{s.theta:g}:{s.length:g}"
+        if s.EI != DEFAULT_EI or s.weight != DEFAULT_WEIGHT:
+            item += f":{s.EI:g}:{s.weight:g}"
+        parts.append(item)
+    return ",".join(parts)
+
 
 
 def anchoring_actuator(theta: float = 150.0, height: float = 5.5, *, links: int | None = None,
