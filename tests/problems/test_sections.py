@@ -141,3 +141,10 @@ def test_anchoring_actuator_checks_theta_and_links():
         anchoring_actuator(-10.0)
     with pytest.raises(ProblemError, match="links: N = 100"):
         anchoring_actuator(150.0, links=100)
+
+
+def test_summary_names_the_sections_not_one_theta():
+    res = lcpbench.solve(anchoring_actuator(120.0, 5.5, links=60, gravity="+y"))
+    line = res.summary().splitlines()[1]
+    assert "sections -120:30,120:30,-120:30" in line and "weight toward" in line
+    assert "θ = " not in line

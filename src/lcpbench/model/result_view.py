@@ -104,9 +104,17 @@ def _scene_line(res: ContactResult) -> str:
         return f"{s!r}, N = {res.links}"
     names = {"theta": ("θ", "°"), "height": ("h", " mm"), "length": ("ℓ", " mm"),
              "EI": ("EI", " N·mm²"), "weight": ("w", " N/mm"), "load": ("q", " N/mm")}
-    parts = [f"{sym} = {getattr(s, k):g}{unit}" for k, (sym, unit) in names.items()
-             if hasattr(s, k)]
-    parts.insert(2 if hasattr(s, "theta") else 1, f"N = {res.links}")
+    if hasattr(s, "sections"):  # a row of sections: θ:ℓ[:EI:w] each, not one θ
+        from ..problems.sections import sections_text
+
+        parts = [f"sections {sections_text(s)} (θ:ℓ[:EI:w])", f"N = {res.links}",
+                 f"h = {s.height:g} mm", f"ℓ = {s.length:g} mm"]
+        if s.gravity == "+y":
+            parts.append("weight toward the upper wall")
+    else:
+        parts = [f"{sym} = {getattr(s, k):g}{unit}" for k, (sym, unit) in names.items()
+                 if hasattr(s, k)]
+        parts.insert(2 if hasattr(s, "theta") else 1, f"N = {res.links}")
     if getattr(s, "channel", False):
         parts.append("channel (walls at ±h)")
     return f"{type(s).__name__}: " + ", ".join(parts)
