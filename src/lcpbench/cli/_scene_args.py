@@ -96,6 +96,26 @@ def add_scene_options(parser) -> None:
     a("--channel", action="store_true", help="a second wall at -height (the paper's fixture)")
 
 
+def add_profile_options(parser) -> None:
+    """Add ``--wall-profile FILE.csv``, ``--lower-profile FILE.csv`` and ``--profile-kind``.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The sub-command's parser (``solve``); :func:`scene_from` reads them.
+    """
+    a = parser.add_argument
+    a("--wall-profile", default=None, metavar="FILE.csv",
+      help="upper wall of any profile y = h(x) instead of the flat wall at --height: a CSV "
+           "with a header line, then x,y rows in mm covering 0..length, y > 0")
+    a("--lower-profile", default=None, metavar="FILE.csv",
+      help="with --channel and --wall-profile: the lower wall's profile (y < 0); default "
+           "the mirror image y = -h(x) of the upper wall")
+    a("--profile-kind", choices=("pchip", "linear", "cubic"), default="pchip",
+      help="interpolation of the profile tables: pchip (C1, no overshoot; default), "
+           "linear (piecewise linear: kinks), cubic (natural spline, C2)")
+
+
 def add_tol_option(parser, what: str = "convergence threshold on max|d alpha|") -> None:
     """Add ``--tol RAD``, the driver's convergence threshold.
 
@@ -170,7 +190,7 @@ def _scene_as_given(args) -> ActuatorScene:
     for warning in implausible(args.theta, args.height, args.length):
         print(f"lcpbench: warning: {warning}", file=sys.stderr)
     kw = {"height": args.height, "links": args.links, "length": args.length, "EI": args.EI,
-          "weight": args.weight, "channel": args.channel}
+          "weight": args.weight, "channel": args.channel, **_profiles(args)}
     if args.pressure is None:
         if args.fit is not None:
             raise ProblemError("--fit needs --pressure")
@@ -189,3 +209,22 @@ def _scene_as_given(args) -> ActuatorScene:
                                f"{args.fit!r}") from None
         actuator = linear_calibration(slope, intercept)
     return scene_from_pressure(args.pressure, actuator, **kw)
+
+
+def _profiles(args) -> dict:
+    """The wall profiles of ``--wall-profile``/``--lower-profile`` as scene fields."""
+    upper = getattr(args, "wall_profile", None)
+    lower = getattr(args, "lower_profile", None)
+    if upper is None and lower is None:
+        return {}
+    from ..problems.walls import load_profile_csv
+
+    if upper is None:
+        raise ProblemError("--lower-profile needs --wall-profile and --channel")
+    if lower is not None and not args.channel:
+        raise ProblemError("--lower-profile needs --channel")
+    kind = getattr(args, "profile_kind", "pchip")
+    out = {"wall_profile": load_profile_csv(upper, kind, parameter="--wall-profile")}
+    if lower is not None:
+        out["lower_profile"] = load_profile_csv(lower, kind, parameter="--lower-profile")
+    return out

@@ -12,8 +12,10 @@ globalised and Newton schemes line-search the merit
 Gauss–Newton model the step minimises, plus an l1 penalty σ·Σ(penetration of
 the exact walls), σ = PENALTY × the largest reaction: the walls move under the
 nodes as x moves, and the step that puts a node back on its wall costs energy
-that only the penalty repays (as in SQP's exact-penalty merit). The undamped
-scheme takes full steps.
+that only the penalty repays (as in SQP's exact-penalty merit). Near the
+answer a step the merit would cut below LOCAL_CUT is taken in full (the
+undamped fixed point, which converges locally). The undamped scheme takes
+full steps throughout.
 It stops when max|Δα| < tol and the chain is on the right side of the exact
 walls (h(x) at the new x) to GEOMETRY_SLACK·ℓ: one more step is taken when
 the walls moved under the nodes by more. The answer is judged like every
@@ -49,6 +51,12 @@ from .profile import profile_gaps, profile_step, wall_terms, walls_at
 GEOMETRY_SLACK = 1e-7
 #: the line search's penalty on penetration, in units of the largest reaction
 PENALTY = 2.0
+#: near the answer (max|Δα| < NEWTON_SWITCH) a step the merit cuts below this
+#: length is taken in full instead: the lagged fixed point converges there
+#: (the undamped scheme's local convergence), while the merit, which changes
+#: with the lagged reactions and the walls under the moving nodes, can refuse
+#: every short step (a stenosis crest, two contact nodes: 200 steps of 2e-6)
+LOCAL_CUT = 1.0 / 64
 #: passes of "clip the heights to the walls at the nodes' x" for the first iterate
 START_PASSES = 5
 
@@ -148,6 +156,11 @@ def run_profile_driver(chain: Chain, solver, *, tol: float, max_outer: int, meth
                     if phi_t <= phi + 1e-4 * t * min(slope, 0.0) + noise:
                         break
                 t *= 0.5
+                if t < LOCAL_CUT and dalpha < NEWTON_SWITCH:  # near the answer: the full
+                    trial = alpha_from_heights(chain, sol.u, alpha)  # (undamped) step
+                    if trial is not None:
+                        t = 1.0
+                        break
                 if t < 1e-12:
                     steps.append(StepRecord(sol.iterations, sol.status.value,
                                             sol.solve_time, t_asm, 0.0, dalpha, E,

@@ -74,8 +74,8 @@ class WallProfile:
         bad = ~(np.isfinite(xs) & np.isfinite(ys))
         if bad.any():
             i = int(np.argmax(bad))
-            raise ProblemError(f"{parameter}: point {i + 1} is not finite (x = {xs[i]!r}, "
-                               f"y = {ys[i]!r}); NaN and inf are not allowed")
+            raise ProblemError(f"{parameter}: point {i + 1} is not finite (x = {float(xs[i])!r}, "
+                               f"y = {float(ys[i])!r}); NaN and inf are not allowed")
         if np.any(np.diff(xs) <= 0):
             i = int(np.argmax(np.diff(xs) <= 0))
             raise ProblemError(f"{parameter}: x must be strictly increasing, but point "
