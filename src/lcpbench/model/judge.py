@@ -276,6 +276,11 @@ def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0,
                     + np.abs(step.linear))
     noise = ROUNDOFF_ULPS * EPS * size
     up, lo = on_upper.copy(), on_lower.copy()  # a reaction off the wall is not contact
+    if has_profile(chain) and forces is not None:
+        # the answer sits on the walls at the x of its last step, h'·Δx from the exact
+        # wall: its nodes that carry force start on the wall too (else dozens of rounds)
+        up |= (forces[0] > pull) & np.isfinite(step.upper)
+        lo |= (forces[1] > pull) & np.isfinite(step.lower)
     up &= ~lo | (step.upper - step.origin <= step.origin - step.lower)  # the nearer wall
     lo &= ~up
     found = _pivot_step(step, up, lo, pull)

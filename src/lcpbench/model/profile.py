@@ -139,20 +139,6 @@ def profile_step(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
     return replace(step, linear=step.linear - s, nodal_load=step.nodal_load + s), at
 
 
-def wall_terms(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
-               forces_lower: np.ndarray) -> float:
-    """Σ μ̄ h(x_k) − Σ ν̄ l(x_k) at α (N·mm): Φ = E − this (the merit's wall part)."""
-    x = node_x(chain, alpha)
-    total = 0.0
-    if chain.upper_profile is not None:
-        total += float(np.sum(np.where(forces_upper > 0, forces_upper, 0.0)
-                              * chain.upper_profile(x)))
-    if chain.lower_profile is not None:
-        total -= float(np.sum(np.where(forces_lower > 0, forces_lower, 0.0)
-                              * chain.lower_profile(x)))
-    return total
-
-
 def profile_gaps(chain: Chain, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
     """Exact gaps of the free nodes: h(x_k) − y_k, and y_k − l(x_k) in a channel (mm).
 

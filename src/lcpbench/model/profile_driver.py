@@ -31,7 +31,7 @@ import numpy as np
 
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
-from .chain import alpha_from_heights, energy, heights
+from .chain import alpha_from_heights, energy, heights, node_positions
 from .driver import (
     NEWTON_SWITCH,
     DriverOutput,
@@ -44,7 +44,7 @@ from .driver import (
 )
 from .judge import split_reactions
 from .newton import newton_step
-from .profile import profile_gaps, profile_step, wall_terms, walls_at
+from .profile import profile_gaps, profile_step, walls_at
 
 #: the driver's own criterion on the exact walls: penetration at most this × ℓ
 #: (a tenth of the judge's GEOMETRY_TOL)
@@ -71,12 +71,21 @@ def _penetration(chain: Chain, alpha: np.ndarray) -> float:
     return worst
 
 
-def _violation(chain: Chain, alpha: np.ndarray) -> float:
-    """Σ of the penetrations of the exact walls over the wall rows (mm)."""
-    up, lo = profile_gaps(chain, alpha)
-    total = float(np.sum(np.maximum(-up[np.isfinite(chain.upper)], 0.0)))
-    if lo is not None:
-        total += float(np.sum(np.maximum(-lo[np.isfinite(chain.lower)], 0.0)))
+def _merit(chain: Chain, alpha: np.ndarray, mu_up: np.ndarray, mu_lo: np.ndarray,
+           sigma: float) -> float:
+    """P = E − Σ μ̄ h(x_k) + Σ ν̄ l(x_k) + σ·Σ(penetration of the exact walls) (N·mm):
+    one forward kinematics and one evaluation of each profile."""
+    x, y = node_positions(chain, alpha)
+    xf, yf = x[chain.free_nodes], y[chain.free_nodes]
+    total = energy(chain, alpha)
+    for prof, mu, limit, sign in ((chain.upper_profile, mu_up, chain.upper, 1.0),
+                                  (chain.lower_profile, mu_lo, chain.lower, -1.0)):
+        rows = np.isfinite(limit)
+        wall = prof(xf) if prof is not None else limit
+        if prof is not None:
+            total -= sign * float(np.sum(np.where(mu > 0, mu, 0.0) * wall))
+        if sigma:
+            total += sigma * float(np.sum(np.maximum(sign * (yf - wall), 0.0)[rows]))
     return total
 
 
@@ -145,14 +154,14 @@ def run_profile_driver(chain: Chain, solver, *, tol: float, max_outer: int, meth
                                   if sol.forces_net is not None else 0.0,
                                   float(np.max(mu_up, initial=0.0)),
                                   float(np.max(mu_lo, initial=0.0)), chain.force_scale)
-            phi = E - wall_terms(chain, alpha, mu_up, mu_lo) + sigma * _violation(chain, alpha)
-            slope = float(step.gradient(u) @ d) - sigma * _violation(chain, alpha)
+            phi = _merit(chain, alpha, mu_up, mu_lo, sigma)
+            violation = (phi - _merit(chain, alpha, mu_up, mu_lo, 0.0)) / sigma
+            slope = float(step.gradient(u) @ d) - sigma * violation
             noise = 1e-12 * (abs(phi) + float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6)
             while True:
                 trial = alpha_from_heights(chain, u + t * d, alpha)
                 if trial is not None:
-                    phi_t = (energy(chain, trial) - wall_terms(chain, trial, mu_up, mu_lo)
-                             + sigma * _violation(chain, trial))
+                    phi_t = _merit(chain, trial, mu_up, mu_lo, sigma)
                     if phi_t <= phi + 1e-4 * t * min(slope, 0.0) + noise:
                         break
                 t *= 0.5

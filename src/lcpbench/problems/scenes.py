@@ -265,14 +265,15 @@ class ActuatorScene:
                 np.full(n - 1, -np.inf)
         else:  # rows for the nodes that can reach the wall's lowest point; h at the arc's x
             x = np.concatenate(([0.0], np.cumsum(a * np.cos(rest_alpha))))[interior]
+            # (in a channel, the same rows for both walls: the LCP form pairs them)
             grid = np.linspace(*self.x_reach, 2001)
-            can = reachable(s, self.length, float(np.min(prof_up(grid))), "pinned-pinned")
-            upper = np.where(can, prof_up(x), np.inf)
-            lower = np.full(n - 1, -np.inf)
+            near = float(np.min(prof_up(grid)))
             if prof_lo is not None:
-                can_lo = reachable(s, self.length, float(np.min(-prof_lo(grid))),
-                                   "pinned-pinned")
-                lower = np.where(can_lo, prof_lo(x), -np.inf)
+                near = min(near, float(np.min(-prof_lo(grid))))
+            can = reachable(s, self.length, near, "pinned-pinned")
+            upper = np.where(can, prof_up(x), np.inf)
+            lower = np.where(can, prof_lo(x), -np.inf) if prof_lo is not None else \
+                np.full(n - 1, -np.inf)
         return Chain(
             links=n,
             link_length=a,
