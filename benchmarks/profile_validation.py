@@ -74,14 +74,15 @@ def validation(mod) -> tuple[list[str], dict]:
         e_lo = (abs(res.forces_lower.sum() - ref.forces_lower.sum()) / F0
                 if channel else float("nan"))
         e_s = max(np.max(np.abs(res.y - ref.y)), np.max(np.abs(res.x - ref.x))) / scene.length
-        ok = res.converged and ref.success and coarse.converged
+        ok = res.converged and ref.success
         worst["force"] = max(worst["force"], e_f, 0.0 if np.isnan(e_lo) else e_lo)
         worst["shape"] = max(worst["shape"], e_s)
         worst["n"] += 1
         F = res.total_force + (res.forces_lower.sum() if channel else 0.0)
         lines.append(f"| {p.id}{'' if ok else ' (NOT converged)'} | {theta} | {1e3 * F:.4g} | "
                      f"{e_f:.1e} | {'' if np.isnan(e_lo) else f'{e_lo:.1e}'} | {e_s:.1e} | "
-                     f"{coarse.outer_iterations} ({f_coarse.outer_iterations}) | "
+                     f"{coarse.outer_iterations}{'' if coarse.converged else ' refused*'} "
+                     f"({f_coarse.outer_iterations}) | "
                      f"{res.outer_iterations} ({f_fine.outer_iterations}) |")
     return lines, worst
 
@@ -167,7 +168,9 @@ def main() -> None:
         "",
         f"Largest relative force error {worst['force']:.1e}, largest shape error "
         f"{worst['shape']:.1e} ℓ (the issue's rule: 1e-6). Outer iterations in brackets: the "
-        "flat wall at the profile's lowest height (same θ, N, tol).",
+        "flat wall at the profile's lowest height (same θ, N, tol). refused*: the driver "
+        "stopped (max|Δα| < tol) but lcpbench's judge did not accept the answer (its force "
+        "error bound above min(1e-3, 100·tol)): a status, the answer is not marked converged.",
         "",
         *table,
         "",

@@ -89,7 +89,7 @@ def _merit(chain: Chain, alpha: np.ndarray, mu_up: np.ndarray, mu_lo: np.ndarray
     return total
 
 
-def _profile_start(chain: Chain, alpha0: np.ndarray):
+def _clipped(chain: Chain, alpha0: np.ndarray):
     """Heights clipped to the walls at the nodes' x, a few times (x moves with them)."""
     alpha = alpha0
     u = heights(chain, alpha0)
@@ -100,6 +100,19 @@ def _profile_start(chain: Chain, alpha0: np.ndarray):
         if trial is None:
             return u, None
         alpha = trial
+    return u, alpha
+
+
+def _profile_start(chain: Chain, alpha0: np.ndarray):
+    """The clipped shape of ``alpha0``; where a steep wall makes clipping tear the
+    chain (neighbours more than a apart), the unconstrained arc flattened by
+    halves until its clipped shape is a chain (the arc's angles scaled by 2^-k: a
+    symmetric arc stays closed on the right pin)."""
+    u, alpha = _clipped(chain, alpha0)
+    scale = 0.5
+    while alpha is None and scale > 1e-6:
+        u, alpha = _clipped(chain, scale * chain.rest_alpha)
+        scale *= 0.5
     return u, alpha
 
 

@@ -107,8 +107,12 @@ def _scene_line(res: ContactResult) -> str:
     parts = [f"{sym} = {getattr(s, k):g}{unit}" for k, (sym, unit) in names.items()
              if hasattr(s, k)]
     parts.insert(2 if hasattr(s, "theta") else 1, f"N = {res.links}")
+    profile = getattr(s, "wall_profile", None)
+    if profile is not None:  # h is not used: the wall is y = h(x)
+        parts = [p for p in parts if not p.startswith("h = ")]
+        parts.append(f"wall profile {profile.name}")
     if getattr(s, "channel", False):
-        parts.append("channel (walls at ±h)")
+        parts.append("channel (walls at ±h)" if profile is None else "channel")
     return f"{type(s).__name__}: " + ", ".join(parts)
 
 
