@@ -150,8 +150,7 @@ def test_the_slope_term_is_what_makes_the_answer_exact(monkeypatch):
 def test_x_jacobian_product_matches_finite_differences():
     scene = _scene(150, bump(3, .8, 14, 3), False, None, None, links=12)
     chain = scene.chain()
-    alpha = chain.rest_alpha * 0.7 + 0.01 * np.sin(np.arange(chain.links))
-    alpha[-1] -= np.sum(np.sin(alpha)) / np.cos(alpha[-1])  # near closure is not needed
+    alpha = chain.rest_alpha * 0.7 + 0.01 * np.sin(np.arange(chain.links))  # any shape
     u = heights(chain, alpha)
     w = np.linspace(-1.0, 2.0, u.size)
     J = np.zeros((u.size, u.size))

@@ -131,3 +131,12 @@ def test_cli_solves_a_profile_and_refuses_a_bad_file(tmp_path):
     assert out.returncode == 2 and "pin line" in out.stderr
     out = _cli("solve", "--lower-profile", str(EXAMPLES / "ramp.csv"))
     assert out.returncode == 2 and "--lower-profile needs" in out.stderr
+
+
+def test_flat_scenes_keep_their_store_key_and_json():
+    from lcpbench.bench.grid import scene_key
+
+    key = scene_key(ActuatorScene(theta=120, height=2.5, links=30))
+    assert "profile" not in key
+    with pytest.raises(ProblemError, match="wall_profile"):
+        scene_key(ActuatorScene(wall_profile=WallProfile.flat(3.0)))

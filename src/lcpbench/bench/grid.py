@@ -113,6 +113,12 @@ PAPER_GRID = Grid(theta=parse_range("10:180:10", "theta"), height=parse_range("2
 def scene_key(scene: ActuatorScene) -> str:
     """A canonical text key of a scene (its parameters as sorted JSON)."""
     d = asdict(scene)
+    for k in ("wall_profile", "lower_profile"):  # flat walls: the key as before profiles
+        if d.get(k, "absent") is None:
+            del d[k]
+        elif k in d:
+            raise ProblemError(f"{k}: the benchmark's scenes have flat walls (a scene key "
+                               f"cannot hold a wall profile)")
     d["links"] = int(d["links"])
     for k in ("theta", "height", "length", "EI", "weight"):
         d[k] = float(repr_float(d[k]))

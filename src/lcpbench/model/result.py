@@ -200,9 +200,11 @@ class ContactResult:
         """A JSON-ready summary (the fields of ``lcpbench solve --json``)."""
         scene = asdict(self.scene) if is_dataclass(self.scene) and not isinstance(
             self.scene, type) else {}
-        for key, value in scene.items():  # a WallProfile: its name and x range
-            if hasattr(value, "to_dict") and not isinstance(value, dict):
-                scene[key] = value.to_dict()
+        for key in ("wall_profile", "lower_profile"):  # flat walls: the JSON as before
+            if key in scene and scene[key] is None:
+                del scene[key]
+            elif key in scene:  # a WallProfile: its name and x range
+                scene[key] = getattr(self.scene, key).to_dict()
         out = {
             "scene": {**scene, "links": self.links},
             "total_force": self.total_force,
