@@ -26,6 +26,8 @@ _EXPORTS = {
     "solve_many": "lcpbench.studies.batch",
     "ActuatorScene": "lcpbench.problems.scenes",
     "CantileverScene": "lcpbench.problems.scenes",
+    "WallProfile": "lcpbench.problems.walls",
+    "load_profile_csv": "lcpbench.problems.walls",
     "Certificate": "lcpbench.model.result",
     "ContactResult": "lcpbench.model.result",
     "LcpbenchError": "lcpbench.errors",

@@ -197,7 +197,8 @@ def _installed():
 
 
 @pytest.mark.parametrize("solver", _installed())
-@pytest.mark.parametrize("case", ["stenosis", "lower-ramp-channel"])
+@pytest.mark.parametrize("case", ["stenosis", pytest.param("lower-ramp-channel",
+                                                             marks=pytest.mark.slow)])
 def test_every_backend_runs_the_profile_step_and_is_never_wrong(solver, case):
     if case == "stenosis":
         scene = _scene(150, bump(3, .8, 14, 3), False, None, None, links=30)
