@@ -29,6 +29,8 @@ _EXPORTS = {
     "Section": "lcpbench.problems.sections",
     "SectionedScene": "lcpbench.problems.sections",
     "anchoring_actuator": "lcpbench.problems.sections",
+    "WallProfile": "lcpbench.problems.walls",
+    "load_profile_csv": "lcpbench.problems.walls",
     "Certificate": "lcpbench.model.result",
     "ContactResult": "lcpbench.model.result",
     "LcpbenchError": "lcpbench.errors",

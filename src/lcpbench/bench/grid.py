@@ -120,6 +120,12 @@ def scene_key(scene: ActuatorScene | SectionedScene) -> str:
     entry no single-section key has), so the two kinds never collide.
     """
     d = asdict(scene)
+    for k in ("wall_profile", "lower_profile"):  # flat walls: the key as before profiles
+        if d.get(k, "absent") is None:
+            del d[k]
+        elif k in d:
+            raise ProblemError(f"{k}: the benchmark's scenes have flat walls (a scene key "
+                               f"cannot hold a wall profile)")
     d["links"] = int(d["links"])
     if isinstance(scene, SectionedScene):
         d["sections"] = [{k: float(repr_float(v)) for k, v in sec.items()}

@@ -120,6 +120,26 @@ def add_section_options(parser) -> None:
              "paper's model) or toward it")
 
 
+def add_profile_options(parser) -> None:
+    """Add ``--wall-profile FILE.csv``, ``--lower-profile FILE.csv`` and ``--profile-kind``.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The sub-command's parser (``solve``); :func:`scene_from` reads them.
+    """
+    a = parser.add_argument
+    a("--wall-profile", default=None, metavar="FILE.csv",
+      help="upper wall of any profile y = h(x) instead of the flat wall at --height: a CSV "
+           "with a header line, then x,y rows in mm covering 0..length, y > 0")
+    a("--lower-profile", default=None, metavar="FILE.csv",
+      help="with --channel and --wall-profile: the lower wall's profile (y < 0); default "
+           "the mirror image y = -h(x) of the upper wall")
+    a("--profile-kind", choices=("pchip", "linear", "cubic"), default="pchip",
+      help="interpolation of the profile tables: pchip (C1, no overshoot; default), "
+           "linear (piecewise linear: kinks), cubic (natural spline, C2)")
+
+
 def add_tol_option(parser, what: str = "convergence threshold on max|d alpha|") -> None:
     """Add ``--tol RAD``, the driver's convergence threshold.
 
@@ -193,6 +213,10 @@ def scene_from(args, *, resolve_links: bool = True):
 
 def _scene_as_given(args):
     sections = getattr(args, "sections", None)
+    if sections is not None and (getattr(args, "wall_profile", None) is not None
+                                 or getattr(args, "lower_profile", None) is not None):
+        raise ProblemError("--sections takes flat walls at +-height: drop --wall-profile and "
+                           "--lower-profile (a wall profile is for one section)")
     if sections is not None and sections.strip() != "anchoring":
         return _sectioned(args, sections)
     if getattr(args, "gravity", "away") != "away" and sections is None:
@@ -202,7 +226,7 @@ def _scene_as_given(args):
         print(f"lcpbench: warning: {warning}", file=sys.stderr)
     links = DEFAULT_LINKS if args.links is None else args.links
     kw = {"height": args.height, "links": links, "length": args.length, "EI": args.EI,
-          "weight": args.weight, "channel": args.channel}
+          "weight": args.weight, "channel": args.channel, **_profiles(args)}
     if sections is not None:  # the anchoring preset: theta as for one section
         if args.links == "auto":
             raise ProblemError("--links auto is for one section; give N (a multiple of 3) "
@@ -252,3 +276,22 @@ def _single(args, kw: dict) -> ActuatorScene:
                                f"{args.fit!r}") from None
         actuator = linear_calibration(slope, intercept)
     return scene_from_pressure(args.pressure, actuator, **kw)
+
+
+def _profiles(args) -> dict:
+    """The wall profiles of ``--wall-profile``/``--lower-profile`` as scene fields."""
+    upper = getattr(args, "wall_profile", None)
+    lower = getattr(args, "lower_profile", None)
+    if upper is None and lower is None:
+        return {}
+    from ..problems.walls import load_profile_csv
+
+    if upper is None:
+        raise ProblemError("--lower-profile needs --wall-profile and --channel")
+    if lower is not None and not args.channel:
+        raise ProblemError("--lower-profile needs --channel")
+    kind = getattr(args, "profile_kind", "pchip")
+    out = {"wall_profile": load_profile_csv(upper, kind, parameter="--wall-profile")}
+    if lower is not None:
+        out["lower_profile"] = load_profile_csv(lower, kind, parameter="--lower-profile")
+    return out

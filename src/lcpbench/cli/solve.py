@@ -3,6 +3,7 @@
 ::
 
     lcpbench solve --theta 150 --height 3 [--links N|auto] [--channel] [--solver NAME]
+                   [--wall-profile F.csv [--lower-profile F.csv] [--profile-kind K]]
                    [--settings default|low|mid|high] [--raw] [--json] [--plot F.png]
                    [--sections THETA:LENGTH,...|anchoring] [--gravity away|toward]
     lcpbench export --theta 150 --height 3 [scene options] --format dat|npz --out FILE
@@ -31,6 +32,7 @@ from ._common import (
 )
 from ._scene_args import (
     DEFAULT_METHOD,
+    add_profile_options,
     add_scene_options,
     add_section_options,
     add_solver_options,
@@ -55,6 +57,7 @@ def register(subparsers) -> None:
     )
     add_scene_options(s)
     add_section_options(s)
+    add_profile_options(s)
     add_tol_option(s)
     add_solver_options(s)
     s.add_argument("--raw", action="store_true",
@@ -155,7 +158,10 @@ def summary(result, extra=()) -> str:
                  f"{'toward' if sc.gravity == '+y' else 'away from'} the upper wall"
                  + (", channel" if sc.channel else ""))
     else:
-        scene = (f"theta={sc.theta:g} deg, h={sc.height:g} mm, N={result.links}, "
+        wall = f"h={sc.height:g} mm"
+        if getattr(sc, "wall_profile", None) is not None:
+            wall = f"wall profile {sc.wall_profile.name}"
+        scene = (f"theta={sc.theta:g} deg, {wall}, N={result.links}, "
                  f"length={sc.length:g} mm, EI={sc.EI:g} N*mm^2, w={sc.weight:g} N/mm"
                  + (", channel" if sc.channel else ""))
     rows = [
@@ -207,6 +213,9 @@ def cmd_solve(args) -> int:
     plot_error = None
     if args.plot is not None:
         from ..bench.plot import plot_shape
+
+        if getattr(scene, "wall_profile", None) is not None:
+            from ..bench.wall_plot import plot_profile_shape as plot_shape
 
         try:
             plot_shape(result, args.plot)

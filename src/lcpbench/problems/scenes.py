@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import ProblemError
 from .checks import check_flag, check_number
+from .walls import WallProfile
 
 MIN_LINKS = 4
 MAX_LINKS = 100_000
@@ -88,6 +89,11 @@ class Chain:
         Height of the upper wall above each free node (+inf: no wall row).
     lower : ndarray (len(free_nodes),)
         Height of the lower wall (−inf: no wall row).
+    upper_profile, lower_profile : WallProfile or None
+        Walls of any profile y = h(x) (:mod:`lcpbench.problems.walls`). When
+        given, ``upper``/``lower`` hold h at the nodes' x of ``rest_alpha``
+        (finite on the rows that can reach the wall); the model evaluates
+        h(x) at the current configuration (:mod:`lcpbench.model.profile`).
     """
 
     links: int
@@ -104,6 +110,8 @@ class Chain:
     length: float = 1.0
     wall: float = np.inf  # height of the upper wall (mm), for the gaps of every node
     channel: bool = False  # a second wall at −wall
+    upper_profile: WallProfile | None = None
+    lower_profile: WallProfile | None = None
 
     @property
     def nodal_load(self) -> np.ndarray:
@@ -150,6 +158,15 @@ class ActuatorScene:
         from the wall (the direction of the reaction), as in eqs. (3), (8).
     channel : bool
         Two walls, at +h and −h (the paper's fixture); a real bool.
+    wall_profile : WallProfile or None
+        An upper wall of any profile y = h(x) (mm; :mod:`lcpbench.problems.walls`)
+        instead of the flat wall at +h; ``height`` is then not used. It must
+        cover the chain's x range (0 to ℓ; below 0 too for θ > 180°) and stay
+        above the pin line y = 0 there.
+    lower_profile : WallProfile or None
+        With ``channel=True`` and a ``wall_profile``: the lower wall's profile
+        (below y = 0). Default: the mirror image y = −h(x) of the upper wall
+        (a symmetric narrowing).
 
     Raises
     ------
@@ -166,6 +183,8 @@ class ActuatorScene:
     EI: float = DEFAULT_EI
     weight: float = DEFAULT_WEIGHT
     channel: bool = False
+    wall_profile: WallProfile | None = None
+    lower_profile: WallProfile | None = None
 
     def __post_init__(self):
         theta = check_number("theta", self.theta, low=0.0, high=360.0, low_open=True,
@@ -177,6 +196,40 @@ class ActuatorScene:
         object.__setattr__(self, "EI", _in("EI", self.EI, EI_RANGE, "N·mm²"))
         object.__setattr__(self, "weight", _in("weight", self.weight, WEIGHT_RANGE, "N/mm"))
         object.__setattr__(self, "channel", check_flag("channel", self.channel))
+        self._check_profiles()
+
+    def _check_profiles(self) -> None:
+        for name in ("wall_profile", "lower_profile"):
+            value = getattr(self, name)
+            if value is not None and not isinstance(value, WallProfile):
+                raise ProblemError(f"{name} must be a WallProfile (lcpbench.problems.walls) "
+                                   f"or None, got {type(value).__name__}")
+        if self.lower_profile is not None and not (self.channel and self.wall_profile):
+            raise ProblemError("lower_profile needs channel=True and a wall_profile")
+        lo, hi = self.x_reach
+        if self.wall_profile is not None:
+            self.wall_profile.check_for(lo, hi, side="upper", parameter="wall_profile")
+        if self.lower_profile is not None:
+            self.lower_profile.check_for(lo, hi, side="lower", parameter="lower_profile")
+
+    @property
+    def profiles(self) -> tuple[WallProfile | None, WallProfile | None]:
+        """(upper, lower) wall profiles of the chain: the lower is the given one, the
+        mirror of the upper in a channel, or None."""
+        up = self.wall_profile
+        if up is None:
+            return None, None
+        if not self.channel:
+            return up, None
+        return up, (self.lower_profile if self.lower_profile is not None else up.mirrored())
+
+    @property
+    def x_reach(self) -> tuple[float, float]:
+        """The x range a node of the pinned chain can occupy here (mm): [0, ℓ], and
+        below 0 as far as the unconstrained arc reaches when θ > 180°."""
+        half = math.radians(self.theta) / 2
+        low = min(0.0, self.radius * (math.sin(half) - 1.0)) if half > math.pi / 2 else 0.0
+        return low, float(self.length)
 
     # -- geometry of the unconstrained arc (eq. 2) ---------------------------
     @property
@@ -204,9 +257,23 @@ class ActuatorScene:
         joints = np.column_stack([np.arange(n - 1), np.arange(1, n)])
         interior = np.arange(1, n)  # nodes 2..N
         s = interior * a
-        can = reachable(s, self.length, self.height, "pinned-pinned")
-        upper = np.where(can, self.height, np.inf)
-        lower = np.where(can, -self.height, -np.inf) if self.channel else np.full(n - 1, -np.inf)
+        prof_up, prof_lo = self.profiles
+        if prof_up is None:
+            can = reachable(s, self.length, self.height, "pinned-pinned")
+            upper = np.where(can, self.height, np.inf)
+            lower = np.where(can, -self.height, -np.inf) if self.channel else \
+                np.full(n - 1, -np.inf)
+        else:  # rows for the nodes that can reach the wall's lowest point; h at the arc's x
+            x = np.concatenate(([0.0], np.cumsum(a * np.cos(rest_alpha))))[interior]
+            # (in a channel, the same rows for both walls: the LCP form pairs them)
+            grid = np.linspace(*self.x_reach, 2001)
+            near = float(np.min(prof_up(grid)))
+            if prof_lo is not None:
+                near = min(near, float(np.min(-prof_lo(grid))))
+            can = reachable(s, self.length, near, "pinned-pinned")
+            upper = np.where(can, prof_up(x), np.inf)
+            lower = np.where(can, prof_lo(x), -np.inf) if prof_lo is not None else \
+                np.full(n - 1, -np.inf)
         return Chain(
             links=n,
             link_length=a,
@@ -222,6 +289,8 @@ class ActuatorScene:
             length=self.length,
             wall=self.height,
             channel=bool(self.channel),
+            upper_profile=prof_up,
+            lower_profile=prof_lo,
         )
 
 
