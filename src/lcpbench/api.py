@@ -17,6 +17,7 @@ import numpy as np
 from .errors import ProblemError
 from .model.compiled import check_engine, drive
 from .model.driver import METHODS, DriverStart
+from .model.judge import judge
 from .model.result import ContactResult, build_result
 from .model.step_solver import make_step_solver
 from .model.wall_free import solve_without_contact
@@ -135,13 +136,24 @@ def solve(
                           "linearisation of eq. (20) is singular; lcpbench converges for "
                           f"theta <= 180 deg ({out.reason})")
     elapsed = time.perf_counter() - t0
-    res = build_result(scene, chain, out, solver=name, method=method, tol=tol, time_s=elapsed)
+    # the compiled engine's answers are judged by the compiled judge (the same checks and
+    # verdicts, independent of the solve kernel); the numpy engine's by the numpy judge
+    judged_by = judge if used != "compiled" else _judge_fast()
+    res = build_result(scene, chain, out, solver=name, method=method, tol=tol, time_s=elapsed,
+                       judged_by=judged_by)
     res.extra["last_step"] = out.last_step  # what a continuation hands the next scene
     res.extra["settings"] = settings if isinstance(settings, str) else "custom"
     res.extra["engine"] = used
+    res.extra["judge"] = "numpy" if judged_by is judge else "compiled"
     if why is not None:
         res.extra["auto"] = why
     return res
+
+
+def _judge_fast():
+    from .model.judge_compiled import judge_fast
+
+    return judge_fast
 
 
 def _driver_start(start, chain, method: str):

@@ -218,11 +218,14 @@ class ContactResult:
         return out
 
 
-def build_result(scene, chain: Chain, out: DriverOutput, **how) -> ContactResult:
-    """The result of a driver run, judged by :func:`lcpbench.model.judge.judge`."""
+def build_result(scene, chain: Chain, out: DriverOutput, *, judged_by=judge,
+                 **how) -> ContactResult:
+    """The result of a driver run, judged by :func:`lcpbench.model.judge.judge`
+    (``judged_by``: or by its compiled twin with the same arguments and verdicts,
+    :func:`lcpbench.model.judge_compiled.judge_fast`)."""
     x, y = node_positions(chain, out.alpha)
     yf = y[chain.free_nodes]
-    verdict = judge(chain, out.alpha, out.forces_upper, out.forces_lower, tol=how["tol"],
+    verdict = judged_by(chain, out.alpha, out.forces_upper, out.forces_lower, tol=how["tol"],
                     driver_converged=out.converged, driver_reason=out.reason,
                     step_statuses=[s.status for s in out.steps],
                     step_sizes=[s.max_dalpha for s in out.steps],
