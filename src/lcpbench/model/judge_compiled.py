@@ -34,15 +34,15 @@ def takes(chain: Chain) -> bool:
     return applies("auto", "globalised", chain)
 
 
-def chain_args(chain: Chain) -> tuple:
-    """The chain's arrays in the order :func:`judge_kernel.judge_answer` takes them."""
-    f64 = np.ascontiguousarray
-    return (float(chain.link_length), f64(chain.joint_links[:, 0], dtype=np.int64),
-            f64(chain.joint_links[:, 1], dtype=np.int64), f64(chain.joint_stiffness, dtype=float),
-            f64(chain.rest_joint, dtype=float), f64(chain.link_load, dtype=float),
-            f64(chain.nodal_load, dtype=float), int(chain.free_nodes[0]) + 1,
-            f64(chain.lower, dtype=float), f64(chain.upper, dtype=float), float(chain.length),
-            float(chain.force_scale), float(chain.wall), bool(chain.channel))
+def chain_args(chain: Chain, kernel_args: tuple | None = None) -> tuple:
+    """The chain's arrays in the order :func:`judge_kernel.judge_answer` takes them
+    (``kernel_args``: the solve kernel's, :func:`lcpbench.model.compiled.kernel_args`,
+    when the caller has them: the same arrays, so none is copied twice)."""
+    if kernel_args is None:
+        from .compiled import kernel_args as solve_args
+
+        kernel_args = solve_args(chain)
+    return (*kernel_args[1:], float(chain.wall), bool(chain.channel))
 
 
 def judge_fast(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
