@@ -71,7 +71,9 @@ def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
 
 def _kernel():
     from . import compiled_kernel  # imports numba; loads or compiles the kernel
+    from .kernel_cache import light_cache_load
 
+    light_cache_load(compiled_kernel.solve_chain)
     return compiled_kernel
 
 

@@ -22,7 +22,9 @@ from .judge import Judgement, judge
 
 def _kernel():
     from . import judge_kernel  # imports numba; loads or compiles the kernel
+    from .kernel_cache import light_cache_load
 
+    light_cache_load(judge_kernel.judge_answer)
     return judge_kernel
 
 

@@ -14,8 +14,9 @@ import time
 from dataclasses import replace
 
 import numpy as np
-from scipy.linalg import LinAlgError, solveh_banded
+from numpy.linalg import LinAlgError  # scipy.linalg's LinAlgError is this class
 
+from ..linalg import solveh_banded
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from .chain import heights
