@@ -17,9 +17,10 @@ from functools import partial
 import numpy as np
 
 from .errors import ProblemError
-from .model.compiled import applies, check_engine, drive
+from .model.compiled import applies, check_engine, drive, kernel_args
 from .model.driver import METHODS, DriverStart
 from .model.judge import judge
+from .model.judge_compiled import chain_args
 from .model.result import ContactResult, build_result
 from .model.step_solver import make_step_solver
 from .model.wall_free import solve_without_contact
@@ -130,15 +131,17 @@ def solve(
     begin = _driver_start(start, chain, method)
     # the compiled kernel where it takes the chain, unless the numpy reference is asked for
     kernel = engine != "numpy" and applies(DEFAULT, "globalised", chain)
+    args = kernel_args(chain) if kernel else None  # the chain's arrays, once for all
     out = solve_without_contact(chain, tol, max_outer, begin,
-                                engine="compiled" if kernel else "numpy")
+                                engine="compiled" if kernel else "numpy", args=args)
     used = "compiled" if kernel else "numpy"
     if out is None:
         out, used = drive(chain, step, backend=name, settings=settings, engine=engine,
-                          tol=tol, max_outer=max_outer, method=method, start=begin)
+                          tol=tol, max_outer=max_outer, method=method, start=begin, args=args)
     return finish(scene, chain, out, solver=name, method=method, tol=tol,
                   elapsed=time.perf_counter() - t0, settings=settings, engine=used,
-                  compiled_judge=kernel, why=why)
+                  compiled_judge=kernel, why=why,
+                  judge_args=None if args is None else chain_args(chain, args))
 
 
 def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: float,

@@ -69,27 +69,35 @@ def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
                 and f[0] >= 1)
 
 
+_LOADED: list = []  # the kernel module, once imported
+
+
 def _kernel():
+    if _LOADED:
+        return _LOADED[0]
     from . import compiled_kernel  # imports numba; loads or compiles the kernel
     from .kernel_cache import light_cache_load
 
     light_cache_load(compiled_kernel.solve_chain)
+    _LOADED.append(compiled_kernel)
     return compiled_kernel
 
 
 def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "auto",
-          tol: float, max_outer: int, method: str, start: DriverStart | None
-          ) -> tuple[DriverOutput, str]:
+          tol: float, max_outer: int, method: str, start: DriverStart | None,
+          args: tuple | None = None) -> tuple[DriverOutput, str]:
     """The driver's answer and the engine that produced it ("compiled" or "numpy").
 
     The one place where the compiled kernel is chosen: ``engine="numpy"``, a
     back-end other than the default or another ``method`` run
-    :func:`~lcpbench.model.driver.run_driver` with ``step_solver``.
+    :func:`~lcpbench.model.driver.run_driver` with ``step_solver``. ``args``: the
+    chain's :func:`kernel_args`, given by a caller that has checked that the kernel
+    takes the chain's layout.
     """
     engine = check_engine(engine)
-    if engine != "numpy" and applies(backend, method, chain):
+    if engine != "numpy" and applies(backend, method, None if args is not None else chain):
         out, why = run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
-                                settings=settings)
+                                settings=settings, args=args)
         if out is not None:
             return out, "compiled"
         used = f"numpy (the compiled kernel stopped: {why})"

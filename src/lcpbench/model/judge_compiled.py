@@ -19,12 +19,17 @@ import numpy as np
 from ..problems.scenes import Chain
 from .judge import Judgement, judge
 
+_LOADED: list = []  # the kernel module, once imported
+
 
 def _kernel():
+    if _LOADED:
+        return _LOADED[0]
     from . import judge_kernel  # imports numba; loads or compiles the kernel
     from .kernel_cache import light_cache_load
 
     light_cache_load(judge_kernel.judge_answer)
+    _LOADED.append(judge_kernel)
     return judge_kernel
 
 
