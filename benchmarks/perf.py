@@ -26,14 +26,19 @@ Writes ``results/perf.md``, ``results/perf.json`` and
     python benchmarks/perf.py [--quick] [--repeat 21] [--out results/perf]
 """
 
+# ruff: noqa: E402  (BLAS is pinned to one thread before numpy is imported)
 from __future__ import annotations
+
+import os
+
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_v] = "1"  # one BLAS thread, before numpy loads (issue 19, item 6)
 
 import argparse
 import gc
 import importlib.metadata
 import json
 import math
-import os
 import platform
 import statistics
 import sys
@@ -441,6 +446,40 @@ def _us(s):
     return "—" if s is None or not np.isfinite(s) else f"{s * 1e6:.0f}"
 
 
+def header19(res: dict, cmd: str) -> list[str]:
+    m = res["machine"]
+    end = m.get("load_average_end", [math.nan])
+    return [f"Measured {m['date']} on {m['cpu']} ({m['nproc']} cores available, shared with "
+            f"other work; load average {m['load_average_start'][0]:.2f} at the start, "
+            f"{end[0]:.2f} at the end), one BLAS thread, {m['platform']}, Python "
+            f"{m['python']}. Command: `{cmd}`. Every ratio is a ratio of medians over "
+            "interleaved repetitions; times of different runs are not comparable, ratios "
+            "are. On a loaded machine the wall times include waiting for a core; CPU times "
+            "are given beside them where that matters.", ""]
+
+
+def markdown19(res: dict, cmd: str) -> str:
+    import perf_targets
+
+    return "\n".join(["# Performance", "", *header19(res, cmd),
+                      *perf_targets.markdown(res["issue19"]),
+                      "The issue-6 tables (scaling in N, QP back-ends, before/after) were not "
+                      "re-run here (`--issue19-only`); run `python benchmarks/perf.py` for "
+                      "them.", ""])
+
+
+def full_markdown(res: dict, cmd: str) -> str:
+    """Issue 19's section (when measured), then issue 6's."""
+    if "t1" not in res:
+        return markdown19(res, cmd)
+    if "issue19" not in res:
+        return markdown(res, cmd)
+    import perf_targets
+
+    return "\n".join(["# Performance", "", *header19(res, cmd),
+                      *perf_targets.markdown(res["issue19"]), "", markdown(res, cmd)])
+
+
 def markdown(res: dict, cmd: str) -> str:
     m, t1, t2, t3, t4 = res["machine"], res["t1"], res["t2"], res["t3"], res["t4"]
     ver = ", ".join(f"{k} {v}" for k, v in m["versions"].items())
@@ -691,12 +730,15 @@ def main(argv=None) -> int:
                     "OUT-scaling.png")
     ap.add_argument("--from-json", action="store_true",
                     help="measure nothing: rewrite OUT.md and the plot from OUT.json")
+    ap.add_argument("--issue19-only", action="store_true",
+                    help="only issue 19's targets (benchmarks/perf_targets.py)")
+    ap.add_argument("--starts", type=int, default=5, help="fresh processes for start-up")
     args = ap.parse_args(argv)
     out = Path(args.out)
     if args.from_json:
         res = json.loads(out.with_suffix(".json").read_text())
         plot(res["t4"], out.parent / f"{out.name}-scaling.png")
-        out.with_suffix(".md").write_text(markdown(res, res.get("command", "?")))
+        out.with_suffix(".md").write_text(full_markdown(res, res.get("command", "?")))
         print(f"rewrote {out.with_suffix('.md')} from {out.with_suffix('.json')}",
               file=sys.stderr)
         return 0
@@ -706,7 +748,20 @@ def main(argv=None) -> int:
         f" --repeat {args.repeat}" if args.repeat else "")
     out.parent.mkdir(parents=True, exist_ok=True)
 
+    if args.issue19_only:
+        cmd += " --issue19-only"
     res = {"machine": machine(), "command": cmd}
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    import perf_targets
+    from compiled_core import cold_step
+
+    res["issue19"] = perf_targets.measure(interleaved, wall, med, repeat, args.starts, cold_step)
+    if args.issue19_only:
+        res["machine"]["load_average_end"] = list(os.getloadavg())
+        out.with_suffix(".md").write_text(markdown19(res, cmd))
+        out.with_suffix(".json").write_text(json.dumps(res, indent=1, default=float))
+        print(f"wrote {out.with_suffix('.md')}, {out.with_suffix('.json')}", file=sys.stderr)
+        return 0
     scene = ActuatorScene(**SCENE)
     res["reference_force"] = lcpbench.solve(scene, solver="active-set", tol=1e-10).total_force
     print("target 1: full solve, N = 140", file=sys.stderr, flush=True)
@@ -731,7 +786,7 @@ def main(argv=None) -> int:
 
     png = out.parent / f"{out.name}-scaling.png"
     plot(res["t4"], png)
-    out.with_suffix(".md").write_text(markdown(res, cmd))
+    out.with_suffix(".md").write_text(full_markdown(res, cmd))
     out.with_suffix(".json").write_text(json.dumps(res, indent=1, default=float))
     print(f"wrote {out.with_suffix('.md')}, {out.with_suffix('.json')}, {png}", file=sys.stderr)
     return 0

@@ -11,12 +11,16 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
+from functools import partial
 
 import numpy as np
 
 from .errors import ProblemError
-from .model.compiled import check_engine, drive
+from .model.compiled import applies, check_engine, drive, kernel_args
 from .model.driver import METHODS, DriverStart
+from .model.judge import judge
+from .model.judge_compiled import chain_args
 from .model.result import ContactResult, build_result
 from .model.step_solver import make_step_solver
 from .model.wall_free import solve_without_contact
@@ -125,23 +129,55 @@ def solve(
     t0 = time.perf_counter()
     chain = scene.chain()
     begin = _driver_start(start, chain, method)
-    out = solve_without_contact(chain, tol, max_outer, begin)
-    used = "numpy"
+    # the compiled kernel where it takes the chain, unless the numpy reference is asked for
+    kernel = engine != "numpy" and applies(DEFAULT, "globalised", chain)
+    args = kernel_args(chain) if kernel else None  # the chain's arrays, once for all
+    out = solve_without_contact(chain, tol, max_outer, begin,
+                                engine="compiled" if kernel else "numpy", args=args)
+    used = "compiled" if kernel else "numpy"
     if out is None:
         out, used = drive(chain, step, backend=name, settings=settings, engine=engine,
-                          tol=tol, max_outer=max_outer, method=method, start=begin)
-        if not out.converged and getattr(scene, "theta", 0) > 180:
-            out.reason = ("theta > 180 deg: the end links start beyond the vertical, where the "
-                          "linearisation of eq. (20) is singular; lcpbench converges for "
-                          f"theta <= 180 deg ({out.reason})")
-    elapsed = time.perf_counter() - t0
-    res = build_result(scene, chain, out, solver=name, method=method, tol=tol, time_s=elapsed)
+                          tol=tol, max_outer=max_outer, method=method, start=begin, args=args)
+    return finish(scene, chain, out, solver=name, method=method, tol=tol,
+                  elapsed=time.perf_counter() - t0, settings=settings, engine=used,
+                  compiled_judge=kernel, why=why,
+                  judge_args=None if args is None else chain_args(chain, args))
+
+
+def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: float,
+           settings, engine: str, compiled_judge: bool, why: str | None,
+           judge_args: tuple | None = None) -> ContactResult:
+    """The judged result of a driver run (the end of :func:`solve`; also the batch's).
+
+    Judged by the compiled judge (the same checks and verdicts as the numpy judge,
+    independent of the solve kernel) where ``compiled_judge`` (it takes the chain,
+    whichever back-end solved the steps); engine="numpy" keeps the numpy judge, the
+    reference. ``judge_args``: the chain's arrays for the judge kernel, when the
+    caller has them (:func:`lcpbench.model.judge_compiled.chain_args`)."""
+    if not out.converged and getattr(scene, "theta", 0) > 180:
+        out.reason = ("theta > 180 deg: the end links start beyond the vertical, where the "
+                      "linearisation of eq. (20) is singular; lcpbench converges for "
+                      f"theta <= 180 deg ({out.reason})")
+    judged_by: Callable = judge
+    if compiled_judge:
+        judged_by = _judge_fast()
+        if judge_args is not None:
+            judged_by = partial(judged_by, args=judge_args)
+    res = build_result(scene, chain, out, solver=solver, method=method, tol=tol,
+                       time_s=elapsed, judged_by=judged_by)
     res.extra["last_step"] = out.last_step  # what a continuation hands the next scene
     res.extra["settings"] = settings if isinstance(settings, str) else "custom"
-    res.extra["engine"] = used
+    res.extra["engine"] = engine
+    res.extra["judge"] = "compiled" if compiled_judge else "numpy"
     if why is not None:
         res.extra["auto"] = why
     return res
+
+
+def _judge_fast():
+    from .model.judge_compiled import judge_fast
+
+    return judge_fast
 
 
 def _driver_start(start, chain, method: str):

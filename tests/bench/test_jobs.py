@@ -101,6 +101,7 @@ def test_failures_have_the_same_fields_and_one_row_per_key():
 
 def test_a_job_that_raises_costs_failure_rows(monkeypatch):
     import lcpbench.api
+    import lcpbench.studies.batch
     import lcpbench.studies.continuation
 
     def boom(*args, **kwargs):
@@ -108,6 +109,7 @@ def test_a_job_that_raises_costs_failure_rows(monkeypatch):
 
     monkeypatch.setattr(lcpbench.api, "solve", boom)
     monkeypatch.setattr(lcpbench.studies.continuation, "solve_sequence", boom)
+    monkeypatch.setattr(lcpbench.studies.batch, "solve_many", boom)  # a line is one batch
     for job in JOBS[1], JOBS[-1]:
         rows = job.execute(5.0)
         assert not rows.complete and len(rows.rows) == job.size

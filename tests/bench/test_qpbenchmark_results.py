@@ -71,9 +71,11 @@ def test_one_row_per_run_found_means_converged(exported):
 
 
 def test_residuals_follow_the_physics(exported):
-    """No contact: no reaction, nothing to complement, nothing penetrated: gap and
-    primal residual exactly 0. In contact, every converged answer is feasible to the
-    judge's allowance (penetration 1e-6 ℓ) and balanced (torque residual small)."""
+    """No contact: no reaction, nothing to complement, nothing penetrated: the gap
+    exactly 0, the primal residual 0 to the round-off of the closure (the right pin's
+    height, a sum of N = 20 terms a·sin α: a few ulps of ℓ). In contact, every converged
+    answer is feasible to the judge's allowance (penetration 1e-6 ℓ) and balanced
+    (torque residual small)."""
     _, path = exported
     rows = [r for r in read_results(path) if r["found"]]
     assert rows
@@ -81,7 +83,7 @@ def test_residuals_follow_the_physics(exported):
     touch = [r for r in rows if "-T150-" in r["problem"]]
     assert free and touch
     for r in free:
-        assert r["primal_residual"] == 0.0 and r["duality_gap"] == 0.0
+        assert r["primal_residual"] <= 1e-15 and r["duality_gap"] == 0.0
     for r in rows:
         vals = (r["primal_residual"], r["dual_residual"], r["duality_gap"])
         assert all(math.isfinite(v) and v >= 0 for v in vals)

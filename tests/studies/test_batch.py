@@ -45,3 +45,61 @@ def test_bad_input():
     with pytest.raises(ProblemError, match="continuation must be"):
         lcpbench.solve_many([], continuation="yes")
     assert lcpbench.solve_many([]) == []
+
+
+# -- the compiled batch loop (issue 19, item 4) --------------------------------------------
+
+def paper_like_grid():
+    """θ 10-180 at two heights (no-contact scenes at small θ), a channel line, a heavy line."""
+    scenes = [ActuatorScene(theta=th, height=h, links=60) for h in (2.0, 5.0)
+              for th in range(10, 181, 20)]
+    scenes += [ActuatorScene(theta=th, height=1.0, links=60, channel=True, weight=0.002)
+               for th in (60, 90, 120)]
+    scenes += [ActuatorScene(theta=th, height=3.0, links=40, weight=0.01) for th in (100, 140)]
+    random.Random(19).shuffle(scenes)
+    return scenes
+
+
+@pytest.mark.parametrize("tol", [1e-3, 1e-9])
+def test_the_compiled_batch_is_the_numpy_continuation(tol):
+    """The kernels' loop takes the path of solve_sequence with the numpy engine: the same
+    predictor and warm starts, so the same outer iterations, the same verdicts, and the
+    same forces to round-off."""
+    scenes = paper_like_grid()
+    fast = lcpbench.solve_many(scenes, tol=tol)
+    ref = lcpbench.solve_many(scenes, tol=tol, engine="numpy")
+    assert [r.scene for r in fast] == scenes == [r.scene for r in ref]
+    for f, r in zip(fast, ref):
+        assert f.extra["judge"] == "compiled" and f.extra["engine"] == "compiled"
+        assert r.extra["judge"] == "numpy"
+        assert f.extra["continuation"] == r.extra["continuation"]
+        assert f.converged == r.converged and f.converged, (f.reason, r.reason)
+        assert f.outer_iterations == r.outer_iterations
+        scale = max(r.total_force, r.scene.EI / r.scene.length**2)
+        assert abs(f.total_force - r.total_force) <= 2e-9 * scale + \
+            (f.force_error_bound + r.force_error_bound) * scale
+
+
+def test_every_batch_result_is_judged_as_the_numpy_judge_would():
+    from lcpbench.model.judge import judge
+    from lcpbench.model.result import certify
+
+    for res in lcpbench.solve_many(paper_like_grid(), tol=1e-6):
+        chain = res.scene.chain()
+        lower = res.forces_lower if res.forces_lower is not None else 0 * res.forces
+        v = judge(chain, res.alpha, res.forces, lower, tol=res.tol, driver_converged=True,
+                  driver_reason=res.reason, step_statuses=[s.status for s in res.steps],
+                  step_sizes=[s.max_dalpha for s in res.steps],
+                  certificate=lambda up, lo, c=chain, a=res.alpha: certify(c, a, up, lo))
+        assert v.converged == res.converged, (v.reason, res.reason)
+        assert v.failed == res.judgement.failed
+
+
+def test_batch_bad_settings_and_limits_name_the_parameter():
+    scenes = [ActuatorScene(theta=150, height=3.0, links=20)]
+    with pytest.raises(ProblemError, match="settings"):
+        lcpbench.solve_many(scenes, settings="fast")
+    with pytest.raises(ProblemError, match="max_outer"):
+        lcpbench.solve_many(scenes, max_outer=0)
+    with pytest.raises(ProblemError, match="tol"):
+        lcpbench.solve_many(scenes, tol=2.0)

@@ -288,10 +288,12 @@ class LineJob(Job):
                 for rows in zip(*runs)]
 
     def _line(self, scenes) -> list[dict]:
-        from ..studies.continuation import solve_sequence
+        from ..studies.batch import solve_many
 
-        results = solve_sequence(scenes, predictor=self.predictor, solver=self.backend,
-                                 tol=self.tol, settings=self.settings, method="globalised")
+        # one batch: the default back-end's line runs in the compiled loop; the order
+        # (θ ascending on one line) is the continuation order, so this is solve_sequence
+        results = solve_many(scenes, predictor=self.predictor, solver=self.backend,
+                             tol=self.tol, settings=self.settings, method="globalised")
         rows = []
         for res in results:
             row = solution_row(res)

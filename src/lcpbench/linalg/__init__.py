@@ -3,6 +3,7 @@
 The lowest numerical layer: it knows matrices, not actuators or solvers.
 """
 
-from .banded import banded_matvec, dense_to_bands, sub_bands
+from .banded import banded_matvec, cholesky_banded, dense_to_bands, solveh_banded, sparse, sub_bands
 
-__all__ = ["banded_matvec", "dense_to_bands", "sub_bands"]
+__all__ = ["banded_matvec", "cholesky_banded", "dense_to_bands", "solveh_banded", "sparse",
+           "sub_bands"]

@@ -8,7 +8,25 @@ helpers take any bandwidth.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+
+
+class _Lazy:
+    """A module imported at its first attribute look-up (``lazy.csc_matrix``)."""
+
+    def __init__(self, name: str):
+        self._name = name
+
+    def __getattr__(self, attr: str) -> Any:
+        import importlib
+
+        return getattr(importlib.import_module(self._name), attr)
+
+
+#: ``scipy.sparse``, imported when a QP back-end first builds a matrix, not at start-up
+sparse = _Lazy("scipy.sparse")
 
 
 def banded_matvec(bands: np.ndarray, u: np.ndarray) -> np.ndarray:
@@ -20,6 +38,22 @@ def banded_matvec(bands: np.ndarray, u: np.ndarray) -> np.ndarray:
         out[k:] += bands[k, :-k] * u[:-k]
         out[:-k] += bands[k, :-k] * u[k:]
     return out
+
+
+def solveh_banded(ab, b, **kw):
+    """``scipy.linalg.solveh_banded``, importing scipy.linalg at the first call (it
+    costs a tenth of a second at start-up, and the compiled default solve never
+    calls it)."""
+    from scipy.linalg import solveh_banded as solve
+
+    return solve(ab, b, **kw)
+
+
+def cholesky_banded(ab, **kw):
+    """``scipy.linalg.cholesky_banded``, importing scipy.linalg at the first call."""
+    from scipy.linalg import cholesky_banded as factor
+
+    return factor(ab, **kw)
 
 
 def sub_bands(bands: np.ndarray, idx: np.ndarray) -> np.ndarray:

@@ -73,25 +73,35 @@ def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
                 and f[0] >= 1)
 
 
-def _kernel():
-    from . import compiled_kernel  # imports numba; loads or compiles the kernel
+_LOADED: list = []  # the kernel module, once imported
 
+
+def _kernel():
+    if _LOADED:
+        return _LOADED[0]
+    from . import compiled_kernel  # imports numba; loads or compiles the kernel
+    from .kernel_cache import light_cache_load
+
+    light_cache_load(compiled_kernel.solve_chain)
+    _LOADED.append(compiled_kernel)
     return compiled_kernel
 
 
 def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "auto",
-          tol: float, max_outer: int, method: str, start: DriverStart | None
-          ) -> tuple[DriverOutput, str]:
+          tol: float, max_outer: int, method: str, start: DriverStart | None,
+          args: tuple | None = None) -> tuple[DriverOutput, str]:
     """The driver's answer and the engine that produced it ("compiled" or "numpy").
 
     The one place where the compiled kernel is chosen: ``engine="numpy"``, a
     back-end other than the default or another ``method`` run
-    :func:`~lcpbench.model.driver.run_driver` with ``step_solver``.
+    :func:`~lcpbench.model.driver.run_driver` with ``step_solver``. ``args``: the
+    chain's :func:`kernel_args`, given by a caller that has checked that the kernel
+    takes the chain's layout.
     """
     engine = check_engine(engine)
-    if engine != "numpy" and applies(backend, method, chain):
+    if engine != "numpy" and applies(backend, method, None if args is not None else chain):
         out, why = run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
-                                settings=settings)
+                                settings=settings, args=args)
         if out is not None:
             return out, "compiled"
         used = f"numpy (the compiled kernel stopped: {why})"
@@ -127,33 +137,46 @@ def _warm(start: DriverStart | None, n: int):
     return alpha, u, up, lo, flags
 
 
+def kernel_args(chain: Chain, const: tuple | None = None) -> tuple:
+    """The chain's arrays in the order :func:`compiled_kernel.solve_chain` takes them.
+
+    ``const``: ``(left links, right links, nodal load)`` as contiguous arrays, when
+    the caller has them for a run of chains that share them (a batch)."""
+    f64 = np.ascontiguousarray
+    if const is None:
+        const = (f64(chain.joint_links[:, 0], dtype=np.int64),
+                 f64(chain.joint_links[:, 1], dtype=np.int64), f64(chain.nodal_load, dtype=float))
+    jl, jr, nodal_load = const
+    return (f64(chain.rest_alpha, dtype=float), float(chain.link_length), jl, jr,
+            f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float),
+            f64(chain.link_load, dtype=float), nodal_load, int(chain.free_nodes[0]) + 1,
+            f64(chain.lower, dtype=float), f64(chain.upper, dtype=float), float(chain.length),
+            float(chain.force_scale))
+
+
 def run_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
-                 start: DriverStart | None = None, settings="default"
-                 ) -> tuple[DriverOutput | None, str]:
+                 start: DriverStart | None = None, settings="default",
+                 args: tuple | None = None) -> tuple[DriverOutput | None, str]:
     """The globalised driver with the dual active set, in the compiled kernel.
 
     Returns ``(output, "")``, or ``(None, why)`` when the kernel left the
     reference's path (the caller then runs the numpy reference). Each step
     record's ``solve_time`` is the kernel's wall time shared evenly over the
     steps (assembly included; ``assemble_time`` is 0): the kernel does not
-    time its parts.
+    time its parts. ``args``: the chain's :func:`kernel_args`, when the caller
+    has them already.
     """
     k = _kernel()
     s = get_settings(settings)
     n = chain.free_nodes.size
     request = s.eps if s.eps is not None else DEFAULT_TOL
     max_iter = s.max_iter if s.max_iter else 20 * n + 50
-    f64 = np.ascontiguousarray
     s_alpha, w_u, w_up, w_lo, flags = _warm(start, n)
+    if args is None:
+        args = kernel_args(chain)
     t0 = time.perf_counter()
     (code, alpha, r_up, r_lo, u, sigma, rec, count, res, R) = k.solve_chain(
-        f64(chain.rest_alpha, dtype=float), float(chain.link_length),
-        f64(chain.joint_links[:, 0], dtype=np.int64), f64(chain.joint_links[:, 1], dtype=np.int64),
-        f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float),
-        f64(chain.link_load, dtype=float), f64(chain.nodal_load, dtype=float),
-        int(chain.free_nodes[0]) + 1, f64(chain.lower, dtype=float),
-        f64(chain.upper, dtype=float), float(chain.length), float(chain.force_scale),
-        float(tol), int(max_outer), s_alpha, w_u, w_up, w_lo, flags, int(max_iter),
+        *args, float(tol), int(max_outer), s_alpha, w_u, w_up, w_lo, flags, int(max_iter),
         float(request))
     elapsed = time.perf_counter() - t0
     if code in _BAIL:

@@ -2,25 +2,22 @@
 
 numba (``@njit(cache=True)``) versions of the numpy reference, line for line:
 :func:`lcpbench.model.step.assemble_step` (the banded step of eqs. 20-31),
-:func:`lcpbench.solvers.banded.solve_banded_qp` with ``method="dual"`` (the
-walk, its refinement, :func:`~lcpbench.solvers.banded.step_certificate`),
-the judge's natural residual (:func:`lcpbench.model.step_solver.step_residuals`)
-and the globalised driver of :mod:`lcpbench.model.driver` (Armijo search on
-the exact energy of :mod:`lcpbench.model.chain`). The numpy modules are the
-readable reference and document the algorithm; this file repeats their
-arithmetic in the same order where that is cheap (sums, the band products),
-so both take the same path and agree to round-off (``tests/model/test_compiled.py``).
+:func:`lcpbench.solvers.banded.solve_banded_qp` with ``method="dual"`` (the walk, its
+refinement, :func:`~lcpbench.solvers.banded.step_certificate`), the judge's natural
+residual (:func:`lcpbench.model.step_solver.step_residuals`) and the globalised driver
+of :mod:`lcpbench.model.driver` (Armijo search on the exact energy of
+:mod:`lcpbench.model.chain`). The numpy modules are the readable reference and document
+the algorithm; this file repeats their arithmetic in the same order where that is cheap
+(sums, the band products), so both take the same path and agree to round-off
+(``tests/model/test_compiled.py``).
 
-Everything is in one file on purpose: numba's on-disk cache of a function is
-invalidated only when *its own* file changes, so a kernel split over files
-could run stale code after an edit of a callee.
+One file on purpose: numba's on-disk cache of a function is invalidated only when *its
+own* file changes (a kernel split over files could run stale code).
 
-Nothing here decides "converged" for the user: the kernel returns its
-iterate and reactions, and the Python side builds the DriverOutput, the
-certificate on the exact geometry and the result judge (:mod:`lcpbench.model.judge`).
-Whatever the kernel cannot do as the reference does (the primal safeguard, a
-face that is not positive definite, a certificate or judge that rejects a
-step) it reports with a code, and the caller runs the numpy reference.
+Nothing here decides "converged": the Python side builds the DriverOutput and judges it
+(:mod:`lcpbench.model.judge_compiled`). What the kernel cannot do as the reference does
+(the primal safeguard, a face not positive definite, a step rejected) it reports with a
+code, and the caller runs the numpy reference.
 """
 
 from __future__ import annotations
@@ -277,6 +274,14 @@ def _refactor(fac, bands, fixed, c0):
 
 
 @njit(cache=True)
+def _max_abs(x):  # max|x| and the slope's dot product are loops: loading the cache then
+    m = 0.0  # needs neither numba's array reductions nor its BLAS (which import scipy)
+    for v in x:
+        m = max(m, abs(v))
+    return m
+
+
+@njit(cache=True)
 def _run_maxima(v, slack):
     """The deepest violation v > slack of every run of consecutive violated nodes."""
     n = v.size
@@ -303,7 +308,7 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp):
         return BAIL_NOT_PD, linear, linear, linear, 0
     u = _resolve(fac, -linear)
     g = np.zeros(n)
-    slack = 32 * EPS * (1.0 + np.max(np.abs(u)))
+    slack = 32 * EPS * (1.0 + _max_abs(u))
     sigma, wall, S = np.zeros(n), np.zeros(n), np.zeros(n, np.bool_)
     warm = False
     for i in range(n):
@@ -346,7 +351,7 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp):
                     p = _resolve(fac, r)
                     return 0, u - p, g - _matvec(bands, p), sigma, it
             for old in seen:
-                if np.array_equal(old, sigma):
+                if _max_abs(old - sigma) == 0.0:  # the same working set
                     return BAIL_REPEAT, u, g, sigma, it
             seen.append(sigma.copy())
             for i in range(n):
@@ -409,7 +414,7 @@ def _certificate(u, ru, rl, lo, hi, gp):
         return 0.0
     grad = _grad(u, gp)
     size = _grad_scale(u, gp)
-    force, span = TINY, 1.0 + np.max(np.abs(u))
+    force, span = TINY, 1.0 + _max_abs(u)
     stat = feas = neg = comp = 0.0
     for i in range(n):
         force = max(force, size[i] + ru[i] + rl[i])
@@ -569,7 +574,9 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
             dalpha = max(dalpha, abs((alpha0[i] + (cur - prev) * inv[i]) - alpha[i]))
             prev = cur
         d = su - u
-        slope = np.dot(_grad(u, gp), d)
+        g_u, slope = _grad(u, gp), 0.0
+        for i in range(n):  # the dot product, a loop (see _max_abs)
+            slope += g_u[i] * d[i]
         noise = 1e-12 * (abs(E) + noise_k * 1e-6)
         t = 1.0
         while True:

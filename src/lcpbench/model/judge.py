@@ -65,9 +65,9 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.linalg import LinAlgError, solveh_banded
+from numpy.linalg import LinAlgError  # scipy.linalg's LinAlgError is this class
 
-from ..linalg import banded_matvec, sub_bands
+from ..linalg import banded_matvec, solveh_banded, sub_bands
 from ..problems.scenes import Chain
 from .chain import heights
 from .profile import has_profile, profile_step, walls_at

@@ -29,9 +29,9 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from scipy.linalg import LinAlgError, cholesky_banded
+from numpy.linalg import LinAlgError  # scipy.linalg's LinAlgError is this class
 
-from ..linalg import banded_matvec
+from ..linalg import banded_matvec, cholesky_banded
 from ..problems.scenes import Chain
 from .chain import joint_angles
 from .step import ContactStep

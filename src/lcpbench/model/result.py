@@ -234,14 +234,17 @@ class ContactResult:
         return out
 
 
-def build_result(scene, chain: Chain, out: DriverOutput, **how) -> ContactResult:
-    """The result of a driver run, judged by :func:`lcpbench.model.judge.judge`."""
+def build_result(scene, chain: Chain, out: DriverOutput, *, judged_by=judge,
+                 **how) -> ContactResult:
+    """The result of a driver run, judged by :func:`lcpbench.model.judge.judge`
+    (``judged_by``: or by its compiled twin with the same arguments and verdicts,
+    :func:`lcpbench.model.judge_compiled.judge_fast`)."""
     x, y = node_positions(chain, out.alpha)
     yf = y[chain.free_nodes]
     gaps, gaps_lower = chain.wall - yf, (yf + chain.wall if chain.channel else None)
     if has_profile(chain):
         gaps, gaps_lower = profile_gaps(chain, out.alpha)
-    verdict = judge(chain, out.alpha, out.forces_upper, out.forces_lower, tol=how["tol"],
+    verdict = judged_by(chain, out.alpha, out.forces_upper, out.forces_lower, tol=how["tol"],
                     driver_converged=out.converged, driver_reason=out.reason,
                     step_statuses=[s.status for s in out.steps],
                     step_sizes=[s.max_dalpha for s in out.steps],

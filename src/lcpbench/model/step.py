@@ -27,10 +27,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import solveh_banded
 
 from ..errors import ProblemError
-from ..linalg import banded_matvec
+from ..linalg import banded_matvec, solveh_banded
 from ..problems.scenes import Chain
 
 

@@ -19,10 +19,8 @@ import time
 from collections.abc import Callable
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.linalg import solveh_banded
 
-from ..linalg import banded_matvec, sub_bands
+from ..linalg import banded_matvec, solveh_banded, sub_bands
 from ..solvers.base import BoxQP, QPWarm, Settings, Status, StepSolution
 from ..solvers.judge import accept_tol, verdict
 from ..solvers.lemke import too_large
@@ -43,6 +41,8 @@ def step_qp(step, scaled: bool = True) -> BoxQP:
     n = step.size
     b = step.bands * (L / F)
     diags = [b[0], b[1, : n - 1], b[2, : n - 2]]
+    import scipy.sparse as sp  # at the first QP back-end's step, not at start-up
+
     P = sp.diags([diags[2], diags[1], diags[0], diags[1], diags[2]], [-2, -1, 0, 1, 2],
                  shape=(n, n), format="csc")
     return BoxQP(P, step.linear / F, step.lower / L, step.upper / L, bands=b)

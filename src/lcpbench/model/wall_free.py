@@ -14,8 +14,9 @@ import time
 from dataclasses import replace
 
 import numpy as np
-from scipy.linalg import LinAlgError
+from numpy.linalg import LinAlgError  # scipy.linalg's LinAlgError is this class
 
+from ..linalg import solveh_banded
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from .chain import heights
@@ -44,24 +45,36 @@ def beam_sag(chain: Chain) -> float:
 
 def free_step(step, warm) -> StepSolution:
     """The step of a chain with no walls: its unconstrained minimiser (a banded
-    solve; no LCP). ``warm`` is ignored."""
+    solve, refined once; no LCP). ``warm`` is ignored."""
     t0 = time.perf_counter()
     n = step.size
-    try:
-        u, status = step.unconstrained_minimiser(), Status.SOLVED
+    try:  # solved, then refined once with the factored gradient (as the compiled kernel,
+        # whose dual active set with no bounds is this solve): cond(K) ~ 1e8 at N = 140
+        u = step.unconstrained_minimiser()
+        u -= solveh_banded(step.bands, step.gradient(u), lower=True, check_finite=False)
+        status = Status.SOLVED
     except (LinAlgError, ValueError):  # not positive definite: no minimiser
         u, status = np.full(n, np.nan), Status.FAILED
     return StepSolution(u, np.zeros(n), np.zeros(n), status, 0, time.perf_counter() - t0)
 
 
 def solve_without_contact(chain: Chain, tol: float, max_outer: int,
-                          start: DriverStart | None = None) -> DriverOutput | None:
+                          start: DriverStart | None = None, *,
+                          engine: str = "numpy", args: tuple | None = None
+                          ) -> DriverOutput | None:
     """The answer of a scene that touches no wall, found without any LCP (or None).
 
     A continuation's ``start`` (a neighbour's shape) starts the search too.
     It is looked for when the arc clears the walls, or when the first step of
     that search (one banded solve at the arc, ~0.1 ms at N = 140) already
     does: a heavy chain can sag off a wall its arc crosses.
+
+    ``engine="compiled"``: the search without walls runs in the compiled
+    kernel (:func:`lcpbench.model.compiled.run_compiled` on the chain with its
+    walls removed: the dual active set with no bounds is the banded solve of
+    the free step, refined once); the numpy driver where the kernel stops.
+    ``args``: the chain's :func:`lcpbench.model.compiled.kernel_args`, when the
+    caller has them.
     """
     n = chain.free_nodes.size
     loaded = bool(np.any(chain.link_load != 0))
@@ -80,7 +93,15 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
                    upper_profile=None, lower_profile=None)
     if start is not None:  # a neighbour's shape (its contact set means nothing here)
         start = DriverStart(start.alpha, None)
-    out = run_driver(free, free_step, tol=tol, max_outer=max_outer, start=start)
+    out = None
+    if engine == "compiled":
+        from .compiled import run_compiled
+
+        if args is not None:  # the same arrays, the walls removed
+            args = (*args[:9], free.lower, free.upper, *args[11:])
+        out = run_compiled(free, tol=tol, max_outer=max_outer, start=start, args=args)[0]
+    if out is None:
+        out = run_driver(free, free_step, tol=tol, max_outer=max_outer, start=start)
     if not (out.converged and wall_overlap(walls_at(chain, out.alpha),
                                            heights(chain, out.alpha)) < 0):
         return None

@@ -39,6 +39,7 @@ from ..problems.scenes import (
     CantileverScene,
     Chain,
 )
+from ..studies.batch import solve_many
 from ..studies.discretisation import discretisation_study
 from ..studies.validation import cantilever_validation, observed_order
 from .data import PAPER, RULE_THRESHOLD, SOLVER, TOL, Plan
@@ -52,6 +53,15 @@ def model_solve(scene: ActuatorScene | CantileverScene, **kw) -> ContactResult:
     kw.setdefault("solver", SOLVER)
     kw.setdefault("tol", TOL)
     return solve(scene, **kw)
+
+
+def model_solve_many(scenes: list, **kw) -> list[ContactResult]:
+    """Many figure solves with the figures' back-end and tolerance, in one
+    :func:`lcpbench.solve_many` call (continuation along θ or h; the default
+    back-end's compiled batch loop), one result per scene in their order."""
+    kw.setdefault("solver", SOLVER)
+    kw.setdefault("tol", TOL)
+    return solve_many(scenes, **kw)
 
 
 def _touch_width(res: ContactResult, tol: float = 1e-9) -> float:
@@ -191,27 +201,26 @@ def fig8_forces(plan: Plan, out: Output) -> dict:
     show where it fails and that it lands on the same equilibrium elsewhere.
     """
     a = []
-    for h in plan.fig8_heights:
-        for th in plan.fig8a_thetas:
-            scene = ActuatorScene(theta=th, height=h, links=plan.links)
-            g = model_solve(scene)
-            u = model_solve(scene, method="undamped")
-            a.append({"theta": th, "height": h, "EI": DEFAULT_EI, "total_force": g.total_force,
-                      "converged": g.converged, "outer_iterations": g.outer_iterations,
-                      "arc_height": scene.arc_height,
-                      "undamped_converged": u.converged,
-                      "undamped_total_force": u.total_force if u.converged else math.nan,
-                      "undamped_reason": "" if u.converged else u.reason})
-    b = [{"theta": 150.0, "height": h, "EI": e,
-          "total_force": (r := model_solve(ActuatorScene(theta=150.0, height=h, EI=e,
-                                                    links=plan.links))).total_force,
-          "converged": r.converged}
-         for h in plan.fig8_heights for e in plan.fig8_EIs]
-    c = [{"theta": th, "height": 3.0, "EI": e,
-          "total_force": (r := model_solve(ActuatorScene(theta=th, height=3.0, EI=e,
-                                                    links=plan.links))).total_force,
-          "converged": r.converged}
-         for th in plan.fig8c_thetas for e in plan.fig8_EIs]
+    grid = [ActuatorScene(theta=th, height=h, links=plan.links) for h in plan.fig8_heights
+            for th in plan.fig8a_thetas]
+    for scene, g in zip(grid, model_solve_many(grid), strict=True):  # globalised: one batch
+        u = model_solve(scene, method="undamped")
+        a.append({"theta": scene.theta, "height": scene.height, "EI": DEFAULT_EI,
+                  "total_force": g.total_force, "converged": g.converged,
+                  "outer_iterations": g.outer_iterations, "arc_height": scene.arc_height,
+                  "undamped_converged": u.converged,
+                  "undamped_total_force": u.total_force if u.converged else math.nan,
+                  "undamped_reason": "" if u.converged else u.reason})
+    grid_b = [ActuatorScene(theta=150.0, height=h, EI=e, links=plan.links)
+              for h in plan.fig8_heights for e in plan.fig8_EIs]
+    b = [{"theta": 150.0, "height": s.height, "EI": s.EI, "total_force": r.total_force,
+          "converged": r.converged} for s, r in zip(grid_b, model_solve_many(grid_b),
+                                                    strict=True)]
+    grid_c = [ActuatorScene(theta=th, height=3.0, EI=e, links=plan.links)
+              for th in plan.fig8c_thetas for e in plan.fig8_EIs]
+    c = [{"theta": s.theta, "height": 3.0, "EI": s.EI, "total_force": r.total_force,
+          "converged": r.converged} for s, r in zip(grid_c, model_solve_many(grid_c),
+                                                    strict=True)]
     out.csv("fig8a-force-theta.csv", a)
     out.csv("fig8b-force-EI-theta150.csv", b)
     out.csv("fig8c-force-EI-h3.csv", c)

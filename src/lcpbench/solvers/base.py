@@ -19,7 +19,6 @@ from dataclasses import dataclass, field
 from enum import Enum
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..errors import ProblemError
 
@@ -262,6 +261,8 @@ def prepare_box_qp(qp: BoxQP):
         raise ProblemError(f"P must be {n} x {n}, got {getattr(qp.P, 'shape', None)}")
     if np.isnan(c).any() or np.isnan(lower).any() or np.isnan(upper).any():
         raise ProblemError("NaN in c or bounds")
+    import scipy.sparse as sp  # at the first QP, not at start-up
+
     P = sp.csc_matrix(qp.P, dtype=float)
     return P, c, lower, upper
 

@@ -18,8 +18,8 @@ from __future__ import annotations
 import time
 
 import numpy as np
-import scipy.sparse as sp
 
+from ..linalg import sparse as sp  # scipy.sparse, imported at the first QP
 from .base import (
     BoxQP,
     QPResult,

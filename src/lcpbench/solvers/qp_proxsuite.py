@@ -28,9 +28,9 @@ warm-start the multipliers too.
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..errors import ProblemError
+from ..linalg import sparse as sp  # scipy.sparse, imported at the first QP
 from .base import (
     BoxQP,
     QPResult,

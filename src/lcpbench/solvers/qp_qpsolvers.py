@@ -64,9 +64,9 @@ import warnings
 from importlib.util import find_spec
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..errors import SolverNotFound
+from ..linalg import sparse as sp  # scipy.sparse, imported at the first QP
 from . import qp_clarabel, qp_osqp, qp_proxsuite
 from .base import (
     BoxQP,

@@ -241,8 +241,13 @@ def _plugins() -> tuple[tuple[Backend, ...], tuple[str, ...]]:
 
 
 @lru_cache(maxsize=1)
+def _builtin_table() -> dict[str, Backend]:
+    return {b.name: b for b in _builtin()}
+
+
+@lru_cache(maxsize=1)
 def _all() -> dict[str, Backend]:
-    table = {b.name: b for b in _builtin()}
+    table = dict(_builtin_table())
     for b in _plugins()[0]:
         table.setdefault(b.name, b)  # a plugin cannot shadow a built-in name
     return table
@@ -279,8 +284,9 @@ def get_backend(name: str) -> Backend:
     """
     if name == "auto":
         name = DEFAULT
-    table = _all()
-    b = table.get(name)
+    # a plugin cannot shadow a built-in name: a built-in is found without scanning the
+    # installed distributions' entry points (a tenth of a second at start-up)
+    b = _builtin_table().get(name) or _all().get(name)
     if b is not None and b.available():
         return b
     installed = ", ".join(available_backends())

@@ -14,7 +14,6 @@ The contact step of the actuator is run through the same back-ends by
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..errors import ProblemError
 from .base import BoxQP, LCPSolution, QPWarm, Settings, Status, lcp_residuals
@@ -115,6 +114,8 @@ def _run_lcp(backend: Backend, M, q, s: Settings, warm) -> LCPSolution:
                                    "(min ½zᵀMz + qᵀz over z >= 0)")
     n = q.size
     Ms = 0.5 * (M + M.T)
+    import scipy.sparse as sp  # at the first QP, not at start-up
+
     qp = BoxQP(sp.csc_matrix(Ms), q.copy(), np.zeros(n), np.full(n, np.inf))
     qwarm = None if warm is None else QPWarm(np.maximum(np.asarray(warm, float), 0.0))
     res = mod.solve_qp(qp, s, qwarm, **backend.options)

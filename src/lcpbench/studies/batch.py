@@ -7,17 +7,26 @@ neighbours on a line in θ; each line is solved by
 :func:`lcpbench.studies.continuation.solve_sequence` (a scene whose warm
 start fails is solved again cold). Other scenes (the cantilever) are solved
 cold. The results come back in the caller's order, one per scene.
+
+With the default back-end and the globalised driver, each line runs in the
+compiled kernels (:mod:`lcpbench.studies.batch_compiled`: the solve kernel
+and the judge kernel per scene, the checks once per batch); otherwise each
+scene is one :func:`lcpbench.solve` call.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
 
-from ..api import solve
+from ..api import PAPER_TOL, check_tol, solve
 from ..errors import ProblemError
 from ..model.result import ContactResult
+from ..model.step_solver import make_step_solver
+from ..problems.checks import check_scene
 from ..problems.scenes import ActuatorScene
-from .continuation import solve_sequence
+from ..solvers.registry import DEFAULT
+from .batch_compiled import solve_line, takes
+from .continuation import PREDICTORS, solve_sequence
 
 
 def _group_key(scene: ActuatorScene) -> tuple:
@@ -60,9 +69,24 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
     if not continuation:
         return [solve(s, **kw) for s in scenes]
     out: list[ContactResult | None] = [None] * len(scenes)
+    fast = takes(solver, dict(solve_kw, tol=tol)) and predictor in PREDICTORS
+    if fast:  # the checks of solve(), once for the batch
+        for s in scenes:
+            check_scene(s)
+        fast_kw = dict(tol=PAPER_TOL if tol is None else check_tol(tol),
+                       max_outer=solve_kw.get("max_outer", 200),
+                       settings=solve_kw.get("settings", "default"))
+        make_step_solver(DEFAULT, fast_kw["settings"], True)  # validates the settings
+        m = fast_kw["max_outer"]
+        if isinstance(m, bool) or not (isinstance(m, int) and m >= 1):
+            fast = False  # solve() names the error
     for line in continuation_order(scenes):
-        for i, res in zip(line, solve_sequence([scenes[i] for i in line], predictor=predictor,
-                                               **kw), strict=True):
+        line_scenes = [scenes[i] for i in line]
+        if fast and all(isinstance(s, ActuatorScene) for s in line_scenes):
+            results = solve_line(line_scenes, predictor=predictor, **fast_kw)
+        else:
+            results = solve_sequence(line_scenes, predictor=predictor, **kw)
+        for i, res in zip(line, results, strict=True):
             out[i] = res
     return out  # type: ignore[return-value]  # every index was filled
 

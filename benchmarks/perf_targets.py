@@ -1,0 +1,309 @@
+"""Issue 19's targets, measured in one run (``benchmarks/perf.py`` calls :func:`measure`).
+
+With one BLAS thread (perf.py pins it before numpy loads), the CPU model and
+the load average recorded, every ratio a ratio of medians over interleaved
+repetitions. N = 140, θ = 150°, h = 3 mm unless said otherwise.
+
+1. full solve at tol 1e-3, ``lcpbench.solve(scene)`` (the compiled kernel and
+   the compiled judge), against the paper-faithful dense path with Lemke;
+2. against the appendix's root-finding baseline, FD Jacobian (LM) and
+   analytic Jacobian (hybr);
+3. one cold contact step at the converged configuration: the compiled step
+   (assembly, dual walk, certificate, judge residual; timed around the call)
+   against Siconos's Lemke (C; solver-reported, inside its worker);
+4. tol 1e-9 against tol 1e-3 (the same call), and continuation over the paper
+   grid at tol 1e-8: outer iterations cold / warm and the largest difference;
+6. ``solve_many`` over the paper's 108 scenes at tol 1e-3 (θ 10–180 by 10,
+   h 2–7): scenes per second, wall and CPU time, against one ``solve`` per scene;
+7. start-up in fresh processes with numba's cache warm: ``import lcpbench``,
+   the first solve, the second (steady state), wall and CPU time.
+
+Also where the time of one default solve goes (its parts timed alone).
+"""
+
+from __future__ import annotations
+
+import os
+import statistics
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+import lcpbench
+from lcpbench import ActuatorScene
+from lcpbench.baseline import solve_baseline
+from lcpbench.bench.grid import PAPER_GRID
+from lcpbench.model.dense import solve_paper_dense
+from lcpbench.studies.continuation import largest_difference, total_outer
+
+TOL = 1e-3
+SCENE = dict(theta=150.0, height=3.0, links=140)
+
+
+def paper_scenes() -> list[ActuatorScene]:
+    return [ActuatorScene(theta=t, height=h) for h in PAPER_GRID.height for t in PAPER_GRID.theta]
+
+
+def cpu_wall(fn):
+    """A contender timed around the call: wall time, the payload carries the CPU time."""
+    def run():
+        c0, t0 = time.process_time(), time.perf_counter()
+        res = fn()
+        return time.perf_counter() - t0, (res, time.process_time() - c0)
+    return run
+
+
+def full_solve(interleaved, wall, med, repeat: int) -> dict:
+    scene = ActuatorScene(**SCENE)
+    runs = interleaved({
+        "lcpbench.solve (compiled)": wall(lambda: lcpbench.solve(scene, tol=TOL)),
+        "dense paper path (Lemke)": wall(lambda: solve_paper_dense(scene, tol=TOL)),
+        "baseline analytic (hybr)": wall(lambda: solve_baseline(scene, jacobian="analytic")),
+        "baseline fd (lm)": wall(lambda: solve_baseline(scene, jacobian="fd", method="lm")),
+        "numpy reference (engine='numpy')": wall(
+            lambda: lcpbench.solve(scene, tol=TOL, engine="numpy")),
+    }, repeat)
+    rows = {name: {"median_s": med(r["times"]), "min_s": min(r["times"])}
+            for name, r in runs.items()}
+    fast = rows["lcpbench.solve (compiled)"]["median_s"]
+    res = runs["lcpbench.solve (compiled)"]["payload"]
+    _, R, outer, ok = runs["dense paper path (Lemke)"]["payload"]
+    return {"rows": rows, "repeat": repeat, "force_N": res.total_force,
+            "converged": res.converged, "dense_force_N": float(np.sum(R)),
+            "dense_converged": bool(ok),
+            "baseline_converged": {n: bool(runs[n]["payload"].converged) for n in
+                                   ("baseline analytic (hybr)", "baseline fd (lm)")},
+            "ratio": {name: r["median_s"] / fast for name, r in rows.items()}}
+
+
+def parts(med, repeat: int) -> dict:
+    """Each part of one default solve timed alone (medians, µs): where the time goes."""
+    from lcpbench.api import finish
+    from lcpbench.model.compiled import _kernel, kernel_args, run_compiled
+    from lcpbench.model.judge_compiled import _kernel as judge_kernel
+    from lcpbench.model.judge_compiled import chain_args
+    from lcpbench.model.wall_free import solve_without_contact
+
+    scene = ActuatorScene(**SCENE)
+    chain = scene.chain()
+    args = kernel_args(chain)
+    jargs = chain_args(chain, args)
+    n = chain.free_nodes.size
+    k, jk = _kernel(), judge_kernel()
+    raw = (*args, TOL, 200, np.zeros(0), np.zeros(n), np.zeros(n, bool), np.zeros(n, bool), 0,
+           20 * n + 50, 1e-9)
+    out, _ = run_compiled(chain, tol=TOL, args=args)
+    sizes = np.array([s.max_dalpha for s in out.steps])
+
+    def judged():
+        o = type(out)(**vars(out))
+        return finish(scene, chain, o, solver="active-set", method="globalised", tol=TOL,
+                      elapsed=0.0, settings="default", engine="compiled",
+                      compiled_judge=True, why=None, judge_args=jargs)
+
+    fns = {
+        "lcpbench.solve, whole call": lambda: lcpbench.solve(scene, tol=TOL),
+        "scene.chain()": scene.chain,
+        "wall-free check (a contact scene: no search)": lambda: solve_without_contact(
+            chain, TOL, 200, None, engine="compiled", args=args),
+        "solve kernel alone (solve_chain, 4 outer iterations)": lambda: k.solve_chain(*raw),
+        "run_compiled (kernel + DriverOutput)": lambda: run_compiled(chain, tol=TOL, args=args),
+        "judge kernel alone (judge_answer)": lambda: jk.judge_answer(
+            out.alpha, *jargs, out.forces_upper, out.forces_lower, TOL, sizes),
+        "judging and building the result (finish)": judged,
+    }
+    out_rows: dict[str, list[float]] = {name: [] for name in fns}
+    for _ in range(repeat):  # interleaved: one call of each per round
+        for name, fn in fns.items():
+            t0 = time.perf_counter()
+            fn()
+            out_rows[name].append(time.perf_counter() - t0)
+    return {name: med(t) * 1e6 for name, t in out_rows.items()}
+
+
+def tolerance(interleaved, wall, med, repeat: int) -> dict:
+    scene = ActuatorScene(**SCENE)
+    runs = interleaved({f"tol {t:g}": wall(lambda t=t: lcpbench.solve(scene, tol=t))
+                        for t in (1e-3, 1e-9)}, repeat)
+    rows = {name: {"median_s": med(r["times"]), "outer": r["payload"].outer_iterations,
+                   "converged": r["payload"].converged} for name, r in runs.items()}
+    return {"rows": rows, "ratio": rows["tol 1e-09"]["median_s"] / rows["tol 0.001"]["median_s"]}
+
+
+def continuation(tol: float = 1e-8) -> dict:
+    scenes = paper_scenes()
+    cold = [lcpbench.solve(s, tol=tol) for s in scenes]
+    warm = lcpbench.solve_many(scenes, tol=tol)
+    c, w = total_outer(cold), total_outer(warm)
+    return {"tol": tol, "cold_outer": c, "warm_outer": w, "ratio": c / w,
+            "largest_difference": largest_difference(cold, warm),
+            "all_converged": all(r.converged for r in cold + warm)}
+
+
+def throughput(interleaved, med, repeat: int) -> dict:
+    scenes = paper_scenes()
+    runs = interleaved({
+        "solve_many (continuation, compiled loop)": cpu_wall(
+            lambda: lcpbench.solve_many(scenes, tol=TOL)),
+        "solve_many(continuation=False)": cpu_wall(
+            lambda: lcpbench.solve_many(scenes, tol=TOL, continuation=False)),
+        "one lcpbench.solve per scene": cpu_wall(
+            lambda: [lcpbench.solve(s, tol=TOL) for s in scenes]),
+    }, repeat)
+    rows = {}
+    for name, r in runs.items():
+        results, _ = r["payload"]
+        wall_s = med(r["times"])
+        rows[name] = {"median_s": wall_s, "scenes_per_s": len(scenes) / wall_s,
+                      "all_converged": all(x.converged for x in results),
+                      "outer": total_outer(results)}
+    # CPU time of the batch, separately (the interleaved wall time includes waiting)
+    cpu = []
+    for _ in range(repeat):
+        c0 = time.process_time()
+        lcpbench.solve_many(scenes, tol=TOL)
+        cpu.append(time.process_time() - c0)
+    best = rows["solve_many (continuation, compiled loop)"]
+    best["cpu_s"] = med(cpu)
+    best["scenes_per_cpu_s"] = len(scenes) / med(cpu)
+    return {"scenes": len(scenes), "rows": rows, "repeat": repeat}
+
+
+def _fresh(code: str) -> list[str]:
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True, env=env).stdout.split()
+
+
+START = ("import time; P, T = time.process_time, time.perf_counter; c0, t0 = P(), T(); "
+         "import lcpbench; c1, t1 = P(), T(); "
+         "s = lcpbench.ActuatorScene(theta=150, height=3.0); r = lcpbench.solve(s); "
+         "c2, t2 = P(), T(); lcpbench.solve(s); c3, t3 = P(), T(); "
+         "import sys; print(t1 - t0, c1 - c0, t2 - t1, c2 - c1, t3 - t2, c3 - c2, "
+         "'numba' in sys.modules and 0, r.extra['engine'])")
+
+
+def start_up(starts: int) -> dict:
+    """Fresh processes (bytecode caching on, as for an installed package), numba's cache
+    warmed by one process first; medians."""
+    _fresh(START)
+    _fresh(START)
+    cols = [[] for _ in range(6)]
+    engines = set()
+    for _ in range(starts):
+        out = _fresh(START)
+        for i in range(6):
+            cols[i].append(float(out[i]))
+        engines.add(out[7])
+    imp = _fresh("import sys, lcpbench; print('numba' in sys.modules, 'scipy' in sys.modules)")
+    names = ("import_wall_s", "import_cpu_s", "first_wall_s", "first_cpu_s",
+             "second_wall_s", "second_cpu_s")
+    return {**{n: statistics.median(c) for n, c in zip(names, cols, strict=True)},
+            "import_loads_numba": imp[0] == "True", "import_loads_scipy": imp[1] == "True",
+            "engines": sorted(engines), "starts": starts}
+
+
+def measure(interleaved, wall, med, repeat: int, starts: int, cold_step) -> dict:
+    """Every issue-19 number of perf.md; ``cold_step`` is compiled_core.cold_step."""
+    res = {}
+    print("issue 19: start-up", file=sys.stderr, flush=True)
+    res["start"] = start_up(starts)
+    print("issue 19: full solve against the dense path and the baselines", file=sys.stderr,
+          flush=True)
+    res["full"] = full_solve(interleaved, wall, med, max(5, repeat // 2))
+    print("issue 19: one cold step against Siconos", file=sys.stderr, flush=True)
+    res["cold"] = cold_step(ActuatorScene(**SCENE), max(repeat, 21))
+    print("issue 19: tolerance, continuation, throughput, parts", file=sys.stderr, flush=True)
+    res["tol"] = tolerance(interleaved, wall, med, repeat)
+    res["continuation"] = continuation()
+    res["throughput"] = throughput(interleaved, med, max(5, repeat // 3))
+    res["parts_us"] = parts(med, max(repeat, 21))
+    return res
+
+
+def markdown(res: dict) -> list[str]:
+    """The issue-19 section of perf.md: the table of targets, then the details."""
+    f, c, t, w = res["full"], res["cold"], res["tol"], res["continuation"]
+    th, s, p = res["throughput"], res["start"], res["parts_us"]
+    goal = lambda ok: "met" if ok else "**not met**"  # noqa: E731
+    r = f["ratio"]
+    crow = c["rows"]
+    comp = crow["compiled step (assembly + walk + certificate + judge)"]["median_s"]
+    sic = crow.get("siconos-lemke (C, solver-reported)", {}).get("median_s")
+    step_ratio = sic / comp if sic else float("nan")
+    best = th["rows"]["solve_many (continuation, compiled loop)"]
+    per_scene = th["rows"]["one lcpbench.solve per scene"]
+    L = [
+        "## Issue 19: the compiled solve core (targets 1-4, 6, 7)", "",
+        "| target | measured | goal | |", "|---|---|---|---|",
+        f"| 1. full solve N = 140, tol 1e-3: dense paper path (Lemke) / `lcpbench.solve` | "
+        f"**{r['dense paper path (Lemke)']:.0f}×** | ≥ 150× | "
+        f"{goal(r['dense paper path (Lemke)'] >= 150)} |",
+        f"| 2. baseline FD Jacobian (LM) / `lcpbench.solve` | **{r['baseline fd (lm)']:.3g}×** | "
+        f"≥ 1e4× | {goal(r['baseline fd (lm)'] >= 1e4)} |",
+        f"| 2. baseline analytic Jacobian (hybr) / `lcpbench.solve` | "
+        f"**{r['baseline analytic (hybr)']:.3g}×** | ≥ 500× | "
+        f"{goal(r['baseline analytic (hybr)'] >= 500)} |",
+        f"| 3. one cold contact step: Siconos Lemke (C) / compiled step | "
+        f"**{step_ratio:.1f}×** | ≥ 20× | {goal(step_ratio >= 20)} |",
+        f"| 4. tol 1e-9 / tol 1e-3 (globalised scheme, the default) | **{t['ratio']:.2f}×** | "
+        f"≤ 1.5× | {goal(t['ratio'] <= 1.5)} |",
+        f"| 4. continuation at tol 1e-8, paper grid: outer iterations cold / warm | "
+        f"**{w['ratio']:.2f}×** (answers within {w['largest_difference']:.1e}) | ≥ 2× | "
+        f"{goal(w['ratio'] >= 2 and w['largest_difference'] <= 1e-8)} |",
+        f"| 6. `solve_many`, 108 paper scenes, tol 1e-3: scenes per second (wall; per CPU "
+        f"second) | **{best['scenes_per_s']:.0f}** ({best['scenes_per_cpu_s']:.0f}) | ≥ 1e4 | "
+        f"{goal(best['scenes_per_s'] >= 1e4)} |",
+        f"| 7. `import lcpbench` (fresh process; CPU) | **{s['import_wall_s'] * 1e3:.0f} ms** "
+        f"({s['import_cpu_s'] * 1e3:.0f} ms; loads numba: {s['import_loads_numba']}) | "
+        f"≤ 300 ms | {goal(s['import_wall_s'] <= 0.3)} |",
+        f"| 7. first solve of a fresh process, numba cache warm (CPU) | "
+        f"**{s['first_wall_s'] * 1e3:.0f} ms** ({s['first_cpu_s'] * 1e3:.0f} ms) | ≤ 500 ms | "
+        f"{goal(s['first_wall_s'] <= 0.5)} |",
+        "",
+        f"Targets 5 (large N) and 8 (heavy chains) are measured elsewhere (another branch "
+        f"of issue 19). Steady state: the second solve of a fresh process took "
+        f"{s['second_wall_s'] * 1e3:.2f} ms.", "",
+        f"### Full solve (median of {f['repeat']} interleaved)", "",
+        "| path | median (ms) | min (ms) | ratio this / `lcpbench.solve` |", "|---|---|---|---|"]
+    for name, row in f["rows"].items():
+        L.append(f"| {name} | {row['median_s'] * 1e3:.3f} | {row['min_s'] * 1e3:.3f} | "
+                 f"{r[name]:.3g} |")
+    L += ["", f"`lcpbench.solve`: F = {f['force_N']:.10g} N, converged {f['converged']}; dense "
+          f"path F = {f['dense_force_N']:.10g} N, converged {f['dense_converged']}; "
+          f"baselines converged: {f['baseline_converged']}.", "",
+          f"### One cold contact step at the converged configuration ({c['repeat']} "
+          "interleaved)", "", "| contender | median (µs) | min (µs) |", "|---|---|---|"]
+    for name, row in crow.items():
+        L.append(f"| {name} | {row['median_s'] * 1e6:.1f} | {row['min_s'] * 1e6:.1f} |")
+    L += ["", "### Tolerance", "", "| tol | median (ms) | outer | converged |", "|---|---|---|---|"]
+    for name, row in t["rows"].items():
+        L.append(f"| {name} | {row['median_s'] * 1e3:.3f} | {row['outer']} | {row['converged']} |")
+    L += ["", f"Continuation at tol {w['tol']:g} over the 108 paper scenes: {w['cold_outer']} "
+          f"outer iterations cold, {w['warm_outer']} with `solve_many`; largest difference of "
+          f"F {w['largest_difference']:.1e} (relative to max(F, EI/ℓ²)); all converged: "
+          f"{w['all_converged']}.", "",
+          f"### Throughput: the paper's {th['scenes']} scenes at tol 1e-3 "
+          f"({th['repeat']} interleaved)", "",
+          "| how | median (ms) | scenes/s | outer iterations | all converged |",
+          "|---|---|---|---|---|"]
+    for name, row in th["rows"].items():
+        L.append(f"| {name} | {row['median_s'] * 1e3:.1f} | {row['scenes_per_s']:.0f} | "
+                 f"{row['outer']} | {row['all_converged']} |")
+    L += ["", f"CPU time of the batch: {best['cpu_s'] * 1e3:.1f} ms "
+          f"({best['scenes_per_cpu_s']:.0f} scenes per CPU second); the batch against one "
+          f"solve per scene: {per_scene['median_s'] / best['median_s']:.1f}×.", "",
+          "### Where the time of one default solve goes (N = 140; each part alone, medians)",
+          "", "| part | µs |", "|---|---|"]
+    for name, us in p.items():
+        L.append(f"| {name} | {us:.1f} |")
+    L += ["", f"### Start-up (fresh processes, median of {s['starts']}; numba cache warm)", "",
+          f"- `import lcpbench`: {s['import_wall_s'] * 1e3:.0f} ms wall, "
+          f"{s['import_cpu_s'] * 1e3:.0f} ms CPU; loads numba: {s['import_loads_numba']}, "
+          f"scipy: {s['import_loads_scipy']}",
+          f"- first solve: {s['first_wall_s'] * 1e3:.0f} ms wall, {s['first_cpu_s'] * 1e3:.0f} ms "
+          f"CPU (engine {', '.join(s['engines'])})",
+          f"- second solve: {s['second_wall_s'] * 1e3:.2f} ms wall", ""]
+    return L

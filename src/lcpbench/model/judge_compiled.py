@@ -1,0 +1,143 @@
+"""The result judge with its arithmetic compiled (:mod:`lcpbench.model.judge_kernel`).
+
+:func:`judge_fast` takes the arguments of :func:`lcpbench.model.judge.judge`
+and returns the same :class:`~lcpbench.model.judge.Judgement`, with the same
+checks, thresholds and reasons; the numbers come from one call of the
+compiled :func:`~lcpbench.model.judge_kernel.judge_answer` instead of a few
+hundred numpy calls. The numpy judge is the reference (tests compare both);
+an answer whose driver did not converge, or a chain the kernel does not take,
+goes to the numpy judge.
+
+Independent of the solve: the judge kernel shares no code with the solve
+kernel (:mod:`lcpbench.model.compiled_kernel`) and takes its own exact step.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..problems.scenes import Chain
+from .judge import Judgement, judge
+
+_LOADED: list = []  # the kernel module, once imported
+
+
+def _kernel():
+    if _LOADED:
+        return _LOADED[0]
+    from . import judge_kernel  # imports numba; loads or compiles the kernel
+    from .kernel_cache import light_cache_load
+
+    light_cache_load(judge_kernel.judge_answer)
+    _LOADED.append(judge_kernel)
+    return judge_kernel
+
+
+def takes(chain: Chain) -> bool:
+    """Whether the judge kernel takes this chain: consecutive joints, contiguous free
+    nodes (the solve kernel's layouts, :func:`lcpbench.model.compiled.applies`)."""
+    from .compiled import applies
+
+    return applies("auto", "globalised", chain)
+
+
+def chain_args(chain: Chain, kernel_args: tuple | None = None) -> tuple:
+    """The chain's arrays in the order :func:`judge_kernel.judge_answer` takes them
+    (``kernel_args``: the solve kernel's, :func:`lcpbench.model.compiled.kernel_args`,
+    when the caller has them: the same arrays, so none is copied twice)."""
+    if kernel_args is None:
+        from .compiled import kernel_args as solve_args
+
+        kernel_args = solve_args(chain)
+    return (*kernel_args[1:], float(chain.wall), bool(chain.channel))
+
+
+def judge_fast(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
+               forces_lower: np.ndarray, *, tol: float, driver_converged: bool,
+               driver_reason: str, step_statuses: list[str], step_sizes: list[float],
+               certificate, args: tuple | None = None) -> Judgement:
+    """:func:`lcpbench.model.judge.judge`, its arithmetic in the judge kernel.
+
+    ``certificate`` is used only where the numpy judge runs (a driver that did
+    not converge, a chain the kernel does not take); otherwise the kernel's
+    certificate is returned in ``judgement.certificate``. ``args``: the
+    chain's :func:`chain_args`, when the caller has them already.
+    """
+    if not driver_converged or (args is None and not takes(chain)):
+        return judge(chain, alpha, forces_upper, forces_lower, tol=tol,
+                     driver_converged=driver_converged, driver_reason=driver_reason,
+                     step_statuses=step_statuses, step_sizes=step_sizes,
+                     certificate=certificate)
+    k = _kernel()
+    if args is None:
+        args = chain_args(chain)
+    code, st, fu, fl, _, _, res, _, _ = k.judge_answer(
+        np.ascontiguousarray(alpha, dtype=float), *args[:-4],
+        *args[-4:], np.ascontiguousarray(forces_upper, dtype=float),
+        np.ascontiguousarray(forces_lower, dtype=float), float(tol),
+        np.asarray(step_sizes, dtype=float))
+    return verdict_from_stats(code == k.SETTLED, dict(zip(k.STATS, st.tolist(), strict=True)),
+                              fu, fl, res, tol=tol, driver_reason=driver_reason,
+                              step_statuses=step_statuses)
+
+
+def verdict_from_stats(settled: bool, s: dict, fu: np.ndarray, fl: np.ndarray,
+                       torque_residual: np.ndarray, *, tol: float, driver_reason: str,
+                       step_statuses: list[str]) -> Judgement:
+    """The Judgement (and its Certificate) from the kernel's numbers, with the
+    reasons of :func:`lcpbench.model.judge.judge`, check by check."""
+    from .result import Certificate
+
+    tau, F0 = s["tau"], s["F0"]
+    verdict = Judgement(False, driver_reason, tau, F0, contact_threshold=s["eps_R"])
+    if settled:
+        verdict.forces_upper, verdict.forces_lower = fu, fl
+    cert = Certificate(min_gap=s["min_gap"], min_force=s["min_force"],
+                       complementarity=s["complementarity"], closure=s["closure"],
+                       torque_residual=torque_residual,
+                       max_torque_residual=s["max_torque_residual"],
+                       relative_torque_residual=s["relative_torque_residual"])
+    verdict.certificate = cert
+    verdict.inexact_steps = sum(st != "solved" for st in step_statuses)
+    fails: list[str] = []
+    if step_statuses and step_statuses[-1] != "solved":
+        fails.append(f"last step: the contact step whose reactions are reported was "
+                     f"{step_statuses[-1]} by lcpbench's residuals")
+    comp, comp_allowed = s["comp"], s["comp_allowed"]
+    if comp > comp_allowed:
+        fails.append(f"complementarity: a node carries a reaction {comp:.1e} F₀ while "
+                     f"{comp:.1e} ℓ from its wall (allowed {comp_allowed:.1e})")
+    pen = s["pen"]
+    if cert.min_gap < -pen:
+        fails.append(f"penetration: {-cert.min_gap:.1e} mm through a wall "
+                     f"(allowed {pen:.1e} mm)")
+    if cert.closure > s["closure_allowed"]:
+        fails.append(f"closure: the right pin is {cert.closure:.1e} mm off y = 0")
+    if cert.relative_torque_residual > max(10 * tol, 1e-6):
+        fails.append(f"torque: relative torque residual {cert.relative_torque_residual:.1e}")
+    allowed_R = max(s["eps_R"], s["floor_R"])
+    if s["R_min"] < -allowed_R:
+        fails.append(f"sign: a wall pulls with {s['R_min']:.2e} N (allowed down to "
+                     f"{-allowed_R:.1e} N)")
+    if not settled:
+        fails.append("force error bound: the judge step did not settle")
+    else:
+        total, node = s["total"], s["node"]
+        verdict.force_error_bound, verdict.node_error_bound = total, node
+        verdict.contraction = s["rho"]
+        verdict.judge_total_force = s["judge_total_force"]
+        verdict.judge_rounds = int(s["rounds"])
+        if not total <= tau:
+            fails.append(f"force error bound: the total force may be {total:.1e} F₀ off "
+                         f"(allowed {tau:.1e}; one more exact step moves it to "
+                         f"{verdict.judge_total_force:.6g} N)")
+        elif not node <= s["node_allowed"]:
+            fails.append(f"force error bound: a node's force may be {node:.1e} F₀ off "
+                         f"(allowed {s['node_allowed']:.1e})")
+    verdict.failed = [f.split(":")[0] for f in fails]
+    if fails:
+        verdict.reason = "not accepted by lcpbench's judge: " + "; ".join(fails)
+        return verdict
+    verdict.converged = True
+    verdict.reason = driver_reason
+    return verdict

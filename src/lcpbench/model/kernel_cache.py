@@ -1,0 +1,55 @@
+"""Loading the compiled kernels from numba's on-disk cache without numba's full start-up.
+
+When numba loads a function from its cache it first refreshes its whole target
+context: it imports and registers the implementations of everything numba can
+compile (the typed containers, the random generators, the polynomial module,
+the BLAS bindings, which import scipy.linalg, and more). That costs about half
+a second per process, longer than loading the kernels themselves, and none of
+it is needed to run object code that is already compiled: the code needs
+numba's runtime (NRT, for the arrays it allocates) and the symbols of the
+process, nothing else.
+
+:func:`light_cache_load` makes one dispatcher load from the cache after
+initialising only the runtime. Where the cache has no entry for the call (the
+first run after an edit, a new signature), it hands over to numba's own
+loader, which refreshes the context and compiles as usual; any error on the
+light path does the same. ``LCPBENCH_NUMBA_FULL_LOAD=1`` turns it off.
+
+It uses two private methods of numba's cache (``_load_overload`` and
+``_guard_against_spurious_io_errors``, numba 0.5x–0.6x); where they are
+missing it does nothing, so a numba that changed them loads as before.
+"""
+
+from __future__ import annotations
+
+import os
+
+
+def light_cache_load(dispatcher) -> bool:
+    """Make ``dispatcher`` (an ``@njit(cache=True)`` function) load from the cache
+    without refreshing numba's target context; False where that is not possible."""
+    cache = getattr(dispatcher, "_cache", None)
+    load = getattr(cache, "_load_overload", None)
+    guard = getattr(cache, "_guard_against_spurious_io_errors", None)
+    full = getattr(cache, "load_overload", None)
+    if load is None or guard is None or full is None or os.environ.get(
+            "LCPBENCH_NUMBA_FULL_LOAD"):
+        return False
+    if getattr(full, "_lcpbench_light", False):
+        return True
+
+    def light(sig, target_context):
+        found = None
+        try:
+            from numba.core.runtime import nrt
+
+            nrt.rtsys.initialize(target_context)  # the runtime the kernels allocate with
+            with guard():
+                found = load(sig, target_context)
+        except Exception:  # anything unexpected: numba's own loader decides
+            found = None
+        return found if found is not None else full(sig, target_context)
+
+    light._lcpbench_light = True  # type: ignore[attr-defined]
+    cache.load_overload = light
+    return True

@@ -1,0 +1,137 @@
+"""The default back-end's batch loop: continuation lines in the compiled kernels.
+
+:func:`lcpbench.solve_many` hands each continuation line here when the scenes
+use the default back-end (the dual active set) with the globalised driver and
+the compiled engine: per scene, the chain, the wall-free search
+(:func:`lcpbench.model.wall_free.solve_without_contact` in the kernel), one
+call of the solve kernel (:func:`lcpbench.model.compiled.run_compiled`) and one
+of the judge kernel (:func:`lcpbench.model.judge_compiled.judge_fast`); the
+checks of :func:`lcpbench.solve` are done once per batch, not per scene.
+
+It is :func:`lcpbench.studies.continuation.solve_sequence` with the same
+predictor (the polynomial through the line's last answers, the last answer's
+contact set as the warm start, a failed warm start redone cold), so the
+results are the ones ``solve_many(..., engine="numpy")`` gives, to round-off
+(tests). Every result is judged by lcpbench's judge, as every result of
+:func:`lcpbench.solve` is.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from ..api import finish
+from ..model.compiled import applies, kernel_args, run_compiled
+from ..model.driver import DriverStart, run_driver
+from ..model.judge_compiled import chain_args
+from ..model.result import ContactResult
+from ..model.step_solver import make_step_solver
+from ..model.wall_free import solve_without_contact
+from ..problems.scenes import ActuatorScene
+from ..solvers.registry import DEFAULT
+from .continuation import _POINTS
+
+AUTO_WHY = "auto: the built-in active set (exact)"
+
+
+def takes(solver, solve_kw: dict) -> bool:
+    """Whether a batch with these :func:`lcpbench.solve` arguments runs here."""
+    allowed = {"tol", "max_outer", "settings", "engine", "method"}
+    return (solver in ("auto", DEFAULT) and set(solve_kw) <= allowed
+            and solve_kw.get("method", "globalised") == "globalised"
+            and solve_kw.get("engine", "auto") in ("auto", "compiled"))
+
+
+def _predict(history: list, scene: ActuatorScene, most: int):
+    """(α, warm step) for ``scene`` from the line's last answers, as
+    :func:`lcpbench.studies.continuation.predict` (scenes of one group: only θ
+    and h can differ). None: start cold."""
+    if not history or most == 0:
+        return None
+    s1, r1 = history[-1]
+
+    def moving(a, b):
+        if a.theta != b.theta and a.height == b.height:
+            return "theta"
+        if a.height != b.height and a.theta == b.theta:
+            return "height"
+        return None
+
+    param = moving(s1, scene)
+    if not r1.converged or param is None:
+        return None
+    pts = [(s1, r1)]
+    for s, r in reversed(history[:-1]):
+        if len(pts) == most:
+            break
+        if not r.converged or moving(s, pts[-1][0]) != param:
+            break
+        pts.append((s, r))
+    t = getattr(scene, param)
+    ts = [getattr(s, param) for s, _ in pts]
+    alpha = 0.0
+    for i, (_, r) in enumerate(pts):
+        w = math.prod((t - ts[j]) / (ts[i] - ts[j]) for j in range(len(pts)) if j != i)
+        alpha = alpha + w * r.alpha
+    return DriverStart(np.asarray(alpha, dtype=float), r1.extra.get("last_step"))
+
+
+def _solve_one(scene, tol: float, max_outer: int, settings: str,
+               start: DriverStart | None, const: dict) -> ContactResult:
+    """:func:`lcpbench.solve` for an already checked scene, in the kernels.
+
+    ``const``: what the scenes of a line share (filled by the first): whether the
+    kernels take the chain's layout and the arrays the chains have in common."""
+    t0 = time.perf_counter()
+    chain = scene.chain()
+    if not const:
+        const["kernel"] = applies(DEFAULT, "globalised", chain)
+        const["arrays"] = kernel_args(chain)[2:4] + (kernel_args(chain)[7],)
+    kernel = const["kernel"]
+    args = kernel_args(chain, const["arrays"]) if kernel else None
+    out = solve_without_contact(chain, tol, max_outer, start,
+                                engine="compiled" if kernel else "numpy", args=args)
+    used = "compiled" if kernel else "numpy"
+    if out is None:
+        out, why = (run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
+                                 settings=settings, args=args) if kernel
+                    else (None, "a layout the kernel does not take"))
+        if out is None:  # the kernel left the reference's path: the numpy reference
+            out = run_driver(chain, make_step_solver(DEFAULT, settings, True), tol=tol,
+                             max_outer=max_outer, method="globalised", start=start)
+            used = f"numpy (the compiled kernel stopped: {why})"
+    return finish(scene, chain, out, solver=DEFAULT, method="globalised", tol=tol,
+                  elapsed=time.perf_counter() - t0, settings=settings, engine=used,
+                  compiled_judge=kernel, why=AUTO_WHY,
+                  judge_args=chain_args(chain, args) if kernel else None)
+
+
+def solve_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = "default",
+               predictor: str = "quadratic") -> list[ContactResult]:
+    """One continuation line (scenes of one group, in order), in the kernels."""
+    most = _POINTS.get(predictor, 0)
+    history: list = []
+    out = []
+    const: dict = {}
+    for scene in scenes:
+        start = _predict(history, scene, most)
+        res = _solve_one(scene, tol, max_outer, settings, start, const)
+        label = "cold" if start is None else predictor
+        if start is not None and not res.converged:  # never worse than a cold start
+            failed = res
+            res = _solve_one(scene, tol, max_outer, settings, None, const)
+            label = f"{predictor}, failed; cold"
+            res.extra["discarded"] = {
+                "outer_iterations": failed.outer_iterations,
+                "inner_iterations": failed.inner_iterations,
+                "time_s": failed.time_s, "reason": failed.reason}
+        res.extra["continuation"] = label
+        history.append((scene, res))
+        out.append(res)
+    return out
+
+
+__all__ = ["solve_line", "takes"]
