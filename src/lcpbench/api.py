@@ -62,6 +62,7 @@ def solve(
     scaled: bool = True,
     start: ContactResult | None = None,
     engine: str = "auto",
+    pressure_limit: float | None = None,
 ) -> ContactResult:
     """Find the constrained equilibrium of a scene.
 
@@ -99,6 +100,10 @@ def solve(
         it does not apply) or "numpy" (the readable reference). Both engines
         take the same path and give the same answer to round-off;
         ``result.extra["engine"]`` says which one ran.
+    pressure_limit : a safety threshold on the contact pressure per length (N/mm,
+        >= 0; None: none). The result reports ``pressure`` and ``indentation``
+        per node, and ``pressure_exceeded`` is True when the largest pressure
+        passes the limit (tissue walls, ``wall_stiffness``).
 
     Returns
     -------
@@ -116,6 +121,9 @@ def solve(
                                            and max_outer >= 1):
         raise ProblemError(f"max_outer must be an integer >= 1, got {max_outer!r}")
     engine = check_engine(engine)
+    if pressure_limit is not None:
+        pressure_limit = float(check_number("pressure_limit", pressure_limit, low=0.0,
+                                            high=1e12, unit="N/mm"))
     name, settings, why = _backend_of(solver, settings)
     step = make_step_solver(name, settings, scaled)  # validates them first
     if getattr(scene, "links", None) == "auto":
@@ -139,6 +147,7 @@ def solve(
     res.extra["last_step"] = out.last_step  # what a continuation hands the next scene
     res.extra["settings"] = settings if isinstance(settings, str) else "custom"
     res.extra["engine"] = used
+    res.pressure_limit = pressure_limit
     if why is not None:
         res.extra["auto"] = why
     return res

@@ -57,11 +57,14 @@ def check_engine(engine) -> str:
 
 def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
     """Whether the kernel runs this solve: the default back-end, the globalised
-    driver, and (given ``chain``) a chain of consecutive joints and free nodes."""
+    driver, and (given ``chain``) a chain of consecutive joints and free nodes with
+    rigid walls."""
     if backend not in (DEFAULT, "auto") or method != "globalised":
         return False
     if chain is None:
         return True
+    if chain.upper_stiffness is not None or chain.lower_stiffness is not None:
+        return False  # elastic walls: the numpy reference (model.elastic), not ported yet
     left, right = chain.joint_links[:, 0], chain.joint_links[:, 1]
     f = chain.free_nodes
     return bool(right.size and f.size and np.all(np.diff(right) == 1)
@@ -92,6 +95,9 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
             return out, "compiled"
         used = f"numpy (the compiled kernel stopped: {why})"
     elif engine == "compiled":
+        if chain.upper_stiffness is not None or chain.lower_stiffness is not None:
+            raise ProblemError("engine='compiled' does not run elastic walls yet "
+                               "(wall_stiffness < inf); use engine='auto' or 'numpy'")
         raise ProblemError(f"engine='compiled' runs the default back-end ({DEFAULT}) with "
                            f"method='globalised'; got solver {backend!r}, method {method!r}")
     else:

@@ -103,7 +103,8 @@ def _scene_line(res: ContactResult) -> str:
     if not is_dataclass(s):
         return f"{s!r}, N = {res.links}"
     names = {"theta": ("θ", "°"), "height": ("h", " mm"), "length": ("ℓ", " mm"),
-             "EI": ("EI", " N·mm²"), "weight": ("w", " N/mm"), "load": ("q", " N/mm")}
+             "EI": ("EI", " N·mm²"), "weight": ("w", " N/mm"), "load": ("q", " N/mm"),
+             "wall_stiffness": ("k", " N/mm per mm")}
     parts = [f"{sym} = {getattr(s, k):g}{unit}" for k, (sym, unit) in names.items()
              if hasattr(s, k)]
     parts.insert(2 if hasattr(s, "theta") else 1, f"N = {res.links}")
@@ -127,6 +128,13 @@ def summary_rows(res: ContactResult) -> list[tuple[str, str]]:
     if res.forces_lower is not None:
         lower = float(np.sum(res.forces_lower))
         rows.append(("lower wall ΣR", f"{1e3 * lower:.6g} mN"))
+    if getattr(res.scene, "wall_stiffness", np.inf) < np.inf or res.pressure_limit is not None:
+        rows.append(("contact pressure", f"max {res.max_pressure:.4g} N/mm, max indentation "
+                                         f"{res.max_indentation:.4g} mm"))
+    if res.pressure_limit is not None:
+        flag = "EXCEEDED" if res.pressure_exceeded else "below"
+        rows.append(("pressure limit", f"{flag}: max {res.max_pressure:.4g} N/mm vs limit "
+                                       f"{res.pressure_limit:g} N/mm"))
     rows.append(("force error bound", f"{res.force_error_bound:.2g} (relative to "
                                       "max(|F|, EI/ℓ²), lcpbench's judge)"))
     c = res.certificate

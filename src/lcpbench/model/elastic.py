@@ -1,0 +1,319 @@
+"""Elastic (tissue-like) walls: the contact step with compliance (issue 17, item 2).
+
+A Winkler wall of stiffness k (N/mm per mm of wall) acts on free node i as a
+one-sided spring of stiffness k_i = k · share_i (N/mm), share_i the node's
+share of wall length (:func:`lcpbench.problems.scenes.wall_share`). The wall's
+reaction R_i (eq. 30's R, N) and the node's gap g_i = h − u_i (< 0: the node
+indents the wall) satisfy the LCP with compliance
+
+    R ≥ 0,   g + R/k ≥ 0,   R · (g + R/k) = 0,
+
+and the step is the QP with the matching penalty, min Q(u) + Σ ½ k_i (u_i − h_i)₊²
+(Q the step's quadratic, :mod:`lcpbench.model.step`). The penalty is not
+quadratic, so each contact node gets an indentation variable δ_i ≥ 0 and its
+height is split, u_i = v_i + δ_i with v_i ≤ h_i (the wall's surface):
+
+    minimise  Q(E x) + Σ ½ k_i δ_i²   over x = (v, δ),   v in the walls, δ ≥ 0,
+
+with u = E x. For fixed u the inner minimum over δ is exactly the penalty, so
+the two problems have the same u. Its Hessian P = Eᵀ H E + diag(0, k) is
+positive definite (xᵀPx = uᵀHu + Σ k δ² > 0 unless δ = 0 and v = u = 0). The
+variables are interleaved node by node (v_i, δ⁺_i, δ⁻_i), so P stays banded:
+a pentadiagonal H gives a half-bandwidth of at most 8 (5 with one wall), and
+every solve is O(N). At the solution R_i = k_i δ_i is the multiplier of v_i's
+wall bound: R > 0 puts v on the wall (g + R/k = h − v = 0) and δ = R/k is the
+indentation; R = 0 gives δ = 0 and g ≥ 0.
+
+Each back-end gets the form it takes:
+
+* QP back-ends: the box QP in x (:func:`elastic_qp`);
+* the banded active set: the same QP with its bands;
+* LCP back-ends: the standard LCP of that box QP (:func:`box_lcp`): on a gap
+  row z = h − v, w = R; on an indentation row z = δ, w = k δ − R; in the
+  channel the extra block z = R_lower, w = v − lower, as for rigid walls.
+  M = D S D with S the condensed P and D = ±1, symmetric positive definite
+  for one wall.
+
+A rigid wall (k = inf) has no δ at its nodes, so a rigid step's forms are the
+ones of :mod:`lcpbench.model.step` (tests check the LCPs agree).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..problems.scenes import wall_share
+
+
+def compliances(obj) -> tuple[np.ndarray, np.ndarray]:
+    """1/k of the upper and lower wall per free node (mm/N; 0 for a rigid wall).
+
+    ``obj`` is a Chain or a ContactStep (anything with ``upper``,
+    ``upper_stiffness``, ``lower_stiffness``).
+    """
+    n = np.asarray(obj.upper).size
+    out = []
+    for k in (obj.upper_stiffness, obj.lower_stiffness):
+        if k is None:
+            out.append(np.zeros(n))
+        else:
+            with np.errstate(divide="ignore"):
+                out.append(np.where(np.isfinite(k), 1.0 / np.asarray(k, float), 0.0))
+    return out[0], out[1]
+
+
+def _soft(obj) -> tuple[np.ndarray, np.ndarray]:
+    """Finite stiffness of the upper / lower wall per node (0 where rigid or no wall)."""
+    n = np.asarray(obj.upper).size
+    out = []
+    for k, wall in ((obj.upper_stiffness, obj.upper), (obj.lower_stiffness, obj.lower)):
+        if k is None:
+            out.append(np.zeros(n))
+        else:
+            k = np.asarray(k, float)
+            out.append(np.where(np.isfinite(k) & np.isfinite(wall), k, 0.0))
+    return out[0], out[1]
+
+
+def is_elastic(obj) -> bool:
+    """Whether a chain or step has a wall that yields somewhere."""
+    ku, kl = _soft(obj)
+    return bool(np.any(ku > 0) or np.any(kl > 0))
+
+
+def indentation(obj, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Depth (mm, >= 0) by which each free node at height ``u`` indents the upper
+    and the lower wall: (u − h)₊ and (lower − u)₊; 0 where the wall is absent."""
+    with np.errstate(invalid="ignore"):
+        up = np.where(np.isfinite(obj.upper), np.maximum(u - obj.upper, 0.0), 0.0)
+        lo = np.where(np.isfinite(obj.lower), np.maximum(obj.lower - u, 0.0), 0.0)
+    return up, lo
+
+
+def penalty(obj, u: np.ndarray) -> float:
+    """The walls' elastic energy Σ ½ k_i δ_i² (N·mm) at free-node heights ``u``."""
+    ku, kl = _soft(obj)
+    du, dl = indentation(obj, u)
+    return 0.5 * float(ku @ du**2 + kl @ dl**2)
+
+
+def penalty_gradient(obj, u: np.ndarray) -> np.ndarray:
+    """∂/∂u of :func:`penalty` (N): k (u − h)₊ − k (lower − u)₊."""
+    ku, kl = _soft(obj)
+    du, dl = indentation(obj, u)
+    return ku * du - kl * dl
+
+
+def wall_pressure(chain, y_free: np.ndarray, forces_upper: np.ndarray,
+                  forces_lower: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+    """(indentation depth δ (mm), contact pressure per length p (N/mm)) per free node.
+
+    δ_i = (y_i − h)₊ into an elastic upper wall or (−h − y_i)₊ into a lower one
+    (0 at a rigid wall, which does not yield); p_i = (R_i + R_lower,i) / share_i,
+    the node's reaction over its share of wall length
+    (:func:`lcpbench.problems.scenes.wall_share`). At an elastic wall p = k δ; at
+    a rigid one p is the reaction smeared over a link, which grows with N at the
+    edges of a contact (the rigid wall's point forces).
+    """
+    ku, kl = _soft(chain)
+    up, lo = indentation(chain, y_free)
+    depth = np.maximum(np.where(ku > 0, up, 0.0), np.where(kl > 0, lo, 0.0))
+    share = wall_share(chain.links, chain.link_length, chain.free_nodes)
+    total = np.maximum(forces_upper, 0.0)
+    if forces_lower is not None:
+        total = total + np.maximum(forces_lower, 0.0)
+    return depth, total / share
+
+
+@dataclass
+class ElasticQP:
+    """An elastic step's box QP in x, and the map back to the heights u.
+
+    ``u_rows`` (n,): the row of x whose value (``form="spring"``) or whose sum
+    with the node's δ rows (``"split"``) is u_i; ``E`` (n × m, sparse): u = E x.
+    ``node`` (m,): the free node of each row; ``kind`` (m,): 0 for the node's own
+    row, +1 for the upper wall's, −1 for the lower wall's. ``react`` (m,): the
+    rows whose bound multiplier is a wall reaction R. ``P``, ``c``, ``lower``,
+    ``upper``, ``bands``: the QP in mm and N.
+    """
+
+    form: str
+    E: sp.csr_matrix
+    node: np.ndarray
+    kind: np.ndarray
+    react: np.ndarray
+    P: sp.csc_matrix
+    c: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    bands: np.ndarray
+
+    @property
+    def size(self) -> int:
+        return self.c.size
+
+    @property
+    def u_rows(self) -> np.ndarray:
+        return np.flatnonzero(self.kind == 0)
+
+    def heights(self, x: np.ndarray) -> np.ndarray:
+        """Free-node heights u = E x."""
+        return self.E @ x
+
+    def reactions(self, y: np.ndarray) -> np.ndarray:
+        """Net wall reaction per node (N, + the upper wall pushes down) from the
+        signed bound multipliers y (+: an upper bound's)."""
+        return np.bincount(self.node[self.react], y[self.react], minlength=self.E.shape[0])
+
+    def start(self, u: np.ndarray) -> np.ndarray:
+        """x for heights ``u`` (a warm start)."""
+        x = np.zeros(self.size)
+        own = self.u_rows
+        up, lo = self.kind > 0, self.kind < 0
+        if self.form == "spring":  # u itself; each wall's v = u clipped to that wall
+            x[own] = np.clip(u, self.lower[own], self.upper[own])
+            x[up] = np.minimum(u[self.node[up]], self.upper[up])
+            x[lo] = np.maximum(u[self.node[lo]], self.lower[lo])
+            return x
+        x[own] = np.clip(u, self.lower[own], self.upper[own])  # split: v, then δ
+        rest = u - x[own]
+        x[up] = np.maximum(rest[self.node[up]], 0.0)
+        x[lo] = np.maximum(-rest[self.node[lo]], 0.0)
+        return x
+
+
+def _bands(P: sp.csc_matrix) -> np.ndarray:
+    coo = P.tocoo()
+    m = P.shape[0]
+    width = int(np.max(coo.row - coo.col, initial=0))
+    bands = np.zeros((width + 1, m))
+    for d in range(width + 1):
+        bands[d, : m - d] = P.diagonal(-d)
+    return bands
+
+
+def elastic_qp(step, form: str = "spring") -> ElasticQP:
+    """The box QP of an elastic contact step, O(N); interleaved node by node.
+
+    ``form="spring"`` (QP back-ends): x = (u_i, v⁺_i, v⁻_i), minimise
+    Q(u) + Σ ½ k (u − v)² with v⁺ <= h, v⁻ >= lower: the wall's surface point v
+    is held by a spring to the node, so a round-off in v moves R by k times it,
+    never by the chain's stiffness. The multiplier of v's bound is R = k (u − v).
+    ``form="split"`` (the LCP): x = (v_i, δ⁺_i, δ⁻_i), u = v + δ⁺ − δ⁻, minimise
+    Q(u) + Σ ½ k δ² with v in the walls, δ >= 0 (see the module docstring).
+    A rigid wall (k = inf) bounds u (spring) or v (split) itself.
+    """
+    if form not in ("spring", "split"):
+        raise ValueError(f"form must be 'spring' or 'split', got {form!r}")
+    n = step.size
+    ku, kl = _soft(step)
+    per = 1 + (ku > 0) + (kl > 0)  # rows per node
+    first = np.concatenate(([0], np.cumsum(per)[:-1]))
+    m = int(per.sum())
+    node = np.repeat(np.arange(n), per)
+    kind = np.zeros(m, int)
+    iu = first[ku > 0] + 1
+    il = first[kl > 0] + 1 + (ku[kl > 0] > 0)
+    kind[iu], kind[il] = 1, -1
+    b = step.bands
+    H = sp.diags([b[2, : n - 2], b[1, : n - 1], b[0], b[1, : n - 1], b[2, : n - 2]],
+                 [-2, -1, 0, 1, 2], shape=(n, n), format="csr")
+    spring = np.zeros(m)
+    spring[iu], spring[il] = ku[ku > 0], kl[kl > 0]
+    lower = np.full(m, -np.inf)
+    upper = np.full(m, np.inf)
+    if form == "split":
+        sign = np.where(kind < 0, -1.0, 1.0)
+        E = sp.csr_matrix((sign, (node, np.arange(m))), shape=(n, m))
+        P = (E.T @ H @ E + sp.diags(spring)).tocsc()
+        lower[first], upper[first] = step.lower, step.upper
+        lower[kind != 0] = 0.0
+        react = kind == 0
+    else:
+        E = sp.csr_matrix((np.ones(n), (np.arange(n), first)), shape=(n, m))
+        # the walls' springs: ½ k (u − v)², coupling each v to its node's u row
+        wall = np.flatnonzero(kind != 0)
+        one = np.ones(wall.size)
+        G = sp.csr_matrix((np.concatenate([one, -one]),
+                           (np.concatenate([wall, wall]),
+                            np.concatenate([first[node[wall]], wall]))), shape=(m, m))
+        P = (E.T @ H @ E + G.T @ sp.diags(spring) @ G).tocsc()  # G x = u − v per wall row
+        rigid_up = np.where(ku > 0, np.inf, step.upper)
+        rigid_lo = np.where(kl > 0, -np.inf, step.lower)
+        lower[first], upper[first] = rigid_lo, rigid_up
+        upper[iu], lower[il] = step.upper[ku > 0], step.lower[kl > 0]
+        react = np.isfinite(lower) | np.isfinite(upper)
+    P.sum_duplicates()
+    return ElasticQP(form, E, node, kind, react, P, E.T @ step.linear, lower, upper, _bands(P))
+
+
+@dataclass
+class BoxLCP:
+    """A box QP as a standard LCP ``w = M z + q`` (see :func:`box_lcp`)."""
+
+    M: np.ndarray
+    q: np.ndarray
+    rows: np.ndarray  # QP variables with a bound, in the order of z's first block
+    sign: np.ndarray  # D: −1 where z = upper − x, +1 where z = x − lower
+    base: np.ndarray  # the bound z is measured from (x = base + D z)
+    both: np.ndarray  # positions in ``rows`` of the two-sided rows (second block)
+    condense: np.ndarray  # QP variables with no bound, eliminated
+    n_gap: int
+
+
+def box_lcp(P: np.ndarray, c: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> BoxLCP:
+    """``min ½ xᵀPx + cᵀx, lower <= x <= upper`` (P symmetric positive definite) as
+    an LCP. Rows with no bound are condensed out (Schur complement S); a row with
+    an upper bound only has z = upper − x and w = −∇ (its upper multiplier); a
+    lower bound only, z = x − lower and w = ∇; a two-sided row z = upper − x and a
+    second-block unknown z' = its lower multiplier, with w = −∇ + z' and
+    w' = x − lower, as the rigid channel's [[K, I], [−I, 0]] (dense)."""
+    fin_lo, fin_up = np.isfinite(lower), np.isfinite(upper)
+    B = np.flatnonzero(fin_lo | fin_up)
+    F = np.flatnonzero(~(fin_lo | fin_up))
+    S = P[np.ix_(B, B)]
+    cs = c[B]
+    if F.size:
+        X = np.linalg.solve(P[np.ix_(F, F)], np.column_stack([P[np.ix_(F, B)], c[F]]))
+        S = S - P[np.ix_(B, F)] @ X[:, :-1]
+        cs = cs - P[np.ix_(B, F)] @ X[:, -1]
+    S = 0.5 * (S + S.T)
+    sign = np.where(fin_up[B], -1.0, 1.0)
+    base = np.where(fin_up[B], upper[B], lower[B])
+    M11 = sign[:, None] * S * sign[None, :]
+    q1 = sign * (S @ base + cs)
+    both = np.flatnonzero(fin_up[B] & fin_lo[B])
+    m, nb = B.size, both.size
+    if nb == 0:
+        return BoxLCP(M11, q1, B, sign, base, both, F, m)
+    C = np.zeros((m, nb))
+    C[both, np.arange(nb)] = 1.0
+    M = np.block([[M11, C], [-C.T, np.zeros((nb, nb))]])
+    q = np.concatenate([q1, upper[B][both] - lower[B][both]])
+    return BoxLCP(M, q, B, sign, base, both, F, m)
+
+
+def lcp_solution(P: np.ndarray, c: np.ndarray, form: BoxLCP, z: np.ndarray):
+    """The QP's x and signed bound multipliers y (+ upper) from an LCP solution z
+    (w = M z + q recomputed)."""
+    x = np.zeros(c.size)
+    m = form.n_gap
+    B, F = form.rows, form.condense
+    x[B] = form.base + form.sign * z[:m]
+    if F.size:
+        x[F] = np.linalg.solve(P[np.ix_(F, F)], -c[F] - P[np.ix_(F, B)] @ x[B])
+    w = form.M @ z + form.q
+    y = np.zeros(c.size)
+    y[B] = -form.sign * w[:m]  # +: the upper bound's multiplier, −: the lower's
+    if form.both.size:
+        y[B[form.both]] = w[:m][form.both] - z[m:]
+    return x, y
+
+
+def scaled_qp(qp: ElasticQP, L: float, F: float):
+    """(P̃, c̃, lower/L, upper/L, bands) in the units of the back-end."""
+    s = L / F
+    return qp.P * s, qp.c / F, qp.lower / L, qp.upper / L, qp.bands * s
