@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import inspect
+import math
 import sys
 
 from ..api import PAPER_TOL, solve
@@ -96,6 +97,37 @@ def add_scene_options(parser) -> None:
     a("--channel", action="store_true", help="a second wall at -height (the paper's fixture)")
 
 
+def add_wall_options(parser) -> None:
+    """Add ``--wall-stiffness`` and ``--pressure-limit`` (elastic, tissue-like walls).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The sub-command's parser (``solve``).
+    """
+    a = parser.add_argument
+    a("--wall-stiffness", type=float, default=math.inf, metavar="K",
+      help="Winkler stiffness of the walls, N/mm per mm of wall; 'inf' is a rigid wall "
+           "(default inf)")
+    a("--pressure-limit", type=float, default=None, metavar="NPMM",
+      help="safety threshold on the contact pressure per length, N/mm: the run says "
+           "when the largest pressure passes it")
+
+
+def wall_rows(result) -> list[tuple[str, str]]:
+    """The summary lines of an elastic wall and of a pressure limit."""
+    rows: list[tuple[str, str]] = []
+    if getattr(result.scene, "wall_stiffness", math.inf) < math.inf or \
+            result.pressure_limit is not None:
+        rows.append(("contact pressure", f"max {result.max_pressure:.4g} N/mm, max "
+                                         f"indentation {result.max_indentation:.4g} mm"))
+    if result.pressure_limit is not None:
+        word = "EXCEEDED" if result.pressure_exceeded else "below"
+        rows.append(("pressure limit", f"{word}: max pressure {result.max_pressure:.4g} "
+                                       f"N/mm, limit {result.pressure_limit:g} N/mm"))
+    return rows
+
+
 def add_tol_option(parser, what: str = "convergence threshold on max|d alpha|") -> None:
     """Add ``--tol RAD``, the driver's convergence threshold.
 
@@ -171,6 +203,8 @@ def _scene_as_given(args) -> ActuatorScene:
         print(f"lcpbench: warning: {warning}", file=sys.stderr)
     kw = {"height": args.height, "links": args.links, "length": args.length, "EI": args.EI,
           "weight": args.weight, "channel": args.channel}
+    if getattr(args, "wall_stiffness", math.inf) != math.inf:
+        kw["wall_stiffness"] = args.wall_stiffness
     if args.pressure is None:
         if args.fit is not None:
             raise ProblemError("--fit needs --pressure")

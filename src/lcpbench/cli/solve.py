@@ -33,7 +33,9 @@ from ._scene_args import (
     add_scene_options,
     add_solver_options,
     add_tol_option,
+    add_wall_options,
     scene_from,
+    wall_rows,
 )
 
 
@@ -61,6 +63,7 @@ def register(subparsers) -> None:
     add_json_option(s)
     s.add_argument("--plot", metavar="FILE.png",
                    help="draw the shape, walls and reactions (needs matplotlib)")
+    add_wall_options(s)
     s.set_defaults(func=cmd_solve)
 
     e = subparsers.add_parser(
@@ -145,7 +148,9 @@ def summary(result, extra=()) -> str:
     free = sc.chain().free_nodes  # the scene as solved (links resolved)
     scene = (f"theta={sc.theta:g} deg, h={sc.height:g} mm, N={result.links}, "
              f"length={sc.length:g} mm, EI={sc.EI:g} N*mm^2, w={sc.weight:g} N/mm"
-             + (", channel" if sc.channel else ""))
+             + (", channel" if sc.channel else "")
+             + (f", wall k={sc.wall_stiffness:g} N/mm per mm"
+                if sc.wall_stiffness < np.inf else ""))
     rows = [
         ("scene", scene),
         ("converged", ("yes" if result.converged else "no") + f" ({result.reason})"),
@@ -158,6 +163,7 @@ def summary(result, extra=()) -> str:
             ("lower wall", f"{1e3 * lower:.6g} mN ({lower:.6g} N)"),
             ("lower contacts", node_ranges(contacts(result.forces_lower, free))),
         ]
+    rows += wall_rows(result)
     rows += [
         ("iterations", f"{result.outer_iterations} outer, {result.inner_iterations} inner "
                        f"({result.solver}, {result.method}, tol {result.tol:g} rad)"),
@@ -191,7 +197,8 @@ def cmd_solve(args) -> int:
         return 2
     scene = scene_from(args)
     result = solve(scene, solver=args.solver, tol=args.tol, method=args.method,
-                   settings=args.settings, scaled=not args.raw)
+                   settings=args.settings, scaled=not args.raw,
+                   pressure_limit=args.pressure_limit)
     plot_error = None
     if args.plot is not None:
         from ..bench.plot import plot_shape

@@ -222,6 +222,8 @@ class ContactResult:
         """A JSON-ready summary (the fields of ``lcpbench solve --json``)."""
         scene = asdict(self.scene) if is_dataclass(self.scene) and not isinstance(
             self.scene, type) else {}
+        if scene.get("wall_stiffness", 0.0) == np.inf:  # rigid: the key of old outputs
+            scene.pop("wall_stiffness")
         out = {
             "scene": {**scene, "links": self.links},
             "total_force": self.total_force,
