@@ -82,8 +82,8 @@ def rigid_limit_tables(out: Path, force: bool) -> str:
              "stiffness EI/a³, i.e. k ≫ EI/a⁴ (the crossover below); softer walls are "
              "softer than a link, the contact's edges become boundary layers of width "
              "(4EI/k)^¼ and the force converges more slowly. The force is not monotone "
-             "in k: F(k) passes above the rigid wall's between k ≈ 0.05 and k ≈ 500 "
-             "(N = 40), so the error dips where F(k) crosses F_rigid (near k = 0.1), "
+             "in k: F(k) is above the rigid wall's from some k in (0.01, 0.1) to some k in "
+             "(100, 1000) (both N), so the error dips where F(k) crosses F_rigid, "
              "not because it has converged there.\n"]
     studies = {}
     for n, tol in ((40, 1e-9), (140, 1e-8)):
