@@ -12,7 +12,7 @@ overwritten unless ``--force``):
 - ``backends.md``: every installed back-end on three elastic scenes (one wall
   N = 40 and N = 140, the channel N = 40), judged by lcpbench, against the
   active set at tol 1e-10;
-- ``tissue-example.png``: the README's picture (the paper's channel at h = 4.5 mm,
+- ``tissue-example.png`` / ``.txt``: the README's picture and its numbers (the paper's channel at h = 4.5 mm,
   150 kPa by actuator 1's calibration, walls of k = 0.1 N/mm per mm).
 
     OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 python benchmarks/elastic_walls.py
@@ -218,7 +218,8 @@ def main() -> None:
         _write(out / "backends.md", backends() + f"\nLoad average at the start: {load:.2f}.\n",
                args.force)
     if "example" in only:
-        print(tissue_example(out / "tissue-example.png", args.force))
+        _write(out / "tissue-example.txt", tissue_example(out / "tissue-example.png",
+                                                          args.force) + "\n", args.force)
 
 
 if __name__ == "__main__":
