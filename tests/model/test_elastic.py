@@ -177,3 +177,14 @@ def test_bad_stiffness_is_one_problem_error(bad):
 def test_bad_pressure_limit_is_one_problem_error(bad):
     with pytest.raises(ProblemError, match="pressure_limit"):
         lcpbench.solve(_elastic(), pressure_limit=bad)
+
+
+def test_the_rigid_forms_of_an_elastic_step_are_refused():
+    """step_qp / step_lcp (export, the qpbenchmark test set) would drop the springs."""
+    from lcpbench.model.step_solver import step_lcp, step_qp
+
+    chain = _elastic().chain()
+    step = assemble_step(chain, chain.rest_alpha)
+    for form in (step_qp, step_lcp):
+        with pytest.raises(ProblemError, match="elastic"):
+            form(step)

@@ -23,6 +23,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.linalg import solveh_banded
 
+from ..errors import ProblemError
 from ..linalg import banded_matvec, sub_bands
 from ..solvers.base import BoxQP, QPWarm, Settings, Status, StepSolution
 from ..solvers.judge import accept_tol, verdict
@@ -41,7 +42,12 @@ def step_scales(step, scaled: bool) -> tuple[float, float]:
 
 
 def step_qp(step, scaled: bool = True) -> BoxQP:
-    """The step as a bound-constrained QP, in the units of ``step_scales``."""
+    """The step as a bound-constrained QP, in the units of ``step_scales``.
+
+    A step with elastic walls has its own forms (:mod:`lcpbench.model.elastic`):
+    handing its rigid QP over would drop the walls' springs, so it is refused.
+    """
+    _rigid_only(step, "step_qp")
     L, F = step_scales(step, scaled)
     n = step.size
     b = step.bands * (L / F)
@@ -58,6 +64,7 @@ def step_lcp(step, scaled: bool = True):
     gaps in units of ℓ and reactions in units of EI/ℓ² (the channel's second
     block swaps the two).
     """
+    _rigid_only(step, "step_lcp")
     form = step.lcp("contact")
     L, F = step_scales(step, scaled)
     m, k = form.n_gap, form.q.size
@@ -66,6 +73,12 @@ def step_lcp(step, scaled: bool = True):
     M = form.M * dz[None, :] / dw[:, None]
     q = form.q / dw
     return form, M, q, dz, dw
+
+
+def _rigid_only(step, what: str) -> None:
+    if getattr(step, "elastic", False):
+        raise ProblemError(f"{what}: this step has elastic walls; its forms are "
+                           "lcpbench.model.elastic.elastic_qp / box_lcp")
 
 
 def _complete_heights(step, u: np.ndarray) -> np.ndarray:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
@@ -26,7 +27,7 @@ from ..api import solve
 class RigidLimit:
     """Forces against the Winkler stiffness k for one scene (fixed N)."""
 
-    scene: object
+    scene: Any  # an ActuatorScene or CantileverScene
     rigid_force: float
     stiffness: list[float] = field(default_factory=list)  # N/mm per mm
     total_force: list[float] = field(default_factory=list)  # N
