@@ -188,3 +188,13 @@ def test_the_rigid_forms_of_an_elastic_step_are_refused():
     for form in (step_qp, step_lcp):
         with pytest.raises(ProblemError, match="elastic"):
             form(step)
+
+
+def test_node_table_and_summary_of_an_elastic_result():
+    res = lcpbench.solve(_elastic(k=0.2))
+    cols = res.nodes(frame=False)
+    np.testing.assert_array_equal(cols["pressure"], res.pressure)
+    np.testing.assert_array_equal(cols["indentation"], res.indentation)
+    assert "k = 0.2 N/mm per mm" in res.summary() and "contact pressure" in res.summary()
+    rigid = lcpbench.solve(ActuatorScene(links=30))
+    assert "pressure" not in rigid.nodes(frame=False) and "k = " not in rigid.summary()

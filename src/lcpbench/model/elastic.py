@@ -10,32 +10,37 @@ indents the wall) satisfy the LCP with compliance
 
 and the step is the QP with the matching penalty, min Q(u) + Σ ½ k_i (u_i − h_i)₊²
 (Q the step's quadratic, :mod:`lcpbench.model.step`). The penalty is not
-quadratic, so each contact node gets an indentation variable δ_i ≥ 0 and its
-height is split, u_i = v_i + δ_i with v_i ≤ h_i (the wall's surface):
+quadratic, so each node with an elastic wall gets one more unknown per wall,
+in one of two box QPs with the same u (:func:`elastic_qp`):
 
-    minimise  Q(E x) + Σ ½ k_i δ_i²   over x = (v, δ),   v in the walls, δ ≥ 0,
+* the **split form**: u_i = v_i + δ⁺_i − δ⁻_i with v_i in the walls and δ ≥ 0,
+  minimise Q(u) + Σ ½ k_i δ_i² (for fixed u the inner minimum over δ is the
+  penalty). Its LCP (:func:`box_lcp`) is in (g, δ): on a gap row z = h − v,
+  w = R; on an indentation row z = δ, w = k δ − R; in the channel the extra
+  block z = R_lower, w = v − lower, as for rigid walls. With one wall
+  M = D S D (S the condensed P, D = ±1) is symmetric positive definite.
+* the **spring form**: x = (u_i, v⁺_i, v⁻_i), minimise Q(u) + Σ ½ k (u − v)² with
+  v⁺ <= h, v⁻ >= lower: v is the point of the wall's surface the node's spring
+  holds (for fixed u the minimum over v is the penalty again).
 
-with u = E x. For fixed u the inner minimum over δ is exactly the penalty, so
-the two problems have the same u. Its Hessian P = Eᵀ H E + diag(0, k) is
-positive definite (xᵀPx = uᵀHu + Σ k δ² > 0 unless δ = 0 and v = u = 0). The
-variables are interleaved node by node (v_i, δ⁺_i, δ⁻_i), so P stays banded:
-a pentadiagonal H gives a half-bandwidth of at most 8 (5 with one wall), and
-every solve is O(N). At the solution R_i = k_i δ_i is the multiplier of v_i's
-wall bound: R > 0 puts v on the wall (g + R/k = h − v = 0) and δ = R/k is the
-indentation; R = 0 gives δ = 0 and g ≥ 0.
+Both Hessians are positive definite (xᵀPx = uᵀHu + Σ k δ², or + Σ k (u − v)²).
+The unknowns are interleaved node by node, so P stays banded: a pentadiagonal
+H gives a half-bandwidth of at most 8 (5 with one wall), and every solve is
+O(N). At the solution R_i is the multiplier of the wall row's bound (v's), and
+R = k δ = k (u − h)₊: R > 0 puts v on the wall (g + R/k = 0) with indentation
+δ = R/k; R = 0 gives δ = 0 and g >= 0.
 
-Each back-end gets the form it takes:
+Each back-end gets the form it takes (:mod:`lcpbench.model.elastic_step`):
+QP back-ends and the banded active set the spring form, LCP back-ends the
+split form's LCP. Why: in the split form a node off the wall has v and δ both
+free and u = v + δ, so a QP solver's round-off in δ moves u, which the chain's
+stiffness turns into force far from the wall; in the spring form the same
+round-off sits in v and costs only k times itself. The spring form's LCP is
+not banded (u is unbounded and condensing it fills M); a pivoting LCP method
+sets the nonbasic δ to exactly 0 (docs/elastic-walls.md).
 
-* QP back-ends: the box QP in x (:func:`elastic_qp`);
-* the banded active set: the same QP with its bands;
-* LCP back-ends: the standard LCP of that box QP (:func:`box_lcp`): on a gap
-  row z = h − v, w = R; on an indentation row z = δ, w = k δ − R; in the
-  channel the extra block z = R_lower, w = v − lower, as for rigid walls.
-  M = D S D with S the condensed P and D = ±1, symmetric positive definite
-  for one wall.
-
-A rigid wall (k = inf) has no δ at its nodes, so a rigid step's forms are the
-ones of :mod:`lcpbench.model.step` (tests check the LCPs agree).
+A rigid wall (k = inf) adds no unknown, so a rigid step's forms are the ones
+of :mod:`lcpbench.model.step` (tests check the LCPs agree).
 """
 
 from __future__ import annotations
@@ -76,12 +81,6 @@ def _soft(obj) -> tuple[np.ndarray, np.ndarray]:
             k = np.asarray(k, float)
             out.append(np.where(np.isfinite(k) & np.isfinite(wall), k, 0.0))
     return out[0], out[1]
-
-
-def is_elastic(obj) -> bool:
-    """Whether a chain or step has a wall that yields somewhere."""
-    ku, kl = _soft(obj)
-    return bool(np.any(ku > 0) or np.any(kl > 0))
 
 
 def indentation(obj, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

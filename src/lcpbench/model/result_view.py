@@ -38,6 +38,13 @@ LOWER_COLUMNS = {
 }
 
 
+#: extra columns of a scene with elastic walls
+ELASTIC_COLUMNS = {
+    "indentation": "depth the node indents an elastic wall (mm)",
+    "pressure": "contact pressure per length, R / share (N/mm)",
+}
+
+
 def free_node_indices(res: ContactResult) -> np.ndarray:
     """0-based indices (into ``res.x``, ``res.y``) of the nodes of ``res.forces``."""
     if res.free_nodes is not None:
@@ -62,6 +69,9 @@ def node_columns(res: ContactResult) -> dict[str, np.ndarray]:
     if res.forces_lower is not None and res.gaps_lower is not None:
         cols["gap_lower"] = np.asarray(res.gaps_lower, dtype=float).copy()
         cols["force_lower"] = np.asarray(res.forces_lower, dtype=float).copy()
+    if getattr(res.scene, "wall_stiffness", np.inf) < np.inf and res.pressure is not None:
+        cols.update({k: np.asarray(getattr(res, k), dtype=float).copy()
+                     for k in ELASTIC_COLUMNS})
     return cols
 
 
@@ -106,7 +116,7 @@ def _scene_line(res: ContactResult) -> str:
              "EI": ("EI", " N·mm²"), "weight": ("w", " N/mm"), "load": ("q", " N/mm"),
              "wall_stiffness": ("k", " N/mm per mm")}
     parts = [f"{sym} = {getattr(s, k):g}{unit}" for k, (sym, unit) in names.items()
-             if hasattr(s, k)]
+             if hasattr(s, k) and not (k == "wall_stiffness" and getattr(s, k) == np.inf)]
     parts.insert(2 if hasattr(s, "theta") else 1, f"N = {res.links}")
     if getattr(s, "channel", False):
         parts.append("channel (walls at ±h)")
@@ -164,5 +174,5 @@ def summary_html(res: ContactResult) -> str:
             f"{body}</table>")
 
 
-__all__ = ["LOWER_COLUMNS", "NODE_COLUMNS", "free_node_indices", "node_columns",
+__all__ = ["ELASTIC_COLUMNS", "LOWER_COLUMNS", "NODE_COLUMNS", "free_node_indices", "node_columns",
            "node_table", "summary_html", "summary_rows", "summary_text"]
