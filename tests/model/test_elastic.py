@@ -15,12 +15,13 @@ from test_elastic_reference import reference_minimiser
 import lcpbench
 from lcpbench import ActuatorScene, CantileverScene
 from lcpbench.errors import ProblemError
-from lcpbench.model.elastic import box_lcp, elastic_qp, lcp_solution
+from lcpbench.model.elastic import elastic_qp, force_lcp, heights_from_forces
 from lcpbench.model.judge import force_tol, judge
 from lcpbench.model.result import certify
 from lcpbench.model.step import assemble_step
 from lcpbench.model.step_solver import solve_step
 from lcpbench.solvers import available_backends
+from lcpbench.solvers.banded import _BandedBoxQP as _Banded
 from lcpbench.studies.rigid_limit import rigid_limit
 
 BACKENDS = available_backends()
@@ -39,7 +40,8 @@ def reference_force():
 
 @pytest.mark.parametrize("backend", [pytest.param(b, id=b) for b in BACKENDS])
 def test_every_backend_runs_the_elastic_step_and_is_never_wrong(backend, reference_force):
-    """Each back-end gets its form (QP: spring form, LCP: split form); it may fail, but
+    """Each back-end gets its form (QP: the spring form, LCP: the LCP in the reactions);
+    it may fail, but
     an answer lcpbench calls converged is within the success rule of the independent
     reference."""
     res = lcpbench.solve(_elastic(), solver=backend)
@@ -51,47 +53,51 @@ def test_every_backend_runs_the_elastic_step_and_is_never_wrong(backend, referen
         assert abs(res.total_force - reference_force) <= force_tol(res.tol) * F0
 
 
-def test_rigid_step_through_the_generic_lcp_is_the_contact_lcp():
-    """With rigid walls the split form has no δ: box_lcp of the step's QP must be the
-    step's own condensed LCP (eqs. 28-31) to round-off, and solve to the same heights."""
+def test_force_lcp_of_a_rigid_step_is_solved_by_the_contact_lcps_answer():
+    """With rigid walls the LCP in the reactions is the dual of the step's contact LCP
+    (eqs. 28-31): the exact active set's reactions must solve it (w = M R + q >= 0,
+    R >= 0, w'R = 0 to round-off), and give back its heights."""
     scene = ActuatorScene(links=30, height=3.0)
     chain = scene.chain()
     step = assemble_step(chain, chain.rest_alpha)
-    qp = elastic_qp(step, "split")
-    assert qp.size == step.size
-    P = qp.P.toarray()
-    form = box_lcp(P, qp.c, qp.lower, qp.upper)
-    ref = step.lcp("contact")
-    np.testing.assert_allclose(form.M, ref.M, rtol=1e-9, atol=1e-9 * np.abs(ref.M).max())
-    np.testing.assert_allclose(form.q, ref.q, rtol=1e-9, atol=1e-9 * np.abs(ref.q).max())
-    from lcpbench.solvers import solve_lcp
-
-    sol = solve_lcp(form.M, form.q, "lemke")
-    x, _ = lcp_solution(P, qp.c, form, sol.z)
-    exact = solve_step(step, "active-set")
-    np.testing.assert_allclose(qp.heights(x), exact.u, atol=1e-9 * scene.length)
+    exact = solve_step(step, "active-set", "high")
+    form = force_lcp(step)
+    R = exact.forces_net[form.upper_rows]
+    w = form.M @ R + form.q
+    scale = np.abs(form.q).max()
+    assert R.min() >= -1e-9 * np.abs(R).max() and w.min() >= -1e-9 * scale
+    assert abs(w @ R) <= 1e-9 * scale * np.abs(R).max()
+    np.testing.assert_allclose(heights_from_forces(step, form, R), exact.u,
+                               atol=1e-9 * scene.length)
 
 
 @pytest.mark.parametrize("channel", [False, True])
-def test_spring_and_split_forms_have_the_same_step_solution(channel):
-    """The two box QPs of one elastic step (active set on the spring form, Lemke on the
-    split form's LCP) give the same heights and R = k δ at every node."""
+def test_qp_and_lcp_forms_have_the_same_step_solution(channel):
+    """The spring QP (active set), the split QP (active set) and the LCP in the
+    reactions (Lemke, and Gauss-Seidel, which applies: M_ii > 0) give the same heights,
+    and R = k δ at every node pushed into the wall."""
     scene = _elastic(k=0.5, channel=channel)
     chain = scene.chain()
     step = assemble_step(chain, chain.rest_alpha)
     a = solve_step(step, "active-set", "high")
-    # Lemke at its default acceptance: in the channel's split form every node off the
-    # walls is a degenerate pair (δ = 0 and k δ − R = 0) and its residual stalls near
-    # 1e-6 (docs/elastic-walls.md)
-    b = solve_step(step, "lemke", "default")
-    assert a.solved and b.solved
-    np.testing.assert_allclose(a.u, b.u, atol=1e-8 * scene.length)
+    assert a.solved
+    for other in ("lemke", "pgs"):
+        b = solve_step(step, other, "high")
+        assert b.solved, b.message
+        np.testing.assert_allclose(a.u, b.u, atol=1e-7 * scene.length)
+    from lcpbench.solvers.banded import solve_banded_qp
+    from lcpbench.solvers.base import BoxQP
+
+    split = elastic_qp(step, "split")
+    sol = solve_banded_qp(_Banded(BoxQP(split.P, split.c, split.lower, split.upper,
+                                        bands=split.bands)))
+    np.testing.assert_allclose(split.heights(sol.u), a.u, atol=1e-8 * scene.length)
     k = chain.upper_stiffness
     pushed = np.isfinite(k) & (a.u > step.upper)
     assert pushed.any()
     np.testing.assert_allclose(a.forces_net[pushed], (k * (a.u - step.upper))[pushed],
                                rtol=1e-6)
-    # the forms are banded: half-bandwidth 5 with one elastic wall, 8 with two
+    # the QP is banded: half-bandwidth 5 with one elastic wall, 8 with two
     assert elastic_qp(step).bands.shape[0] - 1 <= (8 if channel else 5)
 
 

@@ -9,38 +9,40 @@ indents the wall) satisfy the LCP with compliance
     R ≥ 0,   g + R/k ≥ 0,   R · (g + R/k) = 0,
 
 and the step is the QP with the matching penalty, min Q(u) + Σ ½ k_i (u_i − h_i)₊²
-(Q the step's quadratic, :mod:`lcpbench.model.step`). The penalty is not
-quadratic, so each node with an elastic wall gets one more unknown per wall,
-in one of two box QPs with the same u (:func:`elastic_qp`):
+(Q the step's quadratic, :mod:`lcpbench.model.step`).
 
+QP back-ends (and the banded active set) get a box QP. The penalty is not
+quadratic, so each node with an elastic wall gets one more unknown per wall
+(:func:`elastic_qp`):
+
+* the **spring form** (the one handed over): x = (u_i, v⁺_i, v⁻_i), minimise
+  Q(u) + Σ ½ k (u − v)² with v⁺ <= h, v⁻ >= lower: v is the point of the wall's
+  surface the node's spring holds; for fixed u the minimum over v is the
+  penalty. R = k (u − v) is the multiplier of v's bound.
 * the **split form**: u_i = v_i + δ⁺_i − δ⁻_i with v_i in the walls and δ ≥ 0,
-  minimise Q(u) + Σ ½ k_i δ_i² (for fixed u the inner minimum over δ is the
-  penalty). Its LCP (:func:`box_lcp`) is in (g, δ): on a gap row z = h − v,
-  w = R; on an indentation row z = δ, w = k δ − R; in the channel the extra
-  block z = R_lower, w = v − lower, as for rigid walls. With one wall
-  M = D S D (S the condensed P, D = ±1) is symmetric positive definite.
-* the **spring form**: x = (u_i, v⁺_i, v⁻_i), minimise Q(u) + Σ ½ k (u − v)² with
-  v⁺ <= h, v⁻ >= lower: v is the point of the wall's surface the node's spring
-  holds (for fixed u the minimum over v is the penalty again).
+  minimise Q(u) + Σ ½ k_i δ_i². The same u, but a node off the wall has v and δ
+  both free with u = v + δ, so a solver's round-off in δ moves u, which the
+  chain's stiffness turns into force far from the wall (measured: 1.6e-7 of
+  EI/ℓ² after the active set clipped δ = −3e-13 to its bound). In the spring
+  form that round-off sits in v and costs only k times itself. Kept for
+  comparison (tests), not handed over.
 
-Both Hessians are positive definite (xᵀPx = uᵀHu + Σ k δ², or + Σ k (u − v)²).
+Both Hessians are positive definite (xᵀPx = uᵀHu + Σ k (u − v)², or + Σ k δ²).
 The unknowns are interleaved node by node, so P stays banded: a pentadiagonal
 H gives a half-bandwidth of at most 8 (5 with one wall), and every solve is
-O(N). At the solution R_i is the multiplier of the wall row's bound (v's), and
-R = k δ = k (u − h)₊: R > 0 puts v on the wall (g + R/k = 0) with indentation
-δ = R/k; R = 0 gives δ = 0 and g >= 0.
+O(N).
 
-Each back-end gets the form it takes (:mod:`lcpbench.model.elastic_step`):
-QP back-ends and the banded active set the spring form, LCP back-ends the
-split form's LCP. Why: in the split form a node off the wall has v and δ both
-free and u = v + δ, so a QP solver's round-off in δ moves u, which the chain's
-stiffness turns into force far from the wall; in the spring form the same
-round-off sits in v and costs only k times itself. The spring form's LCP is
-not banded (u is unbounded and condensing it fills M); a pivoting LCP method
-sets the nonbasic δ to exactly 0 (docs/elastic-walls.md).
+LCP back-ends get the LCP in the reactions (:func:`force_lcp`): z = R, w the
+compliant gaps g + R/k, M = W + diag(1/k) with W = H⁻¹ on the wall rows
+(signed for the lower wall). It is dense, as every LCP back-end's input is,
+built by banded solves, and symmetric positive definite where the walls are
+elastic: no pair is degenerate off the walls, and Gauss–Seidel applies. The
+banded LCP of the split form (z = (g, δ)) was tried first: every node off the
+walls is a degenerate pair there (δ = 0 and k δ − R = 0), and Lemke stopped on
+it with a natural residual of 0.7 on the channel at N = 140.
 
-A rigid wall (k = inf) adds no unknown, so a rigid step's forms are the ones
-of :mod:`lcpbench.model.step` (tests check the LCPs agree).
+A rigid wall (k = inf) adds no unknown to the QP and a zero to M's diagonal,
+so a rigid step's forms are those of rigid walls (tests check this).
 """
 
 from __future__ import annotations
@@ -49,6 +51,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.linalg import solveh_banded
 
 from ..problems.scenes import wall_share
 
@@ -250,66 +253,61 @@ def elastic_qp(step, form: str = "spring") -> ElasticQP:
 
 
 @dataclass
-class BoxLCP:
-    """A box QP as a standard LCP ``w = M z + q`` (see :func:`box_lcp`)."""
+class ForceLCP:
+    """The elastic step as the LCP in the wall reactions (see :func:`force_lcp`).
+
+    z = (R_upper on ``upper_rows``, R_lower on ``lower_rows``) (N), w their
+    compliant gaps g + R/k (mm).
+    """
 
     M: np.ndarray
     q: np.ndarray
-    rows: np.ndarray  # QP variables with a bound, in the order of z's first block
-    sign: np.ndarray  # D: −1 where z = upper − x, +1 where z = x − lower
-    base: np.ndarray  # the bound z is measured from (x = base + D z)
-    both: np.ndarray  # positions in ``rows`` of the two-sided rows (second block)
-    condense: np.ndarray  # QP variables with no bound, eliminated
-    n_gap: int
+    upper_rows: np.ndarray
+    lower_rows: np.ndarray
+
+    @property
+    def n_upper(self) -> int:
+        return self.upper_rows.size
 
 
-def box_lcp(P: np.ndarray, c: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> BoxLCP:
-    """``min ½ xᵀPx + cᵀx, lower <= x <= upper`` (P symmetric positive definite) as
-    an LCP. Rows with no bound are condensed out (Schur complement S); a row with
-    an upper bound only has z = upper − x and w = −∇ (its upper multiplier); a
-    lower bound only, z = x − lower and w = ∇; a two-sided row z = upper − x and a
-    second-block unknown z' = its lower multiplier, with w = −∇ + z' and
-    w' = x − lower, as the rigid channel's [[K, I], [−I, 0]] (dense)."""
-    fin_lo, fin_up = np.isfinite(lower), np.isfinite(upper)
-    B = np.flatnonzero(fin_lo | fin_up)
-    F = np.flatnonzero(~(fin_lo | fin_up))
-    S = P[np.ix_(B, B)]
-    cs = c[B]
-    if F.size:
-        X = np.linalg.solve(P[np.ix_(F, F)], np.column_stack([P[np.ix_(F, B)], c[F]]))
-        S = S - P[np.ix_(B, F)] @ X[:, :-1]
-        cs = cs - P[np.ix_(B, F)] @ X[:, -1]
-    S = 0.5 * (S + S.T)
-    sign = np.where(fin_up[B], -1.0, 1.0)
-    base = np.where(fin_up[B], upper[B], lower[B])
-    M11 = sign[:, None] * S * sign[None, :]
-    q1 = sign * (S @ base + cs)
-    both = np.flatnonzero(fin_up[B] & fin_lo[B])
-    m, nb = B.size, both.size
-    if nb == 0:
-        return BoxLCP(M11, q1, B, sign, base, both, F, m)
-    C = np.zeros((m, nb))
-    C[both, np.arange(nb)] = 1.0
-    M = np.block([[M11, C], [-C.T, np.zeros((nb, nb))]])
-    q = np.concatenate([q1, upper[B][both] - lower[B][both]])
-    return BoxLCP(M, q, B, sign, base, both, F, m)
+def force_lcp(step) -> ForceLCP:
+    """The step with compliance as an LCP in the reactions: w = M R + q, w the
+    compliant gaps, dense, symmetric positive (semi)definite.
+
+    With W = H⁻¹ on the wall rows (banded solves, O(N) each) and u₀ = −H⁻¹c the
+    wall-free heights, the heights are u = u₀ − W R_upper + W R_lower, so
+
+        M = [[W_uu + 1/k_u, −W_ul], [−W_lu, W_ll + 1/k_l]],
+        q = [upper − u₀; u₀ − lower].
+
+    M is positive definite where every wall is elastic (1/k > 0 on its
+    diagonal), PSD with rigid rows; no pair is degenerate off the walls (z = R
+    = 0 with w = the gap > 0), and projected Gauss–Seidel applies (M_ii > 0).
+    """
+    n = step.size
+    up = np.flatnonzero(np.isfinite(step.upper))
+    lo = np.flatnonzero(np.isfinite(step.lower))
+    rows = np.concatenate([up, lo])
+    E = np.zeros((n, rows.size + 1))
+    E[rows, np.arange(rows.size)] = 1.0
+    E[:, -1] = -step.linear
+    X = solveh_banded(step.bands, E, lower=True, check_finite=False)
+    W, u0 = X[rows, :-1], X[:, -1]
+    sign = np.concatenate([np.ones(up.size), -np.ones(lo.size)])  # + pushes down
+    cu, cl = compliances(step)
+    M = sign[:, None] * W * sign[None, :]
+    M[np.diag_indices_from(M)] += np.concatenate([cu[up], cl[lo]])
+    M = 0.5 * (M + M.T)
+    q = np.concatenate([step.upper[up] - u0[up], u0[lo] - step.lower[lo]])
+    return ForceLCP(M, q, up, lo)
 
 
-def lcp_solution(P: np.ndarray, c: np.ndarray, form: BoxLCP, z: np.ndarray):
-    """The QP's x and signed bound multipliers y (+ upper) from an LCP solution z
-    (w = M z + q recomputed)."""
-    x = np.zeros(c.size)
-    m = form.n_gap
-    B, F = form.rows, form.condense
-    x[B] = form.base + form.sign * z[:m]
-    if F.size:
-        x[F] = np.linalg.solve(P[np.ix_(F, F)], -c[F] - P[np.ix_(F, B)] @ x[B])
-    w = form.M @ z + form.q
-    y = np.zeros(c.size)
-    y[B] = -form.sign * w[:m]  # +: the upper bound's multiplier, −: the lower's
-    if form.both.size:
-        y[B[form.both]] = w[:m][form.both] - z[m:]
-    return x, y
+def heights_from_forces(step, form: ForceLCP, R: np.ndarray) -> np.ndarray:
+    """Free-node heights u with H u + c + R_upper − R_lower = 0 (one banded solve)."""
+    rhs = -np.asarray(step.linear, dtype=float).copy()
+    rhs[form.upper_rows] -= R[: form.n_upper]
+    rhs[form.lower_rows] += R[form.n_upper:]
+    return solveh_banded(step.bands, rhs, lower=True, check_finite=False)
 
 
 def scaled_qp(qp: ElasticQP, L: float, F: float):

@@ -78,7 +78,7 @@ def step_lcp(step, scaled: bool = True):
 def _rigid_only(step, what: str) -> None:
     if getattr(step, "elastic", False):
         raise ProblemError(f"{what}: this step has elastic walls; its forms are "
-                           "lcpbench.model.elastic.elastic_qp / box_lcp")
+                           "lcpbench.model.elastic.elastic_qp / force_lcp")
 
 
 def _complete_heights(step, u: np.ndarray) -> np.ndarray:
