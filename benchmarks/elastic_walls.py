@@ -130,7 +130,7 @@ def backends() -> str:
                                                       channel=True))]
     parts = ["# Elastic walls: every back-end on the elastic step\n",
              "QP back-ends (and the active set) get the spring form, LCP back-ends the "
-             "split form (docs/elastic-walls.md); each answer judged by lcpbench's residuals "
+             "LCP in the reactions (docs/elastic-walls.md); each answer judged by lcpbench's residuals "
              "and result judge, at settings `default`, driver tol 1e-3 rad. Error: "
              "|F − F_ref| / F_ref against the active set at tol 1e-10 rad. A back-end may "
              "fail; none may be converged and off the reference (success rule 1e-3).\n"]
