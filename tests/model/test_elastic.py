@@ -204,3 +204,28 @@ def test_node_table_and_summary_of_an_elastic_result():
     assert "k = 0.2 N/mm per mm" in res.summary() and "contact pressure" in res.summary()
     rigid = lcpbench.solve(ActuatorScene(links=30))
     assert "pressure" not in rigid.nodes(frame=False) and "k = " not in rigid.summary()
+
+
+@pytest.mark.parametrize("factor", [0.9, 1.1])
+def test_the_judge_rejects_elastic_reactions_off_by_ten_percent(factor):
+    """The converged elastic answer with its reactions scaled: the indentation no
+    longer matches R/k and the torques no longer balance, so it is not converged."""
+    res = lcpbench.solve(_elastic(k=0.3), tol=1e-8)
+    assert res.converged
+    chain = res.scene.chain()
+    up = res.forces * factor
+    verdict = judge(chain, res.alpha, up, np.zeros_like(up), tol=1e-8,
+                    driver_converged=True, driver_reason="converged",
+                    step_statuses=["solved"], step_sizes=[1e-7, 1e-8],
+                    certificate=lambda u, lo: certify(chain, res.alpha, u, lo))
+    assert not verdict.converged
+    assert {"complementarity", "penetration", "torque"} & set(verdict.failed)
+
+
+def test_continuation_over_elastic_scenes_is_the_cold_answer():
+    scenes = [_elastic(k=0.5, theta=t) for t in (130.0, 140.0, 150.0)]
+    warm = lcpbench.solve_many(scenes, tol=1e-9)
+    for s, r in zip(scenes, warm):
+        cold = lcpbench.solve(s, tol=1e-9)
+        assert r.converged and cold.converged
+        assert r.total_force == pytest.approx(cold.total_force, rel=1e-7)
