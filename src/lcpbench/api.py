@@ -68,7 +68,7 @@ def solve(
 
     Parameters
     ----------
-    scene : ActuatorScene or CantileverScene
+    scene : ActuatorScene, SectionedScene or CantileverScene
         With an integer number of links N (``links="auto"`` needs the
         discretisation study of Sec. III-D, several solves:
         ``lcpbench.studies.discretisation.auto_links(scene)`` gives the N).

@@ -39,3 +39,14 @@ def test_solve_bad_elastic_input_is_one_line_exit_2(argv, word, capsys):
     code = main(["solve", "--links", "20", *argv])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and word in err[0]
+
+
+@pytest.mark.parametrize("argv", [
+    ["solve", "--links", "30", "--sections", "150:30", "--wall-stiffness", "1"],
+    ["sweep", "--grid", "anchoring", "--wall-stiffness", "1"],
+])
+def test_elastic_walls_with_sections_are_one_line_exit_2(argv, capsys, tmp_path):
+    code = main([*argv] + (["--store", str(tmp_path / "s.sqlite")] if argv[0] == "sweep"
+                           else []))
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "wall-stiffness" in err[0]

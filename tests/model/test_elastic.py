@@ -229,3 +229,13 @@ def test_continuation_over_elastic_scenes_is_the_cold_answer():
         cold = lcpbench.solve(s, tol=1e-9)
         assert r.converged and cold.converged
         assert r.total_force == pytest.approx(cold.total_force, rel=1e-7)
+
+
+def test_elastic_walls_with_a_wall_profile_are_refused():
+    """Not combined yet (docs/elastic-walls.md): one ProblemError naming both."""
+    from lcpbench.problems.walls import WallProfile
+
+    ramp = WallProfile.from_table([-1.0, 31.0], [3.0, 3.0], "linear", name="flat")
+    ActuatorScene(links=30, wall_profile=ramp)  # each alone is fine
+    with pytest.raises(ProblemError, match="wall_stiffness.*wall_profile"):
+        ActuatorScene(links=30, wall_profile=ramp, wall_stiffness=1.0)

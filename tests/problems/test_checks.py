@@ -73,7 +73,8 @@ def test_check_choice_compares_type_too():
 def test_check_scene_refuses_non_scenes(scene, kind):
     with pytest.raises(ProblemError) as info:
         check_scene(scene)
-    assert str(info.value) == f"scene must be an ActuatorScene or CantileverScene, got {kind}"
+    assert str(info.value) == (f"scene must be an ActuatorScene, SectionedScene or "
+                               f"CantileverScene, got {kind}")
 
 
 def test_check_scene_refuses_the_class_and_accepts_instances():

@@ -1,7 +1,9 @@
 """Test sets of the benchmark: grids of scenes over θ × h (× N, EI, w, ℓ).
 
 A grid is data: tuples of values per parameter, expanded into
-:class:`~lcpbench.problems.scenes.ActuatorScene` objects in a fixed order.
+:class:`~lcpbench.problems.scenes.ActuatorScene` objects in a fixed order
+(:func:`anchoring_scenes`: the paper's 3-section actuator,
+:class:`~lcpbench.problems.sections.SectionedScene`, over θ × h).
 Ranges come from the command line as ``start:stop:step`` (stop included,
 like the paper's "10° to 180° by 10°"), a comma list ``2,3,5`` or one value.
 """
@@ -21,6 +23,7 @@ from ..problems.scenes import (
     DEFAULT_WEIGHT,
     ActuatorScene,
 )
+from ..problems.sections import SectionedScene, anchoring_actuator
 
 MAX_POINTS = 10_000  # per range: a typo like 0:180:1e-6 is an error, not a hang
 
@@ -136,15 +139,29 @@ def tissue_grid(stiffness: tuple[float, ...] = TISSUE_STIFFNESS,
                 wall_stiffness=tuple(stiffness))
 
 
-def scene_key(scene: ActuatorScene) -> str:
+def scene_key(scene: ActuatorScene | SectionedScene) -> str:
     """A canonical text key of a scene (its parameters as sorted JSON).
 
-    A rigid wall (``wall_stiffness`` inf, the default) is left out of the key, so
-    the keys of stores written before elastic walls existed still match; an
-    elastic one is in it, so each stiffness is a scene of its own.
+    A :class:`SectionedScene` keys by its list of sections (a ``"sections"``
+    entry no single-section key has), so the two kinds never collide. A rigid
+    wall (``wall_stiffness`` inf, the default) is left out of the key, so the
+    keys of stores written before elastic walls existed still match; an elastic
+    one is in it, so each stiffness is a scene of its own.
     """
     d = asdict(scene)
+    for k in ("wall_profile", "lower_profile"):  # flat walls: the key as before profiles
+        if d.get(k, "absent") is None:
+            del d[k]
+        elif k in d:
+            raise ProblemError(f"{k}: the benchmark's scenes have flat walls (a scene key "
+                               f"cannot hold a wall profile)")
     d["links"] = int(d["links"])
+    if isinstance(scene, SectionedScene):
+        d["sections"] = [{k: float(repr_float(v)) for k, v in sec.items()}
+                         for sec in d["sections"]]
+        for k in ("height", "length"):
+            d[k] = float(repr_float(d[k]))
+        return json.dumps(d, sort_keys=True)
     for k in ("theta", "height", "length", "EI", "weight"):
         d[k] = float(repr_float(d[k]))
     k = d.pop("wall_stiffness", math.inf)
@@ -158,8 +175,45 @@ def repr_float(v: float) -> str:
     return repr(float(f"{float(v):.12g}"))
 
 
-def scene_from_key(key: str) -> ActuatorScene:
-    return ActuatorScene(**json.loads(key))
+def scene_from_key(key: str) -> ActuatorScene | SectionedScene:
+    d = json.loads(key)
+    if "sections" in d:
+        return SectionedScene(**d)
+    return ActuatorScene(**d)
+
+
+def scene_params(key: str) -> dict:
+    """A scene key's parameters, flat: a SectionedScene's as its sharpest θ (the
+    anchoring actuator's θ), height, links, total length, EI, w and channel, plus
+    ``sections`` (their count), so reports group and label both kinds alike."""
+    d = json.loads(key)
+    if "sections" not in d:
+        return d
+    scene = scene_from_key(key)
+    return {"theta": scene.theta, "height": scene.height, "links": scene.links,
+            "length": scene.length, "EI": scene.EI, "weight": scene.weight,
+            "channel": scene.channel, "sections": len(scene.sections)}
+
+
+#: ``lcpbench sweep --grid anchoring`` defaults: θ of every section (deg), h (mm), N
+ANCHORING_THETA = "60:180:20"
+ANCHORING_HEIGHT = "4.5,5.5,6.5"
+ANCHORING_LINKS = 3 * DEFAULT_LINKS
+
+
+def anchoring_scenes(theta: tuple[float, ...], height: tuple[float, ...],
+                     links: tuple[int, ...] = (ANCHORING_LINKS,),
+                     EI: tuple[float, ...] = (DEFAULT_EI,),
+                     weight: tuple[float, ...] = (DEFAULT_WEIGHT,),
+                     length: tuple[float, ...] = (DEFAULT_LENGTH,)) -> list[SectionedScene]:
+    """The paper's 3-section anchoring actuator over every combination, θ fastest.
+
+    ``links`` is N over the whole actuator (a multiple of 3), ``length`` the
+    length of each section (:func:`~lcpbench.problems.sections.anchoring_actuator`).
+    """
+    combos = itertools.product(links, length, EI, weight, height, theta)
+    return [anchoring_actuator(t, h, links=n, length=ell, EI=ei, weight=w)
+            for n, ell, ei, w, h, t in combos]
 
 
 def _grazing_height(theta: float, links: int) -> float:

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .grid import scene_params
+
 
 def plot_shape(result, path):
     """Draw a :class:`~lcpbench.model.result.ContactResult` to ``path`` (PNG, PDF, SVG, ...).
@@ -321,7 +323,7 @@ def force_lines(refs: dict) -> tuple[list[dict], dict]:
     for r in refs.values():
         if not r["converged"]:
             continue
-        params = json.loads(r["scene"])
+        params = scene_params(r["scene"])
         theta = params.pop("theta")
         key = json.dumps(params, sort_keys=True)
         g = groups.setdefault(key, {"params": params, "pts": []})
@@ -361,7 +363,7 @@ def plot_forces(refs: dict, evaluated, path) -> None:
     base: dict[str, list] = {}
     for e in evaluated:
         if e.backend == "baseline" and e.row["converged"]:
-            params = json.loads(e.row["scene"])
+            params = scene_params(e.row["scene"])
             params.pop("theta")
             base.setdefault(json.dumps(params, sort_keys=True), []).append(
                 (e.row["theta"], 1e3 * e.row["total_force"]))
@@ -401,7 +403,7 @@ def shape_panels(refs: dict, theta: float | None = None, height: float | None = 
         return {}, []
 
     def rest(r):
-        p = json.loads(r["scene"])
+        p = scene_params(r["scene"])
         return json.dumps({k: v for k, v in p.items() if k not in ("theta", "height")},
                           sort_keys=True)
     common = Counter(rest(r) for r in rows).most_common(1)[0][0]

@@ -133,4 +133,9 @@ def repeated(first: dict, again, repeat: int) -> dict:
 def scene_columns(key: str) -> dict:
     """The scene's columns of a row, from its scene key."""
     d = json.loads(key)
+    if "sections" in d:  # a SectionedScene: its sharpest θ, total length, mean EI and w
+        from .grid import scene_from_key
+
+        scene = scene_from_key(key)
+        return {k: getattr(scene, k) for k in SCENE_COLUMNS}
     return {k: d[k] for k in SCENE_COLUMNS}

@@ -19,7 +19,7 @@ interrupted.
 One module per command group, each with ``register(subparsers)`` whose
 parsers set ``func(args) -> int``: :mod:`.solve` (solve, export, lcp,
 validate), :mod:`.solvers` (solvers), :mod:`.sweep` (sweep, report, select),
-:mod:`.paper` (reproduce), and ``lcpbench.vision.commands`` when it is
+:mod:`.paper` (reproduce, anchoring), and ``lcpbench.vision.commands`` when it is
 installed. The shared scene options are in :mod:`._scene_args`. The command
 modules are imported when the parser is built, not by ``import lcpbench.cli``.
 """

@@ -83,8 +83,9 @@ def add_scene_options(parser) -> None:
     a("--height", type=quantity_type("length", "height"), default=DEFAULT_HEIGHT,
       metavar="MM", help=f"wall height above the pins; a bare number is mm, or give the "
                          f"unit: 3mm, 0.003m (default {DEFAULT_HEIGHT:g})")
-    a("--links", type=links_arg, default=DEFAULT_LINKS, metavar="N|auto",
-      help=f"number of links, or 'auto' (default {DEFAULT_LINKS})")
+    a("--links", type=links_arg, default=None, metavar="N|auto",
+      help=f"number of links, or 'auto' (default {DEFAULT_LINKS}; with --sections N over "
+           f"the whole length, default {DEFAULT_LINKS} per {DEFAULT_LENGTH:g} mm)")
     a("--length", type=quantity_type("length", "length"), default=DEFAULT_LENGTH,
       metavar="MM", help=f"section length; bare: mm, or 30mm, 0.03m (default "
                          f"{DEFAULT_LENGTH:g})")
@@ -95,6 +96,49 @@ def add_scene_options(parser) -> None:
       metavar="NPMM", help=f"weight per length; bare: N/mm, or 0.245N/m; 0 turns gravity "
                            f"off (default {DEFAULT_WEIGHT:g})")
     a("--channel", action="store_true", help="a second wall at -height (the paper's fixture)")
+
+
+def add_section_options(parser) -> None:
+    """Add ``--sections`` and ``--gravity``: a row of sections instead of one.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The sub-command's parser; :func:`scene_from` reads the result.
+    """
+    from ..problems.sections import SECTIONS_SYNTAX
+
+    parser.add_argument(
+        "--sections", default=None, metavar="SPEC",
+        help=f"a row of bending sections pinned at its two ends (SectionedScene): "
+             f"{SECTIONS_SYNTAX}; e.g. 150:30,-90:20:40 (fields left out take --length, "
+             f"--EI, --weight). 'anchoring' is the paper's 3-section actuator (Fig. 1b): "
+             f"sections -theta, +theta, -theta of --length each, theta from --theta or "
+             f"--pressure, always in the channel (walls at +-height)")
+    parser.add_argument(
+        "--gravity", choices=("away", "toward"), default="away",
+        help="with --sections: the self-weight acts away from the upper wall (default, the "
+             "paper's model) or toward it")
+
+
+def add_profile_options(parser) -> None:
+    """Add ``--wall-profile FILE.csv``, ``--lower-profile FILE.csv`` and ``--profile-kind``.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The sub-command's parser (``solve``); :func:`scene_from` reads them.
+    """
+    a = parser.add_argument
+    a("--wall-profile", default=None, metavar="FILE.csv",
+      help="upper wall of any profile y = h(x) instead of the flat wall at --height: a CSV "
+           "with a header line, then x,y rows in mm covering 0..length, y > 0")
+    a("--lower-profile", default=None, metavar="FILE.csv",
+      help="with --channel and --wall-profile: the lower wall's profile (y < 0); default "
+           "the mirror image y = -h(x) of the upper wall")
+    a("--profile-kind", choices=("pchip", "linear", "cubic"), default="pchip",
+      help="interpolation of the profile tables: pchip (C1, no overshoot; default), "
+           "linear (piecewise linear: kinks), cubic (natural spline, C2)")
 
 
 def add_wall_options(parser) -> None:
@@ -159,7 +203,7 @@ def add_solver_options(parser, default: str = DEFAULT_SOLVER) -> None:
                              "tolerance low 1e-3, mid 1e-6, high 1e-9 (default: default)")
 
 
-def scene_from(args, *, resolve_links: bool = True) -> ActuatorScene:
+def scene_from(args, *, resolve_links: bool = True):
     """The scene described by the options of :func:`add_scene_options`.
 
     ``--links auto`` runs the discretisation study of Sec. III-D (several
@@ -173,9 +217,10 @@ def scene_from(args, *, resolve_links: bool = True) -> ActuatorScene:
 
     Returns
     -------
-    ActuatorScene
+    ActuatorScene or SectionedScene
         With theta from ``--theta``, or from ``--pressure`` through the
-        calibration of ``--actuator`` or ``--fit``.
+        calibration of ``--actuator`` or ``--fit``; a SectionedScene with
+        ``--sections`` (where the parser has it).
 
     Raises
     ------
@@ -198,13 +243,58 @@ def scene_from(args, *, resolve_links: bool = True) -> ActuatorScene:
     return scene.with_links(n)
 
 
-def _scene_as_given(args) -> ActuatorScene:
+def _scene_as_given(args):
+    sections = getattr(args, "sections", None)
+    if sections is not None and (getattr(args, "wall_profile", None) is not None
+                                 or getattr(args, "lower_profile", None) is not None):
+        raise ProblemError("--sections takes flat walls at +-height: drop --wall-profile and "
+                           "--lower-profile (a wall profile is for one section)")
+    if sections is not None and getattr(args, "wall_stiffness", math.inf) != math.inf:
+        raise ProblemError("--wall-stiffness (elastic walls) is for one section: drop it or "
+                           "--sections")
+    if sections is not None and sections.strip() != "anchoring":
+        return _sectioned(args, sections)
+    if getattr(args, "gravity", "away") != "away" and sections is None:
+        raise ProblemError("--gravity needs --sections (the single section's weight acts "
+                           "away from the wall, as in the paper)")
     for warning in implausible(args.theta, args.height, args.length):
         print(f"lcpbench: warning: {warning}", file=sys.stderr)
-    kw = {"height": args.height, "links": args.links, "length": args.length, "EI": args.EI,
-          "weight": args.weight, "channel": args.channel}
+    links = DEFAULT_LINKS if args.links is None else args.links
+    kw = {"height": args.height, "links": links, "length": args.length, "EI": args.EI,
+          "weight": args.weight, "channel": args.channel, **_profiles(args)}
     if getattr(args, "wall_stiffness", math.inf) != math.inf:
         kw["wall_stiffness"] = args.wall_stiffness
+    if sections is not None:  # the anchoring preset: theta as for one section
+        if args.links == "auto":
+            raise ProblemError("--links auto is for one section; give N (a multiple of 3) "
+                               "with --sections anchoring")
+        one = _single(args, {**kw, "links": DEFAULT_LINKS})
+        from ..problems.sections import anchoring_actuator
+
+        return anchoring_actuator(one.theta, args.height, links=args.links,
+                                  length=args.length, EI=args.EI, weight=args.weight,
+                                  gravity=_GRAVITY[args.gravity])
+    return _single(args, kw)
+
+
+_GRAVITY = {"away": "-y", "toward": "+y"}
+
+
+def _sectioned(args, text: str):
+    """``--sections THETA:LENGTH,...``: the SectionedScene it describes."""
+    from ..problems.sections import SectionedScene, parse_sections
+
+    if args.theta is not None or args.pressure is not None:
+        raise ProblemError("--sections gives every section its own theta: drop --theta and "
+                           "--pressure (or use --sections anchoring)")
+    if args.links == "auto":
+        raise ProblemError("--links auto is for one section; give N with --sections")
+    secs = parse_sections(text, length=args.length, EI=args.EI, weight=args.weight)
+    return SectionedScene(sections=secs, height=args.height, links=args.links,
+                          channel=args.channel, gravity=_GRAVITY[args.gravity])
+
+
+def _single(args, kw: dict) -> ActuatorScene:
     if args.pressure is None:
         if args.fit is not None:
             raise ProblemError("--fit needs --pressure")
@@ -223,3 +313,22 @@ def _scene_as_given(args) -> ActuatorScene:
                                f"{args.fit!r}") from None
         actuator = linear_calibration(slope, intercept)
     return scene_from_pressure(args.pressure, actuator, **kw)
+
+
+def _profiles(args) -> dict:
+    """The wall profiles of ``--wall-profile``/``--lower-profile`` as scene fields."""
+    upper = getattr(args, "wall_profile", None)
+    lower = getattr(args, "lower_profile", None)
+    if upper is None and lower is None:
+        return {}
+    from ..problems.walls import load_profile_csv
+
+    if upper is None:
+        raise ProblemError("--lower-profile needs --wall-profile and --channel")
+    if lower is not None and not args.channel:
+        raise ProblemError("--lower-profile needs --channel")
+    kind = getattr(args, "profile_kind", "pchip")
+    out = {"wall_profile": load_profile_csv(upper, kind, parameter="--wall-profile")}
+    if lower is not None:
+        out["lower_profile"] = load_profile_csv(lower, kind, parameter="--lower-profile")
+    return out

@@ -33,7 +33,7 @@ def register(subparsers) -> None:
                     help="bend angles, degrees (default 10:180:10)")
     ex.add_argument("--height", default=None, metavar="A:B:STEP",
                     help="wall heights, mm (default 2:7:1)")
-    ex.add_argument("--links", default=str(DEFAULT_LINKS), metavar="LIST",
+    ex.add_argument("--links", default=None, metavar="LIST",
                     help=f"numbers of links (default {DEFAULT_LINKS})")
     for name in ("EI", "weight", "length"):
         ex.add_argument(f"--{name}", default=None, metavar="LIST", help=f"{name} values")

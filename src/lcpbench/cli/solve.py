@@ -3,7 +3,9 @@
 ::
 
     lcpbench solve --theta 150 --height 3 [--links N|auto] [--channel] [--solver NAME]
+                   [--wall-profile F.csv [--lower-profile F.csv] [--profile-kind K]]
                    [--settings default|low|mid|high] [--raw] [--json] [--plot F.png]
+                   [--sections THETA:LENGTH,...|anchoring] [--gravity away|toward]
     lcpbench export --theta 150 --height 3 [scene options] --format dat|npz --out FILE
     lcpbench lcp FILE [--solver NAME] [--settings PROFILE] [--json]
     lcpbench validate cantilever [--links N] [--json]
@@ -30,7 +32,9 @@ from ._common import (
 )
 from ._scene_args import (
     DEFAULT_METHOD,
+    add_profile_options,
     add_scene_options,
+    add_section_options,
     add_solver_options,
     add_tol_option,
     add_wall_options,
@@ -50,9 +54,12 @@ def register(subparsers) -> None:
     s = subparsers.add_parser(
         "solve",
         help="constrained equilibrium of an actuator section against a wall",
-        description="Solve one ActuatorScene and report the contact force and its certificate.",
+        description="Solve one ActuatorScene (or, with --sections, a row of sections: a "
+                    "SectionedScene) and report the contact force and its certificate.",
     )
     add_scene_options(s)
+    add_section_options(s)
+    add_profile_options(s)
     add_tol_option(s)
     add_solver_options(s)
     s.add_argument("--raw", action="store_true",
@@ -146,11 +153,24 @@ def summary(result, extra=()) -> str:
     sc = result.scene
     cert = result.certificate
     free = sc.chain().free_nodes  # the scene as solved (links resolved)
-    scene = (f"theta={sc.theta:g} deg, h={sc.height:g} mm, N={result.links}, "
-             f"length={sc.length:g} mm, EI={sc.EI:g} N*mm^2, w={sc.weight:g} N/mm"
-             + (", channel" if sc.channel else "")
-             + (f", wall k={sc.wall_stiffness:g} N/mm per mm"
-                if sc.wall_stiffness < np.inf else ""))
+    if hasattr(sc, "sections"):
+        from ..problems.sections import sections_text
+
+        scene = (f"sections {sections_text(sc)} (theta:length[:EI:w]), h={sc.height:g} mm, "
+                 f"N={result.links}, length={sc.length:g} mm, weight "
+                 f"{'toward' if sc.gravity == '+y' else 'away from'} the upper wall"
+                 + (", channel" if sc.channel else "")
+                 + (f", wall k={sc.wall_stiffness:g} N/mm per mm"
+                    if getattr(sc, "wall_stiffness", np.inf) < np.inf else ""))
+    else:
+        wall = f"h={sc.height:g} mm"
+        if getattr(sc, "wall_profile", None) is not None:
+            wall = f"wall profile {sc.wall_profile.name}"
+        scene = (f"theta={sc.theta:g} deg, {wall}, N={result.links}, "
+                 f"length={sc.length:g} mm, EI={sc.EI:g} N*mm^2, w={sc.weight:g} N/mm"
+                 + (", channel" if sc.channel else "")
+                 + (f", wall k={sc.wall_stiffness:g} N/mm per mm"
+                    if getattr(sc, "wall_stiffness", np.inf) < np.inf else ""))
     rows = [
         ("scene", scene),
         ("converged", ("yes" if result.converged else "no") + f" ({result.reason})"),
@@ -202,6 +222,9 @@ def cmd_solve(args) -> int:
     plot_error = None
     if args.plot is not None:
         from ..bench.plot import plot_shape
+
+        if getattr(scene, "wall_profile", None) is not None:
+            from ..bench.wall_plot import plot_profile_shape as plot_shape
 
         try:
             plot_shape(result, args.plot)

@@ -2,7 +2,7 @@
 
 ::
 
-    lcpbench sweep [--grid paper|hard|tissue] [--wall-stiffness LIST] [--theta A:B:STEP] [--height A:B:STEP] ...
+    lcpbench sweep [--grid paper|hard|anchoring|tissue] [--wall-stiffness LIST] [--theta A:B:STEP] [--height A:B:STEP] ...
                    [--solvers A,B] [--settings P,Q] [--continuation [PREDICTOR]]
                    [--store PATH] [--out DIR] [--jobs K] [--time-limit S] [--repeat K]
     lcpbench report [--store PATH] [--out DIR] [--all] [--format F] [--table2-height MM] [--no-plots]
@@ -79,13 +79,18 @@ def register(subparsers) -> None:
                     "grid (all parameters but theta equal) in order of theta, each scene "
                     "started from its neighbours' answers; those runs are stored as driver "
                     "globalised+secant (or +previous), apart from the cold ones.")
-    sw.add_argument("--grid", choices=("paper", "hard", "tissue"), default="paper",
+    sw.add_argument("--grid", choices=("paper", "hard", "anchoring", "tissue"), default="paper",
                     help="paper: the theta x height grid below (default); hard: the "
                          "hard-case suite (theta 170-180, h down to 0.02 l, N up to 2000, "
-                         "grazing, no contact, heavy, EI 1-1000, channel); tissue: elastic "
-                         "walls, the paper's pressures (theta by actuator 1's calibration) "
-                         "x h 4.5,5.5,6.5 mm x wall stiffness 0.01,0.1,1,inf N/mm per mm, "
-                         "in the channel")
+                         "grazing, no contact, heavy, EI 1-1000, channel); anchoring: the "
+                         "paper's 3-section actuator (sections -theta, +theta, -theta of "
+                         "--length each, pinned at its two ends, in the channel of walls at "
+                         "+-height) over theta x height (default theta 60:180:20, height "
+                         "4.5,5.5,6.5, links 420 over the whole actuator, a multiple of 3; "
+                         "no baseline: the appendix's baseline models one section); tissue: "
+                         "elastic walls, the paper's pressures (theta by actuator 1's "
+                         "calibration) x h 4.5,5.5,6.5 mm x wall stiffness 0.01,0.1,1,inf N/mm "
+                         "per mm, in the channel")
     sw.add_argument("--wall-stiffness", default=None, metavar="LIST",
                     help="Winkler stiffnesses of the walls, N/mm per mm of wall; inf is "
                          "rigid (default inf; --grid tissue: 0.01,0.1,1,inf)")
@@ -96,8 +101,9 @@ def register(subparsers) -> None:
     sw.add_argument("--height", default=None, metavar="A:B:STEP",
                     help="wall heights, mm, or with units: 2mm:7mm:1mm, 0.002m,0.003m "
                          "(default 2:7:1)")
-    sw.add_argument("--links", default=str(DEFAULT_LINKS), metavar="LIST",
-                    help=f"numbers of links (default {DEFAULT_LINKS})")
+    sw.add_argument("--links", default=None, metavar="LIST",
+                    help=f"numbers of links (default {DEFAULT_LINKS}; --grid anchoring: "
+                         f"{3 * DEFAULT_LINKS} over the whole actuator)")
     sw.add_argument("--EI", default=None, metavar="LIST", help="bending stiffnesses, N*mm^2 "
                     f"(default {DEFAULT_EI:g})")
     sw.add_argument("--weight", default=None, metavar="LIST",
@@ -267,6 +273,7 @@ def _stiffness_list(text) -> tuple[float, ...] | None:
 
 def _sweep_scenes(args) -> list:
     """The scenes of ``--grid``, validated before anything runs."""
+    from ..bench import grid as grids
     from ..bench.grid import Grid, hard_scenes, parse_range
 
     stiffness = _stiffness_list(getattr(args, "wall_stiffness", None))
@@ -275,10 +282,24 @@ def _sweep_scenes(args) -> list:
                  if getattr(args, n) is not None] + (["--channel"] if args.channel else [])
         if stiffness is not None:
             given.append("--wall-stiffness")
-        if given or args.links != str(DEFAULT_LINKS):
+        if given or args.links is not None:
             raise ProblemError("--grid hard is a fixed list of scenes; it takes no "
                                f"{', '.join(given) or '--links'}")
         return hard_scenes()
+    if args.grid == "anchoring":
+        if stiffness is not None:
+            raise ProblemError("--grid anchoring has rigid walls; it takes no --wall-stiffness")
+        kw = {"theta": parse_range(_in_model_units(args.theta or grids.ANCHORING_THETA,
+                                                   "theta"), "theta"),
+              "height": parse_range(_in_model_units(args.height or grids.ANCHORING_HEIGHT,
+                                                    "height"), "height"),
+              "links": parse_range(args.links or str(grids.ANCHORING_LINKS), "links",
+                                   integer=True)}
+        for name in ("EI", "weight", "length"):
+            values = _float_list(getattr(args, name), name)
+            if values is not None:
+                kw[name] = values
+        return grids.anchoring_scenes(**kw)  # validates every scene before anything runs
     if args.grid == "tissue":
         from ..bench.grid import TISSUE_HEIGHTS, TISSUE_STIFFNESS, tissue_grid
 
@@ -289,15 +310,15 @@ def _sweep_scenes(args) -> list:
                                f"takes no {', '.join(given)}")
         heights = (parse_range(_in_model_units(args.height, "height"), "height")
                    if args.height is not None else TISSUE_HEIGHTS)
-        links = parse_range(args.links, "links", integer=True)
-        grids = [tissue_grid(stiffness or TISSUE_STIFFNESS, heights, links=int(n))
-                 for n in links]
-        return [sc for g in grids for sc in g.scenes()]
+        links = parse_range(args.links or str(DEFAULT_LINKS), "links", integer=True)
+        tissue = [tissue_grid(stiffness or TISSUE_STIFFNESS, heights, links=int(n))
+                  for n in links]
+        return [sc for g in tissue for sc in g.scenes()]
     grid_kw = {"theta": parse_range(_in_model_units(args.theta or "10:180:10", "theta"),
                                     "theta"),
                "height": parse_range(_in_model_units(args.height or "2:7:1", "height"),
                                      "height"),
-               "links": parse_range(args.links, "links", integer=True),
+               "links": parse_range(args.links or str(DEFAULT_LINKS), "links", integer=True),
                "channel": args.channel}
     if stiffness is not None:
         grid_kw["wall_stiffness"] = stiffness
@@ -346,6 +367,14 @@ def cmd_sweep(args) -> int:
     from ..bench.store import Store
     from ..bench.sweep import plan_sweep, sweep
 
+    if args.grid == "anchoring":
+        if args.baseline not in (None, "none"):
+            raise ProblemError("--grid anchoring has no baseline: the appendix's root-finding "
+                               "baseline models one section (use --baseline none)")
+        if args.continuation is not None:
+            raise ProblemError("--continuation runs along theta of one-section grids; not "
+                               "with --grid anchoring")
+        args.baseline = "none"
     _apply_preset(args)
     scenes = _sweep_scenes(args)
     methods = [m.strip() for m in args.method.split(",") if m.strip()]

@@ -33,6 +33,7 @@ from ..solvers.base import Status, StepSolution
 from ..solvers.judge import DEFAULT_TOL
 from ..solvers.registry import DEFAULT, get_settings
 from .driver import DriverOutput, DriverStart, StepRecord, _converged, _fail, run_driver
+from .profile import has_profile
 
 #: ``engine`` of :func:`lcpbench.solve`: "auto" (the kernel where it applies, numpy
 #: elsewhere), "compiled" (the kernel, or ProblemError where it does not apply),
@@ -57,14 +58,16 @@ def check_engine(engine) -> str:
 
 def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
     """Whether the kernel runs this solve: the default back-end, the globalised
-    driver, and (given ``chain``) a chain of consecutive joints and free nodes with
-    rigid walls."""
+    driver, and (given ``chain``) a chain of consecutive joints and free nodes,
+    with flat, rigid walls (not a wall profile, not an elastic wall)."""
     if backend not in (DEFAULT, "auto") or method != "globalised":
         return False
     if chain is None:
         return True
     if chain.upper_stiffness is not None or chain.lower_stiffness is not None:
         return False  # elastic walls: the numpy reference (model.elastic), not ported yet
+    if chain.upper_profile is not None or chain.lower_profile is not None:
+        return False  # walls of any profile: the numpy reference (model/profile_driver.py)
     left, right = chain.joint_links[:, 0], chain.joint_links[:, 1]
     f = chain.free_nodes
     return bool(right.size and f.size and np.all(np.diff(right) == 1)
@@ -94,6 +97,9 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
         if out is not None:
             return out, "compiled"
         used = f"numpy (the compiled kernel stopped: {why})"
+    elif engine == "compiled" and chain is not None and has_profile(chain):
+        raise ProblemError("engine='compiled' does not run walls of any profile (wall_profile); "
+                           "engine='auto' or 'numpy' runs them in the numpy reference")
     elif engine == "compiled":
         if chain.upper_stiffness is not None or chain.lower_stiffness is not None:
             raise ProblemError("engine='compiled' does not run elastic walls yet "

@@ -111,10 +111,18 @@ def run_driver(
     """Iterate contact steps to the equilibrium of ``chain``.
 
     Returns the final link angles and the reactions of the last step, with
-    ``converged`` and a reason; never raises on non-convergence. ``start``
+    ``converged`` and a reason; never raises on non-convergence. A chain with
+    a wall profile runs :mod:`lcpbench.model.profile_driver`. ``start``
     (globalised and Newton schemes) begins from a neighbouring scene's answer instead
     of the clipped unconstrained arc.
     """
+    if chain.upper_profile is not None or chain.lower_profile is not None:
+        if method not in METHODS:
+            raise ProblemError(f"method must be one of {METHODS}, got {method!r}")
+        from .profile_driver import run_profile_driver  # it imports this module
+
+        return run_profile_driver(chain, solver, tol=tol, max_outer=max_outer,
+                                  method=method, start=start)
     if method == "undamped":
         if start is not None:
             raise ProblemError("a continuation start needs method='globalised'")

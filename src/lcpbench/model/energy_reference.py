@@ -10,6 +10,10 @@ equilibrium without any linearisation, as a reference to judge it by:
                h_k − y_k(α) ≥ 0                             (upper wall, node k)
                y_k(α) − l_k ≥ 0                             (lower wall of a channel)
 
+or, for walls of any profile, h(x_k(α)) − y_k(α) ≥ 0 and y_k(α) − l(x_k(α)) ≥ 0
+(:mod:`lcpbench.model.energy_profile`: exact gradient and Hessian; the wall
+multipliers are then the vertical parts of the normal reactions)
+
 with φ the joint angles of :func:`~lcpbench.model.chain.joint_angles`, μ_i the
 link loads (``chain.link_load``, acting at the link centres y_c,i) and one
 inequality per node that can reach a wall (``chain.upper`` / ``chain.lower``
@@ -36,6 +40,8 @@ from scipy.optimize import minimize
 
 from ..problems.scenes import Chain
 from .chain import alpha_from_heights, energy, heights, joint_angles, node_positions
+from .energy_profile import profile_wall_hessian, profile_walls
+from .profile import has_profile, walls_at
 
 
 @dataclass
@@ -191,6 +197,8 @@ def walls(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The wall gaps g(α) ≥ 0 (mm) and their Jacobian (mm/rad), one row per reachable wall."""
     rows = WallRows.of(chain) if rows is None else rows
+    if has_profile(chain):  # h(x_k(α)): model/energy_profile.py
+        return profile_walls(chain, alpha, rows)
     _, y = node_positions(chain, alpha)
     g = rows.side * (rows.limit - y[rows.node])
     jac = -rows.side[:, None] * rows.mask(chain) * (chain.link_length * np.cos(alpha))[None, :]
@@ -214,6 +222,9 @@ def lagrangian_hessian(
     diag = np.zeros(chain.links)
     if eq_multiplier.size:
         diag += float(eq_multiplier[0]) * a_sin
+    if has_profile(chain):  # the walls' Hessians are not diagonal: model/energy_profile.py
+        return energy_hessian(chain, alpha) + np.diag(diag) \
+            - profile_wall_hessian(chain, alpha, wall_multiplier, rows)
     diag -= ((wall_multiplier * rows.side) @ rows.mask(chain)) * a_sin
     return energy_hessian(chain, alpha) + np.diag(diag)
 
@@ -225,6 +236,12 @@ def _start(chain: Chain) -> np.ndarray:
     """The unconstrained arc clipped to the walls, or the arc scaled down until it fits."""
     u = np.clip(heights(chain, chain.rest_alpha), chain.lower, chain.upper)
     alpha = alpha_from_heights(chain, u, chain.rest_alpha)
+    for _ in range(5 if has_profile(chain) and alpha is not None else 0):
+        at = walls_at(chain, alpha)  # a profile: clip again at the nodes' new x
+        u = np.clip(heights(chain, alpha), at.lower, at.upper)
+        alpha = alpha_from_heights(chain, u, alpha)
+        if alpha is None:
+            break
     if alpha is not None:
         return alpha
     for scale in 0.5 ** np.arange(1, 60):  # pragma: no cover - clipping always fits so far

@@ -52,6 +52,12 @@ judge step holds a node in contact by the wall's spring instead of on it.
    is an a-posteriori estimate under linear contraction, not a proof: it is
    what turns "α stopped moving" into "F is within τ".
 
+With a wall profile y = h(x) (:mod:`lcpbench.model.profile`) the checks are
+those of the exact profile problem: gaps h(x_k) − y_k at the nodes' x,
+torques with the normal reactions μ (h', −1) (their horizontal parts taken
+by the fixed left pin), and a judge step with the answer's reactions as its
+lagged multipliers.
+
 The contact set reported with a result counts nodes whose reaction exceeds
 ε_R (so no 5e-10 N "contacts"). Every threshold is in :data:`THRESHOLDS` and
 docs/solvers.md.
@@ -69,6 +75,7 @@ from ..linalg import banded_matvec, sub_bands
 from ..problems.scenes import Chain
 from .chain import heights
 from .elastic import compliances
+from .profile import has_profile, profile_step, walls_at
 from .step import ContactStep, assemble_step
 
 EPS = np.finfo(float).eps
@@ -269,13 +276,21 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
     return None
 
 
-def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0) -> JudgeStep | None:
+def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0,
+               forces: tuple[np.ndarray, np.ndarray] | None = None) -> JudgeStep | None:
     """One more contact step at ``alpha``, solved by the judge (None if it cannot).
 
     It starts from the answer's contact set: the nodes whose gap costs less
-    than ``pull`` of force to close.
+    than ``pull`` of force to close. With a wall profile the step is the
+    profile step (:func:`lcpbench.model.profile.profile_step`) with the
+    answer's reactions ``forces`` (upper, lower) as its lagged multipliers.
     """
-    step = assemble_step(chain, alpha)
+    if has_profile(chain):
+        n = chain.free_nodes.size
+        up_lo = forces if forces is not None else (np.zeros(n), np.zeros(n))
+        step, chain = profile_step(chain, alpha, *up_lo)
+    else:
+        step = assemble_step(chain, alpha)
     touch = np.maximum(pull / step.bands[0], 1e3 * EPS * chain.length)
     on_upper, on_lower = step.upper - step.origin <= touch, step.origin - step.lower <= touch
     # R = K g + z of an answer is exact to the factored gradient's round-off on a wall
@@ -285,6 +300,11 @@ def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0) -> JudgeSt
                     + np.abs(step.linear))
     noise = ROUNDOFF_ULPS * EPS * size
     up, lo = on_upper.copy(), on_lower.copy()  # a reaction off the wall is not contact
+    if has_profile(chain) and forces is not None:
+        # the answer sits on the walls at the x of its last step, h'·Δx from the exact
+        # wall: its nodes that carry force start on the wall too (else dozens of rounds)
+        up |= (forces[0] > pull) & np.isfinite(step.upper)
+        lo |= (forces[1] > pull) & np.isfinite(step.lower)
     up &= ~lo | (step.upper - step.origin <= step.origin - step.lower)  # the nearer wall
     lo &= ~up
     found = _pivot_step(step, up, lo, pull)
@@ -332,7 +352,8 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
         return verdict
     L = chain.length
     fails: list[str] = []
-    js = judge_step(chain, alpha, pull=eps_R)
+    chain = walls_at(chain, alpha)  # a wall profile: its rows at the nodes' x (exact gaps)
+    js = judge_step(chain, alpha, pull=eps_R, forces=(forces_upper, forces_lower))
     if js is not None:  # values within round-off are zero, not reactions
         forces_upper = np.where(np.abs(forces_upper) <= js.noise, 0.0, forces_upper)
         forces_lower = np.where(np.abs(forces_lower) <= js.noise, 0.0, forces_lower)

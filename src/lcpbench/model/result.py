@@ -11,6 +11,7 @@ from .chain import joint_angles, node_positions, torque_residual
 from .driver import DriverOutput, StepRecord
 from .elastic import compliances, wall_pressure
 from .judge import Judgement, judge
+from .profile import has_profile, joint_moments_xy, profile_gaps, wall_forces_xy
 
 
 @dataclass
@@ -52,10 +53,15 @@ def certify(chain: Chain, alpha: np.ndarray, upper: np.ndarray, lower: np.ndarra
     """The certificate of link angles ``alpha`` with wall reactions ``upper``, ``lower`` (N)."""
     x, y = node_positions(chain, alpha)
     yf = y[chain.free_nodes]
+    profile = has_profile(chain)
     gaps = [chain.wall - yf] if np.isfinite(chain.wall) else []
+    if profile:  # exact gaps h(x_k) − y_k at the nodes' x
+        g_up, g_lo = profile_gaps(chain, alpha)
+        gaps = [g_up] if g_lo is None else [g_up, g_lo]
     forces = [upper]
     if chain.channel:
-        gaps.append(yf + chain.wall)
+        if not profile:
+            gaps.append(yf + chain.wall)
         forces.append(lower)
     gap = np.concatenate(gaps) if gaps else np.array([np.inf])
     force = np.concatenate(forces)
@@ -66,7 +72,12 @@ def certify(chain: Chain, alpha: np.ndarray, upper: np.ndarray, lower: np.ndarra
         gap = gap + comp_ * np.maximum(force, 0.0)
     comp = float(np.max(np.abs(gap * force), initial=0.0)) if gaps else 0.0
     closure = abs(float(y[-1])) if chain.free_nodes[-1] < chain.links else 0.0
-    res = torque_residual(chain, alpha, lower - upper)
+    if profile:  # the reactions are normal to the wall: μ (h', −1), ν (−l', 1)
+        fx, fy = wall_forces_xy(chain, alpha, upper, lower)
+        res = chain.joint_stiffness * (joint_angles(chain, alpha) - chain.rest_joint) \
+            - joint_moments_xy(chain, alpha, fx, fy)
+    else:
+        res = torque_residual(chain, alpha, lower - upper)
     spring = chain.joint_stiffness * np.abs(joint_angles(chain, alpha) - chain.rest_joint)
     worst = float(np.max(np.abs(res), initial=0.0))
     # over the largest spring torque, but never less than the chain's own scale EI/ℓ
@@ -224,6 +235,11 @@ class ContactResult:
             self.scene, type) else {}
         if scene.get("wall_stiffness", 0.0) == np.inf:  # rigid: the key of old outputs
             scene.pop("wall_stiffness")
+        for key in ("wall_profile", "lower_profile"):  # flat walls: the JSON as before
+            if key in scene and scene[key] is None:
+                del scene[key]
+            elif key in scene:  # a WallProfile: its name and x range
+                scene[key] = getattr(self.scene, key).to_dict()
         out = {
             "scene": {**scene, "links": self.links},
             "total_force": self.total_force,
@@ -264,6 +280,9 @@ def build_result(scene, chain: Chain, out: DriverOutput, **how) -> ContactResult
     """The result of a driver run, judged by :func:`lcpbench.model.judge.judge`."""
     x, y = node_positions(chain, out.alpha)
     yf = y[chain.free_nodes]
+    gaps, gaps_lower = chain.wall - yf, (yf + chain.wall if chain.channel else None)
+    if has_profile(chain):
+        gaps, gaps_lower = profile_gaps(chain, out.alpha)
     verdict = judge(chain, out.alpha, out.forces_upper, out.forces_lower, tol=how["tol"],
                     driver_converged=out.converged, driver_reason=out.reason,
                     step_statuses=[s.status for s in out.steps],
@@ -281,9 +300,9 @@ def build_result(scene, chain: Chain, out: DriverOutput, **how) -> ContactResult
         x=x,
         y=y,
         alpha=out.alpha,
-        gaps=chain.wall - yf,
+        gaps=gaps,
         forces=out.forces_upper,
-        gaps_lower=yf + chain.wall if chain.channel else None,
+        gaps_lower=gaps_lower,
         forces_lower=out.forces_lower if chain.channel else None,
         total_force=float(out.forces_upper.sum()),
         outer_iterations=len(out.steps),

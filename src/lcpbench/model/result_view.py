@@ -115,11 +115,24 @@ def _scene_line(res: ContactResult) -> str:
     names = {"theta": ("θ", "°"), "height": ("h", " mm"), "length": ("ℓ", " mm"),
              "EI": ("EI", " N·mm²"), "weight": ("w", " N/mm"), "load": ("q", " N/mm"),
              "wall_stiffness": ("k", " N/mm per mm")}
-    parts = [f"{sym} = {getattr(s, k):g}{unit}" for k, (sym, unit) in names.items()
-             if hasattr(s, k) and not (k == "wall_stiffness" and getattr(s, k) == np.inf)]
-    parts.insert(2 if hasattr(s, "theta") else 1, f"N = {res.links}")
+    profile = getattr(s, "wall_profile", None)
+    if hasattr(s, "sections"):  # a row of sections: θ:ℓ[:EI:w] each, not one θ
+        from ..problems.sections import sections_text
+
+        parts = [f"sections {sections_text(s)} (θ:ℓ[:EI:w])", f"N = {res.links}",
+                 f"h = {s.height:g} mm", f"ℓ = {s.length:g} mm"]
+        if s.gravity == "+y":
+            parts.append("weight toward the upper wall")
+    else:
+        parts = [f"{sym} = {getattr(s, k):g}{unit}" for k, (sym, unit) in names.items()
+                 if hasattr(s, k)
+                 and not (k == "wall_stiffness" and getattr(s, k) == np.inf)]
+        parts.insert(2 if hasattr(s, "theta") else 1, f"N = {res.links}")
+        if profile is not None:  # h is not used: the wall is y = h(x)
+            parts = [p for p in parts if not p.startswith("h = ")]
+            parts.append(f"wall profile {profile.name}")
     if getattr(s, "channel", False):
-        parts.append("channel (walls at ±h)")
+        parts.append("channel (walls at ±h)" if profile is None else "channel")
     return f"{type(s).__name__}: " + ", ".join(parts)
 
 

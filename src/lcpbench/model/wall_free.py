@@ -20,6 +20,7 @@ from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from .chain import heights
 from .driver import DriverOutput, DriverStart, run_driver
+from .profile import walls_at
 from .step import assemble_step
 
 #: Skip the wall-free search when the arc crosses a wall by more than this many
@@ -75,11 +76,13 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
         return DriverOutput(chain.rest_alpha.copy(), np.zeros(n), np.zeros(n), True,
                             "no contact: the unconstrained arc clears every wall and there "
                             "is no load")
-    free = replace(chain, upper=np.full(n, np.inf), lower=np.full(n, -np.inf))
+    free = replace(chain, upper=np.full(n, np.inf), lower=np.full(n, -np.inf),
+                   upper_profile=None, lower_profile=None)
     if start is not None:  # a neighbour's shape (its contact set means nothing here)
         start = DriverStart(start.alpha, None)
     out = run_driver(free, free_step, tol=tol, max_outer=max_outer, start=start)
-    if not (out.converged and wall_overlap(chain, heights(chain, out.alpha)) < 0):
+    if not (out.converged and wall_overlap(walls_at(chain, out.alpha),
+                                           heights(chain, out.alpha)) < 0):
         return None
     out.reason = ("no contact: the equilibrium without walls clears every wall (found by "
                   "banded solves, no LCP)")

@@ -158,15 +158,17 @@ def check_scene(scene) -> object:
     Raises
     ------
     ProblemError
-        ``"scene must be an ActuatorScene or CantileverScene, got dict"``
+        ``"scene must be an ActuatorScene, SectionedScene or CantileverScene, got dict"``
         for None, a dict, a string, a class instead of an instance, or
         anything else.
     """
     from .scenes import ActuatorScene, CantileverScene  # scenes import this module
+    from .sections import SectionedScene
 
-    if isinstance(scene, (ActuatorScene, CantileverScene)):
+    if isinstance(scene, (ActuatorScene, CantileverScene, SectionedScene)):
         return scene
     kind = "None" if scene is None else type(scene).__name__
     if isinstance(scene, type):
         kind = f"the class {scene.__name__} (an instance is needed)"
-    raise ProblemError(f"scene must be an ActuatorScene or CantileverScene, got {kind}")
+    raise ProblemError(f"scene must be an ActuatorScene, SectionedScene or CantileverScene, "
+                       f"got {kind}")

@@ -25,6 +25,7 @@ import numpy as np
 
 from ..errors import ProblemError
 from .checks import check_flag, check_number
+from .walls import WallProfile
 
 MIN_LINKS = 4
 MAX_LINKS = 100_000
@@ -92,6 +93,11 @@ class Chain:
         Elastic walls: the spring stiffness k_i (N/mm) of the wall at each free
         node (the Winkler foundation's k times the node's share of wall
         length, :func:`wall_share`); None, or +inf entries, for a rigid wall.
+    upper_profile, lower_profile : WallProfile or None
+        Walls of any profile y = h(x) (:mod:`lcpbench.problems.walls`). When
+        given, ``upper``/``lower`` hold h at the nodes' x of ``rest_alpha``
+        (finite on the rows that can reach the wall); the model evaluates
+        h(x) at the current configuration (:mod:`lcpbench.model.profile`).
     """
 
     links: int
@@ -113,6 +119,8 @@ class Chain:
     # length; None (or +inf entries) = a rigid wall. lcpbench.model.elastic.
     upper_stiffness: np.ndarray | None = None
     lower_stiffness: np.ndarray | None = None
+    upper_profile: WallProfile | None = None
+    lower_profile: WallProfile | None = None
 
     @property
     def nodal_load(self) -> np.ndarray:
@@ -195,6 +203,15 @@ class ActuatorScene:
         or ``inf`` (default): rigid walls. An elastic wall (tissue) yields: its
         reaction at a node is R_i = k · share_i · indentation (issue 17;
         :mod:`lcpbench.model.elastic`).
+    wall_profile : WallProfile or None
+        An upper wall of any profile y = h(x) (mm; :mod:`lcpbench.problems.walls`)
+        instead of the flat wall at +h; ``height`` is then not used. It must
+        cover the chain's x range (0 to ℓ; below 0 too for θ > 180°) and stay
+        above the pin line y = 0 there.
+    lower_profile : WallProfile or None
+        With ``channel=True`` and a ``wall_profile``: the lower wall's profile
+        (below y = 0). Default: the mirror image y = −h(x) of the upper wall
+        (a symmetric narrowing).
 
     Raises
     ------
@@ -212,6 +229,8 @@ class ActuatorScene:
     weight: float = DEFAULT_WEIGHT
     channel: bool = False
     wall_stiffness: float = math.inf
+    wall_profile: WallProfile | None = None
+    lower_profile: WallProfile | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "wall_stiffness", wall_stiffness(self.wall_stiffness))
@@ -224,6 +243,43 @@ class ActuatorScene:
         object.__setattr__(self, "EI", _in("EI", self.EI, EI_RANGE, "N·mm²"))
         object.__setattr__(self, "weight", _in("weight", self.weight, WEIGHT_RANGE, "N/mm"))
         object.__setattr__(self, "channel", check_flag("channel", self.channel))
+        self._check_profiles()
+
+    def _check_profiles(self) -> None:
+        for name in ("wall_profile", "lower_profile"):
+            value = getattr(self, name)
+            if value is not None and not isinstance(value, WallProfile):
+                raise ProblemError(f"{name} must be a WallProfile (lcpbench.problems.walls) "
+                                   f"or None, got {type(value).__name__}")
+        if self.lower_profile is not None and not (self.channel and self.wall_profile):
+            raise ProblemError("lower_profile needs channel=True and a wall_profile")
+        if self.wall_profile is not None and math.isfinite(self.wall_stiffness):
+            raise ProblemError("wall_stiffness (an elastic wall) and wall_profile (a wall of "
+                               "any profile) cannot be combined yet: give one of them")
+        lo, hi = self.x_reach
+        if self.wall_profile is not None:
+            self.wall_profile.check_for(lo, hi, side="upper", parameter="wall_profile")
+        if self.lower_profile is not None:
+            self.lower_profile.check_for(lo, hi, side="lower", parameter="lower_profile")
+
+    @property
+    def profiles(self) -> tuple[WallProfile | None, WallProfile | None]:
+        """(upper, lower) wall profiles of the chain: the lower is the given one, the
+        mirror of the upper in a channel, or None."""
+        up = self.wall_profile
+        if up is None:
+            return None, None
+        if not self.channel:
+            return up, None
+        return up, (self.lower_profile if self.lower_profile is not None else up.mirrored())
+
+    @property
+    def x_reach(self) -> tuple[float, float]:
+        """The x range a node of the pinned chain can occupy here (mm): [0, ℓ], and
+        below 0 as far as the unconstrained arc reaches when θ > 180°."""
+        half = math.radians(self.theta) / 2
+        low = min(0.0, self.radius * (math.sin(half) - 1.0)) if half > math.pi / 2 else 0.0
+        return low, float(self.length)
 
     # -- geometry of the unconstrained arc (eq. 2) ---------------------------
     @property
@@ -251,9 +307,23 @@ class ActuatorScene:
         joints = np.column_stack([np.arange(n - 1), np.arange(1, n)])
         interior = np.arange(1, n)  # nodes 2..N
         s = interior * a
-        can = reachable(s, self.length, self.height, "pinned-pinned")
-        upper = np.where(can, self.height, np.inf)
-        lower = np.where(can, -self.height, -np.inf) if self.channel else np.full(n - 1, -np.inf)
+        prof_up, prof_lo = self.profiles
+        if prof_up is None:
+            can = reachable(s, self.length, self.height, "pinned-pinned")
+            upper = np.where(can, self.height, np.inf)
+            lower = np.where(can, -self.height, -np.inf) if self.channel else \
+                np.full(n - 1, -np.inf)
+        else:  # rows for the nodes that can reach the wall's lowest point; h at the arc's x
+            x = np.concatenate(([0.0], np.cumsum(a * np.cos(rest_alpha))))[interior]
+            # (in a channel, the same rows for both walls: the LCP form pairs them)
+            grid = np.linspace(*self.x_reach, 2001)
+            near = float(np.min(prof_up(grid)))
+            if prof_lo is not None:
+                near = min(near, float(np.min(-prof_lo(grid))))
+            can = reachable(s, self.length, near, "pinned-pinned")
+            upper = np.where(can, prof_up(x), np.inf)
+            lower = np.where(can, prof_lo(x), -np.inf) if prof_lo is not None else \
+                np.full(n - 1, -np.inf)
         share = wall_share(n, a, interior)
         return Chain(
             links=n,
@@ -273,6 +343,8 @@ class ActuatorScene:
             upper_stiffness=_node_stiffness(self.wall_stiffness, can, share),
             lower_stiffness=(_node_stiffness(self.wall_stiffness, can, share)
                              if self.channel else None),
+            upper_profile=prof_up,
+            lower_profile=prof_lo,
         )
 
 

@@ -1,0 +1,142 @@
+"""WallProfile: tables, functions, CSV files, and one clear error per bad input."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lcpbench.errors import ProblemError
+from lcpbench.problems.scenes import ActuatorScene
+from lcpbench.problems.walls import WallProfile, load_profile_csv
+
+ROOT = Path(__file__).resolve().parents[2]
+EXAMPLES = ROOT / "examples" / "profiles"
+
+
+def test_linear_table_interpolates_and_has_its_segment_slopes():
+    p = WallProfile.from_table([0, 10, 30], [3, 2, 4], "linear")
+    assert p(5.0) == pytest.approx(2.5)
+    assert p.slope(5.0) == pytest.approx(-0.1)
+    assert p.slope(20.0) == pytest.approx(0.1)
+    assert p(40.0) == pytest.approx(4.0) and p.slope(40.0) == 0.0  # continued flat
+
+
+@pytest.mark.parametrize("kind", ["pchip", "cubic"])
+def test_smooth_tables_reproduce_a_straight_line(kind):
+    x = np.linspace(0, 30, 7)
+    p = WallProfile.from_table(x, 2 + 0.05 * x, kind)
+    t = np.linspace(0, 30, 101)
+    np.testing.assert_allclose(p(t), 2 + 0.05 * t, atol=1e-12)
+    np.testing.assert_allclose(p.slope(t), 0.05, atol=1e-12)
+    np.testing.assert_allclose(p.curvature(t), 0.0, atol=1e-10)
+
+
+def test_function_slope_by_central_differences_matches_the_derivative():
+    p = WallProfile.from_function(lambda x: 3 - 0.8 * np.exp(-((x - 14) / 3) ** 2))
+    t = np.linspace(0, 30, 61)
+    exact = 0.8 * 2 * (t - 14) / 9 * np.exp(-((t - 14) / 3) ** 2)
+    np.testing.assert_allclose(p.slope(t), exact, atol=1e-9)
+
+
+def test_flat_and_mirror():
+    p = WallProfile.flat(3.0)
+    assert p(12.0) == 3.0 and p.slope(12.0) == 0.0
+    assert p.mirrored()(12.0) == -3.0
+
+
+@pytest.mark.parametrize("x, y, kind, match", [
+    ([0, 10, 30], [3, np.nan, 3], "pchip", "not finite"),
+    ([0, 10, np.inf], [3, 3, 3], "pchip", "not finite"),
+    ([0, 10, 10, 30], [3, 3, 3, 3], "pchip", "strictly increasing"),
+    ([0, 20, 10], [3, 3, 3], "linear", "strictly increasing"),
+    ([0], [3], "pchip", "at least 2 points"),
+    ([0, 30], [3, 3, 3], "pchip", "same length"),
+    ([0, 30], [3, 3], "spline", "kind must be"),
+])
+def test_bad_tables_give_one_problem_error(x, y, kind, match):
+    with pytest.raises(ProblemError, match=match):
+        WallProfile.from_table(x, y, kind)
+
+
+def test_a_profile_crossing_the_pin_line_is_refused():
+    with pytest.raises(ProblemError, match="wall_profile.*pin line"):
+        ActuatorScene(wall_profile=WallProfile.from_table([0, 30], [3, -1], "linear"))
+    with pytest.raises(ProblemError, match="wall_profile.*pin line"):
+        ActuatorScene(wall_profile=WallProfile.from_table([0, 15, 30], [3, 0, 3], "linear"))
+    with pytest.raises(ProblemError, match="lower_profile.*pin line"):
+        ActuatorScene(channel=True, wall_profile=WallProfile.flat(3.0),
+                      lower_profile=WallProfile.from_table([0, 30], [-1, 0.5], "linear"))
+
+
+def test_a_profile_must_cover_the_chain():
+    with pytest.raises(ProblemError, match="cover the chain's x range"):
+        ActuatorScene(wall_profile=WallProfile.from_table([0, 20], [3, 3]))
+    with pytest.raises(ProblemError, match="cover"):  # theta > 180: the arc reaches x < 0
+        ActuatorScene(theta=250, wall_profile=WallProfile.from_table([0, 30], [9, 9]))
+
+
+def test_scene_field_types():
+    with pytest.raises(ProblemError, match="wall_profile must be a WallProfile"):
+        ActuatorScene(wall_profile="stenosis.csv")
+    with pytest.raises(ProblemError, match="lower_profile needs channel"):
+        ActuatorScene(wall_profile=WallProfile.flat(3.0),
+                      lower_profile=WallProfile.flat(-3.0))
+
+
+def test_csv_loader(tmp_path):
+    p = load_profile_csv(EXAMPLES / "stenosis.csv")
+    assert p(14.0) == pytest.approx(2.2) and p(0.0) == pytest.approx(3.0, abs=1e-6)
+    f = tmp_path / "w.csv"
+    f.write_text("x,y\n# comment\n0,3\n\n30,4\n")
+    assert load_profile_csv(f, "linear")(15.0) == pytest.approx(3.5)
+
+
+@pytest.mark.parametrize("text, match", [
+    ("x,y\n0,3\n10,nan\n30,3\n", "not finite"),
+    ("x,y\n0,3\n10,inf\n30,3\n", "not finite"),
+    ("0,3\n10,3\n30,3\n", "header"),
+    ("x,y\n0,3\n", "at least 2 points"),
+    ("x,y\n0,3\n10,a\n", "not two numbers"),
+    ("x,y\n0,3,1\n30,3\n", "must be x,y"),
+    ("", "empty"),
+    ("x,y\n30,3\n0,3\n", "strictly increasing"),
+])
+def test_bad_csv_files(tmp_path, text, match):
+    f = tmp_path / "bad.csv"
+    f.write_text(text)
+    with pytest.raises(ProblemError, match=match):
+        load_profile_csv(f)
+
+
+def _cli(*args):
+    return subprocess.run([sys.executable, "-m", "lcpbench.cli", *args], capture_output=True,
+                          text=True, timeout=300)
+
+
+def test_cli_solves_a_profile_and_refuses_a_bad_file(tmp_path):
+    out = _cli("solve", "--links", "40", "--wall-profile", str(EXAMPLES / "stenosis.csv"))
+    assert out.returncode == 0, out.stderr
+    assert "wall profile stenosis.csv" in out.stdout
+    bad = tmp_path / "nan.csv"
+    bad.write_text("x,y\n0,3\n10,nan\n30,3\n")
+    out = _cli("solve", "--wall-profile", str(bad))
+    assert out.returncode == 2
+    assert out.stderr.count("\n") == 1 and "--wall-profile" in out.stderr
+    assert "Traceback" not in out.stderr
+    cross = tmp_path / "cross.csv"
+    cross.write_text("x,y\n0,3\n30,-1\n")
+    out = _cli("solve", "--wall-profile", str(cross))
+    assert out.returncode == 2 and "pin line" in out.stderr
+    out = _cli("solve", "--lower-profile", str(EXAMPLES / "ramp.csv"))
+    assert out.returncode == 2 and "--lower-profile needs" in out.stderr
+
+
+def test_flat_scenes_keep_their_store_key_and_json():
+    from lcpbench.bench.grid import scene_key
+
+    key = scene_key(ActuatorScene(theta=120, height=2.5, links=30))
+    assert "profile" not in key
+    with pytest.raises(ProblemError, match="wall_profile"):
+        scene_key(ActuatorScene(wall_profile=WallProfile.flat(3.0)))
