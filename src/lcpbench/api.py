@@ -66,6 +66,7 @@ def solve(
     scaled: bool = True,
     start: ContactResult | None = None,
     engine: str = "auto",
+    pressure_limit: float | None = None,
 ) -> ContactResult:
     """Find the constrained equilibrium of a scene.
 
@@ -103,6 +104,10 @@ def solve(
         it does not apply) or "numpy" (the readable reference). Both engines
         take the same path and give the same answer to round-off;
         ``result.extra["engine"]`` says which one ran.
+    pressure_limit : a safety threshold on the contact pressure per length (N/mm,
+        >= 0; None: none). The result reports ``pressure`` and ``indentation``
+        per node, and ``pressure_exceeded`` is True when the largest pressure
+        passes the limit (tissue walls, ``wall_stiffness``).
 
     Returns
     -------
@@ -120,6 +125,9 @@ def solve(
                                            and max_outer >= 1):
         raise ProblemError(f"max_outer must be an integer >= 1, got {max_outer!r}")
     engine = check_engine(engine)
+    if pressure_limit is not None:
+        pressure_limit = float(check_number("pressure_limit", pressure_limit, low=0.0,
+                                            high=1e12, unit="N/mm"))
     name, settings, why = _backend_of(solver, settings)
     step = make_step_solver(name, settings, scaled)  # validates them first
     if getattr(scene, "links", None) == "auto":
@@ -141,12 +149,14 @@ def solve(
     return finish(scene, chain, out, solver=name, method=method, tol=tol,
                   elapsed=time.perf_counter() - t0, settings=settings, engine=used,
                   compiled_judge=kernel, why=why,
-                  judge_args=None if args is None else chain_args(chain, args))
+                  judge_args=None if args is None else chain_args(chain, args),
+                  pressure_limit=pressure_limit)
 
 
 def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: float,
            settings, engine: str, compiled_judge: bool, why: str | None,
-           judge_args: tuple | None = None) -> ContactResult:
+           judge_args: tuple | None = None,
+           pressure_limit: float | None = None) -> ContactResult:
     """The judged result of a driver run (the end of :func:`solve`; also the batch's).
 
     Judged by the compiled judge (the same checks and verdicts as the numpy judge,
@@ -169,6 +179,7 @@ def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: 
     res.extra["settings"] = settings if isinstance(settings, str) else "custom"
     res.extra["engine"] = engine
     res.extra["judge"] = "compiled" if compiled_judge else "numpy"
+    res.pressure_limit = pressure_limit
     if why is not None:
         res.extra["auto"] = why
     return res

@@ -81,6 +81,7 @@ class Grid:
     weight : weights per length w (N/mm).
     length : section lengths ℓ (mm).
     channel : two walls (±h) instead of one.
+    wall_stiffness : Winkler stiffnesses k of the walls (N/mm per mm; inf: rigid).
     """
 
     theta: tuple[float, ...]
@@ -90,34 +91,62 @@ class Grid:
     weight: tuple[float, ...] = (DEFAULT_WEIGHT,)
     length: tuple[float, ...] = (DEFAULT_LENGTH,)
     channel: bool = False
+    wall_stiffness: tuple[float, ...] = (math.inf,)
 
     def __post_init__(self):
-        for name in ("theta", "height", "links", "EI", "weight", "length"):
+        for name in ("theta", "height", "links", "EI", "weight", "length", "wall_stiffness"):
             if len(getattr(self, name)) == 0:
                 raise ProblemError(f"the grid is empty: {name} has no values")
 
     def scenes(self) -> list[ActuatorScene]:
         """Every scene of the grid (validated), θ varying fastest."""
-        combos = itertools.product(self.links, self.length, self.EI, self.weight,
-                                   self.height, self.theta)
+        combos = itertools.product(self.wall_stiffness, self.links, self.length, self.EI,
+                                   self.weight, self.height, self.theta)
         return [ActuatorScene(theta=t, height=h, links=n, length=ell, EI=ei, weight=w,
-                              channel=self.channel)
-                for n, ell, ei, w, h, t in combos]
+                              channel=self.channel, wall_stiffness=k)
+                for k, n, ell, ei, w, h, t in combos]
 
     def __len__(self) -> int:
         return math.prod(len(getattr(self, k)) for k in
-                         ("theta", "height", "links", "EI", "weight", "length"))
+                         ("theta", "height", "links", "EI", "weight", "length",
+                          "wall_stiffness"))
 
 
 #: The paper's grid (Sec. IV, Fig. 8a): θ 10°–180° by 10°, h 2–7 mm by 1, N = 140.
 PAPER_GRID = Grid(theta=parse_range("10:180:10", "theta"), height=parse_range("2:7:1", "height"))
 
 
+#: The tissue grid (issue 17): the paper's heights (Sec. V-C) and pressures (0-25 psi
+#: in 2.5-psi steps, θ by actuator 1's calibration, eq. 40) against elastic walls
+#: from very soft to rigid, Winkler k in N/mm per mm of wall.
+TISSUE_HEIGHTS = (4.5, 5.5, 6.5)
+TISSUE_STIFFNESS = (0.01, 0.1, 1.0, math.inf)
+TISSUE_PRESSURES = tuple(round(2.5 * i * 6.894757293168361, 2) for i in range(1, 11))  # kPa
+
+
+def tissue_grid(stiffness: tuple[float, ...] = TISSUE_STIFFNESS,
+                heights: tuple[float, ...] = TISSUE_HEIGHTS, *, channel: bool = True,
+                links: int = DEFAULT_LINKS) -> Grid:
+    """The tissue grid: θ from the paper's pressures (actuator 1, eq. 40) × h × k.
+
+    The paper's fixture is a channel (walls at ±h); both walls get the same k.
+    """
+    from ..problems.calibrations import get_calibration
+
+    cal = get_calibration(1)
+    thetas = tuple(round(float(cal.theta(p)), 9) for p in TISSUE_PRESSURES)
+    return Grid(theta=thetas, height=tuple(heights), links=(links,), channel=channel,
+                wall_stiffness=tuple(stiffness))
+
+
 def scene_key(scene: ActuatorScene | SectionedScene) -> str:
     """A canonical text key of a scene (its parameters as sorted JSON).
 
     A :class:`SectionedScene` keys by its list of sections (a ``"sections"``
-    entry no single-section key has), so the two kinds never collide.
+    entry no single-section key has), so the two kinds never collide. A rigid
+    wall (``wall_stiffness`` inf, the default) is left out of the key, so the
+    keys of stores written before elastic walls existed still match; an elastic
+    one is in it, so each stiffness is a scene of its own.
     """
     d = asdict(scene)
     for k in ("wall_profile", "lower_profile"):  # flat walls: the key as before profiles
@@ -135,6 +164,9 @@ def scene_key(scene: ActuatorScene | SectionedScene) -> str:
         return json.dumps(d, sort_keys=True)
     for k in ("theta", "height", "length", "EI", "weight"):
         d[k] = float(repr_float(d[k]))
+    k = d.pop("wall_stiffness", math.inf)
+    if math.isfinite(k):
+        d["wall_stiffness"] = float(repr_float(k))
     return json.dumps(d, sort_keys=True)
 
 

@@ -287,7 +287,8 @@ def _cmap(n: int):
 
 #: the scene parameters of a line of the force figure, with their units
 _PARAMS = (("height", "h", "mm"), ("links", "N", ""), ("length", "ℓ", "mm"),
-           ("EI", "EI", "N·mm²"), ("weight", "w", "N/mm"), ("channel", "channel", ""))
+           ("EI", "EI", "N·mm²"), ("weight", "w", "N/mm"), ("channel", "channel", ""),
+           ("wall_stiffness", "k", "N/mm²"))
 
 
 def _param_text(name: str, value, digits: int = 6) -> str:
@@ -334,11 +335,14 @@ def force_lines(refs: dict) -> tuple[list[dict], dict]:
                                 if groups else []) if n not in varying}
     digits = {n: _digits(g["params"].get(n) for g in groups.values()) for n in varying}
     lines = []
-    for g in sorted(groups.values(), key=lambda g: [g["params"].get(n, 0) for n in names]):
+    for g in sorted(groups.values(),
+                    key=lambda g: [g["params"].get(n, float("inf")) for n in names]):
         pts = sorted(g["pts"])
         lines.append({"params": g["params"], "thetas": [p[0] for p in pts],
                       "forces": [p[1] for p in pts],
-                      "label": ", ".join(_param_text(n, g["params"][n], digits[n])
+                      # a rigid wall's key has no wall_stiffness (bench/grid.scene_key)
+                      "label": ", ".join(_param_text(n, g["params"].get(n, float("inf")),
+                                                     digits[n])
                                          for n in varying)
                       or "reference"})
     return lines, common

@@ -221,15 +221,32 @@ def build_report(store: Store, out: str | os.PathLike | None = None, *,
         plot_shapes(refs, out / "shapes.png")
         figures = ["work-precision.png", "force-vs-theta.png", "shapes.png"]
     profile_figures = _write_profiles(evaluated, out, plots and bool(runs))
+    tissue = _tissue_section(refs, out, plots and bool(runs))
     scope = (f"the {len(runs)} runs of the sweep that built it ({stored} in the store; "
              "`lcpbench report --all` reports them all)" if keys is not None
              else f"{len(runs)} runs")
     (out / "report.md").write_text(_markdown(store, runs, refs, evaluated, summary, h2,
                                              figures, time_limit, pairs, scope)
-                                   + profiles_section(profile_figures)
+                                   + profiles_section(profile_figures) + tissue
                                    + machine_section(store.sweeps(), runs))
     return {"summary": summary, "runs": len(runs), "refs": len(refs), "out": str(out),
             "continuation": pairs, "stored": stored}
+
+
+def _tissue_section(refs: dict, out: Path, plots: bool) -> str:
+    """Elastic walls (``--grid tissue``): force and contact pressure against input
+    pressure for each wall stiffness, from the references (bench/tissue_plot.py)."""
+    from .tissue_plot import plot_tissue, tissue_table
+
+    table = tissue_table(refs)
+    if not table:
+        return ""
+    text = ("\n## Elastic walls\n\nReference solves of the scenes with elastic (Winkler) "
+            "walls, per wall height and stiffness: the largest total force and contact "
+            "pressure per length over the input pressures.\n\n" + table)
+    if plots and plot_tissue(refs, out / "tissue.png"):
+        text += "\n![force and contact pressure against pressure](tissue.png)\n"
+    return text
 
 
 def _write_profiles(evaluated, out: Path, plots: bool) -> list[str]:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import inspect
+import math
 import sys
 
 from ..api import PAPER_TOL, solve
@@ -140,6 +141,37 @@ def add_profile_options(parser) -> None:
            "linear (piecewise linear: kinks), cubic (natural spline, C2)")
 
 
+def add_wall_options(parser) -> None:
+    """Add ``--wall-stiffness`` and ``--pressure-limit`` (elastic, tissue-like walls).
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The sub-command's parser (``solve``).
+    """
+    a = parser.add_argument
+    a("--wall-stiffness", type=float, default=math.inf, metavar="K",
+      help="Winkler stiffness of the walls, N/mm per mm of wall; 'inf' is a rigid wall "
+           "(default inf)")
+    a("--pressure-limit", type=float, default=None, metavar="NPMM",
+      help="safety threshold on the contact pressure per length, N/mm: the run says "
+           "when the largest pressure passes it")
+
+
+def wall_rows(result) -> list[tuple[str, str]]:
+    """The summary lines of an elastic wall and of a pressure limit."""
+    rows: list[tuple[str, str]] = []
+    if getattr(result.scene, "wall_stiffness", math.inf) < math.inf or \
+            result.pressure_limit is not None:
+        rows.append(("contact pressure", f"max {result.max_pressure:.4g} N/mm, max "
+                                         f"indentation {result.max_indentation:.4g} mm"))
+    if result.pressure_limit is not None:
+        word = "EXCEEDED" if result.pressure_exceeded else "below"
+        rows.append(("pressure limit", f"{word}: max pressure {result.max_pressure:.4g} "
+                                       f"N/mm, limit {result.pressure_limit:g} N/mm"))
+    return rows
+
+
 def add_tol_option(parser, what: str = "convergence threshold on max|d alpha|") -> None:
     """Add ``--tol RAD``, the driver's convergence threshold.
 
@@ -217,6 +249,9 @@ def _scene_as_given(args):
                                  or getattr(args, "lower_profile", None) is not None):
         raise ProblemError("--sections takes flat walls at +-height: drop --wall-profile and "
                            "--lower-profile (a wall profile is for one section)")
+    if sections is not None and getattr(args, "wall_stiffness", math.inf) != math.inf:
+        raise ProblemError("--wall-stiffness (elastic walls) is for one section: drop it or "
+                           "--sections")
     if sections is not None and sections.strip() != "anchoring":
         return _sectioned(args, sections)
     if getattr(args, "gravity", "away") != "away" and sections is None:
@@ -227,6 +262,8 @@ def _scene_as_given(args):
     links = DEFAULT_LINKS if args.links is None else args.links
     kw = {"height": args.height, "links": links, "length": args.length, "EI": args.EI,
           "weight": args.weight, "channel": args.channel, **_profiles(args)}
+    if getattr(args, "wall_stiffness", math.inf) != math.inf:
+        kw["wall_stiffness"] = args.wall_stiffness
     if sections is not None:  # the anchoring preset: theta as for one section
         if args.links == "auto":
             raise ProblemError("--links auto is for one section; give N (a multiple of 3) "

@@ -37,7 +37,9 @@ from ._scene_args import (
     add_section_options,
     add_solver_options,
     add_tol_option,
+    add_wall_options,
     scene_from,
+    wall_rows,
 )
 
 
@@ -68,6 +70,7 @@ def register(subparsers) -> None:
     add_json_option(s)
     s.add_argument("--plot", metavar="FILE.png",
                    help="draw the shape, walls and reactions (needs matplotlib)")
+    add_wall_options(s)
     s.set_defaults(func=cmd_solve)
 
     e = subparsers.add_parser(
@@ -156,14 +159,18 @@ def summary(result, extra=()) -> str:
         scene = (f"sections {sections_text(sc)} (theta:length[:EI:w]), h={sc.height:g} mm, "
                  f"N={result.links}, length={sc.length:g} mm, weight "
                  f"{'toward' if sc.gravity == '+y' else 'away from'} the upper wall"
-                 + (", channel" if sc.channel else ""))
+                 + (", channel" if sc.channel else "")
+                 + (f", wall k={sc.wall_stiffness:g} N/mm per mm"
+                    if getattr(sc, "wall_stiffness", np.inf) < np.inf else ""))
     else:
         wall = f"h={sc.height:g} mm"
         if getattr(sc, "wall_profile", None) is not None:
             wall = f"wall profile {sc.wall_profile.name}"
         scene = (f"theta={sc.theta:g} deg, {wall}, N={result.links}, "
                  f"length={sc.length:g} mm, EI={sc.EI:g} N*mm^2, w={sc.weight:g} N/mm"
-                 + (", channel" if sc.channel else ""))
+                 + (", channel" if sc.channel else "")
+                 + (f", wall k={sc.wall_stiffness:g} N/mm per mm"
+                    if getattr(sc, "wall_stiffness", np.inf) < np.inf else ""))
     rows = [
         ("scene", scene),
         ("converged", ("yes" if result.converged else "no") + f" ({result.reason})"),
@@ -176,6 +183,7 @@ def summary(result, extra=()) -> str:
             ("lower wall", f"{1e3 * lower:.6g} mN ({lower:.6g} N)"),
             ("lower contacts", node_ranges(contacts(result.forces_lower, free))),
         ]
+    rows += wall_rows(result)
     rows += [
         ("iterations", f"{result.outer_iterations} outer, {result.inner_iterations} inner "
                        f"({result.solver}, {result.method}, tol {result.tol:g} rad)"),
@@ -209,7 +217,8 @@ def cmd_solve(args) -> int:
         return 2
     scene = scene_from(args)
     result = solve(scene, solver=args.solver, tol=args.tol, method=args.method,
-                   settings=args.settings, scaled=not args.raw)
+                   settings=args.settings, scaled=not args.raw,
+                   pressure_limit=args.pressure_limit)
     plot_error = None
     if args.plot is not None:
         from ..bench.plot import plot_shape

@@ -2,7 +2,7 @@
 
 ::
 
-    lcpbench sweep [--grid paper|hard|anchoring] [--theta A:B:STEP] [--height A:B:STEP] ...
+    lcpbench sweep [--grid paper|hard|anchoring|tissue] [--wall-stiffness LIST] [--theta A:B:STEP] [--height A:B:STEP] ...
                    [--solvers A,B] [--settings P,Q] [--continuation [PREDICTOR]]
                    [--store PATH] [--out DIR] [--jobs K] [--time-limit S] [--repeat K]
     lcpbench report [--store PATH] [--out DIR] [--all] [--format F] [--table2-height MM] [--no-plots]
@@ -79,7 +79,7 @@ def register(subparsers) -> None:
                     "grid (all parameters but theta equal) in order of theta, each scene "
                     "started from its neighbours' answers; those runs are stored as driver "
                     "globalised+secant (or +previous), apart from the cold ones.")
-    sw.add_argument("--grid", choices=("paper", "hard", "anchoring"), default="paper",
+    sw.add_argument("--grid", choices=("paper", "hard", "anchoring", "tissue"), default="paper",
                     help="paper: the theta x height grid below (default); hard: the "
                          "hard-case suite (theta 170-180, h down to 0.02 l, N up to 2000, "
                          "grazing, no contact, heavy, EI 1-1000, channel); anchoring: the "
@@ -87,7 +87,13 @@ def register(subparsers) -> None:
                          "--length each, pinned at its two ends, in the channel of walls at "
                          "+-height) over theta x height (default theta 60:180:20, height "
                          "4.5,5.5,6.5, links 420 over the whole actuator, a multiple of 3; "
-                         "no baseline: the appendix's baseline models one section)")
+                         "no baseline: the appendix's baseline models one section); tissue: "
+                         "elastic walls, the paper's pressures (theta by actuator 1's "
+                         "calibration) x h 4.5,5.5,6.5 mm x wall stiffness 0.01,0.1,1,inf N/mm "
+                         "per mm, in the channel")
+    sw.add_argument("--wall-stiffness", default=None, metavar="LIST",
+                    help="Winkler stiffnesses of the walls, N/mm per mm of wall; inf is "
+                         "rigid (default inf; --grid tissue: 0.01,0.1,1,inf)")
     sw.add_argument("--theta", default=None, metavar="A:B:STEP",
                     help="bend angles, degrees: start:stop:step (stop included), a comma list "
                          "or one value; items may carry units: 90deg:180deg:30deg, 2.6rad "
@@ -249,19 +255,40 @@ def _positive_number(value, name) -> float:
     return value
 
 
+def _stiffness_list(text) -> tuple[float, ...] | None:
+    """``--wall-stiffness``: a comma list of Winkler k (N/mm per mm) or inf; checked."""
+    if text is None:
+        return None
+    from ..problems.scenes import wall_stiffness
+
+    try:
+        values = tuple(float(v) for v in str(text).split(",") if v.strip())
+    except ValueError:
+        raise ProblemError(f"wall-stiffness must be a comma list of numbers > 0 or inf "
+                           f"(N/mm per mm of wall), got {text!r}") from None
+    if not values:
+        raise ProblemError("wall-stiffness must list at least one stiffness")
+    return tuple(wall_stiffness(v) for v in values)
+
+
 def _sweep_scenes(args) -> list:
     """The scenes of ``--grid``, validated before anything runs."""
     from ..bench import grid as grids
     from ..bench.grid import Grid, hard_scenes, parse_range
 
+    stiffness = _stiffness_list(getattr(args, "wall_stiffness", None))
     if args.grid == "hard":
         given = [f"--{n}" for n in ("theta", "height", "EI", "weight", "length")
                  if getattr(args, n) is not None] + (["--channel"] if args.channel else [])
+        if stiffness is not None:
+            given.append("--wall-stiffness")
         if given or args.links is not None:
             raise ProblemError("--grid hard is a fixed list of scenes; it takes no "
                                f"{', '.join(given) or '--links'}")
         return hard_scenes()
     if args.grid == "anchoring":
+        if stiffness is not None:
+            raise ProblemError("--grid anchoring has rigid walls; it takes no --wall-stiffness")
         kw = {"theta": parse_range(_in_model_units(args.theta or grids.ANCHORING_THETA,
                                                    "theta"), "theta"),
               "height": parse_range(_in_model_units(args.height or grids.ANCHORING_HEIGHT,
@@ -273,12 +300,28 @@ def _sweep_scenes(args) -> list:
             if values is not None:
                 kw[name] = values
         return grids.anchoring_scenes(**kw)  # validates every scene before anything runs
+    if args.grid == "tissue":
+        from ..bench.grid import TISSUE_HEIGHTS, TISSUE_STIFFNESS, tissue_grid
+
+        given = [f"--{n}" for n in ("theta", "EI", "weight", "length")
+                 if getattr(args, n) is not None]
+        if given:
+            raise ProblemError("--grid tissue sets theta from the paper's pressures; it "
+                               f"takes no {', '.join(given)}")
+        heights = (parse_range(_in_model_units(args.height, "height"), "height")
+                   if args.height is not None else TISSUE_HEIGHTS)
+        links = parse_range(args.links or str(DEFAULT_LINKS), "links", integer=True)
+        tissue = [tissue_grid(stiffness or TISSUE_STIFFNESS, heights, links=int(n))
+                  for n in links]
+        return [sc for g in tissue for sc in g.scenes()]
     grid_kw = {"theta": parse_range(_in_model_units(args.theta or "10:180:10", "theta"),
                                     "theta"),
                "height": parse_range(_in_model_units(args.height or "2:7:1", "height"),
                                      "height"),
                "links": parse_range(args.links or str(DEFAULT_LINKS), "links", integer=True),
                "channel": args.channel}
+    if stiffness is not None:
+        grid_kw["wall_stiffness"] = stiffness
     for name in ("EI", "weight", "length"):
         values = _float_list(getattr(args, name), name)
         if values is not None:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..problems.scenes import Chain
+from .elastic import penalty
 
 
 def node_positions(chain: Chain, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -34,12 +35,16 @@ def energy(chain: Chain, alpha: np.ndarray) -> float:
     """Total potential energy (N·mm): springs ½Σk(φ−φ*)² minus the work of the loads.
 
     Each link load acts at the link centre, whose height is the mean of its
-    end-node heights.
+    end-node heights. Elastic walls add their springs' energy Σ ½ k_i δ_i²
+    (:func:`lcpbench.model.elastic.penalty`; 0 for rigid walls).
     """
     dphi = joint_angles(chain, alpha) - chain.rest_joint
     _, y = node_positions(chain, alpha)
     centre = 0.5 * (y[:-1] + y[1:])
-    return 0.5 * float(np.sum(chain.joint_stiffness * dphi**2)) - float(chain.link_load @ centre)
+    E = 0.5 * float(np.sum(chain.joint_stiffness * dphi**2)) - float(chain.link_load @ centre)
+    if chain.upper_stiffness is not None or chain.lower_stiffness is not None:
+        E += penalty(chain, y[chain.free_nodes])
+    return E
 
 
 def heights(chain: Chain, alpha: np.ndarray) -> np.ndarray:

@@ -59,11 +59,13 @@ def check_engine(engine) -> str:
 def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
     """Whether the kernel runs this solve: the default back-end, the globalised
     driver, and (given ``chain``) a chain of consecutive joints and free nodes,
-    with flat walls (not a wall profile)."""
+    with flat, rigid walls (not a wall profile, not an elastic wall)."""
     if backend not in (DEFAULT, "auto") or method != "globalised":
         return False
     if chain is None:
         return True
+    if chain.upper_stiffness is not None or chain.lower_stiffness is not None:
+        return False  # elastic walls: the numpy reference (model.elastic), not ported yet
     if chain.upper_profile is not None or chain.lower_profile is not None:
         return False  # walls of any profile: the numpy reference (model/profile_driver.py)
     left, right = chain.joint_links[:, 0], chain.joint_links[:, 1]
@@ -109,6 +111,9 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
         raise ProblemError("engine='compiled' does not run walls of any profile (wall_profile); "
                            "engine='auto' or 'numpy' runs them in the numpy reference")
     elif engine == "compiled":
+        if chain.upper_stiffness is not None or chain.lower_stiffness is not None:
+            raise ProblemError("engine='compiled' does not run elastic walls yet "
+                               "(wall_stiffness < inf); use engine='auto' or 'numpy'")
         raise ProblemError(f"engine='compiled' runs the default back-end ({DEFAULT}) with "
                            f"method='globalised'; got solver {backend!r}, method {method!r}")
     else:

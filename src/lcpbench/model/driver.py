@@ -34,6 +34,7 @@ from ..errors import ProblemError
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from .chain import alpha_from_heights, energy, heights
+from .elastic import penalty_gradient
 from .judge import split_reactions
 from .newton import newton_step
 from .step import ContactStep, assemble_step
@@ -197,7 +198,10 @@ def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int,
             return _step_failed(alpha, n, steps, sol, t_asm, E)
         dalpha = float(np.max(np.abs(step.predict_alpha(sol.u) - alpha), initial=0.0))
         d = sol.u - u
-        slope = float(step.gradient(u) @ d)
+        grad = step.gradient(u)
+        if step.elastic:  # the walls' springs are part of the energy searched on
+            grad += penalty_gradient(step, u)
+        slope = float(grad @ d)
         noise = 1e-12 * (abs(E) + float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6)
         t = 1.0
         while True:

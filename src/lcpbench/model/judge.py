@@ -29,6 +29,10 @@ contact (F = 0) is judged too. Lengths are measured in the section length ℓ.
    a node that carries a reaction touches its wall.
 5. **penetration**: min g ≥ −min(1e-6, NODE_SHARE · τ) · ℓ on the exact
    geometry.
+
+At an elastic wall (:mod:`lcpbench.model.elastic`) g is the compliant gap
+g + R/k in checks 4 and 5 (a node indents the wall by exactly R/k), and the
+judge step holds a node in contact by the wall's spring instead of on it.
 6. **closure, torque**: the exact-geometry certificate
    (:func:`lcpbench.model.result.certify`): the right pin on y = 0 to 1e-6 ℓ,
    the joint torques in balance to max(10 tol, 1e-6) of the spring torques.
@@ -70,6 +74,7 @@ from numpy.linalg import LinAlgError  # scipy.linalg's LinAlgError is this class
 from ..linalg import banded_matvec, solveh_banded, sub_bands
 from ..problems.scenes import Chain
 from .chain import heights
+from .elastic import compliances
 from .profile import has_profile, profile_step, walls_at
 from .step import ContactStep, assemble_step
 
@@ -190,6 +195,15 @@ def split_reactions(chain: Chain, net: np.ndarray, u: np.ndarray):
     return np.where(near_upper, net, 0.0), np.where(near_upper, 0.0, -net)
 
 
+def _springs(step: ContactStep) -> tuple[np.ndarray, np.ndarray]:
+    """The elastic walls' k_i (N/mm) per free node, 0 where a wall is rigid or absent."""
+    out = []
+    for k, wall in ((step.upper_stiffness, step.upper), (step.lower_stiffness, step.lower)):
+        k = np.full(step.size, np.inf) if k is None else np.asarray(k, float)
+        out.append(np.where(np.isfinite(k) & np.isfinite(wall), k, 0.0))
+    return out[0], out[1]
+
+
 def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
     """The step's exact solution by block principal pivoting from contact sets up/lo.
 
@@ -199,23 +213,33 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
     Nodes in ``up`` sit on the upper wall, in ``lo`` on the lower; the others
     are solved for (a banded solve, refined once in factored form). A wall
     that pulls by more than ``pull`` (N) releases its node; a node more than
-    pull / H_ii (mm) through a wall joins its set (the height error that costs
+    pull / H_ii (mm) through a wall joins its set (on an elastic wall the node is
+    not held on the wall but by its spring, and released when the spring pulls) (the height error that costs
     ``pull`` of force), or more than the round-off where that is larger, so
     that at large N rounding cannot make it cycle. The step's Hessian is positive definite,
     so the LCP has one solution; the round cap only guards against cycling.
     """
     up, lo = up.copy(), lo.copy()
     best, stall = step.size + 1, 0
+    k_up, k_lo = _springs(step)
     for rounds in range(1, PIVOT_ROUNDS + 2 * step.size + 1):
+        # a node on a rigid wall is held on it; on an elastic wall it stays free, held
+        # by the wall's spring k (u − h) (model.elastic): a banded solve all the same
+        soft_up, soft_lo = up & (k_up > 0), lo & (k_lo > 0)
+        spring = np.where(soft_up, k_up, 0.0) + np.where(soft_lo, k_lo, 0.0)
+        rest = np.where(soft_up, step.upper, np.where(soft_lo, step.lower, 0.0))
         u = step.origin.copy()
-        u[up] = step.upper[up]
-        u[lo] = step.lower[lo]
-        free = np.flatnonzero(~(up | lo))
+        hard_up, hard_lo = up & ~soft_up, lo & ~soft_lo
+        u[hard_up] = step.upper[hard_up]
+        u[hard_lo] = step.lower[hard_lo]
+        free = np.flatnonzero(~(hard_up | hard_lo))
         if free.size:
             try:
                 bands = sub_bands(step.bands, free)
+                bands[0] += spring[free]
                 for _ in range(2):  # solve, then refine with the factored gradient
-                    u[free] -= solveh_banded(bands, step.gradient(u)[free], lower=True,
+                    grad = step.gradient(u) + spring * (u - rest)
+                    u[free] -= solveh_banded(bands, grad[free], lower=True,
                                              check_finite=False)
             except (LinAlgError, ValueError):
                 return None
@@ -342,7 +366,9 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
         fails.append(f"last step: the contact step whose reactions are reported was "
                      f"{step_statuses[-1]} by lcpbench's residuals")
     u = heights(chain, alpha)
-    g_up, g_lo = chain.upper - u, u - chain.lower
+    c_up, c_lo = compliances(chain)  # elastic walls: the compliant gap g + R/k
+    g_up = chain.upper - u + c_up * np.maximum(forces_upper, 0.0)
+    g_lo = u - chain.lower + c_lo * np.maximum(forces_lower, 0.0)
     with np.errstate(invalid="ignore"):
         comp = max(float(np.max(np.minimum(forces_upper / F0, g_up / L), initial=0.0)),
                    float(np.max(np.minimum(forces_lower / F0, g_lo / L), initial=0.0)))

@@ -9,6 +9,7 @@ import numpy as np
 from ..problems.scenes import Chain
 from .chain import joint_angles, node_positions, torque_residual
 from .driver import DriverOutput, StepRecord
+from .elastic import compliances, wall_pressure
 from .judge import Judgement, judge
 from .profile import has_profile, joint_moments_xy, profile_gaps, wall_forces_xy
 
@@ -24,6 +25,7 @@ class Certificate:
     Attributes
     ----------
     min_gap : smallest distance of any node to a wall (mm); < 0 is penetration.
+        At an elastic wall the compliant gap g + R/k (0 for a node in contact).
     min_force : smallest reaction (N); < 0 would be a wall pulling.
     complementarity : largest |g_i R_i| over the nodes (N·mm).
     closure : |y| of the right pin, which must lie on y = 0 (mm); 0 for a free end.
@@ -63,6 +65,11 @@ def certify(chain: Chain, alpha: np.ndarray, upper: np.ndarray, lower: np.ndarra
         forces.append(lower)
     gap = np.concatenate(gaps) if gaps else np.array([np.inf])
     force = np.concatenate(forces)
+    if gaps and (chain.upper_stiffness is not None or chain.lower_stiffness is not None):
+        # elastic walls: the compliant gap g + R/k (model.elastic); the node indents by R/k
+        c_up, c_lo = compliances(chain)
+        comp_ = np.concatenate([c_up, c_lo] if chain.channel else [c_up])
+        gap = gap + comp_ * np.maximum(force, 0.0)
     comp = float(np.max(np.abs(gap * force), initial=0.0)) if gaps else 0.0
     closure = abs(float(y[-1])) if chain.free_nodes[-1] < chain.links else 0.0
     if profile:  # the reactions are normal to the wall: μ (h', −1), ν (−l', 1)
@@ -116,6 +123,13 @@ class ContactResult:
         step (N), for comparison only (None when no step was solved).
     judgement : the :class:`~lcpbench.model.judge.Judgement` behind ``converged``;
         ``force_error_bound`` is its bound on the relative error of F.
+    indentation : per free node, the depth (mm) by which it indents an elastic
+        wall (0 at a rigid wall); ``max_indentation`` its largest.
+    pressure : per free node, the contact pressure per length p = R / share (N/mm),
+        the reaction over the node's share of wall length; ``max_pressure`` its
+        largest (:func:`lcpbench.model.elastic.wall_pressure`).
+    pressure_limit, pressure_exceeded : the safety threshold asked for (N/mm, None:
+        none) and whether ``max_pressure`` passes it.
     solver, method, tol, time_s : how it was computed; wall time of the solve (s).
     """
 
@@ -144,6 +158,25 @@ class ContactResult:
     judgement: Judgement | None = None
     #: 0-based indices into ``x``, ``y`` of the nodes of ``forces`` and ``gaps``
     free_nodes: np.ndarray | None = None
+    indentation: np.ndarray | None = None
+    pressure: np.ndarray | None = None
+    pressure_limit: float | None = None
+
+    @property
+    def max_indentation(self) -> float:
+        """Largest indentation of an elastic wall (mm); 0 for rigid walls."""
+        return float(np.max(self.indentation, initial=0.0)) if self.indentation is not None \
+            else 0.0
+
+    @property
+    def max_pressure(self) -> float:
+        """Largest contact pressure per length (N/mm)."""
+        return float(np.max(self.pressure, initial=0.0)) if self.pressure is not None else 0.0
+
+    @property
+    def pressure_exceeded(self) -> bool:
+        """Whether ``max_pressure`` passes the safety threshold ``pressure_limit``."""
+        return self.pressure_limit is not None and self.max_pressure > self.pressure_limit
 
     @property
     def force_error_bound(self) -> float:
@@ -200,6 +233,8 @@ class ContactResult:
         """A JSON-ready summary (the fields of ``lcpbench solve --json``)."""
         scene = asdict(self.scene) if is_dataclass(self.scene) and not isinstance(
             self.scene, type) else {}
+        if scene.get("wall_stiffness", 0.0) == np.inf:  # rigid: the key of old outputs
+            scene.pop("wall_stiffness")
         for key in ("wall_profile", "lower_profile"):  # flat walls: the JSON as before
             if key in scene and scene[key] is None:
                 del scene[key]
@@ -226,7 +261,14 @@ class ContactResult:
             "force_error_bound": self.force_error_bound,
             "judgement": self.judgement.to_dict() if self.judgement else None,
             "multipliers": None if self.multipliers is None else self.multipliers.tolist(),
+            "max_indentation": self.max_indentation,
+            "max_pressure": self.max_pressure,
+            "pressure_limit": self.pressure_limit,
+            "pressure_exceeded": self.pressure_exceeded,
         }
+        if self.indentation is not None and self.pressure is not None:
+            out["indentation"] = self.indentation.tolist()
+            out["pressure"] = self.pressure.tolist()
         if self.forces_lower is not None and self.gaps_lower is not None:
             out["forces_lower"] = self.forces_lower.tolist()
             out["gaps_lower"] = self.gaps_lower.tolist()
@@ -253,6 +295,8 @@ def build_result(scene, chain: Chain, out: DriverOutput, *, judged_by=judge,
     if verdict.forces_upper is not None and verdict.forces_lower is not None:
         # R with its round-off set to zero (the certificate is of these)
         out.forces_upper, out.forces_lower = verdict.forces_upper, verdict.forces_lower
+    depth, pressure = wall_pressure(chain, yf, out.forces_upper,
+                                    out.forces_lower if chain.channel else None)
     return ContactResult(
         scene=scene,
         links=chain.links,
@@ -273,5 +317,7 @@ def build_result(scene, chain: Chain, out: DriverOutput, *, judged_by=judge,
         multipliers_lower=out.multipliers_lower if chain.channel else None,
         judgement=verdict,
         free_nodes=np.asarray(chain.free_nodes, dtype=int),
+        indentation=depth,
+        pressure=pressure,
         **how,
     )

@@ -38,6 +38,13 @@ LOWER_COLUMNS = {
 }
 
 
+#: extra columns of a scene with elastic walls
+ELASTIC_COLUMNS = {
+    "indentation": "depth the node indents an elastic wall (mm)",
+    "pressure": "contact pressure per length, R / share (N/mm)",
+}
+
+
 def free_node_indices(res: ContactResult) -> np.ndarray:
     """0-based indices (into ``res.x``, ``res.y``) of the nodes of ``res.forces``."""
     if res.free_nodes is not None:
@@ -62,6 +69,9 @@ def node_columns(res: ContactResult) -> dict[str, np.ndarray]:
     if res.forces_lower is not None and res.gaps_lower is not None:
         cols["gap_lower"] = np.asarray(res.gaps_lower, dtype=float).copy()
         cols["force_lower"] = np.asarray(res.forces_lower, dtype=float).copy()
+    if getattr(res.scene, "wall_stiffness", np.inf) < np.inf and res.pressure is not None:
+        cols.update({k: np.asarray(getattr(res, k), dtype=float).copy()
+                     for k in ELASTIC_COLUMNS})
     return cols
 
 
@@ -103,7 +113,8 @@ def _scene_line(res: ContactResult) -> str:
     if not is_dataclass(s):
         return f"{s!r}, N = {res.links}"
     names = {"theta": ("θ", "°"), "height": ("h", " mm"), "length": ("ℓ", " mm"),
-             "EI": ("EI", " N·mm²"), "weight": ("w", " N/mm"), "load": ("q", " N/mm")}
+             "EI": ("EI", " N·mm²"), "weight": ("w", " N/mm"), "load": ("q", " N/mm"),
+             "wall_stiffness": ("k", " N/mm per mm")}
     profile = getattr(s, "wall_profile", None)
     if hasattr(s, "sections"):  # a row of sections: θ:ℓ[:EI:w] each, not one θ
         from ..problems.sections import sections_text
@@ -114,7 +125,8 @@ def _scene_line(res: ContactResult) -> str:
             parts.append("weight toward the upper wall")
     else:
         parts = [f"{sym} = {getattr(s, k):g}{unit}" for k, (sym, unit) in names.items()
-                 if hasattr(s, k)]
+                 if hasattr(s, k)
+                 and not (k == "wall_stiffness" and getattr(s, k) == np.inf)]
         parts.insert(2 if hasattr(s, "theta") else 1, f"N = {res.links}")
         if profile is not None:  # h is not used: the wall is y = h(x)
             parts = [p for p in parts if not p.startswith("h = ")]
@@ -139,6 +151,13 @@ def summary_rows(res: ContactResult) -> list[tuple[str, str]]:
     if res.forces_lower is not None:
         lower = float(np.sum(res.forces_lower))
         rows.append(("lower wall ΣR", f"{1e3 * lower:.6g} mN"))
+    if getattr(res.scene, "wall_stiffness", np.inf) < np.inf or res.pressure_limit is not None:
+        rows.append(("contact pressure", f"max {res.max_pressure:.4g} N/mm, max indentation "
+                                         f"{res.max_indentation:.4g} mm"))
+    if res.pressure_limit is not None:
+        flag = "EXCEEDED" if res.pressure_exceeded else "below"
+        rows.append(("pressure limit", f"{flag}: max {res.max_pressure:.4g} N/mm vs limit "
+                                       f"{res.pressure_limit:g} N/mm"))
     rows.append(("force error bound", f"{res.force_error_bound:.2g} (relative to "
                                       "max(|F|, EI/ℓ²), lcpbench's judge)"))
     c = res.certificate
@@ -168,5 +187,5 @@ def summary_html(res: ContactResult) -> str:
             f"{body}</table>")
 
 
-__all__ = ["LOWER_COLUMNS", "NODE_COLUMNS", "free_node_indices", "node_columns",
+__all__ = ["ELASTIC_COLUMNS", "LOWER_COLUMNS", "NODE_COLUMNS", "free_node_indices", "node_columns",
            "node_table", "summary_html", "summary_rows", "summary_text"]

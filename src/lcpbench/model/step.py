@@ -76,6 +76,17 @@ class ContactStep:
     # The Newton step's curvature term T (lower banded, in ``bands`` already);
     # None for the paper's Gauss–Newton step (:mod:`lcpbench.model.newton`)
     geometric: np.ndarray | None = None
+    # Elastic walls: spring stiffness k_i (N/mm) of the upper / lower wall per free
+    # node, None = rigid (Chain.upper_stiffness). The step is then the QP with the
+    # walls' penalty, handed over in its own forms (:mod:`lcpbench.model.elastic`).
+    upper_stiffness: np.ndarray | None = None
+    lower_stiffness: np.ndarray | None = None
+
+    @property
+    def elastic(self) -> bool:
+        """Whether a wall of this step yields (a finite stiffness at some node)."""
+        return any(k is not None and bool(np.isfinite(k).any())
+                   for k in (self.upper_stiffness, self.lower_stiffness))
 
     @property
     def size(self) -> int:
@@ -317,4 +328,6 @@ def assemble_step(chain: Chain, alpha: np.ndarray) -> ContactStep:
         nodal_load=chain.nodal_load,
         length_scale=chain.length,
         force_scale=chain.force_scale,
+        upper_stiffness=chain.upper_stiffness,
+        lower_stiffness=chain.lower_stiffness,
     )

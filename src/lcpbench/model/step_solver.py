@@ -5,7 +5,8 @@ forces by EI/ℓ², DESIGN.md): heights ũ = u/ℓ, reactions R̃ = R/(EI/ℓ²)
 P̃ = P ℓ/F and c̃ = c/F. ``scaled=False`` hands over the raw step (mm, N).
 
 Residuals of a contact step (:func:`step_residuals`) are those of its LCP —
-gaps g and reactions R = K g + z, ``||min(g, R)||_inf``, the smallest g and R
+gaps g (at an elastic wall the compliant gap g + R/k, :mod:`lcpbench.model.elastic`)
+and reactions R = K g + z, ``||min(g, R)||_inf``, the smallest g and R
 and ``|gᵀR|`` — evaluated in O(N) from the gaps alone: the heights of nodes
 with no wall row are re-solved exactly (the LCP condenses them out), and R is
 minus the energy gradient, computed in factored form. Gaps are divided by ℓ
@@ -20,12 +21,15 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ..errors import ProblemError
 from ..linalg import banded_matvec, solveh_banded, sub_bands
 from ..solvers.base import BoxQP, QPWarm, Settings, Status, StepSolution
 from ..solvers.judge import accept_tol, verdict
 from ..solvers.lemke import too_large
 from ..solvers.registry import Backend, get_backend, get_settings
 from ..solvers.runner import fallback_message
+from .elastic import compliances
+from .elastic_step import run_elastic_step
 
 
 def step_scales(step, scaled: bool) -> tuple[float, float]:
@@ -36,7 +40,12 @@ def step_scales(step, scaled: bool) -> tuple[float, float]:
 
 
 def step_qp(step, scaled: bool = True) -> BoxQP:
-    """The step as a bound-constrained QP, in the units of ``step_scales``."""
+    """The step as a bound-constrained QP, in the units of ``step_scales``.
+
+    A step with elastic walls has its own forms (:mod:`lcpbench.model.elastic`):
+    handing its rigid QP over would drop the walls' springs, so it is refused.
+    """
+    _rigid_only(step, "step_qp")
     L, F = step_scales(step, scaled)
     n = step.size
     b = step.bands * (L / F)
@@ -55,6 +64,7 @@ def step_lcp(step, scaled: bool = True):
     gaps in units of ℓ and reactions in units of EI/ℓ² (the channel's second
     block swaps the two).
     """
+    _rigid_only(step, "step_lcp")
     form = step.lcp("contact")
     L, F = step_scales(step, scaled)
     m, k = form.n_gap, form.q.size
@@ -63,6 +73,12 @@ def step_lcp(step, scaled: bool = True):
     M = form.M * dz[None, :] / dw[:, None]
     q = form.q / dw
     return form, M, q, dz, dw
+
+
+def _rigid_only(step, what: str) -> None:
+    if getattr(step, "elastic", False):
+        raise ProblemError(f"{what}: this step has elastic walls; its forms are "
+                           "lcpbench.model.elastic.elastic_qp / force_lcp")
 
 
 def _complete_heights(step, u: np.ndarray) -> np.ndarray:
@@ -92,11 +108,13 @@ def step_residuals(step, u: np.ndarray) -> tuple[dict, np.ndarray]:
     R = -step.gradient(u)
     L, F = float(step.length_scale), float(step.force_scale)
     up, lo = np.isfinite(step.upper), np.isfinite(step.lower)
-    g_up = (step.upper[up] - u[up]) / L
-    g_lo = (u[lo] - step.lower[lo]) / L
     # one-sided rows: R itself (a negative R is a sign error); two-sided: split
     r_up = np.where(lo, np.maximum(R, 0.0), R)[up] / F
     r_lo = np.where(up, np.maximum(-R, 0.0), -R)[lo] / F
+    # the gaps; at an elastic wall the compliant gap g + R/k (model.elastic), 0 in contact
+    c_up, c_lo = compliances(step)
+    g_up = (step.upper[up] - u[up] + c_up[up] * np.maximum(r_up * F, 0.0)) / L
+    g_lo = (u[lo] - step.lower[lo] + c_lo[lo] * np.maximum(r_lo * F, 0.0)) / L
     nat = max(np.max(np.abs(np.minimum(g_up, r_up)), initial=0.0),
               np.max(np.abs(np.minimum(g_lo, r_lo)), initial=0.0))
     size = banded_matvec(np.abs(step.bands), np.abs(u)) + np.abs(step.linear)
@@ -146,6 +164,8 @@ def _judge(step, sol: StepSolution, s: Settings) -> None:
 def _run_step(backend: Backend, step, s: Settings, scaled: bool, warm) -> StepSolution:
     mod = backend.load()
     n = step.size
+    if step.elastic:
+        return run_elastic_step(backend, mod, step, s, scaled, warm)
     if hasattr(mod, "solve_step"):
         return mod.solve_step(step, s, warm, **backend.options)
     L, F = step_scales(step, scaled)

@@ -89,6 +89,10 @@ class Chain:
         Height of the upper wall above each free node (+inf: no wall row).
     lower : ndarray (len(free_nodes),)
         Height of the lower wall (−inf: no wall row).
+    upper_stiffness, lower_stiffness : ndarray (len(free_nodes),) or None
+        Elastic walls: the spring stiffness k_i (N/mm) of the wall at each free
+        node (the Winkler foundation's k times the node's share of wall
+        length, :func:`wall_share`); None, or +inf entries, for a rigid wall.
     upper_profile, lower_profile : WallProfile or None
         Walls of any profile y = h(x) (:mod:`lcpbench.problems.walls`). When
         given, ``upper``/``lower`` hold h at the nodes' x of ``rest_alpha``
@@ -110,6 +114,11 @@ class Chain:
     length: float = 1.0
     wall: float = np.inf  # height of the upper wall (mm), for the gaps of every node
     channel: bool = False  # a second wall at −wall
+    # Elastic walls (issue 17): per free node, the stiffness k_i (N/mm) of the
+    # upper / lower wall's spring, the Winkler k times the node's share of wall
+    # length; None (or +inf entries) = a rigid wall. lcpbench.model.elastic.
+    upper_stiffness: np.ndarray | None = None
+    lower_stiffness: np.ndarray | None = None
     upper_profile: WallProfile | None = None
     lower_profile: WallProfile | None = None
 
@@ -120,6 +129,37 @@ class Chain:
         f[:-1] += 0.5 * self.link_load
         f[1:] += 0.5 * self.link_load
         return f[self.free_nodes]
+
+
+STIFFNESS_RANGE = (1e-9, 1e12)  # N/mm per mm of wall (Winkler k); inf = rigid
+
+
+def wall_stiffness(value, name: str = "wall_stiffness") -> float:
+    """A Winkler stiffness k (N/mm per mm of wall): a number in [1e-9, 1e12], or
+    +inf (a rigid wall, the default); ProblemError otherwise (NaN, negative, 0)."""
+    if isinstance(value, (float, np.floating)) and math.isinf(value) and value > 0:
+        return math.inf
+    return check_number(name, value, low=STIFFNESS_RANGE[0], high=STIFFNESS_RANGE[1],
+                        unit="N/mm per mm of wall", alternative="inf (rigid)")
+
+
+def wall_share(links: int, link_length: float, free_nodes: np.ndarray) -> np.ndarray:
+    """Each free node's share of wall length (mm): half of each link it ends.
+
+    A node between two links stands for a, a free tip for a/2: the lengths
+    over which a Winkler wall's pressure p (N/mm) adds up to the node's
+    reaction R_i = p_i · share_i.
+    """
+    f = np.asarray(free_nodes)
+    ends = (f > 0).astype(float) + (f < links).astype(float)
+    return 0.5 * link_length * ends
+
+
+def _node_stiffness(k: float, rows: np.ndarray, share: np.ndarray) -> np.ndarray | None:
+    """k_i = Winkler k × share_i on the wall rows (inf elsewhere); None when rigid."""
+    if math.isinf(k):
+        return None
+    return np.where(rows, k * share, np.inf)
 
 
 def reachable(node_arclength: np.ndarray, length: float, height: float, ends: str) -> np.ndarray:
@@ -158,6 +198,11 @@ class ActuatorScene:
         from the wall (the direction of the reaction), as in eqs. (3), (8).
     channel : bool
         Two walls, at +h and −h (the paper's fixture); a real bool.
+    wall_stiffness : float
+        Winkler stiffness k of the walls (N/mm per mm of wall, in [1e-9, 1e12]),
+        or ``inf`` (default): rigid walls. An elastic wall (tissue) yields: its
+        reaction at a node is R_i = k · share_i · indentation (issue 17;
+        :mod:`lcpbench.model.elastic`).
     wall_profile : WallProfile or None
         An upper wall of any profile y = h(x) (mm; :mod:`lcpbench.problems.walls`)
         instead of the flat wall at +h; ``height`` is then not used. It must
@@ -183,10 +228,12 @@ class ActuatorScene:
     EI: float = DEFAULT_EI
     weight: float = DEFAULT_WEIGHT
     channel: bool = False
+    wall_stiffness: float = math.inf
     wall_profile: WallProfile | None = None
     lower_profile: WallProfile | None = None
 
     def __post_init__(self):
+        object.__setattr__(self, "wall_stiffness", wall_stiffness(self.wall_stiffness))
         theta = check_number("theta", self.theta, low=0.0, high=360.0, low_open=True,
                              high_open=True, unit="degrees")
         object.__setattr__(self, "theta", theta)
@@ -206,6 +253,9 @@ class ActuatorScene:
                                    f"or None, got {type(value).__name__}")
         if self.lower_profile is not None and not (self.channel and self.wall_profile):
             raise ProblemError("lower_profile needs channel=True and a wall_profile")
+        if self.wall_profile is not None and math.isfinite(self.wall_stiffness):
+            raise ProblemError("wall_stiffness (an elastic wall) and wall_profile (a wall of "
+                               "any profile) cannot be combined yet: give one of them")
         lo, hi = self.x_reach
         if self.wall_profile is not None:
             self.wall_profile.check_for(lo, hi, side="upper", parameter="wall_profile")
@@ -274,6 +324,7 @@ class ActuatorScene:
             upper = np.where(can, prof_up(x), np.inf)
             lower = np.where(can, prof_lo(x), -np.inf) if prof_lo is not None else \
                 np.full(n - 1, -np.inf)
+        share = wall_share(n, a, interior)
         return Chain(
             links=n,
             link_length=a,
@@ -289,6 +340,9 @@ class ActuatorScene:
             length=self.length,
             wall=self.height,
             channel=bool(self.channel),
+            upper_stiffness=_node_stiffness(self.wall_stiffness, can, share),
+            lower_stiffness=(_node_stiffness(self.wall_stiffness, can, share)
+                             if self.channel else None),
             upper_profile=prof_up,
             lower_profile=prof_lo,
         )
@@ -306,7 +360,7 @@ class CantileverScene:
         Distance h from the undeformed beam to the wall (mm), in [1e-6, 1e6].
     links : int
         As for :class:`ActuatorScene`, but not "auto".
-    length, EI :
+    length, EI, wall_stiffness :
         As for :class:`ActuatorScene`.
 
     Notes
@@ -322,8 +376,10 @@ class CantileverScene:
     links: int = DEFAULT_LINKS
     length: float = DEFAULT_LENGTH
     EI: float = DEFAULT_EI
+    wall_stiffness: float = math.inf
 
     def __post_init__(self):
+        object.__setattr__(self, "wall_stiffness", wall_stiffness(self.wall_stiffness))
         object.__setattr__(self, "load", _in("load", self.load, LOAD_RANGE, "N/mm"))
         object.__setattr__(self, "height", _in("height", self.height, HEIGHT_RANGE, "mm"))
         object.__setattr__(self, "links", _links(self.links, auto=False))
@@ -352,6 +408,7 @@ class CantileverScene:
             force_scale=self.EI / self.length**2,
             length=self.length,
             wall=self.height,
+            upper_stiffness=_node_stiffness(self.wall_stiffness, can, wall_share(n, a, free)),
         )
 
     # -- Euler–Bernoulli theory, eqs. (33)–(37) ------------------------------
