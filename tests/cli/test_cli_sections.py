@@ -10,6 +10,7 @@ import lcpbench
 from lcpbench.bench.grid import anchoring_scenes, scene_from_key, scene_key, scene_params
 from lcpbench.bench.rows import scene_columns
 from lcpbench.cli import main
+from lcpbench.problems.scenes import ActuatorScene
 from lcpbench.problems.sections import (
     Section,
     SectionedScene,
@@ -92,7 +93,7 @@ def test_sweep_grid_anchoring_runs_into_the_store(tmp_path, capsys):
 
     store = tmp_path / "s.sqlite"
     code = main(["sweep", "--grid", "anchoring", "--theta", "150", "--height", "5.5",
-                 "--links", "60", "--solvers", "active-set", "--store", str(store),
+                 "--links", "60", "--sections-count", "3", "--solvers", "active-set", "--store", str(store),
                  "--no-report", "--quiet", "--jobs", "1"])
     assert code == 0, capsys.readouterr().err
     with Store(store, create=False) as s:
@@ -115,3 +116,46 @@ def test_sweep_grid_anchoring_bad_input(args, needle, tmp_path, capsys):
                  "--quiet"])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and needle in err[-1] and len(err) == 1, err
+
+
+def test_anchoring_grid_default_is_sections_by_height_by_pressure():
+    """The default --grid anchoring: 1 and 3 sections x 3 heights x the paper's pressures,
+    theta from actuator 1's calibration (eq. 40), the middle section toward the upper wall."""
+    from lcpbench.bench.grid import TISSUE_PRESSURES
+    from lcpbench.cli import build_parser
+    from lcpbench.cli.sweep import _sweep_scenes
+    from lcpbench.problems.calibrations import get_calibration
+
+    args = build_parser().parse_args(["sweep", "--grid", "anchoring"])
+    scenes = _sweep_scenes(args)
+    assert len(scenes) == 2 * 3 * len(TISSUE_PRESSURES)
+    assert {len(s.sections) for s in scenes} == {1, 3}
+    assert len({scene_key(s) for s in scenes}) == len(scenes)
+    cal = get_calibration(1)
+    for s in scenes:
+        middle = s.sections[len(s.sections) // 2]
+        assert middle.theta > 0 and s.channel
+        assert any(abs(middle.theta - cal.theta(p)) < 1e-8 for p in TISSUE_PRESSURES)
+        assert [sec.theta for sec in s.sections] == [
+            middle.theta * (-1) ** abs(k - len(s.sections) // 2) for k in range(len(s.sections))]
+
+
+def test_one_section_of_the_anchoring_grid_is_the_single_section_model_in_the_channel():
+    one = anchoring_actuator(120.0, 4.5, sections=1, links=60)
+    single = ActuatorScene(theta=120.0, height=4.5, links=60, channel=True)
+    a, b = lcpbench.solve(one), lcpbench.solve(single)
+    assert a.converged and b.converged and b.total_force > 0
+    assert a.total_force == pytest.approx(b.total_force, rel=1e-9)
+
+
+@pytest.mark.parametrize("args,needle", [
+    (["--grid", "anchoring", "--sections-count", "2"], "sections must be odd"),
+    (["--grid", "anchoring", "--theta", "150", "--pressure", "100"], "not both"),
+    (["--grid", "anchoring", "--pressure", "a,b"], "pressure must be"),
+    (["--pressure", "100"], "--pressure is for --grid anchoring"),
+    (["--grid", "tissue", "--sections-count", "3"], "--sections-count is for --grid anchoring"),
+])
+def test_anchoring_grid_axes_bad_input(args, needle, tmp_path, capsys):
+    code = main(["sweep", *args, "--store", str(tmp_path / "s.sqlite"), "--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and needle in err[-1], err

@@ -195,25 +195,42 @@ def scene_params(key: str) -> dict:
             "channel": scene.channel, "sections": len(scene.sections)}
 
 
-#: ``lcpbench sweep --grid anchoring`` defaults: θ of every section (deg), h (mm), N
-ANCHORING_THETA = "60:180:20"
+#: ``lcpbench sweep --grid anchoring`` defaults: numbers of alternating sections, h (mm),
+#: and the paper's pressures (kPa, θ by actuator 1's calibration, eq. 40); ``--theta``
+#: gives θ instead. N is 140 per section unless given.
+ANCHORING_SECTIONS = (1, 3)
 ANCHORING_HEIGHT = "4.5,5.5,6.5"
 ANCHORING_LINKS = 3 * DEFAULT_LINKS
 
 
-def anchoring_scenes(theta: tuple[float, ...], height: tuple[float, ...],
-                     links: tuple[int, ...] = (ANCHORING_LINKS,),
+def anchoring_scenes(theta: tuple[float, ...] | None, height: tuple[float, ...],
+                     links: tuple[int | None, ...] = (None,),
                      EI: tuple[float, ...] = (DEFAULT_EI,),
                      weight: tuple[float, ...] = (DEFAULT_WEIGHT,),
-                     length: tuple[float, ...] = (DEFAULT_LENGTH,)) -> list[SectionedScene]:
-    """The paper's 3-section anchoring actuator over every combination, θ fastest.
+                     length: tuple[float, ...] = (DEFAULT_LENGTH,), *,
+                     sections: tuple[int, ...] = (3,),
+                     pressure: tuple[float, ...] | None = None,
+                     actuator: int = 1) -> list[SectionedScene]:
+    """The anchoring actuator over sections × heights × pressures (or θ), θ fastest.
 
-    ``links`` is N over the whole actuator (a multiple of 3), ``length`` the
-    length of each section (:func:`~lcpbench.problems.sections.anchoring_actuator`).
+    ``sections``: numbers of alternating sections (odd; 3 is the paper's
+    actuator, 1 its single-section model in the same channel). ``pressure``
+    (kPa): θ from the calibration of ``actuator`` (eq. 40), instead of
+    ``theta``. ``links`` is N over the whole actuator (a multiple of the
+    number of sections; None: 140 per section), ``length`` the length of each
+    section (:func:`~lcpbench.problems.sections.anchoring_actuator`).
     """
-    combos = itertools.product(links, length, EI, weight, height, theta)
-    return [anchoring_actuator(t, h, links=n, length=ell, EI=ei, weight=w)
-            for n, ell, ei, w, h, t in combos]
+    if (theta is None) == (pressure is None):
+        raise ProblemError("the anchoring grid takes bend angles or pressures (one of them)")
+    if pressure is not None:
+        from ..problems.calibrations import get_calibration
+
+        cal = get_calibration(actuator)
+        theta = tuple(round(float(cal.theta(p)), 9) for p in pressure)
+    assert theta is not None
+    combos = itertools.product(sections, links, length, EI, weight, height, theta)
+    return [anchoring_actuator(t, h, links=n, length=ell, EI=ei, weight=w, sections=k)
+            for k, n, ell, ei, w, h, t in combos]
 
 
 def _grazing_height(theta: float, links: int) -> float:

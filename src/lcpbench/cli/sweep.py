@@ -30,6 +30,7 @@ from ._common import (
     worker_count,
 )
 from ._scene_args import DEFAULT_METHOD, add_scene_options, scene_from
+from ._sweep_scenes import _sweep_scenes  # noqa: F401  (export and tests use it from here)
 
 #: solves timed per run of the standard run (issue 16: one timing carried 2x noise)
 DEFAULT_REPEAT = 3
@@ -83,14 +84,23 @@ def register(subparsers) -> None:
                     help="paper: the theta x height grid below (default); hard: the "
                          "hard-case suite (theta 170-180, h down to 0.02 l, N up to 2000, "
                          "grazing, no contact, heavy, EI 1-1000, channel); anchoring: the "
-                         "paper's 3-section actuator (sections -theta, +theta, -theta of "
-                         "--length each, pinned at its two ends, in the channel of walls at "
-                         "+-height) over theta x height (default theta 60:180:20, height "
-                         "4.5,5.5,6.5, links 420 over the whole actuator, a multiple of 3; "
-                         "no baseline: the appendix's baseline models one section); tissue: "
+                         "anchoring actuator (alternating sections ..., -theta, +theta, -theta, "
+                         "... of --length each, pinned at its two ends, in the channel of walls "
+                         "at +-height) over --sections-count x height x --pressure (default "
+                         "1,3 sections x h 4.5,5.5,6.5 x the paper's 10 pressures; --theta "
+                         "instead of pressures; links 140 per section unless --links gives N "
+                         "over the whole actuator; no baseline: the appendix's baseline models one section); tissue: "
                          "elastic walls, the paper's pressures (theta by actuator 1's "
                          "calibration) x h 4.5,5.5,6.5 mm x wall stiffness 0.01,0.1,1,inf N/mm "
                          "per mm, in the channel")
+    sw.add_argument("--pressure", default=None, metavar="LIST",
+                    help="--grid anchoring: input pressures, kPa (A:B:STEP or a comma list), "
+                         "theta from actuator 1's calibration (eq. 40); default the paper's "
+                         "17.24-172.37 kPa in 10 steps unless --theta is given")
+    sw.add_argument("--sections-count", default=None, metavar="LIST",
+                    help="--grid anchoring: numbers of alternating sections, odd (default "
+                         "1,3: the paper's single-section model and its 3-section actuator, "
+                         "in the same channel)")
     sw.add_argument("--wall-stiffness", default=None, metavar="LIST",
                     help="Winkler stiffnesses of the walls, N/mm per mm of wall; inf is "
                          "rigid (default inf; --grid tissue: 0.01,0.1,1,inf)")
@@ -215,118 +225,10 @@ def register(subparsers) -> None:
 
 
 # -- sweep --------------------------------------------------------------------
-#: the unit table (cli/_units.py) of each sweep list that takes unit suffixes
-_RANGE_UNITS = {"theta": "angle", "height": "length", "length": "length",
-                "EI": "stiffness", "weight": "weight"}
-
-
-def _in_model_units(text: str | None, name: str) -> str | None:
-    """A range or list whose items may carry units (``2mm:7mm:1mm``, ``0.17rad,2.6rad``),
-    rewritten in the model's units for :func:`~lcpbench.bench.grid.parse_range`."""
-    import argparse
-    import re
-
-    from ._units import parse_quantity
-
-    if text is None or name not in _RANGE_UNITS:
-        return text
-    items = re.split(r"([:,])", str(text))
-    out = []
-    for item in items:
-        if item in (":", ",") or not item.strip() or not re.search(r"[^\d.eE+\-\s]", item):
-            out.append(item)  # separators, blanks and bare numbers: as they are
-            continue
-        try:
-            out.append(repr(float(parse_quantity(item, _RANGE_UNITS[name], name))))
-        except argparse.ArgumentTypeError as exc:
-            raise ProblemError(str(exc)) from None
-    return "".join(out)
-
-
-def _float_list(text, name) -> tuple | None:
-    from ..bench.grid import parse_range
-
-    return None if text is None else parse_range(_in_model_units(text, name), name)
-
-
 def _positive_number(value, name) -> float:
     if not (math.isfinite(value) and value > 0):
         raise ProblemError(f"{name} must be a number > 0, got {value:g}")
     return value
-
-
-def _stiffness_list(text) -> tuple[float, ...] | None:
-    """``--wall-stiffness``: a comma list of Winkler k (N/mm per mm) or inf; checked."""
-    if text is None:
-        return None
-    from ..problems.scenes import wall_stiffness
-
-    try:
-        values = tuple(float(v) for v in str(text).split(",") if v.strip())
-    except ValueError:
-        raise ProblemError(f"wall-stiffness must be a comma list of numbers > 0 or inf "
-                           f"(N/mm per mm of wall), got {text!r}") from None
-    if not values:
-        raise ProblemError("wall-stiffness must list at least one stiffness")
-    return tuple(wall_stiffness(v) for v in values)
-
-
-def _sweep_scenes(args) -> list:
-    """The scenes of ``--grid``, validated before anything runs."""
-    from ..bench import grid as grids
-    from ..bench.grid import Grid, hard_scenes, parse_range
-
-    stiffness = _stiffness_list(getattr(args, "wall_stiffness", None))
-    if args.grid == "hard":
-        given = [f"--{n}" for n in ("theta", "height", "EI", "weight", "length")
-                 if getattr(args, n) is not None] + (["--channel"] if args.channel else [])
-        if stiffness is not None:
-            given.append("--wall-stiffness")
-        if given or args.links is not None:
-            raise ProblemError("--grid hard is a fixed list of scenes; it takes no "
-                               f"{', '.join(given) or '--links'}")
-        return hard_scenes()
-    if args.grid == "anchoring":
-        if stiffness is not None:
-            raise ProblemError("--grid anchoring has rigid walls; it takes no --wall-stiffness")
-        kw = {"theta": parse_range(_in_model_units(args.theta or grids.ANCHORING_THETA,
-                                                   "theta"), "theta"),
-              "height": parse_range(_in_model_units(args.height or grids.ANCHORING_HEIGHT,
-                                                    "height"), "height"),
-              "links": parse_range(args.links or str(grids.ANCHORING_LINKS), "links",
-                                   integer=True)}
-        for name in ("EI", "weight", "length"):
-            values = _float_list(getattr(args, name), name)
-            if values is not None:
-                kw[name] = values
-        return grids.anchoring_scenes(**kw)  # validates every scene before anything runs
-    if args.grid == "tissue":
-        from ..bench.grid import TISSUE_HEIGHTS, TISSUE_STIFFNESS, tissue_grid
-
-        given = [f"--{n}" for n in ("theta", "EI", "weight", "length")
-                 if getattr(args, n) is not None]
-        if given:
-            raise ProblemError("--grid tissue sets theta from the paper's pressures; it "
-                               f"takes no {', '.join(given)}")
-        heights = (parse_range(_in_model_units(args.height, "height"), "height")
-                   if args.height is not None else TISSUE_HEIGHTS)
-        links = parse_range(args.links or str(DEFAULT_LINKS), "links", integer=True)
-        tissue = [tissue_grid(stiffness or TISSUE_STIFFNESS, heights, links=int(n))
-                  for n in links]
-        return [sc for g in tissue for sc in g.scenes()]
-    grid_kw = {"theta": parse_range(_in_model_units(args.theta or "10:180:10", "theta"),
-                                    "theta"),
-               "height": parse_range(_in_model_units(args.height or "2:7:1", "height"),
-                                     "height"),
-               "links": parse_range(args.links or str(DEFAULT_LINKS), "links", integer=True),
-               "channel": args.channel}
-    if stiffness is not None:
-        grid_kw["wall_stiffness"] = stiffness
-    for name in ("EI", "weight", "length"):
-        values = _float_list(getattr(args, name), name)
-        if values is not None:
-            grid_kw[name] = values
-    return Grid(**grid_kw).scenes()  # validates every scene before anything runs
 
 
 def _apply_preset(args) -> None:

@@ -388,7 +388,8 @@ def sections_text(scene: SectionedScene) -> str:
 
 def anchoring_actuator(theta: float = 150.0, height: float = 5.5, *, links: int | None = None,
                        length: float = DEFAULT_LENGTH, EI: float = DEFAULT_EI,
-                       weight: float = DEFAULT_WEIGHT, gravity: str = "-y") -> SectionedScene:
+                       weight: float = DEFAULT_WEIGHT, gravity: str = "-y",
+                       sections: int = 3) -> SectionedScene:
     """The paper's 3-section anchoring actuator in its two-wall fixture (Fig. 1b, 14).
 
     Three identical sections of length ℓ bending alternately: the middle one
@@ -407,13 +408,22 @@ def anchoring_actuator(theta: float = 150.0, height: float = 5.5, *, links: int 
         h, the distance of each wall from the pin line (mm): 4.5, 5.5 or 6.5 mm
         in the paper.
     links : int or None
-        N over the whole actuator, a multiple of 3 (None: 420, the paper's
-        140 per section).
+        N over the whole actuator, a multiple of ``sections`` (None: the
+        paper's 140 per section, 420 for three).
     length, EI, weight, gravity :
         As for :class:`Section` and :class:`SectionedScene`.
+    sections : int
+        How many alternating sections (odd, 1 to 15; default 3, the paper's):
+        the middle one bends toward the upper wall, its neighbours away, and so
+        on. One section is the paper's single-section model in the channel.
     """
     theta = check_number("theta", theta, low=0.0, high=360.0, low_open=True, high_open=True,
                          unit="degrees")
-    secs = tuple(Section(sign * theta, length, EI, weight) for sign in (-1.0, 1.0, -1.0))
+    count = int(check_number("sections", sections, low=1, high=15, integer=True))
+    if count % 2 == 0:
+        raise ProblemError(f"sections must be odd (a middle section toward the upper wall, "
+                           f"the others alternating), got {count}")
+    signs = [(-1.0) ** abs(k - count // 2) for k in range(count)]
+    secs = tuple(Section(sign * theta, length, EI, weight) for sign in signs)
     return SectionedScene(sections=secs, height=height, links=links, channel=True,
                           gravity=gravity)
