@@ -59,10 +59,11 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy.linalg import LinAlgError, solveh_banded
+from scipy.linalg import LinAlgError
 
-from ..linalg import banded_matvec, sub_bands
+from ..linalg import banded_matvec
 from ..problems.scenes import Chain
+from . import large_n
 from .chain import heights
 from .step import ContactStep, assemble_step
 
@@ -206,10 +207,8 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
         free = np.flatnonzero(~(up | lo))
         if free.size:
             try:
-                bands = sub_bands(step.bands, free)
                 for _ in range(2):  # solve, then refine with the factored gradient
-                    u[free] -= solveh_banded(bands, step.gradient(u)[free], lower=True,
-                                             check_finite=False)
+                    u[free] -= step.solve_on(free, step.gradient(u)[free])
             except (LinAlgError, ValueError):
                 return None
         net = -step.gradient(u)
@@ -218,6 +217,8 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
         # of S_i): a sign within that is undecided, not a reason to pivot
         roundoff = ROUNDOFF_ULPS * EPS * step.gradient_scale(u)
         size = banded_matvec(np.abs(step.bands), np.abs(u)) + np.abs(step.linear)
+        if step.factor is not None:  # increments (large N): R's terms are the gradient's
+            size = np.maximum(size, step.gradient_scale(u))
         slack = np.maximum(np.maximum(roundoff, pull), ROUNDOFF_ULPS * EPS * size)
         # a height error δ costs H_ii δ of force: ``pull`` in force is pull / H_ii in height
         reach = np.maximum(ROUNDOFF_ULPS * EPS * (np.abs(u) + step.length_scale),
@@ -252,11 +253,15 @@ def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0) -> JudgeSt
     than ``pull`` of force to close.
     """
     step = assemble_step(chain, alpha)
+    absolute = step.origin  # node heights at α
+    if large_n.applies(chain):  # in increments, on the tridiagonal factor
+        step = large_n.increment_step(step)
     touch = np.maximum(pull / step.bands[0], 1e3 * EPS * chain.length)
     on_upper, on_lower = step.upper - step.origin <= touch, step.origin - step.lower <= touch
     # R = K g + z of an answer is exact to the factored gradient's round-off on a wall
     # (g = 0), to that of rounded heights, a few ulps of S_i = (|K||g| + |z|)_i, off it
-    size = np.where(on_upper | on_lower, step.gradient_scale(step.origin),
+    size = np.where(on_upper | on_lower | (step.factor is not None),
+                    step.gradient_scale(step.origin),
                     banded_matvec(np.abs(step.bands), np.abs(step.origin))
                     + np.abs(step.linear))
     noise = ROUNDOFF_ULPS * EPS * size
@@ -267,7 +272,7 @@ def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0) -> JudgeSt
     if found is None:
         return None
     u, net, rounds, roundoff, worst, term_size = found
-    upper, lower = split_reactions(chain, net, u)
+    upper, lower = split_reactions(chain, net, u - step.origin + absolute)
     dalpha = float(np.max(np.abs(step.predict_alpha(u) - alpha), initial=0.0))
     return JudgeStep(upper, lower, rounds, dalpha, roundoff, worst, noise, term_size)
 

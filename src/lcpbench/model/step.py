@@ -25,12 +25,13 @@ multipliers are the reactions. It can also state itself as a standard LCP.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.linalg import solveh_banded
 
 from ..errors import ProblemError
-from ..linalg import banded_matvec
+from ..linalg import banded_matvec, sub_bands
 from ..problems.scenes import Chain
 
 
@@ -77,6 +78,9 @@ class ContactStep:
     # The Newton step's curvature term T (lower banded, in ``bands`` already);
     # None for the paper's Gauss–Newton step (:mod:`lcpbench.model.newton`)
     geometric: np.ndarray | None = None
+    # Face solves on the tridiagonal factor of H (large N, :mod:`lcpbench.model.large_n`:
+    # a :class:`lcpbench.linalg.saddle.TridiagonalFactor`); None: banded Cholesky of H
+    factor: Any = None
 
     @property
     def size(self) -> int:
@@ -164,7 +168,20 @@ class ContactStep:
         return H
 
     def unconstrained_minimiser(self) -> np.ndarray:
+        if self.factor is not None:
+            return self.factor.solve(-self.linear)
         return solveh_banded(self.bands, -self.linear, lower=True, check_finite=False)
+
+    def solve_on(self, idx: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        """H[idx, idx]⁻¹ rhs: the principal block of the nodes ``idx`` (sorted)."""
+        if self.factor is None:
+            return solveh_banded(sub_bands(self.bands, idx), rhs, lower=True,
+                                 check_finite=False)
+        fixed = np.ones(self.size, bool)
+        fixed[idx] = False
+        full = np.zeros(self.size)
+        full[idx] = rhs
+        return self.factor.face_solve(fixed, full)[idx]
 
     # -- back to the chain ----------------------------------------------------
     def predict_alpha(self, u: np.ndarray) -> np.ndarray:
