@@ -31,7 +31,9 @@ total = time.perf_counter() - t0
 rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # MiB (Linux: KiB)
 print(json.dumps({"N": N, "tol": tol, "driver_s": r.time_s, "total_s": total, "rss_mib": rss,
                   "force": r.total_force, "converged": r.converged, "reason": r.reason[:300],
-                  "engine": r.extra.get("engine", ""), "outer": r.iterations}))
+                  "engine": r.extra.get("engine", ""), "outer": r.outer_iterations,
+                  "force_error_bound": r.judgement.force_error_bound if r.judgement else None,
+                  "node_error_bound": r.judgement.node_error_bound if r.judgement else None}))
 """
 
 
@@ -58,12 +60,64 @@ def main(argv=None) -> int:
     ap.add_argument("--out", default="results/large-n")
     a = ap.parse_args(argv)
     load = os.getloadavg()
-    rows = [run_one(int(n), a.tol, a.timeout) for n in a.sizes.split(",")]
-    for r in rows:
-        print(json.dumps(r), flush=True)
+    rows = []
+    for n in a.sizes.split(","):
+        rows.append(run_one(int(n), a.tol, a.timeout))
+        print(json.dumps(rows[-1]), flush=True)
+    load_after = os.getloadavg()
     with open(a.out + ".json", "w") as fh:
-        json.dump({"load": load, "rows": rows}, fh, indent=1)
+        json.dump({"load": load, "load_after": load_after, "rows": rows}, fh, indent=1)
+    write_report(a.out, rows, a.tol, load, load_after)
     return 0
+
+
+def _slope(xs, ys):
+    import numpy as np
+
+    if len(xs) < 2:
+        return float("nan")
+    return float(np.polyfit(np.log(xs), np.log(ys), 1)[0])
+
+
+def write_report(out: str, rows: list[dict], tol: float, load, load_after) -> None:
+    ok = [r for r in rows if "error" not in r]
+    big = [r for r in ok if r["N"] >= 4000]
+    lines = [f"# Large N (issue 19, target 5): θ = 150°, h = 3 mm, tol = {tol:g} rad", "",
+             "`python benchmarks/large_n.py` (one subprocess per N, one BLAS thread; kernels "
+             "loaded before the clock). Load average before "
+             f"{load[0]:.2f}, after {load_after[0]:.2f} (2 shared cores).", "",
+             "| N | engine | driver (s) | solve + judge (s) | peak RSS (MiB) | F (N) | outer | "
+             "converged | judge |", "|---|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        if "error" in r:
+            lines.append(f"| {r['N']} | | | | | | | | {r['error']} |")
+            continue
+        eng = "compiled" if r["engine"] == "compiled" else "increments"
+        why = "" if r["converged"] else r["reason"].replace("|", "/")[:160]
+        lines.append(f"| {r['N']} | {eng} | {r['driver_s']:.3f} | {r['total_s']:.3f} | "
+                     f"{r['rss_mib']:.0f} | {r['force']:.10f} | {r['outer']} | "
+                     f"{r['converged']} | {why} |")
+    if len(big) >= 2:
+        lines += ["", f"Log-log slope of the driver time over the increment path "
+                      f"(N = {big[0]['N']}…{big[-1]['N']}): "
+                      f"{_slope([r['N'] for r in big], [r['driver_s'] for r in big]):.2f}; "
+                      f"of the peak RSS: {_slope([r['N'] for r in big], [r['rss_mib'] for r in big]):.2f}."]
+    with open(out + ".md", "w") as fh:
+        fh.write("\n".join(lines) + "\n")
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        return
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    ax.loglog([r["N"] for r in ok], [r["driver_s"] for r in ok], "o-", label="driver (s)")
+    ax.loglog([r["N"] for r in ok], [r["total_s"] for r in ok], "s--", label="solve + judge (s)")
+    ax.set_xlabel("links N")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(out + ".png", dpi=120)
 
 
 if __name__ == "__main__":

@@ -32,7 +32,7 @@ def _rotate_in(R, filled, w, c):
             filled[c] = True
             return
         a, b = R[0, c], w[0]
-        r = np.hypot(a, b)
+        r = np.sqrt(a * a + b * b)  # entries ~ √k/a: far from overflow
         cs, sn = a / r, b / r
         R[0, c] = r
         for p in range(1, 3):

@@ -96,6 +96,9 @@ STEP_NOISE = 1e4 * EPS
 #: for the single pivots after STALL rounds without fewer infeasible nodes)
 PIVOT_ROUNDS = 30
 STALL = 3
+#: in increments (large N) the single pivots are capped at 2 × this many, not 2 per node:
+#: each round is an O(N) face solve, and a judge that cannot settle says so
+LARGE_ROUNDS = 100
 
 THRESHOLDS = {
     "force_tol": "min(1e-3, 100·tol), relative to F₀ = max(|F|, EI/ℓ²)",
@@ -200,7 +203,12 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
     """
     up, lo = up.copy(), lo.copy()
     best, stall = step.size + 1, 0
-    for rounds in range(1, PIVOT_ROUNDS + 2 * step.size + 1):
+    # the round-off of a height: of ℓ; in increments (large N), of the node's own wall
+    # distance (there a height error δ costs ~16 EI δ / a³ of force: 1e-13 mm is 2 N at
+    # N = 1e5)
+    height_size = step.length_scale if step.factor is None else _wall_size(step)
+    cap = PIVOT_ROUNDS + 2 * (step.size if step.factor is None else LARGE_ROUNDS)
+    for rounds in range(1, cap + 1):
         u = step.origin.copy()
         u[up] = step.upper[up]
         u[lo] = step.lower[lo]
@@ -221,8 +229,7 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
             size = np.maximum(size, step.gradient_scale(u))
         slack = np.maximum(np.maximum(roundoff, pull), ROUNDOFF_ULPS * EPS * size)
         # a height error δ costs H_ii δ of force: ``pull`` in force is pull / H_ii in height
-        reach = np.maximum(ROUNDOFF_ULPS * EPS * (np.abs(u) + step.length_scale),
-                           pull / step.bands[0])
+        reach = np.maximum(ROUNDOFF_ULPS * EPS * (np.abs(u) + height_size), pull / step.bands[0])
         release_up = up & (net < -slack)
         release_lo = lo & (net > slack)
         join_up = ~up & ~lo & (u > step.upper + reach)
@@ -246,6 +253,13 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
     return None
 
 
+def _wall_size(step: ContactStep) -> np.ndarray:
+    """|wall height| per node (0 where there is none): what a node's height rounds at."""
+    lo, hi = step.lower + step.origin, step.upper + step.origin
+    return np.maximum(np.where(np.isfinite(hi), np.abs(hi), 0.0),
+                      np.where(np.isfinite(lo), np.abs(lo), 0.0))
+
+
 def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0) -> JudgeStep | None:
     """One more contact step at ``alpha``, solved by the judge (None if it cannot).
 
@@ -254,9 +268,11 @@ def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0) -> JudgeSt
     """
     step = assemble_step(chain, alpha)
     absolute = step.origin  # node heights at α
+    floor = 1e3 * EPS * chain.length
     if large_n.applies(chain):  # in increments, on the tridiagonal factor
         step = large_n.increment_step(step)
-    touch = np.maximum(pull / step.bands[0], 1e3 * EPS * chain.length)
+        floor = ROUNDOFF_ULPS * EPS * (np.abs(absolute) + _wall_size(step))
+    touch = np.maximum(pull / step.bands[0], floor)
     on_upper, on_lower = step.upper - step.origin <= touch, step.origin - step.lower <= touch
     # R = K g + z of an answer is exact to the factored gradient's round-off on a wall
     # (g = 0), to that of rounded heights, a few ulps of S_i = (|K||g| + |z|)_i, off it
