@@ -32,6 +32,7 @@ from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from ..solvers.judge import DEFAULT_TOL
 from ..solvers.registry import DEFAULT, get_settings
+from . import large_n
 from .driver import DriverOutput, DriverStart, StepRecord, _converged, _fail, run_driver
 from .profile import has_profile
 
@@ -101,6 +102,11 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
     takes the chain's layout.
     """
     engine = check_engine(engine)
+    if method == "globalised" and large_n.applies(chain):  # N >= LARGE_N: increments
+        from .large_driver import run_large
+
+        return (run_large(chain, step_solver, tol=tol, max_outer=max_outer, start=start),
+                "numpy (large N: increments on the tridiagonal factor)")
     if engine != "numpy" and applies(backend, method, None if args is not None else chain):
         out, why = run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
                                 settings=settings, args=args)

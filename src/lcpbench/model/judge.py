@@ -73,6 +73,7 @@ from numpy.linalg import LinAlgError  # scipy.linalg's LinAlgError is this class
 
 from ..linalg import banded_matvec, solveh_banded, sub_bands
 from ..problems.scenes import Chain
+from . import large_n
 from .chain import heights
 from .elastic import compliances
 from .profile import has_profile, profile_step, walls_at
@@ -107,6 +108,9 @@ STEP_NOISE = 1e4 * EPS
 #: for the single pivots after STALL rounds without fewer infeasible nodes)
 PIVOT_ROUNDS = 30
 STALL = 3
+#: in increments (large N) the single pivots are capped at 2 × this many, not 2 per node:
+#: each round is an O(N) face solve, and a judge that cannot settle says so
+LARGE_ROUNDS = 100
 
 THRESHOLDS = {
     "force_tol": "min(1e-3, 100·tol), relative to F₀ = max(|F|, EI/ℓ²)",
@@ -222,7 +226,12 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
     up, lo = up.copy(), lo.copy()
     best, stall = step.size + 1, 0
     k_up, k_lo = _springs(step)
-    for rounds in range(1, PIVOT_ROUNDS + 2 * step.size + 1):
+    # the round-off of a height: of ℓ; in increments (large N), of the node's own wall
+    # distance (there a height error δ costs ~16 EI δ / a³ of force: 1e-13 mm is 2 N at
+    # N = 1e5)
+    height_size = step.length_scale if step.factor is None else _wall_size(step)
+    cap = PIVOT_ROUNDS + 2 * (step.size if step.factor is None else LARGE_ROUNDS)
+    for rounds in range(1, cap + 1):
         # a node on a rigid wall is held on it; on an elastic wall it stays free, held
         # by the wall's spring k (u − h) (model.elastic): a banded solve all the same
         soft_up, soft_lo = up & (k_up > 0), lo & (k_lo > 0)
@@ -235,12 +244,16 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
         free = np.flatnonzero(~(hard_up | hard_lo))
         if free.size:
             try:
-                bands = sub_bands(step.bands, free)
-                bands[0] += spring[free]
-                for _ in range(2):  # solve, then refine with the factored gradient
-                    grad = step.gradient(u) + spring * (u - rest)
-                    u[free] -= solveh_banded(bands, grad[free], lower=True,
-                                             check_finite=False)
+                if np.any(spring[free] > 0):  # elastic walls (never large N): banded
+                    bands = sub_bands(step.bands, free)
+                    bands[0] += spring[free]
+                    for _ in range(2):  # solve, then refine with the factored gradient
+                        grad = step.gradient(u) + spring * (u - rest)
+                        u[free] -= solveh_banded(bands, grad[free], lower=True,
+                                                 check_finite=False)
+                else:  # on H's banded Cholesky, or its tridiagonal factor (large N)
+                    for _ in range(2):  # solve, then refine with the factored gradient
+                        u[free] -= step.solve_on(free, step.gradient(u)[free])
             except (LinAlgError, ValueError):
                 return None
         net = -step.gradient(u)
@@ -249,10 +262,11 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
         # of S_i): a sign within that is undecided, not a reason to pivot
         roundoff = ROUNDOFF_ULPS * EPS * step.gradient_scale(u)
         size = banded_matvec(np.abs(step.bands), np.abs(u)) + np.abs(step.linear)
+        if step.factor is not None:  # increments (large N): R's terms are the gradient's
+            size = np.maximum(size, step.gradient_scale(u))
         slack = np.maximum(np.maximum(roundoff, pull), ROUNDOFF_ULPS * EPS * size)
         # a height error δ costs H_ii δ of force: ``pull`` in force is pull / H_ii in height
-        reach = np.maximum(ROUNDOFF_ULPS * EPS * (np.abs(u) + step.length_scale),
-                           pull / step.bands[0])
+        reach = np.maximum(ROUNDOFF_ULPS * EPS * (np.abs(u) + height_size), pull / step.bands[0])
         release_up = up & (net < -slack)
         release_lo = lo & (net > slack)
         join_up = ~up & ~lo & (u > step.upper + reach)
@@ -276,6 +290,13 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
     return None
 
 
+def _wall_size(step: ContactStep) -> np.ndarray:
+    """|wall height| per node (0 where there is none): what a node's height rounds at."""
+    lo, hi = step.lower + step.origin, step.upper + step.origin
+    return np.maximum(np.where(np.isfinite(hi), np.abs(hi), 0.0),
+                      np.where(np.isfinite(lo), np.abs(lo), 0.0))
+
+
 def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0,
                forces: tuple[np.ndarray, np.ndarray] | None = None) -> JudgeStep | None:
     """One more contact step at ``alpha``, solved by the judge (None if it cannot).
@@ -291,11 +312,17 @@ def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0,
         step, chain = profile_step(chain, alpha, *up_lo)
     else:
         step = assemble_step(chain, alpha)
-    touch = np.maximum(pull / step.bands[0], 1e3 * EPS * chain.length)
+    absolute = step.origin  # node heights at α
+    floor = 1e3 * EPS * chain.length
+    if large_n.applies(chain):  # in increments, on the tridiagonal factor
+        step = large_n.increment_step(step)
+        floor = ROUNDOFF_ULPS * EPS * (np.abs(absolute) + _wall_size(step))
+    touch = np.maximum(pull / step.bands[0], floor)
     on_upper, on_lower = step.upper - step.origin <= touch, step.origin - step.lower <= touch
     # R = K g + z of an answer is exact to the factored gradient's round-off on a wall
     # (g = 0), to that of rounded heights, a few ulps of S_i = (|K||g| + |z|)_i, off it
-    size = np.where(on_upper | on_lower, step.gradient_scale(step.origin),
+    size = np.where(on_upper | on_lower | (step.factor is not None),
+                    step.gradient_scale(step.origin),
                     banded_matvec(np.abs(step.bands), np.abs(step.origin))
                     + np.abs(step.linear))
     noise = ROUNDOFF_ULPS * EPS * size
@@ -311,7 +338,7 @@ def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0,
     if found is None:
         return None
     u, net, rounds, roundoff, worst, term_size = found
-    upper, lower = split_reactions(chain, net, u)
+    upper, lower = split_reactions(chain, net, u - step.origin + absolute)
     dalpha = float(np.max(np.abs(step.predict_alpha(u) - alpha), initial=0.0))
     return JudgeStep(upper, lower, rounds, dalpha, roundoff, worst, noise, term_size)
 

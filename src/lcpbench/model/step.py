@@ -25,11 +25,12 @@ multipliers are the reactions. It can also state itself as a standard LCP.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ..errors import ProblemError
-from ..linalg import banded_matvec, solveh_banded
+from ..linalg import banded_matvec, solveh_banded, sub_bands
 from ..problems.scenes import Chain
 
 
@@ -87,6 +88,9 @@ class ContactStep:
         """Whether a wall of this step yields (a finite stiffness at some node)."""
         return any(k is not None and bool(np.isfinite(k).any())
                    for k in (self.upper_stiffness, self.lower_stiffness))
+    # Face solves on the tridiagonal factor of H (large N, :mod:`lcpbench.model.large_n`:
+    # a :class:`lcpbench.linalg.saddle.TridiagonalFactor`); None: banded Cholesky of H
+    factor: Any = None
 
     @property
     def size(self) -> int:
@@ -174,7 +178,20 @@ class ContactStep:
         return H
 
     def unconstrained_minimiser(self) -> np.ndarray:
+        if self.factor is not None:
+            return self.factor.solve(-self.linear)
         return solveh_banded(self.bands, -self.linear, lower=True, check_finite=False)
+
+    def solve_on(self, idx: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        """H[idx, idx]⁻¹ rhs: the principal block of the nodes ``idx`` (sorted)."""
+        if self.factor is None:
+            return solveh_banded(sub_bands(self.bands, idx), rhs, lower=True,
+                                 check_finite=False)
+        fixed = np.ones(self.size, bool)
+        fixed[idx] = False
+        full = np.zeros(self.size)
+        full[idx] = rhs
+        return self.factor.face_solve(fixed, full)[idx]
 
     # -- back to the chain ----------------------------------------------------
     def predict_alpha(self, u: np.ndarray) -> np.ndarray:

@@ -22,7 +22,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..errors import ProblemError
-from ..linalg import banded_matvec, solveh_banded, sub_bands
+from ..linalg import banded_matvec
 from ..solvers.base import BoxQP, QPWarm, Settings, Status, StepSolution
 from ..solvers.judge import accept_tol, verdict
 from ..solvers.lemke import too_large
@@ -81,6 +81,29 @@ def _rigid_only(step, what: str) -> None:
                            "lcpbench.model.elastic.elastic_qp / force_lcp")
 
 
+#: the LCP form is dense (:meth:`ContactStep.lcp`: H, its condensed Schur complement
+#: and M, ~DENSE_COPIES n × n doubles at once); a larger step is FAILED before any
+#: allocation: at n = 1e4 it took 2.6 GB and minutes, at n = 1e5 it would need 400 GB
+MAX_DENSE_FORM_BYTES = 2**30
+DENSE_COPIES = 5
+
+
+def dense_form_bytes(n: int) -> int:
+    """Bytes the dense LCP form of a step with ``n`` free nodes holds at once."""
+    return DENSE_COPIES * 8 * n * n
+
+
+def dense_form_too_large(n: int) -> str | None:
+    """Why the dense LCP form of an ``n``-node step is refused, or None."""
+    need = dense_form_bytes(n)
+    if need <= MAX_DENSE_FORM_BYTES:
+        return None
+    top = int((MAX_DENSE_FORM_BYTES / (8 * DENSE_COPIES)) ** 0.5)
+    return (f"step too large for a dense LCP form: n = {n} free nodes need "
+            f"{need / 2**30:.3g} GiB (limit {MAX_DENSE_FORM_BYTES / 2**30:.3g} GiB, n <= {top}); "
+            f"use a banded or sparse back-end")
+
+
 def _complete_heights(step, u: np.ndarray) -> np.ndarray:
     """Re-solve exactly the heights of the nodes that have no wall row."""
     rows = np.isfinite(step.upper) | np.isfinite(step.lower)
@@ -89,7 +112,7 @@ def _complete_heights(step, u: np.ndarray) -> np.ndarray:
         return u
     u = u.copy()
     grad = step.gradient(u)
-    u[F] -= solveh_banded(sub_bands(step.bands, F), grad[F], lower=True, check_finite=False)
+    u[F] -= step.solve_on(F, grad[F])
     return u
 
 
@@ -181,7 +204,8 @@ def _run_step(backend: Backend, step, s: Settings, scaled: bool, warm) -> StepSo
         return StepSolution(res.x * L, np.maximum(y, 0.0), np.maximum(-y, 0.0), res.status,
                             res.iterations, res.solve_time, res.setup_time, res.message,
                             time_source=res.time_source, build_time=build)
-    if backend.storage == "dense" and (why := too_large(n)):  # before M is formed
+    if (why := dense_form_too_large(n)) or (backend.storage == "dense"
+                                            and (why := too_large(n))):  # before M is formed
         return StepSolution(np.full(n, np.nan), np.zeros(n), np.zeros(n), Status.FAILED,
                             message=why)
     t0 = time.perf_counter()

@@ -1,0 +1,96 @@
+"""The globalised driver in increments, for large N (:mod:`.large_n`).
+
+The same scheme as :func:`lcpbench.model.driver.run_driver` with
+``method="globalised"``: start from the unconstrained arc clipped to the walls,
+solve the contact step, search along it with Armijo on the exact energy,
+stop when max|α̂ − α| < tol. The differences, both for round-off at large N:
+the step is :func:`~.large_n.increment_step` (unknowns d = u − u₀, face solves
+on the tridiagonal factor of H) and the iterate moves by
+:func:`~.large_n.alpha_from_increments`, so the state is α, never heights
+rounded to doubles. The step is solved by the caller's step solver (the
+default back-end's active set, judged by lcpbench's step residuals); the
+answer is judged by :mod:`.judge` as every other.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+
+import numpy as np
+
+from ..problems.scenes import Chain
+from ..solvers.base import Status
+from .chain import energy
+from .driver import (
+    DriverOutput,
+    DriverStart,
+    StepRecord,
+    StepSolver,
+    _converged,
+    _fail,
+    _feasible_start,
+    _setup,
+    _step_failed,
+)
+from .large_n import alpha_from_increments, increment_step
+from .step import assemble_step
+
+
+def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer: int = 200,
+              start: DriverStart | None = None) -> DriverOutput:
+    """Iterate increment steps to the equilibrium of ``chain`` (never raises on
+    non-convergence). The last step's ``u`` is returned in heights (mm), as the
+    other drivers do, for a continuation of the next scene."""
+    n = chain.free_nodes.size
+    steps: list[StepRecord] = []
+    warm = None
+    alpha = None
+    if start is not None:
+        _, alpha = _feasible_start(chain, np.asarray(start.alpha, float))
+    if alpha is None:
+        _, alpha = _feasible_start(chain, chain.rest_alpha)
+    elif start is not None and start.warm is not None:  # its contact set, no heights
+        warm = replace(start.warm, u=np.full(n, np.nan))
+    if alpha is None:
+        return _fail(chain.rest_alpha, n, steps, "cannot fit the chain between the walls")
+    E = energy(chain, alpha)
+    noise = 1e-12 * (abs(E) + float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6)
+    for _ in range(max_outer):
+        t0 = time.perf_counter()
+        step = increment_step(assemble_step(chain, alpha))
+        t_asm = time.perf_counter() - t0
+        sol = solver(step, warm)
+        if sol.status not in (Status.SOLVED, Status.INACCURATE):
+            return _step_failed(alpha, n, steps, sol, t_asm, E)
+        d = sol.u  # the increment to the step's answer
+        dalpha = float(np.max(np.abs(step.predict_alpha(d) - alpha), initial=0.0))
+        slope = float(step.linear @ d)  # the gradient at u₀ along d
+        t = 1.0
+        while True:
+            trial = alpha_from_increments(chain, alpha, t * d)
+            if trial is not None:
+                E_t = energy(chain, trial)
+                if E_t <= E + 1e-4 * t * min(slope, 0.0) + noise:
+                    break
+            t *= 0.5
+            if t < 1e-12:
+                steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time,
+                                        t_asm, 0.0, dalpha, E, _setup(sol)))
+                return _fail(alpha, n, steps, "line search failed: no decrease of the energy "
+                                              "along the step")
+        steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
+                                t, dalpha, E_t, _setup(sol)))
+        if dalpha < tol:
+            final = replace(sol, u=_heights(chain, alpha) + d)  # in heights, as every driver reports
+            return _converged(chain, trial, final, steps)
+        # the warm start of the next step: this answer, in the next step's increments
+        warm = replace(sol, u=(1.0 - t) * d)
+        alpha, E = trial, E_t
+    return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
+                                  f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
+
+
+def _heights(chain: Chain, alpha: np.ndarray) -> np.ndarray:
+    y = np.concatenate(([0.0], np.cumsum(chain.link_length * np.sin(alpha))))
+    return y[chain.free_nodes]
