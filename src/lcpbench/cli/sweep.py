@@ -113,7 +113,7 @@ def register(subparsers) -> None:
                          "(default 2:7:1)")
     sw.add_argument("--links", default=None, metavar="LIST",
                     help=f"numbers of links (default {DEFAULT_LINKS}; --grid anchoring: "
-                         f"{3 * DEFAULT_LINKS} over the whole actuator)")
+                         f"N over the whole actuator, default {DEFAULT_LINKS} per section)")
     sw.add_argument("--EI", default=None, metavar="LIST", help="bending stiffnesses, N*mm^2 "
                     f"(default {DEFAULT_EI:g})")
     sw.add_argument("--weight", default=None, metavar="LIST",
