@@ -158,20 +158,6 @@ def add_wall_options(parser) -> None:
            "when the largest pressure passes it")
 
 
-def wall_rows(result) -> list[tuple[str, str]]:
-    """The summary lines of an elastic wall and of a pressure limit."""
-    rows: list[tuple[str, str]] = []
-    if getattr(result.scene, "wall_stiffness", math.inf) < math.inf or \
-            result.pressure_limit is not None:
-        rows.append(("contact pressure", f"max {result.max_pressure:.4g} N/mm, max "
-                                         f"indentation {result.max_indentation:.4g} mm"))
-    if result.pressure_limit is not None:
-        word = "EXCEEDED" if result.pressure_exceeded else "below"
-        rows.append(("pressure limit", f"{word}: max pressure {result.max_pressure:.4g} "
-                                       f"N/mm, limit {result.pressure_limit:g} N/mm"))
-    return rows
-
-
 def add_tol_option(parser, what: str = "convergence threshold on max|d alpha|") -> None:
     """Add ``--tol RAD``, the driver's convergence threshold.
 

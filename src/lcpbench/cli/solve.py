@@ -19,6 +19,7 @@ import numpy as np
 
 from ..api import solve
 from ..model.driver import METHODS
+from ..model.result_view import pressure_rows
 from ..problems.scenes import DEFAULT_LINKS
 from ._common import (
     ArgumentParser,
@@ -39,7 +40,6 @@ from ._scene_args import (
     add_tol_option,
     add_wall_options,
     scene_from,
-    wall_rows,
 )
 
 
@@ -183,7 +183,7 @@ def summary(result, extra=()) -> str:
             ("lower wall", f"{1e3 * lower:.6g} mN ({lower:.6g} N)"),
             ("lower contacts", node_ranges(contacts(result.forces_lower, free))),
         ]
-    rows += wall_rows(result)
+    rows += pressure_rows(result)
     rows += [
         ("iterations", f"{result.outer_iterations} outer, {result.inner_iterations} inner "
                        f"({result.solver}, {result.method}, tol {result.tol:g} rad)"),

@@ -136,6 +136,19 @@ def _scene_line(res: ContactResult) -> str:
     return f"{type(s).__name__}: " + ", ".join(parts)
 
 
+def pressure_rows(res: ContactResult) -> list[tuple[str, str]]:
+    """The summary lines of an elastic wall and of a pressure limit (also the CLI's)."""
+    rows: list[tuple[str, str]] = []
+    if getattr(res.scene, "wall_stiffness", np.inf) < np.inf or res.pressure_limit is not None:
+        rows.append(("contact pressure", f"max {res.max_pressure:.4g} N/mm, max indentation "
+                                         f"{res.max_indentation:.4g} mm"))
+    if res.pressure_limit is not None:
+        flag = "EXCEEDED" if res.pressure_exceeded else "below"
+        rows.append(("pressure limit", f"{flag}: max pressure {res.max_pressure:.4g} N/mm, "
+                                       f"limit {res.pressure_limit:g} N/mm"))
+    return rows
+
+
 def summary_rows(res: ContactResult) -> list[tuple[str, str]]:
     """(label, value) pairs shared by the text and HTML summaries."""
     idx = free_node_indices(res)
@@ -151,13 +164,7 @@ def summary_rows(res: ContactResult) -> list[tuple[str, str]]:
     if res.forces_lower is not None:
         lower = float(np.sum(res.forces_lower))
         rows.append(("lower wall ΣR", f"{1e3 * lower:.6g} mN"))
-    if getattr(res.scene, "wall_stiffness", np.inf) < np.inf or res.pressure_limit is not None:
-        rows.append(("contact pressure", f"max {res.max_pressure:.4g} N/mm, max indentation "
-                                         f"{res.max_indentation:.4g} mm"))
-    if res.pressure_limit is not None:
-        flag = "EXCEEDED" if res.pressure_exceeded else "below"
-        rows.append(("pressure limit", f"{flag}: max {res.max_pressure:.4g} N/mm vs limit "
-                                       f"{res.pressure_limit:g} N/mm"))
+    rows += pressure_rows(res)
     rows.append(("force error bound", f"{res.force_error_bound:.2g} (relative to "
                                       "max(|F|, EI/ℓ²), lcpbench's judge)"))
     c = res.certificate
