@@ -18,10 +18,7 @@ results are the ones ``solve_many(..., engine="numpy")`` gives, to round-off
 
 from __future__ import annotations
 
-import math
 import time
-
-import numpy as np
 
 from ..api import finish
 from ..model.compiled import applies, kernel_args, run_compiled
@@ -32,7 +29,7 @@ from ..model.step_solver import make_step_solver
 from ..model.wall_free import solve_without_contact
 from ..problems.scenes import ActuatorScene
 from ..solvers.registry import DEFAULT
-from .continuation import _POINTS
+from .continuation import _POINTS, extrapolated_alpha
 
 AUTO_WHY = "auto: the built-in active set (exact)"
 
@@ -70,13 +67,7 @@ def _predict(history: list, scene: ActuatorScene, most: int):
         if not r.converged or moving(s, pts[-1][0]) != param:
             break
         pts.append((s, r))
-    t = getattr(scene, param)
-    ts = [getattr(s, param) for s, _ in pts]
-    alpha = 0.0
-    for i, (_, r) in enumerate(pts):
-        w = math.prod((t - ts[j]) / (ts[i] - ts[j]) for j in range(len(pts)) if j != i)
-        alpha = alpha + w * r.alpha
-    return DriverStart(np.asarray(alpha, dtype=float), r1.extra.get("last_step"))
+    return DriverStart(extrapolated_alpha(scene, param, pts), r1.extra.get("last_step"))
 
 
 def _solve_one(scene, tol: float, max_outer: int, settings: str,

@@ -17,6 +17,8 @@ import math
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 
+import numpy as np
+
 from ..api import solve
 from ..errors import ProblemError
 from ..model.result import ContactResult
@@ -75,13 +77,19 @@ def predict(history: list[tuple[ActuatorScene, ContactResult]], scene: ActuatorS
     r1 = pts[0][1]
     if len(pts) == 1:
         return r1
+    return replace(r1, alpha=extrapolated_alpha(scene, param, pts))
+
+
+def extrapolated_alpha(scene, param: str, pts: Sequence) -> np.ndarray:
+    """α at ``scene`` by Lagrange extrapolation along ``param`` ("theta" or "height")
+    through the (scene, result) points ``pts`` of one line (distinct values)."""
     t = getattr(scene, param)
     ts = [getattr(s, param) for s, _ in pts]
-    alpha = 0.0
+    alpha = np.zeros_like(pts[0][1].alpha, dtype=float)
     for i, (_, r) in enumerate(pts):
         w = math.prod((t - ts[j]) / (ts[i] - ts[j]) for j in range(len(pts)) if j != i)
         alpha = alpha + w * r.alpha
-    return replace(r1, alpha=alpha)
+    return alpha
 
 
 def solve_sequence(scenes: Sequence[ActuatorScene], *, predictor: str = "quadratic",
