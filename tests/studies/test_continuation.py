@@ -105,3 +105,24 @@ def test_a_failed_warm_start_is_redone_cold_and_its_cost_counted(monkeypatch):
     lost = sum(r.extra["discarded"]["outer_iterations"] for r in out[1:])
     assert lost >= 2
     assert total_outer(out) == sum(r.outer_iterations for r in cold) + lost
+
+
+def test_newton_continuation_gives_the_energy_minimum_of_each_scene():
+    """method="newton" continues too (its first warm step is a Newton step): each answer
+    is the independent energy minimisation's, and the cold Newton answer's, to 1e-8."""
+    from lcpbench.model.energy_reference import minimise_energy
+
+    kw = {"solver": "active-set", "tol": 1e-10, "method": "newton"}
+    warm = solve_sequence(LINE[3:7], predictor="quadratic", **kw)
+    cold = solve_sequence(LINE[3:7], predictor="none", **kw)
+    assert all(r.converged for r in warm + cold)
+    assert largest_difference(cold, warm) < 1e-8
+    for scene, r in zip(LINE[3:7], warm):
+        ref = minimise_energy(scene.chain())
+        F0 = max(abs(ref.total_force), scene.EI / scene.length**2)
+        assert abs(r.total_force - ref.total_force) / F0 < 1e-8
+
+
+def test_undamped_continuation_is_refused():
+    with pytest.raises(ProblemError, match="globalised' or 'newton"):
+        solve_sequence(LINE[:2], method="undamped")

@@ -191,8 +191,9 @@ def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int,
     if alpha is None:
         return _fail(chain.rest_alpha, n, steps, "cannot fit the chain between the walls")
     E = energy(chain, alpha)
+    warm_start = start is not None and warm is not None  # a neighbour's answer: near already
     for _ in range(max_outer):
-        near = newton and bool(steps) and steps[-1].max_dalpha < NEWTON_SWITCH
+        near = newton and (steps[-1].max_dalpha < NEWTON_SWITCH if steps else warm_start)
         step, sol, t_asm = _solve_step(chain, alpha, solver, warm, near)
         if sol.status not in (Status.SOLVED, Status.INACCURATE):
             return _step_failed(alpha, n, steps, sol, t_asm, E)

@@ -106,8 +106,9 @@ def solve_sequence(scenes: Sequence[ActuatorScene], *, predictor: str = "quadrat
     if predictor not in PREDICTORS:
         raise ProblemError(f"predictor must be one of {', '.join(PREDICTORS)}, got "
                            f"{predictor!r}")
-    if solve_kw.get("method", "globalised") != "globalised":
-        raise ProblemError("continuation needs method='globalised'")
+    if solve_kw.get("method", "globalised") not in ("globalised", "newton"):
+        raise ProblemError("continuation needs method='globalised' or 'newton' (the undamped "
+                           "scheme has no line search to fall back on)")
     history: list[tuple[ActuatorScene, ContactResult]] = []
     out = []
     for k, scene in enumerate(scenes):
