@@ -123,9 +123,12 @@ def wall_pressure(chain, y_free: np.ndarray, forces_upper: np.ndarray,
     a rigid one p is the reaction smeared over a link, which grows with N at the
     edges of a contact (the rigid wall's point forces).
     """
-    ku, kl = _soft(chain)
-    up, lo = indentation(chain, y_free)
-    depth = np.maximum(np.where(ku > 0, up, 0.0), np.where(kl > 0, lo, 0.0))
+    if chain.upper_stiffness is None and chain.lower_stiffness is None:
+        depth = np.zeros(y_free.size)  # rigid walls do not yield
+    else:
+        ku, kl = _soft(chain)
+        up, lo = indentation(chain, y_free)
+        depth = np.maximum(np.where(ku > 0, up, 0.0), np.where(kl > 0, lo, 0.0))
     share = wall_share(chain.links, chain.link_length, chain.free_nodes)
     total = np.maximum(forces_upper, 0.0)
     if forces_lower is not None:
