@@ -17,6 +17,7 @@ from functools import partial
 import numpy as np
 
 from .errors import ProblemError
+from .model import large_n
 from .model.compiled import applies, check_engine, drive, kernel_args
 from .model.driver import METHODS, DriverStart
 from .model.judge import judge
@@ -169,6 +170,7 @@ def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: 
                       "linearisation of eq. (20) is singular; lcpbench converges for "
                       f"theta <= 180 deg ({out.reason})")
     judged_by: Callable = judge
+    compiled_judge = compiled_judge and not large_n.applies(chain)  # large N: increments
     if compiled_judge:
         judged_by = _judge_fast()
         if judge_args is not None:

@@ -31,6 +31,12 @@ def _kernel():
     return givens_kernel
 
 
+def _face_kernel():
+    from . import face_kernel
+
+    return face_kernel
+
+
 class TridiagonalFactor:
     """Face solves of H = Jᵀ diag(k) J from the three diagonals of J.
 
@@ -45,9 +51,14 @@ class TridiagonalFactor:
     The interface is that of :class:`lcpbench.solvers.banded._Banded`:
     ``face_solve(fixed, rhs)``, ``solve(rhs)``, ``resolve(rhs)`` (the last
     factor again) and ``matvec(x)``.
+
+    ``restart=True`` (default): each face is refactored from its first change
+    against the last face, in one compiled call (:mod:`.face_kernel`: the same
+    R bit for bit); ``False``: the reference, a full factorisation per face
+    (:mod:`.givens_kernel`) and the refinement in numpy.
     """
 
-    def __init__(self, coef: np.ndarray, stiffness: np.ndarray):
+    def __init__(self, coef: np.ndarray, stiffness: np.ndarray, *, restart: bool = True):
         coef = np.asarray(coef, dtype=float)
         n = coef.shape[0]
         if coef.shape != (n, 3) or np.shape(stiffness) != (n,):
@@ -57,8 +68,20 @@ class TridiagonalFactor:
         self.rows[0, 0] = 0.0
         self.rows[-1, 2] = 0.0
         self.R = np.zeros((3, n))
+        self.restart = restart
+        self._fixed: np.ndarray | None = None  # the face of the last factorisation
+        if restart:
+            self._filled = np.zeros(n, np.bool_)
+            self._snap = np.zeros((n, 4))
+            self._inv = np.zeros(n)
 
     def matvec(self, x: np.ndarray) -> np.ndarray:
+        if self.restart:
+            return _face_kernel().matvec(self.rows, np.ascontiguousarray(x, dtype=float),
+                                         np.empty(self.n))
+        return self.matvec_reference(x)
+
+    def matvec_reference(self, x: np.ndarray) -> np.ndarray:
         """H x as Aᵀ(A x), never with the rounded H: a face solve undoes an increment
         H_FS d_S of the dual walk only if both use the same matrix (with the rounded
         H, at N = 3·10⁴, the walk's heights were off by millimetres)."""
@@ -73,6 +96,20 @@ class TridiagonalFactor:
 
     def face_solve(self, fixed: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         """x with H_face x = rhs (H with the fixed rows and columns the identity)."""
+        fixed = np.ascontiguousarray(fixed, dtype=np.bool_)
+        if self.restart:
+            j0 = 0
+            if self._fixed is not None:
+                changed = np.flatnonzero(fixed != self._fixed)
+                j0 = int(changed[0]) - 1 if changed.size else self.n
+            x = np.empty(self.n)
+            self._fixed = None  # invalid until the factorisation succeeds
+            ok = _face_kernel().face_solve(self.rows, fixed, self.R, self._filled, self._snap,
+                                           self._inv, j0, np.ascontiguousarray(rhs, float), x)
+            if not ok:
+                raise np.linalg.LinAlgError("a face of H is singular (zero pivot of R)")
+            self._fixed = fixed.copy()
+            return x
         ok = _kernel().factor(self.rows, np.ascontiguousarray(fixed, dtype=np.bool_), self.R)
         if not ok:
             raise np.linalg.LinAlgError("a face of H is singular (zero pivot of R)")
@@ -90,4 +127,6 @@ class TridiagonalFactor:
         return self.face_solve(np.zeros(self.n, bool), rhs)
 
     def resolve(self, rhs: np.ndarray) -> np.ndarray:
+        if self.restart:
+            return _face_kernel().resolve(self.R, self._inv, np.array(rhs, dtype=float))
         return _kernel().solve(self.R, np.array(rhs, dtype=float))

@@ -76,6 +76,7 @@ from ..problems.scenes import Chain
 from . import large_n
 from .chain import heights
 from .elastic import compliances
+from .judge_large import primal_step
 from .profile import has_profile, profile_step, walls_at
 from .step import ContactStep, assemble_step
 
@@ -231,6 +232,8 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
     # N = 1e5)
     height_size = step.length_scale if step.factor is None else _wall_size(step)
     cap = PIVOT_ROUNDS + 2 * (step.size if step.factor is None else LARGE_ROUNDS)
+    if step.factor is not None:  # increments (large N): one change at a time (judge_large)
+        return _large_step(step, up, lo, pull, height_size, cap)
     for rounds in range(1, cap + 1):
         # a node on a rigid wall is held on it; on an elastic wall it stays free, held
         # by the wall's spring k (u − h) (model.elastic): a banded solve all the same
@@ -288,6 +291,33 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
         up = (up & ~release_up) | join_up
         lo = (lo & ~release_lo) | join_lo
     return None
+
+
+def _large_step(step: ContactStep, up, lo, pull: float, height_size, cap: int):
+    """:func:`_pivot_step` in increments (large N), by the primal active set of
+    :mod:`.judge_large`, with the same slack, reach and settle test."""
+
+    def sizes(u):
+        roundoff = ROUNDOFF_ULPS * EPS * step.gradient_scale(u)
+        size = np.maximum(banded_matvec(np.abs(step.bands), np.abs(u)) + np.abs(step.linear),
+                          step.gradient_scale(u))
+        return roundoff, size
+
+    def slack_of(u):
+        roundoff, size = sizes(u)
+        return np.maximum(np.maximum(roundoff, pull), ROUNDOFF_ULPS * EPS * size)
+
+    def reach_of(u):
+        return np.maximum(ROUNDOFF_ULPS * EPS * (np.abs(u) + height_size), pull / step.bands[0])
+
+    found = primal_step(step, up, lo, slack_of=slack_of, reach_of=reach_of, cap=cap)
+    if found is None:
+        return None
+    u, up, lo, rounds = found
+    net = -step.gradient(u)
+    roundoff, size = sizes(u)
+    return (u, net, rounds, np.where(up | lo, roundoff, 0.0), float(np.max(roundoff)),
+            float(np.max(size, initial=0.0)))
 
 
 def _wall_size(step: ContactStep) -> np.ndarray:

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..problems.scenes import Chain
+from . import large_n
 from .judge import Judgement, judge
 
 _LOADED: list = []  # the kernel module, once imported
@@ -63,7 +64,9 @@ def judge_fast(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
     certificate is returned in ``judgement.certificate``. ``args``: the
     chain's :func:`chain_args`, when the caller has them already.
     """
-    if not driver_converged or (args is None and not takes(chain)):
+    if not driver_converged or large_n.applies(chain) or (args is None and not takes(chain)):
+        # large N: the numpy judge, whose exact step is in increments on the tridiagonal
+        # factor (the kernel's is in heights on the Cholesky of H, whose round-off grows as N⁴)
         return judge(chain, alpha, forces_upper, forces_lower, tol=tol,
                      driver_converged=driver_converged, driver_reason=driver_reason,
                      step_statuses=step_statuses, step_sizes=step_sizes,

@@ -62,15 +62,16 @@ def applies(chain: Chain) -> bool:
     return chain.links >= LARGE_N and layout_fits(chain)
 
 
-def increment_step(step: ContactStep) -> ContactStep:
+def increment_step(step: ContactStep, *, restart: bool = True) -> ContactStep:
     """The step in increments d = u − u₀: the same QP, moved to the origin.
 
     Its linear term is the factored gradient at u₀ (from the joint angles of α,
     no cancellation), its walls are the gaps of u₀, and its face solves use
-    the tridiagonal factor.
+    the tridiagonal factor (``restart``: refactored from each face's first change, in
+    one compiled call; False: the reference, see :class:`TridiagonalFactor`).
     """
     n = step.size
-    factor = TridiagonalFactor(step.coef, step.stiffness)
+    factor = TridiagonalFactor(step.coef, step.stiffness, restart=restart)
     return replace(step, linear=step.gradient(step.origin), lower=step.lower - step.origin,
                    upper=step.upper - step.origin, origin=np.zeros(n), factor=factor)
 
