@@ -103,3 +103,23 @@ def test_batch_bad_settings_and_limits_name_the_parameter():
         lcpbench.solve_many(scenes, max_outer=0)
     with pytest.raises(ProblemError, match="tol"):
         lcpbench.solve_many(scenes, tol=2.0)
+
+
+def test_large_n_scenes_take_solves_large_n_path_in_a_batch():
+    """From LARGE_N links solve() drives in increments (model.large_driver); solve_many's
+    compiled loop must not run such a chain through the heights kernel instead."""
+    from lcpbench.model.large_n import LARGE_N
+
+    scenes = [lcpbench.ActuatorScene(theta=t, height=3.0, links=LARGE_N) for t in (160.0, 165.0)]
+    ones = [lcpbench.solve(scene, tol=1e-3) for scene in scenes]
+    cold = lcpbench.solve_many(scenes, tol=1e-3, continuation=False)
+    warm = lcpbench.solve_many(scenes, tol=1e-3)
+    for one, c, w in zip(ones, cold, warm):
+        assert "large N" in one.extra["engine"]
+        assert c.extra["engine"] == w.extra["engine"] == one.extra["engine"]
+        assert c.total_force == one.total_force and c.converged == one.converged
+        # a warm start ends elsewhere within the tolerance: both answers are judged
+        F0 = max(one.total_force, one.scene.EI / one.scene.length**2)
+        if w.converged and one.converged:
+            assert abs(w.total_force - one.total_force) / F0 <= (
+                w.force_error_bound + one.force_error_bound)

@@ -21,7 +21,8 @@ from __future__ import annotations
 import time
 
 from ..api import finish
-from ..model.compiled import applies, kernel_args, run_compiled
+from ..model import large_n
+from ..model.compiled import applies, drive, kernel_args, run_compiled
 from ..model.driver import DriverStart, run_driver
 from ..model.judge_compiled import chain_args
 from ..model.result import ContactResult
@@ -79,17 +80,21 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
     t0 = time.perf_counter()
     chain = scene.chain()
     if not const:
-        const["kernel"] = applies(DEFAULT, "globalised", chain)
+        # not from LARGE_N links: those run in increments (model.large_driver, via drive)
+        const["kernel"] = applies(DEFAULT, "globalised", chain) and not large_n.applies(chain)
         const["arrays"] = kernel_args(chain)[2:4] + (kernel_args(chain)[7],)
     kernel = const["kernel"]
     args = kernel_args(chain, const["arrays"]) if kernel else None
     out = solve_without_contact(chain, tol, max_outer, start,
                                 engine="compiled" if kernel else "numpy", args=args)
     used = "compiled" if kernel else "numpy"
+    if out is None and not kernel:  # large N, or a layout the kernel does not take
+        out, used = drive(chain, make_step_solver(DEFAULT, settings, True), backend=DEFAULT,
+                          settings=settings, engine="numpy", tol=tol, max_outer=max_outer,
+                          method="globalised", start=start)
     if out is None:
-        out, why = (run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
-                                 settings=settings, args=args) if kernel
-                    else (None, "a layout the kernel does not take"))
+        out, why = run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
+                                settings=settings, args=args)
         if out is None:  # the kernel left the reference's path: the numpy reference
             out = run_driver(chain, make_step_solver(DEFAULT, settings, True), tol=tol,
                              max_outer=max_outer, method="globalised", start=start)
