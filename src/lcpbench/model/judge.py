@@ -408,7 +408,6 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
                                else certificate)
         return verdict
     L = chain.length
-    fails: list[str] = []
     chain = walls_at(chain, alpha)  # a wall profile: its rows at the nodes' x (exact gaps)
     js = judge_step(chain, alpha, pull=eps_R, forces=(forces_upper, forces_lower))
     if js is not None:  # values within round-off are zero, not reactions
@@ -419,9 +418,6 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
         certificate = certificate(forces_upper, forces_lower)
     verdict.certificate = certificate
     verdict.inexact_steps = sum(s != "solved" for s in step_statuses)
-    if step_statuses and step_statuses[-1] != "solved":
-        fails.append(f"last step: the contact step whose reactions are reported was "
-                     f"{step_statuses[-1]} by lcpbench's residuals")
     u = heights(chain, alpha)
     c_up, c_lo = compliances(chain)  # elastic walls: the compliant gap g + R/k
     g_up = chain.upper - u + c_up * np.maximum(forces_upper, 0.0)
@@ -431,26 +427,10 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
                    float(np.max(np.minimum(forces_lower / F0, g_lo / L), initial=0.0)))
     comp_allowed = max(NODE_SHARE * tau, FLOOR_ULPS * EPS * js.term_size / F0
                        if js is not None else 0.0)
-    if comp > comp_allowed:
-        fails.append(f"complementarity: a node carries a reaction {comp:.1e} F₀ while "
-                     f"{comp:.1e} ℓ from its wall (allowed {comp_allowed:.1e})")
-    pen = min(GEOMETRY_TOL, NODE_SHARE * tau) * L
-    if certificate.min_gap < -pen:
-        fails.append(f"penetration: {-certificate.min_gap:.1e} mm through a wall "
-                     f"(allowed {pen:.1e} mm)")
-    if certificate.closure > GEOMETRY_TOL * L:
-        fails.append(f"closure: the right pin is {certificate.closure:.1e} mm off y = 0")
-    if certificate.relative_torque_residual > max(10 * tol, 1e-6):
-        fails.append(f"torque: relative torque residual "
-                     f"{certificate.relative_torque_residual:.1e}")
     floor_R = FLOOR_ULPS * EPS * js.term_size if js is not None else 0.0
     R_min = float(min(np.min(forces_upper, initial=0.0), np.min(forces_lower, initial=0.0)))
-    if R_min < -max(eps_R, floor_R):
-        fails.append(f"sign: a wall pulls with {R_min:.2e} N (allowed down to "
-                     f"{-max(eps_R, floor_R):.1e} N)")
-    if js is None:
-        fails.append("force error bound: the judge step did not settle")
-    else:
+    bound = None
+    if js is not None:
         rho = _contraction(step_sizes, js.dalpha)
         kappa = 1.0 / (1.0 - rho)
         # the judge's own round-off: its wall reactions', and the residual left on the
@@ -466,13 +446,57 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
         verdict.contraction = rho
         verdict.judge_total_force = float(np.sum(js.forces_upper))
         verdict.judge_rounds = js.rounds
-        if not total <= tau:
-            fails.append(f"force error bound: the total force may be {total:.1e} F₀ off "
-                         f"(allowed {tau:.1e}; one more exact step moves it to "
-                         f"{verdict.judge_total_force:.6g} N)")
-        elif not node <= node_allowed:
-            fails.append(f"force error bound: a node's force may be {node:.1e} F₀ off "
-                         f"(allowed {node_allowed:.1e})")
+        bound = (total, node, node_allowed)
+    fails = failed_checks(certificate, step_statuses, tol=tol, tau=tau, comp=comp,
+                          comp_allowed=comp_allowed,
+                          pen=min(GEOMETRY_TOL, NODE_SHARE * tau) * L,
+                          closure_allowed=GEOMETRY_TOL * L, R_min=R_min,
+                          allowed_R=max(eps_R, floor_R), bound=bound,
+                          judge_total_force=verdict.judge_total_force)
+    return settle_verdict(verdict, fails, driver_reason)
+
+
+def failed_checks(cert, step_statuses: list[str], *, tol: float, tau: float, comp: float,
+                  comp_allowed: float, pen: float, closure_allowed: float, R_min: float,
+                  allowed_R: float, bound: tuple[float, float, float] | None,
+                  judge_total_force: float) -> list[str]:
+    """The checks of :func:`judge` that fail, each as "check: why", in one order.
+
+    Shared by the numpy judge and the compiled one (:mod:`lcpbench.model.judge_compiled`),
+    which compute the same numbers: ``bound`` is (total, per-node, per-node allowed) of
+    the force error bound, None when the judge step did not settle.
+    """
+    fails: list[str] = []
+    if step_statuses and step_statuses[-1] != "solved":
+        fails.append(f"last step: the contact step whose reactions are reported was "
+                     f"{step_statuses[-1]} by lcpbench's residuals")
+    if comp > comp_allowed:
+        fails.append(f"complementarity: a node carries a reaction {comp:.1e} F₀ while "
+                     f"{comp:.1e} ℓ from its wall (allowed {comp_allowed:.1e})")
+    if cert.min_gap < -pen:
+        fails.append(f"penetration: {-cert.min_gap:.1e} mm through a wall "
+                     f"(allowed {pen:.1e} mm)")
+    if cert.closure > closure_allowed:
+        fails.append(f"closure: the right pin is {cert.closure:.1e} mm off y = 0")
+    if cert.relative_torque_residual > max(10 * tol, 1e-6):
+        fails.append(f"torque: relative torque residual {cert.relative_torque_residual:.1e}")
+    if R_min < -allowed_R:
+        fails.append(f"sign: a wall pulls with {R_min:.2e} N (allowed down to "
+                     f"{-allowed_R:.1e} N)")
+    if bound is None:
+        fails.append("force error bound: the judge step did not settle")
+    elif not bound[0] <= tau:
+        fails.append(f"force error bound: the total force may be {bound[0]:.1e} F₀ off "
+                     f"(allowed {tau:.1e}; one more exact step moves it to "
+                     f"{judge_total_force:.6g} N)")
+    elif not bound[1] <= bound[2]:
+        fails.append(f"force error bound: a node's force may be {bound[1]:.1e} F₀ off "
+                     f"(allowed {bound[2]:.1e})")
+    return fails
+
+
+def settle_verdict(verdict: Judgement, fails: list[str], driver_reason: str) -> Judgement:
+    """The verdict with its failed checks: converged only if none failed."""
     verdict.failed = [f.split(":")[0] for f in fails]
     if fails:
         verdict.reason = "not accepted by lcpbench's judge: " + "; ".join(fails)

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..problems.scenes import Chain
 from . import large_n
-from .judge import Judgement, judge
+from .judge import Judgement, failed_checks, judge, settle_verdict
 
 _LOADED: list = []  # the kernel module, once imported
 
@@ -102,45 +102,17 @@ def verdict_from_stats(settled: bool, s: dict, fu: np.ndarray, fl: np.ndarray,
                        relative_torque_residual=s["relative_torque_residual"])
     verdict.certificate = cert
     verdict.inexact_steps = sum(st != "solved" for st in step_statuses)
-    fails: list[str] = []
-    if step_statuses and step_statuses[-1] != "solved":
-        fails.append(f"last step: the contact step whose reactions are reported was "
-                     f"{step_statuses[-1]} by lcpbench's residuals")
-    comp, comp_allowed = s["comp"], s["comp_allowed"]
-    if comp > comp_allowed:
-        fails.append(f"complementarity: a node carries a reaction {comp:.1e} F₀ while "
-                     f"{comp:.1e} ℓ from its wall (allowed {comp_allowed:.1e})")
-    pen = s["pen"]
-    if cert.min_gap < -pen:
-        fails.append(f"penetration: {-cert.min_gap:.1e} mm through a wall "
-                     f"(allowed {pen:.1e} mm)")
-    if cert.closure > s["closure_allowed"]:
-        fails.append(f"closure: the right pin is {cert.closure:.1e} mm off y = 0")
-    if cert.relative_torque_residual > max(10 * tol, 1e-6):
-        fails.append(f"torque: relative torque residual {cert.relative_torque_residual:.1e}")
-    allowed_R = max(s["eps_R"], s["floor_R"])
-    if s["R_min"] < -allowed_R:
-        fails.append(f"sign: a wall pulls with {s['R_min']:.2e} N (allowed down to "
-                     f"{-allowed_R:.1e} N)")
-    if not settled:
-        fails.append("force error bound: the judge step did not settle")
-    else:
+    bound = None
+    if settled:
         total, node = s["total"], s["node"]
         verdict.force_error_bound, verdict.node_error_bound = total, node
         verdict.contraction = s["rho"]
         verdict.judge_total_force = s["judge_total_force"]
         verdict.judge_rounds = int(s["rounds"])
-        if not total <= tau:
-            fails.append(f"force error bound: the total force may be {total:.1e} F₀ off "
-                         f"(allowed {tau:.1e}; one more exact step moves it to "
-                         f"{verdict.judge_total_force:.6g} N)")
-        elif not node <= s["node_allowed"]:
-            fails.append(f"force error bound: a node's force may be {node:.1e} F₀ off "
-                         f"(allowed {s['node_allowed']:.1e})")
-    verdict.failed = [f.split(":")[0] for f in fails]
-    if fails:
-        verdict.reason = "not accepted by lcpbench's judge: " + "; ".join(fails)
-        return verdict
-    verdict.converged = True
-    verdict.reason = driver_reason
-    return verdict
+        bound = (total, node, s["node_allowed"])
+    fails = failed_checks(cert, step_statuses, tol=tol, tau=tau, comp=s["comp"],
+                          comp_allowed=s["comp_allowed"], pen=s["pen"],
+                          closure_allowed=s["closure_allowed"], R_min=s["R_min"],
+                          allowed_R=max(s["eps_R"], s["floor_R"]), bound=bound,
+                          judge_total_force=verdict.judge_total_force)
+    return settle_verdict(verdict, fails, driver_reason)
