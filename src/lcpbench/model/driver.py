@@ -204,19 +204,10 @@ def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int,
             grad += penalty_gradient(step, u)
         slope = float(grad @ d)
         noise = 1e-12 * (abs(E) + float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6)
-        t = 1.0
-        while True:
-            trial = alpha_from_heights(chain, u + t * d, alpha)
-            if trial is not None:
-                E_t = energy(chain, trial)
-                if E_t <= E + 1e-4 * t * min(slope, 0.0) + noise:
-                    break
-            t *= 0.5
-            if t < 1e-12:
-                steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time,
-                                        t_asm, 0.0, dalpha, E, _setup(sol)))
-                return _fail(alpha, n, steps, "line search failed: no decrease of the energy "
-                                              "along the step")
+        t, trial, E_t = armijo(chain, lambda t, u=u, d=d, a=alpha: alpha_from_heights(chain, u + t * d, a),
+                               E, slope, noise)
+        if trial is None:
+            return line_search_failed(alpha, n, steps, sol, t_asm, dalpha, E)
         u, alpha, E = u + t * d, trial, E_t
         steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
                                 t, dalpha, E, _setup(sol)))
@@ -225,6 +216,31 @@ def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int,
             return _converged(chain, alpha, sol, steps, step)
     return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
                                   f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
+
+
+def armijo(chain: Chain, trial_of, E: float, slope: float, noise: float):
+    """Backtracking on the exact energy: the first t in 1, ½, ¼, … with
+    E(trial_of(t)) ≤ E + 1e-4 t min(slope, 0) + noise, as (t, α, E(α));
+    (0, None, E) below t = 1e-12. ``trial_of(t)`` is the chain at t (None where
+    none fits)."""
+    t = 1.0
+    while t >= 1e-12:
+        trial = trial_of(t)
+        if trial is not None:
+            E_t = energy(chain, trial)
+            if E_t <= E + 1e-4 * t * min(slope, 0.0) + noise:
+                return t, trial, E_t
+        t *= 0.5
+    return 0.0, None, E
+
+
+def line_search_failed(alpha, n: int, steps: list[StepRecord], sol: StepSolution,
+                       t_asm: float, dalpha: float, E: float) -> DriverOutput:
+    """The answer of a line search that found no decrease (the step recorded, t = 0)."""
+    steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm, 0.0,
+                            dalpha, E, _setup(sol)))
+    return _fail(alpha, n, steps, "line search failed: no decrease of the energy along "
+                                  "the step")
 
 
 def _undamped(chain: Chain, solver: StepSolver, tol: float, max_outer: int) -> DriverOutput:

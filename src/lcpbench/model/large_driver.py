@@ -32,6 +32,8 @@ from .driver import (
     _feasible_start,
     _setup,
     _step_failed,
+    armijo,
+    line_search_failed,
 )
 from .large_n import alpha_from_increments, increment_step
 from .step import assemble_step
@@ -66,19 +68,10 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
         d = sol.u  # the increment to the step's answer
         dalpha = float(np.max(np.abs(step.predict_alpha(d) - alpha), initial=0.0))
         slope = float(step.linear @ d)  # the gradient at u₀ along d
-        t = 1.0
-        while True:
-            trial = alpha_from_increments(chain, alpha, t * d)
-            if trial is not None:
-                E_t = energy(chain, trial)
-                if E_t <= E + 1e-4 * t * min(slope, 0.0) + noise:
-                    break
-            t *= 0.5
-            if t < 1e-12:
-                steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time,
-                                        t_asm, 0.0, dalpha, E, _setup(sol)))
-                return _fail(alpha, n, steps, "line search failed: no decrease of the energy "
-                                              "along the step")
+        t, trial, E_t = armijo(chain, lambda t, a=alpha, d=d: alpha_from_increments(chain, a, t * d),
+                               E, slope, noise)
+        if trial is None:
+            return line_search_failed(alpha, n, steps, sol, t_asm, dalpha, E)
         steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
                                 t, dalpha, E_t, _setup(sol)))
         if dalpha < tol:
