@@ -24,8 +24,10 @@ import time
 import numpy as np
 
 from ..api import finish
+from ..model.angle_step import heavy
 from ..model.compiled import applies, kernel_args, run_compiled
 from ..model.driver import DriverStart, run_driver
+from ..model.heavy_driver import run_heavy
 from ..model.judge_compiled import chain_args
 from ..model.result import ContactResult
 from ..model.step_solver import make_step_solver
@@ -95,7 +97,11 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
     out = solve_without_contact(chain, tol, max_outer, start,
                                 engine="compiled" if kernel else "numpy", args=args)
     used = "compiled" if kernel else "numpy"
+    if out is None and heavy(chain):  # links past the vertical: steps in the angles
+        out = run_heavy(chain, start, tol, max_outer)
+        used = "numpy (SQP steps in the link angles: a heavy chain)"
     if out is None:
+        used = "compiled" if kernel else "numpy"
         out, why = (run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
                                  settings=settings, args=args) if kernel
                     else (None, "a layout the kernel does not take"))
