@@ -43,10 +43,10 @@ MAX_LINKS = 1500
 #: the constraints (closure, walls) are met to this fraction of ℓ at an answer
 FEASIBLE = 1e-11
 #: load parameter wℓ³/EI (total load over EI/ℓ²) from which a chain is solved in
-#: angles first. Below it the height steps (the compiled kernel) converge: the hard
-#: suite's heavy scenes (w = 0.05 N/mm, wℓ³/EI = 42) in under 20 outer iterations;
-#: from a few hundred on they stall (benchmarks/heavy_chains.py)
-HEAVY = 50.0
+#: angles first: from about 40 the height steps crawl (41 outer iterations at 1e-3
+#: for a chain hanging at wℓ³/EI = 42) and from a few hundred they stall
+#: (benchmarks/heavy_chains.py)
+HEAVY = 40.0
 
 
 @dataclass

@@ -116,8 +116,9 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
         q = angle_step.load_parameter(chain)
         if q >= angle_step.HEAVY:
             out = heavy_driver.run_heavy(chain, start, tol, max_outer)
-            if out is not None:
-                return out, "numpy (SQP steps in the link angles: a heavy chain)"
+            if out is not None:  # (its reason says so)
+                return out, ("numpy" if engine == "numpy"
+                             else "numpy (SQP steps in the link angles: a heavy chain)")
         first = (min(max_outer, heavy_driver.FIRST_TRY) if q >= heavy_driver.MODERATE
                  else max_outer)
         out, used = _drive(chain, step_solver, backend=backend, settings=settings,
@@ -128,8 +129,9 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
         rescue = heavy_driver.run_heavy(chain, start, tol, max_outer - len(out.steps))
         if rescue is None:
             return out, used
-        rescue.steps = out.steps + rescue.steps
-        return rescue, f"{used}; then SQP steps in the link angles"
+        rescue.steps = out.steps + rescue.steps  # the reason says the SQP finished it
+        rescue.reason = "converged (height steps, then SQP steps in the link angles)"
+        return rescue, used
     return _drive(chain, step_solver, backend=backend, settings=settings, engine=engine,
                   tol=tol, max_outer=max_outer, method=method, start=start, args=args)
 

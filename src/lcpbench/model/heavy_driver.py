@@ -44,5 +44,9 @@ def run_heavy(chain: Chain, start: DriverStart | None, tol: float,
         return None
     records = [StepRecord(0, "solved", 0.0, 0.0, 1.0, s, e)
                for s, e in zip(outcome.step_sizes, outcome.energies, strict=True)]
-    return DriverOutput(outcome.alpha, outcome.forces_upper, outcome.forces_lower, True,
-                        "converged (SQP steps in the link angles: a heavy chain)", records)
+    up, lo = outcome.forces_upper, outcome.forces_lower
+    free = not (np.any(up) or np.any(lo))
+    reason = ("no contact: the equilibrium clears every wall (found by SQP steps in the "
+              "link angles: a heavy chain)" if free
+              else "converged (SQP steps in the link angles: a heavy chain)")
+    return DriverOutput(outcome.alpha, up, lo, True, reason, records)
