@@ -114,9 +114,13 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
         from . import heavy_driver
 
         q = angle_step.load_parameter(chain)
+        # with contact, the SQP's reactions stand in for the default back-end only: a
+        # sweep's other back-ends keep the height steps; with none, no back-end is
+        # involved (as on the wall-free path)
+        own = backend in (DEFAULT, "auto")
         if q >= angle_step.HEAVY:
             out = heavy_driver.run_heavy(chain, start, tol, max_outer)
-            if out is not None:  # (its reason says so)
+            if out is not None and (own or heavy_driver.no_contact(out)):  # (its reason says so)
                 return out, ("numpy" if engine == "numpy"
                              else "numpy (SQP steps in the link angles: a heavy chain)")
         first = (min(max_outer, heavy_driver.FIRST_TRY) if q >= heavy_driver.MODERATE
@@ -124,10 +128,10 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
         out, used = _drive(chain, step_solver, backend=backend, settings=settings,
                            engine=engine, tol=tol, max_outer=first, method=method,
                            start=start, args=args)
-        if out.converged or q <= 0 or max_outer <= len(out.steps):
+        if out.converged or q < heavy_driver.MODERATE or max_outer <= len(out.steps):
             return out, used
         rescue = heavy_driver.run_heavy(chain, start, tol, max_outer - len(out.steps))
-        if rescue is None:
+        if rescue is None or not (own or heavy_driver.no_contact(rescue)):
             return out, used
         rescue.steps = out.steps + rescue.steps  # the reason says the SQP finished it
         rescue.reason = "converged (height steps, then SQP steps in the link angles)"

@@ -31,6 +31,11 @@ FIRST_TRY = 30
 ANGLE_STEPS = 30
 
 
+def no_contact(out: DriverOutput) -> bool:
+    """Whether no wall carries a reaction in ``out``."""
+    return not (np.any(out.forces_upper) or np.any(out.forces_lower))
+
+
 def run_heavy(chain: Chain, start: DriverStart | None, tol: float,
               max_outer: int) -> DriverOutput | None:
     """The driver's output for a heavy chain, or None when the angle steps did not
