@@ -24,6 +24,7 @@ from known_answers import CANTILEVER_THEORY_FORCE, PAPER_SCENE
 
 from lcpbench import ActuatorScene, CantileverScene, ProblemError, solve
 from lcpbench.bench.grid import hard_scenes
+from lcpbench.model.angle_step import heavy
 from lcpbench.solvers.base import Settings
 
 
@@ -72,12 +73,15 @@ def assert_certified(res, tol):
 @pytest.mark.parametrize("tol", [1e-3, 1e-8])
 def test_hard_suite_same_path_and_answer(scene, tol):
     ref, fast = both(scene, tol=tol)
-    assert_same(ref, fast, compiled=fast.outer_iterations > 0 and "no contact" not in ref.reason)
+    # a heavy chain (wℓ³/EI >= 40) is solved by steps in the link angles, in numpy
+    assert_same(ref, fast, compiled=fast.outer_iterations > 0 and "no contact" not in ref.reason
+                and not heavy(scene.chain()))
     assert_certified(fast, tol)
 
 
 def test_paper_scene_channel_and_cantilever_run_compiled():
-    heavy_channel = ActuatorScene(theta=60, height=0.3, channel=True, weight=0.05)
+    # wℓ³/EI = 34, below the steps in the link angles (model/angle_step.HEAVY = 40)
+    heavy_channel = ActuatorScene(theta=60, height=0.3, channel=True, weight=0.04)
     for scene in (ActuatorScene(**PAPER_SCENE), ActuatorScene(theta=180, height=1.0, channel=True),
                   heavy_channel, CantileverScene()):
         ref, fast = both(scene, tol=1e-8)
@@ -132,7 +136,8 @@ cantilevers = st.builds(
 @given(scene=st.one_of(actuators(), cantilevers), tol=st.sampled_from([1e-3, 1e-8]))
 def test_random_scenes_same_path_and_answer(scene, tol):
     ref, fast = both(scene, tol=tol)
-    assert_same(ref, fast, compiled=ref.outer_iterations > 0 and "no contact" not in ref.reason)
+    assert_same(ref, fast, compiled=ref.outer_iterations > 0 and "no contact" not in ref.reason
+                and not heavy(scene.chain()))
     if ref.converged:
         assert_certified(fast, tol)
 

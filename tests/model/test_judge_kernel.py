@@ -53,7 +53,7 @@ def _close(a: float, b: float, scale: float = 0.0, rtol: float = RTOL) -> bool:
     return abs(a - b) <= rtol * max(abs(a), abs(b)) + scale
 
 
-def assert_same(ref, fast):
+def assert_same(ref, fast, roundoff: float = SOLVE_ROUNDOFF):
     assert fast.converged == ref.converged, (ref.reason, fast.reason)
     assert fast.failed == ref.failed
     assert fast.inexact_steps == ref.inexact_steps
@@ -62,7 +62,7 @@ def assert_same(ref, fast):
         assert _close(getattr(ref, name), getattr(fast, name)), name
     assert _close(ref.contraction, fast.contraction, rtol=RATIO_ROUNDOFF)
     for name in ("force_error_bound", "node_error_bound"):  # in units of F₀
-        assert _close(getattr(ref, name), getattr(fast, name), SOLVE_ROUNDOFF,
+        assert _close(getattr(ref, name), getattr(fast, name), roundoff,
                       RATIO_ROUNDOFF), name
     assert _close(ref.judge_total_force, fast.judge_total_force,
                   SOLVE_ROUNDOFF * ref.force_unit)
@@ -167,7 +167,11 @@ def test_random_scenes_same_verdicts_and_perturbed_forces():
     for scene in _random_scenes(1919, 12):
         for tol in (1e-3, 1e-8):
             res = solve(scene, tol=tol)
-            assert_same(*_judge_result(res))
+            # the judge step's matrix carries 1/(a cos α) per link (eq. 21): its round-off
+            # grows as 1/cos²α, and heavy chains (wℓ³/EI in the hundreds here, solved
+            # in the link angles) hang with links a degree or two from the vertical
+            steep = 1.0 / max(float(np.min(np.cos(res.alpha) ** 2)), 1e-12)
+            assert_same(*_judge_result(res), roundoff=SOLVE_ROUNDOFF * max(1.0, steep / 10))
             judged += "driver" not in res.judgement.failed
             if res.total_force > 0:  # a relative error of 1e-4..1e-2 on every node
                 noisy = res.forces * (1 + rng.uniform(-1e-2, 1e-2, res.forces.size))

@@ -32,7 +32,7 @@ from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from ..solvers.judge import DEFAULT_TOL
 from ..solvers.registry import DEFAULT, get_settings
-from . import large_n
+from . import angle_step, large_n
 from .driver import DriverOutput, DriverStart, StepRecord, _converged, _fail, run_driver
 from .profile import has_profile
 
@@ -100,8 +100,52 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
     :func:`~lcpbench.model.driver.run_driver` with ``step_solver``. ``args``: the
     chain's :func:`kernel_args`, given by a caller that has checked that the kernel
     takes the chain's layout.
+
+    Heavy chains (:mod:`lcpbench.model.heavy_driver`): from wℓ³/EI ≥
+    :data:`~lcpbench.model.angle_step.HEAVY` the SQP steps in the link angles run
+    first (the height steps where they fail); a loaded chain whose height steps do
+    not converge (within :data:`~lcpbench.model.heavy_driver.FIRST_TRY` outer
+    iterations from wℓ³/EI ≥ :data:`~lcpbench.model.heavy_driver.MODERATE`) is
+    finished by them, its outer iterations counted with the height steps'.
     """
     engine = check_engine(engine)
+    angles = method != "undamped" and angle_step.in_reach(chain)
+    if angles:
+        from . import heavy_driver
+
+        q = angle_step.load_parameter(chain)
+        # with contact, the SQP's reactions stand in for the default back-end only: a
+        # sweep's other back-ends keep the height steps, with their whole budget of outer
+        # iterations; the SQP's answer is taken for them only where it touches no wall
+        # (no back-end is involved, as on the wall-free path, which heavy chains skip)
+        own = backend in (DEFAULT, "auto")
+        if q >= angle_step.HEAVY:
+            out = heavy_driver.run_heavy(chain, start, tol, max_outer)
+            if out is not None and (own or heavy_driver.no_contact(out)):  # (its reason)
+                return out, ("numpy" if engine == "numpy"
+                             else "numpy (SQP steps in the link angles: a heavy chain)")
+        first = (min(max_outer, heavy_driver.FIRST_TRY) if own and q >= heavy_driver.MODERATE
+                 else max_outer)
+        out, used = _drive(chain, step_solver, backend=backend, settings=settings,
+                           engine=engine, tol=tol, max_outer=first, method=method,
+                           start=start, args=args)
+        budget = max_outer - len(out.steps) if own else max_outer
+        if out.converged or q < heavy_driver.MODERATE or budget <= 0:
+            return out, used
+        rescue = heavy_driver.run_heavy(chain, start, tol, budget)
+        if rescue is None or not (own or heavy_driver.no_contact(rescue)):
+            return out, used
+        rescue.steps = out.steps + rescue.steps  # the reason says the SQP finished it
+        rescue.reason = "converged (height steps, then SQP steps in the link angles)"
+        return rescue, used
+    return _drive(chain, step_solver, backend=backend, settings=settings, engine=engine,
+                  tol=tol, max_outer=max_outer, method=method, start=start, args=args)
+
+
+def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
+           tol: float, max_outer: int, method: str, start: DriverStart | None,
+           args: tuple | None = None) -> tuple[DriverOutput, str]:
+    """:func:`drive` in the node heights: the kernel, the large-N increments or numpy."""
     if method == "globalised" and large_n.applies(chain):  # N >= LARGE_N: increments
         from .large_driver import run_large
 

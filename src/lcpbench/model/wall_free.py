@@ -19,6 +19,7 @@ from numpy.linalg import LinAlgError  # scipy.linalg's LinAlgError is this class
 from ..linalg import solveh_banded
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
+from .angle_step import heavy
 from .chain import heights
 from .driver import DriverOutput, DriverStart, run_driver
 from .profile import walls_at
@@ -77,6 +78,8 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
     caller has them.
     """
     n = chain.free_nodes.size
+    if heavy(chain):  # links past the vertical: the angle steps (model/heavy_driver.py)
+        return None
     loaded = bool(np.any(chain.link_load != 0))
     overlap = wall_overlap(chain, heights(chain, chain.rest_alpha))
     if overlap >= 0:  # the arc touches or crosses a wall

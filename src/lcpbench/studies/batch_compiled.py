@@ -22,6 +22,7 @@ import time
 
 from ..api import finish
 from ..model import large_n
+from ..model.angle_step import in_reach, load_parameter
 from ..model.compiled import applies, drive, kernel_args, run_compiled
 from ..model.driver import DriverStart, run_driver
 from ..model.judge_compiled import chain_args
@@ -71,6 +72,13 @@ def _predict(history: list, scene: ActuatorScene, most: int):
     return DriverStart(extrapolated_alpha(scene, param, pts), r1.extra.get("last_step"))
 
 
+def moderately_heavy(chain) -> bool:
+    """Whether :func:`lcpbench.model.compiled.drive` may take SQP steps in the angles."""
+    from ..model.heavy_driver import MODERATE
+
+    return in_reach(chain) and load_parameter(chain) >= MODERATE
+
+
 def _solve_one(scene, tol: float, max_outer: int, settings: str,
                start: DriverStart | None, const: dict) -> ContactResult:
     """:func:`lcpbench.solve` for an already checked scene, in the kernels.
@@ -88,11 +96,15 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
     out = solve_without_contact(chain, tol, max_outer, start,
                                 engine="compiled" if kernel else "numpy", args=args)
     used = "compiled" if kernel else "numpy"
-    if out is None and not kernel:  # large N, or a layout the kernel does not take
+    if out is None and (not kernel or moderately_heavy(chain)):
+        # large N, a layout the kernel does not take, or a heavy chain (SQP steps in the
+        # angles, first or as the rescue): solve()'s choice, in model.compiled.drive
         out, used = drive(chain, make_step_solver(DEFAULT, settings, True), backend=DEFAULT,
-                          settings=settings, engine="numpy", tol=tol, max_outer=max_outer,
-                          method="globalised", start=start)
+                          settings=settings, engine="auto" if kernel else "numpy", tol=tol,
+                          max_outer=max_outer, method="globalised", start=start,
+                          args=args)
     if out is None:
+        used = "compiled"
         out, why = run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
                                 settings=settings, args=args)
         if out is None:  # the kernel left the reference's path: the numpy reference
