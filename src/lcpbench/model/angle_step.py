@@ -71,9 +71,7 @@ def load_parameter(chain: Chain) -> float:
 def in_reach(chain: Chain) -> bool:
     """Whether the SQP takes the chain: rigid flat walls, at most :data:`MAX_LINKS`
     links."""
-    if chain.upper_stiffness is not None or chain.lower_stiffness is not None:
-        return False
-    if chain.upper_profile is not None or chain.lower_profile is not None:
+    if chain.elastic_walls or chain.profiled_walls:
         return False
     return chain.links <= MAX_LINKS
 

@@ -42,7 +42,7 @@ def energy(chain: Chain, alpha: np.ndarray) -> float:
     _, y = node_positions(chain, alpha)
     centre = 0.5 * (y[:-1] + y[1:])
     E = 0.5 * float(np.sum(chain.joint_stiffness * dphi**2)) - float(chain.link_load @ centre)
-    if chain.upper_stiffness is not None or chain.lower_stiffness is not None:
+    if chain.elastic_walls:
         E += penalty(chain, y[chain.free_nodes])
     return E
 

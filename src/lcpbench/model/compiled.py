@@ -65,9 +65,9 @@ def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
         return False
     if chain is None:
         return True
-    if chain.upper_stiffness is not None or chain.lower_stiffness is not None:
+    if chain.elastic_walls:
         return False  # elastic walls: the numpy reference (model.elastic), not ported yet
-    if chain.upper_profile is not None or chain.lower_profile is not None:
+    if chain.profiled_walls:
         return False  # walls of any profile: the numpy reference (model/profile_driver.py)
     left, right = chain.joint_links[:, 0], chain.joint_links[:, 1]
     f = chain.free_nodes
@@ -76,18 +76,10 @@ def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
                 and f[0] >= 1)
 
 
-_LOADED: list = []  # the kernel module, once imported
-
-
 def _kernel():
-    if _LOADED:
-        return _LOADED[0]
-    from . import compiled_kernel  # imports numba; loads or compiles the kernel
-    from .kernel_cache import light_cache_load
+    from .kernel_cache import kernel_module  # numba at the first solve, not at import
 
-    light_cache_load(compiled_kernel.solve_chain)
-    _LOADED.append(compiled_kernel)
-    return compiled_kernel
+    return kernel_module("lcpbench.model.compiled_kernel", "solve_chain")
 
 
 def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "auto",
@@ -161,7 +153,7 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
         raise ProblemError("engine='compiled' does not run walls of any profile (wall_profile); "
                            "engine='auto' or 'numpy' runs them in the numpy reference")
     elif engine == "compiled":
-        if chain.upper_stiffness is not None or chain.lower_stiffness is not None:
+        if chain.elastic_walls:
             raise ProblemError("engine='compiled' does not run elastic walls yet "
                                "(wall_stiffness < inf); use engine='auto' or 'numpy'")
         raise ProblemError(f"engine='compiled' runs the default back-end ({DEFAULT}) with "

@@ -116,7 +116,7 @@ def run_driver(
     (globalised and Newton schemes) begins from a neighbouring scene's answer instead
     of the clipped unconstrained arc.
     """
-    if chain.upper_profile is not None or chain.lower_profile is not None:
+    if chain.profiled_walls:
         if method not in METHODS:
             raise ProblemError(f"method must be one of {METHODS}, got {method!r}")
         from .profile_driver import run_profile_driver  # it imports this module
@@ -176,18 +176,23 @@ def _feasible_start(chain: Chain, alpha0: np.ndarray):
     return u, alpha_from_heights(chain, u, alpha0)
 
 
+def starting_point(chain: Chain, start: DriverStart | None, fit: Callable):
+    """(u, α, warm) to begin from: a neighbour's answer ``start`` fitted to this
+    scene's walls by ``fit(chain, α) -> (u, α or None)``, else the unconstrained arc
+    (α None where neither fits)."""
+    if start is not None:
+        u, alpha = fit(chain, np.asarray(start.alpha, float))
+        if alpha is not None:
+            return u, alpha, start.warm
+    u, alpha = fit(chain, chain.rest_alpha)
+    return u, alpha, None
+
+
 def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int,
                 start: DriverStart | None = None, newton: bool = False) -> DriverOutput:
     n = chain.free_nodes.size
     steps: list[StepRecord] = []
-    warm: StepSolution | None = None
-    alpha = None
-    if start is not None:  # a neighbour's answer, clipped to this scene's walls
-        u, alpha = _feasible_start(chain, np.asarray(start.alpha, float))
-        warm = start.warm
-    if alpha is None:
-        u, alpha = _feasible_start(chain, chain.rest_alpha)
-        warm = None
+    u, alpha, warm = starting_point(chain, start, _feasible_start)
     if alpha is None:
         return _fail(chain.rest_alpha, n, steps, "cannot fit the chain between the walls")
     E = energy(chain, alpha)

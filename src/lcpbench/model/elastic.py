@@ -123,7 +123,7 @@ def wall_pressure(chain, y_free: np.ndarray, forces_upper: np.ndarray,
     a rigid one p is the reaction smeared over a link, which grows with N at the
     edges of a contact (the rigid wall's point forces).
     """
-    if chain.upper_stiffness is None and chain.lower_stiffness is None:
+    if not chain.elastic_walls:
         depth = np.zeros(y_free.size)  # rigid walls do not yield
     else:
         ku, kl = _soft(chain)

@@ -20,18 +20,11 @@ from ..problems.scenes import Chain
 from . import large_n
 from .judge import Judgement, failed_checks, judge, settle_verdict
 
-_LOADED: list = []  # the kernel module, once imported
-
 
 def _kernel():
-    if _LOADED:
-        return _LOADED[0]
-    from . import judge_kernel  # imports numba; loads or compiles the kernel
-    from .kernel_cache import light_cache_load
+    from .kernel_cache import kernel_module  # numba at the first judgement, not at import
 
-    light_cache_load(judge_kernel.judge_answer)
-    _LOADED.append(judge_kernel)
-    return judge_kernel
+    return kernel_module("lcpbench.model.judge_kernel", "judge_answer")
 
 
 def takes(chain: Chain) -> bool:

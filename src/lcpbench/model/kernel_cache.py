@@ -22,7 +22,21 @@ missing it does nothing, so a numba that changed them loads as before.
 
 from __future__ import annotations
 
+import importlib
 import os
+
+_LOADED: dict = {}  # module name -> the kernel module, once imported and hooked
+
+
+def kernel_module(name: str, entry: str):
+    """The compiled module ``name`` (imports numba; loads or compiles it), its
+    dispatcher ``entry`` hooked to :func:`light_cache_load`, once per process."""
+    module = _LOADED.get(name)
+    if module is None:
+        module = importlib.import_module(name)
+        light_cache_load(getattr(module, entry))
+        _LOADED[name] = module
+    return module
 
 
 def light_cache_load(dispatcher) -> bool:

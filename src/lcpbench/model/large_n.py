@@ -55,9 +55,7 @@ def layout_fits(chain: Chain) -> bool:
 def applies(chain: Chain) -> bool:
     """Whether solves and the judge use the increment formulation (N >= LARGE_N; rigid,
     flat walls: elastic walls and wall profiles keep their own steps)."""
-    if chain.upper_stiffness is not None or chain.lower_stiffness is not None:
-        return False
-    if chain.upper_profile is not None or chain.lower_profile is not None:
+    if chain.elastic_walls or chain.profiled_walls:
         return False
     return chain.links >= LARGE_N and layout_fits(chain)
 

@@ -57,8 +57,7 @@ from .step import ContactStep, assemble_step
 
 def has_profile(chain: Chain) -> bool:
     """Whether a wall of ``chain`` has a profile h(x) (not the flat rows)."""
-    return getattr(chain, "upper_profile", None) is not None or \
-        getattr(chain, "lower_profile", None) is not None
+    return chain.profiled_walls
 
 
 def node_x(chain: Chain, alpha: np.ndarray) -> np.ndarray:

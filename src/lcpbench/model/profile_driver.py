@@ -30,7 +30,7 @@ import time
 import numpy as np
 
 from ..problems.scenes import Chain
-from ..solvers.base import Status, StepSolution
+from ..solvers.base import Status
 from .chain import alpha_from_heights, energy, heights, node_positions
 from .driver import (
     NEWTON_SWITCH,
@@ -41,6 +41,7 @@ from .driver import (
     _fail,
     _setup,
     _step_failed,
+    starting_point,
 )
 from .judge import split_reactions
 from .newton import newton_step
@@ -121,15 +122,8 @@ def run_profile_driver(chain: Chain, solver, *, tol: float, max_outer: int, meth
     """Iterate profile contact steps to the equilibrium (never raises on failure)."""
     n = chain.free_nodes.size
     steps: list[StepRecord] = []
-    warm: StepSolution | None = None
-    alpha = None
     undamped = method == "undamped"
-    if start is not None:
-        u, alpha = _profile_start(chain, np.asarray(start.alpha, float))
-        warm = start.warm
-    if alpha is None:
-        u, alpha = _profile_start(chain, chain.rest_alpha)
-        warm = None
+    u, alpha, warm = starting_point(chain, start, _profile_start)
     if alpha is None:
         return _fail(chain.rest_alpha, n, steps, "cannot fit the chain between the walls")
     mu_up, mu_lo = np.zeros(n), np.zeros(n)

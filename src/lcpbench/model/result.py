@@ -65,7 +65,7 @@ def certify(chain: Chain, alpha: np.ndarray, upper: np.ndarray, lower: np.ndarra
         forces.append(lower)
     gap = np.concatenate(gaps) if gaps else np.array([np.inf])
     force = np.concatenate(forces)
-    if gaps and (chain.upper_stiffness is not None or chain.lower_stiffness is not None):
+    if gaps and chain.elastic_walls:
         # elastic walls: the compliant gap g + R/k (model.elastic); the node indents by R/k
         c_up, c_lo = compliances(chain)
         comp_ = np.concatenate([c_up, c_lo] if chain.channel else [c_up])

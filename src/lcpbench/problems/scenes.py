@@ -123,6 +123,16 @@ class Chain:
     lower_profile: WallProfile | None = None
 
     @property
+    def elastic_walls(self) -> bool:
+        """Whether a wall is given a stiffness (``upper_stiffness``/``lower_stiffness``)."""
+        return self.upper_stiffness is not None or self.lower_stiffness is not None
+
+    @property
+    def profiled_walls(self) -> bool:
+        """Whether a wall has a profile y = h(x) (``upper_profile``/``lower_profile``)."""
+        return self.upper_profile is not None or self.lower_profile is not None
+
+    @property
     def nodal_load(self) -> np.ndarray:
         """Link loads lumped half to each end node (exact for rigid links)."""
         f = np.zeros(self.links + 1)

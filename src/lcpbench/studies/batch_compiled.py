@@ -31,7 +31,7 @@ from ..model.step_solver import make_step_solver
 from ..model.wall_free import solve_without_contact
 from ..problems.scenes import ActuatorScene
 from ..solvers.registry import DEFAULT
-from .continuation import _POINTS, extrapolated_alpha
+from .continuation import _POINTS, extrapolated_alpha, warm_or_cold
 
 AUTO_WHY = "auto: the built-in active set (exact)"
 
@@ -90,7 +90,8 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
     if not const:
         # not from LARGE_N links: those run in increments (model.large_driver, via drive)
         const["kernel"] = applies(DEFAULT, "globalised", chain) and not large_n.applies(chain)
-        const["arrays"] = kernel_args(chain)[2:4] + (kernel_args(chain)[7],)
+        full = kernel_args(chain)
+        const["arrays"] = full[2:4] + (full[7],)
     kernel = const["kernel"]
     args = kernel_args(chain, const["arrays"]) if kernel else None
     out = solve_without_contact(chain, tol, max_outer, start,
@@ -125,18 +126,9 @@ def solve_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str 
     out = []
     const: dict = {}
     for scene in scenes:
-        start = _predict(history, scene, most)
-        res = _solve_one(scene, tol, max_outer, settings, start, const)
-        label = "cold" if start is None else predictor
-        if start is not None and not res.converged:  # never worse than a cold start
-            failed = res
-            res = _solve_one(scene, tol, max_outer, settings, None, const)
-            label = f"{predictor}, failed; cold"
-            res.extra["discarded"] = {
-                "outer_iterations": failed.outer_iterations,
-                "inner_iterations": failed.inner_iterations,
-                "time_s": failed.time_s, "reason": failed.reason}
-        res.extra["continuation"] = label
+        res = warm_or_cold(
+            lambda s, sc=scene: _solve_one(sc, tol, max_outer, settings, s, const),
+            _predict(history, scene, most), predictor)
         history.append((scene, res))
         out.append(res)
     return out

@@ -80,6 +80,25 @@ def predict(history: list[tuple[ActuatorScene, ContactResult]], scene: ActuatorS
     return replace(r1, alpha=extrapolated_alpha(scene, param, pts))
 
 
+def warm_or_cold(solve_from: Callable, start, predictor: str) -> ContactResult:
+    """``solve_from(start)``, redone cold (``solve_from(None)``) where the warm start
+    fails, so a continuation is never worse than a cold start; the result's
+    ``extra["continuation"]`` says which, ``extra["discarded"]`` what a failed warm
+    attempt cost (for honest totals)."""
+    res = solve_from(start)
+    label = "cold" if start is None else predictor
+    if start is not None and not res.converged:
+        failed = res
+        res = solve_from(None)
+        label = f"{predictor}, failed; cold"
+        res.extra["discarded"] = {
+            "outer_iterations": failed.outer_iterations,
+            "inner_iterations": failed.inner_iterations,
+            "time_s": failed.time_s, "reason": failed.reason}
+    res.extra["continuation"] = label
+    return res
+
+
 def extrapolated_alpha(scene, param: str, pts: Sequence) -> np.ndarray:
     """α at ``scene`` by Lagrange extrapolation along ``param`` ("theta" or "height")
     through the (scene, result) points ``pts`` of one line (distinct values)."""
@@ -112,18 +131,8 @@ def solve_sequence(scenes: Sequence[ActuatorScene], *, predictor: str = "quadrat
     history: list[tuple[ActuatorScene, ContactResult]] = []
     out = []
     for k, scene in enumerate(scenes):
-        start = predict(history, scene, predictor)
-        res = solve(scene, start=start, **solve_kw)
-        label = "cold" if start is None else predictor
-        if start is not None and not res.converged:  # never worse than a cold start
-            failed = res
-            res = solve(scene, **solve_kw)
-            label = f"{predictor}, failed; cold"
-            res.extra["discarded"] = {  # the failed attempt's cost, for honest totals
-                "outer_iterations": failed.outer_iterations,
-                "inner_iterations": failed.inner_iterations,
-                "time_s": failed.time_s, "reason": failed.reason}
-        res.extra["continuation"] = label
+        res = warm_or_cold(lambda s, sc=scene: solve(sc, start=s, **solve_kw),
+                           predict(history, scene, predictor), predictor)
         history.append((scene, res))
         out.append(res)
         if progress is not None:
