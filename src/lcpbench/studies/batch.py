@@ -57,10 +57,10 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
 
     ``tol``, ``solver`` and ``solve_kw`` are :func:`lcpbench.solve`'s.
     ``continuation``: start each scene from its solved neighbours (the
-    globalised driver only; a failed warm start is redone cold, so the answer
+    globalised or Newton driver; a failed warm start is redone cold, so the answer
     is the cold one's to the tolerance); ``predictor`` as in
-    :func:`~lcpbench.studies.continuation.solve_sequence`. False: every scene
-    cold, in the given order.
+    :func:`~lcpbench.studies.continuation.solve_sequence` (default "adaptive").
+    False: every scene cold, in the given order.
     """
     if isinstance(scenes, (str, bytes)) or not isinstance(scenes, Iterable):
         raise ProblemError(f"scenes must be a sequence of scenes, got {type(scenes).__name__}")

@@ -1,14 +1,15 @@
-"""Continuation: solve a line of scenes, each starting from its neighbours' answers.
+"""Continuation: solve scenes in order, each starting from its neighbours' answers.
 
-Along a line in θ (or in h) the equilibrium moves smoothly, so the answer of
-the previous scene, or better the straight-line extrapolation through the
-previous two (a secant predictor), is a much closer first iterate than the
-clipped unconstrained arc. The globalised driver clips the prediction to the
-walls and line-searches on the exact energy from there, so the answer is the
-same equilibrium; only the path to it is shorter.
+Along a line in θ the equilibrium moves smoothly, so a polynomial through
+the nearest answers is a much closer first iterate than the clipped
+unconstrained arc; across lines (in h) a scene that touches no wall has the
+same answer as its neighbour that touches none (:class:`Solved` has the
+rules). The globalised and Newton drivers clip the prediction to the walls
+and line-search on the exact energy from there, so the answer is the same
+equilibrium; only the path to it is shorter.
 
-Measured on the paper grid with the active set (``benchmarks/warm_sweep.py``,
-``results/warm-sweep.md``).
+Measured on the paper grid (``benchmarks/perf_targets.py`` → results/perf.md,
+``benchmarks/warm_sweep.py``; docs/performance.md).
 """
 
 from __future__ import annotations
