@@ -158,3 +158,16 @@ def test_warm_answers_are_the_cold_ones_on_a_small_grid(method):
     assert labels <= {"cold", "adaptive"} and "adaptive" in labels
     # both kinds of scene occur: some touch a wall and some do not
     assert any(r.total_force > 0 for r in warm) and any(r.total_force == 0 for r in warm)
+
+
+def test_planes_whose_fields_do_not_hash_are_found_by_equality(base, monkeypatch):
+    import lcpbench.studies.continuation as cont
+
+    pairs = [fake(base, t, 3.0, field(t, 3.0), True) for t in (100, 110, 120)]
+    target = ActuatorScene(theta=130, height=3.0, links=N)
+    hashed, _ = solved_from(pairs).predict(target)
+    monkeypatch.setattr(cont, "_hashable", lambda key: False)
+    s = solved_from(pairs)
+    alpha, _ = s.predict(target)
+    assert np.array_equal(alpha, hashed)
+    assert s.predict(ActuatorScene(theta=130, height=3.0, links=N + 1)) is None

@@ -76,12 +76,12 @@ class Solved:
         if not isinstance(scene, ActuatorScene):
             return None
         key = tuple(getattr(scene, f) for f in _PLANE_FIELDS)
-        try:
-            plane = self._planes.get(key)
-        except TypeError:  # a field that does not hash (a wall profile): by equality
-            plane = next((p for k, p in self._planes.items() if k == key), None)
+        if not _hashable(key):  # a field that does not hash: the planes compared one by one
+            key = next((k for k in self._planes if isinstance(k, _Unhashed) and k.key == key),
+                       _Unhashed(key))
+        plane = self._planes.get(key)
         if plane is None and make:
-            plane = self._planes[key if _hashable(key) else len(self._planes)] = ({}, {})
+            plane = self._planes[key] = ({}, {})
         return plane
 
     def add(self, scene: ActuatorScene, res: ContactResult) -> None:
@@ -131,6 +131,13 @@ class Solved:
 
 #: what makes two actuator scenes lie in one plane of θ and h
 _PLANE_FIELDS = tuple(f.name for f in fields(ActuatorScene) if f.name not in ("theta", "height"))
+
+
+class _Unhashed:
+    """A plane's key with a field that does not hash (by identity in the dict)."""
+
+    def __init__(self, key: tuple) -> None:
+        self.key = key
 
 
 def _hashable(key) -> bool:
