@@ -255,10 +255,11 @@ def run_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
 
 
 def warm_up() -> None:
-    """Load the kernel by one tiny solve, compiling it into numba's on-disk cache
+    """Load the kernels by one tiny solve each, compiling them into numba's on-disk cache
     the first time (about a minute). Call it before starting processes that
     solve under a time limit (the sweep's workers), so that no job pays for
     the compilation."""
     from ..problems.scenes import ActuatorScene
 
     run_compiled(ActuatorScene(theta=150, height=3.0, links=8).chain(), tol=1e-3)
+    compiled_driver.warm_up()  # the driver around the other back-ends
