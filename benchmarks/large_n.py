@@ -80,12 +80,15 @@ def _slope(xs, ys):
 
 
 def write_report(out: str, rows: list[dict], tol: float, load, load_after) -> None:
+    from lcpbench.bench.machine import cpu_model
+
     ok = [r for r in rows if "error" not in r]
     big = [r for r in ok if r["N"] >= 4000]
     lines = [f"# Large N (issue 19, target 5): θ = 150°, h = 3 mm, tol = {tol:g} rad", "",
              "`python benchmarks/large_n.py` (one subprocess per N, one BLAS thread; kernels "
              "loaded before the clock). Load average before "
-             f"{load[0]:.2f}, after {load_after[0]:.2f} (2 shared cores).", "",
+             f"{load[0]:.2f}, after {load_after[0]:.2f}; {cpu_model()}, {os.cpu_count()} "
+             "cores.", "",
              "| N | engine | driver (s) | solve + judge (s) | peak RSS (MiB) | F (N) | outer | "
              "converged | judge |", "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:

@@ -15,7 +15,13 @@ answers must agree to 1e-8).
     python benchmarks/warm_sweep.py [--solver active-set] [--out results/warm-sweep.md]
 """
 
+# ruff: noqa: E402  (BLAS is pinned to one thread before numpy is imported)
 from __future__ import annotations
+
+import os
+
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_v] = "1"  # one BLAS thread, before numpy loads (issue 19, item 6)
 
 import argparse
 import time
@@ -23,6 +29,7 @@ from pathlib import Path
 
 import lcpbench
 from lcpbench.bench.grid import PAPER_GRID
+from lcpbench.bench.machine import timing_note, timing_start
 from lcpbench.studies.continuation import largest_difference, solve_sequence, total_outer
 
 #: the paper's tolerance, two between, and one where warm and cold must agree to 1e-8
@@ -42,6 +49,7 @@ def main() -> None:
     ap.add_argument("--solver", default="active-set")
     ap.add_argument("--out", default="results/warm-sweep.md")
     args = ap.parse_args()
+    start = timing_start()
     rows = []
     for tol in TOLS:
         cold, t_cold = run("none", tol, args.solver)
@@ -64,6 +72,7 @@ def main() -> None:
         "cold | force difference from cold | converged |",
         "|---:|---|---:|---:|---:|---:|---:|---:|",
     ]
+    lines[3:3] = ["", f"Machine: {timing_note(start)}"]
     for tol, p, outer, ratio, t, speed, diff, conv, n in rows:
         lines.append(f"| {tol:.0e} | {p if p != 'none' else 'cold'} | {outer} | {ratio:.2f}× | "
                      f"{t:.2f} | {speed:.2f}× | {diff:.1e} | {conv}/{n} |")
