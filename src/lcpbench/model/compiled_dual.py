@@ -35,10 +35,12 @@ M1, M2, M3 = np.uint64(0x9E3779B97F4A7C15), np.uint64(0xBF58476D1CE4E5B9), np.ui
 
 
 @njit(cache=True)
-def _grad_into(out, m, u, gp, scale):
-    """ContactStep.gradient, Jᵀ k (φ̂(u) − φ*) − f about the linearisation point
-    (``scale``: ContactStep.gradient_scale, the size of its terms), into ``out``;
-    ``gp`` = (coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load)."""
+def _grad_into(out, m, u, gp, scale, T):
+    """ContactStep.gradient, Jᵀ k (φ̂(u) − φ*) − f + T (u − u₀) about the
+    linearisation point u₀ (``scale``: ContactStep.gradient_scale, the size of its
+    terms), into ``out``; ``gp`` = (coef, b0, fs, links, origin, phi_origin, k,
+    rest, nodal_load); T: the Newton step's geometric bands (zero for a
+    Gauss–Newton step: adding them changes nothing but the sign of a zero)."""
     coef, b0, fs, links, origin, phi_origin, k, rest, load = gp
     n, nj = u.size, coef.shape[0]
     for j in range(nj):  # J (u − u₀), then the moments
@@ -61,6 +63,16 @@ def _grad_into(out, m, u, gp, scale):
             if 0 <= j < nj:
                 s += (abs(coef[j, c]) if scale else coef[j, c]) * m[j]
         out[i] = s + (abs(load[i]) + TINY) if scale else s - load[i]
+    for i in range(n):  # + T (u − u₀), summed as linalg.banded_matvec
+        d0 = u[i] - origin[i]
+        s = abs(T[0, i]) * abs(d0) if scale else T[0, i] * d0
+        if i >= 1:
+            d1 = u[i - 1] - origin[i - 1]
+            s += abs(T[1, i - 1]) * abs(d1) if scale else T[1, i - 1] * d1
+        if i + 1 < n:
+            d2 = u[i + 1] - origin[i + 1]
+            s += abs(T[1, i]) * abs(d2) if scale else T[1, i] * d2
+        out[i] += s
     return out
 
 
@@ -254,7 +266,7 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
                     for i in range(n):
                         if S[i]:
                             u[i] = wall[i]
-                    _grad_into(g, m, u, gp, False)
+                    _grad_into(g, m, u, gp, False, ws[10])
                     for i in range(n):
                         r[i] = 0.0 if S[i] else g[i]
                     _resolve(fac, r)
@@ -326,15 +338,15 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
 
 
 @njit(cache=True)
-def _certify(u, ru, rl, lo, hi, gp, grad, size, m):
+def _certify(u, ru, rl, lo, hi, gp, grad, size, m, T):
     n = u.size
     for i in range(n):
         if not (np.isfinite(u[i]) and np.isfinite(ru[i]) and np.isfinite(rl[i])):
             return np.inf
     if n == 0:
         return 0.0
-    _grad_into(grad, m, u, gp, False)
-    _grad_into(size, m, u, gp, True)
+    _grad_into(grad, m, u, gp, False, T)
+    _grad_into(size, m, u, gp, True, T)
     force, span = TINY, 1.0 + _max_abs(u)
     stat = feas = neg = comp = 0.0
     for i in range(n):
@@ -354,11 +366,12 @@ def _certify(u, ru, rl, lo, hi, gp, grad, size, m):
 def _certificate(u, ru, rl, lo, hi, gp):
     """solvers.banded.step_certificate: the scaled KKT residual of a step answer."""
     n = u.size
-    return _certify(u, ru, rl, lo, hi, gp, np.empty(n), np.empty(n), np.empty(gp[0].shape[0]))
+    return _certify(u, ru, rl, lo, hi, gp, np.empty(n), np.empty(n), np.empty(gp[0].shape[0]),
+                    np.zeros((2, n)))
 
 
 @njit(cache=True)
-def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m):
+def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m, T):
     """_residuals into ``out`` and ``R`` (u2, rows, fac, m: work arrays)."""
     n = u.size
     some_free = False
@@ -367,7 +380,7 @@ def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m):
         some_free = some_free or not rows[i]
         u2[i] = u[i]
     if some_free:  # the nodes with no wall row, re-solved exactly
-        _grad_into(R, m, u2, gp, False)
+        _grad_into(R, m, u2, gp, False, T)
         if not _refactor(fac, bands, rows, 0, n):
             out[:] = 0.0
             return False
@@ -378,7 +391,7 @@ def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m):
         for i in range(n):
             if not rows[i]:
                 u2[i] -= R[i]
-    _grad_into(R, m, u2, gp, False)
+    _grad_into(R, m, u2, gp, False, T)
     nat, min_gap, min_r, comp_up, comp_lo, term = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0
     for i in range(n):
         R[i] = -R[i]
@@ -409,5 +422,5 @@ def _residuals(u, bands, linear, lo, hi, gp, L, F):
     n = u.size
     out, R = np.zeros(5), np.empty(n)
     ok = _judge(u, bands, linear, lo, hi, gp, L, F, out, R, np.empty(n), np.empty(n, np.bool_),
-                np.empty((4, n)), np.empty(gp[0].shape[0]))
+                np.empty((4, n)), np.empty(gp[0].shape[0]), np.zeros((2, n)))
     return ok, out, R

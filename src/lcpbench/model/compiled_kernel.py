@@ -40,6 +40,7 @@ from .compiled_dual import (
     BAIL_REPEAT,
     DIR,
     EPS,
+    FACT,
     FLOOR_ULPS,
     GF,
     INV,
@@ -70,9 +71,11 @@ from .compiled_dual import (
     _dual,
     _grad_into,
     _judge,
+    _refactor,
     _residuals,
 )
 
+NEWTON_SWITCH = 0.05  # model.driver.NEWTON_SWITCH (rad)
 # outcome codes of solve_chain (the Python side turns them into reasons)
 CONVERGED, MAX_OUTER, LINE_SEARCH, NO_FIT = 0, 1, 2, 3
 __all__ = ["BAIL_CERT", "BAIL_JUDGE", "BAIL_LIMIT", "BAIL_NOT_PD", "BAIL_PRIMAL", "BAIL_REPEAT",
@@ -84,7 +87,7 @@ __all__ = ["BAIL_CERT", "BAIL_JUDGE", "BAIL_LIMIT", "BAIL_NOT_PD", "BAIL_PRIMAL"
 def _workspace(n, links, nj, max_iter):
     return (np.zeros((18, n)), np.zeros((9, n), np.bool_), np.zeros((3, nj)),
             np.zeros((6, links)), np.zeros((5, links + 2)), np.zeros((4, n)), np.zeros((3, n)),
-            np.zeros((nj, 3)), np.zeros(max_iter + 2, np.uint64), np.zeros(5))
+            np.zeros((nj, 3)), np.zeros(max_iter + 2, np.uint64), np.zeros(5), np.zeros((2, n)))
 
 
 # -- the chain (model.chain) ----------------------------------------------------
@@ -200,13 +203,58 @@ def _assemble(alpha, a, jl, jr, k, rest, fs, n, nodal_load):
 
 
 @njit(cache=True)
+def _newton(alpha, a, jl, jr, k, rest, fs, n, bands, linear, origin, T, fac, none, mu, sines):
+    """model.newton.newton_step: T (the geometric bands) into ``T``, and H + T,
+    c − T u₀ into the step where H + T is positive definite (True); else T = 0
+    and the Gauss–Newton step stands (False)."""
+    links = alpha.size
+    mu[:] = 0.0
+    for j in range(jr.size):  # the net spring moment on each link (np.add.at's order)
+        mu[jr[j]] += k[j] * ((alpha[jr[j]] - (alpha[jl[j]] if jl[j] >= 0 else 0.0)) - rest[j])
+    for j in range(jr.size):
+        if jl[j] >= 0:
+            mu[jl[j]] -= k[j] * ((alpha[jr[j]] - alpha[jl[j]]) - rest[j])
+    for i in range(n):  # w = μ sin α / (a² cos³ α) on each link, to its two nodes
+        node = fs - 1 + i
+        T[0, i] = T[1, i] = 0.0
+        if node < links:
+            w = mu[node] * (sines[node] / (a * a * np.cos(alpha[node]) ** 3))
+            T[0, i] += w
+            T[1, i] = -w if i + 1 < n else 0.0
+        if node >= 1:
+            T[0, i] += mu[node - 1] * (sines[node - 1] / (a * a * np.cos(alpha[node - 1]) ** 3))
+    for i in range(n):  # H + T, factored to test it (LAPACK's dpbtrf in the reference)
+        fac[0, i], fac[1, i], fac[2, i] = bands[0, i] + T[0, i], bands[1, i] + T[1, i], bands[2, i]
+        none[i] = False
+    if not _refactor(fac, fac, none, 0, n):
+        T[:] = 0.0
+        return False
+    for i in range(n):
+        s = T[0, i] * origin[i]
+        if i >= 1:
+            s += T[1, i - 1] * origin[i - 1]
+        if i + 1 < n:
+            s += T[1, i] * origin[i + 1]
+        linear[i] -= s
+    for i in range(n):
+        bands[0, i] += T[0, i]
+        bands[1, i] += T[1, i]
+    return True
+
+
+@njit(cache=True)
 def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, warm_u, warm_up, warm_lo,
-          warm_flags, max_iter, request, ws, gp, sines):
+          warm_flags, max_iter, request, ws, gp, sines, newton):
     """One contact step at α (``sines``: sin α) into the work arrays: assemble, dual
     walk, certificate, judge; (code, face solves), code 0: solved."""
     wn, wb, wj, wa = ws[0], ws[1], ws[2], ws[3]
     _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, ws[6], wn[LIN], wa[INV], ws[7],
                    wn[ORIG], wa[ALPHA0], wj[0], wj[1], ws[4], sines)
+    T = ws[10]
+    T[:] = 0.0
+    if newton:  # T = 0 where H + T is not positive definite
+        _newton(alpha, a, jl, jr, k, rest, fs, n, ws[6], wn[LIN], wn[ORIG], T, ws[5],
+                wb[FACT], ws[4][0], sines)
     W_up, W_lo, bad = wb[WUP], wb[WLO], False
     for i in range(n):
         bad = bad or lo[i] > hi[i]
@@ -230,10 +278,11 @@ def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, warm_u, wa
         u[i] = min(max(u[i], lo[i]), hi[i])
         r_up[i] = max(-grad[i], 0.0) if sigma[i] > 0 else 0.0
         r_lo[i] = max(grad[i], 0.0) if sigma[i] < 0 else 0.0
-    if not _certify(u, r_up, r_lo, lo, hi, gp, wn[GF], wn[RATIO], wj[2]) <= RTOL:
+    if not _certify(u, r_up, r_lo, lo, hi, gp, wn[GF], wn[RATIO], wj[2], T) <= RTOL:
         return BAIL_CERT, it
     res = ws[9]
-    ok = _judge(u, ws[6], wn[LIN], lo, hi, gp, L, F, res, wn[NET], wn[U2], wb[ROWS], ws[5], wj[2])
+    ok = _judge(u, ws[6], wn[LIN], lo, hi, gp, L, F, res, wn[NET], wn[U2], wb[ROWS], ws[5], wj[2],
+                T)
     if not (ok and res[0] <= max(10.0 * request, FLOOR_ULPS * EPS * res[4])):
         return BAIL_JUDGE, it
     return 0, it
@@ -248,7 +297,7 @@ def _contact_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
     wn, wa = ws[0], ws[3]
     gp = (ws[7], jr[0], fs, alpha.size, wn[ORIG], ws[2][0], k, rest, nodal_load)
     code, it = _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, warm_u, warm_up,
-                     warm_lo, warm_flags, max_iter, request, ws, gp, np.sin(alpha))
+                     warm_lo, warm_flags, max_iter, request, ws, gp, np.sin(alpha), False)
     return (code, wn[U], wn[RUP], wn[RLO], wn[SIG], it, wa[INV], wa[ALPHA0], wn[ORIG], gp, ws[9],
             wn[NET])
 
@@ -279,8 +328,11 @@ def _clipped_heights(u, alpha, a, fs, lo, hi):
 @njit(cache=True)
 def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
                 tol, max_outer, start_alpha, warm_u, warm_up, warm_lo, warm_flags,
-                max_iter, request):
-    """The globalised driver (model.driver._globalised) around the compiled step.
+                max_iter, request, newton=False):
+    """The globalised driver (model.driver._globalised) around the compiled step;
+    ``newton``: its Newton scheme (``method="newton"``), the exact Hessian H + T
+    where positive definite once the last step moved α by less than
+    NEWTON_SWITCH, or from a warm start's first step.
 
     ``fs``: shifted index (node + 1) of the first free node; ``start_alpha``
     empty for a cold start; ``warm_flags``: bit 0 ``warm_u``, bit 1 ``warm_up``,
@@ -299,6 +351,7 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
     if start_alpha.size == links:  # a neighbour's answer, clipped to the walls
         _clipped_heights(u, start_alpha, a, fs, lo, hi)
         ok = _fit(alpha, u, start_alpha, a, fs, links, none[:0])
+    near = ok and warm_flags != 0  # a neighbour's answer and its last step: near already
     if not ok:
         warm_flags = 0
         _clipped_heights(u, rest_alpha, a, fs, lo, hi)
@@ -317,7 +370,8 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
     gp = (ws[7], jr[0], fs, links, origin, ws[2][0], k, rest, nodal_load)
     for _ in range(max_outer):
         code, it = _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
-                         w_u, w_up, w_lo, warm_flags, max_iter, request, ws, gp, sin_a)
+                         w_u, w_up, w_lo, warm_flags, max_iter, request, ws, gp, sin_a,
+                         newton and near)
         if code != 0:
             return code, alpha.copy(), zero, zero, u.copy(), sigma.copy(), rec, count, none, zero
         dalpha = prev = 0.0
@@ -326,7 +380,7 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
             cur = su[node] - origin[node] if 0 <= node < n else 0.0
             dalpha = max(dalpha, abs((alpha0[i] + (cur - prev) * inv[i]) - alpha[i]))
             prev = cur
-        _grad_into(g_u, m, u, gp, False)
+        _grad_into(g_u, m, u, gp, False, ws[10])
         slope = 0.0
         for i in range(n):  # the dot product, a loop (see _max_abs)
             d[i] = su[i] - u[i]
@@ -350,7 +404,7 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
         rec, count = _record(rec, count, it, t, dalpha, E)
         for i in range(n):
             w_u[i], w_up[i], w_lo[i] = su[i], sigma[i] > 0, sigma[i] < 0
-        warm_flags = 7
+        warm_flags, near = 7, dalpha < NEWTON_SWITCH
         if dalpha < tol:
             return (CONVERGED, alpha.copy(), wn[RUP].copy(), wn[RLO].copy(), su.copy(),
                     sigma.copy(), rec, count, ws[9].copy(), wn[NET].copy())
