@@ -279,6 +279,8 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
             for q in range(count):
                 if seen[q] == h:  # the same working set
                     return BAIL_REPEAT, it
+            if count == seen.size:  # a limit of face solves far above 20 n + 50: the
+                return BAIL_LIMIT, it  # reference walks on (the history is not grown)
             seen[count] = h
             count += 1
             for i in range(n):
