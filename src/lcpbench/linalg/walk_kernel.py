@@ -41,6 +41,20 @@ def _matvec(A, x, out, y):
 
 
 @njit(cache=True)
+def _held_product(A, fixed, x, out):
+    """out += Aᵀ (A x) for x zero off the ``fixed`` nodes: O(held nodes), the same
+    terms as :func:`_matvec` (column i of A lives in rows i − 1 .. i + 1)."""
+    n = x.size
+    for i in range(n):
+        if not fixed[i] or x[i] == 0.0:
+            continue
+        for j in range(max(i - 1, 0), min(i + 2, n)):
+            yj = A[j, i - j + 1] * x[i]
+            for k in range(max(j - 1, 0), min(j + 2, n)):
+                out[k] += A[j, k - j + 1] * yj
+
+
+@njit(cache=True)
 def face_move(rows, rrows, fixed, rfixed, R, filled, snap, B, bfilled, bsnap, tri,
               invR, invB, j0, k0, m, wall, u, g, refine, d, g_face, r, x, y):
     """Writes the move ``d`` to the face minimiser and the gradient there ``g_face``;
@@ -51,7 +65,8 @@ def face_move(rows, rrows, fixed, rfixed, R, filled, snap, B, bfilled, bsnap, tr
     n = u.size
     for i in range(n):
         d[i] = (wall[i] - u[i]) if fixed[i] else 0.0
-    _matvec(rows, d, g_face, y)  # H d₀
+        g_face[i] = 0.0
+    _held_product(rows, fixed, d, g_face)  # H d₀: d₀ lives on the held nodes only
     for i in range(n):
         r[i] = 0.0 if fixed[i] else g[i] + g_face[i]
         x[i] = r[i]

@@ -256,7 +256,7 @@ def _dual(step, warm_up, warm_lo, max_iter, reach=0):
     has_lo = bool(np.count_nonzero(np.isfinite(lo)))
     S = np.zeros(n, bool)  # the working set: nodes held against a wall
     u = H.solve(-np.asarray(step.linear, dtype=float))  # the unconstrained minimiser
-    g = np.zeros(n)  # the gradient there, up to round-off
+    g = np.full(n, 0.0)  # the gradient there, up to round-off (written: see wall)
     # violations at the round-off of the heights are not violations (the walls that
     # matter are within a violation of u)
     slack = 32 * EPS * (1.0 + float(np.max(np.abs(u), initial=0.0)))
@@ -317,7 +317,8 @@ def _dual(step, warm_up, warm_lo, max_iter, reach=0):
                     if own:
                         return u, g, sigma > 0, sigma < 0, it, None
                     return u - p, g - matvec(p), sigma > 0, sigma < 0, it, None
-            key = sigma.tobytes()
+            held = np.flatnonzero(sigma)  # the working set, compactly
+            key = held.tobytes() + sigma[held].tobytes()
             if key in seen:
                 return u, None, sigma > 0, sigma < 0, it, "a working set repeated (round-off)"
             seen.add(key)
