@@ -345,18 +345,21 @@ def _dual(step, warm_up, warm_lo, max_iter, reach=0):
             d -= face_solve(S, r)
             g_face = g + matvec(d)
         # the reactions there are −σ g_face; move towards it until one turns negative
-        sg = sigma * g_face
-        falling = sg > 0.0
-        if np.count_nonzero(falling):
+        # (only held nodes have reactions: the tests run on them, not on all n)
+        held = np.flatnonzero(S)
+        sg = sigma[held] * g_face[held]
+        fall = sg > 0.0
+        if np.count_nonzero(fall):
+            falling = held[fall]
             lam = np.maximum(-sigma[falling] * g[falling], 0.0)
-            ratio = lam / (lam + sg[falling])
+            ratio = lam / (lam + sg[fall])
             s = float(ratio.min())
             if s < 1.0:
                 u = u + s * d
                 g = g + s * (g_face - g)
                 # release every wall whose reaction reaches zero here, ties within
                 # round-off included (a symmetric chain has its contacts in mirror pairs)
-                drop = np.flatnonzero(falling)[ratio <= s + tie]
+                drop = falling[ratio <= s + tie]
                 sigma[drop] = 0.0
                 S[drop] = False
                 at_face_minimiser = False
