@@ -12,7 +12,8 @@ minimises the Lagrangian for some reactions R >= 0 (H u + c + R_upper −
 R_lower = 0), so it is dual feasible and only the walls can be violated. Each iteration puts a
 *block* of violated nodes against their walls (the deepest node of every run
 of consecutive violated nodes; first, on a warm start, the previous contact
-set), computes the minimiser on that face with one banded solve, and moves
+set; at large N, warm-started, nodes galloping from the contacts, :mod:`.gallop`),
+computes the minimiser on that face with one banded solve, and moves
 towards it until it gets there or a reaction would turn negative, in which
 case that wall is released (with every wall whose reaction reaches zero
 within round-off of the same point, which keeps mirror pairs of a symmetric
