@@ -279,7 +279,7 @@ def test_safeguard_takes_over_from_a_stuck_walk(paper_step, monkeypatch):
     step = paper_step
     exact = solve_banded_qp(step)
 
-    def stuck(step, warm_up, warm_lo, max_iter):
+    def stuck(step, warm_up, warm_lo, max_iter, reach=0):
         held = np.isfinite(step.upper)
         return step.unconstrained_minimiser(), None, held, np.zeros_like(held), 3, "stuck"
 

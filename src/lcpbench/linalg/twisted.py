@@ -35,12 +35,11 @@ class TwistedFactor(TridiagonalFactor):
         self._tri = np.zeros(3)
         self._m = n // 2
         self.rows_touched = 0
+        self._work = np.empty((3, n))  # face_move's
 
-    def face_solve(self, fixed: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    def _twist(self, fixed: np.ndarray) -> tuple[int, int, int]:
+        """(j0, k0, m): where the two passes restart for the face ``fixed``, and the twist."""
         n = self.n
-        fixed = np.ascontiguousarray(fixed, dtype=np.bool_)
-        if n < 5:  # no room for a twist
-            return super().face_solve(fixed, rhs)
         if self._fixed is None:
             j0, k0, m = 0, 0, n // 2
         else:
@@ -52,6 +51,14 @@ class TwistedFactor(TridiagonalFactor):
                 m = min(max((j0 + n - k0) // 2, 2), n - 2)
             else:
                 j0, k0, m = self._m, n - self._m, self._m
+        return j0, k0, m
+
+    def face_solve(self, fixed: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        n = self.n
+        fixed = np.ascontiguousarray(fixed, dtype=np.bool_)
+        if n < 5:  # no room for a twist
+            return super().face_solve(fixed, rhs)
+        j0, k0, m = self._twist(fixed)
         self._fixed = None  # invalid until the factorisation succeeds
         x = np.empty(n)
         ok = _kernel().face_solve(self.rows, self.rrows, fixed, np.ascontiguousarray(fixed[::-1]),
@@ -63,6 +70,32 @@ class TwistedFactor(TridiagonalFactor):
         self._fixed, self._m = fixed.copy(), m
         self.rows_touched = (m - j0) + (n - m - k0)
         return x
+
+    def face_move(self, fixed: np.ndarray, wall: np.ndarray, u: np.ndarray, g: np.ndarray,
+                  *, refine: bool = False) -> tuple[np.ndarray, np.ndarray] | None:
+        """``(d, g_face)``: the dual walk's move from ``u`` (gradient ``g``) to the minimiser
+        on the face ``fixed`` (held on ``wall``) and the gradient there, in one compiled
+        call (:mod:`.walk_kernel`); None when n < 5 (the caller does it in numpy)."""
+        n = self.n
+        if n < 5:
+            return None
+        fixed = np.ascontiguousarray(fixed, dtype=np.bool_)
+        j0, k0, m = self._twist(fixed)
+        self._fixed = None
+        d, g_face = np.empty(n), np.empty(n)
+        from . import walk_kernel
+
+        ok = walk_kernel.face_move(self.rows, self.rrows, fixed, np.ascontiguousarray(fixed[::-1]),
+                                   self.R, self._filled, self._snap, self.B, self._bfilled,
+                                   self._bsnap, self._tri, self._inv, self._invB, j0, k0, m,
+                                   np.ascontiguousarray(wall, float), np.ascontiguousarray(u, float),
+                                   np.ascontiguousarray(g, float), refine, d, g_face,
+                                   self._work[0], self._work[1], self._work[2])
+        if not ok:
+            raise np.linalg.LinAlgError("a face of H is singular (zero pivot)")
+        self._fixed, self._m = fixed.copy(), m
+        self.rows_touched = (m - j0) + (n - m - k0)
+        return d, g_face
 
     def resolve(self, rhs: np.ndarray) -> np.ndarray:
         if self.n < 5:

@@ -49,6 +49,10 @@ from .step import assemble_step
 #: divides that by ~100 (docs/performance.md)
 NODE_SETTLED = 0.5
 EXTRA_STEPS = 4
+#: the next step's walk gallops from its warm contacts (:mod:`lcpbench.solvers.gallop`)
+#: from 1/REACH_SHARE of the nodes the contacts moved in this step on (the outer
+#: iteration contracts the moves by ~10-20 a step)
+REACH_SHARE = 16
 
 
 def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer: int = 200,
@@ -71,6 +75,7 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
     E = energy(chain, alpha)
     noise = 1e-12 * (abs(E) + float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6)
     last_net, extra = None, 0
+    last_contacts = None
     for _ in range(max_outer):
         t0 = time.perf_counter()
         step = increment_step(assemble_step(chain, alpha))
@@ -94,6 +99,9 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
         extra += dalpha < tol
         # the warm start of the next step: this answer, in the next step's increments
         warm = replace(sol, u=(1.0 - t) * d)
+        move, last_contacts = _contact_move(sol, last_contacts)
+        if move is not None:
+            warm.reach = max(1, move // REACH_SHARE)  # read by the dual walk's solve_step
         alpha, E = trial, E_t
     return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
                                   f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
@@ -114,6 +122,24 @@ def _node_change(chain: Chain, net, last_net, steps: list[StepRecord]):
     rho = _contraction([s.max_dalpha for s in steps[:-1]], steps[-1].max_dalpha)
     change = float(np.max(np.abs(net - last_net), initial=0.0))
     return rho / (1.0 - rho) * change / F0, net
+
+
+def _contact_move(sol, last):
+    """``(move, contacts)``: how many nodes the contacts moved against the ``last`` step's
+    (the largest distance of a contact node to the nearest last one; None when either
+    set is empty or unknown) and this step's contact nodes."""
+    up, lo = getattr(sol, "active_upper", None), getattr(sol, "active_lower", None)
+    if up is None or lo is None:
+        return None, None
+    now = np.flatnonzero(np.asarray(up, bool) | np.asarray(lo, bool))
+    if last is None or last.size == 0 or now.size == 0:
+        return None, now
+    k = np.clip(np.searchsorted(last, now), 1, last.size - 1) if last.size > 1 else None
+    if k is None:
+        dist = np.abs(now - last[0])
+    else:
+        dist = np.minimum(np.abs(now - last[k - 1]), np.abs(now - last[k]))
+    return int(dist.max()), now
 
 
 def _heights(chain: Chain, alpha: np.ndarray) -> np.ndarray:

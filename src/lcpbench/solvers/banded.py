@@ -12,7 +12,8 @@ minimises the Lagrangian for some reactions R >= 0 (H u + c + R_upper −
 R_lower = 0), so it is dual feasible and only the walls can be violated. Each iteration puts a
 *block* of violated nodes against their walls (the deepest node of every run
 of consecutive violated nodes; first, on a warm start, the previous contact
-set), computes the minimiser on that face with one banded solve, and moves
+set; at large N, warm-started, nodes galloping from the contacts, :mod:`.gallop`),
+computes the minimiser on that face with one banded solve, and moves
 towards it until it gets there or a reaction would turn negative, in which
 case that wall is released (with every wall whose reaction reaches zero
 within round-off of the same point, which keeps mirror pairs of a symmetric
@@ -51,11 +52,15 @@ from scipy.linalg.lapack import dpbsv, dpbtrs
 from ..errors import ProblemError
 from ..linalg import dense_to_bands, sub_bands
 from .base import Status, StepSolution
+from .gallop import gallop_picks
 
 EPS = np.finfo(float).eps
 METHODS = ("dual", "primal")
 #: Step fractions of the dual walk closer than this are ties (released together).
 TIE = 1e-6
+#: the same in a galloping walk at large N (:mod:`.gallop`), whose mirror pairs differ
+#: by its round-off, ~cond(J) ε ~ N² ε (1e-6 at N = 10⁵)
+TIE_LARGE = 1e-4
 
 
 
@@ -68,6 +73,7 @@ def solve_banded_qp(
     max_iter: int | None = None,
     rtol: float = 1e-9,
     method: str = "dual",
+    reach: int = 0,
 ) -> StepSolution:
     """Solve a contact step exactly by an active-set method.
 
@@ -84,6 +90,8 @@ def solve_banded_qp(
     max_iter : face solves (active-set changes) allowed, both methods together
         (default 20 n + 50).
     rtol : relative tolerance of the final certificate.
+    reach : > 0: a step with its own face solves (large N), warm-started, gallops
+        from its contacts from this many nodes on (:mod:`.gallop`); 0: bisects.
     method : "dual" (default) or "primal"; see the module docstring.
 
     Returns
@@ -106,7 +114,7 @@ def solve_banded_qp(
                 start = step.unconstrained_minimiser()
             return _primal(step, np.asarray(start, dtype=float), warm_up, warm_lo, max_iter,
                            t0, rtol)
-        u, grad, S_up, S_lo, it, why = _dual(step, warm_up, warm_lo, max_iter)
+        u, grad, S_up, S_lo, it, why = _dual(step, warm_up, warm_lo, max_iter, reach)
         u = np.minimum(np.maximum(u, lo), hi)  # round-off off the walls
         if why is None:
             sol = _finish(step, u, S_up, S_lo, it, t0, rtol, grad)
@@ -226,7 +234,7 @@ def _run_maxima(v: np.ndarray, slack: float) -> np.ndarray:
     return viol & (mid >= w[:-2]) & (mid > w[2:])
 
 
-def _dual(step, warm_up, warm_lo, max_iter):
+def _dual(step, warm_up, warm_lo, max_iter, reach=0):
     """The dual active-set walk.
 
     Returns ``(u, grad, S_up, S_lo, face_solves, why)``; ``why`` is None when
@@ -245,10 +253,11 @@ def _dual(step, warm_up, warm_lo, max_iter):
     # a step may bring its own face solves (the tridiagonal factor at large N)
     H = getattr(step, "factor", None) or _Banded(step.bands)
     matvec, face_solve = H.matvec, H.face_solve
+    face_move = getattr(H, "face_move", None)
     has_lo = bool(np.count_nonzero(np.isfinite(lo)))
     S = np.zeros(n, bool)  # the working set: nodes held against a wall
     u = H.solve(-np.asarray(step.linear, dtype=float))  # the unconstrained minimiser
-    g = np.zeros(n)  # the gradient there, up to round-off
+    g = np.full(n, 0.0)  # the gradient there, up to round-off (written: see wall)
     # violations at the round-off of the heights are not violations (the walls that
     # matter are within a violation of u)
     slack = 32 * EPS * (1.0 + float(np.max(np.abs(u), initial=0.0)))
@@ -261,8 +270,13 @@ def _dual(step, warm_up, warm_lo, max_iter):
         slack = 32 * EPS * (np.abs(u) + np.where(np.isfinite(hi), np.abs(hi), 0.0)
                             + np.where(np.isfinite(lo), np.abs(lo), 0.0))
     sigma = np.zeros(n)  # +1: held against the upper wall, −1: the lower one, 0: free
-    wall = np.zeros(n)  # the wall height of each held node
+    wall = np.full(n, 0.0)  # the wall height of each held node (written: np.zeros pages
+    # that are only read are slow to read in compiled loops)
     warm = bool(np.count_nonzero(warm_up) or np.count_nonzero(warm_lo))
+    # large N, warm-started with a hint of how far the contacts move: gallop from them
+    # instead of bisecting the spans between them (:mod:`.gallop`)
+    reach = int(reach) if (own and warm) else 0
+    tie = TIE_LARGE if own else TIE
     seen: set[bytes] = set()
     at_face_minimiser = True
     it = 0
@@ -282,8 +296,13 @@ def _dual(step, warm_up, warm_lo, max_iter):
                 if not (np.count_nonzero(J_up) or (has_lo and np.count_nonzero(J_lo))):
                     J_up = None
             if J_up is None:
-                J_up = _run_maxima(v_up, slack)
-                J_lo = _run_maxima(v_lo, slack) if has_lo else None
+                if reach:
+                    J_up = gallop_picks(v_up, slack, S, reach)
+                    J_lo = gallop_picks(v_lo, slack, S, reach) if has_lo else None
+                    reach *= 2
+                else:
+                    J_up = _run_maxima(v_up, slack)
+                    J_lo = _run_maxima(v_lo, slack) if has_lo else None
                 if not (np.count_nonzero(J_up) or (has_lo and np.count_nonzero(J_lo))):
                     # the optimum: one step of refinement with the exact gradient, on
                     # the face just factored
@@ -299,7 +318,8 @@ def _dual(step, warm_up, warm_lo, max_iter):
                     if own:
                         return u, g, sigma > 0, sigma < 0, it, None
                     return u - p, g - matvec(p), sigma > 0, sigma < 0, it, None
-            key = sigma.tobytes()
+            held = np.flatnonzero(sigma)  # the working set, compactly
+            key = held.tobytes() + sigma[held].tobytes()
             if key in seen:
                 return u, None, sigma > 0, sigma < 0, it, "a working set repeated (round-off)"
             seen.add(key)
@@ -315,24 +335,32 @@ def _dual(step, warm_up, warm_lo, max_iter):
         it += 1
         # d: from u to the minimiser on the face S (S onto its walls, then Newton
         # on the free nodes), as an increment
-        d = (wall - u) * S
-        r = g + matvec(d)
-        r[S] = 0.0
-        d -= face_solve(S, r)
-        g_face = g + matvec(d)
+        moved = face_move(S, wall, u, g) if face_move is not None else None
+        if moved is not None:  # the same move in one compiled call (large N; its face solve
+            # unrefined: every optimum the walk finds is refined before it is accepted)
+            d, g_face = moved
+        else:
+            d = (wall - u) * S
+            r = g + matvec(d)
+            r[S] = 0.0
+            d -= face_solve(S, r)
+            g_face = g + matvec(d)
         # the reactions there are −σ g_face; move towards it until one turns negative
-        sg = sigma * g_face
-        falling = sg > 0.0
-        if np.count_nonzero(falling):
+        # (only held nodes have reactions: the tests run on them, not on all n)
+        held = np.flatnonzero(S)
+        sg = sigma[held] * g_face[held]
+        fall = sg > 0.0
+        if np.count_nonzero(fall):
+            falling = held[fall]
             lam = np.maximum(-sigma[falling] * g[falling], 0.0)
-            ratio = lam / (lam + sg[falling])
+            ratio = lam / (lam + sg[fall])
             s = float(ratio.min())
             if s < 1.0:
                 u = u + s * d
                 g = g + s * (g_face - g)
                 # release every wall whose reaction reaches zero here, ties within
                 # round-off included (a symmetric chain has its contacts in mirror pairs)
-                drop = np.flatnonzero(falling)[ratio <= s + TIE]
+                drop = falling[ratio <= s + tie]
                 sigma[drop] = 0.0
                 S[drop] = False
                 at_face_minimiser = False
@@ -534,7 +562,8 @@ def solve_step(step, settings, warm=None, **options) -> StepSolution:
     """
     x, up, lo = _warm_sets(warm, step.size)
     max_iter = settings.max_iter if settings.max_iter else None
-    return solve_banded_qp(step, start=x, active_upper=up, active_lower=lo, max_iter=max_iter)
+    return solve_banded_qp(step, start=x, active_upper=up, active_lower=lo, max_iter=max_iter,
+                           reach=int(getattr(warm, "reach", 0) or 0))
 
 
 def solve_qp(qp, settings, warm=None, **options):

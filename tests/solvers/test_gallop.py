@@ -1,0 +1,147 @@
+"""The galloping dual walk at large N (issue 19, target 5): same answers, optimal.
+
+The walk's choice of which violated wall joins next changes its path, never
+its answer (the dual objective rises on every move): so the galloping walk is
+checked against the bisecting one (reach 0) and against the KKT conditions of
+the step, computed here from the step's own exact gradient; the whole solve
+against the previous path (no gallop, refined face solves, the old tie), within
+the judge's own error bounds. The compiled move is checked against the numpy
+move it replaces.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import lcpbench
+from lcpbench.linalg.twisted import TwistedFactor
+from lcpbench.model import large_driver
+from lcpbench.model.large_driver import run_large
+from lcpbench.model.step_solver import make_step_solver
+from lcpbench.problems.scenes import ActuatorScene
+from lcpbench.solvers import banded
+from lcpbench.solvers.banded import solve_banded_qp
+from lcpbench.solvers.gallop import gallop_picks
+
+
+def test_gallop_picks_are_violated_and_follow_the_rule():
+    v = np.full(40, -1.0)
+    held = np.zeros(40, bool)
+    held[[4, 30]] = True
+    v[5:30] = np.linspace(0.1, 1.0, 25) * np.linspace(1.0, 0.1, 25)  # a run between two contacts
+    v[34:38] = [0.2, 0.9, 0.5, 0.1]  # a run with no held neighbour
+    v[held] = -np.inf
+    picks = gallop_picks(v, 0.0, held, 3)
+    assert np.all(v[picks] > 0.0)
+    assert set(np.flatnonzero(picks)) == {5 + 2, 29 - 2, 35}  # reach 3 in from each held side
+    # a run no longer than the reach: its deepest node, as the bisecting walk
+    short = gallop_picks(v, 0.0, held, 25)
+    assert set(np.flatnonzero(short)) == {5 + int(np.argmax(v[5:30])), 35}
+    assert not gallop_picks(np.full(5, -1.0), 0.0, np.zeros(5, bool), 1).any()
+
+
+def _recorded_steps(links=10000, theta=150.0, height=3.0):
+    """(step, warm) of every warm-started step of a large-N solve."""
+    chain = ActuatorScene(theta, height, links=links).chain()
+    inner = make_step_solver()
+    seen = []
+
+    def record(step, warm):
+        if warm is not None:
+            seen.append((step, warm))
+        return inner(step, warm)
+
+    out = run_large(chain, record, tol=1e-3)
+    assert out.converged
+    return seen
+
+
+def _kkt(step, u, up, lo):
+    """Scaled KKT residuals from the step's exact gradient (independent of the walk)."""
+    g = step.gradient(u)
+    scale = np.max(step.gradient_scale(u))
+    free = ~(up | lo)
+    span = 1.0 + np.max(np.abs(u))
+    return {"stationarity": np.max(np.abs(g[free]), initial=0.0) / scale,
+            "reactions": max(np.max(g[up], initial=0.0), np.max(-g[lo], initial=0.0)) / scale,
+            "feasibility": max(np.max(u - step.upper), np.max(step.lower - u), 0.0) / span,
+            "on_walls": max(np.max(np.abs(u[up] - step.upper[up]), initial=0.0),
+                            np.max(np.abs(u[lo] - step.lower[lo]), initial=0.0)) / span}
+
+
+@pytest.fixture(scope="module")
+def steps():
+    return _recorded_steps()
+
+
+@pytest.mark.parametrize("reach", [1, 3, 40, 1000])
+def test_galloping_walk_is_optimal_and_agrees_with_bisection(steps, reach):
+    assert len(steps) >= 3
+    for step, warm in steps:
+        ref = solve_banded_qp(step, start=warm.u, active_upper=warm.active_upper,
+                              active_lower=warm.active_lower)
+        got = solve_banded_qp(step, start=warm.u, active_upper=warm.active_upper,
+                              active_lower=warm.active_lower, reach=reach)
+        assert got.status.value == "solved"
+        kkt = _kkt(step, got.u, got.active_upper, got.active_lower)
+        assert max(kkt.values()) < 1e-9, kkt
+        # a strictly convex QP has one minimiser: both walks reach it, to the round-off
+        # of the heights (increments about u₀: the walls' gaps set the scale)
+        walls = np.concatenate((step.upper[np.isfinite(step.upper)],
+                                step.lower[np.isfinite(step.lower)]))
+        size = np.max(np.abs(ref.u)) + np.max(np.abs(walls), initial=0.0)
+        assert np.max(np.abs(got.u - ref.u)) <= 1e-9 * size
+        assert np.array_equal(got.active_upper, ref.active_upper)
+        assert np.array_equal(got.active_lower, ref.active_lower)
+        net_got = got.forces_upper - got.forces_lower
+        net_ref = ref.forces_upper - ref.forces_lower
+        assert np.max(np.abs(net_got - net_ref)) <= 1e-6 * np.max(np.abs(net_ref))
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_compiled_move_matches_the_numpy_move(steps, seed):
+    step, _ = steps[0]
+    H = step.factor
+    assert isinstance(H, TwistedFactor)
+    n = step.size
+    rng = np.random.default_rng(seed)
+    fixed = np.zeros(n, bool)
+    fixed[rng.choice(n, 6, replace=False)] = True
+    wall = np.where(fixed, rng.standard_normal(n), 0.0)
+    u = rng.standard_normal(n)
+    g = H.matvec(u) + step.linear
+    for refine in (True, False):
+        d, g_face = H.face_move(fixed, wall, u, g, refine=refine)
+        d_ref = (wall - u) * fixed
+        r = g + H.matvec(d_ref)
+        r[fixed] = 0.0
+        d_ref -= H.face_solve(fixed, r)
+        g_ref = g + H.matvec(d_ref)
+        # refined: the numpy move's arithmetic (to round-off); unrefined: the face solve's
+        # error, ~cond(J) ε on this rough right-hand side, which the next move takes up
+        assert np.max(np.abs(d - d_ref)) <= (1e-13 if refine else 1e-4) * np.max(np.abs(d_ref))
+        assert np.allclose(d[fixed], (wall - u)[fixed], rtol=0, atol=1e-12 * np.max(np.abs(u)))
+        # both end on the face minimiser: no force left on the free nodes
+        assert np.max(np.abs(g_face[~fixed])) <= 1e-12 * np.max(np.abs(g))
+        assert np.max(np.abs(g_face - g_ref)) <= 1e-12 * np.max(np.abs(g))
+
+
+def _old_path(monkeypatch):
+    """The walk before galloping: no reach hint, the small tie, refined numpy moves."""
+    monkeypatch.setattr(large_driver, "_contact_move", lambda sol, last: (None, None))
+    monkeypatch.setattr(banded, "TIE_LARGE", banded.TIE)
+    monkeypatch.setattr(TwistedFactor, "face_move", lambda self, *a, **k: None)
+
+
+@pytest.mark.parametrize("theta,height", [(150.0, 3.0), (120.0, 2.0), (170.0, 4.0)])
+def test_new_path_gives_the_old_answer_at_n_1e4(monkeypatch, theta, height):
+    scene = ActuatorScene(theta, height, links=10000)
+    new = lcpbench.solve(scene, tol=1e-3)
+    with monkeypatch.context() as m:
+        _old_path(m)
+        old = lcpbench.solve(scene, tol=1e-3)
+    assert new.converged and old.converged
+    # both are judged answers of one equilibrium: within the judge's bounds of each other
+    bound = new.judgement.force_error_bound + old.judgement.force_error_bound
+    assert abs(new.total_force - old.total_force) <= bound * max(abs(old.total_force), 1e-12) + 1e-12
