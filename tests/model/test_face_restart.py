@@ -12,14 +12,17 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lcpbench.linalg import face_kernel, givens_kernel
 from lcpbench.linalg.saddle import TridiagonalFactor
 from lcpbench.model.driver import _feasible_start
 from lcpbench.model.large_n import increment_step
 from lcpbench.model.step import assemble_step
+from lcpbench.numba_cache import kernel_module
 from lcpbench.problems.scenes import ActuatorScene
 from lcpbench.solvers.banded import solve_banded_qp
 from lcpbench.solvers.base import Status
+
+face_kernel = kernel_module("lcpbench.linalg.face_kernel")
+givens_kernel = kernel_module("lcpbench.linalg.givens_kernel")
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

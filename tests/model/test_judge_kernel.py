@@ -16,10 +16,12 @@ import pytest
 from lcpbench import ActuatorScene, CantileverScene, solve
 from lcpbench.bench.grid import hard_scenes
 from lcpbench.model import judge as numpy_judge
-from lcpbench.model import judge_kernel
 from lcpbench.model.judge import judge
 from lcpbench.model.judge_compiled import judge_fast
 from lcpbench.model.result import certify
+from lcpbench.numba_cache import kernel_module
+
+judge_kernel = kernel_module("lcpbench.model.judge_kernel", "judge_answer")
 
 #: relative agreement of the numbers (different summation orders of the same terms)
 RTOL = 1e-6

@@ -5,16 +5,18 @@ slow start that the code controls. ``import lcpbench`` loads neither numba nor
 scipy; the default solve loads neither scipy.linalg nor scipy.sparse (the
 kernels' cache entries need none of numba's BLAS or array reductions, and the
 QP back-ends' sparse matrices are built only when a QP back-end runs); the
-light cache load (:mod:`lcpbench.model.kernel_cache`) gives bit-for-bit the
+light cache load (:mod:`lcpbench.numba_cache`) gives bit-for-bit the
 answer of numba's own loader.
 """
 
 import json
 import os
+import re
 import subprocess
 import sys
+from pathlib import Path
 
-from lcpbench.model.kernel_cache import light_cache_load
+from lcpbench.numba_cache import light_cache_load
 
 PROBE = """
 import json, sys
@@ -51,15 +53,14 @@ def test_light_loading_leaves_other_objects_alone():
     assert light_cache_load(object()) is False  # no numba cache: nothing to change
 
 
-def test_a_split_kernel_is_cached_under_a_hash_of_all_its_files(tmp_path):
-    """numba invalidates a cache entry only when the function's own file changes;
-    the solve kernel spans two files, so its cache directory is named by both."""
-    from pathlib import Path
-
+def test_the_kernels_are_cached_under_a_hash_of_all_their_files(tmp_path):
+    """numba invalidates a cache entry only when the function's own file changes,
+    and the kernels call each other across files; their cache directory is named
+    by all of them, so an edit of any one moves it."""
     from numba.core import config
 
     from lcpbench.model import compiled
-    from lcpbench.model.kernel_cache import SPLIT, kernel_cache_dir
+    from lcpbench.numba_cache import KERNEL_FILES, kernel_cache_dir, kernel_module
 
     a, b = tmp_path / "a.py", tmp_path / "b.py"
     a.write_text("x = 1\n")
@@ -69,7 +70,30 @@ def test_a_split_kernel_is_cached_under_a_hash_of_all_its_files(tmp_path):
     assert kernel_cache_dir([a, b], str(tmp_path)) != first
     assert first.startswith(str(tmp_path / "lcpbench-numba"))
     k = compiled._kernel()
-    here = Path(compiled.__file__).parent
-    where = kernel_cache_dir([here / f for f in SPLIT[k.__name__]], config.CACHE_DIR)
-    for dispatcher in (k.solve_chain, k._dual):  # one in each file
+    here = Path(compiled.__file__).parent.parent
+    where = kernel_cache_dir([here / f for f in KERNEL_FILES], config.CACHE_DIR)
+    walk = kernel_module("lcpbench.linalg.walk_kernel")
+    twisted = kernel_module("lcpbench.linalg.twisted_kernel")
+    for dispatcher in (k.solve_chain, k._dual, walk.face_move, twisted.factor):
         assert dispatcher._cache._cache_path.startswith(where)
+
+
+def test_every_file_with_numba_kernels_is_listed_and_loaded_through_the_cache():
+    """A kernel file missing from KERNEL_FILES, or imported directly by a module
+    that is not itself a kernel, would be cached beside its source, out of reach
+    of the hash."""
+    from lcpbench.numba_cache import KERNEL_FILES
+
+    root = Path(__file__).resolve().parents[2] / "src" / "lcpbench"
+    with_njit = {str(p.relative_to(root)) for p in root.rglob("*.py")
+                 if re.search(r"^from numba import|^import numba", p.read_text(), re.M)}
+    assert with_njit == set(KERNEL_FILES)
+    names = {Path(f).stem for f in KERNEL_FILES}
+    for p in root.rglob("*.py"):
+        if str(p.relative_to(root)) in KERNEL_FILES:
+            continue  # kernels import kernels inside kernel_module's import
+        for line in p.read_text().splitlines():
+            m = re.match(r"\s*from \.+[\w.]* import (.+)|\s*import ([\w.]+)", line)
+            if m:
+                imported = set(re.findall(r"\w+", m.group(1) or m.group(2)))
+                assert not imported & names, f"{p.name}: {line.strip()}"

@@ -26,15 +26,15 @@ import numpy as np
 
 
 def _kernel():
-    from . import givens_kernel  # imports numba; loads or compiles the kernel
+    from ..numba_cache import kernel_module  # numba: loads or compiles at first use
 
-    return givens_kernel
+    return kernel_module("lcpbench.linalg.givens_kernel")
 
 
 def _face_kernel():
-    from . import face_kernel
+    from ..numba_cache import kernel_module  # numba: loads or compiles at first use
 
-    return face_kernel
+    return kernel_module("lcpbench.linalg.face_kernel")
 
 
 class TridiagonalFactor:

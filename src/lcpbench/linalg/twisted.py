@@ -13,9 +13,9 @@ from .saddle import TridiagonalFactor
 
 
 def _kernel():
-    from . import twisted_kernel  # numba: loads or compiles at the first face solve
+    from ..numba_cache import kernel_module  # numba: loads or compiles at first use
 
-    return twisted_kernel
+    return kernel_module("lcpbench.linalg.twisted_kernel")
 
 
 class TwistedFactor(TridiagonalFactor):
@@ -83,7 +83,9 @@ class TwistedFactor(TridiagonalFactor):
         j0, k0, m = self._twist(fixed)
         self._fixed = None
         d, g_face = np.empty(n), np.empty(n)
-        from . import walk_kernel
+        from ..numba_cache import kernel_module  # numba: loads or compiles at first use
+
+        walk_kernel = kernel_module("lcpbench.linalg.walk_kernel")
 
         ok = walk_kernel.face_move(self.rows, self.rrows, fixed, np.ascontiguousarray(fixed[::-1]),
                                    self.R, self._filled, self._snap, self.B, self._bfilled,

@@ -77,7 +77,7 @@ def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
 
 
 def _kernel():
-    from .kernel_cache import kernel_module  # numba at the first solve, not at import
+    from ..numba_cache import kernel_module  # numba at the first solve, not at import
 
     return kernel_module("lcpbench.model.compiled_kernel", "solve_chain")
 

@@ -49,7 +49,7 @@ ENTRIES = ("assemble", "qp_form", "lcp_form", "from_lcp", "judge", "advance", "e
 
 
 def _kernel():
-    from .kernel_cache import kernel_module, light_cache_load  # numba at the first solve
+    from ..numba_cache import kernel_module, light_cache_load  # numba at the first solve
 
     kd = kernel_module("lcpbench.model.driver_kernel", "assemble")
     if not getattr(kd, "_all_light", False):  # every entry loads from the cache lightly

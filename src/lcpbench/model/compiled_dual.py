@@ -7,7 +7,7 @@ residual (:func:`lcpbench.model.step_solver.step_residuals`), on the step's band
 H (the banded step of eqs. 20-31) and its linear term c, in the same order of
 operations as the reference where that is cheap. Every pass writes into work
 arrays that :func:`lcpbench.model.compiled_kernel.solve_chain` allocates once.
-Loaded only through :func:`lcpbench.model.kernel_cache.kernel_module` (see there).
+Loaded only through :func:`lcpbench.numba_cache.kernel_module` (see there).
 """
 
 from __future__ import annotations

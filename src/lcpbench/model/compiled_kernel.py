@@ -14,7 +14,7 @@ the algorithm; this file repeats their arithmetic in the same order where that i
 Two files: this one (the chain, the assembly, the outer loop) and
 :mod:`lcpbench.model.compiled_dual` (the dual active set, its certificate and the
 judge's residual). numba's on-disk cache of a function is invalidated only when *its
-own* file changes, so :func:`lcpbench.model.kernel_cache.kernel_module` keeps the
+own* file changes, so :func:`lcpbench.numba_cache.kernel_module` keeps the
 cache of both under a hash of both files' sources (a split kernel never runs stale
 code); import this module through it.
 

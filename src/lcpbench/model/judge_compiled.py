@@ -22,7 +22,7 @@ from .judge import Judgement, failed_checks, judge, settle_verdict
 
 
 def _kernel():
-    from .kernel_cache import kernel_module  # numba at the first judgement, not at import
+    from ..numba_cache import kernel_module  # numba at the first judgement, not at import
 
     return kernel_module("lcpbench.model.judge_kernel", "judge_answer")
 

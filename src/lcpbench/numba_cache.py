@@ -15,12 +15,17 @@ first run after an edit, a new signature), it hands over to numba's own
 loader, which refreshes the context and compiles as usual; any error on the
 light path does the same. ``LCPBENCH_NUMBA_FULL_LOAD=1`` turns it off.
 
-A kernel split over several files (the solve kernel: ``compiled_kernel.py`` and
-``compiled_dual.py``) is cached under a directory named by a hash of all its
-files (:func:`kernel_cache_dir`): numba invalidates a function's cache entry only
-when *its own* file changes, so without it an edit of one file could leave another
-file's cached code running stale. The base is numba's ``NUMBA_CACHE_DIR`` where set,
-else the user's cache directory (``$XDG_CACHE_HOME`` or ``~/.cache``).
+Every numba kernel of lcpbench (:data:`KERNEL_FILES`) is imported through
+:func:`kernel_module` and cached under one directory named by a hash of all
+their sources (:func:`kernel_cache_dir`). numba invalidates a function's cache
+entry only when *its own* file changes, and kernels call each other across
+files (``compiled_kernel.py`` the dual walk of ``compiled_dual.py``,
+``walk_kernel.py`` the twisted factor, which calls the face kernel): without the
+hash an edit of one file could leave another file's cached code running stale.
+Any edit of any kernel moves the directory, so every kernel compiles once
+afresh. The base is numba's ``NUMBA_CACHE_DIR`` where set, else the user's cache
+directory (``$XDG_CACHE_HOME`` or ``~/.cache``). This module is at the bottom of
+the layers, so ``linalg`` can load its kernels through it too.
 
 It uses two private methods of numba's cache (``_load_overload`` and
 ``_guard_against_spurious_io_errors``, numba 0.5x–0.6x); where they are
@@ -35,8 +40,12 @@ import os
 from pathlib import Path
 
 _LOADED: dict = {}  # module name -> the kernel module, once imported and hooked
-#: the kernels spread over several files: module -> its files (in lcpbench/model)
-SPLIT = {"lcpbench.model.compiled_kernel": ("compiled_kernel.py", "compiled_dual.py")}
+_DIR: list = []  # the cache directory of this process's kernels, once computed
+#: every file of lcpbench with numba kernels, relative to the package
+#: (tests/test_numba_cache.py checks that no file with ``@njit`` is missing)
+KERNEL_FILES = ("model/compiled_kernel.py", "model/compiled_dual.py", "model/judge_kernel.py",
+                "model/driver_kernel.py", "linalg/givens_kernel.py", "linalg/face_kernel.py",
+                "linalg/twisted_kernel.py", "linalg/walk_kernel.py")
 
 
 def kernel_cache_dir(files, base: str | None = None) -> str:
@@ -50,25 +59,25 @@ def kernel_cache_dir(files, base: str | None = None) -> str:
     return os.path.join(base, "lcpbench-numba", sha.hexdigest()[:20])
 
 
-def kernel_module(name: str, entry: str):
-    """The compiled module ``name`` (imports numba; loads or compiles it), its
-    dispatcher ``entry`` hooked to :func:`light_cache_load`, once per process; a
-    module of :data:`SPLIT` cached under :func:`kernel_cache_dir`."""
+def kernel_module(name: str, entry: str | None = None):
+    """The compiled module ``name`` (imports numba; loads or compiles it) under the
+    kernels' cache directory (:func:`kernel_cache_dir` of :data:`KERNEL_FILES`),
+    its dispatcher ``entry`` hooked to :func:`light_cache_load`, once per process."""
     module = _LOADED.get(name)
     if module is None:
-        if name in SPLIT:
-            from numba.core import config  # numba's locator reads it at each @njit
+        from numba.core import config  # numba's locator reads it at each @njit
 
+        if not _DIR:
             here = Path(__file__).parent
-            saved = config.CACHE_DIR
-            config.CACHE_DIR = kernel_cache_dir([here / f for f in SPLIT[name]], saved)
-            try:
-                module = importlib.import_module(name)
-            finally:
-                config.CACHE_DIR = saved
-        else:
+            _DIR.append(kernel_cache_dir([here / f for f in KERNEL_FILES], config.CACHE_DIR))
+        saved = config.CACHE_DIR
+        config.CACHE_DIR = _DIR[0]
+        try:
             module = importlib.import_module(name)
-        light_cache_load(getattr(module, entry))
+        finally:
+            config.CACHE_DIR = saved
+        if entry is not None:
+            light_cache_load(getattr(module, entry))
         _LOADED[name] = module
     return module
 
