@@ -373,6 +373,27 @@ def _certificate(u, ru, rl, lo, hi, gp):
 
 
 @njit(cache=True)
+def _wall_terms(hi, lo, u, R, L, F, nat, min_gap, min_r, comp_up, comp_lo):
+    """One node's terms of step_residuals (gap g and reaction r of each wall row,
+    scaled by L and F): the accumulators (natural residual max|min(g, r)|, least
+    gap, least reaction, Σ g·r of each wall) updated. Shared with driver_kernel."""
+    up, low = np.isfinite(hi), np.isfinite(lo)
+    if up:
+        g = (hi - u) / L
+        r = (max(R, 0.0) if low else R) / F
+        nat = max(nat, abs(min(g, r)))
+        min_gap, min_r = min(min_gap, g), min(min_r, r)
+        comp_up += g * r
+    if low:
+        g = (u - lo) / L
+        r = (max(-R, 0.0) if up else -R) / F
+        nat = max(nat, abs(min(g, r)))
+        min_gap, min_r = min(min_gap, g), min(min_r, r)
+        comp_lo += g * r
+    return nat, min_gap, min_r, comp_up, comp_lo
+
+
+@njit(cache=True)
 def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m, T):
     """_residuals into ``out`` and ``R`` (u2, rows, fac, m: work arrays)."""
     n = u.size
@@ -398,18 +419,8 @@ def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m, T):
     for i in range(n):
         R[i] = -R[i]
         up, low = np.isfinite(hi[i]), np.isfinite(lo[i])
-        if up:
-            g = (hi[i] - u2[i]) / L
-            r = (max(R[i], 0.0) if low else R[i]) / F
-            nat = max(nat, abs(min(g, r)))
-            min_gap, min_r = min(min_gap, g), min(min_r, r)
-            comp_up += g * r
-        if low:
-            g = (u2[i] - lo[i]) / L
-            r = (max(-R[i], 0.0) if up else -R[i]) / F
-            nat = max(nat, abs(min(g, r)))
-            min_gap, min_r = min(min_gap, g), min(min_r, r)
-            comp_lo += g * r
+        nat, min_gap, min_r, comp_up, comp_lo = _wall_terms(
+            hi[i], lo[i], u2[i], R[i], L, F, nat, min_gap, min_r, comp_up, comp_lo)
         if up or low:
             term = max(term, _mv(bands, u2, i, n, True) + abs(linear[i]))
     out[0], out[1], out[2], out[3], out[4] = nat, min_gap, min_r, abs(comp_up) + abs(comp_lo), \

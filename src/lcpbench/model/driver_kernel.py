@@ -28,6 +28,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .compiled_dual import _wall_terms  # one copy of the judge's rows (numba_cache)
+
 TINY = np.finfo(np.float64).tiny
 
 
@@ -291,18 +293,8 @@ def judge(u, bands, linear, lo, hi, coef, b0, fs, links, origin, phi_origin, k, 
     nat, min_gap, min_r, comp_up, comp_lo, term = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0
     for i in range(n):
         up, low = np.isfinite(hi[i]), np.isfinite(lo[i])
-        if up:
-            g = (hi[i] - u2[i]) / L
-            r = (max(R[i], 0.0) if low else R[i]) / F
-            nat = max(nat, abs(min(g, r)))
-            min_gap, min_r = min(min_gap, g), min(min_r, r)
-            comp_up += g * r
-        if low:
-            g = (u2[i] - lo[i]) / L
-            r = (max(-R[i], 0.0) if up else -R[i]) / F
-            nat = max(nat, abs(min(g, r)))
-            min_gap, min_r = min(min_gap, g), min(min_r, r)
-            comp_lo += g * r
+        nat, min_gap, min_r, comp_up, comp_lo = _wall_terms(
+            hi[i], lo[i], u2[i], R[i], L, F, nat, min_gap, min_r, comp_up, comp_lo)
         if up or low:  # banded_matvec(|H|, |u|) + |c|, in its order
             s = abs(bands[0, i]) * abs(u2[i])
             for kk in (1, 2):
