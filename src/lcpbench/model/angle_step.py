@@ -65,7 +65,8 @@ class AngleOutcome:
 
 def load_parameter(chain: Chain) -> float:
     """wℓ³/EI: the chain's total load over EI/ℓ² (dimensionless)."""
-    return float(np.sum(np.abs(chain.link_load))) / float(chain.force_scale)
+    return chain.derived("_load_parameter", lambda: float(np.sum(np.abs(chain.link_load)))
+                         / float(chain.force_scale))
 
 
 def in_reach(chain: Chain) -> bool:
