@@ -23,6 +23,7 @@ certificate and judge (:mod:`lcpbench.model.judge`) as every other back-end.
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -250,6 +251,10 @@ def run_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
                            time_source="wall", backend=DEFAULT, settings=s.name,
                            residuals=dict(zip(_RESIDUALS, res.tolist(), strict=True)),
                            forces_net=R)
+        if not chain.channel and math.isfinite(float(R.sum())):  # _converged, its one-wall case
+            return DriverOutput(alpha, R.copy(), np.zeros(n), True, "converged", steps,
+                                last_step=sol, multipliers_upper=r_up,
+                                multipliers_lower=r_lo), ""
         return _converged(chain, alpha, sol, steps), ""
     if code == k.NO_FIT:
         return _fail(chain.rest_alpha.copy(), n, steps,

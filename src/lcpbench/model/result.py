@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field, is_dataclass
+from typing import Any
 
 import numpy as np
 
@@ -162,6 +163,12 @@ class ContactResult:
     pressure: np.ndarray | None = None
     pressure_limit: float | None = None
 
+    def __getstate__(self) -> dict:
+        """Pickled (and copied) with every derived field computed (``DERIVED``)."""
+        if "_derive_from" in self.__dict__:
+            _derive(self)
+        return dict(self.__dict__)
+
     @property
     def max_indentation(self) -> float:
         """Largest indentation of an elastic wall (mm); 0 for rigid walls."""
@@ -280,7 +287,7 @@ class ContactResult:
 #: positions by forward kinematics, the gaps, the wall pressure): computed at
 #: their first access, all at once, by the same functions as before.
 DERIVED = ("x", "y", "gaps", "gaps_lower", "indentation", "pressure")
-_PENDING = object()  # a derived field not computed yet
+_PENDING: Any = object()  # a derived field not computed yet (typed Any: it stands in for arrays)
 
 
 class _Derived:
@@ -320,16 +327,8 @@ def _derive(res: ContactResult) -> None:
             d[name] = values[name]
 
 
-def _getstate(self: ContactResult) -> dict:
-    """Pickled (and copied) with every derived field computed."""
-    if "_derive_from" in self.__dict__:
-        _derive(self)
-    return dict(self.__dict__)
-
-
 for _name in DERIVED:
     setattr(ContactResult, _name, _Derived(_name))
-ContactResult.__getstate__ = _getstate  # type: ignore[method-assign]
 
 
 def build_result(scene, chain: Chain, out: DriverOutput, *, judged_by=judge,
