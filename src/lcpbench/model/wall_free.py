@@ -19,7 +19,7 @@ from numpy.linalg import LinAlgError  # scipy.linalg's LinAlgError is this class
 from ..linalg import solveh_banded
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
-from .angle_step import heavy
+from .angle_step import heavy, total_load
 from .chain import heights
 from .driver import DriverOutput, DriverStart, run_driver
 from .profile import walls_at
@@ -49,7 +49,7 @@ def free_heights(chain: Chain, alpha: np.ndarray) -> np.ndarray:
 
 def beam_sag(chain: Chain) -> float:
     """5 w ℓ⁴ / (384 EI) for the chain's total load (EI = force_scale · ℓ²), mm."""
-    load = float(np.sum(np.abs(chain.link_load)))
+    load = total_load(chain)
     return 5.0 / 384.0 * load * chain.length / chain.force_scale
 
 
