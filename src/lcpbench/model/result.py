@@ -312,7 +312,11 @@ class _Derived:
 def _derive(res: ContactResult) -> None:
     """Fill the derived fields still pending, from the chain and answer kept with
     the result (:func:`build_result`)."""
-    chain, alpha, upper, lower = res.__dict__.pop("_derive_from")
+    d = res.__dict__
+    source = d.get("_derive_from")
+    if source is None:  # another thread derived them meanwhile
+        return
+    chain, alpha, upper, lower = source
     x, y = node_positions(chain, alpha)
     yf = y[chain.free_nodes]
     gaps, gaps_lower = chain.wall - yf, (yf + chain.wall if chain.channel else None)
@@ -321,10 +325,10 @@ def _derive(res: ContactResult) -> None:
     depth, pressure = wall_pressure(chain, yf, upper, lower if chain.channel else None)
     values = dict(x=x, y=y, gaps=gaps, gaps_lower=gaps_lower, indentation=depth,
                   pressure=pressure)
-    d = res.__dict__
     for name in DERIVED:
         if d[name] is _PENDING:  # a field set by hand in between keeps its value
             d[name] = values[name]
+    d.pop("_derive_from", None)
 
 
 for _name in DERIVED:
