@@ -10,6 +10,7 @@ walls.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import replace
 
@@ -59,13 +60,15 @@ def arc_far_past_wall(chain: Chain, loaded: bool) -> bool:
     the search (0 with no load, ``SAG_BOUND`` times :func:`beam_sag` with one), with
     a margin far above round-off. False says nothing (the full test runs)."""
     f = chain.free_nodes
-    i = f.size // 2
-    if not f.size or not np.isfinite(chain.upper[i]):
+    if not f.size:
         return False
-    y = chain.link_length * float(np.sum(np.sin(chain.rest_alpha[:f[i]])))
+    i = f.size // 2
+    wall = float(chain.upper[i])
+    if not math.isfinite(wall):
+        return False
+    y = chain.link_length * float(np.sin(chain.rest_alpha[:int(f[i])]).sum())
     bound = SAG_BOUND * beam_sag(chain) if loaded else 0.0
-    margin = 1e-9 * (chain.length + abs(float(chain.upper[i])))
-    return y - float(chain.upper[i]) > bound + margin
+    return y - wall > bound + 1e-9 * (chain.length + abs(wall))  # (a margin over round-off)
 
 
 def free_step(step, warm) -> StepSolution:
