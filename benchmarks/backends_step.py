@@ -11,7 +11,13 @@ solver's multipliers), and the smallest gap and reaction.
     python benchmarks/backends_step.py [--repeat 5] [--out results/backends-step]
 """
 
+# ruff: noqa: E402  (BLAS is pinned to one thread before numpy is imported)
 from __future__ import annotations
+
+import os
+
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_v] = "1"  # one BLAS thread, before numpy loads (issue 19, item 6)
 
 import argparse
 import json
@@ -24,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from lcpbench import ActuatorScene, solve
+from lcpbench.bench.machine import timing_note, timing_start
 from lcpbench.model.step import assemble_step
 from lcpbench.model.step_solver import solve_step
 from lcpbench.solvers import available_backends
@@ -120,6 +127,7 @@ def main(argv=None) -> int:
     ap.add_argument("--solvers", default=None, help="comma-separated (default: all installed)")
     ap.add_argument("--out", default="results/backends-step")
     args = ap.parse_args(argv)
+    start = timing_start()
     step, ref = exact_step()
     names = args.solvers.split(",") if args.solvers else available_backends()
     rows = []
@@ -136,8 +144,7 @@ def main(argv=None) -> int:
     meta = {"theta": 150, "height": 3, "links": 140,
             "force_N": float(ref.forces_net[rows_].sum()),
             "contact_rows": int(rows_.sum()), "repeat": args.repeat,
-            "machine": f"{platform.machine()}, {platform.processor() or 'cpu'}, "
-                       f"python {platform.python_version()}",
+            "machine": f"{timing_note(start)} python {platform.python_version()}",
             "date": date.today().isoformat()}
     out = Path(args.out)
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -18,7 +18,13 @@ overwritten unless ``--force``):
     OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 python benchmarks/elastic_walls.py
 """
 
+# ruff: noqa: E402  (BLAS is pinned to one thread before numpy is imported)
 from __future__ import annotations
+
+import os
+
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_v] = "1"  # one BLAS thread, before numpy loads (issue 19, item 6)
 
 import argparse
 import math
@@ -30,6 +36,7 @@ import numpy as np
 
 import lcpbench
 from lcpbench import ActuatorScene
+from lcpbench.bench.machine import timing_note, timing_start
 from lcpbench.problems.calibrations import get_calibration, scene_from_pressure
 from lcpbench.solvers import available_backends
 from lcpbench.studies.rigid_limit import rigid_limit
@@ -207,15 +214,13 @@ def main() -> None:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     only = set(args.only.split(","))
-    import os
-
-    load = os.getloadavg()[0]
+    start = timing_start()
     if "validation" in only:
         _write(out / "validation.md", validation(), args.force)
     if "rigid" in only:
         _write(out / "rigid-limit.md", rigid_limit_tables(out, args.force), args.force)
     if "backends" in only:
-        _write(out / "backends.md", backends() + f"\nLoad average at the start: {load:.2f}.\n",
+        _write(out / "backends.md", backends() + f"\nMachine: {timing_note(start)}\n",
                args.force)
     if "example" in only:
         _write(out / "tissue-example.txt", tissue_example(out / "tissue-example.png",

@@ -9,7 +9,13 @@ read the ratio, not the seconds).
     python benchmarks/full_solve.py [--links 140] [--theta 150] [--height 3] [--repeat 20]
 """
 
+# ruff: noqa: E402  (BLAS is pinned to one thread before numpy is imported)
 from __future__ import annotations
+
+import os
+
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_v] = "1"  # one BLAS thread, before numpy loads (issue 19, item 6)
 
 import argparse
 import platform
@@ -17,6 +23,7 @@ import statistics
 import time
 
 import lcpbench
+from lcpbench.bench.machine import timing_note, timing_start
 from lcpbench.model.dense import solve_paper_dense
 
 
@@ -37,11 +44,12 @@ def main():
     ap.add_argument("--tol", type=float, default=1e-3)
     ap.add_argument("--repeat", type=int, default=20)
     args = ap.parse_args()
+    start = timing_start()
     scene = lcpbench.ActuatorScene(theta=args.theta, height=args.height, links=args.links)
     d_best, d_med, (_, R, d_it, d_ok) = best_of(
         lambda: solve_paper_dense(scene, tol=args.tol), args.repeat)
     b_best, b_med, res = best_of(lambda: lcpbench.solve(scene, tol=args.tol), args.repeat)
-    print(f"machine: {platform.processor() or platform.machine()}, python {platform.python_version()}")
+    print(f"machine: {timing_note(start)} python {platform.python_version()}")
     print(f"scene: theta={args.theta} h={args.height} N={args.links} tol={args.tol}")
     print(f"dense  (paper eqs. 3-31 + Lemke, undamped): best {d_best*1e3:8.2f} ms  median "
           f"{d_med*1e3:8.2f} ms  outer {d_it}  converged {d_ok}  force {R.sum():.6f} N")

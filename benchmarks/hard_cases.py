@@ -6,12 +6,19 @@ certificate) and prints it.
     python benchmarks/hard_cases.py [--tol 1e-8] [--out results/hard-cases.md]
 """
 
+# ruff: noqa: E402  (BLAS is pinned to one thread before numpy is imported)
 from __future__ import annotations
+
+import os
+
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_v] = "1"  # one BLAS thread, before numpy loads (issue 19, item 6)
 
 import argparse
 from pathlib import Path
 
 import lcpbench
+from lcpbench.bench.machine import timing_note, timing_start
 
 CASES = [
     # theta, height, links, weight, channel, label
@@ -37,6 +44,7 @@ def main():
     ap.add_argument("--tol", type=float, default=1e-8)
     ap.add_argument("--out", default="results/hard-cases.md")
     args = ap.parse_args()
+    start = timing_start()
     head = ("| case | θ (deg) | h (mm) | N | w (N/mm) | method | converged | outer | "
             "total force (N) | min gap (mm) | rel. torque residual | time (ms) |")
     lines = [f"# Hard cases for the driver (tol = {args.tol:g} rad)", "",
@@ -53,6 +61,7 @@ def main():
                 f"| {label} | {th:g} | {h:g} | {n} | {w:g} | {method} | {conv} | "
                 f"{r.outer_iterations} | {r.total_force:.6g} | {c.min_gap:.2e} | "
                 f"{c.relative_torque_residual:.1e} | {r.time_s * 1e3:.1f} |")
+    lines[3:3] = ["", f"Machine: {timing_note(start)}"]
     text = "\n".join(lines) + "\n"
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     Path(args.out).write_text(text)

@@ -15,10 +15,15 @@ Run with PYTHONPATH pointing at another checkout's src for a "before" row.
 Appends a section to results/heavy-chains.md (``--out``).
 """
 
+# ruff: noqa: E402  (BLAS is pinned to one thread before numpy is imported)
 from __future__ import annotations
 
-import argparse
 import os
+
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_v] = "1"  # one BLAS thread, before numpy loads (issue 19, item 6)
+
+import argparse
 import subprocess
 import time
 
@@ -26,6 +31,7 @@ import numpy as np
 
 import lcpbench
 from lcpbench import ActuatorScene
+from lcpbench.bench.machine import timing_note, timing_start
 from lcpbench.model.energy_reference import minimise_energy
 
 ELL, EI = 30.0, 32.01
@@ -48,6 +54,7 @@ def main() -> None:
     ap.add_argument("--label", default="run")
     ap.add_argument("--out", default="results/heavy-chains.md")
     a = ap.parse_args()
+    start = timing_start()
     rows, conv, outer, errs, bad_ref = [], 0, [], [], 0
     t_all = time.perf_counter()
     for q, sc in scenes(a.count, a.links, a.seed):
@@ -71,7 +78,7 @@ def main() -> None:
     head = (f"\n## {a.label}: {a.count} scenes, N = {a.links}, seed {a.seed}\n\n"
             f"lcpbench from `{os.path.dirname(lcpbench.__file__)}`, "
             f"git {subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], capture_output=True, text=True, cwd=os.path.dirname(lcpbench.__file__)).stdout.strip()}, "
-            f"load `{os.getloadavg()[0]:.2f}`, {time.perf_counter() - t_all:.0f} s in all.\n\n"
+            f"{time.perf_counter() - t_all:.0f} s in all; {timing_note(start)}\n\n"
             f"- converged: **{conv} / {a.count}**\n"
             f"- outer iterations of the converged: max {max(outer, default=0)}, "
             f"median {float(np.median(outer)) if outer else 0:.0f}\n"

@@ -21,7 +21,13 @@ at them::
         --store /tmp/audit.db --out results/judge-audit.md
 """
 
+# ruff: noqa: E402  (BLAS is pinned to one thread before numpy is imported)
 from __future__ import annotations
+
+import os
+
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_v] = "1"  # one BLAS thread, before numpy loads (issue 19, item 6)
 
 import argparse
 import json
@@ -33,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from lcpbench import ActuatorScene
+from lcpbench.bench.machine import timing_note, timing_start
 from lcpbench.bench.metrics import evaluate
 from lcpbench.bench.store import Store
 from lcpbench.bench.sweep import plan_sweep, sweep
@@ -73,12 +80,11 @@ def counts(evaluated, good_refs: set) -> dict[tuple[str, str], dict[str, int]]:
     return out
 
 
-def markdown(table: dict, args, elapsed: float, load: tuple, wrong_examples: list) -> str:
+def markdown(table: dict, args, elapsed: float, machine: str, wrong_examples: list) -> str:
     lines = [f"# Converged-but-wrong audit ({args.scenes} random scenes, seed {args.seed})", "",
              "Made by `python benchmarks/judge_audit.py "
              f"--scenes {args.scenes} --seed {args.seed} --profiles {' '.join(args.profiles)}`"
-             f" in {elapsed / 60:.1f} min, load average at start "
-             f"{load[0]:.2f}. \"wrong\" = marked converged but off the reference by more than "
+             f" in {elapsed / 60:.1f} min; {machine} \"wrong\" = marked converged but off the reference by more than "
              "the success rule min(1e-3, 100·tol) (docs/bench.md).", "",
              "| back-end | settings | accurate | wrong | not converged | no reference |",
              "|---|---|---:|---:|---:|---:|"]
@@ -109,7 +115,7 @@ def main(argv=None) -> int:
     scenes = random_scenes(args.scenes, args.seed)
     names = args.solvers or available_backends()
     jobs = plan_sweep(scenes, names, args.profiles, baselines=())
-    load = tuple(float(x) for x in Path("/proc/loadavg").read_text().split()[:3])
+    start = timing_start()
     t0 = time.perf_counter()
     with Store(args.store) as store:
 
@@ -127,7 +133,7 @@ def main(argv=None) -> int:
     wrong = [f"{e.backend}/{e.settings} {e.row['scene']}: error {e.error:.2e}"
              for e in evaluated if e.row["converged"] and not e.success
              and math.isfinite(e.error)]
-    text = markdown(table, args, time.perf_counter() - t0, load, wrong)
+    text = markdown(table, args, time.perf_counter() - t0, timing_note(start), wrong)
     print(text)
     if args.out:
         Path(args.out).write_text(text)

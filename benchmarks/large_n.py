@@ -3,8 +3,10 @@
 Each N is solved in a fresh subprocess (one BLAS thread) at the paper's scene
 (θ = 150°, h = 3 mm), so the peak RSS (``resource.getrusage``) is that solve's
 own. The kernels are compiled/loaded once per process before the clock starts
-(a tiny solve). Writes ``results/large-n.md`` and ``results/large-n.png``;
-``--out`` to write elsewhere.
+(a tiny solve). Then the force against N at a tight tol (``--conv-sizes``,
+``--conv-tol``): its differences to the largest N, N² times them (bounded for
+O(N⁻²)) and the judge's error bound on each. Writes ``results/large-n.md``,
+``.json`` and ``.png``; ``--out`` to write elsewhere.
 
     OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 python benchmarks/large_n.py
 """
@@ -56,19 +58,40 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sizes", default="1000,3000,10000,30000,100000")
     ap.add_argument("--tol", type=float, default=1e-3)
+    ap.add_argument("--conv-sizes", default="125,250,500,1000,2000,4000,10000,30000,100000",
+                    help="the force against N, at --conv-tol ('' to skip)")
+    ap.add_argument("--conv-tol", type=float, default=1e-9)
     ap.add_argument("--timeout", type=float, default=300.0)
     ap.add_argument("--out", default="results/large-n")
     a = ap.parse_args(argv)
     load = os.getloadavg()
-    rows = []
+    rows, conv = [], []
     for n in a.sizes.split(","):
         rows.append(run_one(int(n), a.tol, a.timeout))
         print(json.dumps(rows[-1]), flush=True)
+    for n in filter(None, a.conv_sizes.split(",")):
+        conv.append(run_one(int(n), a.conv_tol, a.timeout))
+        print(json.dumps(conv[-1]), flush=True)
     load_after = os.getloadavg()
+    cpu = _cpu()
     with open(a.out + ".json", "w") as fh:
-        json.dump({"load": load, "load_after": load_after, "rows": rows}, fh, indent=1)
-    write_report(a.out, rows, a.tol, load, load_after)
+        json.dump({"load": load, "load_after": load_after, "cpu": cpu, "rows": rows,
+                   "convergence": conv}, fh, indent=1)
+    write_report(a.out, rows, a.tol, load, load_after, conv=conv, conv_tol=a.conv_tol, cpu=cpu)
     return 0
+
+
+def _cpu() -> str:
+    try:
+        with open("/proc/cpuinfo") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    import platform
+
+    return platform.processor() or "unknown"
 
 
 def _slope(xs, ys):
@@ -79,13 +102,16 @@ def _slope(xs, ys):
     return float(np.polyfit(np.log(xs), np.log(ys), 1)[0])
 
 
-def write_report(out: str, rows: list[dict], tol: float, load, load_after) -> None:
+def write_report(out: str, rows: list[dict], tol: float, load, load_after, *,
+                 conv: list[dict] | None = None, conv_tol: float = 1e-9,
+                 cpu: str = "") -> None:
     ok = [r for r in rows if "error" not in r]
     big = [r for r in ok if r["N"] >= 4000]
     lines = [f"# Large N (issue 19, target 5): θ = 150°, h = 3 mm, tol = {tol:g} rad", "",
              "`python benchmarks/large_n.py` (one subprocess per N, one BLAS thread; kernels "
              "loaded before the clock). Load average before "
-             f"{load[0]:.2f}, after {load_after[0]:.2f} (2 shared cores).", "",
+             f"{load[0]:.2f}, after {load_after[0]:.2f}; {cpu}, {os.cpu_count()} "
+             "cores.", "",
              "| N | engine | driver (s) | solve + judge (s) | peak RSS (MiB) | F (N) | outer | "
              "converged | judge |", "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
@@ -97,11 +123,15 @@ def write_report(out: str, rows: list[dict], tol: float, load, load_after) -> No
         lines.append(f"| {r['N']} | {eng} | {r['driver_s']:.3f} | {r['total_s']:.3f} | "
                      f"{r['rss_mib']:.0f} | {r['force']:.10f} | {r['outer']} | "
                      f"{r['converged']} | {why} |")
+    if len(ok) >= 2:
+        lines += ["", f"Log-log slope of the driver time over N = {ok[0]['N']}…{ok[-1]['N']}: "
+                      f"{_slope([r['N'] for r in ok], [r['driver_s'] for r in ok]):.2f}."]
     if len(big) >= 2:
         lines += ["", f"Log-log slope of the driver time over the increment path "
                       f"(N = {big[0]['N']}…{big[-1]['N']}): "
                       f"{_slope([r['N'] for r in big], [r['driver_s'] for r in big]):.2f}; "
                       f"of the peak RSS: {_slope([r['N'] for r in big], [r['rss_mib'] for r in big]):.2f}."]
+    lines += _convergence_lines(conv or [], conv_tol)
     with open(out + ".md", "w") as fh:
         fh.write("\n".join(lines) + "\n")
     try:
@@ -111,13 +141,61 @@ def write_report(out: str, rows: list[dict], tol: float, load, load_after) -> No
         import matplotlib.pyplot as plt
     except ImportError:
         return
-    fig, ax = plt.subplots(figsize=(5, 3.5))
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(9, 3.5))
     ax.loglog([r["N"] for r in ok], [r["driver_s"] for r in ok], "o-", label="driver (s)")
     ax.loglog([r["N"] for r in ok], [r["total_s"] for r in ok], "s--", label="solve + judge (s)")
     ax.set_xlabel("links N")
     ax.legend()
+    pts = _differences(conv or [])
+    if pts:
+        ns = [p[0] for p in pts]
+        bx.loglog(ns, [p[2] for p in pts], "o-", label="|F(N) − F(N_max)| / F")
+        bx.loglog(ns, [p[3] for p in pts], "v:", label="judge's bound on F(N) (F₀)")
+        c = max(p[2] * p[0] ** 2 for p in pts)
+        bx.loglog(ns, [c / n ** 2 for n in ns], "k--", lw=0.8, label="C N⁻²")
+        bx.set_xlabel("links N")
+        bx.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(out + ".png", dpi=120)
+
+
+def _differences(conv: list[dict]) -> list[tuple[int, float, float, float]]:
+    """(N, F, |F − F(N_max)|/F(N_max), the judge's bound on F(N)) for N < N_max."""
+    ok = [r for r in conv if "error" not in r and r.get("force")]
+    if len(ok) < 2:
+        return []
+    ref = ok[-1]["force"]
+    return [(r["N"], r["force"], abs(r["force"] - ref) / abs(ref),
+             r["force_error_bound"] if r["force_error_bound"] is not None else float("nan"))
+            for r in ok[:-1]]
+
+
+def _convergence_lines(conv: list[dict], tol: float) -> list[str]:
+    """The force against N: differences to the largest N, N² times them, the error bars."""
+    pts = _differences(conv)
+    if not pts:
+        return []
+    ok = [r for r in conv if "error" not in r and r.get("force")]
+    top = ok[-1]
+    lines = ["", f"## The force against N (tol = {tol:g} rad)", "",
+             f"F(N_max = {top['N']}) = {top['force']:.12f} N (the judge's bound on it: "
+             f"{top['force_error_bound']:.1e} F₀; converged: {top['converged']}). "
+             "e(N) = |F(N) − F(N_max)| / F; O(N⁻²) means N² e(N) stays bounded.", "",
+             "| N | engine | F (N) | e(N) | N² e(N) | judge's bound on F(N) (F₀) | converged |",
+             "|---|---|---|---|---|---|---|"]
+    eng = {r["N"]: ("compiled" if r["engine"] == "compiled" else "increments") for r in ok}
+    conv_of = {r["N"]: r["converged"] for r in ok}
+    for n, f, e, b in pts:
+        lines.append(f"| {n} | {eng[n]} | {f:.12f} | {e:.2e} | {n * n * e:.3f} | {b:.1e} | "
+                     f"{conv_of[n]} |")
+    resolved = [(n, e) for n, e, b in ((p[0], p[2], p[3]) for p in pts) if e > 3 * b]
+    if len(resolved) >= 2:
+        lines += ["", f"Log-log slope of e(N) over the N whose e(N) is above 3× its error "
+                      f"bound (N = {resolved[0][0]}…{resolved[-1][0]}): "
+                      f"{_slope([p[0] for p in resolved], [p[1] for p in resolved]):.2f}; "
+                      f"N² e(N) from {min(p[0] ** 2 * p[2] for p in pts):.2f} to "
+                      f"{max(p[0] ** 2 * p[2] for p in pts):.2f} over N = {pts[0][0]}…{pts[-1][0]}."]
+    return lines
 
 
 if __name__ == "__main__":

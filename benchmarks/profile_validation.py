@@ -23,12 +23,16 @@ paper's default actuator, θ = 150°, N = 140)::
         --out results/profile-validation.md --picture results/profile-stenosis.png
 """
 
+# ruff: noqa: E402  (BLAS is pinned to one thread before numpy is imported)
 from __future__ import annotations
+
+import os
+
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_v] = "1"  # one BLAS thread, before numpy loads (issue 19, item 6)
 
 import argparse
 import importlib.util
-import os
-import platform
 import time
 from pathlib import Path
 
@@ -36,6 +40,7 @@ import numpy as np
 
 import lcpbench
 from lcpbench import ActuatorScene
+from lcpbench.bench.machine import timing_note, timing_start
 from lcpbench.model.energy_reference import minimise_energy
 from lcpbench.problems.walls import WallProfile, load_profile_csv
 from lcpbench.solvers.registry import available_backends
@@ -115,6 +120,7 @@ def backends(mod) -> list[str]:
 
 
 def cost(repeats: int) -> list[str]:
+    start = timing_start()
     sten = ActuatorScene(theta=150, links=140, wall_profile=load_profile_csv(
         ROOT / "examples" / "profiles" / "stenosis.csv"))
     flat = ActuatorScene(theta=150, height=2.2, links=140)
@@ -129,8 +135,7 @@ def cost(repeats: int) -> list[str]:
     med = {k: float(np.median(v)) for k, v in times.items()}
     per = {k: med[k] / outer[k] for k in med}
     return [f"N = 140, tol 1e-3, numpy engine for both, median of {repeats} interleaved "
-            f"repeats, load {os.getloadavg()[0]:.2f} ({platform.processor() or 'cpu'}, "
-            f"OMP/OPENBLAS threads {os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}):", "",
+            f"repeats; {timing_note(start)}", "",
             "| scene | outer | solve (ms) | per outer iteration (ms) |", "|---|---|---|---|",
             f"| flat wall h = 2.2 mm | {outer['flat']} | {1e3 * med['flat']:.3g} | "
             f"{1e3 * per['flat']:.3g} |",

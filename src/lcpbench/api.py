@@ -100,9 +100,12 @@ def solve(
         take one. Globalised scheme only; the answer is the same equilibrium
         to the tolerance (tests check 1e-8 at tight tol).
     engine : "auto" (default: the default back-end with the globalised driver
-        runs in one compiled kernel, :mod:`lcpbench.model.compiled`; every
-        other solve in numpy), "compiled" (the kernel, or ProblemError where
-        it does not apply) or "numpy" (the readable reference). Both engines
+        runs in one compiled kernel, :mod:`lcpbench.model.compiled`; another
+        back-end that takes a QP or an LCP has the driver's own parts around
+        its calls compiled, :mod:`lcpbench.model.compiled_driver`; every other
+        solve in numpy), "compiled" (the kernel or the compiled driver, or
+        ProblemError where neither applies) or "numpy" (the readable
+        reference). Both engines
         take the same path and give the same answer to round-off;
         ``result.extra["engine"]`` says which one ran.
     pressure_limit : a safety threshold on the contact pressure per length (N/mm,

@@ -114,6 +114,35 @@ def machine_record(*, workers: int | None = None, repeat: int | None = None) -> 
     }
 
 
+def timing_start() -> dict:
+    """What a timing script records when it starts (``benchmarks/*.py``): the CPU
+    model, the cores, the load average and the BLAS thread variables (each script sets
+    them to 1 before numpy loads); :func:`timing_note` adds the load at the end."""
+    from .pool import SINGLE_THREAD
+
+    return {"cpu": cpu_model(), "cores": os.cpu_count(), "load_start": load_average(),
+            "blas_threads": {k: os.environ.get(k) for k in SINGLE_THREAD}}
+
+
+def timing_note(start: dict) -> str:
+    """One sentence for a result file: the machine, one BLAS thread or not, and the load
+    average (1/5/15 min) at the start (``start`` from :func:`timing_start`) and now."""
+    start["load_end"] = load_average()
+    env = start["blas_threads"]
+    if all(env.get(k) == "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+                                        "MKL_NUM_THREADS")):
+        blas = "one BLAS thread"
+    else:
+        blas = "BLAS threads not pinned (" + (", ".join(
+            f"{k}={v}" for k, v in env.items() if v is not None) or "no variable set") + ")"
+
+    def load(x):
+        return "n/a" if not x else "/".join(f"{a:g}" for a in x)
+
+    return (f"{start['cpu']}, {start['cores']} cores, {blas}; load average (1/5/15 min) "
+            f"{load(start['load_start'])} at the start, {load(start['load_end'])} at the end.")
+
+
 def overloaded(record: dict) -> str | None:
     """A warning when the 1-minute load average exceeded the worker count, else None.
 

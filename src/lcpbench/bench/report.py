@@ -16,7 +16,7 @@ from pathlib import Path
 from ..jsonsafe import sanitise
 from .expected import OFF_REFERENCE, is_expected
 from .jobs import DEFAULT_TIME_LIMIT
-from .machine import machine_section
+from .machine import cpu_model, machine_section
 from .metrics import (
     SHIFT,
     continuation_pairs,
@@ -289,9 +289,11 @@ def _markdown(store, runs, refs, evaluated, summary, h2, figures, time_limit,
         "",
         f"Built from `{store.path.name}`: {scope or f'{len(runs)} runs'} over "
         f"{len(scenes)} scenes ({_grid_text(runs) if runs else 'no runs'}).",
-        f"Machine: {platform.machine()}, {os.cpu_count()} cores, Python "
+        f"Machine: {cpu_model()}, {os.cpu_count()} cores, Python "
         f"{platform.python_version()}. Times are wall times of one solve in a worker "
-        f"process (scene to result, including assembly), {_repeats_text(runs)} "
+        f"process (scene to result, including assembly; lcpbench's parts compiled around "
+        f"every back-end, so a row's time is the back-end's plus the same small "
+        f"overhead), {_repeats_text(runs)} "
         "(the machine each sweep ran on: \"Machine and timing\" below).",
         "",
         "**Reference.** Per scene, the built-in active set at settings `high` and driver "

@@ -33,7 +33,7 @@ from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from ..solvers.judge import DEFAULT_TOL
 from ..solvers.registry import DEFAULT, get_settings
-from . import angle_step, large_n
+from . import angle_step, compiled_driver, large_n
 from .driver import DriverOutput, DriverStart, StepRecord, _converged, _fail, run_driver
 from .profile import has_profile
 
@@ -159,12 +159,17 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
     elif engine == "compiled" and chain is not None and has_profile(chain):
         raise ProblemError("engine='compiled' does not run walls of any profile (wall_profile); "
                            "engine='auto' or 'numpy' runs them in the numpy reference")
+    elif engine != "numpy" and compiled_driver.takes(chain, step_solver, method):
+        # another back-end: its calls in Python, lcpbench's parts around them compiled
+        return (compiled_driver.run(chain, step_solver, tol=tol, max_outer=max_outer,
+                                    start=start), compiled_driver.ENGINE)
     elif engine == "compiled":
         if chain.elastic_walls:
             raise ProblemError("engine='compiled' does not run elastic walls yet "
                                "(wall_stiffness < inf); use engine='auto' or 'numpy'")
-        raise ProblemError(f"engine='compiled' runs the default back-end ({DEFAULT}) with "
-                           f"method='globalised'; got solver {backend!r}, method {method!r}")
+        raise ProblemError(f"engine='compiled' runs method='globalised' with a back-end that "
+                           f"takes a QP or an LCP, on flat rigid walls; got solver "
+                           f"{backend!r}, method {method!r}")
     else:
         used = "numpy"
     out = run_driver(chain, step_solver, tol=tol, max_outer=max_outer, method=method,
@@ -271,10 +276,11 @@ _RESIDUALS = ("natural", "min_gap", "min_reaction", "complementarity", "term_siz
 
 
 def warm_up() -> None:
-    """Load the kernel by one tiny solve, compiling it into numba's on-disk cache
+    """Load the kernels by one tiny solve each, compiling them into numba's on-disk cache
     the first time (about a minute). Call it before starting processes that
     solve under a time limit (the sweep's workers), so that no job pays for
     the compilation."""
     from ..problems.scenes import ActuatorScene
 
     run_compiled(ActuatorScene(theta=150, height=3.0, links=8).chain(), tol=1e-3)
+    compiled_driver.warm_up()  # the driver around the other back-ends

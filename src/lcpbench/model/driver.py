@@ -99,6 +99,12 @@ def _fail(alpha, n, steps, reason) -> DriverOutput:
     return DriverOutput(alpha, zero, zero.copy(), False, reason, steps)
 
 
+def out_of_iterations(alpha, n: int, steps: list[StepRecord], max_outer: int) -> DriverOutput:
+    """The answer of a driver that ran its ``max_outer`` outer iterations."""
+    return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
+                                  f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
+
+
 def run_driver(
     chain: Chain,
     solver: StepSolver,
@@ -219,8 +225,7 @@ def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int,
         warm = sol
         if dalpha < tol:
             return _converged(chain, alpha, sol, steps, step)
-    return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
-                                  f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
+    return out_of_iterations(alpha, n, steps, max_outer)
 
 
 def armijo(chain: Chain, trial_of, E: float, slope: float, noise: float):
@@ -271,5 +276,4 @@ def _undamped(chain: Chain, solver: StepSolver, tol: float, max_outer: int) -> D
         warm = sol
         if dalpha < tol:
             return _converged(chain, alpha, sol, steps, step)
-    return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
-                                  f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
+    return out_of_iterations(alpha, n, steps, max_outer)

@@ -3,7 +3,9 @@
 The same scheme as :func:`lcpbench.model.driver.run_driver` with
 ``method="globalised"``: start from the unconstrained arc clipped to the walls,
 solve the contact step, search along it with Armijo on the exact energy,
-stop when max|α̂ − α| < tol. The differences, both for round-off at large N:
+stop when max|α̂ − α| < tol and the driver's prediction of the judge's
+per-node force bound holds (:data:`NODE_SETTLED`). The differences, both for
+round-off at large N:
 the step is :func:`~.large_n.increment_step` (unknowns d = u − u₀, face solves
 on the tridiagonal factor of H) and the iterate moves by
 :func:`~.large_n.alpha_from_increments`, so the state is α, never heights
@@ -35,8 +37,18 @@ from .driver import (
     armijo,
     line_search_failed,
 )
+from .judge import NODE_GROSS, _contraction
 from .large_n import alpha_from_increments, increment_step
 from .step import assemble_step
+
+#: past max|Δα| < tol the driver goes on while its prediction of the judge's per-node
+#: force error bound (:func:`_node_change`) exceeds this share of NODE_GROSS, for at
+#: most EXTRA_STEPS steps: a point contact's split between its two neighbouring nodes
+#: moves by ~4 EI δφ / a² per joint-angle error δφ, so at N ≥ 10⁴ and tol 1e-3 the
+#: answer's nodes were 0.1–1 F₀ off (the total force within τ); each further step
+#: divides that by ~100 (docs/performance.md)
+NODE_SETTLED = 0.5
+EXTRA_STEPS = 4
 
 
 def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer: int = 200,
@@ -58,6 +70,7 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
         return _fail(chain.rest_alpha.copy(), n, steps, "cannot fit the chain between the walls")
     E = energy(chain, alpha)
     noise = 1e-12 * (abs(E) + float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6)
+    last_net, extra = None, 0
     for _ in range(max_outer):
         t0 = time.perf_counter()
         step = increment_step(assemble_step(chain, alpha))
@@ -74,14 +87,33 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
             return line_search_failed(alpha, n, steps, sol, t_asm, dalpha, E)
         steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
                                 t, dalpha, E_t, _setup(sol)))
-        if dalpha < tol:
+        node_change, last_net = _node_change(chain, sol.forces_net, last_net, steps)
+        if dalpha < tol and (node_change <= NODE_SETTLED * NODE_GROSS or extra >= EXTRA_STEPS):
             final = replace(sol, u=_heights(chain, alpha) + d)  # in heights, as every driver reports
             return _converged(chain, trial, final, steps)
+        extra += dalpha < tol
         # the warm start of the next step: this answer, in the next step's increments
         warm = replace(sol, u=(1.0 - t) * d)
         alpha, E = trial, E_t
     return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
                                   f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
+
+
+def _node_change(chain: Chain, net, last_net, steps: list[StepRecord]):
+    """``(bound, net)``: the judge's per-node force error bound as this driver can predict
+    it, ρ κ max_i |R_i − R_i^prev| / F₀ (the judge takes κ max_i |R_i − R'_i| one step
+    later, so ρ smaller), with ρ and κ = 1/(1 − ρ) as the judge estimates them; inf
+    before two steps' reactions are known."""
+    if net is None or not np.all(np.isfinite(net)):
+        return np.inf, None
+    net = np.asarray(net, dtype=float)
+    if last_net is None:
+        return np.inf, net
+    F0 = max(float(np.sum(np.maximum(net, 0.0))), float(np.sum(np.maximum(-net, 0.0))),
+             chain.force_scale)
+    rho = _contraction([s.max_dalpha for s in steps[:-1]], steps[-1].max_dalpha)
+    change = float(np.max(np.abs(net - last_net), initial=0.0))
+    return rho / (1.0 - rho) * change / F0, net
 
 
 def _heights(chain: Chain, alpha: np.ndarray) -> np.ndarray:

@@ -32,6 +32,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..linalg.saddle import TridiagonalFactor
+from ..linalg.twisted import TwistedFactor
 from ..problems.scenes import Chain
 from .step import ContactStep
 
@@ -65,11 +66,13 @@ def increment_step(step: ContactStep, *, restart: bool = True) -> ContactStep:
 
     Its linear term is the factored gradient at u₀ (from the joint angles of α,
     no cancellation), its walls are the gaps of u₀, and its face solves use
-    the tridiagonal factor (``restart``: refactored from each face's first change, in
-    one compiled call; False: the reference, see :class:`TridiagonalFactor`).
+    the tridiagonal factor (``restart``: twisted, each face refactored between its
+    first and last change, :class:`~lcpbench.linalg.twisted.TwistedFactor`; False:
+    the reference, a full factorisation per face, :class:`TridiagonalFactor`).
     """
     n = step.size
-    factor = TridiagonalFactor(step.coef, step.stiffness, restart=restart)
+    factor = (TwistedFactor(step.coef, step.stiffness) if restart
+              else TridiagonalFactor(step.coef, step.stiffness, restart=False))
     return replace(step, linear=step.gradient(step.origin), lower=step.lower - step.origin,
                    upper=step.upper - step.origin, origin=np.zeros(n), factor=factor)
 

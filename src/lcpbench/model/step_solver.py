@@ -46,11 +46,15 @@ def step_qp(step, scaled: bool = True) -> BoxQP:
     handing its rigid QP over would drop the walls' springs, so it is refused.
     """
     _rigid_only(step, "step_qp")
-    L, F = step_scales(step, scaled)
+    import scipy.sparse as sp  # at the first QP back-end's step, not at start-up
+
     n = step.size
+    if scaled and (own := getattr(step, "compiled_qp", None)) is not None:
+        data, indices, indptr, c, lo, hi, b = own()  # model.compiled_driver
+        return BoxQP(sp.csc_matrix((data, indices, indptr), shape=(n, n)), c, lo, hi, bands=b)
+    L, F = step_scales(step, scaled)
     b = step.bands * (L / F)
     diags = [b[0], b[1, : n - 1], b[2, : n - 2]]
-    import scipy.sparse as sp  # at the first QP back-end's step, not at start-up
 
     P = sp.diags([diags[2], diags[1], diags[0], diags[1], diags[2]], [-2, -1, 0, 1, 2],
                  shape=(n, n), format="csc")
@@ -65,6 +69,8 @@ def step_lcp(step, scaled: bool = True):
     block swaps the two).
     """
     _rigid_only(step, "step_lcp")
+    if scaled and (own := getattr(step, "compiled_lcp", None)) is not None:
+        return own()  # model.compiled_driver
     form = step.lcp("contact")
     L, F = step_scales(step, scaled)
     m, k = form.n_gap, form.q.size
@@ -123,6 +129,9 @@ def step_residuals(step, u: np.ndarray) -> tuple[dict, np.ndarray]:
     newtons (positive: the upper wall pushes down), zero up to round-off on
     nodes with no wall row.
     """
+    if (own := getattr(step, "compiled_residuals", None)) is not None:
+        if (out := own(u)) is not None:  # model.compiled_driver
+            return out
     nan = {"natural": np.inf, "min_gap": -np.inf, "min_reaction": -np.inf,
            "complementarity": np.inf}
     if not np.all(np.isfinite(u)):
@@ -246,4 +255,5 @@ def make_step_solver(solver: str = "auto", settings: str | Settings = "default",
         return solve_step(step, backend, s, scaled=scaled, warm=warm)
 
     run.backend = backend  # type: ignore[attr-defined]  # read by the harness
+    run.scaled = scaled  # type: ignore[attr-defined]  # model.compiled_driver.takes
     return run

@@ -2,11 +2,13 @@
 
 With ``continuation=True`` (default) the actuator scenes are put in an order
 that continuation can use: grouped by everything but θ and h (N, ℓ, EI, w,
-channel), and within a group by h, then θ, so consecutive scenes are
-neighbours on a line in θ; each line is solved by
-:func:`lcpbench.studies.continuation.solve_sequence` (a scene whose warm
-start fails is solved again cold). Other scenes (the cantilever) are solved
-cold. The results come back in the caller's order, one per scene.
+channel), and within a group by h, then θ (lines in θ, the closest walls
+first); each group is solved in that order by
+:func:`lcpbench.studies.continuation.solve_sequence`, every scene starting
+from the group's answers before it, on its own line and on the neighbouring
+lines (:class:`lcpbench.studies.continuation.Solved`; a scene whose warm start
+fails is solved again cold). Other scenes (the cantilever) are solved cold.
+The results come back in the caller's order, one per scene.
 
 With the default back-end and the globalised driver, each line runs in the
 compiled kernels (:mod:`lcpbench.studies.batch_compiled`: the solve kernel
@@ -49,16 +51,16 @@ def continuation_order(scenes: list) -> list[list[int]]:
 
 
 def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
-               continuation: bool = True, predictor: str = "quadratic",
+               continuation: bool = True, predictor: str = "adaptive",
                **solve_kw) -> list[ContactResult]:
     """Solve every scene; one :class:`ContactResult` per scene, in the caller's order.
 
     ``tol``, ``solver`` and ``solve_kw`` are :func:`lcpbench.solve`'s.
     ``continuation``: start each scene from its solved neighbours (the
-    globalised driver only; a failed warm start is redone cold, so the answer
+    globalised or Newton driver; a failed warm start is redone cold, so the answer
     is the cold one's to the tolerance); ``predictor`` as in
-    :func:`~lcpbench.studies.continuation.solve_sequence`. False: every scene
-    cold, in the given order.
+    :func:`~lcpbench.studies.continuation.solve_sequence` (default "adaptive").
+    False: every scene cold, in the given order.
     """
     if isinstance(scenes, (str, bytes)) or not isinstance(scenes, Iterable):
         raise ProblemError(f"scenes must be a sequence of scenes, got {type(scenes).__name__}")

@@ -31,7 +31,7 @@ from ..model.step_solver import make_step_solver
 from ..model.wall_free import solve_without_contact
 from ..problems.scenes import ActuatorScene
 from ..solvers.registry import DEFAULT
-from .continuation import _POINTS, extrapolated_alpha, warm_or_cold
+from .continuation import Solved, new_solved, warm_or_cold
 
 AUTO_WHY = "auto: the built-in active set (exact)"
 
@@ -44,32 +44,11 @@ def takes(solver, solve_kw: dict) -> bool:
             and solve_kw.get("engine", "auto") in ("auto", "compiled"))
 
 
-def _predict(history: list, scene: ActuatorScene, most: int):
-    """(α, warm step) for ``scene`` from the line's last answers, as
-    :func:`lcpbench.studies.continuation.predict` (scenes of one group: only θ
-    and h can differ). None: start cold."""
-    if not history or most == 0:
-        return None
-    s1, r1 = history[-1]
-
-    def moving(a, b):
-        if a.theta != b.theta and a.height == b.height:
-            return "theta"
-        if a.height != b.height and a.theta == b.theta:
-            return "height"
-        return None
-
-    param = moving(s1, scene)
-    if not r1.converged or param is None:
-        return None
-    pts = [(s1, r1)]
-    for s, r in reversed(history[:-1]):
-        if len(pts) == most:
-            break
-        if not r.converged or moving(s, pts[-1][0]) != param:
-            break
-        pts.append((s, r))
-    return DriverStart(extrapolated_alpha(scene, param, pts), r1.extra.get("last_step"))
+def _predict(solved: Solved, scene: ActuatorScene) -> DriverStart | None:
+    """The start of ``scene``, as :func:`lcpbench.studies.continuation.solve_sequence`
+    chooses it (:meth:`Solved.predict`); None: start cold."""
+    got = solved.predict(scene)
+    return None if got is None else DriverStart(got[0], got[1].extra.get("last_step"))
 
 
 def moderately_heavy(chain) -> bool:
@@ -118,17 +97,16 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
 
 
 def solve_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = "default",
-               predictor: str = "quadratic") -> list[ContactResult]:
+               predictor: str = "adaptive") -> list[ContactResult]:
     """One continuation line (scenes of one group, in order), in the kernels."""
-    most = _POINTS.get(predictor, 0)
-    history: list = []
+    solved = new_solved(predictor)
     out = []
     const: dict = {}
     for scene in scenes:
         res = warm_or_cold(
             lambda s, sc=scene: _solve_one(sc, tol, max_outer, settings, s, const),
-            _predict(history, scene, most), predictor)
-        history.append((scene, res))
+            _predict(solved, scene), predictor)
+        solved.add(scene, res)
         out.append(res)
     return out
 

@@ -1,21 +1,24 @@
-"""Continuation: solve a line of scenes, each starting from its neighbours' answers.
+"""Continuation: solve scenes in order, each starting from its neighbours' answers.
 
-Along a line in θ (or in h) the equilibrium moves smoothly, so the answer of
-the previous scene, or better the straight-line extrapolation through the
-previous two (a secant predictor), is a much closer first iterate than the
-clipped unconstrained arc. The globalised driver clips the prediction to the
-walls and line-searches on the exact energy from there, so the answer is the
-same equilibrium; only the path to it is shorter.
+Along a line in θ the equilibrium moves smoothly, so a polynomial through
+the nearest answers is a much closer first iterate than the clipped
+unconstrained arc; across lines (in h) a scene that touches no wall has the
+same answer as its neighbour that touches none (:class:`Solved` has the
+rules). The globalised and Newton drivers clip the prediction to the walls
+and line-search on the exact energy from there, so the answer is the same
+equilibrium; only the path to it is shorter.
 
-Measured on the paper grid with the active set (``benchmarks/warm_sweep.py``,
-``results/warm-sweep.md``).
+Measured on the paper grid (``benchmarks/perf_targets.py`` → results/perf.md,
+``benchmarks/warm_sweep.py``; docs/performance.md).
 """
 
 from __future__ import annotations
 
+import bisect
+import functools
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import replace
+from dataclasses import fields, replace
 
 import numpy as np
 
@@ -24,60 +27,195 @@ from ..errors import ProblemError
 from ..model.result import ContactResult
 from ..problems.scenes import ActuatorScene
 
-PREDICTORS = ("quadratic", "secant", "previous", "none")
-#: answers each predictor extrapolates through (polynomial degree + 1)
-_POINTS = {"quadratic": 3, "secant": 2, "previous": 1}
+PREDICTORS = ("adaptive", "quadratic", "secant", "previous", "none")
+#: answers each predictor extrapolates through (polynomial degree + 1; "adaptive": at most)
+_POINTS = {"adaptive": 6, "quadratic": 3, "secant": 2, "previous": 1}
 
 
-def _step(a: ActuatorScene, b: ActuatorScene) -> tuple[str, float] | None:
-    """The one parameter (theta or height) that changes from a to b, and by how much."""
-    same = replace(b, theta=a.theta, height=a.height) == a
-    if not same:
+def touches(res: ContactResult) -> bool:
+    """Whether an answer presses on a wall (any reaction > 0)."""
+    lower = res.forces_lower
+    return bool(np.any(res.forces > 0) or (lower is not None and np.any(lower > 0)))
+
+
+class Solved:
+    """The solved scenes of a batch, indexed for the predictor.
+
+    Scenes that differ only in θ and h form one plane; in it a scene's
+    neighbours are the solved scenes at the same h (its line in θ) and at the
+    same θ (the other lines). :meth:`predict` starts a scene from:
+
+    1. a neighbour at the same θ that touches no wall, as it is, when the
+       line's nearest answer touches no wall either (or there is none): it is
+       the chain's equilibrium without walls, which no wall enters, so it is
+       this scene's answer too if the scene touches nothing (to the driver's
+       tolerance; else a start clipped to the walls, as any);
+    2. just after the line starts to touch (fewer than ``most`` answers on it
+       that touch): the neighbouring line's answer at θ plus the polynomial in
+       θ of the difference between the two lines, through the θ where both
+       touch (a 2-D predictor);
+    3. else the polynomial in θ through the line's nearest converged answers
+       (at most ``most``; only answers that touch a wall as the nearest does,
+       or all that do not: a polynomial through a change of contact
+       extrapolates neither shape). ``adaptive``: of the degree where two
+       successive degrees agree best (the difference estimates the error of
+       the lower one; through the answers' own truncation the higher degrees
+       amplify it, which stops the choice at loose tolerances);
+    4. with no answer on the line, the nearest answer at the same θ; with none
+       at all, a cold start.
+    """
+
+    def __init__(self, most: int = 3, adaptive: bool = False) -> None:
+        self.most = most
+        self.adaptive = adaptive
+        # per plane (the scene's fields but θ and h): its answers by h then θ, and by θ
+        # then h, each as (result, touches a wall); converged answers only
+        self._planes: dict = {}
+
+    def _plane(self, scene, make: bool = False) -> tuple[dict, dict] | None:
+        if not isinstance(scene, ActuatorScene):
+            return None
+        key = tuple(getattr(scene, f) for f in _PLANE_FIELDS)
+        if not _hashable(key):  # a field that does not hash: the planes compared one by one
+            key = next((k for k in self._planes if isinstance(k, _Unhashed) and k.key == key),
+                       _Unhashed(key))
+        plane = self._planes.get(key)
+        if plane is None and make:
+            plane = self._planes[key] = ({}, {})
+        return plane
+
+    def add(self, scene: ActuatorScene, res: ContactResult) -> None:
+        """Record the answer ``res`` of ``scene`` (not converged, or not an actuator
+        scene: ignored)."""
+        plane = self._plane(scene, make=True) if res.converged else None
+        if plane is not None:
+            entry = (res, touches(res))
+            for lines, at, v in ((plane[0], scene.height, scene.theta),
+                                 (plane[1], scene.theta, scene.height)):
+                line = lines.setdefault(at, ({}, []))
+                if v not in line[0]:
+                    bisect.insort(line[1], v)
+                line[0][v] = entry
+
+    def predict(self, scene: ActuatorScene) -> tuple[np.ndarray, ContactResult] | None:
+        """(α to start ``scene`` from, the answer whose last contact step warm-starts
+        it), or None: start cold."""
+        plane = self._plane(scene) if self.most else None
+        if plane is None:
+            return None
+        th, h = scene.theta, scene.height
+        by_h, by_theta = plane
+        line = _nearest(by_h.get(h), th, self.most)
+        across = _nearest(by_theta.get(th), h, 1)
+        line_touches = bool(line) and line[0][2]
+        if across and not across[0][2] and not line_touches:  # 1.
+            return across[0][1].alpha, across[0][1]
+        if line_touches and len(line) < self.most and across and across[0][2]:  # 2.
+            other = by_h[across[0][0]][0]
+            ts, diff = [], []
+            for t, r, _ in line:
+                o = other.get(t)
+                if o is None or not o[1]:
+                    break
+                ts.append(t)
+                diff.append(r.alpha - o[0].alpha)
+            if diff:
+                return across[0][1].alpha + extrapolations(th, ts, diff)[-1], line[0][1]
+        if line:  # 3.
+            ps = extrapolations(th, [p[0] for p in line], [p[1].alpha for p in line])
+            return (best_degree(ps) if self.adaptive else ps[-1]), line[0][1]
+        if across:  # 4.
+            return across[0][1].alpha, across[0][1]
         return None
-    if a.theta != b.theta and a.height == b.height:
-        return "theta", b.theta - a.theta
-    if a.height != b.height and a.theta == b.theta:
-        return "height", b.height - a.height
-    return None
 
 
-def _line_points(history, scene, most: int):
-    """The last solved scenes on the same line as ``scene`` (newest first, at most
-    ``most``, all converged, the same parameter moving between each), and that
-    parameter (None: only the newest, or nothing)."""
-    s1, r1 = history[-1]
-    d = _step(s1, scene)
-    if not r1.converged or r1.links != scene.links or d is None:
-        return [], None
-    param, pts = d[0], [(s1, r1)]
-    for s, r in reversed(history[:-1]):
-        if len(pts) == most:
+#: what makes two actuator scenes lie in one plane of θ and h
+_PLANE_FIELDS = tuple(f.name for f in fields(ActuatorScene) if f.name not in ("theta", "height"))
+
+
+class _Unhashed:
+    """A plane's key with a field that does not hash (by identity in the dict)."""
+
+    def __init__(self, key: tuple) -> None:
+        self.key = key
+
+
+def _hashable(key) -> bool:
+    try:
+        hash(key)
+    except TypeError:
+        return False
+    return True
+
+
+def _nearest(line: tuple[dict, list] | None, at: float, most: int) -> list:
+    """The answers of ``line`` (({θ or h: (result, touches)}, its keys sorted)) other
+    than at ``at``, nearest first, at most ``most``, all touching a wall as the
+    nearest does or all not: [(value, result, touches)]."""
+    if line is None:
+        return []
+    entries, keys = line
+    hi = bisect.bisect_left(keys, at)
+    lo, hi = hi - 1, hi + (hi < len(keys) and keys[hi] == at)
+    out: list = []
+    while len(out) < most and (lo >= 0 or hi < len(keys)):
+        if hi >= len(keys) or (lo >= 0 and at - keys[lo] <= keys[hi] - at):
+            v, lo = keys[lo], lo - 1
+        else:
+            v, hi = keys[hi], hi + 1
+        r, t = entries[v]
+        if out and t != out[0][2]:
             break
-        d = _step(s, pts[-1][0])
-        if not r.converged or d is None or d[0] != param or d[1] == 0:
-            break
-        pts.append((s, r))
-    return pts, param
+        out.append((v, r, t))
+    return out
+
+
+def extrapolations(t: float, ts: Sequence[float], values: Sequence[np.ndarray]) -> np.ndarray:
+    """Row j: the polynomial through the first j + 1 of the points (ts[i], values[i])
+    (distinct ts; Lagrange), evaluated at t."""
+    return _weights(tuple(t - x for x in ts)) @ np.array(values, dtype=float)
+
+
+@functools.lru_cache(maxsize=512)  # a grid repeats a few patterns of steps
+def _weights(d: tuple[float, ...]) -> np.ndarray:
+    """Row j: the Lagrange weights at t of the first j + 1 points, from d_i = t − t_i."""
+    m = len(d)
+    row = [1.0] + [0.0] * (m - 1)
+    rows = [row]
+    for j in range(1, m):  # one more point: each weight gains the factor of point j
+        row = [w * d[j] / (d[j] - d[i]) for i, w in enumerate(row[:j])]
+        row.append(math.prod(d[k] / (d[k] - d[j]) for k in range(j)))
+        row += [0.0] * (m - j - 1)
+        rows.append(row)
+    return np.array(rows)
+
+
+def best_degree(ps: np.ndarray) -> np.ndarray:
+    """Of successive extrapolations ``ps`` (rows, one more point each), the one after
+    the smallest change max|p_{j+1} − p_j|."""
+    if len(ps) < 3:
+        return ps[-1]
+    change = ps[1:] - ps[:-1]
+    return ps[int(np.abs(change, out=change).max(axis=1).argmin()) + 1]
 
 
 def predict(history: list[tuple[ActuatorScene, ContactResult]], scene: ActuatorScene,
-            predictor: str = "quadratic") -> ContactResult | None:
-    """A start for ``scene`` from the solved scenes before it (None: start cold).
-
-    "previous": the last answer. "secant" and "quadratic": the polynomial
-    through the last two or three answers on the line (Lagrange, in the
-    moving parameter, unequal steps allowed), evaluated at ``scene``; fewer
-    points where the line has fewer.
-    """
+            predictor: str = "adaptive") -> ContactResult | None:
+    """A start for ``scene`` from the solved scenes ``history`` (None: start cold), as
+    :class:`Solved` chooses it: ``base`` with the predicted α, where ``base`` is
+    the answer whose last contact step warm-starts the scene."""
     if predictor == "none" or not history:
         return None
-    pts, param = _line_points(history, scene, _POINTS[predictor])
-    if not pts:
-        return None
-    r1 = pts[0][1]
-    if len(pts) == 1:
-        return r1
-    return replace(r1, alpha=extrapolated_alpha(scene, param, pts))
+    solved = Solved(_POINTS[predictor], predictor == "adaptive")
+    for s, r in history:
+        solved.add(s, r)
+    got = solved.predict(scene)
+    return None if got is None else replace(got[1], alpha=got[0])
+
+
+def new_solved(predictor: str) -> Solved:
+    """The index of solved scenes that ``predictor`` predicts from."""
+    return Solved(_POINTS.get(predictor, 0), predictor == "adaptive")
 
 
 def warm_or_cold(solve_from: Callable, start, predictor: str) -> ContactResult:
@@ -99,28 +237,17 @@ def warm_or_cold(solve_from: Callable, start, predictor: str) -> ContactResult:
     return res
 
 
-def extrapolated_alpha(scene, param: str, pts: Sequence) -> np.ndarray:
-    """α at ``scene`` by Lagrange extrapolation along ``param`` ("theta" or "height")
-    through the (scene, result) points ``pts`` of one line (distinct values)."""
-    t = getattr(scene, param)
-    ts = [getattr(s, param) for s, _ in pts]
-    alpha = np.zeros_like(pts[0][1].alpha, dtype=float)
-    for i, (_, r) in enumerate(pts):
-        w = math.prod((t - ts[j]) / (ts[i] - ts[j]) for j in range(len(pts)) if j != i)
-        alpha = alpha + w * r.alpha
-    return alpha
-
-
-def solve_sequence(scenes: Sequence[ActuatorScene], *, predictor: str = "quadratic",
+def solve_sequence(scenes: Sequence[ActuatorScene], *, predictor: str = "adaptive",
                    progress: Callable[[int, int], None] | None = None,
                    **solve_kw) -> list[ContactResult]:
-    """Solve ``scenes`` in order, each started from its predecessors (``lcpbench.solve``
-    keyword arguments in ``solve_kw``; the globalised driver).
+    """Solve ``scenes`` in order, each started from the answers solved before it
+    (``lcpbench.solve`` keyword arguments in ``solve_kw``; the globalised or
+    Newton driver), as :class:`Solved` predicts it.
 
-    ``predictor``: "quadratic" (the parabola through the previous three
-    answers when one of θ or h moves along the line; default), "secant" (the
-    straight line through the previous two), "previous" (the last answer),
-    or "none" (every scene cold).
+    ``predictor``: the polynomial in θ through the nearest answers on the
+    scene's line: "adaptive" (up to six, of the degree where successive
+    degrees agree best; default), "quadratic" (three), "secant" (two),
+    "previous" (one, the nearest answer); or "none" (every scene cold).
     """
     if predictor not in PREDICTORS:
         raise ProblemError(f"predictor must be one of {', '.join(PREDICTORS)}, got "
@@ -128,12 +255,13 @@ def solve_sequence(scenes: Sequence[ActuatorScene], *, predictor: str = "quadrat
     if solve_kw.get("method", "globalised") not in ("globalised", "newton"):
         raise ProblemError("continuation needs method='globalised' or 'newton' (the undamped "
                            "scheme has no line search to fall back on)")
-    history: list[tuple[ActuatorScene, ContactResult]] = []
+    solved = new_solved(predictor)
     out = []
     for k, scene in enumerate(scenes):
-        res = warm_or_cold(lambda s, sc=scene: solve(sc, start=s, **solve_kw),
-                           predict(history, scene, predictor), predictor)
-        history.append((scene, res))
+        got = solved.predict(scene)
+        start = None if got is None else replace(got[1], alpha=got[0])
+        res = warm_or_cold(lambda s, sc=scene: solve(sc, start=s, **solve_kw), start, predictor)
+        solved.add(scene, res)
         out.append(res)
         if progress is not None:
             progress(k + 1, len(scenes))

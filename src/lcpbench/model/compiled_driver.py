@@ -1,0 +1,184 @@
+"""The globalised driver around any back-end, with lcpbench's own parts compiled.
+
+The default back-end runs its whole solve in one kernel (:mod:`.compiled`); every
+other back-end is a Python call per contact step. Around that call the numpy driver
+(:func:`lcpbench.model.driver.run_driver`) spends several milliseconds per solve of
+lcpbench's own Python (assembly, the back-end's form, the judge, the line search), so a
+table of full-solve times would compare that more than the back-ends. Here those parts
+are the kernels of :mod:`.driver_kernel`; per outer iteration:
+
+1. :func:`~.driver_kernel.assemble`: the banded step at α (a :class:`KernelStep`);
+2. the step solver of :mod:`.step_solver`, unchanged (fallback, verdict, timings), which
+   asks the step for its form (:func:`~.driver_kernel.qp_form` or
+   :func:`~.driver_kernel.lcp_form`, timed as the form's ``build_time`` as before), the
+   back-end's call in Python, and lcpbench's residuals (:func:`~.driver_kernel.judge`);
+3. :func:`~.driver_kernel.advance`: max|α̂ − α| and the Armijo search on the exact energy.
+
+It takes the numpy driver's path and gives its answer to round-off
+(``tests/model/test_compiled_driver.py``). Where it does not apply (see :func:`takes`)
+the numpy driver runs.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..problems.scenes import Chain
+from ..solvers.base import Status
+from .driver import (
+    DriverOutput,
+    DriverStart,
+    StepRecord,
+    _converged,
+    _fail,
+    _feasible_start,
+    _setup,
+    _step_failed,
+    line_search_failed,
+    out_of_iterations,
+    starting_point,
+)
+from .step import ContactStep, LCPForm
+
+ENGINE = "compiled driver"
+
+
+ENTRIES = ("assemble", "qp_form", "lcp_form", "from_lcp", "judge", "advance", "energy")
+
+
+def _kernel():
+    from .kernel_cache import kernel_module, light_cache_load  # numba at the first solve
+
+    kd = kernel_module("lcpbench.model.driver_kernel", "assemble")
+    if not getattr(kd, "_all_light", False):  # every entry loads from the cache lightly
+        for name in ENTRIES[1:]:
+            light_cache_load(getattr(kd, name))
+        kd._all_light = True
+    return kd
+
+
+def takes(chain: Chain, step_solver, method: str) -> bool:
+    """Whether this driver runs the solve: the globalised scheme, a scaled step solver
+    of a back-end that takes a QP or an LCP (not a contact step itself, as the banded
+    active set does), a chain of consecutive joints and contiguous free nodes with flat,
+    rigid walls."""
+    from .compiled import applies
+
+    backend = getattr(step_solver, "backend", None)
+    if (method != "globalised" or backend is None or backend.form not in ("qp", "lcp")
+            or not getattr(step_solver, "scaled", False)
+            or hasattr(backend.load(), "solve_step")):
+        return False
+    return applies("auto", method, chain)
+
+
+class KernelStep(ContactStep):
+    """A contact step assembled by :mod:`.driver_kernel`, whose forms, LCP heights and
+    residuals the kernels compute (the hooks of :mod:`.step_solver`)."""
+
+    kernel = None  # the driver_kernel module
+
+    def compiled_qp(self):
+        """(P data, indices, indptr, c̃, lower/ℓ, upper/ℓ, scaled bands)."""
+        return self.kernel.qp_form(self.bands, self.linear, self.lower, self.upper,
+                                   float(self.length_scale), float(self.force_scale))
+
+    def compiled_lcp(self):
+        """step_lcp's ``(form, M̃, q̃, dz, dw)``."""
+        code, M, q, Ms, qs, dz, dw, rows, top, cond = self.kernel.lcp_form(
+            self.bands, self.linear, self.lower, self.upper, float(self.length_scale),
+            float(self.force_scale))
+        if code:
+            raise NotImplementedError("a lower wall on only some contact rows")
+        return LCPForm(M=M, q=q, rows=rows, heights=top, condense=cond,
+                       n_gap=rows.size), Ms, qs, dz, dw
+
+    def from_lcp(self, form: LCPForm, zeta: np.ndarray) -> np.ndarray:
+        return self.kernel.from_lcp(self.bands, self.linear, form.rows, form.heights,
+                                    form.condense, np.ascontiguousarray(zeta, dtype=float))
+
+    def compiled_residuals(self, u: np.ndarray):
+        """step_residuals' ``(residuals, R)``, or None (the numpy reference decides)."""
+        ok, res, R = self.kernel.judge(
+            np.ascontiguousarray(u, dtype=float), self.bands, self.linear, self.lower,
+            self.upper, self.coef, int(self.base[0]), int(self.free_nodes[0]) + 1,
+            self.links, self.origin, self.phi_origin, self.stiffness, self.rest_joint,
+            self.nodal_load, float(self.length_scale), float(self.force_scale))
+        if not ok:
+            return None
+        return dict(zip(("natural", "min_gap", "min_reaction", "complementarity",
+                         "term_size"), map(float, res), strict=True)), R
+
+
+def _arrays(chain: Chain) -> tuple:
+    f64 = np.ascontiguousarray
+    return (float(chain.link_length), f64(chain.joint_links[:, 0], dtype=np.int64),
+            f64(chain.joint_links[:, 1], dtype=np.int64),
+            f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float),
+            int(chain.free_nodes[0]) + 1, f64(chain.nodal_load, dtype=float),
+            f64(chain.link_load, dtype=float), f64(chain.lower, dtype=float),
+            f64(chain.upper, dtype=float))
+
+
+def _assemble(kd, chain: Chain, c: tuple, alpha: np.ndarray) -> KernelStep:
+    a, jl, jr, k, rest, fs, load, _, lo, hi = c
+    bands, linear, inv, v, phi0, coef, origin, alpha0, phi_origin = kd.assemble(
+        alpha, a, jl, jr, k, rest, fs, lo.size, load)
+    step = KernelStep(bands, linear, lo, hi, alpha, inv, v, chain.free_nodes, chain.links,
+                      jr, coef, phi0, origin, alpha0, phi_origin, k, rest, load,
+                      length_scale=chain.length, force_scale=chain.force_scale)
+    step.kernel = kd
+    return step
+
+
+def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
+        start: DriverStart | None = None) -> DriverOutput:
+    """:func:`lcpbench.model.driver.run_driver` (``method="globalised"``) with the
+    parts around the back-end compiled; for a chain and step solver it :func:`takes`."""
+    kd = _kernel()
+    c = _arrays(chain)
+    a, jl, jr, k, rest, fs, load, link_load, _, _ = c
+    n = chain.free_nodes.size
+    steps: list[StepRecord] = []
+    u, alpha, warm = starting_point(chain, start, _feasible_start)
+    if alpha is None:
+        return _fail(chain.rest_alpha, n, steps, "cannot fit the chain between the walls")
+    u, alpha = np.ascontiguousarray(u, dtype=float), np.ascontiguousarray(alpha, dtype=float)
+    E = kd.energy(alpha, a, jl, jr, k, rest, link_load)
+    noise_k = float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6
+    for _ in range(max_outer):
+        t0 = time.perf_counter()
+        step = _assemble(kd, chain, c, alpha)
+        t_asm = time.perf_counter() - t0
+        sol = solver(step, warm)
+        if sol.status not in (Status.SOLVED, Status.INACCURATE):
+            return _step_failed(alpha, n, steps, sol, t_asm, E)
+        dalpha, t, trial, E_t = kd.advance(
+            np.ascontiguousarray(sol.u, dtype=float), u, alpha, E,
+            1e-12 * (abs(E) + noise_k), step.inv_a_cos, step.alpha0, step.origin,
+            step.phi_origin, step.coef, fs, k, rest, load, a, jl, jr, link_load)
+        if t == 0.0:
+            return line_search_failed(alpha, n, steps, sol, t_asm, dalpha, E)
+        u, alpha, E = u + t * (sol.u - u), trial, E_t
+        steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
+                                t, dalpha, E, _setup(sol)))
+        warm = sol
+        if dalpha < tol:
+            return _converged(chain, alpha, sol, steps, step)
+    return out_of_iterations(alpha, n, steps, max_outer)
+
+
+
+def warm_up() -> None:
+    """Load (or compile, the first time) every kernel of this driver: both forms and
+    one tiny solve with lcpbench's Lemke (no optional back-end needed)."""
+    from ..problems.scenes import ActuatorScene
+    from .step_solver import make_step_solver
+
+    chain = ActuatorScene(theta=150, height=3.0, links=8).chain()
+    step = _assemble(_kernel(), chain, _arrays(chain), chain.rest_alpha)
+    step.compiled_qp()
+    step.compiled_lcp()
+    run(chain, make_step_solver("lemke"), tol=1e-3)

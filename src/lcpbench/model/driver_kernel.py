@@ -1,0 +1,346 @@
+"""The compiled parts of the driver around any back-end (fair timing, issue 19 item 6).
+
+numba (``@njit(cache=True)``) versions of what :func:`lcpbench.model.driver.run_driver`
+does around a back-end's call, so that a full solve costs the back-end's time plus the
+same small compiled overhead for every back-end:
+
+- :func:`assemble`: :func:`lcpbench.model.step.assemble_step` (the banded step of
+  eqs. 20-31, its stencils and linearisation point);
+- :func:`qp_form` / :func:`lcp_form`: the forms the back-ends take
+  (:func:`lcpbench.model.step_solver.step_qp`, the banded QP as CSC arrays;
+  :meth:`ContactStep.lcp` with the scaling of ``step_lcp``, the condensed dense LCP);
+  :func:`from_lcp`, the heights of an LCP answer;
+- :func:`judge`: :func:`lcpbench.model.step_solver.step_residuals`, lcpbench's
+  residuals of the back-end's answer and R = K g + z;
+- :func:`advance`: max|α̂ − α| (eq. 21) and the Armijo search on the exact energy
+  (:func:`lcpbench.model.driver.armijo`).
+
+The numpy modules are the reference; this file repeats their arithmetic in the same
+order where that is cheap, so the driver of :mod:`lcpbench.model.compiled_driver`
+takes the numpy driver's path to round-off (``tests/model/test_compiled_driver.py``).
+Self-contained on purpose: numba's on-disk cache of a function is invalidated only
+when its own file changes, so nothing here calls :mod:`.compiled_kernel` (which has
+its own copies of the chain's energy, inverse kinematics and assembly).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+TINY = np.finfo(np.float64).tiny
+
+
+# -- the chain (model.chain) ----------------------------------------------------
+@njit(cache=True)
+def _node_heights(alpha, a):
+    y = np.zeros(alpha.size + 1)
+    acc = 0.0
+    for i in range(alpha.size):
+        acc += a * np.sin(alpha[i])
+        y[i + 1] = acc
+    return y
+
+
+@njit(cache=True)
+def energy(alpha, a, jl, jr, k, rest, link_load):
+    """chain.energy (rigid walls): ½Σk(φ−φ*)² − Σ P·(centre height)."""
+    s = 0.0
+    for j in range(jr.size):
+        d = (alpha[jr[j]] - (alpha[jl[j]] if jl[j] >= 0 else 0.0)) - rest[j]
+        s += k[j] * (d * d)
+    y = _node_heights(alpha, a)
+    w = 0.0
+    for i in range(alpha.size):
+        w += link_load[i] * (0.5 * (y[i] + y[i + 1]))
+    return 0.5 * s - w
+
+
+@njit(cache=True)
+def _chain_at(u, reference, a, fs, links):
+    """chain.alpha_from_heights: (ok, α); not ok when some |Δy| >= a."""
+    y = np.zeros(links + 1)
+    y[fs - 1:fs - 1 + u.size] = u
+    out = np.empty(links)
+    for i in range(links):
+        s = (y[i + 1] - y[i]) / a
+        if not np.isfinite(s) or abs(s) >= 1.0:
+            return False, out
+        base = np.arcsin(s)
+        if np.cos(reference[i]) < 0.0:
+            base = np.pi - base
+        out[i] = base + 2 * np.pi * np.rint((reference[i] - base) / (2 * np.pi))
+    return True, out
+
+
+# -- the step (model.step) ----------------------------------------------------------
+@njit(cache=True)
+def assemble(alpha, a, jl, jr, k, rest, fs, n, nodal_load):
+    """assemble_step's arrays: (bands, c, 1/(a cos α), v, φ₀, J's coefficients,
+    u₀, α̂(u₀), φ̂(u₀)); ``fs`` the shifted index (node + 1) of the first free node."""
+    links, nj = alpha.size, jr.size
+    inv, v = np.empty(links), np.empty(links)
+    for i in range(links):
+        inv[i] = 1.0 / (a * np.cos(alpha[i]))
+        v[i] = np.tan(alpha[i]) - alpha[i]
+    coef, t, phi0 = np.empty((nj, 3)), np.empty(nj), np.empty(nj)
+    for j in range(nj):
+        wl = inv[jl[j]] if jl[j] >= 0 else 0.0
+        coef[j, 0], coef[j, 1], coef[j, 2] = wl, -wl - inv[jr[j]], inv[jr[j]]
+        phi0[j] = -v[jr[j]] + (v[jl[j]] if jl[j] >= 0 else 0.0)
+        t[j] = k[j] * (phi0[j] - rest[j])
+    b0, size = jr[0], links + 2
+    diag, off1, off2, lin = np.zeros(size), np.zeros(size), np.zeros(size), np.zeros(size)
+    for m in range(3):  # the order of assemble_step's sums
+        for j in range(nj):
+            diag[b0 + m + j] += k[j] * coef[j, m] ** 2
+        for j in range(nj):
+            lin[b0 + m + j] += coef[j, m] * t[j]
+    for m in range(2):
+        for j in range(nj):
+            off1[b0 + m + j] += k[j] * coef[j, m] * coef[j, m + 1]
+    for j in range(nj):
+        off2[b0 + j] += k[j] * coef[j, 0] * coef[j, 2]
+    y = _node_heights(alpha, a)
+    origin = y[fs - 1:fs - 1 + n].copy()
+    alpha0 = alpha.copy()
+    if fs - 1 + n - 1 < links:  # the right end is pinned: close the chain
+        alpha0[links - 1] += -y[links] * inv[links - 1]
+    phi_origin = np.empty(nj)
+    for j in range(nj):
+        phi_origin[j] = alpha0[jr[j]] - (alpha0[jl[j]] if jl[j] >= 0 else 0.0)
+    bands, linear = np.zeros((3, n)), np.empty(n)
+    for i in range(n):
+        bands[0, i] = diag[fs + i]
+        if i < n - 1:
+            bands[1, i] = off1[fs + i]
+        if i < n - 2:
+            bands[2, i] = off2[fs + i]
+        linear[i] = lin[fs + i] - nodal_load[i]
+    return bands, linear, inv, v, phi0, coef, origin, alpha0, phi_origin
+
+
+@njit(cache=True)
+def qp_form(bands, linear, lo, hi, L, F):
+    """step_qp: P = H·(L/F) as CSC arrays (both triangles, rows sorted, the entries of
+    ``scipy.sparse.diags``), c/F, lower/L, upper/L and the scaled bands."""
+    n = linear.size
+    b = bands * (L / F)
+    indptr = np.zeros(n + 1, np.int32)
+    for j in range(n):
+        indptr[j + 1] = indptr[j] + min(j, 2) + min(n - 1 - j, 2) + 1
+    data, indices = np.empty(indptr[n]), np.empty(indptr[n], np.int32)
+    for j in range(n):
+        p = indptr[j]
+        for i in range(max(j - 2, 0), min(j + 3, n)):
+            data[p] = b[abs(i - j), min(i, j)]
+            indices[p] = i
+            p += 1
+    return data, indices, indptr, linear / F, lo / L, hi / L, b
+
+
+@njit(cache=True)
+def _dense(bands):
+    """ContactStep.dense_hessian."""
+    n = bands.shape[1]
+    H = np.zeros((n, n))
+    for i in range(n):
+        H[i, i] = bands[0, i]
+    for kk in (1, 2):
+        for i in range(n - kk):
+            H[i + kk, i] += bands[kk, i]
+            H[i, i + kk] += bands[kk, i]
+    return H
+
+
+@njit(cache=True)
+def _take(H, rows, cols):
+    out = np.empty((rows.size, cols.size))
+    for i in range(rows.size):
+        for j in range(cols.size):
+            out[i, j] = H[rows[i], cols[j]]
+    return out
+
+
+@njit(cache=True)
+def lcp_form(bands, linear, lo, hi, L, F):
+    """ContactStep.lcp("contact") and step_lcp's scaling: (code, M, q, M̃, q̃, dz, dw,
+    rows, heights, condensed); code 1: a lower wall on only some contact rows."""
+    H = _dense(bands)
+    C = np.flatnonzero(np.isfinite(hi))
+    Fi = np.flatnonzero(~np.isfinite(hi))
+    top = hi[C].copy()
+    S = _take(H, C, C)
+    ct = linear[C].copy()
+    if Fi.size:  # the nodes with no wall row, condensed out
+        rhs = np.empty((Fi.size, C.size + 1))
+        rhs[:, :C.size] = _take(H, Fi, C)
+        rhs[:, C.size] = linear[Fi]
+        X = np.linalg.solve(_take(H, Fi, Fi), rhs)
+        HCF = _take(H, C, Fi)
+        S = S - HCF @ np.ascontiguousarray(X[:, :C.size])
+        ct = ct - HCF @ np.ascontiguousarray(X[:, C.size])
+    K = 0.5 * (S + S.T)
+    z = (-K) @ top - ct
+    m = C.size
+    lower = 0
+    for i in range(m):
+        lower += np.isfinite(lo[C[i]])
+    if lower == 0:
+        M, q = K, z
+    elif lower < m:
+        return 1, K, z, K, z, z, z, C, top, Fi
+    else:
+        M, q = np.zeros((2 * m, 2 * m)), np.empty(2 * m)
+        M[:m, :m] = K
+        for i in range(m):
+            M[i, m + i], M[m + i, i] = 1.0, -1.0
+            q[m + i] = top[i] - lo[C[i]]
+        q[:m] = z
+    size = q.size
+    dz, dw = np.empty(size), np.empty(size)
+    dz[:m], dz[m:], dw[:m], dw[m:] = L, F, F, L
+    Ms = np.empty((size, size))
+    for i in range(size):
+        for j in range(size):
+            Ms[i, j] = M[i, j] * dz[j] / dw[i]
+    return 0, M, q, Ms, q / dw, dz, dw, C, top, Fi
+
+
+@njit(cache=True)
+def from_lcp(bands, linear, rows, heights, condensed, zeta):
+    """ContactStep.from_lcp: the free node heights of an LCP answer ζ."""
+    u = np.empty(linear.size)
+    for i in range(rows.size):
+        u[rows[i]] = heights[i] - zeta[i]
+    if condensed.size:
+        H = _dense(bands)
+        rhs = -linear[condensed] - _take(H, condensed, rows) @ u[rows]
+        u[condensed] = np.linalg.solve(_take(H, condensed, condensed), rhs)
+    return u
+
+
+# -- the judge (model.step_solver.step_residuals) -----------------------------------
+@njit(cache=True)
+def _gradient(u, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load):
+    """ContactStep.gradient: Jᵀ k (φ̂(u) − φ*) − f, about the linearisation point."""
+    y = np.zeros(links + 2)
+    for i in range(u.size):
+        y[fs + i] = u[i] - origin[i]
+    m = np.empty(coef.shape[0])
+    for j in range(m.size):
+        s = coef[j, 0] * y[b0 + j]
+        s += coef[j, 1] * y[b0 + 1 + j]
+        s += coef[j, 2] * y[b0 + 2 + j]
+        m[j] = ((s + phi_origin[j]) - rest[j]) * k[j]
+    g = np.zeros(links + 2)
+    for kk in range(3):  # Jᵀ m in _JT's order
+        for j in range(m.size):
+            g[b0 + kk + j] += coef[j, kk] * m[j]
+    return g[fs:fs + u.size] - nodal_load
+
+
+@njit(cache=True)
+def _solve_on(bands, idx, rhs):
+    """ContactStep.solve_on: H[idx, idx]⁻¹ rhs by the banded Cholesky factor of the
+    principal block (bandwidth 2); (False, rhs) where the block is not positive definite."""
+    f = idx.size
+    c0, c1, c2 = np.zeros(f), np.zeros(f), np.zeros(f)
+    for i in range(f):  # the block's bands (a node two apart or less keeps its entry)
+        c0[i] = bands[0, idx[i]]
+        for kk, c in ((1, c1), (2, c2)):
+            if i + kk < f and idx[i + kk] - idx[i] <= 2:
+                c[i] = bands[idx[i + kk] - idx[i], idx[i]]
+    for j in range(f):
+        d = c0[j] - (c1[j - 1] ** 2 if j >= 1 else 0.0) - (c2[j - 2] ** 2 if j >= 2 else 0.0)
+        if not d > 0.0:
+            return False, rhs
+        c0[j] = np.sqrt(d)
+        c1[j] = (c1[j] - (c2[j - 1] * c1[j - 1] if j >= 1 else 0.0)) / c0[j]
+        c2[j] = c2[j] / c0[j]
+    x = rhs.copy()
+    for j in range(f):
+        s = x[j] - (c1[j - 1] * x[j - 1] if j >= 1 else 0.0)
+        x[j] = (s - (c2[j - 2] * x[j - 2] if j >= 2 else 0.0)) / c0[j]
+    for j in range(f - 1, -1, -1):
+        s = x[j] - (c1[j] * x[j + 1] if j + 1 < f else 0.0)
+        x[j] = (s - (c2[j] * x[j + 2] if j + 2 < f else 0.0)) / c0[j]
+    return True, x
+
+
+@njit(cache=True)
+def judge(u, bands, linear, lo, hi, coef, b0, fs, links, origin, phi_origin, k, rest,
+          nodal_load, L, F):
+    """step_residuals (rigid walls): (ok, [natural, min_gap, min_reaction,
+    complementarity, term_size], R); not ok for heights that are not finite or where
+    the nodes with no wall row cannot be re-solved (the caller runs the numpy reference)."""
+    n = u.size
+    for i in range(n):
+        if not np.isfinite(u[i]):
+            return False, np.zeros(5), np.full(n, np.nan)  # the reference's NaN answer
+    rows = np.isfinite(hi) | np.isfinite(lo)
+    free = np.flatnonzero(~rows)
+    u2 = u.copy()
+    if free.size:  # the nodes with no wall row, re-solved exactly
+        grad = _gradient(u2, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load)
+        ok, x = _solve_on(bands, free, grad[free])
+        if not ok:
+            return False, np.zeros(5), grad
+        u2[free] -= x
+    R = -_gradient(u2, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load)
+    nat, min_gap, min_r, comp_up, comp_lo, term = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0
+    for i in range(n):
+        up, low = np.isfinite(hi[i]), np.isfinite(lo[i])
+        if up:
+            g = (hi[i] - u2[i]) / L
+            r = (max(R[i], 0.0) if low else R[i]) / F
+            nat = max(nat, abs(min(g, r)))
+            min_gap, min_r = min(min_gap, g), min(min_r, r)
+            comp_up += g * r
+        if low:
+            g = (u2[i] - lo[i]) / L
+            r = (max(-R[i], 0.0) if up else -R[i]) / F
+            nat = max(nat, abs(min(g, r)))
+            min_gap, min_r = min(min_gap, g), min(min_r, r)
+            comp_lo += g * r
+        if up or low:  # banded_matvec(|H|, |u|) + |c|, in its order
+            s = abs(bands[0, i]) * abs(u2[i])
+            for kk in (1, 2):
+                if i - kk >= 0:
+                    s += abs(bands[kk, i - kk]) * abs(u2[i - kk])
+                if i + kk < n:
+                    s += abs(bands[kk, i]) * abs(u2[i + kk])
+            term = max(term, s + abs(linear[i]))
+    return True, np.array([nat, min_gap, min_r, abs(comp_up) + abs(comp_lo), term / F]), R
+
+
+# -- the outer step (model.driver._globalised) --------------------------------------
+@njit(cache=True)
+def advance(su, u, alpha, E, noise, inv, alpha0, origin, phi_origin, coef, fs, k, rest,
+            nodal_load, a, jl, jr, link_load):
+    """max|α̂ − α| of the step answer ``su`` (eq. 21, about u₀) and the Armijo search
+    on the exact energy along u + t(su − u): (max|Δα|, t, α(t), E(t)); t = 0 where
+    no t >= 1e-12 decreases the energy."""
+    links, n = alpha.size, u.size
+    dalpha, prev = 0.0, 0.0
+    for i in range(links):
+        node = i + 1 - (fs - 1)
+        cur = su[node] - origin[node] if 0 <= node < n else 0.0
+        dalpha = max(dalpha, abs((alpha0[i] + (cur - prev) * inv[i]) - alpha[i]))
+        prev = cur
+    d = su - u
+    if not np.all(np.isfinite(d)):
+        return np.nan, 0.0, alpha, E
+    g = _gradient(u, coef, jr[0], fs, links, origin, phi_origin, k, rest, nodal_load)
+    slope = 0.0
+    for i in range(n):
+        slope += g[i] * d[i]
+    t = 1.0
+    while t >= 1e-12:
+        ok, trial = _chain_at(u + t * d, alpha, a, fs, links)
+        if ok:
+            E_t = energy(trial, a, jl, jr, k, rest, link_load)
+            if E_t <= E + 1e-4 * t * min(slope, 0.0) + noise:
+                return dalpha, t, trial, E_t
+        t *= 0.5
+    return dalpha, 0.0, alpha, E

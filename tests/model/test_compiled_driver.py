@@ -1,0 +1,120 @@
+"""The driver around any back-end with lcpbench's parts compiled (model/compiled_driver.py)
+against the numpy driver (model/driver.py run_driver), the reference.
+
+The kernels of model/driver_kernel.py are checked piece by piece against the numpy
+functions they stand for (assembly, the back-ends' forms, the judge's residuals, the
+heights of an LCP answer), then whole solves: the same path (outer iterations, Armijo
+step lengths, the back-end's iterations where they do not depend on round-off) and the
+same answer to round-off, for an LCP and QP back-ends, on the actuator with nodes that
+cannot reach the wall (condensed out of the LCP), the two-wall channel and the
+cantilever.
+"""
+
+import numpy as np
+import pytest
+
+from lcpbench import ActuatorScene, CantileverScene, solve
+from lcpbench.model import compiled_driver
+from lcpbench.model.step import assemble_step
+from lcpbench.model.step_solver import make_step_solver, step_lcp, step_qp, step_residuals
+from lcpbench.solvers.registry import get_backend
+
+SCENES = {
+    "actuator": ActuatorScene(theta=150.0, height=3.0, links=30),
+    "channel": ActuatorScene(theta=160.0, height=2.0, links=24, channel=True),
+    "cantilever": CantileverScene(links=20),
+}
+
+
+def _steps(scene):
+    """The numpy step and the kernel's step at a bent, not-at-rest configuration."""
+    chain = scene.chain()
+    alpha = chain.rest_alpha * 0.9 + 0.01 * np.sin(np.arange(chain.links))
+    kd = compiled_driver._kernel()
+    return chain, assemble_step(chain, alpha), compiled_driver._assemble(
+        kd, chain, compiled_driver._arrays(chain), alpha)
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_kernel_pieces_match_the_numpy_functions(name):
+    chain, ref, step = _steps(SCENES[name])
+    for field in ("bands", "linear", "inv_a_cos", "v", "phi0", "coef", "origin", "alpha0",
+                  "phi_origin"):
+        a, b = getattr(ref, field), getattr(step, field)
+        assert np.allclose(a, b, rtol=1e-14, atol=1e-14 * np.max(np.abs(a))), field
+    qa, qb = step_qp(ref), step_qp(step)
+    assert qb.P.has_sorted_indices and qb.P.nnz == qa.P.nnz
+    assert np.array_equal(qa.P.toarray(), qb.P.toarray())
+    for field in ("c", "lower", "upper", "bands"):
+        assert np.allclose(getattr(qa, field), getattr(qb, field), rtol=1e-14, atol=0), field
+    fa, Ma, qa_, dza, dwa = step_lcp(ref)
+    fb, Mb, qb_, dzb, dwb = step_lcp(step)
+    assert fa.condense.size == fb.condense.size  # (the actuator condenses nodes out)
+    assert np.array_equal(fa.rows, fb.rows) and np.array_equal(fa.condense, fb.condense)
+    assert np.array_equal(dza, dzb) and np.array_equal(dwa, dwb)
+    assert np.allclose(Ma, Mb, rtol=1e-12, atol=1e-12 * np.max(np.abs(Ma)))
+    assert np.allclose(qa_, qb_, rtol=1e-10, atol=1e-10 * np.max(np.abs(qa_)))
+    # an answer ζ of the LCP back to heights, and lcpbench's residuals of those heights
+    zeta = np.abs(np.random.default_rng(1).normal(size=fa.q.size)) * 0.1
+    ua, ub = ref.from_lcp(fa, zeta), step.from_lcp(fb, zeta)
+    assert np.allclose(ua, ub, rtol=1e-12, atol=1e-12 * np.max(np.abs(ua)))
+    (ra, Ra), (rb, Rb) = step_residuals(ref, ua), step_residuals(step, ua)
+    assert ra.keys() <= rb.keys()
+    for key, value in ra.items():
+        assert np.isclose(value, rb[key], rtol=1e-9, atol=1e-12), key
+    assert np.allclose(Ra, Rb, rtol=1e-9, atol=1e-9 * np.max(np.abs(Ra)))
+    # heights that are not finite: the reference's answer (no residuals to speak of)
+    bad = ua.copy()
+    bad[0] = np.nan
+    assert step_residuals(step, bad)[0]["natural"] == np.inf
+
+
+def assert_same_solve(ref, fast, *, same_inner: bool):
+    assert ref.extra["engine"] == "numpy"
+    assert fast.extra["engine"] == compiled_driver.ENGINE
+    assert (ref.converged, ref.reason) == (fast.converged, fast.reason)
+    assert [s.step_length for s in ref.steps] == [s.step_length for s in fast.steps]
+    if same_inner:
+        assert [s.iterations for s in ref.steps] == [s.iterations for s in fast.steps]
+    assert np.allclose([s.max_dalpha for s in ref.steps], [s.max_dalpha for s in fast.steps],
+                       rtol=1e-8, atol=1e-13)
+    assert np.max(np.abs(ref.alpha - fast.alpha)) <= 1e-11
+    scale = max(abs(ref.total_force), ref.scene.EI / ref.scene.length**2)
+    assert abs(ref.total_force - fast.total_force) <= 1e-8 * scale
+    assert np.max(np.abs(ref.forces - fast.forces), initial=0.0) <= 1e-8 * scale
+
+
+# Lemke: an LCP back-end, exact pivoting (its path does not depend on round-off);
+# Clarabel and OSQP: QP back-ends (OSQP warm-started from the last step)
+@pytest.mark.parametrize("backend,same_inner", [("lemke", True), ("clarabel", False),
+                                                ("osqp", False)])
+@pytest.mark.parametrize("name", SCENES)
+def test_solve_takes_the_numpy_drivers_path(backend, same_inner, name):
+    if not get_backend(backend).available():
+        pytest.skip(f"{backend} not installed")
+    scene = SCENES[name]
+    ref = solve(scene, solver=backend, tol=1e-6, settings="high", engine="numpy")
+    fast = solve(scene, solver=backend, tol=1e-6, settings="high")
+    assert ref.converged or name == "channel", ref.reason  # (a reason to compare, at least)
+    assert_same_solve(ref, fast, same_inner=same_inner)
+
+
+def test_an_iterative_lcp_back_end_with_a_warm_start():
+    scene = ActuatorScene(theta=150.0, height=3.0, links=12)
+    ref = solve(scene, solver="pgs", tol=1e-4, engine="numpy")
+    fast = solve(scene, solver="pgs", tol=1e-4)
+    assert_same_solve(ref, fast, same_inner=False)
+
+
+def test_where_it_does_not_apply_the_numpy_driver_runs():
+    chain = SCENES["actuator"].chain()
+    lemke = make_step_solver("lemke")
+    assert compiled_driver.takes(chain, lemke, "globalised")
+    assert not compiled_driver.takes(chain, lemke, "newton")
+    assert not compiled_driver.takes(chain, make_step_solver("lemke", scaled=False),
+                                     "globalised")
+    assert not compiled_driver.takes(chain, make_step_solver("active-set"), "globalised")
+    soft = ActuatorScene(theta=150.0, height=3.0, links=30, wall_stiffness=10.0).chain()
+    assert not compiled_driver.takes(soft, lemke, "globalised")
+    res = solve(SCENES["actuator"], solver="lemke", method="undamped")
+    assert res.extra["engine"] == "numpy"
