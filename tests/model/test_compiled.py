@@ -79,6 +79,16 @@ def test_hard_suite_same_path_and_answer(scene, tol):
     assert_certified(fast, tol)
 
 
+@pytest.mark.parametrize("scene", hard_scenes(), ids=lambda s: f"{s.theta:g}-{s.height:.3g}-"
+                         f"{s.links}-{s.weight:g}-{s.EI:g}-{'ch' if s.channel else ''}")
+def test_newton_takes_the_reference_path_in_the_kernel(scene):
+    """method="newton": H + T where positive definite from max|Δα| < NEWTON_SWITCH."""
+    ref, fast = both(scene, tol=1e-8, method="newton")
+    assert_same(ref, fast, compiled=fast.outer_iterations > 0 and "no contact" not in ref.reason
+                and not heavy(scene.chain()))
+    assert_certified(fast, 1e-8)
+
+
 def test_paper_scene_channel_and_cantilever_run_compiled():
     # wℓ³/EI = 34, below the steps in the link angles (model/angle_step.HEAVY = 40)
     heavy_channel = ActuatorScene(theta=60, height=0.3, channel=True, weight=0.04)
@@ -149,6 +159,10 @@ def test_continuation_start_takes_the_same_path():
     fast = solve(b, start=solve(a), tol=1e-8)
     assert_same(ref, fast)
     assert fast.outer_iterations < solve(b, tol=1e-8).outer_iterations  # the start helped
+    # Newton: a warm start's first step is a Newton step
+    ref = solve(b, start=solve(a, engine="numpy"), engine="numpy", tol=1e-8, method="newton")
+    fast = solve(b, start=solve(a), tol=1e-8, method="newton")
+    assert_same(ref, fast)
 
 
 def test_kernel_hands_over_to_the_reference_when_it_leaves_its_path():
@@ -173,6 +187,7 @@ def test_engine_argument():
     assert solve(scene, solver="lemke", engine="compiled").extra["engine"] == "compiled driver"
     assert solve(scene, solver="lemke").extra["engine"] == "compiled driver"
     assert solve(scene, solver="lemke", engine="numpy").extra["engine"] == "numpy"
+    assert solve(scene, engine="compiled", method="newton").extra["engine"] == "compiled"
 
 
 def test_import_does_not_load_numba_and_the_first_solve_does():

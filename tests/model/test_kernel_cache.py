@@ -49,3 +49,27 @@ def test_the_light_cache_load_gives_numbas_answer():
 
 def test_light_loading_leaves_other_objects_alone():
     assert light_cache_load(object()) is False  # no numba cache: nothing to change
+
+
+def test_a_split_kernel_is_cached_under_a_hash_of_all_its_files(tmp_path):
+    """numba invalidates a cache entry only when the function's own file changes;
+    the solve kernel spans two files, so its cache directory is named by both."""
+    from pathlib import Path
+
+    from numba.core import config
+
+    from lcpbench.model import compiled
+    from lcpbench.model.kernel_cache import SPLIT, kernel_cache_dir
+
+    a, b = tmp_path / "a.py", tmp_path / "b.py"
+    a.write_text("x = 1\n")
+    b.write_text("y = 1\n")
+    first = kernel_cache_dir([a, b], str(tmp_path))
+    b.write_text("y = 2\n")  # an edit of the second file alone moves the cache
+    assert kernel_cache_dir([a, b], str(tmp_path)) != first
+    assert first.startswith(str(tmp_path / "lcpbench-numba"))
+    k = compiled._kernel()
+    here = Path(compiled.__file__).parent
+    where = kernel_cache_dir([here / f for f in SPLIT[k.__name__]], config.CACHE_DIR)
+    for dispatcher in (k.solve_chain, k._dual):  # one in each file
+        assert dispatcher._cache._cache_path.startswith(where)

@@ -60,9 +60,9 @@ def check_engine(engine) -> str:
 
 def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
     """Whether the kernel runs this solve: the default back-end, the globalised
-    driver, and (given ``chain``) a chain of consecutive joints and free nodes,
+    driver or its Newton scheme, and (given ``chain``) a chain of consecutive joints and free nodes,
     with flat, rigid walls (not a wall profile, not an elastic wall)."""
-    if backend not in (DEFAULT, "auto") or method != "globalised":
+    if backend not in (DEFAULT, "auto") or method not in ("globalised", "newton"):
         return False
     if chain is None:
         return True
@@ -152,7 +152,7 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
                 "numpy (large N: increments on the tridiagonal factor)")
     if engine != "numpy" and applies(backend, method, None if args is not None else chain):
         out, why = run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
-                                settings=settings, args=args)
+                                settings=settings, args=args, newton=method == "newton")
         if out is not None:
             return out, "compiled"
         used = f"numpy (the compiled kernel stopped: {why})"
@@ -167,9 +167,9 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
         if chain.elastic_walls:
             raise ProblemError("engine='compiled' does not run elastic walls yet "
                                "(wall_stiffness < inf); use engine='auto' or 'numpy'")
-        raise ProblemError(f"engine='compiled' runs method='globalised' with a back-end that "
-                           f"takes a QP or an LCP, on flat rigid walls; got solver "
-                           f"{backend!r}, method {method!r}")
+        raise ProblemError(f"engine='compiled' runs method='globalised' (or 'newton' with the "
+                           f"default back-end, {DEFAULT}) with a back-end that takes a QP or an "
+                           f"LCP, on flat rigid walls; got solver {backend!r}, method {method!r}")
     else:
         used = "numpy"
     out = run_driver(chain, step_solver, tol=tol, max_outer=max_outer, method=method,
@@ -220,8 +220,10 @@ def _kernel_args(chain: Chain, const: tuple | None) -> tuple:
 
 def run_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
                  start: DriverStart | None = None, settings="default",
-                 args: tuple | None = None) -> tuple[DriverOutput | None, str]:
-    """The globalised driver with the dual active set, in the compiled kernel.
+                 args: tuple | None = None,
+                 newton: bool = False) -> tuple[DriverOutput | None, str]:
+    """The globalised driver (``newton``: its Newton scheme) with the dual active
+    set, in the compiled kernel.
 
     Returns ``(output, "")``, or ``(None, why)`` when the kernel left the
     reference's path (the caller then runs the numpy reference). Each step
@@ -241,7 +243,7 @@ def run_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
     t0 = time.perf_counter()
     (code, alpha, r_up, r_lo, u, sigma, rec, count, res, R) = k.solve_chain(
         *args, float(tol), int(max_outer), s_alpha, w_u, w_up, w_lo, flags, int(max_iter),
-        float(request))
+        float(request), bool(newton))
     elapsed = time.perf_counter() - t0
     if code in _BAIL:
         return None, _BAIL[code]

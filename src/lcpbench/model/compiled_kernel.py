@@ -11,8 +11,12 @@ the algorithm; this file repeats their arithmetic in the same order where that i
 (sums, the band products), so both take the same path and agree to round-off
 (``tests/model/test_compiled.py``).
 
-One file on purpose: numba's on-disk cache of a function is invalidated only when *its
-own* file changes (a kernel split over files could run stale code).
+Two files: this one (the chain, the assembly, the outer loop) and
+:mod:`lcpbench.model.compiled_dual` (the dual active set, its certificate and the
+judge's residual). numba's on-disk cache of a function is invalidated only when *its
+own* file changes, so :func:`lcpbench.model.kernel_cache.kernel_module` keeps the
+cache of both under a hash of both files' sources (a split kernel never runs stale
+code); import this module through it.
 
 Nothing here decides "converged": the Python side builds the DriverOutput and judges it
 (:mod:`lcpbench.model.judge_compiled`). What the kernel cannot do as the reference does
@@ -25,85 +29,139 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-EPS = np.finfo(np.float64).eps
-TINY = np.finfo(np.float64).tiny
-TIE = 1e-6  # solvers.banded.TIE
-RTOL = 1e-9  # solvers.banded.solve_banded_qp(rtol=)
-FLOOR_ULPS = 256.0  # solvers.judge.FLOOR_ULPS
+from .compiled_dual import (
+    ALPHA,
+    ALPHA0,
+    BAIL_CERT,
+    BAIL_JUDGE,
+    BAIL_LIMIT,
+    BAIL_NOT_PD,
+    BAIL_PRIMAL,
+    BAIL_REPEAT,
+    DIR,
+    EPS,
+    FACT,
+    FLOOR_ULPS,
+    GF,
+    INV,
+    LIN,
+    NET,
+    ORIG,
+    OUT_U,
+    PREV_LO,
+    PREV_UP,
+    RATIO,
+    RLO,
+    ROWS,
+    RTOL,
+    RUP,
+    SIG,
+    SIN_A,
+    SIN_T,
+    TRIAL,
+    TRY,
+    U2,
+    WLO,
+    WU,
+    WUP,
+    G,
+    U,
+    _certificate,
+    _certify,
+    _dual,
+    _grad_into,
+    _judge,
+    _refactor,
+    _residuals,
+)
 
+NEWTON_SWITCH = 0.05  # model.driver.NEWTON_SWITCH (rad)
 # outcome codes of solve_chain (the Python side turns them into reasons)
 CONVERGED, MAX_OUTER, LINE_SEARCH, NO_FIT = 0, 1, 2, 3
-# the step left the path of the reference: the caller runs the numpy driver
-BAIL_PRIMAL, BAIL_NOT_PD, BAIL_REPEAT, BAIL_LIMIT, BAIL_CERT, BAIL_JUDGE = 10, 11, 12, 13, 14, 15
+__all__ = ["BAIL_CERT", "BAIL_JUDGE", "BAIL_LIMIT", "BAIL_NOT_PD", "BAIL_PRIMAL", "BAIL_REPEAT",
+           "CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "_certificate", "_residuals",
+           "solve_chain"]
+
+
+@njit(cache=True)
+def _workspace(n, links, nj, max_iter):
+    return (np.zeros((18, n)), np.zeros((9, n), np.bool_), np.zeros((3, nj)),
+            np.zeros((6, links)), np.zeros((5, links + 2)), np.zeros((4, n)), np.zeros((3, n)),
+            np.zeros((nj, 3)),
+            np.zeros(min(max_iter, 20 * n + 50) + 2, np.uint64), np.zeros(5), np.zeros((2, n)))
 
 
 # -- the chain (model.chain) ----------------------------------------------------
 @njit(cache=True)
-def _node_heights(alpha, a):
-    y = np.zeros(alpha.size + 1)
-    acc = 0.0
-    for i in range(alpha.size):
-        acc += a * np.sin(alpha[i])
-        y[i + 1] = acc
-    return y
-
-
-@njit(cache=True)
-def _energy(alpha, a, jl, jr, k, rest, link_load):
-    """chain.energy: ½Σk(φ−φ*)² − Σ P·(centre height)."""
+def _energy_into(alpha, a, jl, jr, k, rest, link_load, sines):
+    """chain.energy: ½Σk(φ−φ*)² − Σ P·(centre height); sin α into ``sines``."""
     s = 0.0
     for j in range(jr.size):
         left = alpha[jl[j]] if jl[j] >= 0 else 0.0
         d = (alpha[jr[j]] - left) - rest[j]
         s += k[j] * (d * d)
-    y = _node_heights(alpha, a)
-    w = 0.0
-    for i in range(alpha.size):
-        w += link_load[i] * (0.5 * (y[i] + y[i + 1]))
+    w, y = 0.0, 0.0
+    for i in range(alpha.size):  # the node heights y_i, y_(i+1) summed as they go
+        sines[i] = np.sin(alpha[i])
+        y1 = y + a * sines[i]
+        w += link_load[i] * (0.5 * (y + y1))
+        y = y1
     return 0.5 * s - w
+
+
+@njit(cache=True)
+def _energy(alpha, a, jl, jr, k, rest, link_load):
+    """chain.energy: ½Σk(φ−φ*)² − Σ P·(centre height)."""
+    return _energy_into(alpha, a, jl, jr, k, rest, link_load, np.empty(alpha.size))
+
+
+@njit(cache=True)
+def _fit(out, u, reference, a, fs, links, inv):
+    """chain.alpha_from_heights into ``out``; False when some |Δy| >= a. ``inv``:
+    1 / (a cos α) of ``reference`` if known (its sign is the branch), else empty."""
+    off, n = fs - 1, u.size
+    y0 = u[0] if off == 0 else 0.0
+    for i in range(links):
+        y1 = u[i + 1 - off] if off <= i + 1 < off + n else 0.0
+        s = (y1 - y0) / a
+        y0 = y1
+        if not np.isfinite(s) or abs(s) >= 1.0:
+            return False
+        base = np.arcsin(s)
+        if (inv[i] if inv.size == links else np.cos(reference[i])) < 0.0:
+            base = np.pi - base
+        out[i] = base + 2 * np.pi * np.rint((reference[i] - base) / (2 * np.pi))
+    return True
 
 
 @njit(cache=True)
 def _alpha_from_heights(u, reference, a, fs, links):
     """chain.alpha_from_heights: (ok, α); not ok when some |Δy| >= a."""
-    y = np.zeros(links + 1)
-    y[fs - 1:fs - 1 + u.size] = u
     out = np.empty(links)
-    for i in range(links):
-        s = (y[i + 1] - y[i]) / a
-        if not np.isfinite(s) or abs(s) >= 1.0:
-            return False, out
-        base = np.arcsin(s)
-        if np.cos(reference[i]) < 0.0:
-            base = np.pi - base
-        out[i] = base + 2 * np.pi * np.rint((reference[i] - base) / (2 * np.pi))
-    return True, out
+    return _fit(out, u, reference, a, fs, links, np.empty(0)), out
 
 
 # -- the banded step (model.step) -------------------------------------------------
 @njit(cache=True)
-def _assemble(alpha, a, jl, jr, k, rest, fs, n, nodal_load):
-    """model.step.assemble_step: bands, c, the stencils of J and the linearisation point."""
+def _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, inv, coef,
+                   origin, alpha0, phi_origin, t, wl, sines):
     links = alpha.size
     nj = jr.size
-    inv = np.empty(links)
-    v = np.empty(links)
+    v, diag, off1, off2, lin = wl[0], wl[1], wl[2], wl[3], wl[4]
     for i in range(links):
         inv[i] = 1.0 / (a * np.cos(alpha[i]))
         v[i] = np.tan(alpha[i]) - alpha[i]
-    coef = np.empty((nj, 3))
-    t = np.empty(nj)
     for j in range(nj):
-        wl = inv[jl[j]] if jl[j] >= 0 else 0.0
+        wlj = inv[jl[j]] if jl[j] >= 0 else 0.0
         wr = inv[jr[j]]
-        coef[j, 0] = wl
-        coef[j, 1] = -wl - wr
+        coef[j, 0] = wlj
+        coef[j, 1] = -wlj - wr
         coef[j, 2] = wr
         phi0 = -v[jr[j]] + (v[jl[j]] if jl[j] >= 0 else 0.0)
         t[j] = k[j] * (phi0 - rest[j])
     b0 = jr[0]
-    size = links + 2
-    diag, off1, off2, lin = np.zeros(size), np.zeros(size), np.zeros(size), np.zeros(size)
+    for i in range(links + 2):
+        diag[i] = off1[i] = off2[i] = lin[i] = 0.0
     for m in range(3):
         for j in range(nj):
             diag[b0 + m + j] += k[j] * coef[j, m] ** 2
@@ -114,377 +172,94 @@ def _assemble(alpha, a, jl, jr, k, rest, fs, n, nodal_load):
             off1[b0 + m + j] += k[j] * coef[j, m] * coef[j, m + 1]
     for j in range(nj):
         off2[b0 + j] += k[j] * coef[j, 0] * coef[j, 2]
-    y = _node_heights(alpha, a)
-    origin = y[fs - 1:fs - 1 + n].copy()
-    alpha0 = alpha.copy()
+    y = 0.0  # the node heights (model.chain.heights), the free ones are the origin
+    if fs == 1:
+        origin[0] = 0.0
+    for i in range(links):
+        y += a * sines[i]
+        if fs - 1 <= i + 1 < fs - 1 + n:
+            origin[i + 1 - (fs - 1)] = y
+    alpha0[:] = alpha
     if fs - 1 + n - 1 < links:  # the right end is pinned: close the chain
-        alpha0[links - 1] += -y[links] * inv[links - 1]
-    phi_origin = np.empty(nj)
+        alpha0[links - 1] += -y * inv[links - 1]
     for j in range(nj):
         phi_origin[j] = alpha0[jr[j]] - (alpha0[jl[j]] if jl[j] >= 0 else 0.0)
-    bands = np.zeros((3, n))
-    linear = np.empty(n)
     for i in range(n):
         bands[0, i] = diag[fs + i]
-        if i < n - 1:
-            bands[1, i] = off1[fs + i]
-        if i < n - 2:
-            bands[2, i] = off2[fs + i]
+        bands[1, i] = off1[fs + i] if i < n - 1 else 0.0
+        bands[2, i] = off2[fs + i] if i < n - 2 else 0.0
         linear[i] = lin[fs + i] - nodal_load[i]
+
+
+@njit(cache=True)
+def _assemble(alpha, a, jl, jr, k, rest, fs, n, nodal_load):
+    """model.step.assemble_step: bands, c, the stencils of J and the linearisation point."""
+    links, nj = alpha.size, jr.size
+    bands, linear, inv, coef = np.zeros((3, n)), np.empty(n), np.empty(links), np.empty((nj, 3))
+    origin, alpha0, phi_origin = np.empty(n), np.empty(links), np.empty(nj)
+    _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, inv, coef,
+                   origin, alpha0, phi_origin, np.empty(nj), np.empty((5, links + 2)),
+                   np.sin(alpha))
     return bands, linear, inv, coef, origin, alpha0, phi_origin
 
 
 @njit(cache=True)
-def _J(du, coef, b0, fs, links):
-    y = np.zeros(links + 2)
-    y[fs:fs + du.size] = du
-    out = np.empty(coef.shape[0])
-    for j in range(coef.shape[0]):
-        s = coef[j, 0] * y[b0 + j]
-        s += coef[j, 1] * y[b0 + 1 + j]
-        s += coef[j, 2] * y[b0 + 2 + j]
-        out[j] = s
-    return out
-
-
-@njit(cache=True)
-def _JT(m, coef, b0, fs, n, links):
-    g = np.zeros(links + 2)
-    for kk in range(3):
-        for j in range(m.size):
-            g[b0 + kk + j] += coef[j, kk] * m[j]
-    return g[fs:fs + n].copy()
-
-
-@njit(cache=True)
-def _gradient(u, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load):
-    """ContactStep.gradient: Jᵀ k (φ̂(u) − φ*) − f, about the linearisation point."""
-    m = _J(u - origin, coef, b0, fs, links)
-    for j in range(m.size):
-        m[j] = ((m[j] + phi_origin[j]) - rest[j]) * k[j]
-    g = _JT(m, coef, b0, fs, u.size, links)
-    return g - nodal_load
-
-
-@njit(cache=True)
-def _gradient_scale(u, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load):
-    """ContactStep.gradient_scale: the size of the terms of the gradient."""
-    ac = np.abs(coef)
-    m = _J(np.abs(u - origin), ac, b0, fs, links)
-    for j in range(m.size):
-        m[j] = (m[j] + (abs(phi_origin[j]) + abs(rest[j]))) * k[j]
-    g = _JT(m, ac, b0, fs, u.size, links)
-    return g + (np.abs(nodal_load) + TINY)
-
-
-@njit(cache=True)
-def _grad(u, gp):
-    """The exact gradient at u; ``gp`` = (coef, b0, fs, links, origin, phi_origin, k,
-    rest, nodal_load) of the step."""
-    return _gradient(u, gp[0], gp[1], gp[2], gp[3], gp[4], gp[5], gp[6], gp[7], gp[8])
-
-
-@njit(cache=True)
-def _grad_scale(u, gp):
-    return _gradient_scale(u, gp[0], gp[1], gp[2], gp[3], gp[4], gp[5], gp[6], gp[7], gp[8])
-
-
-@njit(cache=True)
-def _matvec(bands, x):
-    """H x on the bands, summed in the order of solvers.banded._Banded.matvec."""
-    n = x.size
-    out = np.empty(n)
+def _newton(alpha, a, jl, jr, k, rest, fs, n, bands, linear, origin, T, fac, none, mu, sines):
+    """model.newton.newton_step: T (the geometric bands) into ``T``, and H + T,
+    c − T u₀ into the step where H + T is positive definite (True); else T = 0
+    and the Gauss–Newton step stands (False)."""
+    links = alpha.size
+    mu[:] = 0.0
+    for j in range(jr.size):  # the net spring moment on each link (np.add.at's order)
+        mu[jr[j]] += k[j] * ((alpha[jr[j]] - (alpha[jl[j]] if jl[j] >= 0 else 0.0)) - rest[j])
+    for j in range(jr.size):
+        if jl[j] >= 0:
+            mu[jl[j]] -= k[j] * ((alpha[jr[j]] - alpha[jl[j]]) - rest[j])
+    for i in range(n):  # w = μ sin α / (a² cos³ α) on each link, to its two nodes
+        node = fs - 1 + i
+        T[0, i] = T[1, i] = 0.0
+        if node < links:
+            w = mu[node] * (sines[node] / (a * a * np.cos(alpha[node]) ** 3))
+            T[0, i] += w
+            T[1, i] = -w if i + 1 < n else 0.0
+        if node >= 1:
+            T[0, i] += mu[node - 1] * (sines[node - 1] / (a * a * np.cos(alpha[node - 1]) ** 3))
+    for i in range(n):  # H + T, factored to test it (LAPACK's dpbtrf in the reference)
+        fac[0, i], fac[1, i], fac[2, i] = bands[0, i] + T[0, i], bands[1, i] + T[1, i], bands[2, i]
+        none[i] = False
+    if not _refactor(fac, fac, none, 0, n):
+        T[:] = 0.0
+        return False
     for i in range(n):
-        s = bands[2, i - 2] * x[i - 2] if i >= 2 else 0.0
-        s += bands[1, i - 1] * x[i - 1] if i >= 1 else 0.0
-        s += bands[0, i] * x[i]
-        s += bands[1, i] * x[i + 1] if i + 1 < n else 0.0
-        s += bands[2, i] * x[i + 2] if i + 2 < n else 0.0
-        out[i] = s
-    return out
-
-
-# -- banded Cholesky (LAPACK dpbtf2 / dpbtrs, lower, bandwidth 2) ------------------
-@njit(cache=True)
-def _factor(ab, start=0):
-    """In place on rows 0-2 (the bands); row 3 gets 1 / L_jj, so that the solves
-    multiply instead of divide. Columns before ``start`` are already factored
-    (and their updates applied). False when a leading minor is not positive
-    definite."""
-    n = ab.shape[1]
-    for j in range(start, n):
-        ajj = ab[0, j]
-        if not ajj > 0.0:
-            return False
-        ajj = np.sqrt(ajj)
-        ab[0, j] = ajj
-        kn = min(2, n - 1 - j)
-        r = 1.0 / ajj
-        ab[3, j] = r
-        for p in range(1, kn + 1):
-            ab[p, j] *= r
-        for q in range(1, kn + 1):  # the trailing rank-1 update (dsyr)
-            tq = -ab[q, j]
-            for p in range(q, kn + 1):
-                ab[p - q, j + q] += ab[p, j] * tq
+        s = T[0, i] * origin[i]
+        if i >= 1:
+            s += T[1, i - 1] * origin[i - 1]
+        if i + 1 < n:
+            s += T[1, i] * origin[i + 1]
+        linear[i] -= s
+    for i in range(n):
+        bands[0, i] += T[0, i]
+        bands[1, i] += T[1, i]
     return True
 
 
 @njit(cache=True)
-def _resolve(ab, x):
-    """Overwrites x with the solution of L Lᵀ x = x."""
-    n = x.size
-    for j in range(n):
-        x[j] = x[j] * ab[3, j]
-        t = x[j]
-        for p in range(1, min(2, n - 1 - j) + 1):
-            x[j + p] -= t * ab[p, j]
-    for j in range(n - 1, -1, -1):
-        t = x[j]
-        for p in range(min(2, n - 1 - j), 0, -1):
-            t -= ab[p, j] * x[j + p]
-        x[j] = t * ab[3, j]
-    return x
-
-
-@njit(cache=True)
-def _refactor(fac, bands, fixed, c0):
-    """Factor H with the rows and columns of the ``fixed`` nodes replaced by the
-    identity, from column ``c0`` on (``c0 = 0``: all of it). ``fac`` holds the
-    factor of a face that differs from ``fixed`` only at nodes >= c0 + 2, so its
-    columns before c0 stand (a column reads the nodes up to two below it); the
-    same operations in the same order as a full factorisation, so the same bits."""
-    n = fixed.size
-    for kk in range(3):
-        for i in range(c0, n):
-            keep = (not fixed[i]) and (i + kk < n) and (not fixed[i + kk])
-            fac[kk, i] = bands[kk, i] * (1.0 if keep else 0.0)
-    for i in range(c0, n):
-        if fixed[i]:
-            fac[0, i] += 1.0
-    for j in range(max(0, c0 - 2), c0):  # the updates of the factored columns
-        kn = min(2, n - 1 - j)
-        for q in range(1, kn + 1):
-            if j + q < c0:
-                continue
-            tq = -fac[q, j]
-            for p in range(q, kn + 1):
-                fac[p - q, j + q] += fac[p, j] * tq
-    return _factor(fac, c0)
-
-
-@njit(cache=True)
-def _max_abs(x):  # max|x| and the slope's dot product are loops: loading the cache then
-    m = 0.0  # needs neither numba's array reductions nor its BLAS (which import scipy)
-    for v in x:
-        m = max(m, abs(v))
-    return m
-
-
-@njit(cache=True)
-def _run_maxima(v, slack):
-    """The deepest violation v > slack of every run of consecutive violated nodes."""
-    n = v.size
-    out = np.zeros(n, np.bool_)
-    for i in range(n):
-        if v[i] > slack:
-            left = v[i - 1] if i > 0 else -np.inf
-            right = v[i + 1] if i + 1 < n else -np.inf
-            out[i] = v[i] >= left and v[i] > right
-    return out
-
-
-# -- the dual active set (solvers.banded._dual, _finish, step_certificate) ----------
-@njit(cache=True)
-def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp):
-    """(code, u, g, sigma, face solves): code 0 at the optimum (after refinement)."""
-    n = linear.size
-    has_lo = False
-    for i in range(n):
-        has_lo = has_lo or np.isfinite(lo[i])
-    fac = np.empty((4, n))
-    factored = np.zeros(n, np.bool_)  # the face ``fac`` holds (none fixed: H itself)
-    if not _refactor(fac, bands, factored, 0):
-        return BAIL_NOT_PD, linear, linear, linear, 0
-    u = _resolve(fac, -linear)
-    g = np.zeros(n)
-    slack = 32 * EPS * (1.0 + _max_abs(u))
-    sigma, wall, S = np.zeros(n), np.zeros(n), np.zeros(n, np.bool_)
-    warm = False
-    for i in range(n):
-        warm = warm or warm_up[i] or warm_lo[i]
-    seen = [sigma.copy()]
-    seen.pop()
-    at_face_minimiser = True
-    it = 0
-    while True:
-        if at_face_minimiser:
-            v_up = u - hi
-            v_lo = lo - u
-            for i in range(n):
-                if S[i]:
-                    v_up[i] = -np.inf
-                    v_lo[i] = -np.inf
-            found = False
-            J_up = np.zeros(n, np.bool_)
-            J_lo = np.zeros(n, np.bool_)
-            if warm:
-                warm = False
-                for i in range(n):
-                    J_up[i] = warm_up[i] and v_up[i] > slack
-                    J_lo[i] = has_lo and warm_lo[i] and v_lo[i] > slack
-                    found = found or J_up[i] or J_lo[i]
-            if not found:
-                J_up = _run_maxima(v_up, slack)
-                J_lo = _run_maxima(v_lo, slack) if has_lo else np.zeros(n, np.bool_)
-                for i in range(n):
-                    found = found or J_up[i] or J_lo[i]
-                if not found:  # the optimum: one refinement on the face just factored
-                    for i in range(n):
-                        if S[i]:
-                            u[i] = wall[i]
-                    g = _grad(u, gp)
-                    r = g.copy()
-                    for i in range(n):
-                        if S[i]:
-                            r[i] = 0.0
-                    p = _resolve(fac, r)
-                    return 0, u - p, g - _matvec(bands, p), sigma, it
-            for old in seen:
-                if _max_abs(old - sigma) == 0.0:  # the same working set
-                    return BAIL_REPEAT, u, g, sigma, it
-            seen.append(sigma.copy())
-            for i in range(n):
-                if J_up[i]:
-                    sigma[i] = 1.0
-                    wall[i] = hi[i]
-                elif J_lo[i]:
-                    sigma[i] = -1.0
-                    wall[i] = lo[i]
-                S[i] = sigma[i] != 0.0
-        if it >= max_iter:
-            return BAIL_LIMIT, u, g, sigma, it
-        it += 1
-        d = np.empty(n)
-        for i in range(n):
-            d[i] = (wall[i] - u[i]) * (1.0 if S[i] else 0.0)
-        r = g + _matvec(bands, d)
-        for i in range(n):
-            if S[i]:
-                r[i] = 0.0
-        first = n  # the first node whose wall changed since the last factorisation
-        for i in range(n):
-            if S[i] != factored[i]:
-                first = i
-                break
-        if first < n:
-            if not _refactor(fac, bands, S, max(0, first - 2)):
-                return BAIL_NOT_PD, u, g, sigma, it
-            factored[:] = S
-        d -= _resolve(fac, r)
-        g_face = g + _matvec(bands, d)
-        s = np.inf
-        ratio = np.full(n, np.inf)
-        for i in range(n):
-            sg = sigma[i] * g_face[i]
-            if sg > 0.0:
-                lam = max(-sigma[i] * g[i], 0.0)
-                ratio[i] = lam / (lam + sg)
-                s = min(s, ratio[i])
-        if s < 1.0:
-            u = u + s * d
-            g = g + s * (g_face - g)
-            for i in range(n):
-                if ratio[i] <= s + TIE:  # ties within round-off go together
-                    sigma[i] = 0.0
-                    S[i] = False
-            at_face_minimiser = False
-            continue
-        u, g, at_face_minimiser = u + d, g_face, True
-
-
-@njit(cache=True)
-def _certificate(u, ru, rl, lo, hi, gp):
-    """solvers.banded.step_certificate: the scaled KKT residual of a step answer."""
-    n = u.size
-    for i in range(n):
-        if not (np.isfinite(u[i]) and np.isfinite(ru[i]) and np.isfinite(rl[i])):
-            return np.inf
-    if n == 0:
-        return 0.0
-    grad = _grad(u, gp)
-    size = _grad_scale(u, gp)
-    force, span = TINY, 1.0 + _max_abs(u)
-    stat = feas = neg = comp = 0.0
-    for i in range(n):
-        force = max(force, size[i] + ru[i] + rl[i])
-    for i in range(n):
-        stat = max(stat, abs(grad[i] + ru[i] - rl[i]))
-        feas = max(feas, u[i] - hi[i], lo[i] - u[i])
-        neg = max(neg, -ru[i], -rl[i])
-        if np.isfinite(hi[i]):
-            comp = max(comp, abs((hi[i] - u[i]) * ru[i]))
-        if np.isfinite(lo[i]):
-            comp = max(comp, abs((u[i] - lo[i]) * rl[i]))
-    return max(stat / force, feas / span, neg / force, comp / (force * span))
-
-
-@njit(cache=True)
-def _residuals(u, bands, linear, lo, hi, gp, L, F):
-    """model.step_solver.step_residuals: (ok, [natural, min_gap, min_reaction,
-    complementarity, term_size], R) with R = −gradient on the completed heights."""
-    n = u.size
-    rows = np.empty(n, np.bool_)
-    some_free = False
-    for i in range(n):
-        rows[i] = np.isfinite(hi[i]) or np.isfinite(lo[i])
-        some_free = some_free or not rows[i]
-    u2 = u.copy()
-    if some_free:  # the nodes with no wall row, re-solved exactly
-        grad = _grad(u2, gp)
-        fac = np.empty((4, n))
-        if not _refactor(fac, bands, rows, 0):
-            return False, np.zeros(5), grad
-        for i in range(n):
-            if rows[i]:
-                grad[i] = 0.0
-        x = _resolve(fac, grad)
-        for i in range(n):
-            if not rows[i]:
-                u2[i] -= x[i]
-    R = -_grad(u2, gp)
-    size = _matvec(np.abs(bands), np.abs(u2))
-    nat, min_gap, min_r, comp_up, comp_lo, term = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0
-    for i in range(n):
-        up, low = np.isfinite(hi[i]), np.isfinite(lo[i])
-        if up:
-            g = (hi[i] - u2[i]) / L
-            r = (max(R[i], 0.0) if low else R[i]) / F
-            nat = max(nat, abs(min(g, r)))
-            min_gap, min_r = min(min_gap, g), min(min_r, r)
-            comp_up += g * r
-        if low:
-            g = (u2[i] - lo[i]) / L
-            r = (max(-R[i], 0.0) if up else -R[i]) / F
-            nat = max(nat, abs(min(g, r)))
-            min_gap, min_r = min(min_gap, g), min(min_r, r)
-            comp_lo += g * r
-        if up or low:
-            term = max(term, size[i] + abs(linear[i]))
-    out = np.array([nat, min_gap, min_r, abs(comp_up) + abs(comp_lo), term / F])
-    return True, out, R
-
-
-@njit(cache=True)
-def _contact_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
-                  warm_u, warm_up, warm_lo, warm_flags, max_iter, request):
-    """One contact step at α: assemble, dual walk, certificate, judge (code 0: solved)."""
-    bands, linear, inv, coef, origin, alpha0, phi_origin = _assemble(
-        alpha, a, jl, jr, k, rest, fs, n, nodal_load)
-    gp = (coef, jr[0], fs, alpha.size, origin, phi_origin, k, rest, nodal_load)
-    W_up, W_lo, bad = np.zeros(n, np.bool_), np.zeros(n, np.bool_), False
+def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, warm_u, warm_up, warm_lo,
+          warm_flags, max_iter, request, ws, gp, sines, newton):
+    """One contact step at α (``sines``: sin α) into the work arrays: assemble, dual
+    walk, certificate, judge; (code, face solves), code 0: solved."""
+    wn, wb, wj, wa = ws[0], ws[1], ws[2], ws[3]
+    _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, ws[6], wn[LIN], wa[INV], ws[7],
+                   wn[ORIG], wa[ALPHA0], wj[0], wj[1], ws[4], sines)
+    T = ws[10]
+    T[:] = 0.0
+    if newton:  # T = 0 where H + T is not positive definite
+        _newton(alpha, a, jl, jr, k, rest, fs, n, ws[6], wn[LIN], wn[ORIG], T, ws[5],
+                wb[FACT], ws[4][0], sines)
+    W_up, W_lo, bad = wb[WUP], wb[WLO], False
     for i in range(n):
         bad = bad or lo[i] > hi[i]
+        W_up[i] = W_lo[i] = False
         if warm_flags & 1 and not np.isnan(warm_u[i]):  # the walls the last answer is on
             ui = min(max(warm_u[i], lo[i]), hi[i])
             W_up[i] = np.isfinite(hi[i]) and ui >= hi[i]
@@ -494,25 +269,38 @@ def _contact_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
         if warm_flags & 4:
             W_lo[i] = W_lo[i] or (warm_lo[i] and np.isfinite(lo[i]))
         W_lo[i] = W_lo[i] and not W_up[i]
-    empty = np.zeros(5)
     if bad:  # crossed walls: the reference hands this to the primal method
-        return BAIL_PRIMAL, linear, linear, linear, linear, 0, inv, alpha0, origin, gp, empty, linear
-    code, u, grad, sigma, it = _dual(bands, linear, lo, hi, W_up, W_lo, max_iter, gp)
+        return BAIL_PRIMAL, 0
+    code, it = _dual(ws[6], wn[LIN], lo, hi, W_up, W_lo, max_iter, gp, ws)
     if code != 0:
-        return code, u, u, u, sigma, it, inv, alpha0, origin, gp, empty, u
-    r_up, r_lo = np.zeros(n), np.zeros(n)
+        return code, it
+    u, grad, sigma, r_up, r_lo = wn[U], wn[G], wn[SIG], wn[RUP], wn[RLO]
     for i in range(n):
         u[i] = min(max(u[i], lo[i]), hi[i])
-        if sigma[i] > 0:
-            r_up[i] = max(-grad[i], 0.0)
-        elif sigma[i] < 0:
-            r_lo[i] = max(grad[i], 0.0)
-    if not _certificate(u, r_up, r_lo, lo, hi, gp) <= RTOL:
-        return BAIL_CERT, u, r_up, r_lo, sigma, it, inv, alpha0, origin, gp, empty, u
-    ok, res, R = _residuals(u, bands, linear, lo, hi, gp, L, F)
+        r_up[i] = max(-grad[i], 0.0) if sigma[i] > 0 else 0.0
+        r_lo[i] = max(grad[i], 0.0) if sigma[i] < 0 else 0.0
+    if not _certify(u, r_up, r_lo, lo, hi, gp, wn[GF], wn[RATIO], wj[2], T) <= RTOL:
+        return BAIL_CERT, it
+    res = ws[9]
+    ok = _judge(u, ws[6], wn[LIN], lo, hi, gp, L, F, res, wn[NET], wn[U2], wb[ROWS], ws[5], wj[2],
+                T)
     if not (ok and res[0] <= max(10.0 * request, FLOOR_ULPS * EPS * res[4])):
-        return BAIL_JUDGE, u, r_up, r_lo, sigma, it, inv, alpha0, origin, gp, res, R
-    return 0, u, r_up, r_lo, sigma, it, inv, alpha0, origin, gp, res, R
+        return BAIL_JUDGE, it
+    return 0, it
+
+
+@njit(cache=True)
+def _contact_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
+                  warm_u, warm_up, warm_lo, warm_flags, max_iter, request):
+    """One cold contact step at α, its work arrays allocated: (code, u, r_up, r_lo,
+    sigma, face solves, inv, α₀, origin, gp, residuals, R), code 0: solved."""
+    ws = _workspace(n, alpha.size, jr.size, max_iter)
+    wn, wa = ws[0], ws[3]
+    gp = (ws[7], jr[0], fs, alpha.size, wn[ORIG], ws[2][0], k, rest, nodal_load)
+    code, it = _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, warm_u, warm_up,
+                     warm_lo, warm_flags, max_iter, request, ws, gp, np.sin(alpha), False)
+    return (code, wn[U], wn[RUP], wn[RLO], wn[SIG], it, wa[INV], wa[ALPHA0], wn[ORIG], gp, ws[9],
+            wn[NET])
 
 
 @njit(cache=True)
@@ -526,10 +314,26 @@ def _record(rec, count, it, t, dalpha, E):
 
 
 @njit(cache=True)
+def _clipped_heights(u, alpha, a, fs, lo, hi):
+    """The free nodes' heights of the chain at α, clipped to the walls, into u."""
+    y, n = 0.0, u.size
+    if fs == 1:
+        u[0] = min(max(0.0, lo[0]), hi[0])
+    for i in range(alpha.size):
+        y += a * np.sin(alpha[i])
+        node = i + 1 - (fs - 1)
+        if 0 <= node < n:
+            u[node] = min(max(y, lo[node]), hi[node])
+
+
+@njit(cache=True)
 def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
                 tol, max_outer, start_alpha, warm_u, warm_up, warm_lo, warm_flags,
-                max_iter, request):
-    """The globalised driver (model.driver._globalised) around the compiled step.
+                max_iter, request, newton=False):
+    """The globalised driver (model.driver._globalised) around the compiled step;
+    ``newton``: its Newton scheme (``method="newton"``), the exact Hessian H + T
+    where positive definite once the last step moved α by less than
+    NEWTON_SWITCH, or from a warm start's first step.
 
     ``fs``: shifted index (node + 1) of the first free node; ``start_alpha``
     empty for a cold start; ``warm_flags``: bit 0 ``warm_u``, bit 1 ``warm_up``,
@@ -539,59 +343,70 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
     count, residuals, forces_net)``; ``records`` rows: face solves, step
     length t, max|Δα|, energy; ``sigma`` +1/−1 on the upper/lower walls.
     """
-    n = lo.size
-    links = rest_alpha.size
+    n, links = lo.size, rest_alpha.size
+    ws = _workspace(n, links, jr.size, max_iter)
+    wn, wb, wa, m = ws[0], ws[1], ws[3], ws[2][2]
     rec = np.empty((4, min(max_outer, 64)))
     count, zero, none, ok = 0, np.zeros(n), np.zeros(5), False
-    alpha = rest_alpha.copy()
-    u = zero
+    alpha, trial, u = wa[ALPHA], wa[TRIAL], wn[OUT_U]
     if start_alpha.size == links:  # a neighbour's answer, clipped to the walls
-        y = _node_heights(start_alpha, a)
-        u = np.minimum(np.maximum(y[fs - 1:fs - 1 + n], lo), hi)
-        ok, alpha = _alpha_from_heights(u, start_alpha, a, fs, links)
+        _clipped_heights(u, start_alpha, a, fs, lo, hi)
+        ok = _fit(alpha, u, start_alpha, a, fs, links, none[:0])
+    near = ok and warm_flags != 0  # a neighbour's answer and its last step: near already
     if not ok:
         warm_flags = 0
-        y = _node_heights(rest_alpha, a)
-        u = np.minimum(np.maximum(y[fs - 1:fs - 1 + n], lo), hi)
-        ok, alpha = _alpha_from_heights(u, rest_alpha, a, fs, links)
+        _clipped_heights(u, rest_alpha, a, fs, lo, hi)
+        ok = _fit(alpha, u, rest_alpha, a, fs, links, none[:0])
     if not ok:
         return NO_FIT, rest_alpha.copy(), zero, zero, zero, zero, rec, count, none, zero
-    E = _energy(alpha, a, jl, jr, k, rest, link_load)
+    sin_a, sin_t = wa[SIN_A], wa[SIN_T]
+    E = _energy_into(alpha, a, jl, jr, k, rest, link_load, sin_a)
     noise_k = 0.0
     for j in range(k.size):
         noise_k += abs(k[j])
-    trial, E_t = alpha, E
+    w_u, w_up, w_lo = wn[WU], wb[PREV_UP], wb[PREV_LO]
+    w_u[:], w_up[:], w_lo[:] = warm_u, warm_up, warm_lo
+    su, sigma, inv, alpha0, origin = wn[U], wn[SIG], wa[INV], wa[ALPHA0], wn[ORIG]
+    d, ut, g_u = wn[DIR], wn[TRY], wn[GF]
+    gp = (ws[7], jr[0], fs, links, origin, ws[2][0], k, rest, nodal_load)
     for _ in range(max_outer):
-        code, su, r_up, r_lo, sigma, it, inv, alpha0, origin, gp, res, R = _contact_step(
-            alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
-            warm_u, warm_up, warm_lo, warm_flags, max_iter, request)
+        code, it = _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
+                         w_u, w_up, w_lo, warm_flags, max_iter, request, ws, gp, sin_a,
+                         newton and near)
         if code != 0:
-            return code, alpha, zero, zero, u, sigma, rec, count, none, zero
+            return code, alpha.copy(), zero, zero, u.copy(), sigma.copy(), rec, count, none, zero
         dalpha = prev = 0.0
         for i in range(links):  # predict_alpha, eq. (21), about u0
             node = i + 1 - (fs - 1)
             cur = su[node] - origin[node] if 0 <= node < n else 0.0
             dalpha = max(dalpha, abs((alpha0[i] + (cur - prev) * inv[i]) - alpha[i]))
             prev = cur
-        d = su - u
-        g_u, slope = _grad(u, gp), 0.0
+        _grad_into(g_u, m, u, gp, False, ws[10])
+        slope = 0.0
         for i in range(n):  # the dot product, a loop (see _max_abs)
+            d[i] = su[i] - u[i]
             slope += g_u[i] * d[i]
         noise = 1e-12 * (abs(E) + noise_k * 1e-6)
         t = 1.0
         while True:
-            ok, trial = _alpha_from_heights(u + t * d, alpha, a, fs, links)
-            if ok:
-                E_t = _energy(trial, a, jl, jr, k, rest, link_load)
+            for i in range(n):
+                ut[i] = u[i] + t * d[i]
+            if _fit(trial, ut, alpha, a, fs, links, inv):
+                E_t = _energy_into(trial, a, jl, jr, k, rest, link_load, sin_t)
                 if E_t <= E + 1e-4 * t * min(slope, 0.0) + noise:
                     break
             t *= 0.5
             if t < 1e-12:
                 rec, count = _record(rec, count, it, 0.0, dalpha, E)
-                return LINE_SEARCH, alpha, zero, zero, u, sigma, rec, count, none, zero
-        u, alpha, E = u + t * d, trial, E_t
+                return (LINE_SEARCH, alpha.copy(), zero, zero, u.copy(), sigma.copy(), rec, count,
+                        none, zero)
+        u[:] = ut
+        alpha, trial, sin_a, sin_t, E = trial, alpha, sin_t, sin_a, E_t
         rec, count = _record(rec, count, it, t, dalpha, E)
-        warm_u, warm_up, warm_lo, warm_flags = su, sigma > 0, sigma < 0, 7
+        for i in range(n):
+            w_u[i], w_up[i], w_lo[i] = su[i], sigma[i] > 0, sigma[i] < 0
+        warm_flags, near = 7, dalpha < NEWTON_SWITCH
         if dalpha < tol:
-            return CONVERGED, alpha, r_up, r_lo, su, sigma, rec, count, res, R
-    return MAX_OUTER, alpha, zero, zero, u, zero, rec, count, none, zero
+            return (CONVERGED, alpha.copy(), wn[RUP].copy(), wn[RLO].copy(), su.copy(),
+                    sigma.copy(), rec, count, ws[9].copy(), wn[NET].copy())
+    return MAX_OUTER, alpha.copy(), zero, zero, u.copy(), zero, rec, count, none, zero

@@ -15,6 +15,13 @@ first run after an edit, a new signature), it hands over to numba's own
 loader, which refreshes the context and compiles as usual; any error on the
 light path does the same. ``LCPBENCH_NUMBA_FULL_LOAD=1`` turns it off.
 
+A kernel split over several files (the solve kernel: ``compiled_kernel.py`` and
+``compiled_dual.py``) is cached under a directory named by a hash of all its
+files (:func:`kernel_cache_dir`): numba invalidates a function's cache entry only
+when *its own* file changes, so without it an edit of one file could leave another
+file's cached code running stale. The base is numba's ``NUMBA_CACHE_DIR`` where set,
+else the user's cache directory (``$XDG_CACHE_HOME`` or ``~/.cache``).
+
 It uses two private methods of numba's cache (``_load_overload`` and
 ``_guard_against_spurious_io_errors``, numba 0.5x–0.6x); where they are
 missing it does nothing, so a numba that changed them loads as before.
@@ -22,18 +29,45 @@ missing it does nothing, so a numba that changed them loads as before.
 
 from __future__ import annotations
 
+import hashlib
 import importlib
 import os
+from pathlib import Path
 
 _LOADED: dict = {}  # module name -> the kernel module, once imported and hooked
+#: the kernels spread over several files: module -> its files (in lcpbench/model)
+SPLIT = {"lcpbench.model.compiled_kernel": ("compiled_kernel.py", "compiled_dual.py")}
+
+
+def kernel_cache_dir(files, base: str | None = None) -> str:
+    """``<base>/lcpbench-numba/<sha>``: the cache of a kernel made of ``files``,
+    named by the SHA-256 of their sources (in order)."""
+    sha = hashlib.sha256()
+    for f in files:
+        sha.update(Path(f).read_bytes())
+    if not base:
+        base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return os.path.join(base, "lcpbench-numba", sha.hexdigest()[:20])
 
 
 def kernel_module(name: str, entry: str):
     """The compiled module ``name`` (imports numba; loads or compiles it), its
-    dispatcher ``entry`` hooked to :func:`light_cache_load`, once per process."""
+    dispatcher ``entry`` hooked to :func:`light_cache_load`, once per process; a
+    module of :data:`SPLIT` cached under :func:`kernel_cache_dir`."""
     module = _LOADED.get(name)
     if module is None:
-        module = importlib.import_module(name)
+        if name in SPLIT:
+            from numba.core import config  # numba's locator reads it at each @njit
+
+            here = Path(__file__).parent
+            saved = config.CACHE_DIR
+            config.CACHE_DIR = kernel_cache_dir([here / f for f in SPLIT[name]], saved)
+            try:
+                module = importlib.import_module(name)
+            finally:
+                config.CACHE_DIR = saved
+        else:
+            module = importlib.import_module(name)
         light_cache_load(getattr(module, entry))
         _LOADED[name] = module
     return module

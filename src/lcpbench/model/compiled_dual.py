@@ -1,0 +1,428 @@
+"""The dual active set of the compiled kernel (:mod:`lcpbench.model.compiled_kernel`).
+
+numba versions of :func:`lcpbench.solvers.banded.solve_banded_qp` with
+``method="dual"`` (the walk with block additions, its refinement), of
+:func:`~lcpbench.solvers.banded.step_certificate` and of the judge's natural
+residual (:func:`lcpbench.model.step_solver.step_residuals`), on the step's bands
+H (the banded step of eqs. 20-31) and its linear term c, in the same order of
+operations as the reference where that is cheap. Every pass writes into work
+arrays that :func:`lcpbench.model.compiled_kernel.solve_chain` allocates once.
+Loaded only through :func:`lcpbench.model.kernel_cache.kernel_module` (see there).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+EPS = np.finfo(np.float64).eps
+TINY = np.finfo(np.float64).tiny
+TIE = 1e-6  # solvers.banded.TIE
+RTOL = 1e-9  # solvers.banded.solve_banded_qp(rtol=)
+FLOOR_ULPS = 256.0  # solvers.judge.FLOOR_ULPS
+# the step left the path of the reference: the caller runs the numpy driver
+BAIL_PRIMAL, BAIL_NOT_PD, BAIL_REPEAT, BAIL_LIMIT, BAIL_CERT, BAIL_JUDGE = 10, 11, 12, 13, 14, 15
+
+# Work arrays, allocated once per solve (compiled_kernel._workspace); no loop
+# allocates. Rows of ``wn`` (free nodes):
+U, G, SIG, WALL, D, RES, GF, RATIO, LIN, ORIG, RUP, RLO, NET, U2, OUT_U, DIR, TRY, WU = range(18)
+# rows of ``wb``: the working set S, the face factored, the additions, the warm walls
+S_, FACT, JUP, JLO, WUP, WLO, ROWS, PREV_UP, PREV_LO = range(9)
+# rows of ``wa`` (links): 1 / (a cos α), α₀, the iterate α, the trial α, their sines
+INV, ALPHA0, ALPHA, TRIAL, SIN_A, SIN_T = range(6)
+# splitmix64, for the hash of a working set
+M1, M2, M3 = np.uint64(0x9E3779B97F4A7C15), np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB)
+
+
+@njit(cache=True)
+def _grad_into(out, m, u, gp, scale, T):
+    """ContactStep.gradient, Jᵀ k (φ̂(u) − φ*) − f + T (u − u₀) about the
+    linearisation point u₀ (``scale``: ContactStep.gradient_scale, the size of its
+    terms), into ``out``; ``gp`` = (coef, b0, fs, links, origin, phi_origin, k,
+    rest, nodal_load); T: the Newton step's geometric bands (zero for a
+    Gauss–Newton step: adding them changes nothing but the sign of a zero)."""
+    coef, b0, fs, links, origin, phi_origin, k, rest, load = gp
+    n, nj = u.size, coef.shape[0]
+    for j in range(nj):  # J (u − u₀), then the moments
+        s = 0.0
+        for c in range(3):
+            i = b0 + c + j - fs
+            du = 0.0
+            if 0 <= i < n:
+                du = abs(u[i] - origin[i]) if scale else u[i] - origin[i]
+            w = abs(coef[j, c]) if scale else coef[j, c]
+            s = w * du if c == 0 else s + w * du
+        if scale:
+            m[j] = (s + (abs(phi_origin[j]) + abs(rest[j]))) * k[j]
+        else:
+            m[j] = ((s + phi_origin[j]) - rest[j]) * k[j]
+    for i in range(n):  # Jᵀ m, summed in the order of the reference's three passes
+        s = 0.0
+        for c in range(3):
+            j = fs + i - b0 - c
+            if 0 <= j < nj:
+                s += (abs(coef[j, c]) if scale else coef[j, c]) * m[j]
+        out[i] = s + (abs(load[i]) + TINY) if scale else s - load[i]
+    for i in range(n):  # + T (u − u₀), summed as linalg.banded_matvec
+        d0 = u[i] - origin[i]
+        s = abs(T[0, i]) * abs(d0) if scale else T[0, i] * d0
+        if i >= 1:
+            d1 = u[i - 1] - origin[i - 1]
+            s += abs(T[1, i - 1]) * abs(d1) if scale else T[1, i - 1] * d1
+        if i + 1 < n:
+            d2 = u[i + 1] - origin[i + 1]
+            s += abs(T[1, i]) * abs(d2) if scale else T[1, i] * d2
+        out[i] += s
+    return out
+
+
+@njit(cache=True)
+def _mv(bands, x, i, n, absolute):
+    """Row i of H x (of |H| |x| when ``absolute``), summed in the order of
+    solvers.banded._Banded.matvec."""
+    if absolute:
+        s = abs(bands[2, i - 2]) * abs(x[i - 2]) if i >= 2 else 0.0
+        s += abs(bands[1, i - 1]) * abs(x[i - 1]) if i >= 1 else 0.0
+        s += abs(bands[0, i]) * abs(x[i])
+        s += abs(bands[1, i]) * abs(x[i + 1]) if i + 1 < n else 0.0
+        s += abs(bands[2, i]) * abs(x[i + 2]) if i + 2 < n else 0.0
+        return s
+    s = bands[2, i - 2] * x[i - 2] if i >= 2 else 0.0
+    s += bands[1, i - 1] * x[i - 1] if i >= 1 else 0.0
+    s += bands[0, i] * x[i]
+    s += bands[1, i] * x[i + 1] if i + 1 < n else 0.0
+    s += bands[2, i] * x[i + 2] if i + 2 < n else 0.0
+    return s
+
+# -- banded Cholesky (LAPACK dpbtf2 / dpbtrs, lower, bandwidth 2) ------------------
+@njit(cache=True)
+def _factor(ab, start, stop):
+    """In place on rows 0-2 (the bands); row 3 gets 1 / L_jj, so that the solves
+    multiply instead of divide. Columns before ``start`` are already factored
+    (and their updates applied); those from ``stop`` on as well (see
+    :func:`_refactor`). False when a leading minor is not positive definite."""
+    n = ab.shape[1]
+    for j in range(start, stop):
+        ajj = ab[0, j]
+        if not ajj > 0.0:
+            return False
+        if ajj == 1.0 and ab[1, j] == 0.0 and ab[2, j] == 0.0:  # an identity column (a
+            ab[3, j] = 1.0  # fixed node): L is 1 there and its updates add zeros
+            continue
+        ajj = np.sqrt(ajj)
+        ab[0, j] = ajj
+        r = 1.0 / ajj
+        ab[3, j] = r
+        if j + 2 < n:  # the trailing rank-1 update (dsyr), unrolled
+            l1, l2 = ab[1, j] * r, ab[2, j] * r
+            ab[1, j], ab[2, j] = l1, l2
+            t1 = -l1
+            ab[0, j + 1] += l1 * t1
+            ab[1, j + 1] += l2 * t1
+            ab[0, j + 2] += l2 * -l2
+        elif j + 1 < n:
+            l1 = ab[1, j] * r
+            ab[1, j] = l1
+            ab[0, j + 1] += l1 * -l1
+    return True
+
+
+@njit(cache=True)
+def _resolve(ab, x):
+    """Overwrites x with the solution of L Lᵀ x = x (the next two entries carried
+    in registers: the same operations in the same order as row by row)."""
+    n = x.size
+    if n == 0:
+        return x
+    p1 = x[0]
+    p2 = x[1] if n > 1 else 0.0
+    for j in range(n):
+        t = p1 * ab[3, j]
+        x[j] = t
+        p1 = p2 - t * ab[1, j] if j + 1 < n else 0.0
+        p2 = x[j + 2] - t * ab[2, j] if j + 2 < n else 0.0
+    b1 = b2 = 0.0
+    for j in range(n - 1, -1, -1):
+        t = x[j]
+        if j + 2 < n:
+            t -= ab[2, j] * b2
+        if j + 1 < n:
+            t -= ab[1, j] * b1
+        b2, b1 = b1, t * ab[3, j]
+        x[j] = b1
+    return x
+
+
+@njit(cache=True)
+def _refactor(fac, bands, fixed, c0, c1):
+    """Factor H with the rows and columns of the ``fixed`` nodes replaced by the
+    identity, columns ``c0`` to ``c1`` (0, n: all of it). ``fac`` holds the factor
+    of a face that differs from ``fixed`` only at nodes in [c0 + 2, c1 − 2), so its
+    columns before c0 stand (a column reads the nodes up to two below it), and
+    those from c1 on as well when nodes c1 − 2 and c1 − 1 are fixed in both (the
+    identity there cuts H in two: the columns after it see only exact zeros from
+    before it). The same operations in the same order as a full factorisation,
+    so the same bits (but for the sign of a zero)."""
+    n = fixed.size
+    for kk in range(3):
+        for i in range(c0, c1):
+            keep = (not fixed[i]) and (i + kk < n) and (not fixed[i + kk])
+            fac[kk, i] = bands[kk, i] * (1.0 if keep else 0.0)
+    for i in range(c0, c1):
+        if fixed[i]:
+            fac[0, i] += 1.0
+    for j in range(max(0, c0 - 2), c0):  # the updates of the factored columns
+        kn = min(2, n - 1 - j)
+        for q in range(1, kn + 1):
+            if j + q < c0:
+                continue
+            tq = -fac[q, j]
+            for p in range(q, kn + 1):
+                fac[p - q, j + q] += fac[p, j] * tq
+    return _factor(fac, c0, c1)
+
+
+@njit(cache=True)
+def _max_abs(x):  # max|x| and the slope's dot product are loops: loading the cache then
+    m = 0.0  # needs neither numba's array reductions nor its BLAS (which import scipy)
+    for v in x:
+        m = max(m, abs(v))
+    return m
+
+
+@njit(cache=True)
+def _violation(u, bound, S, i, sign):
+    if S[i]:
+        return -np.inf
+    return u[i] - bound[i] if sign > 0 else bound[i] - u[i]
+
+
+@njit(cache=True)
+def _run_maxima(out, u, bound, S, slack, sign):
+    """The deepest violation v > slack of every run of consecutive violated nodes
+    (v = u − hi, or lo − u for ``sign`` < 0, −∞ on S), into ``out``; whether any."""
+    n, found = u.size, False
+    left, v = -np.inf, (_violation(u, bound, S, 0, sign) if n else 0.0)
+    for i in range(n):
+        right = _violation(u, bound, S, i + 1, sign) if i + 1 < n else -np.inf
+        out[i] = v > slack and v >= left and v > right
+        found = found or out[i]
+        left, v = v, right
+    return found
+
+
+@njit(cache=True)
+def _key(i, s):
+    """The working set's hash is the XOR of these over its nodes (splitmix64 of
+    (node, wall)); 0 off the walls, so a change of one node updates it in O(1)."""
+    if s == 0.0:
+        return np.uint64(0)
+    z = np.uint64(2 * i + (1 if s > 0 else 2)) * M1
+    z = (z ^ (z >> np.uint64(30))) * M2
+    z = (z ^ (z >> np.uint64(27))) * M3
+    return z ^ (z >> np.uint64(31))
+
+
+# -- the dual active set (solvers.banded._dual, _finish, step_certificate) ----------
+@njit(cache=True)
+def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
+    """(code, face solves): code 0 at the optimum (after refinement); u, g and sigma
+    in the rows U, G, SIG of the work array ``ws[0]``. A working set met before
+    (its hash in ``ws[8]``; a collision, at odds of 2⁻⁶⁴, only hands the solve to
+    the reference) stops the walk as the reference's list of sets does."""
+    wn, wb, m, fac, seen = ws[0], ws[1], ws[2][2], ws[5], ws[8]
+    u, g, sigma, wall, d, r, gf, ratio = wn[U], wn[G], wn[SIG], wn[WALL], wn[D], wn[RES], wn[GF], \
+        wn[RATIO]
+    S, factored, J_up, J_lo = wb[S_], wb[FACT], wb[JUP], wb[JLO]
+    n = linear.size
+    has_lo = warm = False
+    for i in range(n):
+        has_lo = has_lo or np.isfinite(lo[i])
+        warm = warm or warm_up[i] or warm_lo[i]
+        factored[i] = S[i] = False  # the face ``fac`` holds (none fixed: H itself)
+        g[i] = sigma[i] = wall[i] = 0.0
+        u[i] = -linear[i]
+    if not _refactor(fac, bands, factored, 0, n):
+        return BAIL_NOT_PD, 0
+    _resolve(fac, u)
+    slack = 32 * EPS * (1.0 + _max_abs(u))
+    h, count, at_face_minimiser, it = np.uint64(0), 0, True, 0
+    while True:
+        if at_face_minimiser:
+            found = False
+            if warm:
+                warm = False
+                for i in range(n):
+                    J_up[i] = warm_up[i] and _violation(u, hi, S, i, 1) > slack
+                    J_lo[i] = has_lo and warm_lo[i] and _violation(u, lo, S, i, -1) > slack
+                    found = found or J_up[i] or J_lo[i]
+            if not found:
+                found = _run_maxima(J_up, u, hi, S, slack, 1)
+                if has_lo:
+                    found = _run_maxima(J_lo, u, lo, S, slack, -1) or found
+                else:
+                    J_lo[:] = False
+                if not found:  # the optimum: one refinement on the face just factored
+                    for i in range(n):
+                        if S[i]:
+                            u[i] = wall[i]
+                    _grad_into(g, m, u, gp, False, ws[10])
+                    for i in range(n):
+                        r[i] = 0.0 if S[i] else g[i]
+                    _resolve(fac, r)
+                    for i in range(n):
+                        gf[i] = g[i] - _mv(bands, r, i, n, False)
+                    for i in range(n):
+                        u[i] = u[i] - r[i]
+                        g[i] = gf[i]
+                    return 0, it
+            for q in range(count):
+                if seen[q] == h:  # the same working set
+                    return BAIL_REPEAT, it
+            if count == seen.size:  # a limit of face solves far above 20 n + 50: the
+                return BAIL_LIMIT, it  # reference walks on (the history is not grown)
+            seen[count] = h
+            count += 1
+            for i in range(n):
+                new = sigma[i]
+                if J_up[i]:
+                    new, wall[i] = 1.0, hi[i]
+                elif J_lo[i]:
+                    new, wall[i] = -1.0, lo[i]
+                if new != sigma[i]:
+                    h ^= _key(i, sigma[i]) ^ _key(i, new)
+                    sigma[i] = new
+                S[i] = sigma[i] != 0.0
+        if it >= max_iter:
+            return BAIL_LIMIT, it
+        it += 1
+        for i in range(n):
+            d[i] = (wall[i] - u[i]) * (1.0 if S[i] else 0.0)
+        first, last = n, -1  # the nodes whose wall changed since the last factorisation
+        for i in range(n):
+            r[i] = 0.0 if S[i] else g[i] + _mv(bands, d, i, n, False)
+            if S[i] != factored[i]:
+                first, last = min(first, i), i
+        if first < n:
+            stop = last + 1  # after the change, the first two fixed nodes in a row
+            while stop + 1 < n and not (S[stop] and S[stop + 1]):
+                stop += 1
+            stop = min(stop + 2, n)
+            if not _refactor(fac, bands, S, max(0, first - 2), stop):
+                return BAIL_NOT_PD, it
+            factored[:] = S
+        _resolve(fac, r)
+        for i in range(n):
+            d[i] -= r[i]
+        s = np.inf
+        for i in range(n):
+            gf[i] = g[i] + _mv(bands, d, i, n, False)
+            sg = sigma[i] * gf[i]
+            ratio[i] = np.inf
+            if sg > 0.0:
+                lam = max(-sigma[i] * g[i], 0.0)
+                ratio[i] = lam / (lam + sg)
+                s = min(s, ratio[i])
+        if s < 1.0:
+            for i in range(n):
+                u[i] = u[i] + s * d[i]
+                g[i] = g[i] + s * (gf[i] - g[i])
+                if ratio[i] <= s + TIE:  # ties within round-off go together
+                    h ^= _key(i, sigma[i])
+                    sigma[i] = 0.0
+                    S[i] = False
+            at_face_minimiser = False
+            continue
+        for i in range(n):
+            u[i] = u[i] + d[i]
+            g[i] = gf[i]
+        at_face_minimiser = True
+
+
+@njit(cache=True)
+def _certify(u, ru, rl, lo, hi, gp, grad, size, m, T):
+    n = u.size
+    for i in range(n):
+        if not (np.isfinite(u[i]) and np.isfinite(ru[i]) and np.isfinite(rl[i])):
+            return np.inf
+    if n == 0:
+        return 0.0
+    _grad_into(grad, m, u, gp, False, T)
+    _grad_into(size, m, u, gp, True, T)
+    force, span = TINY, 1.0 + _max_abs(u)
+    stat = feas = neg = comp = 0.0
+    for i in range(n):
+        force = max(force, size[i] + ru[i] + rl[i])
+    for i in range(n):
+        stat = max(stat, abs(grad[i] + ru[i] - rl[i]))
+        feas = max(feas, u[i] - hi[i], lo[i] - u[i])
+        neg = max(neg, -ru[i], -rl[i])
+        if np.isfinite(hi[i]):
+            comp = max(comp, abs((hi[i] - u[i]) * ru[i]))
+        if np.isfinite(lo[i]):
+            comp = max(comp, abs((u[i] - lo[i]) * rl[i]))
+    return max(stat / force, feas / span, neg / force, comp / (force * span))
+
+
+@njit(cache=True)
+def _certificate(u, ru, rl, lo, hi, gp):
+    """solvers.banded.step_certificate: the scaled KKT residual of a step answer."""
+    n = u.size
+    return _certify(u, ru, rl, lo, hi, gp, np.empty(n), np.empty(n), np.empty(gp[0].shape[0]),
+                    np.zeros((2, n)))
+
+
+@njit(cache=True)
+def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m, T):
+    """_residuals into ``out`` and ``R`` (u2, rows, fac, m: work arrays)."""
+    n = u.size
+    some_free = False
+    for i in range(n):
+        rows[i] = np.isfinite(hi[i]) or np.isfinite(lo[i])
+        some_free = some_free or not rows[i]
+        u2[i] = u[i]
+    if some_free:  # the nodes with no wall row, re-solved exactly
+        _grad_into(R, m, u2, gp, False, T)
+        if not _refactor(fac, bands, rows, 0, n):
+            out[:] = 0.0
+            return False
+        for i in range(n):
+            if rows[i]:
+                R[i] = 0.0
+        _resolve(fac, R)
+        for i in range(n):
+            if not rows[i]:
+                u2[i] -= R[i]
+    _grad_into(R, m, u2, gp, False, T)
+    nat, min_gap, min_r, comp_up, comp_lo, term = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0
+    for i in range(n):
+        R[i] = -R[i]
+        up, low = np.isfinite(hi[i]), np.isfinite(lo[i])
+        if up:
+            g = (hi[i] - u2[i]) / L
+            r = (max(R[i], 0.0) if low else R[i]) / F
+            nat = max(nat, abs(min(g, r)))
+            min_gap, min_r = min(min_gap, g), min(min_r, r)
+            comp_up += g * r
+        if low:
+            g = (u2[i] - lo[i]) / L
+            r = (max(-R[i], 0.0) if up else -R[i]) / F
+            nat = max(nat, abs(min(g, r)))
+            min_gap, min_r = min(min_gap, g), min(min_r, r)
+            comp_lo += g * r
+        if up or low:
+            term = max(term, _mv(bands, u2, i, n, True) + abs(linear[i]))
+    out[0], out[1], out[2], out[3], out[4] = nat, min_gap, min_r, abs(comp_up) + abs(comp_lo), \
+        term / F
+    return True
+
+
+@njit(cache=True)
+def _residuals(u, bands, linear, lo, hi, gp, L, F):
+    """model.step_solver.step_residuals: (ok, [natural, min_gap, min_reaction,
+    complementarity, term_size], R) with R = −gradient on the completed heights."""
+    n = u.size
+    out, R = np.zeros(5), np.empty(n)
+    ok = _judge(u, bands, linear, lo, hi, gp, L, F, out, R, np.empty(n), np.empty(n, np.bool_),
+                np.empty((4, n)), np.empty(gp[0].shape[0]), np.zeros((2, n)))
+    return ok, out, R
