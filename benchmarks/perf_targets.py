@@ -105,15 +105,22 @@ def parts(med, repeat: int) -> dict:
 
     fns = {
         "lcpbench.solve, whole call": lambda: lcpbench.solve(scene, tol=TOL),
-        "scene.chain()": scene.chain,
-        "wall-free check (a contact scene: no search)": lambda: solve_without_contact(
-            chain, TOL, 200, None, engine="compiled", args=args),
+        "lcpbench.solve, a new scene object (built outside)": lambda: lcpbench.solve(
+            fresh.pop(), tol=TOL),
+        "scene.chain() (kept: the second call)": scene.chain,
+        "building the chain of a new scene": lambda: fresh.pop().chain(),
+        "wall-free check (a contact scene: no search; again, its tests kept)": lambda:
+            solve_without_contact(chain, TOL, 200, None, engine="compiled", args=args),
+        "wall-free check of a new scene's chain": lambda: solve_without_contact(
+            fresh_chains.pop(), TOL, 200, None, engine="compiled"),
         "solve kernel alone (solve_chain, 4 outer iterations)": lambda: k.solve_chain(*raw),
         "run_compiled (kernel + DriverOutput)": lambda: run_compiled(chain, tol=TOL, args=args),
         "judge kernel alone (judge_answer)": lambda: jk.judge_answer(
             out.alpha, *jargs, out.forces_upper, out.forces_lower, TOL, sizes),
         "judging and building the result (finish)": judged,
     }
+    fresh = [ActuatorScene(**SCENE) for _ in range(2 * repeat)]
+    fresh_chains = [ActuatorScene(**SCENE).chain() for _ in range(repeat)]
     out_rows: dict[str, list[float]] = {name: [] for name in fns}
     for _ in range(repeat):  # interleaved: one call of each per round
         for name, fn in fns.items():
@@ -231,6 +238,9 @@ def measure(interleaved, wall, med, repeat: int, starts: int, cold_step) -> dict
     res["continuation"] = continuation()
     res["throughput"] = throughput(interleaved, med, max(5, repeat // 3))
     res["parts_us"] = parts(med, max(repeat, 21))
+    import python_overhead  # benchmarks/ is on sys.path (perf.py puts it there)
+
+    res["python"] = python_overhead.measure(max(5, repeat // 3))
     return res
 
 
@@ -321,6 +331,10 @@ def markdown(res: dict) -> list[str]:
           "", "| part | µs |", "|---|---|"]
     for name, us in p.items():
         L.append(f"| {name} | {us:.1f} |")
+    if "python" in res:  # the Python around the kernels, the kernels replayed
+        import python_overhead
+
+        L += [""] + python_overhead.markdown(res["python"])
     L += ["", f"### Start-up (fresh processes, median of {s['starts']}; numba cache warm)", "",
           f"- `import lcpbench`: {s['import_wall_s'] * 1e3:.0f} ms wall, "
           f"{s['import_cpu_s'] * 1e3:.0f} ms CPU; loads numba: {s['import_loads_numba']}, "

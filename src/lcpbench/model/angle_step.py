@@ -65,7 +65,12 @@ class AngleOutcome:
 
 def load_parameter(chain: Chain) -> float:
     """wℓ³/EI: the chain's total load over EI/ℓ² (dimensionless)."""
-    return float(np.sum(np.abs(chain.link_load))) / float(chain.force_scale)
+    return total_load(chain) / float(chain.force_scale)
+
+
+def total_load(chain: Chain) -> float:
+    """Σ|μ_i|: the chain's total load (N), kept with the chain."""
+    return chain.derived("_total_load", lambda: float(np.sum(np.abs(chain.link_load))))
 
 
 def in_reach(chain: Chain) -> bool:

@@ -23,6 +23,7 @@ certificate and judge (:mod:`lcpbench.model.judge`) as every other back-end.
 
 from __future__ import annotations
 
+import math
 import time
 
 import numpy as np
@@ -65,10 +66,16 @@ def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
         return False
     if chain is None:
         return True
+    return chain.derived("_kernel_layout", lambda: _layout(chain))
+
+
+def _layout(chain: Chain) -> bool:
     if chain.elastic_walls:
         return False  # elastic walls: the numpy reference (model.elastic), not ported yet
     if chain.profiled_walls:
         return False  # walls of any profile: the numpy reference (model/profile_driver.py)
+    if chain.consecutive is not None:  # the scene says (the test below, done at building)
+        return chain.consecutive
     left, right = chain.joint_links[:, 0], chain.joint_links[:, 1]
     f = chain.free_nodes
     return bool(right.size and f.size and np.all(np.diff(right) == 1)
@@ -193,7 +200,12 @@ def kernel_args(chain: Chain, const: tuple | None = None) -> tuple:
     """The chain's arrays in the order :func:`compiled_kernel.solve_chain` takes them.
 
     ``const``: ``(left links, right links, nodal load)`` as contiguous arrays, when
-    the caller has them for a run of chains that share them (a batch)."""
+    the caller has them for a run of chains that share them (a batch). Kept with
+    the chain (:meth:`~lcpbench.problems.scenes.Chain.derived`)."""
+    return chain.derived("_kernel_args", lambda: _kernel_args(chain, const))
+
+
+def _kernel_args(chain: Chain, const: tuple | None) -> tuple:
     f64 = np.ascontiguousarray
     if const is None:
         const = (f64(chain.joint_links[:, 0], dtype=np.int64),
@@ -236,24 +248,33 @@ def run_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
     if code in _BAIL:
         return None, _BAIL[code]
     share = elapsed / max(count, 1)
-    steps = [StepRecord(int(rec[0, i]), Status.SOLVED.value, share, 0.0, float(rec[1, i]),
-                        float(rec[2, i]), float(rec[3, i])) for i in range(count)]
+    solved = _SOLVED
+    cols = rec[:4, :count].T.tolist()  # one conversion for all the records
+    steps = [StepRecord(int(it), solved, share, 0.0, step, dalpha, energy)
+             for it, step, dalpha, energy in cols]
     if code == k.CONVERGED:
         sol = StepSolution(u, r_up, r_lo, Status.SOLVED, iterations=steps[-1].iterations,
                            solve_time=share, active_upper=sigma > 0, active_lower=sigma < 0,
                            time_source="wall", backend=DEFAULT, settings=s.name,
-                           residuals=dict(zip(("natural", "min_gap", "min_reaction",
-                                               "complementarity", "term_size"),
-                                              map(float, res), strict=True)),
+                           residuals=dict(zip(_RESIDUALS, res.tolist(), strict=True)),
                            forces_net=R)
+        if not chain.channel and math.isfinite(float(R.sum())):  # _converged, its one-wall case
+            return DriverOutput(alpha, R.copy(), np.zeros(n), True, "converged", steps,
+                                last_step=sol, multipliers_upper=r_up,
+                                multipliers_lower=r_lo), ""
         return _converged(chain, alpha, sol, steps), ""
     if code == k.NO_FIT:
-        return _fail(chain.rest_alpha, n, steps, "cannot fit the chain between the walls"), ""
+        return _fail(chain.rest_alpha.copy(), n, steps,
+                     "cannot fit the chain between the walls"), ""
     if code == k.LINE_SEARCH:
         return _fail(alpha, n, steps, "line search failed: no decrease of the energy along "
                                       "the step"), ""
     return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
                                   f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)"), ""
+
+
+_SOLVED = Status.SOLVED.value
+_RESIDUALS = ("natural", "min_gap", "min_reaction", "complementarity", "term_size")
 
 
 def warm_up() -> None:

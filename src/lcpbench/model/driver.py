@@ -200,7 +200,7 @@ def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int,
     steps: list[StepRecord] = []
     u, alpha, warm = starting_point(chain, start, _feasible_start)
     if alpha is None:
-        return _fail(chain.rest_alpha, n, steps, "cannot fit the chain between the walls")
+        return _fail(chain.rest_alpha.copy(), n, steps, "cannot fit the chain between the walls")
     E = energy(chain, alpha)
     warm_start = start is not None and warm is not None  # a neighbour's answer: near already
     for _ in range(max_outer):

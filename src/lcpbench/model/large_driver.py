@@ -71,7 +71,7 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
     elif start is not None and start.warm is not None:  # its contact set, no heights
         warm = replace(start.warm, u=np.full(n, np.nan))
     if alpha is None:
-        return _fail(chain.rest_alpha, n, steps, "cannot fit the chain between the walls")
+        return _fail(chain.rest_alpha.copy(), n, steps, "cannot fit the chain between the walls")
     E = energy(chain, alpha)
     noise = 1e-12 * (abs(E) + float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6)
     last_net, extra = None, 0

@@ -125,7 +125,7 @@ def run_profile_driver(chain: Chain, solver, *, tol: float, max_outer: int, meth
     undamped = method == "undamped"
     u, alpha, warm = starting_point(chain, start, _profile_start)
     if alpha is None:
-        return _fail(chain.rest_alpha, n, steps, "cannot fit the chain between the walls")
+        return _fail(chain.rest_alpha.copy(), n, steps, "cannot fit the chain between the walls")
     mu_up, mu_lo = np.zeros(n), np.zeros(n)
     if warm is not None and warm.forces_net is not None and np.all(np.isfinite(warm.forces_net)):
         mu_up, mu_lo = split_reactions(walls_at(chain, alpha), warm.forces_net, u)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field, is_dataclass
+from typing import Any
 
 import numpy as np
 
@@ -162,6 +163,12 @@ class ContactResult:
     pressure: np.ndarray | None = None
     pressure_limit: float | None = None
 
+    def __getstate__(self) -> dict:
+        """Pickled (and copied) with every derived field computed (``DERIVED``)."""
+        if "_derive_from" in self.__dict__:
+            _derive(self)
+        return dict(self.__dict__)
+
     @property
     def max_indentation(self) -> float:
         """Largest indentation of an elastic wall (mm); 0 for rigid walls."""
@@ -276,36 +283,82 @@ class ContactResult:
         return out
 
 
+#: The fields of :class:`ContactResult` derived from the answer (the node
+#: positions by forward kinematics, the gaps, the wall pressure): computed at
+#: their first access, all at once, by the same functions as before.
+DERIVED = ("x", "y", "gaps", "gaps_lower", "indentation", "pressure")
+_PENDING: Any = object()  # a derived field not computed yet (typed Any: it stands in for arrays)
+
+
+class _Derived:
+    """A field of :class:`ContactResult` computed on first access (``DERIVED``)."""
+
+    def __init__(self, name: str):
+        self.name = name
+
+    def __get__(self, obj, owner=None):
+        if obj is None:
+            return self
+        value = obj.__dict__[self.name]
+        if value is _PENDING:
+            _derive(obj)
+            value = obj.__dict__[self.name]
+        return value
+
+    def __set__(self, obj, value) -> None:
+        obj.__dict__[self.name] = value
+
+
+def _derive(res: ContactResult) -> None:
+    """Fill the derived fields still pending, from the chain and answer kept with
+    the result (:func:`build_result`)."""
+    d = res.__dict__
+    source = d.get("_derive_from")
+    if source is None:  # another thread derived them meanwhile
+        return
+    chain, alpha, upper, lower = source
+    x, y = node_positions(chain, alpha)
+    yf = y[chain.free_nodes]
+    gaps, gaps_lower = chain.wall - yf, (yf + chain.wall if chain.channel else None)
+    if has_profile(chain):
+        gaps, gaps_lower = profile_gaps(chain, alpha)
+    depth, pressure = wall_pressure(chain, yf, upper, lower if chain.channel else None)
+    values = dict(x=x, y=y, gaps=gaps, gaps_lower=gaps_lower, indentation=depth,
+                  pressure=pressure)
+    for name in DERIVED:
+        if d[name] is _PENDING:  # a field set by hand in between keeps its value
+            d[name] = values[name]
+    d.pop("_derive_from", None)
+
+
+for _name in DERIVED:
+    setattr(ContactResult, _name, _Derived(_name))
+
+
 def build_result(scene, chain: Chain, out: DriverOutput, *, judged_by=judge,
                  **how) -> ContactResult:
     """The result of a driver run, judged by :func:`lcpbench.model.judge.judge`
     (``judged_by``: or by its compiled twin with the same arguments and verdicts,
-    :func:`lcpbench.model.judge_compiled.judge_fast`)."""
-    x, y = node_positions(chain, out.alpha)
-    yf = y[chain.free_nodes]
-    gaps, gaps_lower = chain.wall - yf, (yf + chain.wall if chain.channel else None)
-    if has_profile(chain):
-        gaps, gaps_lower = profile_gaps(chain, out.alpha)
+    :func:`lcpbench.model.judge_compiled.judge_fast`). The fields in
+    :data:`DERIVED` are computed at their first access."""
     verdict = judged_by(chain, out.alpha, out.forces_upper, out.forces_lower, tol=how["tol"],
-                    driver_converged=out.converged, driver_reason=out.reason,
-                    step_statuses=[s.status for s in out.steps],
-                    step_sizes=[s.max_dalpha for s in out.steps],
-                    certificate=lambda up, lo: certify(chain, out.alpha, up, lo))
+                        driver_converged=out.converged, driver_reason=out.reason,
+                        step_statuses=[s.status for s in out.steps],
+                        step_sizes=[s.max_dalpha for s in out.steps],
+                        certificate=lambda up, lo: certify(chain, out.alpha, up, lo))
     cert = verdict.certificate
     if verdict.forces_upper is not None and verdict.forces_lower is not None:
         # R with its round-off set to zero (the certificate is of these)
         out.forces_upper, out.forces_lower = verdict.forces_upper, verdict.forces_lower
-    depth, pressure = wall_pressure(chain, yf, out.forces_upper,
-                                    out.forces_lower if chain.channel else None)
-    return ContactResult(
+    res = ContactResult(
         scene=scene,
         links=chain.links,
-        x=x,
-        y=y,
+        x=_PENDING,
+        y=_PENDING,
         alpha=out.alpha,
-        gaps=gaps,
+        gaps=_PENDING,
         forces=out.forces_upper,
-        gaps_lower=gaps_lower,
+        gaps_lower=_PENDING,
         forces_lower=out.forces_lower if chain.channel else None,
         total_force=float(out.forces_upper.sum()),
         outer_iterations=len(out.steps),
@@ -316,8 +369,10 @@ def build_result(scene, chain: Chain, out: DriverOutput, *, judged_by=judge,
         multipliers=out.multipliers_upper,
         multipliers_lower=out.multipliers_lower if chain.channel else None,
         judgement=verdict,
-        free_nodes=np.asarray(chain.free_nodes, dtype=int),
-        indentation=depth,
-        pressure=pressure,
+        free_nodes=np.array(chain.free_nodes, dtype=int),
+        indentation=_PENDING,
+        pressure=_PENDING,
         **how,
     )
+    res.__dict__["_derive_from"] = (chain, out.alpha, out.forces_upper, out.forces_lower)
+    return res

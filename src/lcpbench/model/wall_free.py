@@ -10,6 +10,7 @@ walls.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import replace
 
@@ -19,7 +20,7 @@ from numpy.linalg import LinAlgError  # scipy.linalg's LinAlgError is this class
 from ..linalg import solveh_banded
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
-from .angle_step import heavy
+from .angle_step import heavy, total_load
 from .chain import heights
 from .driver import DriverOutput, DriverStart, run_driver
 from .profile import walls_at
@@ -38,10 +39,36 @@ def wall_overlap(chain: Chain, u: np.ndarray) -> float:
     return float(max(np.max(u - chain.upper), np.max(chain.lower - u)))
 
 
+def free_heights(chain: Chain, alpha: np.ndarray) -> np.ndarray:
+    """:func:`lcpbench.model.chain.heights` (the same sums), without the x coordinates."""
+    f = chain.free_nodes
+    if not f.size or f[0] < 1:
+        return heights(chain, alpha)
+    below = chain.derived("_free_nodes_below", lambda: f - 1)  # y[k] = Σ_{j<k} a sin α_j
+    return np.cumsum(chain.link_length * np.sin(alpha))[below]
+
+
 def beam_sag(chain: Chain) -> float:
     """5 w ℓ⁴ / (384 EI) for the chain's total load (EI = force_scale · ℓ²), mm."""
-    load = float(np.sum(np.abs(chain.link_load)))
+    load = total_load(chain)
     return 5.0 / 384.0 * load * chain.length / chain.force_scale
+
+
+def arc_far_past_wall(chain: Chain, loaded: bool) -> bool:
+    """A cheap sufficient test that :func:`solve_without_contact` finds nothing: the
+    arc's middle free node alone crosses the upper wall by more than the bound of
+    the search (0 with no load, ``SAG_BOUND`` times :func:`beam_sag` with one), with
+    a margin far above round-off. False says nothing (the full test runs)."""
+    f = chain.free_nodes
+    if not f.size:
+        return False
+    i = f.size // 2
+    wall = float(chain.upper[i])
+    if not math.isfinite(wall):
+        return False
+    y = chain.link_length * float(np.sin(chain.rest_alpha[:int(f[i])]).sum())
+    bound = SAG_BOUND * beam_sag(chain) if loaded else 0.0
+    return y - wall > bound + 1e-9 * (chain.length + abs(wall))  # (a margin over round-off)
 
 
 def free_step(step, warm) -> StepSolution:
@@ -80,8 +107,11 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
     n = chain.free_nodes.size
     if heavy(chain):  # links past the vertical: the angle steps (model/heavy_driver.py)
         return None
-    loaded = bool(np.any(chain.link_load != 0))
-    overlap = wall_overlap(chain, heights(chain, chain.rest_alpha))
+    loaded = chain.derived("_loaded", lambda: np.count_nonzero(chain.link_load) > 0)
+    if chain.derived("_arc_far_past_wall", lambda: arc_far_past_wall(chain, loaded)):
+        return None  # what the test below finds, from one node
+    overlap = chain.derived("_arc_overlap",
+                            lambda: wall_overlap(chain, free_heights(chain, chain.rest_alpha)))
     if overlap >= 0:  # the arc touches or crosses a wall
         if not loaded or overlap > SAG_BOUND * beam_sag(chain):
             return None
@@ -92,8 +122,9 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
         return DriverOutput(chain.rest_alpha.copy(), np.zeros(n), np.zeros(n), True,
                             "no contact: the unconstrained arc clears every wall and there "
                             "is no load")
-    free = replace(chain, upper=np.full(n, np.inf), lower=np.full(n, -np.inf),
-                   upper_profile=None, lower_profile=None)
+    free = chain.derived("_without_walls", lambda: replace(
+        chain, upper=np.full(n, np.inf), lower=np.full(n, -np.inf), upper_profile=None,
+        lower_profile=None))
     if start is not None:  # a neighbour's shape (its contact set means nothing here)
         start = DriverStart(start.alpha, None)
     out = None
@@ -106,7 +137,7 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
     if out is None:
         out = run_driver(free, free_step, tol=tol, max_outer=max_outer, start=start)
     if not (out.converged and wall_overlap(walls_at(chain, out.alpha),
-                                           heights(chain, out.alpha)) < 0):
+                                           free_heights(chain, out.alpha)) < 0):
         return None
     out.reason = ("no contact: the equilibrium without walls clears every wall (found by "
                   "banded solves, no LCP)")

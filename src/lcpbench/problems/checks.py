@@ -100,26 +100,21 @@ def check_number(name: str, value, *, low: float | None = None, high: float | No
         (``an integer`` when ``integer``) for a value of the wrong type, a
         non-integral one, NaN or inf, or one outside the interval.
     """
+    if _is_real(value):
+        try:
+            x = float(value)
+        except (TypeError, ValueError, OverflowError):
+            x = math.nan
+        if (math.isfinite(x) and not (integer and not x.is_integer())
+                and not (low is not None and (x < low or (low_open and x == low)))
+                and not (high is not None and (x > high or (high_open and x == high)))):
+            return int(value) if integer else x
+    # the message is built only for a value that fails (scenes check seven numbers)
     kind = "an integer" if integer else "a number"
     what = f"{kind} {allowed_range(low, high, low_open, high_open, unit)}"
     if alternative:
         what += f" or {alternative}"
-    error = ProblemError(f"{name} must be {what}, got {describe(value)}")
-    if not _is_real(value):
-        raise error
-    try:
-        x = float(value)
-    except (TypeError, ValueError, OverflowError):
-        raise error from None
-    if not math.isfinite(x):
-        raise error
-    if integer and not x.is_integer():
-        raise error
-    if low is not None and (x < low or (low_open and x == low)):
-        raise error
-    if high is not None and (x > high or (high_open and x == high)):
-        raise error
-    return int(value) if integer else x
+    raise ProblemError(f"{name} must be {what}, got {describe(value)}")
 
 
 def check_choice(name: str, value, choices: Iterable) -> object:

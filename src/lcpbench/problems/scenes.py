@@ -18,6 +18,7 @@ Two scenes:
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, replace
 
@@ -121,6 +122,10 @@ class Chain:
     lower_stiffness: np.ndarray | None = None
     upper_profile: WallProfile | None = None
     lower_profile: WallProfile | None = None
+    #: True when built with joint j between links j and j + 1 (or the clamp and link
+    #: 0) and the free nodes contiguous from node 2 on: the layout the compiled
+    #: kernels take (what the scenes build); None: not known, checked from the arrays
+    consecutive: bool | None = None
 
     @property
     def elastic_walls(self) -> bool:
@@ -131,6 +136,20 @@ class Chain:
     def profiled_walls(self) -> bool:
         """Whether a wall has a profile y = h(x) (``upper_profile``/``lower_profile``)."""
         return self.upper_profile is not None or self.lower_profile is not None
+
+    def derived(self, key: str, make):
+        """A value derived from the chain (``make()``), computed once and kept with it.
+
+        The chain is immutable (``dataclasses.replace`` makes a new one, without
+        the kept values), so whatever depends on its fields only (the compiled
+        kernels' argument arrays, its layout, its load parameter) is computed at
+        the first solve and reused by the next ones."""
+        d = self.__dict__
+        try:
+            return d[key]
+        except KeyError:
+            value = d[key] = make()  # (a frozen dataclass: not via setattr)
+            return value
 
     @property
     def nodal_load(self) -> np.ndarray:
@@ -306,20 +325,35 @@ class ActuatorScene:
         return replace(self, links=links)
 
     def chain(self) -> Chain:
-        """The Hencky bar chain of this scene (needs an integer ``links``)."""
+        """The Hencky bar chain of this scene (needs an integer ``links``).
+
+        Built once per scene and kept: a scene is immutable, and so is its Chain
+        (a frozen dataclass whose arrays nobody writes to), so a second call, or a
+        second solve of the same scene, gets the same object."""
+        cached = self.__dict__.get("_chain")
+        if cached is None:
+            cached = self._build_chain()
+            self.__dict__["_chain"] = cached  # (a frozen dataclass: not via setattr)
+        return cached
+
+    def __getstate__(self) -> dict:
+        """Pickled without the kept Chain (rebuilt on demand)."""
+        return {k: v for k, v in self.__dict__.items() if k != "_chain"}
+
+    def _build_chain(self) -> Chain:
         if self.links == "auto":
             raise ProblemError("links='auto' must be resolved first "
                                "(lcpbench.studies.discretisation.auto_links gives N)")
         n = int(self.links)
-        a = self.length / n
+        fr = _frame(n, float(self.length))
+        a = fr.a
         th = math.radians(self.theta)
-        rest_alpha = th / 2 - (np.arange(n) + 0.5) * th / n
-        joints = np.column_stack([np.arange(n - 1), np.arange(1, n)])
-        interior = np.arange(1, n)  # nodes 2..N
-        s = interior * a
+        rest_alpha = th / 2 - fr.half_index * th / n
+        interior = fr.interior  # nodes 2..N
         prof_up, prof_lo = self.profiles
         if prof_up is None:
-            can = reachable(s, self.length, self.height, "pinned-pinned")
+            # reachable(s, ℓ, h, "pinned-pinned"), its reach min(s, ℓ − s) kept per frame
+            can = fr.reach >= self.height * (1.0 - 1e-12)
             upper = np.where(can, self.height, np.inf)
             lower = np.where(can, -self.height, -np.inf) if self.channel else \
                 np.full(n - 1, -np.inf)
@@ -330,32 +364,59 @@ class ActuatorScene:
             near = float(np.min(prof_up(grid)))
             if prof_lo is not None:
                 near = min(near, float(np.min(-prof_lo(grid))))
-            can = reachable(s, self.length, near, "pinned-pinned")
+            can = reachable(interior * a, self.length, near, "pinned-pinned")
             upper = np.where(can, prof_up(x), np.inf)
             lower = np.where(can, prof_lo(x), -np.inf) if prof_lo is not None else \
                 np.full(n - 1, -np.inf)
-        share = wall_share(n, a, interior)
+        elastic = not math.isinf(self.wall_stiffness)
         return Chain(
             links=n,
             link_length=a,
             rest_alpha=rest_alpha,
             joint_stiffness=np.full(n - 1, self.EI / a),
-            joint_links=joints,
+            joint_links=fr.joints.copy(),
             rest_joint=np.full(n - 1, -th / n),
             link_load=np.full(n, -self.weight * a),  # μ = wℓ/N (eq. 5), away from the wall
-            free_nodes=interior,
+            free_nodes=interior.copy(),
             upper=upper,
             lower=lower,
             force_scale=self.EI / self.length**2,
             length=self.length,
             wall=self.height,
             channel=bool(self.channel),
-            upper_stiffness=_node_stiffness(self.wall_stiffness, can, share),
-            lower_stiffness=(_node_stiffness(self.wall_stiffness, can, share)
-                             if self.channel else None),
+            upper_stiffness=(_node_stiffness(self.wall_stiffness, can, wall_share(
+                n, a, interior)) if elastic else None),
+            lower_stiffness=(_node_stiffness(self.wall_stiffness, can, wall_share(
+                n, a, interior)) if elastic and self.channel else None),
             upper_profile=prof_up,
             lower_profile=prof_lo,
+            consecutive=True,
         )
+
+
+@dataclass(frozen=True)
+class _Frame:
+    """What the chains of actuator scenes with one N and ℓ share, whatever θ and h
+    (read only: a Chain gets copies of the integer arrays)."""
+
+    a: float
+    half_index: np.ndarray  # k + 1/2, k = 0..N−1 (the link centres, in links)
+    joints: np.ndarray
+    interior: np.ndarray
+    reach: np.ndarray  # min(s, ℓ − s) of the interior nodes (:func:`reachable`)
+
+
+@functools.lru_cache(maxsize=32)
+def _frame(n: int, length: float) -> _Frame:
+    a = length / n
+    interior = np.arange(1, n)
+    s = interior * a
+    frame = _Frame(a, np.arange(n) + 0.5,
+                   np.column_stack([np.arange(n - 1), np.arange(1, n)]), interior,
+                   np.minimum(s, length - s))
+    for arr in (frame.half_index, frame.joints, frame.interior, frame.reach):
+        arr.setflags(write=False)
+    return frame
 
 
 @dataclass(frozen=True)
@@ -419,6 +480,7 @@ class CantileverScene:
             length=self.length,
             wall=self.height,
             upper_stiffness=_node_stiffness(self.wall_stiffness, can, wall_share(n, a, free)),
+            consecutive=True,
         )
 
     # -- Euler–Bernoulli theory, eqs. (33)–(37) ------------------------------

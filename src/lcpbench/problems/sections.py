@@ -309,6 +309,7 @@ class SectionedScene:
             length=total,
             wall=self.height,
             channel=bool(self.channel),
+            consecutive=True,
         )
 
 

@@ -62,16 +62,15 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
                start: DriverStart | None, const: dict) -> ContactResult:
     """:func:`lcpbench.solve` for an already checked scene, in the kernels.
 
-    ``const``: what the scenes of a line share (filled by the first): whether the
-    kernels take the chain's layout and the arrays the chains have in common."""
+    ``const``: what the scenes of a line share (filled by the first): the arrays the
+    chains have in common (N, ℓ, w and EI are the line's; walls may differ)."""
     t0 = time.perf_counter()
     chain = scene.chain()
-    if not const:
-        # not from LARGE_N links: those run in increments (model.large_driver, via drive)
-        const["kernel"] = applies(DEFAULT, "globalised", chain) and not large_n.applies(chain)
+    # not from LARGE_N links: those run in increments (model.large_driver, via drive)
+    kernel = applies(DEFAULT, "globalised", chain) and not large_n.applies(chain)
+    if kernel and not const:
         full = kernel_args(chain)
         const["arrays"] = full[2:4] + (full[7],)
-    kernel = const["kernel"]
     args = kernel_args(chain, const["arrays"]) if kernel else None
     out = solve_without_contact(chain, tol, max_outer, start,
                                 engine="compiled" if kernel else "numpy", args=args)
