@@ -263,11 +263,11 @@ def test_cli_continuation_sweep(capsys, tmp_path):
         runs = st.runs(arrays=False)
     assert sorted(r["theta"] for r in runs) == [120.0, 150.0, 180.0]
     assert {r["method"] for r in runs} == {"globalised+previous"}
-    # given without a value: the quadratic predictor, stored apart from the first run
+    # given without a value: the adaptive predictor (solve_many's), stored apart from the first run
     assert main([*args, "--continuation"]) == 0
     with Store(store) as st:
         methods = sorted(r["method"] for r in st.runs(arrays=False))
-    assert methods == ["globalised+previous"] * 3 + ["globalised+quadratic"] * 3
+    assert methods == ["globalised+adaptive"] * 3 + ["globalised+previous"] * 3
 
 
 # -- the report -----------------------------------------------------------------------------------

@@ -334,8 +334,8 @@ def _markdown(store, runs, refs, evaluated, summary, h2, figures, time_limit,
         lines += [
             "## Continuation against cold starts",
             "",
-            "Runs of `lcpbench sweep --continuation` (driver `globalised+quadratic`, "
-            "`+secant` or `+previous`: the scenes of each line in θ solved in order, each started from "
+            "Runs of `lcpbench sweep --continuation` (driver `globalised+adaptive`, "
+            "`+quadratic`, `+secant` or `+previous`: the scenes of each line in θ solved in order, each started from "
             "its neighbours' answers) against the cold `globalised` runs of the same "
             "back-end, settings and tol, over the scenes where both converged. Force "
             "difference: |F_cold − F_cont| / max(|F_cold|, EI/ℓ²); each is within the "

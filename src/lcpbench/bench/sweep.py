@@ -40,7 +40,7 @@ from .store import Store
 
 #: predictors of a continuation sweep (studies.continuation); the rows' method is
 #: "globalised+<predictor>"
-CONTINUATION = ("quadratic", "secant", "previous")
+CONTINUATION = ("adaptive", "quadratic", "secant", "previous")
 
 __all__ = ["CONTINUATION", "DEFAULT_TIME_LIMIT", "SweepPlan", "default_workers",
            "plan_sweep", "sweep"]
@@ -95,7 +95,7 @@ def plan_sweep(grid: Grid | Iterable, backends: list[str], settings: list[str], 
     """Every job of a sweep, in a fixed order: references, then scene by scene.
 
     ``method`` is one driver scheme or several (each back-end runs with each).
-    ``continuation`` ("quadratic", "secant" or "previous"): the back-end runs become line
+    ``continuation`` ("adaptive", "quadratic", "secant" or "previous"): the back-end runs become line
     jobs, one per back-end × settings and per line of scenes (all parameters
     but θ equal, θ ascending), run after the references; method
     "globalised+<continuation>". It needs the globalised driver only.

@@ -138,13 +138,14 @@ def register(subparsers) -> None:
     sw.add_argument("--method", default=DEFAULT_METHOD, metavar="M[,M]",
                     help=f"outer iteration(s): globalised, newton, undamped, comma-separated "
                          f"(default {DEFAULT_METHOD})")
-    sw.add_argument("--continuation", nargs="?", const="quadratic", default=None,
+    sw.add_argument("--continuation", nargs="?", const="adaptive", default=None,
                     choices=CONTINUATION, metavar="PREDICTOR",
                     help="warm-start along theta: run each back-end over each line of "
                          "scenes (every parameter but theta equal), theta ascending, each "
                          "scene started from the extrapolation of the previous answers: "
-                         "quadratic (the parabola through the last three; the default when "
-                         "given without a value), secant (the line through the last two) or "
+                         "adaptive (the polynomial through up to six, of the degree where "
+                         "successive degrees agree best; the default when given without a "
+                         "value, as in solve_many), quadratic (the last three), secant (the line through the last two) or "
                          "previous (the last answer); stored as driver "
                          "globalised+PREDICTOR, so a cold sweep into the same store "
                          "compares with it in the report. Globalised driver only; the time "
