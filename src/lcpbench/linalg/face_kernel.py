@@ -75,8 +75,9 @@ def _save(R, filled, snap, j):
 
 
 @njit(cache=True)
-def _restore(R, filled, snap, j):
-    n = R.shape[1]
+def restore_before(R, filled, snap, j):
+    """Rows j − 1 and j of the factor as they were before row j was rotated in
+    (the columns beyond are left as they are; the twisted kernel's restore)."""
     if j >= 1:
         R[0, j - 1] = snap[j, 0]
         R[1, j - 1] = snap[j, 1]
@@ -86,6 +87,13 @@ def _restore(R, filled, snap, j):
     R[0, j] = snap[j, 2]
     R[1, j] = 0.0
     R[2, j] = 0.0
+
+
+@njit(cache=True)
+def _restore(R, filled, snap, j):
+    """The state before row j, the columns beyond it cleared."""
+    restore_before(R, filled, snap, j)
+    n = R.shape[1]
     for c in range(j + 1, n):
         R[0, c] = 0.0
         R[1, c] = 0.0
@@ -149,10 +157,9 @@ def resolve(R, inv, x):
 
 
 @njit(cache=True)
-def matvec(A, x, out):
-    """out = Aᵀ (A x) (H x without the rounded H); A = the rows of diag(√k) J."""
+def matvec_into(A, x, out, y):
+    """out = Aᵀ (A x), with the work array ``y`` (A x) given."""
     n = x.size
-    y = np.empty(n)
     for i in range(n):
         s = A[i, 1] * x[i]
         if i >= 1:
@@ -167,6 +174,12 @@ def matvec(A, x, out):
         if i >= 1:
             s += A[i - 1, 2] * y[i - 1]
         out[i] = s
+
+
+@njit(cache=True)
+def matvec(A, x, out):
+    """out = Aᵀ (A x) (H x without the rounded H); A = the rows of diag(√k) J."""
+    matvec_into(A, x, out, np.empty(x.size))
     return out
 
 

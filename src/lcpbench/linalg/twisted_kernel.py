@@ -30,21 +30,7 @@ import numpy as np
 from numba import njit
 
 from .face_kernel import _rotate_in, _save, matvec
-
-
-@njit(cache=True)
-def _restore(R, filled, snap, j):
-    """The state before row j (:func:`.face_kernel._restore` without clearing the
-    columns beyond: :func:`_pass` unfills only those it can reach)."""
-    if j >= 1:
-        R[0, j - 1] = snap[j, 0]
-        R[1, j - 1] = snap[j, 1]
-        R[2, j - 1] = 0.0
-        filled[j - 1] = (int(snap[j, 3]) & 1) != 0
-    filled[j] = (int(snap[j, 3]) & 2) != 0
-    R[0, j] = snap[j, 2]
-    R[1, j] = 0.0
-    R[2, j] = 0.0
+from .face_kernel import restore_before as _restore  # columns beyond: see _pass
 
 
 @njit(cache=True)

@@ -17,27 +17,8 @@ from __future__ import annotations
 
 from numba import njit
 
+from .face_kernel import matvec_into as _matvec
 from .twisted_kernel import factor, resolve
-
-
-@njit(cache=True)
-def _matvec(A, x, out, y):
-    """out = Aᵀ (A x), :func:`.face_kernel.matvec` with its work array ``y`` given."""
-    n = x.size
-    for i in range(n):
-        s = A[i, 1] * x[i]
-        if i >= 1:
-            s += A[i, 0] * x[i - 1]
-        if i + 1 < n:
-            s += A[i, 2] * x[i + 1]
-        y[i] = s
-    for i in range(n):
-        s = A[i, 1] * y[i]
-        if i + 1 < n:
-            s += A[i + 1, 0] * y[i + 1]
-        if i >= 1:
-            s += A[i - 1, 2] * y[i - 1]
-        out[i] = s
 
 
 @njit(cache=True)
