@@ -29,6 +29,7 @@ import numpy as np
 from numba import njit
 
 from .compiled_dual import _wall_terms  # one copy of the judge's rows (numba_cache)
+from .compiled_kernel import _assemble as _banded_step  # and of the banded step
 
 TINY = np.finfo(np.float64).tiny
 
@@ -79,46 +80,17 @@ def _chain_at(u, reference, a, fs, links):
 @njit(cache=True)
 def assemble(alpha, a, jl, jr, k, rest, fs, n, nodal_load):
     """assemble_step's arrays: (bands, c, 1/(a cos α), v, φ₀, J's coefficients,
-    u₀, α̂(u₀), φ̂(u₀)); ``fs`` the shifted index (node + 1) of the first free node."""
+    u₀, α̂(u₀), φ̂(u₀)); ``fs`` the shifted index (node + 1) of the first free node.
+    The banded step is the solve kernel's (:func:`.compiled_kernel._assemble`);
+    v = tan α − α and φ₀ = v_l − v_r are the forms' extra terms."""
+    bands, linear, inv, coef, origin, alpha0, phi_origin = _banded_step(
+        alpha, a, jl, jr, k, rest, fs, n, nodal_load)
     links, nj = alpha.size, jr.size
-    inv, v = np.empty(links), np.empty(links)
+    v, phi0 = np.empty(links), np.empty(nj)
     for i in range(links):
-        inv[i] = 1.0 / (a * np.cos(alpha[i]))
         v[i] = np.tan(alpha[i]) - alpha[i]
-    coef, t, phi0 = np.empty((nj, 3)), np.empty(nj), np.empty(nj)
     for j in range(nj):
-        wl = inv[jl[j]] if jl[j] >= 0 else 0.0
-        coef[j, 0], coef[j, 1], coef[j, 2] = wl, -wl - inv[jr[j]], inv[jr[j]]
         phi0[j] = -v[jr[j]] + (v[jl[j]] if jl[j] >= 0 else 0.0)
-        t[j] = k[j] * (phi0[j] - rest[j])
-    b0, size = jr[0], links + 2
-    diag, off1, off2, lin = np.zeros(size), np.zeros(size), np.zeros(size), np.zeros(size)
-    for m in range(3):  # the order of assemble_step's sums
-        for j in range(nj):
-            diag[b0 + m + j] += k[j] * coef[j, m] ** 2
-        for j in range(nj):
-            lin[b0 + m + j] += coef[j, m] * t[j]
-    for m in range(2):
-        for j in range(nj):
-            off1[b0 + m + j] += k[j] * coef[j, m] * coef[j, m + 1]
-    for j in range(nj):
-        off2[b0 + j] += k[j] * coef[j, 0] * coef[j, 2]
-    y = _node_heights(alpha, a)
-    origin = y[fs - 1:fs - 1 + n].copy()
-    alpha0 = alpha.copy()
-    if fs - 1 + n - 1 < links:  # the right end is pinned: close the chain
-        alpha0[links - 1] += -y[links] * inv[links - 1]
-    phi_origin = np.empty(nj)
-    for j in range(nj):
-        phi_origin[j] = alpha0[jr[j]] - (alpha0[jl[j]] if jl[j] >= 0 else 0.0)
-    bands, linear = np.zeros((3, n)), np.empty(n)
-    for i in range(n):
-        bands[0, i] = diag[fs + i]
-        if i < n - 1:
-            bands[1, i] = off1[fs + i]
-        if i < n - 2:
-            bands[2, i] = off2[fs + i]
-        linear[i] = lin[fs + i] - nodal_load[i]
     return bands, linear, inv, v, phi0, coef, origin, alpha0, phi_origin
 
 
