@@ -184,6 +184,22 @@ def matvec(A, x, out):
 
 
 @njit(cache=True)
+def face_residual(rows, fixed, rhs, x):
+    """rhs − H_face x, H_face = H with the ``fixed`` rows and columns the identity
+    (H x as Aᵀ(A x), without the rounded H): the right side of one refinement step
+    of a face solve, here and in the twisted kernel."""
+    n = rhs.size
+    xf = np.empty(n)
+    for i in range(n):
+        xf[i] = 0.0 if fixed[i] else x[i]
+    hx = np.empty(n)
+    matvec(rows, xf, hx)
+    for i in range(n):
+        xf[i] = rhs[i] - (x[i] if fixed[i] else hx[i])
+    return xf
+
+
+@njit(cache=True)
 def face_solve(rows, fixed, R, filled, snap, inv, j0, rhs, x):
     """x with H_face x = rhs, refined once with the face's residual; False on a zero
     pivot. ``rhs`` is kept."""
@@ -192,13 +208,7 @@ def face_solve(rows, fixed, R, filled, snap, inv, j0, rhs, x):
     n = rhs.size
     x[:] = rhs
     resolve(R, inv, x)
-    xf = np.empty(n)
-    for i in range(n):
-        xf[i] = 0.0 if fixed[i] else x[i]
-    hx = np.empty(n)
-    matvec(rows, xf, hx)
-    for i in range(n):
-        xf[i] = rhs[i] - (x[i] if fixed[i] else hx[i])
+    xf = face_residual(rows, fixed, rhs, x)
     resolve(R, inv, xf)
     for i in range(n):
         x[i] += xf[i]

@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .face_kernel import _rotate_in, _save, matvec
+from .face_kernel import _rotate_in, _save, face_residual
 from .face_kernel import restore_before as _restore  # columns beyond: see _pass
 
 
@@ -184,13 +184,7 @@ def face_solve(rows, rrows, fixed, rfixed, R, filled, snap, B, bfilled, bsnap, t
     n = rhs.size
     x[:] = rhs
     resolve(R, B, tri, invR, invB, m, x)
-    xf = np.empty(n)
-    for i in range(n):
-        xf[i] = 0.0 if fixed[i] else x[i]
-    hx = np.empty(n)
-    matvec(rows, xf, hx)
-    for i in range(n):
-        xf[i] = rhs[i] - (x[i] if fixed[i] else hx[i])
+    xf = face_residual(rows, fixed, rhs, x)
     resolve(R, B, tri, invR, invB, m, xf)
     for i in range(n):
         x[i] += xf[i]
