@@ -70,6 +70,8 @@ def test_labels_and_store_keys():
     assert cold.key == (KEYS[0], "active-set", "default", 1e-3, "globalised")
     assert line.keys == [(k, "active-set", "default", 1e-3, "globalised+secant") for k in KEYS]
     assert line.time_limit(2.0) == 4.0 and cold.time_limit(2.0) == 2.0
+    # a reference is not timed against the others: a killed reference costs its scene's runs
+    assert ref.time_limit(2.0) >= 10 * cold.time_limit(2.0)
     assert not ref.is_stored(set(), set()) and ref.is_stored(set(), {KEYS[0]})
     assert not line.is_stored({line.keys[0]}, set())
     assert line.is_stored(set(line.keys), set())
