@@ -120,9 +120,12 @@ def solve(
     """
     check_scene(scene)
     scaled = check_flag("scaled", scaled)
-    if tol is None:
-        tol = solver.driver_tol if isinstance(solver, Selection) else PAPER_TOL
-    tol = check_tol(tol)
+    if tol is not None:
+        tol = check_tol(tol)
+    elif isinstance(solver, Selection):
+        tol = check_tol(solver.driver_tol)
+    else:
+        tol = PAPER_TOL  # (a float in range)
     if method not in METHODS:
         raise ProblemError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     if isinstance(max_outer, bool) or not (isinstance(max_outer, (int, np.integer))
@@ -175,7 +178,7 @@ def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: 
     judged_by: Callable = judge
     compiled_judge = compiled_judge and not large_n.applies(chain)  # large N: increments
     if compiled_judge:
-        judged_by = _judge_fast()
+        judged_by = _FAST[0] if _FAST else _judge_fast()
         if judge_args is not None:
             judged_by = partial(judged_by, args=judge_args)
     res = build_result(scene, chain, out, solver=solver, method=method, tol=tol,
@@ -190,9 +193,13 @@ def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: 
     return res
 
 
+_FAST: list = []  # judge_fast, once imported
+
+
 def _judge_fast():
     from .model.judge_compiled import judge_fast
 
+    _FAST.append(judge_fast)
     return judge_fast
 
 
