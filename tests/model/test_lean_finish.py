@@ -157,3 +157,14 @@ def test_bad_arguments_still_name_the_parameter(bad, match):
         lcpbench.solve(ActuatorScene(links=10), **bad)
     with pytest.raises(ProblemError, match="scene must be"):
         lcpbench.solve({"theta": 150})
+
+
+def test_a_load_of_minus_zero_and_a_nodal_load_of_zero_keep_their_signs():
+    # w = 0: each link carries μ = −0.0 and each node ½μ + ½μ = +0.0; with N + 1 links
+    # and N links the two arrays have the same size, and neither takes the other's sign
+    a = ActuatorScene(theta=150, height=3.0, links=41, weight=0.0).chain()
+    b = ActuatorScene(theta=150, height=3.0, links=40, weight=0.0).chain()
+    assert np.all(np.signbit(b.link_load)) and b.link_load.size == 40
+    assert not np.any(np.signbit(a.__dict__["_nodal_load"])) and a.free_nodes.size == 40
+    assert _same_bits(a.__dict__["_nodal_load"], _plain(a).nodal_load)
+    assert _same_bits(b.link_load, np.full(40, -0.0 * (30.0 / 40)))

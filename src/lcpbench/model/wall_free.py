@@ -66,7 +66,8 @@ def arc_far_past_wall(chain: Chain, loaded: bool) -> bool:
     wall = float(chain.upper[i])
     if not math.isfinite(wall):
         return False
-    y = chain.link_length * float(np.sin(chain.rest_alpha[:int(f[i])]).sum())
+    # (np.add.reduce: ndarray.sum without its Python wrapper, the same sum)
+    y = chain.link_length * float(np.add.reduce(np.sin(chain.rest_alpha[:int(f[i])])))
     bound = SAG_BOUND * beam_sag(chain) if loaded else 0.0
     return y - wall > bound + 1e-9 * (chain.length + abs(wall))  # (a margin over round-off)
 

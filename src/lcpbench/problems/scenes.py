@@ -354,9 +354,8 @@ class ActuatorScene:
         interior = fr.interior  # nodes 2..N
         prof_up, prof_lo = self.profiles
         if prof_up is None:
-            upper, lower = (w.copy() for w in _flat_walls(n, float(self.length),
-                                                            self.height, self.channel))
-            can = None
+            up, lo = _flat_walls(n, float(self.length), self.height, self.channel)
+            upper, lower, can = up.copy(), lo.copy(), None
         else:  # rows for the nodes that can reach the wall's lowest point; h at the arc's x
             x = np.concatenate(([0.0], np.cumsum(a * np.cos(rest_alpha))))[interior]
             # (in a channel, the same rows for both walls: the LCP form pairs them)
@@ -409,13 +408,16 @@ class _Frame:
     reach: np.ndarray  # min(s, ℓ − s) of the interior nodes (:func:`reachable`)
 
 
-@functools.lru_cache(maxsize=64)
-def _filled(size: int, value: float, sign: float | None = None) -> np.ndarray:
+def _filled(size: int, value: float) -> np.ndarray:
     """``np.full(size, value)``, read only: a template that chains copy (a copy costs a
-    fifth of np.full). ``sign``: that of ``value``, so that −0.0 and 0.0, equal as
-    keys, get their own templates (a caller passes value only: set here)."""
-    if sign is None:
-        return _filled(size, value, math.copysign(1.0, value))
+    fifth of np.full)."""
+    return _template(size, value, math.copysign(1.0, value))
+
+
+@functools.lru_cache(maxsize=64)
+def _template(size: int, value: float, sign: float) -> np.ndarray:
+    """:func:`_filled`; ``sign``, that of ``value``, keeps −0.0 and 0.0 (equal as keys)
+    apart."""
     arr = np.full(size, value)
     arr.setflags(write=False)
     return arr
