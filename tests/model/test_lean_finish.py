@@ -168,3 +168,37 @@ def test_a_load_of_minus_zero_and_a_nodal_load_of_zero_keep_their_signs():
     assert not np.any(np.signbit(a.__dict__["_nodal_load"])) and a.free_nodes.size == 40
     assert _same_bits(a.__dict__["_nodal_load"], _plain(a).nodal_load)
     assert _same_bits(b.link_load, np.full(40, -0.0 * (30.0 / 40)))
+
+
+ROUTES = [  # (scene, solve's arguments, whether the direct route takes it)
+    (dict(theta=150, height=3.0, links=60), {}, True),  # contact
+    (dict(theta=150, height=3.0, links=60), dict(method="newton"), True),
+    (dict(theta=150, height=3.0, links=60), dict(max_outer=2), True),  # not converged
+    (dict(theta=170, height=2.5, links=30, channel=True), dict(tol=1e-9), True),
+    (dict(theta=195, height=3.0, links=20), {}, True),  # the kernel stops (on main)
+    (dict(theta=40, height=6.0, links=30), {}, False),  # no wall touched: the search
+    (dict(theta=150, height=3.0, links=30, weight=0.3), {}, False),  # heavy: SQP steps
+    (dict(theta=150, height=3.0, links=30, weight=0.02), {}, False),  # moderately heavy
+    (dict(theta=150, height=3.0, links=30, wall_stiffness=0.5), {}, False),  # elastic
+]
+
+
+@pytest.mark.parametrize("kw,how,route", ROUTES)
+def test_the_direct_route_is_drives_route(kw, how, route, monkeypatch):
+    """lcpbench.solve's direct route to the kernel answers what the route through
+    solve_without_contact and drive answers, bit for bit, engine and reason included."""
+    from lcpbench import api
+
+    scene = ActuatorScene(**kw)
+    assert compiled.direct(scene.chain()) is route
+    fast = lcpbench.solve(scene, **how)
+    monkeypatch.setattr(api, "direct", lambda chain: False)
+    slow = lcpbench.solve(ActuatorScene(**kw), **how)
+    assert (fast.converged, fast.reason, fast.extra["engine"], fast.outer_iterations) == \
+        (slow.converged, slow.reason, slow.extra["engine"], slow.outer_iterations)
+    for name in ("alpha", "forces", "gaps", "x", "y"):
+        assert _same_bits(getattr(fast, name), getattr(slow, name)), name
+    assert fast.total_force == slow.total_force
+    assert [(s.iterations, s.status, s.step_length, s.max_dalpha, s.energy)
+            for s in fast.steps] == [(s.iterations, s.status, s.step_length, s.max_dalpha,
+                                      s.energy) for s in slow.steps]

@@ -26,6 +26,7 @@ from __future__ import annotations
 import functools
 import math
 import time
+from collections.abc import Callable
 
 import numpy as np
 
@@ -34,7 +35,7 @@ from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from ..solvers.judge import DEFAULT_TOL
 from ..solvers.registry import DEFAULT, get_settings
-from . import angle_step, compiled_driver, heavy_driver, large_n
+from . import angle_step, compiled_driver, heavy_driver, large_n, wall_free
 from .driver import DriverOutput, DriverStart, StepRecord, _converged, _fail, run_driver
 from .profile import has_profile
 
@@ -159,11 +160,8 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
         return (run_large(chain, step_solver, tol=tol, max_outer=max_outer, start=start),
                 "numpy (large N: increments on the tridiagonal factor)")
     if engine != "numpy" and applies(backend, method, None if args is not None else chain):
-        out, why = run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
-                                settings=settings, args=args, newton=method == "newton")
-        if out is not None:
-            return out, "compiled"
-        used = f"numpy (the compiled kernel stopped: {why})"
+        return run_kernel(chain, lambda: step_solver, settings=settings, tol=tol,
+                          max_outer=max_outer, method=method, start=start, args=args)
     elif engine == "compiled" and chain is not None and has_profile(chain):
         raise ProblemError("engine='compiled' does not run walls of any profile (wall_profile); "
                            "engine='auto' or 'numpy' runs them in the numpy reference")
@@ -183,6 +181,36 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
     out = run_driver(chain, step_solver, tol=tol, max_outer=max_outer, method=method,
                      start=start)
     return out, used
+
+
+def run_kernel(chain: Chain, make_step: Callable[[], Callable], *, settings, tol: float,
+               max_outer: int, method: str, start: DriverStart | None = None,
+               args: tuple | None = None) -> tuple[DriverOutput, str]:
+    """The default back-end's solve in the kernel (:func:`run_compiled`), or, where the
+    kernel stops, in the numpy reference with the step solver ``make_step()`` (called
+    then only): the answer and the engine that produced it."""
+    out, why = run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
+                            settings=settings, args=args, newton=method == "newton")
+    if out is not None:
+        return out, "compiled"
+    return (run_driver(chain, make_step(), tol=tol, max_outer=max_outer, method=method,
+                       start=start), f"numpy (the compiled kernel stopped: {why})")
+
+
+def direct(chain: Chain) -> bool:
+    """Whether :func:`drive` takes this chain straight to :func:`run_kernel` with the
+    default back-end (the globalised or Newton scheme, a cold start), and
+    :func:`lcpbench.model.wall_free.solve_without_contact` answers None at once: the
+    kernel takes the chain (:func:`applies`), it is not large
+    (:func:`lcpbench.model.large_n.applies`) nor loaded enough for SQP steps in the
+    angles (:data:`~lcpbench.model.heavy_driver.MODERATE`, below
+    :data:`~lcpbench.model.angle_step.HEAVY`), and its arc crosses the wall too far for
+    the wall-free search (:func:`~lcpbench.model.wall_free.arc_far_past_wall`). The
+    route :func:`lcpbench.solve` takes without the calls in between (tests compare)."""
+    return (applies(DEFAULT, "globalised", chain) and not large_n.applies(chain)
+            and not (angle_step.in_reach(chain)
+                     and angle_step.load_parameter(chain) >= heavy_driver.MODERATE)
+            and wall_free.arc_far(chain))
 
 
 @functools.lru_cache(maxsize=16)
