@@ -19,7 +19,7 @@ import numpy as np
 from .errors import ProblemError
 from .model import large_n
 from .model.compiled import applies, check_engine, direct, drive, kernel_args, run_kernel
-from .model.driver import METHODS, DriverStart
+from .model.driver import METHODS, DriverOutput, DriverStart
 from .model.judge import judge
 from .model.judge_compiled import chain_args
 from .model.result import ContactResult, build_result
@@ -153,6 +153,7 @@ def solve(
     args = kernel_args(chain) if kernel else None  # the chain's arrays, once for all
     make_step = partial(make_step_solver, name, settings, scaled) if step is None \
         else lambda: step
+    out: DriverOutput | None
     if kernel and name == DEFAULT and begin is None and method != "undamped" and \
             direct(chain):  # drive()'s own route to the kernel, without the calls between
         out, used = run_kernel(chain, make_step, settings=settings, tol=tol,

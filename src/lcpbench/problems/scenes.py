@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import ProblemError
 from .checks import check_flag, check_number
+from .templates import filled, full, uniform_load
 from .walls import WallProfile
 
 MIN_LINKS = 4
@@ -375,10 +376,10 @@ class ActuatorScene:
             links=n,
             link_length=a,
             rest_alpha=rest_alpha,
-            joint_stiffness=_filled(n - 1, self.EI / a).copy(),
+            joint_stiffness=filled(n - 1, self.EI / a).copy(),
             joint_links=fr.joints.copy(),
-            rest_joint=_full(n - 1, -th / n),
-            link_load=_filled(n, load).copy(),
+            rest_joint=full(n - 1, -th / n),
+            link_load=filled(n, load).copy(),
             free_nodes=interior.copy(),
             upper=upper,
             lower=lower,
@@ -408,21 +409,6 @@ class _Frame:
     reach: np.ndarray  # min(s, ℓ − s) of the interior nodes (:func:`reachable`)
 
 
-def _filled(size: int, value: float) -> np.ndarray:
-    """``np.full(size, value)``, read only: a template that chains copy (a copy costs a
-    fifth of np.full)."""
-    return _template(size, value, math.copysign(1.0, value))
-
-
-@functools.lru_cache(maxsize=64)
-def _template(size: int, value: float, sign: float) -> np.ndarray:
-    """:func:`_filled`; ``sign``, that of ``value``, keeps −0.0 and 0.0 (equal as keys)
-    apart."""
-    arr = np.full(size, value)
-    arr.setflags(write=False)
-    return arr
-
-
 @functools.lru_cache(maxsize=64)
 def _flat_walls(n: int, length: float, height: float, channel: bool):
     """(upper, lower) wall heights of an actuator's free nodes, read only (chains copy
@@ -435,34 +421,6 @@ def _flat_walls(n: int, length: float, height: float, channel: bool):
     for arr in (upper, lower):
         arr.setflags(write=False)
     return upper, lower
-
-
-def _full(size: int, value: float) -> np.ndarray:
-    """``np.full(size, value)``, without its Python wrapper."""
-    arr = np.empty(size)
-    arr.fill(value)
-    return arr
-
-
-def uniform_load(n: int, load: float) -> dict:
-    """What the model derives from a chain whose N links each carry ``load`` (N), with
-    pins at both ends, computed from the number: kept with the chain
-    (:meth:`Chain.derived`; tests check each against its definition):
-
-    - ``_nodal_load``: :attr:`Chain.nodal_load` (half of each link's load to each end:
-      an interior node gets ½μ + ½μ, summed as the property sums them);
-    - ``_total_load``: Σ|μ_i| (:func:`lcpbench.model.angle_step.total_load`, the same
-      numpy sum);
-    - ``_loaded``: whether a link carries a load (``lcpbench.model.wall_free``).
-    """
-    return {"_nodal_load": _filled(n - 1, (0.0 + 0.5 * load) + 0.5 * load).copy(),
-            "_total_load": _total(n, load, math.copysign(1.0, load)),
-            "_loaded": load != 0.0}
-
-
-@functools.lru_cache(maxsize=64)
-def _total(n: int, load: float, sign: float) -> float:
-    return float(np.sum(np.abs(_filled(n, load))))
 
 
 _CHAIN_FIELDS = frozenset(f.name for f in fields(Chain))
