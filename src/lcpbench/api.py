@@ -18,15 +18,15 @@ import numpy as np
 
 from .errors import ProblemError
 from .model import large_n
-from .model.compiled import applies, check_engine, drive, kernel_args
-from .model.driver import METHODS, DriverStart
+from .model.compiled import applies, check_engine, direct, drive, kernel_args, run_kernel
+from .model.driver import METHODS, DriverOutput, DriverStart
 from .model.judge import judge
 from .model.judge_compiled import chain_args
 from .model.result import ContactResult, build_result
 from .model.step_solver import make_step_solver
 from .model.wall_free import solve_without_contact
 from .problems.checks import check_flag, check_number, check_scene
-from .solvers.registry import DEFAULT
+from .solvers.registry import DEFAULT, get_settings
 from .solvers.selection import Selection
 
 #: The paper's driver tolerance (rad), the default of :func:`solve`.
@@ -120,9 +120,12 @@ def solve(
     """
     check_scene(scene)
     scaled = check_flag("scaled", scaled)
-    if tol is None:
-        tol = solver.driver_tol if isinstance(solver, Selection) else PAPER_TOL
-    tol = check_tol(tol)
+    if tol is not None:
+        tol = check_tol(tol)
+    elif isinstance(solver, Selection):
+        tol = check_tol(solver.driver_tol)
+    else:
+        tol = PAPER_TOL  # (a float in range)
     if method not in METHODS:
         raise ProblemError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     if isinstance(max_outer, bool) or not (isinstance(max_outer, (int, np.integer))
@@ -133,7 +136,11 @@ def solve(
         pressure_limit = float(check_number("pressure_limit", pressure_limit, low=0.0,
                                             high=1e12, unit="N/mm"))
     name, settings, why = _backend_of(solver, settings)
-    step = make_step_solver(name, settings, scaled)  # validates them first
+    if name == DEFAULT:  # built in: only its settings to check; its step solver when used
+        get_settings(settings)
+        step = None
+    else:
+        step = make_step_solver(name, settings, scaled)  # validates them first
     if getattr(scene, "links", None) == "auto":
         raise ProblemError("links='auto' is resolved by the discretisation study (Sec. III-D), "
                            "which runs several solves: use lcpbench.studies.discretisation."
@@ -144,12 +151,21 @@ def solve(
     # the compiled kernel where it takes the chain, unless the numpy reference is asked for
     kernel = engine != "numpy" and applies(DEFAULT, "globalised", chain)
     args = kernel_args(chain) if kernel else None  # the chain's arrays, once for all
-    out = solve_without_contact(chain, tol, max_outer, begin,
-                                engine="compiled" if kernel else "numpy", args=args)
-    used = "compiled" if kernel else "numpy"
-    if out is None:
-        out, used = drive(chain, step, backend=name, settings=settings, engine=engine,
-                          tol=tol, max_outer=max_outer, method=method, start=begin, args=args)
+    make_step = partial(make_step_solver, name, settings, scaled) if step is None \
+        else lambda: step
+    out: DriverOutput | None
+    if kernel and name == DEFAULT and begin is None and method != "undamped" and \
+            direct(chain):  # drive()'s own route to the kernel, without the calls between
+        out, used = run_kernel(chain, make_step, settings=settings, tol=tol,
+                               max_outer=max_outer, method=method, args=args)
+    else:
+        out = solve_without_contact(chain, tol, max_outer, begin,
+                                    engine="compiled" if kernel else "numpy", args=args)
+        used = "compiled" if kernel else "numpy"
+        if out is None:
+            out, used = drive(chain, make_step(), backend=name, settings=settings,
+                              engine=engine, tol=tol, max_outer=max_outer, method=method,
+                              start=begin, args=args)
     return finish(scene, chain, out, solver=name, method=method, tol=tol,
                   elapsed=time.perf_counter() - t0, settings=settings, engine=used,
                   compiled_judge=kernel, why=why,
@@ -175,7 +191,7 @@ def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: 
     judged_by: Callable = judge
     compiled_judge = compiled_judge and not large_n.applies(chain)  # large N: increments
     if compiled_judge:
-        judged_by = _judge_fast()
+        judged_by = _FAST[0] if _FAST else _judge_fast()
         if judge_args is not None:
             judged_by = partial(judged_by, args=judge_args)
     res = build_result(scene, chain, out, solver=solver, method=method, tol=tol,
@@ -190,9 +206,13 @@ def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: 
     return res
 
 
+_FAST: list = []  # judge_fast, once imported
+
+
 def _judge_fast():
     from .model.judge_compiled import judge_fast
 
+    _FAST.append(judge_fast)
     return judge_fast
 
 

@@ -23,8 +23,10 @@ certificate and judge (:mod:`lcpbench.model.judge`) as every other back-end.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
+from collections.abc import Callable
 
 import numpy as np
 
@@ -33,7 +35,7 @@ from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from ..solvers.judge import DEFAULT_TOL
 from ..solvers.registry import DEFAULT, get_settings
-from . import angle_step, compiled_driver, large_n
+from . import angle_step, compiled_driver, heavy_driver, large_n, wall_free
 from .driver import DriverOutput, DriverStart, StepRecord, _converged, _fail, run_driver
 from .profile import has_profile
 
@@ -84,9 +86,18 @@ def _layout(chain: Chain) -> bool:
 
 
 def _kernel():
+    """The kernel module (numba imported, the kernel loaded, at the first call)."""
+    return _KERNEL[0] if _KERNEL else _load_kernel()
+
+
+_KERNEL: list = []  # the kernel module, once loaded
+
+
+def _load_kernel():
     from ..numba_cache import kernel_module  # numba at the first solve, not at import
 
-    return kernel_module("lcpbench.model.compiled_kernel", "solve_chain")
+    _KERNEL.append(kernel_module("lcpbench.model.compiled_kernel", "solve_chain"))
+    return _KERNEL[0]
 
 
 def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "auto",
@@ -110,8 +121,6 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
     engine = check_engine(engine)
     angles = method != "undamped" and angle_step.in_reach(chain)
     if angles:
-        from . import heavy_driver
-
         q = angle_step.load_parameter(chain)
         # with contact, the SQP's reactions stand in for the default back-end only: a
         # sweep's other back-ends keep the height steps, with their whole budget of outer
@@ -151,11 +160,8 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
         return (run_large(chain, step_solver, tol=tol, max_outer=max_outer, start=start),
                 "numpy (large N: increments on the tridiagonal factor)")
     if engine != "numpy" and applies(backend, method, None if args is not None else chain):
-        out, why = run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
-                                settings=settings, args=args, newton=method == "newton")
-        if out is not None:
-            return out, "compiled"
-        used = f"numpy (the compiled kernel stopped: {why})"
+        return run_kernel(chain, lambda: step_solver, settings=settings, tol=tol,
+                          max_outer=max_outer, method=method, start=start, args=args)
     elif engine == "compiled" and chain is not None and has_profile(chain):
         raise ProblemError("engine='compiled' does not run walls of any profile (wall_profile); "
                            "engine='auto' or 'numpy' runs them in the numpy reference")
@@ -177,11 +183,50 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
     return out, used
 
 
+def run_kernel(chain: Chain, make_step: Callable[[], Callable], *, settings, tol: float,
+               max_outer: int, method: str, start: DriverStart | None = None,
+               args: tuple | None = None) -> tuple[DriverOutput, str]:
+    """The default back-end's solve in the kernel (:func:`run_compiled`), or, where the
+    kernel stops, in the numpy reference with the step solver ``make_step()`` (called
+    then only): the answer and the engine that produced it."""
+    out, why = run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
+                            settings=settings, args=args, newton=method == "newton")
+    if out is not None:
+        return out, "compiled"
+    return (run_driver(chain, make_step(), tol=tol, max_outer=max_outer, method=method,
+                       start=start), f"numpy (the compiled kernel stopped: {why})")
+
+
+def direct(chain: Chain) -> bool:
+    """Whether :func:`drive` takes this chain straight to :func:`run_kernel` with the
+    default back-end (the globalised or Newton scheme, a cold start), and
+    :func:`lcpbench.model.wall_free.solve_without_contact` answers None at once: the
+    kernel takes the chain (:func:`applies`), it is not large
+    (:func:`lcpbench.model.large_n.applies`) nor loaded enough for SQP steps in the
+    angles (:data:`~lcpbench.model.heavy_driver.MODERATE`, below
+    :data:`~lcpbench.model.angle_step.HEAVY`), and its arc crosses the wall too far for
+    the wall-free search (:func:`~lcpbench.model.wall_free.arc_far_past_wall`). The
+    route :func:`lcpbench.solve` takes without the calls in between (tests compare)."""
+    return (applies(DEFAULT, "globalised", chain) and not large_n.applies(chain)
+            and not (angle_step.in_reach(chain)
+                     and angle_step.load_parameter(chain) >= heavy_driver.MODERATE)
+            and wall_free.arc_far(chain))
+
+
+@functools.lru_cache(maxsize=16)
+def _cold(n: int) -> tuple:
+    """The kernel's start arguments of a cold start with ``n`` free nodes: no start α,
+    no warm step (zeros), made once per n. Writable (numba types read-only arrays
+    apart: another compilation) and never written: the kernel copies them into its
+    workspace (tests/model/test_lean_path.py checks that they stay zero)."""
+    return np.zeros(0), np.zeros(n), np.zeros(n, bool), np.zeros(n, bool), 0
+
+
 def _warm(start: DriverStart | None, n: int):
     """(start α, warm heights, upper mask, lower mask, flags) for the kernel."""
-    empty_f, empty_b = np.zeros(n), np.zeros(n, bool)
     if start is None:
-        return np.zeros(0), empty_f, empty_b, empty_b, 0
+        return _cold(n)
+    empty_f, empty_b = np.zeros(n), np.zeros(n, bool)
     alpha = np.ascontiguousarray(start.alpha, dtype=float)
     w = start.warm
     if w is None:
@@ -208,8 +253,9 @@ def kernel_args(chain: Chain, const: tuple | None = None) -> tuple:
 def _kernel_args(chain: Chain, const: tuple | None) -> tuple:
     f64 = np.ascontiguousarray
     if const is None:
-        const = (f64(chain.joint_links[:, 0], dtype=np.int64),
-                 f64(chain.joint_links[:, 1], dtype=np.int64), f64(chain.nodal_load, dtype=float))
+        joints = np.array(chain.joint_links.T, dtype=np.int64, order="C")  # rows: left, right
+        const = (joints[0], joints[1],
+                 f64(chain.derived("_nodal_load", lambda: chain.nodal_load), dtype=float))
     jl, jr, nodal_load = const
     return (f64(chain.rest_alpha, dtype=float), float(chain.link_length), jl, jr,
             f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float),
@@ -232,7 +278,7 @@ def run_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
     time its parts. ``args``: the chain's :func:`kernel_args`, when the caller
     has them already.
     """
-    k = _kernel()
+    k = _KERNEL[0] if _KERNEL else _load_kernel()
     s = get_settings(settings)
     n = chain.free_nodes.size
     request = s.eps if s.eps is not None else DEFAULT_TOL
@@ -253,12 +299,15 @@ def run_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
     steps = [StepRecord(int(it), solved, share, 0.0, step, dalpha, energy)
              for it, step, dalpha, energy in cols]
     if code == k.CONVERGED:
-        sol = StepSolution(u, r_up, r_lo, Status.SOLVED, iterations=steps[-1].iterations,
+        r0, r1, r2, r3, r4 = res.tolist()
+        sol = StepSolution(u, r_up, r_lo, _SOLVED_STATUS, iterations=steps[-1].iterations,
                            solve_time=share, active_upper=sigma > 0, active_lower=sigma < 0,
                            time_source="wall", backend=DEFAULT, settings=s.name,
-                           residuals=dict(zip(_RESIDUALS, res.tolist(), strict=True)),
+                           residuals={"natural": r0, "min_gap": r1, "min_reaction": r2,
+                                      "complementarity": r3, "term_size": r4},
                            forces_net=R)
-        if not chain.channel and math.isfinite(float(R.sum())):  # _converged, its one-wall case
+        # _converged, its one-wall case (np.add.reduce: ndarray.sum without its wrapper)
+        if not chain.channel and math.isfinite(_add_reduce(R)):
             return DriverOutput(alpha, R.copy(), np.zeros(n), True, "converged", steps,
                                 last_step=sol, multipliers_upper=r_up,
                                 multipliers_lower=r_lo), ""
@@ -274,7 +323,8 @@ def run_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
 
 
 _SOLVED = Status.SOLVED.value
-_RESIDUALS = ("natural", "min_gap", "min_reaction", "complementarity", "term_size")
+_SOLVED_STATUS = Status.SOLVED
+_add_reduce = np.add.reduce
 
 
 def warm_up() -> None:

@@ -22,9 +22,18 @@ from .judge import Judgement, failed_checks, judge, settle_verdict
 
 
 def _kernel():
+    """The judge kernel's module (numba imported, the kernel loaded, at the first call)."""
+    return _KERNEL[0] if _KERNEL else _load_kernel()
+
+
+_KERNEL: list = []  # the kernel module, once loaded
+
+
+def _load_kernel():
     from ..numba_cache import kernel_module  # numba at the first judgement, not at import
 
-    return kernel_module("lcpbench.model.judge_kernel", "judge_answer")
+    _KERNEL.append(kernel_module("lcpbench.model.judge_kernel", "judge_answer"))
+    return _KERNEL[0]
 
 
 def takes(chain: Chain) -> bool:
@@ -64,17 +73,28 @@ def judge_fast(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
                      driver_converged=driver_converged, driver_reason=driver_reason,
                      step_statuses=step_statuses, step_sizes=step_sizes,
                      certificate=certificate)
-    k = _kernel()
+    k = _KERNEL[0] if _KERNEL else _load_kernel()
     if args is None:
         args = chain_args(chain)
     code, st, fu, fl, _, _, res, _, _ = k.judge_answer(
-        np.ascontiguousarray(alpha, dtype=float), *args[:-4],
-        *args[-4:], np.ascontiguousarray(forces_upper, dtype=float),
-        np.ascontiguousarray(forces_lower, dtype=float), float(tol),
-        np.asarray(step_sizes, dtype=float))
+        _contiguous(alpha, dtype=float), *args, _contiguous(forces_upper, dtype=float),
+        _contiguous(forces_lower, dtype=float), float(tol), np.array(step_sizes, dtype=float))
     return verdict_from_stats(code == k.SETTLED, dict(zip(k.STATS, st.tolist(), strict=True)),
                               fu, fl, res, tol=tol, driver_reason=driver_reason,
                               step_statuses=step_statuses)
+
+
+_contiguous = np.ascontiguousarray
+
+
+_CERT: list = []  # lcpbench.model.result.Certificate, once imported (result imports judge)
+
+
+def _certificate():
+    from .result import Certificate
+
+    _CERT.append(Certificate)
+    return Certificate
 
 
 def verdict_from_stats(settled: bool, s: dict, fu: np.ndarray, fl: np.ndarray,
@@ -82,8 +102,7 @@ def verdict_from_stats(settled: bool, s: dict, fu: np.ndarray, fl: np.ndarray,
                        step_statuses: list[str]) -> Judgement:
     """The Judgement (and its Certificate) from the kernel's numbers, with the
     reasons of :func:`lcpbench.model.judge.judge`, check by check."""
-    from .result import Certificate
-
+    Certificate = _CERT[0] if _CERT else _certificate()
     tau, F0 = s["tau"], s["F0"]
     verdict = Judgement(False, driver_reason, tau, F0, contact_threshold=s["eps_R"])
     if settled:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field, is_dataclass
+from dataclasses import MISSING, asdict, dataclass, field, fields, is_dataclass
 from typing import Any
 
 import numpy as np
@@ -346,11 +346,11 @@ def build_result(scene, chain: Chain, out: DriverOutput, *, judged_by=judge,
                         step_statuses=[s.status for s in out.steps],
                         step_sizes=[s.max_dalpha for s in out.steps],
                         certificate=lambda up, lo: certify(chain, out.alpha, up, lo))
-    cert = verdict.certificate
     if verdict.forces_upper is not None and verdict.forces_lower is not None:
         # R with its round-off set to zero (the certificate is of these)
         out.forces_upper, out.forces_lower = verdict.forces_upper, verdict.forces_lower
-    res = ContactResult(
+    channel = chain.channel
+    return new_result(dict(
         scene=scene,
         links=chain.links,
         x=_PENDING,
@@ -359,20 +359,54 @@ def build_result(scene, chain: Chain, out: DriverOutput, *, judged_by=judge,
         gaps=_PENDING,
         forces=out.forces_upper,
         gaps_lower=_PENDING,
-        forces_lower=out.forces_lower if chain.channel else None,
-        total_force=float(out.forces_upper.sum()),
+        forces_lower=out.forces_lower if channel else None,
+        total_force=float(_add_reduce(out.forces_upper)),  # ndarray.sum, without its wrapper
         outer_iterations=len(out.steps),
         steps=out.steps,
         converged=verdict.converged,
         reason=verdict.reason,
-        certificate=cert,
+        certificate=verdict.certificate,
         multipliers=out.multipliers_upper,
-        multipliers_lower=out.multipliers_lower if chain.channel else None,
+        multipliers_lower=out.multipliers_lower if channel else None,
         judgement=verdict,
         free_nodes=np.array(chain.free_nodes, dtype=int),
         indentation=_PENDING,
         pressure=_PENDING,
+        _derive_from=(chain, out.alpha, out.forces_upper, out.forces_lower),
         **how,
-    )
-    res.__dict__["_derive_from"] = (chain, out.alpha, out.forces_upper, out.forces_lower)
+    ))
+
+
+_add_reduce = np.add.reduce
+
+
+def _field_defaults() -> tuple[dict, tuple]:
+    """ContactResult's plain defaults and its fields with a default factory."""
+    plain, made = {}, []
+    for f in fields(ContactResult):
+        if f.default is not MISSING:
+            plain[f.name] = f.default
+        elif f.default_factory is not MISSING:
+            made.append((f.name, f.default_factory))
+    return plain, tuple(made)
+
+
+_DEFAULTS, _FACTORIES = _field_defaults()
+_FIELDS = frozenset(f.name for f in fields(ContactResult))
+
+
+def new_result(values: dict) -> ContactResult:
+    """``ContactResult(**values)`` with every field set at once (what the dataclass's
+    ``__init__`` does one attribute at a time; the result of every solve is built
+    here). ``values`` may hold ``_derive_from`` (see :data:`DERIVED`); a field it
+    lacks takes its default, as in the constructor (TypeError: a field without one)."""
+    res = object.__new__(ContactResult)
+    d = res.__dict__
+    d.update(_DEFAULTS)
+    for name, make in _FACTORIES:
+        d[name] = make()
+    d.update(values)
+    if len(d) != len(_FIELDS) + ("_derive_from" in d):  # (one test, not per field)
+        wrong = sorted(_FIELDS.symmetric_difference(d.keys() - {"_derive_from"}))
+        raise TypeError(f"ContactResult fields missing or unknown: {wrong}")
     return res

@@ -66,9 +66,21 @@ def arc_far_past_wall(chain: Chain, loaded: bool) -> bool:
     wall = float(chain.upper[i])
     if not math.isfinite(wall):
         return False
-    y = chain.link_length * float(np.sin(chain.rest_alpha[:int(f[i])]).sum())
+    # (np.add.reduce: ndarray.sum without its Python wrapper, the same sum)
+    y = chain.link_length * float(np.add.reduce(np.sin(chain.rest_alpha[:int(f[i])])))
     bound = SAG_BOUND * beam_sag(chain) if loaded else 0.0
     return y - wall > bound + 1e-9 * (chain.length + abs(wall))  # (a margin over round-off)
+
+
+def loaded_chain(chain: Chain) -> bool:
+    """Whether a link of the chain carries a load (kept with the chain)."""
+    return chain.derived("_loaded", lambda: np.count_nonzero(chain.link_load) > 0)
+
+
+def arc_far(chain: Chain) -> bool:
+    """:func:`arc_far_past_wall` of the chain with its load (kept with the chain)."""
+    return chain.derived("_arc_far_past_wall",
+                         lambda: arc_far_past_wall(chain, loaded_chain(chain)))
 
 
 def free_step(step, warm) -> StepSolution:
@@ -107,8 +119,8 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
     n = chain.free_nodes.size
     if heavy(chain):  # links past the vertical: the angle steps (model/heavy_driver.py)
         return None
-    loaded = chain.derived("_loaded", lambda: np.count_nonzero(chain.link_load) > 0)
-    if chain.derived("_arc_far_past_wall", lambda: arc_far_past_wall(chain, loaded)):
+    loaded = loaded_chain(chain)
+    if arc_far(chain):
         return None  # what the test below finds, from one node
     overlap = chain.derived("_arc_overlap",
                             lambda: wall_overlap(chain, free_heights(chain, chain.rest_alpha)))

@@ -100,7 +100,8 @@ def check_number(name: str, value, *, low: float | None = None, high: float | No
         (``an integer`` when ``integer``) for a value of the wrong type, a
         non-integral one, NaN or inf, or one outside the interval.
     """
-    if _is_real(value):
+    kind_ = type(value)
+    if kind_ is float or kind_ is int or _is_real(value):  # (exact types: no ABC check)
         try:
             x = float(value)
         except (TypeError, ValueError, OverflowError):
@@ -147,6 +148,18 @@ def check_flag(name: str, value) -> bool:
     return bool(value)
 
 
+_SCENE_TYPES: tuple = ()  # the scene classes, imported at the first check
+
+
+def _scene_types() -> tuple:
+    from .scenes import ActuatorScene, CantileverScene  # scenes import this module
+    from .sections import SectionedScene
+
+    global _SCENE_TYPES
+    _SCENE_TYPES = (ActuatorScene, CantileverScene, SectionedScene)
+    return _SCENE_TYPES
+
+
 def check_scene(scene) -> object:
     """``scene`` if it is a scene lcpbench can solve, else ProblemError.
 
@@ -157,10 +170,8 @@ def check_scene(scene) -> object:
         for None, a dict, a string, a class instead of an instance, or
         anything else.
     """
-    from .scenes import ActuatorScene, CantileverScene  # scenes import this module
-    from .sections import SectionedScene
-
-    if isinstance(scene, (ActuatorScene, CantileverScene, SectionedScene)):
+    kinds = _SCENE_TYPES or _scene_types()
+    if isinstance(scene, kinds):
         return scene
     kind = "None" if scene is None else type(scene).__name__
     if isinstance(scene, type):

@@ -20,12 +20,13 @@ from __future__ import annotations
 
 import functools
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 
 from ..errors import ProblemError
 from .checks import check_flag, check_number
+from .templates import filled, full, uniform_load
 from .walls import WallProfile
 
 MIN_LINKS = 4
@@ -348,15 +349,14 @@ class ActuatorScene:
         fr = _frame(n, float(self.length))
         a = fr.a
         th = math.radians(self.theta)
-        rest_alpha = th / 2 - fr.half_index * th / n
+        rest_alpha = fr.half_index * th  # th / 2 − half_index · th / n, in place
+        rest_alpha /= n
+        np.subtract(th / 2, rest_alpha, out=rest_alpha)
         interior = fr.interior  # nodes 2..N
         prof_up, prof_lo = self.profiles
         if prof_up is None:
-            # reachable(s, ℓ, h, "pinned-pinned"), its reach min(s, ℓ − s) kept per frame
-            can = fr.reach >= self.height * (1.0 - 1e-12)
-            upper = np.where(can, self.height, np.inf)
-            lower = np.where(can, -self.height, -np.inf) if self.channel else \
-                np.full(n - 1, -np.inf)
+            up, lo = _flat_walls(n, float(self.length), self.height, self.channel)
+            upper, lower, can = up.copy(), lo.copy(), None
         else:  # rows for the nodes that can reach the wall's lowest point; h at the arc's x
             x = np.concatenate(([0.0], np.cumsum(a * np.cos(rest_alpha))))[interior]
             # (in a channel, the same rows for both walls: the LCP form pairs them)
@@ -369,14 +369,17 @@ class ActuatorScene:
             lower = np.where(can, prof_lo(x), -np.inf) if prof_lo is not None else \
                 np.full(n - 1, -np.inf)
         elastic = not math.isinf(self.wall_stiffness)
-        return Chain(
+        if elastic and can is None:
+            can = fr.reach >= self.height * (1.0 - 1e-12)  # (the rows of _flat_walls)
+        load = -self.weight * a  # μ = wℓ/N (eq. 5), away from the wall
+        return new_chain(dict(
             links=n,
             link_length=a,
             rest_alpha=rest_alpha,
-            joint_stiffness=np.full(n - 1, self.EI / a),
+            joint_stiffness=filled(n - 1, self.EI / a).copy(),
             joint_links=fr.joints.copy(),
-            rest_joint=np.full(n - 1, -th / n),
-            link_load=np.full(n, -self.weight * a),  # μ = wℓ/N (eq. 5), away from the wall
+            rest_joint=full(n - 1, -th / n),
+            link_load=filled(n, load).copy(),
             free_nodes=interior.copy(),
             upper=upper,
             lower=lower,
@@ -391,7 +394,7 @@ class ActuatorScene:
             upper_profile=prof_up,
             lower_profile=prof_lo,
             consecutive=True,
-        )
+        ), uniform_load(n, load))
 
 
 @dataclass(frozen=True)
@@ -404,6 +407,37 @@ class _Frame:
     joints: np.ndarray
     interior: np.ndarray
     reach: np.ndarray  # min(s, ℓ − s) of the interior nodes (:func:`reachable`)
+
+
+@functools.lru_cache(maxsize=64)
+def _flat_walls(n: int, length: float, height: float, channel: bool):
+    """(upper, lower) wall heights of an actuator's free nodes, read only (chains copy
+    them): ±h on the rows of the nodes that can reach the walls
+    (:func:`reachable`, "pinned-pinned", its reach min(s, ℓ − s) kept per frame),
+    ±inf elsewhere; −inf below when not a channel."""
+    can = _frame(n, length).reach >= height * (1.0 - 1e-12)
+    upper = np.where(can, height, np.inf)
+    lower = np.where(can, -height, -np.inf) if channel else np.full(n - 1, -np.inf)
+    for arr in (upper, lower):
+        arr.setflags(write=False)
+    return upper, lower
+
+
+_CHAIN_FIELDS = frozenset(f.name for f in fields(Chain))
+
+
+def new_chain(values: dict, kept: dict | None = None) -> Chain:
+    """``Chain(**values)`` with every field given, set at once (a frozen dataclass sets
+    them one by one through ``object.__setattr__``: a seventh of a scene's chain);
+    ``kept``: values derived from it, kept with it (:meth:`Chain.derived`)."""
+    if values.keys() != _CHAIN_FIELDS:
+        raise TypeError(f"new_chain needs every field of Chain: "
+                        f"{sorted(_CHAIN_FIELDS.symmetric_difference(values))}")
+    chain = object.__new__(Chain)
+    chain.__dict__.update(values)
+    if kept:
+        chain.__dict__.update(kept)
+    return chain
 
 
 @functools.lru_cache(maxsize=32)
