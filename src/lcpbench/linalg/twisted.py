@@ -56,6 +56,7 @@ class TwistedFactor(TridiagonalFactor):
         self._m = n // 2
         self.rows_touched = 0
         self._work = np.empty((3, n))  # face_move's
+        self._walk_work: tuple | None = None  # walk's
 
     def _twist(self, fixed: np.ndarray) -> tuple[int, int, int]:
         """(j0, k0, m): where the two passes restart for the face ``fixed``, and the twist."""
@@ -132,7 +133,10 @@ class TwistedFactor(TridiagonalFactor):
         n = self.n
         ctl[0] = self._m
         prev, self._fixed = self._fixed, None  # invalid until the walk returns
-        f, b, i = np.empty((3, n)), np.empty((2, n), np.bool_), np.empty(6 * n, np.int64)
+        if self._walk_work is None:
+            self._walk_work = (np.empty((3, n)), np.empty((2, n), np.bool_),
+                               np.empty(6 * n, np.int64))  # (written before read)
+        f, b, i = self._walk_work
         code = kernel_module("lcpbench.linalg.walk_kernel").walk(
             self.rows, self.rrows, self.R, self._filled, self._snap, self.B, self._bfilled,
             self._bsnap, self._tri, self._inv, self._invB, prev, ctl, step.lower, step.upper,

@@ -188,7 +188,7 @@ def increments_at(chain: Chain, alpha: np.ndarray) -> IncrementStep:
     return IncrementStep(
         bands=bands, linear=linear, lower=lo, upper=hi, alpha=alpha, inv_a_cos=inv_a_cos,
         v=v, free_nodes=chain.free_nodes, links=chain.links, base=base[1:n + 1], coef=coef,
-        phi0=phi0, origin=np.zeros(n), alpha0=alpha0, phi_origin=phi_origin,
+        phi0=phi0, origin=np.full(n, 0.0), alpha0=alpha0, phi_origin=phi_origin,
         stiffness=k, rest_joint=rest, nodal_load=load, length_scale=chain.length,
         force_scale=chain.force_scale, upper_stiffness=chain.upper_stiffness,
         lower_stiffness=chain.lower_stiffness,
