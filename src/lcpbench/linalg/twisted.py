@@ -26,8 +26,28 @@ class TwistedFactor(TridiagonalFactor):
 
     def __init__(self, coef: np.ndarray, stiffness: np.ndarray):
         super().__init__(coef, stiffness, restart=True)
+        self._state(np.ascontiguousarray(self.rows[::-1, ::-1]))
+
+    @classmethod
+    def from_rows(cls, rows: np.ndarray, rrows: np.ndarray) -> TwistedFactor:
+        """The factor of the rows A = diag(√k) J given (C order, their first and last
+        outer entries zero) and their mirror ``rrows = rows[::-1, ::-1]`` (the compiled
+        assembly writes both: :mod:`lcpbench.model.large_kernel`)."""
+        self = cls.__new__(cls)
+        self.n = rows.shape[0]
+        self.rows = rows
+        self.R = np.zeros((3, self.n))
+        self.restart = True
+        self._fixed = None
+        self._filled = np.zeros(self.n, np.bool_)
+        self._snap = np.zeros((self.n, 4))
+        self._inv = np.zeros(self.n)
+        self._state(rrows)
+        return self
+
+    def _state(self, rrows: np.ndarray) -> None:
         n = self.n
-        self.rrows = np.ascontiguousarray(self.rows[::-1, ::-1])
+        self.rrows = rrows
         self.B = np.zeros((3, n))
         self._bfilled = np.zeros(n, np.bool_)
         self._bsnap = np.zeros((n, 4))
@@ -36,6 +56,7 @@ class TwistedFactor(TridiagonalFactor):
         self._m = n // 2
         self.rows_touched = 0
         self._work = np.empty((3, n))  # face_move's
+        self._walk_work: tuple | None = None  # walk's
 
     def _twist(self, fixed: np.ndarray) -> tuple[int, int, int]:
         """(j0, k0, m): where the two passes restart for the face ``fixed``, and the twist."""
@@ -98,6 +119,33 @@ class TwistedFactor(TridiagonalFactor):
         self._fixed, self._m = fixed.copy(), m
         self.rows_touched = (m - j0) + (n - m - k0)
         return d, g_face
+
+    def walk(self, ctl: np.ndarray, step, slack, u, g, sigma, wall, warm_up, warm_lo,
+             has_lo: bool, tie: float, max_iter: int, seen: np.ndarray) -> int:
+        """The dual walk's moves up to its next unviolated point, compiled
+        (:func:`lcpbench.linalg.walk_kernel.walk`, its return code), after a face solve
+        (the walk starts at the unconstrained minimiser); the factor is left on the
+        walk's last face (``resolve`` solves with it)."""
+        from ..numba_cache import kernel_module  # numba: loads or compiles at first use
+
+        if self._fixed is None:
+            raise ValueError("the compiled walk starts after a face solve")
+        n = self.n
+        ctl[0] = self._m
+        prev, self._fixed = self._fixed, None  # invalid until the walk returns
+        if self._walk_work is None:
+            self._walk_work = (np.empty((3, n)), np.empty((2, n), np.bool_),
+                               np.empty(6 * n, np.int64))  # (written before read)
+        f, b, i = self._walk_work
+        code = kernel_module("lcpbench.linalg.walk_kernel").walk(
+            self.rows, self.rrows, self.R, self._filled, self._snap, self.B, self._bfilled,
+            self._bsnap, self._tri, self._inv, self._invB, prev, ctl, step.lower, step.upper,
+            has_lo, slack, u, g, sigma, wall, warm_up, warm_lo, tie, max_iter, seen,
+            f[0], f[1], self._work[0], self._work[1], self._work[2], b[0], b[1],
+            i[:2 * n], i[2 * n:5 * n], i[5 * n:], f[2])
+        if code != 3:
+            self._fixed, self._m = prev, int(ctl[0])
+        return int(code)
 
     def resolve(self, rhs: np.ndarray) -> np.ndarray:
         if self.n < 5:

@@ -15,6 +15,7 @@ and every optimum the walk finds is refined to round-off before it is accepted
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 from .face_kernel import matvec_into as _matvec
@@ -69,3 +70,205 @@ def face_move(rows, rrows, fixed, rfixed, R, filled, snap, B, bfilled, bsnap, tr
     for i in range(n):
         g_face[i] += g[i]
     return True
+
+
+@njit(cache=True)
+def _viol(u, wall, S, side, i):
+    """The violation of node i's wall (``side`` +1: u − upper, −1: lower − u); −inf on
+    held nodes (as the numpy walk's v)."""
+    if S[i]:
+        return -np.inf
+    return u[i] - wall[i] if side > 0 else wall[i] - u[i]
+
+
+@njit(cache=True)
+def _picks(u, wall, side, slack, S, reach, picks, npick):
+    """Append to ``picks`` (node index; ``side`` in the sign) the nodes the walk adds on
+    this wall: :func:`lcpbench.solvers.gallop.gallop_picks` when ``reach`` > 0, else
+    :func:`lcpbench.solvers.banded._run_maxima`, in one pass without the v array.
+    Returns the new count."""
+    n = u.size
+    i = 0
+    while i < n:
+        if not _viol(u, wall, S, side, i) > slack[i]:
+            i += 1
+            continue
+        a = i
+        while i + 1 < n and _viol(u, wall, S, side, i + 1) > slack[i + 1]:
+            i += 1
+        b = i
+        if reach > 0:
+            left = a >= 1 and S[a - 1]
+            right = b + 1 < n and S[b + 1]
+            if (left or right) and b - a + 1 > reach:
+                if left:
+                    picks[npick] = side * (a + reach - 1 + 1)
+                    npick += 1
+                if right and not (left and b - reach + 1 == a + reach - 1):
+                    picks[npick] = side * (b - reach + 1 + 1)
+                    npick += 1
+                i += 1
+                continue
+            best = a  # the run's deepest node (the first of equal ones)
+            for k in range(a + 1, b + 1):
+                if _viol(u, wall, S, side, k) > _viol(u, wall, S, side, best):
+                    best = k
+            picks[npick] = side * (best + 1)
+            npick += 1
+        else:  # every local maximum of the run (v_i >= v_{i-1}, v_i > v_{i+1})
+            for k in range(a, b + 1):
+                vk = _viol(u, wall, S, side, k)
+                lft = _viol(u, wall, S, side, k - 1) if k >= 1 else -np.inf
+                rgt = _viol(u, wall, S, side, k + 1) if k + 1 < n else -np.inf
+                if vk >= lft and vk > rgt:
+                    picks[npick] = side * (k + 1)
+                    npick += 1
+        i += 1
+    return npick
+
+
+@njit(cache=True)
+def _mix(i, side):
+    """A 64-bit mix of (node, side) (splitmix64); the working set's key is their sum."""
+    z = np.uint64(2 * i + (1 if side > 0 else 0)) + np.uint64(0x9E3779B97F4A7C15)
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+@njit(cache=True)
+def _set(i, side, value, sigma, wall, S, rfixed, chg, ctl, key):
+    """Node i onto its wall (side ±1, wall height ``value``) or off it (side 0);
+    returns the working set's key after the change."""
+    n = S.size
+    if sigma[i] != 0.0:
+        key -= _mix(i, sigma[i])
+    sigma[i] = side
+    if side != 0.0:
+        wall[i] = value
+        key += _mix(i, side)
+    S[i] = side != 0.0
+    rfixed[n - 1 - i] = S[i]
+    chg[ctl[6]] = i
+    ctl[6] += 1
+    return key
+
+
+@njit(cache=True)
+def walk(rows, rrows, R, filled, snap, B, bfilled, bsnap, tri, invR, invB, prev, ctl,
+         lo, hi, has_lo, slack, u, g, sigma, wall, warm_up, warm_lo, tie, max_iter, seen,
+         d, g_face, r, x, y, S, rfixed, picks, chg, held, ratio):
+    """The dual walk of :func:`lcpbench.solvers.banded._dual` on a twisted factor (large
+    N), from a face minimiser (u, g, sigma, wall) to the next point where no wall is
+    violated beyond ``slack``, every move one :func:`face_move` (unrefined). Returns
+    0 there (the caller refines), 1 when a working set repeats, 2 at ``max_iter`` face
+    solves, 3 on a zero pivot. ``prev``: the face of the last factorisation (the walk's
+    face on entry); ``ctl`` = [twist m, face solves, reach, warm, refined, seen count,
+    (work)] (in and out); ``seen``: the working sets' keys (a collision only hands over
+    to the primal method). Work: d, g_face, r, x, y (n floats), S, rfixed (n bools),
+    picks (2n ints), chg (3n ints), held (n ints), ratio (n floats).
+
+    The bookkeeping is incremental (the numpy walk's ~20 full-length passes per face
+    were as costly as the face solve's own): violations are computed where they are
+    scanned, the working set's key is a sum of per-node hashes, the twist comes from
+    the nodes changed since the last factorisation."""
+    n = u.size
+    key = np.uint64(0)
+    for i in range(n):
+        S[i] = sigma[i] != 0.0
+        rfixed[n - 1 - i] = S[i]
+        if S[i]:
+            key += _mix(i, sigma[i])
+    ctl[6] = 0
+    at_minimiser = True
+    while True:
+        if at_minimiser:
+            npick = 0
+            if ctl[3]:  # first, the warm contact set, where it is violated
+                ctl[3] = 0
+                for i in range(n):
+                    if warm_up[i] and _viol(u, hi, S, 1, i) > slack[i]:
+                        picks[npick] = i + 1
+                        npick += 1
+                    elif has_lo and warm_lo[i] and _viol(u, lo, S, -1, i) > slack[i]:
+                        picks[npick] = -(i + 1)
+                        npick += 1
+            if npick == 0:
+                npick = _picks(u, hi, 1, slack, S, ctl[2], picks, 0)
+                if has_lo:
+                    npick = _picks(u, lo, -1, slack, S, ctl[2], picks, npick)
+                if ctl[2] > 0:
+                    ctl[2] *= 2
+                if npick == 0:
+                    for k in range(ctl[6]):
+                        prev[chg[k]] = S[chg[k]]
+                    return 0
+            for k in range(ctl[5]):
+                if seen[k] == key:
+                    return 1
+            if ctl[5] < seen.size:
+                seen[ctl[5]] = key
+                ctl[5] += 1
+            for k in range(npick):
+                i = abs(picks[k]) - 1
+                if S[i]:  # (a node violates one wall at a time; the upper first)
+                    continue
+                if picks[k] > 0:
+                    key = _set(i, 1.0, hi[i], sigma, wall, S, rfixed, chg, ctl, key)
+                else:
+                    key = _set(i, -1.0, lo[i], sigma, wall, S, rfixed, chg, ctl, key)
+        if ctl[1] >= max_iter:
+            return 2
+        ctl[1] += 1
+        # the twist of this face against the last one (TwistedFactor._twist), from the
+        # nodes changed since
+        first, last = n, -1
+        for k in range(ctl[6]):
+            i = chg[k]
+            if S[i] != prev[i]:
+                first = min(first, i)
+                last = max(last, i)
+        m0 = ctl[0]
+        if last >= 0:
+            j0 = max(min(first - 1, m0), 0)
+            k0 = max(min(n - 2 - last, n - m0), 0)
+            m = min(max((j0 + n - k0) // 2, 2), n - 2)
+        else:
+            j0, k0, m = m0, n - m0, m0
+        if not face_move(rows, rrows, S, rfixed, R, filled, snap, B, bfilled, bsnap, tri,
+                         invR, invB, j0, k0, m, wall, u, g, False, d, g_face, r, x, y):
+            return 3
+        for k in range(ctl[6]):
+            prev[chg[k]] = S[chg[k]]
+        ctl[6] = 0
+        ctl[0] = m
+        # the reactions there are −σ g_face; move towards it until one turns negative
+        # (each falling reaction's step fraction from g before the move)
+        step = 1.0
+        nfall = 0
+        for i in range(n):
+            if S[i]:
+                sg = sigma[i] * g_face[i]
+                if sg > 0.0:
+                    lam = max(-sigma[i] * g[i], 0.0)
+                    held[nfall] = i
+                    ratio[nfall] = lam / (lam + sg)
+                    if ratio[nfall] < step:
+                        step = ratio[nfall]
+                    nfall += 1
+        if step < 1.0:
+            for i in range(n):
+                u[i] = u[i] + step * d[i]
+                g[i] = g[i] + step * (g_face[i] - g[i])
+            # release every wall whose reaction reaches zero here, ties within
+            # round-off included (a symmetric chain has its contacts in mirror pairs)
+            for k in range(nfall):
+                if ratio[k] <= step + tie:
+                    key = _set(held[k], 0.0, 0.0, sigma, wall, S, rfixed, chg, ctl, key)
+            at_minimiser = False
+            continue
+        for i in range(n):
+            u[i] = u[i] + d[i]
+            g[i] = g_face[i]
+        at_minimiser = True
+        ctl[4] = 0

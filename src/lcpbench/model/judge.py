@@ -340,12 +340,13 @@ def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0,
         n = chain.free_nodes.size
         up_lo = forces if forces is not None else (np.zeros(n), np.zeros(n))
         step, chain = profile_step(chain, alpha, *up_lo)
+    elif large_n.applies(chain):  # in increments, on the tridiagonal factor
+        step = large_n.increments_at(chain, alpha)
     else:
         step = assemble_step(chain, alpha)
-    absolute = step.origin  # node heights at α
+    absolute = step.origin if step.factor is None else step.heights  # node heights at α
     floor = 1e3 * EPS * chain.length
-    if large_n.applies(chain):  # in increments, on the tridiagonal factor
-        step = large_n.increment_step(step)
+    if step.factor is not None:  # increments (large N)
         floor = ROUNDOFF_ULPS * EPS * (np.abs(absolute) + _wall_size(step))
     touch = np.maximum(pull / step.bands[0], floor)
     on_upper, on_lower = step.upper - step.origin <= touch, step.origin - step.lower <= touch

@@ -23,7 +23,6 @@ import numpy as np
 
 from ..problems.scenes import Chain
 from ..solvers.base import Status
-from .chain import energy
 from .driver import (
     DriverOutput,
     DriverStart,
@@ -34,12 +33,10 @@ from .driver import (
     _feasible_start,
     _setup,
     _step_failed,
-    armijo,
     line_search_failed,
 )
 from .judge import NODE_GROSS, _contraction
-from .large_n import alpha_from_increments, increment_step
-from .step import assemble_step
+from .large_n import energy_of, increments_at, trial_of
 
 #: past max|Δα| < tol the driver goes on while its prediction of the judge's per-node
 #: force error bound (:func:`_node_change`) exceeds this share of NODE_GROSS, for at
@@ -72,13 +69,13 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
         warm = replace(start.warm, u=np.full(n, np.nan))
     if alpha is None:
         return _fail(chain.rest_alpha.copy(), n, steps, "cannot fit the chain between the walls")
-    E = energy(chain, alpha)
+    E = energy_of(chain, alpha)
     noise = 1e-12 * (abs(E) + float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6)
     last_net, extra = None, 0
     last_contacts = None
     for _ in range(max_outer):
         t0 = time.perf_counter()
-        step = increment_step(assemble_step(chain, alpha))
+        step = increments_at(chain, alpha)
         t_asm = time.perf_counter() - t0
         sol = solver(step, warm)
         if sol.status not in (Status.SOLVED, Status.INACCURATE):
@@ -86,15 +83,14 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
         d = sol.u  # the increment to the step's answer
         dalpha = float(np.max(np.abs(step.predict_alpha(d) - alpha), initial=0.0))
         slope = float(step.linear @ d)  # the gradient at u₀ along d
-        t, trial, E_t = armijo(chain, lambda t, a=alpha, d=d: alpha_from_increments(chain, a, t * d),
-                               E, slope, noise)
+        t, trial, E_t = _armijo(trial_of(chain, alpha, d), E, slope, noise)
         if trial is None:
             return line_search_failed(alpha, n, steps, sol, t_asm, dalpha, E)
         steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
                                 t, dalpha, E_t, _setup(sol)))
         node_change, last_net = _node_change(chain, sol.forces_net, last_net, steps)
         if dalpha < tol and (node_change <= NODE_SETTLED * NODE_GROSS or extra >= EXTRA_STEPS):
-            final = replace(sol, u=_heights(chain, alpha) + d)  # in heights, as every driver reports
+            final = replace(sol, u=step.heights + d)  # in heights, as every driver reports
             return _converged(chain, trial, final, steps)
         extra += dalpha < tol
         # the warm start of the next step: this answer, in the next step's increments
@@ -105,6 +101,19 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
         alpha, E = trial, E_t
     return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
                                   f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
+
+
+def _armijo(at, E: float, slope: float, noise: float):
+    """:func:`lcpbench.model.driver.armijo` with the compiled move and energy ``at(t)``
+    (:func:`~.large_n.trial_of`): the first t in 1, ½, ¼, … with
+    E(t) ≤ E + 1e-4 t min(slope, 0) + noise, as (t, α, E(α)); (0, None, E) below 1e-12."""
+    t = 1.0
+    while t >= 1e-12:
+        trial, E_t = at(t)
+        if trial is not None and E_t <= E + 1e-4 * t * min(slope, 0.0) + noise:
+            return t, trial, E_t
+        t *= 0.5
+    return 0.0, None, E
 
 
 def _node_change(chain: Chain, net, last_net, steps: list[StepRecord]):
@@ -141,7 +150,3 @@ def _contact_move(sol, last):
         dist = np.minimum(np.abs(now - last[k - 1]), np.abs(now - last[k]))
     return int(dist.max()), now
 
-
-def _heights(chain: Chain, alpha: np.ndarray) -> np.ndarray:
-    y = np.concatenate(([0.0], np.cumsum(chain.link_length * np.sin(alpha))))
-    return y[chain.free_nodes]

@@ -27,7 +27,7 @@ the result judge (:mod:`.judge`) takes its own judge step the same way.
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -35,6 +35,12 @@ from ..linalg.saddle import TridiagonalFactor
 from ..linalg.twisted import TwistedFactor
 from ..problems.scenes import Chain
 from .step import ContactStep
+
+
+def _kernel():
+    from ..numba_cache import kernel_module  # numba: loads or compiles at first use
+
+    return kernel_module("lcpbench.model.large_kernel")
 
 #: links from which :func:`lcpbench.solve` and the judge use this formulation
 #: (below it the Cholesky of H is accurate: one refinement contracts by
@@ -94,3 +100,121 @@ def alpha_from_increments(chain: Chain, alpha: np.ndarray, du: np.ndarray
     base = np.arcsin(s)
     base = np.where(np.cos(alpha) >= 0.0, base, np.pi - base)
     return base + 2 * np.pi * np.round((alpha - base) / (2 * np.pi))
+
+
+@dataclass
+class IncrementStep(ContactStep):
+    """:func:`increment_step` of :func:`~lcpbench.model.step.assemble_step`, assembled
+    by one compiled pass (:func:`increments_at`), with the factored gradient and
+    its term sizes compiled (:mod:`.large_kernel`: the same arithmetic as the
+    reference's numpy). ``heights``: u₀, the free nodes' heights at α (mm)."""
+
+    heights: np.ndarray | None = None
+
+    def __post_init__(self):  # the reference's precomputed arrays serve its numpy only
+        f = np.asarray(self.free_nodes)
+        self._free = slice(int(f[0]) + 1, int(f[-1]) + 2)
+        b0, nj = int(self.base[0]), int(self.base.size)
+        self._cols = tuple(slice(b0 + k, b0 + k + nj) for k in range(3))
+        self._m = np.empty(self.size)
+
+    def gradient(self, u: np.ndarray) -> np.ndarray:
+        g = np.empty(self.size)
+        _kernel().gradient(self.coef, self.stiffness, self.phi_origin, self.rest_joint,
+                           self.nodal_load, self.origin,
+                           np.ascontiguousarray(u, dtype=float), g, self._m)
+        return g
+
+    def gradient_scale(self, u: np.ndarray) -> np.ndarray:
+        g = np.empty(self.size)
+        _kernel().gradient_scale(self.coef, self.stiffness, self.phi_origin, self.rest_joint,
+                                 self.nodal_load, self.origin,
+                                 np.ascontiguousarray(u, dtype=float), g, self._m)
+        return g
+
+
+    def solve_on(self, idx: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        """H[idx, idx]⁻¹ rhs. A row of A touches three consecutive nodes, so runs of
+        ``idx`` two or more nodes apart are independent blocks, each solved on the
+        rows that touch it (a twisted factor of those rows, the nodes between the
+        runs held): O(|idx|), not O(n) (the step judge re-solves the ~20 % of the
+        nodes that no wall reaches at every step). Many nodes: the whole factor."""
+        idx = np.asarray(idx)
+        n = self.size
+        if idx.size * 2 > n:
+            return super().solve_on(idx, rhs)
+        rhs = np.asarray(rhs, dtype=float)
+        out = np.empty(idx.size)
+        cuts = np.flatnonzero(np.diff(idx) > 2) + 1
+        for a, b in zip(np.concatenate(([0], cuts)), np.concatenate((cuts, [idx.size]))):
+            r0, r1 = max(int(idx[a]) - 1, 0), min(int(idx[b - 1]) + 1, n - 1)
+            rows = self.factor.rows[r0:r1 + 1].copy()
+            rows[0, 0] = rows[-1, 2] = 0.0  # the nodes outside are held
+            fixed = np.ones(r1 + 1 - r0, bool)
+            fixed[idx[a:b] - r0] = False
+            full = np.zeros(fixed.size)
+            full[idx[a:b] - r0] = rhs[a:b]
+            sub = TwistedFactor.from_rows(rows, np.ascontiguousarray(rows[::-1, ::-1]))
+            out[a:b] = sub.face_solve(fixed, full)[idx[a:b] - r0]
+        return out
+
+
+def _chain_arrays(chain: Chain) -> tuple:
+    """The chain's arrays the compiled assembly reads (kept with the chain)."""
+    def make():
+        f64 = np.ascontiguousarray
+        return (f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float),
+                f64(chain.nodal_load, dtype=float), f64(chain.lower, dtype=float),
+                f64(chain.upper, dtype=float), f64(chain.link_load, dtype=float),
+                np.arange(chain.links, dtype=np.int64))
+
+    return chain.derived("_large_arrays", make)
+
+
+def increments_at(chain: Chain, alpha: np.ndarray) -> IncrementStep:
+    """``increment_step(assemble_step(chain, alpha))`` in one compiled pass (a chain of
+    :func:`applies`), its face solves on the twisted factor; the same numbers."""
+    k, rest, load, lower, upper, _, base = _chain_arrays(chain)
+    alpha = np.array(alpha, dtype=float)
+    nl = alpha.size
+    n = nl - 1
+    inv_a_cos, v, alpha0 = np.empty(nl), np.empty(nl), np.empty(nl)
+    coef, rows, rrows = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
+    phi0, origin, phi_origin, linear = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    lo, hi, bands = np.empty(n), np.empty(n), np.empty((3, n))
+    _kernel().assemble(alpha, float(chain.link_length), k, rest, load, lower, upper,
+                       inv_a_cos, v, coef, phi0, origin, alpha0, phi_origin, bands, linear,
+                       lo, hi, rows, rrows)
+    return IncrementStep(
+        bands=bands, linear=linear, lower=lo, upper=hi, alpha=alpha, inv_a_cos=inv_a_cos,
+        v=v, free_nodes=chain.free_nodes, links=chain.links, base=base[1:n + 1], coef=coef,
+        phi0=phi0, origin=np.full(n, 0.0), alpha0=alpha0, phi_origin=phi_origin,
+        stiffness=k, rest_joint=rest, nodal_load=load, length_scale=chain.length,
+        force_scale=chain.force_scale, upper_stiffness=chain.upper_stiffness,
+        lower_stiffness=chain.lower_stiffness,
+        factor=TwistedFactor.from_rows(rows, rrows), heights=origin)
+
+
+def energy_of(chain: Chain, alpha: np.ndarray) -> float:
+    """:func:`lcpbench.model.chain.energy` of a chain of :func:`applies` (rigid walls),
+    compiled, its sums compensated: the energies the large-N Armijo search compares."""
+    k, rest, _, _, _, link_load, _ = _chain_arrays(chain)
+    return float(_kernel().energy(np.ascontiguousarray(alpha, dtype=float),
+                                  float(chain.link_length), k, rest, link_load))
+
+
+def trial_of(chain: Chain, alpha: np.ndarray, du: np.ndarray):
+    """``t -> (α', E(α'))`` moved by t·du (:func:`alpha_from_increments` and
+    :func:`energy_of` in one compiled pass); ``(None, nan)`` where no chain fits."""
+    k, rest, _, _, _, link_load, _ = _chain_arrays(chain)
+    kern = _kernel()
+    a = float(chain.link_length)
+    alpha = np.ascontiguousarray(alpha, dtype=float)
+    du = np.ascontiguousarray(du, dtype=float)
+
+    def at(t: float):
+        out = np.empty(alpha.size)
+        E = kern.trial_energy(alpha, du, float(t), a, k, rest, link_load, out)
+        return (None, E) if np.isnan(E) else (out, E)
+
+    return at

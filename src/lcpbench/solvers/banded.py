@@ -51,6 +51,7 @@ from scipy.linalg.lapack import dpbsv, dpbtrs
 
 from ..errors import ProblemError
 from ..linalg import dense_to_bands, sub_bands
+from . import compiled_walk
 from .base import Status, StepSolution
 from .gallop import gallop_picks
 
@@ -277,6 +278,9 @@ def _dual(step, warm_up, warm_lo, max_iter, reach=0):
     # instead of bisecting the spans between them (:mod:`.gallop`)
     reach = int(reach) if (own and warm) else 0
     tie = TIE_LARGE if own else TIE
+    if own and compiled_walk.ENABLED and hasattr(H, "walk") and n >= 5:  # large N
+        return compiled_walk.dual_walk(step, H, u, slack, warm_up, warm_lo, has_lo,
+                                       max_iter, reach, tie, _refine)
     seen: set[bytes] = set()
     at_face_minimiser = True
     it = 0

@@ -1,0 +1,65 @@
+"""The dual walk at large N with its loop compiled (:func:`lcpbench.linalg.walk_kernel.walk`).
+
+:func:`lcpbench.solvers.banded._dual` on a step with its own twisted factor
+(large N, in increments): the same walk — the warm contact set first, then
+nodes galloping from the contacts (:mod:`.gallop`) or the deepest node of
+each violated run, every move to a face minimiser one compiled face solve,
+the ratio test, the releases within ``tie`` — with the per-face bookkeeping
+(violations, picks, the working set's key, the twist, the ratio test; at
+N = 10⁵ about 20 full-length numpy passes, ~1–2 ms a face) in the same
+compiled call as the face solves. The refinement at every optimum it finds
+stays here, in numpy, with the step's exact factored gradient, as in
+:func:`~lcpbench.solvers.banded._dual`. ``numpy`` there stays the reference;
+tests check that both take the same path.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.linalg import LinAlgError
+
+#: False: the numpy walk of :func:`~lcpbench.solvers.banded._dual` (the reference)
+ENABLED = True
+#: working sets remembered (their hashes) to see one repeat
+SEEN = 4096
+
+
+def dual_walk(step, H, u, slack, warm_up, warm_lo, has_lo: bool, max_iter: int,
+              reach: int, tie: float, refine):
+    """``(u, grad, S_up, S_lo, face_solves, why)`` as :func:`banded._dual` (own factor
+    ``H`` with ``walk``; ``u`` the unconstrained minimiser, just solved on ``H``;
+    ``refine(step, H, S, u)`` the walk's refinement, :func:`banded._refine`)."""
+    n = step.size
+    u = np.array(u, dtype=float)
+    # written, not np.zeros: pages of np.zeros that are only read are slow to read in
+    # compiled loops (the face move reads ``wall`` at every node; 2x the walk at 10⁵)
+    g = np.full(n, 0.0)  # the gradient there, up to round-off
+    sigma, wall = np.full(n, 0.0), np.full(n, 0.0)
+    warm = bool(np.count_nonzero(warm_up) or np.count_nonzero(warm_lo))
+    ctl = np.array([0, 0, int(reach), int(warm), 0, 0, 0], dtype=np.int64)
+    seen = np.zeros(min(max_iter + 2, SEEN), dtype=np.uint64)
+    slack = np.ascontiguousarray(np.broadcast_to(slack, (n,)), dtype=float)
+    up_w = np.ascontiguousarray(warm_up, dtype=np.bool_)
+    lo_w = np.ascontiguousarray(warm_lo, dtype=np.bool_)
+    while True:
+        code = H.walk(ctl, step, slack, u, g, sigma, wall, up_w, lo_w, has_lo, tie,
+                      max_iter, seen)
+        it = int(ctl[1])
+        if code == 1:
+            return u, None, sigma > 0, sigma < 0, it, "a working set repeated (round-off)"
+        if code == 2:
+            return u, None, sigma > 0, sigma < 0, it, f"limit of {max_iter} face solves"
+        if code == 3:
+            raise LinAlgError("a face of H is singular (zero pivot)")
+        S = sigma != 0.0
+        u = np.where(S, wall, u)
+        if ctl[4]:  # refined, and no wall violated after it: the optimum
+            return u, step.gradient(u), sigma > 0, sigma < 0, it, None
+        # the optimum of the unrefined moves: one step of refinement with the exact
+        # gradient on the face just factored, more while it halves; then the walls again
+        r = step.gradient(u)
+        r[S] = 0.0
+        u, g = refine(step, H, S, u - H.resolve(r))
+        u = np.ascontiguousarray(u, dtype=float)
+        g = np.ascontiguousarray(g, dtype=float)
+        ctl[4] = 1

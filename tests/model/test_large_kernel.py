@@ -1,0 +1,82 @@
+"""The compiled parts of a large-N outer step (:mod:`lcpbench.model.large_kernel`).
+
+Each is checked against the numpy reference it replaces (the same arithmetic:
+bit for bit where no sum is reordered), and the block solves against a dense
+solve of the same principal block (an independent method).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from lcpbench.model import large_n
+from lcpbench.model.chain import energy
+from lcpbench.model.step import assemble_step
+from lcpbench.problems.scenes import ActuatorScene
+
+FIELDS = ("bands", "linear", "lower", "upper", "inv_a_cos", "v", "coef", "phi0", "origin",
+          "alpha0", "phi_origin")
+
+
+def _chain_alpha(links, seed=0, shrink=0.97):
+    chain = ActuatorScene(150.0, 3.0, links=links).chain()
+    rng = np.random.default_rng(seed)
+    return chain, chain.rest_alpha * shrink + 1e-4 * rng.standard_normal(chain.links)
+
+
+@pytest.mark.parametrize("links,seed", [(300, 0), (5000, 1)])
+def test_compiled_assembly_is_the_reference_step_in_increments(links, seed):
+    chain, alpha = _chain_alpha(links, seed)
+    ref = large_n.increment_step(assemble_step(chain, alpha))
+    got = large_n.increments_at(chain, alpha)
+    for f in FIELDS:
+        assert np.array_equal(getattr(got, f), getattr(ref, f)), f
+    assert np.array_equal(got.heights, assemble_step(chain, alpha).origin)
+    assert np.array_equal(got.factor.rows, ref.factor.rows)
+    assert np.array_equal(got.factor.rrows, ref.factor.rrows)
+    rng = np.random.default_rng(seed + 10)
+    for _ in range(3):
+        u = 1e-3 * rng.standard_normal(got.size)
+        assert np.array_equal(got.gradient(u), ref.gradient(u))
+        assert np.array_equal(got.gradient_scale(u), ref.gradient_scale(u))
+    # the factored gradient is H u + c (H from the bands): a property, not the code
+    u = 1e-3 * rng.standard_normal(got.size)
+    Hu = got.factor.matvec(u)
+    assert np.max(np.abs(got.gradient(u) - (Hu + got.linear))) <= 1e-9 * np.max(np.abs(Hu))
+
+
+@pytest.mark.parametrize("links", [300, 20000])
+def test_compiled_energy_and_trial_agree_with_the_reference(links):
+    chain, alpha = _chain_alpha(links)
+    E = energy(chain, alpha)
+    assert abs(large_n.energy_of(chain, alpha) - E) <= 1e-13 * abs(E)
+    rng = np.random.default_rng(3)
+    du = 1e-2 / links * rng.standard_normal(chain.free_nodes.size)
+    at = large_n.trial_of(chain, alpha, du)
+    for t in (1.0, 0.5, 0.125):
+        a, E_t = at(t)
+        ref = large_n.alpha_from_increments(chain, alpha, t * du)
+        assert np.array_equal(a, ref)
+        assert abs(E_t - energy(chain, ref)) <= 1e-13 * abs(E_t)
+    # a move no chain of these links can make: no trial
+    big = np.zeros(chain.free_nodes.size)
+    big[chain.free_nodes.size // 2] = 2 * chain.link_length
+    a, E_t = large_n.trial_of(chain, alpha, big)(1.0)
+    assert a is None and large_n.alpha_from_increments(chain, alpha, big) is None
+
+
+def test_block_solves_match_a_dense_solve_of_the_block():
+    chain, alpha = _chain_alpha(400)
+    step = large_n.increments_at(chain, alpha)
+    H = step.dense_hessian()
+    rng = np.random.default_rng(5)
+    n = step.size
+    cases = [np.flatnonzero(~np.isfinite(chain.upper)),  # what the step judge re-solves
+             np.r_[0:20, 21:40, 42:50, 200:203, n - 9:n], np.r_[7:8]]
+    for idx in cases:
+        assert idx.size * 2 <= n  # the block path
+        rhs = rng.standard_normal(idx.size)
+        want = np.linalg.solve(H[np.ix_(idx, idx)], rhs)
+        got = step.solve_on(idx, rhs)
+        assert np.max(np.abs(got - want)) <= 1e-8 * np.max(np.abs(want))
