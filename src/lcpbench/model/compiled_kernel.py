@@ -144,13 +144,17 @@ def _alpha_from_heights(u, reference, a, fs, links):
 # -- the banded step (model.step) -------------------------------------------------
 @njit(cache=True)
 def _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, inv, coef,
-                   origin, alpha0, phi_origin, t, wl, sines):
+                   origin, alpha0, phi_origin, t, wl, sines, tangent):
+    """``sines``: sin α. ``tangent``: v = tan α − α as the reference (the compiled
+    driver's assembly); else with tan α = sin α / cos α (equal to round-off, one
+    transcendental call less per link: the solve kernel's)."""
     links = alpha.size
     nj = jr.size
     v, diag, off1, off2, lin = wl[0], wl[1], wl[2], wl[3], wl[4]
     for i in range(links):
-        inv[i] = 1.0 / (a * np.cos(alpha[i]))
-        v[i] = np.tan(alpha[i]) - alpha[i]
+        c = np.cos(alpha[i])
+        inv[i] = 1.0 / (a * c)
+        v[i] = (np.tan(alpha[i]) if tangent else sines[i] / c) - alpha[i]
     for j in range(nj):
         wlj = inv[jl[j]] if jl[j] >= 0 else 0.0
         wr = inv[jr[j]]
@@ -199,7 +203,7 @@ def _assemble(alpha, a, jl, jr, k, rest, fs, n, nodal_load):
     origin, alpha0, phi_origin = np.empty(n), np.empty(links), np.empty(nj)
     _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, inv, coef,
                    origin, alpha0, phi_origin, np.empty(nj), np.empty((5, links + 2)),
-                   np.sin(alpha))
+                   np.sin(alpha), True)
     return bands, linear, inv, coef, origin, alpha0, phi_origin
 
 
@@ -250,7 +254,7 @@ def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, warm_u, wa
     walk, certificate, judge; (code, face solves), code 0: solved."""
     wn, wb, wj, wa = ws[0], ws[1], ws[2], ws[3]
     _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, ws[6], wn[LIN], wa[INV], ws[7],
-                   wn[ORIG], wa[ALPHA0], wj[0], wj[1], ws[4], sines)
+                   wn[ORIG], wa[ALPHA0], wj[0], wj[1], ws[4], sines, False)
     T = ws[10]
     T[:] = 0.0
     if newton:  # T = 0 where H + T is not positive definite
