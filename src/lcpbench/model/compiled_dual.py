@@ -212,10 +212,13 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
         if it >= max_iter:
             return BAIL_LIMIT, it
         it += 1
-        for i in range(n):
+        # (each loop below writes d two nodes ahead of the row it reads d for: one pass)
+        for i in range(min(2, n)):
             d[i] = (wall[i] - u[i]) * (1.0 if S[i] else 0.0)
         first, last = n, -1  # the nodes whose wall changed since the last factorisation
         for i in range(n):
+            if i + 2 < n:
+                d[i + 2] = (wall[i + 2] - u[i + 2]) * (1.0 if S[i + 2] else 0.0)
             r[i] = 0.0 if S[i] else g[i] + _mv(bands, d, i, n, False)
             if S[i] != factored[i]:
                 first, last = min(first, i), i
@@ -228,10 +231,12 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
                 return BAIL_NOT_PD, it
             factored[:] = S
         _resolve(fac, r)
-        for i in range(n):
+        for i in range(min(2, n)):
             d[i] -= r[i]
         s = np.inf
         for i in range(n):
+            if i + 2 < n:
+                d[i + 2] -= r[i + 2]
             gf[i] = g[i] + _mv(bands, d, i, n, False)
             sg = sigma[i] * gf[i]
             ratio[i] = np.inf
