@@ -28,8 +28,6 @@ import sys  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
-import numpy as np  # noqa: E402
-
 from lcpbench import ActuatorScene  # noqa: E402
 from lcpbench.model.compiled import _kernel, _warm, kernel_args  # noqa: E402
 

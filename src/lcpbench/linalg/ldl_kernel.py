@@ -91,41 +91,6 @@ def refactor(fac, bands, fixed, c0, c1):
                 fac[2, j] = 0.0
         cur0, cur1 = new0, new1
     return True
-    j = c0
-    # the Schur complement's entries of column c0 (and the next diagonal) from the
-    # factored columns c0 − 2, c0 − 1: the loop's own updates, replayed
-    cur0 = _a0(bands, fixed, j)
-    if j >= 2:
-        cur0 = cur0 - fac[2, j - 2] * _a2(bands, fixed, j - 2)
-    cur1 = _a1(bands, fixed, j) if j + 1 < n else 0.0
-    nxt0 = _a0(bands, fixed, j + 1) if j + 1 < n else 0.0
-    if j >= 1:
-        cur0 = cur0 - fac[1, j - 1] * fac[3, j - 1]
-        if j + 1 < n:
-            cur1 = cur1 - fac[2, j - 1] * fac[3, j - 1]
-            nxt0 = nxt0 - fac[2, j - 1] * _a2(bands, fixed, j - 1)
-    for j in range(c0, c1):
-        a2 = _a2(bands, fixed, j) if j + 2 < n else 0.0
-        if fixed[j]:  # an identity column: no division, and the chain is cut
-            fac[0, j] = 1.0
-            fac[1, j] = fac[2, j] = fac[3, j] = 0.0
-            new0 = nxt0
-            new1 = _a1(bands, fixed, j + 1) if j + 2 < n else 0.0
-            nxt0 = _a0(bands, fixed, j + 2) if j + 2 < n else 0.0
-        else:
-            if not cur0 > 0.0:
-                return False
-            r = 1.0 / cur0
-            l1, l2 = cur1 * r, a2 * r
-            fac[0, j], fac[1, j], fac[2, j], fac[3, j] = r, l1, l2, cur1
-            new0 = nxt0 - l1 * cur1
-            if j + 2 < n:
-                new1 = _a1(bands, fixed, j + 1) - l2 * cur1
-                nxt0 = _a0(bands, fixed, j + 2) - l2 * a2
-            else:
-                new1 = nxt0 = 0.0
-        cur0, cur1 = new0, new1
-    return True
 
 
 @njit(cache=True)
