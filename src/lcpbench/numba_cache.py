@@ -45,8 +45,8 @@ _DIR: list = []  # the cache directory of this process's kernels, once computed
 #: (tests/test_numba_cache.py checks that no file with ``@njit`` is missing)
 KERNEL_FILES = ("model/compiled_kernel.py", "model/compiled_dual.py", "model/judge_kernel.py",
                 "model/driver_kernel.py", "model/large_kernel.py", "linalg/givens_kernel.py",
-                "linalg/face_kernel.py",
-                "linalg/twisted_kernel.py", "linalg/walk_kernel.py")
+                "linalg/face_kernel.py", "linalg/twisted_kernel.py", "linalg/walk_kernel.py",
+                "linalg/ldl_kernel.py")
 
 
 def kernel_cache_dir(files, base: str | None = None) -> str:

@@ -15,6 +15,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..linalg.ldl_kernel import refactor as _refactor  # the faces' LDLᵀ (one dependent
+from ..linalg.ldl_kernel import resolve as _resolve  # chain: a division, not a square root)
+
 EPS = np.finfo(np.float64).eps
 TINY = np.finfo(np.float64).tiny
 TIE = 1e-6  # solvers.banded.TIE
@@ -29,7 +32,8 @@ U, G, SIG, WALL, D, RES, GF, RATIO, LIN, ORIG, RUP, RLO, NET, U2, OUT_U, DIR, TR
 # rows of ``wb``: the working set S, the face factored, the additions, the warm walls
 S_, FACT, JUP, JLO, WUP, WLO, ROWS, PREV_UP, PREV_LO = range(9)
 # rows of ``wa`` (links): 1 / (a cos α), α₀, the iterate α, the trial α, their sines
-INV, ALPHA0, ALPHA, TRIAL, SIN_A, SIN_T = range(6)
+# and cosines
+INV, ALPHA0, ALPHA, TRIAL, SIN_A, SIN_T, COS_A, COS_T = range(8)
 # splitmix64, for the hash of a working set
 M1, M2, M3 = np.uint64(0x9E3779B97F4A7C15), np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB)
 
@@ -93,94 +97,6 @@ def _mv(bands, x, i, n, absolute):
     s += bands[1, i] * x[i + 1] if i + 1 < n else 0.0
     s += bands[2, i] * x[i + 2] if i + 2 < n else 0.0
     return s
-
-# -- banded Cholesky (LAPACK dpbtf2 / dpbtrs, lower, bandwidth 2) ------------------
-@njit(cache=True)
-def _factor(ab, start, stop):
-    """In place on rows 0-2 (the bands); row 3 gets 1 / L_jj, so that the solves
-    multiply instead of divide. Columns before ``start`` are already factored
-    (and their updates applied); those from ``stop`` on as well (see
-    :func:`_refactor`). False when a leading minor is not positive definite."""
-    n = ab.shape[1]
-    for j in range(start, stop):
-        ajj = ab[0, j]
-        if not ajj > 0.0:
-            return False
-        if ajj == 1.0 and ab[1, j] == 0.0 and ab[2, j] == 0.0:  # an identity column (a
-            ab[3, j] = 1.0  # fixed node): L is 1 there and its updates add zeros
-            continue
-        ajj = np.sqrt(ajj)
-        ab[0, j] = ajj
-        r = 1.0 / ajj
-        ab[3, j] = r
-        if j + 2 < n:  # the trailing rank-1 update (dsyr), unrolled
-            l1, l2 = ab[1, j] * r, ab[2, j] * r
-            ab[1, j], ab[2, j] = l1, l2
-            t1 = -l1
-            ab[0, j + 1] += l1 * t1
-            ab[1, j + 1] += l2 * t1
-            ab[0, j + 2] += l2 * -l2
-        elif j + 1 < n:
-            l1 = ab[1, j] * r
-            ab[1, j] = l1
-            ab[0, j + 1] += l1 * -l1
-    return True
-
-
-@njit(cache=True)
-def _resolve(ab, x):
-    """Overwrites x with the solution of L Lᵀ x = x (the next two entries carried
-    in registers: the same operations in the same order as row by row)."""
-    n = x.size
-    if n == 0:
-        return x
-    p1 = x[0]
-    p2 = x[1] if n > 1 else 0.0
-    for j in range(n):
-        t = p1 * ab[3, j]
-        x[j] = t
-        p1 = p2 - t * ab[1, j] if j + 1 < n else 0.0
-        p2 = x[j + 2] - t * ab[2, j] if j + 2 < n else 0.0
-    b1 = b2 = 0.0
-    for j in range(n - 1, -1, -1):
-        t = x[j]
-        if j + 2 < n:
-            t -= ab[2, j] * b2
-        if j + 1 < n:
-            t -= ab[1, j] * b1
-        b2, b1 = b1, t * ab[3, j]
-        x[j] = b1
-    return x
-
-
-@njit(cache=True)
-def _refactor(fac, bands, fixed, c0, c1):
-    """Factor H with the rows and columns of the ``fixed`` nodes replaced by the
-    identity, columns ``c0`` to ``c1`` (0, n: all of it). ``fac`` holds the factor
-    of a face that differs from ``fixed`` only at nodes in [c0 + 2, c1 − 2), so its
-    columns before c0 stand (a column reads the nodes up to two below it), and
-    those from c1 on as well when nodes c1 − 2 and c1 − 1 are fixed in both (the
-    identity there cuts H in two: the columns after it see only exact zeros from
-    before it). The same operations in the same order as a full factorisation,
-    so the same bits (but for the sign of a zero)."""
-    n = fixed.size
-    for kk in range(3):
-        for i in range(c0, c1):
-            keep = (not fixed[i]) and (i + kk < n) and (not fixed[i + kk])
-            fac[kk, i] = bands[kk, i] * (1.0 if keep else 0.0)
-    for i in range(c0, c1):
-        if fixed[i]:
-            fac[0, i] += 1.0
-    for j in range(max(0, c0 - 2), c0):  # the updates of the factored columns
-        kn = min(2, n - 1 - j)
-        for q in range(1, kn + 1):
-            if j + q < c0:
-                continue
-            tq = -fac[q, j]
-            for p in range(q, kn + 1):
-                fac[p - q, j + q] += fac[p, j] * tq
-    return _factor(fac, c0, c1)
-
 
 @njit(cache=True)
 def _max_abs(x):  # max|x| and the slope's dot product are loops: loading the cache then
@@ -296,10 +212,13 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
         if it >= max_iter:
             return BAIL_LIMIT, it
         it += 1
-        for i in range(n):
+        # (each loop below writes d two nodes ahead of the row it reads d for: one pass)
+        for i in range(min(2, n)):
             d[i] = (wall[i] - u[i]) * (1.0 if S[i] else 0.0)
         first, last = n, -1  # the nodes whose wall changed since the last factorisation
         for i in range(n):
+            if i + 2 < n:
+                d[i + 2] = (wall[i + 2] - u[i + 2]) * (1.0 if S[i + 2] else 0.0)
             r[i] = 0.0 if S[i] else g[i] + _mv(bands, d, i, n, False)
             if S[i] != factored[i]:
                 first, last = min(first, i), i
@@ -312,10 +231,12 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
                 return BAIL_NOT_PD, it
             factored[:] = S
         _resolve(fac, r)
-        for i in range(n):
+        for i in range(min(2, n)):
             d[i] -= r[i]
         s = np.inf
         for i in range(n):
+            if i + 2 < n:
+                d[i + 2] -= r[i + 2]
             gf[i] = g[i] + _mv(bands, d, i, n, False)
             sg = sigma[i] * gf[i]
             ratio[i] = np.inf

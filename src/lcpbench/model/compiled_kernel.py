@@ -144,13 +144,17 @@ def _alpha_from_heights(u, reference, a, fs, links):
 # -- the banded step (model.step) -------------------------------------------------
 @njit(cache=True)
 def _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, inv, coef,
-                   origin, alpha0, phi_origin, t, wl, sines):
+                   origin, alpha0, phi_origin, t, wl, sines, tangent):
+    """``sines``: sin α. ``tangent``: v = tan α − α as the reference (the compiled
+    driver's assembly); else with tan α = sin α / cos α (equal to round-off, one
+    transcendental call less per link: the solve kernel's)."""
     links = alpha.size
     nj = jr.size
-    v, diag, off1, off2, lin = wl[0], wl[1], wl[2], wl[3], wl[4]
+    v = wl[0]
     for i in range(links):
-        inv[i] = 1.0 / (a * np.cos(alpha[i]))
-        v[i] = np.tan(alpha[i]) - alpha[i]
+        c = np.cos(alpha[i])
+        inv[i] = 1.0 / (a * c)
+        v[i] = (np.tan(alpha[i]) if tangent else sines[i] / c) - alpha[i]
     for j in range(nj):
         wlj = inv[jl[j]] if jl[j] >= 0 else 0.0
         wr = inv[jr[j]]
@@ -160,18 +164,22 @@ def _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, 
         phi0 = -v[jr[j]] + (v[jl[j]] if jl[j] >= 0 else 0.0)
         t[j] = k[j] * (phi0 - rest[j])
     b0 = jr[0]
-    for i in range(links + 2):
-        diag[i] = off1[i] = off2[i] = lin[i] = 0.0
-    for m in range(3):
-        for j in range(nj):
-            diag[b0 + m + j] += k[j] * coef[j, m] ** 2
-        for j in range(nj):
-            lin[b0 + m + j] += coef[j, m] * t[j]
-    for m in range(2):
-        for j in range(nj):
-            off1[b0 + m + j] += k[j] * coef[j, m] * coef[j, m + 1]
-    for j in range(nj):
-        off2[b0 + j] += k[j] * coef[j, 0] * coef[j, 2]
+    for i in range(n):  # H and c row by row: each sum in the order of the reference's passes
+        x = fs + i  # (one pass over the joints per stencil column m, then the next m)
+        dg = o1 = o2 = ln = 0.0
+        for m in range(3):
+            j = x - b0 - m
+            if 0 <= j < nj:
+                dg += k[j] * coef[j, m] ** 2
+                ln += coef[j, m] * t[j]
+                if m < 2:
+                    o1 += k[j] * coef[j, m] * coef[j, m + 1]
+                if m == 0:
+                    o2 += k[j] * coef[j, 0] * coef[j, 2]
+        bands[0, i] = dg
+        bands[1, i] = o1 if i < n - 1 else 0.0
+        bands[2, i] = o2 if i < n - 2 else 0.0
+        linear[i] = ln - nodal_load[i]
     y = 0.0  # the node heights (model.chain.heights), the free ones are the origin
     if fs == 1:
         origin[0] = 0.0
@@ -184,11 +192,6 @@ def _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, 
         alpha0[links - 1] += -y * inv[links - 1]
     for j in range(nj):
         phi_origin[j] = alpha0[jr[j]] - (alpha0[jl[j]] if jl[j] >= 0 else 0.0)
-    for i in range(n):
-        bands[0, i] = diag[fs + i]
-        bands[1, i] = off1[fs + i] if i < n - 1 else 0.0
-        bands[2, i] = off2[fs + i] if i < n - 2 else 0.0
-        linear[i] = lin[fs + i] - nodal_load[i]
 
 
 @njit(cache=True)
@@ -199,7 +202,7 @@ def _assemble(alpha, a, jl, jr, k, rest, fs, n, nodal_load):
     origin, alpha0, phi_origin = np.empty(n), np.empty(links), np.empty(nj)
     _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, inv, coef,
                    origin, alpha0, phi_origin, np.empty(nj), np.empty((5, links + 2)),
-                   np.sin(alpha))
+                   np.sin(alpha), True)
     return bands, linear, inv, coef, origin, alpha0, phi_origin
 
 
@@ -250,7 +253,7 @@ def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, warm_u, wa
     walk, certificate, judge; (code, face solves), code 0: solved."""
     wn, wb, wj, wa = ws[0], ws[1], ws[2], ws[3]
     _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, ws[6], wn[LIN], wa[INV], ws[7],
-                   wn[ORIG], wa[ALPHA0], wj[0], wj[1], ws[4], sines)
+                   wn[ORIG], wa[ALPHA0], wj[0], wj[1], ws[4], sines, False)
     T = ws[10]
     T[:] = 0.0
     if newton:  # T = 0 where H + T is not positive definite
