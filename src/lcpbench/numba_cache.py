@@ -65,7 +65,7 @@ _AOT: list = []  # [(extension module, manifest) or None], once looked for
 _AOT_KERNELS: dict = {}  # module name -> its AotKernels, once made
 _USE_AOT: list = [None]  # use_aot's setting; None: the environment decides
 #: every file of lcpbench with numba kernels, relative to the package
-#: (tests/test_numba_cache.py checks that no file with ``@njit`` is missing)
+#: (tests/model/test_kernel_cache.py checks that no file with ``@njit`` is missing)
 KERNEL_FILES = ("model/compiled_kernel.py", "model/compiled_dual.py", "model/judge_kernel.py",
                 "model/driver_kernel.py", "linalg/givens_kernel.py", "linalg/face_kernel.py",
                 "linalg/twisted_kernel.py", "linalg/walk_kernel.py")
@@ -105,12 +105,11 @@ def machine_tag() -> str:
     sha = hashlib.sha256(f"{platform.machine()} {sys.implementation.cache_tag}".encode())
     try:
         with open("/proc/cpuinfo", encoding="utf-8", errors="replace") as f:
-            seen = set()
-            for line in f:
+            for line in f:  # the first processor's block (x86: vendor, model, flags; Arm)
+                if not line.strip():
+                    break
                 key = line.split(":", 1)[0].strip()
-                if key in ("vendor_id", "model name", "flags", "Features", "CPU part") \
-                        and key not in seen:
-                    seen.add(key)
+                if key in ("vendor_id", "model name", "flags", "Features", "CPU part"):
                     sha.update(line.encode())
     except OSError:  # not Linux: the platform's word for the processor
         sha.update(platform.processor().encode())
