@@ -84,30 +84,45 @@ def start_up(starts: int) -> dict:
 
 
 def steady_state(repeat: int, block: int = 20) -> dict:
-    """``lcpbench.solve`` (N = 140) with the AOT kernels and with the JIT kernels in this
-    process, blocks of ``block`` calls interleaved; medians of the per-call time."""
+    """In this process, blocks of ``block`` calls interleaved, medians of the per-call
+    time: ``lcpbench.solve`` (N = 140) with the AOT kernels and with the JIT kernels
+    (``numba_cache.use_aot``), and one call of the solve kernel alone, AOT (its argument
+    check included) against JIT (numba's dispatch included), on the same arguments."""
+    import numpy as np
+
     import lcpbench
     from lcpbench import numba_cache
+    from lcpbench.model.compiled import kernel_args
 
     scene = lcpbench.ActuatorScene(theta=150, height=3.0)
-    times: dict = {"aot": [], "jit": []}
+    chain = scene.chain()
+    n = chain.free_nodes.size
+    args = (*kernel_args(chain), 1e-3, 200, np.zeros(0), np.zeros(n), np.zeros(n, bool),
+            np.zeros(n, bool), 0, 20 * n + 50, 1e-10, False)
+    name = "lcpbench.model.compiled_kernel"
+    times: dict = {"aot": [], "jit": [], "kernel aot": [], "kernel jit": []}
     served = {}
     try:
         for _ in range(repeat):
-            for way in times:
+            for way in ("aot", "jit"):
                 numba_cache.use_aot(way == "aot")
                 lcpbench.solve(scene)  # the switch's look-up, outside the clock
-                served[way] = type(numba_cache.kernel_module(
-                    "lcpbench.model.compiled_kernel", "solve_chain")).__name__
+                k = numba_cache.kernel_module(name, "solve_chain")
+                served[way] = type(k).__name__
                 t0 = time.perf_counter()
                 for _ in range(block):
                     lcpbench.solve(scene)
                 times[way].append((time.perf_counter() - t0) / block)
+                t0 = time.perf_counter()
+                for _ in range(block):
+                    k.solve_chain(*args)
+                times[f"kernel {way}"].append((time.perf_counter() - t0) / block)
     finally:
         numba_cache.use_aot(None)
-    aot, jit = statistics.median(times["aot"]), statistics.median(times["jit"])
-    return {"aot_us": aot * 1e6, "jit_us": jit * 1e6, "aot_min_us": min(times["aot"]) * 1e6,
-            "jit_min_us": min(times["jit"]) * 1e6, "jit_over_aot": jit / aot,
+    med = {w: statistics.median(t) * 1e6 for w, t in times.items()}
+    return {"aot_us": med["aot"], "jit_us": med["jit"], "aot_min_us": min(times["aot"]) * 1e6,
+            "jit_min_us": min(times["jit"]) * 1e6, "jit_over_aot": med["jit"] / med["aot"],
+            "kernel_aot_us": med["kernel aot"], "kernel_jit_us": med["kernel jit"],
             "served": served, "repeat": repeat, "block": block}
 
 
@@ -138,7 +153,8 @@ def markdown(s: dict, steady: dict | None = None) -> list[str]:
               f"interleaved blocks of {steady['block']}): AOT kernels "
               f"{steady['aot_us']:.0f} µs, JIT kernels {steady['jit_us']:.0f} µs (JIT / AOT "
               f"{steady['jit_over_aot']:.2f}; minima {steady['aot_min_us']:.0f} / "
-              f"{steady['jit_min_us']:.0f} µs)" + (
+              f"{steady['jit_min_us']:.0f} µs); the solve kernel alone (its call included) "
+              f"{steady['kernel_aot_us']:.0f} µs AOT, {steady['kernel_jit_us']:.0f} µs JIT" + (
                   "." if steady["served"].get("aot") == "AotKernels" else
                   "; no AOT module was found, so both are the JIT.")]
     return L + [""]
