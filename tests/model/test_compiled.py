@@ -13,6 +13,7 @@ does not compute: the exact-geometry certificate (statics), beam theory for
 the cantilever, and the symmetry of a symmetric scene.
 """
 
+import os
 import subprocess
 import sys
 
@@ -191,9 +192,11 @@ def test_engine_argument():
 
 
 def test_import_does_not_load_numba_and_the_first_solve_does():
+    """With the JIT kernels (``LCPBENCH_AOT=0``; the ahead-of-time kernels load no
+    numba at all: tests/model/test_aot.py)."""
     code = ("import sys, lcpbench; a = 'numba' in sys.modules; "
             "r = lcpbench.solve(lcpbench.ActuatorScene(links=20)); "
             "print(a, 'numba' in sys.modules, r.extra['engine'])")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True).stdout.split()
+                         check=True, env={**os.environ, "LCPBENCH_AOT": "0"}).stdout.split()
     assert out == ["False", "True", "compiled"]

@@ -45,7 +45,7 @@ def test_the_default_solve_loads_no_scipy_linalg_sparse_or_numba_blas():
 
 
 def test_the_light_cache_load_gives_numbas_answer():
-    light, full = probe(), probe(LCPBENCH_NUMBA_FULL_LOAD="1")
+    light, full = probe(LCPBENCH_AOT="0"), probe(LCPBENCH_NUMBA_FULL_LOAD="1")
     assert light["force"] == full["force"] and light["bound"] == full["bound"]
 
 
@@ -60,7 +60,7 @@ def test_the_kernels_are_cached_under_a_hash_of_all_their_files(tmp_path):
     from numba.core import config
 
     from lcpbench.model import compiled
-    from lcpbench.numba_cache import KERNEL_FILES, kernel_cache_dir, kernel_module
+    from lcpbench.numba_cache import KERNEL_FILES, jit_module, kernel_cache_dir
 
     a, b = tmp_path / "a.py", tmp_path / "b.py"
     a.write_text("x = 1\n")
@@ -69,11 +69,11 @@ def test_the_kernels_are_cached_under_a_hash_of_all_their_files(tmp_path):
     b.write_text("y = 2\n")  # an edit of the second file alone moves the cache
     assert kernel_cache_dir([a, b], str(tmp_path)) != first
     assert first.startswith(str(tmp_path / "lcpbench-numba"))
-    k = compiled._kernel()
+    k = jit_module("lcpbench.model.compiled_kernel", "solve_chain")
     here = Path(compiled.__file__).parent.parent
     where = kernel_cache_dir([here / f for f in KERNEL_FILES], config.CACHE_DIR)
-    walk = kernel_module("lcpbench.linalg.walk_kernel")
-    twisted = kernel_module("lcpbench.linalg.twisted_kernel")
+    walk = jit_module("lcpbench.linalg.walk_kernel")
+    twisted = jit_module("lcpbench.linalg.twisted_kernel")
     for dispatcher in (k.solve_chain, k._dual, walk.face_move, twisted.factor):
         assert dispatcher._cache._cache_path.startswith(where)
 

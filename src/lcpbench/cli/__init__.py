@@ -9,6 +9,7 @@
     lcpbench lcp FILE [--solver NAME] [--settings PROFILE] [--json]
     lcpbench validate cantilever [--links N] [--json]
     lcpbench sweep | report | select | reproduce ...
+    lcpbench compile [--dir DIR]
     lcpbench --version
 
 Exit status: 0 on success, 1 when the solve did not converge (the result is
@@ -19,7 +20,7 @@ interrupted.
 One module per command group, each with ``register(subparsers)`` whose
 parsers set ``func(args) -> int``: :mod:`.solve` (solve, export, lcp,
 validate), :mod:`.solvers` (solvers), :mod:`.sweep` (sweep, report, select),
-:mod:`.paper` (reproduce, anchoring), and ``lcpbench.vision.commands`` when it is
+:mod:`.paper` (reproduce, anchoring), :mod:`.compile` (compile), and ``lcpbench.vision.commands`` when it is
 installed. The shared scene options are in :mod:`._scene_args`. The command
 modules are imported when the parser is built, not by ``import lcpbench.cli``.
 """
@@ -35,7 +36,7 @@ from ._common import PROG, ArgumentParser, ParserExit, error_line
 __all__ = ["PROG", "build_parser", "main"]
 
 # The command groups, in the order of `lcpbench --help`.
-GROUPS = ("solve", "solvers", "sweep", "export", "paper")
+GROUPS = ("solve", "solvers", "sweep", "export", "paper", "compile")
 
 
 def _optional_groups() -> list:
