@@ -255,8 +255,10 @@ def markdown(res: dict) -> list[str]:
         f" ms; {s.get('jit', s)['first_wall_s'] * 1e3:.0f} ms) | ≤ 500 ms | "
         f"{goal(s['first_wall_s'] <= 0.5)} |",
         "",
-        f"Targets 5 (large N) and 8 (heavy chains) are measured elsewhere (another branch "
-        f"of issue 19). Steady state: the second solve of a fresh process took "
+        f"Targets 5 (large N) and 8 (heavy chains) have their own scripts and results: "
+        f"`python benchmarks/large_n.py` → [large-n.md](large-n.md), `python "
+        f"benchmarks/heavy_chains.py` → [heavy-chains.md](heavy-chains.md). "
+        f"Steady state: the second solve of a fresh process took "
         f"{s['second_wall_s'] * 1e3:.2f} ms.", "",
         f"### Full solve (median of {f['repeat']} interleaved)", "",
         "| path | median (ms) | min (ms) | ratio this / `lcpbench.solve` |", "|---|---|---|---|"]
