@@ -64,6 +64,7 @@ _DIR: list = []  # the cache directory of this process's kernels, once computed
 _AOT: list = []  # [(extension module, manifest) or None], once looked for
 _AOT_KERNELS: dict = {}  # module name -> its AotKernels, once made
 _USE_AOT: list = [None]  # use_aot's setting; None: the environment decides
+_HOLDERS: list = []  # callers' one-element caches of a kernel module (see held)
 #: every file of lcpbench with numba kernels, relative to the package
 #: (tests/model/test_kernel_cache.py checks that no file with ``@njit`` is missing)
 KERNEL_FILES = ("model/compiled_kernel.py", "model/compiled_dual.py", "model/judge_kernel.py",
@@ -175,6 +176,17 @@ def use_aot(enabled: bool | None) -> None:
     _USE_AOT[0] = enabled
     _LOADED.clear()
     _AOT.clear()
+    for holder in _HOLDERS:  # the callers that keep the module look it up again
+        holder.clear()
+
+
+def held(holder: list) -> list:
+    """Register ``holder``, a caller's cache of what :func:`kernel_module` returned,
+    to be emptied by :func:`use_aot` (else a caller would keep the kernels it got
+    first, whatever the switch says); returns it."""
+    if not any(h is holder for h in _HOLDERS):
+        _HOLDERS.append(holder)
+    return holder
 
 
 def aot_kernels(name: str, entry: str | None = None) -> AotKernels | None:
@@ -459,16 +471,20 @@ def build_aot(out_dir: str | None = None, modules: dict | None = None) -> dict:
         cc.output_dir, cc.target_cpu = build, "host"
         for symbol, (d, sig) in sorted(exports.items()):
             cc.export(symbol, sig)(d.py_func)
-        plain = codegen.AOTCPUCodegen._customize_tm_features
+        from numba.core import pythonapi
+
+        plain = codegen.AOTCPUCodegen._customize_tm_features, pythonapi.PythonAPI.unserialize
         # the JIT's ISA features (the host's), not only those the CPU model's name implies
         codegen.AOTCPUCodegen._customize_tm_features = (  # type: ignore[method-assign]
             codegen.CPUCodegen._get_host_cpu_features)
+        pythonapi.PythonAPI.unserialize = _unserialize_once(plain[1])  # type: ignore
         try:
             cc.compile()
         except Exception as exc:
             raise AotBuildError(f"numba.pycc failed: {_first_line(exc)}") from exc
         finally:
-            codegen.AOTCPUCodegen._customize_tm_features = plain  # type: ignore[method-assign]
+            codegen.AOTCPUCodegen._customize_tm_features = plain[0]  # type: ignore
+            pythonapi.PythonAPI.unserialize = plain[1]  # type: ignore[method-assign]
         import numba
         import numpy as np
         from llvmlite import binding
@@ -488,6 +504,32 @@ def build_aot(out_dir: str | None = None, modules: dict | None = None) -> dict:
     _LOADED.clear()
     return info
 
+
+def _unserialize_once(unserialize):
+    """numba's ``PythonAPI.unserialize`` for the AOT build: a constant (a pickled
+    object in a global of the module) is unpickled once per process, then a new
+    reference to the same object. numba's JIT does the same (``numba.core.serialize``
+    keeps what it unpickled by address); pycc's copy of ``numba_unpickle`` has no such
+    cache, so each returned array paid a ``pickle.loads`` of ``numpy.ndarray`` (its
+    Python type), ~1 µs a call per array. A pointer known only at run time (an
+    exception's info) is unpickled as before."""
+    from llvmlite import ir
+
+    def once(self, structptr):
+        if not isinstance(structptr, ir.GlobalVariable):
+            return unserialize(self, structptr)
+        b, module = self.builder, self.builder.module
+        memo = ir.GlobalVariable(module, self.pyobj, module.get_unique_name(
+            f"lcpbench.unpickled{structptr.name}"))
+        memo.linkage, memo.initializer = "internal", ir.Constant(self.pyobj, None)
+        with b.if_then(b.icmp_unsigned("==", b.load(memo), ir.Constant(self.pyobj, None)),
+                       likely=False):
+            b.store(unserialize(self, structptr), memo)  # NULL (an error) tries again
+        obj = b.load(memo)
+        self.incref(obj)  # Py_IncRef takes NULL
+        return obj
+
+    return once
 
 def _first_line(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()

@@ -219,6 +219,52 @@ def test_arguments_that_do_not_fit_the_signature_go_to_the_jit(monkeypatch):
         assert f(*args)[0] == "jit", args
 
 
+def _raising_kernels():
+    from numba import njit
+
+    @njit(cache=False)
+    def two_arrays(x, n):
+        if n == 1:
+            raise ValueError("first site")
+        if n == 2:
+            raise KeyError("second site")
+        return x * 2.0, np.arange(n)
+
+    two_arrays(np.ones(3), 3)
+    return {__name__: type("Two", (), {"two_arrays": two_arrays})}
+
+
+def test_constants_unpickled_once_are_still_the_right_objects(tmp_path):
+    """The AOT build unpickles each constant of the module once per process (the
+    returned arrays' Python type, an exception's class and message), as numba's JIT
+    does: call after call the arrays are plain ndarrays with the JIT's values, and
+    each raise site keeps its own exception, however the calls alternate."""
+    tiny = _raising_kernels()
+    where = str(tmp_path / "aot")
+    info = numba_cache.build_aot(where, modules=tiny)
+    module, _ = numba_cache.load_aot(where) or (None, None)
+    if module is None:  # built for these kernel files only: load it directly
+        from importlib import machinery, util
+
+        path = os.path.join(where, info["file"])
+        spec = util.spec_from_file_location(numba_cache.AOT_NAME, path, loader=(
+            machinery.ExtensionFileLoader(numba_cache.AOT_NAME, path)))
+        module = util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+    f = getattr(module, info["modules"][__name__]["functions"]["two_arrays"]["symbol"])
+    x = np.array([1.0, -2.0, 0.5])
+    for n in (3, 5, 4):
+        a, b = f(x, n)
+        assert type(a) is np.ndarray and type(b) is np.ndarray
+        np.testing.assert_array_equal(a, 2.0 * x)
+        np.testing.assert_array_equal(b, np.arange(n))
+    for n, exc, text in [(1, ValueError, "first site"), (2, KeyError, "second site"),
+                         (1, ValueError, "first site"), (2, KeyError, "second site")]:
+        with pytest.raises(exc, match=text):
+            f(x, n)
+    assert type(f(x, 3)[0]) is np.ndarray
+
+
 def _tiny_kernels():
     from numba import njit
 
@@ -245,3 +291,4 @@ def test_a_failed_build_leaves_no_module_and_says_so_in_one_line(monkeypatch, tm
     assert aot.run(str(tmp_path / "b")) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("lcpbench compile: no ahead-of-time module")
+

@@ -94,9 +94,9 @@ _KERNEL: list = []  # the kernel module, once loaded
 
 
 def _load_kernel():
-    from ..numba_cache import kernel_module  # numba at the first solve, not at import
+    from ..numba_cache import held, kernel_module  # numba at the first solve, not at import
 
-    _KERNEL.append(kernel_module("lcpbench.model.compiled_kernel", "solve_chain"))
+    held(_KERNEL).append(kernel_module("lcpbench.model.compiled_kernel", "solve_chain"))
     return _KERNEL[0]
 
 

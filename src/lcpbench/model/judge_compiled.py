@@ -30,9 +30,9 @@ _KERNEL: list = []  # the kernel module, once loaded
 
 
 def _load_kernel():
-    from ..numba_cache import kernel_module  # numba at the first judgement, not at import
+    from ..numba_cache import held, kernel_module  # numba at the first judgement, not at import
 
-    _KERNEL.append(kernel_module("lcpbench.model.judge_kernel", "judge_answer"))
+    held(_KERNEL).append(kernel_module("lcpbench.model.judge_kernel", "judge_answer"))
     return _KERNEL[0]
 
 
