@@ -228,7 +228,7 @@ def _raising_kernels():
             raise ValueError("first site")
         if n == 2:
             raise KeyError("second site")
-        return x * 2.0, np.arange(n)
+        return x * 2.0, np.arange(n), x.dtype, np.arange(n).dtype
 
     two_arrays(np.ones(3), 3)
     return {__name__: type("Two", (), {"two_arrays": two_arrays})}
@@ -236,9 +236,10 @@ def _raising_kernels():
 
 def test_constants_unpickled_once_are_still_the_right_objects(tmp_path):
     """The AOT build unpickles each constant of the module once per process (the
-    returned arrays' Python type, an exception's class and message), as numba's JIT
-    does: call after call the arrays are plain ndarrays with the JIT's values, and
-    each raise site keeps its own exception, however the calls alternate."""
+    returned arrays' Python type, a returned dtype), as numba's JIT does: call after
+    call the arrays are plain ndarrays with the JIT's values, each returned dtype is
+    its own (float64, int64: two constants, two caches), and each raise site keeps
+    its own exception, however the calls alternate."""
     tiny = _raising_kernels()
     where = str(tmp_path / "aot")
     info = numba_cache.build_aot(where, modules=tiny)
@@ -254,8 +255,9 @@ def test_constants_unpickled_once_are_still_the_right_objects(tmp_path):
     f = getattr(module, info["modules"][__name__]["functions"]["two_arrays"]["symbol"])
     x = np.array([1.0, -2.0, 0.5])
     for n in (3, 5, 4):
-        a, b = f(x, n)
+        a, b, da, db = f(x, n)
         assert type(a) is np.ndarray and type(b) is np.ndarray
+        assert (da, db) == (np.dtype(np.float64), np.dtype(np.int64))
         np.testing.assert_array_equal(a, 2.0 * x)
         np.testing.assert_array_equal(b, np.arange(n))
     for n, exc, text in [(1, ValueError, "first site"), (2, KeyError, "second site"),
