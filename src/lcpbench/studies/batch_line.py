@@ -1,0 +1,101 @@
+"""A continuation line in one kernel call (:func:`lcpbench.model.batch_kernel.solve_line`).
+
+:func:`lcpbench.solve_many` hands a line here first; :func:`run_line` takes it
+when every scene is an actuator scene of one plane (the same scene but for θ and
+h, so :class:`~lcpbench.studies.continuation.Solved` sees one plane), with a chain
+the solve kernel takes (consecutive joints, flat rigid walls), one wall (no
+channel), below the large-N formulation and below the moderately heavy load
+(those go through :func:`lcpbench.model.compiled.drive`'s SQP steps). Otherwise,
+or where the solve kernel stops on a scene, it returns None and the line is
+solved scene by scene (:func:`lcpbench.studies.batch_compiled.solve_line`), as
+before. The results are :class:`~lcpbench.studies.batch_result.LineResult`,
+built from the kernel's arrays when read.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..model import large_n
+from ..model.compiled import applies, kernel_args
+from ..model.result import ContactResult
+from ..solvers.judge import DEFAULT_TOL
+from ..solvers.registry import DEFAULT, get_settings
+from .batch_compiled import moderately_heavy
+from .batch_result import LineOutput, results
+from .continuation import _POINTS
+
+#: (name, dtype, shape after (scenes, 2)) of the kernel's outputs per attempt;
+#: "links", "n", "nj", "max_outer" and "stats" stand for the sizes
+_OUTPUTS = (("o_code", np.int64, ()), ("o_kind", np.int64, ()), ("o_alpha", float, ("links",)),
+            ("o_R", float, ("n",)), ("o_rup", float, ("n",)), ("o_rlo", float, ("n",)),
+            ("o_u", float, ("n",)), ("o_sig", float, ("n",)), ("o_res", float, (5,)),
+            ("o_rec", float, (4, "max_outer")), ("o_count", np.int64, ()),
+            ("j_code", np.int64, ()), ("j_stats", float, ("stats",)), ("j_fu", float, ("n",)),
+            ("j_fl", float, ("n",)), ("j_tres", float, ("nj",)), ("conv", np.bool_, ()))
+
+
+def _kernel():
+    from ..numba_cache import kernel_module  # numba at the first batch, not at import
+
+    return kernel_module("lcpbench.model.batch_kernel", "solve_line")
+
+
+def takes_line(chain) -> bool:
+    """Whether the line kernel takes a line of one plane whose chains are like ``chain``."""
+    return (applies(DEFAULT, "globalised", chain) and not large_n.applies(chain)
+            and not chain.channel and not moderately_heavy(chain))
+
+
+def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = "default",
+             predictor: str = "adaptive") -> list[ContactResult] | None:
+    """The results of the line (actuator scenes of one plane, checked, in
+    continuation order), or None: the kernel does not take it (the caller solves it
+    scene by scene)."""
+    if not scenes:
+        return []
+    chains = [s.chain() for s in scenes]
+    c0 = chains[0]
+    if not takes_line(c0):
+        return None
+    args0 = kernel_args(c0)
+    try:
+        stacked = [np.array([getattr(c, f) for c in chains], dtype=float)
+                   for f in ("rest_alpha", "joint_stiffness", "rest_joint", "link_load",
+                             "lower", "upper")]
+    except ValueError:  # chains of different sizes
+        return None
+    ra, k, rest, load, lo, hi = stacked
+    m, n = lo.shape
+    if ra.shape[1] != c0.links or n != c0.free_nodes.size:
+        return None
+    wall = np.array([c.wall for c in chains], dtype=float)
+    theta = np.array([s.theta for s in scenes], dtype=float)
+    height = np.array([s.height for s in scenes], dtype=float)
+    kern = _kernel()
+    st = get_settings(settings)
+    request = st.eps if st.eps is not None else DEFAULT_TOL
+    max_iter = st.max_iter if st.max_iter else 20 * n + 50
+    sizes = {"links": c0.links, "n": n, "nj": args0[2].size, "max_outer": max_outer,
+             "stats": len(kern.STATS)}
+    A = {name: np.empty((m, 2, *(sizes.get(d, d) for d in shape)), dtype=dt)
+         for name, dt, shape in _OUTPUTS}
+    A["kept"], A["base"] = np.zeros(m, np.int64), np.zeros(m, np.int64)
+    A["conv"][:] = False
+    most = _POINTS.get(predictor, 0)
+    t0 = time.perf_counter()
+    bad = kern.solve_line(ra, args0[1], args0[2], args0[3], k, rest, load, args0[7],
+                          args0[8], lo, hi, args0[11], args0[12], wall, theta, height,
+                          float(tol), int(max_outer), int(max_iter), float(request), most,
+                          predictor == "adaptive", *(A[name] for name, _, _ in _OUTPUTS),
+                          A["kept"], A["base"])
+    elapsed = time.perf_counter() - t0
+    if bad >= 0:
+        return None
+    return results(LineOutput(scenes, A, float(tol), int(max_outer), settings, predictor,
+                              elapsed / m, kern))
+
+
+__all__ = ["run_line", "takes_line"]
