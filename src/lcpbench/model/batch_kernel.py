@@ -16,13 +16,13 @@ and h; flat rigid walls, one wall, no heavy load). For each scene, in order:
    answer, and its verdict from the judge's numbers alone
    (:func:`lcpbench.model.batch_verdict.accepted`, the checks of
    :func:`lcpbench.model.judge.failed_checks`);
-5. a warm start the judge does not accept is solved again cold (slot 1), as
+5. a warm start the judge does not accept is solved again cold (in a spare row), as
    :func:`~lcpbench.studies.continuation.warm_or_cold` does.
 
 Nothing is decided here that the single solve decides differently: where the
 solve kernel stops (a bail code) the call returns that scene's index and the caller
 solves the whole line by the per-scene path. The outputs are written into arrays the
-caller allocates (slot 0: the first attempt, slot 1: the cold retry).
+caller allocates, a row per attempt; the step records go to one buffer for the line.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ __all__ = ["ARC", "CONTACT", "CONVERGED", "FREE", "LINE_SEARCH", "MAX_OUTER", "N
            "STATS", "solve_line"]
 SAG_BOUND = 10.0  # model.wall_free.SAG_BOUND
 BAIL_NOT_PD = 11  # compiled_dual.BAIL_NOT_PD: the free step has no minimiser
-# what a slot holds (o_kind): a contact solve, the wall-free search's answer, the arc
+# what an attempt is (o_kind): a contact solve, the wall-free search's answer, the arc
 CONTACT, FREE, ARC = 0, 1, 2
 
 
@@ -110,16 +110,30 @@ def _wall_free_kind(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
 
 
 @njit(cache=True)
-def _attempt(s, slot, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_load,
+def _records(recs, used, rec, count):
+    """Append the ``count`` step records ``rec`` to the flat buffer ``recs`` (grown by
+    doubling): (buffer, its new length)."""
+    if used + count > recs.shape[1]:
+        bigger = np.empty((4, 2 * (used + count)))
+        bigger[:, :used] = recs[:, :used]
+        recs = bigger
+    recs[:, used:used + count] = rec[:, :count]
+    return recs, used + count
+
+
+@njit(cache=True)
+def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_load,
              nodal_load, fs, lo, hi, L, F, wall, tol, max_outer, max_iter, request,
              free_lo, free_hi, o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res,
-             o_rec, o_count, j_code, j_stats, j_fu, j_fl, j_tres, conv):
-    """One solve of scene ``s`` into ``slot``; False: the solve kernel stopped."""
+             o_off, o_count, j_code, j_stats, j_fu, j_fl, j_tres, conv, recs, used):
+    """One solve of a scene into ``row`` of the outputs, its step records appended to
+    ``recs``: (done, recs, used); not done: the solve kernel stopped."""
     n = lo.size
     kind = _wall_free_kind(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
                            max_iter, request, free_lo, free_hi)
     if kind < 0:
-        return False
+        return False, recs, used
+    o_off[row] = used
     if kind == ARC:
         code, alpha, count = CONVERGED, ra.copy(), 0
         R = np.zeros(n)
@@ -131,7 +145,7 @@ def _attempt(s, slot, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, lin
                               free_hi, L, F, tol, max_outer, start, np.zeros(n), zb, zb, 0,
                               max_iter, request, False)
             if got[0] >= 10:
-                return False
+                return False, recs, used
             u = np.empty(n)
             _free_heights(u, got[1], a, fs)
             if got[0] == CONVERGED and _overlap(u, lo, hi) < 0:
@@ -143,28 +157,27 @@ def _attempt(s, slot, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, lin
                               tol, max_outer, start, w_u, w_up, w_lo, flags, max_iter,
                               request, False)
             if got[0] >= 10:
-                return False
+                return False, recs, used
             code = got[0]
         alpha, R, count = got[1], got[9], got[7]
-        o_rup[s, slot], o_rlo[s, slot], o_u[s, slot], o_sig[s, slot] = got[2], got[3], got[4], \
-            got[5]
-        o_rec[s, slot, :, :count] = got[6][:, :count]
+        o_rup[row], o_rlo[row], o_u[row], o_sig[row] = got[2], got[3], got[4], got[5]
+        recs, used = _records(recs, used, got[6], count)
         if code == CONVERGED:
-            o_res[s, slot] = got[8]
-    o_code[s, slot], o_kind[s, slot], o_count[s, slot] = code, kind, count
-    o_alpha[s, slot] = alpha
-    o_R[s, slot] = R
+            o_res[row] = got[8]
+    o_code[row], o_kind[row], o_count[row] = code, kind, count
+    o_alpha[row] = alpha
+    o_R[row] = R
     ok = False
     if code == CONVERGED:  # the judge, on the answer and the real walls
         jc, st, fu, fl, _, _, tres, _, _ = judge_answer(
             alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, wall, False,
-            R.copy(), np.zeros(n), tol, o_rec[s, slot, 2, :count].copy())
-        j_code[s, slot] = jc
-        j_stats[s, slot] = st
-        j_fu[s, slot], j_fl[s, slot], j_tres[s, slot] = fu, fl, tres
+            R.copy(), np.zeros(n), tol, recs[2, used - count:used].copy())
+        j_code[row] = jc
+        j_stats[row] = st
+        j_fu[row], j_fl[row], j_tres[row] = fu, fl, tres
         ok = accepted(jc == SETTLED, st, tol)
-    conv[s, slot] = ok
-    return True
+    conv[row] = ok
+    return True, recs, used
 
 
 @njit(cache=True)
@@ -305,48 +318,55 @@ def _predict(s, theta, height, ok, touch, alphas, most, adaptive):
 @njit(cache=True)
 def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, wall,
                theta, height, tol, max_outer, max_iter, request, most, adaptive,
-               o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res, o_rec, o_count,
-               j_code, j_stats, j_fu, j_fl, j_tres, conv, kept, base):
-    """Every scene of the line in order (row s of the per-scene arrays); returns the
-    index of the first scene the solve kernel stopped on, or −1 (all done).
-    ``kept[s]``: the slot of the answer kept; ``base[s]``: the answer that started it
-    (−1: cold)."""
+               o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res, o_off, o_count,
+               j_code, j_stats, j_fu, j_fl, j_tres, conv, kept, failed, base):
+    """Every scene of the line in order; returns ``(code, records)``: code −1 all done,
+    s >= 0 the solve kernel stopped on scene s, −2 more warm starts failed than the
+    outputs have rows for. The outputs have a row per attempt: row s the first
+    attempt of scene s, rows from m on the cold retries of failed warm starts.
+    ``kept[s]``: the row of the answer kept; ``failed[s]``: the row of a failed warm
+    start (−1: none); ``base[s]``: the answer that started it (−1: cold);
+    ``records``: the step records (face solves, step length, max|Δα|, energy) of
+    every attempt, from column ``o_off[row]``, ``o_count[row]`` of them."""
     m, n = lo.shape
+    spare = o_code.size
     free_lo, free_hi = np.full(n, -np.inf), np.full(n, np.inf)
     ok = np.zeros(m, np.bool_)  # accepted answers, what Solved.add records
     touch = np.zeros(m, np.bool_)
     alphas = np.empty(rest_alpha.shape)
     zf, zb = np.zeros(n), np.zeros(n, np.bool_)
+    recs, used, retry = np.empty((4, 2 * m + 8)), 0, m
+    outs = (o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res, o_off, o_count,
+            j_code, j_stats, j_fu, j_fl, j_tres, conv)
     for s in range(m):
         start, b = _predict(s, theta, height, ok, touch, alphas, most, adaptive)
-        base[s] = b
+        base[s], failed[s] = b, -1
         w_u, w_up, w_lo, flags = zf, zb, zb, 0
-        if b >= 0 and o_kind[b, kept[b]] != ARC:  # the base's last contact step
-            sig = o_sig[b, kept[b]]
-            w_u, w_up, w_lo, flags = o_u[b, kept[b]], sig > 0, sig < 0, 7
+        if b >= 0 and o_kind[kept[b]] != ARC:  # the base's last contact step
+            sig = o_sig[kept[b]]
+            w_u, w_up, w_lo, flags = o_u[kept[b]], sig > 0, sig < 0, 7
         args = (rest_alpha[s], a, jl, jr, k[s], rest[s], link_load[s], nodal_load, fs, lo[s],
                 hi[s], L, F, wall[s], tol, max_outer, max_iter, request, free_lo, free_hi)
-        outs = (o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res, o_rec, o_count,
-                j_code, j_stats, j_fu, j_fl, j_tres, conv)
-        if not _attempt(s, 0, start, w_u, w_up, w_lo, flags, *args, *outs):
-            return s
-        kept[s] = 0
-        if b >= 0 and not conv[s, 0]:  # the warm start failed: cold
-            if not _attempt(s, 1, none_like(start), zf, zb, zb, 0, *args, *outs):
-                return s
-            kept[s] = 1
-        slot = kept[s]
-        ok[s] = conv[s, slot]
-        alphas[s] = o_alpha[s, slot]
+        done, recs, used = _attempt(s, start, w_u, w_up, w_lo, flags, *args, *outs, recs,
+                                    used)
+        if not done:
+            return s, recs
+        kept[s] = s
+        if b >= 0 and not conv[s]:  # the warm start failed: cold, in a spare row
+            if retry >= spare:
+                return -2, recs
+            done, recs, used = _attempt(retry, start[:0], zf, zb, zb, 0, *args, *outs, recs,
+                                        used)
+            if not done:
+                return s, recs
+            kept[s], failed[s] = retry, s
+            retry += 1
+        row = kept[s]
+        ok[s] = conv[row]
+        alphas[s] = o_alpha[row]
         if ok[s]:
             for i in range(n):
-                if j_fu[s, slot, i] > 0:
+                if j_fu[row, i] > 0:
                     touch[s] = True
                     break
-    return -1
-
-
-@njit(cache=True)
-def none_like(start):
-    """An empty start (a cold start), of ``start``'s type."""
-    return start[:0]
+    return -1, recs

@@ -22,6 +22,7 @@ kernel per scene, the checks once per batch); otherwise each scene is one
 from __future__ import annotations
 
 from collections.abc import Iterable
+from operator import attrgetter
 
 from ..api import PAPER_TOL, check_tol, solve
 from ..errors import ProblemError
@@ -112,9 +113,10 @@ def _planes(scenes: list) -> list[list[int]]:
     :class:`~lcpbench.studies.continuation.Solved` predicts a scene from its own plane
     only. A field that does not hash: one list, as given."""
     planes: dict = {}
+    key = attrgetter(*_PLANE_FIELDS)
     try:
         for j, s in enumerate(scenes):
-            planes.setdefault(tuple(getattr(s, f) for f in _PLANE_FIELDS), []).append(j)
+            planes.setdefault(key(s), []).append(j)
     except TypeError:
         return [list(range(len(scenes)))]
     return list(planes.values())

@@ -27,14 +27,16 @@ from .batch_compiled import moderately_heavy
 from .batch_result import LineOutput, results
 from .continuation import _POINTS
 
-#: (name, dtype, shape after (scenes, 2)) of the kernel's outputs per attempt;
-#: "links", "n", "nj", "max_outer" and "stats" stand for the sizes
+#: (name, dtype, shape after the rows) of the kernel's outputs per attempt;
+#: "links", "n", "nj" and "stats" stand for the sizes
 _OUTPUTS = (("o_code", np.int64, ()), ("o_kind", np.int64, ()), ("o_alpha", float, ("links",)),
             ("o_R", float, ("n",)), ("o_rup", float, ("n",)), ("o_rlo", float, ("n",)),
             ("o_u", float, ("n",)), ("o_sig", float, ("n",)), ("o_res", float, (5,)),
-            ("o_rec", float, (4, "max_outer")), ("o_count", np.int64, ()),
+            ("o_off", np.int64, ()), ("o_count", np.int64, ()),
             ("j_code", np.int64, ()), ("j_stats", float, ("stats",)), ("j_fu", float, ("n",)),
             ("j_fl", float, ("n",)), ("j_tres", float, ("nj",)), ("conv", np.bool_, ()))
+#: rows for cold retries of failed warm starts: a share of the line (more if needed)
+SPARE = 8
 
 
 def _kernel():
@@ -61,16 +63,15 @@ def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = 
     if not takes_line(c0):
         return None
     args0 = kernel_args(c0)
-    try:
-        stacked = [np.array([getattr(c, f) for c in chains], dtype=float)
-                   for f in ("rest_alpha", "joint_stiffness", "rest_joint", "link_load",
-                             "lower", "upper")]
-    except ValueError:  # chains of different sizes
-        return None
+    m, n, nj = len(chains), c0.free_nodes.size, args0[2].size
+    stacked = []
+    for f, size in (("rest_alpha", c0.links), ("joint_stiffness", nj), ("rest_joint", nj),
+                    ("link_load", c0.links), ("lower", n), ("upper", n)):
+        rows = [getattr(c, f) for c in chains]
+        if any(r.shape != (size,) for r in rows):  # chains of different sizes
+            return None
+        stacked.append(np.concatenate(rows).astype(float, copy=False).reshape(m, size))
     ra, k, rest, load, lo, hi = stacked
-    m, n = lo.shape
-    if ra.shape[1] != c0.links or n != c0.free_nodes.size:
-        return None
     wall = np.array([c.wall for c in chains], dtype=float)
     theta = np.array([s.theta for s in scenes], dtype=float)
     height = np.array([s.height for s in scenes], dtype=float)
@@ -78,20 +79,25 @@ def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = 
     st = get_settings(settings)
     request = st.eps if st.eps is not None else DEFAULT_TOL
     max_iter = st.max_iter if st.max_iter else 20 * n + 50
-    sizes = {"links": c0.links, "n": n, "nj": args0[2].size, "max_outer": max_outer,
-             "stats": len(kern.STATS)}
-    A = {name: np.empty((m, 2, *(sizes.get(d, d) for d in shape)), dtype=dt)
-         for name, dt, shape in _OUTPUTS}
-    A["kept"], A["base"] = np.zeros(m, np.int64), np.zeros(m, np.int64)
-    A["conv"][:] = False
+    sizes = {"links": c0.links, "n": n, "nj": nj, "stats": len(kern.STATS)}
     most = _POINTS.get(predictor, 0)
-    t0 = time.perf_counter()
-    bad = kern.solve_line(ra, args0[1], args0[2], args0[3], k, rest, load, args0[7],
-                          args0[8], lo, hi, args0[11], args0[12], wall, theta, height,
-                          float(tol), int(max_outer), int(max_iter), float(request), most,
-                          predictor == "adaptive", *(A[name] for name, _, _ in _OUTPUTS),
-                          A["kept"], A["base"])
-    elapsed = time.perf_counter() - t0
+    spare = max(SPARE, m // SPARE)
+    while True:
+        A = {name: np.empty((m + spare, *(sizes.get(d, d) for d in shape)), dtype=dt)
+             for name, dt, shape in _OUTPUTS}
+        A["conv"][:] = False
+        for name in ("kept", "failed", "base"):
+            A[name] = np.empty(m, np.int64)
+        t0 = time.perf_counter()
+        bad, A["records"] = kern.solve_line(
+            ra, args0[1], args0[2], args0[3], k, rest, load, args0[7], args0[8], lo, hi,
+            args0[11], args0[12], wall, theta, height, float(tol), int(max_outer),
+            int(max_iter), float(request), most, predictor == "adaptive",
+            *(A[name] for name, _, _ in _OUTPUTS), A["kept"], A["failed"], A["base"])
+        elapsed = time.perf_counter() - t0
+        if bad != -2:
+            break
+        spare = m  # more warm starts failed than rows were spared: again with room for all
     if bad >= 0:
         return None
     return results(LineOutput(scenes, A, float(tol), int(max_outer), settings, predictor,

@@ -89,56 +89,54 @@ for _name in LAZY:
 def results(line: LineOutput) -> list[ContactResult]:
     """One :class:`LineResult` per scene of the line, in its order."""
     A = line.arrays
-    m = len(line.scenes)
     kept = A["kept"]
-    rows = np.arange(m)
-    code = A["o_code"][rows, kept]
+    code = A["o_code"][kept]
     judged = code == line.kernel.CONVERGED
-    settled = judged & (A["j_code"][rows, kept] == line.kernel.SETTLED)
+    settled = judged & (A["j_code"][kept] == line.kernel.SETTLED)
     # the reported reactions: the judge's (round-off set to zero), else the driver's R
     # (zero where the driver failed, as driver._fail)
-    forces = np.where(settled[:, None], A["j_fu"][rows, kept],
-                      np.where(judged[:, None], A["o_R"][rows, kept], 0.0))
+    forces = np.where(settled[:, None], A["j_fu"][kept],
+                      np.where(judged[:, None], A["o_R"][kept], 0.0))
     totals = forces.sum(axis=1).tolist()
-    alphas = A["o_alpha"][rows, kept]
-    conv = A["conv"][rows, kept].tolist()
-    counts = A["o_count"][rows, kept].tolist()
+    alphas = A["o_alpha"][kept]
+    conv = A["conv"][kept].tolist()
+    counts = A["o_count"][kept].tolist()
     out: list[ContactResult] = []
-    new = object.__new__
+    new, links, tol, t = object.__new__, alphas.shape[1], line.tol, line.time_s
     for s, scene in enumerate(line.scenes):
         r = new(LineResult)
-        r.__dict__.update(
-            scene=scene, links=alphas.shape[1], alpha=alphas[s], forces=forces[s],
-            forces_lower=None, total_force=totals[s], outer_iterations=counts[s],
-            converged=conv[s], solver=DEFAULT, method="globalised", tol=line.tol,
-            time_s=line.time_s, pressure_limit=None, _line=(line, s))
+        r.__dict__ = {
+            "scene": scene, "links": links, "alpha": alphas[s], "forces": forces[s],
+            "forces_lower": None, "total_force": totals[s], "outer_iterations": counts[s],
+            "converged": conv[s], "solver": DEFAULT, "method": "globalised", "tol": tol,
+            "time_s": t, "pressure_limit": None, "_line": (line, s)}
         out.append(r)
     return out
 
 
-def driver_output(line: LineOutput, s: int, slot: int, chain) -> DriverOutput:
-    """The DriverOutput of scene ``s``'s attempt ``slot``, as run_compiled (and
+def driver_output(line: LineOutput, row: int, chain) -> DriverOutput:
+    """The DriverOutput of the attempt in ``row``, as run_compiled (and
     solve_without_contact) build it from the solve kernel's outputs."""
     A, k = line.arrays, line.kernel
     n = chain.free_nodes.size
-    kind, code = int(A["o_kind"][s, slot]), int(A["o_code"][s, slot])
+    kind, code = int(A["o_kind"][row]), int(A["o_code"][row])
     if kind == k.ARC:
-        return DriverOutput(A["o_alpha"][s, slot], np.zeros(n), np.zeros(n), True,
+        return DriverOutput(A["o_alpha"][row], np.zeros(n), np.zeros(n), True,
                             "no contact: the unconstrained arc clears every wall and there "
                             "is no load")
-    count = int(A["o_count"][s, slot])
+    count, off = int(A["o_count"][row]), int(A["o_off"][row])
     share = line.time_s / max(count, 1)
-    cols = A["o_rec"][s, slot, :, :count].T.tolist()
+    cols = A["records"][:, off:off + count].T.tolist()
     steps = [StepRecord(int(it), _SOLVED, share, 0.0, step, dalpha, energy)
              for it, step, dalpha, energy in cols]
-    alpha = A["o_alpha"][s, slot]
+    alpha = A["o_alpha"][row]
     if code == k.CONVERGED:
-        R, r_up, r_lo, sigma = (A[f][s, slot] for f in ("o_R", "o_rup", "o_rlo", "o_sig"))
-        sol = StepSolution(A["o_u"][s, slot], r_up, r_lo, Status.SOLVED,
+        R, r_up, r_lo, sigma = (A[f][row] for f in ("o_R", "o_rup", "o_rlo", "o_sig"))
+        sol = StepSolution(A["o_u"][row], r_up, r_lo, Status.SOLVED,
                            iterations=steps[-1].iterations, solve_time=share,
                            active_upper=sigma > 0, active_lower=sigma < 0, time_source="wall",
                            backend=DEFAULT, settings=get_settings(line.settings).name,
-                           residuals=dict(zip(_RESIDUALS, A["o_res"][s, slot].tolist(),
+                           residuals=dict(zip(_RESIDUALS, A["o_res"][row].tolist(),
                                               strict=True)), forces_net=R)
         reason = "converged" if kind == k.CONTACT else (
             "no contact: the equilibrium without walls clears every wall (found by banded "
@@ -154,7 +152,7 @@ def driver_output(line: LineOutput, s: int, slot: int, chain) -> DriverOutput:
                                   f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
 
 
-def _judged(line: LineOutput, s: int, slot: int, chain, alpha, forces_upper, forces_lower, *,
+def _judged(line: LineOutput, row: int, chain, alpha, forces_upper, forces_lower, *,
             tol, driver_converged, driver_reason, step_statuses, step_sizes, certificate):
     """The Judgement from the judge kernel's numbers of the batch (build_result's
     ``judged_by``); an answer whose driver did not converge: the numpy judge, as
@@ -167,21 +165,21 @@ def _judged(line: LineOutput, s: int, slot: int, chain, alpha, forces_upper, for
                           step_statuses=step_statuses, step_sizes=step_sizes,
                           certificate=certificate)
     A, k = line.arrays, line.kernel
-    stats = dict(zip(k.STATS, A["j_stats"][s, slot].tolist(), strict=True))
-    return verdict_from_stats(int(A["j_code"][s, slot]) == k.SETTLED, stats,
-                              A["j_fu"][s, slot].copy(), A["j_fl"][s, slot].copy(),
-                              A["j_tres"][s, slot].copy(), tol=tol, driver_reason=driver_reason,
+    stats = dict(zip(k.STATS, A["j_stats"][row].tolist(), strict=True))
+    return verdict_from_stats(int(A["j_code"][row]) == k.SETTLED, stats,
+                              A["j_fu"][row].copy(), A["j_fl"][row].copy(),
+                              A["j_tres"][row].copy(), tol=tol, driver_reason=driver_reason,
                               step_statuses=step_statuses)
 
 
-def _attempt(line: LineOutput, s: int, slot: int) -> ContactResult:
+def _attempt(line: LineOutput, s: int, row: int) -> ContactResult:
     scene = line.scenes[s]
     chain = scene.chain()
-    out = driver_output(line, s, slot, chain)
+    out = driver_output(line, row, chain)
     return finish(scene, chain, out, solver=DEFAULT, method="globalised", tol=line.tol,
                   elapsed=line.time_s, settings=line.settings, engine="compiled",
                   compiled_judge=True, why=AUTO_WHY,
-                  judged_by=partial(_judged, line, s, slot))
+                  judged_by=partial(_judged, line, row))
 
 
 def materialize(res: LineResult) -> None:
@@ -192,11 +190,10 @@ def materialize(res: LineResult) -> None:
         return
     line, s = source
     A = line.arrays
-    slot = int(A["kept"][s])
-    full = _attempt(line, s, slot)
+    full = _attempt(line, s, int(A["kept"][s]))
     label = "cold" if A["base"][s] < 0 else line.predictor
-    if slot == 1:  # the warm start failed: the cold answer, with what the failure cost
-        failed = _attempt(line, s, 0)
+    if A["failed"][s] >= 0:  # the warm start failed: the cold answer, with what it cost
+        failed = _attempt(line, s, int(A["failed"][s]))
         label = f"{line.predictor}, failed; cold"
         full.extra["discarded"] = {
             "outer_iterations": failed.outer_iterations,
