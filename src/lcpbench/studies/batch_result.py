@@ -201,6 +201,10 @@ def materialize(res: LineResult) -> None:
             "time_s": failed.time_s, "reason": failed.reason}
     full.extra["continuation"] = label
     full.extra["batch"] = "line kernel"
+    if full.converged != d.get("converged", full.converged):  # the two must agree
+        raise RuntimeError(f"the line kernel's verdict ({d['converged']}) is not the judge's "
+                           f"({full.converged}: {full.reason}); please report this scene: "
+                           f"{line.scenes[s]!r}")
     for key, value in full.__dict__.items():
         d.setdefault(key, value)
 
