@@ -67,10 +67,10 @@ def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = 
     stacked = []
     for f, size in (("rest_alpha", c0.links), ("joint_stiffness", nj), ("rest_joint", nj),
                     ("link_load", c0.links), ("lower", n), ("upper", n)):
-        rows = [getattr(c, f) for c in chains]
-        if any(r.shape != (size,) for r in rows):  # chains of different sizes
+        flat = np.concatenate([getattr(c, f) for c in chains])
+        if flat.size != m * size:  # chains of different sizes (not one plane)
             return None
-        stacked.append(np.concatenate(rows).astype(float, copy=False).reshape(m, size))
+        stacked.append(flat.astype(float, copy=False).reshape(m, size))
     ra, k, rest, load, lo, hi = stacked
     wall = np.array([c.wall for c in chains], dtype=float)
     theta = np.array([s.theta for s in scenes], dtype=float)
