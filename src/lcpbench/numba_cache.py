@@ -64,6 +64,9 @@ _DIR: list = []  # the cache directory of this process's kernels, once computed
 _AOT: list = []  # [(extension module, manifest) or None], once looked for
 _AOT_KERNELS: dict = {}  # module name -> its AotKernels, once made
 _USE_AOT: list = [None]  # use_aot's setting; None: the environment decides
+#: how many times :func:`use_aot` switched; a caller that keeps a kernel module
+#: (``model.compiled``, ``model.judge_compiled``) loads it again when this moved
+SWITCHES: list = [0]
 #: every file of lcpbench with numba kernels, relative to the package
 #: (tests/model/test_kernel_cache.py checks that no file with ``@njit`` is missing)
 KERNEL_FILES = ("model/compiled_kernel.py", "model/compiled_dual.py", "model/judge_kernel.py",
@@ -173,6 +176,7 @@ def use_aot(enabled: bool | None) -> None:
     as the environment says (None); the next :func:`kernel_module` call chooses again.
     For the builder (which needs the JIT dispatchers) and for benchmarks."""
     _USE_AOT[0] = enabled
+    SWITCHES[0] += 1
     _LOADED.clear()
     _AOT.clear()
 

@@ -31,6 +31,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..errors import ProblemError
+from ..numba_cache import SWITCHES
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from ..solvers.judge import DEFAULT_TOL
@@ -87,16 +88,16 @@ def _layout(chain: Chain) -> bool:
 
 def _kernel():
     """The kernel module (numba imported, the kernel loaded, at the first call)."""
-    return _KERNEL[0] if _KERNEL else _load_kernel()
+    return _KERNEL[0] if _KERNEL and _KERNEL[1] == SWITCHES[0] else _load_kernel()
 
 
-_KERNEL: list = []  # the kernel module, once loaded
+_KERNEL: list = []  # [the kernel module, numba_cache.SWITCHES when it was loaded]
 
 
 def _load_kernel():
     from ..numba_cache import kernel_module  # numba at the first solve, not at import
 
-    _KERNEL.append(kernel_module("lcpbench.model.compiled_kernel", "solve_chain"))
+    _KERNEL[:] = [kernel_module("lcpbench.model.compiled_kernel", "solve_chain"), SWITCHES[0]]
     return _KERNEL[0]
 
 
@@ -278,7 +279,7 @@ def run_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
     time its parts. ``args``: the chain's :func:`kernel_args`, when the caller
     has them already.
     """
-    k = _KERNEL[0] if _KERNEL else _load_kernel()
+    k = _KERNEL[0] if _KERNEL and _KERNEL[1] == SWITCHES[0] else _load_kernel()
     s = get_settings(settings)
     n = chain.free_nodes.size
     request = s.eps if s.eps is not None else DEFAULT_TOL

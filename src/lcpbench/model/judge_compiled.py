@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..numba_cache import SWITCHES
 from ..problems.scenes import Chain
 from . import large_n
 from .judge import Judgement, failed_checks, judge, settle_verdict
@@ -23,16 +24,16 @@ from .judge import Judgement, failed_checks, judge, settle_verdict
 
 def _kernel():
     """The judge kernel's module (numba imported, the kernel loaded, at the first call)."""
-    return _KERNEL[0] if _KERNEL else _load_kernel()
+    return _KERNEL[0] if _KERNEL and _KERNEL[1] == SWITCHES[0] else _load_kernel()
 
 
-_KERNEL: list = []  # the kernel module, once loaded
+_KERNEL: list = []  # [the kernel module, numba_cache.SWITCHES when it was loaded]
 
 
 def _load_kernel():
     from ..numba_cache import kernel_module  # numba at the first judgement, not at import
 
-    _KERNEL.append(kernel_module("lcpbench.model.judge_kernel", "judge_answer"))
+    _KERNEL[:] = [kernel_module("lcpbench.model.judge_kernel", "judge_answer"), SWITCHES[0]]
     return _KERNEL[0]
 
 
@@ -73,7 +74,7 @@ def judge_fast(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
                      driver_converged=driver_converged, driver_reason=driver_reason,
                      step_statuses=step_statuses, step_sizes=step_sizes,
                      certificate=certificate)
-    k = _KERNEL[0] if _KERNEL else _load_kernel()
+    k = _KERNEL[0] if _KERNEL and _KERNEL[1] == SWITCHES[0] else _load_kernel()
     if args is None:
         args = chain_args(chain)
     code, st, fu, fl, _, _, res, _, _ = k.judge_answer(
