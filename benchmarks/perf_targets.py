@@ -161,11 +161,32 @@ def continuation(tol: float = 1e-8) -> dict:
     return out
 
 
+BATCH = "solve_many (continuation, one kernel call per line)"
+PER_SCENE_LOOP = "solve_many scene by scene (the compiled loop before the line kernel)"
+
+
+def per_scene_loop(scenes, tol):
+    """``solve_many`` as it was before the line kernel: the same continuation, each
+    scene one call of the solve kernel and one of the judge kernel
+    (:func:`lcpbench.studies.batch_compiled.solve_line` per line)."""
+    from lcpbench.studies.batch import continuation_order
+    from lcpbench.studies.batch_compiled import solve_line
+
+    out = [None] * len(scenes)
+    for line in continuation_order(scenes):
+        for i, r in zip(line, solve_line([scenes[i] for i in line], tol=tol)):
+            out[i] = r
+    return out
+
+
 def throughput(interleaved, med, repeat: int) -> dict:
     scenes = paper_scenes()
+    fresh = iter([paper_scenes() for _ in range(repeat + 2)])  # new objects: chains built
     runs = interleaved({
-        "solve_many (continuation, compiled loop)": cpu_wall(
-            lambda: lcpbench.solve_many(scenes, tol=TOL)),
+        BATCH: cpu_wall(lambda: lcpbench.solve_many(scenes, tol=TOL)),
+        BATCH + ", new scene objects": cpu_wall(
+            lambda: lcpbench.solve_many(next(fresh), tol=TOL)),
+        PER_SCENE_LOOP: cpu_wall(lambda: per_scene_loop(scenes, TOL)),
         "solve_many(continuation=False)": cpu_wall(
             lambda: lcpbench.solve_many(scenes, tol=TOL, continuation=False)),
         "one lcpbench.solve per scene": cpu_wall(
@@ -178,15 +199,23 @@ def throughput(interleaved, med, repeat: int) -> dict:
         rows[name] = {"median_s": wall_s, "scenes_per_s": len(scenes) / wall_s,
                       "all_converged": all(x.converged for x in results),
                       "outer": total_outer(results)}
-    # CPU time of the batch, separately (the interleaved wall time includes waiting)
-    cpu = []
+    # CPU time of the batch, separately (the interleaved wall time includes waiting), and
+    # the line kernel's own wall time (each result's time_s is its share of it)
+    cpu, kernel = [], []
     for _ in range(repeat):
         c0 = time.process_time()
-        lcpbench.solve_many(scenes, tol=TOL)
+        got = lcpbench.solve_many(scenes, tol=TOL)
         cpu.append(time.process_time() - c0)
-    best = rows["solve_many (continuation, compiled loop)"]
+        kernel.append(sum(x.time_s for x in got))
+    best = rows[BATCH]
     best["cpu_s"] = med(cpu)
     best["scenes_per_cpu_s"] = len(scenes) / med(cpu)
+    best["kernel_s"] = med(kernel)
+    import python_overhead  # benchmarks/ is on sys.path (perf.py puts it there)
+
+    # the Python of the batch alone: the kernels replayed (CPU, best of repeat)
+    best["python_cpu_s"] = python_overhead.replayed(
+        lambda s: lcpbench.solve_many(s, tol=TOL), repeat, lambda: scenes)[0]
     return {"scenes": len(scenes), "rows": rows, "repeat": repeat}
 
 
@@ -222,7 +251,7 @@ def markdown(res: dict) -> list[str]:
     comp = crow["compiled step (assembly + walk + certificate + judge)"]["median_s"]
     sic = crow.get("siconos-lemke (C, solver-reported)", {}).get("median_s")
     step_ratio = sic / comp if sic else float("nan")
-    best = th["rows"]["solve_many (continuation, compiled loop)"]
+    best = th["rows"][BATCH]
     per_scene = th["rows"]["one lcpbench.solve per scene"]
     L = [
         "## Issue 19: the compiled solve core (targets 1-4, 6, 7)", "",
@@ -295,9 +324,21 @@ def markdown(res: dict) -> list[str]:
     for name, row in th["rows"].items():
         L.append(f"| {name} | {row['median_s'] * 1e3:.1f} | {row['scenes_per_s']:.0f} | "
                  f"{row['outer']} | {row['all_converged']} |")
+    n, nan = th["scenes"], float("nan")
+    kern = best.get("kernel_s", nan)
     L += ["", f"CPU time of the batch: {best['cpu_s'] * 1e3:.1f} ms "
           f"({best['scenes_per_cpu_s']:.0f} scenes per CPU second); the batch against one "
-          f"solve per scene: {per_scene['median_s'] / best['median_s']:.1f}×.", "",
+          f"solve per scene: {per_scene['median_s'] / best['median_s']:.1f}×, against the "
+          f"per-scene compiled loop: "
+          f"{th['rows'][PER_SCENE_LOOP]['median_s'] / best['median_s']:.1f}×. Per scene "
+          f"(CPU): {best['cpu_s'] / n * 1e6:.0f} µs, of which "
+          f"{best.get('python_cpu_s', nan) / n * 1e6:.0f} µs of Python (the kernels replayed, "
+          f"best of {th['repeat']}) and the rest, "
+          f"{(best['cpu_s'] - best.get('python_cpu_s', nan)) / n * 1e6:.0f} µs, in the line "
+          f"kernel ({(best['cpu_s'] - best.get('python_cpu_s', nan)) / max(best['outer'], 1) * 1e6:.0f}"
+          f" µs per outer iteration, the judge and the wall-free search included; the "
+          f"kernel's wall time: {kern / n * 1e6:.0f} µs per scene).",
+          "",
           "### Where the time of one default solve goes (N = 140; each part alone, medians)",
           "", "| part | µs |", "|---|---|"]
     for name, us in p.items():

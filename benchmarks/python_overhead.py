@@ -1,7 +1,8 @@
 """The Python around the compiled kernels (issue 19, targets 1 and 6), timed alone.
 
-Each call of the solve kernel and of the judge kernel is first recorded, then
-replayed: the same calls return the recorded outputs at once, so what is
+Each call of the solve kernel, of the judge kernel and of the line kernel
+(``solve_many``'s, which writes into arrays: those are copied back) is first
+recorded, then replayed: the same calls return the recorded outputs at once, so what is
 left is the Python of ``lcpbench.solve`` / ``lcpbench.solve_many`` (checks,
 chains, the wall-free test, the driver output, the verdict, the result),
 whatever the kernels cost. The replayed run must give the recorded answers
@@ -34,19 +35,26 @@ def paper_scenes() -> list[ActuatorScene]:
 
 
 class _Replay:
-    """A kernel function that records its outputs, then hands them back in order."""
+    """A kernel function that records its outputs, then hands them back in order.
 
-    def __init__(self, module, name: str):
+    ``fills``: the kernel writes into its arguments from this index on (the line
+    kernel's output arrays): recorded as copies, copied back when replayed."""
+
+    def __init__(self, module, name: str, fills: int | None = None):
         self.module, self.name, self.real = module, name, getattr(module, name)
+        self.fills = fills
         self.calls: list = []
         self.next: int | None = None  # None: recording
 
     def __call__(self, *args):
         if self.next is None:
             out = self.real(*args)
-            self.calls.append(out)
+            filled = [a.copy() for a in args[self.fills:]] if self.fills is not None else None
+            self.calls.append((out, filled))
             return out
-        out = self.calls[self.next % len(self.calls)]
+        out, filled = self.calls[self.next % len(self.calls)]
+        for a, b in zip(args[self.fills:] if filled else (), filled or ()):
+            a[...] = b
         self.next += 1
         return out
 
@@ -54,14 +62,20 @@ class _Replay:
 def _kernels():
     from lcpbench.model.compiled import _kernel
     from lcpbench.model.judge_compiled import _kernel as judge_kernel
+    from lcpbench.studies.batch_line import _kernel as line_kernel
 
-    return _kernel(), judge_kernel()
+    return _kernel(), judge_kernel(), line_kernel()
+
+
+#: the line kernel's first output argument (batch_kernel.solve_line: 22 inputs)
+LINE_OUTPUTS = 22
 
 
 def replayed(fn, repeat: int, fresh) -> tuple[float, int]:
-    """(best CPU seconds of ``fn(fresh())`` with both kernels replayed, kernel calls)."""
-    solve_k, judge_k = _kernels()
-    reps = [_Replay(solve_k, "solve_chain"), _Replay(judge_k, "judge_answer")]
+    """(best CPU seconds of ``fn(fresh())`` with the kernels replayed, kernel calls)."""
+    solve_k, judge_k, line_k = _kernels()
+    reps = [_Replay(solve_k, "solve_chain"), _Replay(judge_k, "judge_answer"),
+            _Replay(line_k, "solve_line", fills=LINE_OUTPUTS)]
     for r in reps:
         setattr(r.module, r.name, r)
     try:

@@ -176,24 +176,28 @@ def solve(
 def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: float,
            settings, engine: str, compiled_judge: bool, why: str | None,
            judge_args: tuple | None = None,
-           pressure_limit: float | None = None) -> ContactResult:
+           pressure_limit: float | None = None,
+           judged_by: Callable | None = None) -> ContactResult:
     """The judged result of a driver run (the end of :func:`solve`; also the batch's).
 
     Judged by the compiled judge (the same checks and verdicts as the numpy judge,
     independent of the solve kernel) where ``compiled_judge`` (it takes the chain,
     whichever back-end solved the steps); engine="numpy" keeps the numpy judge, the
     reference. ``judge_args``: the chain's arrays for the judge kernel, when the
-    caller has them (:func:`lcpbench.model.judge_compiled.chain_args`)."""
+    caller has them (:func:`lcpbench.model.judge_compiled.chain_args`). ``judged_by``:
+    the judgement already made (a batch line's, from the judge kernel's numbers), in
+    place of the judge call."""
     if not out.converged and getattr(scene, "theta", 0) > 180:
         out.reason = ("theta > 180 deg: the end links start beyond the vertical, where the "
                       "linearisation of eq. (20) is singular; lcpbench converges for "
                       f"theta <= 180 deg ({out.reason})")
-    judged_by: Callable = judge
     compiled_judge = compiled_judge and not large_n.applies(chain)  # large N: increments
-    if compiled_judge:
-        judged_by = _FAST[0] if _FAST else _judge_fast()
-        if judge_args is not None:
-            judged_by = partial(judged_by, args=judge_args)
+    if judged_by is None:
+        judged_by = judge
+        if compiled_judge:
+            judged_by = _FAST[0] if _FAST else _judge_fast()
+            if judge_args is not None:
+                judged_by = partial(judged_by, args=judge_args)
     res = build_result(scene, chain, out, solver=solver, method=method, tol=tol,
                        time_s=elapsed, judged_by=judged_by)
     res.extra["last_step"] = out.last_step  # what a continuation hands the next scene

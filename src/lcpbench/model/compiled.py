@@ -90,7 +90,7 @@ def _kernel():
     return _KERNEL[0] if _KERNEL else _load_kernel()
 
 
-_KERNEL: list = []  # the kernel module, once loaded
+_KERNEL: list = []  # the kernel module, once loaded (emptied by numba_cache.use_aot)
 
 
 def _load_kernel():

@@ -11,14 +11,18 @@ fails is solved again cold). Other scenes (the cantilever) are solved cold.
 The results come back in the caller's order, one per scene.
 
 With the default back-end and the globalised driver, each line runs in the
-compiled kernels (:mod:`lcpbench.studies.batch_compiled`: the solve kernel
-and the judge kernel per scene, the checks once per batch); otherwise each
-scene is one :func:`lcpbench.solve` call.
+compiled kernels: a line of one plane (flat rigid walls, one wall, no heavy load)
+in one call of :func:`lcpbench.model.batch_kernel.solve_line` (prediction, solve
+and judge of every scene; :mod:`lcpbench.studies.batch_line`), another one scene
+by scene (:mod:`lcpbench.studies.batch_compiled`: the solve kernel and the judge
+kernel per scene, the checks once per batch); otherwise each scene is one
+:func:`lcpbench.solve` call.
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
+from operator import attrgetter
 
 from ..api import PAPER_TOL, check_tol, solve
 from ..errors import ProblemError
@@ -28,7 +32,8 @@ from ..problems.checks import check_scene
 from ..problems.scenes import ActuatorScene
 from ..solvers.registry import DEFAULT
 from .batch_compiled import solve_line, takes
-from .continuation import PREDICTORS, solve_sequence
+from .batch_line import run_line
+from .continuation import _PLANE_FIELDS, PREDICTORS, solve_sequence
 
 
 def _group_key(scene: ActuatorScene) -> tuple:
@@ -74,7 +79,8 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
     fast = takes(solver, dict(solve_kw, tol=tol)) and predictor in PREDICTORS
     if fast:  # the checks of solve(), once for the batch
         for s in scenes:
-            check_scene(s)
+            if type(s) is not ActuatorScene:  # (an actuator scene needs no more check)
+                check_scene(s)
         fast_kw = dict(tol=PAPER_TOL if tol is None else check_tol(tol),
                        max_outer=solve_kw.get("max_outer", 200),
                        settings=solve_kw.get("settings", "default"))
@@ -85,12 +91,35 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
     for line in continuation_order(scenes):
         line_scenes = [scenes[i] for i in line]
         if fast and all(isinstance(s, ActuatorScene) for s in line_scenes):
-            results = solve_line(line_scenes, predictor=predictor, **fast_kw)
-        else:
-            results = solve_sequence(line_scenes, predictor=predictor, **kw)
+            for plane in _planes(line_scenes):
+                # a plane in one kernel call where it takes it, else scene by scene
+                ps = [line_scenes[j] for j in plane]
+                got = run_line(ps, predictor=predictor, **fast_kw)
+                results = got if got is not None else solve_line(ps, predictor=predictor,
+                                                                 **fast_kw)
+                for j, res in zip(plane, results, strict=True):
+                    out[line[j]] = res
+            continue
+        results = solve_sequence(line_scenes, predictor=predictor, **kw)
         for i, res in zip(line, results, strict=True):
             out[i] = res
     return out  # type: ignore[return-value]  # every index was filled
+
+
+def _planes(scenes: list) -> list[list[int]]:
+    """Indices of ``scenes`` (actuator scenes, in continuation order) by plane (the
+    same scene but for θ and h), each in order. Solving them one plane after the other
+    gives the answers of solving them in the given order:
+    :class:`~lcpbench.studies.continuation.Solved` predicts a scene from its own plane
+    only. A field that does not hash: one list, as given."""
+    planes: dict = {}
+    key = attrgetter(*_PLANE_FIELDS)
+    try:
+        for j, s in enumerate(scenes):
+            planes.setdefault(key(s), []).append(j)
+    except TypeError:
+        return [list(range(len(scenes)))]
+    return list(planes.values())
 
 
 __all__ = ["continuation_order", "solve_many"]

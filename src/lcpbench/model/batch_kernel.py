@@ -1,0 +1,372 @@
+"""One kernel call per continuation line: predict, solve and judge every scene of it.
+
+:func:`solve_line` is :func:`lcpbench.studies.batch_compiled.solve_line` in one
+compiled call, for a line of actuator scenes of one plane (the same chain but for θ
+and h; flat rigid walls, one wall, no heavy load). For each scene, in order:
+
+1. the start, as :class:`lcpbench.studies.continuation.Solved` chooses it (its
+   rules 1-4 and the ``adaptive`` choice of degree, :func:`_predict`); the
+   Lagrange weights are the same products in the same order, the weighted sums
+   are loops (numpy's are BLAS products: the prediction agrees to round-off);
+2. the wall-free search of :func:`lcpbench.model.wall_free.solve_without_contact`
+   (its tests; the first free step is the compiled step with no walls,
+   :func:`~lcpbench.model.compiled_kernel._contact_step`, the numpy one's twin);
+3. the solve kernel's entry :func:`~lcpbench.model.compiled_kernel.solve_chain`;
+4. the judge kernel's entry :func:`~lcpbench.model.judge_kernel.judge_answer` on the
+   answer, and its verdict from the judge's numbers alone
+   (:func:`lcpbench.model.batch_verdict.accepted`, the checks of
+   :func:`lcpbench.model.judge.failed_checks`);
+5. a warm start the judge does not accept is solved again cold (in a spare row), as
+   :func:`~lcpbench.studies.continuation.warm_or_cold` does.
+
+Nothing is decided here that the single solve decides differently: where the
+solve kernel stops (a bail code) the call returns that scene's index and the caller
+solves the whole line by the per-scene path. The outputs are written into arrays the
+caller allocates, a row per attempt; the step records go to one buffer for the line.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .batch_verdict import accepted
+from .compiled_kernel import CONVERGED, LINE_SEARCH, MAX_OUTER, NO_FIT, _contact_step, solve_chain
+from .judge_kernel import SETTLED, STATS, judge_answer
+
+__all__ = ["ARC", "CONTACT", "CONVERGED", "FREE", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "SETTLED",
+           "STATS", "solve_line"]
+SAG_BOUND = 10.0  # model.wall_free.SAG_BOUND
+BAIL_NOT_PD = 11  # compiled_dual.BAIL_NOT_PD: the free step has no minimiser
+# what an attempt is (o_kind): a contact solve, the wall-free search's answer, the arc
+CONTACT, FREE, ARC = 0, 1, 2
+
+
+@njit(cache=True)
+def _free_heights(u, alpha, a, fs):
+    """model.wall_free.free_heights: the cumulative sums of a sin α at the free nodes."""
+    y, n = 0.0, u.size
+    if fs == 1:
+        u[0] = 0.0
+    for i in range(alpha.size):
+        y += a * np.sin(alpha[i])
+        node = i + 1 - (fs - 1)
+        if 0 <= node < n:
+            u[node] = y
+
+
+@njit(cache=True)
+def _overlap(u, lo, hi):
+    """model.wall_free.wall_overlap: max(max(u − upper), max(lower − u))."""
+    up, dn = -np.inf, -np.inf
+    for i in range(u.size):
+        up = max(up, u[i] - hi[i])
+        dn = max(dn, lo[i] - u[i])
+    return max(up, dn)
+
+
+@njit(cache=True)
+def _wall_free_kind(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
+                    max_iter, request, free_lo, free_hi):
+    """The tests of solve_without_contact before its search: ARC (the arc is the answer),
+    FREE (search without walls), CONTACT (none: the contact solve), or -1 (the compiled
+    free step stopped where the numpy one would not: the caller's path)."""
+    n = lo.size
+    total = 0.0
+    for i in range(link_load.size):
+        total += abs(link_load[i])
+    loaded = total > 0.0
+    sag = 5.0 / 384.0 * total * L / F
+    mid = n // 2  # arc_far_past_wall: the middle free node alone
+    wall = hi[mid]
+    if np.isfinite(wall):
+        y = 0.0
+        for i in range(mid + fs - 1):
+            y += np.sin(ra[i])
+        y *= a
+        bound = SAG_BOUND * sag if loaded else 0.0
+        if y - wall > bound + 1e-9 * (L + abs(wall)):
+            return CONTACT
+    u = np.empty(n)
+    _free_heights(u, ra, a, fs)
+    over = _overlap(u, lo, hi)
+    if over >= 0:
+        if not loaded or over > SAG_BOUND * sag:
+            return CONTACT
+        z = np.zeros(n)
+        b = np.zeros(n, np.bool_)
+        got = _contact_step(ra, a, jl, jr, k, rest, fs, n, nodal_load, free_lo, free_hi, L, F,
+                            z, b, b, 0, max_iter, request)
+        if got[0] == BAIL_NOT_PD:
+            return CONTACT
+        if got[0] != 0:
+            return -1
+        if not _overlap(got[1], lo, hi) < 0:
+            return CONTACT
+        return FREE
+    if not loaded:
+        return ARC
+    return FREE
+
+
+@njit(cache=True)
+def _records(recs, used, rec, count):
+    """Append the ``count`` step records ``rec`` to the flat buffer ``recs`` (grown by
+    doubling): (buffer, its new length)."""
+    if used + count > recs.shape[1]:
+        bigger = np.empty((4, 2 * (used + count)))
+        bigger[:, :used] = recs[:, :used]
+        recs = bigger
+    recs[:, used:used + count] = rec[:, :count]
+    return recs, used + count
+
+
+@njit(cache=True)
+def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_load,
+             nodal_load, fs, lo, hi, L, F, wall, tol, max_outer, max_iter, request,
+             free_lo, free_hi, o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res,
+             o_off, o_count, j_code, j_stats, j_fu, j_fl, j_tres, conv, recs, used):
+    """One solve of a scene into ``row`` of the outputs, its step records appended to
+    ``recs``: (done, recs, used); not done: the solve kernel stopped."""
+    n = lo.size
+    kind = _wall_free_kind(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
+                           max_iter, request, free_lo, free_hi)
+    if kind < 0:
+        return False, recs, used
+    o_off[row] = used
+    if kind == ARC:
+        code, alpha, count = CONVERGED, ra.copy(), 0
+        R = np.zeros(n)
+    else:
+        code = -1
+        if kind == FREE:  # the equilibrium without walls (its start's shape, no warm set)
+            zb = np.zeros(n, np.bool_)
+            got = solve_chain(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, free_lo,
+                              free_hi, L, F, tol, max_outer, start, np.zeros(n), zb, zb, 0,
+                              max_iter, request, False)
+            if got[0] >= 10:
+                return False, recs, used
+            u = np.empty(n)
+            _free_heights(u, got[1], a, fs)
+            if got[0] == CONVERGED and _overlap(u, lo, hi) < 0:
+                code = CONVERGED
+            else:
+                kind = CONTACT
+        if kind == CONTACT:
+            got = solve_chain(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
+                              tol, max_outer, start, w_u, w_up, w_lo, flags, max_iter,
+                              request, False)
+            if got[0] >= 10:
+                return False, recs, used
+            code = got[0]
+        alpha, R, count = got[1], got[9], got[7]
+        o_rup[row], o_rlo[row], o_u[row], o_sig[row] = got[2], got[3], got[4], got[5]
+        recs, used = _records(recs, used, got[6], count)
+        if code == CONVERGED:
+            o_res[row] = got[8]
+    o_code[row], o_kind[row], o_count[row] = code, kind, count
+    o_alpha[row] = alpha
+    o_R[row] = R
+    ok = False
+    if code == CONVERGED:  # the judge, on the answer and the real walls
+        jc, st, fu, fl, _, _, tres, _, _ = judge_answer(
+            alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, wall, False,
+            R.copy(), np.zeros(n), tol, recs[2, used - count:used].copy())
+        j_code[row] = jc
+        j_stats[row] = st
+        j_fu[row], j_fl[row], j_tres[row] = fu, fl, tres
+        ok = accepted(jc == SETTLED, st, tol)
+    conv[row] = ok
+    return True, recs, used
+
+
+@njit(cache=True)
+def _nearest(s, by_h, theta, height, ok, touch, most, idx, val):
+    """Solved's _nearest over the accepted answers before ``s``: on its line in θ
+    (``by_h``) or at its θ (the other lines); nearest first, the latest answer per
+    value, all touching a wall as the nearest does. Fills ``idx``, ``val``; the count."""
+    at = theta[s] if by_h else height[s]
+    vals = np.empty(s)
+    ids = np.empty(s, np.int64)
+    c = 0
+    for i in range(s):
+        if not ok[i]:
+            continue
+        if by_h:
+            if height[i] != height[s]:
+                continue
+            v = theta[i]
+        else:
+            if theta[i] != theta[s]:
+                continue
+            v = height[i]
+        if v == at:
+            continue
+        j = 0
+        while j < c and vals[j] != v:
+            j += 1
+        vals[j], ids[j] = v, i
+        if j == c:
+            c += 1
+    for i in range(1, c):  # sort by value (insertion)
+        v, w = vals[i], ids[i]
+        j = i - 1
+        while j >= 0 and vals[j] > v:
+            vals[j + 1], ids[j + 1] = vals[j], ids[j]
+            j -= 1
+        vals[j + 1], ids[j + 1] = v, w
+    hi = 0
+    while hi < c and vals[hi] < at:
+        hi += 1
+    lo = hi - 1
+    got = 0
+    while got < most and (lo >= 0 or hi < c):
+        if hi >= c or (lo >= 0 and at - vals[lo] <= vals[hi] - at):
+            v, i, lo = vals[lo], ids[lo], lo - 1
+        else:
+            v, i, hi = vals[hi], ids[hi], hi + 1
+        if got and touch[i] != touch[idx[0]]:
+            break
+        idx[got], val[got] = i, v
+        got += 1
+    return got
+
+
+@njit(cache=True)
+def _extrapolations(t, ts, values, m):
+    """continuation.extrapolations: row j, the polynomial through the first j + 1 points
+    at t (the Lagrange weights of continuation._weights, in its order)."""
+    d = np.empty(m)
+    for i in range(m):
+        d[i] = t - ts[i]
+    W = np.zeros((m, m))
+    W[0, 0] = 1.0
+    for j in range(1, m):
+        for i in range(j):
+            W[j, i] = W[j - 1, i] * d[j] / (d[j] - d[i])
+        p = 1.0
+        for q in range(j):
+            p = p * (d[q] / (d[q] - d[j]))
+        W[j, j] = p
+    cols = values.shape[1]
+    ps = np.zeros((m, cols))
+    for j in range(m):
+        for i in range(m):
+            w = W[j, i]
+            for c in range(cols):
+                ps[j, c] += w * values[i, c]
+    return ps
+
+
+@njit(cache=True)
+def _best_degree(ps, m):
+    """continuation.best_degree: the row after the smallest change max|p_(j+1) − p_j|."""
+    if m < 3:
+        return ps[m - 1]
+    best, at = np.inf, 0
+    for j in range(m - 1):
+        worst = 0.0
+        for c in range(ps.shape[1]):
+            worst = max(worst, abs(ps[j + 1, c] - ps[j, c]))
+        if worst < best:
+            best, at = worst, j
+    return ps[at + 1]
+
+
+@njit(cache=True)
+def _predict(s, theta, height, ok, touch, alphas, most, adaptive):
+    """Solved.predict for scene ``s``: (start α, index of the answer whose last step
+    warm-starts it); index −1: a cold start."""
+    links = alphas.shape[1]
+    none = np.empty(0)
+    if most == 0:
+        return none, -1
+    li, lv = np.empty(most, np.int64), np.empty(most)
+    ai, av = np.empty(1, np.int64), np.empty(1)
+    nl = _nearest(s, True, theta, height, ok, touch, most, li, lv)
+    na = _nearest(s, False, theta, height, ok, touch, 1, ai, av)
+    line_touches = nl > 0 and touch[li[0]]
+    if na and not touch[ai[0]] and not line_touches:  # 1.
+        return alphas[ai[0]].copy(), ai[0]
+    if line_touches and nl < most and na and touch[ai[0]]:  # 2.
+        other_h = av[0]
+        ts, diff, c = np.empty(nl), np.empty((nl, links)), 0
+        for q in range(nl):
+            o = -1
+            for i in range(s):  # the latest accepted answer at (other_h, θ_q)
+                if ok[i] and height[i] == other_h and theta[i] == lv[q]:
+                    o = i
+            if o < 0 or not touch[o]:
+                break
+            ts[c] = lv[q]
+            diff[c] = alphas[li[q]] - alphas[o]
+            c += 1
+        if c:
+            ps = _extrapolations(theta[s], ts, diff, c)
+            return alphas[ai[0]] + ps[c - 1], li[0]
+    if nl:  # 3.
+        vals = np.empty((nl, links))
+        for q in range(nl):
+            vals[q] = alphas[li[q]]
+        ps = _extrapolations(theta[s], lv, vals, nl)
+        return (_best_degree(ps, nl) if adaptive else ps[nl - 1]).copy(), li[0]
+    if na:  # 4.
+        return alphas[ai[0]].copy(), ai[0]
+    return none, -1
+
+
+@njit(cache=True)
+def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, wall,
+               theta, height, tol, max_outer, max_iter, request, most, adaptive,
+               o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res, o_off, o_count,
+               j_code, j_stats, j_fu, j_fl, j_tres, conv, kept, failed, base):
+    """Every scene of the line in order; returns ``(code, records)``: code −1 all done,
+    s >= 0 the solve kernel stopped on scene s, −2 more warm starts failed than the
+    outputs have rows for. The outputs have a row per attempt: row s the first
+    attempt of scene s, rows from m on the cold retries of failed warm starts.
+    ``kept[s]``: the row of the answer kept; ``failed[s]``: the row of a failed warm
+    start (−1: none); ``base[s]``: the answer that started it (−1: cold);
+    ``records``: the step records (face solves, step length, max|Δα|, energy) of
+    every attempt, from column ``o_off[row]``, ``o_count[row]`` of them."""
+    m, n = lo.shape
+    spare = o_code.size
+    free_lo, free_hi = np.full(n, -np.inf), np.full(n, np.inf)
+    ok = np.zeros(m, np.bool_)  # accepted answers, what Solved.add records
+    touch = np.zeros(m, np.bool_)
+    alphas = np.empty(rest_alpha.shape)
+    zf, zb = np.zeros(n), np.zeros(n, np.bool_)
+    recs, used, retry = np.empty((4, 2 * m + 8)), 0, m
+    outs = (o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res, o_off, o_count,
+            j_code, j_stats, j_fu, j_fl, j_tres, conv)
+    for s in range(m):
+        start, b = _predict(s, theta, height, ok, touch, alphas, most, adaptive)
+        base[s], failed[s] = b, -1
+        w_u, w_up, w_lo, flags = zf, zb, zb, 0
+        if b >= 0 and o_kind[kept[b]] != ARC:  # the base's last contact step
+            sig = o_sig[kept[b]]
+            w_u, w_up, w_lo, flags = o_u[kept[b]], sig > 0, sig < 0, 7
+        args = (rest_alpha[s], a, jl, jr, k[s], rest[s], link_load[s], nodal_load, fs, lo[s],
+                hi[s], L, F, wall[s], tol, max_outer, max_iter, request, free_lo, free_hi)
+        done, recs, used = _attempt(s, start, w_u, w_up, w_lo, flags, *args, *outs, recs,
+                                    used)
+        if not done:
+            return s, recs
+        kept[s] = s
+        if b >= 0 and not conv[s]:  # the warm start failed: cold, in a spare row
+            if retry >= spare:
+                return -2, recs
+            done, recs, used = _attempt(retry, start[:0], zf, zb, zb, 0, *args, *outs, recs,
+                                        used)
+            if not done:
+                return s, recs
+            kept[s], failed[s] = retry, s
+            retry += 1
+        row = kept[s]
+        ok[s] = conv[row]
+        alphas[s] = o_alpha[row]
+        if ok[s]:
+            for i in range(n):
+                if j_fu[row, i] > 0:
+                    touch[s] = True
+                    break
+    return -1, recs

@@ -1,0 +1,107 @@
+"""A continuation line in one kernel call (:func:`lcpbench.model.batch_kernel.solve_line`).
+
+:func:`lcpbench.solve_many` hands a line here first; :func:`run_line` takes it
+when every scene is an actuator scene of one plane (the same scene but for θ and
+h, so :class:`~lcpbench.studies.continuation.Solved` sees one plane), with a chain
+the solve kernel takes (consecutive joints, flat rigid walls), one wall (no
+channel), below the large-N formulation and below the moderately heavy load
+(those go through :func:`lcpbench.model.compiled.drive`'s SQP steps). Otherwise,
+or where the solve kernel stops on a scene, it returns None and the line is
+solved scene by scene (:func:`lcpbench.studies.batch_compiled.solve_line`), as
+before. The results are :class:`~lcpbench.studies.batch_result.LineResult`,
+built from the kernel's arrays when read.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..model import large_n
+from ..model.compiled import applies, kernel_args
+from ..model.result import ContactResult
+from ..solvers.judge import DEFAULT_TOL
+from ..solvers.registry import DEFAULT, get_settings
+from .batch_compiled import moderately_heavy
+from .batch_result import LineOutput, results
+from .continuation import _POINTS
+
+#: (name, dtype, shape after the rows) of the kernel's outputs per attempt;
+#: "links", "n", "nj" and "stats" stand for the sizes
+_OUTPUTS = (("o_code", np.int64, ()), ("o_kind", np.int64, ()), ("o_alpha", float, ("links",)),
+            ("o_R", float, ("n",)), ("o_rup", float, ("n",)), ("o_rlo", float, ("n",)),
+            ("o_u", float, ("n",)), ("o_sig", float, ("n",)), ("o_res", float, (5,)),
+            ("o_off", np.int64, ()), ("o_count", np.int64, ()),
+            ("j_code", np.int64, ()), ("j_stats", float, ("stats",)), ("j_fu", float, ("n",)),
+            ("j_fl", float, ("n",)), ("j_tres", float, ("nj",)), ("conv", np.bool_, ()))
+#: rows for cold retries of failed warm starts: a share of the line (more if needed)
+SPARE = 8
+
+
+def _kernel():
+    from ..numba_cache import kernel_module  # numba at the first batch, not at import
+
+    return kernel_module("lcpbench.model.batch_kernel", "solve_line")
+
+
+def takes_line(chain) -> bool:
+    """Whether the line kernel takes a line of one plane whose chains are like ``chain``."""
+    return (applies(DEFAULT, "globalised", chain) and not large_n.applies(chain)
+            and not chain.channel and not moderately_heavy(chain))
+
+
+def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = "default",
+             predictor: str = "adaptive") -> list[ContactResult] | None:
+    """The results of the line (actuator scenes of one plane, checked, in
+    continuation order), or None: the kernel does not take it (the caller solves it
+    scene by scene)."""
+    if not scenes:
+        return []
+    chains = [s.chain() for s in scenes]
+    c0 = chains[0]
+    if not takes_line(c0):
+        return None
+    args0 = kernel_args(c0)
+    m, n, nj = len(chains), c0.free_nodes.size, args0[2].size
+    stacked = []
+    for f, size in (("rest_alpha", c0.links), ("joint_stiffness", nj), ("rest_joint", nj),
+                    ("link_load", c0.links), ("lower", n), ("upper", n)):
+        flat = np.concatenate([getattr(c, f) for c in chains])
+        if flat.size != m * size:  # chains of different sizes (not one plane)
+            return None
+        stacked.append(flat.astype(float, copy=False).reshape(m, size))
+    ra, k, rest, load, lo, hi = stacked
+    wall = np.array([c.wall for c in chains], dtype=float)
+    theta = np.array([s.theta for s in scenes], dtype=float)
+    height = np.array([s.height for s in scenes], dtype=float)
+    kern = _kernel()
+    st = get_settings(settings)
+    request = st.eps if st.eps is not None else DEFAULT_TOL
+    max_iter = st.max_iter if st.max_iter else 20 * n + 50
+    sizes = {"links": c0.links, "n": n, "nj": nj, "stats": len(kern.STATS)}
+    most = _POINTS.get(predictor, 0)
+    spare = max(SPARE, m // SPARE)
+    while True:
+        A = {name: np.empty((m + spare, *(sizes.get(d, d) for d in shape)), dtype=dt)
+             for name, dt, shape in _OUTPUTS}
+        A["conv"][:] = False
+        for name in ("kept", "failed", "base"):
+            A[name] = np.empty(m, np.int64)
+        t0 = time.perf_counter()
+        bad, A["records"] = kern.solve_line(
+            ra, args0[1], args0[2], args0[3], k, rest, load, args0[7], args0[8], lo, hi,
+            args0[11], args0[12], wall, theta, height, float(tol), int(max_outer),
+            int(max_iter), float(request), most, predictor == "adaptive",
+            *(A[name] for name, _, _ in _OUTPUTS), A["kept"], A["failed"], A["base"])
+        elapsed = time.perf_counter() - t0
+        if bad != -2:
+            break
+        spare = m  # more warm starts failed than rows were spared: again with room for all
+    if bad >= 0:
+        return None
+    return results(LineOutput(scenes, A, float(tol), int(max_outer), settings, predictor,
+                              elapsed / m, kern))
+
+
+__all__ = ["run_line", "takes_line"]

@@ -1,0 +1,195 @@
+"""A continuation line in one kernel call (lcpbench.model.batch_kernel, studies.batch_line).
+
+Each scene of the batch must be what one ``lcpbench.solve`` gives from the same start
+(the start chosen by the Python predictor, Solved, from the batch's own answers
+before it); the kernel's port of the predictor must choose as Solved does; the
+results, built when read, must carry what a single solve's carry.
+"""
+
+import dataclasses
+import pickle
+import random
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+import lcpbench
+from lcpbench import ActuatorScene, CantileverScene, ProblemError
+from lcpbench.bench.grid import PAPER_GRID
+from lcpbench.model.chain import node_positions
+from lcpbench.studies.batch import continuation_order
+from lcpbench.studies.batch_line import takes_line
+from lcpbench.studies.batch_result import LineResult
+from lcpbench.studies.continuation import Solved, new_solved, warm_or_cold
+
+
+def paper_scenes(links=140):
+    return [ActuatorScene(theta=t, height=h, links=links) for h in PAPER_GRID.height
+            for t in PAPER_GRID.theta]
+
+
+def _from_line(res) -> bool:
+    return isinstance(res, LineResult)
+
+
+@pytest.mark.parametrize("tol", [1e-3, 1e-8])
+def test_each_scene_is_one_solve_from_the_same_start(tol):
+    """Replay the line in Python: Solved predicts each scene from the batch's answers
+    before it, lcpbench.solve runs from that start (a failed warm start redone cold):
+    the same verdict, path and label, and the same answer to round-off."""
+    scenes = paper_scenes(links=60 if tol < 1e-6 else 140)
+    batch = lcpbench.solve_many(scenes, tol=tol)
+    assert all(_from_line(r) for r in batch)
+    order = continuation_order(scenes)
+    assert len(order) == 1
+    solved = new_solved("adaptive")
+    for i in order[0]:
+        scene, got = scenes[i], batch[i]
+        p = solved.predict(scene)
+        start = None if p is None else dataclasses.replace(p[1], alpha=p[0])
+        one = warm_or_cold(lambda s, sc=scene: lcpbench.solve(sc, tol=tol, start=s), start,
+                           "adaptive")
+        assert got.converged == one.converged and got.converged, (got.reason, one.reason)
+        assert got.extra["continuation"] == one.extra["continuation"]
+        assert got.outer_iterations == one.outer_iterations
+        assert [s.iterations for s in got.steps] == [s.iterations for s in one.steps]
+        F0 = max(one.total_force, scene.EI / scene.length**2)
+        assert abs(got.total_force - one.total_force) <= 1e-9 * F0
+        assert np.max(np.abs(got.alpha - one.alpha)) <= 1e-9
+        assert got.reason == one.reason
+        solved.add(scene, got)
+
+
+def test_results_are_built_when_read_and_carry_what_a_solve_carries():
+    scenes = [ActuatorScene(theta=t, height=3.0, links=40) for t in (120, 140, 160)]
+    batch = lcpbench.solve_many(scenes, tol=1e-6)
+    r = batch[1]
+    assert "_line" in r.__dict__ and "steps" not in r.__dict__  # nothing built yet
+    assert r.converged and r.outer_iterations == len(r.steps)  # (builds it)
+    assert "_line" not in r.__dict__
+    assert r.judgement.converged and r.judgement.failed == []
+    assert r.total_force == pytest.approx(float(np.sum(r.forces)), rel=0, abs=0)
+    x, y = node_positions(scenes[1].chain(), r.alpha)  # forward kinematics of α
+    assert np.array_equal(r.x, x) and np.array_equal(r.y, y)
+    assert np.allclose(r.gaps, 3.0 - y[r.free_nodes])
+    assert r.extra["engine"] == "compiled" and r.extra["judge"] == "compiled"
+    assert r.extra["last_step"].u.shape == r.forces.shape
+    # a field set before it is read keeps its value; pickling and replace build the rest
+    s = batch[2]
+    s.reason = "mine"
+    assert s.reason == "mine" and s.certificate.min_force >= -1e-12
+    back = pickle.loads(pickle.dumps(batch[0]))
+    assert back.total_force == batch[0].total_force and back.reason == batch[0].reason
+    assert np.array_equal(back.x, batch[0].x)
+    moved = dataclasses.replace(batch[0], alpha=batch[0].alpha + 0.0)
+    assert moved.steps == batch[0].steps
+    assert "converged" in repr(batch[0]) and batch[0].to_dict()["converged"]
+
+
+def _fake(converged, touches, alpha):
+    return SimpleNamespace(converged=converged, alpha=alpha, forces_lower=None,
+                           forces=np.array([1.0 if touches else 0.0]))
+
+
+@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("predictor", ["adaptive", "quadratic", "previous"])
+def test_the_kernels_predictor_chooses_as_solved(seed, predictor):
+    """Random histories on a plane (repeated scenes, answers that failed or touch):
+    the kernel's prediction has the same base and the same α as Solved.predict."""
+    from lcpbench.numba_cache import kernel_module
+    from lcpbench.studies.continuation import _POINTS
+
+    k = kernel_module("lcpbench.model.batch_kernel")
+    rng = random.Random(seed)
+    thetas = [90.0 + 7.5 * i for i in range(8)]
+    heights = [2.0, 2.5, 3.0, 4.0]
+    m, links = 40, 5
+    scenes = [ActuatorScene(theta=rng.choice(thetas), height=rng.choice(heights), links=links)
+              for _ in range(m)]
+    ok = np.array([rng.random() < 0.8 for _ in range(m)])
+    touch = np.array([rng.random() < 0.6 for _ in range(m)])
+    alphas = np.array([np.sin(np.arange(links) + s.theta / 30) * s.height
+                       + 0.01 * rng.random() for s in scenes])
+    theta = np.array([s.theta for s in scenes])
+    height = np.array([s.height for s in scenes])
+    solved = Solved(_POINTS[predictor], predictor == "adaptive")
+    fakes = [_fake(bool(o), bool(t), a) for o, t, a in zip(ok, touch, alphas)]
+    for s in range(m):
+        want = solved.predict(scenes[s])
+        start, base = k._predict(s, theta, height, ok, touch, alphas, _POINTS[predictor],
+                                 predictor == "adaptive")
+        if want is None:
+            assert base == -1 and start.size == 0
+        else:
+            assert fakes[base] is want[1]
+            assert np.allclose(start, want[0], rtol=1e-12, atol=1e-12)
+        solved.add(scenes[s], fakes[s])
+
+
+def test_mixed_batches_fall_back_per_plane_in_the_callers_order():
+    """Rigid and elastic walls in one group (two planes), a channel, a heavy chain and a
+    cantilever: the rigid plane runs in the line kernel, the others as before, and every
+    answer is the numpy continuation's."""
+    rigid = [ActuatorScene(theta=t, height=3.0, links=40) for t in (110, 130, 150, 170)]
+    soft = [ActuatorScene(theta=t, height=3.0, links=40, wall_stiffness=50.0)
+            for t in (120, 150)]
+    channel = [ActuatorScene(theta=t, height=1.0, links=40, channel=True) for t in (90, 120)]
+    heavy = [ActuatorScene(theta=t, height=3.0, links=30, weight=0.05) for t in (100, 140)]
+    scenes = rigid + soft + channel + heavy + [CantileverScene(links=30)]
+    random.Random(3).shuffle(scenes)
+    fast = lcpbench.solve_many(scenes, tol=1e-8)
+    ref = lcpbench.solve_many(scenes, tol=1e-8, engine="numpy")
+    assert [r.scene for r in fast] == scenes
+    for f, r in zip(fast, ref):
+        assert _from_line(f) == (f.scene in rigid)
+        assert f.converged == r.converged and f.converged, (f.reason, r.reason)
+        assert f.extra["continuation"] == r.extra["continuation"]
+        F0 = max(r.total_force, r.scene.EI / r.scene.length**2)
+        assert abs(f.total_force - r.total_force) <= 1e-8 * F0 + (
+            f.force_error_bound + r.force_error_bound) * F0
+
+
+def test_which_lines_the_kernel_takes():
+    assert takes_line(ActuatorScene(theta=150, height=3.0, links=40).chain())
+    for scene in (ActuatorScene(theta=150, height=1.0, links=40, channel=True),
+                  ActuatorScene(theta=150, height=3.0, links=40, wall_stiffness=50.0),
+                  ActuatorScene(theta=150, height=3.0, links=30, weight=0.05)):
+        assert not takes_line(scene.chain())
+
+
+def test_bad_scenes_in_a_batch_name_the_problem_as_solve_does():
+    good = ActuatorScene(theta=150, height=3.0, links=20)
+    with pytest.raises(ProblemError, match="scene must be") as batch:
+        lcpbench.solve_many([good, {"theta": 150}])
+    with pytest.raises(ProblemError, match="scene must be") as one:
+        lcpbench.solve({"theta": 150})
+    assert str(batch.value) == str(one.value)
+    auto = ActuatorScene(theta=150, height=3.0, links="auto")
+    with pytest.raises(ProblemError, match="links"):
+        lcpbench.solve_many([good, auto])
+
+
+def test_failed_warm_starts_are_redone_cold_as_scene_by_scene():
+    """With max_outer = 4 at tol 1e-10 many warm starts fail (more than the rows spared
+    for retries at first): each is redone cold, labelled and counted as the per-scene
+    loop (studies.batch_compiled) does it."""
+    from lcpbench.studies.batch_compiled import solve_line
+    from lcpbench.studies.batch_line import run_line
+
+    scenes = [ActuatorScene(theta=t, height=h, links=40) for h in (2.0, 3.0)
+              for t in range(10, 181, 10)]
+    line = [scenes[i] for i in continuation_order(scenes)[0]]
+    got = run_line(line, tol=1e-10, max_outer=4)
+    want = solve_line(line, tol=1e-10, max_outer=4)
+    assert got is not None
+    failed = [w for w in want if "failed" in w.extra["continuation"]]
+    assert len(failed) > 8 and any(w.converged for w in want)
+    for g, w in zip(got, want):
+        assert (g.converged, g.extra["continuation"], g.outer_iterations) == (
+            w.converged, w.extra["continuation"], w.outer_iterations)
+        assert g.reason == w.reason
+        assert g.extra.get("discarded", {}).get("outer_iterations") == \
+            w.extra.get("discarded", {}).get("outer_iterations")
+        F0 = max(abs(w.total_force), w.scene.EI / w.scene.length**2)
+        assert abs(g.total_force - w.total_force) <= 1e-9 * F0
