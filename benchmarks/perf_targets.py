@@ -56,16 +56,21 @@ def cpu_wall(fn):
     return run
 
 
-def full_solve(interleaved, wall, med, repeat: int) -> dict:
+def _full_contenders(wall) -> dict:
+    """The full solves of target 1 and 2, each a timed contender."""
     scene = ActuatorScene(**SCENE)
-    runs = interleaved({
+    return {
         "lcpbench.solve (compiled)": wall(lambda: lcpbench.solve(scene, tol=TOL)),
         "dense paper path (Lemke)": wall(lambda: solve_paper_dense(scene, tol=TOL)),
         "baseline analytic (hybr)": wall(lambda: solve_baseline(scene, jacobian="analytic")),
         "baseline fd (lm)": wall(lambda: solve_baseline(scene, jacobian="fd", method="lm")),
         "numpy reference (engine='numpy')": wall(
             lambda: lcpbench.solve(scene, tol=TOL, engine="numpy")),
-    }, repeat)
+    }
+
+
+def full_solve(interleaved, wall, med, repeat: int) -> dict:
+    runs = interleaved(_full_contenders(wall), repeat)
     rows = {name: {"median_s": med(r["times"]), "min_s": min(r["times"])}
             for name, r in runs.items()}
     fast = rows["lcpbench.solve (compiled)"]["median_s"]
@@ -85,12 +90,10 @@ def full_solve_warm(interleaved, wall, med, repeat: int, block: int = 5) -> dict
     the caches they emptied, while a 100 ms solve hardly notices; here every contender
     runs as it would over a grid of scenes, one after another (the finite-difference
     baseline, at 2 s a call, is left out for time; its cold-cache penalty is nil)."""
-    scene = ActuatorScene(**SCENE)
-    runs = interleaved({
-        "lcpbench.solve (compiled)": wall(lambda: lcpbench.solve(scene, tol=TOL)),
-        "dense paper path (Lemke)": wall(lambda: solve_paper_dense(scene, tol=TOL)),
-        "baseline analytic (hybr)": wall(lambda: solve_baseline(scene, jacobian="analytic")),
-    }, repeat, block=block)
+    every = _full_contenders(wall)
+    runs = interleaved({name: every[name] for name in (
+        "lcpbench.solve (compiled)", "dense paper path (Lemke)", "baseline analytic (hybr)")},
+        repeat, block=block)
     rows = {name: {"median_s": med(r["times"]), "min_s": min(r["times"])}
             for name, r in runs.items()}
     fast = rows["lcpbench.solve (compiled)"]["median_s"]
