@@ -21,9 +21,9 @@ README.md and docs/ state and explain.
 - Siconos' enumeration and its Murty, Bard and path-search pivot rules do
   not converge on the N = 140 contact step (docs/solvers.md).
 - The hard suite (``--grid hard``, results/hard/README.md): the undamped
-  driver passes the vertical at θ = 180°, h ≤ 1 mm; at N = 2000 the
-  back-ends but the banded active set run out of time or of their own
-  iterations; the judge refuses answers whose total force is within τ of the
+  driver passes the vertical at θ = 180°, h ≤ 1 mm; at N = 2000 most
+  back-ends run out of time or of their own iterations (the built-in active
+  set, on the banded step, takes 0.2 s); the judge refuses answers whose total force is within τ of the
   reference but whose force error bound is not (its conservatism), and
   answers that fail lcpbench's residual checks or are off by more than τ.
   These entries (:data:`HARD_EXPECTED`) name more than a status: the
@@ -151,7 +151,7 @@ HARD_EXPECTED: tuple[Expectation, ...] = (
     # (a) within τ of the reference, refused by the force error bound alone: the bound
     # |F_k − F_{k+1}| / (1 − ρ) takes ρ from the back-end's last step sizes, which an
     # inexact inner solve holds near 0.99 (κ = 100), so an answer 4e-9 off is bounded
-    # by 4e-7 > τ = 1e-7 (results/hard/README.md, "Why the judge refuses")
+    # by 4e-7 > τ = 1e-7 (results/hard/README.md, "Expected and unexpected failures")
     *(Expectation(b, frozenset({"not_converged"}),
                   "the judge's force error bound (×1/(1 − ρ) = ×100 on an inexact last "
                   "step) refuses an answer within τ of the reference: the bound is "
