@@ -11,6 +11,10 @@ import numpy as np
 
 from .saddle import TridiagonalFactor
 
+#: the dual walk's face moves fused into three passes (:mod:`.twisted_walk_kernel`);
+#: False: one compiled face move at a time (:mod:`.walk_kernel`), the same path
+FUSED = True
+
 
 def _kernel():
     from ..numba_cache import kernel_module  # numba: loads or compiles at first use
@@ -123,9 +127,10 @@ class TwistedFactor(TridiagonalFactor):
     def walk(self, ctl: np.ndarray, step, slack, u, g, sigma, wall, warm_up, warm_lo,
              has_lo: bool, tie: float, max_iter: int, seen: np.ndarray) -> int:
         """The dual walk's moves up to its next unviolated point, compiled
-        (:func:`lcpbench.linalg.walk_kernel.walk`, its return code), after a face solve
-        (the walk starts at the unconstrained minimiser); the factor is left on the
-        walk's last face (``resolve`` solves with it)."""
+        (:func:`lcpbench.linalg.twisted_walk_kernel.walk`, its return code; ``FUSED``
+        False: :func:`lcpbench.linalg.walk_kernel.walk`, the same path), after a face
+        solve (the walk starts at the unconstrained minimiser); the factor is left on
+        the walk's last face (``resolve`` solves with it)."""
         from ..numba_cache import kernel_module  # numba: loads or compiles at first use
 
         if self._fixed is None:
@@ -135,14 +140,20 @@ class TwistedFactor(TridiagonalFactor):
         prev, self._fixed = self._fixed, None  # invalid until the walk returns
         if self._walk_work is None:
             self._walk_work = (np.empty((3, n)), np.empty((2, n), np.bool_),
-                               np.empty(6 * n, np.int64))  # (written before read)
+                               np.empty(7 * n, np.int64))  # (written before read)
         f, b, i = self._walk_work
-        code = kernel_module("lcpbench.linalg.walk_kernel").walk(
-            self.rows, self.rrows, self.R, self._filled, self._snap, self.B, self._bfilled,
-            self._bsnap, self._tri, self._inv, self._invB, prev, ctl, step.lower, step.upper,
-            has_lo, slack, u, g, sigma, wall, warm_up, warm_lo, tie, max_iter, seen,
-            f[0], f[1], self._work[0], self._work[1], self._work[2], b[0], b[1],
-            i[:2 * n], i[2 * n:5 * n], i[5 * n:], f[2])
+        head = (self.rows, self.rrows, self.R, self._filled, self._snap, self.B, self._bfilled,
+                self._bsnap, self._tri, self._inv, self._invB, prev, ctl, step.lower,
+                step.upper, has_lo, slack, u, g, sigma, wall, warm_up, warm_lo, tie, max_iter,
+                seen)
+        if FUSED:
+            code = kernel_module("lcpbench.linalg.twisted_walk_kernel").walk(
+                *head, f[0], f[1], b[0], b[1], i[:2 * n], i[2 * n:5 * n], i[5 * n:6 * n],
+                f[2], i[6 * n:])
+        else:
+            code = kernel_module("lcpbench.linalg.walk_kernel").walk(
+                *head, f[0], f[1], self._work[0], self._work[1], self._work[2], b[0], b[1],
+                i[:2 * n], i[2 * n:5 * n], i[5 * n:6 * n], f[2])
         if code != 3:
             self._fixed, self._m = prev, int(ctl[0])
         return int(code)
