@@ -33,34 +33,46 @@ class TwistedFactor(TridiagonalFactor):
         self._state(np.ascontiguousarray(self.rows[::-1, ::-1]))
 
     @classmethod
-    def from_rows(cls, rows: np.ndarray, rrows: np.ndarray) -> TwistedFactor:
+    def from_rows(cls, rows: np.ndarray, rrows: np.ndarray, state: dict | None = None
+                  ) -> TwistedFactor:
         """The factor of the rows A = diag(√k) J given (C order, their first and last
         outer entries zero) and their mirror ``rrows = rows[::-1, ::-1]`` (the compiled
-        assembly writes both: :mod:`lcpbench.model.large_kernel`)."""
+        assembly writes both: :mod:`lcpbench.model.large_kernel`). ``state``: a dict
+        whose arrays the factor takes for its own (made there at first use; a factor
+        from scratch writes every entry before it reads it), for a caller that
+        factors step after step (:class:`lcpbench.model.large_n.StepWork`); no two
+        live factors may share one."""
         self = cls.__new__(cls)
         self.n = rows.shape[0]
         self.rows = rows
-        self.R = np.zeros((3, self.n))
         self.restart = True
         self._fixed = None
-        self._filled = np.zeros(self.n, np.bool_)
-        self._snap = np.zeros((self.n, 4))
-        self._inv = np.zeros(self.n)
-        self._state(rrows)
+        if state is None:
+            state = {}
+        if not state:
+            n = self.n
+            state.update(R=np.zeros((3, n)), filled=np.zeros(n, np.bool_),
+                         snap=np.zeros((n, 4)), inv=np.zeros(n))
+        self.R, self._filled = state["R"], state["filled"]
+        self._snap, self._inv = state["snap"], state["inv"]
+        self._state(rrows, state)
         return self
 
-    def _state(self, rrows: np.ndarray) -> None:
+    def _state(self, rrows: np.ndarray, state: dict | None = None) -> None:
         n = self.n
         self.rrows = rrows
-        self.B = np.zeros((3, n))
-        self._bfilled = np.zeros(n, np.bool_)
-        self._bsnap = np.zeros((n, 4))
-        self._invB = np.zeros(n)
-        self._tri = np.zeros(3)
+        if state is None:
+            state = {}
+        if "B" not in state:
+            state.update(B=np.zeros((3, n)), bfilled=np.zeros(n, np.bool_),
+                         bsnap=np.zeros((n, 4)), invB=np.zeros(n), tri=np.zeros(3),
+                         work=np.empty((3, n)), walk_work=None)
+        self.B, self._bfilled, self._bsnap = state["B"], state["bfilled"], state["bsnap"]
+        self._invB, self._tri, self._work = state["invB"], state["tri"], state["work"]
         self._m = n // 2
         self.rows_touched = 0
-        self._work = np.empty((3, n))  # face_move's
-        self._walk_work: tuple | None = None  # walk's
+        self._walk_work: tuple | None = state["walk_work"]  # walk's (made at first use)
+        self._shared = state
 
     def _twist(self, fixed: np.ndarray) -> tuple[int, int, int]:
         """(j0, k0, m): where the two passes restart for the face ``fixed``, and the twist."""
@@ -141,6 +153,7 @@ class TwistedFactor(TridiagonalFactor):
         if self._walk_work is None:
             self._walk_work = (np.empty((3, n)), np.empty((2, n), np.bool_),
                                np.empty(7 * n, np.int64))  # (written before read)
+            self._shared["walk_work"] = self._walk_work
         f, b, i = self._walk_work
         head = (self.rows, self.rrows, self.R, self._filled, self._snap, self.B, self._bfilled,
                 self._bsnap, self._tri, self._inv, self._invB, prev, ctl, step.lower,

@@ -96,12 +96,16 @@ def _solve(R, B, tri, invR, invB, m, S, g, hd, x):
         x[1] = (_r(S, g, hd, 1) - R[1, 0] * x[0]) * invR[1]
     if mb - 1 > 1:
         x[n - 2] = (_r(S, g, hd, n - 2) - B[1, 0] * x[n - 1]) * invB[1]
-    for i in range(2, max(m - 1, mb - 1)):
-        if i < m - 1:
-            x[i] = (_r(S, g, hd, i) - R[1, i - 1] * x[i - 1] - R[2, i - 2] * x[i - 2]) * invR[i]
-        if i < mb - 1:
-            j = n - 1 - i
-            x[j] = (_r(S, g, hd, j) - B[1, i - 1] * x[j + 1] - B[2, i - 2] * x[j + 2]) * invB[i]
+    both = min(m - 1, mb - 1)
+    for i in range(2, both):  # the two sweeps together (two dependency chains in flight)
+        x[i] = (_r(S, g, hd, i) - R[1, i - 1] * x[i - 1] - R[2, i - 2] * x[i - 2]) * invR[i]
+        j = n - 1 - i
+        x[j] = (_r(S, g, hd, j) - B[1, i - 1] * x[j + 1] - B[2, i - 2] * x[j + 2]) * invB[i]
+    for i in range(max(both, 2), m - 1):
+        x[i] = (_r(S, g, hd, i) - R[1, i - 1] * x[i - 1] - R[2, i - 2] * x[i - 2]) * invR[i]
+    for i in range(max(both, 2), mb - 1):
+        j = n - 1 - i
+        x[j] = (_r(S, g, hd, j) - B[1, i - 1] * x[j + 1] - B[2, i - 2] * x[j + 2]) * invB[i]
     s1 = _r(S, g, hd, m - 1)
     if m >= 2:
         s1 -= R[1, m - 2] * x[m - 2]
@@ -120,14 +124,17 @@ def _solve(R, B, tri, invR, invB, m, S, g, hd, x):
     y2 = (s2 - tri[1] * y1) / tri[2]
     x[m] = y2 / tri[2]
     x[m - 1] = (y1 - tri[1] * x[m]) / tri[0]
-    for s in range(max(m - 1, mb - 1)):
+    for s in range(min(m - 1, mb - 1)):  # top row m − 2 − s, bottom row mb − 2 − s
         i = m - 2 - s
-        if i >= 0:
-            x[i] = (x[i] - R[1, i] * x[i + 1] - R[2, i] * x[i + 2]) * invR[i]
+        x[i] = (x[i] - R[1, i] * x[i + 1] - R[2, i] * x[i + 2]) * invR[i]
         k = mb - 2 - s
-        if k >= 0:
-            j = n - 1 - k
-            x[j] = (x[j] - B[1, k] * x[j - 1] - B[2, k] * x[j - 2]) * invB[k]
+        j = n - 1 - k
+        x[j] = (x[j] - B[1, k] * x[j - 1] - B[2, k] * x[j - 2]) * invB[k]
+    for i in range(m - 2 - min(m - 1, mb - 1), -1, -1):
+        x[i] = (x[i] - R[1, i] * x[i + 1] - R[2, i] * x[i + 2]) * invR[i]
+    for k in range(mb - 2 - min(m - 1, mb - 1), -1, -1):
+        j = n - 1 - k
+        x[j] = (x[j] - B[1, k] * x[j - 1] - B[2, k] * x[j - 2]) * invB[k]
 
 
 @njit(cache=True)

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 
@@ -34,6 +35,20 @@ def assemble(alpha, a, k, rest, load, lower, upper, inv_a_cos, v, coef, phi0, or
     """Writes the step at α in increments (all arrays preallocated; n = alpha.size − 1
     free nodes, n joints): the fields of the ContactStep, its walls ``lo``/``hi`` about
     u₀, the rows of A = diag(√k) J and their mirror ``rrows`` (the twisted factor's)."""
+    sk = np.empty(k.size)
+    for j in range(k.size):
+        sk[j] = math.sqrt(k[j])
+    assemble_into(alpha, a, k, sk, rest, load, lower, upper, inv_a_cos, v, coef, phi0,
+                  origin, alpha0, phi_origin, bands, linear, lo, hi, rows, rrows,
+                  np.empty(alpha.size), np.empty(k.size))
+
+
+@njit(cache=True)
+def assemble_into(alpha, a, k, sk, rest, load, lower, upper, inv_a_cos, v, coef, phi0,
+                  origin, alpha0, phi_origin, bands, linear, lo, hi, rows, rrows, sin_alpha,
+                  work):
+    """:func:`assemble` with √k given (``sk``, the chain's) and sin α kept (``sin_alpha``,
+    for :func:`trial_energy_at`); ``work``: (n,)."""
     nl = alpha.size
     n = nl - 1
     y = 0.0
@@ -42,7 +57,9 @@ def assemble(alpha, a, k, rest, load, lower, upper, inv_a_cos, v, coef, phi0, or
         inv_a_cos[i] = 1.0 / (a * c)
         v[i] = math.tan(alpha[i]) - alpha[i]
         alpha0[i] = alpha[i]
-        y += a * math.sin(alpha[i])
+        sa = math.sin(alpha[i])
+        sin_alpha[i] = sa
+        y += a * sa
         if i < n:
             origin[i] = y  # the height of free node i + 1
     alpha0[nl - 1] += -y * inv_a_cos[nl - 1]  # the closure error of the pinned end
@@ -53,9 +70,8 @@ def assemble(alpha, a, k, rest, load, lower, upper, inv_a_cos, v, coef, phi0, or
         coef[j, 2] = wr
         phi0[j] = -v[j + 1] + v[j]
         phi_origin[j] = alpha0[j + 1] - alpha0[j]
-        sk = math.sqrt(k[j])
         for m in range(3):
-            rows[j, m] = coef[j, m] * sk
+            rows[j, m] = coef[j, m] * sk[j]
     rows[0, 0] = 0.0
     rows[n - 1, 2] = 0.0
     for j in range(n):
@@ -80,7 +96,9 @@ def assemble(alpha, a, k, rest, load, lower, upper, inv_a_cos, v, coef, phi0, or
         lo[i] = lower[i] - origin[i]
         hi[i] = upper[i] - origin[i]
     # the linear term: the factored gradient at u₀ (φ̂(u₀) = φ̂ at the origin exactly)
-    _gradient_at(coef, k, phi_origin.copy(), rest, load, linear)
+    for j in range(n):
+        work[j] = phi_origin[j]
+    _gradient_at(coef, k, work, rest, load, linear)
 
 
 @njit(cache=True)
@@ -179,6 +197,27 @@ def trial_energy(alpha, du, t, a, k, rest, link_load, out):
             return math.nan
         base = math.asin(s)
         if math.cos(alpha[i]) < 0.0:
+            base = math.pi - base
+        out[i] = base + 2 * math.pi * round((alpha[i] - base) / (2 * math.pi))
+    return energy(out, a, k, rest, link_load)
+
+
+@njit(cache=True)
+def trial_energy_at(alpha, sin_alpha, inv_a_cos, du, t, a, k, rest, link_load, out):
+    """:func:`trial_energy` at the α of a step assembled by :func:`assemble_into`, its
+    sin α and the sign of cos α (that of 1/(a cos α), a > 0) taken from the assembly:
+    the same numbers."""
+    nl = alpha.size
+    n = nl - 1
+    prev = 0.0
+    for i in range(nl):
+        nxt = t * du[i] if i < n else 0.0
+        s = sin_alpha[i] + (nxt - prev) / a
+        prev = nxt
+        if not (abs(s) < 1.0):  # also NaN
+            return math.nan
+        base = math.asin(s)
+        if inv_a_cos[i] < 0.0:
             base = math.pi - base
         out[i] = base + 2 * math.pi * round((alpha[i] - base) / (2 * math.pi))
     return energy(out, a, k, rest, link_load)
