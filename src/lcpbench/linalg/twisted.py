@@ -38,8 +38,9 @@ class TwistedFactor(TridiagonalFactor):
         """The factor of the rows A = diag(√k) J given (C order, their first and last
         outer entries zero) and their mirror ``rrows = rows[::-1, ::-1]`` (the compiled
         assembly writes both: :mod:`lcpbench.model.large_kernel`). ``state``: a dict
-        whose arrays the factor takes for its own (made there at first use; a factor
-        from scratch writes every entry before it reads it), for a caller that
+        whose arrays the factor takes for its own (made there at first use, not
+        zeroed: a factor from scratch writes every entry before it reads it, as
+        :func:`~.twisted_kernel._pass` assigns what it reaches), for a caller that
         factors step after step (:class:`lcpbench.model.large_n.StepWork`); no two
         live factors may share one."""
         self = cls.__new__(cls)
@@ -51,8 +52,8 @@ class TwistedFactor(TridiagonalFactor):
             state = {}
         if not state:
             n = self.n
-            state.update(R=np.zeros((3, n)), filled=np.zeros(n, np.bool_),
-                         snap=np.zeros((n, 4)), inv=np.zeros(n))
+            state.update(R=np.empty((3, n)), filled=np.empty(n, np.bool_),
+                         snap=np.empty((n, 4)), inv=np.empty(n))
         self.R, self._filled = state["R"], state["filled"]
         self._snap, self._inv = state["snap"], state["inv"]
         self._state(rrows, state)
@@ -64,8 +65,8 @@ class TwistedFactor(TridiagonalFactor):
         if state is None:
             state = {}
         if "B" not in state:
-            state.update(B=np.zeros((3, n)), bfilled=np.zeros(n, np.bool_),
-                         bsnap=np.zeros((n, 4)), invB=np.zeros(n), tri=np.zeros(3),
+            state.update(B=np.empty((3, n)), bfilled=np.empty(n, np.bool_),
+                         bsnap=np.empty((n, 4)), invB=np.empty(n), tri=np.zeros(3),
                          work=np.empty((3, n)), walk_work=None)
         self.B, self._bfilled, self._bsnap = state["B"], state["bfilled"], state["bsnap"]
         self._invB, self._tri, self._work = state["invB"], state["tri"], state["work"]
