@@ -28,6 +28,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ..linalg.twisted_kernel import face_solve as _face_solve
+
 
 @njit(cache=True)
 def assemble(alpha, a, k, rest, load, lower, upper, inv_a_cos, v, coef, phi0, origin,
@@ -221,3 +223,112 @@ def trial_energy_at(alpha, sin_alpha, inv_a_cos, du, t, a, k, rest, link_load, o
             base = math.pi - base
         out[i] = base + 2 * math.pi * round((alpha[i] - base) / (2 * math.pi))
     return energy(out, a, k, rest, link_load)
+
+
+@njit(cache=True)
+def _block_solve(rows, idx, a, b, grad, u2):
+    """u2[idx[a:b]] −= H[block]⁻¹ grad there: one block of
+    :meth:`lcpbench.model.large_n.IncrementStep.solve_on` (the rows that touch it, the
+    nodes between held; a fresh twisted factor; the same arithmetic). False on a zero
+    pivot or a block too small for a twist (the caller runs the numpy reference)."""
+    n = rows.shape[0]
+    r0, r1 = max(idx[a] - 1, 0), min(idx[b - 1] + 1, n - 1)
+    nb = r1 + 1 - r0
+    if nb < 5:
+        return False
+    sub = rows[r0:r1 + 1].copy()
+    sub[0, 0] = 0.0
+    sub[nb - 1, 2] = 0.0
+    rsub = np.empty((nb, 3))
+    for j in range(nb):
+        for c in range(3):
+            rsub[nb - 1 - j, 2 - c] = sub[j, c]
+    fixed = np.ones(nb, np.bool_)
+    full = np.zeros(nb)
+    for q in range(a, b):
+        fixed[idx[q] - r0] = False
+        full[idx[q] - r0] = grad[idx[q]]
+    rfixed = fixed[::-1].copy()
+    x = np.empty(nb)
+    ok = _face_solve(sub, rsub, fixed, rfixed, np.empty((3, nb)), np.empty(nb, np.bool_),
+                     np.empty((nb, 4)), np.empty((3, nb)), np.empty(nb, np.bool_),
+                     np.empty((nb, 4)), np.zeros(3), np.empty(nb), np.empty(nb), 0, 0,
+                     nb // 2, full, x)
+    if not ok:
+        return False
+    for q in range(a, b):
+        u2[idx[q]] -= x[idx[q] - r0]
+    return True
+
+
+@njit(cache=True)
+def _terms(hi, lo, u, R, L, F, nat, min_gap, min_r, comp_up, comp_lo):
+    """One node's terms of :func:`lcpbench.model.step_solver.step_residuals` (rigid
+    walls): gap and reaction of each wall row scaled by L and F, and the accumulators."""
+    up, low = np.isfinite(hi), np.isfinite(lo)
+    if up:
+        g = (hi - u) / L
+        r = (max(R, 0.0) if low else R) / F
+        nat = max(nat, abs(min(g, r)))
+        min_gap, min_r = min(min_gap, g), min(min_r, r)
+        comp_up += g * r
+    if low:
+        g = (u - lo) / L
+        r = (max(-R, 0.0) if up else -R) / F
+        nat = max(nat, abs(min(g, r)))
+        min_gap, min_r = min(min_gap, g), min(min_r, r)
+        comp_lo += g * r
+    return nat, min_gap, min_r, comp_up, comp_lo
+
+
+@njit(cache=True)
+def residuals(u, coef, k, phi_origin, rest, load, origin, rows, bands, linear, lo, hi, L, F):
+    """:func:`lcpbench.model.step_solver.step_residuals` of a large-N step in increments
+    (rigid walls): ``(ok, [natural, min_gap, min_reaction, complementarity, term_size],
+    R)``; not ok where the heights are not finite or the nodes with no wall row cannot
+    be re-solved here (the caller runs the numpy reference). The same sums as the
+    reference, except Σ g·r (complementarity, reported, not judged) summed in order."""
+    n = u.size
+    for i in range(n):
+        if not np.isfinite(u[i]):
+            return False, np.zeros(5), np.full(n, np.nan)
+    u2 = u.copy()
+    m = np.empty(n)
+    nfree = 0
+    for i in range(n):
+        if not (np.isfinite(hi[i]) or np.isfinite(lo[i])):
+            nfree += 1
+    if nfree:  # _complete_heights: the nodes with no wall row, re-solved exactly
+        if nfree * 2 > n:
+            return False, np.zeros(5), np.full(n, np.nan)
+        idx = np.empty(nfree, np.int64)
+        q = 0
+        for i in range(n):
+            if not (np.isfinite(hi[i]) or np.isfinite(lo[i])):
+                idx[q] = i
+                q += 1
+        grad = np.empty(n)
+        gradient(coef, k, phi_origin, rest, load, origin, u2, grad, m)
+        a = 0
+        for q in range(1, nfree + 1):  # runs of idx two or more nodes apart: blocks
+            if q == nfree or idx[q] - idx[q - 1] > 2:
+                if not _block_solve(rows, idx, a, q, grad, u2):
+                    return False, np.zeros(5), np.full(n, np.nan)
+                a = q
+    R = np.empty(n)
+    gradient(coef, k, phi_origin, rest, load, origin, u2, R, m)
+    for i in range(n):
+        R[i] = -R[i]
+    nat, min_gap, min_r, comp_up, comp_lo, term = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0
+    for i in range(n):
+        nat, min_gap, min_r, comp_up, comp_lo = _terms(
+            hi[i], lo[i], u2[i], R[i], L, F, nat, min_gap, min_r, comp_up, comp_lo)
+        if np.isfinite(hi[i]) or np.isfinite(lo[i]):  # banded_matvec(|H|, |u|) + |c|
+            s = abs(bands[0, i]) * abs(u2[i])
+            for kk in (1, 2):
+                if i - kk >= 0:
+                    s += abs(bands[kk, i - kk]) * abs(u2[i - kk])
+                if i + kk < n:
+                    s += abs(bands[kk, i]) * abs(u2[i + kk])
+            term = max(term, s + abs(linear[i]))
+    return True, np.array([nat, min_gap, min_r, abs(comp_up) + abs(comp_lo), term / F]), R

@@ -133,6 +133,22 @@ class IncrementStep(ContactStep):
         return g
 
 
+    def compiled_residuals(self, u: np.ndarray):
+        """step_residuals' ``(residuals, R)`` in one compiled call
+        (:func:`~lcpbench.model.large_kernel.residuals`, independent of the walk), or
+        None (the numpy reference decides). Rigid walls only, as every step here."""
+        if self.upper_stiffness is not None or self.lower_stiffness is not None:
+            return None
+        ok, res, R = _kernel().residuals(
+            np.ascontiguousarray(u, dtype=float), self.coef, self.stiffness, self.phi_origin,
+            self.rest_joint, self.nodal_load, self.origin, self.factor.rows, self.bands,
+            self.linear, self.lower, self.upper, float(self.length_scale),
+            float(self.force_scale))
+        if not ok:
+            return None
+        return dict(zip(("natural", "min_gap", "min_reaction", "complementarity",
+                         "term_size"), map(float, res), strict=True)), R
+
     def solve_on(self, idx: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         """H[idx, idx]⁻¹ rhs. A row of A touches three consecutive nodes, so runs of
         ``idx`` two or more nodes apart are independent blocks, each solved on the
