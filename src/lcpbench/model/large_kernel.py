@@ -29,6 +29,7 @@ import numpy as np
 from numba import njit
 
 from ..linalg.twisted_kernel import face_solve as _face_solve
+from ..linalg.twisted_kernel import resolve as _resolve
 
 
 @njit(cache=True)
@@ -332,3 +333,45 @@ def residuals(u, coef, k, phi_origin, rest, load, origin, rows, bands, linear, l
                     s += abs(bands[kk, i]) * abs(u2[i + kk])
             term = max(term, s + abs(linear[i]))
     return True, np.array([nat, min_gap, min_r, abs(comp_up) + abs(comp_lo), term / F]), R
+
+
+@njit(cache=True)
+def _free_residual(coef, k, phi_origin, rest, load, origin, S, u, g, r, m):
+    """g = the gradient at u, r = g off S (0 on S); returns max|r|."""
+    gradient(coef, k, phi_origin, rest, load, origin, u, g, m)
+    size = 0.0
+    bad = False
+    for i in range(u.size):
+        r[i] = 0.0 if S[i] else g[i]
+        a = abs(r[i])
+        if a > size:
+            size = a
+        elif a != a:  # NaN: np.max's answer
+            bad = True
+    return np.nan if bad else size
+
+
+@njit(cache=True)
+def walk_refine(coef, k, phi_origin, rest, load, origin, R, B, tri, invR, invB, m, S, u,
+                rounds):
+    """The dual walk's refinement at an optimum it found
+    (:func:`lcpbench.solvers.compiled_walk.dual_walk`): one step with the exact gradient
+    on the face last factored, then :func:`lcpbench.solvers.banded._refine` (more
+    while the free nodes' residual halves, at most ``rounds``), the same arithmetic.
+    ``u`` on the walls on S; returns (u, g)."""
+    n = u.size
+    g, r, w = np.empty(n), np.empty(n), np.empty(n)
+    _free_residual(coef, k, phi_origin, rest, load, origin, S, u, g, r, w)
+    _resolve(R, B, tri, invR, invB, m, r)
+    u = u - r
+    size = _free_residual(coef, k, phi_origin, rest, load, origin, S, u, g, r, w)
+    g_v, r_v = np.empty(n), np.empty(n)
+    for _ in range(rounds):
+        _resolve(R, B, tri, invR, invB, m, r)
+        v = u - r
+        size_v = _free_residual(coef, k, phi_origin, rest, load, origin, S, v, g_v, r_v, w)
+        if not size_v < 0.5 * size:
+            break
+        u, g, size = v, g_v, size_v
+        r, r_v, g_v = r_v, r, np.empty(n)
+    return u, g

@@ -149,6 +149,19 @@ class IncrementStep(ContactStep):
         return dict(zip(("natural", "min_gap", "min_reaction", "complementarity",
                          "term_size"), map(float, res), strict=True)), R
 
+    def walk_refine(self, S: np.ndarray, u: np.ndarray, rounds: int = 4):
+        """``(u, g)``: the dual walk's refinement at an optimum (``u`` on the walls on S)
+        in one compiled call on the face its twisted factor holds
+        (:func:`~lcpbench.model.large_kernel.walk_refine`: the arithmetic of
+        :func:`lcpbench.solvers.compiled_walk.dual_walk` and
+        :func:`lcpbench.solvers.banded._refine`)."""
+        H = self.factor
+        return _kernel().walk_refine(self.coef, self.stiffness, self.phi_origin,
+                                     self.rest_joint, self.nodal_load, self.origin, H.R, H.B,
+                                     H._tri, H._inv, H._invB, H._m,
+                                     np.ascontiguousarray(S, dtype=np.bool_),
+                                     np.ascontiguousarray(u, dtype=float), int(rounds))
+
     def solve_on(self, idx: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         """H[idx, idx]⁻¹ rhs. A row of A touches three consecutive nodes, so runs of
         ``idx`` two or more nodes apart are independent blocks, each solved on the
