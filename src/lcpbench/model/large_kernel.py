@@ -41,24 +41,35 @@ def assemble(alpha, a, k, rest, load, lower, upper, inv_a_cos, v, coef, phi0, or
     sk = np.empty(k.size)
     for j in range(k.size):
         sk[j] = math.sqrt(k[j])
-    assemble_into(alpha, a, k, sk, rest, load, lower, upper, inv_a_cos, v, coef, phi0,
-                  origin, alpha0, phi_origin, bands, linear, lo, hi, rows, rrows,
+    assemble_into(alpha, a, k, sk, rest, load, lower, upper, inv_a_cos, coef, origin,
+                  alpha0, phi_origin, bands, linear, lo, hi, rows, rrows,
                   np.empty(alpha.size), np.empty(k.size))
+    tangent_terms(alpha, v, phi0)
 
 
 @njit(cache=True)
-def assemble_into(alpha, a, k, sk, rest, load, lower, upper, inv_a_cos, v, coef, phi0,
-                  origin, alpha0, phi_origin, bands, linear, lo, hi, rows, rrows, sin_alpha,
-                  work):
-    """:func:`assemble` with √k given (``sk``, the chain's) and sin α kept (``sin_alpha``,
-    for :func:`trial_energy_at`); ``work``: (n,)."""
+def tangent_terms(alpha, v, phi0):
+    """The fields ``v`` = tan α − α and ``phi0`` of the step at α (the height form's
+    φ̂(0); the steps in increments never read them, so :func:`assemble_into` leaves
+    them to this, called on first use)."""
+    for i in range(alpha.size):
+        v[i] = math.tan(alpha[i]) - alpha[i]
+    for j in range(phi0.size):
+        phi0[j] = -v[j + 1] + v[j]
+
+
+@njit(cache=True)
+def assemble_into(alpha, a, k, sk, rest, load, lower, upper, inv_a_cos, coef, origin,
+                  alpha0, phi_origin, bands, linear, lo, hi, rows, rrows, sin_alpha, work):
+    """:func:`assemble` with √k given (``sk``, the chain's), sin α kept (``sin_alpha``,
+    for :func:`trial_energy_at`) and ``v``, ``phi0`` left to :func:`tangent_terms`;
+    ``work``: (n,)."""
     nl = alpha.size
     n = nl - 1
     y = 0.0
     for i in range(nl):
         c = math.cos(alpha[i])
         inv_a_cos[i] = 1.0 / (a * c)
-        v[i] = math.tan(alpha[i]) - alpha[i]
         alpha0[i] = alpha[i]
         sa = math.sin(alpha[i])
         sin_alpha[i] = sa
@@ -71,7 +82,6 @@ def assemble_into(alpha, a, k, sk, rest, load, lower, upper, inv_a_cos, v, coef,
         coef[j, 0] = wl
         coef[j, 1] = -wl - wr
         coef[j, 2] = wr
-        phi0[j] = -v[j + 1] + v[j]
         phi_origin[j] = alpha0[j + 1] - alpha0[j]
         for m in range(3):
             rows[j, m] = coef[j, m] * sk[j]

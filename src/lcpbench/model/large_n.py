@@ -118,6 +118,17 @@ class IncrementStep(ContactStep):
         self._cols = tuple(slice(b0 + k, b0 + k + nj) for k in range(3))
         self._m = np.empty(self.size)
 
+    def __getattr__(self, name: str):
+        """``v`` and ``phi0``, computed on first use (:func:`increments_at` leaves them)."""
+        tangent = self.__dict__.get("_tangent")
+        if name in ("v", "phi0") and tangent is not None:
+            v, phi0 = tangent
+            _kernel().tangent_terms(self.alpha, v, phi0)
+            self.v, self.phi0 = v, phi0
+            del self._tangent
+            return getattr(self, name)
+        raise AttributeError(name)
+
     def gradient(self, u: np.ndarray) -> np.ndarray:
         g = np.empty(self.size)
         _kernel().gradient(self.coef, self.stiffness, self.phi_origin, self.rest_joint,
@@ -234,17 +245,20 @@ def increments_at(chain: Chain, alpha: np.ndarray, work: StepWork | None = None
     bands = work.bands
     n = nl - 1
     _kernel().assemble_into(alpha, float(chain.link_length), k, sk, rest, load, lower, upper,
-                            inv_a_cos, v, coef, phi0, origin, alpha0, phi_origin, bands,
+                            inv_a_cos, coef, origin, alpha0, phi_origin, bands,
                             linear, lo, hi, rows, rrows, sin_alpha, tmp)
     step = IncrementStep(
         bands=bands, linear=linear, lower=lo, upper=hi, alpha=alpha, inv_a_cos=inv_a_cos,
-        v=v, free_nodes=chain.free_nodes, links=chain.links, base=base[1:n + 1], coef=coef,
-        phi0=phi0, origin=np.full(n, 0.0), alpha0=alpha0, phi_origin=phi_origin,
+        v=None, free_nodes=chain.free_nodes, links=chain.links, base=base[1:n + 1], coef=coef,
+        phi0=None, origin=np.full(n, 0.0), alpha0=alpha0, phi_origin=phi_origin,
         stiffness=k, rest_joint=rest, nodal_load=load, length_scale=chain.length,
         force_scale=chain.force_scale, upper_stiffness=chain.upper_stiffness,
         lower_stiffness=chain.lower_stiffness,
         factor=TwistedFactor.from_rows(rows, rrows, state=work.factor_state), heights=origin)
     step.sin_alpha = sin_alpha
+    # v and phi0 (a tan per link) on first use: the steps in increments never read them
+    step._tangent = (v, phi0)
+    del step.v, step.phi0
     return step
 
 
