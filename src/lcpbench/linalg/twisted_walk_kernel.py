@@ -145,10 +145,9 @@ def _update(A, S, wall, u, g, x, step, hi, lo, has_lo, slack):
     the range the next picks scan; :func:`_picks_in`)."""
     n = u.size
     first, last = n, -1
-    # window: d at i − 1, i, i + 1 (dm, d0, d1); A d at i − 1, i (ym, y0)
+    # window: d at i, i + 1 (d0, d1); A d at i − 1, i (ym, y0)
     d0 = _d(S, wall, u, x, 0)
     d1 = _d(S, wall, u, x, 1) if n > 1 else 0.0
-    dm = 0.0
     ym = 0.0
     y0 = A[0, 1] * d0
     if n > 1:
@@ -179,7 +178,7 @@ def _update(A, S, wall, u, g, x, step, hi, lo, has_lo, slack):
                 if first == n:
                     first = i
                 last = i
-        dm, d0, d1 = d0, d1, d2
+        d0, d1 = d1, d2
         ym, y0 = y0, y1
     return first, last
 
