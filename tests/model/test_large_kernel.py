@@ -135,3 +135,19 @@ def test_compiled_step_residuals_are_the_reference_residuals(links, seed):
     bad = u.copy()
     bad[3] = np.nan
     assert step.compiled_residuals(bad) is None  # the reference reports NaN heights
+
+
+def test_outer_steps_that_rewrite_one_set_of_arrays_give_fresh_arrays_answer(monkeypatch):
+    """The large-N driver assembles every outer step into one :class:`large_n.StepWork`;
+    with fresh arrays for each step (as before) the solve is the same, bit for bit."""
+    import lcpbench
+    from lcpbench.model import large_driver
+
+    scene = ActuatorScene(150.0, 3.0, links=6000)
+    reused = lcpbench.solve(scene, tol=1e-3)
+    fresh = large_n.increments_at
+    monkeypatch.setattr(large_driver, "increments_at", lambda chain, alpha, work: fresh(chain, alpha))
+    new = lcpbench.solve(scene, tol=1e-3)
+    assert reused.extra["engine"].startswith("numpy (large N")
+    assert np.array_equal(reused.alpha, new.alpha) and reused.total_force == new.total_force
+    assert reused.converged == new.converged

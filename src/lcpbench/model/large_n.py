@@ -214,9 +214,9 @@ def _chain_arrays(chain: Chain) -> tuple:
 
 class StepWork:
     """The arrays of one :func:`increments_at` step (and its twisted factor's state), to
-    be written again by a later step: the driver keeps two and takes them in turn, so a
-    step's arrays live until the step after next (at N = 10⁵ fresh arrays cost ~5,000
-    page faults a step). Never share one between steps that are alive together."""
+    be written again by a later step (the large-N driver's outer steps: at N = 10⁵
+    fresh arrays cost ~5,000 page faults a step). The next step's assembly overwrites
+    this step: never use one for two steps that are read together."""
 
     def __init__(self, links: int):
         nl, n = links, links - 1
