@@ -70,7 +70,8 @@ _HOLDERS: list = []  # callers' one-element caches of a kernel module (see held)
 KERNEL_FILES = ("model/compiled_kernel.py", "model/compiled_dual.py", "model/judge_kernel.py",
                 "model/driver_kernel.py", "model/large_kernel.py", "linalg/givens_kernel.py",
                 "linalg/face_kernel.py", "linalg/twisted_kernel.py", "linalg/walk_kernel.py",
-                "linalg/ldl_kernel.py", "model/batch_kernel.py", "model/batch_verdict.py")
+                "linalg/ldl_kernel.py", "model/batch_kernel.py", "model/batch_verdict.py",
+                "linalg/twisted_walk_kernel.py")
 #: the name of the ahead-of-time extension module (one per cache directory and machine)
 AOT_NAME = "lcpbench_aot"
 MANIFEST = "manifest.json"

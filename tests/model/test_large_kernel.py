@@ -80,3 +80,74 @@ def test_block_solves_match_a_dense_solve_of_the_block():
         want = np.linalg.solve(H[np.ix_(idx, idx)], rhs)
         got = step.solve_on(idx, rhs)
         assert np.max(np.abs(got - want)) <= 1e-8 * np.max(np.abs(want))
+
+
+@pytest.mark.parametrize("links", [300, 20000])
+def test_trial_from_the_assembly_is_the_trial_from_alpha(links):
+    """The line search's trial with the assembly's sin α and sign of cos α
+    (:func:`large_kernel.trial_energy_at`) gives the chain and energy of the trial
+    from α alone, bit for bit."""
+    chain, alpha = _chain_alpha(links)
+    step = large_n.increments_at(chain, alpha, large_n.StepWork(chain.links))
+    rng = np.random.default_rng(4)
+    du = 1e-2 / links * rng.standard_normal(chain.free_nodes.size)
+    fast, plain = large_n.trial_of(chain, alpha, du, step), large_n.trial_of(chain, alpha, du)
+    for t in (1.0, 0.5, 0.125):
+        (a, E), (b, F) = fast(t), plain(t)
+        assert np.array_equal(a, b) and E == F
+
+
+def _numpy_residuals(step, u):
+    from lcpbench.model import step_solver
+
+    class Plain:  # the step without its compiled residuals: the numpy reference runs
+        def __getattr__(self, name):
+            if name == "compiled_residuals":
+                raise AttributeError(name)
+            return getattr(step, name)
+
+    return step_solver.step_residuals(Plain(), u)
+
+
+@pytest.mark.parametrize("links,seed", [(400, 0), (20000, 1)])
+def test_compiled_step_residuals_are_the_reference_residuals(links, seed):
+    """The step judge's residuals in one kernel against step_residuals' numpy on a
+    step answer (the walk's) and on heights off it: the same reactions and verdict
+    terms bit for bit (Σ g·r, reported only, summed in another order)."""
+    from lcpbench.solvers.banded import solve_banded_qp
+
+    chain, alpha = _chain_alpha(links, seed)
+    step = large_n.increments_at(chain, alpha)
+    u = solve_banded_qp(step).u
+    rng = np.random.default_rng(seed)
+    for x in (u, u + 1e-6 * rng.standard_normal(u.size)):
+        got, R = step.compiled_residuals(x)
+        want, R_ref = _numpy_residuals(step, x)
+        assert np.array_equal(R, R_ref)
+        for key in ("natural", "min_gap", "min_reaction", "term_size"):
+            assert got[key] == want[key], key
+        # a sum of n terms in another order: within n ε Σ|g r| of each other
+        up = np.isfinite(step.upper)
+        size = np.sum(np.abs((step.upper[up] - x[up]) / step.length_scale
+                             * (R_ref[up] / step.force_scale)))
+        assert abs(got["complementarity"] - want["complementarity"]) <= \
+            x.size * np.finfo(float).eps * size
+    bad = u.copy()
+    bad[3] = np.nan
+    assert step.compiled_residuals(bad) is None  # the reference reports NaN heights
+
+
+def test_outer_steps_that_rewrite_one_set_of_arrays_give_fresh_arrays_answer(monkeypatch):
+    """The large-N driver assembles every outer step into one :class:`large_n.StepWork`;
+    with fresh arrays for each step (as before) the solve is the same, bit for bit."""
+    import lcpbench
+    from lcpbench.model import large_driver
+
+    scene = ActuatorScene(150.0, 3.0, links=6000)
+    reused = lcpbench.solve(scene, tol=1e-3)
+    fresh = large_n.increments_at
+    monkeypatch.setattr(large_driver, "increments_at", lambda chain, alpha, work: fresh(chain, alpha))
+    new = lcpbench.solve(scene, tol=1e-3)
+    assert reused.extra["engine"].startswith("numpy (large N")
+    assert np.array_equal(reused.alpha, new.alpha) and reused.total_force == new.total_force
+    assert reused.converged == new.converged

@@ -11,6 +11,10 @@ import numpy as np
 
 from .saddle import TridiagonalFactor
 
+#: the dual walk's face moves fused into three passes (:mod:`.twisted_walk_kernel`);
+#: False: one compiled face move at a time (:mod:`.walk_kernel`), the same path
+FUSED = True
+
 
 def _kernel():
     from ..numba_cache import kernel_module  # numba: loads or compiles at first use
@@ -29,34 +33,47 @@ class TwistedFactor(TridiagonalFactor):
         self._state(np.ascontiguousarray(self.rows[::-1, ::-1]))
 
     @classmethod
-    def from_rows(cls, rows: np.ndarray, rrows: np.ndarray) -> TwistedFactor:
+    def from_rows(cls, rows: np.ndarray, rrows: np.ndarray, state: dict | None = None
+                  ) -> TwistedFactor:
         """The factor of the rows A = diag(√k) J given (C order, their first and last
         outer entries zero) and their mirror ``rrows = rows[::-1, ::-1]`` (the compiled
-        assembly writes both: :mod:`lcpbench.model.large_kernel`)."""
+        assembly writes both: :mod:`lcpbench.model.large_kernel`). ``state``: a dict
+        whose arrays the factor takes for its own (made there at first use, not
+        zeroed: a factor from scratch writes every entry before it reads it, as
+        :func:`~.twisted_kernel._pass` assigns what it reaches), for a caller that
+        factors step after step (:class:`lcpbench.model.large_n.StepWork`); no two
+        live factors may share one."""
         self = cls.__new__(cls)
         self.n = rows.shape[0]
         self.rows = rows
-        self.R = np.zeros((3, self.n))
         self.restart = True
         self._fixed = None
-        self._filled = np.zeros(self.n, np.bool_)
-        self._snap = np.zeros((self.n, 4))
-        self._inv = np.zeros(self.n)
-        self._state(rrows)
+        if state is None:
+            state = {}
+        if not state:
+            n = self.n
+            state.update(R=np.empty((3, n)), filled=np.empty(n, np.bool_),
+                         snap=np.empty((n, 4)), inv=np.empty(n))
+        self.R, self._filled = state["R"], state["filled"]
+        self._snap, self._inv = state["snap"], state["inv"]
+        self._state(rrows, state)
         return self
 
-    def _state(self, rrows: np.ndarray) -> None:
+    def _state(self, rrows: np.ndarray, state: dict | None = None) -> None:
         n = self.n
         self.rrows = rrows
-        self.B = np.zeros((3, n))
-        self._bfilled = np.zeros(n, np.bool_)
-        self._bsnap = np.zeros((n, 4))
-        self._invB = np.zeros(n)
-        self._tri = np.zeros(3)
+        if state is None:
+            state = {}
+        if "B" not in state:
+            state.update(B=np.empty((3, n)), bfilled=np.empty(n, np.bool_),
+                         bsnap=np.empty((n, 4)), invB=np.empty(n), tri=np.zeros(3),
+                         work=np.empty((3, n)), walk_work=None)
+        self.B, self._bfilled, self._bsnap = state["B"], state["bfilled"], state["bsnap"]
+        self._invB, self._tri, self._work = state["invB"], state["tri"], state["work"]
         self._m = n // 2
         self.rows_touched = 0
-        self._work = np.empty((3, n))  # face_move's
-        self._walk_work: tuple | None = None  # walk's
+        self._walk_work: tuple | None = state["walk_work"]  # walk's (made at first use)
+        self._shared = state
 
     def _twist(self, fixed: np.ndarray) -> tuple[int, int, int]:
         """(j0, k0, m): where the two passes restart for the face ``fixed``, and the twist."""
@@ -123,9 +140,10 @@ class TwistedFactor(TridiagonalFactor):
     def walk(self, ctl: np.ndarray, step, slack, u, g, sigma, wall, warm_up, warm_lo,
              has_lo: bool, tie: float, max_iter: int, seen: np.ndarray) -> int:
         """The dual walk's moves up to its next unviolated point, compiled
-        (:func:`lcpbench.linalg.walk_kernel.walk`, its return code), after a face solve
-        (the walk starts at the unconstrained minimiser); the factor is left on the
-        walk's last face (``resolve`` solves with it)."""
+        (:func:`lcpbench.linalg.twisted_walk_kernel.walk`, its return code; ``FUSED``
+        False: :func:`lcpbench.linalg.walk_kernel.walk`, the same path), after a face
+        solve (the walk starts at the unconstrained minimiser); the factor is left on
+        the walk's last face (``resolve`` solves with it)."""
         from ..numba_cache import kernel_module  # numba: loads or compiles at first use
 
         if self._fixed is None:
@@ -135,14 +153,21 @@ class TwistedFactor(TridiagonalFactor):
         prev, self._fixed = self._fixed, None  # invalid until the walk returns
         if self._walk_work is None:
             self._walk_work = (np.empty((3, n)), np.empty((2, n), np.bool_),
-                               np.empty(6 * n, np.int64))  # (written before read)
+                               np.empty(7 * n, np.int64))  # (written before read)
+            self._shared["walk_work"] = self._walk_work
         f, b, i = self._walk_work
-        code = kernel_module("lcpbench.linalg.walk_kernel").walk(
-            self.rows, self.rrows, self.R, self._filled, self._snap, self.B, self._bfilled,
-            self._bsnap, self._tri, self._inv, self._invB, prev, ctl, step.lower, step.upper,
-            has_lo, slack, u, g, sigma, wall, warm_up, warm_lo, tie, max_iter, seen,
-            f[0], f[1], self._work[0], self._work[1], self._work[2], b[0], b[1],
-            i[:2 * n], i[2 * n:5 * n], i[5 * n:], f[2])
+        head = (self.rows, self.rrows, self.R, self._filled, self._snap, self.B, self._bfilled,
+                self._bsnap, self._tri, self._inv, self._invB, prev, ctl, step.lower,
+                step.upper, has_lo, slack, u, g, sigma, wall, warm_up, warm_lo, tie, max_iter,
+                seen)
+        if FUSED:
+            code = kernel_module("lcpbench.linalg.twisted_walk_kernel").walk(
+                *head, f[0], f[1], b[0], b[1], i[:2 * n], i[2 * n:5 * n], i[5 * n:6 * n],
+                f[2], i[6 * n:])
+        else:
+            code = kernel_module("lcpbench.linalg.walk_kernel").walk(
+                *head, f[0], f[1], self._work[0], self._work[1], self._work[2], b[0], b[1],
+                i[:2 * n], i[2 * n:5 * n], i[5 * n:6 * n], f[2])
         if code != 3:
             self._fixed, self._m = prev, int(ctl[0])
         return int(code)

@@ -36,7 +36,7 @@ from .driver import (
     line_search_failed,
 )
 from .judge import NODE_GROSS, _contraction
-from .large_n import energy_of, increments_at, trial_of
+from .large_n import StepWork, energy_of, increments_at, trial_of
 
 #: past max|Δα| < tol the driver goes on while its prediction of the judge's per-node
 #: force error bound (:func:`_node_change`) exceeds this share of NODE_GROSS, for at
@@ -73,9 +73,14 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
     noise = 1e-12 * (abs(E) + float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6)
     last_net, extra = None, 0
     last_contacts = None
+    # one set of step arrays for every outer step: the next step's assembly writes them
+    # again when nothing reads this step any more (its answer, reactions, warm start
+    # and trial α are arrays of their own); at N = 10⁵ fresh arrays cost ~5,000 page
+    # faults a step, two sets ~15 MiB more peak RSS
+    work = StepWork(chain.links)
     for _ in range(max_outer):
         t0 = time.perf_counter()
-        step = increments_at(chain, alpha)
+        step = increments_at(chain, alpha, work)
         t_asm = time.perf_counter() - t0
         sol = solver(step, warm)
         if sol.status not in (Status.SOLVED, Status.INACCURATE):
@@ -83,7 +88,7 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
         d = sol.u  # the increment to the step's answer
         dalpha = float(np.max(np.abs(step.predict_alpha(d) - alpha), initial=0.0))
         slope = float(step.linear @ d)  # the gradient at u₀ along d
-        t, trial, E_t = _armijo(trial_of(chain, alpha, d), E, slope, noise)
+        t, trial, E_t = _armijo(trial_of(chain, alpha, d, step), E, slope, noise)
         if trial is None:
             return line_search_failed(alpha, n, steps, sol, t_asm, dalpha, E)
         steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,

@@ -25,7 +25,11 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
+
+from ..linalg.twisted_kernel import face_solve as _face_solve
+from ..linalg.twisted_kernel import resolve as _resolve
 
 
 @njit(cache=True)
@@ -34,15 +38,42 @@ def assemble(alpha, a, k, rest, load, lower, upper, inv_a_cos, v, coef, phi0, or
     """Writes the step at α in increments (all arrays preallocated; n = alpha.size − 1
     free nodes, n joints): the fields of the ContactStep, its walls ``lo``/``hi`` about
     u₀, the rows of A = diag(√k) J and their mirror ``rrows`` (the twisted factor's)."""
+    sk = np.empty(k.size)
+    for j in range(k.size):
+        sk[j] = math.sqrt(k[j])
+    assemble_into(alpha, a, k, sk, rest, load, lower, upper, inv_a_cos, coef, origin,
+                  alpha0, phi_origin, bands, linear, lo, hi, rows, rrows,
+                  np.empty(alpha.size), np.empty(k.size))
+    tangent_terms(alpha, v, phi0)
+
+
+@njit(cache=True)
+def tangent_terms(alpha, v, phi0):
+    """The fields ``v`` = tan α − α and ``phi0`` of the step at α (the height form's
+    φ̂(0); the steps in increments never read them, so :func:`assemble_into` leaves
+    them to this, called on first use)."""
+    for i in range(alpha.size):
+        v[i] = math.tan(alpha[i]) - alpha[i]
+    for j in range(phi0.size):
+        phi0[j] = -v[j + 1] + v[j]
+
+
+@njit(cache=True)
+def assemble_into(alpha, a, k, sk, rest, load, lower, upper, inv_a_cos, coef, origin,
+                  alpha0, phi_origin, bands, linear, lo, hi, rows, rrows, sin_alpha, work):
+    """:func:`assemble` with √k given (``sk``, the chain's), sin α kept (``sin_alpha``,
+    for :func:`trial_energy_at`) and ``v``, ``phi0`` left to :func:`tangent_terms`;
+    ``work``: (n,)."""
     nl = alpha.size
     n = nl - 1
     y = 0.0
     for i in range(nl):
         c = math.cos(alpha[i])
         inv_a_cos[i] = 1.0 / (a * c)
-        v[i] = math.tan(alpha[i]) - alpha[i]
         alpha0[i] = alpha[i]
-        y += a * math.sin(alpha[i])
+        sa = math.sin(alpha[i])
+        sin_alpha[i] = sa
+        y += a * sa
         if i < n:
             origin[i] = y  # the height of free node i + 1
     alpha0[nl - 1] += -y * inv_a_cos[nl - 1]  # the closure error of the pinned end
@@ -51,11 +82,9 @@ def assemble(alpha, a, k, rest, load, lower, upper, inv_a_cos, v, coef, phi0, or
         coef[j, 0] = wl
         coef[j, 1] = -wl - wr
         coef[j, 2] = wr
-        phi0[j] = -v[j + 1] + v[j]
         phi_origin[j] = alpha0[j + 1] - alpha0[j]
-        sk = math.sqrt(k[j])
         for m in range(3):
-            rows[j, m] = coef[j, m] * sk
+            rows[j, m] = coef[j, m] * sk[j]
     rows[0, 0] = 0.0
     rows[n - 1, 2] = 0.0
     for j in range(n):
@@ -80,7 +109,9 @@ def assemble(alpha, a, k, rest, load, lower, upper, inv_a_cos, v, coef, phi0, or
         lo[i] = lower[i] - origin[i]
         hi[i] = upper[i] - origin[i]
     # the linear term: the factored gradient at u₀ (φ̂(u₀) = φ̂ at the origin exactly)
-    _gradient_at(coef, k, phi_origin.copy(), rest, load, linear)
+    for j in range(n):
+        work[j] = phi_origin[j]
+    _gradient_at(coef, k, work, rest, load, linear)
 
 
 @njit(cache=True)
@@ -182,3 +213,175 @@ def trial_energy(alpha, du, t, a, k, rest, link_load, out):
             base = math.pi - base
         out[i] = base + 2 * math.pi * round((alpha[i] - base) / (2 * math.pi))
     return energy(out, a, k, rest, link_load)
+
+
+@njit(cache=True)
+def trial_energy_at(alpha, sin_alpha, inv_a_cos, du, t, a, k, rest, link_load, out):
+    """:func:`trial_energy` at the α of a step assembled by :func:`assemble_into`, its
+    sin α and the sign of cos α (that of 1/(a cos α), a > 0) taken from the assembly:
+    the same numbers."""
+    nl = alpha.size
+    n = nl - 1
+    prev = 0.0
+    for i in range(nl):
+        nxt = t * du[i] if i < n else 0.0
+        s = sin_alpha[i] + (nxt - prev) / a
+        prev = nxt
+        if not (abs(s) < 1.0):  # also NaN
+            return math.nan
+        base = math.asin(s)
+        if inv_a_cos[i] < 0.0:
+            base = math.pi - base
+        out[i] = base + 2 * math.pi * round((alpha[i] - base) / (2 * math.pi))
+    return energy(out, a, k, rest, link_load)
+
+
+@njit(cache=True)
+def _block_solve(rows, idx, a, b, grad, u2):
+    """u2[idx[a:b]] −= H[block]⁻¹ grad there: one block of
+    :meth:`lcpbench.model.large_n.IncrementStep.solve_on` (the rows that touch it, the
+    nodes between held; a fresh twisted factor; the same arithmetic). False on a zero
+    pivot or a block too small for a twist (the caller runs the numpy reference)."""
+    n = rows.shape[0]
+    r0, r1 = max(idx[a] - 1, 0), min(idx[b - 1] + 1, n - 1)
+    nb = r1 + 1 - r0
+    if nb < 5:
+        return False
+    sub = rows[r0:r1 + 1].copy()
+    sub[0, 0] = 0.0
+    sub[nb - 1, 2] = 0.0
+    rsub = np.empty((nb, 3))
+    for j in range(nb):
+        for c in range(3):
+            rsub[nb - 1 - j, 2 - c] = sub[j, c]
+    fixed = np.ones(nb, np.bool_)
+    full = np.zeros(nb)
+    for q in range(a, b):
+        fixed[idx[q] - r0] = False
+        full[idx[q] - r0] = grad[idx[q]]
+    rfixed = fixed[::-1].copy()
+    x = np.empty(nb)
+    ok = _face_solve(sub, rsub, fixed, rfixed, np.empty((3, nb)), np.empty(nb, np.bool_),
+                     np.empty((nb, 4)), np.empty((3, nb)), np.empty(nb, np.bool_),
+                     np.empty((nb, 4)), np.zeros(3), np.empty(nb), np.empty(nb), 0, 0,
+                     nb // 2, full, x)
+    if not ok:
+        return False
+    for q in range(a, b):
+        u2[idx[q]] -= x[idx[q] - r0]
+    return True
+
+
+@njit(cache=True)
+def _terms(hi, lo, u, R, L, F, nat, min_gap, min_r, comp_up, comp_lo):
+    """One node's terms of :func:`lcpbench.model.step_solver.step_residuals` (rigid
+    walls): gap and reaction of each wall row scaled by L and F, and the accumulators."""
+    up, low = np.isfinite(hi), np.isfinite(lo)
+    if up:
+        g = (hi - u) / L
+        r = (max(R, 0.0) if low else R) / F
+        nat = max(nat, abs(min(g, r)))
+        min_gap, min_r = min(min_gap, g), min(min_r, r)
+        comp_up += g * r
+    if low:
+        g = (u - lo) / L
+        r = (max(-R, 0.0) if up else -R) / F
+        nat = max(nat, abs(min(g, r)))
+        min_gap, min_r = min(min_gap, g), min(min_r, r)
+        comp_lo += g * r
+    return nat, min_gap, min_r, comp_up, comp_lo
+
+
+@njit(cache=True)
+def residuals(u, coef, k, phi_origin, rest, load, origin, rows, bands, linear, lo, hi, L, F):
+    """:func:`lcpbench.model.step_solver.step_residuals` of a large-N step in increments
+    (rigid walls): ``(ok, [natural, min_gap, min_reaction, complementarity, term_size],
+    R)``; not ok where the heights are not finite or the nodes with no wall row cannot
+    be re-solved here (the caller runs the numpy reference). The same sums as the
+    reference, except Σ g·r (complementarity, reported, not judged) summed in order."""
+    n = u.size
+    for i in range(n):
+        if not np.isfinite(u[i]):
+            return False, np.zeros(5), np.full(n, np.nan)
+    u2 = u.copy()
+    m = np.empty(n)
+    nfree = 0
+    for i in range(n):
+        if not (np.isfinite(hi[i]) or np.isfinite(lo[i])):
+            nfree += 1
+    if nfree:  # _complete_heights: the nodes with no wall row, re-solved exactly
+        if nfree * 2 > n:
+            return False, np.zeros(5), np.full(n, np.nan)
+        idx = np.empty(nfree, np.int64)
+        q = 0
+        for i in range(n):
+            if not (np.isfinite(hi[i]) or np.isfinite(lo[i])):
+                idx[q] = i
+                q += 1
+        grad = np.empty(n)
+        gradient(coef, k, phi_origin, rest, load, origin, u2, grad, m)
+        a = 0
+        for q in range(1, nfree + 1):  # runs of idx two or more nodes apart: blocks
+            if q == nfree or idx[q] - idx[q - 1] > 2:
+                if not _block_solve(rows, idx, a, q, grad, u2):
+                    return False, np.zeros(5), np.full(n, np.nan)
+                a = q
+    R = np.empty(n)
+    gradient(coef, k, phi_origin, rest, load, origin, u2, R, m)
+    for i in range(n):
+        R[i] = -R[i]
+    nat, min_gap, min_r, comp_up, comp_lo, term = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0
+    for i in range(n):
+        nat, min_gap, min_r, comp_up, comp_lo = _terms(
+            hi[i], lo[i], u2[i], R[i], L, F, nat, min_gap, min_r, comp_up, comp_lo)
+        if np.isfinite(hi[i]) or np.isfinite(lo[i]):  # banded_matvec(|H|, |u|) + |c|
+            s = abs(bands[0, i]) * abs(u2[i])
+            for kk in (1, 2):
+                if i - kk >= 0:
+                    s += abs(bands[kk, i - kk]) * abs(u2[i - kk])
+                if i + kk < n:
+                    s += abs(bands[kk, i]) * abs(u2[i + kk])
+            term = max(term, s + abs(linear[i]))
+    return True, np.array([nat, min_gap, min_r, abs(comp_up) + abs(comp_lo), term / F]), R
+
+
+@njit(cache=True)
+def _free_residual(coef, k, phi_origin, rest, load, origin, S, u, g, r, m):
+    """g = the gradient at u, r = g off S (0 on S); returns max|r|."""
+    gradient(coef, k, phi_origin, rest, load, origin, u, g, m)
+    size = 0.0
+    bad = False
+    for i in range(u.size):
+        r[i] = 0.0 if S[i] else g[i]
+        a = abs(r[i])
+        if a > size:
+            size = a
+        elif a != a:  # NaN: np.max's answer
+            bad = True
+    return np.nan if bad else size
+
+
+@njit(cache=True)
+def walk_refine(coef, k, phi_origin, rest, load, origin, R, B, tri, invR, invB, m, S, u,
+                rounds):
+    """The dual walk's refinement at an optimum it found
+    (:func:`lcpbench.solvers.compiled_walk.dual_walk`): one step with the exact gradient
+    on the face last factored, then :func:`lcpbench.solvers.banded._refine` (more
+    while the free nodes' residual halves, at most ``rounds``), the same arithmetic.
+    ``u`` on the walls on S; returns (u, g)."""
+    n = u.size
+    g, r, w = np.empty(n), np.empty(n), np.empty(n)
+    _free_residual(coef, k, phi_origin, rest, load, origin, S, u, g, r, w)
+    _resolve(R, B, tri, invR, invB, m, r)
+    u = u - r
+    size = _free_residual(coef, k, phi_origin, rest, load, origin, S, u, g, r, w)
+    g_v, r_v = np.empty(n), np.empty(n)
+    for _ in range(rounds):
+        _resolve(R, B, tri, invR, invB, m, r)
+        v = u - r
+        size_v = _free_residual(coef, k, phi_origin, rest, load, origin, S, v, g_v, r_v, w)
+        if not size_v < 0.5 * size:
+            break
+        u, g, size = v, g_v, size_v
+        r, r_v, g_v = r_v, r, np.empty(n)
+    return u, g

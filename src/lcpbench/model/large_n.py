@@ -118,6 +118,17 @@ class IncrementStep(ContactStep):
         self._cols = tuple(slice(b0 + k, b0 + k + nj) for k in range(3))
         self._m = np.empty(self.size)
 
+    def __getattr__(self, name: str):
+        """``v`` and ``phi0``, computed on first use (:func:`increments_at` leaves them)."""
+        tangent = self.__dict__.get("_tangent")
+        if name in ("v", "phi0") and tangent is not None:
+            v, phi0 = tangent
+            _kernel().tangent_terms(self.alpha, v, phi0)
+            self.v, self.phi0 = v, phi0
+            del self._tangent
+            return getattr(self, name)
+        raise AttributeError(name)
+
     def gradient(self, u: np.ndarray) -> np.ndarray:
         g = np.empty(self.size)
         _kernel().gradient(self.coef, self.stiffness, self.phi_origin, self.rest_joint,
@@ -132,6 +143,35 @@ class IncrementStep(ContactStep):
                                  np.ascontiguousarray(u, dtype=float), g, self._m)
         return g
 
+
+    def compiled_residuals(self, u: np.ndarray):
+        """step_residuals' ``(residuals, R)`` in one compiled call
+        (:func:`~lcpbench.model.large_kernel.residuals`, independent of the walk), or
+        None (the numpy reference decides). Rigid walls only, as every step here."""
+        if self.upper_stiffness is not None or self.lower_stiffness is not None:
+            return None
+        ok, res, R = _kernel().residuals(
+            np.ascontiguousarray(u, dtype=float), self.coef, self.stiffness, self.phi_origin,
+            self.rest_joint, self.nodal_load, self.origin, self.factor.rows, self.bands,
+            self.linear, self.lower, self.upper, float(self.length_scale),
+            float(self.force_scale))
+        if not ok:
+            return None
+        return dict(zip(("natural", "min_gap", "min_reaction", "complementarity",
+                         "term_size"), map(float, res), strict=True)), R
+
+    def walk_refine(self, S: np.ndarray, u: np.ndarray, rounds: int = 4):
+        """``(u, g)``: the dual walk's refinement at an optimum (``u`` on the walls on S)
+        in one compiled call on the face its twisted factor holds
+        (:func:`~lcpbench.model.large_kernel.walk_refine`: the arithmetic of
+        :func:`lcpbench.solvers.compiled_walk.dual_walk` and
+        :func:`lcpbench.solvers.banded._refine`)."""
+        H = self.factor
+        return _kernel().walk_refine(self.coef, self.stiffness, self.phi_origin,
+                                     self.rest_joint, self.nodal_load, self.origin, H.R, H.B,
+                                     H._tri, H._inv, H._invB, H._m,
+                                     np.ascontiguousarray(S, dtype=np.bool_),
+                                     np.ascontiguousarray(u, dtype=float), int(rounds))
 
     def solve_on(self, idx: np.ndarray, rhs: np.ndarray) -> np.ndarray:
         """H[idx, idx]⁻¹ rhs. A row of A touches three consecutive nodes, so runs of
@@ -163,58 +203,94 @@ def _chain_arrays(chain: Chain) -> tuple:
     """The chain's arrays the compiled assembly reads (kept with the chain)."""
     def make():
         f64 = np.ascontiguousarray
-        return (f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float),
+        k = f64(chain.joint_stiffness, dtype=float)
+        return (k, f64(chain.rest_joint, dtype=float),
                 f64(chain.nodal_load, dtype=float), f64(chain.lower, dtype=float),
                 f64(chain.upper, dtype=float), f64(chain.link_load, dtype=float),
-                np.arange(chain.links, dtype=np.int64))
+                np.arange(chain.links, dtype=np.int64), np.sqrt(k))
 
     return chain.derived("_large_arrays", make)
 
 
-def increments_at(chain: Chain, alpha: np.ndarray) -> IncrementStep:
+class StepWork:
+    """The arrays of one :func:`increments_at` step (and its twisted factor's state), to
+    be written again by a later step (the large-N driver's outer steps: at N = 10⁵
+    fresh arrays cost ~5,000 page faults a step). The next step's assembly overwrites
+    this step: never use one for two steps that are read together."""
+
+    def __init__(self, links: int):
+        nl, n = links, links - 1
+        e = np.empty
+        self.link = (e(nl), e(nl), e(nl), e(nl))  # inv_a_cos, v, alpha0, sin α
+        self.rows3 = (e((n, 3)), e((n, 3)), e((n, 3)))  # coef, rows, rrows
+        self.node = tuple(e(n) for _ in range(7))  # phi0, origin, phi_origin, linear, lo, hi,
+        # work
+        self.bands = e((3, n))
+        self.factor_state: dict = {}  # TwistedFactor.from_rows's arrays, once made
+
+
+def increments_at(chain: Chain, alpha: np.ndarray, work: StepWork | None = None
+                  ) -> IncrementStep:
     """``increment_step(assemble_step(chain, alpha))`` in one compiled pass (a chain of
-    :func:`applies`), its face solves on the twisted factor; the same numbers."""
-    k, rest, load, lower, upper, _, base = _chain_arrays(chain)
+    :func:`applies`), its face solves on the twisted factor; the same numbers. ``work``:
+    the arrays to write (:class:`StepWork`; default: new ones)."""
+    k, rest, load, lower, upper, _, base, sk = _chain_arrays(chain)
     alpha = np.array(alpha, dtype=float)
     nl = alpha.size
+    if work is None:
+        work = StepWork(nl)
+    inv_a_cos, v, alpha0, sin_alpha = work.link
+    coef, rows, rrows = work.rows3
+    phi0, origin, phi_origin, linear, lo, hi, tmp = work.node
+    bands = work.bands
     n = nl - 1
-    inv_a_cos, v, alpha0 = np.empty(nl), np.empty(nl), np.empty(nl)
-    coef, rows, rrows = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
-    phi0, origin, phi_origin, linear = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    lo, hi, bands = np.empty(n), np.empty(n), np.empty((3, n))
-    _kernel().assemble(alpha, float(chain.link_length), k, rest, load, lower, upper,
-                       inv_a_cos, v, coef, phi0, origin, alpha0, phi_origin, bands, linear,
-                       lo, hi, rows, rrows)
-    return IncrementStep(
+    _kernel().assemble_into(alpha, float(chain.link_length), k, sk, rest, load, lower, upper,
+                            inv_a_cos, coef, origin, alpha0, phi_origin, bands,
+                            linear, lo, hi, rows, rrows, sin_alpha, tmp)
+    step = IncrementStep(
         bands=bands, linear=linear, lower=lo, upper=hi, alpha=alpha, inv_a_cos=inv_a_cos,
-        v=v, free_nodes=chain.free_nodes, links=chain.links, base=base[1:n + 1], coef=coef,
-        phi0=phi0, origin=np.full(n, 0.0), alpha0=alpha0, phi_origin=phi_origin,
+        v=None, free_nodes=chain.free_nodes, links=chain.links, base=base[1:n + 1], coef=coef,
+        phi0=None, origin=np.full(n, 0.0), alpha0=alpha0, phi_origin=phi_origin,
         stiffness=k, rest_joint=rest, nodal_load=load, length_scale=chain.length,
         force_scale=chain.force_scale, upper_stiffness=chain.upper_stiffness,
         lower_stiffness=chain.lower_stiffness,
-        factor=TwistedFactor.from_rows(rows, rrows), heights=origin)
+        factor=TwistedFactor.from_rows(rows, rrows, state=work.factor_state), heights=origin)
+    step.sin_alpha = sin_alpha
+    # v and phi0 (a tan per link) on first use: the steps in increments never read them
+    step._tangent = (v, phi0)
+    del step.v, step.phi0
+    return step
 
 
 def energy_of(chain: Chain, alpha: np.ndarray) -> float:
     """:func:`lcpbench.model.chain.energy` of a chain of :func:`applies` (rigid walls),
     compiled, its sums compensated: the energies the large-N Armijo search compares."""
-    k, rest, _, _, _, link_load, _ = _chain_arrays(chain)
+    k, rest, _, _, _, link_load, _, _ = _chain_arrays(chain)
     return float(_kernel().energy(np.ascontiguousarray(alpha, dtype=float),
                                   float(chain.link_length), k, rest, link_load))
 
 
-def trial_of(chain: Chain, alpha: np.ndarray, du: np.ndarray):
+def trial_of(chain: Chain, alpha: np.ndarray, du: np.ndarray, step: IncrementStep | None = None):
     """``t -> (α', E(α'))`` moved by t·du (:func:`alpha_from_increments` and
-    :func:`energy_of` in one compiled pass); ``(None, nan)`` where no chain fits."""
-    k, rest, _, _, _, link_load, _ = _chain_arrays(chain)
+    :func:`energy_of` in one compiled pass); ``(None, nan)`` where no chain fits.
+    ``step``: the step assembled at this α (:func:`increments_at`), whose sin α and
+    sign of cos α it reuses (the same numbers)."""
+    k, rest, _, _, _, link_load, _, _ = _chain_arrays(chain)
     kern = _kernel()
     a = float(chain.link_length)
     alpha = np.ascontiguousarray(alpha, dtype=float)
     du = np.ascontiguousarray(du, dtype=float)
+    sin_alpha = getattr(step, "sin_alpha", None)
+    if sin_alpha is not None and not np.array_equal(step.alpha, alpha):
+        sin_alpha = None
 
     def at(t: float):
         out = np.empty(alpha.size)
-        E = kern.trial_energy(alpha, du, float(t), a, k, rest, link_load, out)
+        if sin_alpha is not None:
+            E = kern.trial_energy_at(alpha, sin_alpha, step.inv_a_cos, du, float(t), a, k,
+                                     rest, link_load, out)
+        else:
+            E = kern.trial_energy(alpha, du, float(t), a, k, rest, link_load, out)
         return (None, E) if np.isnan(E) else (out, E)
 
     return at

@@ -22,6 +22,15 @@ from scipy.linalg import LinAlgError
 ENABLED = True
 #: working sets remembered (their hashes) to see one repeat
 SEEN = 4096
+#: the refinement at an optimum in one compiled call where the step has it
+#: (:meth:`lcpbench.model.large_n.IncrementStep.walk_refine`); False: numpy
+COMPILED_REFINE = True
+
+
+def _banded_refine():
+    from .banded import _refine
+
+    return _refine
 
 
 def dual_walk(step, H, u, slack, warm_up, warm_lo, has_lo: bool, max_iter: int,
@@ -57,9 +66,13 @@ def dual_walk(step, H, u, slack, warm_up, warm_lo, has_lo: bool, max_iter: int,
             return u, step.gradient(u), sigma > 0, sigma < 0, it, None
         # the optimum of the unrefined moves: one step of refinement with the exact
         # gradient on the face just factored, more while it halves; then the walls again
-        r = step.gradient(u)
-        r[S] = 0.0
-        u, g = refine(step, H, S, u - H.resolve(r))
+        if COMPILED_REFINE and H is getattr(step, "factor", None) and \
+                hasattr(step, "walk_refine") and refine is _banded_refine():
+            u, g = step.walk_refine(S, u)  # the same arithmetic in one compiled call
+        else:
+            r = step.gradient(u)
+            r[S] = 0.0
+            u, g = refine(step, H, S, u - H.resolve(r))
         u = np.ascontiguousarray(u, dtype=float)
         g = np.ascontiguousarray(g, dtype=float)
         ctl[4] = 1
