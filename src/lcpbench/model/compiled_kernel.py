@@ -88,7 +88,8 @@ def _workspace(n, links, nj, max_iter):
     return (np.zeros((18, n)), np.zeros((9, n), np.bool_), np.zeros((3, nj)),
             np.zeros((6, links)), np.zeros((5, links + 2)), np.zeros((4, n)), np.zeros((3, n)),
             np.zeros((nj, 3)),
-            np.zeros(min(max_iter, 20 * n + 50) + 2, np.uint64), np.zeros(5), np.zeros((2, n)))
+            np.zeros(min(max_iter, 20 * n + 50) + 2, np.uint64), np.zeros(5), np.zeros((2, n)),
+            np.zeros((3, n), np.int64))
 
 
 # -- the chain (model.chain) ----------------------------------------------------
