@@ -81,6 +81,47 @@ def _grad_into(out, m, u, gp, scale, T):
 
 
 @njit(cache=True)
+def _grad_and_scale(out, size, m, ms, u, gp, T):
+    """:func:`_grad_into` at u without and with ``scale`` (into ``out`` and ``size``),
+    in one pass over the joints and one over the nodes: the same operations on the
+    same numbers, so the same bits as the two calls (the certificate's pair)."""
+    coef, b0, fs, links, origin, phi_origin, k, rest, load = gp
+    n, nj = u.size, coef.shape[0]
+    for j in range(nj):
+        s = sa = 0.0
+        for c in range(3):
+            i = b0 + c + j - fs
+            du = u[i] - origin[i] if 0 <= i < n else 0.0
+            w = coef[j, c]
+            if c == 0:
+                s, sa = w * du, abs(w) * abs(du)
+            else:
+                s, sa = s + w * du, sa + abs(w) * abs(du)
+        m[j] = ((s + phi_origin[j]) - rest[j]) * k[j]
+        ms[j] = (sa + (abs(phi_origin[j]) + abs(rest[j]))) * k[j]
+    for i in range(n):
+        s = sa = 0.0
+        for c in range(3):
+            j = fs + i - b0 - c
+            if 0 <= j < nj:
+                s += coef[j, c] * m[j]
+                sa += abs(coef[j, c]) * ms[j]
+        d0 = u[i] - origin[i]
+        t = T[0, i] * d0
+        ta = abs(T[0, i]) * abs(d0)
+        if i >= 1:
+            d1 = u[i - 1] - origin[i - 1]
+            t += T[1, i - 1] * d1
+            ta += abs(T[1, i - 1]) * abs(d1)
+        if i + 1 < n:
+            d2 = u[i + 1] - origin[i + 1]
+            t += T[1, i] * d2
+            ta += abs(T[1, i]) * abs(d2)
+        out[i] = (s - load[i]) + t
+        size[i] = (sa + (abs(load[i]) + TINY)) + ta
+
+
+@njit(cache=True)
 def _mv(bands, x, i, n, absolute):
     """Row i of H x (of |H| |x| when ``absolute``), summed in the order of
     solvers.banded._Banded.matvec."""
@@ -310,15 +351,15 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
 
 
 @njit(cache=True)
-def _certify(u, ru, rl, lo, hi, gp, grad, size, m, T):
+def _certify(u, ru, rl, lo, hi, gp, grad, size, m, ms, T):
+    """The certificate's residual; ``grad``: the gradient at u (when finite)."""
     n = u.size
     for i in range(n):
         if not (np.isfinite(u[i]) and np.isfinite(ru[i]) and np.isfinite(rl[i])):
             return np.inf
     if n == 0:
         return 0.0
-    _grad_into(grad, m, u, gp, False, T)
-    _grad_into(size, m, u, gp, True, T)
+    _grad_and_scale(grad, size, m, ms, u, gp, T)
     force, span = TINY, 1.0 + _max_abs(u)
     stat = feas = neg = comp = 0.0
     for i in range(n):
@@ -338,7 +379,8 @@ def _certify(u, ru, rl, lo, hi, gp, grad, size, m, T):
 def _certificate(u, ru, rl, lo, hi, gp):
     """solvers.banded.step_certificate: the scaled KKT residual of a step answer."""
     n = u.size
-    return _certify(u, ru, rl, lo, hi, gp, np.empty(n), np.empty(n), np.empty(gp[0].shape[0]),
+    nj = gp[0].shape[0]
+    return _certify(u, ru, rl, lo, hi, gp, np.empty(n), np.empty(n), np.empty(nj), np.empty(nj),
                     np.zeros((2, n)))
 
 
@@ -364,8 +406,9 @@ def _wall_terms(hi, lo, u, R, L, F, nat, min_gap, min_r, comp_up, comp_lo):
 
 
 @njit(cache=True)
-def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m, T):
-    """_residuals into ``out`` and ``R`` (u2, rows, fac, m: work arrays)."""
+def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m, T, g0):
+    """_residuals into ``out`` and ``R`` (u2, rows, fac, m: work arrays); ``g0``: the
+    gradient at u where the caller has it (the certificate's), else empty."""
     n = u.size
     some_free = False
     for i in range(n):
@@ -373,7 +416,10 @@ def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m, T):
         some_free = some_free or not rows[i]
         u2[i] = u[i]
     if some_free:  # the nodes with no wall row, re-solved exactly
-        _grad_into(R, m, u2, gp, False, T)
+        if g0.size == n:
+            R[:] = g0
+        else:
+            _grad_into(R, m, u2, gp, False, T)
         if not _refactor(fac, bands, rows, 0, n):
             out[:] = 0.0
             return False
@@ -405,5 +451,5 @@ def _residuals(u, bands, linear, lo, hi, gp, L, F):
     n = u.size
     out, R = np.zeros(5), np.empty(n)
     ok = _judge(u, bands, linear, lo, hi, gp, L, F, out, R, np.empty(n), np.empty(n, np.bool_),
-                np.empty((4, n)), np.empty(gp[0].shape[0]), np.zeros((2, n)))
+                np.empty((4, n)), np.empty(gp[0].shape[0]), np.zeros((2, n)), np.empty(0))
     return ok, out, R
