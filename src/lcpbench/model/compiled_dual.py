@@ -81,6 +81,47 @@ def _grad_into(out, m, u, gp, scale, T):
 
 
 @njit(cache=True)
+def _grad_and_scale(out, size, m, ms, u, gp, T):
+    """:func:`_grad_into` at u without and with ``scale`` (into ``out`` and ``size``),
+    in one pass over the joints and one over the nodes: the same operations on the
+    same numbers, so the same bits as the two calls (the certificate's pair)."""
+    coef, b0, fs, links, origin, phi_origin, k, rest, load = gp
+    n, nj = u.size, coef.shape[0]
+    for j in range(nj):
+        s = sa = 0.0
+        for c in range(3):
+            i = b0 + c + j - fs
+            du = u[i] - origin[i] if 0 <= i < n else 0.0
+            w = coef[j, c]
+            if c == 0:
+                s, sa = w * du, abs(w) * abs(du)
+            else:
+                s, sa = s + w * du, sa + abs(w) * abs(du)
+        m[j] = ((s + phi_origin[j]) - rest[j]) * k[j]
+        ms[j] = (sa + (abs(phi_origin[j]) + abs(rest[j]))) * k[j]
+    for i in range(n):
+        s = sa = 0.0
+        for c in range(3):
+            j = fs + i - b0 - c
+            if 0 <= j < nj:
+                s += coef[j, c] * m[j]
+                sa += abs(coef[j, c]) * ms[j]
+        d0 = u[i] - origin[i]
+        t = T[0, i] * d0
+        ta = abs(T[0, i]) * abs(d0)
+        if i >= 1:
+            d1 = u[i - 1] - origin[i - 1]
+            t += T[1, i - 1] * d1
+            ta += abs(T[1, i - 1]) * abs(d1)
+        if i + 1 < n:
+            d2 = u[i + 1] - origin[i + 1]
+            t += T[1, i] * d2
+            ta += abs(T[1, i]) * abs(d2)
+        out[i] = (s - load[i]) + t
+        size[i] = (sa + (abs(load[i]) + TINY)) + ta
+
+
+@njit(cache=True)
 def _mv(bands, x, i, n, absolute):
     """Row i of H x (of |H| |x| when ``absolute``), summed in the order of
     solvers.banded._Banded.matvec."""
@@ -114,20 +155,6 @@ def _violation(u, bound, S, i, sign):
 
 
 @njit(cache=True)
-def _run_maxima(out, u, bound, S, slack, sign):
-    """The deepest violation v > slack of every run of consecutive violated nodes
-    (v = u − hi, or lo − u for ``sign`` < 0, −∞ on S), into ``out``; whether any."""
-    n, found = u.size, False
-    left, v = -np.inf, (_violation(u, bound, S, 0, sign) if n else 0.0)
-    for i in range(n):
-        right = _violation(u, bound, S, i + 1, sign) if i + 1 < n else -np.inf
-        out[i] = v > slack and v >= left and v > right
-        found = found or out[i]
-        left, v = v, right
-    return found
-
-
-@njit(cache=True)
 def _key(i, s):
     """The working set's hash is the XOR of these over its nodes (splitmix64 of
     (node, wall)); 0 off the walls, so a change of one node updates it in O(1)."""
@@ -141,44 +168,94 @@ def _key(i, s):
 
 # -- the dual active set (solvers.banded._dual, _finish, step_certificate) ----------
 @njit(cache=True)
+def _run_picks(u, bound, S, slack, sign, picks, npick):
+    """:func:`lcpbench.solvers.banded._run_maxima` as a list: the deepest violation v > slack of every run of
+    consecutive violated nodes appended to ``picks`` (node + 1, with ``sign``: +
+    the upper wall, − the lower one); the new count."""
+    n = u.size
+    left, v = -np.inf, (_violation(u, bound, S, 0, sign) if n else 0.0)
+    for i in range(n):
+        right = _violation(u, bound, S, i + 1, sign) if i + 1 < n else -np.inf
+        if v > slack and v >= left and v > right:
+            picks[npick] = sign * (i + 1)
+            npick += 1
+        left, v = v, right
+    return npick
+
+
+@njit(cache=True)
+def _move(bands, d, u, g, s, n):
+    """u + s d and the gradient carried, g + s (g_face − g) with g_face = g + H d
+    (s = 1: u + d and g_face), in one pass, H d row by row as :func:`_mv` sums it
+    (the interior rows without its end tests); d is zeroed behind (the next face's
+    d₀ is zero off its held nodes)."""
+    full = s >= 1.0
+    for i in range(n):
+        if 2 <= i < n - 2:
+            hd = (((bands[2, i - 2] * d[i - 2] + bands[1, i - 1] * d[i - 1]) + bands[0, i] * d[i])
+                  + bands[1, i] * d[i + 1]) + bands[2, i] * d[i + 2]
+        else:
+            hd = _mv(bands, d, i, n, False)
+        gf = g[i] + hd
+        if full:
+            u[i] = u[i] + d[i]
+            g[i] = gf
+        else:
+            u[i] = u[i] + s * d[i]
+            g[i] = g[i] + s * (gf - g[i])
+        if i >= 2:
+            d[i - 2] = 0.0
+    for i in range(max(n - 2, 0), n):
+        d[i] = 0.0
+
+
+@njit(cache=True)
 def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
     """(code, face solves): code 0 at the optimum (after refinement); u, g and sigma
     in the rows U, G, SIG of the work array ``ws[0]``. A working set met before
     (its hash in ``ws[8]``; a collision, at odds of 2⁻⁶⁴, only hands the solve to
-    the reference) stops the walk as the reference's list of sets does."""
-    wn, wb, m, fac, seen = ws[0], ws[1], ws[2][2], ws[5], ws[8]
+    the reference) stops the walk as the reference's list of sets does.
+
+    The reference's arithmetic, with its bookkeeping kept incremental: the held
+    nodes, the walls picked and the nodes changed since the last factorisation as
+    lists (``ws[11]``), r = g + H d₀ computed where d₀ reaches (d₀ lives on the held
+    nodes), the ratio test on the held nodes, the move in one pass."""
+    wn, wb, m, fac, seen, wi = ws[0], ws[1], ws[2][2], ws[5], ws[8], ws[11]
     u, g, sigma, wall, d, r, gf, ratio = wn[U], wn[G], wn[SIG], wn[WALL], wn[D], wn[RES], wn[GF], \
         wn[RATIO]
-    S, factored, J_up, J_lo = wb[S_], wb[FACT], wb[JUP], wb[JLO]
+    S, factored = wb[S_], wb[FACT]
+    held, picks, chg = wi[0], wi[1], wi[2]
     n = linear.size
     has_lo = warm = False
     for i in range(n):
         has_lo = has_lo or np.isfinite(lo[i])
         warm = warm or warm_up[i] or warm_lo[i]
         factored[i] = S[i] = False  # the face ``fac`` holds (none fixed: H itself)
-        g[i] = sigma[i] = wall[i] = 0.0
+        g[i] = sigma[i] = wall[i] = d[i] = 0.0
         u[i] = -linear[i]
     if not _refactor(fac, bands, factored, 0, n):
         return BAIL_NOT_PD, 0
     _resolve(fac, u)
     slack = 32 * EPS * (1.0 + _max_abs(u))
     h, count, at_face_minimiser, it = np.uint64(0), 0, True, 0
+    nheld = nchg = 0
     while True:
         if at_face_minimiser:
-            found = False
-            if warm:
+            npick = 0
+            if warm:  # first, the warm contact set, where it is violated (S is empty)
                 warm = False
                 for i in range(n):
-                    J_up[i] = warm_up[i] and _violation(u, hi, S, i, 1) > slack
-                    J_lo[i] = has_lo and warm_lo[i] and _violation(u, lo, S, i, -1) > slack
-                    found = found or J_up[i] or J_lo[i]
-            if not found:
-                found = _run_maxima(J_up, u, hi, S, slack, 1)
+                    if warm_up[i] and _violation(u, hi, S, i, 1) > slack:
+                        picks[npick] = i + 1
+                        npick += 1
+                    elif has_lo and warm_lo[i] and _violation(u, lo, S, i, -1) > slack:
+                        picks[npick] = -(i + 1)
+                        npick += 1
+            if npick == 0:
+                npick = _run_picks(u, hi, S, slack, 1, picks, 0)
                 if has_lo:
-                    found = _run_maxima(J_lo, u, lo, S, slack, -1) or found
-                else:
-                    J_lo[:] = False
-                if not found:  # the optimum: one refinement on the face just factored
+                    npick = _run_picks(u, lo, S, slack, -1, picks, npick)
+                if npick == 0:  # the optimum: one refinement on the face just factored
                     for i in range(n):
                         if S[i]:
                             u[i] = wall[i]
@@ -199,29 +276,41 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
                 return BAIL_LIMIT, it  # reference walks on (the history is not grown)
             seen[count] = h
             count += 1
-            for i in range(n):
-                new = sigma[i]
-                if J_up[i]:
-                    new, wall[i] = 1.0, hi[i]
-                elif J_lo[i]:
-                    new, wall[i] = -1.0, lo[i]
-                if new != sigma[i]:
-                    h ^= _key(i, sigma[i]) ^ _key(i, new)
-                    sigma[i] = new
-                S[i] = sigma[i] != 0.0
+            for q in range(npick):  # (a node violates one wall at a time; the upper first)
+                i = abs(picks[q]) - 1
+                if S[i]:
+                    continue
+                sigma[i] = 1.0 if picks[q] > 0 else -1.0
+                wall[i] = hi[i] if picks[q] > 0 else lo[i]
+                h ^= _key(i, sigma[i])
+                S[i] = True
+                held[nheld] = i
+                nheld += 1
+                chg[nchg] = i
+                nchg += 1
         if it >= max_iter:
             return BAIL_LIMIT, it
         it += 1
-        # (each loop below writes d two nodes ahead of the row it reads d for: one pass)
-        for i in range(min(2, n)):
-            d[i] = (wall[i] - u[i]) * (1.0 if S[i] else 0.0)
-        first, last = n, -1  # the nodes whose wall changed since the last factorisation
+        # d₀: the held nodes onto their walls (d is zero elsewhere); r = g + H d₀ off S,
+        # where d₀ reaches it, else g
         for i in range(n):
-            if i + 2 < n:
-                d[i + 2] = (wall[i + 2] - u[i + 2]) * (1.0 if S[i + 2] else 0.0)
-            r[i] = 0.0 if S[i] else g[i] + _mv(bands, d, i, n, False)
+            r[i] = 0.0 if S[i] else g[i]
+        for q in range(nheld):
+            j = held[q]
+            d[j] = wall[j] - u[j]
+        for q in range(nheld):
+            j = held[q]
+            if d[j] != 0.0:
+                for i in range(max(j - 2, 0), min(j + 3, n)):
+                    if not S[i]:
+                        r[i] = g[i] + _mv(bands, d, i, n, False)
+        first, last = n, -1  # the nodes whose wall changed since the last factorisation
+        for q in range(nchg):
+            i = chg[q]
             if S[i] != factored[i]:
-                first, last = min(first, i), i
+                first, last = min(first, i), max(last, i)
+                factored[i] = S[i]
+        nchg = 0
         if first < n:
             stop = last + 1  # after the change, the first two fixed nodes in a row
             while stop + 1 < n and not (S[stop] and S[stop + 1]):
@@ -229,47 +318,48 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
             stop = min(stop + 2, n)
             if not _refactor(fac, bands, S, max(0, first - 2), stop):
                 return BAIL_NOT_PD, it
-            factored[:] = S
         _resolve(fac, r)
-        for i in range(min(2, n)):
-            d[i] -= r[i]
-        s = np.inf
         for i in range(n):
-            if i + 2 < n:
-                d[i + 2] -= r[i + 2]
-            gf[i] = g[i] + _mv(bands, d, i, n, False)
-            sg = sigma[i] * gf[i]
-            ratio[i] = np.inf
+            d[i] -= r[i]
+        s = np.inf  # the ratio test, on the held nodes (g_face = g + H d there)
+        for q in range(nheld):
+            j = held[q]
+            sg = sigma[j] * (g[j] + _mv(bands, d, j, n, False))
+            ratio[j] = np.inf
             if sg > 0.0:
-                lam = max(-sigma[i] * g[i], 0.0)
-                ratio[i] = lam / (lam + sg)
-                s = min(s, ratio[i])
+                lam = max(-sigma[j] * g[j], 0.0)
+                ratio[j] = lam / (lam + sg)
+                s = min(s, ratio[j])
+        _move(bands, d, u, g, s, n)
         if s < 1.0:
-            for i in range(n):
-                u[i] = u[i] + s * d[i]
-                g[i] = g[i] + s * (gf[i] - g[i])
-                if ratio[i] <= s + TIE:  # ties within round-off go together
-                    h ^= _key(i, sigma[i])
-                    sigma[i] = 0.0
-                    S[i] = False
+            kept = 0
+            for q in range(nheld):
+                j = held[q]
+                if ratio[j] <= s + TIE:  # ties within round-off go together
+                    h ^= _key(j, sigma[j])
+                    sigma[j] = 0.0
+                    S[j] = False
+                    chg[nchg] = j
+                    nchg += 1
+                else:
+                    held[kept] = j
+                    kept += 1
+            nheld = kept
             at_face_minimiser = False
             continue
-        for i in range(n):
-            u[i] = u[i] + d[i]
-            g[i] = gf[i]
         at_face_minimiser = True
 
 
 @njit(cache=True)
-def _certify(u, ru, rl, lo, hi, gp, grad, size, m, T):
+def _certify(u, ru, rl, lo, hi, gp, grad, size, m, ms, T):
+    """The certificate's residual; ``grad``: the gradient at u (when finite)."""
     n = u.size
     for i in range(n):
         if not (np.isfinite(u[i]) and np.isfinite(ru[i]) and np.isfinite(rl[i])):
             return np.inf
     if n == 0:
         return 0.0
-    _grad_into(grad, m, u, gp, False, T)
-    _grad_into(size, m, u, gp, True, T)
+    _grad_and_scale(grad, size, m, ms, u, gp, T)
     force, span = TINY, 1.0 + _max_abs(u)
     stat = feas = neg = comp = 0.0
     for i in range(n):
@@ -289,7 +379,8 @@ def _certify(u, ru, rl, lo, hi, gp, grad, size, m, T):
 def _certificate(u, ru, rl, lo, hi, gp):
     """solvers.banded.step_certificate: the scaled KKT residual of a step answer."""
     n = u.size
-    return _certify(u, ru, rl, lo, hi, gp, np.empty(n), np.empty(n), np.empty(gp[0].shape[0]),
+    nj = gp[0].shape[0]
+    return _certify(u, ru, rl, lo, hi, gp, np.empty(n), np.empty(n), np.empty(nj), np.empty(nj),
                     np.zeros((2, n)))
 
 
@@ -315,8 +406,9 @@ def _wall_terms(hi, lo, u, R, L, F, nat, min_gap, min_r, comp_up, comp_lo):
 
 
 @njit(cache=True)
-def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m, T):
-    """_residuals into ``out`` and ``R`` (u2, rows, fac, m: work arrays)."""
+def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m, T, g0):
+    """_residuals into ``out`` and ``R`` (u2, rows, fac, m: work arrays); ``g0``: the
+    gradient at u where the caller has it (the certificate's), else empty."""
     n = u.size
     some_free = False
     for i in range(n):
@@ -324,7 +416,10 @@ def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m, T):
         some_free = some_free or not rows[i]
         u2[i] = u[i]
     if some_free:  # the nodes with no wall row, re-solved exactly
-        _grad_into(R, m, u2, gp, False, T)
+        if g0.size == n:
+            R[:] = g0
+        else:
+            _grad_into(R, m, u2, gp, False, T)
         if not _refactor(fac, bands, rows, 0, n):
             out[:] = 0.0
             return False
@@ -356,5 +451,5 @@ def _residuals(u, bands, linear, lo, hi, gp, L, F):
     n = u.size
     out, R = np.zeros(5), np.empty(n)
     ok = _judge(u, bands, linear, lo, hi, gp, L, F, out, R, np.empty(n), np.empty(n, np.bool_),
-                np.empty((4, n)), np.empty(gp[0].shape[0]), np.zeros((2, n)))
+                np.empty((4, n)), np.empty(gp[0].shape[0]), np.zeros((2, n)), np.empty(0))
     return ok, out, R

@@ -85,10 +85,11 @@ __all__ = ["BAIL_CERT", "BAIL_JUDGE", "BAIL_LIMIT", "BAIL_NOT_PD", "BAIL_PRIMAL"
 
 @njit(cache=True)
 def _workspace(n, links, nj, max_iter):
-    return (np.zeros((18, n)), np.zeros((9, n), np.bool_), np.zeros((3, nj)),
+    return (np.zeros((18, n)), np.zeros((9, n), np.bool_), np.zeros((4, nj)),
             np.zeros((6, links)), np.zeros((5, links + 2)), np.zeros((4, n)), np.zeros((3, n)),
             np.zeros((nj, 3)),
-            np.zeros(min(max_iter, 20 * n + 50) + 2, np.uint64), np.zeros(5), np.zeros((2, n)))
+            np.zeros(min(max_iter, 20 * n + 50) + 2, np.uint64), np.zeros(5), np.zeros((2, n)),
+            np.zeros((3, n), np.int64))
 
 
 # -- the chain (model.chain) ----------------------------------------------------
@@ -282,11 +283,11 @@ def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, warm_u, wa
         u[i] = min(max(u[i], lo[i]), hi[i])
         r_up[i] = max(-grad[i], 0.0) if sigma[i] > 0 else 0.0
         r_lo[i] = max(grad[i], 0.0) if sigma[i] < 0 else 0.0
-    if not _certify(u, r_up, r_lo, lo, hi, gp, wn[GF], wn[RATIO], wj[2], T) <= RTOL:
+    if not _certify(u, r_up, r_lo, lo, hi, gp, wn[GF], wn[RATIO], wj[2], wj[3], T) <= RTOL:
         return BAIL_CERT, it
     res = ws[9]
     ok = _judge(u, ws[6], wn[LIN], lo, hi, gp, L, F, res, wn[NET], wn[U2], wb[ROWS], ws[5], wj[2],
-                T)
+                T, wn[GF])
     if not (ok and res[0] <= max(10.0 * request, FLOOR_ULPS * EPS * res[4])):
         return BAIL_JUDGE, it
     return 0, it
