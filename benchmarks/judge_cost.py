@@ -9,9 +9,12 @@ by the kernels' sources, so it serves at most one of the two), interleaved:
 2. ``lcpbench.solve`` of that scene, the judge kernel swapped in
    :mod:`lcpbench.model.judge_compiled` (both behind the same adapter);
 3. ``lcpbench.solve_many`` over the paper's 108 scenes (θ 10-180 by 10, h 2-7),
-   with the line kernel (:mod:`lcpbench.model.batch_kernel`) compiled against
-   each judge: the earlier judge's line kernel is this tree's ``batch_kernel.py``
-   with its judge import and call line pointed at the earlier kernel. CPU time.
+   CPU time, with the line kernel (:mod:`lcpbench.model.batch_kernel`) compiled
+   against each judge: this tree's ``batch_kernel.py`` with its judge import and
+   call line pointed at the earlier kernel; and each with the judge called a
+   second time per scene (its answer unused), so that twice − once is what the
+   judge costs inside the line kernel, where it runs between solves (colder
+   caches than in a loop of judge calls).
 
 The earlier kernel is ``git show REF:src/lcpbench/model/judge_kernel.py``
 (default 782a192, main before this change), loaded under another module name
@@ -193,9 +196,9 @@ def main(argv=None) -> int:
             use_judge(which)
             row = rows.setdefault(which, {})
             row.setdefault("judge_answer from Python (µs)", []).append(
-                1e6 * timed(lambda: adapters[which].judge_answer(*call), 20))
+                1e6 * timed(lambda f=adapters[which].judge_answer: f(*call), 20))
             row.setdefault(f"judge_answer, {opts.loop} in a compiled loop (µs)", []).append(
-                1e6 * timed(lambda: loops[which](opts.loop, call)) / opts.loop)
+                1e6 * timed(lambda f=loops[which]: f(opts.loop, call)) / opts.loop)
             row.setdefault("lcpbench.solve (µs)", []).append(
                 1e6 * timed(lambda: lcpbench.solve(scene, tol=TOL), 5))
             if r < opts.batches:
