@@ -16,10 +16,11 @@ the same :class:`~lcpbench.model.judge.Judgement` with the same reasons
 Independent of the solve kernel (:mod:`lcpbench.model.compiled_kernel`): the
 judge step is block principal pivoting (Júdice–Pires, then Murty's least
 index), not the dual active set; nothing here is imported from that file and
-nothing there from here. The banded Cholesky below is textbook arithmetic
-(LAPACK's dpbtrf/dpbtrs for bandwidth 2), written again in this file because
-numba's on-disk cache of a function is invalidated only when *its own* file
-changes.
+nothing there from here. The banded factorisation below is textbook
+arithmetic (LDLᵀ for bandwidth 2, no square roots; the numpy judge solves with
+LAPACK's Cholesky, the same solution to round-off), written again in this file
+because numba's on-disk cache of a function is invalidated only when *its own*
+file changes. Its work arrays are one allocation per call (rows :data:`ROWS`).
 
 The chain must have consecutive joints and contiguous free nodes (the
 layouts the solve kernel takes, :func:`lcpbench.model.compiled.applies`).
@@ -214,8 +215,9 @@ def _term_sizes(bands, linear, x, n, out):
 
 @njit(cache=True)
 def _factor(bands, free, m, fac):
-    """The banded Cholesky L Lᵀ of H[free, free] (dpbtf2, bandwidth 2) into fac's rows
-    0-2, 1 / L_jj in row 3; False if H[free, free] is not positive definite."""
+    """H[free, free] = L D Lᵀ (bandwidth 2, no square roots) into fac: the unit L's
+    sub-diagonals in rows 1-2, 1 / D in row 3; False if H[free, free] is not positive
+    definite (a pivot d ≤ 0, where Cholesky's square root fails)."""
     for p in range(m):
         fac[0, p] = bands[0, free[p]]
         fac[1, p] = fac[2, p] = 0.0
@@ -225,45 +227,45 @@ def _factor(bands, free, m, fac):
                 fac[1, p] = bands[gap, free[p]]
         if p + 2 < m and free[p + 2] - free[p] == 2:
             fac[2, p] = bands[2, free[p]]
-    for j in range(m):
-        ajj = fac[0, j]
-        if not ajj > 0.0:
+    for j in range(m):  # one division per column on the dependency chain
+        d = fac[0, j]
+        if not d > 0.0:
             return False
-        ajj = np.sqrt(ajj)
-        fac[0, j] = ajj
-        fac[3, j] = 1.0 / ajj
+        fac[3, j] = 1.0 / d
         if j + 2 < m:
-            l1, l2 = fac[1, j] / ajj, fac[2, j] / ajj
+            a1, a2 = fac[1, j], fac[2, j]
+            l1, l2 = a1 / d, a2 / d
+            fac[0, j + 1] -= l1 * a1
+            fac[1, j + 1] -= l2 * a1
+            fac[0, j + 2] -= l2 * a2
             fac[1, j], fac[2, j] = l1, l2
-            fac[0, j + 1] -= l1 * l1
-            fac[1, j + 1] -= l2 * l1
-            fac[0, j + 2] -= l2 * l2
         elif j + 1 < m:
-            l1 = fac[1, j] / ajj
+            a1 = fac[1, j]
+            l1 = a1 / d
+            fac[0, j + 1] -= l1 * a1
             fac[1, j] = l1
-            fac[0, j + 1] -= l1 * l1
     return True
 
 
 @njit(cache=True)
 def _solve(fac, free, m, rhs, x):
-    """x = H[free, free]⁻¹ rhs[free] on the factor of :func:`_factor` (dpbtrs)."""
+    """x = H[free, free]⁻¹ rhs[free] on the factor of :func:`_factor`."""
     for p in range(m):
         x[p] = rhs[free[p]]
-    for j in range(m):  # L z = rhs
-        xj = x[j] * fac[3, j]
-        x[j] = xj
+    for j in range(m):  # L z = rhs, then D y = z
+        xj = x[j]
         if j + 1 < m:
             x[j + 1] -= xj * fac[1, j]
         if j + 2 < m:
             x[j + 2] -= xj * fac[2, j]
-    for j in range(m - 1, -1, -1):  # Lᵀ x = z
+        x[j] = xj * fac[3, j]
+    for j in range(m - 1, -1, -1):  # Lᵀ x = y
         t = x[j]
         if j + 1 < m:
             t -= fac[1, j] * x[j + 1]
         if j + 2 < m:
             t -= fac[2, j] * x[j + 2]
-        x[j] = t * fac[3, j]
+        x[j] = t
 
 
 @njit(cache=True)
