@@ -169,7 +169,7 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
     o_R[row] = R
     ok = False
     if code == CONVERGED:  # the judge, on the answer and the real walls
-        jc, st, fu, fl, _, _, tres, _, _ = judge_answer(
+        jc, st, fu, fl, tres = judge_answer(
             alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, wall, False,
             R.copy(), np.zeros(n), tol, recs[2, used - count:used].copy())
         j_code[row] = jc

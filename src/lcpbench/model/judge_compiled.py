@@ -76,7 +76,7 @@ def judge_fast(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
     k = _KERNEL[0] if _KERNEL else _load_kernel()
     if args is None:
         args = chain_args(chain)
-    code, st, fu, fl, _, _, res, _, _ = k.judge_answer(
+    code, st, fu, fl, res = k.judge_answer(
         _contiguous(alpha, dtype=float), *args, _contiguous(forces_upper, dtype=float),
         _contiguous(forces_lower, dtype=float), float(tol), np.array(step_sizes, dtype=float))
     return verdict_from_stats(code == k.SETTLED, dict(zip(k.STATS, st.tolist(), strict=True)),

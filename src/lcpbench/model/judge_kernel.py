@@ -16,10 +16,11 @@ the same :class:`~lcpbench.model.judge.Judgement` with the same reasons
 Independent of the solve kernel (:mod:`lcpbench.model.compiled_kernel`): the
 judge step is block principal pivoting (Júdice–Pires, then Murty's least
 index), not the dual active set; nothing here is imported from that file and
-nothing there from here. The banded Cholesky below is textbook arithmetic
-(LAPACK's dpbtrf/dpbtrs for bandwidth 2), written again in this file because
-numba's on-disk cache of a function is invalidated only when *its own* file
-changes.
+nothing there from here. The banded factorisation below is textbook
+arithmetic (LDLᵀ for bandwidth 2, no square roots; the numpy judge solves with
+LAPACK's Cholesky, the same solution to round-off), written again in this file
+because numba's on-disk cache of a function is invalidated only when *its own*
+file changes. Its work arrays are one allocation per call (rows :data:`ROWS`).
 
 The chain must have consecutive joints and contiguous free nodes (the
 layouts the solve kernel takes, :func:`lcpbench.model.compiled.applies`).
@@ -49,26 +50,44 @@ STATS = ("tau", "F0", "eps_R", "comp", "comp_allowed", "min_gap", "min_force",
 SETTLED, NOT_SETTLED = 0, 1
 
 
+# rows of the judge's work array: one allocation per call, each row links + 2 long
+# (a node's or link's entries from column 0; the step's accumulators in shifted
+# node index, node + 1). The certificate's suffix sums reuse the step's rows, which
+# are spent by then.
+(X, Y, COS, INV, V, ALPHA0, DIAG, OFF1, OFF2, LIN, C0, C1, C2, PHI0, ORIGIN, LINEAR, U, NET,
+ SCALE, ROUNDOFF, NOISE, RHS, HY, HG, HGA, JU, JLO, SIZE) = range(28)
+ROWS = 28
+FORCE, F_SUM, FX_SUM, P_SUM, PX_SUM = DIAG, OFF1, OFF2, LIN, HY
+# a node's place in the judge step's contact set
+FREE, UP, LO = 0, 1, 2
+
+
 # -- the chain's exact geometry (model.chain) ------------------------------------------
 @njit(cache=True)
-def _positions(alpha, a):
-    x = np.zeros(alpha.size + 1)
-    y = np.zeros(alpha.size + 1)
+def _positions(alpha, a, w):
+    """Node positions x, y (rows X, Y), cos α (row COS) and tan α − α (row V)."""
+    x, y, cs, v = w[X], w[Y], w[COS], w[V]
+    x[0] = y[0] = 0.0
     sx = sy = 0.0
     for i in range(alpha.size):
-        sx += a * np.cos(alpha[i])
-        sy += a * np.sin(alpha[i])
+        c, s = np.cos(alpha[i]), np.sin(alpha[i])
+        cs[i] = c
+        v[i] = s / c - alpha[i]  # tan α − α, on the cos and sin at hand
+        sx += a * c
+        sy += a * s
         x[i + 1], y[i + 1] = sx, sy
-    return x, y
 
 
 @njit(cache=True)
-def _torque_residual(alpha, x, jl, jr, k, rest, link_load, fs, nodal_force, pinned_right):
-    """chain.torque_residual: k(φ − φ*) minus the moment statics demands at each joint."""
-    links = alpha.size
-    force = np.zeros(links + 1)
-    for i in range(nodal_force.size):
-        force[fs - 1 + i] = nodal_force[i]
+def _torque_residual(alpha, w, jl, jr, k, rest, link_load, fs, fu, fl, pinned_right, res):
+    """chain.torque_residual of the net reactions fl − fu into ``res``: k(φ − φ*) minus
+    the moment statics demands at each joint; returns the largest spring torque."""
+    links, x = alpha.size, w[X]
+    force = w[FORCE]
+    for i in range(links + 1):
+        force[i] = 0.0
+    for i in range(fu.size):
+        force[fs - 1 + i] = fl[i] - fu[i]
     if pinned_right:
         m = 0.0
         for i in range(links):
@@ -77,17 +96,15 @@ def _torque_residual(alpha, x, jl, jr, k, rest, link_load, fs, nodal_force, pinn
         for i in range(links + 1):
             fx += force[i] * x[i]
         force[links] = -(m + fx) / x[links]
-    f_sum = np.zeros(links + 2)  # suffix sums Σ_{q>=p}
-    fx_sum = np.zeros(links + 2)
-    p_sum = np.zeros(links + 1)
-    px_sum = np.zeros(links + 1)
+    f_sum, fx_sum, p_sum, px_sum = w[F_SUM], w[FX_SUM], w[P_SUM], w[PX_SUM]  # Σ_{q>=p}
+    f_sum[links + 1] = fx_sum[links + 1] = 0.0
+    p_sum[links] = px_sum[links] = 0.0
     for p in range(links, -1, -1):
         f_sum[p] = f_sum[p + 1] + force[p]
         fx_sum[p] = fx_sum[p + 1] + force[p] * x[p]
     for p in range(links - 1, -1, -1):
         p_sum[p] = p_sum[p + 1] + link_load[p]
         px_sum[p] = px_sum[p + 1] + link_load[p] * (0.5 * (x[p] + x[p + 1]))
-    res = np.empty(jr.size)
     spring_max = 0.0
     for j in range(jr.size):
         at = jr[j]
@@ -97,29 +114,28 @@ def _torque_residual(alpha, x, jl, jr, k, rest, link_load, fs, nodal_force, pinn
         spring = k[j] * (phi - rest[j])
         res[j] = spring - moment
         spring_max = max(spring_max, k[j] * abs(phi - rest[j]))
-    return res, spring_max
+    return spring_max
 
 
 # -- the judge's contact step (model.step.assemble_step, written for the judge) ----------
 @njit(cache=True)
-def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, y):
-    """(bands, linear, coef, inv, origin, alpha0, phi_origin) of the step at α."""
+def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, w, bands):
+    """The step at α: its bands, and (rows) linear, coef, inv, origin, alpha0, phi_origin."""
     links = alpha.size
     nj = jr.size
-    inv = np.empty(links)
-    v = np.empty(links)
+    cs, inv, v = w[COS], w[INV], w[V]
     for i in range(links):
-        inv[i] = 1.0 / (a * np.cos(alpha[i]))
-        v[i] = np.tan(alpha[i]) - alpha[i]
-    coef = np.empty((nj, 3))
-    diag, off1, off2, lin = (np.zeros(links + 2), np.zeros(links + 2), np.zeros(links + 2),
-                             np.zeros(links + 2))
+        inv[i] = 1.0 / (a * cs[i])
+    diag, off1, off2, lin = w[DIAG], w[OFF1], w[OFF2], w[LIN]
+    for p in range(links + 2):
+        diag[p] = off1[p] = off2[p] = lin[p] = 0.0
+    c0s, c1s, c2s = w[C0], w[C1], w[C2]
     b0 = jr[0]
     for j in range(nj):
         wl = inv[jl[j]] if jl[j] >= 0 else 0.0
         wr = inv[jr[j]]
         c0, c1, c2 = wl, -wl - wr, wr
-        coef[j, 0], coef[j, 1], coef[j, 2] = c0, c1, c2
+        c0s[j], c1s[j], c2s[j] = c0, c1, c2
         t = k[j] * ((-v[jr[j]] + (v[jl[j]] if jl[j] >= 0 else 0.0)) - rest[j])
         p = b0 + j
         diag[p] += k[j] * c0 * c0
@@ -131,174 +147,189 @@ def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, y):
         lin[p] += c0 * t
         lin[p + 1] += c1 * t
         lin[p + 2] += c2 * t
-    origin = np.empty(n)
+    y, origin, alpha0, phi_origin, linear = w[Y], w[ORIGIN], w[ALPHA0], w[PHI0], w[LINEAR]
     for i in range(n):
         origin[i] = y[fs - 1 + i]
-    alpha0 = alpha.copy()
+    for i in range(links):
+        alpha0[i] = alpha[i]
     if fs - 1 + n - 1 < links:  # pinned right end: the last link closes the chain
         alpha0[links - 1] += -y[links] * inv[links - 1]
-    phi_origin = np.empty(nj)
     for j in range(nj):
         phi_origin[j] = alpha0[jr[j]] - (alpha0[jl[j]] if jl[j] >= 0 else 0.0)
-    bands = np.zeros((3, n))
-    linear = np.empty(n)
     for i in range(n):
         bands[0, i] = diag[fs + i]
-        if i < n - 1:
-            bands[1, i] = off1[fs + i]
-        if i < n - 2:
-            bands[2, i] = off2[fs + i]
+        bands[1, i] = off1[fs + i] if i < n - 1 else 0.0
+        bands[2, i] = off2[fs + i] if i < n - 2 else 0.0
         linear[i] = lin[fs + i] - nodal_load[i]
-    return bands, linear, coef, inv, origin, alpha0, phi_origin
 
 
 @njit(cache=True)
-def _grad(u, absolute, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load):
-    """ContactStep.gradient (absolute False) or .gradient_scale (True) at u."""
-    nj = coef.shape[0]
-    y = np.zeros(links + 2)
-    for i in range(u.size):
-        d = u[i] - origin[i]
-        y[fs + i] = abs(d) if absolute else d
-    g = np.zeros(links + 2)
+def _grad(u, w, out, with_scale, n, fs, b0, nj, k, rest, nodal_load):
+    """ContactStep.gradient at u into ``out``, and with ``with_scale`` its
+    .gradient_scale at u into row SCALE, in one pass."""
+    origin, phi_origin = w[ORIGIN], w[PHI0]
+    c0s, c1s, c2s = w[C0], w[C1], w[C2]
+    y, g, ga = w[HY], w[HG], w[HGA]
+    for p in range(y.size):
+        y[p] = g[p] = ga[p] = 0.0
+    for i in range(n):
+        y[fs + i] = u[i] - origin[i]
     for j in range(nj):
-        c0, c1, c2 = coef[j, 0], coef[j, 1], coef[j, 2]
-        if absolute:
-            c0, c1, c2 = abs(c0), abs(c1), abs(c2)
-        m = c0 * y[b0 + j] + c1 * y[b0 + 1 + j] + c2 * y[b0 + 2 + j]
-        if absolute:
-            m = (m + (abs(phi_origin[j]) + abs(rest[j]))) * k[j]
-        else:
-            m = ((m + phi_origin[j]) - rest[j]) * k[j]
+        c0, c1, c2 = c0s[j], c1s[j], c2s[j]
+        y0, y1, y2 = y[b0 + j], y[b0 + 1 + j], y[b0 + 2 + j]
+        m = ((c0 * y0 + c1 * y1 + c2 * y2 + phi_origin[j]) - rest[j]) * k[j]
         g[b0 + j] += c0 * m
         g[b0 + 1 + j] += c1 * m
         g[b0 + 2 + j] += c2 * m
-    out = np.empty(u.size)
-    for i in range(u.size):
-        out[i] = g[fs + i] + (abs(nodal_load[i]) + TINY) if absolute else g[fs + i] - nodal_load[i]
-    return out
+        if with_scale:
+            a0, a1, a2 = abs(c0), abs(c1), abs(c2)
+            ma = (a0 * abs(y0) + a1 * abs(y1) + a2 * abs(y2)
+                  + (abs(phi_origin[j]) + abs(rest[j]))) * k[j]
+            ga[b0 + j] += a0 * ma
+            ga[b0 + 1 + j] += a1 * ma
+            ga[b0 + 2 + j] += a2 * ma
+    for i in range(n):
+        out[i] = g[fs + i] - nodal_load[i]
+    if with_scale:
+        scale = w[SCALE]
+        for i in range(n):
+            scale[i] = ga[fs + i] + (abs(nodal_load[i]) + TINY)
 
 
 @njit(cache=True)
-def _abs_matvec(bands, x):
-    """|H| |x| on the bands (a size of terms, for round-off bounds)."""
-    n = x.size
-    out = np.empty(n)
+def _term_sizes(bands, linear, x, n, out):
+    """(|H| |x| + |c|)_i on the bands into ``out``: the size of the terms of each R_i
+    (for round-off bounds)."""
     for i in range(n):
         s = abs(bands[0, i]) * abs(x[i])
-        for kk in (1, 2):
-            if i - kk >= 0:
-                s += abs(bands[kk, i - kk]) * abs(x[i - kk])
-            if i + kk < n:
-                s += abs(bands[kk, i]) * abs(x[i + kk])
-        out[i] = s
-    return out
+        if i - 1 >= 0:
+            s += abs(bands[1, i - 1]) * abs(x[i - 1])
+        if i + 1 < n:
+            s += abs(bands[1, i]) * abs(x[i + 1])
+        if i - 2 >= 0:
+            s += abs(bands[2, i - 2]) * abs(x[i - 2])
+        if i + 2 < n:
+            s += abs(bands[2, i]) * abs(x[i + 2])
+        out[i] = s + abs(linear[i])
 
 
 @njit(cache=True)
-def _solve_free(bands, free, rhs):
-    """H[free, free]⁻¹ rhs[free] by a banded Cholesky (None-like: ok False if not PD)."""
-    m = free.size
-    ab = np.zeros((3, m))
+def _factor(bands, free, m, fac):
+    """H[free, free] = L D Lᵀ (bandwidth 2, no square roots) into fac: the unit L's
+    sub-diagonals in rows 1-2, 1 / D in row 3; False if H[free, free] is not positive
+    definite (a pivot d ≤ 0, where Cholesky's square root fails)."""
     for p in range(m):
-        ab[0, p] = bands[0, free[p]]
-        for kk in (1, 2):
-            if p + kk < m:
-                gap = free[p + kk] - free[p]
-                if gap <= 2:
-                    ab[kk, p] = bands[gap, free[p]]
-    for j in range(m):  # L Lᵀ, in place (dpbtf2)
-        ajj = ab[0, j]
-        if not ajj > 0.0:
-            return False, rhs
-        ajj = np.sqrt(ajj)
-        ab[0, j] = ajj
-        kn = min(2, m - 1 - j)
-        for p in range(1, kn + 1):
-            ab[p, j] /= ajj
-        for q in range(1, kn + 1):
-            for p in range(q, kn + 1):
-                ab[p - q, j + q] -= ab[p, j] * ab[q, j]
-    x = np.empty(m)
+        fac[0, p] = bands[0, free[p]]
+        fac[1, p] = fac[2, p] = 0.0
+        if p + 1 < m:
+            gap = free[p + 1] - free[p]
+            if gap <= 2:
+                fac[1, p] = bands[gap, free[p]]
+        if p + 2 < m and free[p + 2] - free[p] == 2:
+            fac[2, p] = bands[2, free[p]]
+    for j in range(m):  # one division per column on the dependency chain
+        d = fac[0, j]
+        if not d > 0.0:
+            return False
+        fac[3, j] = 1.0 / d
+        if j + 2 < m:
+            a1, a2 = fac[1, j], fac[2, j]
+            l1, l2 = a1 / d, a2 / d
+            fac[0, j + 1] -= l1 * a1
+            fac[1, j + 1] -= l2 * a1
+            fac[0, j + 2] -= l2 * a2
+            fac[1, j], fac[2, j] = l1, l2
+        elif j + 1 < m:
+            a1 = fac[1, j]
+            l1 = a1 / d
+            fac[0, j + 1] -= l1 * a1
+            fac[1, j] = l1
+    return True
+
+
+@njit(cache=True)
+def _solve(fac, free, m, rhs, x):
+    """x = H[free, free]⁻¹ rhs[free] on the factor of :func:`_factor`."""
     for p in range(m):
         x[p] = rhs[free[p]]
-    for j in range(m):
-        x[j] /= ab[0, j]
-        for p in range(1, min(2, m - 1 - j) + 1):
-            x[j + p] -= x[j] * ab[p, j]
-    for j in range(m - 1, -1, -1):
+    for j in range(m):  # L z = rhs, then D y = z
+        xj = x[j]
+        if j + 1 < m:
+            x[j + 1] -= xj * fac[1, j]
+        if j + 2 < m:
+            x[j + 2] -= xj * fac[2, j]
+        x[j] = xj * fac[3, j]
+    for j in range(m - 1, -1, -1):  # Lᵀ x = y
         t = x[j]
-        for p in range(1, min(2, m - 1 - j) + 1):
-            t -= ab[p, j] * x[j + p]
-        x[j] = t / ab[0, j]
-    return True, x
+        if j + 1 < m:
+            t -= fac[1, j] * x[j + 1]
+        if j + 2 < m:
+            t -= fac[2, j] * x[j + 2]
+        x[j] = t
 
 
 @njit(cache=True)
-def _pivot(bands, linear, lo, hi, L, gp, up, lo_set, pull):
-    """model.judge._pivot_step: (rounds or 0 if it did not settle, u, net reaction,
-    round-off per wall node, worst round-off, term size S)."""
-    coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load = gp
-    n = linear.size
-    up, lo_set = up.copy(), lo_set.copy()
+def _pivot(bands, fac, iw, lo, hi, L, pull, w, fs, b0, nj, k, rest, nodal_load):
+    """model.judge._pivot_step from the contact set ``iw[0]`` (FREE, UP, LO): (rounds or
+    0 if it did not settle, worst round-off, term size S); u, the net reaction and
+    the round-off per wall node in rows U, NET, ROUNDOFF."""
+    n = lo.size
+    state, change, free = iw[0], iw[1], iw[2]  # change: 1 release up, 2 release lo,
+    origin, linear, u, net = w[ORIGIN], w[LINEAR], w[U], w[NET]  # 3 join up, 4 join lo
+    scale, roundoff, x, sizes = w[SCALE], w[ROUNDOFF], w[RHS], w[SIZE]
     best, stall = n + 1, 0
-    empty = np.zeros(n)
     for rounds in range(1, PIVOT_ROUNDS + 2 * n + 1):
-        u = origin.copy()
         nfree = 0
         for i in range(n):
-            if up[i]:
+            if state[i] == UP:
                 u[i] = hi[i]
-            elif lo_set[i]:
+            elif state[i] == LO:
                 u[i] = lo[i]
             else:
+                u[i] = origin[i]
+                free[nfree] = i
                 nfree += 1
         if nfree:
-            free = np.empty(nfree, np.int64)
-            c = 0
-            for i in range(n):
-                if not (up[i] or lo_set[i]):
-                    free[c] = i
-                    c += 1
+            if not _factor(bands, free, nfree, fac):
+                return 0, 0.0, 0.0
             for _ in range(2):  # solve, then refine with the factored gradient
-                g = _grad(u, False, coef, b0, fs, links, origin, phi_origin, k, rest,
-                          nodal_load)
-                ok, x = _solve_free(bands, free, g)
-                if not ok:
-                    return 0, u, empty, empty, 0.0, 0.0
+                _grad(u, w, net, False, n, fs, b0, nj, k, rest, nodal_load)
+                _solve(fac, free, nfree, net, x)
                 for p in range(nfree):
                     u[free[p]] -= x[p]
-        net = -_grad(u, False, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load)
-        scale = _grad(u, True, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load)
-        size = _abs_matvec(bands, u)
+        _grad(u, w, net, True, n, fs, b0, nj, k, rest, nodal_load)
+        _term_sizes(bands, linear, u, n, sizes)
         count, first = 0, -1
-        change = np.zeros(n, np.int64)  # 1 release up, 2 release lo, 3 join up, 4 join lo
         worst, S = 0.0, 0.0
-        roundoff = np.empty(n)
         for i in range(n):
+            net[i] = -net[i]
             roundoff[i] = ROUNDOFF_ULPS * EPS * scale[i]
-            size[i] += abs(linear[i])
+            size = sizes[i]
             worst = max(worst, roundoff[i])
-            S = max(S, size[i])
-            slack = max(max(roundoff[i], pull), ROUNDOFF_ULPS * EPS * size[i])
+            S = max(S, size)
+            slack = max(max(roundoff[i], pull), ROUNDOFF_ULPS * EPS * size)
             reach = max(ROUNDOFF_ULPS * EPS * (abs(u[i]) + L), pull / bands[0, i])
-            if up[i] and net[i] < -slack:
-                change[i] = 1
-            elif lo_set[i] and net[i] > slack:
-                change[i] = 2
-            elif not up[i] and not lo_set[i] and u[i] > hi[i] + reach:
-                change[i] = 3
-            elif not up[i] and not lo_set[i] and u[i] < lo[i] - reach:
-                change[i] = 4
-            if change[i]:
+            c = 0
+            if state[i] == UP:
+                if net[i] < -slack:
+                    c = 1
+            elif state[i] == LO:
+                if net[i] > slack:
+                    c = 2
+            elif u[i] > hi[i] + reach:
+                c = 3
+            elif u[i] < lo[i] - reach:
+                c = 4
+            change[i] = c
+            if c:
                 count += 1
                 if first < 0:
                     first = i
         if count == 0:
             for i in range(n):
-                if not (up[i] or lo_set[i]):
+                if state[i] == FREE:
                     roundoff[i] = 0.0
-            return rounds, u, net, roundoff, worst, S
+            return rounds, worst, S
         if count < best:
             best, stall = count, 0
         else:
@@ -306,15 +337,8 @@ def _pivot(bands, linear, lo, hi, L, gp, up, lo_set, pull):
         for i in range(n):
             if change[i] == 0 or (stall >= STALL and i != first):
                 continue
-            if change[i] == 1:
-                up[i] = False
-            elif change[i] == 2:
-                lo_set[i] = False
-            elif change[i] == 3:
-                up[i] = True
-            else:
-                lo_set[i] = True
-    return 0, origin, empty, empty, 0.0, 0.0
+            state[i] = FREE if change[i] <= 2 else (UP if change[i] == 3 else LO)
+    return 0, 0.0, 0.0
 
 
 @njit(cache=True)
@@ -349,15 +373,16 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
     scale EI/ℓ²; ``L`` the length ℓ; ``wall`` the upper wall's height (inf:
     none); ``channel`` a lower wall at −wall too.
 
-    Returns ``(code, stats, forces_upper, forces_lower, judge_upper,
-    judge_lower, torque_residual, x, y)``: ``code`` SETTLED or NOT_SETTLED
-    (the judge step did not settle), ``stats`` the numbers named in
-    :data:`STATS`, the answer's reactions with their round-off set to zero,
-    the judge step's reactions R', the certificate's torque residual and the
-    node positions.
+    Returns ``(code, stats, forces_upper, forces_lower, torque_residual)``:
+    ``code`` SETTLED or NOT_SETTLED (the judge step did not settle), ``stats``
+    the numbers named in :data:`STATS`, the answer's reactions with their
+    round-off set to zero and the certificate's torque residual. Its work arrays
+    are allocated once per call (a row per quantity, :data:`ROWS`).
     """
     n = lo.size
     links = alpha.size
+    nj = jr.size
+    b0 = jr[0]
     tau = min(FORCE_TOL_CAP, FORCE_TOL_PER_RAD * tol)
     F_up = F_lo = 0.0
     for i in range(n):
@@ -366,29 +391,28 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
     F0 = max(max(abs(F_up), abs(F_lo)), F)
     eps_R = NODE_SHARE * tau * F0
     stats = np.full(len(STATS), np.nan)
-    x, y = _positions(alpha, a)
+    w = np.empty((ROWS, links + 2))
+    bands, fac = np.empty((3, n)), np.empty((4, n))
+    iw = np.empty((3, n), np.int64)
+    _positions(alpha, a, w)
     # the judge step at α, from the answer's contact set
-    bands, linear, coef, inv, origin, alpha0, phi_origin = _step(
-        alpha, a, jl, jr, k, rest, fs, n, nodal_load, y)
-    gp = (coef, jr[0], fs, links, origin, phi_origin, k, rest, nodal_load)
-    scale0 = _grad(origin, True, coef, jr[0], fs, links, origin, phi_origin, k, rest,
-                   nodal_load)
-    size0 = _abs_matvec(bands, origin)
-    up, lo_set = np.zeros(n, np.bool_), np.zeros(n, np.bool_)
-    noise = np.empty(n)
+    _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, w, bands)
+    origin, linear, noise, state = w[ORIGIN], w[LINEAR], w[NOISE], iw[0]
+    _grad(origin, w, w[RHS], True, n, fs, b0, nj, k, rest, nodal_load)  # scale at u₀
+    _term_sizes(bands, linear, origin, n, w[SIZE])
+    scale0, size0 = w[SCALE], w[SIZE]
     for i in range(n):
         touch = max(eps_R / bands[0, i], 1e3 * EPS * L)
         on_up = hi[i] - origin[i] <= touch
         on_lo = origin[i] - lo[i] <= touch
-        noise[i] = ROUNDOFF_ULPS * EPS * (scale0[i] if on_up or on_lo
-                                          else size0[i] + abs(linear[i]))
-        up[i] = on_up and (not on_lo or hi[i] - origin[i] <= origin[i] - lo[i])
-        lo_set[i] = on_lo and not up[i]
-    rounds, u, net, roundoff, worst, S = _pivot(bands, linear, lo, hi, L, gp, up, lo_set,
-                                                eps_R)
+        noise[i] = ROUNDOFF_ULPS * EPS * (scale0[i] if on_up or on_lo else size0[i])
+        up = on_up and (not on_lo or hi[i] - origin[i] <= origin[i] - lo[i])
+        state[i] = UP if up else (LO if on_lo else FREE)
+    rounds, worst, S = _pivot(bands, fac, iw, lo, hi, L, eps_R, w, fs, b0, nj, k, rest,
+                              nodal_load)
     settled = rounds > 0
+    u, net, roundoff, ju, jlo = w[U], w[NET], w[ROUNDOFF], w[JU], w[JLO]
     fu, fl = forces_upper.copy(), forces_lower.copy()
-    ju, jlo = np.zeros(n), np.zeros(n)
     if settled:
         for i in range(n):  # values within round-off are zero, not reactions
             if abs(fu[i]) <= noise[i]:
@@ -400,10 +424,13 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
                 near = u[i] >= mid if np.isfinite(mid) else np.isfinite(hi[i])
                 ju[i], jlo[i] = (net[i], 0.0) if near else (0.0, -net[i])
             else:
-                ju[i] = net[i]
+                ju[i], jlo[i] = net[i], 0.0
     # the certificate of the cleaned reactions (model.result.certify)
+    y = w[Y]
     min_gap, min_force, cmp = np.inf, 0.0, 0.0
     has_gap = np.isfinite(wall)
+    comp = 0.0  # complementarity and sign on the answer's heights
+    R_min = 0.0
     for i in range(n):
         yf = y[fs - 1 + i]
         min_force = min(min_force, fu[i])
@@ -414,23 +441,18 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
             min_force = min(min_force, fl[i])
             min_gap = min(min_gap, yf + wall)
             cmp = max(cmp, abs((yf + wall) * fl[i]))
-    pinned_right = fs - 1 + n - 1 < links
-    closure = abs(y[links]) if pinned_right else 0.0
-    net_force = fl - fu
-    res, spring_max = _torque_residual(alpha, x, jl, jr, k, rest, link_load, fs, net_force,
-                                       pinned_right)
-    worst_t = 0.0
-    for j in range(res.size):
-        worst_t = max(worst_t, abs(res[j]))
-    rel_t = worst_t / max(spring_max, F * L)
-    # complementarity and sign on the answer's heights
-    comp = 0.0
-    R_min = 0.0
-    for i in range(n):
-        yf = y[fs - 1 + i]
         comp = max(comp, min(fu[i] / F0, (hi[i] - yf) / L))
         comp = max(comp, min(fl[i] / F0, (yf - lo[i]) / L))
         R_min = min(R_min, min(fu[i], fl[i]))
+    pinned_right = fs - 1 + n - 1 < links
+    closure = abs(y[links]) if pinned_right else 0.0
+    res = np.empty(nj)
+    spring_max = _torque_residual(alpha, w, jl, jr, k, rest, link_load, fs, fu, fl,
+                                  pinned_right, res)
+    worst_t = 0.0
+    for j in range(nj):
+        worst_t = max(worst_t, abs(res[j]))
+    rel_t = worst_t / max(spring_max, F * L)
     floor_R = FLOOR_ULPS * EPS * S if settled else 0.0
     stats[0], stats[1], stats[2], stats[3] = tau, F0, eps_R, comp
     stats[4] = max(NODE_SHARE * tau, floor_R / F0) if settled else NODE_SHARE * tau
@@ -439,7 +461,8 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
     stats[19] = min(GEOMETRY_TOL, NODE_SHARE * tau) * L
     stats[20] = GEOMETRY_TOL * L
     if not settled:
-        return NOT_SETTLED, stats, fu, fl, ju, jlo, res, x, y
+        return NOT_SETTLED, stats, fu, fl, res
+    origin, alpha0, inv = w[ORIGIN], w[ALPHA0], w[INV]
     dalpha, prev = 0.0, 0.0
     for i in range(links):  # ContactStep.predict_alpha, eq. (21), about u₀
         node = i + 1 - (fs - 1)
@@ -465,4 +488,4 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
     stats[14] = kappa * d_max / F0
     stats[15] = max(max(NODE_FACTOR * tau, NODE_GROSS), NODE_FACTOR * floor_R / F0)
     stats[16], stats[17], stats[18] = rho, J, rounds
-    return SETTLED, stats, fu, fl, ju, jlo, res, x, y
+    return SETTLED, stats, fu, fl, res
