@@ -8,7 +8,8 @@ main's package is imported from ``--main`` (default /work/main/src) under the na
 the table says which served). Two scene kinds: the same scene object again (its
 chain kept) and a new scene object each call (its construction not timed). Blocks of
 ``--block`` solves, the two trees alternating, the order swapped every repetition;
-wall time (perf_counter) per solve, median and best over ``--repeat`` blocks. Then
+wall time (perf_counter) and CPU time (process_time) per solve, median and best over
+``--repeat`` blocks. Then
 the same with the kernels replayed (``python_overhead._Replay``: each kernel call
 hands back its recorded outputs), which leaves the Python alone. One BLAS thread;
 the load average before and after is printed.
@@ -66,24 +67,29 @@ class Tree:
                         importlib.import_module(f"{package}.model.judge_compiled")._kernel())
         self.served = "AOT" if type(self.kernels[0]).__name__ == "AotKernels" else "JIT"
 
-    def block(self, n: int, same: bool) -> float:
-        """Wall seconds per solve of a block of n solves (scene objects made before)."""
+    def block(self, n: int, same: bool) -> tuple[float, float]:
+        """(wall, CPU) seconds per solve of a block of n solves (scene objects made
+        before)."""
         scenes = [self.Scene(**SCENE)] * n if same else [self.Scene(**SCENE) for _ in range(n)]
         solve = self.solve
-        t0 = time.perf_counter()
+        c0, t0 = time.process_time(), time.perf_counter()
         for s in scenes:
             r = solve(s, tol=TOL)
-        elapsed = (time.perf_counter() - t0) / n
+        wall, cpu = (time.perf_counter() - t0) / n, (time.process_time() - c0) / n
         assert r.converged
-        return elapsed
+        return wall, cpu
 
 
-def interleaved(trees: list[Tree], repeat: int, block: int, same: bool) -> dict:
-    times: dict = {t.label: [] for t in trees}
+def interleaved(trees: list[Tree], repeat: int, block: int, same: bool) -> tuple[dict, dict]:
+    """({tree: wall times}, {tree: CPU times}) of ``repeat`` blocks each, alternating."""
+    wall: dict = {t.label: [] for t in trees}
+    cpu: dict = {t.label: [] for t in trees}
     for r in range(repeat):
         for t in (trees if r % 2 == 0 else trees[::-1]):
-            times[t.label].append(t.block(block, same))
-    return times
+            w, c = t.block(block, same)
+            wall[t.label].append(w)
+            cpu[t.label].append(c)
+    return wall, cpu
 
 
 def replaying(trees: list[Tree]):
@@ -108,11 +114,14 @@ def replaying(trees: list[Tree]):
     return _Ctx()
 
 
-def _row(what: str, times: dict, main: str, mine: str) -> str:
-    med = {k: statistics.median(v) * 1e6 for k, v in times.items()}
-    best = {k: min(v) * 1e6 for k, v in times.items()}
-    return (f"| {what} | {med[main]:.1f} ({best[main]:.1f}) | {med[mine]:.1f} "
-            f"({best[mine]:.1f}) | {med[main] / med[mine]:.2f} |")
+def _row(what: str, times: tuple[dict, dict], main: str, mine: str) -> str:
+    cells = []
+    for kind in times:  # wall, then CPU
+        med = {k: statistics.median(v) * 1e6 for k, v in kind.items()}
+        best = {k: min(v) * 1e6 for k, v in kind.items()}
+        cells.append(f"{med[main]:.1f} ({best[main]:.1f}) | {med[mine]:.1f} "
+                     f"({best[mine]:.1f}) | {med[main] / med[mine]:.2f}")
+    return f"| {what} | {' | '.join(cells)} |"
 
 
 def main(argv=None) -> int:
@@ -144,12 +153,13 @@ def main(argv=None) -> int:
                              main_l, mine_l))
     load1 = os.getloadavg()
     print(f"### One default solve: {main_l} against this tree, interleaved\n")
-    print(f"N = 140, θ = 150°, h = 3 mm, tol 1e-3; wall µs per solve, median (best) of "
+    print(f"N = 140, θ = 150°, h = 3 mm, tol 1e-3; µs per solve (wall, CPU), median (best) of "
           f"{args.repeat} blocks of {args.block}; kernels served: "
           f"main {trees[0].served}, this tree {trees[1].served}; one BLAS thread; "
           f"load average {load0[0]:.2f} before, {load1[0]:.2f} after.\n")
-    print("| what | main µs | this tree µs | main / this |")
-    print("|---|---|---|---|")
+    print("| what | main wall µs | this tree wall µs | main / this | main CPU µs | "
+          "this tree CPU µs | main / this |")
+    print("|---|---|---|---|---|---|---|")
     print("\n".join(rows))
     return 0
 

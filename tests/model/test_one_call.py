@@ -150,3 +150,22 @@ def test_channels_and_the_numpy_engine_keep_the_full_build():
     assert type(channel) is ContactResult and channel.converged
     ref = lcpbench.solve(ActuatorScene(theta=150, height=3.0, links=30), engine="numpy")
     assert type(ref) is ContactResult and ref.extra["judge"] == "numpy"
+
+
+def test_a_verdict_set_by_hand_stays_and_a_verdict_unlike_the_judges_is_caught(monkeypatch):
+    scene = ActuatorScene(theta=150.0, height=3.0, links=40)
+    mine = lcpbench.solve(scene)
+    mine.converged = False  # set before the rest is built: kept, not checked
+    assert mine.reason == "converged" and mine.converged is False
+    solve_k, judge_k, _ = api_module._JUDGE[0]
+
+    class Wrong:  # a compiled verdict that says the opposite of the judge's checks
+        @staticmethod
+        def accepted(settled, stats, tol):
+            return False
+
+    monkeypatch.setattr(api_module, "_JUDGE", [(solve_k, judge_k, Wrong)])
+    res = lcpbench.solve(scene)
+    assert res.converged is False
+    with pytest.raises(RuntimeError, match="is not the judge's"):
+        res.reason

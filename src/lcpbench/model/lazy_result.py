@@ -9,7 +9,8 @@ the callable kept in its ``_build``: the complete result, made by the same funct
 as before (the DriverOutput by :func:`lcpbench.model.compiled.kernel_output`, the
 Judgement by :func:`lcpbench.model.judge_compiled.verdict_from_stats` from the judge
 kernel's numbers, the result by :func:`lcpbench.api.finish`). Its fields fill those
-not set; the verdict set at once must be the one built (else RuntimeError).
+not set (a field set by hand keeps its value); the verdict set at once must be the
+one built (else RuntimeError: the compiled verdict and the judge's reasons disagree).
 
 Used by the one-wall route of :func:`lcpbench.solve` (the default back-end) and by a
 batch line (:mod:`lcpbench.studies.batch_result`).
@@ -70,7 +71,7 @@ def lazy_result(cls: type, values: dict, build: Callable[[], ContactResult]) -> 
     """A ``cls`` (:class:`LazyResult` or a subclass) with the fields ``values`` set and
     the others built by ``build()`` at the first access of any of them."""
     res = object.__new__(cls)
-    values["_build"] = build
+    values["_build"] = (build, values["converged"])  # (the verdict set, to check)
     res.__dict__ = values
     return res
 
@@ -78,12 +79,13 @@ def lazy_result(cls: type, values: dict, build: Callable[[], ContactResult]) -> 
 def materialize(res: ContactResult) -> None:
     """Build every field of ``res`` (those set already keep their values)."""
     d = res.__dict__
-    build = d.get("_build")
-    if build is None:
+    source = d.get("_build")
+    if source is None:
         return
+    build, verdict = source
     full = build()
-    if full.converged != d.get("converged", full.converged):  # the two must agree
-        raise RuntimeError(f"the kernel's verdict ({d['converged']}) is not the judge's "
+    if full.converged != verdict:  # the two must agree
+        raise RuntimeError(f"the kernel's verdict ({verdict}) is not the judge's "
                            f"({full.converged}: {full.reason}); please report this scene: "
                            f"{d.get('scene')!r}")
     for key, value in full.__dict__.items():
