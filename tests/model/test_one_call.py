@@ -105,6 +105,14 @@ def test_the_answer_and_verdict_are_the_numpy_references(kw):
     assert np.array_equal(got.forces > 0, ref.forces > 0)  # the same contact set
 
 
+@pytest.mark.parametrize("kw", SCENES[:2])
+def test_the_newton_scheme_takes_the_same_route(kw):
+    scene = ActuatorScene(**kw)
+    res = lcpbench.solve(scene, tol=1e-9, method="newton")
+    assert type(res) is LazyResult and res.method == "newton"
+    _same_fields(res, _full(scene, tol=1e-9, method="newton"))
+
+
 @pytest.mark.parametrize("tol, max_outer", [(1e-3, 1), (1e-3, 2), (0.5, 200), (0.3, 200)])
 def test_a_driver_that_stops_or_a_loose_tol_gives_the_full_builds_verdict(tol, max_outer):
     scene = ActuatorScene(theta=150.0, height=3.0, links=60)
