@@ -176,4 +176,4 @@ def test_a_verdict_set_by_hand_stays_and_a_verdict_unlike_the_judges_is_caught(m
     res = lcpbench.solve(scene)
     assert res.converged is False
     with pytest.raises(RuntimeError, match="is not the judge's"):
-        res.reason
+        _ = res.reason
