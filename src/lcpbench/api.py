@@ -18,10 +18,22 @@ import numpy as np
 
 from .errors import ProblemError
 from .model import large_n
-from .model.compiled import applies, check_engine, direct, drive, kernel_args, run_kernel
+from .model.compiled import (
+    _BAIL,
+    applies,
+    call_kernel,
+    check_engine,
+    direct,
+    drive,
+    kernel_args,
+    kernel_output,
+    reference,
+    run_kernel,
+)
 from .model.driver import METHODS, DriverOutput, DriverStart
 from .model.judge import judge
 from .model.judge_compiled import chain_args
+from .model.lazy_result import LazyResult, lazy_result, stats_judge
 from .model.result import ContactResult, build_result
 from .model.step_solver import make_step_solver
 from .model.wall_free import solve_without_contact
@@ -156,6 +168,10 @@ def solve(
     out: DriverOutput | None
     if kernel and name == DEFAULT and begin is None and method != "undamped" and \
             direct(chain):  # drive()'s own route to the kernel, without the calls between
+        if not chain.channel:  # one wall: the kernels, the rest of the result when read
+            return _one_wall(scene, chain, args, make_step, tol=tol, max_outer=max_outer,
+                             method=method, settings=settings, why=why,
+                             pressure_limit=pressure_limit, t0=t0)
         out, used = run_kernel(chain, make_step, settings=settings, tol=tol,
                                max_outer=max_outer, method=method, args=args)
     else:
@@ -208,6 +224,82 @@ def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: 
     if why is not None:
         res.extra["auto"] = why
     return res
+
+
+def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_outer: int,
+              method: str, settings, why: str | None, pressure_limit: float | None,
+              t0: float) -> ContactResult:
+    """:func:`solve`'s direct route on a chain with one wall: the solve kernel, then,
+    on a converged answer, the judge kernel and its verdict
+    (:func:`lcpbench.model.batch_verdict.accepted`, the checks of the judge, as a
+    batch line decides it); the result's other fields are built when read
+    (:class:`~lcpbench.model.lazy_result.LazyResult`), by the same functions as
+    :func:`run_kernel` and :func:`finish`. Where the kernel stops, the numpy reference,
+    as :func:`run_kernel`; where the driver did not converge, :func:`finish` at once."""
+    got, kernel_s, name = call_kernel(chain, tol=tol, max_outer=max_outer, start=None,
+                                      settings=settings, args=args, newton=method == "newton")
+    code = got[0]
+    if code in _BAIL:
+        out, used = reference(chain, make_step, _BAIL[code], tol=tol, max_outer=max_outer,
+                              method=method)
+        return finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol,
+                      elapsed=time.perf_counter() - t0, settings=settings, engine=used,
+                      compiled_judge=True, why=why, judge_args=chain_args(chain, args),
+                      pressure_limit=pressure_limit)
+    elapsed = time.perf_counter() - t0
+    judge_args = chain_args(chain, args)
+    build = partial(_built, scene, chain, got, kernel_s, name, method=method, tol=tol,
+                    max_outer=max_outer, elapsed=elapsed, settings=settings, why=why,
+                    pressure_limit=pressure_limit)
+    jk = _JUDGE[0] if _JUDGE else _judge_kernels()
+    if code != jk[0].CONVERGED:  # the driver's failure: judged at once, as always
+        return build(judged=partial(_FAST[0] if _FAST else _judge_fast(), args=judge_args))
+    alpha, rec, count, R = got[1], got[6], got[7], got[9]
+    judge, f64 = jk[1], _contiguous  # (numpy's own float64: the AOT kernels' quick check)
+    settled_code, st, fu, fl, tres = judge.judge_answer(
+        f64(alpha, dtype=float), *judge_args, f64(R, dtype=float).copy(), np.zeros(R.size), tol,
+        f64(rec[2, :count], dtype=float).copy())
+    settled = bool(settled_code == judge.SETTLED)
+    forces = fu if settled else R.copy()  # build_result's: the judge's R, else the driver's
+    return lazy_result(LazyResult, {
+        "scene": scene, "links": chain.links, "alpha": alpha, "forces": forces,
+        "forces_lower": None, "total_force": float(_add_reduce(forces)),
+        "outer_iterations": count,
+        "converged": bool(jk[2].accepted(settled, f64(st, dtype=float), tol)),
+        "solver": DEFAULT, "method": method, "tol": tol, "time_s": elapsed,
+        "pressure_limit": pressure_limit},
+        partial(build, judged=partial(_stats_judged, judge.STATS, settled, st, fu, fl, tres)))
+
+
+def _built(scene, chain, got: tuple, kernel_s: float, name: str, *, method: str, tol: float,
+           max_outer: int, elapsed: float, settings, why, pressure_limit, judged
+           ) -> ContactResult:
+    """The complete result of :func:`_one_wall`, judged by ``judged``."""
+    out = kernel_output(chain, *got, elapsed=kernel_s, settings=name, max_outer=max_outer)
+    return finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol, elapsed=elapsed,
+                  settings=settings, engine="compiled", compiled_judge=True, why=why,
+                  judged_by=judged, pressure_limit=pressure_limit)
+
+
+def _stats_judged(names, settled, st, fu, fl, tres, *args, **kw):
+    """:func:`lcpbench.model.lazy_result.stats_judge` of the judge kernel's numbers."""
+    return stats_judge(settled, dict(zip(names, st.tolist(), strict=True)), fu, fl,
+                       tres)(*args, **kw)
+
+
+_JUDGE: list = []  # (solve kernel, judge kernel, batch_verdict), once loaded
+_add_reduce = np.add.reduce
+_contiguous = np.ascontiguousarray
+
+
+def _judge_kernels() -> tuple:
+    from .model import compiled, judge_compiled
+    from .numba_cache import held, kernel_module
+
+    found = (compiled._kernel(), judge_compiled._kernel(),
+             kernel_module("lcpbench.model.batch_verdict", "accepted"))
+    held(_JUDGE).append(found)
+    return found
 
 
 _FAST: list = []  # judge_fast, once imported

@@ -65,9 +65,9 @@ def test_results_are_built_when_read_and_carry_what_a_solve_carries():
     scenes = [ActuatorScene(theta=t, height=3.0, links=40) for t in (120, 140, 160)]
     batch = lcpbench.solve_many(scenes, tol=1e-6)
     r = batch[1]
-    assert "_line" in r.__dict__ and "steps" not in r.__dict__  # nothing built yet
+    assert "_build" in r.__dict__ and "steps" not in r.__dict__  # nothing built yet
     assert r.converged and r.outer_iterations == len(r.steps)  # (builds it)
-    assert "_line" not in r.__dict__
+    assert "_build" not in r.__dict__
     assert r.judgement.converged and r.judgement.failed == []
     assert r.total_force == pytest.approx(float(np.sum(r.forces)), rel=0, abs=0)
     x, y = node_positions(scenes[1].chain(), r.alpha)  # forward kinematics of α

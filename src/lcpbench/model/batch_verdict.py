@@ -1,4 +1,5 @@
-"""The judge's verdict from its own numbers, compiled (for the batch kernel).
+"""The judge's verdict from its own numbers, compiled (for the batch kernel and the
+one-wall route of a single solve, :func:`lcpbench.api.solve`, which calls it from Python).
 
 :func:`accepted` is whether :func:`lcpbench.model.judge.failed_checks` finds no
 failed check, given the numbers the judge kernel
@@ -8,7 +9,7 @@ contact step of the compiled solve is "solved" (the solve kernel stops on any
 other). The same comparisons, written so that a NaN fails as it does there.
 Judge side only: nothing here comes from the solve kernel. The reasons (the
 text of each failed check) are built in Python when a result is read
-(:mod:`lcpbench.studies.batch_result`), by ``verdict_from_stats`` itself.
+(:mod:`lcpbench.model.lazy_result`), by ``verdict_from_stats`` itself.
 """
 
 from __future__ import annotations

@@ -193,6 +193,15 @@ def run_kernel(chain: Chain, make_step: Callable[[], Callable], *, settings, tol
                             settings=settings, args=args, newton=method == "newton")
     if out is not None:
         return out, "compiled"
+    return reference(chain, make_step, why, tol=tol, max_outer=max_outer, method=method,
+                     start=start)
+
+
+def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol: float,
+              max_outer: int, method: str, start: DriverStart | None = None
+              ) -> tuple[DriverOutput, str]:
+    """The whole solve in the numpy reference, where the kernel stopped (``why``, one of
+    its bail reasons): the answer and the engine that produced it."""
     return (run_driver(chain, make_step(), tol=tol, max_outer=max_outer, method=method,
                        start=start), f"numpy (the compiled kernel stopped: {why})")
 
@@ -278,6 +287,18 @@ def run_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
     time its parts. ``args``: the chain's :func:`kernel_args`, when the caller
     has them already.
     """
+    got, elapsed, name = call_kernel(chain, tol=tol, max_outer=max_outer, start=start,
+                                     settings=settings, args=args, newton=newton)
+    code = got[0]
+    if code in _BAIL:
+        return None, _BAIL[code]
+    return kernel_output(chain, *got, elapsed=elapsed, settings=name, max_outer=max_outer), ""
+
+
+def call_kernel(chain: Chain, *, tol: float, max_outer: int, start: DriverStart | None,
+                settings, args: tuple | None, newton: bool) -> tuple[tuple, float, str]:
+    """One call of :func:`compiled_kernel.solve_chain` on the chain: (its outputs, its
+    wall time in s, the name of the back-end's settings)."""
     k = _KERNEL[0] if _KERNEL else _load_kernel()
     s = get_settings(settings)
     n = chain.free_nodes.size
@@ -287,12 +308,25 @@ def run_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
     if args is None:
         args = kernel_args(chain)
     t0 = time.perf_counter()
-    (code, alpha, r_up, r_lo, u, sigma, rec, count, res, R) = k.solve_chain(
-        *args, float(tol), int(max_outer), s_alpha, w_u, w_up, w_lo, flags, int(max_iter),
-        float(request), bool(newton))
-    elapsed = time.perf_counter() - t0
-    if code in _BAIL:
-        return None, _BAIL[code]
+    got = k.solve_chain(*args, float(tol), int(max_outer), s_alpha, w_u, w_up, w_lo, flags,
+                        int(max_iter), float(request), bool(newton))
+    return got, time.perf_counter() - t0, s.name
+
+
+def kernel_output(chain: Chain, code: int, alpha, r_up, r_lo, u, sigma, rec, count: int, res,
+                  R, *, elapsed: float, settings: str, max_outer: int,
+                  reason: str = "converged") -> DriverOutput:
+    """The DriverOutput of the solve kernel's outputs (the tuple
+    :func:`compiled_kernel.solve_chain` returns, ``code`` not a bail code), built by the
+    driver's own helpers: the one place for a single solve (:func:`run_compiled`,
+    :func:`lcpbench.api.solve`'s one-wall route) and a batch line
+    (:func:`lcpbench.studies.batch_result.driver_output`).
+
+    ``rec``: the step records, ``count`` of them from column 0; ``elapsed``: the
+    kernel's wall time, shared evenly over the steps; ``settings``: the settings'
+    name; ``reason``: of a converged answer (the wall-free search's says so)."""
+    k = _KERNEL[0] if _KERNEL else _load_kernel()
+    n = chain.free_nodes.size
     share = elapsed / max(count, 1)
     solved = _SOLVED
     cols = rec[:4, :count].T.tolist()  # one conversion for all the records
@@ -302,24 +336,26 @@ def run_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
         r0, r1, r2, r3, r4 = res.tolist()
         sol = StepSolution(u, r_up, r_lo, _SOLVED_STATUS, iterations=steps[-1].iterations,
                            solve_time=share, active_upper=sigma > 0, active_lower=sigma < 0,
-                           time_source="wall", backend=DEFAULT, settings=s.name,
+                           time_source="wall", backend=DEFAULT, settings=settings,
                            residuals={"natural": r0, "min_gap": r1, "min_reaction": r2,
                                       "complementarity": r3, "term_size": r4},
                            forces_net=R)
         # _converged, its one-wall case (np.add.reduce: ndarray.sum without its wrapper)
         if not chain.channel and math.isfinite(_add_reduce(R)):
-            return DriverOutput(alpha, R.copy(), np.zeros(n), True, "converged", steps,
+            return DriverOutput(alpha, R.copy(), np.zeros(n), True, reason, steps,
                                 last_step=sol, multipliers_upper=r_up,
-                                multipliers_lower=r_lo), ""
-        return _converged(chain, alpha, sol, steps), ""
+                                multipliers_lower=r_lo)
+        out = _converged(chain, alpha, sol, steps)
+        if reason != "converged":
+            out.reason = reason
+        return out
     if code == k.NO_FIT:
-        return _fail(chain.rest_alpha.copy(), n, steps,
-                     "cannot fit the chain between the walls"), ""
+        return _fail(chain.rest_alpha.copy(), n, steps, "cannot fit the chain between the walls")
     if code == k.LINE_SEARCH:
         return _fail(alpha, n, steps, "line search failed: no decrease of the energy along "
-                                      "the step"), ""
+                                      "the step")
     return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
-                                  f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)"), ""
+                                  f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
 
 
 _SOLVED = Status.SOLVED.value
