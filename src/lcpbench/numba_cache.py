@@ -402,6 +402,7 @@ def aot_exports(modules: dict | None = None) -> tuple[dict, dict, list]:
 
     Returns ``(manifest modules, {symbol: (dispatcher, numba signature)}, skipped)``."""
     from numba.core.registry import CPUDispatcher
+    from numba.core.types import Literal
 
     modules = dict(_JIT) if modules is None else modules
     spec, exports, skipped = {}, {}, []
@@ -412,7 +413,10 @@ def aot_exports(modules: dict | None = None) -> tuple[dict, dict, list]:
             d = getattr(module, fn_name, None)
             if not isinstance(d, CPUDispatcher) or d.py_func.__module__ != name:
                 continue
-            sigs = d.signatures
+            # a constant passed from another kernel types the callee with a literal
+            # (Literal[bool](False)): an overload that only compiled code calls, made
+            # while the caller compiles (not when the caller loads from the cache)
+            sigs = [s for s in d.signatures if not any(isinstance(t, Literal) for t in s)]
             if len(sigs) != 1:
                 if sigs or fn_name in _ENTRIES.get(name, ()):
                     skipped.append(f"{name}.{fn_name}: {len(sigs)} signatures")

@@ -278,6 +278,27 @@ def _tiny_kernels():
     return {__name__: type("Tiny", (), {"tiny_sum": tiny_sum, "FACTOR": 2.0})}
 
 
+def test_an_entry_also_called_from_compiled_code_with_a_constant_is_exported():
+    """A kernel that calls an entry with a constant (``tiny_sum(x, 1)``) types it with
+    a literal (``Literal[int](1)``) while the caller compiles: a second overload that
+    Python never calls. The entry is still exported, with the signature Python's call
+    compiled (the first build on a cold numba cache hit this)."""
+    from numba import njit, types
+
+    tiny = _tiny_kernels()
+    tiny_sum = tiny[__name__].tiny_sum
+
+    @njit(cache=False)
+    def caller(x):
+        return tiny_sum(x, 1)
+
+    caller(np.ones(3))
+    assert any(isinstance(t, types.Literal) for s in tiny_sum.signatures for t in s)
+    spec, exports, skipped = numba_cache.aot_exports(tiny)
+    assert skipped == []
+    assert spec[__name__]["functions"]["tiny_sum"]["args"] == ["A:float64:1", "i8"]
+
+
 def test_a_failed_build_leaves_no_module_and_says_so_in_one_line(monkeypatch, tmp_path,
                                                                   capsys):
     """No working C compiler: AotBuildError, nothing in the output directory, and
