@@ -406,6 +406,28 @@ def _wall_terms(hi, lo, u, R, L, F, nat, min_gap, min_r, comp_up, comp_lo):
 
 
 @njit(cache=True)
+def wall_residuals(u2, R, bands, linear, lo, hi, L, F):
+    """The verdict terms of step_residuals over the nodes (rigid walls, heights ``u2``
+    and reactions ``R`` given): [natural residual, least gap, least reaction,
+    |Σ g·r| of both walls, term size / F], the term size max(|H| |u| + |c|) over the
+    wall rows in banded_matvec's order. Shared by driver_kernel and large_kernel."""
+    n = u2.size
+    nat, min_gap, min_r, comp_up, comp_lo, term = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0
+    for i in range(n):
+        nat, min_gap, min_r, comp_up, comp_lo = _wall_terms(
+            hi[i], lo[i], u2[i], R[i], L, F, nat, min_gap, min_r, comp_up, comp_lo)
+        if np.isfinite(hi[i]) or np.isfinite(lo[i]):  # banded_matvec(|H|, |u|) + |c|
+            s = abs(bands[0, i]) * abs(u2[i])
+            for kk in (1, 2):
+                if i - kk >= 0:
+                    s += abs(bands[kk, i - kk]) * abs(u2[i - kk])
+                if i + kk < n:
+                    s += abs(bands[kk, i]) * abs(u2[i + kk])
+            term = max(term, s + abs(linear[i]))
+    return np.array([nat, min_gap, min_r, abs(comp_up) + abs(comp_lo), term / F])
+
+
+@njit(cache=True)
 def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m, T, g0):
     """_residuals into ``out`` and ``R`` (u2, rows, fac, m: work arrays); ``g0``: the
     gradient at u where the caller has it (the certificate's), else empty."""

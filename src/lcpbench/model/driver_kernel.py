@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .compiled_dual import _wall_terms  # one copy of the judge's rows (numba_cache)
+from .compiled_dual import wall_residuals  # one copy of the judge's rows (numba_cache)
 from .compiled_kernel import _assemble as _banded_step  # and of the banded step
 
 TINY = np.finfo(np.float64).tiny
@@ -262,20 +262,7 @@ def judge(u, bands, linear, lo, hi, coef, b0, fs, links, origin, phi_origin, k, 
             return False, np.zeros(5), grad
         u2[free] -= x
     R = -_gradient(u2, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load)
-    nat, min_gap, min_r, comp_up, comp_lo, term = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0
-    for i in range(n):
-        up, low = np.isfinite(hi[i]), np.isfinite(lo[i])
-        nat, min_gap, min_r, comp_up, comp_lo = _wall_terms(
-            hi[i], lo[i], u2[i], R[i], L, F, nat, min_gap, min_r, comp_up, comp_lo)
-        if up or low:  # banded_matvec(|H|, |u|) + |c|, in its order
-            s = abs(bands[0, i]) * abs(u2[i])
-            for kk in (1, 2):
-                if i - kk >= 0:
-                    s += abs(bands[kk, i - kk]) * abs(u2[i - kk])
-                if i + kk < n:
-                    s += abs(bands[kk, i]) * abs(u2[i + kk])
-            term = max(term, s + abs(linear[i]))
-    return True, np.array([nat, min_gap, min_r, abs(comp_up) + abs(comp_lo), term / F]), R
+    return True, wall_residuals(u2, R, bands, linear, lo, hi, L, F), R
 
 
 # -- the outer step (model.driver._globalised) --------------------------------------

@@ -30,6 +30,7 @@ from numba import njit
 
 from ..linalg.twisted_kernel import face_solve as _face_solve
 from ..linalg.twisted_kernel import resolve as _resolve
+from .compiled_dual import wall_residuals  # the judge's rows, one copy (numba_cache)
 
 
 @njit(cache=True)
@@ -273,26 +274,6 @@ def _block_solve(rows, idx, a, b, grad, u2):
 
 
 @njit(cache=True)
-def _terms(hi, lo, u, R, L, F, nat, min_gap, min_r, comp_up, comp_lo):
-    """One node's terms of :func:`lcpbench.model.step_solver.step_residuals` (rigid
-    walls): gap and reaction of each wall row scaled by L and F, and the accumulators."""
-    up, low = np.isfinite(hi), np.isfinite(lo)
-    if up:
-        g = (hi - u) / L
-        r = (max(R, 0.0) if low else R) / F
-        nat = max(nat, abs(min(g, r)))
-        min_gap, min_r = min(min_gap, g), min(min_r, r)
-        comp_up += g * r
-    if low:
-        g = (u - lo) / L
-        r = (max(-R, 0.0) if up else -R) / F
-        nat = max(nat, abs(min(g, r)))
-        min_gap, min_r = min(min_gap, g), min(min_r, r)
-        comp_lo += g * r
-    return nat, min_gap, min_r, comp_up, comp_lo
-
-
-@njit(cache=True)
 def residuals(u, coef, k, phi_origin, rest, load, origin, rows, bands, linear, lo, hi, L, F):
     """:func:`lcpbench.model.step_solver.step_residuals` of a large-N step in increments
     (rigid walls): ``(ok, [natural, min_gap, min_reaction, complementarity, term_size],
@@ -330,19 +311,7 @@ def residuals(u, coef, k, phi_origin, rest, load, origin, rows, bands, linear, l
     gradient(coef, k, phi_origin, rest, load, origin, u2, R, m)
     for i in range(n):
         R[i] = -R[i]
-    nat, min_gap, min_r, comp_up, comp_lo, term = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0
-    for i in range(n):
-        nat, min_gap, min_r, comp_up, comp_lo = _terms(
-            hi[i], lo[i], u2[i], R[i], L, F, nat, min_gap, min_r, comp_up, comp_lo)
-        if np.isfinite(hi[i]) or np.isfinite(lo[i]):  # banded_matvec(|H|, |u|) + |c|
-            s = abs(bands[0, i]) * abs(u2[i])
-            for kk in (1, 2):
-                if i - kk >= 0:
-                    s += abs(bands[kk, i - kk]) * abs(u2[i - kk])
-                if i + kk < n:
-                    s += abs(bands[kk, i]) * abs(u2[i + kk])
-            term = max(term, s + abs(linear[i]))
-    return True, np.array([nat, min_gap, min_r, abs(comp_up) + abs(comp_lo), term / F]), R
+    return True, wall_residuals(u2, R, bands, linear, lo, hi, L, F), R
 
 
 @njit(cache=True)
