@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import lcpbench
+from lcpbench.linalg import twisted
 from lcpbench.linalg.twisted import TwistedFactor
 from lcpbench.model import large_driver
 from lcpbench.model.large_driver import run_large
@@ -148,11 +149,15 @@ def test_new_path_gives_the_old_answer_at_n_1e4(monkeypatch, theta, height):
     assert abs(new.total_force - old.total_force) <= bound * max(abs(old.total_force), 1e-12) + 1e-12
 
 
+@pytest.mark.parametrize("fused", [True, False])
 @pytest.mark.parametrize("reach", [None, 0, 5])
-def test_compiled_walk_takes_the_numpy_walks_path(steps, monkeypatch, reach):
+def test_compiled_walk_takes_the_numpy_walks_path(steps, monkeypatch, reach, fused):
     """The walk's loop compiled (:mod:`lcpbench.solvers.compiled_walk`) against the numpy
     walk it replaces, on every warm step of a 10⁴ solve and cold: the same picks, moves
-    and refinement, so the same face solves and the same answer bit for bit."""
+    and refinement, so the same face solves and the same answer bit for bit. Both
+    compiled walks: the fused one (``twisted.FUSED``, the default) and the walk it
+    fuses (``linalg.walk_kernel``)."""
+    monkeypatch.setattr(twisted, "FUSED", fused)
     cases = [(step, warm) for step, warm in steps] + [(steps[0][0], None)]
     for step, warm in cases:
         kw = {} if warm is None else dict(

@@ -41,12 +41,12 @@ class _Lazy:
         if obj is None:
             return self
         d = obj.__dict__
-        if self.name not in d:
-            if "_build" not in d:
-                raise AttributeError(self.name)
-            materialize(obj)
-        if self.inner is not None:  # ContactResult's own lazy fields (x, y, gaps...)
+        if self.name not in d and "_build" in d:  # not built yet (materialize sets the
+            materialize(obj)  # fields before it drops _build: another thread's build
+        if self.inner is not None:  # is seen whole); ContactResult's lazy fields (x, y...)
             return self.inner.__get__(obj, owner)
+        if self.name not in d:
+            raise AttributeError(self.name)
         return d[self.name]
 
     def __set__(self, obj, value) -> None:
