@@ -28,7 +28,7 @@ import numpy as np
 from numba import njit
 
 from .twisted_kernel import factor
-from .walk_kernel import _mix, _set, _viol
+from .walk_kernel import _mix, _picks_in, _set, _viol
 
 
 @njit(cache=True)
@@ -181,50 +181,6 @@ def _update(A, S, wall, u, g, x, step, hi, lo, has_lo, slack):
         d0, d1 = d1, d2
         ym, y0 = y0, y1
     return first, last
-
-
-@njit(cache=True)
-def _picks_in(u, wall, side, slack, S, reach, picks, npick, start, stop):
-    """:func:`lcpbench.linalg.walk_kernel._picks` scanning nodes ``start`` .. ``stop``
-    only (every violated node lies there, so the same runs and the same picks)."""
-    n = u.size
-    i = start
-    while i <= stop:
-        if not _viol(u, wall, S, side, i) > slack[i]:
-            i += 1
-            continue
-        a = i
-        while i + 1 < n and _viol(u, wall, S, side, i + 1) > slack[i + 1]:
-            i += 1
-        b = i
-        if reach > 0:
-            left = a >= 1 and S[a - 1]
-            right = b + 1 < n and S[b + 1]
-            if (left or right) and b - a + 1 > reach:
-                if left:
-                    picks[npick] = side * (a + reach - 1 + 1)
-                    npick += 1
-                if right and not (left and b - reach + 1 == a + reach - 1):
-                    picks[npick] = side * (b - reach + 1 + 1)
-                    npick += 1
-                i += 1
-                continue
-            best = a  # the run's deepest node (the first of equal ones)
-            for k in range(a + 1, b + 1):
-                if _viol(u, wall, S, side, k) > _viol(u, wall, S, side, best):
-                    best = k
-            picks[npick] = side * (best + 1)
-            npick += 1
-        else:  # every local maximum of the run (v_i >= v_{i-1}, v_i > v_{i+1})
-            for k in range(a, b + 1):
-                vk = _viol(u, wall, S, side, k)
-                lft = _viol(u, wall, S, side, k - 1) if k >= 1 else -np.inf
-                rgt = _viol(u, wall, S, side, k + 1) if k + 1 < n else -np.inf
-                if vk >= lft and vk > rgt:
-                    picks[npick] = side * (k + 1)
-                    npick += 1
-        i += 1
-    return npick
 
 
 @njit(cache=True)

@@ -87,9 +87,17 @@ def _picks(u, wall, side, slack, S, reach, picks, npick):
     this wall: :func:`lcpbench.solvers.gallop.gallop_picks` when ``reach`` > 0, else
     :func:`lcpbench.solvers.banded._run_maxima`, in one pass without the v array.
     Returns the new count."""
+    return _picks_in(u, wall, side, slack, S, reach, picks, npick, 0, u.size - 1)
+
+
+@njit(cache=True)
+def _picks_in(u, wall, side, slack, S, reach, picks, npick, start, stop):
+    """:func:`_picks` scanning nodes ``start`` .. ``stop`` only (the fused walk of
+    :mod:`lcpbench.linalg.twisted_walk_kernel` passes the violated range: every
+    violated node lies there, so the same runs and the same picks)."""
     n = u.size
-    i = 0
-    while i < n:
+    i = start
+    while i <= stop:
         if not _viol(u, wall, S, side, i) > slack[i]:
             i += 1
             continue
