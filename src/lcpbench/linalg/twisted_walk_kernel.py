@@ -28,7 +28,7 @@ import numpy as np
 from numba import njit
 
 from .twisted_kernel import factor
-from .walk_kernel import _mix, _picks_in, _set, _viol
+from .walk_kernel import _add_picks, _mix, _picks_in, _set, _twist_window, _viol
 
 
 @njit(cache=True)
@@ -225,36 +225,14 @@ def walk(rows, rrows, R, filled, snap, B, bfilled, bsnap, tri, invR, invB, prev,
                     for k in range(ctl[6]):
                         prev[chg[k]] = S[chg[k]]
                     return 0
-            for k in range(ctl[5]):
-                if seen[k] == key:
-                    return 1
-            if ctl[5] < seen.size:
-                seen[ctl[5]] = key
-                ctl[5] += 1
-            for k in range(npick):
-                i = abs(picks[k]) - 1
-                if S[i]:  # (a node violates one wall at a time; the upper first)
-                    continue
-                if picks[k] > 0:
-                    key = _set(i, 1.0, hi[i], sigma, wall, S, rfixed, chg, ctl, key)
-                else:
-                    key = _set(i, -1.0, lo[i], sigma, wall, S, rfixed, chg, ctl, key)
+            repeat, key = _add_picks(picks, npick, seen, key, hi, lo, sigma, wall, S, rfixed,
+                                     chg, ctl)
+            if repeat:
+                return 1
         if ctl[1] >= max_iter:
             return 2
         ctl[1] += 1
-        first, last = n, -1
-        for k in range(ctl[6]):
-            i = chg[k]
-            if S[i] != prev[i]:
-                first = min(first, i)
-                last = max(last, i)
-        m0 = ctl[0]
-        if last >= 0:
-            j0 = max(min(first - 1, m0), 0)
-            k0 = max(min(n - 2 - last, n - m0), 0)
-            m = min(max((j0 + n - k0) // 2, 2), n - 2)
-        else:
-            j0, k0, m = m0, n - m0, m0
+        j0, k0, m = _twist_window(chg, ctl, S, prev, n)
         if not factor(rows, rrows, S, rfixed, R, filled, snap, B, bfilled, bsnap, tri,
                       invR, invB, j0, k0, m):
             return 3

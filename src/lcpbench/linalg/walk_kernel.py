@@ -136,6 +136,47 @@ def _picks_in(u, wall, side, slack, S, reach, picks, npick, start, stop):
 
 
 @njit(cache=True)
+def _add_picks(picks, npick, seen, key, hi, lo, sigma, wall, S, rfixed, chg, ctl):
+    """The walk's step to its next working set: ``(True, key)`` where the set ``key``
+    was met before (the walk stops), else the set recorded in ``seen`` and the picks
+    fixed on their walls: ``(False, the new set's key)``."""
+    for k in range(ctl[5]):
+        if seen[k] == key:
+            return True, key
+    if ctl[5] < seen.size:
+        seen[ctl[5]] = key
+        ctl[5] += 1
+    for k in range(npick):
+        i = abs(picks[k]) - 1
+        if S[i]:  # (a node violates one wall at a time; the upper first)
+            continue
+        if picks[k] > 0:
+            key = _set(i, 1.0, hi[i], sigma, wall, S, rfixed, chg, ctl, key)
+        else:
+            key = _set(i, -1.0, lo[i], sigma, wall, S, rfixed, chg, ctl, key)
+    return False, key
+
+
+@njit(cache=True)
+def _twist_window(chg, ctl, S, prev, n):
+    """(j0, k0, m) of this face's factor against the last one (TwistedFactor._twist),
+    from the nodes changed since (``chg``, the first ``ctl[6]``) and the last twist
+    ``ctl[0]``."""
+    first, last = n, -1
+    for k in range(ctl[6]):
+        i = chg[k]
+        if S[i] != prev[i]:
+            first = min(first, i)
+            last = max(last, i)
+    m0 = ctl[0]
+    if last >= 0:
+        j0 = max(min(first - 1, m0), 0)
+        k0 = max(min(n - 2 - last, n - m0), 0)
+        return j0, k0, min(max((j0 + n - k0) // 2, 2), n - 2)
+    return m0, n - m0, m0
+
+
+@njit(cache=True)
 def _mix(i, side):
     """A 64-bit mix of (node, side) (splitmix64); the working set's key is their sum."""
     z = np.uint64(2 * i + (1 if side > 0 else 0)) + np.uint64(0x9E3779B97F4A7C15)
@@ -211,38 +252,14 @@ def walk(rows, rrows, R, filled, snap, B, bfilled, bsnap, tri, invR, invB, prev,
                     for k in range(ctl[6]):
                         prev[chg[k]] = S[chg[k]]
                     return 0
-            for k in range(ctl[5]):
-                if seen[k] == key:
-                    return 1
-            if ctl[5] < seen.size:
-                seen[ctl[5]] = key
-                ctl[5] += 1
-            for k in range(npick):
-                i = abs(picks[k]) - 1
-                if S[i]:  # (a node violates one wall at a time; the upper first)
-                    continue
-                if picks[k] > 0:
-                    key = _set(i, 1.0, hi[i], sigma, wall, S, rfixed, chg, ctl, key)
-                else:
-                    key = _set(i, -1.0, lo[i], sigma, wall, S, rfixed, chg, ctl, key)
+            repeat, key = _add_picks(picks, npick, seen, key, hi, lo, sigma, wall, S, rfixed,
+                                     chg, ctl)
+            if repeat:
+                return 1
         if ctl[1] >= max_iter:
             return 2
         ctl[1] += 1
-        # the twist of this face against the last one (TwistedFactor._twist), from the
-        # nodes changed since
-        first, last = n, -1
-        for k in range(ctl[6]):
-            i = chg[k]
-            if S[i] != prev[i]:
-                first = min(first, i)
-                last = max(last, i)
-        m0 = ctl[0]
-        if last >= 0:
-            j0 = max(min(first - 1, m0), 0)
-            k0 = max(min(n - 2 - last, n - m0), 0)
-            m = min(max((j0 + n - k0) // 2, 2), n - 2)
-        else:
-            j0, k0, m = m0, n - m0, m0
+        j0, k0, m = _twist_window(chg, ctl, S, prev, n)
         if not face_move(rows, rrows, S, rfixed, R, filled, snap, B, bfilled, bsnap, tri,
                          invR, invB, j0, k0, m, wall, u, g, False, d, g_face, r, x, y):
             return 3
