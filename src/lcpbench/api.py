@@ -268,7 +268,7 @@ def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_ou
         "converged": bool(jk[2].accepted(settled, f64(st, dtype=float), tol)),
         "solver": DEFAULT, "method": method, "tol": tol, "time_s": elapsed,
         "pressure_limit": pressure_limit},
-        partial(build, judged=partial(_stats_judged, judge.STATS, settled, st, fu, fl, tres)))
+        partial(build, judged=stats_judge(settled, judge.STATS, st, fu, fl, tres)))
 
 
 def _built(scene, chain, got: tuple, kernel_s: float, name: str, *, method: str, tol: float,
@@ -279,12 +279,6 @@ def _built(scene, chain, got: tuple, kernel_s: float, name: str, *, method: str,
     return finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol, elapsed=elapsed,
                   settings=settings, engine="compiled", compiled_judge=True, why=why,
                   judged_by=judged, pressure_limit=pressure_limit)
-
-
-def _stats_judged(names, settled, st, fu, fl, tres, *args, **kw):
-    """:func:`lcpbench.model.lazy_result.stats_judge` of the judge kernel's numbers."""
-    return stats_judge(settled, dict(zip(names, st.tolist(), strict=True)), fu, fl,
-                       tres)(*args, **kw)
 
 
 _JUDGE: list = []  # (solve kernel, judge kernel, batch_verdict), once loaded

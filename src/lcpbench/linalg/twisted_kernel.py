@@ -124,6 +124,31 @@ def factor(rows, rrows, fixed, rfixed, R, filled, snap, B, bfilled, bsnap, tri,
 
 
 @njit(cache=True)
+def _middle(R, B, tri, m, mb, r1, r2, x):
+    """The twist's 2×2 block: x[m − 1] and x[m] (the bottom's mb and mb − 1) from their
+    right-hand sides r1, r2 and the swept neighbours x[m − 3 .. m − 2], x[m + 1 .. m + 2]
+    (Mᵀy there, then M x back)."""
+    s1 = r1
+    if m >= 2:
+        s1 -= R[1, m - 2] * x[m - 2]
+    if m >= 3:
+        s1 -= R[2, m - 3] * x[m - 3]
+    if mb >= 2:
+        s1 -= B[2, mb - 2] * x[m + 1]
+    s2 = r2
+    if m >= 2:
+        s2 -= R[2, m - 2] * x[m - 2]
+    if mb >= 2:
+        s2 -= B[1, mb - 2] * x[m + 1]
+    if mb >= 3:
+        s2 -= B[2, mb - 3] * x[m + 2]
+    y1 = s1 / tri[0]
+    y2 = (s2 - tri[1] * y1) / tri[2]
+    x[m] = y2 / tri[2]
+    x[m - 1] = (y1 - tri[1] * x[m]) / tri[0]
+
+
+@njit(cache=True)
 def resolve(R, B, tri, invR, invB, m, x):
     """Overwrites x with (MᵀM)⁻¹ x: Mᵀy = x from both ends to the twist, then M x = y back."""
     n = x.size
@@ -142,25 +167,7 @@ def resolve(R, B, tri, invR, invB, m, x):
         if i < mb - 1:  # bottom row i: original index n − 1 − i
             j = n - 1 - i
             x[j] = (x[j] - B[1, i - 1] * x[j + 1] - B[2, i - 2] * x[j + 2]) * invB[i]
-    # the middle columns m − 1 (bottom's mb) and m (bottom's mb − 1)
-    s1 = x[m - 1]
-    if m >= 2:
-        s1 -= R[1, m - 2] * x[m - 2]
-    if m >= 3:
-        s1 -= R[2, m - 3] * x[m - 3]
-    if mb >= 2:
-        s1 -= B[2, mb - 2] * x[m + 1]
-    s2 = x[m]
-    if m >= 2:
-        s2 -= R[2, m - 2] * x[m - 2]
-    if mb >= 2:
-        s2 -= B[1, mb - 2] * x[m + 1]
-    if mb >= 3:
-        s2 -= B[2, mb - 3] * x[m + 2]
-    y1 = s1 / tri[0]
-    y2 = (s2 - tri[1] * y1) / tri[2]
-    x[m] = y2 / tri[2]
-    x[m - 1] = (y1 - tri[1] * x[m]) / tri[0]
+    _middle(R, B, tri, m, mb, x[m - 1], x[m], x)
     # M x = y from the twist outwards: top row m − 2 − s and bottom row mb − 2 − s
     for s in range(max(m - 1, mb - 1)):
         i = m - 2 - s

@@ -27,7 +27,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .twisted_kernel import factor
+from .twisted_kernel import _middle, factor
 from .walk_kernel import _add_picks, _mix, _picks_in, _set, _twist_window, _viol
 
 
@@ -106,24 +106,7 @@ def _solve(R, B, tri, invR, invB, m, S, g, hd, x):
     for i in range(max(both, 2), mb - 1):
         j = n - 1 - i
         x[j] = (_r(S, g, hd, j) - B[1, i - 1] * x[j + 1] - B[2, i - 2] * x[j + 2]) * invB[i]
-    s1 = _r(S, g, hd, m - 1)
-    if m >= 2:
-        s1 -= R[1, m - 2] * x[m - 2]
-    if m >= 3:
-        s1 -= R[2, m - 3] * x[m - 3]
-    if mb >= 2:
-        s1 -= B[2, mb - 2] * x[m + 1]
-    s2 = _r(S, g, hd, m)
-    if m >= 2:
-        s2 -= R[2, m - 2] * x[m - 2]
-    if mb >= 2:
-        s2 -= B[1, mb - 2] * x[m + 1]
-    if mb >= 3:
-        s2 -= B[2, mb - 3] * x[m + 2]
-    y1 = s1 / tri[0]
-    y2 = (s2 - tri[1] * y1) / tri[2]
-    x[m] = y2 / tri[2]
-    x[m - 1] = (y1 - tri[1] * x[m]) / tri[0]
+    _middle(R, B, tri, m, mb, _r(S, g, hd, m - 1), _r(S, g, hd, m), x)
     for s in range(min(m - 1, mb - 1)):  # top row m − 2 − s, bottom row mb − 2 − s
         i = m - 2 - s
         x[i] = (x[i] - R[1, i] * x[i + 1] - R[2, i] * x[i + 2]) * invR[i]

@@ -199,28 +199,16 @@ def energy(alpha, a, k, rest, link_load):
 def trial_energy(alpha, du, t, a, k, rest, link_load, out):
     """Writes α moved by the increments t·du (exact inverse kinematics, each link keeping
     its branch and winding) into ``out`` and returns its energy; NaN where some link
-    would need |sin α'| ≥ 1."""
-    nl = alpha.size
-    n = nl - 1
-    prev = 0.0
-    for i in range(nl):
-        nxt = t * du[i] if i < n else 0.0
-        s = math.sin(alpha[i]) + (nxt - prev) / a
-        prev = nxt
-        if not (abs(s) < 1.0):  # also NaN
-            return math.nan
-        base = math.asin(s)
-        if math.cos(alpha[i]) < 0.0:
-            base = math.pi - base
-        out[i] = base + 2 * math.pi * round((alpha[i] - base) / (2 * math.pi))
-    return energy(out, a, k, rest, link_load)
+    would need |sin α'| ≥ 1 (:func:`trial_energy_at` with sin α and cos α of ``alpha``)."""
+    return trial_energy_at(alpha, np.sin(alpha), np.cos(alpha), du, t, a, k, rest, link_load,
+                           out)
 
 
 @njit(cache=True)
 def trial_energy_at(alpha, sin_alpha, inv_a_cos, du, t, a, k, rest, link_load, out):
-    """:func:`trial_energy` at the α of a step assembled by :func:`assemble_into`, its
-    sin α and the sign of cos α (that of 1/(a cos α), a > 0) taken from the assembly:
-    the same numbers."""
+    """:func:`trial_energy` given sin α and an array with the sign of cos α: a step's
+    from :func:`assemble_into` (1/(a cos α), a > 0), so the assembly's numbers are
+    reused."""
     nl = alpha.size
     n = nl - 1
     prev = 0.0

@@ -93,11 +93,12 @@ def materialize(res: ContactResult) -> None:
     d.pop("_build", None)
 
 
-def stats_judge(settled: bool, stats: dict, forces_upper: np.ndarray,
+def stats_judge(settled: bool, names: tuple, stats: np.ndarray, forces_upper: np.ndarray,
                 forces_lower: np.ndarray, torque_residual: np.ndarray) -> Callable:
     """The ``judged_by`` of :func:`lcpbench.model.result.build_result` whose judgement is
-    already made by the judge kernel (``settled``, its ``stats`` by name, its reactions
-    and torque residual): :func:`~lcpbench.model.judge_compiled.verdict_from_stats`;
+    already made by the judge kernel (``settled``, its ``stats`` array with their
+    ``names``, its reactions and torque residual):
+    :func:`~lcpbench.model.judge_compiled.verdict_from_stats`;
     an answer whose driver did not converge goes to the numpy judge, as
     :func:`~lcpbench.model.judge_compiled.judge_fast` hands it on."""
 
@@ -109,9 +110,9 @@ def stats_judge(settled: bool, stats: dict, forces_upper: np.ndarray,
             return judge_fast(chain, alpha, fu, fl, tol=tol, driver_converged=False,
                               driver_reason=driver_reason, step_statuses=step_statuses,
                               step_sizes=step_sizes, certificate=certificate)
-        return verdict_from_stats(settled, stats, forces_upper, forces_lower,
-                                  torque_residual, tol=tol, driver_reason=driver_reason,
-                                  step_statuses=step_statuses)
+        return verdict_from_stats(settled, dict(zip(names, stats.tolist(), strict=True)),
+                                  forces_upper, forces_lower, torque_residual, tol=tol,
+                                  driver_reason=driver_reason, step_statuses=step_statuses)
 
     return judged
 

@@ -100,9 +100,8 @@ def _judged(line: LineOutput, row: int):
     """The ``judged_by`` of the attempt in ``row``: the judge kernel's numbers of the
     batch (:func:`lcpbench.model.lazy_result.stats_judge`)."""
     A, k = line.arrays, line.kernel
-    stats = dict(zip(k.STATS, A["j_stats"][row].tolist(), strict=True))
-    return stats_judge(int(A["j_code"][row]) == k.SETTLED, stats, A["j_fu"][row].copy(),
-                       A["j_fl"][row].copy(), A["j_tres"][row].copy())
+    return stats_judge(int(A["j_code"][row]) == k.SETTLED, k.STATS, A["j_stats"][row],
+                       A["j_fu"][row].copy(), A["j_fl"][row].copy(), A["j_tres"][row].copy())
 
 
 def _attempt(line: LineOutput, s: int, row: int) -> ContactResult:
