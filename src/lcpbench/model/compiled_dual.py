@@ -265,10 +265,15 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
                     _resolve(fac, r)
                     for i in range(n):
                         gf[i] = g[i] - _mv(bands, r, i, n, False)
+                    crossed = False  # the walls once more (solvers.banded._dual)
                     for i in range(n):
                         u[i] = u[i] - r[i]
                         g[i] = gf[i]
-                    return 0, it
+                        crossed = crossed or (not S[i] and (
+                            u[i] - hi[i] > slack or (has_lo and lo[i] - u[i] > slack)))
+                    if not crossed:
+                        return 0, it
+                    continue
             for q in range(count):
                 if seen[q] == h:  # the same working set
                     return BAIL_REPEAT, it

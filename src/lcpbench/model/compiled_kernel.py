@@ -38,6 +38,8 @@ from .compiled_dual import (
     BAIL_NOT_PD,
     BAIL_PRIMAL,
     BAIL_REPEAT,
+    COS_A,
+    COS_T,
     DIR,
     EPS,
     FACT,
@@ -85,17 +87,21 @@ __all__ = ["BAIL_CERT", "BAIL_JUDGE", "BAIL_LIMIT", "BAIL_NOT_PD", "BAIL_PRIMAL"
 
 @njit(cache=True)
 def _workspace(n, links, nj, max_iter):
-    return (np.zeros((18, n)), np.zeros((9, n), np.bool_), np.zeros((4, nj)),
-            np.zeros((6, links)), np.zeros((5, links + 2)), np.zeros((4, n)), np.zeros((3, n)),
-            np.zeros((nj, 3)),
-            np.zeros(min(max_iter, 20 * n + 50) + 2, np.uint64), np.zeros(5), np.zeros((2, n)),
-            np.zeros((3, n), np.int64))
+    """The solve's work arrays, uninitialised: every entry is written before it is
+    read (each pass sets its rows; the walk its lists and the hashes it compares),
+    so nothing is zeroed that is not read (``seen`` alone holds 20 n + 50 hashes)."""
+    return (np.empty((18, n)), np.empty((9, n), np.bool_), np.empty((4, nj)),
+            np.empty((8, links)), np.empty((5, links + 2)), np.empty((4, n)),
+            np.empty((3, n)), np.empty((nj, 3)),
+            np.empty(min(max_iter, 20 * n + 50) + 2, np.uint64), np.empty(5), np.empty((2, n)),
+            np.empty((3, n), np.int64))
 
 
 # -- the chain (model.chain) ----------------------------------------------------
 @njit(cache=True)
 def _energy_into(alpha, a, jl, jr, k, rest, link_load, sines):
-    """chain.energy: ½Σk(φ−φ*)² − Σ P·(centre height); sin α into ``sines``."""
+    """chain.energy: ½Σk(φ−φ*)² − Σ P·(centre height), ``sines``: sin α (given: the
+    fit's Δy / a, :func:`_fit`)."""
     s = 0.0
     for j in range(jr.size):
         left = alpha[jl[j]] if jl[j] >= 0 else 0.0
@@ -103,7 +109,6 @@ def _energy_into(alpha, a, jl, jr, k, rest, link_load, sines):
         s += k[j] * (d * d)
     w, y = 0.0, 0.0
     for i in range(alpha.size):  # the node heights y_i, y_(i+1) summed as they go
-        sines[i] = np.sin(alpha[i])
         y1 = y + a * sines[i]
         w += link_load[i] * (0.5 * (y + y1))
         y = y1
@@ -113,13 +118,20 @@ def _energy_into(alpha, a, jl, jr, k, rest, link_load, sines):
 @njit(cache=True)
 def _energy(alpha, a, jl, jr, k, rest, link_load):
     """chain.energy: ½Σk(φ−φ*)² − Σ P·(centre height)."""
-    return _energy_into(alpha, a, jl, jr, k, rest, link_load, np.empty(alpha.size))
+    return _energy_into(alpha, a, jl, jr, k, rest, link_load, np.sin(alpha))
 
 
 @njit(cache=True)
-def _fit(out, u, reference, a, fs, links, inv):
+def _fit(out, u, reference, a, fs, links, inv, sines, cosines):
     """chain.alpha_from_heights into ``out``; False when some |Δy| >= a. ``inv``:
-    1 / (a cos α) of ``reference`` if known (its sign is the branch), else empty."""
+    1 / (a cos α) of ``reference`` if known (its sign is the branch), else empty.
+
+    ``sines``, ``cosines``: sin α and cos α of the fitted α, without a transcendental
+    call: sin α = s = Δy / a exactly (α = arcsin s, or π − arcsin s, plus 2πk), and
+    cos α = ±√((1 − s)(1 + s)), the sign that of the branch. They equal numpy's
+    sin and cos of the rounded α to round-off (closer to the exact values: α
+    carries the rounding of arcsin, s does not), and save the energy's sine and the
+    assembly's cosine of every link (the reference computes both from α)."""
     off, n = fs - 1, u.size
     y0 = u[0] if off == 0 else 0.0
     for i in range(links):
@@ -129,9 +141,13 @@ def _fit(out, u, reference, a, fs, links, inv):
         if not np.isfinite(s) or abs(s) >= 1.0:
             return False
         base = np.arcsin(s)
+        c = np.sqrt((1.0 - s) * (1.0 + s))
         if (inv[i] if inv.size == links else np.cos(reference[i])) < 0.0:
             base = np.pi - base
+            c = -c
         out[i] = base + 2 * np.pi * np.rint((reference[i] - base) / (2 * np.pi))
+        sines[i] = s
+        cosines[i] = c
     return True
 
 
@@ -139,21 +155,23 @@ def _fit(out, u, reference, a, fs, links, inv):
 def _alpha_from_heights(u, reference, a, fs, links):
     """chain.alpha_from_heights: (ok, α); not ok when some |Δy| >= a."""
     out = np.empty(links)
-    return _fit(out, u, reference, a, fs, links, np.empty(0)), out
+    return _fit(out, u, reference, a, fs, links, np.empty(0), np.empty(links),
+                np.empty(links)), out
 
 
 # -- the banded step (model.step) -------------------------------------------------
 @njit(cache=True)
 def _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, inv, coef,
-                   origin, alpha0, phi_origin, t, wl, sines, tangent):
-    """``sines``: sin α. ``tangent``: v = tan α − α as the reference (the compiled
-    driver's assembly); else with tan α = sin α / cos α (equal to round-off, one
-    transcendental call less per link: the solve kernel's)."""
+                   origin, alpha0, phi_origin, t, wl, sines, cosines, tangent):
+    """``sines``: sin α; ``cosines``: cos α where given (the solve kernel's, from
+    :func:`_fit`), else empty (cos α computed). ``tangent``: v = tan α − α as the
+    reference (the compiled driver's assembly); else with tan α = sin α / cos α
+    (equal to round-off, one transcendental call less per link: the solve kernel's)."""
     links = alpha.size
     nj = jr.size
     v = wl[0]
     for i in range(links):
-        c = np.cos(alpha[i])
+        c = cosines[i] if cosines.size == links else np.cos(alpha[i])
         inv[i] = 1.0 / (a * c)
         v[i] = (np.tan(alpha[i]) if tangent else sines[i] / c) - alpha[i]
     for j in range(nj):
@@ -203,12 +221,13 @@ def _assemble(alpha, a, jl, jr, k, rest, fs, n, nodal_load):
     origin, alpha0, phi_origin = np.empty(n), np.empty(links), np.empty(nj)
     _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, inv, coef,
                    origin, alpha0, phi_origin, np.empty(nj), np.empty((5, links + 2)),
-                   np.sin(alpha), True)
+                   np.sin(alpha), np.empty(0), True)
     return bands, linear, inv, coef, origin, alpha0, phi_origin
 
 
 @njit(cache=True)
-def _newton(alpha, a, jl, jr, k, rest, fs, n, bands, linear, origin, T, fac, none, mu, sines):
+def _newton(alpha, a, jl, jr, k, rest, fs, n, bands, linear, origin, T, fac, none, mu, sines,
+            cosines):
     """model.newton.newton_step: T (the geometric bands) into ``T``, and H + T,
     c − T u₀ into the step where H + T is positive definite (True); else T = 0
     and the Gauss–Newton step stands (False)."""
@@ -223,11 +242,11 @@ def _newton(alpha, a, jl, jr, k, rest, fs, n, bands, linear, origin, T, fac, non
         node = fs - 1 + i
         T[0, i] = T[1, i] = 0.0
         if node < links:
-            w = mu[node] * (sines[node] / (a * a * np.cos(alpha[node]) ** 3))
+            w = mu[node] * (sines[node] / (a * a * cosines[node] ** 3))
             T[0, i] += w
             T[1, i] = -w if i + 1 < n else 0.0
         if node >= 1:
-            T[0, i] += mu[node - 1] * (sines[node - 1] / (a * a * np.cos(alpha[node - 1]) ** 3))
+            T[0, i] += mu[node - 1] * (sines[node - 1] / (a * a * cosines[node - 1] ** 3))
     for i in range(n):  # H + T, factored to test it (LAPACK's dpbtrf in the reference)
         fac[0, i], fac[1, i], fac[2, i] = bands[0, i] + T[0, i], bands[1, i] + T[1, i], bands[2, i]
         none[i] = False
@@ -249,17 +268,18 @@ def _newton(alpha, a, jl, jr, k, rest, fs, n, bands, linear, origin, T, fac, non
 
 @njit(cache=True)
 def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, warm_u, warm_up, warm_lo,
-          warm_flags, max_iter, request, ws, gp, sines, newton):
-    """One contact step at α (``sines``: sin α) into the work arrays: assemble, dual
-    walk, certificate, judge; (code, face solves), code 0: solved."""
+          warm_flags, max_iter, request, ws, gp, sines, cosines, newton):
+    """One contact step at α (``sines``, ``cosines``: sin α, cos α) into the work
+    arrays: assemble, dual walk, certificate, judge; (code, face solves), code 0:
+    solved."""
     wn, wb, wj, wa = ws[0], ws[1], ws[2], ws[3]
     _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, ws[6], wn[LIN], wa[INV], ws[7],
-                   wn[ORIG], wa[ALPHA0], wj[0], wj[1], ws[4], sines, False)
+                   wn[ORIG], wa[ALPHA0], wj[0], wj[1], ws[4], sines, cosines, False)
     T = ws[10]
     T[:] = 0.0
     if newton:  # T = 0 where H + T is not positive definite
         _newton(alpha, a, jl, jr, k, rest, fs, n, ws[6], wn[LIN], wn[ORIG], T, ws[5],
-                wb[FACT], ws[4][0], sines)
+                wb[FACT], ws[4][0], sines, cosines)
     W_up, W_lo, bad = wb[WUP], wb[WLO], False
     for i in range(n):
         bad = bad or lo[i] > hi[i]
@@ -302,7 +322,8 @@ def _contact_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
     wn, wa = ws[0], ws[3]
     gp = (ws[7], jr[0], fs, alpha.size, wn[ORIG], ws[2][0], k, rest, nodal_load)
     code, it = _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, warm_u, warm_up,
-                     warm_lo, warm_flags, max_iter, request, ws, gp, np.sin(alpha), False)
+                     warm_lo, warm_flags, max_iter, request, ws, gp, np.sin(alpha),
+                     np.cos(alpha), False)
     return (code, wn[U], wn[RUP], wn[RLO], wn[SIG], it, wa[INV], wa[ALPHA0], wn[ORIG], gp, ws[9],
             wn[NET])
 
@@ -355,15 +376,15 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
     alpha, trial, u = wa[ALPHA], wa[TRIAL], wn[OUT_U]
     if start_alpha.size == links:  # a neighbour's answer, clipped to the walls
         _clipped_heights(u, start_alpha, a, fs, lo, hi)
-        ok = _fit(alpha, u, start_alpha, a, fs, links, none[:0])
+        ok = _fit(alpha, u, start_alpha, a, fs, links, none[:0], wa[SIN_A], wa[COS_A])
     near = ok and warm_flags != 0  # a neighbour's answer and its last step: near already
     if not ok:
         warm_flags = 0
         _clipped_heights(u, rest_alpha, a, fs, lo, hi)
-        ok = _fit(alpha, u, rest_alpha, a, fs, links, none[:0])
+        ok = _fit(alpha, u, rest_alpha, a, fs, links, none[:0], wa[SIN_A], wa[COS_A])
     if not ok:
         return NO_FIT, rest_alpha.copy(), zero, zero, zero, zero, rec, count, none, zero
-    sin_a, sin_t = wa[SIN_A], wa[SIN_T]
+    sin_a, sin_t, cos_a, cos_t = wa[SIN_A], wa[SIN_T], wa[COS_A], wa[COS_T]
     E = _energy_into(alpha, a, jl, jr, k, rest, link_load, sin_a)
     noise_k = 0.0
     for j in range(k.size):
@@ -376,7 +397,7 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
     for _ in range(max_outer):
         code, it = _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
                          w_u, w_up, w_lo, warm_flags, max_iter, request, ws, gp, sin_a,
-                         newton and near)
+                         cos_a, newton and near)
         if code != 0:
             return code, alpha.copy(), zero, zero, u.copy(), sigma.copy(), rec, count, none, zero
         dalpha = prev = 0.0
@@ -395,7 +416,7 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
         while True:
             for i in range(n):
                 ut[i] = u[i] + t * d[i]
-            if _fit(trial, ut, alpha, a, fs, links, inv):
+            if _fit(trial, ut, alpha, a, fs, links, inv, sin_t, cos_t):
                 E_t = _energy_into(trial, a, jl, jr, k, rest, link_load, sin_t)
                 if E_t <= E + 1e-4 * t * min(slope, 0.0) + noise:
                     break
@@ -406,6 +427,7 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
                         none, zero)
         u[:] = ut
         alpha, trial, sin_a, sin_t, E = trial, alpha, sin_t, sin_a, E_t
+        cos_a, cos_t = cos_t, cos_a
         rec, count = _record(rec, count, it, t, dalpha, E)
         for i in range(n):
             w_u[i], w_up[i], w_lo[i] = su[i], sigma[i] > 0, sigma[i] < 0

@@ -321,7 +321,15 @@ def _dual(step, warm_up, warm_lo, max_iter, reach=0):
                         continue
                     if own:
                         return u, g, sigma > 0, sigma < 0, it, None
-                    return u - p, g - matvec(p), sigma > 0, sigma < 0, it, None
+                    u, g = u - p, g - matvec(p)
+                    # the walls once more: the unrefined heights carry the round-off
+                    # of the factor (cond(H) ε |u|), and a node the walk left free
+                    # may cross its wall once refined (a grazing contact); walk on
+                    free = ~S
+                    if not (np.any((u - hi)[free] > slack)
+                            or (has_lo and np.any((lo - u)[free] > slack))):
+                        return u, g, sigma > 0, sigma < 0, it, None
+                    continue
             held = np.flatnonzero(sigma)  # the working set, compactly
             key = held.tobytes() + sigma[held].tobytes()
             if key in seen:
