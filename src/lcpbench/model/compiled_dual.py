@@ -39,44 +39,44 @@ M1, M2, M3 = np.uint64(0x9E3779B97F4A7C15), np.uint64(0xBF58476D1CE4E5B9), np.ui
 
 
 @njit(cache=True)
-def _grad_into(out, m, u, gp, scale, T):
+def _grad_into(out, m, u, gp, T):
     """ContactStep.gradient, Jᵀ k (φ̂(u) − φ*) − f + T (u − u₀) about the
-    linearisation point u₀ (``scale``: ContactStep.gradient_scale, the size of its
-    terms), into ``out``; ``gp`` = (coef, b0, fs, links, origin, phi_origin, k,
-    rest, nodal_load); T: the Newton step's geometric bands (zero for a
-    Gauss–Newton step: adding them changes nothing but the sign of a zero)."""
+    linearisation point u₀, into ``out``; ``gp`` = (coef, b0, fs, links, origin,
+    phi_origin, k, rest, nodal_load); T: the Newton step's geometric bands (zero for
+    a Gauss–Newton step: adding them changes nothing but the sign of a zero). Joint
+    j's three columns are the nodes j + b0 − fs + (0, 1, 2); the interior rows are
+    summed without the end tests, in the same order as the ends (and the
+    reference's three passes)."""
     coef, b0, fs, links, origin, phi_origin, k, rest, load = gp
     n, nj = u.size, coef.shape[0]
+    off = b0 - fs
     for j in range(nj):  # J (u − u₀), then the moments
-        s = 0.0
-        for c in range(3):
-            i = b0 + c + j - fs
-            du = 0.0
-            if 0 <= i < n:
-                du = abs(u[i] - origin[i]) if scale else u[i] - origin[i]
-            w = abs(coef[j, c]) if scale else coef[j, c]
-            s = w * du if c == 0 else s + w * du
-        if scale:
-            m[j] = (s + (abs(phi_origin[j]) + abs(rest[j]))) * k[j]
+        i = off + j
+        if i >= 0 and i + 2 < n:
+            s = ((coef[j, 0] * (u[i] - origin[i]) + coef[j, 1] * (u[i + 1] - origin[i + 1]))
+                 + coef[j, 2] * (u[i + 2] - origin[i + 2]))
         else:
-            m[j] = ((s + phi_origin[j]) - rest[j]) * k[j]
-    for i in range(n):  # Jᵀ m, summed in the order of the reference's three passes
-        s = 0.0
-        for c in range(3):
-            j = fs + i - b0 - c
-            if 0 <= j < nj:
-                s += (abs(coef[j, c]) if scale else coef[j, c]) * m[j]
-        out[i] = s + (abs(load[i]) + TINY) if scale else s - load[i]
-    for i in range(n):  # + T (u − u₀), summed as linalg.banded_matvec
+            s = 0.0
+            for c in range(3):
+                du = u[i + c] - origin[i + c] if 0 <= i + c < n else 0.0
+                s = coef[j, c] * du if c == 0 else s + coef[j, c] * du
+        m[j] = ((s + phi_origin[j]) - rest[j]) * k[j]
+    for i in range(n):  # Jᵀ m, then + T (u − u₀) summed as linalg.banded_matvec
+        j = i - off
+        if j - 2 >= 0 and j < nj:
+            s = ((0.0 + coef[j, 0] * m[j]) + coef[j - 1, 1] * m[j - 1]) + coef[j - 2, 2] * m[j - 2]
+        else:
+            s = 0.0
+            for c in range(3):
+                if 0 <= j - c < nj:
+                    s += coef[j - c, c] * m[j - c]
         d0 = u[i] - origin[i]
-        s = abs(T[0, i]) * abs(d0) if scale else T[0, i] * d0
+        t = T[0, i] * d0
         if i >= 1:
-            d1 = u[i - 1] - origin[i - 1]
-            s += abs(T[1, i - 1]) * abs(d1) if scale else T[1, i - 1] * d1
+            t += T[1, i - 1] * (u[i - 1] - origin[i - 1])
         if i + 1 < n:
-            d2 = u[i + 1] - origin[i + 1]
-            s += abs(T[1, i]) * abs(d2) if scale else T[1, i] * d2
-        out[i] += s
+            t += T[1, i] * (u[i + 1] - origin[i + 1])
+        out[i] = (s - load[i]) + t
     return out
 
 
@@ -259,7 +259,7 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
                     for i in range(n):
                         if S[i]:
                             u[i] = wall[i]
-                    _grad_into(g, m, u, gp, False, ws[10])
+                    _grad_into(g, m, u, gp, ws[10])
                     for i in range(n):
                         r[i] = 0.0 if S[i] else g[i]
                     _resolve(fac, r)
@@ -446,7 +446,7 @@ def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m, T, g0):
         if g0.size == n:
             R[:] = g0
         else:
-            _grad_into(R, m, u2, gp, False, T)
+            _grad_into(R, m, u2, gp, T)
         if not _refactor(fac, bands, rows, 0, n):
             out[:] = 0.0
             return False
@@ -457,7 +457,7 @@ def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m, T, g0):
         for i in range(n):
             if not rows[i]:
                 u2[i] -= R[i]
-    _grad_into(R, m, u2, gp, False, T)
+    _grad_into(R, m, u2, gp, T)
     nat, min_gap, min_r, comp_up, comp_lo, term = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0
     for i in range(n):
         R[i] = -R[i]

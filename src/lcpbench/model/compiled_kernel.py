@@ -406,7 +406,7 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
             cur = su[node] - origin[node] if 0 <= node < n else 0.0
             dalpha = max(dalpha, abs((alpha0[i] + (cur - prev) * inv[i]) - alpha[i]))
             prev = cur
-        _grad_into(g_u, m, u, gp, False, ws[10])
+        _grad_into(g_u, m, u, gp, ws[10])
         slope = 0.0
         for i in range(n):  # the dot product, a loop (see _max_abs)
             d[i] = su[i] - u[i]
