@@ -20,6 +20,8 @@ import subprocess
 import sys
 import time
 
+from lcpbench.bench.machine import refuse_overwrite
+
 CHILD = r"""
 import json, resource, sys, time
 import lcpbench
@@ -72,7 +74,9 @@ def main(argv=None) -> int:
                     help="solves per N in its process; the table shows the best (the machine "
                          "is shared: the load moves single wall times by 2x)")
     ap.add_argument("--out", default="results/large-n")
+    ap.add_argument("--force", action="store_true", help="overwrite OUT.md and OUT.json")
     a = ap.parse_args(argv)
+    refuse_overwrite([a.out + ".md", a.out + ".json"], a.force)
     load = os.getloadavg()
     rows, conv = [], []
     for n in a.sizes.split(","):

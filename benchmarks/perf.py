@@ -51,6 +51,7 @@ import numpy as np
 import lcpbench
 from lcpbench import ActuatorScene
 from lcpbench.baseline import solve_baseline
+from lcpbench.bench.machine import refuse_overwrite
 from lcpbench.model.dense import solve_paper_dense
 from lcpbench.model.driver import run_driver
 from lcpbench.model.step import assemble_step
@@ -443,8 +444,11 @@ def main(argv=None) -> int:
     ap.add_argument("--issue19-only", action="store_true",
                     help="only issue 19's targets (benchmarks/perf_targets.py)")
     ap.add_argument("--starts", type=int, default=5, help="fresh processes for start-up")
+    ap.add_argument("--force", action="store_true", help="overwrite OUT.md and OUT.json")
     args = ap.parse_args(argv)
     out = Path(args.out)
+    if not args.from_json:
+        refuse_overwrite([out.with_suffix(".md"), out.with_suffix(".json")], args.force)
     if args.from_json:
         res = json.loads(out.with_suffix(".json").read_text())
         plot(res["t4"], out.parent / f"{out.name}-scaling.png")

@@ -7,7 +7,13 @@ import sqlite3
 import pytest
 
 from lcpbench.bench.grid import Grid
-from lcpbench.bench.machine import machine_record, machine_section, overloaded, timing_rows
+from lcpbench.bench.machine import (
+    machine_record,
+    machine_section,
+    overloaded,
+    refuse_overwrite,
+    timing_rows,
+)
 from lcpbench.bench.rows import repeated
 from lcpbench.bench.store import SCHEMA_VERSION, Store
 from lcpbench.bench.sweep import plan_sweep, sweep
@@ -165,3 +171,16 @@ def test_schema_2_store_is_read_as_it_is_and_migrated_on_write(tmp_path):
                                                                            "workers": 1}
         version = st.db.execute("SELECT value FROM meta WHERE key='schema'").fetchone()[0]
         assert version == "3"
+
+
+def test_a_timing_script_keeps_existing_results_unless_forced(tmp_path, capsys):
+    kept, new = tmp_path / "perf.md", tmp_path / "perf.json"
+    kept.write_text("committed")
+    refuse_overwrite([new], force=False)  # nothing there: go on
+    with pytest.raises(SystemExit) as stop:
+        refuse_overwrite([kept, new], force=False)
+    assert stop.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and str(kept) in err and "--force" in err
+    refuse_overwrite([kept, new], force=True)  # told to: go on
+    assert kept.read_text() == "committed"  # the guard itself writes nothing

@@ -124,6 +124,18 @@ def timing_start() -> dict:
             "blas_threads": {k: os.environ.get(k) for k in SINGLE_THREAD}}
 
 
+def refuse_overwrite(paths, force: bool) -> None:
+    """A timing script's guard for committed results: when some of ``paths`` exists
+    and ``force`` is not set, one line on stderr and exit status 2 (a run never
+    overwrites results it was not told to)."""
+    there = [str(p) for p in paths if os.path.exists(p)]
+    if there and not force:
+        verb = "exists" if len(there) == 1 else "exist"
+        print(f"error: {', '.join(there)} {verb} (results); pass --force to overwrite, or "
+              "--out to write elsewhere", file=sys.stderr)
+        raise SystemExit(2)
+
+
 def timing_note(start: dict) -> str:
     """One sentence for a result file: the machine, one BLAS thread or not, and the load
     average (1/5/15 min) at the start (``start`` from :func:`timing_start`) and now."""
