@@ -6,9 +6,10 @@ own. The kernels are compiled/loaded once per process before the clock starts
 (a tiny solve). Then the force against N at a tight tol (``--conv-sizes``,
 ``--conv-tol``): its differences to the largest N, N² times them (bounded for
 O(N⁻²)) and the judge's error bound on each. Writes ``results/large-n.md``,
-``.json`` and ``.png``; ``--out`` to write elsewhere.
+``.json`` and ``.png``; ``--out`` to write elsewhere (existing files are kept
+unless ``--force``).
 
-    OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 python benchmarks/large_n.py
+    OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 python benchmarks/large_n.py --force
 """
 
 from __future__ import annotations
@@ -74,9 +75,9 @@ def main(argv=None) -> int:
                     help="solves per N in its process; the table shows the best (the machine "
                          "is shared: the load moves single wall times by 2x)")
     ap.add_argument("--out", default="results/large-n")
-    ap.add_argument("--force", action="store_true", help="overwrite OUT.md and OUT.json")
+    ap.add_argument("--force", action="store_true", help="overwrite OUT.md, .json and .png")
     a = ap.parse_args(argv)
-    refuse_overwrite([a.out + ".md", a.out + ".json"], a.force)
+    refuse_overwrite([a.out + ".md", a.out + ".json", a.out + ".png"], a.force)
     load = os.getloadavg()
     rows, conv = [], []
     for n in a.sizes.split(","):

@@ -444,11 +444,13 @@ def main(argv=None) -> int:
     ap.add_argument("--issue19-only", action="store_true",
                     help="only issue 19's targets (benchmarks/perf_targets.py)")
     ap.add_argument("--starts", type=int, default=5, help="fresh processes for start-up")
-    ap.add_argument("--force", action="store_true", help="overwrite OUT.md and OUT.json")
+    ap.add_argument("--force", action="store_true", help="overwrite OUT.md, .json and "
+                    "-scaling.png")
     args = ap.parse_args(argv)
     out = Path(args.out)
     if not args.from_json:
-        refuse_overwrite([out.with_suffix(".md"), out.with_suffix(".json")], args.force)
+        refuse_overwrite([out.with_suffix(".md"), out.with_suffix(".json"),
+                          out.parent / f"{out.name}-scaling.png"], args.force)
     if args.from_json:
         res = json.loads(out.with_suffix(".json").read_text())
         plot(res["t4"], out.parent / f"{out.name}-scaling.png")
@@ -459,7 +461,7 @@ def main(argv=None) -> int:
     repeat = args.repeat or (3 if args.quick else 21)
     sizes = [100, 200, 400] if args.quick else SIZES
     cmd = "python benchmarks/perf.py" + (" --quick" if args.quick else "") + (
-        f" --repeat {args.repeat}" if args.repeat else "")
+        f" --repeat {args.repeat}" if args.repeat else "") + (" --force" if args.force else "")
     out.parent.mkdir(parents=True, exist_ok=True)
 
     if args.issue19_only:

@@ -6,7 +6,8 @@ scale in one pass. Checked against independent computations: the contact step's
 answer against the primal active set of the numpy reference (another method on
 the same strictly convex QP, whose answer is unique) on asymmetric steps, cold
 and warm-started from wrong contact sets (so that the walk releases walls), and
-the fused gradient against the two separate passes it replaces, bit for bit.
+the fused gradient and term size against the gradient alone (bit for bit) and
+against J, T and the loads written out in numpy.
 """
 
 from __future__ import annotations
@@ -66,7 +67,7 @@ def test_contact_step_is_the_primal_active_sets_answer(seed, warm):
     assert np.max(np.abs(r_up - ref.forces_upper)) <= 1e-7 * force
 
 
-def test_fused_gradient_is_the_two_gradients_bit_for_bit():
+def test_fused_gradient_and_term_size():
     chain, alpha = _perturbed(ActuatorScene(theta=150, height=3.0, links=140), 5)
     got = _kernel_step(chain, alpha)
     gp = got[9]

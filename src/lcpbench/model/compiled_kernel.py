@@ -317,7 +317,8 @@ def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, warm_u, wa
 def _contact_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
                   warm_u, warm_up, warm_lo, warm_flags, max_iter, request):
     """One cold contact step at α, its work arrays allocated: (code, u, r_up, r_lo,
-    sigma, face solves, inv, α₀, origin, gp, residuals, R), code 0: solved."""
+    sigma, face solves, inv, α₀, origin, gp, residuals, R), code 0: solved (other codes:
+    the arrays after the code are work rows, some never written, not an answer)."""
     ws = _workspace(n, alpha.size, jr.size, max_iter)
     wn, wa = ws[0], ws[3]
     gp = (ws[7], jr[0], fs, alpha.size, wn[ORIG], ws[2][0], k, rest, nodal_load)
@@ -398,8 +399,8 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
         code, it = _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
                          w_u, w_up, w_lo, warm_flags, max_iter, request, ws, gp, sin_a,
                          cos_a, newton and near)
-        if code != 0:
-            return code, alpha.copy(), zero, zero, u.copy(), sigma.copy(), rec, count, none, zero
+        if code != 0:  # (sigma unwritten where the walk never ran: zero, as the rest)
+            return code, alpha.copy(), zero, zero, u.copy(), zero, rec, count, none, zero
         dalpha = prev = 0.0
         for i in range(links):  # predict_alpha, eq. (21), about u0
             node = i + 1 - (fs - 1)
