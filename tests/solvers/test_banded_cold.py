@@ -304,3 +304,34 @@ def test_unknown_method():
 def test_empty_box_is_not_solved():
     qp = DenseBoxQP([[1.0]], [0.0], [1.0], [0.0])
     assert solve_banded_qp(qp).status is not Status.SOLVED
+
+
+def test_a_wall_crossed_by_the_refinement_is_walked_on(monkeypatch):
+    """The walk decides on unrefined heights; where the refinement at its optimum
+    carries a free node through its wall (a grazing contact, the first solve off by
+    more than the slack: cond(H) ε |u|), the walk goes on and holds the node. The
+    first solve's error is put in by hand (1e-8 at node 2, the wall 1e-9 below the
+    free minimiser there); the answer is the KKT point written out with node 2 fixed."""
+    H = np.diag([4.0] * 5) + np.diag([-1.0] * 4, 1) + np.diag([-1.0] * 4, -1)
+    free_min = np.array([0.3, 0.7, 1.0, 0.7, 0.3])
+    wall = free_min[2] - 1e-9
+    qp = DenseBoxQP(H, -H @ free_min, [-INF] * 5, [INF, INF, wall, INF, INF])
+    exact = banded._Banded.solve
+
+    def off_by_round_off(self, rhs):
+        x = exact(self, rhs)
+        x[2] -= 1e-8  # below the wall: no violation seen before the refinement
+        return x
+
+    monkeypatch.setattr(banded._Banded, "solve", off_by_round_off)
+    u, grad, held_up, held_lo, _, why = banded._dual(qp, np.zeros(5, bool), np.zeros(5, bool),
+                                                      50)
+    assert why is None and held_up[2] and np.count_nonzero(held_up | held_lo) == 1
+    # KKT with node 2 on its wall: the free rows H u + c = 0, u_2 = wall, reaction ≥ 0
+    free = np.array([0, 1, 3, 4])
+    kkt = np.full(5, wall)
+    kkt[free] = np.linalg.solve(H[np.ix_(free, free)],
+                                -(qp.linear[free] + H[free, 2] * wall))
+    assert np.allclose(u, kkt, rtol=0, atol=1e-14)
+    assert -(H @ kkt + qp.linear)[2] > 0  # the wall pushes: a reaction, not a pull
+    assert np.max(np.abs(grad - (H @ u + qp.linear))[free]) <= 1e-14
