@@ -448,9 +448,6 @@ def main(argv=None) -> int:
                     "-scaling.png")
     args = ap.parse_args(argv)
     out = Path(args.out)
-    if not args.from_json:
-        refuse_overwrite([out.with_suffix(".md"), out.with_suffix(".json"),
-                          out.parent / f"{out.name}-scaling.png"], args.force)
     if args.from_json:
         res = json.loads(out.with_suffix(".json").read_text())
         plot(res["t4"], out.parent / f"{out.name}-scaling.png")
@@ -458,6 +455,8 @@ def main(argv=None) -> int:
         print(f"rewrote {out.with_suffix('.md')} from {out.with_suffix('.json')}",
               file=sys.stderr)
         return 0
+    refuse_overwrite([out.with_suffix(".md"), out.with_suffix(".json"),
+                      out.parent / f"{out.name}-scaling.png"], args.force)
     repeat = args.repeat or (3 if args.quick else 21)
     sizes = [100, 200, 400] if args.quick else SIZES
     cmd = "python benchmarks/perf.py" + (" --quick" if args.quick else "") + (

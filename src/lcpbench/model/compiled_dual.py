@@ -237,7 +237,7 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
         return BAIL_NOT_PD, 0
     _resolve(fac, u)
     slack = 32 * EPS * (1.0 + _max_abs(u))
-    h, count, at_face_minimiser, it = np.uint64(0), 0, True, 0
+    h, count, at_face_minimiser, it, refined = np.uint64(0), 0, True, 0, False
     nheld = nchg = 0
     while True:
         if at_face_minimiser:
@@ -255,6 +255,8 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
                 npick = _run_picks(u, hi, S, slack, 1, picks, 0)
                 if has_lo:
                     npick = _run_picks(u, lo, S, slack, -1, picks, npick)
+                if npick == 0 and refined:  # no wall crossed by the refinement
+                    return 0, it
                 if npick == 0:  # the optimum: one refinement on the face just factored
                     for i in range(n):
                         if S[i]:
@@ -265,14 +267,10 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
                     _resolve(fac, r)
                     for i in range(n):
                         gf[i] = g[i] - _mv(bands, r, i, n, False)
-                    crossed = False  # the walls once more (solvers.banded._dual)
                     for i in range(n):
                         u[i] = u[i] - r[i]
                         g[i] = gf[i]
-                        crossed = crossed or (not S[i] and (
-                            u[i] - hi[i] > slack or (has_lo and lo[i] - u[i] > slack)))
-                    if not crossed:
-                        return 0, it
+                    refined = True  # then the walls once more (solvers.banded._dual)
                     continue
             for q in range(count):
                 if seen[q] == h:  # the same working set
@@ -353,6 +351,7 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
             at_face_minimiser = False
             continue
         at_face_minimiser = True
+        refined = False
 
 
 @njit(cache=True)

@@ -163,15 +163,15 @@ def _alpha_from_heights(u, reference, a, fs, links):
 @njit(cache=True)
 def _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, inv, coef,
                    origin, alpha0, phi_origin, t, wl, sines, cosines, tangent):
-    """``sines``: sin α; ``cosines``: cos α where given (the solve kernel's, from
-    :func:`_fit`), else empty (cos α computed). ``tangent``: v = tan α − α as the
-    reference (the compiled driver's assembly); else with tan α = sin α / cos α
-    (equal to round-off, one transcendental call less per link: the solve kernel's)."""
+    """``sines``, ``cosines``: sin α and cos α (the solve kernel's from :func:`_fit`).
+    ``tangent``: v = tan α − α as the reference (the compiled driver's assembly);
+    else with tan α = sin α / cos α (equal to round-off, one transcendental call
+    less per link: the solve kernel's)."""
     links = alpha.size
     nj = jr.size
     v = wl[0]
     for i in range(links):
-        c = cosines[i] if cosines.size == links else np.cos(alpha[i])
+        c = cosines[i]
         inv[i] = 1.0 / (a * c)
         v[i] = (np.tan(alpha[i]) if tangent else sines[i] / c) - alpha[i]
     for j in range(nj):
@@ -221,7 +221,7 @@ def _assemble(alpha, a, jl, jr, k, rest, fs, n, nodal_load):
     origin, alpha0, phi_origin = np.empty(n), np.empty(links), np.empty(nj)
     _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, inv, coef,
                    origin, alpha0, phi_origin, np.empty(nj), np.empty((5, links + 2)),
-                   np.sin(alpha), np.empty(0), True)
+                   np.sin(alpha), np.cos(alpha), True)
     return bands, linear, inv, coef, origin, alpha0, phi_origin
 
 

@@ -308,6 +308,8 @@ def _dual(step, warm_up, warm_lo, max_iter, reach=0):
                     J_up = _run_maxima(v_up, slack)
                     J_lo = _run_maxima(v_lo, slack) if has_lo else None
                 if not (np.count_nonzero(J_up) or (has_lo and np.count_nonzero(J_lo))):
+                    if refined and not own:  # no wall crossed by the refinement
+                        return u, g, sigma > 0, sigma < 0, it, None
                     # the optimum: one step of refinement with the exact gradient, on
                     # the face just factored
                     u = np.where(S, wall, u)
@@ -321,14 +323,11 @@ def _dual(step, warm_up, warm_lo, max_iter, reach=0):
                         continue
                     if own:
                         return u, g, sigma > 0, sigma < 0, it, None
+                    # then the walls once more: the unrefined heights carry the
+                    # round-off of the factor (cond(H) ε |u|), and a node the walk left
+                    # free may cross its wall once refined (a grazing contact)
                     u, g = u - p, g - matvec(p)
-                    # the walls once more: the unrefined heights carry the round-off
-                    # of the factor (cond(H) ε |u|), and a node the walk left free
-                    # may cross its wall once refined (a grazing contact); walk on
-                    free = ~S
-                    if not (np.any((u - hi)[free] > slack)
-                            or (has_lo and np.any((lo - u)[free] > slack))):
-                        return u, g, sigma > 0, sigma < 0, it, None
+                    refined = True
                     continue
             held = np.flatnonzero(sigma)  # the working set, compactly
             key = held.tobytes() + sigma[held].tobytes()
