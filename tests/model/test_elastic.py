@@ -117,7 +117,11 @@ def test_the_judge_rejects_a_rigid_answer_for_an_elastic_wall():
 def test_rigid_limit_converges_like_one_over_k():
     """For a fixed chain the penalty's error is O(1/k) once k·a exceeds the chain's
     local stiffness EI/a³: the log-log slope of |F(k) − F_rigid| tends to −1."""
-    study = rigid_limit(ActuatorScene(links=40), [1e4, 1e5, 1e6], tol=1e-9)
+    # tol 1e-8: at 1e-9 the stiffest wall's (k = 1e6) last steps are round-off, and
+    # the judge's bound on them (1.7e-7 F₀ against 1e-7 on one machine, within it on
+    # another) depends on the machine's arithmetic; at 1e-8 it is 1.5e-9 against 1e-6,
+    # and the errors measured here (5e-7 and up) are 300x that bound
+    study = rigid_limit(ActuatorScene(links=40), [1e4, 1e5, 1e6], tol=1e-8)
     assert all(study.converged)
     assert min(study.stiffness) >= 10 * study.crossover
     slopes = study.slopes()
