@@ -156,7 +156,12 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
     """:func:`drive` in the node heights: the kernel, the large-N increments or numpy."""
     if method == "globalised" and large_n.applies(chain):  # N >= LARGE_N: increments
         from .large_driver import run_large
+        from .nested_start import nested_start
 
+        if start is None:  # the same solve at fewer links, interpolated (nested iteration)
+            start = nested_start(chain, lambda coarse: drive(
+                coarse, step_solver, backend=backend, settings=settings, engine=engine,
+                tol=tol, max_outer=max_outer, method=method, start=None)[0])
         return (run_large(chain, step_solver, tol=tol, max_outer=max_outer, start=start),
                 "numpy (large N: increments on the tridiagonal factor)")
     if engine != "numpy" and applies(backend, method, None if args is not None else chain):
