@@ -20,6 +20,7 @@ from numpy.linalg import LinAlgError  # scipy.linalg's LinAlgError is this class
 from ..linalg import solveh_banded
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
+from . import large_n
 from .angle_step import heavy, total_load
 from .chain import heights
 from .driver import DriverOutput, DriverStart, run_driver
@@ -134,6 +135,11 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
         return DriverOutput(chain.rest_alpha.copy(), np.zeros(n), np.zeros(n), True,
                             "no contact: the unconstrained arc clears every wall and there "
                             "is no load")
+    if large_n.applies(chain):
+        # the search's steps are banded solves in heights, whose round-off grows as N⁴:
+        # at N = 10⁴ its equilibrium is 1e-4 F₀ off per node, which the judge rejects;
+        # the increment driver solves it (with no contact in its steps)
+        return None
     free = chain.derived("_without_walls", lambda: replace(
         chain, upper=np.full(n, np.inf), lower=np.full(n, -np.inf), upper_profile=None,
         lower_profile=None))
