@@ -158,10 +158,10 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
         from .large_driver import run_large
         from .nested_start import nested_start
 
-        if start is None:  # the same solve at fewer links, interpolated (nested iteration)
-            start = nested_start(chain, lambda coarse: drive(
-                coarse, step_solver, backend=backend, settings=settings, engine=engine,
-                tol=tol, max_outer=max_outer, method=method, start=None)[0])
+        if start is None:  # the same solve at fewer links, interpolated (nested iteration;
+            # its outer steps are not the answer's, its time is in the solve's)
+            start = nested_start(chain, functools.partial(_coarse_solve, tol=tol,
+                                                          engine=engine))
         return (run_large(chain, step_solver, tol=tol, max_outer=max_outer, start=start),
                 "numpy (large N: increments on the tridiagonal factor)")
     if engine != "numpy" and applies(backend, method, None if args is not None else chain):
@@ -186,6 +186,23 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
     out = run_driver(chain, step_solver, tol=tol, max_outer=max_outer, method=method,
                      start=start)
     return out, used
+
+
+def _coarse_solve(coarse: Chain, *, tol: float, engine: str) -> DriverOutput | None:
+    """The nested start's solve of the coarse chain (:mod:`.nested_start`): the built-in
+    active set whatever the fine solve's back-end (a start needs no particular one, and a
+    dense back-end at 1000 links can take minutes), Gauss–Newton height steps (no SQP
+    route: it is cubic in N), at most :data:`~.nested_start.COARSE_OUTER` outer steps;
+    None where a factorisation fails (the fine solve then starts cold)."""
+    from .nested_start import COARSE_OUTER
+    from .step_solver import make_step_solver
+
+    try:
+        return _drive(coarse, make_step_solver(DEFAULT), backend=DEFAULT, settings="default",
+                      engine="numpy" if engine == "numpy" else "auto", tol=tol,
+                      max_outer=COARSE_OUTER, method="globalised", start=None)[0]
+    except np.linalg.LinAlgError:
+        return None
 
 
 def run_kernel(chain: Chain, make_step: Callable[[], Callable], *, settings, tol: float,

@@ -33,16 +33,27 @@ from scipy.linalg import solve_banded
 
 from ..problems.scenes import Chain, new_chain
 from ..solvers.base import Status, StepSolution
+from .angle_step import load_parameter
 from .chain import alpha_from_heights, heights
 from .driver import DriverOutput, DriverStart
+from .heavy_driver import MODERATE
 
 #: links of the coarse chain (a solve of ~1 ms in the compiled kernel); 0: no nested start
 COARSE_LINKS = 1000
+#: outer steps allowed to the coarse solve (a chain it does not settle in these starts cold)
+COARSE_OUTER = 50
 
 
 def coarse_chain(chain: Chain, links: int) -> Chain:
     """``chain`` with ``links`` links: the same bar, loads and walls, resampled by arc
-    length (see the module's docstring)."""
+    length (see the module's docstring).
+
+    Each coarse node takes the wall rows of the fine node nearest it: where N is not a
+    multiple of ``links`` a row at the ends of the reachable span may differ from the
+    scene's own chain at ``links`` (a node there touches only a vertical chain). The
+    rest angles α* are sampled, not re-levelled: for an asymmetric layout the rest
+    shape's right pin may sit ~1e-4 mm off y = 0; the energy uses φ*, and the start
+    is fitted to the walls and pins again (:func:`interpolated_start`)."""
     n, L = chain.links, float(chain.length)
     a, ac = float(chain.link_length), L / links
     mid = (np.arange(n) + 0.5) * a  # link centres
@@ -80,11 +91,11 @@ def interpolated_start(chain: Chain, coarse: Chain, out: DriverOutput) -> Driver
     """The fine chain's start from the coarse answer ``out``.
 
     Its node heights are the cubic spline in arc length through the coarse node
-    heights (:func:`_spline`), so a coarse node on a wall stays on it and both pins
-    stay on y = 0; they are clipped to the fine
-    walls, and α is their exact inverse kinematics (on the branch of the coarse link
-    angles). The coarse contact nodes, mapped to the nearest fine nodes, are the
-    warm contact set. None when no chain of the fine links has those heights."""
+    heights (:func:`_spline`; both pins on y = 0, and a coarse node on a wall puts the
+    fine node at its arc length on it when N is a multiple of N_c), clipped to the
+    fine walls; α is their exact inverse kinematics (on the branch of the coarse link
+    angles). The coarse contact nodes, mapped to the nearest fine nodes, are the warm
+    contact set. None when no chain of the fine links has those heights."""
     n, nc = chain.links, coarse.links
     yc = np.zeros(nc + 1)
     yc[coarse.free_nodes] = heights(coarse, out.alpha)
@@ -144,6 +155,10 @@ def nested_start(chain: Chain, solve: Callable[[Chain], DriverOutput | None]
     links = COARSE_LINKS
     if not links or chain.links < 4 * links:
         return None
+    if np.any(np.cos(chain.rest_alpha) <= 0.0):  # links past the vertical (θ > 180°): the
+        return None  # fine driver's own cold start says what it can do there
+    if load_parameter(chain) >= MODERATE:  # a heavy chain: its height steps crawl at both
+        return None  # sizes (:mod:`.heavy_driver`), a coarse solve would only add to it
     coarse = coarse_chain(chain, links)
     out = solve(coarse)
     if out is None or not out.converged:
