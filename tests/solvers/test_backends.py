@@ -184,3 +184,21 @@ def test_siconos_collection(problem, backend):
                            f"expected {expected}")
     if "-or-" in expected:  # a path-dependent outcome must say why in the table
         assert EXPECTED["why"].get(f"{Path(problem).stem} / {backend}")
+
+
+def test_a_step_whose_residuals_cannot_be_computed_is_failed_not_raised(monkeypatch):
+    # solve_step never raises on solver trouble: where lcpbench's own residuals need a
+    # solve that fails (H not positive definite: a chain with links past the vertical
+    # can give one), the step is FAILED with the reason, so the driver stops with it
+    import lcpbench.model.step_solver as step_solver
+    from lcpbench.solvers.base import Status
+
+    def broken(step, u):
+        raise np.linalg.LinAlgError("66-th leading minor not positive definite")
+
+    monkeypatch.setattr(step_solver, "step_residuals", broken)
+    step = assemble_step(ActuatorScene(150, 3.0, links=40).chain(),
+                         ActuatorScene(150, 3.0, links=40).chain().rest_alpha)
+    sol = solve_step(step, "active-set")
+    assert sol.status is Status.FAILED
+    assert "residuals could not be computed" in sol.message

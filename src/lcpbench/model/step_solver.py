@@ -173,7 +173,11 @@ def solve_step(step, solver: str | Backend = "auto", settings: str | Settings = 
         sol = StepSolution(np.full(n, np.nan), np.zeros(n), np.zeros(n), Status.FAILED,
                            message=f"{backend.name} raised {type(exc).__name__}: {exc}")
     sol.backend, sol.settings, sol.scaled = backend.name, s.name, scaled
-    _judge(step, sol, s)
+    try:
+        _judge(step, sol, s)
+    except np.linalg.LinAlgError as exc:  # the residuals' own solve: H not positive definite
+        sol.status = Status.FAILED
+        sol.message = f"lcpbench's residuals could not be computed ({exc})"
     if sol.status is not Status.SOLVED and backend.fallback:
         first = sol
         sol = solve_step(step, backend.fallback, s, scaled=scaled)
