@@ -27,11 +27,12 @@ For the paper's actuator this is the chain the scene builds at N_c links.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
-from scipy.linalg import solve_banded
 
-from ..problems.scenes import Chain, new_chain
+from ..linalg import solveh_banded
+from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from .angle_step import load_parameter
 from .chain import alpha_from_heights, heights
@@ -64,7 +65,8 @@ def coarse_chain(chain: Chain, links: int) -> Chain:
     # reach a wall stay +-inf)
     near = np.clip(np.rint(node_c / a).astype(np.int64) - 1, 0, n - 2)
     joints = np.column_stack((np.arange(links - 1), np.arange(1, links)))
-    return new_chain(dict(
+    return replace(  # the rest (flat rigid walls' height, scales) as the chain's
+        chain,
         links=links,
         link_length=ac,
         rest_alpha=np.interp(mid_c, mid, chain.rest_alpha),
@@ -75,16 +77,8 @@ def coarse_chain(chain: Chain, links: int) -> Chain:
         free_nodes=np.arange(1, links),
         upper=chain.upper[near].copy(),
         lower=chain.lower[near].copy(),
-        force_scale=chain.force_scale,
-        length=chain.length,
-        wall=chain.wall,
-        channel=chain.channel,
-        upper_stiffness=None,
-        lower_stiffness=None,
-        upper_profile=None,
-        lower_profile=None,
         consecutive=True,
-    ))
+    )
 
 
 def interpolated_start(chain: Chain, coarse: Chain, out: DriverOutput) -> DriverStart | None:
@@ -125,9 +119,9 @@ def _spline(y: np.ndarray, x: np.ndarray) -> np.ndarray:
     rhs = 6.0 * (y[2:] - 2 * y[1:-1] + y[:-2])
     rhs[0] -= M[0]
     rhs[-1] -= M[-1]
-    ab = np.empty((3, m - 2))
-    ab[0], ab[1], ab[2] = 1.0, 4.0, 1.0
-    M[1:-1] = solve_banded((1, 1), ab, rhs)
+    bands = np.empty((2, m - 2))  # symmetric, lower form: the diagonal 4, then the 1s
+    bands[0], bands[1] = 4.0, 1.0
+    M[1:-1] = solveh_banded(bands, rhs, lower=True, check_finite=False)
     j = np.minimum(x.astype(np.int64), m - 2)
     t = x - j
     s = 1.0 - t
