@@ -20,9 +20,11 @@ one of these, interleaved (each round runs every condition once, in rotating ord
 
 It also times the solve kernel and the judge kernel alone, whole solves at N = 12
 and N = 140, and the N = 140 solve with its kernels replayed (its Python alone,
-``python_overhead.py``'s replay), after a 100 ms busy loop and right after themselves. Medians and minima
-in µs, one BLAS thread, the load average recorded. Writes ``results/cold-penalty.md`` and ``.json``; refuses to overwrite them
-without ``--force``.
+``python_overhead.py``'s replay), after a 100 ms busy loop and right after
+themselves. Medians and minima in µs, one BLAS thread, the load average recorded.
+Writes ``results/cold-penalty.md`` and ``.json``; refuses to overwrite them without
+``--force``. The causes named in the Markdown are inferred from these timings: no
+hardware counters are read.
 
     python benchmarks/cold_penalty.py [--repeat 31] [--out results/cold-penalty] [--force]
 """
@@ -66,14 +68,19 @@ def busy(seconds: float) -> None:
 
 def aot_pages() -> list[np.ndarray]:
     """The AOT library's mapped code and read-only data, as byte arrays (none where
-    the kernels run through numba's JIT)."""
+    the kernels run through numba's JIT, or where /proc/self/maps is not there)."""
     views = []
-    with open("/proc/self/maps") as maps:
-        for line in maps:
-            part = line.split()
-            if len(part) >= 6 and "lcpbench_aot" in part[5] and part[1].startswith("r"):
-                lo, hi = (int(x, 16) for x in part[0].split("-"))
-                views.append(np.ctypeslib.as_array((ctypes.c_uint8 * (hi - lo)).from_address(lo)))
+    try:
+        with open("/proc/self/maps") as maps:
+            lines = maps.read().splitlines()
+    except OSError:  # not Linux: the condition is left out
+        return views
+    for line in lines:
+        part = line.split()
+        if len(part) >= 6 and "lcpbench_aot" in part[5] and part[1].startswith("r") \
+                and "w" not in part[1]:
+            lo, hi = (int(x, 16) for x in part[0].split("-"))
+            views.append(np.ctypeslib.as_array((ctypes.c_uint8 * (hi - lo)).from_address(lo)))
     return views
 
 
@@ -118,35 +125,37 @@ def timed_solves(scene, before: dict, repeat: int) -> dict:
 def _replayed_solve(scene):
     """``lcpbench.solve`` of the scene with the two kernels replayed
     (``python_overhead._Replay``: their recorded outputs handed back at once), so that
-    only its Python runs; the kernels are put back after each call."""
+    only its Python runs (and the four assignments that put the replays in and the
+    kernels back after each call). A replayed run must give the recorded force."""
     from python_overhead import _kernels, _Replay
 
     solve_k, judge_k, _ = _kernels()
     reps = [_Replay(solve_k, "solve_chain"), _Replay(judge_k, "judge_answer")]
-    for r in reps:  # record once
-        setattr(r.module, r.name, r)
-    try:
-        lcpbench.solve(scene, tol=TOL)
-    finally:
-        for r in reps:
-            setattr(r.module, r.name, r.real)
 
     def run():
-        for r in reps:
-            r.next = 0
-            setattr(r.module, r.name, r)
         try:
+            for r in reps:
+                r.next = 0 if r.calls else None  # None: the first call records
+                setattr(r.module, r.name, r)
             return lcpbench.solve(scene, tol=TOL)
         finally:
             for r in reps:
                 setattr(r.module, r.name, r.real)
-    return run
+
+    recorded = run().total_force
+
+    def checked():
+        got = run()
+        if got.total_force != recorded:
+            raise RuntimeError("the replayed solve left the recorded path")
+        return got
+    return checked
 
 
 def kernel_parts(scene, small, repeat: int) -> dict:
     """The solve kernel and the judge kernel alone, and whole solves at N = 12 and 140:
     after a 100 ms busy loop, then right after themselves."""
-    from lcpbench.model.compiled import _kernel, kernel_args
+    from lcpbench.model.compiled import DEFAULT_TOL, _cold, _kernel, kernel_args
     from lcpbench.model.judge_compiled import _kernel as judge_kernel
     from lcpbench.model.judge_compiled import chain_args
 
@@ -155,10 +164,9 @@ def kernel_parts(scene, small, repeat: int) -> dict:
     jargs = chain_args(chain, args)
     n = chain.free_nodes.size
     k, jk = _kernel(), judge_kernel()
-    warm = (np.zeros(0), np.zeros(n), np.zeros(n, bool), np.zeros(n, bool))
 
-    def solve_kernel():
-        return k.solve_chain(*args, TOL, 200, *warm, 0, 20 * n + 50, 1e-9, False)
+    def solve_kernel():  # the call of lcpbench.solve (compiled.call_kernel, cold start)
+        return k.solve_chain(*args, TOL, 200, *_cold(n), 20 * n + 50, DEFAULT_TOL, False)
 
     got = solve_kernel()
     alpha, rec, count, R = got[1], got[6], got[7], got[9]
@@ -197,19 +205,21 @@ def _reading(solves: dict, parts: dict) -> str:
     base = med["nothing (back to back)"]
 
     def share(cold: str, warmed: str) -> str:
-        gone = (med[cold] - med[warmed]) / max(med[cold] - base, 1e-9)
-        return f"{100 * gone:.0f} %"
+        penalty = med[cold] - base
+        if penalty <= 0:
+            return "n/a (no penalty to take away)"
+        return f"{100 * (med[cold] - med[warmed]) / penalty:.0f} %"
 
     dense = "dense paper path (target 1's contender)"
     after = {ms: med[f"busy loop {ms:g} ms"] - base for ms in (1, 10, 30, 100)}
+    small = share(dense, "dense paper path, then a solve at N = 12")
+    arrays = share(dense, "dense paper path, then the kernels' arrays read")
     text = ("Reading: the penalty (median over back to back) is "
             + ", ".join(f"{round(v):d} µs after a {ms:g} ms busy loop" for ms, v in after.items())
             + f", {med['sleep 30 ms'] - base:.0f} µs after a 30 ms sleep, "
             f"{med['read 64 MB'] - base:.0f} µs after reading 64 MB and "
             f"{med[dense] - base:.0f} µs after the dense path. Of the dense path's, a solve "
-            f"at N = 12 just before takes away {share(dense, 'dense paper path, then a solve at N = 12')}, "
-            f"reading the kernels' arrays "
-            f"{share(dense, 'dense paper path, then the kernels' + chr(39) + ' arrays read')}")
+            f"at N = 12 just before takes away {small}, reading the kernels' arrays {arrays}")
     aot = "dense paper path, then the AOT library read (1 byte per line)"
     if aot in med:
         text += f", reading the AOT library's bytes {share(dense, aot)}"
