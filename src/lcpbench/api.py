@@ -31,13 +31,14 @@ from .model.compiled import (
     run_kernel,
 )
 from .model.driver import METHODS, DriverOutput, DriverStart
-from .model.judge import judge
+from .model.judge import force_tol, judge
 from .model.judge_compiled import chain_args
 from .model.lazy_result import LazyResult, lazy_result, stats_judge
 from .model.result import ContactResult, build_result
 from .model.step_solver import make_step_solver
 from .model.wall_free import solve_without_contact
 from .problems.checks import check_flag, check_number, check_scene
+from .problems.scenes import Chain
 from .solvers.registry import DEFAULT, get_settings
 from .solvers.selection import Selection
 
@@ -169,9 +170,12 @@ def solve(
     if kernel and name == DEFAULT and begin is None and method != "undamped" and \
             direct(chain):  # drive()'s own route to the kernel, without the calls between
         if not chain.channel:  # one wall: the kernels, the rest of the result when read
-            return _one_wall(scene, chain, args, make_step, tol=tol, max_outer=max_outer,
-                             method=method, settings=settings, why=why,
-                             pressure_limit=pressure_limit, t0=t0)
+            res = _one_wall(scene, chain, args, make_step, tol=tol, max_outer=max_outer,
+                            method=method, settings=settings, why=why,
+                            pressure_limit=pressure_limit, t0=t0)
+            return res if res.converged else in_increments(
+                res, chain, make_step, backend=name, settings=settings, engine=engine, tol=tol,
+                max_outer=max_outer, method=method, why=why, pressure_limit=pressure_limit)
         out, used = run_kernel(chain, make_step, settings=settings, tol=tol,
                                max_outer=max_outer, method=method, args=args)
     else:
@@ -182,11 +186,59 @@ def solve(
             out, used = drive(chain, make_step(), backend=name, settings=settings,
                               engine=engine, tol=tol, max_outer=max_outer, method=method,
                               start=begin, args=args)
-    return finish(scene, chain, out, solver=name, method=method, tol=tol,
-                  elapsed=time.perf_counter() - t0, settings=settings, engine=used,
-                  compiled_judge=kernel, why=why,
-                  judge_args=None if args is None else chain_args(chain, args),
-                  pressure_limit=pressure_limit)
+    res = finish(scene, chain, out, solver=name, method=method, tol=tol,
+                 elapsed=time.perf_counter() - t0, settings=settings, engine=used,
+                 compiled_judge=kernel, why=why,
+                 judge_args=None if args is None else chain_args(chain, args),
+                 pressure_limit=pressure_limit)
+    return res if res.converged else in_increments(
+        res, chain, make_step, backend=name, settings=settings, engine=engine, tol=tol,
+        max_outer=max_outer, method=method, why=why, pressure_limit=pressure_limit)
+
+
+def in_increments(res: ContactResult, chain: Chain, make_step: Callable, *, backend: str,
+                  settings, engine: str, tol: float, max_outer: int, method: str, why: str | None,
+                  pressure_limit: float | None) -> ContactResult:
+    """``res`` again, solved in increments on the tridiagonal factor, where the round-off
+    of the height formulation may have kept the judge from certifying it
+    (:func:`lcpbench.model.large_n.roundoff_limited`); otherwise ``res`` itself. Only
+    the built-in back-end's answers (``backend``): another back-end's rejection stays
+    its own, as a benchmark must see it.
+
+    In node heights round-off grows with cond H ~ N⁴: on the paper scene the answer at
+    N = 3000 stops 1.6·10⁻⁷ F₀ from the force (the judge's exact step sees it), so it
+    cannot be certified at tol 1e-9 (τ = 100 tol = 10⁻⁷), however long the driver runs.
+    The same solve in increments (cond ~ N², as from ``LARGE_N`` links) starts from
+    ``res``'s angles (``chain``: its scene's) and is judged in increments too. Its outer
+    steps are the answer's; ``time_s`` counts both solves; ``extra["increments"]`` says
+    why it ran. Where it does not converge either, ``res`` is returned with that in
+    ``extra["increments"]``."""
+    from dataclasses import replace
+
+    if backend != DEFAULT or not large_n.roundoff_may_limit(chain, force_tol(tol), method):
+        return res  # (its judgement not read: a lazy result stays lazy)
+    judgement = res.judgement
+    if judgement is None or not large_n.roundoff_limited(chain, judgement, method):
+        return res
+    t0 = time.perf_counter()
+    chain = replace(chain, increments=True)
+    out, used = drive(chain, make_step(), backend=backend, settings=settings,
+                      engine=engine, tol=tol, max_outer=max_outer, method=method,
+                      start=DriverStart(np.asarray(res.alpha, dtype=float)))
+    again = finish(res.scene, chain, out, solver=res.solver, method=method, tol=tol,
+                   elapsed=res.time_s + time.perf_counter() - t0, settings=settings,
+                   engine=used, compiled_judge=False, why=why, pressure_limit=pressure_limit)
+    told = (f"the answer in node heights was not certified ({judgement.reason}), and at "
+            f"N = {chain.links} their round-off (cond H · ε = "
+            f"{large_n.heights_condition(chain.links) * np.finfo(float).eps:.1e}) may reach "
+            f"τ = {judgement.force_tol:.1e}")
+    if not again.converged:
+        res.extra["increments"] = f"{told}; solved again in increments: {again.reason}"
+        return res
+    again.extra["increments"] = (f"{told}; solved again in increments on the tridiagonal "
+                                 f"factor from that answer ({res.outer_iterations} outer "
+                                 f"steps there, not counted)")
+    return again
 
 
 def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: float,

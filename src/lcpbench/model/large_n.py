@@ -59,12 +59,47 @@ def layout_fits(chain: Chain) -> bool:
                 and np.array_equal(left, np.arange(n)) and chain.links == n + 1)
 
 
+def takes(chain: Chain) -> bool:
+    """Whether the increment formulation takes the chain at all: rigid, flat walls
+    (elastic walls and wall profiles keep their own steps) and :func:`layout_fits`."""
+    return not (chain.elastic_walls or chain.profiled_walls) and layout_fits(chain)
+
+
 def applies(chain: Chain) -> bool:
-    """Whether solves and the judge use the increment formulation (N >= LARGE_N; rigid,
-    flat walls: elastic walls and wall profiles keep their own steps)."""
-    if chain.elastic_walls or chain.profiled_walls:
-        return False
-    return chain.links >= LARGE_N and layout_fits(chain)
+    """Whether solves and the judge use the increment formulation: N >= LARGE_N, or a
+    chain marked ``increments`` (:func:`roundoff_limited`), that it :func:`takes`."""
+    return (chain.links >= LARGE_N or chain.increments) and takes(chain)
+
+
+def heights_condition(links: int) -> float:
+    """cond H of the height formulation, (2N/π)⁴: H ∝ (LM)², whose tridiagonal factor LM
+    (second differences) has eigenvalues 4 sin²(jπ/2N), from ≈ π²/N² to 4."""
+    return (2.0 * links / np.pi) ** 4
+
+
+def roundoff_may_limit(chain: Chain, tau: float, method: str) -> bool:
+    """Whether the round-off of node heights may keep an answer from a relative force
+    accuracy τ, where increments would not: cond H · ε (:func:`heights_condition`)
+    reaches τ, and the increment formulation takes the chain (:func:`takes`) and the
+    scheme (``method``: the globalised one, which it runs) but is not used already.
+
+    cond H · ε is what round-off can do to a height step, an upper estimate: on the
+    paper scene the forces of the height answers are 10⁻³ of it off (1.6·10⁻⁷ F₀ at
+    N = 3000, 6.6·10⁻¹⁰ F₀ at N = 500)."""
+    return (method == "globalised"
+            and heights_condition(chain.links) * np.finfo(float).eps >= tau
+            and not applies(chain) and takes(chain))
+
+
+def roundoff_limited(chain: Chain, judgement, method: str) -> bool:
+    """Whether an answer in node heights that the judge did not certify may have been
+    kept from it by round-off (:func:`roundoff_may_limit` at its τ), so that the same
+    solve in increments (whose round-off grows as N², not N⁴) is worth a try: the judge
+    did not accept, but the driver converged (its steps stopped moving α). As
+    cond H · ε is an upper estimate, a retry is tried in more cases than it is needed
+    in; it runs only where the judge rejected the answer."""
+    return (not judgement.converged and "driver" not in judgement.failed
+            and roundoff_may_limit(chain, judgement.force_tol, method))
 
 
 def increment_step(step: ContactStep, *, restart: bool = True) -> ContactStep:

@@ -127,6 +127,11 @@ class Chain:
     #: 0) and the free nodes contiguous from node 2 on: the layout the compiled
     #: kernels take (what the scenes build); None: not known, checked from the arrays
     consecutive: bool | None = None
+    #: True: solved and judged in increments on the tridiagonal factor of H
+    #: (:mod:`lcpbench.model.large_n`) whatever N, not only from ``LARGE_N`` links;
+    #: :func:`lcpbench.solve` sets it where the round-off of the height formulation
+    #: keeps the judge from certifying the asked tolerance
+    increments: bool = False
 
     @property
     def elastic_walls(self) -> bool:
@@ -394,6 +399,7 @@ class ActuatorScene:
             upper_profile=prof_up,
             lower_profile=prof_lo,
             consecutive=True,
+            increments=False,
         ), uniform_load(n, load))
 
 
