@@ -219,11 +219,31 @@ def run_kernel(chain: Chain, make_step: Callable[[], Callable], *, settings, tol
                      start=start)
 
 
+#: the kernel's bail reasons that the round-off of node heights can cause
+ROUNDOFF_BAILS = frozenset((_BAIL[12], _BAIL[14], _BAIL[15]))
+
+
 def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol: float,
               max_outer: int, method: str, start: DriverStart | None = None
               ) -> tuple[DriverOutput, str]:
     """The whole solve in the numpy reference, where the kernel stopped (``why``, one of
-    its bail reasons): the answer and the engine that produced it."""
+    its bail reasons): the answer and the engine that produced it.
+
+    Where the reason is one that round-off of node heights can cause
+    (:data:`ROUNDOFF_BAILS`) and cond H · ε reaches the step's own accuracy
+    (``DEFAULT_TOL``, N ≳ 400; :func:`lcpbench.model.large_n.roundoff_may_limit`), the
+    solve runs in increments on the tridiagonal factor instead, as from ``LARGE_N``
+    links: the numpy reference in heights would meet the same round-off, and its step
+    solver then falls back to a dense Lemke step, O(N³) (97 s at N = 3999)."""
+    if why in ROUNDOFF_BAILS and large_n.roundoff_may_limit(chain, DEFAULT_TOL, method):
+        from dataclasses import replace
+
+        from .large_driver import run_large
+
+        return (run_large(replace(chain, increments=True), make_step(), tol=tol,
+                          max_outer=max_outer, start=start),
+                f"numpy (increments on the tridiagonal factor; the compiled kernel "
+                f"stopped: {why})")
     return (run_driver(chain, make_step(), tol=tol, max_outer=max_outer, method=method,
                        start=start), f"numpy (the compiled kernel stopped: {why})")
 

@@ -23,8 +23,8 @@ import time
 from ..api import finish
 from ..model import large_n
 from ..model.angle_step import in_reach, load_parameter
-from ..model.compiled import applies, drive, kernel_args, run_compiled
-from ..model.driver import DriverStart, run_driver
+from ..model.compiled import applies, drive, kernel_args, reference, run_compiled
+from ..model.driver import DriverStart
 from ..model.judge_compiled import chain_args
 from ..model.result import ContactResult
 from ..model.step_solver import make_step_solver
@@ -87,9 +87,9 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
         out, why = run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
                                 settings=settings, args=args)
         if out is None:  # the kernel left the reference's path: the numpy reference
-            out = run_driver(chain, make_step_solver(DEFAULT, settings, True), tol=tol,
-                             max_outer=max_outer, method="globalised", start=start)
-            used = f"numpy (the compiled kernel stopped: {why})"
+            out, used = reference(chain, lambda: make_step_solver(DEFAULT, settings, True),
+                                  why, tol=tol, max_outer=max_outer, method="globalised",
+                                  start=start)
     return finish(scene, chain, out, solver=DEFAULT, method="globalised", tol=tol,
                   elapsed=time.perf_counter() - t0, settings=settings, engine=used,
                   compiled_judge=kernel, why=AUTO_WHY,

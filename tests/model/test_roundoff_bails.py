@@ -1,0 +1,65 @@
+"""Kernel bails caused by round-off below LARGE_N (issue 19, item 3): in increments, never a dense step.
+
+Near N = 4000 the compiled kernel in node heights sometimes stops because a step
+judge rejected its own step (cond H ~ N⁴). The numpy reference in heights met the
+same round-off, its step solver fell back to a dense Lemke step, and one solve at
+N = 3999 took 97 s. :func:`lcpbench.model.compiled.reference` now solves such a
+chain in increments on the tridiagonal factor, as from ``LARGE_N`` links. Whether
+a given scene bails depends on round-off, so on the machine: these tests call the
+route with the bail reason given, and check the property that holds everywhere
+(no dense step at N = 3999).
+"""
+
+from __future__ import annotations
+
+from lcpbench import ActuatorScene, solve
+from lcpbench.model import compiled, large_n, step_solver
+from lcpbench.model.judge import force_tol
+from lcpbench.model.step_solver import make_step_solver
+
+STEP_REJECTED = compiled._BAIL[15]
+
+
+def _make_step():
+    return make_step_solver("active-set", "default", True)
+
+
+def test_a_round_off_bail_at_n_3999_is_solved_in_increments(monkeypatch):
+    scene = ActuatorScene(90, 2.0, links=3999)
+    chain = scene.chain()
+    out, used = compiled.reference(chain, _make_step, STEP_REJECTED, tol=1e-9,
+                                   max_outer=200, method="globalised")
+    assert out.converged and "increments" in used and STEP_REJECTED in used
+    # the same scene solved in increments from the rest shape (LARGE_N lowered)
+    monkeypatch.setattr(large_n, "LARGE_N", 10)
+    cold = solve(scene, tol=1e-9)
+    assert cold.converged and "increments" in cold.extra["engine"]
+    F = float(out.forces_upper.sum())
+    assert abs(F - cold.total_force) / cold.judgement.force_unit <= force_tol(1e-9)
+
+
+def test_a_round_off_bail_at_small_n_keeps_the_numpy_reference():
+    # N = 140: cond H · ε ≈ 1.4e-8, below the step's accuracy; the reference in heights
+    chain = ActuatorScene(150, 3.0, links=140).chain()
+    out, used = compiled.reference(chain, _make_step, STEP_REJECTED, tol=1e-3,
+                                   max_outer=200, method="globalised")
+    assert out.converged and used == f"numpy (the compiled kernel stopped: {STEP_REJECTED})"
+
+
+def test_no_solve_at_n_3999_takes_a_dense_step(monkeypatch):
+    # whichever of these scenes bails on this machine, none may reach a dense Lemke
+    # step (the active set's fallback): the route of a bail is increments
+    dense = []
+    run = step_solver._run_step
+
+    def watched(backend, step, s, scaled, warm):
+        if backend.storage == "dense":
+            dense.append((backend.name, step.size))
+        return run(backend, step, s, scaled, warm)
+
+    monkeypatch.setattr(step_solver, "_run_step", watched)
+    for theta, h in ((90, 2.0), (170, 5.0), (150, 3.0), (120, 1.0)):
+        for tol in (1e-3, 1e-9):
+            res = solve(ActuatorScene(theta, h, links=3999), tol=tol)
+            assert res.converged, res.reason
+    assert dense == []
