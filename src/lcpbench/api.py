@@ -25,6 +25,7 @@ from .model.compiled import (
     check_engine,
     direct,
     drive,
+    heavy,
     kernel_args,
     kernel_output,
     reference,
@@ -209,21 +210,27 @@ def in_increments(res: ContactResult, chain: Chain, make_step: Callable, *, back
     N = 3000 stops 1.6·10⁻⁷ F₀ from the force (the judge's exact step sees it), so it
     cannot be certified at tol 1e-9 (τ = 100 tol = 10⁻⁷), however long the driver runs.
     The same solve in increments (cond ~ N², as from ``LARGE_N`` links) starts from
-    ``res``'s angles (``chain``: its scene's) and is judged in increments too. Its outer
-    steps are the answer's; ``time_s`` counts both solves; ``extra["increments"]`` says
-    why it ran. Where it does not converge either, ``res`` is returned with that in
-    ``extra["increments"]``."""
+    ``res``'s angles (``chain``: its scene's) with the outer steps ``res`` left of
+    ``max_outer``, and is judged in increments too. Its outer steps are the answer's
+    (``extra["increments"]`` says why it ran and how many ``res`` took); ``time_s``
+    counts both solves; ``res``'s other ``extra`` entries (a batch's continuation) are
+    kept. Where it does not converge either, ``res`` is returned with that in
+    ``extra["increments"]``. A chain heavy enough for SQP steps in the link angles
+    (:func:`lcpbench.model.compiled.heavy`) is not retried: those steps are not in
+    node heights."""
     from dataclasses import replace
 
     if backend != DEFAULT or not large_n.roundoff_may_limit(chain, force_tol(tol), method):
         return res  # (its judgement not read: a lazy result stays lazy)
     judgement = res.judgement
-    if judgement is None or not large_n.roundoff_limited(chain, judgement, method):
+    left = max_outer - res.outer_iterations
+    if judgement is None or left < 1 or heavy(chain) \
+            or not large_n.roundoff_limited(chain, judgement, method):
         return res
     t0 = time.perf_counter()
     chain = replace(chain, increments=True)
     out, used = drive(chain, make_step(), backend=backend, settings=settings,
-                      engine=engine, tol=tol, max_outer=max_outer, method=method,
+                      engine=engine, tol=tol, max_outer=left, method=method,
                       start=DriverStart(np.asarray(res.alpha, dtype=float)))
     again = finish(res.scene, chain, out, solver=res.solver, method=method, tol=tol,
                    elapsed=res.time_s + time.perf_counter() - t0, settings=settings,
@@ -234,10 +241,13 @@ def in_increments(res: ContactResult, chain: Chain, make_step: Callable, *, back
             f"τ = {judgement.force_tol:.1e}")
     if not again.converged:
         res.extra["increments"] = f"{told}; solved again in increments: {again.reason}"
+        res.time_s = again.time_s  # both solves
         return res
     again.extra["increments"] = (f"{told}; solved again in increments on the tridiagonal "
                                  f"factor from that answer ({res.outer_iterations} outer "
                                  f"steps there, not counted)")
+    for key, value in res.extra.items():  # a batch's continuation, discarded attempt
+        again.extra.setdefault(key, value)
     return again
 
 

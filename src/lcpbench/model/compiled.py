@@ -259,9 +259,14 @@ def direct(chain: Chain) -> bool:
     the wall-free search (:func:`~lcpbench.model.wall_free.arc_far_past_wall`). The
     route :func:`lcpbench.solve` takes without the calls in between (tests compare)."""
     return (applies(DEFAULT, "globalised", chain) and not large_n.applies(chain)
-            and not (angle_step.in_reach(chain)
-                     and angle_step.load_parameter(chain) >= heavy_driver.MODERATE)
-            and wall_free.arc_far(chain))
+            and not heavy(chain) and wall_free.arc_far(chain))
+
+
+def heavy(chain: Chain) -> bool:
+    """Whether :func:`drive` may take SQP steps in the link angles for this chain: it is
+    in reach of them and loaded from :data:`~lcpbench.model.heavy_driver.MODERATE` on
+    (wℓ³/EI)."""
+    return angle_step.in_reach(chain) and angle_step.load_parameter(chain) >= heavy_driver.MODERATE
 
 
 @functools.lru_cache(maxsize=16)

@@ -84,8 +84,8 @@ def roundoff_may_limit(chain: Chain, tau: float, method: str) -> bool:
     scheme (``method``: the globalised one, which it runs) but is not used already.
 
     cond H · ε is what round-off can do to a height step, an upper estimate: on the
-    paper scene the forces of the height answers are 10⁻³ of it off (1.6·10⁻⁷ F₀ at
-    N = 3000, 6.6·10⁻¹⁰ F₀ at N = 500)."""
+    paper scene the forces of the height answers are 10⁻⁴–10⁻³ of it off (1.6·10⁻⁷ F₀
+    at N = 3000, 6.6·10⁻¹⁰ F₀ at N = 500)."""
     return (method == "globalised"
             and heights_condition(chain.links) * np.finfo(float).eps >= tau
             and not applies(chain) and takes(chain))
