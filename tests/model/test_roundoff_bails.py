@@ -1,4 +1,4 @@
-"""Kernel bails caused by round-off below LARGE_N (issue 19, item 3): in increments, never a dense step.
+"""Kernel bails caused by round-off below LARGE_N, and the dense fallback (issue 19, item 3): O(N) steps.
 
 Near N = 4000 the compiled kernel in node heights sometimes stops because a step
 judge rejected its own step (cond H ~ N⁴). The numpy reference in heights met the
@@ -63,3 +63,28 @@ def test_no_solve_at_n_3999_takes_a_dense_step(monkeypatch):
             res = solve(ActuatorScene(theta, h, links=3999), tol=tol)
             assert res.converged, res.reason
     assert dense == []
+
+
+def test_the_dense_fallback_is_refused_above_its_size():
+    assert step_solver.dense_fallback_refused("lemke", step_solver.MAX_DENSE_FALLBACK) is None
+    why = step_solver.dense_fallback_refused("lemke", step_solver.MAX_DENSE_FALLBACK + 1)
+    assert why is not None and f"n = {step_solver.MAX_DENSE_FALLBACK + 1}" in why
+    assert step_solver.dense_fallback_refused("active-set", 10**5) is None  # banded
+
+
+def test_past_the_vertical_at_n_3000_fails_fast_without_a_dense_step(monkeypatch):
+    # θ > 180°: the linearisation is singular at the end links and no scheme converges
+    # (documented); before, each uncertified step fell back to dense Lemke, minutes
+    dense = []
+    run = step_solver._run_step
+
+    def watched(backend, step, s, scaled, warm):
+        if backend.storage == "dense":
+            dense.append((backend.name, step.size))
+        return run(backend, step, s, scaled, warm)
+
+    monkeypatch.setattr(step_solver, "_run_step", watched)
+    for engine in ("auto", "numpy"):
+        res = solve(ActuatorScene(200, 3.0, links=3000), tol=1e-3, engine=engine)
+        assert not res.converged and "theta > 180 deg" in res.reason
+    assert all(n <= step_solver.MAX_DENSE_FALLBACK for _, n in dense)

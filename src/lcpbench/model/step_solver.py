@@ -93,6 +93,12 @@ def _rigid_only(step, what: str) -> None:
 MAX_DENSE_FORM_BYTES = 2**30
 DENSE_COPIES = 5
 
+#: a back-end's fallback with dense storage (the active set's Lemke) is run on a step
+#: of at most this many free nodes: a dense pivoting step is O(n³), 0.08 s at n = 500,
+#: 0.5 s at 1000, 3.5 s at 1500 and ~90 s at 4000 (one core), where the step it stands
+#: in for is O(n). A larger step that the back-end cannot certify keeps its own status.
+MAX_DENSE_FALLBACK = 1000
+
 
 def dense_form_bytes(n: int) -> int:
     """Bytes the dense LCP form of a step with ``n`` free nodes holds at once."""
@@ -160,6 +166,16 @@ def step_residuals(step, u: np.ndarray) -> tuple[dict, np.ndarray]:
     return res, R
 
 
+def dense_fallback_refused(fallback: str, n: int) -> str | None:
+    """Why the fallback back-end ``fallback`` is not run on a step of ``n`` free nodes
+    (dense storage, ``n`` over :data:`MAX_DENSE_FALLBACK`), or None."""
+    if n <= MAX_DENSE_FALLBACK or get_backend(fallback).storage != "dense":
+        return None
+    return (f"its fallback {fallback} is not run on n = {n} free nodes: a dense "
+            f"pivoting step is O(n³) (about 0.5 s at n = 1000, 90 s at 4000), run up to "
+            f"n = {MAX_DENSE_FALLBACK}")
+
+
 def solve_step(step, solver: str | Backend = "auto", settings: str | Settings = "default",
                *, scaled: bool = True, warm: StepSolution | None = None) -> StepSolution:
     """Solve one contact step with any back-end; never raises on solver trouble."""
@@ -178,7 +194,10 @@ def solve_step(step, solver: str | Backend = "auto", settings: str | Settings = 
     except np.linalg.LinAlgError as exc:  # the residuals' own solve: H not positive definite
         sol.status = Status.FAILED
         sol.message = f"lcpbench's residuals could not be computed ({exc})"
-    if sol.status is not Status.SOLVED and backend.fallback:
+    if sol.status is not Status.SOLVED and backend.fallback and \
+            (why := dense_fallback_refused(backend.fallback, step.size)):
+        sol.message = f"{sol.message}; {why}" if sol.message else why
+    elif sol.status is not Status.SOLVED and backend.fallback:
         first = sol
         sol = solve_step(step, backend.fallback, s, scaled=scaled)
         sol.message = fallback_message(backend, first, sol)
