@@ -12,6 +12,8 @@ route with the bail reason given, and check the property that holds everywhere
 
 from __future__ import annotations
 
+import pytest
+
 from lcpbench import ActuatorScene, solve
 from lcpbench.model import compiled, large_n, step_solver
 from lcpbench.model.judge import force_tol
@@ -46,23 +48,29 @@ def test_a_round_off_bail_at_small_n_keeps_the_numpy_reference():
     assert out.converged and used == f"numpy (the compiled kernel stopped: {STEP_REJECTED})"
 
 
-def test_no_solve_at_n_3999_takes_a_dense_step(monkeypatch):
-    # whichever of these scenes bails on this machine, none may reach a dense Lemke
-    # step (the active set's fallback): the route of a bail is increments
-    dense = []
+@pytest.fixture
+def dense_steps(monkeypatch):
+    """The (back-end, free nodes) of every step a dense back-end is run on, as solved."""
+    seen = []
     run = step_solver._run_step
 
     def watched(backend, step, s, scaled, warm):
         if backend.storage == "dense":
-            dense.append((backend.name, step.size))
+            seen.append((backend.name, step.size))
         return run(backend, step, s, scaled, warm)
 
     monkeypatch.setattr(step_solver, "_run_step", watched)
+    return seen
+
+
+def test_no_solve_at_n_3999_takes_a_dense_step(dense_steps):
+    # whichever of these scenes bails on this machine, none may reach a dense Lemke
+    # step (the active set's fallback): the route of a bail is increments
     for theta, h in ((90, 2.0), (170, 5.0), (150, 3.0), (120, 1.0)):
         for tol in (1e-3, 1e-9):
             res = solve(ActuatorScene(theta, h, links=3999), tol=tol)
             assert res.converged, res.reason
-    assert dense == []
+    assert dense_steps == []
 
 
 def test_the_dense_fallback_is_refused_above_its_size():
@@ -72,19 +80,10 @@ def test_the_dense_fallback_is_refused_above_its_size():
     assert step_solver.dense_fallback_refused("active-set", 10**5) is None  # banded
 
 
-def test_past_the_vertical_at_n_3000_fails_fast_without_a_dense_step(monkeypatch):
+def test_past_the_vertical_at_n_3000_fails_fast_without_a_dense_step(dense_steps):
     # θ > 180°: the linearisation is singular at the end links and no scheme converges
     # (documented); before, each uncertified step fell back to dense Lemke, minutes
-    dense = []
-    run = step_solver._run_step
-
-    def watched(backend, step, s, scaled, warm):
-        if backend.storage == "dense":
-            dense.append((backend.name, step.size))
-        return run(backend, step, s, scaled, warm)
-
-    monkeypatch.setattr(step_solver, "_run_step", watched)
     for engine in ("auto", "numpy"):
         res = solve(ActuatorScene(200, 3.0, links=3000), tol=1e-3, engine=engine)
         assert not res.converged and "theta > 180 deg" in res.reason
-    assert all(n <= step_solver.MAX_DENSE_FALLBACK for _, n in dense)
+    assert all(n <= step_solver.MAX_DENSE_FALLBACK for _, n in dense_steps)
