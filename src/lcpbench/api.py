@@ -235,7 +235,7 @@ def in_increments(res: ContactResult, chain: Chain, make_step: Callable, *, back
     again = finish(res.scene, chain, out, solver=res.solver, method=method, tol=tol,
                    elapsed=res.time_s + time.perf_counter() - t0, settings=settings,
                    engine=used, compiled_judge=False, why=why, pressure_limit=pressure_limit)
-    told = (f"the answer in node heights was not certified ({judgement.reason}), and at "
+    told = (f"the judge in node heights did not certify the answer ({judgement.reason}); at "
             f"N = {chain.links} their round-off (cond H · ε = "
             f"{large_n.heights_condition(chain.links) * np.finfo(float).eps:.1e}) may reach "
             f"τ = {judgement.force_tol:.1e}")

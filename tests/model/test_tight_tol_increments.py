@@ -53,7 +53,7 @@ def test_the_rejected_answer_is_solved_again_in_increments_and_accepted(retried)
     assert retried.judgement.force_error_bound <= force_tol(TOL)
     assert retried.extra["judge"] == "numpy"  # judged in increments, as from LARGE_N
     assert "increments" in retried.extra["engine"]
-    assert "not certified" in retried.extra["increments"]
+    assert "did not certify" in retried.extra["increments"]
 
 
 def test_the_retried_force_is_the_independent_exact_step_of_the_rejected_answer(

@@ -140,7 +140,7 @@ def _builtin() -> list[Backend]:
     out = [
         _own("active-set", "qp", "banded", True, "active-set", "lcpbench.solvers.banded",
              "primal active set on the banded Cholesky factor, O(N) per change; "
-             "falls back to Lemke when it cannot certify (steps up to 1000 nodes)",
+             "falls back to Lemke when it cannot certify (a solve's steps: up to 1000 nodes)",
              fallback="lemke"),
         _own("lemke", "lcp", "dense", False, "pivoting", "lcpbench.solvers.lemke",
              "Lemke's complementary pivoting, lexicographic anti-cycling rule"),
