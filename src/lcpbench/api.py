@@ -168,30 +168,30 @@ def solve(
     make_step = partial(make_step_solver, name, settings, scaled) if step is None \
         else lambda: step
     out: DriverOutput | None
-    if kernel and name == DEFAULT and begin is None and method != "undamped" and \
-            direct(chain):  # drive()'s own route to the kernel, without the calls between
-        if not chain.channel:  # one wall: the kernels, the rest of the result when read
-            res = _one_wall(scene, chain, args, make_step, tol=tol, max_outer=max_outer,
-                            method=method, settings=settings, why=why,
-                            pressure_limit=pressure_limit, t0=t0)
-            return res if res.converged else in_increments(
-                res, chain, make_step, backend=name, settings=settings, engine=engine, tol=tol,
-                max_outer=max_outer, method=method, why=why, pressure_limit=pressure_limit)
-        out, used = run_kernel(chain, make_step, settings=settings, tol=tol,
-                               max_outer=max_outer, method=method, args=args)
+    # drive()'s own route to the kernel, without the calls between
+    route = kernel and name == DEFAULT and begin is None and method != "undamped" and \
+        direct(chain)
+    if route and not chain.channel:  # one wall: the kernels, the rest of the result when read
+        res = _one_wall(scene, chain, args, make_step, tol=tol, max_outer=max_outer,
+                        method=method, settings=settings, why=why,
+                        pressure_limit=pressure_limit, t0=t0)
     else:
-        out = solve_without_contact(chain, tol, max_outer, begin,
-                                    engine="compiled" if kernel else "numpy", args=args)
-        used = "compiled" if kernel else "numpy"
-        if out is None:
-            out, used = drive(chain, make_step(), backend=name, settings=settings,
-                              engine=engine, tol=tol, max_outer=max_outer, method=method,
-                              start=begin, args=args)
-    res = finish(scene, chain, out, solver=name, method=method, tol=tol,
-                 elapsed=time.perf_counter() - t0, settings=settings, engine=used,
-                 compiled_judge=kernel, why=why,
-                 judge_args=None if args is None else chain_args(chain, args),
-                 pressure_limit=pressure_limit)
+        if route:
+            out, used = run_kernel(chain, make_step, settings=settings, tol=tol,
+                                   max_outer=max_outer, method=method, args=args)
+        else:
+            out = solve_without_contact(chain, tol, max_outer, begin,
+                                        engine="compiled" if kernel else "numpy", args=args)
+            used = "compiled" if kernel else "numpy"
+            if out is None:
+                out, used = drive(chain, make_step(), backend=name, settings=settings,
+                                  engine=engine, tol=tol, max_outer=max_outer, method=method,
+                                  start=begin, args=args)
+        res = finish(scene, chain, out, solver=name, method=method, tol=tol,
+                     elapsed=time.perf_counter() - t0, settings=settings, engine=used,
+                     compiled_judge=kernel, why=why,
+                     judge_args=None if args is None else chain_args(chain, args),
+                     pressure_limit=pressure_limit)
     return res if res.converged else in_increments(
         res, chain, make_step, backend=name, settings=settings, engine=engine, tol=tol,
         max_outer=max_outer, method=method, why=why, pressure_limit=pressure_limit)

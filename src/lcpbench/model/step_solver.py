@@ -194,16 +194,16 @@ def solve_step(step, solver: str | Backend = "auto", settings: str | Settings = 
     except np.linalg.LinAlgError as exc:  # the residuals' own solve: H not positive definite
         sol.status = Status.FAILED
         sol.message = f"lcpbench's residuals could not be computed ({exc})"
-    if sol.status is not Status.SOLVED and backend.fallback and \
-            (why := dense_fallback_refused(backend.fallback, step.size)):
-        sol.message = f"{sol.message}; {why}" if sol.message else why
-    elif sol.status is not Status.SOLVED and backend.fallback:
-        first = sol
-        sol = solve_step(step, backend.fallback, s, scaled=scaled)
-        sol.message = fallback_message(backend, first, sol)
-        sol.iterations += first.iterations
-        sol.solve_time += first.solve_time
-        sol.backend = f"{backend.name}>{backend.fallback}"
+    if sol.status is not Status.SOLVED and backend.fallback:
+        if why := dense_fallback_refused(backend.fallback, step.size):
+            sol.message = f"{sol.message}; {why}" if sol.message else why
+        else:
+            first = sol
+            sol = solve_step(step, backend.fallback, s, scaled=scaled)
+            sol.message = fallback_message(backend, first, sol)
+            sol.iterations += first.iterations
+            sol.solve_time += first.solve_time
+            sol.backend = f"{backend.name}>{backend.fallback}"
     sol.wall_time = time.perf_counter() - t0
     return sol
 

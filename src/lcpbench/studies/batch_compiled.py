@@ -22,8 +22,7 @@ import time
 
 from ..api import finish
 from ..model import large_n
-from ..model.angle_step import in_reach, load_parameter
-from ..model.compiled import applies, drive, kernel_args, reference, run_compiled
+from ..model.compiled import applies, drive, heavy, kernel_args, reference, run_compiled
 from ..model.driver import DriverStart
 from ..model.judge_compiled import chain_args
 from ..model.result import ContactResult
@@ -51,13 +50,6 @@ def _predict(solved: Solved, scene: ActuatorScene) -> DriverStart | None:
     return None if got is None else DriverStart(got[0], got[1].extra.get("last_step"))
 
 
-def moderately_heavy(chain) -> bool:
-    """Whether :func:`lcpbench.model.compiled.drive` may take SQP steps in the angles."""
-    from ..model.heavy_driver import MODERATE
-
-    return in_reach(chain) and load_parameter(chain) >= MODERATE
-
-
 def _solve_one(scene, tol: float, max_outer: int, settings: str,
                start: DriverStart | None, const: dict) -> ContactResult:
     """:func:`lcpbench.solve` for an already checked scene, in the kernels.
@@ -75,7 +67,7 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
     out = solve_without_contact(chain, tol, max_outer, start,
                                 engine="compiled" if kernel else "numpy", args=args)
     used = "compiled" if kernel else "numpy"
-    if out is None and (not kernel or moderately_heavy(chain)):
+    if out is None and (not kernel or heavy(chain)):
         # large N, a layout the kernel does not take, or a heavy chain (SQP steps in the
         # angles, first or as the rescue): solve()'s choice, in model.compiled.drive
         out, used = drive(chain, make_step_solver(DEFAULT, settings, True), backend=DEFAULT,

@@ -19,11 +19,10 @@ import time
 import numpy as np
 
 from ..model import large_n
-from ..model.compiled import applies, kernel_args
+from ..model.compiled import applies, heavy, kernel_args
 from ..model.result import ContactResult
 from ..solvers.judge import DEFAULT_TOL
 from ..solvers.registry import DEFAULT, get_settings
-from .batch_compiled import moderately_heavy
 from .batch_result import LineOutput, results
 from .continuation import _POINTS
 
@@ -48,7 +47,7 @@ def _kernel():
 def takes_line(chain) -> bool:
     """Whether the line kernel takes a line of one plane whose chains are like ``chain``."""
     return (applies(DEFAULT, "globalised", chain) and not large_n.applies(chain)
-            and not chain.channel and not moderately_heavy(chain))
+            and not chain.channel and not heavy(chain))
 
 
 def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = "default",
