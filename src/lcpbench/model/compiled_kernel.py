@@ -199,16 +199,19 @@ def _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, 
         bands[1, i] = o1 if i < n - 1 else 0.0
         bands[2, i] = o2 if i < n - 2 else 0.0
         linear[i] = ln - nodal_load[i]
-    y = 0.0  # the node heights (model.chain.heights), the free ones are the origin
-    if fs == 1:
+    y = lost = 0.0  # the node heights, compensated (model.chain.compensated_heights);
+    if fs == 1:  # the free ones are the origin
         origin[0] = 0.0
     for i in range(links):
-        y += a * sines[i]
+        term = a * sines[i]
+        y1 = y + term
+        lost += (y - y1) + term if abs(y) >= abs(term) else (term - y1) + y
+        y = y1
         if fs - 1 <= i + 1 < fs - 1 + n:
-            origin[i + 1 - (fs - 1)] = y
+            origin[i + 1 - (fs - 1)] = y + lost
     alpha0[:] = alpha
     if fs - 1 + n - 1 < links:  # the right end is pinned: close the chain
-        alpha0[links - 1] += -y * inv[links - 1]
+        alpha0[links - 1] += -(y + lost) * inv[links - 1]
     for j in range(nj):
         phi_origin[j] = alpha0[jr[j]] - (alpha0[jl[j]] if jl[j] >= 0 else 0.0)
 

@@ -55,8 +55,8 @@ SETTLED, NOT_SETTLED = 0, 1
 # node index, node + 1). The certificate's suffix sums reuse the step's rows, which
 # are spent by then.
 (X, Y, COS, INV, V, ALPHA0, DIAG, OFF1, OFF2, LIN, C0, C1, C2, PHI0, ORIGIN, LINEAR, U, NET,
- SCALE, ROUNDOFF, NOISE, RHS, HY, HG, HGA, JU, JLO, SIZE) = range(28)
-ROWS = 28
+ SCALE, ROUNDOFF, NOISE, RHS, HY, HG, HGA, JU, JLO, SIZE, YC) = range(29)
+ROWS = 29
 FORCE, F_SUM, FX_SUM, P_SUM, PX_SUM = DIAG, OFF1, OFF2, LIN, HY
 # a node's place in the judge step's contact set
 FREE, UP, LO = 0, 1, 2
@@ -65,17 +65,22 @@ FREE, UP, LO = 0, 1, 2
 # -- the chain's exact geometry (model.chain) ------------------------------------------
 @njit(cache=True)
 def _positions(alpha, a, w):
-    """Node positions x, y (rows X, Y), cos α (row COS) and tan α − α (row V)."""
-    x, y, cs, v = w[X], w[Y], w[COS], w[V]
-    x[0] = y[0] = 0.0
-    sx = sy = 0.0
+    """Node positions x, y (rows X, Y, as model.chain.node_positions), cos α (row COS),
+    tan α − α (row V), and the heights summed with compensation (row YC, the judge
+    step's linearisation point and closure, as model.step)."""
+    x, y, cs, v, yc = w[X], w[Y], w[COS], w[V], w[YC]
+    x[0] = y[0] = yc[0] = 0.0
+    sx = sy = lost = 0.0
     for i in range(alpha.size):
         c, s = np.cos(alpha[i]), np.sin(alpha[i])
         cs[i] = c
         v[i] = s / c - alpha[i]  # tan α − α, on the cos and sin at hand
         sx += a * c
-        sy += a * s
-        x[i + 1], y[i + 1] = sx, sy
+        term = a * s
+        y1 = sy + term
+        lost += (sy - y1) + term if abs(sy) >= abs(term) else (term - y1) + sy
+        sy = y1
+        x[i + 1], y[i + 1], yc[i + 1] = sx, sy, sy + lost
 
 
 @njit(cache=True)
@@ -147,7 +152,7 @@ def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, w, bands):
         lin[p] += c0 * t
         lin[p + 1] += c1 * t
         lin[p + 2] += c2 * t
-    y, origin, alpha0, phi_origin, linear = w[Y], w[ORIGIN], w[ALPHA0], w[PHI0], w[LINEAR]
+    y, origin, alpha0, phi_origin, linear = w[YC], w[ORIGIN], w[ALPHA0], w[PHI0], w[LINEAR]
     for i in range(n):
         origin[i] = y[fs - 1 + i]
     for i in range(links):

@@ -30,7 +30,10 @@ from numba import njit
 
 from ..linalg.twisted_kernel import face_solve as _face_solve
 from ..linalg.twisted_kernel import resolve as _resolve
-from .compiled_dual import wall_residuals  # the judge's rows, one copy (numba_cache)
+from .compiled_dual import EPS, wall_residuals  # the judge's rows, one copy (numba_cache)
+
+#: model.judge.ROUNDOFF_ULPS: a residual below it stays where the heights are completed
+ROUNDOFF_ULPS = 64.0
 
 
 @njit(cache=True)
@@ -67,17 +70,20 @@ def assemble_into(alpha, a, k, sk, rest, load, lower, upper, inv_a_cos, coef, or
     ``work``: (n,)."""
     nl = alpha.size
     n = nl - 1
-    y = 0.0
+    y = lost = 0.0
     for i in range(nl):
         c = math.cos(alpha[i])
         inv_a_cos[i] = 1.0 / (a * c)
         alpha0[i] = alpha[i]
         sa = math.sin(alpha[i])
         sin_alpha[i] = sa
-        y += a * sa
+        term = a * sa  # the heights compensated (model.chain.compensated_heights)
+        y1 = y + term
+        lost += (y - y1) + term if abs(y) >= abs(term) else (term - y1) + y
+        y = y1
         if i < n:
-            origin[i] = y  # the height of free node i + 1
-    alpha0[nl - 1] += -y * inv_a_cos[nl - 1]  # the closure error of the pinned end
+            origin[i] = y + lost  # the height of free node i + 1
+    alpha0[nl - 1] += -(y + lost) * inv_a_cos[nl - 1]  # the closure error of the pinned end
     for j in range(n):
         wl, wr = inv_a_cos[j], inv_a_cos[j + 1]
         coef[j, 0] = wl
@@ -287,8 +293,12 @@ def residuals(u, coef, k, phi_origin, rest, load, origin, rows, bands, linear, l
             if not (np.isfinite(hi[i]) or np.isfinite(lo[i])):
                 idx[q] = i
                 q += 1
-        grad = np.empty(n)
+        grad, scale = np.empty(n), np.empty(n)
         gradient(coef, k, phi_origin, rest, load, origin, u2, grad, m)
+        gradient_scale(coef, k, phi_origin, rest, load, origin, u2, scale, m)
+        for i in range(n):  # a residual at round-off stays (see the reference)
+            if abs(grad[i]) <= ROUNDOFF_ULPS * EPS * scale[i]:
+                grad[i] = 0.0
         a = 0
         for q in range(1, nfree + 1):  # runs of idx two or more nodes apart: blocks
             if q == nfree or idx[q] - idx[q - 1] > 2:

@@ -32,6 +32,7 @@ import numpy as np
 from ..errors import ProblemError
 from ..linalg import banded_matvec, solveh_banded, sub_bands
 from ..problems.scenes import Chain
+from .chain import compensated_heights
 
 
 @dataclass
@@ -306,10 +307,11 @@ def assemble_step(chain: Chain, alpha: np.ndarray) -> ContactStep:
     for m in range(2):
         off1[b0 + m : b0 + m + nj] += k * coef[:, m] * coef[:, m + 1]
     off2[b0 : b0 + nj] += k * coef[:, 0] * coef[:, 2]
-    # The linearisation point: u₀ = heights by forward kinematics. If the chain is
-    # not closed on a pinned right end (the undamped iteration), the last link's
-    # linearised angle at u₀ differs from α_N by the closure error.
-    y = np.concatenate(([0.0], np.cumsum(chain.link_length * np.sin(alpha))))
+    # The linearisation point: u₀ = heights by forward kinematics, summed with
+    # compensation (chain.compensated_heights). If the chain is not closed on a pinned
+    # right end (the undamped iteration), the last link's linearised angle at u₀
+    # differs from α_N by the closure error y_N.
+    y = np.concatenate(([0.0], compensated_heights(chain.link_length * np.sin(alpha))))
     origin = y[chain.free_nodes]
     alpha0 = np.asarray(alpha, dtype=float).copy()
     if chain.free_nodes[-1] < chain.links:
