@@ -303,7 +303,7 @@ def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_ou
     code = got[0]
     if code in _BAIL:
         out, used = reference(chain, make_step, _BAIL[code], tol=tol, max_outer=max_outer,
-                              method=method)
+                              method=method, settings=settings)
         return finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol,
                       elapsed=time.perf_counter() - t0, settings=settings, engine=used,
                       compiled_judge=True, why=why, judge_args=chain_args(chain, args),

@@ -48,6 +48,19 @@ def test_a_round_off_bail_at_small_n_keeps_the_numpy_reference():
     assert out.converged and used == f"numpy (the compiled kernel stopped: {STEP_REJECTED})"
 
 
+def test_the_route_asks_the_steps_accuracy_of_the_settings():
+    # N = 140: cond H · ε = (2N/π)⁴ ε ≈ 1.4e-8 lies between settings "high" (1e-9) and the
+    # default (1e-6): heights may keep a step from 1e-9, not from 1e-6
+    assert compiled.step_request("default") == 1e-6 and compiled.step_request("high") == 1e-9
+    chain = ActuatorScene(150, 3.0, links=140).chain()
+    cond_eps = large_n.heights_condition(chain.links) * 2.0**-52
+    assert 1e-9 < cond_eps < 1e-6
+    out, used = compiled.reference(chain, lambda: make_step_solver("active-set", "high", True),
+                                   STEP_REJECTED, tol=1e-3, max_outer=200,
+                                   method="globalised", settings="high")
+    assert out.converged and "increments" in used
+
+
 @pytest.fixture
 def dense_steps(monkeypatch):
     """The (back-end, free nodes) of every step a dense back-end is run on, as solved."""

@@ -216,7 +216,14 @@ def run_kernel(chain: Chain, make_step: Callable[[], Callable], *, settings, tol
     if out is not None:
         return out, "compiled"
     return reference(chain, make_step, why, tol=tol, max_outer=max_outer, method=method,
-                     start=start)
+                     start=start, settings=settings)
+
+
+def step_request(settings) -> float:
+    """The accuracy the kernel asks of each step (its step judge's request): the
+    settings' ``eps``, else ``DEFAULT_TOL``."""
+    eps = get_settings(settings).eps
+    return DEFAULT_TOL if eps is None else float(eps)
 
 
 #: the kernel's bail reasons that the round-off of node heights can cause
@@ -224,18 +231,20 @@ ROUNDOFF_BAILS = frozenset((_BAIL[12], _BAIL[14], _BAIL[15]))
 
 
 def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol: float,
-              max_outer: int, method: str, start: DriverStart | None = None
-              ) -> tuple[DriverOutput, str]:
+              max_outer: int, method: str, start: DriverStart | None = None,
+              settings="default") -> tuple[DriverOutput, str]:
     """The whole solve in the numpy reference, where the kernel stopped (``why``, one of
     its bail reasons): the answer and the engine that produced it.
 
     Where the reason is one that round-off of node heights can cause
     (:data:`ROUNDOFF_BAILS`) and cond H · ε reaches the step's own accuracy
-    (``DEFAULT_TOL``, N ≳ 400; :func:`lcpbench.model.large_n.roundoff_may_limit`), the
+    (:func:`step_request` of ``settings``, the kernel's: 1e-6 by default, N ≳ 400;
+    :func:`lcpbench.model.large_n.roundoff_may_limit`), the
     solve runs in increments on the tridiagonal factor instead, as from ``LARGE_N``
     links: the numpy reference in heights would meet the same round-off, and its step
     solver then falls back to a dense Lemke step, O(N³) (97 s at N = 3999)."""
-    if why in ROUNDOFF_BAILS and large_n.roundoff_may_limit(chain, DEFAULT_TOL, method):
+    if why in ROUNDOFF_BAILS and large_n.roundoff_may_limit(chain, step_request(settings),
+                                                            method):
         from dataclasses import replace
 
         from .large_driver import run_large
@@ -349,7 +358,7 @@ def call_kernel(chain: Chain, *, tol: float, max_outer: int, start: DriverStart 
     k = _KERNEL[0] if _KERNEL else _load_kernel()
     s = get_settings(settings)
     n = chain.free_nodes.size
-    request = s.eps if s.eps is not None else DEFAULT_TOL
+    request = step_request(s)
     max_iter = s.max_iter if s.max_iter else 20 * n + 50
     s_alpha, w_u, w_up, w_lo, flags = _warm(start, n)
     if args is None:

@@ -81,7 +81,7 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
         if out is None:  # the kernel left the reference's path: the numpy reference
             out, used = reference(chain, lambda: make_step_solver(DEFAULT, settings, True),
                                   why, tol=tol, max_outer=max_outer, method="globalised",
-                                  start=start)
+                                  start=start, settings=settings)
     return finish(scene, chain, out, solver=DEFAULT, method="globalised", tol=tol,
                   elapsed=time.perf_counter() - t0, settings=settings, engine=used,
                   compiled_judge=kernel, why=AUTO_WHY,
