@@ -110,16 +110,20 @@ def conditions(scene, small, kernel_data, aot) -> dict:
 
 
 def timed_solves(scene, before: dict, repeat: int) -> dict:
-    times: dict[str, list[float]] = {name: [] for name in before}
-    names = list(before)
-    for r in range(repeat + 1):  # round 0: warm-up, not recorded
-        for name in names[r % len(names):] + names[:r % len(names)]:
-            before[name]()
+    """Each condition, then one timed solve, interleaved by perf.py's
+    :func:`interleaved` (rotating order, one warm-up round, the collector off)."""
+    from perf import interleaved
+
+    def after(condition):
+        def run():
+            condition()
             t0 = time.perf_counter()
             lcpbench.solve(scene, tol=TOL)
-            if r:
-                times[name].append(time.perf_counter() - t0)
-    return times
+            return time.perf_counter() - t0, None
+        return run
+
+    runs = interleaved({name: after(c) for name, c in before.items()}, repeat, warmup=1)
+    return {name: r["times"] for name, r in runs.items()}
 
 
 def _replayed_solve(scene):
