@@ -66,7 +66,9 @@ def energy(chain: Chain, alpha: np.ndarray) -> float:
 
 
 def heights(chain: Chain, alpha: np.ndarray) -> np.ndarray:
-    """Heights of the free nodes (the unknowns u of the contact step)."""
+    """Heights of the free nodes (the unknowns u of the contact step), a plain running
+    sum as :func:`node_positions`; a step's linearisation point sums them with
+    compensation (:func:`compensated_heights`), equal to a few ulps of |y| more."""
     return node_positions(chain, alpha)[1][chain.free_nodes]
 
 

@@ -120,8 +120,8 @@ def dense_form_too_large(n: int) -> str | None:
 def _complete_heights(step, u: np.ndarray) -> np.ndarray:
     """Re-solve exactly the heights of the nodes that have no wall row.
 
-    In increments (large N, a step with its own factor) a node whose residual is at
-    round-off (ROUNDOFF_ULPS ε of its terms) is not moved: the re-solve holds the
+    In increments (large N, a step with its own factor) the residual of a node that is
+    at round-off (ROUNDOFF_ULPS ε of its terms) is left as it is: the re-solve holds the
     nodes at the ends of each run, and at N = 10⁵ a run of 10⁴ nodes turns
     residuals of 10⁻¹¹ N into 4·10⁻⁸ N on its end nodes (free nodes reported
     pulling, four times what the judge allows at tol 1e-9)."""
