@@ -33,7 +33,7 @@ import numpy as np
 from ..errors import ProblemError
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
-from ..solvers.judge import DEFAULT_TOL
+from ..solvers.judge import requested
 from ..solvers.registry import DEFAULT, get_settings
 from . import angle_step, compiled_driver, heavy_driver, large_n, wall_free
 from .driver import DriverOutput, DriverStart, StepRecord, _converged, _fail, run_driver
@@ -222,8 +222,7 @@ def run_kernel(chain: Chain, make_step: Callable[[], Callable], *, settings, tol
 def step_request(settings) -> float:
     """The accuracy the kernel asks of each step (its step judge's request): the
     settings' ``eps``, else ``DEFAULT_TOL``."""
-    eps = get_settings(settings).eps
-    return DEFAULT_TOL if eps is None else float(eps)
+    return float(requested(get_settings(settings)))
 
 
 #: the kernel's bail reasons that the round-off of node heights can cause

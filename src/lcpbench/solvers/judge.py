@@ -31,10 +31,14 @@ DEFAULT_TOL = 1e-6
 FLOOR_ULPS = 256
 
 
+def requested(settings: Settings) -> float:
+    """The accuracy asked of each step: the settings' ``eps``, else DEFAULT_TOL."""
+    return settings.eps if settings.eps is not None else DEFAULT_TOL
+
+
 def accept_tol(settings: Settings, size: float = 0.0) -> float:
     """Largest natural residual accepted as SOLVED; ``size`` is S above."""
-    request = settings.eps if settings.eps is not None else DEFAULT_TOL
-    return max(ACCEPT_FACTOR * request, FLOOR_ULPS * EPS * size)
+    return max(ACCEPT_FACTOR * requested(settings), FLOOR_ULPS * EPS * size)
 
 
 def verdict(status: Status, natural: float, bound: float) -> tuple[Status, str]:

@@ -21,7 +21,7 @@ import numpy as np
 from ..model import large_n
 from ..model.compiled import applies, heavy, kernel_args
 from ..model.result import ContactResult
-from ..solvers.judge import DEFAULT_TOL
+from ..solvers.judge import requested
 from ..solvers.registry import DEFAULT, get_settings
 from .batch_result import LineOutput, results
 from .continuation import _POINTS
@@ -76,7 +76,7 @@ def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = 
     height = np.array([s.height for s in scenes], dtype=float)
     kern = _kernel()
     st = get_settings(settings)
-    request = st.eps if st.eps is not None else DEFAULT_TOL
+    request = requested(st)
     max_iter = st.max_iter if st.max_iter else 20 * n + 50
     sizes = {"links": c0.links, "n": n, "nj": nj, "stats": len(kern.STATS)}
     most = _POINTS.get(predictor, 0)
