@@ -357,7 +357,7 @@ def call_kernel(chain: Chain, *, tol: float, max_outer: int, start: DriverStart 
     k = _KERNEL[0] if _KERNEL else _load_kernel()
     s = get_settings(settings)
     n = chain.free_nodes.size
-    request = step_request(s)
+    request = requested(s)
     max_iter = s.max_iter if s.max_iter else 20 * n + 50
     s_alpha, w_u, w_up, w_lo, flags = _warm(start, n)
     if args is None:

@@ -75,6 +75,7 @@ from .compiled_dual import (
     _judge,
     _refactor,
     _residuals,
+    add_compensated,
 )
 
 NEWTON_SWITCH = 0.05  # model.driver.NEWTON_SWITCH (rad)
@@ -203,10 +204,7 @@ def _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, 
     if fs == 1:  # the free ones are the origin
         origin[0] = 0.0
     for i in range(links):
-        term = a * sines[i]
-        y1 = y + term
-        lost += (y - y1) + term if abs(y) >= abs(term) else (term - y1) + y
-        y = y1
+        y, lost = add_compensated(y, lost, a * sines[i])
         if fs - 1 <= i + 1 < fs - 1 + n:
             origin[i + 1 - (fs - 1)] = y + lost
     alpha0[:] = alpha

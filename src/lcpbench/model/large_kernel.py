@@ -30,7 +30,7 @@ from numba import njit
 
 from ..linalg.twisted_kernel import face_solve as _face_solve
 from ..linalg.twisted_kernel import resolve as _resolve
-from .compiled_dual import EPS, wall_residuals  # the judge's rows, one copy (numba_cache)
+from .compiled_dual import EPS, add_compensated, wall_residuals  # one copy (numba_cache)
 
 #: model.judge.ROUNDOFF_ULPS: a residual below it stays where the heights are completed
 ROUNDOFF_ULPS = 64.0
@@ -77,10 +77,7 @@ def assemble_into(alpha, a, k, sk, rest, load, lower, upper, inv_a_cos, coef, or
         alpha0[i] = alpha[i]
         sa = math.sin(alpha[i])
         sin_alpha[i] = sa
-        term = a * sa  # the heights compensated (model.chain.compensated_heights)
-        y1 = y + term
-        lost += (y - y1) + term if abs(y) >= abs(term) else (term - y1) + y
-        y = y1
+        y, lost = add_compensated(y, lost, a * sa)  # model.chain.compensated_heights
         if i < n:
             origin[i] = y + lost  # the height of free node i + 1
     alpha0[nl - 1] += -(y + lost) * inv_a_cos[nl - 1]  # the closure error of the pinned end
