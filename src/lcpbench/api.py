@@ -337,7 +337,8 @@ def _built(scene, chain, got: tuple, kernel_s: float, name: str, *, method: str,
            max_outer: int, elapsed: float, settings, why, pressure_limit, judged
            ) -> ContactResult:
     """The complete result of :func:`_one_wall`, judged by ``judged``."""
-    out = kernel_output(chain, *got, elapsed=kernel_s, settings=name, max_outer=max_outer)
+    out = kernel_output(chain, *got, elapsed=kernel_s, settings=name, max_outer=max_outer,
+                        tol=tol)
     return finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol, elapsed=elapsed,
                   settings=settings, engine="compiled", compiled_judge=True, why=why,
                   judged_by=judged, pressure_limit=pressure_limit)

@@ -36,7 +36,15 @@ from ..solvers.base import Status, StepSolution
 from ..solvers.judge import requested
 from ..solvers.registry import DEFAULT, get_settings
 from . import angle_step, compiled_driver, heavy_driver, large_n, wall_free
-from .driver import DriverOutput, DriverStart, StepRecord, _converged, _fail, run_driver
+from .driver import (
+    DriverOutput,
+    DriverStart,
+    StepRecord,
+    _converged,
+    _fail,
+    out_of_iterations,
+    run_driver,
+)
 from .profile import has_profile
 
 #: ``engine`` of :func:`lcpbench.solve`: "auto" (the kernel where it applies, numpy
@@ -347,7 +355,8 @@ def run_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
     code = got[0]
     if code in _BAIL:
         return None, _BAIL[code]
-    return kernel_output(chain, *got, elapsed=elapsed, settings=name, max_outer=max_outer), ""
+    return kernel_output(chain, *got, elapsed=elapsed, settings=name, max_outer=max_outer,
+                         tol=tol), ""
 
 
 def call_kernel(chain: Chain, *, tol: float, max_outer: int, start: DriverStart | None,
@@ -370,7 +379,7 @@ def call_kernel(chain: Chain, *, tol: float, max_outer: int, start: DriverStart 
 
 def kernel_output(chain: Chain, code: int, alpha, r_up, r_lo, u, sigma, rec, count: int, res,
                   R, *, elapsed: float, settings: str, max_outer: int,
-                  reason: str = "converged") -> DriverOutput:
+                  reason: str = "converged", tol: float | None = None) -> DriverOutput:
     """The DriverOutput of the solve kernel's outputs (the tuple
     :func:`compiled_kernel.solve_chain` returns, ``code`` not a bail code), built by the
     driver's own helpers: the one place for a single solve (:func:`run_compiled`,
@@ -379,7 +388,8 @@ def kernel_output(chain: Chain, code: int, alpha, r_up, r_lo, u, sigma, rec, cou
 
     ``rec``: the step records, ``count`` of them from column 0; ``elapsed``: the
     kernel's wall time, shared evenly over the steps; ``settings``: the settings'
-    name; ``reason``: of a converged answer (the wall-free search's says so)."""
+    name; ``reason``: of a converged answer (the wall-free search's says so); ``tol``:
+    the requested one, for the reason of a run out of iterations."""
     k = _KERNEL[0] if _KERNEL else _load_kernel()
     n = chain.free_nodes.size
     share = elapsed / max(count, 1)
@@ -409,8 +419,7 @@ def kernel_output(chain: Chain, code: int, alpha, r_up, r_lo, u, sigma, rec, cou
     if code == k.LINE_SEARCH:
         return _fail(alpha, n, steps, "line search failed: no decrease of the energy along "
                                       "the step")
-    return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
-                                  f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
+    return out_of_iterations(alpha, n, steps, max_outer, tol)
 
 
 _SOLVED = Status.SOLVED.value

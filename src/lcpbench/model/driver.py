@@ -24,6 +24,7 @@ definite: quadratic instead of linear convergence near the answer.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -99,10 +100,55 @@ def _fail(alpha, n, steps, reason) -> DriverOutput:
     return DriverOutput(alpha, zero, zero.copy(), False, reason, steps)
 
 
-def out_of_iterations(alpha, n: int, steps: list[StepRecord], max_outer: int) -> DriverOutput:
-    """The answer of a driver that ran its ``max_outer`` outer iterations."""
-    return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
-                                  f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
+#: Outer iterations without a new low of max|Δα| (halving the best before them) after
+#: which a run out of iterations is reported as stalled. A linear contraction as slow
+#: as 0.93 per step still halves it in 10.
+STALL_STEPS = 10
+#: A stall at or below this max|Δα| (rad) is the accuracy of the contact steps (their
+#: round-off, or a back-end's own tolerance): the nodes then move by less than 1e-10 of
+#: the chain's length per step, far below any physical meaning of the answer.
+STEP_ACCURACY_DALPHA = 1e-10
+
+
+def stall(steps: list[StepRecord]) -> tuple[float, int] | None:
+    """``(best, since)`` when the outer iteration stalled: the smallest max|Δα| of all
+    steps, ``best``, was not halved over the last :data:`STALL_STEPS` steps; ``since``
+    is the first outer iteration (from 1) within a factor 2 of it. None when it was
+    still falling, or the run is shorter than twice :data:`STALL_STEPS`."""
+    d = [s.max_dalpha for s in steps]
+    if len(d) < 2 * STALL_STEPS or not all(map(math.isfinite, d)):
+        return None
+    before, recent = min(d[:-STALL_STEPS]), min(d[-STALL_STEPS:])
+    if recent < 0.5 * before:
+        return None
+    best = min(before, recent)
+    return best, next(i for i, v in enumerate(d) if v <= 2.0 * best) + 1
+
+
+def _round_up(x: float) -> float:
+    """``x`` rounded up to two significant digits (a tol to ask for is above it)."""
+    unit = 10.0 ** (math.floor(math.log10(x)) - 1)
+    return math.ceil(x / unit) * unit
+
+
+def out_of_iterations(alpha, n: int, steps: list[StepRecord], max_outer: int,
+                      tol: float | None = None) -> DriverOutput:
+    """The answer of a driver that ran its ``max_outer`` outer iterations. Its reason
+    says when max|Δα| had stalled (:func:`stall`); below :data:`STEP_ACCURACY_DALPHA`,
+    that this is the accuracy of the steps and, if ``tol`` is below it, what to ask for."""
+    reason = (f"no convergence in {max_outer} outer iterations "
+              f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
+    stalled = stall(steps)
+    if stalled is not None:
+        best, since = stalled
+        reason += (f": max|Δα| stalled, no lower than {best:.2e} rad since outer "
+                   f"iteration {since}")
+        if best <= STEP_ACCURACY_DALPHA:
+            reason += ", the accuracy of the contact steps"
+            if tol is not None and tol < best:
+                reason += (f"; tol = {tol:.3g} rad is below it, ask for more than "
+                           f"{_round_up(2.0 * best):.1e} rad")
+    return _fail(alpha, n, steps, reason)
 
 
 def run_driver(
@@ -225,7 +271,7 @@ def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int,
         warm = sol
         if dalpha < tol:
             return _converged(chain, alpha, sol, steps, step)
-    return out_of_iterations(alpha, n, steps, max_outer)
+    return out_of_iterations(alpha, n, steps, max_outer, tol)
 
 
 def armijo(chain: Chain, trial_of, E: float, slope: float, noise: float):
@@ -276,4 +322,4 @@ def _undamped(chain: Chain, solver: StepSolver, tol: float, max_outer: int) -> D
         warm = sol
         if dalpha < tol:
             return _converged(chain, alpha, sol, steps, step)
-    return out_of_iterations(alpha, n, steps, max_outer)
+    return out_of_iterations(alpha, n, steps, max_outer, tol)

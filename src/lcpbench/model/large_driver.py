@@ -34,6 +34,7 @@ from .driver import (
     _setup,
     _step_failed,
     line_search_failed,
+    out_of_iterations,
 )
 from .judge import NODE_GROSS, _contraction
 from .large_n import StepWork, energy_of, increments_at, trial_of
@@ -104,8 +105,7 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
         if move is not None:
             warm.reach = max(1, move // REACH_SHARE)  # read by the dual walk's solve_step
         alpha, E = trial, E_t
-    return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
-                                  f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
+    return out_of_iterations(alpha, n, steps, max_outer, tol)
 
 
 def _armijo(at, E: float, slope: float, noise: float):

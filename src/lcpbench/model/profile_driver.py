@@ -41,6 +41,7 @@ from .driver import (
     _fail,
     _setup,
     _step_failed,
+    out_of_iterations,
     starting_point,
 )
 from .judge import split_reactions
@@ -193,5 +194,4 @@ def run_profile_driver(chain: Chain, solver, *, tol: float, max_outer: int, meth
             mu_up, mu_lo = split_reactions(at, net, sol.u)
         if dalpha < tol and _penetration(chain, alpha) <= GEOMETRY_SLACK * ell:
             return _converged(walls_at(chain, alpha), alpha, sol, steps, step)
-    return _fail(alpha, n, steps, f"no convergence in {max_outer} outer iterations "
-                                  f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
+    return out_of_iterations(alpha, n, steps, max_outer, tol)

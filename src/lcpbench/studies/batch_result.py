@@ -93,7 +93,7 @@ def driver_output(line: LineOutput, row: int, chain) -> DriverOutput:
                          A["records"][:, off:off + count], count, A["o_res"][row],
                          A["o_R"][row], elapsed=line.time_s,
                          settings=get_settings(line.settings).name,
-                         max_outer=line.max_outer, reason=reason)
+                         max_outer=line.max_outer, reason=reason, tol=line.tol)
 
 
 def _judged(line: LineOutput, row: int):
