@@ -379,7 +379,7 @@ def call_kernel(chain: Chain, *, tol: float, max_outer: int, start: DriverStart 
 
 def kernel_output(chain: Chain, code: int, alpha, r_up, r_lo, u, sigma, rec, count: int, res,
                   R, *, elapsed: float, settings: str, max_outer: int,
-                  reason: str = "converged", tol: float | None = None) -> DriverOutput:
+                  tol: float, reason: str = "converged") -> DriverOutput:
     """The DriverOutput of the solve kernel's outputs (the tuple
     :func:`compiled_kernel.solve_chain` returns, ``code`` not a bail code), built by the
     driver's own helpers: the one place for a single solve (:func:`run_compiled`,

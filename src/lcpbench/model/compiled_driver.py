@@ -167,7 +167,7 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
         warm = sol
         if dalpha < tol:
             return _converged(chain, alpha, sol, steps, step)
-    return out_of_iterations(alpha, n, steps, max_outer)
+    return out_of_iterations(alpha, n, steps, max_outer, tol)
 
 
 

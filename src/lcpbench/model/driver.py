@@ -111,43 +111,38 @@ STEP_ACCURACY_DALPHA = 1e-10
 
 
 def stall(steps: list[StepRecord]) -> tuple[float, int] | None:
-    """``(best, since)`` when the outer iteration stalled: the smallest max|Δα| of all
-    steps, ``best``, was not halved over the last :data:`STALL_STEPS` steps; ``since``
-    is the first outer iteration (from 1) within a factor 2 of it. None when it was
+    """``(level, since)`` when the outer iteration stalled: the smallest max|Δα| of the
+    last :data:`STALL_STEPS` steps, ``level``, is not below half the smallest before
+    them (no new low: a contraction even as slow as 0.93 per step makes one); ``since``
+    is the first outer iteration (from 1) at or below twice ``level``. None when it was
     still falling, or the run is shorter than twice :data:`STALL_STEPS`."""
     d = [s.max_dalpha for s in steps]
     if len(d) < 2 * STALL_STEPS or not all(map(math.isfinite, d)):
         return None
-    before, recent = min(d[:-STALL_STEPS]), min(d[-STALL_STEPS:])
-    if recent < 0.5 * before:
+    level = min(d[-STALL_STEPS:])
+    if level < 0.5 * min(d[:-STALL_STEPS]):
         return None
-    best = min(before, recent)
-    return best, next(i for i, v in enumerate(d) if v <= 2.0 * best) + 1
-
-
-def _round_up(x: float) -> float:
-    """``x`` rounded up to two significant digits (a tol to ask for is above it)."""
-    unit = 10.0 ** (math.floor(math.log10(x)) - 1)
-    return math.ceil(x / unit) * unit
+    return level, next(i for i, v in enumerate(d) if v <= 2.0 * level) + 1
 
 
 def out_of_iterations(alpha, n: int, steps: list[StepRecord], max_outer: int,
-                      tol: float | None = None) -> DriverOutput:
+                      tol: float | None) -> DriverOutput:
     """The answer of a driver that ran its ``max_outer`` outer iterations. Its reason
-    says when max|Δα| had stalled (:func:`stall`); below :data:`STEP_ACCURACY_DALPHA`,
-    that this is the accuracy of the steps and, if ``tol`` is below it, what to ask for."""
+    says when max|Δα| had stalled (:func:`stall`); at or below
+    :data:`STEP_ACCURACY_DALPHA`, that this is the accuracy of the contact steps, and
+    whether the requested ``tol`` is below it (the driver cannot reach it)."""
     reason = (f"no convergence in {max_outer} outer iterations "
               f"(last max|Δα| = {steps[-1].max_dalpha:.2e} rad)")
     stalled = stall(steps)
     if stalled is not None:
-        best, since = stalled
-        reason += (f": max|Δα| stalled, no lower than {best:.2e} rad since outer "
+        level, since = stalled
+        reason += (f": max|Δα| stalled, no lower than {level:.2e} rad over the last "
+                   f"{STALL_STEPS} steps and within a factor 2 of that since outer "
                    f"iteration {since}")
-        if best <= STEP_ACCURACY_DALPHA:
+        if level <= STEP_ACCURACY_DALPHA:
             reason += ", the accuracy of the contact steps"
-            if tol is not None and tol < best:
-                reason += (f"; tol = {tol:.3g} rad is below it, ask for more than "
-                           f"{_round_up(2.0 * best):.1e} rad")
+            if tol is not None and tol < level:
+                reason += f"; tol = {tol:.3g} rad is below it, out of the driver's reach"
     return _fail(alpha, n, steps, reason)
 
 
