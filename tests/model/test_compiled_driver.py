@@ -76,8 +76,11 @@ def assert_same_solve(ref, fast, *, same_inner: bool):
     assert [s.step_length for s in ref.steps] == [s.step_length for s in fast.steps]
     if same_inner:
         assert [s.iterations for s in ref.steps] == [s.iterations for s in fast.steps]
+    # max|Δα| = max|α̂ − α| is a difference of angles of ~1 rad: its round-off is that of
+    # the angles (held to 1e-11 below), not a fraction of itself. Late steps of 1e-5..1e-7
+    # rad differed by 2.5e-13 between the engines on one machine (Lemke, the same pivots)
     assert np.allclose([s.max_dalpha for s in ref.steps], [s.max_dalpha for s in fast.steps],
-                       rtol=1e-8, atol=1e-13)
+                       rtol=1e-8, atol=1e-11)
     assert np.max(np.abs(ref.alpha - fast.alpha)) <= 1e-11
     scale = max(abs(ref.total_force), ref.scene.EI / ref.scene.length**2)
     assert abs(ref.total_force - fast.total_force) <= 1e-8 * scale
