@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lcpbench import ActuatorScene, solve
+from lcpbench import ActuatorScene, api, solve
 from lcpbench.model import large_driver, nested_start
 from lcpbench.model.judge import NODE_GROSS, force_tol, judge
 from lcpbench.model.result import certify
@@ -62,10 +62,26 @@ def test_without_the_extra_steps_the_same_judge_rejects_the_unsettled_split(monk
     # the discretisation error of the answer, and its first step may settle already
     monkeypatch.setattr(large_driver, "EXTRA_STEPS", 0)
     monkeypatch.setattr(nested_start, "COARSE_LINKS", 0)
+    # the driver's answer as it is: lcpbench.solve would continue a refusal on the force
+    # bound alone at a tighter tolerance (api.tightened; the next test)
+    monkeypatch.setattr(api, "tightened", lambda res, *args, **kw: res)
     res = solve(ActuatorScene(150, 3.0, links=N), tol=1e-3)
     assert not res.converged
     assert "force error bound" in res.judgement.failed
     assert res.judgement.node_error_bound > NODE_GROSS
+
+
+def test_without_the_extra_steps_solve_continues_to_the_same_answer(monkeypatch, answer):
+    # the same unsettled answer, continued by lcpbench.solve at a tenth of the driver's
+    # tolerance: certified, and within tau of the answer with the extra steps (another
+    # route to the same equilibrium)
+    monkeypatch.setattr(large_driver, "EXTRA_STEPS", 0)
+    monkeypatch.setattr(nested_start, "COARSE_LINKS", 0)
+    res = solve(ActuatorScene(150, 3.0, links=N), tol=1e-3)
+    assert res.converged, res.reason
+    assert "force error bound alone" in res.extra["tightened"]
+    F0 = max(answer.total_force, answer.scene.EI / answer.scene.length**2)
+    assert abs(res.total_force - answer.total_force) <= force_tol(1e-3) * F0
 
 
 def _top(res):

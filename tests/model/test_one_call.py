@@ -40,10 +40,15 @@ def _full(scene, **kw):
     out, used = compiled.run_kernel(
         chain, partial(make_step_solver, DEFAULT, "default", True), settings="default",
         tol=tol, max_outer=max_outer, method=method, args=args)
-    return api_module.finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol,
-                             elapsed=0.0, settings="default", engine=used,
-                             compiled_judge=True, why="auto: the built-in active set (exact)",
-                             judge_args=chain_args(chain, args))
+    why = "auto: the built-in active set (exact)"
+    res = api_module.finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol,
+                            elapsed=0.0, settings="default", engine=used,
+                            compiled_judge=True, why=why, judge_args=chain_args(chain, args))
+    # then, as solve() does, a refusal solved further (api.retried)
+    return res if res.converged else api_module.retried(
+        res, chain, partial(make_step_solver, DEFAULT, "default", True), backend=DEFAULT,
+        settings="default", engine="auto", tol=tol, max_outer=max_outer, method=method,
+        why=why, pressure_limit=None)
 
 
 def _same_fields(got: ContactResult, want: ContactResult) -> None:
@@ -173,6 +178,12 @@ def test_a_verdict_set_by_hand_stays_and_a_verdict_unlike_the_judges_is_caught(m
             return False
 
     monkeypatch.setattr(api_module, "_JUDGE", [(solve_k, judge_k, Wrong)])
+    # solve() reads a refusal's reasons, to continue one on the force bound alone
+    # (api.tightened): the wrong verdict is caught there already
+    with pytest.raises(RuntimeError, match="is not the judge's"):
+        lcpbench.solve(scene)
+    # and, where nothing reads them first, when the result's reasons are read
+    monkeypatch.setattr(api_module, "tightened", lambda res, *args, **kw: res)
     res = lcpbench.solve(scene)
     assert res.converged is False
     with pytest.raises(RuntimeError, match="is not the judge's"):

@@ -24,7 +24,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from operator import attrgetter
 
-from ..api import PAPER_TOL, check_tol, in_increments, solve
+from ..api import PAPER_TOL, check_tol, retried, solve
 from ..errors import ProblemError
 from ..model.result import ContactResult
 from ..model.step_solver import make_step_solver
@@ -110,10 +110,10 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
 def _in_increments(res: ContactResult, scene: ActuatorScene, *, tol: float, max_outer: int,
                    settings: str) -> ContactResult:
     """A kernel line's answer that the judge did not certify, as :func:`lcpbench.solve`
-    treats it: solved again in increments where the round-off of node heights may be
-    what kept it from the tolerance (:func:`lcpbench.api.in_increments`; ``scene``:
-    ``res``'s)."""
-    return in_increments(res, scene.chain(),
+    treats it (:func:`lcpbench.api.retried`: in increments where the round-off of node
+    heights may be what kept it from the tolerance, continued at a tighter driver
+    tolerance where the force error bound alone refused it; ``scene``: ``res``'s)."""
+    return retried(res, scene.chain(),
                          lambda: make_step_solver(DEFAULT, settings, True),
                          backend=DEFAULT, settings=settings, engine="auto", tol=tol,
                          max_outer=max_outer, method="globalised", why=AUTO_WHY,
