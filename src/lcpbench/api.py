@@ -209,6 +209,10 @@ def retried(res: ContactResult, chain: Chain, make_step: Callable, **kw) -> Cont
 
 #: the driver tolerance of :func:`tightened`, as a fraction of the requested one
 TIGHTER = 0.1
+#: outer steps :func:`tightened` may take: an answer a step short of its bound needs
+#: one or two; one at the driver's round-off (N = 10⁵, tol 1e-10) wanders at
+#: 1e-11…1e-10 rad for 19 steps, 0.45 s, and is refused all the same
+TIGHTEN_STEPS = 5
 
 
 def tightened(res: ContactResult, chain: Chain, make_step: Callable, *, backend: str,
@@ -223,8 +227,10 @@ def tightened(res: ContactResult, chain: Chain, make_step: Callable, *, backend:
     an answer within τ can fail it when the driver stopped on max|Δα| < tol a step early
     (θ = 96.7°, h = 4.41 mm, N = 173: 5.4·10⁻⁴ F₀ from the reference, bounded by
     1.1·10⁻³ against the allowed 10⁻³; one more outer step, 7.8·10⁻⁶). The continuation is
-    judged at ``tol``, as every answer, by the same judge; it takes the outer steps
-    ``res`` left of ``max_outer``. ``time_s``, the outer iterations and the step records
+    judged at ``tol``, as every answer, by the same judge; it takes at most
+    :data:`TIGHTEN_STEPS` of the outer steps ``res`` left of ``max_outer`` (where the
+    driver is at its round-off, more would not help). ``time_s``, the outer iterations
+    and the step records
     count both solves (``extra["tightened"]`` says how many ``res`` took). Where it is
     refused too, ``res`` is returned with that in ``extra["tightened"]``."""
     if backend != DEFAULT or method == "undamped":
@@ -235,7 +241,7 @@ def tightened(res: ContactResult, chain: Chain, make_step: Callable, *, backend:
         return res
     t0 = time.perf_counter()
     out, used = drive(chain, make_step(), backend=backend, settings=settings, engine=engine,
-                      tol=TIGHTER * tol, max_outer=left, method=method,
+                      tol=TIGHTER * tol, max_outer=min(left, TIGHTEN_STEPS), method=method,
                       start=DriverStart(np.asarray(res.alpha, dtype=float)))
     kernel = engine != "numpy" and applies(DEFAULT, "globalised", chain)
     again = finish(res.scene, chain, out, solver=res.solver, method=method, tol=tol,
