@@ -218,21 +218,23 @@ TIGHTEN_STEPS = 5
 def tightened(res: ContactResult, chain: Chain, make_step: Callable, *, backend: str,
               settings, engine: str, tol: float, max_outer: int, method: str,
               why: str | None, pressure_limit: float | None) -> ContactResult:
-    """``res`` continued from its own angles with the driver's tolerance
-    :data:`TIGHTER` · ``tol``, where lcpbench's result judge refused it on the force error
-    bound alone; otherwise ``res`` itself. The built-in back-end only: another back-end's
-    refusal stays its own, as a benchmark must see it; not the paper's undamped scheme.
+    """``res`` continued from its own angles (and its last step, as a warm start) with the
+    driver's tolerance :data:`TIGHTER` · ``tol``, where lcpbench's result judge refused it
+    on its force error bound alone (the total's, a node's, or a judge step that did not
+    settle: the judge's check "force error bound"); otherwise ``res`` itself. The built-in
+    back-end only: another back-end's refusal stays its own, as a benchmark must see it;
+    not the paper's undamped scheme.
 
-    The bound, |F_k − F_{k+1}| / (1 − ρ) with ρ from the last steps, is an upper bound:
-    an answer within τ can fail it when the driver stopped on max|Δα| < tol a step early
-    (θ = 96.7°, h = 4.41 mm, N = 173: 5.4·10⁻⁴ F₀ from the reference, bounded by
-    1.1·10⁻³ against the allowed 10⁻³; one more outer step, 7.8·10⁻⁶). The continuation is
-    judged at ``tol``, as every answer, by the same judge; it takes at most
-    :data:`TIGHTEN_STEPS` of the outer steps ``res`` left of ``max_outer`` (where the
-    driver is at its round-off, more would not help). ``time_s``, the outer iterations
-    and the step records
-    count both solves (``extra["tightened"]`` says how many ``res`` took). Where it is
-    refused too, ``res`` is returned with that in ``extra["tightened"]``."""
+    The bound, |F_k − F_{k+1}| / (1 − ρ) with ρ from the last steps, is an a-posteriori
+    estimate: an answer within τ can fail it when the driver stopped on max|Δα| < tol a
+    step early (θ = 96.7°, h = 4.41 mm, N = 173: 5.4·10⁻⁴ F₀ from the reference, bounded
+    by 1.1·10⁻³ against the allowed 10⁻³; one more outer step, 7.8·10⁻⁶). The
+    continuation is judged at ``tol``, as every answer, by the same judge, on the step
+    records of both solves (ρ from all of them); it takes at most :data:`TIGHTEN_STEPS`
+    of the outer steps ``res`` left of ``max_outer`` (where the driver is at its
+    round-off, more would not help). A certified continuation's outer iterations, step
+    records and ``time_s`` count both solves; where it is refused too, ``res`` is returned
+    with its own steps, ``time_s`` counting both, and why in ``extra["tightened"]``."""
     if backend != DEFAULT or method == "undamped":
         return res
     judgement = res.judgement
@@ -242,23 +244,20 @@ def tightened(res: ContactResult, chain: Chain, make_step: Callable, *, backend:
     t0 = time.perf_counter()
     out, used = drive(chain, make_step(), backend=backend, settings=settings, engine=engine,
                       tol=TIGHTER * tol, max_outer=min(left, TIGHTEN_STEPS), method=method,
-                      start=DriverStart(np.asarray(res.alpha, dtype=float)))
+                      start=DriverStart(np.asarray(res.alpha, dtype=float),
+                                        res.extra.get("last_step")))
+    out.steps = [*res.steps, *out.steps]  # judged, and reported, as one run
     kernel = engine != "numpy" and applies(DEFAULT, "globalised", chain)
     again = finish(res.scene, chain, out, solver=res.solver, method=method, tol=tol,
                    elapsed=res.time_s + time.perf_counter() - t0, settings=settings,
                    engine=used, compiled_judge=kernel, why=why, pressure_limit=pressure_limit)
-    told = (f"the judge refused the answer on the force error bound alone "
-            f"({judgement.force_error_bound:.1e} F₀ against {judgement.force_tol:.1e})")
+    told = (f"refused on the force error bound alone ({judgement.reason}); continued from "
+            f"its angles at driver tolerance {TIGHTER * tol:.1e} rad")
     if not again.converged:
-        res.extra["tightened"] = (f"{told}; continued at driver tolerance "
-                                  f"{TIGHTER * tol:.1e} rad: {again.reason}")
+        res.extra["tightened"] = f"{told}: {again.reason}"
         res.time_s = again.time_s  # both solves
         return res
-    again.extra["tightened"] = (f"{told}; continued from that answer at driver tolerance "
-                                f"{TIGHTER * tol:.1e} rad ({res.outer_iterations} outer "
-                                f"steps before, counted)")
-    again.steps = [*res.steps, *again.steps]  # a new list: the judged output keeps its own
-    again.outer_iterations += res.outer_iterations
+    again.extra["tightened"] = f"{told} ({res.outer_iterations} outer steps before, counted)"
     for key, value in res.extra.items():  # a batch's continuation, discarded attempt
         again.extra.setdefault(key, value)
     return again
