@@ -98,7 +98,7 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
                 results = got if got is not None else solve_line(ps, predictor=predictor,
                                                                  **fast_kw)
                 for j, res in zip(plane, results, strict=True):
-                    out[line[j]] = res if res.converged else _in_increments(
+                    out[line[j]] = res if res.converged else _retried(
                         res, line_scenes[j], **fast_kw)
             continue
         results = solve_sequence(line_scenes, predictor=predictor, **kw)
@@ -107,17 +107,16 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
     return out  # type: ignore[return-value]  # every index was filled
 
 
-def _in_increments(res: ContactResult, scene: ActuatorScene, *, tol: float, max_outer: int,
-                   settings: str) -> ContactResult:
+def _retried(res: ContactResult, scene: ActuatorScene, *, tol: float, max_outer: int,
+             settings: str) -> ContactResult:
     """A kernel line's answer that the judge did not certify, as :func:`lcpbench.solve`
     treats it (:func:`lcpbench.api.retried`: in increments where the round-off of node
     heights may be what kept it from the tolerance, continued at a tighter driver
     tolerance where the force error bound alone refused it; ``scene``: ``res``'s)."""
-    return retried(res, scene.chain(),
-                         lambda: make_step_solver(DEFAULT, settings, True),
-                         backend=DEFAULT, settings=settings, engine="auto", tol=tol,
-                         max_outer=max_outer, method="globalised", why=AUTO_WHY,
-                         pressure_limit=None)
+    return retried(res, scene.chain(), lambda: make_step_solver(DEFAULT, settings, True),
+                   backend=DEFAULT, settings=settings, engine="auto", tol=tol,
+                   max_outer=max_outer, method="globalised", why=AUTO_WHY,
+                   pressure_limit=None)
 
 
 def _planes(scenes: list) -> list[list[int]]:
