@@ -89,3 +89,21 @@ def test_solve_many_treats_it_as_solve_does(reference):
     ref_other = solve(other, tol=1e-11, settings="high")
     F0 = max(ref_other.total_force, other.EI / other.length**2)
     assert abs(got[1].total_force - ref_other.total_force) <= 1e-3 * F0
+
+
+def test_a_continuation_that_is_refused_too_keeps_the_first_answer(monkeypatch):
+    # the refused branch and the cap: one outer step at a driver tolerance it cannot
+    # reach (tol 0.1 rad, continued at 1e-7) ends out of iterations, so the first answer
+    # stands, refused, with its own steps, and the time of both solves
+    scene = ActuatorScene(theta=150.0, height=3.0, links=60)
+    monkeypatch.setattr(api, "tightened", lambda res, *args, **kw: res)
+    first = solve(scene, tol=0.1)
+    monkeypatch.undo()
+    monkeypatch.setattr(api, "TIGHTER", 1e-6)
+    monkeypatch.setattr(api, "TIGHTEN_STEPS", 1)
+    res = solve(scene, tol=0.1)
+    assert not res.converged
+    assert res.outer_iterations == first.outer_iterations == len(res.steps)
+    assert res.total_force == first.total_force
+    assert "no convergence in 1 outer iterations" in res.extra["tightened"]
+    assert res.judgement.failed == ["force error bound"]
