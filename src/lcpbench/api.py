@@ -204,7 +204,59 @@ def retried(res: ContactResult, chain: Chain, make_step: Callable, **kw) -> Cont
     force error bound alone refused it, continued at a tenth of the driver's tolerance
     (:func:`tightened`). Keyword arguments: :func:`in_increments`'s."""
     res = in_increments(res, chain, make_step, **kw)
-    return res if res.converged else tightened(res, chain, make_step, **kw)
+    res = res if res.converged else tightened(res, chain, make_step, **kw)
+    return res if res.converged else escaped(res, chain, make_step, **kw)
+
+
+def escaped(res: ContactResult, chain: Chain, make_step: Callable, *, backend: str,
+            settings, engine: str, tol: float, max_outer: int, method: str,
+            why: str | None, pressure_limit: float | None) -> ContactResult:
+    """``res`` left downhill where the result judge refused it as a saddle (check
+    "stability" alone): the driver restarts from α ± t d along each direction d of
+    negative curvature on its contact set (:func:`lcpbench.model.escape.escape_starts`)
+    and the lowest-energy certified answer is returned, with ``extra["escaped"]``
+    saying from what. Every back-end: a saddle is a fixed point of any exact contact
+    step, not a failure of one back-end. Where no restart is certified, ``res`` with
+    why in ``extra["escaped"]``; ``time_s`` counts every solve."""
+    judgement = res.judgement
+    if judgement is None or judgement.failed != ["stability"] or method == "undamped":
+        return res
+    from .model.chain import energy
+    from .model.escape import escape_starts
+
+    t0 = time.perf_counter()
+    lower = res.forces_lower if res.forces_lower is not None else np.zeros_like(res.forces)
+    starts = escape_starts(chain, np.asarray(res.alpha, float), res.forces, lower,
+                           judgement.contact_threshold)
+    best, tried = None, []
+    for alpha in starts:
+        out, used = drive(chain, make_step(), backend=backend, settings=settings,
+                          engine=engine, tol=tol, max_outer=max_outer, method=method,
+                          start=DriverStart(alpha))
+        kernel = engine != "numpy" and applies(DEFAULT, "globalised", chain)
+        again = finish(res.scene, chain, out, solver=res.solver, method=method, tol=tol,
+                       elapsed=0.0, settings=settings, engine=used, compiled_judge=kernel,
+                       why=why, pressure_limit=pressure_limit)
+        if not again.converged:
+            again = tightened(again, chain, make_step, backend=backend, settings=settings,
+                              engine=engine, tol=tol, max_outer=max_outer, method=method,
+                              why=why, pressure_limit=pressure_limit)
+        tried.append(again.reason)
+        if again.converged and (best is None or energy(chain, again.alpha)
+                                < energy(chain, best.alpha)):
+            best = again
+    elapsed = res.time_s + time.perf_counter() - t0
+    told = (f"the driver reached a saddle (F = {res.total_force:.6g} N, "
+            f"{judgement.unstable_directions} unstable directions)")
+    if best is None:
+        res.extra["escaped"] = (f"{told}; {len(starts)} restarts downhill of it"
+                                + (f", none certified: {tried[0]}" if tried else ""))
+        res.time_s = elapsed
+        return res
+    best.extra["escaped"] = (f"{told}; restarted downhill along its negative curvature "
+                             f"({len(starts)} restarts) to this stable equilibrium")
+    best.time_s = elapsed
+    return best
 
 
 #: the driver tolerance of :func:`tightened`, as a fraction of the requested one

@@ -179,11 +179,12 @@ def test_a_verdict_set_by_hand_stays_and_a_verdict_unlike_the_judges_is_caught(m
 
     monkeypatch.setattr(api_module, "_JUDGE", [(solve_k, judge_k, Wrong)])
     # solve() reads a refusal's reasons, to continue one on the force bound alone
-    # (api.tightened): the wrong verdict is caught there already
+    # (api.tightened) or leave a saddle (api.escaped): the wrong verdict is caught there
     with pytest.raises(RuntimeError, match="is not the judge's"):
         lcpbench.solve(scene)
     # and, where nothing reads them first, when the result's reasons are read
     monkeypatch.setattr(api_module, "tightened", lambda res, *args, **kw: res)
+    monkeypatch.setattr(api_module, "escaped", lambda res, *args, **kw: res)  # (reads them too)
     res = lcpbench.solve(scene)
     assert res.converged is False
     with pytest.raises(RuntimeError, match="is not the judge's"):

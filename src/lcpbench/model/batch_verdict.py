@@ -20,6 +20,7 @@ from numba import njit
 TAU, EPS_R, COMP, COMP_ALLOWED, MIN_GAP, CLOSURE = 0, 2, 3, 4, 5, 8
 REL_TORQUE, FLOOR_R, R_MIN, TOTAL, NODE, NODE_ALLOWED, PEN, CLOSURE_ALLOWED = (
     10, 11, 12, 13, 14, 15, 19, 20)
+UNSTABLE = 21
 
 
 @njit(cache=True)
@@ -34,6 +35,8 @@ def accepted(settled, stats, tol):
     if stats[REL_TORQUE] > max(10 * tol, 1e-6):
         return False
     if stats[R_MIN] < -max(stats[EPS_R], stats[FLOOR_R]):
+        return False
+    if not stats[UNSTABLE] <= 0:
         return False
     if not settled:
         return False

@@ -52,6 +52,13 @@ judge step holds a node in contact by the wall's spring instead of on it.
    is an a-posteriori estimate under linear contraction, not a proof: it is
    what turns "α stopped moving" into "F is within τ".
 
+8. **stability**: the equilibrium is a local minimum of the exact energy on its
+   contact set: the Hessian of the Lagrangian has no negative curvature on the
+   tangent space of the nodes held by a wall (reaction above ε_R; the others are
+   left free, which can only refuse more) and of the right pin's closure
+   (:mod:`lcpbench.model.stability_kernel`, an O(N) inertia count). A saddle,
+   which passes every first-order check above, is refused here.
+
 With a wall profile y = h(x) (:mod:`lcpbench.model.profile`) the checks are
 those of the exact profile problem: gaps h(x_k) − y_k at the nodes' x,
 torques with the normal reactions μ (h', −1) (their horizontal parts taken
@@ -124,6 +131,7 @@ THRESHOLDS = {
     "force_error_bound": "<= τ for F; per node <= max(NODE_FACTOR·τ, NODE_GROSS, "
                          "NODE_FACTOR·FLOOR_ULPS·ε·S/F₀)",
     "contact": "R_i > NODE_SHARE·τ·F₀",
+    "stability": "no negative curvature of the energy on the contact set (R_i > ε_R held)",
 }
 
 
@@ -171,6 +179,10 @@ class Judgement:
     judge_total_force: float = float("nan")
     judge_rounds: int = 0
     inexact_steps: int = 0
+    #: negative-curvature directions of the energy on the contact set (the second-order
+    #: check, :mod:`lcpbench.model.stability_kernel`): 0 a stable equilibrium; None
+    #: not checked (a wall profile, a joint layout the check does not take)
+    unstable_directions: int | None = None
     failed: list[str] = field(default_factory=list)
     # the answer's reactions with round-off set to zero (None: not judged that far)
     forces_upper: np.ndarray | None = field(default=None, repr=False)
@@ -448,19 +460,47 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
         verdict.judge_total_force = float(np.sum(js.forces_upper))
         verdict.judge_rounds = js.rounds
         bound = (total, node, node_allowed)
+    verdict.unstable_directions = unstable_directions(chain, alpha, forces_upper,
+                                                      forces_lower, eps_R)
     fails = failed_checks(certificate, step_statuses, tol=tol, tau=tau, comp=comp,
                           comp_allowed=comp_allowed,
                           pen=min(GEOMETRY_TOL, NODE_SHARE * tau) * L,
                           closure_allowed=GEOMETRY_TOL * L, R_min=R_min,
                           allowed_R=max(eps_R, floor_R), bound=bound,
-                          judge_total_force=verdict.judge_total_force)
+                          judge_total_force=verdict.judge_total_force,
+                          unstable=verdict.unstable_directions or 0)
     return settle_verdict(verdict, fails, driver_reason)
+
+
+def unstable_directions(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
+                        forces_lower: np.ndarray, threshold: float) -> int | None:
+    """The second-order check of an answer (:mod:`lcpbench.model.stability_kernel`):
+    how many directions lower the energy on its contact set (0: stable), None where
+    it does not apply (a wall profile, joints that are not neighbours)."""
+    if has_profile(chain):
+        return None
+    from ..numba_cache import kernel_module  # numba at the first numpy judgement
+
+    kern = kernel_module("lcpbench.model.stability_kernel", "unstable_directions")
+    n = len(forces_upper)
+    rigid = np.full(n, np.inf)
+    up = rigid if chain.upper_stiffness is None else np.asarray(chain.upper_stiffness, float)
+    lo = rigid if chain.lower_stiffness is None else np.asarray(chain.lower_stiffness, float)
+    f64 = np.ascontiguousarray
+    code, unstable, _ = kern.unstable_directions(
+        f64(alpha, dtype=float), float(chain.link_length), f64(chain.joint_links[:, 0]),
+        f64(chain.joint_links[:, 1]), f64(chain.joint_stiffness, dtype=float),
+        f64(chain.rest_joint, dtype=float), f64(chain.link_load, dtype=float),
+        int(chain.free_nodes[0]), f64(forces_upper, dtype=float),
+        f64(forces_lower, dtype=float), f64(up), f64(lo), float(threshold),
+        bool(chain.free_nodes[-1] < chain.links))
+    return int(unstable) if code == kern.CHECKED else None
 
 
 def failed_checks(cert, step_statuses: list[str], *, tol: float, tau: float, comp: float,
                   comp_allowed: float, pen: float, closure_allowed: float, R_min: float,
                   allowed_R: float, bound: tuple[float, float, float] | None,
-                  judge_total_force: float) -> list[str]:
+                  judge_total_force: float, unstable: float = 0) -> list[str]:
     """The checks of :func:`judge` that fail, each as "check: why", in one order.
 
     Shared by the numpy judge and the compiled one (:mod:`lcpbench.model.judge_compiled`),
@@ -484,6 +524,11 @@ def failed_checks(cert, step_statuses: list[str], *, tol: float, tau: float, com
     if R_min < -allowed_R:
         fails.append(f"sign: a wall pulls with {R_min:.2e} N (allowed down to "
                      f"{-allowed_R:.1e} N)")
+    if not unstable <= 0:  # (a NaN fails, as in batch_verdict.accepted)
+        many = not unstable <= 1
+        fails.append(f"stability: the answer is an unstable equilibrium (a saddle): "
+                     f"{unstable:g} direction{'s' if many else ''} on its contact set "
+                     f"lower{'' if many else 's'} the energy")
     if bound is None:
         fails.append("force error bound: the judge step did not settle")
     elif not bound[0] <= tau:

@@ -114,6 +114,8 @@ def verdict_from_stats(settled: bool, s: dict, fu: np.ndarray, fl: np.ndarray,
                        relative_torque_residual=s["relative_torque_residual"])
     verdict.certificate = cert
     verdict.inexact_steps = sum(st != "solved" for st in step_statuses)
+    unstable = s["unstable"]
+    verdict.unstable_directions = int(unstable) if np.isfinite(unstable) else None
     bound = None
     if settled:
         total, node = s["total"], s["node"]
@@ -126,5 +128,6 @@ def verdict_from_stats(settled: bool, s: dict, fu: np.ndarray, fl: np.ndarray,
                           comp_allowed=s["comp_allowed"], pen=s["pen"],
                           closure_allowed=s["closure_allowed"], R_min=s["R_min"],
                           allowed_R=max(s["eps_R"], s["floor_R"]), bound=bound,
-                          judge_total_force=verdict.judge_total_force)
+                          judge_total_force=verdict.judge_total_force,
+                          unstable=unstable)
     return settle_verdict(verdict, fails, driver_reason)

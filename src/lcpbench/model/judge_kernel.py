@@ -31,6 +31,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from .stability_kernel import CHECKED, unstable_directions
+
 EPS = np.finfo(np.float64).eps
 TINY = np.finfo(np.float64).tiny
 # model.judge's thresholds (tests check they are the same numbers)
@@ -46,7 +48,7 @@ PIVOT_ROUNDS, STALL = 30, 3
 STATS = ("tau", "F0", "eps_R", "comp", "comp_allowed", "min_gap", "min_force",
          "complementarity", "closure", "max_torque_residual", "relative_torque_residual",
          "floor_R", "R_min", "total", "node", "node_allowed", "rho", "judge_total_force",
-         "rounds", "pen", "closure_allowed")
+         "rounds", "pen", "closure_allowed", "unstable")
 SETTLED, NOT_SETTLED = 0, 1
 
 
@@ -465,6 +467,11 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
     stats[9], stats[10], stats[11], stats[12] = worst_t, rel_t, floor_R, R_min
     stats[19] = min(GEOMETRY_TOL, NODE_SHARE * tau) * L
     stats[20] = GEOMETRY_TOL * L
+    # the second-order check (model.stability_kernel): rigid walls here
+    rigid = np.full(n, np.inf)
+    code, unstable, _ = unstable_directions(alpha, a, jl, jr, k, rest, link_load, fs - 1, fu,
+                                            fl, rigid, rigid, eps_R, pinned_right)
+    stats[21] = unstable if code == CHECKED else 0.0
     if not settled:
         return NOT_SETTLED, stats, fu, fl, res
     origin, alpha0, inv = w[ORIGIN], w[ALPHA0], w[INV]

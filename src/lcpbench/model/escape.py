@@ -1,0 +1,89 @@
+"""Escape from a saddle: the starts that leave an unstable equilibrium downhill.
+
+The result judge refuses an answer whose energy has negative curvature on its
+contact set (check "stability", :mod:`lcpbench.model.stability_kernel`). Such an
+answer satisfies every first-order condition, so the driver, started there,
+stays there. This module gives the directions to leave it by: the eigenvectors of
+the reduced Hessian of the Lagrangian with negative eigenvalues, on the tangent
+space of the nodes held by a wall and of the closure (Z, an orthonormal basis of
+the null space of their rows ∇y_q = (a cos α_i)_{i<q}).
+
+Along such a direction d the energy falls by ½ t² dᵀHd to second order; the
+walls and the closure move by O(t²) only, which the driver's next contact step
+takes back. :func:`escape_starts` returns α ± t d for each negative direction,
+with t the largest of a few trial lengths whose exact energy, with the reactions'
+work, is below the saddle's: the driver restarts from each, and the judge decides
+as for every answer.
+
+Dense (the null space and the eigenvectors), so up to :data:`MAX_LINKS` links:
+the check is O(N), the escape only runs where the check refused an answer.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.linalg import eigh, null_space
+
+from ..problems.scenes import Chain
+from .chain import energy, node_positions
+
+#: the escape's dense eigenproblem is taken up to this many links
+MAX_LINKS = 2000
+#: trial step lengths: the largest link-angle change along d (rad)
+TRIALS = (0.5, 0.2, 0.05, 0.01)
+
+
+def negative_directions(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
+                        forces_lower: np.ndarray, threshold: float) -> list[np.ndarray]:
+    """Unit directions in α of negative curvature on the contact set, most negative first.
+
+    The Hessian is the one the judge's check counts with
+    (:func:`lcpbench.model.stability_kernel.lagrangian_hessian`)."""
+    from ..numba_cache import kernel_module
+
+    kern = kernel_module("lcpbench.model.stability_kernel", "unstable_directions")
+    f64 = np.ascontiguousarray
+    pinned = bool(chain.free_nodes[-1] < chain.links)
+    diag, off, ok = kern.lagrangian_hessian(
+        f64(alpha, dtype=float), float(chain.link_length), f64(chain.joint_links[:, 0]),
+        f64(chain.joint_links[:, 1]), f64(chain.joint_stiffness, dtype=float),
+        f64(chain.rest_joint, dtype=float), f64(chain.link_load, dtype=float),
+        int(chain.free_nodes[0]), f64(forces_upper, dtype=float),
+        f64(forces_lower, dtype=float), pinned)
+    if not ok or chain.links > MAX_LINKS:
+        return []
+    H = np.diag(diag) + np.diag(off, 1) + np.diag(off, -1)
+    c = chain.link_length * np.cos(alpha)
+    held = [int(q) for q, up, lo in zip(chain.free_nodes, forces_upper, forces_lower)
+            if max(up, lo) > threshold]
+    if pinned:
+        held.append(chain.links)
+    rows = np.array([np.where(np.arange(chain.links) < q, c, 0.0) for q in held])
+    Z = null_space(rows) if held else np.eye(chain.links)
+    values, vectors = eigh(Z.T @ H @ Z)
+    scale = max(float(np.max(np.abs(diag))), 1e-300)
+    return [Z @ vectors[:, i] for i in range(values.size) if values[i] < -1e-12 * scale]
+
+
+def escape_starts(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
+                  forces_lower: np.ndarray, threshold: float) -> list[np.ndarray]:
+    """Link angles to restart the driver from, downhill of the saddle ``alpha``: for
+    each negative direction, both signs, the longest trial step that lowers the
+    exact energy with the reactions' work (the Lagrangian)."""
+    free = chain.free_nodes
+
+    def lagrangian(a):
+        y = node_positions(chain, a)[1]
+        return energy(chain, a) + float(np.dot(forces_upper - forces_lower, y[free]))
+
+    base = lagrangian(alpha)
+    starts = []
+    for d in negative_directions(chain, alpha, forces_upper, forces_lower, threshold):
+        d = d / max(float(np.max(np.abs(d))), 1e-300)
+        for sign in (1.0, -1.0):
+            for t in TRIALS:
+                trial = alpha + sign * t * d
+                if lagrangian(trial) < base:
+                    starts.append(trial)
+                    break
+    return starts
