@@ -323,3 +323,33 @@ def test_lcp_json_says_its_residuals_are_scaled(capsys):
     natural = np.abs(np.minimum(z, prob.M @ z + prob.q)).max()
     assert natural > 1e-6  # a residual to compare
     assert out["residuals"]["natural"] * scale == pytest.approx(natural, rel=1e-9, abs=1e-300)
+
+
+def test_lcp_default_is_the_active_set_for_spd_m_and_lemke_otherwise(capsys):
+    # lcp_deudeu: M = [[2, 1], [1, 2]] (symmetric, eigenvalues 1 and 3)
+    code, d, _ = run_json(capsys, ["lcp", PEER + "/lcp_deudeu.dat", "--json"])
+    assert code == 0 and d["solver"] == "active-set"
+    assert d["solver_choice"] == "the default, as M is symmetric positive definite"
+    # lcp_exp_murty2: upper triangular, not symmetric
+    code, d, _ = run_json(capsys, ["lcp", PEER + "/lcp_exp_murty2.dat", "--json"])
+    assert code == 0 and d["solver"] == "lemke"
+    assert d["solver_choice"] == "the default, as M is not symmetric"
+    code, d, _ = run_json(capsys, ["lcp", PEER + "/lcp_deudeu.dat", "--solver", "pgs",
+                                   "--json"])
+    assert d["solver"] == "pgs" and d["solver_choice"] == "given by --solver"
+
+
+def test_lcp_refuses_the_default_lemke_above_its_limit_but_honours_solver(capsys,
+                                                                          monkeypatch):
+    from lcpbench.solvers import runner
+
+    monkeypatch.setattr(runner, "LEMKE_DEFAULT_MAX_SIZE", 5)  # murty2 has n = 6
+    code = main(["lcp", PEER + "/lcp_exp_murty2.dat"])
+    out = capsys.readouterr()
+    assert code == 2 and out.out == "" and "Traceback" not in out.err
+    lines = out.err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("lcpbench: error: solver: ")
+    assert "up to n = 5" in lines[0] and "--solver" in lines[0]
+    code, d, _ = run_json(capsys, ["lcp", PEER + "/lcp_exp_murty2.dat", "--solver", "lemke",
+                                   "--json"])
+    assert code == 0 and d["solver"] == "lemke" and d["status"] == "solved"

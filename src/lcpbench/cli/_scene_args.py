@@ -172,18 +172,22 @@ def add_tol_option(parser, what: str = "convergence threshold on max|d alpha|") 
                         help=f"{what}, rad (default {DEFAULT_TOL:g})")
 
 
-def add_solver_options(parser, default: str = DEFAULT_SOLVER) -> None:
+def add_solver_options(parser, default: str | None = DEFAULT_SOLVER,
+                       default_help: str | None = None) -> None:
     """Add ``--solver NAME`` and ``--settings PROFILE``.
 
     Parameters
     ----------
     parser : argparse.ArgumentParser
         The sub-command's parser.
-    default : str
-        The default back-end.
+    default : str or None
+        The default back-end (None: the command chooses).
+    default_help : str, optional
+        What the help says the default is (default: its name).
     """
+    said = default if default_help is None else default_help
     parser.add_argument("--solver", default=default, metavar="NAME",
-                        help=f"back-end (default {default}; `lcpbench solvers` lists them)")
+                        help=f"back-end (default {said}; `lcpbench solvers` lists them)")
     parser.add_argument("--settings", choices=tuple(PROFILES), default="default",
                         help="accuracy profile: the solver's own defaults, or a generic "
                              "tolerance low 1e-3, mid 1e-6, high 1e-9 (default: default)")

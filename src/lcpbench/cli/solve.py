@@ -93,7 +93,11 @@ def register(subparsers) -> None:
         description="Solve 0 <= z _|_ M z + q >= 0 from a Siconos .dat or a .npz file and "
                     "print z, w, status, iterations, time and residuals.")
     lp.add_argument("file", metavar="FILE", help="a .dat (Siconos) or .npz (M, q) file")
-    add_solver_options(lp, default="lemke")
+    from ..solvers.runner import LEMKE_DEFAULT_MAX_SIZE
+
+    add_solver_options(lp, default=None,
+                       default_help="active-set where M is symmetric positive definite, "
+                                    f"lemke otherwise, up to n = {LEMKE_DEFAULT_MAX_SIZE}")
     add_json_option(lp)
     lp.set_defaults(func=cmd_lcp)
 
@@ -272,15 +276,21 @@ def cmd_export(args) -> int:
 def cmd_lcp(args) -> int:
     """``lcpbench lcp``: solve an LCP file; 0 solved, 1 not."""
     from ..problems.lcpfile import read_lcp
-    from ..solvers.runner import solve_lcp
+    from ..solvers.runner import default_lcp_solver, solve_lcp
 
     prob = read_lcp(args.file)
-    sol = solve_lcp(prob.M, prob.q, args.solver, args.settings)
+    if args.solver is None:
+        solver, why = default_lcp_solver(prob.M)
+        choice = f"the default, as {why}"
+    else:
+        solver, choice = args.solver, "given by --solver"
+    sol = solve_lcp(prob.M, prob.q, solver, args.settings)
     res = sol.extra.get("residuals", {})
     # lcp_residuals divides natural, min_w and complementarity by max(1, |q|_inf); say so
     scale = max(1.0, float(np.max(np.abs(prob.q), initial=0.0)))
     out = {
         "file": args.file, "size": int(prob.q.size), "solver": sol.extra.get("backend"),
+        "solver_choice": choice,
         "settings": args.settings, "status": sol.status.value, "message": sol.message,
         "iterations": sol.iterations, "solve_time_s": sol.solve_time,
         "setup_time_s": sol.setup_time, "time_source": sol.extra.get("time_source", "solver"),
@@ -295,7 +305,7 @@ def cmd_lcp(args) -> int:
         with np.printoptions(precision=6, threshold=20, edgeitems=5, linewidth=100):
             rows = [
                 ("problem", f"{args.file} (n = {prob.q.size})"),
-                ("solver", f"{out['solver']} (settings {args.settings})"),
+                ("solver", f"{out['solver']} (settings {args.settings}; {choice})"),
                 ("status", sol.status.value + (f" ({sol.message})" if sol.message else "")),
                 ("iterations", str(sol.iterations)),
                 ("time", f"solve {1e6 * sol.solve_time:.1f} us, setup "
