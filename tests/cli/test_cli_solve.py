@@ -353,3 +353,65 @@ def test_lcp_refuses_the_default_lemke_above_its_limit_but_honours_solver(capsys
     code, d, _ = run_json(capsys, ["lcp", PEER + "/lcp_exp_murty2.dat", "--solver", "lemke",
                                    "--json"])
     assert code == 0 and d["solver"] == "lemke" and d["status"] == "solved"
+
+
+# -- refuse instead of guessing (issue 36) -------------------------------------------------
+PROFILE = str(Path(__file__).resolve().parents[2] / "examples" / "profiles" / "stenosis.csv")
+
+
+def _one_line_refusal(capsys, argv) -> str:
+    code = main(argv)
+    out = capsys.readouterr()
+    assert code == 2 and out.out == "", out
+    lines = out.err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("lcpbench: error: "), out.err
+    assert "Traceback" not in out.err
+    return lines[0]
+
+
+def test_plot_into_an_existing_directory_is_refused(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    folder = tmp_path / "figs"
+    folder.mkdir()
+    line = _one_line_refusal(capsys, ["solve", "--links", str(N), "--plot", str(folder)])
+    assert f"--plot {folder}: is a directory" in line and "shape.png" in line
+    assert list(tmp_path.iterdir()) == [folder]  # no figs.png written beside it
+
+
+@pytest.mark.parametrize("out, fmt", [("x.npz", "dat"), ("x.dat", "npz"), ("X.NPZ", "dat")])
+def test_export_suffix_contradicting_format_is_refused(tmp_path, capsys, out, fmt):
+    path = tmp_path / out
+    line = _one_line_refusal(capsys, ["export", "--links", str(N), "--out", str(path),
+                                      "--format", fmt])
+    assert f"--out {path} ends in .{out.rsplit('.')[-1].lower()} but --format is {fmt}" in line
+    assert not path.exists()
+
+
+def test_export_agreeing_or_unknown_suffix_with_format_still_writes(tmp_path, capsys):
+    from lcpbench.problems.lcpfile import read_lcp
+
+    for name, fmt in (("a.NPZ", "npz"), ("a.lcp", "dat")):  # no contradiction in either
+        assert main(["export", "--links", str(N), "--out", str(tmp_path / name),
+                     "--format", fmt]) == 0
+        assert read_lcp(tmp_path / name, fmt=fmt).size > 0
+    capsys.readouterr()
+
+
+def test_export_into_a_directory_is_refused(tmp_path, capsys):
+    folder = tmp_path / "out.dat"
+    folder.mkdir()
+    line = _one_line_refusal(capsys, ["export", "--links", str(N), "--out", str(folder)])
+    assert f"--out {folder}: is a directory" in line
+
+
+@pytest.mark.parametrize("extra", [["--height", "3"], ["--height", "4mm", "--channel"]])
+def test_height_with_a_wall_profile_is_refused(capsys, extra):
+    line = _one_line_refusal(capsys, ["solve", "--links", str(N), "--wall-profile", PROFILE,
+                                      *extra])
+    assert "--height" in line and "--wall-profile" in line and "drop one" in line
+
+
+def test_the_default_height_is_still_the_scenes(capsys):
+    code, d, _ = run_json(capsys, ["solve", "--links", str(N), "--theta", "30", "--weight",
+                                   "0", "--json"])
+    assert code == 0 and d["scene"]["height"] == lcpbench.ActuatorScene().height

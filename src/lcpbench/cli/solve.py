@@ -14,10 +14,13 @@
 from __future__ import annotations
 
 import math
+import os
+from pathlib import PurePath
 
 import numpy as np
 
 from ..api import solve
+from ..errors import ProblemError
 from ..model.driver import METHODS
 from ..model.result_view import pressure_rows
 from ..problems.scenes import DEFAULT_LINKS
@@ -81,7 +84,8 @@ def register(subparsers) -> None:
     add_tol_option(e, "convergence threshold of the solve")
     e.add_argument("--format", choices=("dat", "npz"), default=None,
                    help="Siconos .dat (dense, column-major) or numpy .npz (M, q); "
-                        "default: from the suffix of --out")
+                        "default: from the suffix of --out (a .dat or .npz suffix that "
+                        "contradicts --format is refused)")
     e.add_argument("--out", required=True, metavar="FILE", help="where to write")
     e.add_argument("--raw", action="store_true",
                    help="physical units (mm, N) instead of the nondimensionalised step "
@@ -214,11 +218,21 @@ def _judge_rows(result) -> list[tuple[str, str]]:
 
 
 # -- commands -----------------------------------------------------------------
+def _not_a_directory(option: str, path: str, example: str) -> None:
+    """ProblemError when the file an option names is an existing directory (matplotlib
+    would write DIR.png beside it, numpy into a file of another name)."""
+    if os.path.isdir(path):
+        raise ProblemError(f"{option} {path}: is a directory; give the file to write, "
+                           f"e.g. {os.path.join(path, example)}")
+
+
 def cmd_solve(args) -> int:
     """``lcpbench solve``: 0 converged, 1 not converged, 2 bad input or plot error."""
     if args.plot is not None and not has_matplotlib():
         error_line("--plot needs matplotlib: pip install 'lcpbench[plot]'")
         return 2
+    if args.plot is not None:
+        _not_a_directory("--plot", args.plot, "shape.png")
     scene = scene_from(args)
     result = solve(scene, solver=args.solver, tol=args.tol, method=args.method,
                    settings=args.settings, scaled=not args.raw,
@@ -251,13 +265,17 @@ def cmd_export(args) -> int:
     from ..model.step_solver import step_lcp
     from ..problems.lcpfile import write_lcp
 
+    _not_a_directory("--out", args.out, "step.dat")
     fmt = args.format
+    suffix = PurePath(args.out).suffix.lower().lstrip(".")
     if fmt is None:
-        suffix = args.out.rsplit(".", 1)[-1].lower() if "." in args.out else ""
         if suffix not in ("dat", "npz"):
             error_line(f"--out {args.out}: give a .dat or .npz suffix, or --format dat|npz")
             return 2
         fmt = suffix
+    elif suffix in ("dat", "npz") and suffix != fmt:
+        raise ProblemError(f"--out {args.out} ends in .{suffix} but --format is {fmt}: make "
+                           f"them agree (or leave --format out: it follows the suffix)")
     scene = scene_from(args)
     result = solve(scene, tol=args.tol)
     if not result.converged:
