@@ -415,3 +415,26 @@ def test_the_default_height_is_still_the_scenes(capsys):
     code, d, _ = run_json(capsys, ["solve", "--links", str(N), "--theta", "30", "--weight",
                                    "0", "--json"])
     assert code == 0 and d["scene"]["height"] == lcpbench.ActuatorScene().height
+
+
+def _bad_lcp_files(tmp_path) -> dict:
+    zero = tmp_path / "zero.dat"
+    zero.symlink_to("/dev/zero")
+    huge = tmp_path / "huge.dat"
+    with open(huge, "wb") as fh:  # sparse: says n = 3, takes 2 GB (of NUL bytes)
+        fh.write(b"3\n0\n3 3\n3 3\n")
+        fh.truncate(2 * 10**9)
+    digits = tmp_path / "digits.dat"
+    digits.write_text("9" * 5000 + "\n0\n2 2\n2 2\n1 0 0 1\n-1 -1\n")
+    latin = tmp_path / "latin1.dat"
+    latin.write_bytes("2\n0\n2 2\n2 2\n1 0 0 1\n-1 -1\n# Müller\n".encode("latin-1"))
+    return {zero: "is a device, not a regular file",
+            huge: "refused without reading it",
+            digits: "the problem size n has 5000 digits",
+            latin: "not UTF-8 text"}
+
+
+def test_lcp_refuses_unbounded_or_broken_files_in_one_line(tmp_path, capsys):
+    for path, what in _bad_lcp_files(tmp_path).items():
+        line = _one_line_refusal(capsys, ["lcp", str(path)])
+        assert f"{path}: " in line and what in line, line
