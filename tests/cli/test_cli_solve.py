@@ -323,3 +323,118 @@ def test_lcp_json_says_its_residuals_are_scaled(capsys):
     natural = np.abs(np.minimum(z, prob.M @ z + prob.q)).max()
     assert natural > 1e-6  # a residual to compare
     assert out["residuals"]["natural"] * scale == pytest.approx(natural, rel=1e-9, abs=1e-300)
+
+
+def test_lcp_default_is_the_active_set_for_spd_m_and_lemke_otherwise(capsys):
+    # lcp_deudeu: M = [[2, 1], [1, 2]] (symmetric, eigenvalues 1 and 3)
+    code, d, _ = run_json(capsys, ["lcp", PEER + "/lcp_deudeu.dat", "--json"])
+    assert code == 0 and d["solver"] == "active-set"
+    assert d["solver_choice"] == "the default, as M is symmetric positive definite"
+    # lcp_exp_murty2: upper triangular, not symmetric
+    code, d, _ = run_json(capsys, ["lcp", PEER + "/lcp_exp_murty2.dat", "--json"])
+    assert code == 0 and d["solver"] == "lemke"
+    assert d["solver_choice"] == "the default, as M is not symmetric"
+    code, d, _ = run_json(capsys, ["lcp", PEER + "/lcp_deudeu.dat", "--solver", "pgs",
+                                   "--json"])
+    assert d["solver"] == "pgs" and d["solver_choice"] == "given by --solver"
+
+
+def test_lcp_refuses_the_default_lemke_above_its_limit_but_honours_solver(capsys,
+                                                                          monkeypatch):
+    from lcpbench.solvers import runner
+
+    monkeypatch.setattr(runner, "LEMKE_DEFAULT_MAX_SIZE", 5)  # murty2 has n = 6
+    code = main(["lcp", PEER + "/lcp_exp_murty2.dat"])
+    out = capsys.readouterr()
+    assert code == 2 and out.out == "" and "Traceback" not in out.err
+    lines = out.err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("lcpbench: error: solver: ")
+    assert "up to n = 5" in lines[0] and "--solver" in lines[0]
+    code, d, _ = run_json(capsys, ["lcp", PEER + "/lcp_exp_murty2.dat", "--solver", "lemke",
+                                   "--json"])
+    assert code == 0 and d["solver"] == "lemke" and d["status"] == "solved"
+
+
+# -- refuse instead of guessing (issue 36) -------------------------------------------------
+PROFILE = str(Path(__file__).resolve().parents[2] / "examples" / "profiles" / "stenosis.csv")
+
+
+def _one_line_refusal(capsys, argv) -> str:
+    code = main(argv)
+    out = capsys.readouterr()
+    assert code == 2 and out.out == "", out
+    lines = out.err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("lcpbench: error: "), out.err
+    assert "Traceback" not in out.err
+    return lines[0]
+
+
+def test_plot_into_an_existing_directory_is_refused(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    folder = tmp_path / "figs"
+    folder.mkdir()
+    line = _one_line_refusal(capsys, ["solve", "--links", str(N), "--plot", str(folder)])
+    assert f"--plot {folder}: is a directory" in line and "shape.png" in line
+    assert list(tmp_path.iterdir()) == [folder]  # no figs.png written beside it
+
+
+@pytest.mark.parametrize("out, fmt", [("x.npz", "dat"), ("x.dat", "npz"), ("X.NPZ", "dat")])
+def test_export_suffix_contradicting_format_is_refused(tmp_path, capsys, out, fmt):
+    path = tmp_path / out
+    line = _one_line_refusal(capsys, ["export", "--links", str(N), "--out", str(path),
+                                      "--format", fmt])
+    assert f"--out {path} ends in .{out.rsplit('.')[-1].lower()} but --format is {fmt}" in line
+    assert not path.exists()
+
+
+def test_export_agreeing_or_unknown_suffix_with_format_still_writes(tmp_path, capsys):
+    from lcpbench.problems.lcpfile import read_lcp
+
+    for name, fmt in (("a.NPZ", "npz"), ("a.lcp", "dat")):  # no contradiction in either
+        assert main(["export", "--links", str(N), "--out", str(tmp_path / name),
+                     "--format", fmt]) == 0
+        assert read_lcp(tmp_path / name, fmt=fmt).size > 0
+    capsys.readouterr()
+
+
+def test_export_into_a_directory_is_refused(tmp_path, capsys):
+    folder = tmp_path / "out.dat"
+    folder.mkdir()
+    line = _one_line_refusal(capsys, ["export", "--links", str(N), "--out", str(folder)])
+    assert f"--out {folder}: is a directory" in line
+
+
+@pytest.mark.parametrize("extra", [["--height", "3"], ["--height", "4mm", "--channel"]])
+def test_height_with_a_wall_profile_is_refused(capsys, extra):
+    line = _one_line_refusal(capsys, ["solve", "--links", str(N), "--wall-profile", PROFILE,
+                                      *extra])
+    assert "--height" in line and "--wall-profile" in line and "drop one" in line
+
+
+def test_the_default_height_is_still_the_scenes(capsys):
+    code, d, _ = run_json(capsys, ["solve", "--links", str(N), "--theta", "30", "--weight",
+                                   "0", "--json"])
+    assert code == 0 and d["scene"]["height"] == lcpbench.ActuatorScene().height
+
+
+def _bad_lcp_files(tmp_path) -> dict:
+    zero = tmp_path / "zero.dat"
+    zero.symlink_to("/dev/zero")
+    huge = tmp_path / "huge.dat"
+    with open(huge, "wb") as fh:  # sparse: says n = 3, takes 2 GB (of NUL bytes)
+        fh.write(b"3\n0\n3 3\n3 3\n")
+        fh.truncate(2 * 10**9)
+    digits = tmp_path / "digits.dat"
+    digits.write_text("9" * 5000 + "\n0\n2 2\n2 2\n1 0 0 1\n-1 -1\n")
+    latin = tmp_path / "latin1.dat"
+    latin.write_bytes("2\n0\n2 2\n2 2\n1 0 0 1\n-1 -1\n# Müller\n".encode("latin-1"))
+    return {zero: "is a device, not a regular file",
+            huge: "refused without reading it",
+            digits: "the problem size n has 5000 digits",
+            latin: "not UTF-8 text"}
+
+
+def test_lcp_refuses_unbounded_or_broken_files_in_one_line(tmp_path, capsys):
+    for path, what in _bad_lcp_files(tmp_path).items():
+        line = _one_line_refusal(capsys, ["lcp", str(path)])
+        assert f"{path}: " in line and what in line, line

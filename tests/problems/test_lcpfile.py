@@ -7,6 +7,7 @@ The peer collection's README is the independent reference for the layout:
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import numpy as np
@@ -325,3 +326,113 @@ def test_npz_of_normal_size_still_reads(tmp_path):
     prob = read_lcp(path)
     np.testing.assert_array_equal(prob.M, M)
     np.testing.assert_array_equal(prob.q, q)
+
+
+# -- bounded reading (issue 36): refused before reading, parsed as a stream ---------------
+def _one_line(info, path) -> str:
+    msg = str(info.value)
+    assert str(path) in msg and "\n" not in msg
+    return msg
+
+
+def test_a_device_is_refused_before_it_is_opened(tmp_path):
+    link = tmp_path / "zero.dat"  # /dev/zero never ends: reading it would fill the memory
+    link.symlink_to("/dev/zero")
+    with pytest.raises(ProblemError, match="is a device, not a regular file") as info:
+        read_lcp(link)
+    _one_line(info, link)
+    with pytest.raises(ProblemError, match="is a device, not a regular file"):
+        read_lcp("/dev/zero", fmt="npz")
+
+
+def test_a_directory_and_a_pipe_are_refused(tmp_path):
+    folder = tmp_path / "folder.dat"
+    folder.mkdir()
+    with pytest.raises(ProblemError, match="is a directory, not a regular file"):
+        read_lcp(folder)
+    fifo = tmp_path / "fifo.dat"
+    os.mkfifo(fifo)  # opening it would wait for a writer
+    with pytest.raises(ProblemError, match="is a pipe, not a regular file"):
+        read_lcp(fifo)
+
+
+def test_a_file_far_larger_than_its_header_promises_is_refused_unread(tmp_path):
+    # n = 3, dense: 3*3 + 3 + 5 = 17 numbers, at most 17 * 64 bytes + 1 MiB of comments.
+    # The file is sparse (no disk): 2 GB of NUL bytes that would take > 1 GB to read.
+    path = tmp_path / "huge.dat"
+    with open(path, "wb") as fh:
+        fh.write(b"3\n0\n3 3\n3 3\n")
+        fh.truncate(2 * 10**9)
+    with pytest.raises(ProblemError) as info:
+        read_lcp(path)
+    msg = _one_line(info, path)
+    assert f"takes {2 * 10**9} bytes" in msg and "n = 3" in msg
+    assert f"at most {17 * lcpfile.BYTES_PER_NUMBER + lcpfile.FREE_TEXT_BYTES} bytes" in msg
+    assert "refused without reading it" in msg
+
+
+def test_the_size_bound_of_a_block_file_counts_its_block_numbers(tmp_path):
+    # sparse block storage, n = 2: at most 2*4 + 5*2 + 10 = 28 numbers
+    limit = 28 * lcpfile.BYTES_PER_NUMBER + lcpfile.FREE_TEXT_BYTES
+    path = tmp_path / "blk.dat"
+    path.write_text("2\n1\n2\n2\n1\n1\n1\n2\n2\n2\n1\n0 1\n0\n0\n2 1 1 2\n-5 -6\n"
+                    + "#" * (limit + 1))
+    with pytest.raises(ProblemError, match=f"at most {limit} bytes"):
+        read_lcp(path)
+    path.write_text(GOOD + "# " + "a note " * 1000)  # free text well within the bound
+    np.testing.assert_array_equal(read_lcp(path).M, np.eye(2))
+
+
+def test_a_5000_digit_integer_is_one_line(tmp_path):
+    path = tmp_path / "digits.dat"
+    path.write_text("1" * 5000 + "\n0\n2 2\n2 2\n1 0 0 1\n-1 -1\n")
+    with pytest.raises(ProblemError, match="line 1: the problem size n has 5000 digits"):
+        read_lcp(path)
+    path.write_text(GOOD.replace("1 0\n", "1" * 5000 + " 0\n"))
+    with pytest.raises(ProblemError, match="line 6: a number of more than 4096 characters"
+                       ) as info:
+        read_lcp(path)
+    assert len(str(info.value)) < 300  # the token is not printed whole
+    path.write_text(GOOD.replace("1 0\n", "1" * 400 + " 0\n"))  # 1.1e399: inf
+    with pytest.raises(ProblemError, match=r"line 6: non-finite value '1+'\.\.\. \(400 char"):
+        read_lcp(path)
+
+
+def test_text_that_is_not_utf8_is_one_line(tmp_path):
+    path = tmp_path / "latin1.dat"
+    path.write_bytes(GOOD.encode() + "# Müller\n".encode("latin-1"))
+    with pytest.raises(ProblemError, match="not UTF-8 text") as info:
+        read_lcp(path)
+    _one_line(info, path)
+
+
+@pytest.mark.parametrize("chunk", [1, 2, 3, 5, 8, 13])
+def test_tokens_comments_and_line_numbers_across_chunk_boundaries(tmp_path, monkeypatch,
+                                                                  chunk):
+    monkeypatch.setattr(lcpfile, "CHUNK_CHARS", chunk)
+    path = tmp_path / "c.dat"
+    path.write_text("# header ##\n2#n\n0\n2\n2\n2 2 # dims\n1 0#col 0\n0 1\n-1 -1\nnote 3 4\n")
+    prob = read_lcp(path)
+    np.testing.assert_array_equal(prob.M, np.eye(2))
+    np.testing.assert_array_equal(prob.q, [-1.0, -1.0])
+    for text, match in (MALFORMED["non-numeric in M"], MALFORMED["extra numbers"],
+                        MALFORMED["block too short"]):
+        path.write_text(text)
+        with pytest.raises(ProblemError, match=match):
+            read_lcp(path)
+
+
+def test_round_trip_in_small_chunks(tmp_path, monkeypatch):
+    monkeypatch.setattr(lcpfile, "CHUNK_CHARS", 7)
+    rng = np.random.default_rng(7)
+    M, q = rng.normal(size=(5, 5)), rng.normal(size=5)
+    prob = read_lcp(write_lcp(tmp_path / "r.dat", M, q))
+    assert prob.M.tobytes() == M.tobytes() and prob.q.tobytes() == q.tobytes()
+
+
+def test_a_token_longer_than_the_limit_across_chunks_is_refused(tmp_path, monkeypatch):
+    monkeypatch.setattr(lcpfile, "CHUNK_CHARS", 100)
+    path = tmp_path / "long.dat"
+    path.write_text(GOOD.replace("0 1\n", "0 " + "7" * 5000 + "\n"))
+    with pytest.raises(ProblemError, match="line 7: a token of more than 4096 characters"):
+        read_lcp(path)

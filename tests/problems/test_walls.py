@@ -140,3 +140,97 @@ def test_flat_scenes_keep_their_store_key_and_json():
     assert "profile" not in key
     with pytest.raises(ProblemError, match="wall_profile"):
         scene_key(ActuatorScene(wall_profile=WallProfile.flat(3.0)))
+
+
+# -- bounded input, one clear error (issue 36) ---------------------------------------------
+def _cli_main(capsys, *args):
+    """The CLI in this process: its status and stderr (a refusal is one line, status 2)."""
+    from lcpbench.cli import main
+
+    code = main(list(args))
+    return code, capsys.readouterr().err
+
+
+def _refused(capsys, *args) -> str:
+    code, err = _cli_main(capsys, *args)
+    assert code == 2 and err.count("\n") == 1 and "Traceback" not in err, err
+    assert err.startswith("lcpbench: error: ")
+    return err
+
+
+def test_a_device_profile_is_refused_unread(tmp_path, capsys):
+    with pytest.raises(ProblemError, match="wall_profile: '/dev/zero': is a device"):
+        load_profile_csv("/dev/zero")
+    err = _refused(capsys, "solve", "--wall-profile", "/dev/zero")
+    assert "--wall-profile: '/dev/zero': is a device, not a regular file" in err
+    folder = tmp_path / "dir.csv"
+    folder.mkdir()
+    with pytest.raises(ProblemError, match="is a directory, not a regular file"):
+        load_profile_csv(folder)
+
+
+def test_a_profile_csv_over_the_cap_is_refused_unread(tmp_path, capsys):
+    from lcpbench.problems import walls
+
+    big = tmp_path / "big.csv"
+    with open(big, "wb") as fh:  # sparse: 2 GB of NUL bytes cost no disk
+        fh.write(b"x,y\n0,3\n30,3\n")
+        fh.truncate(2 * 10**9)
+    with pytest.raises(ProblemError) as info:
+        load_profile_csv(big)
+    msg = str(info.value)
+    assert f"takes {2 * 10**9} bytes" in msg
+    assert f"at most {walls.MAX_PROFILE_BYTES} bytes (16 MiB" in msg and "\n" not in msg
+    assert walls.MAX_PROFILE_BYTES == 16 * 2**20
+    err = _refused(capsys, "solve", "--wall-profile", str(big))
+    assert "--wall-profile" in err and "at most 16777216 bytes" in err
+
+
+def test_a_profile_csv_that_is_not_utf8_is_one_line(tmp_path, capsys):
+    bad = tmp_path / "latin1.csv"
+    bad.write_bytes("x (mm),höhe\n0,3\n30,3\n".encode("latin-1"))
+    with pytest.raises(ProblemError, match="wall_profile: latin1.csv is not UTF-8 text"):
+        load_profile_csv(bad)
+    err = _refused(capsys, "solve", "--wall-profile", str(bad))
+    assert "--wall-profile: latin1.csv is not UTF-8 text" in err
+
+
+def test_a_profile_csv_with_a_utf8_bom_and_a_huge_field(tmp_path):
+    bom = tmp_path / "bom.csv"
+    bom.write_bytes("x,y\n0,3\n30,3\n".encode("utf-8-sig"))  # as spreadsheets write it
+    assert load_profile_csv(bom, "linear")(15.0) == pytest.approx(3.0)
+    huge = tmp_path / "huge.csv"
+    huge.write_text("x,y\n0,3\n" + "1" * 200_000 + ",3\n")  # past csv's field limit
+    with pytest.raises(ProblemError, match="huge.csv is not a CSV of x,y rows"):
+        load_profile_csv(huge)
+
+
+def _bump(x):
+    return 3 - 0.8 * np.exp(-((x - 14) / 3) ** 2)
+
+
+def _raises(x):
+    raise RuntimeError("lookup\ntable missing")
+
+
+@pytest.mark.parametrize("height, match", [
+    (_raises, "the height function raised RuntimeError: lookup table missing"),
+    (lambda x: 1 / 0, "the height function raised ZeroDivisionError"),
+    (lambda x: "3 mm", "the height function must return numbers .* returned str '3 mm'"),
+    (lambda x: None, "the height function must return numbers .* returned NoneType"),
+    (lambda x: [3.0, 3.0], "the height function must return one number per x"),
+])
+def test_a_user_function_that_raises_or_returns_no_numbers_is_one_error(height, match):
+    profile = WallProfile.from_function(height, name="mine")
+    with pytest.raises(ProblemError, match=f"wall_profile 'mine': {match}") as info:
+        ActuatorScene(theta=150, wall_profile=profile, links=20)
+    assert "\n" not in str(info.value)
+
+
+def test_a_user_slope_that_raises_is_one_error_from_solve():
+    import lcpbench
+
+    profile = WallProfile.from_function(_bump, slope=_raises, name="bump")
+    scene = ActuatorScene(theta=150, wall_profile=profile, links=20)  # h itself is fine
+    with pytest.raises(ProblemError, match="wall_profile 'bump': the slope function raised"):
+        lcpbench.solve(scene)

@@ -80,9 +80,11 @@ def add_scene_options(parser) -> None:
     a("--fit", default=None, metavar="SLOPE,INTERCEPT",
       help="your own calibration theta = SLOPE * P + INTERCEPT (degrees, P in "
            "the unit of --pressure) instead of --actuator")
-    a("--height", type=quantity_type("length", "height"), default=DEFAULT_HEIGHT,
+    # default None, so that a --height given beside --wall-profile can be refused
+    a("--height", type=quantity_type("length", "height"), default=None,
       metavar="MM", help=f"wall height above the pins; a bare number is mm, or give the "
-                         f"unit: 3mm, 0.003m (default {DEFAULT_HEIGHT:g})")
+                         f"unit: 3mm, 0.003m (default {DEFAULT_HEIGHT:g}; not with "
+                         f"--wall-profile)")
     a("--links", type=links_arg, default=None, metavar="N|auto",
       help=f"number of links, or 'auto' (default {DEFAULT_LINKS}; with --sections N over "
            f"the whole length, default {DEFAULT_LINKS} per {DEFAULT_LENGTH:g} mm)")
@@ -172,18 +174,22 @@ def add_tol_option(parser, what: str = "convergence threshold on max|d alpha|") 
                         help=f"{what}, rad (default {DEFAULT_TOL:g})")
 
 
-def add_solver_options(parser, default: str = DEFAULT_SOLVER) -> None:
+def add_solver_options(parser, default: str | None = DEFAULT_SOLVER,
+                       default_help: str | None = None) -> None:
     """Add ``--solver NAME`` and ``--settings PROFILE``.
 
     Parameters
     ----------
     parser : argparse.ArgumentParser
         The sub-command's parser.
-    default : str
-        The default back-end.
+    default : str or None
+        The default back-end (None: the command chooses).
+    default_help : str, optional
+        What the help says the default is (default: its name).
     """
+    said = default if default_help is None else default_help
     parser.add_argument("--solver", default=default, metavar="NAME",
-                        help=f"back-end (default {default}; `lcpbench solvers` lists them)")
+                        help=f"back-end (default {said}; `lcpbench solvers` lists them)")
     parser.add_argument("--settings", choices=tuple(PROFILES), default="default",
                         help="accuracy profile: the solver's own defaults, or a generic "
                              "tolerance low 1e-3, mid 1e-6, high 1e-9 (default: default)")
@@ -235,18 +241,22 @@ def _scene_as_given(args):
                                  or getattr(args, "lower_profile", None) is not None):
         raise ProblemError("--sections takes flat walls at +-height: drop --wall-profile and "
                            "--lower-profile (a wall profile is for one section)")
+    if args.height is not None and getattr(args, "wall_profile", None) is not None:
+        raise ProblemError("--height sets the height of a flat wall and --wall-profile gives "
+                           "the wall instead (--height would be ignored): drop one of them")
+    height = DEFAULT_HEIGHT if args.height is None else args.height
     if sections is not None and getattr(args, "wall_stiffness", math.inf) != math.inf:
         raise ProblemError("--wall-stiffness (elastic walls) is for one section: drop it or "
                            "--sections")
     if sections is not None and sections.strip() != "anchoring":
-        return _sectioned(args, sections)
+        return _sectioned(args, sections, height)
     if getattr(args, "gravity", "away") != "away" and sections is None:
         raise ProblemError("--gravity needs --sections (the single section's weight acts "
                            "away from the wall, as in the paper)")
-    for warning in implausible(args.theta, args.height, args.length):
+    for warning in implausible(args.theta, height, args.length):
         print(f"lcpbench: warning: {warning}", file=sys.stderr)
     links = DEFAULT_LINKS if args.links is None else args.links
-    kw = {"height": args.height, "links": links, "length": args.length, "EI": args.EI,
+    kw = {"height": height, "links": links, "length": args.length, "EI": args.EI,
           "weight": args.weight, "channel": args.channel, **_profiles(args)}
     if getattr(args, "wall_stiffness", math.inf) != math.inf:
         kw["wall_stiffness"] = args.wall_stiffness
@@ -257,7 +267,7 @@ def _scene_as_given(args):
         one = _single(args, {**kw, "links": DEFAULT_LINKS})
         from ..problems.sections import anchoring_actuator
 
-        return anchoring_actuator(one.theta, args.height, links=args.links,
+        return anchoring_actuator(one.theta, height, links=args.links,
                                   length=args.length, EI=args.EI, weight=args.weight,
                                   gravity=_GRAVITY[args.gravity])
     return _single(args, kw)
@@ -266,7 +276,7 @@ def _scene_as_given(args):
 _GRAVITY = {"away": "-y", "toward": "+y"}
 
 
-def _sectioned(args, text: str):
+def _sectioned(args, text: str, height: float):
     """``--sections THETA:LENGTH,...``: the SectionedScene it describes."""
     from ..problems.sections import SectionedScene, parse_sections
 
@@ -276,7 +286,7 @@ def _sectioned(args, text: str):
     if args.links == "auto":
         raise ProblemError("--links auto is for one section; give N with --sections")
     secs = parse_sections(text, length=args.length, EI=args.EI, weight=args.weight)
-    return SectionedScene(sections=secs, height=args.height, links=args.links,
+    return SectionedScene(sections=secs, height=height, links=args.links,
                           channel=args.channel, gravity=_GRAVITY[args.gravity])
 
 

@@ -14,10 +14,13 @@
 from __future__ import annotations
 
 import math
+import os
+from pathlib import PurePath
 
 import numpy as np
 
 from ..api import solve
+from ..errors import ProblemError
 from ..model.driver import METHODS
 from ..model.result_view import pressure_rows
 from ..problems.scenes import DEFAULT_LINKS
@@ -81,7 +84,8 @@ def register(subparsers) -> None:
     add_tol_option(e, "convergence threshold of the solve")
     e.add_argument("--format", choices=("dat", "npz"), default=None,
                    help="Siconos .dat (dense, column-major) or numpy .npz (M, q); "
-                        "default: from the suffix of --out")
+                        "default: from the suffix of --out (a .dat or .npz suffix that "
+                        "contradicts --format is refused)")
     e.add_argument("--out", required=True, metavar="FILE", help="where to write")
     e.add_argument("--raw", action="store_true",
                    help="physical units (mm, N) instead of the nondimensionalised step "
@@ -93,7 +97,11 @@ def register(subparsers) -> None:
         description="Solve 0 <= z _|_ M z + q >= 0 from a Siconos .dat or a .npz file and "
                     "print z, w, status, iterations, time and residuals.")
     lp.add_argument("file", metavar="FILE", help="a .dat (Siconos) or .npz (M, q) file")
-    add_solver_options(lp, default="lemke")
+    from ..solvers.runner import LEMKE_DEFAULT_MAX_SIZE
+
+    add_solver_options(lp, default=None,
+                       default_help="active-set where M is symmetric positive definite, "
+                                    f"lemke otherwise, up to n = {LEMKE_DEFAULT_MAX_SIZE}")
     add_json_option(lp)
     lp.set_defaults(func=cmd_lcp)
 
@@ -210,11 +218,21 @@ def _judge_rows(result) -> list[tuple[str, str]]:
 
 
 # -- commands -----------------------------------------------------------------
+def _not_a_directory(option: str, path: str, example: str) -> None:
+    """ProblemError when the file an option names is an existing directory (matplotlib
+    would write DIR.png beside it, numpy into a file of another name)."""
+    if os.path.isdir(path):
+        raise ProblemError(f"{option} {path}: is a directory; give the file to write, "
+                           f"e.g. {os.path.join(path, example)}")
+
+
 def cmd_solve(args) -> int:
     """``lcpbench solve``: 0 converged, 1 not converged, 2 bad input or plot error."""
     if args.plot is not None and not has_matplotlib():
         error_line("--plot needs matplotlib: pip install 'lcpbench[plot]'")
         return 2
+    if args.plot is not None:
+        _not_a_directory("--plot", args.plot, "shape.png")
     scene = scene_from(args)
     result = solve(scene, solver=args.solver, tol=args.tol, method=args.method,
                    settings=args.settings, scaled=not args.raw,
@@ -247,13 +265,17 @@ def cmd_export(args) -> int:
     from ..model.step_solver import step_lcp
     from ..problems.lcpfile import write_lcp
 
+    _not_a_directory("--out", args.out, "step.dat")
     fmt = args.format
+    suffix = PurePath(args.out).suffix.lower().lstrip(".")
     if fmt is None:
-        suffix = args.out.rsplit(".", 1)[-1].lower() if "." in args.out else ""
         if suffix not in ("dat", "npz"):
             error_line(f"--out {args.out}: give a .dat or .npz suffix, or --format dat|npz")
             return 2
         fmt = suffix
+    elif suffix in ("dat", "npz") and suffix != fmt:
+        raise ProblemError(f"--out {args.out} ends in .{suffix} but --format is {fmt}: make "
+                           f"them agree (or leave --format out: it follows the suffix)")
     scene = scene_from(args)
     result = solve(scene, tol=args.tol)
     if not result.converged:
@@ -272,15 +294,21 @@ def cmd_export(args) -> int:
 def cmd_lcp(args) -> int:
     """``lcpbench lcp``: solve an LCP file; 0 solved, 1 not."""
     from ..problems.lcpfile import read_lcp
-    from ..solvers.runner import solve_lcp
+    from ..solvers.runner import default_lcp_solver, solve_lcp
 
     prob = read_lcp(args.file)
-    sol = solve_lcp(prob.M, prob.q, args.solver, args.settings)
+    if args.solver is None:
+        solver, why = default_lcp_solver(prob.M)
+        choice = f"the default, as {why}"
+    else:
+        solver, choice = args.solver, "given by --solver"
+    sol = solve_lcp(prob.M, prob.q, solver, args.settings)
     res = sol.extra.get("residuals", {})
     # lcp_residuals divides natural, min_w and complementarity by max(1, |q|_inf); say so
     scale = max(1.0, float(np.max(np.abs(prob.q), initial=0.0)))
     out = {
         "file": args.file, "size": int(prob.q.size), "solver": sol.extra.get("backend"),
+        "solver_choice": choice,
         "settings": args.settings, "status": sol.status.value, "message": sol.message,
         "iterations": sol.iterations, "solve_time_s": sol.solve_time,
         "setup_time_s": sol.setup_time, "time_source": sol.extra.get("time_source", "solver"),
@@ -295,7 +323,7 @@ def cmd_lcp(args) -> int:
         with np.printoptions(precision=6, threshold=20, edgeitems=5, linewidth=100):
             rows = [
                 ("problem", f"{args.file} (n = {prob.q.size})"),
-                ("solver", f"{out['solver']} (settings {args.settings})"),
+                ("solver", f"{out['solver']} (settings {args.settings}; {choice})"),
                 ("status", sol.status.value + (f" ({sol.message})" if sol.message else "")),
                 ("iterations", str(sol.iterations)),
                 ("time", f"solve {1e6 * sol.solve_time:.1f} us, setup "

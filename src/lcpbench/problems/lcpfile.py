@@ -39,12 +39,25 @@ size is checked as soon as it is known — the header of a ``.dat`` file, the
 ``.npy`` headers inside an ``.npz`` archive — before anything is allocated:
 a file declaring more is refused with a ProblemError that gives the declared
 size, the memory it would need and the limit (never a MemoryError).
+
+Bounded reading
+---------------
+Only regular files are read: a device (``/dev/zero``), a pipe or a directory is
+refused before it is opened. A ``.dat`` file is refused, from its size and
+header alone, when it takes more than :data:`BYTES_PER_NUMBER` bytes per
+number the header promises plus :data:`FREE_TEXT_BYTES` (a 2 GB file that
+says n = 3 is not read). It is then parsed as a stream, :data:`CHUNK_CHARS`
+characters at a time, into the arrays: the memory is M and q plus one chunk.
+Text that is not UTF-8, a token longer than :data:`MAX_TOKEN_CHARS` and a
+header integer of more than :data:`MAX_INT_DIGITS` digits are one-line
+ProblemErrors naming the file.
 """
 
 from __future__ import annotations
 
 import os
 import re
+import stat
 import zipfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -60,6 +73,17 @@ _INT = re.compile(r"[+-]?\d+\Z")
 
 #: Largest n read into a dense n x n float64 M (16384² x 8 bytes = 2 GiB).
 MAX_SIZE = 16384
+#: Most bytes a ``.dat`` file may take per number its header promises (``%.17g`` takes
+#: at most 24 and a separator) ...
+BYTES_PER_NUMBER = 64
+#: ... plus this many for the header, comments and a note after ``q``.
+FREE_TEXT_BYTES = 2**20
+#: Characters read from a ``.dat`` file at a time: the text in memory at once.
+CHUNK_CHARS = 2**20
+#: Longest token of a ``.dat`` file, in characters (a number takes at most a few dozen).
+MAX_TOKEN_CHARS = 4096
+#: Most digits of an integer in a ``.dat`` header (n itself is at most MAX_SIZE).
+MAX_INT_DIGITS = 18
 
 
 def _gib(nbytes: float) -> str:
@@ -130,30 +154,103 @@ def _check_arrays(M, q, where: str) -> tuple[np.ndarray, np.ndarray]:
 
 
 # -- Siconos .dat ---------------------------------------------------------------------------
-class _Tokens:
-    """The whitespace-separated tokens of a text file, comments dropped, with line numbers."""
+def _show(tok: str) -> str:
+    """A token for a message: quoted, and cut short when it is long."""
+    if len(tok) <= 40:
+        return repr(tok)
+    return f"{tok[:20]!r}... ({len(tok)} characters)"
 
-    def __init__(self, path: Path, text: str):
+
+class _Tokens:
+    """The whitespace-separated tokens of a text file, comments dropped, with line numbers.
+
+    The file is read as a stream, :data:`CHUNK_CHARS` characters at a time: besides the
+    arrays being filled, the reader holds one chunk and its tokens, never the whole text.
+    """
+
+    def __init__(self, path: Path, fh):
         self.path = path
-        self.toks: list[tuple[str, int]] = []
-        for lineno, line in enumerate(text.splitlines(), start=1):
-            self.toks.extend((t, lineno) for t in line.split("#", 1)[0].split())
-        self.pos = 0
+        self._fh = fh
+        self._toks: list[str] = []    # the tokens of the chunk in hand ...
+        self._lines: list[int] = []   # ... and their line numbers
+        self._pos = 0
+        self._carry = ""              # a token cut by the end of the chunk
+        self._lineno = 1
+        self._in_comment = False
+        self._eof = False
 
     def error(self, what: str) -> ProblemError:
         return ProblemError(f"{self.path}: {what}")
 
-    def _next(self, what: str) -> tuple[str, int]:
-        if self.pos >= len(self.toks):
-            raise self.error(f"file ends early: expected {what}")
-        tok = self.toks[self.pos]
-        self.pos += 1
-        return tok
+    # -- the stream -------------------------------------------------------------------
+    def _read(self) -> str:
+        try:
+            return self._fh.read(CHUNK_CHARS)
+        except UnicodeDecodeError as exc:
+            raise self.error(f"cannot read: not UTF-8 text after line {self._lineno} "
+                             f"({exc.reason})") from None
+        except OSError as exc:
+            raise self.error(f"cannot read ({exc.strerror or exc})") from exc
 
+    def _scan(self, text: str) -> None:
+        """Append the tokens of ``text`` (which ends between tokens) to the chunk in hand."""
+        for i, part in enumerate(text.split("\n")):
+            if i:
+                self._lineno += 1
+                self._in_comment = False
+            if self._in_comment:
+                continue
+            head, hash_, _ = part.partition("#")
+            self._in_comment = bool(hash_)
+            words = head.split()
+            self._toks.extend(words)
+            self._lines.extend([self._lineno] * len(words))
+
+    def _fill(self) -> bool:
+        """Read on until a token is in hand; False at the end of the file."""
+        while self._pos >= len(self._toks):
+            if self._eof:
+                return False
+            if len(self._carry) > MAX_TOKEN_CHARS:
+                raise self.error(f"line {self._lineno}: a token of more than "
+                                 f"{MAX_TOKEN_CHARS} characters ({_show(self._carry)})")
+            self._toks, self._lines, self._pos = [], [], 0
+            chunk = self._read()
+            text = self._carry + chunk
+            if not chunk:
+                self._eof, self._carry = True, ""
+                self._scan(text)
+                continue
+            cut = max(text.rfind(c) for c in " \t\n\r\f\v")
+            self._carry = text[cut + 1:]
+            self._scan(text[:cut + 1])
+            if self._in_comment:  # the cut token is part of a comment
+                self._carry = ""
+            elif "#" in self._carry:  # a token ended by a comment
+                self._scan(self._carry)
+                self._carry = ""
+        return True
+
+    def _next(self, what: str) -> tuple[str, int]:
+        if not self._fill():
+            raise self.error(f"file ends early: expected {what}")
+        self._pos += 1
+        return self._toks[self._pos - 1], self._lines[self._pos - 1]
+
+    @property
+    def line(self) -> int:
+        """The line reached (of the last token taken)."""
+        return self._lines[self._pos - 1] if self._pos else self._lineno
+
+    # -- values -----------------------------------------------------------------------
     def integer(self, what: str, low: int = 0) -> int:
         tok, line = self._next(what)
         if not _INT.match(tok):
-            raise self.error(f"line {line}: expected an integer for {what}, got {tok!r}")
+            raise self.error(f"line {line}: expected an integer for {what}, got {_show(tok)}")
+        digits = len(tok.lstrip("+-").lstrip("0"))
+        if digits > MAX_INT_DIGITS:
+            raise self.error(f"line {line}: {what} has {digits} digits; the header's "
+                             f"integers have at most {MAX_INT_DIGITS}")
         value = int(tok)
         if value < low:
             raise self.error(f"line {line}: {what} must be >= {low}, got {value}")
@@ -163,32 +260,46 @@ class _Tokens:
         return [self.integer(what, low) for _ in range(count)]
 
     def floats(self, count: int, what: str) -> np.ndarray:
-        end = self.pos + count
-        if end > len(self.toks):
-            hint = " (M or q too short?)" if what == "q" else ""
-            raise self.error(f"file ends early: {what} needs {count} numbers, "
-                             f"found {len(self.toks) - self.pos}{hint}")
-        chunk = self.toks[self.pos:end]
-        try:
-            values = np.array([float(t) for t, _ in chunk])
-        except ValueError:
-            tok, line = next((t, ln) for t, ln in chunk if not _is_float(t))
-            raise self.error(f"line {line}: non-numeric token {tok!r} in {what}") from None
-        bad = np.flatnonzero(~np.isfinite(values))
-        if bad.size:
-            tok, line = chunk[int(bad[0])]
-            raise self.error(f"line {line}: non-finite value {tok!r} in {what}")
-        self.pos = end
-        return values
+        """The next ``count`` numbers, read chunk by chunk into one float array."""
+        out = np.empty(count)
+        done = 0
+        while done < count:
+            if not self._fill():
+                hint = " (M or q too short?)" if what == "q" else ""
+                raise self.error(f"file ends early: {what} needs {count} numbers, "
+                                 f"found {done}{hint}")
+            take = min(count - done, len(self._toks) - self._pos)
+            chunk = self._toks[self._pos:self._pos + take]
+            if max(map(len, chunk)) > MAX_TOKEN_CHARS:
+                i = next(i for i, t in enumerate(chunk) if len(t) > MAX_TOKEN_CHARS)
+                raise self.error(f"line {self._lines[self._pos + i]}: a number of more than "
+                                 f"{MAX_TOKEN_CHARS} characters in {what} ({_show(chunk[i])})")
+            try:
+                values = np.array([float(t) for t in chunk])
+            except ValueError:
+                i = next(i for i, t in enumerate(chunk) if not _is_float(t))
+                raise self.error(f"line {self._lines[self._pos + i]}: non-numeric token "
+                                 f"{_show(chunk[i])} in {what}") from None
+            bad = np.flatnonzero(~np.isfinite(values))
+            if bad.size:
+                i = int(bad[0])
+                raise self.error(f"line {self._lines[self._pos + i]}: non-finite value "
+                                 f"{_show(chunk[i])} in {what}")
+            out[done:done + take] = values
+            done += take
+            self._pos += take
+        return out
 
     def check_end(self) -> None:
         """Free text may follow ``q``; further numbers mean a wrong count."""
-        if self.pos < len(self.toks):
-            tok, line = self.toks[self.pos]
-            if _is_float(tok):
-                extra = sum(1 for t, _ in self.toks[self.pos:] if _is_float(t))
-                raise self.error(f"line {line}: {extra} extra number(s) after q "
-                                 "(wrong n or matrix size?)")
+        if not self._fill() or not _is_float(self._toks[self._pos]):
+            return
+        line, extra = self._lines[self._pos], 0
+        while self._fill():
+            extra += sum(1 for t in self._toks[self._pos:] if _is_float(t))
+            self._pos = len(self._toks)
+        raise self.error(f"line {line}: {extra} extra number(s) after q "
+                         "(wrong n or matrix size?)")
 
 
 def _is_float(tok: str) -> bool:
@@ -242,14 +353,28 @@ def _read_block(tk: _Tokens, size0: int, size1: int) -> np.ndarray:
     return M
 
 
-def _read_dat(path: Path, text: str) -> LCPProblem:
-    tk = _Tokens(path, text)
+def _check_bytes(path: Path, nbytes: int, n: int, storage: int) -> None:
+    """Refuse a file far larger than the numbers its header promises can take."""
+    # dense: 5 header integers, M and q; sparse block: at most n² entries, as many block
+    # numbers, and O(n) sizes and pointers
+    numbers = n * n + n + 5 if storage == 0 else 2 * n * n + 5 * n + 10
+    limit = BYTES_PER_NUMBER * numbers + FREE_TEXT_BYTES
+    if nbytes > limit:
+        raise ProblemError(
+            f"{path}: the file takes {nbytes} bytes, far more than an LCP of size n = {n} "
+            f"({numbers} numbers) can: at most {limit} bytes ({BYTES_PER_NUMBER} per number "
+            f"and {FREE_TEXT_BYTES} for comments); refused without reading it")
+
+
+def _read_dat(path: Path, fh, nbytes: int) -> LCPProblem:
+    tk = _Tokens(path, fh)
     n = tk.integer("the problem size n", 1)
     check_size(n, str(path))
     storage = tk.integer("the storage code (0 dense, 1 sparse block)")
     if storage not in (0, 1):
         raise tk.error(f"unknown storage code {storage}; expected 0 (dense) or "
                        "1 (sparse block)")
+    _check_bytes(path, nbytes, n, storage)
     size0 = tk.integer("the matrix row count", 1)
     size1 = tk.integer("the matrix column count", 1)
     if (size0, size1) != (n, n):
@@ -330,21 +455,46 @@ def read_lcp(path: str | os.PathLike, *, fmt: str | None = None) -> LCPProblem:
     ------
     ProblemError
         One line naming the file and the fault: missing or unreadable file,
-        unknown suffix or format, unknown storage code, non-integer header,
+        not a regular file (a device, pipe or directory), a ``.dat`` file far
+        larger than its header's n allows, text that is not UTF-8, an oversized
+        number, unknown suffix or format, unknown storage code, non-integer header,
         non-numeric or non-finite entries, too few numbers or extra numbers
         after ``q``, inconsistent sizes or block structure.
     """
     path = Path(path)
     fmt = _format_of(path, fmt)
+    nbytes = regular_file_size(path)
     try:
         if fmt == "npz":
             return _read_npz(path)
-        text = path.read_text(encoding="utf-8")
+        with open(path, encoding="utf-8") as fh:
+            return _read_dat(path, fh, nbytes)
     except FileNotFoundError:
         raise ProblemError(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ProblemError(f"{path}: cannot read ({exc})") from exc
-    return _read_dat(path, text)
+    except OSError as exc:
+        raise ProblemError(f"{path}: cannot read ({exc.strerror or exc})") from exc
+
+
+def regular_file_size(path: Path, what: str | None = None) -> int:
+    """The size in bytes of the regular file ``path``, or ProblemError (one line).
+
+    A device (``/dev/zero``), a pipe or a directory is refused before it is opened: a
+    device never ends, and opening a pipe waits for a writer. ``what`` starts the
+    message (default: the path).
+    """
+    where = str(path) if what is None else what
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        raise ProblemError(f"{where}: no such file") from None
+    except OSError as exc:
+        raise ProblemError(f"{where}: cannot read ({exc.strerror or exc})") from exc
+    if not stat.S_ISREG(st.st_mode):
+        kind = ("a directory" if stat.S_ISDIR(st.st_mode) else
+                "a device" if stat.S_ISCHR(st.st_mode) or stat.S_ISBLK(st.st_mode) else
+                "a pipe" if stat.S_ISFIFO(st.st_mode) else "a socket or other special file")
+        raise ProblemError(f"{where}: is {kind}, not a regular file")
+    return int(st.st_size)
 
 
 def write_lcp(path: str | os.PathLike, M, q, *, fmt: str | None = None) -> Path:

@@ -21,6 +21,7 @@ than two points, an unknown ``kind``, a profile at or below the pin line
 from __future__ import annotations
 
 import csv
+from array import array
 from collections.abc import Callable
 from pathlib import Path
 
@@ -33,6 +34,39 @@ KINDS = ("linear", "pchip", "cubic")
 SAMPLES = 2001
 #: relative step of the central differences for a function given without its slope
 FD_STEP = 1e-5
+#: largest profile CSV read, bytes (16 MiB: about half a million x,y rows)
+MAX_PROFILE_BYTES = 16 * 2**20
+
+
+def _checked(fun: Callable, what: str, name: str) -> Callable:
+    """``fun`` (a user's h, h' or h'') whose exceptions and non-numeric answers are one
+    ProblemError naming the profile, never a traceback from inside the model."""
+    def call(t):
+        try:
+            value = fun(t)
+        except ProblemError:
+            raise
+        except Exception as exc:
+            why = " ".join(str(exc).split())[:200]
+            raise ProblemError(f"wall_profile {name!r}: the {what} function raised "
+                               f"{type(exc).__name__}: {why}") from exc
+        try:
+            arr = np.asarray(value)
+        except Exception:
+            arr = np.asarray(None)
+        if arr.dtype.kind not in "biuf":
+            raise ProblemError(f"wall_profile {name!r}: the {what} function must return "
+                               f"numbers (mm, one per x), it returned "
+                               f"{type(value).__name__} {repr(value)[:60]}")
+        try:
+            np.broadcast_shapes(arr.shape, np.shape(t))
+        except ValueError:
+            raise ProblemError(f"wall_profile {name!r}: the {what} function must return one "
+                               f"number per x: {np.size(t)} x values gave shape "
+                               f"{arr.shape}") from None
+        return arr.astype(float, copy=False)
+
+    return call
 
 
 class WallProfile:
@@ -133,6 +167,10 @@ class WallProfile:
                                f"got {x_range!r}")
         scale = 1.0 if not np.isfinite(hi - lo) else max(hi - lo, 1e-9)
         d = FD_STEP * scale
+        key = ("function", id(height))
+        height = _checked(height, "height", name)
+        slope = None if slope is None else _checked(slope, "slope", name)
+        curvature = None if curvature is None else _checked(curvature, "curvature", name)
 
         def h(t):
             t = np.asarray(t, dtype=float)
@@ -153,7 +191,7 @@ class WallProfile:
                 v = (dh(c + d) - dh(c - d)) / (2 * d)
             return np.where((t < lo) | (t > hi), 0.0, np.asarray(v, float) * np.ones_like(t))
 
-        return cls(h, dh, d2h, x_range=(lo, hi), name=name, key=("function", id(height)))
+        return cls(h, dh, d2h, x_range=(lo, hi), name=name, key=key)
 
     @classmethod
     def flat(cls, height: float) -> WallProfile:
@@ -226,33 +264,67 @@ def load_profile_csv(path, kind: str = "pchip", *, parameter: str = "wall_profil
                      ) -> WallProfile:
     """A profile from a CSV file: a header line, then one ``x,y`` pair (mm) per line.
 
-    Blank lines and lines starting with ``#`` are skipped.
+    Blank lines and lines starting with ``#`` are skipped. The file must be a
+    regular file (not a device such as ``/dev/zero``, a pipe or a directory) of
+    at most :data:`MAX_PROFILE_BYTES`, in UTF-8; it is read line by line into
+    the table. Anything else is one ProblemError naming ``parameter``.
     """
+    from .lcpfile import regular_file_size
+
     p = Path(path)
+    size = regular_file_size(p, f"{parameter}: {str(p)!r}")
+    if size > MAX_PROFILE_BYTES:
+        raise ProblemError(f"{parameter}: {str(p)!r} takes {size} bytes; a profile CSV may "
+                           f"take at most {MAX_PROFILE_BYTES} bytes (16 MiB, about half a "
+                           f"million x,y rows)")
     try:
-        text = p.read_text()
+        with open(p, encoding="utf-8-sig", newline="") as fh:
+            xs, ys = _csv_rows(fh, p.name, parameter)
+    except UnicodeDecodeError as exc:
+        raise ProblemError(f"{parameter}: {p.name} is not UTF-8 text ({exc.reason})") from None
+    except csv.Error as exc:
+        raise ProblemError(f"{parameter}: {p.name} is not a CSV of x,y rows ({exc})") from None
     except OSError as exc:
         raise ProblemError(f"{parameter}: cannot read {str(p)!r} ({exc.strerror})") from exc
-    rows = [r for r in csv.reader(text.splitlines())
-            if r and any(c.strip() for c in r) and not r[0].lstrip().startswith("#")]
-    if not rows:
-        raise ProblemError(f"{parameter}: {p.name} is empty (expected a header and x,y rows)")
-    try:
-        [float(c) for c in rows[0]]
-    except ValueError:
-        pass
-    else:
-        raise ProblemError(f"{parameter}: {p.name} must start with a header line (e.g. x,y), "
-                           f"got the numbers {','.join(rows[0])!r}")
-    xs, ys = [], []
-    for line, row in enumerate(rows[1:], start=2):
-        if len(row) != 2:
-            raise ProblemError(f"{parameter}: {p.name} row {line} must be x,y (two numbers), "
-                               f"got {','.join(row)!r}")
-        try:
-            xs.append(float(row[0]))
-            ys.append(float(row[1]))
-        except ValueError:
-            raise ProblemError(f"{parameter}: {p.name} row {line} is not two numbers: "
-                               f"{','.join(row)!r}") from None
     return WallProfile.from_table(xs, ys, kind, name=p.name, parameter=parameter)
+
+
+def _bounded(fh, name: str, parameter: str):
+    """The lines of ``fh``, refusing to go past MAX_PROFILE_BYTES (a file still growing)."""
+    total = 0
+    for line in fh:
+        total += len(line)
+        if total > MAX_PROFILE_BYTES:
+            raise ProblemError(f"{parameter}: {name} grew past {MAX_PROFILE_BYTES} bytes "
+                               "while it was read")
+        yield line
+
+
+def _csv_rows(fh, name: str, parameter: str) -> tuple[array, array]:
+    """The x and y columns of an open profile CSV (header checked, then skipped)."""
+    xs, ys = array("d"), array("d")
+    count = 0  # rows that are neither blank nor comments
+    for row in csv.reader(_bounded(fh, name, parameter)):
+        if not row or not any(c.strip() for c in row) or row[0].lstrip().startswith("#"):
+            continue
+        count += 1
+        if count == 1:
+            try:
+                [float(c) for c in row]
+            except ValueError:
+                continue  # the header
+            raise ProblemError(f"{parameter}: {name} must start with a header line (e.g. "
+                               f"x,y), got the numbers {','.join(row)!r}")
+        if len(row) != 2:
+            raise ProblemError(f"{parameter}: {name} row {count} must be x,y (two numbers), "
+                               f"got {','.join(row)[:80]!r}")
+        try:
+            x, y = float(row[0]), float(row[1])
+        except ValueError:
+            raise ProblemError(f"{parameter}: {name} row {count} is not two numbers: "
+                               f"{','.join(row)[:80]!r}") from None
+        xs.append(x)
+        ys.append(y)
+    if count == 0:
+        raise ProblemError(f"{parameter}: {name} is empty (expected a header and x,y rows)")
+    return xs, ys

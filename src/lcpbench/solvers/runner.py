@@ -57,6 +57,54 @@ def _is_symmetric(M: np.ndarray) -> bool:
     return bool(np.max(np.abs(M - M.T), initial=0.0) <= 1e-12 * max(np.max(np.abs(M)), 1e-300))
 
 
+#: Largest n for which :func:`default_lcp_solver` picks Lemke (M not symmetric positive
+#: definite). Each pivot costs O(n²) and a dense problem takes about n/2 to n pivots or
+#: more: n = 800, 0.6 s; n = 3000 did not finish in 10 min.
+LEMKE_DEFAULT_MAX_SIZE = 1000
+
+
+def default_lcp_solver(M) -> tuple[str, str]:
+    """The back-end ``lcpbench lcp`` runs when none is named, and why.
+
+    ``"active-set"`` (the built-in box QP, O(n³) at worst) where M is symmetric
+    positive definite (symmetric to 1e-12 of max|M| and its Cholesky factor exists);
+    ``"lemke"`` otherwise, up to n = :data:`LEMKE_DEFAULT_MAX_SIZE`.
+
+    Parameters
+    ----------
+    M : ndarray, shape (n, n)
+
+    Returns
+    -------
+    (str, str)
+        The back-end's name and the reason, e.g. ``"M is symmetric positive definite"``.
+
+    Raises
+    ------
+    ProblemError
+        When M is not symmetric positive definite and n exceeds
+        :data:`LEMKE_DEFAULT_MAX_SIZE`: the message says which back-end to name instead.
+    """
+    M = np.asarray(M, dtype=float)
+    n = M.shape[0]
+    if _is_symmetric(M):
+        try:
+            np.linalg.cholesky(0.5 * (M + M.T))
+        except np.linalg.LinAlgError:
+            why = "M is symmetric but not positive definite"
+        else:
+            return "active-set", "M is symmetric positive definite"
+    else:
+        why = "M is not symmetric"
+    if n > LEMKE_DEFAULT_MAX_SIZE:
+        raise ProblemError(
+            f"solver: {why}, so the default would be Lemke, which lcpbench runs by default "
+            f"only up to n = {LEMKE_DEFAULT_MAX_SIZE} (its O(n^2) pivots take minutes "
+            f"beyond; this LCP has n = {n}): name a back-end with --solver, e.g. pgs or "
+            f"psor (iterative), or lemke to run it all the same")
+    return "lemke", why
+
+
 def solve_lcp(M, q, solver: str = "lemke", settings: str | Settings = "default",
               warm: np.ndarray | None = None) -> LCPSolution:
     """Solve ``0 <= z ⟂ M z + q >= 0`` with any back-end.
