@@ -8,12 +8,16 @@ restarted sweep skips what is already there, and ``replace=True`` (the
 CLI's ``--rerun``) overwrites it. Nothing else ever overwrites a row.
 
 A file that is not an lcpbench store raises
-:class:`~lcpbench.errors.StoreError` in one line and is left untouched (its
-bytes and modification time: it is inspected through a read-only
-connection): not SQLite, a failed integrity check, an empty file (0 bytes),
-an SQLite database with no tables, or with only views or other programs'
+:class:`~lcpbench.errors.StoreError` in one line and is left untouched: it
+is inspected through a read-only, immutable connection, so SQLite neither
+rolls back its ``-journal`` nor replays its ``-wal`` (their bytes and the
+file's stay as they are, no ``-shm`` is made) and no lock file is created.
+Refused: not SQLite, a failed integrity check, an empty file (0 bytes), an
+SQLite database with no tables, or with only views or other programs'
 tables, a ``meta`` table of another shape, a newer schema version, or
-missing ``runs``/``refs`` tables.
+missing ``runs``/``refs`` tables. Only a store found to be lcpbench's is then
+opened as usual (SQLite rolls back a hot journal of its own there) and
+checked for integrity.
 
 Sweeps take an exclusive lock (:meth:`Store.lock`): ``flock`` on
 ``<store>.lock`` beside the store, which records who holds it (pid, host,
@@ -178,13 +182,14 @@ class Store:
             raise StoreError(f"{where}: is a folder; give a file path (e.g. "
                              f"{self.path / 'lcpbench.sqlite'})")
         exists = self.path.exists()
+        recover = exists and bool(self._recovery_files())
         if not exists and not create:
             raise StoreError(f"{where}: no such file (run `lcpbench sweep` first)")
         if exists:
             if self.path.stat().st_size == 0:
                 raise StoreError(f"{where}: an empty file (0 bytes), not an lcpbench store; "
                                  "it was left as it is: remove it or pass another --store")
-            self.schema = self._inspect()
+            self._inspect(integrity=not recover)  # before anything may recover or lock it
         else:
             try:
                 self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -195,60 +200,80 @@ class Store:
         except sqlite3.Error as exc:
             raise StoreError(f"{where}: cannot open it ({exc})") from exc
         try:
-            if not exists:
+            if exists:  # lcpbench's: a hot journal of its own is rolled back here
+                self.schema = self._check(self.db, integrity=recover)
+            else:
                 self._create()
         except BaseException:
             self.db.close()
             raise
 
     # -- opening ------------------------------------------------------------------
-    def _inspect(self) -> int:
-        """Check an existing file is an lcpbench store without writing to it; its schema."""
+    def _inspect(self, *, integrity: bool) -> int:
+        """Check an existing file is an lcpbench store without letting SQLite touch it.
+
+        Opened read-only and immutable: SQLite neither replays a ``-wal`` file nor
+        rolls back a ``-journal`` (a foreign database's recovery is not ours to
+        run), creates no ``-shm`` and takes no lock. Returns the schema version.
+        """
         where = f"store {self.path}"
-        left = "it was left as it is: move it away or pass another --store"
-        hot = any(Path(f"{self.path}{s}").exists() for s in ("-journal", "-wal"))
         try:
-            # read-only, so a foreign file is never modified; a hot journal (a commit
-            # cut short by a kill) needs a writable connection to be rolled back
-            uri = self.path.resolve().as_uri() + ("" if hot else "?mode=ro")
-            db = sqlite3.connect(uri, uri=True, timeout=30.0)
+            uri = self.path.resolve().as_uri() + "?mode=ro&immutable=1"
+            db = sqlite3.connect(uri, uri=True)
         except sqlite3.Error as exc:
             raise StoreError(f"{where}: cannot open it ({exc})") from exc
         try:
-            try:
-                ok = db.execute("PRAGMA quick_check").fetchone()[0]
-                objects = db.execute("SELECT type, name FROM sqlite_master "
-                                     "WHERE name NOT LIKE 'sqlite_%'").fetchall()
-                tables = {name for kind, name in objects if kind == "table"}
-                columns = {t: [r[1] for r in db.execute(f"PRAGMA table_info({t})")]
-                           for t in _REQUIRED if t in tables}
-            except sqlite3.DatabaseError as exc:
-                raise StoreError(f"{where}: not a readable SQLite file ({exc}); "
-                                 f"{left}") from exc
-            if ok != "ok":
-                raise StoreError(f"{where}: fails SQLite's integrity check ({ok}); {left}")
-            if "meta" not in tables:
-                found = ", ".join(f"{k} {n}" for k, n in sorted(objects)) or "nothing"
-                raise StoreError(f"{where}: an SQLite file that is not an lcpbench store "
-                                 f"(holds {found}); {left}")
-            if columns["meta"] != list(_REQUIRED["meta"]):
-                raise StoreError(f"{where}: its meta table has columns "
-                                 f"({', '.join(columns['meta'])}), not (key, value): not an "
-                                 f"lcpbench store; {left}")
-            row = db.execute("SELECT value FROM meta WHERE key = 'schema'").fetchone()
-            found = "none" if row is None else str(row[0])
-            if found not in {str(v) for v in READABLE_VERSIONS}:
-                raise StoreError(f"{where}: schema version {found}, this lcpbench reads "
-                                 f"{', '.join(map(str, READABLE_VERSIONS))}; {left}")
-            for table, need in _REQUIRED.items():
-                missing = [c for c in need if c not in columns.get(table, [])]
-                if missing:
-                    what = (f"no {table} table" if table not in columns else
-                            f"table {table} lacks column(s) {', '.join(missing)}")
-                    raise StoreError(f"{where}: not a complete lcpbench store ({what}); {left}")
-            return int(found)
+            # with a -journal or -wal the file alone may be mid-commit: its integrity
+            # is checked once the store, found to be lcpbench's, is opened and recovered
+            return self._check(db, integrity=integrity)
         finally:
             db.close()
+
+    def _recovery_files(self) -> list[str]:
+        """The store's ``-journal``/``-wal`` files that exist (SQLite would recover them)."""
+        return [f"{self.path.name}{s}" for s in ("-journal", "-wal")
+                if Path(f"{self.path}{s}").exists()]
+
+    def _check(self, db: sqlite3.Connection, *, integrity: bool) -> int:
+        """Refuse (StoreError, one line) what is not an lcpbench store; its schema version."""
+        where = f"store {self.path}"
+        beside = " and ".join(self._recovery_files())
+        left = (f"it was left as it is{f' (with its {beside})' if beside else ''}: "
+                "move it away or pass another --store")
+        try:
+            ok = db.execute("PRAGMA quick_check").fetchone()[0] if integrity else "ok"
+            objects = db.execute("SELECT type, name FROM sqlite_master "
+                                 "WHERE name NOT LIKE 'sqlite_%'").fetchall()
+            tables = {name for kind, name in objects if kind == "table"}
+            columns = {t: [r[1] for r in db.execute(f"PRAGMA table_info({t})")]
+                       for t in _REQUIRED if t in tables}
+        except sqlite3.DatabaseError as exc:
+            raise StoreError(f"{where}: not a readable SQLite file ({exc}); {left}") from exc
+        if ok != "ok":
+            raise StoreError(f"{where}: fails SQLite's integrity check ({ok}); {left}")
+        if "meta" not in tables:
+            found = ", ".join(f"{k} {n}" for k, n in sorted(objects)) or "nothing"
+            raise StoreError(f"{where}: an SQLite file that is not an lcpbench store "
+                             f"(holds {found}); {left}")
+        if columns["meta"] != list(_REQUIRED["meta"]):
+            raise StoreError(f"{where}: its meta table has columns "
+                             f"({', '.join(columns['meta'])}), not (key, value): not an "
+                             f"lcpbench store; {left}")
+        try:
+            row = db.execute("SELECT value FROM meta WHERE key = 'schema'").fetchone()
+        except sqlite3.DatabaseError as exc:
+            raise StoreError(f"{where}: not a readable SQLite file ({exc}); {left}") from exc
+        found = "none" if row is None else str(row[0])
+        if found not in {str(v) for v in READABLE_VERSIONS}:
+            raise StoreError(f"{where}: schema version {found}, this lcpbench reads "
+                             f"{', '.join(map(str, READABLE_VERSIONS))}; {left}")
+        for table, need in _REQUIRED.items():
+            missing = [c for c in need if c not in columns.get(table, [])]
+            if missing:
+                what = (f"no {table} table" if table not in columns else
+                        f"table {table} lacks column(s) {', '.join(missing)}")
+                raise StoreError(f"{where}: not a complete lcpbench store ({what}); {left}")
+        return int(found)
 
     def _create(self) -> None:
         try:
