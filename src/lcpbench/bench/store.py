@@ -21,9 +21,10 @@ checked for integrity.
 
 Sweeps take an exclusive lock (:meth:`Store.lock`): ``flock`` on
 ``<store>.lock`` beside the store, which records who holds it (pid, host,
-start time, owner, sweep id). A second sweep on the same store gets a
-StoreError naming the holder, or waits with ``wait=True``. The kernel drops
-the lock when its process dies, so a stale lock file never blocks. Every run
+start time, owner, sweep id) and is removed when the lock is released
+(:mod:`.store_lock`). A second sweep on the same store gets a StoreError
+naming the holder, or waits with ``wait=True``. The kernel drops the lock
+when its process dies, so a stale lock file never blocks. Every run
 written while the lock is held carries its ``sweep_id``, so a report can
 count only what one sweep wrote (``Store.runs(sweep_id=...)``).
 
@@ -53,7 +54,6 @@ time they are written to (a run, or a lock); a version above
 from __future__ import annotations
 
 import csv
-import fcntl
 import json
 import os
 import socket
@@ -66,6 +66,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import StoreError
+from .store_lock import hold_lock
 
 SCHEMA_VERSION = 3
 #: Older versions this lcpbench reads, and migrates when it writes.
@@ -325,23 +326,13 @@ class Store:
             ``"store X is locked by pid N on host H (owner, started T); ..."``
             when another sweep holds it and ``wait`` is False, or the lock file
             cannot be created.
+
+        The lock file is removed when the block ends, also when it raises.
         """
-        try:
-            fh = open(self.lock_path, "a+")
-        except OSError as exc:
-            raise StoreError(f"store {self.path}: cannot create its lock file "
-                             f"{self.lock_path} ({exc.strerror or exc})") from exc
-        try:
-            try:
-                fcntl.flock(fh, fcntl.LOCK_EX | (0 if wait else fcntl.LOCK_NB))
-            except BlockingIOError:
-                raise StoreError(f"store {self.path} is locked by {self._holder()}; wait for "
-                                 "it to finish, or use --wait") from None
+        with hold_lock(self.lock_path, self.path, wait=wait) as fh:
             sweep_id = uuid.uuid4().hex
             info = {"pid": os.getpid(), "host": socket.gethostname(), "owner": owner,
                     "started": _now(), "sweep_id": sweep_id}
-            fh.seek(0)
-            fh.truncate()
             fh.write(json.dumps(info) + "\n")
             fh.flush()
             self._upgrade()
@@ -353,21 +344,6 @@ class Store:
                 yield sweep_id
             finally:
                 self.sweep_id = None
-                fh.seek(0)
-                fh.truncate()
-        finally:
-            fh.close()  # closing the file releases the flock
-
-    def _holder(self) -> str:
-        """Who holds the lock, from the lock file (best effort)."""
-        try:
-            info = json.loads(self.lock_path.read_text() or "{}")
-        except (OSError, ValueError):
-            info = {}
-        if not info:
-            return "another process (no details recorded yet)"
-        return (f"pid {info.get('pid', '?')} on host {info.get('host', '?')} "
-                f"({info.get('owner', '?')}, started {info.get('started', '?')})")
 
     def close(self) -> None:
         self.db.close()
