@@ -27,6 +27,7 @@ naming the holder, or waits with ``wait=True``. The kernel drops the lock
 when its process dies, so a stale lock file never blocks. Every run
 written while the lock is held carries its ``sweep_id``, so a report can
 count only what one sweep wrote (``Store.runs(sweep_id=...)``).
+:meth:`Store.in_memory` is a store without a file (its lock: no lock file).
 
 Tables
 ------
@@ -60,7 +61,7 @@ import socket
 import sqlite3
 import time
 import uuid
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 import numpy as np
@@ -176,6 +177,7 @@ class Store:
 
     def __init__(self, path: str | os.PathLike = DEFAULT_STORE, *, create: bool = True):
         self.path = Path(path)
+        self.memory = False
         self.sweep_id: str | None = None
         self.schema = SCHEMA_VERSION
         where = f"store {self.path}"
@@ -208,6 +210,16 @@ class Store:
         except BaseException:
             self.db.close()
             raise
+
+    @classmethod
+    def in_memory(cls) -> Store:
+        """A new store that lives in memory only (gone when closed); no file, no lock file."""
+        store = cls.__new__(cls)
+        store.path, store.sweep_id, store.schema = Path(":memory:"), None, SCHEMA_VERSION
+        store.memory = True
+        store.db = sqlite3.connect(":memory:")
+        store._create()
+        return store
 
     # -- opening ------------------------------------------------------------------
     def _inspect(self, *, integrity: bool) -> int:
@@ -329,12 +341,15 @@ class Store:
 
         The lock file is removed when the block ends, also when it raises.
         """
-        with hold_lock(self.lock_path, self.path, wait=wait) as fh:
+        held = nullcontext() if self.memory else hold_lock(self.lock_path, self.path,
+                                                           wait=wait)
+        with held as fh:
             sweep_id = uuid.uuid4().hex
             info = {"pid": os.getpid(), "host": socket.gethostname(), "owner": owner,
                     "started": _now(), "sweep_id": sweep_id}
-            fh.write(json.dumps(info) + "\n")
-            fh.flush()
+            if fh is not None:  # who holds it, for whoever finds it taken
+                fh.write(json.dumps(info) + "\n")
+                fh.flush()
             self._upgrade()
             self._write("INSERT INTO sweeps (sweep_id, owner, pid, host, started) "
                         "VALUES (?, ?, ?, ?, ?)", (sweep_id, owner, info["pid"], info["host"],
