@@ -185,14 +185,13 @@ class Store:
             raise StoreError(f"{where}: is a folder; give a file path (e.g. "
                              f"{self.path / 'lcpbench.sqlite'})")
         exists = self.path.exists()
-        recover = exists and bool(self._recovery_files())
         if not exists and not create:
             raise StoreError(f"{where}: no such file (run `lcpbench sweep` first)")
         if exists:
             if self.path.stat().st_size == 0:
                 raise StoreError(f"{where}: an empty file (0 bytes), not an lcpbench store; "
                                  "it was left as it is: remove it or pass another --store")
-            self._inspect(integrity=not recover)  # before anything may recover or lock it
+            self._inspect()  # before anything may recover, write or lock it
         else:
             try:
                 self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -203,8 +202,9 @@ class Store:
         except sqlite3.Error as exc:
             raise StoreError(f"{where}: cannot open it ({exc})") from exc
         try:
-            if exists:  # lcpbench's: a hot journal of its own is rolled back here
-                self.schema = self._check(self.db, integrity=recover)
+            if exists:  # lcpbench's: a hot journal of its own is rolled back here, and
+                # the integrity is checked under SQLite's locks (a sweep may be writing)
+                self.schema = self._check(self.db, integrity=True)
             else:
                 self._create()
         except BaseException:
@@ -222,7 +222,7 @@ class Store:
         return store
 
     # -- opening ------------------------------------------------------------------
-    def _inspect(self, *, integrity: bool) -> int:
+    def _inspect(self) -> int:
         """Check an existing file is an lcpbench store without letting SQLite touch it.
 
         Opened read-only and immutable: SQLite neither replays a ``-wal`` file nor
@@ -236,9 +236,9 @@ class Store:
         except sqlite3.Error as exc:
             raise StoreError(f"{where}: cannot open it ({exc})") from exc
         try:
-            # with a -journal or -wal the file alone may be mid-commit: its integrity
-            # is checked once the store, found to be lcpbench's, is opened and recovered
-            return self._check(db, integrity=integrity)
+            # no integrity verdict here: without locks or recovery the file alone may be
+            # mid-commit; it is checked once the store, found to be lcpbench's, is opened
+            return self._check(db, integrity=False)
         finally:
             db.close()
 
