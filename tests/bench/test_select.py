@@ -218,3 +218,17 @@ def test_ruled_out_and_screened_out_candidates_are_not_probed_further(tmp_path,
 def test_repeat_is_checked():
     with pytest.raises(ProblemError, match="repeat"):
         select_backend(SCENE, force_tol=1e-3, repeat=0, probe=False)
+
+
+# -- issue 40, item 6: nothing written where the user did not ask --------------------------
+def test_without_a_store_the_probes_stay_in_memory(tmp_path, monkeypatch):
+    monkeypatch.delenv("LCPBENCH_STORE", raising=False)
+    monkeypatch.chdir(tmp_path)
+    s = select_backend(lcpbench.ActuatorScene(theta=150.0, height=3.0, links=20),
+                       force_tol=1e-3, candidates=["active-set"], settings=("default",),
+                       repeat=1, evidence=[])
+    assert (s.backend, s.settings) == ("active-set", "default")  # the probes did run
+    assert list(tmp_path.iterdir()) == []  # and wrote nothing: no results/lcpbench.sqlite
+    cached = select_backend(SCENE, force_tol=1e-3, probe=False)
+    assert cached.backend is None and "no store given" in cached.reason
+    assert list(tmp_path.iterdir()) == []

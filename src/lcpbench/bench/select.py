@@ -5,7 +5,8 @@ two. Its probe set is four contact scenes of that kind at fixed fractions of
 ℓ (θ = 90°, 150°, 180° and two wall heights), so every scene of a kind shares
 one set of probes. Each candidate (back-end, settings) runs every probe
 through the sweep harness into the store: the probes are cached there, and a
-second selection for the same kind and accuracy solves nothing.
+second selection for the same kind and accuracy solves nothing. Without a
+store (nor ``$LCPBENCH_STORE``) they are kept in memory: nothing is written.
 
 What is probed (issue 16, "selection that means something"):
 
@@ -47,7 +48,7 @@ from .grid import Grid, scene_key
 from .jobs import ReferenceJob, RunJob
 from .metrics import error_of, geometric_mean, succeeded
 from .select_evidence import COMMITTED_RUNS, compare, kind_of, preference, read_runs_csv, ruled_out
-from .store import DEFAULT_STORE, Store
+from .store import Store
 from .sweep import DEFAULT_TIME_LIMIT, sweep
 
 #: probe scenes of a kind: (θ in degrees, h / ℓ)
@@ -140,8 +141,10 @@ def select_backend(scene_or_grid, force_tol: float = 1e-6, time_budget: float | 
     force_tol : largest relative error of the total reaction F = ΣR (eq. 30) allowed
         on every probe, against the probe's reference (not a driver tolerance).
     time_budget : largest geometric-mean time of one solve (s), or None.
-    store : a Store or a path (default: ``$LCPBENCH_STORE`` or
-        ``results/lcpbench.sqlite``); the probes are cached there.
+    store : a Store or a path where the probes are cached (default:
+        ``$LCPBENCH_STORE`` when set, else an in-memory store: nothing is
+        written to disk and nothing is cached for the next call; ``lcpbench
+        select`` caches in ``results/lcpbench.sqlite`` unless told otherwise).
     candidates : back-end names (default: every installed one).
     settings : the profiles tried for each back-end.
     probe : run the probes that are not cached (False: use the cache only,
@@ -176,11 +179,13 @@ def select_backend(scene_or_grid, force_tol: float = 1e-6, time_budget: float | 
                                                                 max(1.0, 20 * time_budget))
     own = not isinstance(store, Store)
     if own:
-        path = Path(os.environ.get(STORE_ENV) or DEFAULT_STORE) if store is None else Path(store)
-        if not probe and not path.exists():
-            return _fallback(force_tol, dtol, "no probes cached (no store at "
-                                        f"{path}); run `lcpbench select` to measure them")
-        store = Store(path, create=probe)
+        path = Path(store) if store is not None else (
+            Path(os.environ[STORE_ENV]) if os.environ.get(STORE_ENV) else None)
+        if not probe and (path is None or not path.exists()):
+            where = "no store given" if path is None else f"no store at {path}"
+            return _fallback(force_tol, dtol, f"no probes cached ({where}); run "
+                                              "`lcpbench select` to measure them")
+        store = Store.in_memory() if path is None else Store(path, create=probe)
     try:
         return _select(store, probes, [(n, p) for n in names for p in settings], force_tol,
                        dtol, time_budget, probe=probe, workers=workers, limit=limit,

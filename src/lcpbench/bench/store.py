@@ -8,20 +8,26 @@ restarted sweep skips what is already there, and ``replace=True`` (the
 CLI's ``--rerun``) overwrites it. Nothing else ever overwrites a row.
 
 A file that is not an lcpbench store raises
-:class:`~lcpbench.errors.StoreError` in one line and is left untouched (its
-bytes and modification time: it is inspected through a read-only
-connection): not SQLite, a failed integrity check, an empty file (0 bytes),
-an SQLite database with no tables, or with only views or other programs'
+:class:`~lcpbench.errors.StoreError` in one line and is left untouched: it
+is inspected through a read-only, immutable connection, so SQLite neither
+rolls back its ``-journal`` nor replays its ``-wal`` (their bytes and the
+file's stay as they are, no ``-shm`` is made) and no lock file is created.
+Refused: not SQLite, a failed integrity check, an empty file (0 bytes), an
+SQLite database with no tables, or with only views or other programs'
 tables, a ``meta`` table of another shape, a newer schema version, or
-missing ``runs``/``refs`` tables.
+missing ``runs``/``refs`` tables. Only a store found to be lcpbench's is then
+opened as usual (SQLite rolls back a hot journal of its own there) and
+checked for integrity.
 
 Sweeps take an exclusive lock (:meth:`Store.lock`): ``flock`` on
 ``<store>.lock`` beside the store, which records who holds it (pid, host,
-start time, owner, sweep id). A second sweep on the same store gets a
-StoreError naming the holder, or waits with ``wait=True``. The kernel drops
-the lock when its process dies, so a stale lock file never blocks. Every run
+start time, owner, sweep id) and is removed when the lock is released
+(:mod:`.store_lock`). A second sweep on the same store gets a StoreError
+naming the holder, or waits with ``wait=True``. The kernel drops the lock
+when its process dies, so a stale lock file never blocks. Every run
 written while the lock is held carries its ``sweep_id``, so a report can
 count only what one sweep wrote (``Store.runs(sweep_id=...)``).
+:meth:`Store.in_memory` is a store without a file (its lock: no lock file).
 
 Tables
 ------
@@ -49,19 +55,19 @@ time they are written to (a run, or a lock); a version above
 from __future__ import annotations
 
 import csv
-import fcntl
 import json
 import os
 import socket
 import sqlite3
 import time
 import uuid
-from contextlib import contextmanager
+from contextlib import contextmanager, nullcontext
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import StoreError
+from .store_lock import hold_lock
 
 SCHEMA_VERSION = 3
 #: Older versions this lcpbench reads, and migrates when it writes.
@@ -171,6 +177,7 @@ class Store:
 
     def __init__(self, path: str | os.PathLike = DEFAULT_STORE, *, create: bool = True):
         self.path = Path(path)
+        self.memory = False
         self.sweep_id: str | None = None
         self.schema = SCHEMA_VERSION
         where = f"store {self.path}"
@@ -184,7 +191,7 @@ class Store:
             if self.path.stat().st_size == 0:
                 raise StoreError(f"{where}: an empty file (0 bytes), not an lcpbench store; "
                                  "it was left as it is: remove it or pass another --store")
-            self.schema = self._inspect()
+            self._inspect()  # before anything may recover, write or lock it
         else:
             try:
                 self.path.parent.mkdir(parents=True, exist_ok=True)
@@ -195,60 +202,91 @@ class Store:
         except sqlite3.Error as exc:
             raise StoreError(f"{where}: cannot open it ({exc})") from exc
         try:
-            if not exists:
+            if exists:  # lcpbench's: a hot journal of its own is rolled back here, and
+                # the integrity is checked under SQLite's locks (a sweep may be writing)
+                self.schema = self._check(self.db, integrity=True)
+            else:
                 self._create()
         except BaseException:
             self.db.close()
             raise
 
+    @classmethod
+    def in_memory(cls) -> Store:
+        """A new store that lives in memory only (gone when closed); no file, no lock file."""
+        store = cls.__new__(cls)
+        store.path, store.sweep_id, store.schema = Path(":memory:"), None, SCHEMA_VERSION
+        store.memory = True
+        store.db = sqlite3.connect(":memory:")
+        store._create()
+        return store
+
     # -- opening ------------------------------------------------------------------
     def _inspect(self) -> int:
-        """Check an existing file is an lcpbench store without writing to it; its schema."""
+        """Check an existing file is an lcpbench store without letting SQLite touch it.
+
+        Opened read-only and immutable: SQLite neither replays a ``-wal`` file nor
+        rolls back a ``-journal`` (a foreign database's recovery is not ours to
+        run), creates no ``-shm`` and takes no lock. Returns the schema version.
+        """
         where = f"store {self.path}"
-        left = "it was left as it is: move it away or pass another --store"
-        hot = any(Path(f"{self.path}{s}").exists() for s in ("-journal", "-wal"))
         try:
-            # read-only, so a foreign file is never modified; a hot journal (a commit
-            # cut short by a kill) needs a writable connection to be rolled back
-            uri = self.path.resolve().as_uri() + ("" if hot else "?mode=ro")
-            db = sqlite3.connect(uri, uri=True, timeout=30.0)
+            uri = self.path.resolve().as_uri() + "?mode=ro&immutable=1"
+            db = sqlite3.connect(uri, uri=True)
         except sqlite3.Error as exc:
             raise StoreError(f"{where}: cannot open it ({exc})") from exc
         try:
-            try:
-                ok = db.execute("PRAGMA quick_check").fetchone()[0]
-                objects = db.execute("SELECT type, name FROM sqlite_master "
-                                     "WHERE name NOT LIKE 'sqlite_%'").fetchall()
-                tables = {name for kind, name in objects if kind == "table"}
-                columns = {t: [r[1] for r in db.execute(f"PRAGMA table_info({t})")]
-                           for t in _REQUIRED if t in tables}
-            except sqlite3.DatabaseError as exc:
-                raise StoreError(f"{where}: not a readable SQLite file ({exc}); "
-                                 f"{left}") from exc
-            if ok != "ok":
-                raise StoreError(f"{where}: fails SQLite's integrity check ({ok}); {left}")
-            if "meta" not in tables:
-                found = ", ".join(f"{k} {n}" for k, n in sorted(objects)) or "nothing"
-                raise StoreError(f"{where}: an SQLite file that is not an lcpbench store "
-                                 f"(holds {found}); {left}")
-            if columns["meta"] != list(_REQUIRED["meta"]):
-                raise StoreError(f"{where}: its meta table has columns "
-                                 f"({', '.join(columns['meta'])}), not (key, value): not an "
-                                 f"lcpbench store; {left}")
-            row = db.execute("SELECT value FROM meta WHERE key = 'schema'").fetchone()
-            found = "none" if row is None else str(row[0])
-            if found not in {str(v) for v in READABLE_VERSIONS}:
-                raise StoreError(f"{where}: schema version {found}, this lcpbench reads "
-                                 f"{', '.join(map(str, READABLE_VERSIONS))}; {left}")
-            for table, need in _REQUIRED.items():
-                missing = [c for c in need if c not in columns.get(table, [])]
-                if missing:
-                    what = (f"no {table} table" if table not in columns else
-                            f"table {table} lacks column(s) {', '.join(missing)}")
-                    raise StoreError(f"{where}: not a complete lcpbench store ({what}); {left}")
-            return int(found)
+            # no integrity verdict here: without locks or recovery the file alone may be
+            # mid-commit; it is checked once the store, found to be lcpbench's, is opened
+            return self._check(db, integrity=False)
         finally:
             db.close()
+
+    def _recovery_files(self) -> list[str]:
+        """The store's ``-journal``/``-wal`` files that exist (SQLite would recover them)."""
+        return [f"{self.path.name}{s}" for s in ("-journal", "-wal")
+                if Path(f"{self.path}{s}").exists()]
+
+    def _check(self, db: sqlite3.Connection, *, integrity: bool) -> int:
+        """Refuse (StoreError, one line) what is not an lcpbench store; its schema version."""
+        where = f"store {self.path}"
+        beside = " and ".join(self._recovery_files())
+        left = (f"it was left as it is{f' (with its {beside})' if beside else ''}: "
+                "move it away or pass another --store")
+        try:
+            ok = db.execute("PRAGMA quick_check").fetchone()[0] if integrity else "ok"
+            objects = db.execute("SELECT type, name FROM sqlite_master "
+                                 "WHERE name NOT LIKE 'sqlite_%'").fetchall()
+            tables = {name for kind, name in objects if kind == "table"}
+            columns = {t: [r[1] for r in db.execute(f"PRAGMA table_info({t})")]
+                       for t in _REQUIRED if t in tables}
+        except sqlite3.DatabaseError as exc:
+            raise StoreError(f"{where}: not a readable SQLite file ({exc}); {left}") from exc
+        if ok != "ok":
+            raise StoreError(f"{where}: fails SQLite's integrity check ({ok}); {left}")
+        if "meta" not in tables:
+            found = ", ".join(f"{k} {n}" for k, n in sorted(objects)) or "nothing"
+            raise StoreError(f"{where}: an SQLite file that is not an lcpbench store "
+                             f"(holds {found}); {left}")
+        if columns["meta"] != list(_REQUIRED["meta"]):
+            raise StoreError(f"{where}: its meta table has columns "
+                             f"({', '.join(columns['meta'])}), not (key, value): not an "
+                             f"lcpbench store; {left}")
+        try:
+            row = db.execute("SELECT value FROM meta WHERE key = 'schema'").fetchone()
+        except sqlite3.DatabaseError as exc:
+            raise StoreError(f"{where}: not a readable SQLite file ({exc}); {left}") from exc
+        found = "none" if row is None else str(row[0])
+        if found not in {str(v) for v in READABLE_VERSIONS}:
+            raise StoreError(f"{where}: schema version {found}, this lcpbench reads "
+                             f"{', '.join(map(str, READABLE_VERSIONS))}; {left}")
+        for table, need in _REQUIRED.items():
+            missing = [c for c in need if c not in columns.get(table, [])]
+            if missing:
+                what = (f"no {table} table" if table not in columns else
+                        f"table {table} lacks column(s) {', '.join(missing)}")
+                raise StoreError(f"{where}: not a complete lcpbench store ({what}); {left}")
+        return int(found)
 
     def _create(self) -> None:
         try:
@@ -300,25 +338,18 @@ class Store:
             ``"store X is locked by pid N on host H (owner, started T); ..."``
             when another sweep holds it and ``wait`` is False, or the lock file
             cannot be created.
+
+        The lock file is removed when the block ends, also when it raises.
         """
-        try:
-            fh = open(self.lock_path, "a+")
-        except OSError as exc:
-            raise StoreError(f"store {self.path}: cannot create its lock file "
-                             f"{self.lock_path} ({exc.strerror or exc})") from exc
-        try:
-            try:
-                fcntl.flock(fh, fcntl.LOCK_EX | (0 if wait else fcntl.LOCK_NB))
-            except BlockingIOError:
-                raise StoreError(f"store {self.path} is locked by {self._holder()}; wait for "
-                                 "it to finish, or use --wait") from None
+        held = nullcontext() if self.memory else hold_lock(self.lock_path, self.path,
+                                                           wait=wait)
+        with held as fh:
             sweep_id = uuid.uuid4().hex
             info = {"pid": os.getpid(), "host": socket.gethostname(), "owner": owner,
                     "started": _now(), "sweep_id": sweep_id}
-            fh.seek(0)
-            fh.truncate()
-            fh.write(json.dumps(info) + "\n")
-            fh.flush()
+            if fh is not None:  # who holds it, for whoever finds it taken
+                fh.write(json.dumps(info) + "\n")
+                fh.flush()
             self._upgrade()
             self._write("INSERT INTO sweeps (sweep_id, owner, pid, host, started) "
                         "VALUES (?, ?, ?, ?, ?)", (sweep_id, owner, info["pid"], info["host"],
@@ -328,21 +359,6 @@ class Store:
                 yield sweep_id
             finally:
                 self.sweep_id = None
-                fh.seek(0)
-                fh.truncate()
-        finally:
-            fh.close()  # closing the file releases the flock
-
-    def _holder(self) -> str:
-        """Who holds the lock, from the lock file (best effort)."""
-        try:
-            info = json.loads(self.lock_path.read_text() or "{}")
-        except (OSError, ValueError):
-            info = {}
-        if not info:
-            return "another process (no details recorded yet)"
-        return (f"pid {info.get('pid', '?')} on host {info.get('host', '?')} "
-                f"({info.get('owner', '?')}, started {info.get('started', '?')})")
 
     def close(self) -> None:
         self.db.close()

@@ -451,6 +451,16 @@ def _evidence(values: list[str] | None) -> list[str] | None:
     return list(values)
 
 
+def _select_store(store: str | None) -> str:
+    """``--store`` of ``select``: given, else ``$LCPBENCH_STORE``, else the default store
+    (the command caches its probes on disk; the API keeps them in memory)."""
+    import os
+
+    from ..bench.select import STORE_ENV
+
+    return store or os.environ.get(STORE_ENV) or str(DEFAULT_STORE)
+
+
 def cmd_select(args) -> int:
     """``lcpbench select``: 0 with a back-end that meets ``--force-tol``, 1 with none."""
     from ..bench.select import select_backend
@@ -465,7 +475,7 @@ def cmd_select(args) -> int:
     bar = progress_bar(args.quiet)
     try:
         sel = select_backend(scene, force_tol=args.force_tol, time_budget=args.time_budget,
-                             store=args.store, candidates=candidates, workers=workers,
+                             store=_select_store(args.store), candidates=candidates, workers=workers,
                              progress=bar.update if bar else None, repeat=args.repeat,
                              evidence=_evidence(args.evidence))
     finally:
