@@ -67,16 +67,23 @@ def _alloc(F, used):
 
 @njit(cache=True)
 def _eliminate(F, used, s):
-    """Schur-eliminate slot ``s`` from the front; returns its pivot."""
+    """Schur-eliminate slot ``s`` from the front; returns its pivot. Row FRONT of ``F``
+    is scratch: the slots coupled to ``s``."""
     p = F[s, s]
     used[s] = False
+    live = F[FRONT]
+    m = 0
+    for i in range(FRONT):
+        if used[i] and F[i, s] != 0.0:
+            live[m] = i
+            m += 1
     if p != 0.0:
-        for i in range(FRONT):
-            if used[i] and F[i, s] != 0.0:
-                r = F[i, s] / p
-                for j in range(FRONT):
-                    if used[j]:
-                        F[i, j] -= r * F[s, j]
+        for x in range(m):
+            i = int(live[x])
+            r = F[i, s] / p
+            for y in range(m):
+                j = int(live[y])
+                F[i, j] -= r * F[s, j]
     for t in range(FRONT):
         F[s, t] = 0.0
         F[t, s] = 0.0
@@ -167,7 +174,7 @@ def reduced_inertia(diag, off, c, event, stiffness):
     for q in range(1, links + 1):
         if event[q] != 0:
             last_event = q
-    F = np.zeros((FRONT, FRONT))
+    F = np.zeros((FRONT + 1, FRONT))  # the front, and a scratch row
     used = np.zeros(FRONT, np.bool_)
     counts = np.zeros(2, np.int64)
     rows = 0
