@@ -29,7 +29,12 @@ from scipy.linalg import null_space  # noqa: E402
 
 import lcpbench  # noqa: E402
 from lcpbench.model.energy_reference import (  # noqa: E402
-    WallRows, closure, energy_gradient, lagrangian_hessian, walls)
+    WallRows,
+    closure,
+    energy_gradient,
+    lagrangian_hessian,
+    walls,
+)
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "stability"
 

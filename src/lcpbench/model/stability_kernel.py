@@ -152,6 +152,15 @@ def _pivot_sign(F, used, s, small, counts):
 
 
 @njit(cache=True)
+def _close_segment(F, used, closing, closing_y, small, counts):
+    """Eliminate an ended segment's start height (if elastic), then its multiplier, whose
+    pivot is counted as a constraint row's (expected negative)."""
+    if closing_y >= 0:
+        _pivot_sign(F, used, closing_y, small, counts)
+    counts[0] += _eliminate(F, used, closing) < 0.0
+
+
+@njit(cache=True)
 def reduced_inertia(diag, off, c, event, stiffness):
     """Negative and degenerate pivots of H on the tangent space of the segments.
 
@@ -193,9 +202,7 @@ def reduced_inertia(diag, off, c, event, stiffness):
         if prev >= 0:
             _pivot_sign(F, used, prev, small, counts)
         if closing >= 0:
-            if closing_y >= 0:
-                _pivot_sign(F, used, closing_y, small, counts)
-            counts[0] += _eliminate(F, used, closing) < 0.0
+            _close_segment(F, used, closing, closing_y, small, counts)
             rows += 1
             closing, closing_y = -1, -1
         prev = s
@@ -216,9 +223,7 @@ def reduced_inertia(diag, off, c, event, stiffness):
     if prev >= 0:
         _pivot_sign(F, used, prev, small, counts)
     if closing >= 0:
-        if closing_y >= 0:
-            _pivot_sign(F, used, closing_y, small, counts)
-        counts[0] += _eliminate(F, used, closing) < 0.0
+        _close_segment(F, used, closing, closing_y, small, counts)
         rows += 1
     if yp >= 0:
         _pivot_sign(F, used, yp, small, counts)
