@@ -35,6 +35,7 @@ from .model.driver import METHODS, DriverOutput, DriverStart
 from .model.judge import force_tol, judge
 from .model.judge_compiled import chain_args
 from .model.lazy_result import LazyResult, lazy_result, stats_judge
+from .model.ramp import follow_load
 from .model.result import ContactResult, build_result
 from .model.step_solver import make_step_solver
 from .model.wall_free import solve_without_contact
@@ -79,7 +80,7 @@ def solve(
     max_outer: int = 200,
     settings: str = "default",
     scaled: bool = True,
-    start: ContactResult | None = None,
+    start: ContactResult | str | None = None,
     engine: str = "auto",
     pressure_limit: float | None = None,
 ) -> ContactResult:
@@ -112,7 +113,12 @@ def solve(
         continuation along θ or h. Its shape, clipped to this scene's walls, is
         the first iterate and its last contact step warm-starts back-ends that
         take one. Globalised scheme only; the answer is the same equilibrium
-        to the tolerance (tests check 1e-8 at tight tol).
+        to the tolerance (tests check 1e-8 at tight tol). Or ``"ramp"``: follow
+        the load from zero, the bend angles grown from a straight chain in steps
+        of at most 10° (:mod:`lcpbench.model.ramp`), the state the pressurised
+        actuator reaches where a scene has several; a cold solve where the path
+        stops. A cold start that the judge refuses is ramped anyway (the built-in
+        back-end); ``extra["ramped"]`` says when either happened.
     engine : "auto" (default: the default back-end with the globalised driver
         runs in one compiled kernel, :mod:`lcpbench.model.compiled`; another
         back-end that takes a QP or an LCP has the driver's own parts around
@@ -161,6 +167,10 @@ def solve(
                            "auto_links(scene) and scene.with_links(N)")
     t0 = time.perf_counter()
     chain = scene.chain()
+    if isinstance(start, str) and start == "ramp":
+        return _ramp_first(scene, chain, solver, tol=tol, method=method, max_outer=max_outer,
+                           settings=settings, scaled=scaled, engine=engine,
+                           pressure_limit=pressure_limit, name=name, why=why, t0=t0)
     begin = _driver_start(start, chain, method)
     # the compiled kernel where it takes the chain, unless the numpy reference is asked for
     kernel = engine != "numpy" and applies(DEFAULT, "globalised", chain)
@@ -205,7 +215,43 @@ def retried(res: ContactResult, chain: Chain, make_step: Callable, **kw) -> Cont
     (:func:`tightened`). Keyword arguments: :func:`in_increments`'s."""
     res = in_increments(res, chain, make_step, **kw)
     res = res if res.converged else tightened(res, chain, make_step, **kw)
-    return res if res.converged else escaped(res, chain, make_step, **kw)
+    res = res if res.converged else escaped(res, chain, make_step, **kw)
+    return res if res.converged else ramped(res, chain, make_step, **kw)
+
+
+def ramped(res: ContactResult, chain: Chain, make_step: Callable, *, backend: str,
+           settings, engine: str, tol: float, max_outer: int, method: str,
+           why: str | None, pressure_limit: float | None) -> ContactResult:
+    """``res`` solved again along the loading path (:func:`lcpbench.model.ramp.follow_load`:
+    the bend angles from zero, each step started from the last), where the judge refused
+    it after the other escalations (the driver did not converge, stopped at a saddle it
+    could not leave, or short of its force bound). The built-in back-end only, as
+    :func:`tightened`; not the undamped scheme. The path's answer is continued as
+    :func:`tightened` continues any answer. A certified answer has ``extra["ramped"]``;
+    otherwise ``res`` is returned with why there."""
+    judgement = res.judgement
+    if backend != DEFAULT or method == "undamped" or judgement is None:
+        return res
+    t0 = time.perf_counter()
+    out, used, told = follow_load(res.scene, make_step, backend=backend, settings=settings,
+                                  engine=engine, tol=tol, max_outer=max_outer, method=method)
+    elapsed = res.time_s + time.perf_counter() - t0
+    if out is not None:
+        kernel = engine != "numpy" and applies(DEFAULT, "globalised", chain)
+        again = finish(res.scene, chain, out, solver=res.solver, method=method, tol=tol,
+                       elapsed=elapsed, settings=settings, engine=used,
+                       compiled_judge=kernel, why=why, pressure_limit=pressure_limit)
+        if not again.converged:
+            again = tightened(again, chain, make_step, backend=backend, settings=settings,
+                              engine=engine, tol=tol, max_outer=max_outer, method=method,
+                              why=why, pressure_limit=pressure_limit)
+        if again.converged:
+            again.extra["ramped"] = f"the cold start was refused ({res.reason}); {told}"
+            return again
+        told = f"{told}; refused: {again.reason}"
+    res.extra["ramped"] = told
+    res.time_s = elapsed
+    return res
 
 
 def escaped(res: ContactResult, chain: Chain, make_step: Callable, *, backend: str,
@@ -487,12 +533,39 @@ def _judge_fast():
     return judge_fast
 
 
+def _ramp_first(scene, chain, solver, *, tol, method, max_outer, settings, scaled, engine,
+                pressure_limit, name, why, t0) -> ContactResult:
+    """``solve(scene, start="ramp")``: the loading path's answer where the judge certifies
+    it, else the cold solve (with its own escalations), each saying what was tried."""
+    if method == "undamped":
+        raise ProblemError("start='ramp' (a continuation) needs method='globalised' or "
+                           "'newton'")
+    make_step = partial(make_step_solver, name, settings, scaled)
+    out, used, told = follow_load(scene, make_step, backend=name, settings=settings,
+                                  engine=engine, tol=tol, max_outer=max_outer, method=method)
+    if out is not None:
+        kernel = engine != "numpy" and applies(DEFAULT, "globalised", chain)
+        res = finish(scene, chain, out, solver=name, method=method, tol=tol,
+                     elapsed=time.perf_counter() - t0, settings=settings, engine=used,
+                     compiled_judge=kernel, why=why, pressure_limit=pressure_limit)
+        if res.converged:
+            res.extra["ramped"] = told
+            return res
+        told = f"{told}; refused: {res.reason}"
+    cold = solve(scene, solver, tol, method=method, max_outer=max_outer, settings=settings,
+                 scaled=scaled, engine=engine, pressure_limit=pressure_limit)
+    cold.extra.setdefault("ramped", f"start='ramp': {told}; solved cold instead")
+    return cold
+
+
 def _driver_start(start, chain, method: str):
     if start is None:
         return None
     if not isinstance(start, ContactResult):
-        raise ProblemError(f"start must be a ContactResult of a neighbouring scene, got "
-                           f"{type(start).__name__}")
+        raise ProblemError(f"start must be a ContactResult of a neighbouring scene or "
+                           f"'ramp', got {start!r}" if isinstance(start, str) else
+                           f"start must be a ContactResult of a neighbouring scene or "
+                           f"'ramp', got {type(start).__name__}")
     if method == "undamped":
         raise ProblemError("start (continuation) needs method='globalised' or 'newton'")
     if start.links != chain.links or \

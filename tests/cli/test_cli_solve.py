@@ -100,12 +100,24 @@ def test_solve_human_output(capsys):
 
 
 def test_solve_not_converged_exit_1(capsys):
-    # theta > 180 deg: the end links start past the vertical, where the
-    # height parametrisation of the contact step breaks down (see report).
-    code = main(["solve", "--theta", "250", "--height", "2", "--links", str(N)])
+    # a row of sections whose loading path reaches a link past the vertical, where the
+    # height parametrisation of the contact step breaks down (results/stability/)
+    code = main(["solve", "--sections", "159.2:30,-70.9:30,-80.5:30", "--height", "3.44"])
     out = capsys.readouterr().out
     assert code == 1
     assert "converged" in out and "no (" in out
+    assert "ramped" in out and "loading path stopped" in out  # what was tried, said
+
+
+def test_solve_start_ramp_says_which_path(capsys):
+    # past 180 deg the cold start is refused and the loading path is followed
+    code = main(["solve", "--theta", "250", "--height", "2", "--links", str(N)])
+    out = capsys.readouterr().out
+    assert code == 0 and "followed the load from zero" in out
+    code = main(["solve", "--theta", "150", "--height", "3", "--links", str(N),
+                 "--start", "ramp"])
+    out = capsys.readouterr().out
+    assert code == 0 and "followed the load from zero" in out
 
 
 def test_json_sanitise_non_finite():

@@ -65,6 +65,7 @@ def test_without_the_extra_steps_the_same_judge_rejects_the_unsettled_split(monk
     # the driver's answer as it is: lcpbench.solve would continue a refusal on the force
     # bound alone at a tighter tolerance (api.tightened; the next test)
     monkeypatch.setattr(api, "tightened", lambda res, *args, **kw: res)
+    monkeypatch.setattr(api, "ramped", lambda res, *args, **kw: res)  # (nor the load path)
     res = solve(ActuatorScene(150, 3.0, links=N), tol=1e-3)
     assert not res.converged
     assert "force error bound" in res.judgement.failed

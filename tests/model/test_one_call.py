@@ -184,6 +184,7 @@ def test_a_verdict_set_by_hand_stays_and_a_verdict_unlike_the_judges_is_caught(m
         lcpbench.solve(scene)
     # and, where nothing reads them first, when the result's reasons are read
     monkeypatch.setattr(api_module, "tightened", lambda res, *args, **kw: res)
+    monkeypatch.setattr(api_module, "ramped", lambda res, *args, **kw: res)  # (nor the load path)
     monkeypatch.setattr(api_module, "escaped", lambda res, *args, **kw: res)  # (reads them too)
     res = lcpbench.solve(scene)
     assert res.converged is False

@@ -14,9 +14,10 @@
 import numpy as np
 import pytest
 import scipy.linalg as sl
+from energy_oracle import fd_unstable_directions
 
 import lcpbench
-from lcpbench.model.chain import energy, node_positions
+from lcpbench.model.chain import energy
 from lcpbench.model.compiled import drive
 from lcpbench.model.judge import judge, unstable_directions
 from lcpbench.model.result import certify
@@ -90,50 +91,6 @@ def test_positive_definite_hessian_has_no_unstable_direction_whatever_the_segmen
 
 # ---- the whole check, against finite differences of the exact energy ----------------
 
-def _fd_unstable(chain, alpha, fu, fl, threshold, h=1e-5):
-    """Negative curvature directions of the Lagrangian on the contact set, all by
-    central differences of the exact energy and node heights."""
-    n = alpha.size
-    free = chain.free_nodes
-
-    def heights(a):
-        return node_positions(chain, a)[1]
-
-    def grad(fun, a):
-        g = np.zeros(n)
-        for i in range(n):
-            e = np.zeros(n)
-            e[i] = h
-            g[i] = (fun(a + e) - fun(a - e)) / (2 * h)
-        return g
-
-    def L0(a):
-        return energy(chain, a) + float(np.dot(fu - fl, heights(a)[free]))
-
-    rows = [grad(lambda a, q=q: heights(a)[q], alpha)
-            for q, up, lo in zip(free, fu, fl) if max(up, lo) > threshold]
-    lam = 0.0
-    if free[-1] < chain.links:  # the right pin's closure y_N = 0
-        gN = grad(lambda a: heights(a)[-1], alpha)
-        lam = -float(grad(L0, alpha) @ gN) / float(gN @ gN)
-        rows.append(gN)
-
-    def L(a):
-        return L0(a) + lam * heights(a)[-1]
-
-    H = np.zeros((n, n))
-    for i in range(n):
-        e = np.zeros(n)
-        e[i] = h
-        H[:, i] = (grad(L, alpha + e) - grad(L, alpha - e)) / (2 * h)
-    H = 0.5 * (H + H.T)
-    Z = sl.null_space(np.array(rows))
-    values = np.linalg.eigvalsh(Z.T @ H @ Z)
-    # a finite-difference Hessian is good to ~1e-4 here: only clear signs count
-    assert np.min(np.abs(values)) > 1e-3 * np.max(np.abs(values))
-    return int(np.sum(values < 0))
-
-
 def _driver_answer(scene, tol=1e-3):
     """The driver's own answer (no retry, no escape) and the judge's verdict on it."""
     chain = scene.chain()
@@ -160,7 +117,7 @@ SADDLE_40 = dict(theta=300, height=0.8, channel=True, links=40)  # the issue's 6
 def test_check_agrees_with_finite_differences_of_the_energy(kw, saddle):
     chain, out, verdict = _driver_answer(lcpbench.ActuatorScene(**kw))
     threshold = verdict.contact_threshold
-    fd = _fd_unstable(chain, out.alpha, out.forces_upper, out.forces_lower, threshold)
+    fd = fd_unstable_directions(chain, out.alpha, out.forces_upper, out.forces_lower, threshold)
     assert (fd > 0) == saddle
     assert unstable_directions(chain, out.alpha, out.forces_upper, out.forces_lower,
                                threshold) == fd

@@ -50,6 +50,7 @@ def test_the_driver_alone_stops_early_there(monkeypatch, reference):
     # the premise: the built-in back-end's answer as the driver returns it (no retry) is
     # refused on the force error bound alone, though its force is within tau
     monkeypatch.setattr(api, "tightened", lambda res, *args, **kw: res)
+    monkeypatch.setattr(api, "ramped", lambda res, *args, **kw: res)  # (nor the load path)
     res = solve(SCENE)
     assert not res.converged
     assert res.judgement.failed == ["force error bound"]
@@ -95,8 +96,10 @@ def test_a_continuation_that_is_refused_too_keeps_the_first_answer(monkeypatch):
     # stands, refused, with its own steps, and the time of both solves
     scene = ActuatorScene(theta=150.0, height=3.0, links=60)
     monkeypatch.setattr(api, "tightened", lambda res, *args, **kw: res)
+    monkeypatch.setattr(api, "ramped", lambda res, *args, **kw: res)  # (nor the load path)
     first = solve(scene, tol=0.1)
     monkeypatch.undo()
+    monkeypatch.setattr(api, "ramped", lambda res, *args, **kw: res)  # tightened's refusal
     monkeypatch.setattr(api, "TIGHTER", 1e-6)
     monkeypatch.setattr(api, "TIGHTEN_STEPS", 1)
     res = solve(scene, tol=0.1)

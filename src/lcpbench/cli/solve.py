@@ -5,7 +5,7 @@
     lcpbench solve --theta 150 --height 3 [--links N|auto] [--channel] [--solver NAME]
                    [--wall-profile F.csv [--lower-profile F.csv] [--profile-kind K]]
                    [--settings default|low|mid|high] [--raw] [--json] [--plot F.png]
-                   [--sections THETA:LENGTH,...|anchoring] [--gravity away|toward]
+                   [--start cold|ramp] [--sections THETA:LENGTH,...|anchoring] [--gravity away|toward]
     lcpbench export --theta 150 --height 3 [scene options] --format dat|npz --out FILE
     lcpbench lcp FILE [--solver NAME] [--settings PROFILE] [--json]
     lcpbench validate cantilever [--links N] [--json]
@@ -70,6 +70,10 @@ def register(subparsers) -> None:
                         "nondimensionalised one")
     s.add_argument("--method", choices=METHODS, default=DEFAULT_METHOD,
                    help=f"outer iteration (default {DEFAULT_METHOD})")
+    s.add_argument("--start", choices=("cold", "ramp"), default="cold",
+                   help="cold: from the free arc (default; a refused answer is ramped "
+                        "anyway); ramp: follow the load from zero first, the state the "
+                        "pressurised actuator reaches where there are several")
     add_json_option(s)
     s.add_argument("--plot", metavar="FILE.png",
                    help="draw the shape, walls and reactions (needs matplotlib)")
@@ -185,6 +189,8 @@ def summary(result, extra=()) -> str:
         ("total force", f"{1e3 * result.total_force:.6g} mN ({result.total_force:.6g} N)"),
         ("contact nodes", node_ranges(contacts(result.forces, free))),
     ]
+    # what was tried beyond the cold start (a saddle left, the loading path followed)
+    rows += [(key, result.extra[key]) for key in ("escaped", "ramped") if key in result.extra]
     if result.forces_lower is not None:
         lower = float(np.sum(result.forces_lower))
         rows += [
@@ -236,7 +242,8 @@ def cmd_solve(args) -> int:
     scene = scene_from(args)
     result = solve(scene, solver=args.solver, tol=args.tol, method=args.method,
                    settings=args.settings, scaled=not args.raw,
-                   pressure_limit=args.pressure_limit)
+                   pressure_limit=args.pressure_limit,
+                   start="ramp" if args.start == "ramp" else None)
     plot_error = None
     if args.plot is not None:
         from ..bench.plot import plot_shape

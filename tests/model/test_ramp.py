@@ -1,0 +1,84 @@
+"""Following the load from zero (model.ramp; solve(start="ramp") and the escalation in
+api.retried), against independent checks: the answer is a KKT point of the exact energy
+(central differences of the energy and kinematics, tests/energy_oracle.py) with its
+reactions feasible, and a strict local minimum on its contact set (the same oracle's
+second-order test). Scenes whose cold start fails: past 180° in a channel (the
+issue's grid) and a row of sections with large signed angles (the issue's kind)."""
+
+import numpy as np
+import pytest
+from energy_oracle import fd_kkt_residual, fd_unstable_directions
+
+import lcpbench
+from lcpbench.errors import ProblemError
+from lcpbench.model.compiled import drive
+from lcpbench.model.ramp import STEP_DEG, at_fraction, fractions
+from lcpbench.model.step_solver import make_step_solver
+from lcpbench.problems.sections import SectionedScene
+from lcpbench.solvers.registry import DEFAULT
+
+
+def _cold_driver_converges(scene) -> bool:
+    out, _ = drive(scene.chain(), make_step_solver(DEFAULT, "default", True),
+                   backend=DEFAULT, settings="default", tol=1e-3, max_outer=200,
+                   method="globalised", start=None)
+    return out.converged
+
+
+def _assert_stable_kkt_point(scene, res):
+    """Feasible, complementary, stationary and stable, by the oracle."""
+    chain = scene.chain()
+    fu = res.forces
+    fl = res.forces_lower if res.forces_lower is not None else np.zeros_like(fu)
+    y = res.y[chain.free_nodes]
+    h = chain.wall
+    assert np.all(fu >= -1e-9) and np.all(fl >= -1e-9)
+    assert np.all(y <= h + 1e-6)
+    if chain.channel:
+        assert np.all(y >= -h - 1e-6)
+    assert np.all(fu * (h - y) <= 1e-6 * max(1.0, fu.max(initial=0)))
+    assert fd_kkt_residual(chain, res.alpha, fu, fl) < 1e-3  # tol 1e-3 rad answers
+    threshold = res.judgement.contact_threshold
+    assert fd_unstable_directions(chain, res.alpha, fu, fl, threshold) == 0
+
+
+def test_the_path_ends_at_the_scene_in_steps_of_at_most_ten_degrees():
+    for scene in (lcpbench.ActuatorScene(theta=350, height=1.0),
+                  SectionedScene(sections=[(-80, 30.0), (154, 30.0), (81, 30.0)])):
+        path = fractions(scene)
+        assert path[-1] == 1.0 and all(0 < s <= 1 for s in path)
+        thetas = [[abs(s * t) for t in ([scene.theta] if hasattr(scene, "theta")
+                                         else [x.theta for x in scene.sections])]
+                  for s in [0.0, *path]]
+        steps = np.diff(np.array(thetas), axis=0)
+        assert np.all(steps <= STEP_DEG + 1e-9)
+    scaled = at_fraction(SectionedScene(sections=[(-80, 30.0), (154, 30.0)]), 0.5)
+    assert [s.theta for s in scaled.sections] == [-40.0, 77.0]
+
+
+@pytest.mark.parametrize("scene", [
+    lcpbench.ActuatorScene(theta=190, height=0.3, channel=True, links=70),
+    SectionedScene(sections=[(-80, 30.0), (154, 30.0), (81, 30.0)], height=5.07, links=45),
+])
+def test_a_refused_cold_start_is_solved_along_the_loading_path(scene):
+    assert not _cold_driver_converges(scene)  # the premise: cold, the driver fails
+    res = lcpbench.solve(scene)
+    assert res.converged and "followed the load from zero" in res.extra["ramped"]
+    _assert_stable_kkt_point(scene, res)
+
+
+def test_start_ramp_gives_the_stable_state_of_the_paper_scene():
+    scene = lcpbench.ActuatorScene(theta=150, height=3.0, links=40)
+    ramp = lcpbench.solve(scene, start="ramp", tol=1e-9)
+    assert ramp.converged and "followed the load" in ramp.extra["ramped"]
+    _assert_stable_kkt_point(scene, ramp)
+    # one stable state here: the cold start's, to the tolerance
+    assert ramp.total_force == pytest.approx(lcpbench.solve(scene, tol=1e-9).total_force,
+                                             rel=1e-6)
+
+
+def test_start_must_be_a_result_or_ramp():
+    with pytest.raises(ProblemError, match="'ramp'"):
+        lcpbench.solve(lcpbench.ActuatorScene(), start="rmp")
+    with pytest.raises(ProblemError, match="globalised"):
+        lcpbench.solve(lcpbench.ActuatorScene(), start="ramp", method="undamped")
