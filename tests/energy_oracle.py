@@ -37,14 +37,24 @@ def fd_kkt_residual(chain, alpha, fu, fl, h=1e-6):
     return float(np.max(np.abs(g)) / max(np.max(np.abs(gE)), np.max(np.abs(gR)), 1e-300))
 
 
-def fd_unstable_directions(chain, alpha, fu, fl, threshold, h=1e-5):
-    """Negative curvature directions of the Lagrangian on the contact set, all by
-    central differences of the exact energy and node heights."""
-    n = alpha.size
+def _walls_term(chain, fu, fl):
+    """Σ R (y − h(x)) + R' (l(x) − y) over the free nodes, as a function of α."""
     free = chain.free_nodes
 
-    def heights(a):
-        return node_positions(chain, a)[1]
+    def term(a):
+        x, y = node_positions(chain, a)
+        xf, yf = x[free], y[free]
+        up = chain.upper_profile(xf) if chain.upper_profile is not None else 0.0
+        lo = chain.lower_profile(xf) if chain.lower_profile is not None else 0.0
+        return float(np.sum(fu * (yf - up)) + np.sum(fl * (lo - yf)))
+    return term
+
+
+def fd_unstable_directions(chain, alpha, fu, fl, threshold, h=1e-5):
+    """Negative curvature directions of the Lagrangian on the contact set, all by
+    central differences of the exact energy, node positions and wall profiles."""
+    n = alpha.size
+    free = chain.free_nodes
 
     def grad(fun, a):
         g = np.zeros(n)
@@ -54,19 +64,31 @@ def fd_unstable_directions(chain, alpha, fu, fl, threshold, h=1e-5):
             g[i] = (fun(a + e) - fun(a - e)) / (2 * h)
         return g
 
-    def L0(a):
-        return energy(chain, a) + float(np.dot(fu - fl, heights(a)[free]))
+    walls = _walls_term(chain, fu, fl)
 
-    rows = [grad(lambda a, q=q: heights(a)[q], alpha)
-            for q, up, lo in zip(free, fu, fl) if max(up, lo) > threshold]
+    def L0(a):
+        return energy(chain, a) + walls(a)
+
+    rows = []
+    for j, (up, lo) in enumerate(zip(fu, fl)):
+        if max(up, lo) <= threshold:
+            continue
+        one_up = np.zeros_like(fu)
+        one_lo = np.zeros_like(fl)
+        (one_up if up >= lo else one_lo)[j] = 1.0
+        rows.append(grad(_walls_term(chain, one_up, one_lo), alpha))
     lam = 0.0
+
+    def yN(a):
+        return node_positions(chain, a)[1][-1]
+
     if free[-1] < chain.links:  # the right pin's closure y_N = 0
-        gN = grad(lambda a: heights(a)[-1], alpha)
+        gN = grad(yN, alpha)
         lam = -float(grad(L0, alpha) @ gN) / float(gN @ gN)
         rows.append(gN)
 
     def L(a):
-        return L0(a) + lam * heights(a)[-1]
+        return L0(a) + lam * yN(a)
 
     H = np.zeros((n, n))
     for i in range(n):
@@ -79,5 +101,3 @@ def fd_unstable_directions(chain, alpha, fu, fl, threshold, h=1e-5):
     # a finite-difference Hessian is good to ~1e-4 here: only clear signs count
     assert np.min(np.abs(values)) > 1e-3 * np.max(np.abs(values))
     return int(np.sum(values < 0))
-
-

@@ -23,6 +23,7 @@ from lcpbench.model.judge import judge, unstable_directions
 from lcpbench.model.result import certify
 from lcpbench.model.step_solver import make_step_solver
 from lcpbench.numba_cache import kernel_module
+from lcpbench.problems.walls import WallProfile
 from lcpbench.solvers.registry import DEFAULT
 
 
@@ -32,47 +33,56 @@ def _kernel():
 
 # ---- the inertia count, against dense linear algebra -------------------------------
 
-def _dense_count(d, o, c, event, stiffness):
-    """Negative eigenvalues of the lifted Hessian on the null space of the segment rows."""
+def _dense_count(d, o, c, s, event, stiffness, slope, curvature, pinned):
+    """Negative eigenvalues of the Hessian in α on the null space of the held nodes' rows,
+    written in α alone: the walls' curvatures and the springs as rank-one terms."""
     n = d.size
     H = np.diag(d) + np.diag(o, 1) + np.diag(o, -1)
-    elastic = [q for q in range(1, n + 1) if event[q] == 2]
-    nv = n + len(elastic)
-    Hl = np.zeros((nv, nv))
-    Hl[:n, :n] = H
-    for j, q in enumerate(elastic):
-        Hl[n + j, n + j] = stiffness[q]
-    rows, start, yp = [], 0, None
+    rows = []
     for q in range(1, n + 1):
-        if event[q]:
-            r = np.zeros(nv)
-            r[start:q] = -c[start:q]
-            if event[q] == 2:
-                r[n + elastic.index(q)] += 1.0
-            if yp is not None:
-                r[n + elastic.index(yp)] -= 1.0
-            rows.append(r)
-            start, yp = q, (q if event[q] == 2 else None)
-    Z = sl.null_space(np.array(rows)) if rows else np.eye(nv)
+        dy = np.where(np.arange(n) < q, c, 0.0)
+        dx = np.where(np.arange(n) < q, -s, 0.0)
+        if event[q] == 0:
+            continue
+        if not (q == n and pinned):
+            H += curvature[q] * np.outer(dx, dx)
+        if event[q] == 2:
+            H += stiffness[q] * np.outer(dy, dy)
+        else:
+            rows.append(dy - slope[q] * dx)
+    Z = sl.null_space(np.array(rows)) if rows else np.eye(n)
     if Z.shape[1] == 0:
         return 0
-    return int(np.sum(np.linalg.eigvalsh(Z.T @ Hl @ Z) < 0.0))
+    return int(np.sum(np.linalg.eigvalsh(Z.T @ H @ Z) < 0.0))
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_inertia_count_matches_dense_eigenvalues(seed):
+@pytest.mark.parametrize("walls", ["flat", "flat, with the x rows", "curved"])
+def test_inertia_count_matches_dense_eigenvalues(seed, walls):
     rng = np.random.default_rng(seed)
     k = _kernel()
     for _ in range(100):
         n = int(rng.integers(2, 12))
         d = rng.normal(size=n) * 2.0 + 0.5
         o = rng.normal(size=n - 1)
-        c = rng.normal(size=n)
+        angle = rng.uniform(-np.pi, np.pi, n)
+        c, s = np.cos(angle), np.sin(angle)
+        pinned = bool(rng.random() < 0.7)
         event = np.zeros(n + 1, np.int64)
         event[1:] = rng.choice([0, 0, 1, 2], size=n)
+        if pinned:
+            event[n] = 1
         stiffness = np.where(event == 2, rng.uniform(0.2, 5.0, n + 1), np.inf)
-        neg, _ = k.reduced_inertia(d, o, c, event, stiffness)
-        assert neg == _dense_count(d, o, c, event, stiffness)
+        slope = np.zeros(n + 1)
+        curvature = np.zeros(n + 1)
+        if walls == "curved":
+            slope = np.where(event == 1, rng.normal(size=n + 1), 0.0)
+            curvature = np.where(event > 0, rng.normal(size=n + 1), 0.0)
+            if pinned:
+                slope[n] = curvature[n] = 0.0
+        neg, _ = k.reduced_inertia(d, o, c, s, event, stiffness, slope, curvature,
+                                   walls != "flat", pinned)
+        assert neg == _dense_count(d, o, c, s, event, stiffness, slope, curvature, pinned)
 
 
 def test_positive_definite_hessian_has_no_unstable_direction_whatever_the_segments():
@@ -86,7 +96,10 @@ def test_positive_definite_hessian_has_no_unstable_direction_whatever_the_segmen
         event = np.zeros(n + 1, np.int64)
         event[1:] = rng.choice([0, 1, 2], size=n)
         stiffness = np.where(event == 2, 1.0, np.inf)
-        assert k.reduced_inertia(d, o, rng.normal(size=n), event, stiffness)[0] == 0
+        angle = rng.uniform(-np.pi, np.pi, n)
+        zero = np.zeros(n + 1)
+        assert k.reduced_inertia(d, o, np.cos(angle), np.sin(angle), event, stiffness, zero,
+                                 zero, False, True)[0] == 0
 
 
 # ---- the whole check, against finite differences of the exact energy ----------------
@@ -113,9 +126,15 @@ SADDLE_40 = dict(theta=300, height=0.8, channel=True, links=40)  # the issue's 6
     (dict(theta=270, height=0.5, channel=True, links=40), False),
     (dict(theta=150, height=3.0, links=40), False),
     (dict(theta=120, height=2.0, channel=True, links=24, weight=0.05), False),
+    # curved walls: the δx rows, the walls' slopes and curvatures in the check
+    (dict(theta=150, links=30, wall_profile=WallProfile.from_table(
+        [-5, 10, 15, 20, 35], [3.5, 3.5, 2.5, 3.5, 3.5], kind="pchip")), False),
+    (dict(theta=150, links=30, channel=True, wall_profile=WallProfile.from_table(
+        [-5, 35], [2.0, 3.5], kind="linear")), False),
 ])
 def test_check_agrees_with_finite_differences_of_the_energy(kw, saddle):
     chain, out, verdict = _driver_answer(lcpbench.ActuatorScene(**kw))
+    assert out.converged
     threshold = verdict.contact_threshold
     fd = fd_unstable_directions(chain, out.alpha, out.forces_upper, out.forces_lower, threshold)
     assert (fd > 0) == saddle

@@ -38,28 +38,37 @@ def negative_directions(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarra
     """Unit directions in α of negative curvature on the contact set, most negative first.
 
     The Hessian is the one the judge's check counts with
-    (:func:`lcpbench.model.stability_kernel.lagrangian_hessian`)."""
-    from ..numba_cache import kernel_module
+    (:func:`lcpbench.model.stability_kernel.lagrangian_hessian`), with the held nodes'
+    wall curvatures and the elastic walls' springs as rank-one terms in α."""
+    from .judge import stability_args
 
-    kern = kernel_module("lcpbench.model.stability_kernel", "unstable_directions")
-    f64 = np.ascontiguousarray
+    if chain.links > MAX_LINKS:
+        return []
+    kern, args = stability_args(chain, alpha, forces_upper, forces_lower)
+    (alpha_, a, jl, jr, k, rest, load, first, fu, fl, ku, kl, su, sl, cu, cl) = args
     pinned = bool(chain.free_nodes[-1] < chain.links)
-    diag, off, ok = kern.lagrangian_hessian(
-        f64(alpha, dtype=float), float(chain.link_length), f64(chain.joint_links[:, 0]),
-        f64(chain.joint_links[:, 1]), f64(chain.joint_stiffness, dtype=float),
-        f64(chain.rest_joint, dtype=float), f64(chain.link_load, dtype=float),
-        int(chain.free_nodes[0]), f64(forces_upper, dtype=float),
-        f64(forces_lower, dtype=float), pinned)
-    if not ok or chain.links > MAX_LINKS:
+    diag, off, ok = kern.lagrangian_hessian(alpha_, a, jl, jr, k, rest, load, first, fu,
+                                            fl, su, sl, pinned)
+    if not ok:
         return []
     H = np.diag(diag) + np.diag(off, 1) + np.diag(off, -1)
-    c = chain.link_length * np.cos(alpha)
-    held = [int(q) for q, up, lo in zip(chain.free_nodes, forces_upper, forces_lower)
-            if max(up, lo) > threshold]
+    left_of = np.arange(chain.links)[None, :] < np.asarray(chain.free_nodes)[:, None]
+    dy = np.where(left_of, a * np.cos(alpha), 0.0)  # ∇y_q, a row per free node
+    dx = np.where(left_of, -a * np.sin(alpha), 0.0)  # ∇x_q
+    rows = []
+    for i in range(len(fu)):
+        for R, ks, slope, curv, sign in ((fu[i], ku[i], su[i], cu[i], -1.0),
+                                         (fl[i], kl[i], sl[i], cl[i], 1.0)):
+            if not R > threshold:
+                continue
+            H += sign * R * curv * np.outer(dx[i], dx[i])  # −R h'' above, +R' l'' below
+            if np.isfinite(ks):
+                H += ks * np.outer(dy[i], dy[i])
+            else:
+                rows.append(dy[i] - slope * dx[i])
     if pinned:
-        held.append(chain.links)
-    rows = np.array([np.where(np.arange(chain.links) < q, c, 0.0) for q in held])
-    Z = null_space(rows) if held else np.eye(chain.links)
+        rows.append(a * np.cos(alpha))
+    Z = null_space(np.array(rows)) if rows else np.eye(chain.links)
     values, vectors = eigh(Z.T @ H @ Z)
     scale = max(float(np.max(np.abs(diag))), 1e-300)
     return [Z @ vectors[:, i] for i in range(values.size) if values[i] < -1e-12 * scale]
@@ -72,9 +81,15 @@ def escape_starts(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
     exact energy with the reactions' work (the Lagrangian)."""
     free = chain.free_nodes
 
-    def lagrangian(a):
-        y = node_positions(chain, a)[1]
-        return energy(chain, a) + float(np.dot(forces_upper - forces_lower, y[free]))
+    def lagrangian(a):  # E + Σ R (y − h(x)) + R' (l(x) − y)
+        x, y = node_positions(chain, a)
+        xf, yf = x[free], y[free]
+        value = energy(chain, a) + float(np.dot(forces_upper - forces_lower, yf))
+        if chain.upper_profile is not None:
+            value -= float(np.dot(forces_upper, chain.upper_profile(xf)))
+        if chain.lower_profile is not None:
+            value += float(np.dot(forces_lower, chain.lower_profile(xf)))
+        return value
 
     base = lagrangian(alpha)
     starts = []

@@ -84,7 +84,7 @@ from . import large_n
 from .chain import heights
 from .elastic import compliances
 from .judge_large import primal_step
-from .profile import has_profile, profile_step, walls_at
+from .profile import has_profile, node_x, profile_step, walls_at
 from .step import ContactStep, assemble_step
 
 EPS = np.finfo(float).eps
@@ -181,7 +181,7 @@ class Judgement:
     inexact_steps: int = 0
     #: negative-curvature directions of the energy on the contact set (the second-order
     #: check, :mod:`lcpbench.model.stability_kernel`): 0 a stable equilibrium; None
-    #: not checked (a wall profile, a joint layout the check does not take)
+    #: not checked (a joint layout the check does not take)
     unstable_directions: int | None = None
     failed: list[str] = field(default_factory=list)
     # the answer's reactions with round-off set to zero (None: not judged that far)
@@ -476,25 +476,38 @@ def unstable_directions(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarra
                         forces_lower: np.ndarray, threshold: float) -> int | None:
     """The second-order check of an answer (:mod:`lcpbench.model.stability_kernel`):
     how many directions lower the energy on its contact set (0: stable), None where
-    it does not apply (a wall profile, joints that are not neighbours)."""
-    if has_profile(chain):
-        return None
+    it does not apply (joints that are not neighbours)."""
+    kern, args = stability_args(chain, alpha, forces_upper, forces_lower)
+    code, unstable, _ = kern.unstable_directions(*args, float(threshold),
+                                                 bool(chain.free_nodes[-1] < chain.links))
+    return int(unstable) if code == kern.CHECKED else None
+
+
+def stability_args(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
+                   forces_lower: np.ndarray) -> tuple:
+    """The stability kernel's module and the arguments of its ``unstable_directions``
+    up to the threshold: the chain's arrays, the reactions, the walls' springs (inf:
+    rigid) and their slopes and curvatures at the nodes' x (0: flat)."""
     from ..numba_cache import kernel_module  # numba at the first numpy judgement
 
     kern = kernel_module("lcpbench.model.stability_kernel", "unstable_directions")
     n = len(forces_upper)
-    rigid = np.full(n, np.inf)
-    up = rigid if chain.upper_stiffness is None else np.asarray(chain.upper_stiffness, float)
-    lo = rigid if chain.lower_stiffness is None else np.asarray(chain.lower_stiffness, float)
+    rigid, flat = np.full(n, np.inf), np.zeros(n)
+    walls = []
+    for stiffness, profile in ((chain.upper_stiffness, chain.upper_profile),
+                               (chain.lower_stiffness, chain.lower_profile)):
+        x = node_x(chain, alpha) if profile is not None else None
+        walls.append((rigid if stiffness is None else np.asarray(stiffness, float),
+                      flat if x is None else np.asarray(profile.slope(x), float),
+                      flat if x is None else np.asarray(profile.curvature(x), float)))
+    (ku, su, cu), (kl, sl, cl) = walls
     f64 = np.ascontiguousarray
-    code, unstable, _ = kern.unstable_directions(
-        f64(alpha, dtype=float), float(chain.link_length), f64(chain.joint_links[:, 0]),
-        f64(chain.joint_links[:, 1]), f64(chain.joint_stiffness, dtype=float),
-        f64(chain.rest_joint, dtype=float), f64(chain.link_load, dtype=float),
-        int(chain.free_nodes[0]), f64(forces_upper, dtype=float),
-        f64(forces_lower, dtype=float), f64(up), f64(lo), float(threshold),
-        bool(chain.free_nodes[-1] < chain.links))
-    return int(unstable) if code == kern.CHECKED else None
+    return kern, (f64(alpha, dtype=float), float(chain.link_length),
+                  f64(chain.joint_links[:, 0]), f64(chain.joint_links[:, 1]),
+                  f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float),
+                  f64(chain.link_load, dtype=float), int(chain.free_nodes[0]),
+                  f64(forces_upper, dtype=float), f64(forces_lower, dtype=float), f64(ku),
+                  f64(kl), f64(su), f64(sl), f64(cu), f64(cl))
 
 
 def failed_checks(cert, step_statuses: list[str], *, tol: float, tau: float, comp: float,

@@ -468,9 +468,10 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
     stats[19] = min(GEOMETRY_TOL, NODE_SHARE * tau) * L
     stats[20] = GEOMETRY_TOL * L
     # the second-order check (model.stability_kernel): rigid walls here
-    rigid = np.full(n, np.inf)
+    rigid, flat = np.full(n, np.inf), np.zeros(n)
     code, unstable, _ = unstable_directions(alpha, a, jl, jr, k, rest, link_load, fs - 1, fu,
-                                            fl, rigid, rigid, eps_R, pinned_right)
+                                            fl, rigid, rigid, flat, flat, flat, flat, eps_R,
+                                            pinned_right)
     stats[21] = unstable if code == CHECKED else 0.0
     if not settled:
         return NOT_SETTLED, stats, fu, fl, res
