@@ -1,5 +1,8 @@
 """Issue 36, targets 1 and 2: no saddle certified, and an answer for (nearly) every scene.
 
+Three sets: a channel grid past 180°, random rows of sections, and random scenes of
+every kind (elastic walls held by their springs, wall profiles by h(x)).
+
 Solves a grid of channel scenes (θ from 180° to 350°, half-gap h from 0.1 to 1 mm,
 N = 140, the default solve at tol 1e-3), and random rows of 3-4 equal sections with
 signed angles (|θ_k| 20°-170°, h 2-8 mm, one wall or a channel, seed 36, the paper's
@@ -11,7 +14,7 @@ null space of the rows of the closure and of the walls that carry a reaction abo
 the judge's contact threshold, and its eigenvalues. Writes
 results/stability/saddle-grid.md and .csv (refuses to overwrite unless --force).
 
-    python benchmarks/saddle_audit.py [--links 140] [--rows 40] [--force]
+    python benchmarks/saddle_audit.py [--links 140] [--rows 40] [--random 204] [--force]
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ from lcpbench.model.energy_reference import (  # noqa: E402
     walls,
 )
 from lcpbench.problems.sections import SectionedScene  # noqa: E402
+from lcpbench.problems.walls import WallProfile  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "stability"
 
@@ -51,7 +55,16 @@ def reduced_min_eigenvalue(chain, alpha, fu, fl, threshold) -> float:
     g = energy_gradient(chain, alpha) - mu @ jg
     lam = np.linalg.lstsq(jc.T, g, rcond=None)[0] if jc.size else np.zeros(0)
     H = lagrangian_hessian(chain, alpha, lam, mu, rows)
-    active = np.vstack([jc, jg[mu > threshold]])
+    # an elastic wall holds a node by its spring ½ k δ², not by a constraint
+    k = np.full(rows.free.size, np.inf)
+    for side, stiffness in ((1.0, chain.upper_stiffness), (-1.0, chain.lower_stiffness)):
+        if stiffness is not None:
+            on = rows.side == side
+            k[on] = np.asarray(stiffness, float)[rows.free[on]]
+    held = mu > threshold
+    for r in np.flatnonzero(held & np.isfinite(k)):
+        H = H + k[r] * np.outer(jg[r], jg[r])
+    active = np.vstack([jc, jg[held & ~np.isfinite(k)]])
     Z = null_space(active) if active.size else np.eye(alpha.size)
     return float(np.linalg.eigvalsh(Z.T @ H @ Z)[0]) if Z.shape[1] else np.inf
 
@@ -60,6 +73,9 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--links", type=int, default=140)
     p.add_argument("--rows", type=int, default=40, help="random rows of sections")
+    p.add_argument("--random", type=int, default=204,
+                   help="random scenes of every kind (wall, channel, elastic, profile, "
+                        "sections, heavy), in turn")
     p.add_argument("--force", action="store_true", help="overwrite committed results")
     args = p.parse_args(argv)
     md, csv_path = OUT / "saddle-grid.md", OUT / "saddle-grid.csv"
@@ -81,6 +97,34 @@ def main(argv=None) -> int:
         scenes.append(("sections", f"{angles}, h {h}{', channel' if channel else ''}",
                        SectionedScene(sections=[(a, 30.0) for a in angles], height=h,
                                       channel=channel)))
+    kinds = ("wall", "channel", "elastic", "profile", "sections", "heavy")
+    for i in range(args.random):
+        kind = kinds[i % len(kinds)]
+        theta, h = round(float(rng.uniform(10, 350)), 1), round(float(rng.uniform(0.2, 8)), 2)
+        n = int(rng.integers(20, 161))
+        if kind == "sections":
+            k = int(rng.integers(2, 5))
+            angles = [round(float(a), 1)
+                      for a in rng.uniform(10, 170, k) * rng.choice([-1, 1], k)]
+            scene = SectionedScene(sections=[(a, 30.0) for a in angles], height=max(h, 1.0),
+                                   channel=bool(rng.random() < 0.5))
+            name = f"{angles}, h {scene.height}{', channel' if scene.channel else ''}"
+        else:
+            kw = dict(theta=theta, height=h, links=n, channel=kind == "channel")
+            if kind == "elastic":
+                kw["wall_stiffness"] = float(10.0 ** rng.uniform(-3, 6))
+                kw["channel"] = bool(rng.random() < 0.5)
+            elif kind == "profile":
+                low, high = sorted(rng.uniform(max(h, 1.0) * 0.6, max(h, 1.0) * 1.4, 2))
+                kw.pop("height")
+                kw["wall_profile"] = WallProfile.from_table([-40.0, 15.0, 70.0],
+                                                            [high, low, high], kind="pchip")
+            elif kind == "heavy":
+                kw["weight"] = float(10.0 ** rng.uniform(-2, 0))
+            scene = lcpbench.ActuatorScene(**kw)
+            name = ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}"
+                             for k, v in kw.items() if k != "wall_profile")
+        scenes.append((f"random: {kind}", name, scene))
     for kind, name, scene in scenes:
         t = time.perf_counter()
         r = lcpbench.solve(scene)
@@ -102,7 +146,7 @@ def main(argv=None) -> int:
         w.writeheader()
         w.writerows(rows)
     lines = []
-    for kind in ("channel", "sections"):
+    for kind in ("channel", "sections", *(f"random: {k}" for k in kinds)):
         got = [r for r in rows if r["kind"] == kind]
         conv = [r for r in got if r["converged"]]
         reasons: dict[str, int] = {}
@@ -119,12 +163,16 @@ def main(argv=None) -> int:
                or "none") + " |")
     md.write_text(
         f"# Saddles and answers past 180° and in rows of sections ({date.today().isoformat()})\n\n"
-        f"`python benchmarks/saddle_audit.py --links {args.links} --rows {args.rows}`, "
+        f"`python benchmarks/saddle_audit.py --links {args.links} --rows {args.rows} --random {args.random}`, "
         f"`lcpbench.solve(scene)` at tol 1e-3:\n\n"
         f"- channel: θ {thetas[0]}–{thetas[-1]}° by 10, h {gaps[0]}–{gaps[-1]} mm by 0.1, "
         f"N = {args.links};\n"
         f"- sections: {args.rows} random rows of 3–4 sections of 30 mm, signed θ_k with "
-        f"|θ_k| in 20–170°, h 2–8 mm, one wall or a channel (seed 36), N = 140 per 30 mm.\n\n"
+        f"|θ_k| in 20–170°, h 2–8 mm, one wall or a channel (seed 36), N = 140 per 30 mm;\n"
+        f"- random: {args.random} scenes of every kind in turn (θ 10–350°, h 0.2–8 mm, N "
+        f"20–160; elastic walls k 1e-3–1e6 N/mm², one wall or a channel; a pchip "
+        f"narrowing or widening; rows of 2–4 signed sections; heavy chains w 0.01–1 N/mm), "
+        f"same seed.\n\n"
         f"Each certified answer is checked by an independent second-order test: the energy "
         f"reference's dense Hessian of the Lagrangian (its closed-form derivatives) on the "
         f"null space of the closure and the walls that carry a reaction.\n\n"
