@@ -20,6 +20,7 @@ import numpy as np  # noqa: E402
 from numba import njit  # noqa: E402
 
 import lcpbench  # noqa: E402
+from lcpbench.model.judge import stability_args  # noqa: E402
 from lcpbench.numba_cache import kernel_module  # noqa: E402
 
 
@@ -27,26 +28,21 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--rounds", type=int, default=15)
     args = p.parse_args(argv)
-    k = kernel_module("lcpbench.model.stability_kernel", "unstable_directions")
-    check = k.unstable_directions
+    check = kernel_module("lcpbench.model.stability_kernel",
+                          "unstable_directions").unstable_directions
 
     @njit
-    def repeat(times, alpha, a, jl, jr, kk, rest, load, first, fu, fl, ku, kl, thr, pin):
+    def repeat(times, args, thr, pin):
         total = 0
         for _ in range(times):
-            total += check(alpha, a, jl, jr, kk, rest, load, first, fu, fl, ku, kl, thr,
-                           pin)[1]
+            total += check(*args, thr, pin)[1]
         return total
 
     scene = lcpbench.ActuatorScene(theta=150, height=3.0)
     r = lcpbench.solve(scene)
     ch = scene.chain()
-    n = r.forces.size
-    rigid = np.full(n, np.inf)
-    call = (np.ascontiguousarray(r.alpha), ch.link_length, ch.joint_links[:, 0].copy(),
-            ch.joint_links[:, 1].copy(), ch.joint_stiffness, ch.rest_joint, ch.link_load,
-            int(ch.free_nodes[0]), np.ascontiguousarray(r.forces), np.zeros(n), rigid, rigid,
-            r.judgement.contact_threshold, True)
+    _, kernel_args = stability_args(ch, r.alpha, r.forces, np.zeros(r.forces.size))
+    call = (kernel_args, r.judgement.contact_threshold, True)
     repeat(10, *call)
     solves, checks = [], []
     load = os.getloadavg()[0]

@@ -47,8 +47,9 @@ def negative_directions(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarra
     kern, args = stability_args(chain, alpha, forces_upper, forces_lower)
     (alpha_, a, jl, jr, k, rest, load, first, fu, fl, ku, kl, su, sl, cu, cl) = args
     pinned = bool(chain.free_nodes[-1] < chain.links)
-    diag, off, ok = kern.lagrangian_hessian(alpha_, a, jl, jr, k, rest, load, first, fu,
-                                            fl, su, sl, pinned)
+    diag, off, ok = kern.lagrangian_hessian(alpha_, a * np.cos(alpha_), a * np.sin(alpha_),
+                                            jl, jr, k, rest, load, first, fu, fl, su, sl,
+                                            pinned)
     if not ok:
         return []
     H = np.diag(diag) + np.diag(off, 1) + np.diag(off, -1)

@@ -50,13 +50,14 @@ from numba import njit
 DEGENERATE = 1e-12
 #: return codes of :func:`unstable_directions`
 CHECKED, DEGENERATE_PIVOT, NOT_TRIDIAGONAL = 0, 1, 2
-FRONT = 12  # slots of the frontal matrix (at most ten are in use at once)
+FRONT = 10  # slots of the frontal matrix (at most nine are in use at once)
 #: node events of :func:`reduced_inertia`
 FREE, HELD, ELASTIC = 0, 1, 2
 
 
 @njit(cache=True)
 def _alloc(F, used):
+    """A free slot of the front, its row and column zero."""
     for s in range(FRONT):
         if not used[s]:
             used[s] = True
@@ -64,7 +65,7 @@ def _alloc(F, used):
                 F[s, t] = 0.0
                 F[t, s] = 0.0
             return s
-    return -1
+    raise RuntimeError("the stability check's front is full (FRONT too small)")
 
 
 @njit(cache=True)
@@ -124,12 +125,13 @@ def _eliminate_pair(F, used, s, t, small, counts):
 
 
 @njit(cache=True)
-def lagrangian_hessian(alpha, a, jl, jr, k, rest, link_load, first, forces_upper,
+def lagrangian_hessian(alpha, c, s, jl, jr, k, rest, link_load, first, forces_upper,
                        forces_lower, slope_upper, slope_lower, pinned_right):
     """The tridiagonal Hessian of L in α: (diagonal, off-diagonal, ok).
 
-    ``first`` is the node index of the first free node; the reactions (N) and the
-    walls' slopes h'(x), l'(x) (0: flat) run over the free nodes. λ is the
+    ``c``, ``s``: a cos α_i, a sin α_i; ``first`` is the node index of the first free
+    node; the reactions (N) and the walls' slopes h'(x), l'(x) (0: flat) run over the
+    free nodes. λ is the
     least-squares solution of stationarity ∂L/∂α_i = g_i + a cos α_i S_i
     − a sin α_i X_i = 0, with g the springs' gradient (none when the right end is
     free). ``ok`` is False when a joint joins links that are not neighbours (the
@@ -174,12 +176,11 @@ def lagrangian_hessian(alpha, a, jl, jr, k, rest, link_load, first, forces_upper
     if pinned_right:
         num = den = 0.0
         for i in range(links):
-            c = a * np.cos(alpha[i])
-            num += (grad[i] + c * S[i] - a * np.sin(alpha[i]) * X[i]) * c
-            den += c * c
+            num += (grad[i] + c[i] * S[i] - s[i] * X[i]) * c[i]
+            den += c[i] * c[i]
         lam = -num / den if den > 0.0 else 0.0
     for i in range(links):
-        diag[i] -= a * np.sin(alpha[i]) * (S[i] + lam) + a * np.cos(alpha[i]) * X[i]
+        diag[i] -= s[i] * (S[i] + lam) + c[i] * X[i]
     return diag, off, True
 
 
@@ -323,16 +324,16 @@ def unstable_directions(alpha, a, jl, jr, k, rest, link_load, first, forces_uppe
     node's x (0: flat).
     """
     links = alpha.size
-    diag, off, ok = lagrangian_hessian(alpha, a, jl, jr, k, rest, link_load, first,
-                                       forces_upper, forces_lower, slope_upper,
-                                       slope_lower, pinned_right)
-    if not ok:
-        return NOT_TRIDIAGONAL, 0, 0
     c = np.empty(links)
     s = np.empty(links)
     for i in range(links):
         c[i] = a * np.cos(alpha[i])
         s[i] = a * np.sin(alpha[i])
+    diag, off, ok = lagrangian_hessian(alpha, c, s, jl, jr, k, rest, link_load, first,
+                                       forces_upper, forces_lower, slope_upper,
+                                       slope_lower, pinned_right)
+    if not ok:
+        return NOT_TRIDIAGONAL, 0, 0
     event = np.zeros(links + 1, np.int64)
     stiffness = np.full(links + 1, np.inf)
     slope = np.zeros(links + 1)
