@@ -11,22 +11,26 @@ import scipy.linalg as sl
 from lcpbench.model.chain import energy, node_positions
 
 
+def _gradient(fun, a, h):
+    """Central differences of ``fun`` at ``a`` (step ``h`` rad)."""
+    g = np.zeros(a.size)
+    for i in range(a.size):
+        e = np.zeros(a.size)
+        e[i] = h
+        g[i] = (fun(a + e) - fun(a - e)) / (2 * h)
+    return g
+
+
 def fd_kkt_residual(chain, alpha, fu, fl, h=1e-6):
     """First order: max |∇_α (E + Σ (R_q − R'_q) y_q + λ y_N)| over the link angles, with
     λ by least squares, relative to the largest term (N·mm per rad)."""
-    n = alpha.size
     free = chain.free_nodes
 
     def heights(a):
         return node_positions(chain, a)[1]
 
     def grad(fun, a):
-        g = np.zeros(n)
-        for i in range(n):
-            e = np.zeros(n)
-            e[i] = h
-            g[i] = (fun(a + e) - fun(a - e)) / (2 * h)
-        return g
+        return _gradient(fun, a, h)
 
     gE = grad(lambda a: energy(chain, a), alpha)
     gR = grad(lambda a: float(np.dot(fu - fl, heights(a)[free])), alpha)
@@ -57,12 +61,7 @@ def fd_unstable_directions(chain, alpha, fu, fl, threshold, h=1e-5):
     free = chain.free_nodes
 
     def grad(fun, a):
-        g = np.zeros(n)
-        for i in range(n):
-            e = np.zeros(n)
-            e[i] = h
-            g[i] = (fun(a + e) - fun(a - e)) / (2 * h)
-        return g
+        return _gradient(fun, a, h)
 
     walls = _walls_term(chain, fu, fl)
 

@@ -237,14 +237,10 @@ def ramped(res: ContactResult, chain: Chain, make_step: Callable, *, backend: st
                                   engine=engine, tol=tol, max_outer=max_outer, method=method)
     elapsed = res.time_s + time.perf_counter() - t0
     if out is not None:
-        kernel = engine != "numpy" and applies(DEFAULT, "globalised", chain)
-        again = finish(res.scene, chain, out, solver=res.solver, method=method, tol=tol,
-                       elapsed=elapsed, settings=settings, engine=used,
-                       compiled_judge=kernel, why=why, pressure_limit=pressure_limit)
-        if not again.converged:
-            again = tightened(again, chain, make_step, backend=backend, settings=settings,
-                              engine=engine, tol=tol, max_outer=max_outer, method=method,
-                              why=why, pressure_limit=pressure_limit)
+        again = _restart_judged(res.scene, chain, out, used, make_step, elapsed=elapsed,
+                                solver=res.solver, backend=backend, settings=settings,
+                                engine=engine, tol=tol, max_outer=max_outer, method=method,
+                                why=why, pressure_limit=pressure_limit)
         if again.converged:
             again.extra["ramped"] = f"the cold start was refused ({res.reason}); {told}"
             return again
@@ -252,6 +248,21 @@ def ramped(res: ContactResult, chain: Chain, make_step: Callable, *, backend: st
     res.extra["ramped"] = told
     res.time_s = elapsed
     return res
+
+
+def _restart_judged(scene, chain: Chain, out: DriverOutput, used: str, make_step: Callable,
+                    *, elapsed: float, solver: str, backend: str, settings, engine: str,
+                    tol: float, max_outer: int, method: str, why: str | None,
+                    pressure_limit: float | None) -> ContactResult:
+    """A restart's answer (:func:`escaped`, :func:`ramped`) judged as every answer, and
+    continued as :func:`tightened` continues a refusal on the force bound alone."""
+    kernel = engine != "numpy" and applies(DEFAULT, "globalised", chain)
+    res = finish(scene, chain, out, solver=solver, method=method, tol=tol, elapsed=elapsed,
+                 settings=settings, engine=used, compiled_judge=kernel, why=why,
+                 pressure_limit=pressure_limit)
+    return res if res.converged else tightened(
+        res, chain, make_step, backend=backend, settings=settings, engine=engine, tol=tol,
+        max_outer=max_outer, method=method, why=why, pressure_limit=pressure_limit)
 
 
 def escaped(res: ContactResult, chain: Chain, make_step: Callable, *, backend: str,
@@ -279,14 +290,10 @@ def escaped(res: ContactResult, chain: Chain, make_step: Callable, *, backend: s
         out, used = drive(chain, make_step(), backend=backend, settings=settings,
                           engine=engine, tol=tol, max_outer=max_outer, method=method,
                           start=DriverStart(alpha))
-        kernel = engine != "numpy" and applies(DEFAULT, "globalised", chain)
-        again = finish(res.scene, chain, out, solver=res.solver, method=method, tol=tol,
-                       elapsed=0.0, settings=settings, engine=used, compiled_judge=kernel,
-                       why=why, pressure_limit=pressure_limit)
-        if not again.converged:
-            again = tightened(again, chain, make_step, backend=backend, settings=settings,
-                              engine=engine, tol=tol, max_outer=max_outer, method=method,
-                              why=why, pressure_limit=pressure_limit)
+        again = _restart_judged(res.scene, chain, out, used, make_step, elapsed=0.0,
+                                solver=res.solver, backend=backend, settings=settings,
+                                engine=engine, tol=tol, max_outer=max_outer, method=method,
+                                why=why, pressure_limit=pressure_limit)
         tried.append(again.reason)
         if again.converged and (best is None or energy(chain, again.alpha)
                                 < energy(chain, best.alpha)):
