@@ -24,6 +24,7 @@ except _PackageNotFoundError:  # running from a source tree that was never insta
 _EXPORTS = {
     "solve": "lcpbench.api",
     "solve_many": "lcpbench.studies.batch",
+    "stable_states": "lcpbench.studies.states",
     "ActuatorScene": "lcpbench.problems.scenes",
     "CantileverScene": "lcpbench.problems.scenes",
     "Section": "lcpbench.problems.sections",
