@@ -438,8 +438,8 @@ def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: 
     place of the judge call."""
     if not out.converged and getattr(scene, "theta", 0) > 180:
         out.reason = ("theta > 180 deg: the end links start beyond the vertical, where the "
-                      "linearisation of eq. (20) is singular; lcpbench converges for "
-                      f"theta <= 180 deg ({out.reason})")
+                      "linearisation of eq. (20) is singular for a cold start; start='ramp' "
+                      f"follows the load from zero instead ({out.reason})")
     compiled_judge = compiled_judge and not large_n.applies(chain)  # large N: increments
     if judged_by is None:
         judged_by = judge
