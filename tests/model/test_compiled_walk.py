@@ -34,12 +34,12 @@ def _perturbed(scene, seed):
 
 
 def _kernel_step(chain, alpha, warm_up=None):
-    ra, a, jl, jr, k, rest, _, nodal_load, fs, lo, hi, L, F = kernel_args(chain)
+    ra, a, jl, jr, k, rest, _, nodal_load, fs, lo, hi, L, F, cu, cl = kernel_args(chain)
     n = lo.size
     flags = 0 if warm_up is None else 2
     up = np.zeros(n, bool) if warm_up is None else np.ascontiguousarray(warm_up)
     return kernel._contact_step(np.ascontiguousarray(alpha), a, jl, jr, k, rest, fs, n, nodal_load,
-                                lo, hi, L, F, np.zeros(n), up, np.zeros(n, bool), flags,
+                                lo, hi, L, F, cu, cl, np.zeros(n), up, np.zeros(n, bool), flags,
                                 20 * n + 50, 1e-3)
 
 

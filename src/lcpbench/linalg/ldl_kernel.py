@@ -22,6 +22,12 @@ definite H. The entries of the next columns are carried in registers.
 A fixed node's column is the identity's: D = 1 and its L entries are zero (in
 exact arithmetic and in floating point, but for the sign of a zero), so it is
 written without the division and cuts the dependent chain.
+
+A node held by an elastic wall of compliance c > 0 (``shift[j] = c``; mm/N) keeps
+its row with the wall's spring 1/c on the diagonal: D_j = S_jj + 1/c, stored as
+1 / D_j = c / (1 + c S_jj), so that nothing grows with the stiffness 1/c. As
+c → 0 the column tends to a fixed node's (1 / D_j and its L entries → 0): the
+rigid wall is the limit, not a special case (issue 35, item 4).
 Loaded only through :func:`lcpbench.numba_cache.kernel_module` (the kernels' cache).
 """
 
@@ -31,13 +37,15 @@ from numba import njit
 
 
 @njit(cache=True)
-def refactor(fac, bands, fixed, c0, c1):
+def refactor(fac, bands, fixed, shift, c0, c1):
     """Factor the face ``fixed`` of H (``bands``) into ``fac``, columns ``c0`` to
-    ``c1`` (0, n: all of it). ``fac`` holds the factor of a face that differs from
+    ``c1`` (0, n: all of it); ``shift``: the compliance c_j of the nodes held by an
+    elastic wall (0 elsewhere), or empty where no wall yields. ``fac`` holds the factor of a face that differs from
     ``fixed`` only at nodes in [c0 + 2, c1 − 2): its columns before c0 stand (a
     column reads the nodes up to two below it), and those from c1 on as well when
     nodes c1 − 2 and c1 − 1 are fixed in both (the identity there cuts H in two).
-    False when the face is not positive definite (a pivot D_j <= 0)."""
+    False when the face is not positive definite (a pivot D_j <= 0). A change of a
+    node's ``shift`` is a change of the face as one of ``fixed``."""
     n = fixed.size
     if c0 >= c1:
         return True
@@ -68,9 +76,15 @@ def refactor(fac, bands, fixed, c0, c1):
                 new1 = 0.0 if (fixed[j + 1] or fixed[j + 2]) else bands[1, j + 1]
                 nxt0 = 1.0 if fixed[j + 2] else bands[0, j + 2]
         else:
-            if not cur0 > 0.0:
-                return False
-            r = 1.0 / cur0
+            if shift.size and shift[j] > 0.0:  # held by a spring: D = S_jj + 1/c
+                den = 1.0 + shift[j] * cur0
+                if not den > 0.0:
+                    return False
+                r = shift[j] / den
+            else:
+                if not cur0 > 0.0:
+                    return False
+                r = 1.0 / cur0
             l1 = cur1 * r
             fac[0, j] = r
             fac[1, j] = l1

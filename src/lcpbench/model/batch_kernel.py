@@ -96,7 +96,7 @@ def _wall_free_kind(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
         z = np.zeros(n)
         b = np.zeros(n, np.bool_)
         got = _contact_step(ra, a, jl, jr, k, rest, fs, n, nodal_load, free_lo, free_hi, L, F,
-                            z, b, b, 0, max_iter, request)
+                            z[:0], z[:0], z, b, b, 0, max_iter, request)
         if got[0] == BAIL_NOT_PD:
             return CONTACT
         if got[0] != 0:
@@ -123,11 +123,12 @@ def _records(recs, used, rec, count):
 
 @njit(cache=True)
 def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_load,
-             nodal_load, fs, lo, hi, L, F, wall, tol, max_outer, max_iter, request,
+             nodal_load, fs, lo, hi, L, F, cu, cl, wall, tol, max_outer, max_iter, request,
              free_lo, free_hi, o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res,
              o_off, o_count, j_code, j_stats, j_fu, j_fl, j_tres, conv, recs, used):
     """One solve of a scene into ``row`` of the outputs, its step records appended to
-    ``recs``: (done, recs, used); not done: the solve kernel stopped."""
+    ``recs``: (done, recs, used); not done: the solve kernel stopped. ``cu``, ``cl``:
+    the walls' compliances (empty: rigid walls)."""
     n = lo.size
     kind = _wall_free_kind(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
                            max_iter, request, free_lo, free_hi)
@@ -142,8 +143,8 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
         if kind == FREE:  # the equilibrium without walls (its start's shape, no warm set)
             zb = np.zeros(n, np.bool_)
             got = solve_chain(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, free_lo,
-                              free_hi, L, F, tol, max_outer, start, np.zeros(n), zb, zb, 0,
-                              max_iter, request, False)
+                              free_hi, L, F, cu[:0], cl[:0], tol, max_outer, start,
+                              np.zeros(n), zb, zb, 0, max_iter, request, False)
             if got[0] >= 10:
                 return False, recs, used
             u = np.empty(n)
@@ -154,7 +155,7 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
                 kind = CONTACT
         if kind == CONTACT:
             got = solve_chain(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
-                              tol, max_outer, start, w_u, w_up, w_lo, flags, max_iter,
+                              cu, cl, tol, max_outer, start, w_u, w_up, w_lo, flags, max_iter,
                               request, False)
             if got[0] >= 10:
                 return False, recs, used
@@ -170,7 +171,8 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
     ok = False
     if code == CONVERGED:  # the judge, on the answer and the real walls
         jc, st, fu, fl, tres = judge_answer(
-            alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, wall, False,
+            alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl, wall,
+            False,
             R.copy(), np.zeros(n), tol, recs[2, used - count:used].copy())
         j_code[row] = jc
         j_stats[row] = st
@@ -316,7 +318,8 @@ def _predict(s, theta, height, ok, touch, alphas, most, adaptive):
 
 
 @njit(cache=True)
-def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, wall,
+def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, cu, cl, L, F,
+               wall,
                theta, height, tol, max_outer, max_iter, request, most, adaptive,
                o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res, o_off, o_count,
                j_code, j_stats, j_fu, j_fl, j_tres, conv, kept, failed, base):
@@ -327,7 +330,9 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
     ``kept[s]``: the row of the answer kept; ``failed[s]``: the row of a failed warm
     start (−1: none); ``base[s]``: the answer that started it (−1: cold);
     ``records``: the step records (face solves, step length, max|Δα|, energy) of
-    every attempt, from column ``o_off[row]``, ``o_count[row]`` of them."""
+    every attempt, from column ``o_off[row]``, ``o_count[row]`` of them. ``cu``, ``cl``:
+    each scene's walls' compliances 1/k per free node (0: rigid; no columns where no
+    wall yields)."""
     m, n = lo.shape
     spare = o_code.size
     free_lo, free_hi = np.full(n, -np.inf), np.full(n, np.inf)
@@ -346,7 +351,7 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
             sig = o_sig[kept[b]]
             w_u, w_up, w_lo, flags = o_u[kept[b]], sig > 0, sig < 0, 7
         args = (rest_alpha[s], a, jl, jr, k[s], rest[s], link_load[s], nodal_load, fs, lo[s],
-                hi[s], L, F, wall[s], tol, max_outer, max_iter, request, free_lo, free_hi)
+                hi[s], L, F, cu[s], cl[s], wall[s], tol, max_outer, max_iter, request, free_lo, free_hi)
         done, recs, used = _attempt(s, start, w_u, w_up, w_lo, flags, *args, *outs, recs,
                                     used)
         if not done:

@@ -71,7 +71,7 @@ def check_engine(engine) -> str:
 def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
     """Whether the kernel runs this solve: the default back-end, the globalised
     driver or its Newton scheme, and (given ``chain``) a chain of consecutive joints and free nodes,
-    with flat, rigid walls (not a wall profile, not an elastic wall)."""
+    with flat walls, rigid or elastic (not a wall profile)."""
     if backend not in (DEFAULT, "auto") or method not in ("globalised", "newton"):
         return False
     if chain is None:
@@ -80,8 +80,6 @@ def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
 
 
 def _layout(chain: Chain) -> bool:
-    if chain.elastic_walls:
-        return False  # elastic walls: the numpy reference (model.elastic), not ported yet
     if chain.profiled_walls:
         return False  # walls of any profile: the numpy reference (model/profile_driver.py)
     if chain.consecutive is not None:  # the scene says (the test below, done at building)
@@ -183,9 +181,6 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
         return (compiled_driver.run(chain, step_solver, tol=tol, max_outer=max_outer,
                                     start=start), compiled_driver.ENGINE)
     elif engine == "compiled":
-        if chain.elastic_walls:
-            raise ProblemError("engine='compiled' does not run elastic walls yet "
-                               "(wall_stiffness < inf); use engine='auto' or 'numpy'")
         raise ProblemError(f"engine='compiled' runs method='globalised' (or 'newton' with the "
                            f"default back-end, {DEFAULT}) with a back-end that takes a QP or an "
                            f"LCP, on flat rigid walls; got solver {backend!r}, method {method!r}")
@@ -329,11 +324,21 @@ def _kernel_args(chain: Chain, const: tuple | None) -> tuple:
         const = (joints[0], joints[1],
                  f64(chain.derived("_nodal_load", lambda: chain.nodal_load), dtype=float))
     jl, jr, nodal_load = const
+    if chain.elastic_walls:  # the walls' compliances 1/k (0: rigid), the kernel's form
+        from .elastic import compliances
+
+        cu, cl = (f64(c, dtype=float) for c in compliances(chain))
+    else:
+        cu = cl = _NO_SPRINGS
     return (f64(chain.rest_alpha, dtype=float), float(chain.link_length), jl, jr,
             f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float),
             f64(chain.link_load, dtype=float), nodal_load, int(chain.free_nodes[0]) + 1,
             f64(chain.lower, dtype=float), f64(chain.upper, dtype=float), float(chain.length),
-            float(chain.force_scale))
+            float(chain.force_scale), cu, cl)
+
+
+#: the kernels' compliances where no wall yields (empty; never written)
+_NO_SPRINGS = np.zeros(0)
 
 
 def run_compiled(chain: Chain, *, tol: float, max_outer: int = 200,

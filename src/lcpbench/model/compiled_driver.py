@@ -71,7 +71,7 @@ def takes(chain: Chain, step_solver, method: str) -> bool:
             or not getattr(step_solver, "scaled", False)
             or hasattr(backend.load(), "solve_step")):
         return False
-    return applies("auto", method, chain)
+    return not chain.elastic_walls and applies("auto", method, chain)
 
 
 class KernelStep(ContactStep):

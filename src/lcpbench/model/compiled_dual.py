@@ -28,9 +28,11 @@ BAIL_PRIMAL, BAIL_NOT_PD, BAIL_REPEAT, BAIL_LIMIT, BAIL_CERT, BAIL_JUDGE = 10, 1
 
 # Work arrays, allocated once per solve (compiled_kernel._workspace); no loop
 # allocates. Rows of ``wn`` (free nodes):
-U, G, SIG, WALL, D, RES, GF, RATIO, LIN, ORIG, RUP, RLO, NET, U2, OUT_U, DIR, TRY, WU = range(18)
-# rows of ``wb``: the working set S, the face factored, the additions, the warm walls
-S_, FACT, JUP, JLO, WUP, WLO, ROWS, PREV_UP, PREV_LO = range(9)
+U, G, SIG, WALL, D, RES, GF, RATIO, LIN, ORIG, RUP, RLO, NET, U2, OUT_U, DIR, TRY, WU, SHIFT, \
+    FSHIFT = range(20)
+# rows of ``wb``: the working set S, the face factored, the additions, the warm walls, the
+# nodes of S held *on* their wall (a rigid one; the others are held by its spring)
+S_, FACT, JUP, JLO, WUP, WLO, ROWS, PREV_UP, PREV_LO, ELIM = range(10)
 # rows of ``wa`` (links): 1 / (a cos α), α₀, the iterate α, the trial α, their sines
 # and cosines
 INV, ALPHA0, ALPHA, TRIAL, SIN_A, SIN_T, COS_A, COS_T = range(8)
@@ -221,9 +223,16 @@ def _move(bands, d, u, g, s, n):
 
 
 @njit(cache=True)
-def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
+def _dual(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, gp, ws):
     """(code, face solves): code 0 at the optimum (after refinement); u, g and sigma
-    in the rows U, G, SIG of the work array ``ws[0]``. A working set met before
+    in the rows U, G, SIG of the work array ``ws[0]``.
+
+    ``cu``, ``cl``: the compliance 1/k (mm/N) of the upper and lower wall per node (0:
+    rigid), or empty where no wall yields. A node on an elastic wall is held by the
+    wall's spring, not on it: the face minimises Q(u) + ½ (u_i − h_i)² / c_i over it,
+    factored in the compliance form (:func:`lcpbench.linalg.ldl_kernel.refactor`), so
+    the walk is the rigid one's as c → 0 (the wall's reaction is −∂Q/∂u_i, never
+    (u_i − h_i)/c_i). A working set met before
     (its hash in ``ws[8]``; a collision, at odds of 2⁻⁶⁴, only hands the solve to
     the reference) stops the walk as the reference's list of sets does.
 
@@ -237,14 +246,18 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
     S, factored = wb[S_], wb[FACT]
     held, picks, chg = wi[0], wi[1], wi[2]
     n = linear.size
+    soft = cu.size == n and n > 0  # some wall yields: E (held on a wall) is not all of S
+    E = wb[ELIM] if soft else S
+    shift, fshift = wn[SHIFT], wn[FSHIFT]
+    cshift = shift if soft else shift[:0]
     has_lo = warm = False
     for i in range(n):
         has_lo = has_lo or np.isfinite(lo[i])
         warm = warm or warm_up[i] or warm_lo[i]
-        factored[i] = S[i] = False  # the face ``fac`` holds (none fixed: H itself)
-        g[i] = sigma[i] = wall[i] = d[i] = 0.0
+        factored[i] = S[i] = E[i] = False  # the face ``fac`` holds (none fixed: H itself)
+        g[i] = sigma[i] = wall[i] = d[i] = shift[i] = fshift[i] = 0.0
         u[i] = -linear[i]
-    if not _refactor(fac, bands, factored, 0, n):
+    if not _refactor(fac, bands, factored, cshift, 0, n):
         return BAIL_NOT_PD, 0
     _resolve(fac, u)
     slack = 32 * EPS * (1.0 + _max_abs(u))
@@ -270,11 +283,13 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
                     return 0, it
                 if npick == 0:  # the optimum: one refinement on the face just factored
                     for i in range(n):
-                        if S[i]:
+                        if E[i]:
                             u[i] = wall[i]
                     _grad_into(g, m, u, gp, ws[10])
                     for i in range(n):
-                        r[i] = 0.0 if S[i] else g[i]
+                        r[i] = 0.0 if E[i] else g[i]
+                        if S[i] and not E[i]:  # the spring's pull on a node it holds
+                            r[i] += (u[i] - wall[i]) / shift[i]
                     _resolve(fac, r)
                     for i in range(n):
                         gf[i] = g[i] - _mv(bands, r, i, n, False)
@@ -298,6 +313,9 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
                 wall[i] = hi[i] if picks[q] > 0 else lo[i]
                 h ^= _key(i, sigma[i])
                 S[i] = True
+                if soft:
+                    shift[i] = cu[i] if picks[q] > 0 else cl[i]
+                    E[i] = not shift[i] > 0.0
                 held[nheld] = i
                 nheld += 1
                 chg[nchg] = i
@@ -307,8 +325,10 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
         it += 1
         # d₀: the held nodes onto their walls (d is zero elsewhere); r = g + H d₀ off S,
         # where d₀ reaches it, else g
+        # (a node held by a spring keeps its row: r = g + H d₀ there, the spring's pull
+        # being zero at d₀)
         for i in range(n):
-            r[i] = 0.0 if S[i] else g[i]
+            r[i] = 0.0 if E[i] else g[i]
         for q in range(nheld):
             j = held[q]
             d[j] = wall[j] - u[j]
@@ -316,21 +336,22 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
             j = held[q]
             if d[j] != 0.0:
                 for i in range(max(j - 2, 0), min(j + 3, n)):
-                    if not S[i]:
+                    if not E[i]:
                         r[i] = g[i] + _mv(bands, d, i, n, False)
         first, last = n, -1  # the nodes whose wall changed since the last factorisation
         for q in range(nchg):
             i = chg[q]
-            if S[i] != factored[i]:
+            if S[i] != factored[i] or shift[i] != fshift[i]:
                 first, last = min(first, i), max(last, i)
                 factored[i] = S[i]
+                fshift[i] = shift[i]
         nchg = 0
         if first < n:
             stop = last + 1  # after the change, the first two fixed nodes in a row
-            while stop + 1 < n and not (S[stop] and S[stop + 1]):
+            while stop + 1 < n and not (E[stop] and E[stop + 1]):
                 stop += 1
             stop = min(stop + 2, n)
-            if not _refactor(fac, bands, S, max(0, first - 2), stop):
+            if not _refactor(fac, bands, E, cshift, max(0, first - 2), stop):
                 return BAIL_NOT_PD, it
         _resolve(fac, r)
         for i in range(n):
@@ -352,7 +373,8 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
                 if ratio[j] <= s + TIE:  # ties within round-off go together
                     h ^= _key(j, sigma[j])
                     sigma[j] = 0.0
-                    S[j] = False
+                    S[j] = E[j] = False
+                    shift[j] = 0.0
                     chg[nchg] = j
                     nchg += 1
                 else:
@@ -366,8 +388,9 @@ def _dual(bands, linear, lo, hi, warm_up, warm_lo, max_iter, gp, ws):
 
 
 @njit(cache=True)
-def _certify(u, ru, rl, lo, hi, gp, grad, size, m, ms, T):
-    """The certificate's residual; ``grad``: the gradient at u (when finite)."""
+def _certify(u, ru, rl, lo, hi, cu, cl, gp, grad, size, m, ms, T):
+    """The certificate's residual; ``grad``: the gradient at u (when finite); ``cu``,
+    ``cl``: the walls' compliances (empty: rigid), whose gap is g + c R."""
     n = u.size
     for i in range(n):
         if not (np.isfinite(u[i]) and np.isfinite(ru[i]) and np.isfinite(rl[i])):
@@ -377,16 +400,20 @@ def _certify(u, ru, rl, lo, hi, gp, grad, size, m, ms, T):
     _grad_and_scale(grad, size, m, ms, u, gp, T)
     force, span = TINY, 1.0 + _max_abs(u)
     stat = feas = neg = comp = 0.0
+    soft = cu.size == n
     for i in range(n):
         force = max(force, size[i] + ru[i] + rl[i])
     for i in range(n):
         stat = max(stat, abs(grad[i] + ru[i] - rl[i]))
-        feas = max(feas, u[i] - hi[i], lo[i] - u[i])
+        gu, gl = hi[i] - u[i], u[i] - lo[i]
+        if soft:
+            gu, gl = gu + cu[i] * ru[i], gl + cl[i] * rl[i]
+        feas = max(feas, -gu, -gl)
         neg = max(neg, -ru[i], -rl[i])
         if np.isfinite(hi[i]):
-            comp = max(comp, abs((hi[i] - u[i]) * ru[i]))
+            comp = max(comp, abs(gu * ru[i]))
         if np.isfinite(lo[i]):
-            comp = max(comp, abs((u[i] - lo[i]) * rl[i]))
+            comp = max(comp, abs(gl * rl[i]))
     return max(stat / force, feas / span, neg / force, comp / (force * span))
 
 
@@ -395,24 +422,27 @@ def _certificate(u, ru, rl, lo, hi, gp):
     """solvers.banded.step_certificate: the scaled KKT residual of a step answer."""
     n = u.size
     nj = gp[0].shape[0]
-    return _certify(u, ru, rl, lo, hi, gp, np.empty(n), np.empty(n), np.empty(nj), np.empty(nj),
+    return _certify(u, ru, rl, lo, hi, np.empty(0), np.empty(0), gp, np.empty(n), np.empty(n),
+                    np.empty(nj), np.empty(nj),
                     np.zeros((2, n)))
 
 
 @njit(cache=True)
-def _wall_terms(hi, lo, u, R, L, F, nat, min_gap, min_r, comp_up, comp_lo):
+def _wall_terms(hi, lo, u, R, cu, cl, L, F, nat, min_gap, min_r, comp_up, comp_lo):
     """One node's terms of step_residuals (gap g and reaction r of each wall row,
     scaled by L and F): the accumulators (natural residual max|min(g, r)|, least
-    gap, least reaction, Σ g·r of each wall) updated. Shared with driver_kernel."""
+    gap, least reaction, Σ g·r of each wall) updated; at an elastic wall of
+    compliance ``cu``/``cl`` (0: rigid) the gap is the compliant one, g + c R.
+    Shared with driver_kernel."""
     up, low = np.isfinite(hi), np.isfinite(lo)
     if up:
-        g = (hi - u) / L
+        g = ((hi - u) + cu * max(R, 0.0)) / L
         r = (max(R, 0.0) if low else R) / F
         nat = max(nat, abs(min(g, r)))
         min_gap, min_r = min(min_gap, g), min(min_r, r)
         comp_up += g * r
     if low:
-        g = (u - lo) / L
+        g = ((u - lo) + cl * max(-R, 0.0)) / L
         r = (max(-R, 0.0) if up else -R) / F
         nat = max(nat, abs(min(g, r)))
         min_gap, min_r = min(min_gap, g), min(min_r, r)
@@ -430,7 +460,7 @@ def wall_residuals(u2, R, bands, linear, lo, hi, L, F):
     nat, min_gap, min_r, comp_up, comp_lo, term = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0
     for i in range(n):
         nat, min_gap, min_r, comp_up, comp_lo = _wall_terms(
-            hi[i], lo[i], u2[i], R[i], L, F, nat, min_gap, min_r, comp_up, comp_lo)
+            hi[i], lo[i], u2[i], R[i], 0.0, 0.0, L, F, nat, min_gap, min_r, comp_up, comp_lo)
         if np.isfinite(hi[i]) or np.isfinite(lo[i]):  # banded_matvec(|H|, |u|) + |c|
             s = abs(bands[0, i]) * abs(u2[i])
             for kk in (1, 2):
@@ -443,9 +473,10 @@ def wall_residuals(u2, R, bands, linear, lo, hi, L, F):
 
 
 @njit(cache=True)
-def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m, T, g0):
+def _judge(u, bands, linear, lo, hi, cu, cl, gp, L, F, out, R, u2, rows, fac, m, T, g0):
     """_residuals into ``out`` and ``R`` (u2, rows, fac, m: work arrays); ``g0``: the
-    gradient at u where the caller has it (the certificate's), else empty."""
+    gradient at u where the caller has it (the certificate's), else empty; ``cu``,
+    ``cl``: the walls' compliances (empty: rigid)."""
     n = u.size
     some_free = False
     for i in range(n):
@@ -457,7 +488,7 @@ def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m, T, g0):
             R[:] = g0
         else:
             _grad_into(R, m, u2, gp, T)
-        if not _refactor(fac, bands, rows, 0, n):
+        if not _refactor(fac, bands, rows, cu[:0], 0, n):
             out[:] = 0.0
             return False
         for i in range(n):
@@ -469,11 +500,13 @@ def _judge(u, bands, linear, lo, hi, gp, L, F, out, R, u2, rows, fac, m, T, g0):
                 u2[i] -= R[i]
     _grad_into(R, m, u2, gp, T)
     nat, min_gap, min_r, comp_up, comp_lo, term = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0
+    soft = cu.size == n
     for i in range(n):
         R[i] = -R[i]
         up, low = np.isfinite(hi[i]), np.isfinite(lo[i])
         nat, min_gap, min_r, comp_up, comp_lo = _wall_terms(
-            hi[i], lo[i], u2[i], R[i], L, F, nat, min_gap, min_r, comp_up, comp_lo)
+            hi[i], lo[i], u2[i], R[i], cu[i] if soft else 0.0, cl[i] if soft else 0.0, L, F,
+            nat, min_gap, min_r, comp_up, comp_lo)
         if up or low:
             term = max(term, _mv(bands, u2, i, n, True) + abs(linear[i]))
     out[0], out[1], out[2], out[3], out[4] = nat, min_gap, min_r, abs(comp_up) + abs(comp_lo), \
@@ -487,6 +520,7 @@ def _residuals(u, bands, linear, lo, hi, gp, L, F):
     complementarity, term_size], R) with R = −gradient on the completed heights."""
     n = u.size
     out, R = np.zeros(5), np.empty(n)
-    ok = _judge(u, bands, linear, lo, hi, gp, L, F, out, R, np.empty(n), np.empty(n, np.bool_),
+    ok = _judge(u, bands, linear, lo, hi, np.empty(0), np.empty(0), gp, L, F, out, R,
+                np.empty(n), np.empty(n, np.bool_),
                 np.empty((4, n)), np.empty(gp[0].shape[0]), np.zeros((2, n)), np.empty(0))
     return ok, out, R

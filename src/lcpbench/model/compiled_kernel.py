@@ -41,6 +41,7 @@ from .compiled_dual import (
     COS_A,
     COS_T,
     DIR,
+    ELIM,
     EPS,
     FACT,
     FLOOR_ULPS,
@@ -91,7 +92,7 @@ def _workspace(n, links, nj, max_iter):
     """The solve's work arrays, uninitialised: every entry is written before it is
     read (each pass sets its rows; the walk its lists and the hashes it compares),
     so nothing is zeroed that is not read (``seen`` alone holds 20 n + 50 hashes)."""
-    return (np.empty((18, n)), np.empty((9, n), np.bool_), np.empty((4, nj)),
+    return (np.empty((20, n)), np.empty((10, n), np.bool_), np.empty((4, nj)),
             np.empty((8, links)), np.empty((5, links + 2)), np.empty((4, n)),
             np.empty((3, n)), np.empty((nj, 3)),
             np.empty(min(max_iter, 20 * n + 50) + 2, np.uint64), np.empty(5), np.empty((2, n)),
@@ -114,6 +115,29 @@ def _energy_into(alpha, a, jl, jr, k, rest, link_load, sines):
         w += link_load[i] * (0.5 * (y + y1))
         y = y1
     return 0.5 * s - w
+
+
+@njit(cache=True)
+def _penalty(u, lo, hi, cu, cl, grad):
+    """The elastic walls' energy Σ ½ δ_i² / c_i at the free nodes' heights u
+    (model.elastic.penalty, δ the indentation, c = 1/k the compliance; 0 at a rigid
+    wall, c = 0, which u never passes); ``grad``: its gradient added into it, unless
+    empty. 0 where no wall yields (``cu`` empty)."""
+    if cu.size != u.size:
+        return 0.0
+    e = 0.0
+    for i in range(u.size):
+        if cu[i] > 0.0 and u[i] > hi[i]:
+            p = (u[i] - hi[i]) / cu[i]
+            e += 0.5 * p * (u[i] - hi[i])
+            if grad.size:
+                grad[i] += p
+        if cl[i] > 0.0 and u[i] < lo[i]:
+            p = (lo[i] - u[i]) / cl[i]
+            e += 0.5 * p * (lo[i] - u[i])
+            if grad.size:
+                grad[i] -= p
+    return e
 
 
 @njit(cache=True)
@@ -251,7 +275,7 @@ def _newton(alpha, a, jl, jr, k, rest, fs, n, bands, linear, origin, T, fac, non
     for i in range(n):  # H + T, factored to test it (LAPACK's dpbtrf in the reference)
         fac[0, i], fac[1, i], fac[2, i] = bands[0, i] + T[0, i], bands[1, i] + T[1, i], bands[2, i]
         none[i] = False
-    if not _refactor(fac, fac, none, 0, n):
+    if not _refactor(fac, fac, none, mu[:0], 0, n):
         T[:] = 0.0
         return False
     for i in range(n):
@@ -268,11 +292,11 @@ def _newton(alpha, a, jl, jr, k, rest, fs, n, bands, linear, origin, T, fac, non
 
 
 @njit(cache=True)
-def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, warm_u, warm_up, warm_lo,
-          warm_flags, max_iter, request, ws, gp, sines, cosines, newton):
+def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, cu, cl, warm_u, warm_up,
+          warm_lo, warm_flags, max_iter, request, ws, gp, sines, cosines, newton):
     """One contact step at α (``sines``, ``cosines``: sin α, cos α) into the work
     arrays: assemble, dual walk, certificate, judge; (code, face solves), code 0:
-    solved."""
+    solved. ``cu``, ``cl``: the walls' compliances (empty: rigid walls)."""
     wn, wb, wj, wa = ws[0], ws[1], ws[2], ws[3]
     _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, ws[6], wn[LIN], wa[INV], ws[7],
                    wn[ORIG], wa[ALPHA0], wj[0], wj[1], ws[4], sines, cosines, False)
@@ -296,18 +320,22 @@ def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, warm_u, wa
         W_lo[i] = W_lo[i] and not W_up[i]
     if bad:  # crossed walls: the reference hands this to the primal method
         return BAIL_PRIMAL, 0
-    code, it = _dual(ws[6], wn[LIN], lo, hi, W_up, W_lo, max_iter, gp, ws)
+    code, it = _dual(ws[6], wn[LIN], lo, hi, cu, cl, W_up, W_lo, max_iter, gp, ws)
     if code != 0:
         return code, it
     u, grad, sigma, r_up, r_lo = wn[U], wn[G], wn[SIG], wn[RUP], wn[RLO]
+    held_on = ws[1][ELIM]  # (written by the walk where a wall yields)
+    soft = cu.size == n
     for i in range(n):
-        u[i] = min(max(u[i], lo[i]), hi[i])
+        if not soft or sigma[i] == 0.0 or held_on[i]:  # a spring's node indents its wall
+            u[i] = min(max(u[i], lo[i]), hi[i])
         r_up[i] = max(-grad[i], 0.0) if sigma[i] > 0 else 0.0
         r_lo[i] = max(grad[i], 0.0) if sigma[i] < 0 else 0.0
-    if not _certify(u, r_up, r_lo, lo, hi, gp, wn[GF], wn[RATIO], wj[2], wj[3], T) <= RTOL:
+    if not _certify(u, r_up, r_lo, lo, hi, cu, cl, gp, wn[GF], wn[RATIO], wj[2], wj[3],
+                    T) <= RTOL:
         return BAIL_CERT, it
     res = ws[9]
-    ok = _judge(u, ws[6], wn[LIN], lo, hi, gp, L, F, res, wn[NET], wn[U2], wb[ROWS], ws[5], wj[2],
+    ok = _judge(u, ws[6], wn[LIN], lo, hi, cu, cl, gp, L, F, res, wn[NET], wn[U2], wb[ROWS], ws[5], wj[2],
                 T, wn[GF])
     if not (ok and res[0] <= max(10.0 * request, FLOOR_ULPS * EPS * res[4])):
         return BAIL_JUDGE, it
@@ -315,7 +343,7 @@ def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, warm_u, wa
 
 
 @njit(cache=True)
-def _contact_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
+def _contact_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, cu, cl,
                   warm_u, warm_up, warm_lo, warm_flags, max_iter, request):
     """One cold contact step at α, its work arrays allocated: (code, u, r_up, r_lo,
     sigma, face solves, inv, α₀, origin, gp, residuals, R), code 0: solved (other codes:
@@ -323,8 +351,8 @@ def _contact_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
     ws = _workspace(n, alpha.size, jr.size, max_iter)
     wn, wa = ws[0], ws[3]
     gp = (ws[7], jr[0], fs, alpha.size, wn[ORIG], ws[2][0], k, rest, nodal_load)
-    code, it = _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, warm_u, warm_up,
-                     warm_lo, warm_flags, max_iter, request, ws, gp, np.sin(alpha),
+    code, it = _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, cu, cl, warm_u,
+                     warm_up, warm_lo, warm_flags, max_iter, request, ws, gp, np.sin(alpha),
                      np.cos(alpha), False)
     return (code, wn[U], wn[RUP], wn[RLO], wn[SIG], it, wa[INV], wa[ALPHA0], wn[ORIG], gp, ws[9],
             wn[NET])
@@ -354,7 +382,7 @@ def _clipped_heights(u, alpha, a, fs, lo, hi):
 
 
 @njit(cache=True)
-def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
+def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl,
                 tol, max_outer, start_alpha, warm_u, warm_up, warm_lo, warm_flags,
                 max_iter, request, newton=False):
     """The globalised driver (model.driver._globalised) around the compiled step;
@@ -362,8 +390,10 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
     where positive definite once the last step moved α by less than
     NEWTON_SWITCH, or from a warm start's first step.
 
-    ``fs``: shifted index (node + 1) of the first free node; ``start_alpha``
-    empty for a cold start; ``warm_flags``: bit 0 ``warm_u``, bit 1 ``warm_up``,
+    ``fs``: shifted index (node + 1) of the first free node; ``cu``, ``cl``: the
+    compliance 1/k (mm/N) of the upper and lower wall per free node (0: rigid), or
+    empty where no wall yields (elastic walls, model.elastic: the walls' springs join
+    the energy searched on); ``start_alpha`` empty for a cold start; ``warm_flags``: bit 0 ``warm_u``, bit 1 ``warm_up``,
     bit 2 ``warm_lo`` are given (a continuation's last step).
 
     Returns ``(code, alpha, forces_upper, forces_lower, u, sigma, records,
@@ -387,7 +417,8 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
     if not ok:
         return NO_FIT, rest_alpha.copy(), zero, zero, zero, zero, rec, count, none, zero
     sin_a, sin_t, cos_a, cos_t = wa[SIN_A], wa[SIN_T], wa[COS_A], wa[COS_T]
-    E = _energy_into(alpha, a, jl, jr, k, rest, link_load, sin_a)
+    E = _energy_into(alpha, a, jl, jr, k, rest, link_load, sin_a) + _penalty(u, lo, hi, cu, cl,
+                                                                            none[:0])
     noise_k = 0.0
     for j in range(k.size):
         noise_k += abs(k[j])
@@ -397,7 +428,7 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
     d, ut, g_u = wn[DIR], wn[TRY], wn[GF]
     gp = (ws[7], jr[0], fs, links, origin, ws[2][0], k, rest, nodal_load)
     for _ in range(max_outer):
-        code, it = _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F,
+        code, it = _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, cu, cl,
                          w_u, w_up, w_lo, warm_flags, max_iter, request, ws, gp, sin_a,
                          cos_a, newton and near)
         if code != 0:  # (sigma unwritten where the walk never ran: zero, as the rest)
@@ -409,6 +440,7 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
             dalpha = max(dalpha, abs((alpha0[i] + (cur - prev) * inv[i]) - alpha[i]))
             prev = cur
         _grad_into(g_u, m, u, gp, ws[10])
+        _penalty(u, lo, hi, cu, cl, g_u)  # (nothing where no wall yields)
         slope = 0.0
         for i in range(n):  # the dot product, a loop (see _max_abs)
             d[i] = su[i] - u[i]
@@ -419,7 +451,8 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
             for i in range(n):
                 ut[i] = u[i] + t * d[i]
             if _fit(trial, ut, alpha, a, fs, links, inv, sin_t, cos_t):
-                E_t = _energy_into(trial, a, jl, jr, k, rest, link_load, sin_t)
+                E_t = _energy_into(trial, a, jl, jr, k, rest, link_load, sin_t) + _penalty(
+                    ut, lo, hi, cu, cl, none[:0])
                 if E_t <= E + 1e-4 * t * min(slope, 0.0) + noise:
                     break
             t *= 0.5

@@ -221,12 +221,15 @@ def _term_sizes(bands, linear, x, n, out):
 
 
 @njit(cache=True)
-def _factor(bands, free, m, fac):
-    """H[free, free] = L D Lᵀ (bandwidth 2, no square roots) into fac: the unit L's
-    sub-diagonals in rows 1-2, 1 / D in row 3; False if H[free, free] is not positive
-    definite (a pivot d ≤ 0, where Cholesky's square root fails)."""
+def _factor(bands, free, m, fac, spring):
+    """H[free, free] + diag(spring) = L D Lᵀ (bandwidth 2, no square roots) into fac:
+    the unit L's sub-diagonals in rows 1-2, 1 / D in row 3; False if it is not
+    positive definite (a pivot d ≤ 0, where Cholesky's square root fails).
+    ``spring``: the elastic walls' k per node holding it (empty: none)."""
     for p in range(m):
         fac[0, p] = bands[0, free[p]]
+        if spring.size:
+            fac[0, p] += spring[free[p]]
         fac[1, p] = fac[2, p] = 0.0
         if p + 1 < m:
             gap = free[p + 1] - free[p]
@@ -276,11 +279,15 @@ def _solve(fac, free, m, rhs, x):
 
 
 @njit(cache=True)
-def _pivot(bands, fac, iw, lo, hi, L, pull, w, fs, b0, nj, k, rest, nodal_load):
+def _pivot(bands, fac, iw, lo, hi, cu, cl, L, pull, w, fs, b0, nj, k, rest, nodal_load):
     """model.judge._pivot_step from the contact set ``iw[0]`` (FREE, UP, LO): (rounds or
     0 if it did not settle, worst round-off, term size S); u, the net reaction and
-    the round-off per wall node in rows U, NET, ROUNDOFF."""
+    the round-off per wall node in rows U, NET, ROUNDOFF. ``cu``, ``cl``: the walls'
+    compliances 1/k (0: rigid; empty: no wall yields); a node in contact with an
+    elastic wall stays free, held by the wall's spring k (u − h)."""
     n = lo.size
+    soft = cu.size == n
+    spring = np.zeros(n if soft else 0)
     state, change, free = iw[0], iw[1], iw[2]  # change: 1 release up, 2 release lo,
     origin, linear, u, net = w[ORIGIN], w[LINEAR], w[U], w[NET]  # 3 join up, 4 join lo
     scale, roundoff, x, sizes = w[SCALE], w[ROUNDOFF], w[RHS], w[SIZE]
@@ -288,19 +295,26 @@ def _pivot(bands, fac, iw, lo, hi, L, pull, w, fs, b0, nj, k, rest, nodal_load):
     for rounds in range(1, PIVOT_ROUNDS + 2 * n + 1):
         nfree = 0
         for i in range(n):
-            if state[i] == UP:
+            c = 0.0
+            if soft:
+                c = cu[i] if state[i] == UP else (cl[i] if state[i] == LO else 0.0)
+                spring[i] = 1.0 / c if c > 0.0 else 0.0
+            if state[i] == UP and not c > 0.0:
                 u[i] = hi[i]
-            elif state[i] == LO:
+            elif state[i] == LO and not c > 0.0:
                 u[i] = lo[i]
             else:
                 u[i] = origin[i]
                 free[nfree] = i
                 nfree += 1
         if nfree:
-            if not _factor(bands, free, nfree, fac):
+            if not _factor(bands, free, nfree, fac, spring):
                 return 0, 0.0, 0.0
             for _ in range(2):  # solve, then refine with the factored gradient
                 _grad(u, w, net, False, n, fs, b0, nj, k, rest, nodal_load)
+                for i in range(spring.size):  # + the springs' k (u − h)
+                    if spring[i] > 0.0:
+                        net[i] += spring[i] * (u[i] - (hi[i] if state[i] == UP else lo[i]))
                 _solve(fac, free, nfree, net, x)
                 for p in range(nfree):
                     u[free[p]] -= x[p]
@@ -372,12 +386,14 @@ def _contraction(step_sizes, judge_dalpha):
 
 
 @njit(cache=True)
-def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
+def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl,
                  wall, channel, forces_upper, forces_lower, tol, step_sizes):
     """model.judge.judge's numbers for an answer whose driver converged.
 
     ``fs``: shifted index (node + 1) of the first free node; ``F`` the force
-    scale EI/ℓ²; ``L`` the length ℓ; ``wall`` the upper wall's height (inf:
+    scale EI/ℓ²; ``L`` the length ℓ; ``cu``, ``cl``: the compliance 1/k of the
+    upper and lower wall per free node (0: rigid; empty: no wall yields), whose
+    gap is the compliant one, g + R/k; ``wall`` the upper wall's height (inf:
     none); ``channel`` a lower wall at −wall too.
 
     Returns ``(code, stats, forces_upper, forces_lower, torque_residual)``:
@@ -415,7 +431,7 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
         noise[i] = ROUNDOFF_ULPS * EPS * (scale0[i] if on_up or on_lo else size0[i])
         up = on_up and (not on_lo or hi[i] - origin[i] <= origin[i] - lo[i])
         state[i] = UP if up else (LO if on_lo else FREE)
-    rounds, worst, S = _pivot(bands, fac, iw, lo, hi, L, eps_R, w, fs, b0, nj, k, rest,
+    rounds, worst, S = _pivot(bands, fac, iw, lo, hi, cu, cl, L, eps_R, w, fs, b0, nj, k, rest,
                               nodal_load)
     settled = rounds > 0
     u, net, roundoff, ju, jlo = w[U], w[NET], w[ROUNDOFF], w[JU], w[JLO]
@@ -438,18 +454,22 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
     has_gap = np.isfinite(wall)
     comp = 0.0  # complementarity and sign on the answer's heights
     R_min = 0.0
+    soft = cu.size == n
     for i in range(n):
         yf = y[fs - 1 + i]
+        # an elastic wall's gap is the compliant one, g + R/k (the node indents by R/k)
+        iu = cu[i] * max(fu[i], 0.0) if soft else 0.0
+        il = cl[i] * max(fl[i], 0.0) if soft else 0.0
         min_force = min(min_force, fu[i])
         if has_gap:
-            min_gap = min(min_gap, wall - yf)
-            cmp = max(cmp, abs((wall - yf) * fu[i]))
+            min_gap = min(min_gap, wall - yf + iu)
+            cmp = max(cmp, abs((wall - yf + iu) * fu[i]))
         if channel:
             min_force = min(min_force, fl[i])
-            min_gap = min(min_gap, yf + wall)
-            cmp = max(cmp, abs((yf + wall) * fl[i]))
-        comp = max(comp, min(fu[i] / F0, (hi[i] - yf) / L))
-        comp = max(comp, min(fl[i] / F0, (yf - lo[i]) / L))
+            min_gap = min(min_gap, yf + wall + il)
+            cmp = max(cmp, abs((yf + wall + il) * fl[i]))
+        comp = max(comp, min(fu[i] / F0, (hi[i] - yf + iu) / L))
+        comp = max(comp, min(fl[i] / F0, (yf - lo[i] + il) / L))
         R_min = min(R_min, min(fu[i], fl[i]))
     pinned_right = fs - 1 + n - 1 < links
     closure = abs(y[links]) if pinned_right else 0.0
@@ -467,10 +487,14 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
     stats[9], stats[10], stats[11], stats[12] = worst_t, rel_t, floor_R, R_min
     stats[19] = min(GEOMETRY_TOL, NODE_SHARE * tau) * L
     stats[20] = GEOMETRY_TOL * L
-    # the second-order check (model.stability_kernel): rigid walls here
-    rigid, flat = np.full(n, np.inf), np.zeros(n)
+    # the second-order check (model.stability_kernel): flat walls here, rigid or elastic
+    ku, kl, flat = np.full(n, np.inf), np.full(n, np.inf), np.zeros(n)
+    if soft:
+        for i in range(n):
+            ku[i] = 1.0 / cu[i] if cu[i] > 0.0 else np.inf
+            kl[i] = 1.0 / cl[i] if cl[i] > 0.0 else np.inf
     code, unstable, _ = unstable_directions(alpha, a, jl, jr, k, rest, link_load, fs - 1, fu,
-                                            fl, rigid, rigid, flat, flat, flat, flat, eps_R,
+                                            fl, ku, kl, flat, flat, flat, flat, eps_R,
                                             pinned_right)
     stats[21] = unstable if code == CHECKED else 0.0
     if not settled:

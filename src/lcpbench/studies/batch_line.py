@@ -71,6 +71,9 @@ def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = 
             return None
         stacked.append(flat.astype(float, copy=False).reshape(m, size))
     ra, k, rest, load, lo, hi = stacked
+    # elastic walls: each scene's compliances (the solve kernel's form); none: no columns
+    cu, cl = (np.ascontiguousarray(np.stack([kernel_args(c)[13 + w] for c in chains]))
+              if c0.elastic_walls else np.zeros((m, 0)) for w in (0, 1))
     wall = np.array([c.wall for c in chains], dtype=float)
     theta = np.array([s.theta for s in scenes], dtype=float)
     height = np.array([s.height for s in scenes], dtype=float)
@@ -89,7 +92,7 @@ def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = 
             A[name] = np.empty(m, np.int64)
         t0 = time.perf_counter()
         bad, A["records"] = kern.solve_line(
-            ra, args0[1], args0[2], args0[3], k, rest, load, args0[7], args0[8], lo, hi,
+            ra, args0[1], args0[2], args0[3], k, rest, load, args0[7], args0[8], lo, hi, cu, cl,
             args0[11], args0[12], wall, theta, height, float(tol), int(max_outer),
             int(max_iter), float(request), most, predictor == "adaptive",
             *(A[name] for name, _, _ in _OUTPUTS), A["kept"], A["failed"], A["base"])
