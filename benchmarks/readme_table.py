@@ -1,17 +1,19 @@
 """The README's standard-run table, from the committed results/sweep/summary.json.
 
-    python benchmarks/readme_table.py [results/sweep/summary.json]
+    python benchmarks/readme_table.py [results/sweep/summary.json] [--min-success 0.9]
 
 prints the markdown table (back-end, settings, driver, success, converged off
 the reference, median time, median force error, speed-ups), ordered by success
-then median time, so the README's numbers come from committed results.
+then median time, so the README's numbers come from committed results. With
+``--min-success S`` only the rows that succeed on at least that share of the
+scenes, and the baselines (the README's table).
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import math
-import sys
 
 
 def _fmt(v, spec):
@@ -41,5 +43,11 @@ def table(rows: list[dict]) -> str:
 
 
 if __name__ == "__main__":
-    path = sys.argv[1] if len(sys.argv) > 1 else "results/sweep/summary.json"
-    print(table(json.load(open(path))))
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("summary", nargs="?", default="results/sweep/summary.json")
+    ap.add_argument("--min-success", type=float, default=0.0,
+                    help="keep the rows with at least this success share, and the baselines")
+    args = ap.parse_args()
+    rows = json.load(open(args.summary))
+    print(table([r for r in rows if r["success"] >= args.min_success
+                 or r["backend"].startswith("baseline")]))

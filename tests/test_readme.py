@@ -57,3 +57,61 @@ def test_readme_commands_need_only_python3(which):
     venv = steps[0][3]
     for step in steps[1:]:
         assert step[0].startswith(f"{venv}/bin/"), step
+
+
+def test_activation_comes_right_under_the_two_commands():
+    """`lcpbench` is not on PATH after the commands alone: the README says how, at once."""
+    commands = _indented_commands()
+    last = max(i for i, c in enumerate(commands) if "'.[bench]'" in c or "'.[test]'" in c)
+    assert commands[last + 1] == ". .venv/bin/activate", commands
+
+
+def _use_commands() -> list[list[str]]:
+    """The `lcpbench ...` lines of the Use section, as argument lists (comments dropped)."""
+    part = README.split("## Use", 1)[1].split("\n## ", 1)[0]
+    return [shlex.split(ln.strip(), comments=True) for ln in part.splitlines()
+            if ln.startswith("    lcpbench ")]
+
+
+#: commands of the Use section that take more than a few seconds, or touch the
+#: machine beyond the working directory (`compile` writes the user's kernel cache;
+#: tests/model/test_aot.py covers it)
+_SLOW = ("select", "sweep", "report", "reproduce")
+_ELSEWHERE = ("compile",)
+
+
+def _run_in_clone_like(tmp_path, monkeypatch, argvs):
+    from lcpbench.cli import main
+
+    (tmp_path / "examples").symlink_to(ROOT / "examples")  # the README runs from the clone
+    monkeypatch.chdir(tmp_path)
+    for argv in argvs:
+        assert main(argv[1:]) == 0, argv
+
+
+def test_readme_cli_examples_run_as_written(tmp_path, monkeypatch):
+    fast = [a for a in _use_commands() if a[1] not in _SLOW + _ELSEWHERE + ("vision",)]
+    assert any(a[1] == "solve" for a in fast)
+    _run_in_clone_like(tmp_path, monkeypatch, fast)
+    assert (tmp_path / "shape.png").exists()
+
+
+@pytest.mark.slow
+def test_readme_slow_cli_examples_run_as_written(tmp_path, monkeypatch):
+    slow = [a for a in _use_commands() if a[1] in _SLOW]
+    assert {a[1] for a in slow} == set(_SLOW)
+    _run_in_clone_like(tmp_path, monkeypatch, slow)
+    assert (tmp_path / "scratch-report" / "report.md").exists()
+
+
+def test_readme_vision_examples_run_as_written(tmp_path, monkeypatch):
+    pytest.importorskip("cv2")
+    vision = [a for a in _use_commands() if a[1] == "vision"]
+    assert [a[2] for a in vision] == ["render", "measure"]
+    _run_in_clone_like(tmp_path, monkeypatch, vision)
+    assert (tmp_path / "overlay.png").exists()
+
+
+def test_every_use_command_is_run_by_a_test():
+    names = {a[1] for a in _use_commands()}
+    assert names <= {"solve", "solvers", "vision", *_SLOW, *_ELSEWHERE}, names
