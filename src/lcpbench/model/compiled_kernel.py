@@ -84,7 +84,7 @@ NEWTON_SWITCH = 0.05  # model.driver.NEWTON_SWITCH (rad)
 CONVERGED, MAX_OUTER, LINE_SEARCH, NO_FIT = 0, 1, 2, 3
 __all__ = ["BAIL_CERT", "BAIL_JUDGE", "BAIL_LIMIT", "BAIL_NOT_PD", "BAIL_PRIMAL", "BAIL_REPEAT",
            "CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "_certificate", "_residuals",
-           "solve_chain"]
+           "solve_chain", "solve_step"]
 
 
 @njit(cache=True)
@@ -305,6 +305,17 @@ def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, cu, cl, wa
     if newton:  # T = 0 where H + T is not positive definite
         _newton(alpha, a, jl, jr, k, rest, fs, n, ws[6], wn[LIN], wn[ORIG], T, ws[5],
                 wb[FACT], ws[4][0], sines, cosines)
+    return _solve_assembled(n, lo, hi, L, F, cu, cl, warm_u, warm_up, warm_lo, warm_flags,
+                            max_iter, request, ws, gp, T)
+
+
+@njit(cache=True)
+def _solve_assembled(n, lo, hi, L, F, cu, cl, warm_u, warm_up, warm_lo, warm_flags, max_iter,
+                     request, ws, gp, T):
+    """The contact step assembled in the work arrays (H in ``ws[6]``, c in row LIN, the
+    stencils and u₀ in ``gp``, the Newton bands in ``T``): dual walk from the warm
+    sets, certificate, judge; (code, face solves), code 0: solved."""
+    wn, wb, wj = ws[0], ws[1], ws[2]
     W_up, W_lo, bad = wb[WUP], wb[WLO], False
     for i in range(n):
         bad = bad or lo[i] > hi[i]
@@ -335,8 +346,8 @@ def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, cu, cl, wa
                     T) <= RTOL:
         return BAIL_CERT, it
     res = ws[9]
-    ok = _judge(u, ws[6], wn[LIN], lo, hi, cu, cl, gp, L, F, res, wn[NET], wn[U2], wb[ROWS], ws[5], wj[2],
-                T, wn[GF])
+    ok = _judge(u, ws[6], wn[LIN], lo, hi, cu, cl, gp, L, F, res, wn[NET], wn[U2], wb[ROWS],
+                ws[5], wj[2], T, wn[GF])
     if not (ok and res[0] <= max(10.0 * request, FLOOR_ULPS * EPS * res[4])):
         return BAIL_JUDGE, it
     return 0, it
@@ -356,6 +367,31 @@ def _contact_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, cu
                      np.cos(alpha), False)
     return (code, wn[U], wn[RUP], wn[RLO], wn[SIG], it, wa[INV], wa[ALPHA0], wn[ORIG], gp, ws[9],
             wn[NET])
+
+
+@njit(cache=True)
+def solve_step(bands, linear, lo, hi, cu, cl, coef, b0, fs, links, origin, phi_origin, k, rest,
+               nodal_load, T, L, F, warm_u, warm_up, warm_lo, warm_flags, max_iter, request):
+    """A contact step already assembled (:class:`lcpbench.model.step.ContactStep`'s
+    arrays: H's bands, c, the walls, the compliances, J's stencils ``coef`` from
+    shifted node ``b0``, u₀ and φ̂(u₀), the Newton bands ``T`` or zeros) by the walk,
+    certificate and judge of the solve kernel: (code, u, r_up, r_lo, sigma, face
+    solves, residuals, R), code 0: solved (else the arrays are work rows, not an
+    answer). The public step call's compiled route
+    (:func:`lcpbench.model.step_solver.solve_step` with the default back-end)."""
+    n, nj = linear.size, coef.shape[0]
+    ws = _workspace(n, links, nj, max_iter)
+    wn = ws[0]
+    ws[6][:] = bands
+    wn[LIN][:] = linear
+    wn[ORIG][:] = origin
+    ws[7][:] = coef
+    ws[2][0][:] = phi_origin
+    ws[10][:] = T
+    gp = (ws[7], b0, fs, links, wn[ORIG], ws[2][0], k, rest, nodal_load)
+    code, it = _solve_assembled(n, lo, hi, L, F, cu, cl, warm_u, warm_up, warm_lo, warm_flags,
+                                max_iter, request, ws, gp, ws[10])
+    return code, wn[U], wn[RUP], wn[RLO], wn[SIG], it, ws[9], wn[NET]
 
 
 @njit(cache=True)

@@ -24,9 +24,9 @@ import numpy as np
 from ..errors import ProblemError
 from ..linalg import banded_matvec
 from ..solvers.base import BoxQP, QPWarm, Settings, Status, StepSolution
-from ..solvers.judge import EPS, accept_tol, verdict
+from ..solvers.judge import EPS, accept_tol, requested, verdict
 from ..solvers.lemke import too_large
-from ..solvers.registry import Backend, get_backend, get_settings
+from ..solvers.registry import DEFAULT, Backend, get_backend, get_settings
 from ..solvers.runner import fallback_message
 from .elastic import compliances
 from .elastic_step import run_elastic_step
@@ -191,6 +191,13 @@ def solve_step(step, solver: str | Backend = "auto", settings: str | Settings = 
     backend = solver if isinstance(solver, Backend) else get_backend(solver)
     s = get_settings(settings)
     t0 = time.perf_counter()
+    if backend.name == DEFAULT and (sol := _compiled_step(step, s, warm)) is not None:
+        sol.backend, sol.settings, sol.scaled = backend.name, s.name, scaled
+        status, why = verdict(sol.status, sol.residuals["natural"],
+                              accept_tol(s, sol.residuals["term_size"]))
+        sol.status, sol.message = status, why
+        sol.wall_time = time.perf_counter() - t0
+        return sol
     try:
         sol = _run_step(backend, step, s, scaled, warm)
     except Exception as exc:
@@ -215,6 +222,72 @@ def solve_step(step, solver: str | Backend = "auto", settings: str | Settings = 
             sol.backend = f"{backend.name}>{backend.fallback}"
     sol.wall_time = time.perf_counter() - t0
     return sol
+
+
+_STEP_KERNEL: list = []  # the solve kernel's module, once loaded (numba_cache.use_aot empties it)
+
+
+def _compiled_step(step, s: Settings, warm: StepSolution | None) -> StepSolution | None:
+    """The default back-end's step in the solve kernel
+    (:func:`lcpbench.model.compiled_kernel.solve_step`: the dual walk, its certificate
+    and lcpbench's residuals, compiled), or None where it does not apply (a step in
+    increments, joints or free nodes not consecutive) or the kernel stopped where the
+    numpy active set goes on (a bail code): the caller runs the numpy one then."""
+    n = step.size
+    free, base = step.free_nodes, step.base
+    if (step.factor is not None or n == 0 or base.size == 0
+            or not (free[-1] - free[0] == n - 1 and base[-1] - base[0] == base.size - 1)):
+        return None
+    if not _STEP_KERNEL:
+        from ..numba_cache import held, kernel_module  # numba at the first such step
+
+        held(_STEP_KERNEL).append(kernel_module("lcpbench.model.compiled_kernel", "solve_step"))
+    k = _STEP_KERNEL[0]
+    f64 = np.ascontiguousarray
+    cu, cl = (f64(c, dtype=float) for c in compliances(step)) if step.elastic else (_NONE, _NONE)
+    T = _no_newton(n) if step.geometric is None else f64(step.geometric[:2], dtype=float)
+    w_u, w_up, w_lo, flags = _warm_args(warm, n)
+    max_iter = s.max_iter if s.max_iter else 20 * n + 50
+    t0 = time.perf_counter()
+    code, u, r_up, r_lo, sigma, it, res, R = k.solve_step(
+        f64(step.bands, dtype=float), f64(step.linear, dtype=float), f64(step.lower, dtype=float),
+        f64(step.upper, dtype=float), cu, cl, f64(step.coef, dtype=float), int(base[0]),
+        int(free[0]) + 1, int(step.links), f64(step.origin, dtype=float),
+        f64(step.phi_origin, dtype=float), f64(step.stiffness, dtype=float),
+        f64(step.rest_joint, dtype=float), f64(step.nodal_load, dtype=float), T,
+        float(step.length_scale), float(step.force_scale), w_u, w_up, w_lo, flags,
+        int(max_iter), float(requested(s)))
+    elapsed = time.perf_counter() - t0
+    if code != 0:
+        return None
+    r0, r1, r2, r3, r4 = res.tolist()
+    return StepSolution(u, r_up, r_lo, Status.SOLVED, iterations=int(it), solve_time=elapsed,
+                        active_upper=sigma > 0, active_lower=sigma < 0, time_source="wall",
+                        residuals={"natural": r0, "min_gap": r1, "min_reaction": r2,
+                                   "complementarity": r3, "term_size": r4},
+                        forces_net=R)
+
+
+_NONE = np.zeros(0)
+
+
+def _no_newton(n: int) -> np.ndarray:
+    return np.zeros((2, n))
+
+
+def _warm_args(warm: StepSolution | None, n: int):
+    """(heights, upper set, lower set, flags) of the kernel's warm start from a step
+    answer (the numpy active set's: its contact sets, else its heights)."""
+    u, up, lo, flags = np.zeros(n), np.zeros(n, bool), np.zeros(n, bool), 0
+    if warm is None:
+        return u, up, lo, flags
+    if warm.u is not None and np.size(warm.u) == n and np.all(np.isfinite(warm.u)):
+        u, flags = np.ascontiguousarray(warm.u, dtype=float), flags | 1
+    if warm.active_upper is not None and np.size(warm.active_upper) == n:
+        up, flags = np.ascontiguousarray(warm.active_upper, dtype=bool), flags | 2
+    if warm.active_lower is not None and np.size(warm.active_lower) == n:
+        lo, flags = np.ascontiguousarray(warm.active_lower, dtype=bool), flags | 4
+    return u, up, lo, flags
 
 
 def _judge(step, sol: StepSolution, s: Settings) -> None:
