@@ -257,7 +257,8 @@ def build_report(store: Store, out: str | os.PathLike | None = None, *,
     if plots and runs:
         from .plot import plot_forces, plot_shapes, plot_work_precision
 
-        plot_work_precision(summary, evaluated, out / "work-precision.png")
+        plot_work_precision(summary, evaluated, out / "work-precision.png",
+                            time_limit=time_limit)
         plot_forces(refs, evaluated, out / "force-vs-theta.png")
         plot_shapes(refs, out / "shapes.png")
         figures = ["work-precision.png", "force-vs-theta.png", "shapes.png"]
