@@ -70,7 +70,11 @@ def test_identical_curves_share_one_legend_entry():
     assert d.same_curves() == [[0, 2], [1]]
     from lcpbench.bench.profile_plot import legend_label
 
-    assert legend_label(["A", "C"]) == "A = C (same curve)" and legend_label(["B"]) == "B"
+    assert legend_label(["A", "C"]) == "same curve: A, C" and legend_label(["B"]) == "B"
+    # the common settings and driver said once, three names a line
+    assert legend_label(["pgs/high (globalised)", "psor/high (globalised)", "a/high (globalised)",
+                         "b/high (globalised)"]) == ("same curve: pgs, psor, a,\nb "
+                                                     "/high (globalised)")
 
 
 def _run(backend, scene, success, ms, outer, inner, ref):

@@ -298,7 +298,8 @@ def plot_work_precision(summary: list[dict], evaluated, path, *,
             ax.plot([x], [y], SETTINGS_MARKERS.get(p["settings"], "*"), color=color, ms=7,
                     mfc=color if full else "white", mew=1.3)
         rate = ", ".join(f"{p['settings']} {100 * p['success']:.0f} %" for p in pts)
-        label = " = ".join(names) + (" (same points)" if len(names) > 1 else "")
+        label = names[0] if len(names) == 1 else "same points: " + ",\n".join(
+            ", ".join(names[i:i + 3]) for i in range(0, len(names), 3))
         handles.append(Line2D([], [], color=color, ls=style, label=f"{label} ({rate})"))
     ax.set_xscale("log")
     ax.set_yscale("log")

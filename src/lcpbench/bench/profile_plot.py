@@ -29,8 +29,8 @@ def plot_profiles(profiles: list[Profile], out: str | Path) -> list[str]:
     keys = list(dict.fromkeys((p.kind, p.measure) for p in profiles))
     for kind, measure in keys:
         panels = [p for p in profiles if (p.kind, p.measure) == (kind, measure)]
-        rows = max(len(p.same_curves()) for p in panels) // 3 + 1  # legend rows under a panel
-        fig = Figure(figsize=(5.6 * len(panels), 4.2 + 0.17 * rows), layout="constrained")
+        rows = max(_legend_lines(p) for p in panels)  # legend rows under a panel
+        fig = Figure(figsize=(6.4 * len(panels), 4.4 + 0.19 * rows), layout="constrained")
         FigureCanvasAgg(fig)
         axes = fig.subplots(1, len(panels), squeeze=False)[0]
         for ax, p in zip(axes, panels):
@@ -40,9 +40,34 @@ def plot_profiles(profiles: list[Profile], out: str | Path) -> list[str]:
     return names
 
 
-def legend_label(names: list[str]) -> str:
-    """One legend entry for solvers whose curves are identical: their names, joined."""
-    return names[0] if len(names) == 1 else " = ".join(names) + " (same curve)"
+def legend_label(names: list[str], per_line: int = 3) -> str:
+    """One legend entry for solvers whose curves are identical.
+
+    One name is itself. Several are "same curve: a, b, c" over lines of
+    ``per_line`` names, their common "/settings (driver)" said once at the end.
+    """
+    if len(names) == 1:
+        return names[0]
+    parts = [n.partition("/") for n in names]
+    tails = {t for _, _, t in parts}
+    if len(tails) == 1 and all(sep for _, sep, _ in parts):
+        body, suffix = [h for h, _, _ in parts], " /" + tails.pop()
+    else:
+        body, suffix = list(names), ""
+    lines = [", ".join(body[i:i + per_line]) for i in range(0, len(body), per_line)]
+    return "same curve: " + ",\n".join(lines) + suffix
+
+
+def _legend_columns(p: Profile) -> int:
+    """3 columns of single names; 2 when an entry names several (they are wider)."""
+    return 2 if any(len(g) > 1 for g in p.same_curves()) else 3
+
+
+def _legend_lines(p: Profile) -> int:
+    """Rows the legend under a panel takes (entries in columns, multi-line entries)."""
+    heights = [legend_label([p.solvers[i] for i in g]).count("\n") + 1
+               for g in p.same_curves()]
+    return -(-sum(heights) // _legend_columns(p)) + max(heights, default=1)
 
 
 def _panel(ax, p: Profile) -> None:
@@ -80,5 +105,5 @@ def _panel(ax, p: Profile) -> None:
         title += "\nleft out, no inner count reported: " + ", ".join(p.left_out)
     ax.set_title(title, fontsize=8.5)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=6.5, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=3,
-              frameon=False)
+    ax.legend(fontsize=6.5, loc="upper center", bbox_to_anchor=(0.5, -0.16),
+              ncol=_legend_columns(p), frameon=False)
