@@ -14,6 +14,7 @@ import pytest
 from lcpbench.bench.metrics import Evaluated
 from lcpbench.bench.plot import (
     force_lines,
+    indistinguishable,
     plot_forces,
     plot_shapes,
     plot_work_precision,
@@ -86,16 +87,39 @@ def test_work_precision_never_draws_a_failure_at_a_made_up_error(tmp_path):
                 "success": 1.0},
                {"backend": "exact", "settings": "high", "method": "globalised",
                 "success": 1.0}]
-    pts = work_precision_points(summary, ev)
+    pts = work_precision_points(summary, ev, time_limit=60.0)
     (pgs,) = pts["pgs"]
     assert pgs["error"] == math.inf  # 2 of 3 failed: no median error, drawn as failed
-    assert pgs["time"] == 2.0 and pgs["success"] == pytest.approx(1 / 3)
+    assert pgs["success"] == pytest.approx(1 / 3)
+    # time: the report's score over every scene, shift 1 ms, the two failures at 60 s
+    assert pgs["time"] == pytest.approx((3.0 * 60001.0 ** 2) ** (1 / 3) - 1)
     d, h = pts["exact"]
     assert (d["settings"], h["settings"]) == ("default", "high")  # line runs default -> high
-    assert d["error"] == 2e-6 and d["time"] == 5.0
-    assert h["error"] == 1e-12 and h["time"] == 7.0
+    assert d["error"] == 2e-6 and d["time"] == pytest.approx((4 * 6 * 10) ** (1 / 3) - 1)
+    assert h["error"] == 1e-12 and h["time"] == pytest.approx((7 * 8 * 9) ** (1 / 3) - 1)
     plot_work_precision(summary, ev, tmp_path / "wp.png")
     assert (tmp_path / "wp.png").stat().st_size > 0
+
+
+def test_work_precision_merges_lines_that_cannot_be_told_apart():
+    def pt(settings, error, time, success=1.0):
+        return {"settings": settings, "error": error, "time": time, "success": success}
+
+    pts = {
+        "pgs": [pt("default", math.inf, 900.0, 0.38), pt("high", math.inf, 910.0, 0.38)],
+        # 1 % off in time on one point: within 10^0.01 (2.3 %), the same line
+        "psor": [pt("default", math.inf, 909.0, 0.38), pt("high", math.inf, 910.0, 0.38)],
+        # 5 % off: a line of its own
+        "sor-slow": [pt("default", math.inf, 945.0, 0.38), pt("high", math.inf, 910.0, 0.38)],
+        # the same points but another success share: not the same
+        "other": [pt("default", math.inf, 900.0, 0.40), pt("high", math.inf, 910.0, 0.38)],
+        # a finite error against a failed one at the same time: not the same
+        "exact": [pt("default", 1e-6, 900.0), pt("high", math.inf, 910.0, 0.38)],
+    }
+    groups = indistinguishable(pts)
+    assert ["pgs", "psor"] in groups
+    assert sorted(sum(groups, [])) == sorted(pts)  # every back-end once
+    assert len(groups) == 4
 
 
 def test_shapes_panels_keep_one_kind_of_scene(tmp_path):

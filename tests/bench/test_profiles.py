@@ -61,6 +61,54 @@ def test_ties_count_for_each_tied_solver():
     assert p.at("C", 7 / 5) == 1.0
 
 
+def test_identical_curves_share_one_legend_entry():
+    # A and C are the same column, so the same curve; B differs on problem 2
+    cost = np.array([[1.0, 1.0, 1.0], [2.0, 3.0, 2.0], [INF, INF, INF]])
+    p = performance_profile(cost, ["A", "B", "C"])
+    assert p.same_curves() == [[0, 2], [1]]
+    d = data_profile(cost, ["A", "B", "C"])
+    assert d.same_curves() == [[0, 2], [1]]
+    from lcpbench.bench.profile_plot import legend_label
+
+    assert legend_label(["A", "C"]) == "same curve: A, C" and legend_label(["B"]) == "B"
+    # the common settings and driver said once, three names a line
+    assert legend_label(["pgs/high (globalised)", "psor/high (globalised)", "a/high (globalised)",
+                         "b/high (globalised)"]) == ("same curve: pgs, psor, a,\nb "
+                                                     "/high (globalised)")
+
+
+def _run(backend, scene, success, ms, outer, inner, ref):
+    from lcpbench.bench.metrics import Evaluated
+
+    row = {"backend": backend, "settings": "default", "method": "globalised",
+           "scene": scene, "links": 10, "tol": 1e-3, "converged": success,
+           "wall_time": ms / 1e3, "outer_iterations": outer, "inner_iterations": inner}
+    return Evaluated(row, 0.0 if success else INF, success, ref)
+
+
+def test_back_ends_without_an_inner_count_are_left_out_of_inner_profiles():
+    from lcpbench.bench.profiles import profiles_of
+
+    ev = [_run("pivots", "free", True, 1.0, 2, 0, 0.0),
+          _run("pivots", "wall", True, 4.0, 3, 30, 0.4),
+          _run("highs", "free", True, 2.0, 2, 0, 0.0),
+          _run("highs", "wall", True, 2.0, 3, 0, 0.4)]  # 0 on a contact scene: no count
+    by = {(p.kind, p.measure): p for p in profiles_of(ev)}
+    for kind in ("performance", "data"):
+        inner = by[kind, "inner"]
+        assert inner.solvers == ["pivots/default"] and inner.left_out == ("highs",)
+        # time and outer iterations keep both
+        assert by[kind, "time"].solvers == ["highs/default", "pivots/default"]
+        assert by[kind, "time"].left_out == () and by[kind, "outer"].left_out == ()
+    # with highs left out, pivots is the cheapest on both scenes: rho(1) = 1
+    assert by["performance", "inner"].at("pivots/default", 1.0) == 1.0
+    # the outer counts are equal (2, 3 each): one curve, one legend entry
+    assert by["performance", "outer"].same_curves() == [[0, 1]]
+    # time: highs is 2x cheaper on the contact scene, 2x dearer on the free one
+    t = by["performance", "time"]
+    assert t.at("highs/default", 1.0) == 0.5 and t.at("highs/default", 2.0) == 1.0
+
+
 def test_bad_costs_are_refused():
     with pytest.raises(ValueError):
         performance_ratios(np.array([[0.0, 1.0]]))

@@ -21,6 +21,18 @@ Data profile (Moré & Wild, SIAM J. Optim. 20, 2009)
     performance profile it is absolute, so adding a solver does not change
     another's curve.
 
+Failures are charged as in the report's scores, at a cost beyond every
+budget plotted: Dolan and Moré's r_M, here +inf, so a failure never counts
+as solved at any τ or κ (charging it at the time limit instead would only
+add a jump at τ = limit / best, ~10⁵, off the plotted range).
+
+Back-ends that report no inner iteration count (0 on every run, contact
+scenes included: HiGHS and DAQP through qpsolvers, Siconos' enumeration,
+the finite-difference baseline's Jacobian count;
+:func:`~.metrics.silent_inner`) are left out of the inner-iteration
+profiles, since a zero would make them the cheapest everywhere and set the
+ratios of everyone else; :attr:`Profile.left_out` names them.
+
 Costs of iteration counts are floored at 1 (a solve that needed no
 iteration, a no-contact scene, costs one), so ratios stay defined; times
 are floored at 1 µs. Inner iterations mean different things per back-end
@@ -37,6 +49,8 @@ import os
 from dataclasses import dataclass
 
 import numpy as np
+
+from .metrics import silent_inner
 
 #: measure -> (row field, floor, scale to the unit of the axis, label)
 MEASURES = {
@@ -63,11 +77,21 @@ class Profile:
     values: np.ndarray  # (solvers, len(x))
     solved: np.ndarray
     problems: int
+    left_out: tuple[str, ...] = ()  # back-ends left out (no count of this measure)
 
     def at(self, solver: str, x: float) -> float:
         """The curve of ``solver`` at ``x`` (τ or κ), from the breakpoints."""
         i = int(np.searchsorted(self.x, x, side="right")) - 1
         return 0.0 if i < 0 else float(self.values[self.solvers.index(solver), i])
+
+    def same_curves(self) -> list[list[int]]:
+        """The solvers grouped by identical curves (every breakpoint and the solved
+        share equal), each group in solver order, groups in order of their first."""
+        groups: dict[tuple, list[int]] = {}
+        for s in range(len(self.solvers)):
+            key = (tuple(self.values[s].tolist()), float(self.solved[s]))
+            groups.setdefault(key, []).append(s)
+        return list(groups.values())
 
 
 def performance_ratios(cost: np.ndarray) -> np.ndarray:
@@ -135,16 +159,19 @@ def solver_label(backend: str, settings: str, method: str, drivers: int) -> str:
     return f"{name} ({method})" if drivers > 1 and not backend.startswith("baseline") else name
 
 
-def cost_matrix(evaluated, measure: str, *, settings: str | None = None
-                ) -> tuple[list[str], list[str], np.ndarray, np.ndarray]:
+def cost_matrix(evaluated, measure: str, *, settings: str | None = None,
+                leave_out=()) -> tuple[list[str], list[str], np.ndarray, np.ndarray]:
     """(problems, solvers, cost array, links of each problem) from judged runs.
 
     ``settings``: only the solvers at that profile (the baselines, settings
-    "-", are kept in every group). Unsuccessful runs, and missing ones, cost +inf.
+    "-", are kept in every group); ``leave_out``: back-ends not to include.
+    Unsuccessful runs, and missing ones, cost +inf.
     """
+    if measure not in MEASURES:
+        raise ValueError(f"unknown measure {measure!r}; one of {', '.join(MEASURES)}")
     field, floor, scale, _ = MEASURES[measure]
-    chosen = [e for e in evaluated
-              if settings is None or e.settings in (settings, "-")]
+    chosen = [e for e in evaluated if e.backend not in leave_out
+              and (settings is None or e.settings in (settings, "-"))]
     drivers = len({e.row["method"] for e in chosen if not e.backend.startswith("baseline")})
     problems = sorted({e.row["scene"] for e in chosen})
     links = {e.row["scene"]: int(e.row["links"]) for e in chosen}
@@ -163,18 +190,28 @@ def cost_matrix(evaluated, measure: str, *, settings: str | None = None
 
 
 def profiles_of(evaluated) -> list[Profile]:
-    """Every profile of the report: per settings profile, for each measure, both kinds."""
+    """Every profile of the report: per settings profile, for each measure, both kinds.
+
+    The inner-iteration profiles leave out the back-ends that report no
+    inner count (:func:`~.metrics.silent_inner`), named in ``left_out``.
+    """
     groups = sorted({e.settings for e in evaluated if e.settings != "-"},
                     key=lambda s: ({"default": 0, "low": 1, "mid": 2, "high": 3}.get(s, 9), s))
+    silent = silent_inner(evaluated)
     out = []
     for g in groups:
         for m in MEASURES:
-            _, solvers, cost, links = cost_matrix(evaluated, m, settings=g)
+            leave = silent if m == "inner" else set()
+            _, solvers, cost, links = cost_matrix(evaluated, m, settings=g, leave_out=leave)
             if not solvers:
                 continue
-            out.append(performance_profile(cost, solvers, measure=m, group=g))
-            out.append(data_profile(cost, solvers, links + 1 if m == "inner" else None,
-                                    measure=m, group=g))
+            left = tuple(sorted({e.backend for e in evaluated if e.backend in leave
+                                 and e.settings in (g, "-")}))
+            for p in (performance_profile(cost, solvers, measure=m, group=g),
+                      data_profile(cost, solvers, links + 1 if m == "inner" else None,
+                                   measure=m, group=g)):
+                p.left_out = left
+                out.append(p)
     return out
 
 
@@ -231,9 +268,13 @@ def profiles_section(figures: list[str]) -> str:
         "scene; ρ_s(1) is the share on which it was the cheapest, and the curve levels off "
         "at the share it solved. Moré–Wild data profiles: d_s(κ) is the share of scenes s "
         "solved within a budget κ (inner iterations per N + 1 unknowns; outer iterations and "
-        "milliseconds as they are). Success is the rule above; a failure costs ∞. One panel "
-        "per settings profile, the baselines in each. Inner iterations count different work "
-        "per back-end (pivots, active-set changes, ADMM or interior-point iterations).",
+        "milliseconds as they are). Success is the rule above; a failure is charged beyond "
+        "every τ and κ plotted (a cost of ∞, Dolan–Moré's r_M), so it never counts as solved. "
+        "One panel per settings profile, the baselines in each. Inner iterations count "
+        "different work per back-end (pivots, active-set changes, ADMM or interior-point "
+        "iterations); back-ends that report no inner count (0 on every run, contact scenes "
+        "included) are left out of the inner-iteration profiles, and each panel names them. "
+        "Solvers whose curves are identical share one legend entry.",
         "",
     ]
     for f in figures:

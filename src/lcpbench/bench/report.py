@@ -18,7 +18,10 @@ from .expected import OFF_REFERENCE, is_expected
 from .jobs import DEFAULT_TIME_LIMIT
 from .machine import cpu_model, machine_section
 from .metrics import (
+    ITERATION_SHIFT,
+    OUTER_LIMIT,
     SHIFT,
+    TIME_SHIFT_MS,
     continuation_pairs,
     evaluate,
     success_tol,
@@ -58,11 +61,13 @@ def _table(head: list[str], rows: list[list[str]], align: str | None = None) -> 
 
 
 def comparison_table(summary: list[dict]) -> str:
-    """The headline table, qpbenchmark style."""
+    """The headline table: success and Mittelmann-style scores over every scene."""
     head = ["back-end", "settings", "tol (rad)", "success", "converged, off the reference",
-            f"time sgm (×best, shift {SHIFT:g} ms)", "median time (ms)",
+            f"time sgm, all scenes (ms; shift {TIME_SHIFT_MS:g} ms, failure = limit)",
+            "time sgm ×best",
+            f"outer it. sgm, all scenes (shift {ITERATION_SHIFT:g}, failure = {OUTER_LIMIT})",
             f"error sgm (×best, shift {SHIFT:g})", "median error", "max error (successes)",
-            "outer it.", "inner it.", "× faster than baseline"]
+            "inner it. (mean of successes)", "× faster than baseline"]
     fd = any(math.isfinite(r.get("speedup_vs_baseline_fd", math.nan)) for r in summary)
     if fd:
         head.append("× faster than baseline-fd")
@@ -71,18 +76,49 @@ def comparison_table(summary: list[dict]) -> str:
         head.insert(2, "driver")
     rows = []
     for r in summary:
+        inner = (_fmt(r["inner_mean"], ".0f") if r.get("inner_reported", True)
+                 else "not reported")
         rows.append([
             f"`{r['backend']}`", r["settings"]] + ([r["method"]] if methods > 1 else []) + [
             _fmt(r["tol"], ".0e"),
             f"{100 * r['success']:.0f} %", str(r["converged_but_off"]),
-            _fmt(r["time_sgm_rel"], ".1f"), _fmt(r["time_median_ms"], ".3g"),
+            _fmt(r["time_sgm_ms"], ".3g"), _fmt(r["time_sgm_rel"], ".1f"),
+            _fmt(r["outer_sgm"], ".3g"),
             _fmt(r["error_sgm_rel"], ".2f"), _fmt(r["error_median"], ".1e"),
-            _fmt(r["error_max"], ".1e"), _fmt(r["outer_mean"], ".1f"),
-            _fmt(r["inner_mean"], ".0f"),
+            _fmt(r["error_max"], ".1e"), inner,
             _fmt(r["speedup_vs_baseline"], ".1f"),
         ] + ([_fmt(r["speedup_vs_baseline_fd"], ".0f")] if fd else []))
     lead = "lll" if methods > 1 else "ll"
     return _table(head, rows, lead + "r" * (len(head) - len(lead)))
+
+
+def scoring_text(time_limit: float) -> str:
+    """The report's paragraph on the success rule and the scores."""
+    return (
+        "**Error** of a run: |F − F_ref| / max(|F_ref|, EI/ℓ²) on the total force. "
+        "**Success**: converged (lcpbench's judge accepts the answer) and error ≤ "
+        "min(1e-3, 100·tol), with tol the driver tolerance of the run (1e-3 rad for "
+        "`default`, the paper's). **Scores**, as Mittelmann's benchmarks and the OET "
+        "solver benchmark score: the shifted geometric mean exp(mean ln(v + s)) − s over "
+        "*every* scene of a row, each unsuccessful run charged. Time: shift s = "
+        f"{TIME_SHIFT_MS:g} ms, an unsuccessful run at the time limit ({time_limit:g} s; "
+        "Mittelmann's shift is 10 s, but here a solve takes 0.05 ms to 2.5 s and the "
+        "repeats of one sub-ms solve differ by about 0.1 ms, so 1 ms keeps that jitter to "
+        "under 10 % of a scene's log while the contact solves, 1–30 ms, count at their "
+        f"ratio). Outer iterations: shift {ITERATION_SHIFT:g}, an unsuccessful run at the "
+        f"driver's limit of {OUTER_LIMIT} (or its own count if larger: a failure never "
+        "counts as cheaper than it ran). Over n scenes a failure in place of a success "
+        "multiplies score + s by up to (limit/s + 1)^(1/n) (×1.11 for time on the 108 "
+        "paper scenes): failures dominate the score, and among rows that succeed "
+        "everywhere it ranks speed. ×best: over the best row. "
+        f"Errors: the same mean (shift {SHIFT:g}, qpbenchmark's) in units of the success "
+        "threshold, an unsuccessful run at an error of at least 100 %. Inner iterations "
+        "count different work per back-end (pivots, active-set changes, ADMM or "
+        "interior-point iterations) and are shown over successes only; 'not reported': "
+        "the back-end gives no count (0 on every run, contact scenes included). "
+        "'× faster than baseline': geometric mean over the scenes where both succeed of "
+        "baseline time / back-end time (`baseline`: analytic Jacobian, Powell hybrid; "
+        "`baseline-fd`: finite differences, Levenberg-Marquardt).")
 
 
 def table_two(evaluated, height: float, settings: str = "default") -> str:
@@ -221,7 +257,8 @@ def build_report(store: Store, out: str | os.PathLike | None = None, *,
     if plots and runs:
         from .plot import plot_forces, plot_shapes, plot_work_precision
 
-        plot_work_precision(summary, evaluated, out / "work-precision.png")
+        plot_work_precision(summary, evaluated, out / "work-precision.png",
+                            time_limit=time_limit)
         plot_forces(refs, evaluated, out / "force-vs-theta.png")
         plot_shapes(refs, out / "shapes.png")
         figures = ["work-precision.png", "force-vs-theta.png", "shapes.png"]
@@ -308,15 +345,7 @@ def _markdown(store, runs, refs, evaluated, summary, h2, figures, time_limit,
         "" if not bad_refs else f"Scenes without a converged reference: {len(bad_refs)} "
                                 "(their runs count as unsuccessful).",
         "",
-        "**Error** of a run: |F − F_ref| / max(|F_ref|, EI/ℓ²) on the total force. "
-        "**Success**: converged (the certificate accepts it) and error ≤ min(1e-3, 100·tol), "
-        "with tol the driver tolerance of the run (1e-3 rad for `default`, the paper's). "
-        f"Shifted geometric means (shift {SHIFT:g}) as in qpbenchmark: times in ms, errors "
-        "in units of that success threshold; unsuccessful runs count at the time limit "
-        f"({time_limit:g} s) and at an error of at least 100 %. ×best: 1.0 is the best "
-        "back-end. '× faster than baseline': geometric mean over the scenes where both "
-        "succeed of baseline time / back-end time (`baseline`: analytic Jacobian, Powell "
-        "hybrid; `baseline-fd`: finite differences, Levenberg-Marquardt).",
+        scoring_text(time_limit),
         "",
         "## Back-ends compared",
         "",
@@ -359,4 +388,4 @@ def _markdown(store, runs, refs, evaluated, summary, h2, figures, time_limit,
 
 
 __all__ = ["DEFAULT_OUT", "build_report", "comparison_table", "continuation_table",
-           "default_out", "skipped_backends", "success_tol", "table_two"]
+           "default_out", "scoring_text", "skipped_backends", "success_tol", "table_two"]
