@@ -28,7 +28,9 @@ contact (F = 0) is judged too. Lengths are measured in the section length ℓ.
 4. **complementarity**: at every node, min(R_i/F₀, g_i/ℓ) ≤ NODE_SHARE · τ:
    a node that carries a reaction touches its wall.
 5. **penetration**: min g ≥ −min(1e-6, NODE_SHARE · τ) · ℓ on the exact
-   geometry.
+   geometry; at an elastic wall also the indentation that the reactions'
+   tolerance ε_R leaves open, ε_R/k (a soft wall's compliant gap g + R/k is
+   a difference of two large lengths, known only as well as R).
 
 At an elastic wall (:mod:`lcpbench.model.elastic`) g is the compliant gap
 g + R/k in checks 4 and 5 (a node indents the wall by exactly R/k), and the
@@ -464,7 +466,7 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
                                                       forces_lower, eps_R)
     fails = failed_checks(certificate, step_statuses, tol=tol, tau=tau, comp=comp,
                           comp_allowed=comp_allowed,
-                          pen=min(GEOMETRY_TOL, NODE_SHARE * tau) * L,
+                          pen=penetration_allowed(tau, L, eps_R, c_up, c_lo),
                           closure_allowed=GEOMETRY_TOL * L, R_min=R_min,
                           allowed_R=max(eps_R, floor_R), bound=bound,
                           judge_total_force=verdict.judge_total_force,
@@ -508,6 +510,14 @@ def stability_args(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
                   f64(chain.link_load, dtype=float), int(chain.free_nodes[0]),
                   f64(forces_upper, dtype=float), f64(forces_lower, dtype=float), f64(ku),
                   f64(kl), f64(su), f64(sl), f64(cu), f64(cl))
+
+
+def penetration_allowed(tau: float, L: float, eps_R: float, c_up: np.ndarray,
+                        c_lo: np.ndarray) -> float:
+    """Check 5's allowance (mm): min(GEOMETRY_TOL, NODE_SHARE τ) ℓ, plus ε_R times the
+    largest compliance 1/k of an elastic wall (0 for rigid walls)."""
+    c = max(float(np.max(c_up, initial=0.0)), float(np.max(c_lo, initial=0.0)))
+    return min(GEOMETRY_TOL, NODE_SHARE * tau) * L + eps_R * c
 
 
 def failed_checks(cert, step_statuses: list[str], *, tol: float, tau: float, comp: float,

@@ -485,7 +485,10 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
     stats[4] = max(NODE_SHARE * tau, floor_R / F0) if settled else NODE_SHARE * tau
     stats[5], stats[6], stats[7], stats[8] = min_gap, min_force, cmp, closure
     stats[9], stats[10], stats[11], stats[12] = worst_t, rel_t, floor_R, R_min
-    stats[19] = min(GEOMETRY_TOL, NODE_SHARE * tau) * L
+    c_max = 0.0  # model.judge.penetration_allowed: + ε_R / k at an elastic wall
+    for i in range(cu.size):
+        c_max = max(c_max, max(cu[i], cl[i]))
+    stats[19] = min(GEOMETRY_TOL, NODE_SHARE * tau) * L + eps_R * c_max
     stats[20] = GEOMETRY_TOL * L
     # the second-order check (model.stability_kernel): flat walls here, rigid or elastic
     ku, kl, flat = np.full(n, np.inf), np.full(n, np.inf), np.zeros(n)

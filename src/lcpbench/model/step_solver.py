@@ -193,9 +193,8 @@ def solve_step(step, solver: str | Backend = "auto", settings: str | Settings = 
     t0 = time.perf_counter()
     if backend.name == DEFAULT and (sol := _compiled_step(step, s, warm)) is not None:
         sol.backend, sol.settings, sol.scaled = backend.name, s.name, scaled
-        status, why = verdict(sol.status, sol.residuals["natural"],
-                              accept_tol(s, sol.residuals["term_size"]))
-        sol.status, sol.message = status, why
+        sol.status, sol.message = verdict(sol.status, sol.residuals["natural"],
+                                          accept_tol(s, sol.residuals["term_size"]))
         sol.wall_time = time.perf_counter() - t0
         return sol
     try:
