@@ -25,6 +25,7 @@ _EXPORTS = {
     "solve": "lcpbench.api",
     "solve_many": "lcpbench.studies.batch",
     "stable_states": "lcpbench.studies.states",
+    "sensitivities": "lcpbench.model.sensitivity",
     "ActuatorScene": "lcpbench.problems.scenes",
     "CantileverScene": "lcpbench.problems.scenes",
     "Section": "lcpbench.problems.sections",

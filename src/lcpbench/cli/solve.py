@@ -75,6 +75,10 @@ def register(subparsers) -> None:
                         "anyway); ramp: follow the load from zero first, the state the "
                         "pressurised actuator reaches where there are several")
     add_json_option(s)
+    s.add_argument("--sensitivities", action="store_true",
+                   help="the derivatives of the total force, node forces and heights and the "
+                        "peak pressure with respect to theta, h, EI, w, length (and the wall "
+                        "stiffness), by implicit differentiation at the converged contact set")
     s.add_argument("--plot", metavar="FILE.png",
                    help="draw the shape, walls and reactions (needs matplotlib)")
     add_wall_options(s)
@@ -234,12 +238,16 @@ def _not_a_directory(option: str, path: str, example: str) -> None:
 
 def cmd_solve(args) -> int:
     """``lcpbench solve``: 0 converged, 1 not converged, 2 bad input or plot error."""
+    from ..model.sensitivity import PARAMETERS, sensitivities, unsupported
+
     if args.plot is not None and not has_matplotlib():
         error_line("--plot needs matplotlib: pip install 'lcpbench[plot]'")
         return 2
     if args.plot is not None:
         _not_a_directory("--plot", args.plot, "shape.png")
     scene = scene_from(args)
+    if args.sensitivities and (why := unsupported(scene)) is not None:
+        raise ProblemError(f"--sensitivities: {why}")
     result = solve(scene, solver=args.solver, tol=args.tol, method=args.method,
                    settings=args.settings, scaled=not args.raw,
                    pressure_limit=args.pressure_limit,
@@ -255,10 +263,17 @@ def cmd_solve(args) -> int:
             plot_shape(result, args.plot)
         except (OSError, ValueError) as exc:
             plot_error = f"--plot {args.plot}: {exc}"
+    sens = sensitivities(result) if args.sensitivities and result.converged else None
     if args.json:
-        print_json(result.to_dict())
+        out = result.to_dict()
+        if args.sensitivities:  # null where the solve did not converge (its reason says why)
+            out["sensitivities"] = None if sens is None else sens.as_json()
+        print_json(out)
     else:
         extra = [("plot", args.plot)] if args.plot is not None and plot_error is None else []
+        if sens is not None:
+            extra.append(("dF/dp", ", ".join(
+                f"{v:.4g} N per {PARAMETERS[p]} ({p})" for p, v in sens.total_force.items())))
         print(summary(result, extra))
     if plot_error is not None:  # the result is printed all the same
         error_line(plot_error)

@@ -1,0 +1,128 @@
+"""Sensitivities by implicit differentiation (model/sensitivity.py, issue 38 item 1).
+
+Oracles: central differences of converged solves (each parameter moved up and
+down, solved to tol 1e-12 or 1e-11 from the answer; the differences' own error,
+O(δ²) and the solves' round-off over δ, is what the tolerances allow), and
+dimensional analysis (a force is (EI/ℓ²) Φ(θ, h/ℓ, wℓ³/EI, kℓ⁴/EI), so
+EI ∂F/∂EI = F − w F_w − k F_k exactly for the discrete chain).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import lcpbench
+from lcpbench import ActuatorScene, SectionedScene
+from lcpbench.errors import ProblemError
+from lcpbench.model.sensitivity import sensitivities
+
+ATTR = {"theta_deg": "theta", "height_mm": "height", "EI": "EI", "weight": "weight",
+        "length_mm": "length", "wall_stiffness": "wall_stiffness"}
+#: relative step of the central differences (larger where the force moves little)
+STEP = {"weight": 1e-3, "wall_stiffness": 1e-3}
+
+SCENES = [
+    pytest.param(ActuatorScene(theta=150, height=3.0, links=140), 1e-12, id="paper"),
+    pytest.param(ActuatorScene(theta=150, height=1.0, links=140, channel=True), 1e-12,
+                 id="channel"),
+    pytest.param(ActuatorScene(theta=120, height=2.5, links=60), 1e-12, id="120-deg"),
+    pytest.param(ActuatorScene(theta=150, height=3.0, links=140, wall_stiffness=0.5), 1e-11,
+                 id="elastic"),
+    pytest.param(ActuatorScene(theta=150, height=2.0, links=60, wall_stiffness=50.0,
+                               channel=True), 1e-11, id="elastic-channel"),
+]
+
+
+def _central(scene, result, p, tol):
+    attr = ATTR[p]
+    v = getattr(scene, attr)
+    h = STEP.get(p, 1e-5) * abs(v)
+    start = None if p == "length_mm" else result  # (a start must have the same length)
+    up = lcpbench.solve(dataclasses.replace(scene, **{attr: v + h}), tol=tol, start=start)
+    dn = lcpbench.solve(dataclasses.replace(scene, **{attr: v - h}), tol=tol, start=start)
+    assert up.converged and dn.converged, (up.reason, dn.reason)
+    return up, dn, 2 * h
+
+
+@pytest.mark.parametrize("scene,tol", SCENES)
+def test_total_force_derivatives_are_the_central_differences(scene, tol):
+    res = lcpbench.solve(scene, tol=tol)
+    assert res.converged, res.reason
+    sens = sensitivities(res)
+    assert set(sens.wrt) == set(ATTR) - (set() if scene.wall_stiffness < np.inf
+                                         else {"wall_stiffness"})
+    assert sens.one_sided.size == 0  # a stable contact set: every derivative exact
+    for p in sens.wrt:
+        up, dn, span = _central(scene, res, p, tol)
+        fd = (up.total_force - dn.total_force) / span
+        assert sens.total_force[p] == pytest.approx(fd, rel=2e-5), p
+
+
+@pytest.mark.parametrize("scene,tol", SCENES[:1] + SCENES[3:4])
+def test_node_forces_and_heights_follow_the_central_differences(scene, tol):
+    res = lcpbench.solve(scene, tol=tol)
+    sens = sensitivities(res, wrt=("theta_deg", "height_mm"))
+    free = scene.chain().free_nodes
+    for p in sens.wrt:
+        up, dn, span = _central(scene, res, p, tol)
+        dF = (up.forces - dn.forces) / span
+        dy = (np.asarray(up.y)[free] - np.asarray(dn.y)[free]) / span
+        assert np.max(np.abs(sens.forces[p] - dF)) <= 1e-4 * np.max(np.abs(dF))
+        assert np.max(np.abs(sens.heights[p] - dy)) <= 1e-5 * np.max(np.abs(dy))
+
+
+@pytest.mark.parametrize("scene,tol", [SCENES[0], SCENES[3]])
+def test_the_EI_derivative_satisfies_dimensional_analysis(scene, tol):
+    """EI ∂F/∂EI = F − w ∂F/∂w − k ∂F/∂k: the EI derivative (from ∂k_joint/∂EI) and the
+    weight and wall derivatives (from the loads and the springs) are computed apart."""
+    res = lcpbench.solve(scene, tol=tol)
+    s = sensitivities(res)
+    k = scene.wall_stiffness
+    rhs = res.total_force - scene.weight * s.total_force["weight"] - (
+        k * s.total_force["wall_stiffness"] if k < np.inf else 0.0)
+    assert scene.EI * s.total_force["EI"] == pytest.approx(rhs, rel=1e-9)
+
+
+def test_a_chain_off_the_wall_has_no_force_to_move():
+    res = lcpbench.solve(ActuatorScene(theta=40, height=6.0, links=30), tol=1e-10)
+    assert res.converged and res.total_force == 0.0
+    s = sensitivities(res)
+    assert all(v == 0.0 for v in s.total_force.values())
+
+
+def test_refusals_name_the_problem():
+    paper = lcpbench.solve(ActuatorScene(theta=150, height=3.0, links=40))
+    with pytest.raises(ProblemError, match="wrt"):
+        sensitivities(paper, wrt=("pressure",))
+    with pytest.raises(ProblemError, match="wrt"):
+        sensitivities(paper, wrt=("wall_stiffness",))  # a rigid wall has none
+    rows = lcpbench.solve(SectionedScene(sections=[(150.0, 15.0), (-150.0, 15.0)],
+                                         height=3.0, links=40))
+    with pytest.raises(ProblemError, match="SectionedScene"):
+        sensitivities(rows)
+    stopped = lcpbench.solve(ActuatorScene(theta=150, height=3.0, links=40), max_outer=1,
+                             tol=1e-12)
+    assert not stopped.converged
+    with pytest.raises(ProblemError, match="converged"):
+        sensitivities(stopped)
+
+
+def test_the_cli_adds_them_to_the_json_and_refuses_sections():
+    import json
+
+    run = subprocess.run([sys.executable, "-m", "lcpbench.cli", "solve", "--theta", "150",
+                          "--height", "3", "--links", "40", "--tol", "1e-10", "--json",
+                          "--sensitivities"], capture_output=True, text=True, check=True)
+    got = json.loads(run.stdout)["sensitivities"]
+    assert set(got["total_force"]) == {"theta_deg", "height_mm", "EI", "weight", "length_mm"}
+    assert got["units"]["height_mm"] == "mm"
+    assert got["total_force"]["height_mm"] < 0  # a higher wall is pressed less
+    bad = subprocess.run([sys.executable, "-m", "lcpbench.cli", "solve", "--sections",
+                          "150:15,-150:15", "--height", "3", "--sensitivities"],
+                         capture_output=True, text=True)
+    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "sensitivities" in bad.stderr
