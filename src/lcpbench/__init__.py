@@ -26,6 +26,7 @@ _EXPORTS = {
     "solve_many": "lcpbench.studies.batch",
     "stable_states": "lcpbench.studies.states",
     "sensitivities": "lcpbench.model.sensitivity",
+    "design": "lcpbench.studies.design",
     "ActuatorScene": "lcpbench.problems.scenes",
     "CantileverScene": "lcpbench.problems.scenes",
     "Section": "lcpbench.problems.sections",
