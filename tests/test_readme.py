@@ -114,4 +114,4 @@ def test_readme_vision_examples_run_as_written(tmp_path, monkeypatch):
 
 def test_every_use_command_is_run_by_a_test():
     names = {a[1] for a in _use_commands()}
-    assert names <= {"solve", "solvers", "design", "vision", *_SLOW, *_ELSEWHERE}, names
+    assert names <= {"solve", "solvers", "design", "fit", "vision", *_SLOW, *_ELSEWHERE}, names

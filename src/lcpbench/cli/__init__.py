@@ -36,7 +36,7 @@ from ._common import PROG, ArgumentParser, ParserExit, error_line
 __all__ = ["PROG", "build_parser", "main"]
 
 # The command groups, in the order of `lcpbench --help`.
-GROUPS = ("solve", "solvers", "sweep", "export", "paper", "compile", "design")
+GROUPS = ("solve", "solvers", "sweep", "export", "paper", "compile", "design", "fit")
 
 
 def _optional_groups() -> list:

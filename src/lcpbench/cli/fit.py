@@ -1,0 +1,111 @@
+"""``lcpbench fit``: EI (and the θ(P) line) from measured forces (issue 38, item 3).
+
+    lcpbench fit --data F.csv [--fit-theta] [scene options] [--json] [--plot F.png]
+
+F.csv has a header ``pressure_kpa,force_n`` (optionally ``height_mm``) and a row per
+measurement (:func:`lcpbench.studies.fit.fit`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import ProblemError
+from ._common import add_json_option, error_line, has_matplotlib, print_json
+from ._scene_args import add_scene_options, add_wall_options, scene_from
+
+
+def register(subparsers) -> None:
+    f = subparsers.add_parser(
+        "fit", help="fit EI (and the theta(P) line) to measured force-pressure data",
+        description="Fit the bending stiffness EI (N mm^2), and with --fit-theta the "
+                    "calibration line theta = slope * P + intercept, to measured total "
+                    "forces by Gauss-Newton on lcpbench's sensitivities; print the values, "
+                    "95 %% intervals and the residuals. The scene options give the rest "
+                    "(N, length, weight, walls; --EI the starting value; --actuator or --fit "
+                    "the calibration).")
+    f.add_argument("--data", required=True, metavar="F.csv",
+                   help="CSV with columns pressure_kpa,force_n[,height_mm]")
+    f.add_argument("--fit-theta", action="store_true",
+                   help="fit the calibration line's slope and intercept too")
+    f.add_argument("--tol", type=float, default=1e-10, metavar="RAD",
+                   help="convergence threshold of each forward solve (default 1e-10)")
+    add_scene_options(f)
+    add_wall_options(f)
+    add_json_option(f, "the fit as JSON")
+    f.add_argument("--plot", metavar="FILE.png",
+                   help="the data, the fitted curve and its 95 %% band (needs matplotlib)")
+    f.set_defaults(func=cmd_fit)
+
+
+def cmd_fit(args) -> int:
+    """0 fitted, 2 bad input (one line)."""
+    from ..problems.calibrations import get_calibration, linear_calibration
+    from ..studies.fit import fit, read_data
+
+    if args.plot is not None and not has_matplotlib():
+        error_line("--plot needs matplotlib: pip install 'lcpbench[plot]'")
+        return 2
+    if args.pressure is not None:
+        raise ProblemError("fit takes the pressures from --data: drop --pressure")
+    P, y, h = read_data(args.data)
+    if args.fit is not None:
+        try:
+            slope, intercept = (float(v) for v in args.fit.split(","))
+        except ValueError:
+            raise ProblemError(f"--fit must be SLOPE,INTERCEPT (two numbers), got "
+                               f"{args.fit!r}") from None
+        cal = linear_calibration(slope, intercept)
+    else:
+        cal = get_calibration(args.actuator)
+    args.fit = None  # (the scene's theta comes from the data, not from --pressure)
+    scene = scene_from(args)
+    got = fit(scene, P, y, cal, height=h, fit_theta=args.fit_theta, tol=args.tol)
+    if args.plot is not None:
+        _plot(args.plot, scene, P, y, h, got, cal, args.tol)
+    if args.json:
+        print_json(got.as_json())
+        return 0
+    print(f"EI             {got.EI:.6g} N mm^2 (95 % interval {got.EI_low:.6g} .. "
+          f"{got.EI_high:.6g})")
+    if got.slope_interval is not None:
+        print(f"theta(P)       {got.slope:.6g} deg/kPa * P + {got.intercept:.6g} deg")
+    if not got.EI_high - got.EI_low <= 0.5 * got.EI:
+        print("warning        the data determine EI poorly (95 % interval wider than +-25 %): "
+              "measure at more pressures or heights" + (", or fix the calibration (drop "
+                                                        "--fit-theta)" if args.fit_theta else ""))
+    rms = float(np.sqrt(np.mean(got.residuals**2)))
+    print(f"residuals      rms {1e3 * rms:.4g} mN over {P.size} points; largest "
+          f"{1e3 * float(np.max(np.abs(got.residuals))):.4g} mN")
+    print(f"solves         {got.solves} ({got.iterations} Gauss-Newton iterations)")
+    return 0
+
+
+def _plot(path, scene, P, y, h, got, cal, tol) -> None:
+    import dataclasses
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..api import solve
+
+    grid = np.linspace(P.min(), P.max(), 25)
+    height = float(np.median(h)) if h is not None else scene.height
+    curves = {}
+    for name, EI in (("fit", got.EI), ("low", got.EI_low), ("high", got.EI_high)):
+        curves[name] = [solve(dataclasses.replace(scene, EI=EI, height=height,
+                                                  theta=float(got.slope * p + got.intercept)),
+                              tol=tol).total_force for p in grid]
+    fig, ax = plt.subplots(figsize=(6, 4))
+    ax.fill_between(grid, 1e3 * np.array(curves["low"]), 1e3 * np.array(curves["high"]),
+                    color="C0", alpha=0.25, label="95 % interval of EI")
+    ax.plot(grid, 1e3 * np.array(curves["fit"]), "C0-", label=f"fit, EI = {got.EI:.4g} N mm²")
+    ax.plot(P, 1e3 * y, "ko", ms=4, label="data")
+    ax.set_xlabel("pressure (kPa)")
+    ax.set_ylabel("total force (mN)")
+    ax.legend(loc="upper left", frameon=False)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
