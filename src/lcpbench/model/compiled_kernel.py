@@ -256,22 +256,7 @@ def _newton(alpha, a, jl, jr, k, rest, fs, n, bands, linear, origin, T, fac, non
     """model.newton.newton_step: T (the geometric bands) into ``T``, and H + T,
     c − T u₀ into the step where H + T is positive definite (True); else T = 0
     and the Gauss–Newton step stands (False)."""
-    links = alpha.size
-    mu[:] = 0.0
-    for j in range(jr.size):  # the net spring moment on each link (np.add.at's order)
-        mu[jr[j]] += k[j] * ((alpha[jr[j]] - (alpha[jl[j]] if jl[j] >= 0 else 0.0)) - rest[j])
-    for j in range(jr.size):
-        if jl[j] >= 0:
-            mu[jl[j]] -= k[j] * ((alpha[jr[j]] - alpha[jl[j]]) - rest[j])
-    for i in range(n):  # w = μ sin α / (a² cos³ α) on each link, to its two nodes
-        node = fs - 1 + i
-        T[0, i] = T[1, i] = 0.0
-        if node < links:
-            w = mu[node] * (sines[node] / (a * a * cosines[node] ** 3))
-            T[0, i] += w
-            T[1, i] = -w if i + 1 < n else 0.0
-        if node >= 1:
-            T[0, i] += mu[node - 1] * (sines[node - 1] / (a * a * cosines[node - 1] ** 3))
+    _geometric(alpha, a, jl, jr, k, rest, fs, n, T, mu, sines, cosines)
     for i in range(n):  # H + T, factored to test it (LAPACK's dpbtrf in the reference)
         fac[0, i], fac[1, i], fac[2, i] = bands[0, i] + T[0, i], bands[1, i] + T[1, i], bands[2, i]
         none[i] = False
@@ -289,6 +274,28 @@ def _newton(alpha, a, jl, jr, k, rest, fs, n, bands, linear, origin, T, fac, non
         bands[0, i] += T[0, i]
         bands[1, i] += T[1, i]
     return True
+
+
+@njit(cache=True)
+def _geometric(alpha, a, jl, jr, k, rest, fs, n, T, mu, sines, cosines):
+    """model.newton.geometric_bands into ``T`` (diagonal, sub-diagonal): the curvature
+    of the link angles in the heights times the links' net spring moments."""
+    links = alpha.size
+    mu[:] = 0.0
+    for j in range(jr.size):  # the net spring moment on each link (np.add.at's order)
+        mu[jr[j]] += k[j] * ((alpha[jr[j]] - (alpha[jl[j]] if jl[j] >= 0 else 0.0)) - rest[j])
+    for j in range(jr.size):
+        if jl[j] >= 0:
+            mu[jl[j]] -= k[j] * ((alpha[jr[j]] - alpha[jl[j]]) - rest[j])
+    for i in range(n):  # w = μ sin α / (a² cos³ α) on each link, to its two nodes
+        node = fs - 1 + i
+        T[0, i] = T[1, i] = 0.0
+        if node < links:
+            w = mu[node] * (sines[node] / (a * a * cosines[node] ** 3))
+            T[0, i] += w
+            T[1, i] = -w if i + 1 < n else 0.0
+        if node >= 1:
+            T[0, i] += mu[node - 1] * (sines[node - 1] / (a * a * cosines[node - 1] ** 3))
 
 
 @njit(cache=True)

@@ -12,7 +12,7 @@ rigid rows, dR_i = k_i (du_i − dh_i) + ∂_p k_i (u_i − h_i) on the elastic 
 dR_i = 0 on the free ones, where H + T is the exact Hessian of E in the heights (the
 Newton step's, :mod:`lcpbench.model.newton`). It is one face solve of the walk's
 banded LDLᵀ (:func:`lcpbench.linalg.ldl_kernel.refactor`, compiled, the elastic rows in
-its compliance form), O(N): du = du₀ − (H + T)_face⁻¹ r with du₀ = dh on the held
+its compliance form; all of it in :mod:`lcpbench.model.sensitivity_kernel`), O(N): du = du₀ − (H + T)_face⁻¹ r with du₀ = dh on the held
 nodes and r = ∂_p∇E + (H + T) du₀ (+ ∂_p k (u − h) at an elastic wall) off the rigid
 rows; then dR = −(∂_p∇E + (H + T) du) on the held nodes.
 
@@ -41,9 +41,7 @@ import numpy as np
 from ..errors import ProblemError
 from ..problems.scenes import ActuatorScene, wall_share
 from .chain import heights
-from .elastic import compliances
-from .newton import geometric_bands
-from .step import assemble_step
+from .judge import NODE_SHARE, force_tol
 
 #: the parameters (and their units) a sensitivity is taken with respect to
 PARAMETERS = {"theta_deg": "deg", "height_mm": "mm", "EI": "N mm²", "weight": "N/mm",
@@ -119,67 +117,50 @@ def sensitivities(result, wrt=None) -> Sensitivities:
     return _collect(result, scene, names, d)
 
 
-def _derivatives(result, scene: ActuatorScene, names: set, elastic: bool) -> dict:
-    """{parameter: (d forces_upper, d forces_lower, d heights)} by the face solve."""
-    from ..numba_cache import kernel_module  # numba at the first sensitivity
+_ROWS = {"theta_deg": 0, "height_mm": 1, "EI": 2, "weight": 3, "wall_stiffness": 4}
 
-    ldl = kernel_module("lcpbench.linalg.ldl_kernel")
+
+def _derivatives(result, scene: ActuatorScene, names: set, elastic: bool) -> dict:
+    """{parameter: (d forces_upper, d forces_lower, d heights)} by the compiled face solve
+    (:func:`lcpbench.model.sensitivity_kernel.derivatives`), and the one-sided nodes."""
+    from ..numba_cache import kernel_module  # numba at the first sensitivity
+    from .compiled import kernel_args
+
+    kern = kernel_module("lcpbench.model.sensitivity_kernel", "derivatives")
     chain = scene.chain()
-    alpha = np.asarray(result.alpha, dtype=float)
-    step = assemble_step(chain, alpha)
-    n = step.size
-    bands = np.ascontiguousarray(step.bands + geometric_bands(chain, alpha))
-    u = step.origin
-    fu = np.asarray(result.forces, dtype=float)
-    fl = np.zeros(n) if result.forces_lower is None else np.asarray(result.forces_lower, float)
-    eps_R = result.judgement.contact_threshold if result.judgement is not None else 0.0
-    c_up, c_lo = compliances(chain)
-    up, lo = fu > eps_R, (fl > eps_R) & ~(fu > eps_R)
-    touching = ((np.isfinite(step.upper) & (step.upper - u <= max(1e-9 * scene.length,
-                                                                  c_up.max(initial=0.0)
-                                                                  * eps_R)))
-                | (np.isfinite(step.lower) & (u - step.lower <= 1e-9 * scene.length)))
-    result_one_sided = np.flatnonzero(touching & ~(up | lo))
-    comp = np.where(up, c_up, np.where(lo, c_lo, 0.0))
-    rigid = (up | lo) & ~(comp > 0)
-    soft = (up | lo) & (comp > 0)
-    fac = np.zeros((4, n))
-    shift = np.ascontiguousarray(comp) if soft.any() else np.zeros(0)
-    if not ldl.refactor(fac, bands, np.ascontiguousarray(rigid), shift, 0, n):
+    _, a, jl, jr, k, rest, _, nodal_load, fs, lo, hi, _, _, cu, cl = kernel_args(chain)
+    alpha = np.ascontiguousarray(result.alpha, dtype=float)
+    n = lo.size
+    fu = np.ascontiguousarray(result.forces, dtype=float)
+    fl = np.zeros(n) if result.forces_lower is None else \
+        np.ascontiguousarray(result.forces_lower, dtype=float)
+    # the judge's contact threshold ε_R = NODE_SHARE τ F₀ (model.judge.judge), without
+    # building a lazy result's judgement
+    F0 = max(abs(float(fu.sum())), abs(float(fl.sum())), float(chain.force_scale))
+    eps_R = NODE_SHARE * force_tol(result.tol) * F0
+    want = np.zeros(5, bool)
+    for p in names:
+        want[_ROWS[p]] = True
+    # φ* = −θ/N per joint, k = EI/a, the loads ∝ w: their derivatives
+    drest = rest / scene.theta if scene.theta else np.full(rest.size, -math.pi / 180 / n)
+    dk = k / scene.EI
+    unit = nodal_load / scene.weight if scene.weight else \
+        np.ascontiguousarray(replace(scene, weight=1.0).chain().nodal_load, dtype=float)
+    code, du, dfu, dfl = kern.derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu,
+                                          cl, fu, fl, float(eps_R), drest, dk, unit,
+                                          float(scene.wall_stiffness), want)
+    if code != kern.OK:
         raise ProblemError("sensitivities: the Hessian on the answer's free nodes is not "
                            "positive definite (the contact set is not a stable one)")
-    wall_sign = np.where(up, 1.0, np.where(lo, -1.0, 0.0))  # dh of a held node per dh
-    out = {}
-    for p in names:
-        dgrad, du0, extra = _parameter_terms(p, scene, step, u, fu, fl, up, lo, wall_sign)
-        r = dgrad + _banded_matvec(bands, du0) + extra
-        r[rigid] = 0.0
-        du = du0 - ldl.resolve(fac, np.ascontiguousarray(r))
-        dR = -(dgrad + _banded_matvec(bands, du))
-        dfu = np.where(up, dR, 0.0)
-        dfl = np.where(lo, -dR, 0.0)
-        out[p] = (dfu, dfl, du)
-    out["_one_sided"] = result_one_sided
+    out = {p: (dfu[_ROWS[p]], dfl[_ROWS[p]], du[_ROWS[p]]) for p in names}
+    # a node touching its wall without force: at a change of contact set (one-sided)
+    u = heights(chain, alpha)
+    c_max = float(np.max(cu, initial=0.0)) if cu.size else 0.0
+    touching = (hi - u <= max(1e-9 * scene.length, c_max * eps_R)) | \
+        (u - lo <= 1e-9 * scene.length)
+    out["_one_sided"] = np.flatnonzero(touching & ~((fu > eps_R) | (fl > eps_R)))
+    out["_heights"] = u
     return out
-
-
-def _parameter_terms(p: str, scene, step, u, fu, fl, up, lo, wall_sign):
-    """(∂_p ∇E at u, du₀ on the held nodes, the springs' ∂_p k (u − h) term)."""
-    n = step.size
-    zero = np.zeros(n)
-    if p == "height_mm":  # the walls move: +1 the upper wall, −1 the lower (at −h)
-        return zero, np.where(up | lo, wall_sign, 0.0), zero
-    if p == "wall_stiffness":  # k_i = k share_i: ∂k_i (u − h) = R_i / k
-        return zero, zero, np.where(up | lo, (fu - fl) / scene.wall_stiffness, 0.0)
-    m = step.joint_angles(u) - step.rest_joint  # φ − φ*
-    if p == "theta_deg":  # φ* = −θ/N: ∂g = Jᵀ k (π/180)/N
-        return step._JT(step.stiffness * (math.pi / 180.0 / scene.links)), zero, zero
-    if p == "EI":  # k = EI/a: ∂g = Jᵀ (φ − φ*) / a
-        return step._JT(m * (step.stiffness / scene.EI)), zero, zero
-    if p == "weight":  # f ∝ w: ∂g = −f(w = 1)
-        unit = replace(scene, weight=1.0).chain().nodal_load
-        return -np.asarray(unit, dtype=float), zero, zero
-    raise ProblemError(f"no sensitivity with respect to {p!r}")  # (checked before)
 
 
 def _by_dimensions(result, scene: ActuatorScene, d: dict, elastic: bool):
@@ -187,7 +168,7 @@ def _by_dimensions(result, scene: ActuatorScene, d: dict, elastic: bool):
     L, h, w = scene.length, scene.height, scene.weight
     fu = np.asarray(result.forces, dtype=float)
     fl = np.zeros_like(fu) if result.forces_lower is None else np.asarray(result.forces_lower)
-    u = heights(scene.chain(), np.asarray(result.alpha, dtype=float))
+    u = d["_heights"]
     parts = [("height_mm", -h), ("weight", 3 * w)] + ([("wall_stiffness",
                                                          4 * scene.wall_stiffness)]
                                                        if elastic else [])
@@ -213,10 +194,3 @@ def _collect(result, scene, names, d) -> Sensitivities:
         peak_d[p] = float((dfu[peak] + dfl[peak]) / share[peak]) if peak >= 0 else 0.0
     return Sensitivities(names, total, forces, lower if scene.channel else None, heights, peak_d,
                          np.asarray(d["_one_sided"], dtype=np.int64))
-
-
-def _banded_matvec(bands: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """H x for H in lower band storage (3, n) (bands[p, i] = H[i + p, i])."""
-    from ..linalg import banded_matvec
-
-    return banded_matvec(bands, x)
