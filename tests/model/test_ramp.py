@@ -1,5 +1,5 @@
 """Following the load from zero (model.ramp; solve(start="ramp") and the escalation in
-api.retried), against independent checks: the answer is a KKT point of the exact energy
+escalations.ramped), against independent checks: the answer is a KKT point of the exact energy
 (central differences of the energy and kinematics, tests/energy_oracle.py) with its
 reactions feasible, and a strict local minimum on its contact set (the same oracle's
 second-order test). Scenes whose cold start fails: past 180° in a channel (the

@@ -1,5 +1,5 @@
 """The second-order check (model.stability_kernel) and the escape from saddles
-(model.escape, api.escaped), against independent oracles:
+(model.escape, escalations.escaped), against independent oracles:
 
 - linear algebra: the count of negative eigenvalues of the reduced Hessian, from a
   dense null-space basis and eigvalsh, on random tridiagonal Hessians and segments;
