@@ -197,3 +197,19 @@ def test_the_result_says_what_ran():
     ref = lcpbench.solve(scene, engine="numpy")
     assert (ref.route, ref.engine, ref.judge) == ("numpy", "numpy", "numpy")
     assert "engine" not in res.extra and "judge" not in res.extra
+
+
+@pytest.mark.parametrize("kw, how, engine", [
+    (dict(links=40), dict(), "compiled"),
+    (dict(links=40, channel=True), dict(), "compiled"),
+    (dict(links=30, weight=0.3), dict(), "numpy (SQP steps in the link angles"),
+    (dict(links=40), dict(solver="lemke"), "compiled driver"),
+    (dict(links=40), dict(method="undamped"), "numpy"),
+])
+def test_the_planned_engine_is_the_one_drive_runs(kw, how, engine):
+    # model.compiled.drive decides again at run time: the plan must not drift from it
+    res = lcpbench.solve(ActuatorScene(**PAPER, **kw), **how)
+    plan = make_plan(res.scene.chain(), how.get("solver", DEFAULT),
+                     how.get("method", "globalised"), "auto", 1e-3)
+    assert res.route == plan.route and res.engine.startswith(engine)
+    assert res.engine.startswith(plan.engine) and res.judge == plan.judge
