@@ -121,7 +121,7 @@ def start_up(starts: int) -> dict:
     first = ("import time; t0 = time.perf_counter(); import lcpbench; "
              "s = lcpbench.ActuatorScene(theta=150, height=3.0); t = time.perf_counter(); "
              "r = lcpbench.solve(s); t1 = time.perf_counter(); lcpbench.solve(s); "
-             "t2 = time.perf_counter(); print(t1 - t, t2 - t1, t1 - t0, r.extra['engine'])")
+             "t2 = time.perf_counter(); print(t1 - t, t2 - t1, t1 - t0, r.engine)")
     _fresh(first)  # warms numba's on-disk cache
     imports, numba_loaded, firsts, seconds, totals, engines = [], [], [], [], [], set()
     for _ in range(starts):

@@ -95,7 +95,7 @@ def measure(backend: str, repeat: int, settings: str) -> dict:
     for name, r in runs.items():
         res, timed = r["payload"], own[name][WARMUP:]  # (one call per round: block 1)
         row[name] = {"median_s": statistics.median(r["times"]), "outer": res.outer_iterations,
-                     "engine": res.extra["engine"], "converged": res.converged,
+                     "engine": res.engine, "converged": res.converged,
                      "reason": res.reason, "force": res.total_force,
                      "call_s": statistics.median(c for _, c, _ in timed),
                      "reported_s": statistics.median(o for _, _, o in timed),

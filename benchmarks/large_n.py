@@ -42,8 +42,8 @@ rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # MiB (Linux: K
 print(json.dumps({"N": N, "tol": tol, "driver_s": driver, "total_s": total, "cpu_s": cpu,
                   "repeat": repeat, "rss_mib": rss,
                   "force": r.total_force, "converged": r.converged, "reason": r.reason[:300],
-                  "engine": r.extra.get("engine", ""), "outer": r.outer_iterations,
-                  "retried": "increments" in r.extra or "tightened" in r.extra,
+                  "engine": r.engine, "outer": r.outer_iterations,
+                  "retried": any(n in ("in_increments", "tightened") for n, _ in r.retries),
                   "force_error_bound": r.judgement.force_error_bound if r.judgement else None,
                   "node_error_bound": r.judgement.node_error_bound if r.judgement else None}))
 """
@@ -53,7 +53,7 @@ def _engine(r: dict) -> str:
     """What solved a row: the compiled kernel (node heights), increments on the tridiagonal
     factor (from LARGE_N links, or solved again there after the judge rejected the height
     answer), or the numpy reference in heights; "(retried)" where lcpbench.solve solved a
-    refused answer further (api.retried: in increments, or continued at tol/10)."""
+    refused answer further (lcpbench.escalations: in increments, or continued at tol/10)."""
     e = r["engine"]
     name = "compiled" if e == "compiled" else "increments" if "increments" in e else "numpy"
     return f"{name} (retried)" if r.get("retried") else name

@@ -175,7 +175,7 @@ def target1(scene, repeat: int, reference: float) -> dict:
     breakdown = {"steps_solver_s": float(sum(st.solve_time for st in res.steps)),
                  "steps_assembly_s": float(sum(st.assemble_time for st in res.steps)),
                  "face_solves": [int(st.iterations) for st in res.steps],
-                 "engine": str(res.extra.get("engine", "numpy"))}
+                 "engine": str(res.engine)}
     return {"rows": rows, "fastest": fastest["name"], "dense_s": dense["median_s"],
             "fastest_s": fastest["median_s"], "ratio": dense["median_s"] / fastest["median_s"],
             "repeat": repeat, "breakdown": breakdown}

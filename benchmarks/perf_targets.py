@@ -103,8 +103,8 @@ def full_solve_warm(interleaved, wall, med, repeat: int, block: int = 5) -> dict
 
 def parts(med, repeat: int) -> dict:
     """Each part of one default solve timed alone (medians, µs): where the time goes."""
-    from lcpbench.api import finish
     from lcpbench.model.compiled import _kernel, kernel_args, run_compiled, step_request
+    from lcpbench.model.finish import finish
     from lcpbench.model.judge_compiled import _kernel as judge_kernel
     from lcpbench.model.judge_compiled import chain_args
     from lcpbench.model.wall_free import solve_without_contact

@@ -136,8 +136,8 @@ def main(argv=None) -> int:
                                          r.judgement.contact_threshold)
         rows.append(dict(kind=kind, scene=name, converged=r.converged,
                          total_force=r.total_force, min_reduced_eig=lam,
-                         escaped="escaped" in r.extra and r.converged,
-                         ramped="ramped" in r.extra and r.converged,
+                         escaped=r.retried("escaped") is not None and r.converged,
+                         ramped=r.retried("ramped") is not None and r.converged,
                          time_s=dt, reason=r.reason[:160]))
     wall = time.perf_counter() - t0
     OUT.mkdir(parents=True, exist_ok=True)

@@ -66,7 +66,7 @@ def measure(all_scenes: dict, tol: float, rounds: int) -> dict[str, dict]:
     out = {name: {"times": []} for name in all_scenes}
     for name, scene in all_scenes.items():  # warm-up: kernels loaded, chains built
         r = lcpbench.solve(scene, tol=tol)
-        out[name].update(engine=r.extra.get("engine", "?"), converged=r.converged,
+        out[name].update(engine=r.engine, converged=r.converged,
                          force=r.total_force)
     for _ in range(rounds):
         for name, scene in all_scenes.items():

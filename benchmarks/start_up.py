@@ -35,7 +35,7 @@ START = ("import time; P, T = time.process_time, time.perf_counter; c0, t0 = P()
          "c2, t2 = P(), T(); import sys; numba = 'numba' in sys.modules; "
          "lcpbench.solve(s); c3, t3 = P(), T(); "
          "print(t1 - t0, c1 - c0, t2 - t1, c2 - c1, t3 - t2, c3 - c2, numba, "
-         "r.extra['engine'])")
+         "r.engine)")
 NAMES = ("import_wall_s", "import_cpu_s", "first_wall_s", "first_cpu_s", "second_wall_s",
          "second_cpu_s")
 HAS_AOT = ("from lcpbench import numba_cache as n; "

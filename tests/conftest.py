@@ -37,3 +37,22 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "repeatable"))
 # solver="auto" reads back-end selections cached in a results store; the tests
 # must not depend on whatever store the machine happens to hold.
 os.environ["LCPBENCH_STORE"] = os.path.join(os.path.dirname(__file__), "no-such-store.sqlite")
+
+
+import pytest  # noqa: E402
+
+
+@pytest.fixture
+def skip_escalations(monkeypatch):
+    """``skip("tightened", ...)``: those escalations of lcpbench.escalations.ESCALATIONS
+    never apply (their rows' ``applies`` answers False) for the rest of the test."""
+    from dataclasses import replace
+
+    from lcpbench.escalations import ESCALATIONS
+
+    def skip(*names: str) -> None:
+        for name in names:
+            monkeypatch.setitem(ESCALATIONS, name,
+                                replace(ESCALATIONS[name], applies=lambda res, ctx: False))
+
+    return skip

@@ -98,7 +98,7 @@ def test_the_aot_kernels_give_the_jits_answers(aot_build, served_from, monkeypat
                  type(numba_cache.kernel_module(JUDGE, "judge_answer")))
         assert kinds == ((AotKernels, AotKernels) if where else (type(np), type(np)))
         runs = [lcpbench.solve(s) for s in SCENES] + lcpbench.solve_many(line)
-        assert all(r.extra["engine"] == "compiled" for r in runs[:3])
+        assert all(r.engine == "compiled" for r in runs[:3])
         answers[label] = [_summary(r) for r in runs]
     for a, j in zip(answers["aot"], answers["jit"], strict=True):
         assert a[:2] == j[:2] and a[0]  # converged, same outer iterations
@@ -110,7 +110,7 @@ def test_the_aot_kernels_give_the_jits_answers(aot_build, served_from, monkeypat
 
 def test_a_fresh_process_solves_without_importing_numba(aot_build):
     code = ("import sys, lcpbench; r = lcpbench.solve(lcpbench.ActuatorScene(theta=150, "
-            "height=3.0, links=40)); print('numba' in sys.modules, r.extra['engine'], "
+            "height=3.0, links=40)); print('numba' in sys.modules, r.engine, "
             "r.converged, r.total_force.hex())")
     env = {**os.environ, "LCPBENCH_AOT_DIR": aot_build[0]}
     aot = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
@@ -167,7 +167,7 @@ def test_a_broken_module_warns_once_and_the_jit_solves(aot_build, served_from, t
     served_from(str(broken))
     with pytest.warns(RuntimeWarning, match="do not load"):
         r = lcpbench.solve(lcpbench.ActuatorScene(theta=150, height=3.0, links=40))
-    assert r.converged and r.extra["engine"] == "compiled"
+    assert r.converged and r.engine == "compiled"
     assert type(numba_cache.kernel_module(SOLVE, "solve_chain")) is not AotKernels
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # said once: the next solve is silent

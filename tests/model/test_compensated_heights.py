@@ -22,10 +22,10 @@ import numpy as np
 import pytest
 
 from lcpbench import ActuatorScene, CantileverScene, solve
-from lcpbench.api import finish
 from lcpbench.model import compiled, large_n
 from lcpbench.model.chain import compensated_heights
 from lcpbench.model.compiled import kernel_args
+from lcpbench.model.finish import finish
 from lcpbench.model.judge import EPS, ROUNDOFF_ULPS, force_tol
 from lcpbench.model.large_driver import run_large
 from lcpbench.model.result import certify
@@ -100,7 +100,7 @@ def test_the_step_closes_the_chain_with_the_exact_closure_error():
 @pytest.fixture(scope="module")
 def tight():
     res = solve(ActuatorScene(150.0, 3.0, links=N), tol=1e-9)
-    assert res.extra["engine"].startswith("numpy (large N")  # the increments path
+    assert res.engine.startswith("numpy (large N")  # the increments path
     return res
 
 

@@ -36,8 +36,8 @@ def both(scene, **kw):
 def assert_same(ref, fast, *, compiled=True):
     """Same path, same answer to round-off; the kernel really ran when ``compiled``."""
     if compiled:
-        assert fast.extra["engine"] == "compiled"
-    assert ref.extra["engine"] == "numpy"
+        assert fast.engine == "compiled"
+    assert ref.engine == "numpy"
     assert ref.converged == fast.converged and ref.reason == fast.reason
     assert ref.outer_iterations == fast.outer_iterations
     assert [s.step_length for s in ref.steps] == [s.step_length for s in fast.steps]
@@ -107,7 +107,7 @@ def test_paper_scene_channel_and_cantilever_run_compiled():
 def test_cantilever_tip_force_is_beam_theory():
     """Eqs. (34)-(37): the reaction of the wall on the tip at the paper's load."""
     res = solve(CantileverScene(), tol=1e-8)
-    assert res.extra["engine"] == "compiled"
+    assert res.engine == "compiled"
     assert res.total_force == pytest.approx(CANTILEVER_THEORY_FORCE, rel=2e-2)
     assert np.argmax(res.forces) == res.forces.size - 1  # the tip carries it
 
@@ -115,7 +115,7 @@ def test_cantilever_tip_force_is_beam_theory():
 def test_symmetric_scene_has_a_symmetric_answer():
     """Weightless, so the scene is symmetric about mid-span: so are the forces."""
     res = solve(ActuatorScene(theta=170, height=2.0, links=120, weight=0.0), tol=1e-10)
-    assert res.extra["engine"] == "compiled"
+    assert res.engine == "compiled"
     f = res.forces
     assert np.max(np.abs(f - f[::-1])) <= 1e-9 * f.sum()
 
@@ -173,7 +173,7 @@ def test_kernel_hands_over_to_the_reference_when_it_leaves_its_path():
     scene = ActuatorScene(**PAPER_SCENE)
     fast = solve(scene, settings=tight)
     ref = solve(scene, settings=tight, engine="numpy")
-    assert fast.extra["engine"].startswith("numpy (the compiled kernel stopped")
+    assert fast.engine.startswith("numpy (the compiled kernel stopped")
     assert np.array_equal(fast.alpha, ref.alpha) and fast.reason == ref.reason
 
 
@@ -183,12 +183,12 @@ def test_engine_argument():
         solve(scene, engine="fast")
     with pytest.raises(ProblemError, match="engine='compiled' runs method='globalised'"):
         solve(scene, method="undamped", engine="compiled")
-    assert solve(scene, engine="compiled").extra["engine"] == "compiled"
+    assert solve(scene, engine="compiled").engine == "compiled"
     # another back-end: the driver around it compiled (model.compiled_driver)
-    assert solve(scene, solver="lemke", engine="compiled").extra["engine"] == "compiled driver"
-    assert solve(scene, solver="lemke").extra["engine"] == "compiled driver"
-    assert solve(scene, solver="lemke", engine="numpy").extra["engine"] == "numpy"
-    assert solve(scene, engine="compiled", method="newton").extra["engine"] == "compiled"
+    assert solve(scene, solver="lemke", engine="compiled").engine == "compiled driver"
+    assert solve(scene, solver="lemke").engine == "compiled driver"
+    assert solve(scene, solver="lemke", engine="numpy").engine == "numpy"
+    assert solve(scene, engine="compiled", method="newton").engine == "compiled"
 
 
 def test_import_does_not_load_numba_and_the_first_solve_does():
@@ -196,7 +196,7 @@ def test_import_does_not_load_numba_and_the_first_solve_does():
     numba at all: tests/model/test_aot.py)."""
     code = ("import sys, lcpbench; a = 'numba' in sys.modules; "
             "r = lcpbench.solve(lcpbench.ActuatorScene(links=20)); "
-            "print(a, 'numba' in sys.modules, r.extra['engine'])")
+            "print(a, 'numba' in sys.modules, r.engine)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, env={**os.environ, "LCPBENCH_AOT": "0"}).stdout.split()
     assert out == ["False", "True", "compiled"]

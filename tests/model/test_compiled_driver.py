@@ -70,8 +70,8 @@ def test_kernel_pieces_match_the_numpy_functions(name):
 
 
 def assert_same_solve(ref, fast, *, same_inner: bool):
-    assert ref.extra["engine"] == "numpy"
-    assert fast.extra["engine"] == compiled_driver.ENGINE
+    assert ref.engine == "numpy"
+    assert fast.engine == compiled_driver.ENGINE
     assert (ref.converged, ref.reason) == (fast.converged, fast.reason)
     assert [s.step_length for s in ref.steps] == [s.step_length for s in fast.steps]
     if same_inner:
@@ -120,4 +120,4 @@ def test_where_it_does_not_apply_the_numpy_driver_runs():
     soft = ActuatorScene(theta=150.0, height=3.0, links=30, wall_stiffness=10.0).chain()
     assert not compiled_driver.takes(soft, lemke, "globalised")
     res = solve(SCENES["actuator"], solver="lemke", method="undamped")
-    assert res.extra["engine"] == "numpy"
+    assert res.engine == "numpy"

@@ -47,7 +47,7 @@ def test_every_backend_runs_the_elastic_step_and_is_never_wrong(backend, referen
     res = lcpbench.solve(_elastic(), solver=backend)
     # the built-in back-end runs the compiled kernel (its compliance form); the others
     # their own forms of the step, in the numpy driver
-    assert res.extra["engine"] == ("compiled" if backend == "active-set" else "numpy")
+    assert res.engine == ("compiled" if backend == "active-set" else "numpy")
     if backend in EXACT:
         assert res.converged, res.reason
     if res.converged:
@@ -157,7 +157,7 @@ def test_rigid_walls_are_unchanged_by_the_default_stiffness():
     assert s.wall_stiffness == math.inf and s.chain().upper_stiffness is None
     assert ActuatorScene(wall_stiffness=float("inf")) == s
     res = lcpbench.solve(ActuatorScene(links=30))
-    assert res.extra["engine"] == "compiled" and res.max_indentation == 0.0
+    assert res.engine == "compiled" and res.max_indentation == 0.0
 
 
 def test_cantilever_on_an_elastic_wall_tends_to_the_rigid_one():
@@ -181,7 +181,7 @@ def test_the_compiled_kernel_runs_elastic_walls_to_the_reference(k):
     scene = _elastic(k=k)
     res = lcpbench.solve(scene, engine="compiled", tol=1e-9)
     assert res.converged, res.reason
-    assert res.extra["engine"] == "compiled"
+    assert res.engine == "compiled"
     ref = reference_minimiser(scene)[1]
     F0 = max(ref, scene.EI / scene.length**2)
     assert abs(res.total_force - ref) <= force_tol(res.tol) * F0

@@ -108,7 +108,7 @@ def test_large_n_answers_are_judged_by_the_judge_in_increments(monkeypatch):
 
     monkeypatch.setattr(judge_module.large_n, "increments_at", spy)
     res = lcpbench.solve(ActuatorScene(150, 3.0, links=LARGE_N), tol=1e-3)
-    assert res.extra["judge"] == "numpy"
+    assert res.judge == "numpy"
     assert LARGE_N - 1 in calls  # the judge's own step, in increments
 
 

@@ -190,7 +190,7 @@ def test_cantilever_same_verdict():
 def test_the_default_solve_is_judged_by_the_compiled_judge_and_numpy_by_numpy():
     scene = ActuatorScene(theta=150, height=3.0)
     fast, ref = solve(scene), solve(scene, engine="numpy")
-    assert (fast.extra["engine"], fast.extra["judge"]) == ("compiled", "compiled")
-    assert (ref.extra["engine"], ref.extra["judge"]) == ("numpy", "numpy")
+    assert (fast.engine, fast.judge) == ("compiled", "compiled")
+    assert (ref.engine, ref.judge) == ("numpy", "numpy")
     assert fast.converged and ref.converged
     assert fast.force_error_bound == pytest.approx(ref.force_error_bound, rel=1e-5)

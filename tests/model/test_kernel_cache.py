@@ -25,8 +25,8 @@ at_import = sorted(m for m in ("numba", "scipy", "scipy.linalg") if m in sys.mod
 r = lcpbench.solve(lcpbench.ActuatorScene(theta=150, height=3.0, links=30))
 loaded = sorted(m for m in ("scipy.linalg", "scipy.sparse", "numba.np.arraymath",
                             "numba.np.linalg") if m in sys.modules)
-print(json.dumps({"at_import": at_import, "loaded": loaded, "engine": r.extra["engine"],
-                  "judge": r.extra["judge"], "force": r.total_force.hex(),
+print(json.dumps({"at_import": at_import, "loaded": loaded, "engine": r.engine,
+                  "judge": r.judge, "force": r.total_force.hex(),
                   "bound": r.force_error_bound}))
 """
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lcpbench import ActuatorScene, api, solve
+from lcpbench import ActuatorScene, solve
 from lcpbench.model import large_driver, nested_start
 from lcpbench.model.judge import NODE_GROSS, force_tol, judge
 from lcpbench.model.result import certify
@@ -25,7 +25,7 @@ N = 10_000
 @pytest.fixture(scope="module")
 def answer():
     res = solve(ActuatorScene(150, 3.0, links=N), tol=1e-3)
-    assert res.extra["judge"] == "numpy"  # the judge in increments (large N)
+    assert res.judge == "numpy"  # the judge in increments (large N)
     return res
 
 
@@ -55,7 +55,8 @@ def test_the_accepted_nodes_are_within_their_bound_of_a_tight_solve(answer):
     assert abs(answer.total_force - tight.total_force) / F0 <= force_tol(1e-3)
 
 
-def test_without_the_extra_steps_the_same_judge_rejects_the_unsettled_split(monkeypatch):
+def test_without_the_extra_steps_the_same_judge_rejects_the_unsettled_split(monkeypatch,
+                                                                           skip_escalations):
     # what the driver returned before: max|Δα| < tol, nodes not settled. The judge must
     # reject it (the extra steps make the answer right, the judge is not loosened). From
     # the cold start: a nested start (:mod:`lcpbench.model.nested_start`) begins within
@@ -63,9 +64,8 @@ def test_without_the_extra_steps_the_same_judge_rejects_the_unsettled_split(monk
     monkeypatch.setattr(large_driver, "EXTRA_STEPS", 0)
     monkeypatch.setattr(nested_start, "COARSE_LINKS", 0)
     # the driver's answer as it is: lcpbench.solve would continue a refusal on the force
-    # bound alone at a tighter tolerance (api.tightened; the next test)
-    monkeypatch.setattr(api, "tightened", lambda res, *args, **kw: res)
-    monkeypatch.setattr(api, "ramped", lambda res, *args, **kw: res)  # (nor the load path)
+    # bound alone at a tighter tolerance (escalations.tightened; the next test)
+    skip_escalations("tightened", "ramped")  # (nor the load path)
     res = solve(ActuatorScene(150, 3.0, links=N), tol=1e-3)
     assert not res.converged
     assert "force error bound" in res.judgement.failed
@@ -80,7 +80,7 @@ def test_without_the_extra_steps_solve_continues_to_the_same_answer(monkeypatch,
     monkeypatch.setattr(nested_start, "COARSE_LINKS", 0)
     res = solve(ActuatorScene(150, 3.0, links=N), tol=1e-3)
     assert res.converged, res.reason
-    assert "force error bound alone" in res.extra["tightened"]
+    assert "force error bound alone" in res.retried("tightened")
     F0 = max(answer.total_force, answer.scene.EI / answer.scene.length**2)
     assert abs(res.total_force - answer.total_force) <= force_tol(1e-3) * F0
 

@@ -140,7 +140,7 @@ def test_a_new_scene_and_the_same_scene_again_give_the_reference(kw):
     scene = ActuatorScene(**kw)
     for _ in range(2):  # built, then kept
         res = lcpbench.solve(scene, tol=1e-8)
-        assert res.converged == ref.converged and res.extra["engine"] == "compiled"
+        assert res.converged == ref.converged and res.engine == "compiled"
         assert res.total_force == pytest.approx(ref.total_force, rel=1e-9, abs=1e-13)
         assert np.allclose(res.alpha, ref.alpha, rtol=0, atol=1e-10)
 
@@ -188,15 +188,15 @@ ROUTES = [  # (scene, solve's arguments, whether the direct route takes it)
 def test_the_direct_route_is_drives_route(kw, how, route, monkeypatch):
     """lcpbench.solve's direct route to the kernel answers what the route through
     solve_without_contact and drive answers, bit for bit, engine and reason included."""
-    from lcpbench import api
+    from lcpbench import plan
 
     scene = ActuatorScene(**kw)
     assert compiled.direct(scene.chain()) is route
     fast = lcpbench.solve(scene, **how)
-    monkeypatch.setattr(api, "direct", lambda chain: False)
+    monkeypatch.setattr(plan, "direct", lambda chain: False)
     slow = lcpbench.solve(ActuatorScene(**kw), **how)
-    assert (fast.converged, fast.reason, fast.extra["engine"], fast.outer_iterations) == \
-        (slow.converged, slow.reason, slow.extra["engine"], slow.outer_iterations)
+    assert (fast.converged, fast.reason, fast.engine, fast.outer_iterations) == \
+        (slow.converged, slow.reason, slow.engine, slow.outer_iterations)
     for name in ("alpha", "forces", "gaps", "x", "y"):
         assert _same_bits(getattr(fast, name), getattr(slow, name)), name
     assert fast.total_force == slow.total_force

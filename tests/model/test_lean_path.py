@@ -170,5 +170,5 @@ def test_a_batch_line_with_rigid_and_elastic_walls_gives_each_scenes_solve():
     for scene, res in zip(scenes, many, strict=True):
         one = lcpbench.solve(scene, tol=1e-8)
         assert res.converged and one.converged
-        assert res.extra["engine"] == one.extra["engine"]
+        assert res.engine == one.engine
         assert res.total_force == pytest.approx(one.total_force, rel=1e-7, abs=1e-12)

@@ -2,7 +2,7 @@
 judge kernel and its verdict, the rest of the result built when read.
 
 Checked against the route it replaces, the full build of every field
-(:func:`lcpbench.model.compiled.run_kernel`, then :func:`lcpbench.api.finish` with the
+(:func:`lcpbench.model.compiled.run_kernel`, then :func:`lcpbench.model.finish.finish` with the
 compiled judge), and against the numpy reference: the same answer, the same verdict,
 the same reason, every field; a kernel that stops still falls back to the numpy
 reference; an answer the driver did not reach is judged as before.
@@ -18,11 +18,14 @@ import pytest
 import lcpbench
 from lcpbench import ActuatorScene
 from lcpbench import api as api_module
+from lcpbench.escalations import Context, escalate
 from lcpbench.model import compiled
+from lcpbench.model.finish import finish
 from lcpbench.model.judge_compiled import chain_args
 from lcpbench.model.lazy_result import LAZY, LazyResult
 from lcpbench.model.result import ContactResult
 from lcpbench.model.step_solver import make_step_solver
+from lcpbench.plan import make_plan
 from lcpbench.solvers.registry import DEFAULT
 
 SCENES = [dict(theta=150.0, height=3.0, links=140),  # the paper's default scene
@@ -41,14 +44,14 @@ def _full(scene, **kw):
         chain, partial(make_step_solver, DEFAULT, "default", True), settings="default",
         tol=tol, max_outer=max_outer, method=method, args=args)
     why = "auto: the built-in active set (exact)"
-    res = api_module.finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol,
-                            elapsed=0.0, settings="default", engine=used,
-                            compiled_judge=True, why=why, judge_args=chain_args(chain, args))
-    # then, as solve() does, a refusal solved further (api.retried)
-    return res if res.converged else api_module.retried(
-        res, chain, partial(make_step_solver, DEFAULT, "default", True), backend=DEFAULT,
-        settings="default", engine="auto", tol=tol, max_outer=max_outer, method=method,
-        why=why, pressure_limit=None)
+    res = finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol, elapsed=0.0,
+                 settings="default", engine=used, compiled_judge=True, why=why,
+                 judge_args=chain_args(chain, args), route="one-wall kernel")
+    # then, as solve() does, a refusal solved further (its plan's escalations)
+    ctx = Context(chain, partial(make_step_solver, DEFAULT, "default", True), DEFAULT,
+                  "default", "auto", tol, max_outer, method, why, None)
+    return res if res.converged else escalate(
+        res, ctx, make_plan(chain, DEFAULT, method, "auto", tol).escalations)
 
 
 def _same_fields(got: ContactResult, want: ContactResult) -> None:
@@ -137,7 +140,7 @@ def test_a_kernel_that_stops_falls_back_to_the_numpy_reference(monkeypatch):
 
     monkeypatch.setattr(api_module, "call_kernel", stopped)
     res = lcpbench.solve(scene)
-    assert res.extra["engine"] == ("numpy (the compiled kernel stopped: the step "
+    assert res.engine == ("numpy (the compiled kernel stopped: the step "
                                    "certificate rejected the step)")
     assert type(res) is ContactResult
     ref = lcpbench.solve(scene, engine="numpy")
@@ -162,10 +165,11 @@ def test_channels_and_the_numpy_engine_keep_the_full_build():
     channel = lcpbench.solve(ActuatorScene(theta=170, height=2.5, links=30, channel=True))
     assert type(channel) is ContactResult and channel.converged
     ref = lcpbench.solve(ActuatorScene(theta=150, height=3.0, links=30), engine="numpy")
-    assert type(ref) is ContactResult and ref.extra["judge"] == "numpy"
+    assert type(ref) is ContactResult and ref.judge == "numpy"
 
 
-def test_a_verdict_set_by_hand_stays_and_a_verdict_unlike_the_judges_is_caught(monkeypatch):
+def test_a_verdict_set_by_hand_stays_and_a_verdict_unlike_the_judges_is_caught(
+        monkeypatch, skip_escalations):
     scene = ActuatorScene(theta=150.0, height=3.0, links=40)
     mine = lcpbench.solve(scene)
     mine.converged = False  # set before the rest is built: kept, not checked
@@ -179,13 +183,11 @@ def test_a_verdict_set_by_hand_stays_and_a_verdict_unlike_the_judges_is_caught(m
 
     monkeypatch.setattr(api_module, "_JUDGE", [(solve_k, judge_k, Wrong)])
     # solve() reads a refusal's reasons, to continue one on the force bound alone
-    # (api.tightened) or leave a saddle (api.escaped): the wrong verdict is caught there
+    # (tightened) or leave a saddle (escaped): the wrong verdict is caught there
     with pytest.raises(RuntimeError, match="is not the judge's"):
         lcpbench.solve(scene)
     # and, where nothing reads them first, when the result's reasons are read
-    monkeypatch.setattr(api_module, "tightened", lambda res, *args, **kw: res)
-    monkeypatch.setattr(api_module, "ramped", lambda res, *args, **kw: res)  # (nor the load path)
-    monkeypatch.setattr(api_module, "escaped", lambda res, *args, **kw: res)  # (reads them too)
+    skip_escalations("tightened", "ramped", "escaped")  # (the last two read them too)
     res = lcpbench.solve(scene)
     assert res.converged is False
     with pytest.raises(RuntimeError, match="is not the judge's"):

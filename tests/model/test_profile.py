@@ -123,7 +123,7 @@ def test_flat_profile_reproduces_the_flat_wall(theta, height, channel):
                                wall_profile=WallProfile.flat(height))
     a = lcpbench.solve(flat, engine="numpy")
     b = lcpbench.solve(as_profile)
-    assert b.extra["engine"] == "numpy"
+    assert b.engine == "numpy"
     assert a.converged and b.converged
     assert a.outer_iterations == b.outer_iterations
     np.testing.assert_allclose(b.alpha, a.alpha, rtol=0, atol=1e-13)
@@ -223,7 +223,7 @@ def test_compiled_engine_refuses_a_profile_and_auto_runs_numpy():
     with pytest.raises(ProblemError, match="profile"):
         lcpbench.solve(scene, engine="compiled")
     res = lcpbench.solve(scene)
-    assert res.extra["engine"] == "numpy" and res.converged
+    assert res.engine == "numpy" and res.converged
 
 
 @pytest.mark.parametrize("method", ["newton", "undamped"])

@@ -1,5 +1,5 @@
 """Following the load from zero (model.ramp; solve(start="ramp") and the escalation in
-api.retried), against independent checks: the answer is a KKT point of the exact energy
+escalations.ramped), against independent checks: the answer is a KKT point of the exact energy
 (central differences of the energy and kinematics, tests/energy_oracle.py) with its
 reactions feasible, and a strict local minimum on its contact set (the same oracle's
 second-order test). Scenes whose cold start fails: past 180° in a channel (the
@@ -63,14 +63,14 @@ def test_the_path_ends_at_the_scene_in_steps_of_at_most_ten_degrees():
 def test_a_refused_cold_start_is_solved_along_the_loading_path(scene):
     assert not _cold_driver_converges(scene)  # the premise: cold, the driver fails
     res = lcpbench.solve(scene)
-    assert res.converged and "followed the load from zero" in res.extra["ramped"]
+    assert res.converged and "followed the load from zero" in res.retried("ramped")
     _assert_stable_kkt_point(scene, res)
 
 
 def test_start_ramp_gives_the_stable_state_of_the_paper_scene():
     scene = lcpbench.ActuatorScene(theta=150, height=3.0, links=40)
     ramp = lcpbench.solve(scene, start="ramp", tol=1e-9)
-    assert ramp.converged and "followed the load" in ramp.extra["ramped"]
+    assert ramp.converged and ramp.route == "load path" and ramp.retries == ()
     _assert_stable_kkt_point(scene, ramp)
     # one stable state here: the cold start's, to the tolerance
     assert ramp.total_force == pytest.approx(lcpbench.solve(scene, tol=1e-9).total_force,

@@ -35,7 +35,7 @@ def test_a_round_off_bail_at_n_3999_is_solved_in_increments(monkeypatch):
     # the same scene solved in increments from the rest shape (LARGE_N lowered)
     monkeypatch.setattr(large_n, "LARGE_N", 10)
     cold = solve(scene, tol=1e-9)
-    assert cold.converged and "increments" in cold.extra["engine"]
+    assert cold.converged and "increments" in cold.engine
     F = float(out.forces_upper.sum())
     assert abs(F - cold.total_force) / cold.judgement.force_unit <= force_tol(1e-9)
 
@@ -92,8 +92,8 @@ def test_no_solve_at_n_3999_goes_to_the_reference_in_heights(monkeypatch):
         for tol in (1e-3, 1e-9):
             res = solve(ActuatorScene(theta, h, links=3999), tol=tol)
             assert res.converged, res.reason
-            bailed = "the compiled kernel stopped" in res.extra["engine"]
-            assert not bailed or "increments" in res.extra["engine"]
+            bailed = "the compiled kernel stopped" in res.engine
+            assert not bailed or "increments" in res.engine
     assert in_heights == []
 
 
@@ -110,5 +110,5 @@ def test_past_the_vertical_at_n_3000_the_cold_start_fails_without_a_dense_step(d
     # step fell back to dense Lemke, minutes
     for engine in ("auto", "numpy"):
         res = solve(ActuatorScene(200, 3.0, links=3000), tol=1e-3, engine=engine)
-        assert "theta > 180 deg" in res.extra["ramped"]
+        assert "theta > 180 deg" in res.retried("ramped")
     assert all(n <= step_solver.MAX_DENSE_FALLBACK for _, n in dense_steps)

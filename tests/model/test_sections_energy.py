@@ -87,7 +87,7 @@ def test_driver_matches_the_exact_energy_minimiser(index, engine, references):
 def test_default_engine_is_the_compiled_kernel_on_sectioned_chains():
     """Sectioned chains are ordinary chains (consecutive joints): the kernel takes them."""
     res = lcpbench.solve(anchoring_actuator(150.0, 4.5, links=90))
-    assert res.converged and res.extra["engine"] == "compiled"
+    assert res.converged and res.engine == "compiled"
     ref = lcpbench.solve(anchoring_actuator(150.0, 4.5, links=90), engine="numpy")
-    assert ref.extra["engine"] == "numpy"
+    assert ref.engine == "numpy"
     assert _relative(res.total_force, ref.total_force) <= 1e-9

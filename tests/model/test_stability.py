@@ -1,5 +1,5 @@
 """The second-order check (model.stability_kernel) and the escape from saddles
-(model.escape, api.escaped), against independent oracles:
+(model.escape, escalations.escaped), against independent oracles:
 
 - linear algebra: the count of negative eigenvalues of the reduced Hessian, from a
   dense null-space basis and eigvalsh, on random tridiagonal Hessians and segments;
@@ -164,7 +164,7 @@ def test_reproducers_escape_the_saddle_to_a_lower_energy(kw, saddle_force, stabl
     assert verdict.failed == ["stability"]
     assert float(np.sum(out.forces_upper)) == pytest.approx(saddle_force, rel=1e-3)
     res = lcpbench.solve(scene)
-    assert res.converged and "saddle" in res.extra["escaped"]
+    assert res.converged and "saddle" in res.retried("escaped")
     assert res.judgement.unstable_directions == 0
     assert energy(chain, res.alpha) < energy(chain, out.alpha)
     # the issue's stable neighbour at a tighter tolerance; at tol 1e-3 within 0.1 %
@@ -185,4 +185,4 @@ def test_a_restart_that_is_not_certified_keeps_the_refusal_and_says_why():
         assert res.judgement.unstable_directions == 0
     else:
         assert "stability" in res.judgement.failed
-        assert "restarts downhill" in res.extra["escaped"]
+        assert "restarts downhill" in res.retried("escaped")

@@ -17,10 +17,12 @@ import numpy as np
 import pytest
 
 from lcpbench import ActuatorScene, solve, solve_many
-from lcpbench.api import in_increments
+from lcpbench.escalations import Context, escalate
 from lcpbench.model import large_n
 from lcpbench.model.judge import force_tol
 from lcpbench.model.step import assemble_step
+from lcpbench.plan import make_plan
+from lcpbench.solvers.registry import DEFAULT
 
 N = 3000
 TOL = 1e-11
@@ -45,15 +47,15 @@ def retried():
 def test_the_height_answer_at_n_3000_is_rejected_on_its_force(heights_answer):
     assert not heights_answer.converged
     assert heights_answer.judgement.failed == ["force error bound"]
-    assert "increments" not in heights_answer.extra
+    assert heights_answer.retried("in_increments") is None
 
 
 def test_the_rejected_answer_is_solved_again_in_increments_and_accepted(retried):
     assert retried.converged, retried.reason
     assert retried.judgement.force_error_bound <= force_tol(TOL)
-    assert retried.extra["judge"] == "numpy"  # judged in increments, as from LARGE_N
-    assert "increments" in retried.extra["engine"]
-    assert "did not certify" in retried.extra["increments"]
+    assert retried.judge == "numpy"  # judged in increments, as from LARGE_N
+    assert "increments" in retried.engine
+    assert "did not certify" in retried.retried("in_increments")
 
 
 def test_the_retried_force_is_the_independent_exact_step_of_the_rejected_answer(
@@ -75,11 +77,11 @@ def test_a_retried_channel_answer_is_the_cold_increment_solves(monkeypatch):
     # starts, one force
     scene = ActuatorScene(66, 2.99, links=N, channel=True)
     res = solve(scene, tol=1e-10)
-    assert res.converged and "increments" in res.extra, res.reason
+    assert res.converged and res.retried("in_increments") is not None, res.reason
     monkeypatch.setattr(large_n, "LARGE_N", 10)
     cold = solve(scene, tol=1e-10)
-    assert cold.converged and "increments" not in cold.extra
-    assert "increments" in cold.extra["engine"]
+    assert cold.converged and cold.retried("in_increments") is None
+    assert "increments" in cold.engine
     assert abs(res.total_force - cold.total_force) / res.judgement.force_unit \
         <= force_tol(1e-10)
 
@@ -88,7 +90,7 @@ def test_a_batch_retries_as_solve_does(retried):
     scenes = [ActuatorScene(150, 3.0, links=N), ActuatorScene(150, 3.2, links=N)]
     got = solve_many(scenes, tol=TOL)
     assert all(r.converged for r in got), [r.reason for r in got]
-    assert all("increments" in r.extra and "continuation" in r.extra for r in got)
+    assert all(r.retried("in_increments") is not None and "continuation" in r.extra for r in got)
     F0 = retried.judgement.force_unit
     assert abs(got[0].total_force - retried.total_force) / F0 <= force_tol(TOL)
 
@@ -98,15 +100,15 @@ def test_an_accepted_answer_is_never_solved_again():
     # retried; the answer in heights is accepted and kept
     res = solve(ActuatorScene(150, 3.0, links=N), tol=1e-3)
     assert res.converged, res.reason
-    assert "increments" not in res.extra
+    assert res.retried("in_increments") is None
 
 
 def test_where_increments_cannot_do_better_the_rejection_stands():
     # N = 140 at tol 1e-14 (τ = 1e-12): both formulations stop ~1e-11 F₀ off
     res = solve(ActuatorScene(150, 3.0, links=140), tol=1e-14)
     assert not res.converged
-    assert "increments" not in res.extra["engine"]  # the first answer is kept
-    assert "solved again in increments: not accepted" in res.extra["increments"]
+    assert "increments" not in res.engine  # the first answer is kept
+    assert "solved again in increments: not accepted" in res.retried("in_increments")
 
 
 def test_the_retry_takes_only_the_outer_steps_left(heights_answer):
@@ -115,9 +117,9 @@ def test_the_retry_takes_only_the_outer_steps_left(heights_answer):
     scene = ActuatorScene(150, 3.0, links=N)
     used = heights_answer.outer_iterations
     none_left = solve(scene, tol=TOL, max_outer=used)
-    assert not none_left.converged and "increments" not in none_left.extra
+    assert not none_left.converged and none_left.retried("in_increments") is None
     one_left = solve(scene, tol=TOL, max_outer=used + 1)
-    assert not one_left.converged and "1 outer iterations" in one_left.extra["increments"]
+    assert not one_left.converged and "1 outer iterations" in one_left.retried("in_increments")
     assert one_left.outer_iterations == used
 
 
@@ -167,7 +169,11 @@ def test_another_back_ends_rejection_stays_its_own(heights_answer):
     def no_second_solve():
         raise AssertionError("a second solve was started")
 
-    got = in_increments(heights_answer, heights_answer.scene.chain(), no_second_solve,
-                        backend="osqp", settings="default", engine="auto", tol=TOL,
-                        max_outer=200, method="globalised", why=None, pressure_limit=None)
-    assert got is heights_answer and "increments" not in got.extra
+    chain = heights_answer.scene.chain()
+    plan = make_plan(chain, "osqp", "globalised", "auto", TOL)
+    assert "in_increments" not in plan.escalations  # nor tightened, nor ramped
+    assert make_plan(chain, DEFAULT, "globalised", "auto", TOL).escalations[0] == \
+        "in_increments"  # (the built-in back-end's plan has it)
+    ctx = Context(chain, no_second_solve, "osqp", "default", "auto", TOL, 200, "globalised")
+    got = escalate(heights_answer, ctx, plan.escalations)
+    assert got is heights_answer and got.retried("in_increments") is None

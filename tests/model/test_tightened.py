@@ -1,4 +1,4 @@
-"""A refusal on the force error bound alone is solved further (api.tightened).
+"""A refusal on the force error bound alone is solved further (lcpbench.escalations.tightened).
 
 Expected values come from the same scene solved independently at a tight tolerance
 (the reference of the sweep: the built-in active set at settings "high", tol 1e-11,
@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import pytest
 
-from lcpbench import ActuatorScene, api, solve, solve_many
-from lcpbench.api import TIGHTER
+from lcpbench import ActuatorScene, escalations, solve, solve_many
+from lcpbench.escalations import TIGHTER
 
 # From the issue-14 audit (benchmarks/judge_audit.py, seed 14): at the paper's tol 1e-3
 # the driver stops after 3 outer steps, 5.4e-4 F0 from the reference, and the judge's
@@ -36,7 +36,7 @@ def _error(res, ref, scene=SCENE) -> float:
 def test_a_bound_only_refusal_is_continued_and_then_right(reference):
     res = solve(SCENE)  # tol 1e-3
     assert res.converged, res.reason
-    assert "force error bound alone" in res.extra["tightened"]
+    assert "force error bound alone" in res.retried("tightened")
     assert res.tol == 1e-3  # judged at the asked tolerance
     assert _error(res, reference) <= min(1e-3, 100 * res.tol)
     assert res.force_error_bound <= res.judgement.force_tol
@@ -46,11 +46,10 @@ def test_a_bound_only_refusal_is_continued_and_then_right(reference):
     assert res.steps[-1].max_dalpha < TIGHTER * res.tol
 
 
-def test_the_driver_alone_stops_early_there(monkeypatch, reference):
+def test_the_driver_alone_stops_early_there(skip_escalations, reference):
     # the premise: the built-in back-end's answer as the driver returns it (no retry) is
     # refused on the force error bound alone, though its force is within tau
-    monkeypatch.setattr(api, "tightened", lambda res, *args, **kw: res)
-    monkeypatch.setattr(api, "ramped", lambda res, *args, **kw: res)  # (nor the load path)
+    skip_escalations("tightened", "ramped")  # (nor the load path)
     res = solve(SCENE)
     assert not res.converged
     assert res.judgement.failed == ["force error bound"]
@@ -66,7 +65,7 @@ def test_a_loose_driver_tolerance_is_continued_to_a_certified_answer(theta, heig
     ref = solve(scene, tol=1e-11, settings="high")
     res = solve(scene, tol=0.1)
     assert res.converged, res.reason
-    assert "force error bound alone" in res.extra["tightened"]
+    assert "force error bound alone" in res.retried("tightened")
     assert res.judgement.force_tol == 1e-3
     assert _error(res, ref, scene) <= 1e-3
 
@@ -77,7 +76,7 @@ def test_other_back_ends_and_the_undamped_scheme_keep_their_refusal():
         res = solve(scene, tol=0.1, **kw)
         assert not res.converged, kw
         assert "force error bound" in res.judgement.failed
-        assert "tightened" not in res.extra
+        assert res.retried("tightened") is None
 
 
 def test_solve_many_treats_it_as_solve_does(reference):
@@ -85,26 +84,26 @@ def test_solve_many_treats_it_as_solve_does(reference):
                           weight=0.00397)
     got = solve_many([SCENE, other], continuation=True)
     assert all(r.converged for r in got), [r.reason for r in got]
-    assert "tightened" in got[0].extra
+    assert got[0].retried("tightened") is not None
     assert _error(got[0], reference) <= 1e-3
     assert _error(got[1], solve(other, tol=1e-11, settings="high"), other) <= 1e-3
 
 
-def test_a_continuation_that_is_refused_too_keeps_the_first_answer(monkeypatch):
+def test_a_continuation_that_is_refused_too_keeps_the_first_answer(monkeypatch,
+                                                                   skip_escalations):
     # the refused branch and the cap: one outer step at a driver tolerance it cannot
     # reach (tol 0.1 rad, continued at 1e-7) ends out of iterations, so the first answer
     # stands, refused, with its own steps, and the time of both solves
     scene = ActuatorScene(theta=150.0, height=3.0, links=60)
-    monkeypatch.setattr(api, "tightened", lambda res, *args, **kw: res)
-    monkeypatch.setattr(api, "ramped", lambda res, *args, **kw: res)  # (nor the load path)
+    skip_escalations("tightened", "ramped")  # (nor the load path)
     first = solve(scene, tol=0.1)
     monkeypatch.undo()
-    monkeypatch.setattr(api, "ramped", lambda res, *args, **kw: res)  # tightened's refusal
-    monkeypatch.setattr(api, "TIGHTER", 1e-6)
-    monkeypatch.setattr(api, "TIGHTEN_STEPS", 1)
+    skip_escalations("ramped")  # tightened's refusal
+    monkeypatch.setattr(escalations, "TIGHTER", 1e-6)
+    monkeypatch.setattr(escalations, "TIGHTEN_STEPS", 1)
     res = solve(scene, tol=0.1)
     assert not res.converged
     assert res.outer_iterations == first.outer_iterations == len(res.steps)
     assert res.total_force == first.total_force
-    assert "no convergence in 1 outer iterations" in res.extra["tightened"]
+    assert "no convergence in 1 outer iterations" in res.retried("tightened")
     assert res.judgement.failed == ["force error bound"]

@@ -46,7 +46,7 @@ def test_one_section_solves_exactly_as_the_actuator_scene(kw, engine):
     assert a.total_force == b.total_force
     for name in ("alpha", "x", "y", "forces", "gaps"):
         assert np.array_equal(getattr(a, name), getattr(b, name)), name
-    assert a.extra["engine"] == b.extra["engine"]
+    assert a.engine == b.engine
 
 
 def test_rest_shape_is_the_joined_arcs_with_level_chord():

@@ -70,8 +70,8 @@ def test_the_compiled_batch_is_the_numpy_continuation(tol):
     ref = lcpbench.solve_many(scenes, tol=tol, engine="numpy")
     assert [r.scene for r in fast] == scenes == [r.scene for r in ref]
     for f, r in zip(fast, ref):
-        assert f.extra["judge"] == "compiled" and f.extra["engine"] == "compiled"
-        assert r.extra["judge"] == "numpy"
+        assert f.judge == "compiled" and f.engine == "compiled"
+        assert r.judge == "numpy"
         assert f.extra["continuation"] == r.extra["continuation"]
         assert f.converged == r.converged and f.converged, (f.reason, r.reason)
         assert f.outer_iterations == r.outer_iterations
@@ -115,8 +115,8 @@ def test_large_n_scenes_take_solves_large_n_path_in_a_batch():
     cold = lcpbench.solve_many(scenes, tol=1e-3, continuation=False)
     warm = lcpbench.solve_many(scenes, tol=1e-3)
     for one, c, w in zip(ones, cold, warm):
-        assert "large N" in one.extra["engine"]
-        assert c.extra["engine"] == w.extra["engine"] == one.extra["engine"]
+        assert "large N" in one.engine
+        assert c.engine == w.engine == one.engine
         assert c.total_force == one.total_force and c.converged == one.converged
         # a warm start ends elsewhere within the tolerance: both answers are judged
         F0 = max(one.total_force, one.scene.EI / one.scene.length**2)

@@ -194,7 +194,10 @@ def summary(result, extra=()) -> str:
         ("contact nodes", node_ranges(contacts(result.forces, free))),
     ]
     # what was tried beyond the cold start (a saddle left, the loading path followed)
-    rows += [(key, result.extra[key]) for key in ("escaped", "ramped") if key in result.extra]
+    if getattr(result, "route", "") == "load path":
+        rows.append(("ramped", "start='ramp': followed the load from zero"))
+    rows += [(name, why) for name, why in getattr(result, "retries", ())
+             if name in ("escaped", "ramped", "cold")]
     if result.forces_lower is not None:
         lower = float(np.sum(result.forces_lower))
         rows += [

@@ -64,11 +64,18 @@ def takes(chain: Chain, step_solver, method: str) -> bool:
     of a back-end that takes a QP or an LCP (not a contact step itself, as the banded
     active set does), a chain of consecutive joints and contiguous free nodes with flat,
     rigid walls."""
+    backend = getattr(step_solver, "backend", None)
+    return backend is not None and takes_backend(chain, backend,
+                                                 getattr(step_solver, "scaled", False), method)
+
+
+def takes_backend(chain: Chain, backend, scaled: bool, method: str) -> bool:
+    """:func:`takes` from the registry's data on the back-end (a
+    :class:`~lcpbench.solvers.registry.Backend`) and whether its step is ``scaled``
+    (what :func:`lcpbench.plan.make_plan` knows before the step solver is made)."""
     from .compiled import applies
 
-    backend = getattr(step_solver, "backend", None)
-    if (method != "globalised" or backend is None or backend.form not in ("qp", "lcp")
-            or not getattr(step_solver, "scaled", False)
+    if (method != "globalised" or backend.form not in ("qp", "lcp") or not scaled
             or hasattr(backend.load(), "solve_step")):
         return False
     return not chain.elastic_walls and applies("auto", method, chain)

@@ -8,7 +8,7 @@ fields (the scene, α, the reactions R, F, the outer iterations, the verdict
 the callable kept in its ``_build``: the complete result, made by the same functions
 as before (the DriverOutput by :func:`lcpbench.model.compiled.kernel_output`, the
 Judgement by :func:`lcpbench.model.judge_compiled.verdict_from_stats` from the judge
-kernel's numbers, the result by :func:`lcpbench.api.finish`). Its fields fill those
+kernel's numbers, the result by :func:`lcpbench.model.finish.finish`). Its fields fill those
 not set (a field set by hand keeps its value); the verdict set at once must be the
 one built (else RuntimeError: the compiled verdict and the judge's reasons disagree).
 

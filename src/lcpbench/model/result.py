@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import MISSING, asdict, dataclass, field, fields, is_dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -94,6 +94,15 @@ def certify(chain: Chain, alpha: np.ndarray, upper: np.ndarray, lower: np.ndarra
     )
 
 
+class Retry(NamedTuple):
+    """One escalation that ran on a refused answer (:mod:`lcpbench.escalations`): its
+    name in :data:`lcpbench.escalations.ESCALATIONS` and one line on why it ran and
+    what came of it."""
+
+    name: str
+    why: str
+
+
 @dataclass
 class ContactResult:
     """The equilibrium of a scene: shape, gaps, forces and how it was found.
@@ -132,6 +141,16 @@ class ContactResult:
     pressure_limit, pressure_exceeded : the safety threshold asked for (N/mm, None:
         none) and whether ``max_pressure`` passes it.
     solver, method, tol, time_s : how it was computed; wall time of the solve (s).
+    route : the plan's route, the first solve (:data:`lcpbench.plan.ROUTES`; a batch's
+        "line kernel" or "batch scene"); "" where no plan was made (a bare
+        :func:`lcpbench.model.finish.finish`).
+    engine : what produced the answer returned: "compiled" (the solve kernel),
+        "compiled driver" (another back-end, the driver around it compiled) or
+        "numpy", the last with why in parentheses where the plan's engine was
+        another ("numpy (large N: ...)", "numpy (the compiled kernel stopped: ...)").
+    judge : the result judge that ran: "compiled" (the judge kernel) or "numpy".
+    retries : the escalations that ran after the route, in order
+        (:class:`Retry`: name and why); () where the first answer was kept.
     """
 
     scene: object
@@ -162,6 +181,10 @@ class ContactResult:
     indentation: np.ndarray | None = None
     pressure: np.ndarray | None = None
     pressure_limit: float | None = None
+    route: str = ""
+    engine: str = ""
+    judge: str = ""
+    retries: tuple[Retry, ...] = ()
 
     def __getstate__(self) -> dict:
         """Pickled (and copied) with every derived field computed (``DERIVED``)."""
@@ -190,6 +213,10 @@ class ContactResult:
         """lcpbench's a-posteriori bound on the error of ``total_force``, relative to
         max(|F|, EI/ℓ²) (:mod:`lcpbench.model.judge`); NaN if not judged that far."""
         return self.judgement.force_error_bound if self.judgement else float("nan")
+
+    def retried(self, name: str) -> str | None:
+        """The why of escalation ``name`` where it ran (the last time), else None."""
+        return next((r.why for r in reversed(self.retries) if r.name == name), None)
 
     def __repr__(self) -> str:
         return (f"ContactResult(N={self.links}, F={1e3 * self.total_force:.6g} mN on "

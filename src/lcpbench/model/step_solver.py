@@ -210,8 +210,8 @@ def solve_step(step, solver: str | Backend = "auto", settings: str | Settings = 
         sol.status = Status.FAILED
         sol.message = f"lcpbench's residuals could not be computed ({exc})"
     if sol.status is not Status.SOLVED and backend.fallback:
-        if why := dense_fallback_refused(backend.fallback, step.size):
-            sol.message = f"{sol.message}; {why}" if sol.message else why
+        if refused := dense_fallback_refused(backend.fallback, step.size):
+            sol.message = f"{sol.message}; {refused}" if sol.message else refused
         else:
             first = sol
             sol = solve_step(step, backend.fallback, s, scaled=scaled)

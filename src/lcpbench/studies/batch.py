@@ -24,10 +24,12 @@ from __future__ import annotations
 from collections.abc import Iterable
 from operator import attrgetter
 
-from ..api import PAPER_TOL, check_tol, retried, solve
+from ..api import PAPER_TOL, check_tol, solve
 from ..errors import ProblemError
+from ..escalations import Context, escalate
 from ..model.result import ContactResult
 from ..model.step_solver import make_step_solver
+from ..plan import make_plan
 from ..problems.checks import check_scene
 from ..problems.scenes import ActuatorScene
 from ..solvers.registry import DEFAULT
@@ -110,13 +112,13 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
 def _retried(res: ContactResult, scene: ActuatorScene, *, tol: float, max_outer: int,
              settings: str) -> ContactResult:
     """A kernel line's answer that the judge did not certify, as :func:`lcpbench.solve`
-    treats it (:func:`lcpbench.api.retried`: in increments where the round-off of node
-    heights may be what kept it from the tolerance, continued at a tighter driver
-    tolerance where the force error bound alone refused it; ``scene``: ``res``'s)."""
-    return retried(res, scene.chain(), lambda: make_step_solver(DEFAULT, settings, True),
-                   backend=DEFAULT, settings=settings, engine="auto", tol=tol,
-                   max_outer=max_outer, method="globalised", why=AUTO_WHY,
-                   pressure_limit=None)
+    treats it: the escalations its plan lists (:func:`lcpbench.plan.make_plan`, run by
+    :func:`lcpbench.escalations.escalate`; ``scene``: ``res``'s)."""
+    chain = scene.chain()
+    plan = make_plan(chain, DEFAULT, "globalised", "auto", tol)
+    ctx = Context(chain, lambda: make_step_solver(DEFAULT, settings, True), DEFAULT, settings,
+                  "auto", tol, max_outer, "globalised", AUTO_WHY, None)
+    return escalate(res, ctx, plan.escalations)
 
 
 def _planes(scenes: list) -> list[list[int]]:

@@ -20,10 +20,10 @@ from __future__ import annotations
 
 import time
 
-from ..api import finish
 from ..model import large_n
 from ..model.compiled import applies, drive, heavy, kernel_args, reference, run_compiled
 from ..model.driver import DriverStart
+from ..model.finish import finish
 from ..model.judge_compiled import chain_args
 from ..model.result import ContactResult
 from ..model.step_solver import make_step_solver
@@ -33,6 +33,8 @@ from ..solvers.registry import DEFAULT
 from .continuation import Solved, new_solved, warm_or_cold
 
 AUTO_WHY = "auto: the built-in active set (exact)"
+#: the ``route`` of its results (a batch's, not a plan's: lcpbench.plan.ROUTES)
+BATCH_SCENE = "batch scene"
 
 
 def takes(solver, solve_kw: dict) -> bool:
@@ -85,7 +87,7 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
     return finish(scene, chain, out, solver=DEFAULT, method="globalised", tol=tol,
                   elapsed=time.perf_counter() - t0, settings=settings, engine=used,
                   compiled_judge=kernel, why=AUTO_WHY,
-                  judge_args=chain_args(chain, args) if kernel else None)
+                  judge_args=chain_args(chain, args) if kernel else None, route=BATCH_SCENE)
 
 
 def solve_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = "default",

@@ -9,7 +9,7 @@ the node positions) are built at the first access of any of them: from the same
 arrays, by the same functions as a single solve (the DriverOutput by
 :func:`lcpbench.model.compiled.kernel_output`, the Judgement by
 :func:`lcpbench.model.judge_compiled.verdict_from_stats` from the judge kernel's
-numbers, the result by :func:`lcpbench.api.finish`). So a batch that is only
+numbers, the result by :func:`lcpbench.model.finish.finish`). So a batch that is only
 read for its forces builds no Python object per scene but the result itself.
 """
 
@@ -20,14 +20,16 @@ from functools import partial
 
 import numpy as np
 
-from ..api import finish
 from ..model.compiled import kernel_output
 from ..model.driver import DriverOutput
+from ..model.finish import finish
 from ..model.lazy_result import LAZY, LazyResult, lazy_result, materialize, stats_judge
 from ..model.result import ContactResult
 from ..solvers.registry import DEFAULT, get_settings
 
 AUTO_WHY = "auto: the built-in active set (exact)"
+#: the ``route`` of a line's results (a batch's, not a plan's: lcpbench.plan.ROUTES)
+LINE_KERNEL = "line kernel"
 
 
 @dataclass
@@ -69,7 +71,8 @@ def results(line: LineOutput) -> list[ContactResult]:
         "scene": scene, "links": links, "alpha": alphas[s], "forces": forces[s],
         "forces_lower": None, "total_force": totals[s], "outer_iterations": counts[s],
         "converged": conv[s], "solver": DEFAULT, "method": "globalised", "tol": tol,
-        "time_s": t, "pressure_limit": None}, partial(_built, line, s))
+        "time_s": t, "pressure_limit": None, "route": LINE_KERNEL, "engine": "compiled",
+        "judge": "compiled", "retries": ()}, partial(_built, line, s))
         for s, scene in enumerate(line.scenes)]
 
 
@@ -111,7 +114,7 @@ def _attempt(line: LineOutput, s: int, row: int) -> ContactResult:
     return finish(scene, chain, out, solver=DEFAULT, method="globalised", tol=line.tol,
                   elapsed=line.time_s, settings=line.settings, engine="compiled",
                   compiled_judge=True, why=AUTO_WHY,
-                  judged_by=_judged(line, row))
+                  judged_by=_judged(line, row), route=LINE_KERNEL)
 
 
 def _built(line: LineOutput, s: int) -> ContactResult:
@@ -127,7 +130,6 @@ def _built(line: LineOutput, s: int) -> ContactResult:
             "inner_iterations": failed.inner_iterations,
             "time_s": failed.time_s, "reason": failed.reason}
     full.extra["continuation"] = label
-    full.extra["batch"] = "line kernel"
     return full
 
 

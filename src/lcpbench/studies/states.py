@@ -5,8 +5,8 @@ cold start (the free arc pressed into the walls) finds folded states of high for
 while the loading path (the bend angles grown from zero, as the pressurised
 actuator is loaded; ``start="ramp"``) finds the state lying flat on the walls;
 rows of sections and stepped wall profiles have their own. :func:`lcpbench.solve`
-returns one of them and says which path it took (``extra["ramped"]``,
-``extra["escaped"]``); :func:`stable_states` solves both ways and returns every
+returns one of them and says which path it took (its ``route`` and ``retries``:
+"load path", "ramped", "escaped"); :func:`stable_states` solves both ways and returns every
 distinct certified state with its exact energy, lowest first, so that a user sees
 when the answer depends on the path.
 """

@@ -1,0 +1,155 @@
+"""The one routing table of :func:`lcpbench.solve`: (scene features, back-end, method,
+N, tol, start) → a typed :class:`Plan` (route, start, escalations, engine).
+
+:func:`make_plan` decides up front what :func:`lcpbench.solve` runs; ``solve`` calls it
+once and executes the plan. The routes, in the order the rules are tried:
+
+============== ==========================================================================
+route          when (and what runs)
+============== ==========================================================================
+load path      ``start="ramp"``: :func:`lcpbench.model.ramp.follow_load`, the bend angles
+               from zero; where the path stops or its answer is refused, the plan's
+               ``fallback`` (the cold plan; its result's ``retries`` begin with "cold").
+one-wall       the default back-end, the globalised or Newton scheme, a cold start, a
+kernel         chain the solve kernel takes (:func:`lcpbench.model.compiled.applies`:
+               consecutive joints, flat walls), one wall, neither large
+               (N < ``LARGE_N``) nor heavy, its arc far past the wall
+               (:func:`lcpbench.model.compiled.direct`): the solve kernel and the judge
+               kernel, the rest of the result built when read.
+channel kernel the same in a channel (two walls): the solve kernel, judged in full.
+heavy SQP      the default back-end, not undamped, a chain in reach of the SQP in the link
+               angles (rigid flat walls) with wℓ³/EI ≥ ``angle_step.HEAVY``: SQP steps
+               first, height steps where they fail.
+heights, then  the same with ``heavy_driver.MODERATE`` ≤ wℓ³/EI < ``HEAVY``: height
+SQP            steps (the kernel where it takes the chain), finished by SQP steps where
+               they do not converge within ``heavy_driver.FIRST_TRY``.
+large N        the globalised scheme and N ≥ ``large_n.LARGE_N`` (or a chain in
+               increments) on a layout it takes: increments on the tridiagonal factor.
+kernel         the default back-end, globalised or Newton, engine not "numpy", a chain
+               the kernel takes (a warm start, or an arc near the wall): the solve kernel.
+compiled       another back-end that takes a QP or an LCP, the globalised scheme, a
+driver         scaled step, flat rigid walls the kernel's layout takes, engine not
+               "numpy": its calls in Python, the driver around them compiled.
+numpy          everything else (engine="numpy", the undamped scheme, wall profiles,
+               back-ends and chains no compiled route takes): the numpy reference.
+============== ==========================================================================
+
+Every route but the first two and the load path begins with the wall-free search
+(:func:`lcpbench.model.wall_free.solve_without_contact`), which answers a scene that
+touches no wall without any LCP, and then runs :func:`lcpbench.model.compiled.drive`,
+which makes the same choices at run time (the rules here follow it). Decided at run
+time only, and seen in the result's ``engine``: a kernel that stops (a bail: the numpy
+reference, or increments where round-off of node heights is the likely cause), and a
+heavy chain's SQP answer that another back-end cannot use (it touches a wall).
+
+The escalations that may follow a refusal are the rows of
+:data:`lcpbench.escalations.ESCALATIONS` whose ``planned`` predicate holds, in the
+table's order.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .escalations import ESCALATIONS
+from .model import angle_step, heavy_driver, large_n
+from .model.compiled import applies, direct
+from .problems.scenes import Chain
+from .solvers.registry import DEFAULT, get_backend
+
+#: The routes of a plan, by name (see the module).
+ROUTES = ("load path", "one-wall kernel", "channel kernel", "heavy SQP", "heights, then SQP",
+          "large N", "kernel", "compiled driver", "numpy")
+#: The starts: from the free arc (cold), from a neighbour's answer (warm), along the
+#: loading path (ramp).
+STARTS = ("cold", "warm", "ramp")
+#: The engine each route plans for ("compiled", "compiled driver" or "numpy"; the
+#: result's ``engine`` says what ran).
+ENGINE = {"load path": "", "one-wall kernel": "compiled", "channel kernel": "compiled",
+          "heavy SQP": "numpy", "heights, then SQP": "", "large N": "numpy",
+          "kernel": "compiled", "compiled driver": "compiled driver", "numpy": "numpy"}
+
+
+@dataclass(frozen=True)
+class Plan:
+    """What :func:`lcpbench.solve` runs for one scene.
+
+    Attributes
+    ----------
+    route : one of :data:`ROUTES`.
+    start : one of :data:`STARTS`.
+    escalations : names in :data:`lcpbench.escalations.ESCALATIONS`, in its order: what
+        may run on a refused answer.
+    engine : the engine the route plans for ("compiled", "compiled driver", "numpy";
+        the load path's and "heights, then SQP"'s are their steps' engine).
+    kernel_takes : whether the compiled kernels take the chain (engine not "numpy", a
+        layout the solve kernel takes, whichever back-end): the wall-free search and
+        the result judge then run compiled.
+    judge : the result judge planned: "compiled" (the judge kernel: ``kernel_takes``
+        and N < ``LARGE_N``) or "numpy" (the reference; in increments from ``LARGE_N``).
+    fallback : the load path's cold plan (None for every other route).
+    """
+
+    route: str
+    start: str
+    escalations: tuple[str, ...]
+    engine: str
+    kernel_takes: bool = False
+    judge: str = "numpy"
+    fallback: Plan | None = None
+
+
+def make_plan(chain: Chain, backend: str, method: str, engine: str, tol: float,
+              start: str = "cold", *, scaled: bool = True) -> Plan:
+    """The plan of a solve of ``chain`` (its scene's features: walls, N, load) with the
+    back-end ``backend`` (a registry name), ``method`` ("globalised", "newton" or
+    "undamped"), ``engine`` ("auto", "compiled" or "numpy"), the driver tolerance
+    ``tol`` (rad), ``start`` (one of :data:`STARTS`) and the step ``scaled`` or not.
+    The arguments are :func:`lcpbench.solve`'s, checked."""
+    takes = _kernel(chain, DEFAULT, "globalised", engine)
+    judge = "compiled" if takes and not large_n.applies(chain) else "numpy"
+    if start == "ramp":
+        cold = make_plan(chain, backend, method, engine, tol, "cold", scaled=scaled)
+        return Plan("load path", "ramp", (), cold.engine, takes, judge, fallback=cold)
+    route = _route(chain, backend, method, engine, start, scaled)
+    escalations = tuple(name for name, e in ESCALATIONS.items()
+                        if e.planned(chain, backend, method, tol))
+    used = ENGINE[route] or ("compiled" if _kernel(chain, backend, method, engine)
+                             else "numpy")
+    return Plan(route, start, escalations, used, takes, judge)
+
+
+def _kernel(chain: Chain, backend: str, method: str, engine: str) -> bool:
+    return engine != "numpy" and applies(backend, method, chain)
+
+
+def _route(chain: Chain, backend: str, method: str, engine: str, start: str,
+           scaled: bool) -> str:
+    own = backend == DEFAULT
+    if (own and start == "cold" and method != "undamped" and engine != "numpy"
+            and direct(chain)):
+        return "channel kernel" if chain.channel else "one-wall kernel"
+    if own and method != "undamped" and angle_step.in_reach(chain):
+        q = angle_step.load_parameter(chain)
+        if q >= angle_step.HEAVY:
+            return "heavy SQP"
+        if q >= heavy_driver.MODERATE:
+            return "heights, then SQP"
+    if method == "globalised" and large_n.applies(chain):
+        return "large N"
+    if _kernel(chain, backend, method, engine):
+        return "kernel"
+    if engine != "numpy" and _compiled_driver(chain, backend, method, scaled):
+        return "compiled driver"
+    return "numpy"
+
+
+def _compiled_driver(chain: Chain, backend: str, method: str, scaled: bool) -> bool:
+    """:func:`lcpbench.model.compiled_driver.takes`, from the registry's data on the
+    back-end (the step solver is not made yet)."""
+    from .model.compiled_driver import takes_backend
+
+    return takes_backend(chain, get_backend(backend), scaled, method)
+
+
+__all__ = ["ENGINE", "ROUTES", "STARTS", "Plan", "make_plan"]
