@@ -87,12 +87,15 @@ def cold_step(scene, repeat: int) -> dict:
             np.ascontiguousarray(chain.joint_links[:, 0]),
             np.ascontiguousarray(chain.joint_links[:, 1]), chain.joint_stiffness,
             chain.rest_joint, int(chain.free_nodes[0]) + 1, n, chain.nodal_load, chain.lower,
-            chain.upper, float(chain.length), float(chain.force_scale), np.zeros(n),
+            chain.upper, float(chain.length), float(chain.force_scale), np.zeros(0),
+            np.zeros(0), np.zeros(n),
             np.zeros(n, bool), np.zeros(n, bool), 0, 20 * n + 50, 1e-6)
     form, M, q, _, _ = step_lcp(step, scaled=True)
 
-    def numpy_step():
-        sol = solve_step(step, "active-set")
+    def numpy_step():  # the numpy active set itself (solve_step's default is compiled)
+        from lcpbench.solvers.banded import solve_banded_qp
+
+        sol = solve_banded_qp(step)
         return sol.solve_time, sol
 
     contenders = {"compiled step (assembly + walk + certificate + judge)":

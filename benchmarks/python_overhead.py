@@ -67,8 +67,8 @@ def _kernels():
     return _kernel(), judge_kernel(), line_kernel()
 
 
-#: the line kernel's first output argument (batch_kernel.solve_line: 22 inputs)
-LINE_OUTPUTS = 22
+#: the line kernel's first output argument (batch_kernel.solve_line: 24 inputs)
+LINE_OUTPUTS = 24
 
 
 def replayed(fn, repeat: int, fresh) -> tuple[float, int]:
