@@ -213,3 +213,15 @@ def test_the_planned_engine_is_the_one_drive_runs(kw, how, engine):
                      how.get("method", "globalised"), "auto", 1e-3)
     assert res.route == plan.route and res.engine.startswith(engine)
     assert res.engine.startswith(plan.engine) and res.judge == plan.judge
+
+
+def test_the_json_says_what_ran():
+    """`solve --json` (ContactResult.to_dict) carries the typed fields of what ran."""
+    import lcpbench
+    from lcpbench.plan import ROUTES
+
+    res = lcpbench.solve(lcpbench.ActuatorScene(theta=150, height=3.0, links=40))
+    d = res.to_dict()
+    assert d["route"] in ROUTES and d["route"] == res.route
+    assert (d["engine"], d["judge"]) == (res.engine, res.judge)
+    assert d["retries"] == [{"name": r.name, "why": r.why} for r in res.retries]

@@ -299,6 +299,11 @@ class ContactResult:
             "max_pressure": self.max_pressure,
             "pressure_limit": self.pressure_limit,
             "pressure_exceeded": self.pressure_exceeded,
+            # what ran (lcpbench.plan): the route, the engine, the judge, the escalations
+            "route": self.route,
+            "engine": self.engine,
+            "judge": self.judge,
+            "retries": [{"name": r.name, "why": r.why} for r in self.retries],
         }
         if self.indentation is not None and self.pressure is not None:
             out["indentation"] = self.indentation.tolist()
