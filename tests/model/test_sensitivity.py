@@ -126,3 +126,27 @@ def test_the_cli_adds_them_to_the_json_and_refuses_sections():
                           "150:15,-150:15", "--height", "3", "--sensitivities"],
                          capture_output=True, text=True)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "sensitivities" in bad.stderr
+
+
+def test_at_first_touch_the_derivative_is_one_sided_and_listed():
+    """With the wall at the height of first touch (the free shape's apex, without
+    weight), the apex node touches it without force: a change of contact set. Its
+    derivative is taken with the node free, the side where the wall moves away: the
+    one-sided difference upward (no force either side) is 0, and the node is listed;
+    downward the wall presses the node, a different derivative."""
+    import math
+
+    theta, links = 150.0, 40
+    a, t = 30.0 / links, math.radians(theta)
+    apex = a / (2 * math.sin(t / (2 * links))) * (1 - math.cos(t / 2))  # the rest polygon
+    scene = ActuatorScene(theta=theta, height=apex, links=links, weight=0.0)
+    res = lcpbench.solve(scene, tol=1e-12)
+    assert res.converged and res.total_force <= 1e-9
+    s = sensitivities(res, wrt=("height_mm",))
+    assert s.one_sided.size >= 1
+    h = 1e-6 * apex
+    up = lcpbench.solve(dataclasses.replace(scene, height=apex + h), tol=1e-12)
+    down = lcpbench.solve(dataclasses.replace(scene, height=apex - h), tol=1e-12)
+    assert s.total_force["height_mm"] == pytest.approx((up.total_force - res.total_force) / h,
+                                                       abs=1e-6)
+    assert (res.total_force - down.total_force) / h < -1e-3  # the other side presses
