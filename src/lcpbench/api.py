@@ -38,7 +38,8 @@ from .model.result import ContactResult, Retry
 from .model.step_solver import make_step_solver
 from .model.wall_free import solve_without_contact
 from .plan import Plan, make_plan
-from .problems.checks import check_flag, check_number, check_scene
+from .problems.checks import check_flag, check_number
+from .problems.sections import check_scene
 from .solvers.registry import DEFAULT, get_settings
 from .solvers.selection import Selection
 

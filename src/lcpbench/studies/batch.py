@@ -30,8 +30,8 @@ from ..escalations import Context, escalate
 from ..model.result import ContactResult
 from ..model.step_solver import make_step_solver
 from ..plan import make_plan
-from ..problems.checks import check_scene
 from ..problems.scenes import ActuatorScene
+from ..problems.sections import check_scene
 from ..solvers.registry import DEFAULT
 from .batch_compiled import AUTO_WHY, solve_line, takes
 from .batch_line import run_line
