@@ -10,7 +10,7 @@ the rounded H; the face solve of :mod:`.twisted_kernel`), with the face solve's
 refinement optional: the walk carries g by exact products, so an unrefined face
 solve leaves a residual on the free nodes that the next move's r takes up,
 and every optimum the walk finds is refined to round-off before it is accepted
-(:func:`lcpbench.solvers.banded._refine`).
+(:func:`lcpbench.solvers.compiled_walk.refine_on_face`).
 """
 
 from __future__ import annotations
