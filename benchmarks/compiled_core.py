@@ -96,7 +96,7 @@ def cold_step(scene, repeat: int) -> dict:
         return sol.solve_time, sol
 
     contenders = {"compiled step (assembly + walk + certificate + judge)":
-                  wall(lambda: k._contact_step(*args)),
+                  wall(lambda: k.contact_step(*args)),
                   "numpy active set (solver-reported, no assembly)": numpy_step}
     if "siconos-lemke" in available_backends():
         def siconos():
