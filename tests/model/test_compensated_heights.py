@@ -24,9 +24,9 @@ import pytest
 from lcpbench import ActuatorScene, CantileverScene, solve
 from lcpbench.model import compiled, large_n
 from lcpbench.model.chain import compensated_heights
-from lcpbench.model.compiled import kernel_args
 from lcpbench.model.finish import finish
 from lcpbench.model.judge import EPS, ROUNDOFF_ULPS, force_tol
+from lcpbench.model.kernel_call import kernel_args
 from lcpbench.model.large_driver import run_large
 from lcpbench.model.result import certify
 from lcpbench.model.step import assemble_step

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lcpbench.model.compiled import kernel_args
+from lcpbench.model.kernel_call import kernel_args
 from lcpbench.model.step import assemble_step
 from lcpbench.numba_cache import kernel_module
 from lcpbench.problems.scenes import ActuatorScene

@@ -79,7 +79,7 @@ from .compiled_dual import (
     step_residuals,
 )
 
-NEWTON_SWITCH = 0.05  # model.driver.NEWTON_SWITCH (rad)
+NEWTON_SWITCH = 0.05  # model.outer.NEWTON_SWITCH (rad)
 # outcome codes of solve_chain (the Python side turns them into reasons)
 CONVERGED, MAX_OUTER, LINE_SEARCH, NO_FIT = 0, 1, 2, 3
 __all__ = ["BAIL_CERT", "BAIL_JUDGE", "BAIL_LIMIT", "BAIL_NOT_PD", "BAIL_PRIMAL", "BAIL_REPEAT",
