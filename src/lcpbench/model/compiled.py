@@ -43,6 +43,7 @@ from .profile import has_profile
 #: "numpy" (the reference).
 ENGINES = ("auto", "compiled", "numpy")
 
+
 def check_engine(engine) -> str:
     if not isinstance(engine, str) or engine not in ENGINES:
         raise ProblemError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
@@ -57,7 +58,7 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
     The one place where the compiled kernel is chosen: ``engine="numpy"``, a
     back-end other than the default or another ``method`` run
     :func:`~lcpbench.model.driver.run_driver` with ``step_solver``. ``args``: the
-    chain's :func:`kernel_args`, given by a caller that has checked that the kernel
+    chain's :func:`~.kernel_call.kernel_args`, given by a caller that has checked that the kernel
     takes the chain's layout.
 
     Heavy chains (:mod:`lcpbench.model.heavy_driver`): from wℓ³/EI ≥
@@ -154,7 +155,7 @@ def _coarse_solve(coarse: Chain, *, tol: float, engine: str) -> DriverOutput | N
 def run_kernel(chain: Chain, make_step: Callable[[], Callable], *, settings, tol: float,
                max_outer: int, method: str, start: DriverStart | None = None,
                args: tuple | None = None) -> tuple[DriverOutput, str]:
-    """The default back-end's solve in the kernel (:func:`run_compiled`), or, where the
+    """The default back-end's solve in the kernel (:func:`~.kernel_call.run_compiled`), or, where the
     kernel stops, in the numpy reference with the step solver ``make_step()`` (called
     then only): the answer and the engine that produced it."""
     out, why = run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
@@ -206,7 +207,7 @@ def direct(chain: Chain) -> bool:
     """Whether :func:`drive` takes this chain straight to :func:`run_kernel` with the
     default back-end (the globalised or Newton scheme, a cold start), and
     :func:`lcpbench.model.wall_free.solve_without_contact` answers None at once: the
-    kernel takes the chain (:func:`applies`), it is not large
+    kernel takes the chain (:func:`~.kernel_call.applies`), it is not large
     (:func:`lcpbench.model.large_n.applies`) nor loaded enough for SQP steps in the
     angles (:data:`~lcpbench.model.heavy_driver.MODERATE`, below
     :data:`~lcpbench.model.angle_step.HEAVY`), and its arc crosses the wall too far for

@@ -45,6 +45,7 @@ BAIL_REASONS = {
     15: "lcpbench's judge rejected the step",
 }
 
+
 def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
     """Whether the kernel runs this solve: the default back-end, the globalised
     driver or its Newton scheme, and (given ``chain``) a chain of consecutive joints and free nodes,
@@ -81,6 +82,7 @@ def _load_kernel():
 
     held(_KERNEL).append(kernel_module("lcpbench.model.compiled_kernel", "solve_chain"))
     return _KERNEL[0]
+
 
 @functools.lru_cache(maxsize=16)
 def _cold(n: int) -> tuple:

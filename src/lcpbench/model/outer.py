@@ -31,6 +31,7 @@ from .step_solver import step_residuals
 #: on the default scene at 1e-3 with Newton from the start)
 NEWTON_SWITCH = 0.05
 
+
 @dataclass
 class StepRecord:
     """What one outer iteration did."""
@@ -74,9 +75,11 @@ class DriverStart:
     alpha: np.ndarray
     warm: StepSolution | None = None
 
+
 def failed_output(alpha, n, steps, reason) -> DriverOutput:
     zero = np.zeros(n)
     return DriverOutput(alpha, zero, zero.copy(), False, reason, steps)
+
 
 #: Outer iterations without a new low of max|Δα| (halving the best before them) after
 #: which a run out of iterations is reported as stalled. A linear contraction as slow
@@ -123,6 +126,7 @@ def out_of_iterations(alpha, n: int, steps: list[StepRecord], max_outer: int,
                 reason += f"; tol = {tol:.3g} rad is below it, out of the driver's reach"
     return failed_output(alpha, n, steps, reason)
 
+
 def step_failed(alpha, n, steps, sol: StepSolution, t_asm: float, E: float) -> DriverOutput:
     steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm, 0.0,
                             np.nan, E, step_setup_time(sol)))
@@ -150,6 +154,7 @@ def step_setup_time(sol) -> float:
     return float(getattr(sol, "setup_time", 0.0) or 0.0) + float(
         getattr(sol, "build_time", 0.0) or 0.0)
 
+
 def feasible_start(chain: Chain, alpha0: np.ndarray):
     """Node heights clipped to the walls, and the chain through them (None if none fits)."""
     u = np.clip(heights(chain, alpha0), chain.lower, chain.upper)
@@ -166,6 +171,7 @@ def starting_point(chain: Chain, start: DriverStart | None, fit: Callable):
             return u, alpha, start.warm
     u, alpha = fit(chain, chain.rest_alpha)
     return u, alpha, None
+
 
 def line_search_failed(alpha, n: int, steps: list[StepRecord], sol: StepSolution,
                        t_asm: float, dalpha: float, E: float) -> DriverOutput:
