@@ -159,15 +159,16 @@ def _replayed_solve(scene):
 def kernel_parts(scene, small, repeat: int) -> dict:
     """The solve kernel and the judge kernel alone, and whole solves at N = 12 and 140:
     after a 100 ms busy loop, then right after themselves."""
-    from lcpbench.model.compiled import DEFAULT_TOL, _cold, _kernel, kernel_args
+    from lcpbench.model.compiled import DEFAULT_TOL
     from lcpbench.model.judge_compiled import _kernel as judge_kernel
     from lcpbench.model.judge_compiled import chain_args
+    from lcpbench.model.kernel_call import _cold, kernel_args, solve_kernel
 
     chain = scene.chain()
     args = kernel_args(chain)
     jargs = chain_args(chain, args)
     n = chain.free_nodes.size
-    k, jk = _kernel(), judge_kernel()
+    k, jk = solve_kernel(), judge_kernel()
 
     def solve_kernel():  # the call of lcpbench.solve (compiled.call_kernel, cold start)
         return k.solve_chain(*args, TOL, 200, *_cold(n), 20 * n + 50, DEFAULT_TOL, False)

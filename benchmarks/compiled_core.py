@@ -39,8 +39,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from perf import interleaved, machine, med, wall  # noqa: E402
 
 import lcpbench  # noqa: E402
-from lcpbench.model.compiled import _kernel, run_compiled  # noqa: E402
 from lcpbench.model.dense import solve_paper_dense  # noqa: E402
+from lcpbench.model.kernel_call import run_compiled, solve_kernel  # noqa: E402
 from lcpbench.model.step import assemble_step  # noqa: E402
 from lcpbench.model.step_solver import solve_step, step_lcp  # noqa: E402
 from lcpbench.solvers import available_backends, solve_lcp  # noqa: E402
@@ -81,7 +81,7 @@ def cold_step(scene, repeat: int) -> dict:
     res = lcpbench.solve(scene, tol=1e-10)
     chain = scene.chain()
     step = assemble_step(chain, res.alpha)
-    k = _kernel()
+    k = solve_kernel()
     n = chain.free_nodes.size
     args = (np.ascontiguousarray(res.alpha), chain.link_length,
             np.ascontiguousarray(chain.joint_links[:, 0]),
@@ -99,7 +99,7 @@ def cold_step(scene, repeat: int) -> dict:
         return sol.solve_time, sol
 
     contenders = {"compiled step (assembly + walk + certificate + judge)":
-                  wall(lambda: k._contact_step(*args)),
+                  wall(lambda: k.contact_step(*args)),
                   "numpy active set (solver-reported, no assembly)": numpy_step}
     if "siconos-lemke" in available_backends():
         def siconos():

@@ -43,7 +43,8 @@ import lcpbench
 from lcpbench import ActuatorScene, numba_cache
 from lcpbench.bench.grid import PAPER_GRID
 from lcpbench.model import compiled
-from lcpbench.model.compiled import kernel_args
+from lcpbench.model import kernel_call as calls
+from lcpbench.model.kernel_call import kernel_args
 
 BASE = "lcpbench_base"
 SCENE = dict(theta=150.0, height=3.0, links=140)
@@ -76,7 +77,7 @@ def this_tree() -> dict:
 
 def use(kernels: dict) -> None:
     """Route ``lcpbench.solve`` and ``solve_many`` through ``kernels``."""
-    compiled._KERNEL[:] = [kernels["solve"]]
+    calls._KERNEL[:] = [kernels["solve"]]
     numba_cache._LOADED["lcpbench.model.batch_kernel"] = kernels["line"]
 
 

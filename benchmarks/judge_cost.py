@@ -139,7 +139,7 @@ def main(argv=None) -> int:
     import lcpbench
     from lcpbench import ActuatorScene, numba_cache
     from lcpbench.model import judge_compiled
-    from lcpbench.model.compiled import kernel_args, run_compiled
+    from lcpbench.model.kernel_call import kernel_args, run_compiled
 
     numba_cache.use_aot(False)
     new_judge = numba_cache.kernel_module("lcpbench.model.judge_kernel", "judge_answer")

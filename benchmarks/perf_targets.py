@@ -103,10 +103,11 @@ def full_solve_warm(interleaved, wall, med, repeat: int, block: int = 5) -> dict
 
 def parts(med, repeat: int) -> dict:
     """Each part of one default solve timed alone (medians, µs): where the time goes."""
-    from lcpbench.model.compiled import _kernel, kernel_args, run_compiled, step_request
+    from lcpbench.model.compiled import step_request
     from lcpbench.model.finish import finish
     from lcpbench.model.judge_compiled import _kernel as judge_kernel
     from lcpbench.model.judge_compiled import chain_args
+    from lcpbench.model.kernel_call import kernel_args, run_compiled, solve_kernel
     from lcpbench.model.wall_free import solve_without_contact
 
     scene = ActuatorScene(**SCENE)
@@ -114,7 +115,7 @@ def parts(med, repeat: int) -> dict:
     args = kernel_args(chain)
     jargs = chain_args(chain, args)
     n = chain.free_nodes.size
-    k, jk = _kernel(), judge_kernel()
+    k, jk = solve_kernel(), judge_kernel()
     raw = (*args, TOL, 200, np.zeros(0), np.zeros(n), np.zeros(n, bool), np.zeros(n, bool), 0,
            20 * n + 50, step_request("default"))  # the default solve's request (1e-6)
     out, _ = run_compiled(chain, tol=TOL, args=args)

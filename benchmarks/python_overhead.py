@@ -60,11 +60,11 @@ class _Replay:
 
 
 def _kernels():
-    from lcpbench.model.compiled import _kernel
     from lcpbench.model.judge_compiled import _kernel as judge_kernel
+    from lcpbench.model.kernel_call import solve_kernel
     from lcpbench.studies.batch_line import _kernel as line_kernel
 
-    return _kernel(), judge_kernel(), line_kernel()
+    return solve_kernel(), judge_kernel(), line_kernel()
 
 
 #: the line kernel's first output argument (batch_kernel.solve_line: 24 inputs)

@@ -92,7 +92,7 @@ def steady_state(repeat: int, block: int = 20) -> dict:
 
     import lcpbench
     from lcpbench import numba_cache
-    from lcpbench.model.compiled import kernel_args
+    from lcpbench.model.kernel_call import kernel_args
 
     scene = lcpbench.ActuatorScene(theta=150, height=3.0)
     chain = scene.chain()

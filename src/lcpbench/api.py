@@ -19,26 +19,20 @@ import numpy as np
 
 from .errors import ProblemError
 from .escalations import Context, escalate
-from .model.compiled import (
-    _BAIL,
-    call_kernel,
-    check_engine,
-    drive,
-    kernel_args,
-    kernel_output,
-    reference,
-    run_kernel,
-)
-from .model.driver import METHODS, DriverOutput, DriverStart
+from .model.compiled import check_engine, drive, reference, run_kernel
+from .model.driver import METHODS
 from .model.finish import fast_judge, finish
 from .model.judge_compiled import chain_args
+from .model.kernel_call import BAIL_REASONS, call_kernel, kernel_args, kernel_output
 from .model.lazy_result import LazyResult, lazy_result, stats_judge
+from .model.outer import DriverOutput, DriverStart
 from .model.ramp import follow_load
 from .model.result import ContactResult, Retry
 from .model.step_solver import make_step_solver
 from .model.wall_free import solve_without_contact
 from .plan import Plan, make_plan
-from .problems.checks import check_flag, check_number, check_scene
+from .problems.checks import check_flag, check_number
+from .problems.sections import check_scene
 from .solvers.registry import DEFAULT, get_settings
 from .solvers.selection import Selection
 
@@ -257,8 +251,8 @@ def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_ou
     got, kernel_s, name = call_kernel(chain, tol=tol, max_outer=max_outer, start=None,
                                       settings=settings, args=args, newton=method == "newton")
     code = got[0]
-    if code in _BAIL:
-        out, used = reference(chain, make_step, _BAIL[code], tol=tol, max_outer=max_outer,
+    if code in BAIL_REASONS:
+        out, used = reference(chain, make_step, BAIL_REASONS[code], tol=tol, max_outer=max_outer,
                               method=method, settings=settings)
         return finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol,
                       elapsed=time.perf_counter() - t0, settings=settings, engine=used,
@@ -308,10 +302,10 @@ _contiguous = np.ascontiguousarray
 
 
 def _judge_kernels() -> tuple:
-    from .model import compiled, judge_compiled
+    from .model import judge_compiled, kernel_call
     from .numba_cache import held, kernel_module
 
-    found = (compiled._kernel(), judge_compiled._kernel(),
+    found = (kernel_call.solve_kernel(), judge_compiled._kernel(),
              kernel_module("lcpbench.model.batch_verdict", "accepted"))
     held(_JUDGE).append(found)
     return found

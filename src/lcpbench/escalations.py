@@ -33,11 +33,11 @@ from typing import Any
 import numpy as np
 
 from .model import large_n
-from .model.compiled import applies as kernel_applies
 from .model.compiled import drive, heavy
-from .model.driver import DriverOutput, DriverStart
 from .model.finish import finish
 from .model.judge import Judgement, force_tol
+from .model.kernel_call import applies as kernel_applies
+from .model.outer import DriverOutput, DriverStart
 from .model.ramp import follow_load
 from .model.result import ContactResult, Retry
 from .problems.scenes import Chain

@@ -11,7 +11,7 @@ load path      ``start="ramp"``: :func:`lcpbench.model.ramp.follow_load`, the be
                from zero; where the path stops or its answer is refused, the plan's
                ``fallback`` (the cold plan; its result's ``retries`` begin with "cold").
 one-wall       the default back-end, the globalised or Newton scheme, a cold start, a
-kernel         chain the solve kernel takes (:func:`lcpbench.model.compiled.applies`:
+kernel         chain the solve kernel takes (:func:`lcpbench.model.kernel_call.applies`:
                consecutive joints, flat walls), one wall, neither large
                (N < ``LARGE_N``) nor heavy, its arc far past the wall
                (:func:`lcpbench.model.compiled.direct`): the solve kernel and the judge
@@ -53,7 +53,8 @@ from dataclasses import dataclass
 
 from .escalations import ESCALATIONS
 from .model import angle_step, heavy_driver, large_n
-from .model.compiled import applies, direct
+from .model.compiled import direct
+from .model.kernel_call import applies
 from .problems.scenes import Chain
 from .solvers.registry import DEFAULT, get_backend
 

@@ -14,7 +14,8 @@ from lcpbench.bench.grid import TISSUE_STIFFNESS, scene_from_key, scene_key, tis
 from lcpbench.bench.store import Store
 from lcpbench.bench.tissue_plot import tissue_lines, tissue_table
 from lcpbench.cli import build_parser, main
-from lcpbench.cli.sweep import _apply_preset, _sweep_scenes
+from lcpbench.cli._sweep_scenes import sweep_scenes
+from lcpbench.cli.sweep import _apply_preset
 
 
 def test_tissue_grid_is_the_papers_pressures_heights_and_four_stiffnesses():
@@ -53,10 +54,10 @@ def _args(*argv):
 
 
 def test_sweep_tissue_options():
-    scenes = _sweep_scenes(_args("--grid", "tissue", "--height", "5.5",
+    scenes = sweep_scenes(_args("--grid", "tissue", "--height", "5.5",
                                  "--wall-stiffness", "0.5,inf", "--links", "20"))
     assert len(scenes) == 20 and {s.wall_stiffness for s in scenes} == {0.5, math.inf}
-    plain = _sweep_scenes(_args("--theta", "150", "--height", "3", "--wall-stiffness", "2"))
+    plain = sweep_scenes(_args("--theta", "150", "--height", "3", "--wall-stiffness", "2"))
     assert [s.wall_stiffness for s in plain] == [2.0]
 
 

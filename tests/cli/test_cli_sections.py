@@ -123,11 +123,11 @@ def test_anchoring_grid_default_is_sections_by_height_by_pressure():
     theta from actuator 1's calibration (eq. 40), the middle section toward the upper wall."""
     from lcpbench.bench.grid import TISSUE_PRESSURES
     from lcpbench.cli import build_parser
-    from lcpbench.cli.sweep import _sweep_scenes
+    from lcpbench.cli._sweep_scenes import sweep_scenes
     from lcpbench.problems.calibrations import get_calibration
 
     args = build_parser().parse_args(["sweep", "--grid", "anchoring"])
-    scenes = _sweep_scenes(args)
+    scenes = sweep_scenes(args)
     assert len(scenes) == 2 * 3 * len(TISSUE_PRESSURES)
     assert {len(s.sections) for s in scenes} == {1, 3}
     assert len({scene_key(s) for s in scenes}) == len(scenes)

@@ -12,7 +12,7 @@ from __future__ import annotations
 from lcpbench.bench.expected import EXPECTED, never_converges
 from lcpbench.bench.store import Store
 from lcpbench.cli import build_parser, main
-from lcpbench.cli.sweep import _apply_preset, _sweep_backends
+from lcpbench.cli.sweep import _apply_preset, sweep_backends
 from lcpbench.solvers.registry import available_backends
 
 
@@ -35,7 +35,7 @@ def test_never_converging_are_the_documented_pgs_and_newton_min():
 def test_main_job_defaults():
     args = _args()
     assert (args.settings, args.baseline, args.repeat) == ("default", "analytic", 1)
-    solvers, settings = _sweep_backends(args)
+    solvers, settings = sweep_backends(args)
     assert settings == ["default"]
     assert solvers == [b for b in available_backends() if not never_converges(b)]
     assert "active-set" in solvers and "pgs" not in solvers
@@ -44,12 +44,12 @@ def test_main_job_defaults():
 def test_standard_run_defaults_and_explicit_options_win():
     args = _args("--standard")
     assert (args.settings, args.baseline, args.repeat) == ("default,high", "both", 3)
-    solvers, settings = _sweep_backends(args)
+    solvers, settings = sweep_backends(args)
     assert solvers == available_backends() and settings == ["default", "high"]
     args = _args("--standard", "--settings", "high", "--baseline", "none", "--repeat", "2")
     assert (args.settings, args.baseline, args.repeat) == ("high", "none", 2)
     args = _args("--solvers", "all")  # every installed back-end in the main job's settings
-    assert _sweep_backends(args)[0] == available_backends()
+    assert sweep_backends(args)[0] == available_backends()
     assert args.settings == "default"
 
 
@@ -72,7 +72,7 @@ def test_default_sweep_says_which_documented_failures_it_leaves_out(capsys):
     from lcpbench.cli.sweep import _print_backends
 
     args = _args()
-    solvers, _ = _sweep_backends(args)
+    solvers, _ = sweep_backends(args)
     _print_backends(solvers, explicit=False, main_job=True)
     err = capsys.readouterr().err
     line = next(ln for ln in err.splitlines() if "never to converge" in ln)

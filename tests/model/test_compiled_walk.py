@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from lcpbench.model.compiled import kernel_args
+from lcpbench.model.kernel_call import kernel_args
 from lcpbench.model.step import assemble_step
 from lcpbench.numba_cache import kernel_module
 from lcpbench.problems.scenes import ActuatorScene
@@ -38,7 +38,7 @@ def _kernel_step(chain, alpha, warm_up=None):
     n = lo.size
     flags = 0 if warm_up is None else 2
     up = np.zeros(n, bool) if warm_up is None else np.ascontiguousarray(warm_up)
-    return kernel._contact_step(np.ascontiguousarray(alpha), a, jl, jr, k, rest, fs, n, nodal_load,
+    return kernel.contact_step(np.ascontiguousarray(alpha), a, jl, jr, k, rest, fs, n, nodal_load,
                                 lo, hi, L, F, cu, cl, np.zeros(n), up, np.zeros(n, bool), flags,
                                 20 * n + 50, 1e-3)
 
@@ -77,7 +77,7 @@ def test_fused_gradient_and_term_size():
         T = np.zeros((2, n)) if not newton else rng.standard_normal((2, n))
         u = got[1] + 1e-3 * rng.standard_normal(n)
         g1, m = np.empty(n), np.empty(nj)
-        dual._grad_into(g1, m, u, gp, T)
+        dual.grad_into(g1, m, u, gp, T)
         f1, f2 = np.empty(n), np.empty(n)
         dual._grad_and_scale(f1, f2, np.empty(nj), np.empty(nj), u, gp, T)
         assert np.array_equal(f1, g1)

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from lcpbench.linalg.saddle import TridiagonalFactor
-from lcpbench.model.driver import _feasible_start
 from lcpbench.model.large_n import increment_step
+from lcpbench.model.outer import feasible_start
 from lcpbench.model.step import assemble_step
 from lcpbench.numba_cache import kernel_module
 from lcpbench.problems.scenes import ActuatorScene
@@ -77,7 +77,7 @@ def test_restarted_face_solves_match_dense_solves_along_a_walk():
 @pytest.mark.parametrize("links,shrink", [(4200, 1.0), (6000, 1.0), (4200, 0.95)])
 def test_restarted_and_reference_walks_take_the_same_path(links, shrink):
     chain = ActuatorScene(150, 3.0, links=links).chain()
-    _, alpha = _feasible_start(chain, chain.rest_alpha * shrink)
+    _, alpha = feasible_start(chain, chain.rest_alpha * shrink)
     step = assemble_step(chain, alpha)
     ref = solve_banded_qp(increment_step(step, restart=False))
     new = solve_banded_qp(increment_step(step, restart=True))
@@ -120,7 +120,7 @@ def test_the_judges_primal_step_reaches_the_steps_solution(links, shrink, start)
     from lcpbench.model.judge_large import primal_step
 
     chain = ActuatorScene(150, 3.0, links=links).chain()
-    _, alpha = _feasible_start(chain, chain.rest_alpha * shrink)
+    _, alpha = feasible_start(chain, chain.rest_alpha * shrink)
     step = increment_step(assemble_step(chain, alpha))
     ref = solve_banded_qp(step)
     assert ref.status is Status.SOLVED and np.count_nonzero(ref.active_upper) > 0

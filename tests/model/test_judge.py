@@ -243,7 +243,7 @@ def random_scenes(count: int, seed: int, max_links: int):
             for _ in range(count)]
 
 
-def _sweep_backends(scenes):
+def sweep_backends(scenes):
     wrong = []
     for scene in scenes:
         F_ref = reference_force(scene)
@@ -258,9 +258,9 @@ def _sweep_backends(scenes):
 
 def test_random_scenes_every_backend_accurate_or_not_converged():
     scenes = [s for s in random_scenes(6, seed=1414, max_links=40)]
-    assert _sweep_backends(scenes) == []
+    assert sweep_backends(scenes) == []
 
 
 @pytest.mark.slow
 def test_random_scenes_every_backend_accurate_or_not_converged_larger():
-    assert _sweep_backends(random_scenes(30, seed=14, max_links=200)) == []
+    assert sweep_backends(random_scenes(30, seed=14, max_links=200)) == []

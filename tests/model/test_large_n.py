@@ -13,9 +13,10 @@ import pytest
 from lcpbench.linalg.saddle import TridiagonalFactor
 from lcpbench.model import step_solver
 from lcpbench.model.chain import heights
-from lcpbench.model.driver import _feasible_start, run_driver
+from lcpbench.model.driver import run_driver
 from lcpbench.model.large_driver import run_large
 from lcpbench.model.large_n import alpha_from_increments, increment_step, layout_fits
+from lcpbench.model.outer import feasible_start
 from lcpbench.model.step import assemble_step
 from lcpbench.model.step_solver import make_step_solver, solve_step
 from lcpbench.problems.scenes import ActuatorScene
@@ -55,7 +56,7 @@ def test_the_factored_product_is_H():
 
 def test_increments_give_the_same_step_answer_as_heights():
     chain = ActuatorScene(150, 3.0, links=400).chain()
-    _, alpha = _feasible_start(chain, chain.rest_alpha)
+    _, alpha = feasible_start(chain, chain.rest_alpha)
     step = assemble_step(chain, alpha)
     inc = increment_step(step)
     a = solve_step(step, "active-set")

@@ -21,7 +21,7 @@ import pytest
 import lcpbench
 from lcpbench import ActuatorScene
 from lcpbench.errors import ProblemError
-from lcpbench.model import compiled
+from lcpbench.model import compiled, kernel_call
 from lcpbench.model.result import ContactResult, new_result
 from lcpbench.problems.scenes import Chain, reachable
 
@@ -56,7 +56,7 @@ def test_what_a_chain_keeps_from_its_scene_equals_the_definitions(kw):
     assert chain.__dict__["_total_load"] == float(np.sum(np.abs(plain.link_load)))
     assert chain.__dict__["_loaded"] == (np.count_nonzero(plain.link_load) > 0)
     # and the kernel's arguments made from either chain are the same bits
-    for a, b in zip(compiled.kernel_args(chain), compiled._kernel_args(plain, None),
+    for a, b in zip(kernel_call.kernel_args(chain), kernel_call._kernel_args(plain, None),
                     strict=True):
         assert _same_bits(a, b) and type(a) is type(b)
 
@@ -128,7 +128,7 @@ def test_the_shared_cold_start_arguments_stay_zero():
     lcpbench.solve(ActuatorScene(theta=151, height=3.0, links=30), start=first, tol=1e-8)
     lcpbench.solve(scene, method="newton")
     lcpbench.solve(ActuatorScene(theta=170, height=2.5, links=30, channel=True))
-    alpha, u, up, lo, flags = compiled._cold(29)
+    alpha, u, up, lo, flags = kernel_call._cold(29)
     assert alpha.size == 0 and flags == 0
     assert not u.any() and not up.any() and not lo.any()
     assert u.flags.writeable and up.flags.writeable  # the kernel's one signature

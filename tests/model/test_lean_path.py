@@ -22,7 +22,7 @@ import pytest
 import lcpbench
 from lcpbench import ActuatorScene, CantileverScene
 from lcpbench.model.chain import heights, node_positions
-from lcpbench.model.compiled import _layout
+from lcpbench.model.kernel_call import _layout
 from lcpbench.model.result import DERIVED
 from lcpbench.model.wall_free import (
     SAG_BOUND,

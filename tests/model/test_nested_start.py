@@ -14,8 +14,8 @@ import lcpbench
 from lcpbench import ActuatorScene
 from lcpbench.model import large_n, nested_start
 from lcpbench.model.chain import heights
-from lcpbench.model.driver import DriverOutput
 from lcpbench.model.judge import force_tol
+from lcpbench.model.outer import DriverOutput
 from lcpbench.problems.sections import Section, SectionedScene
 
 CHAIN_FIELDS = ("rest_alpha", "joint_stiffness", "joint_links", "rest_joint", "link_load",
@@ -73,7 +73,7 @@ def test_the_start_is_within_the_discretisation_error_of_the_fine_answer(theta, 
 
 
 def _kernel_solve(coarse):
-    from lcpbench.model.compiled import run_compiled
+    from lcpbench.model.kernel_call import run_compiled
 
     out, _ = run_compiled(coarse, tol=1e-6)
     return out

@@ -19,7 +19,7 @@ import lcpbench
 from lcpbench import ActuatorScene
 from lcpbench import api as api_module
 from lcpbench.escalations import Context, escalate
-from lcpbench.model import compiled
+from lcpbench.model import compiled, kernel_call
 from lcpbench.model.finish import finish
 from lcpbench.model.judge_compiled import chain_args
 from lcpbench.model.lazy_result import LAZY, LazyResult
@@ -39,7 +39,7 @@ def _full(scene, **kw):
     tol, max_outer = kw.get("tol", 1e-3), kw.get("max_outer", 200)
     method = kw.get("method", "globalised")
     chain = scene.chain()
-    args = compiled.kernel_args(chain)
+    args = kernel_call.kernel_args(chain)
     out, used = compiled.run_kernel(
         chain, partial(make_step_solver, DEFAULT, "default", True), settings="default",
         tol=tol, max_outer=max_outer, method=method, args=args)
@@ -132,7 +132,7 @@ def test_a_driver_that_stops_or_a_loose_tol_gives_the_full_builds_verdict(tol, m
 
 def test_a_kernel_that_stops_falls_back_to_the_numpy_reference(monkeypatch):
     scene = ActuatorScene(theta=150.0, height=3.0, links=40)
-    real = compiled.call_kernel
+    real = kernel_call.call_kernel
 
     def stopped(chain, **kw):
         got, elapsed, name = real(chain, **kw)

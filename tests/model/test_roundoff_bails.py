@@ -17,9 +17,10 @@ import pytest
 from lcpbench import ActuatorScene, solve
 from lcpbench.model import compiled, large_n, step_solver
 from lcpbench.model.judge import force_tol
+from lcpbench.model.kernel_call import BAIL_REASONS
 from lcpbench.model.step_solver import make_step_solver
 
-STEP_REJECTED = compiled._BAIL[15]
+STEP_REJECTED = BAIL_REASONS[15]
 
 
 def _make_step():

@@ -18,7 +18,7 @@ import pytest
 
 import lcpbench
 from lcpbench import ActuatorScene
-from lcpbench.model.driver import (
+from lcpbench.model.outer import (
     STALL_STEPS,
     STEP_ACCURACY_DALPHA,
     StepRecord,

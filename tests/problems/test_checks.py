@@ -8,7 +8,8 @@ import pytest
 from lcpbench import ActuatorScene, CantileverScene, ProblemError
 from lcpbench.problems import scenes
 from lcpbench.problems.calibrations import linear_calibration
-from lcpbench.problems.checks import check_choice, check_flag, check_number, check_scene
+from lcpbench.problems.checks import check_choice, check_flag, check_number
+from lcpbench.problems.sections import check_scene
 
 #: Values that are not a real number, whatever the parameter.
 NOT_NUMBERS = [

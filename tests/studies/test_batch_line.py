@@ -98,7 +98,7 @@ def test_the_kernels_predictor_chooses_as_solved(seed, predictor):
     """Random histories on a plane (repeated scenes, answers that failed or touch):
     the kernel's prediction has the same base and the same α as Solved.predict."""
     from lcpbench.numba_cache import kernel_module
-    from lcpbench.studies.continuation import _POINTS
+    from lcpbench.studies.continuation import POINTS
 
     k = kernel_module("lcpbench.model.batch_kernel")
     rng = random.Random(seed)
@@ -113,11 +113,11 @@ def test_the_kernels_predictor_chooses_as_solved(seed, predictor):
                        + 0.01 * rng.random() for s in scenes])
     theta = np.array([s.theta for s in scenes])
     height = np.array([s.height for s in scenes])
-    solved = Solved(_POINTS[predictor], predictor == "adaptive")
+    solved = Solved(POINTS[predictor], predictor == "adaptive")
     fakes = [_fake(bool(o), bool(t), a) for o, t, a in zip(ok, touch, alphas)]
     for s in range(m):
         want = solved.predict(scenes[s])
-        start, base = k._predict(s, theta, height, ok, touch, alphas, _POINTS[predictor],
+        start, base = k._predict(s, theta, height, ok, touch, alphas, POINTS[predictor],
                                  predictor == "adaptive")
         if want is None:
             assert base == -1 and start.size == 0

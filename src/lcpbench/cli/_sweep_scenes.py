@@ -61,7 +61,7 @@ def _stiffness_list(text) -> tuple[float, ...] | None:
     return tuple(wall_stiffness(v) for v in values)
 
 
-def _sweep_scenes(args) -> list:
+def sweep_scenes(args) -> list:
     """The scenes of ``--grid``, validated before anything runs."""
     from ..bench import grid as grids
     from ..bench.grid import Grid, hard_scenes, parse_range

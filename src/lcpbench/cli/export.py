@@ -55,10 +55,11 @@ def register(subparsers) -> None:
 def cmd_export_testset(args) -> int:
     """Write the test set; 0 on success, 2 on bad input."""
     from ..bench.testset_files import export_testset
-    from .sweep import _sweep_backends, _sweep_scenes
+    from ._sweep_scenes import sweep_scenes
+    from .sweep import sweep_backends
 
-    scenes = _sweep_scenes(args)
-    solvers, settings = _sweep_backends(args)
+    scenes = sweep_scenes(args)
+    solvers, settings = sweep_backends(args)
     out = Path(args.out)
     if out.exists() and not out.is_dir():
         raise ProblemError(f"out {out}: is a file, not a folder")

@@ -30,7 +30,7 @@ from ._common import (
     worker_count,
 )
 from ._scene_args import DEFAULT_METHOD, add_scene_options, scene_from
-from ._sweep_scenes import _sweep_scenes  # noqa: F401  (export and tests use it from here)
+from ._sweep_scenes import sweep_scenes
 
 #: solves timed per run of the standard run (issue 16: one timing carried 2x noise)
 DEFAULT_REPEAT = 3
@@ -240,7 +240,7 @@ def _apply_preset(args) -> None:
             setattr(args, name, value)
 
 
-def _sweep_backends(args) -> tuple[list[str], list[str]]:
+def sweep_backends(args) -> tuple[list[str], list[str]]:
     """The back-ends and settings profiles of ``--solvers`` and ``--settings``, checked."""
     from ..bench.expected import never_converges
     from ..solvers.registry import available_backends, get_backend, get_settings
@@ -279,12 +279,12 @@ def cmd_sweep(args) -> int:
                                "with --grid anchoring")
         args.baseline = "none"
     _apply_preset(args)
-    scenes = _sweep_scenes(args)
+    scenes = sweep_scenes(args)
     methods = [m.strip() for m in args.method.split(",") if m.strip()]
     if args.continuation is not None and "undamped" in methods:
         raise ProblemError("--continuation needs the globalised driver; it cannot be used "
                            "with --method undamped")
-    solvers, settings = _sweep_backends(args)
+    solvers, settings = sweep_backends(args)
     if args.tol is not None:
         check_tol(args.tol)
     jobs_n = worker_count(args.jobs, args.oversubscribe)

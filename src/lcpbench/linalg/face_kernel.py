@@ -28,7 +28,7 @@ from numba import njit
 
 
 @njit(cache=True)
-def _rotate_in(R, filled, w0, w1, w2, c):
+def rotate_in(R, filled, w0, w1, w2, c):
     """Rotate the row (w0, w1, w2) from column c on into R (:func:`.givens_kernel._rotate_in`
     on scalars, one division per rotation)."""
     n = R.shape[1]
@@ -65,7 +65,7 @@ def _rotate_in(R, filled, w0, w1, w2, c):
 
 
 @njit(cache=True)
-def _save(R, filled, snap, j):
+def save_snapshot(R, filled, snap, j):
     # before row j only R_{j-1,j-1}, R_{j-1,j} and R_{j,j} can be non-zero among rows >= j-1
     n = R.shape[1]
     snap[j, 0] = R[0, j - 1] if j >= 1 else 0.0
@@ -116,18 +116,18 @@ def factor_from(rows, fixed, R, filled, snap, inv, j0):
     else:
         _restore(R, filled, snap, j0)
     for j in range(j0, n):
-        _save(R, filled, snap, j)
+        save_snapshot(R, filled, snap, j)
         if j >= 1 and fixed[j - 1]:  # the unit row of a fixed node, before row j
-            _rotate_in(R, filled, 1.0, 0.0, 0.0, j - 1)
+            rotate_in(R, filled, 1.0, 0.0, 0.0, j - 1)
         w0 = rows[j, 0] if (j >= 1 and not fixed[j - 1]) else 0.0
         w1 = rows[j, 1] if not fixed[j] else 0.0
         w2 = rows[j, 2] if (j + 1 < n and not fixed[j + 1]) else 0.0
         if j == 0:  # row 0 starts at column 0
-            _rotate_in(R, filled, w1, w2, 0.0, 0)
+            rotate_in(R, filled, w1, w2, 0.0, 0)
         else:
-            _rotate_in(R, filled, w0, w1, w2, j - 1)
+            rotate_in(R, filled, w0, w1, w2, j - 1)
     if fixed[n - 1]:
-        _rotate_in(R, filled, 1.0, 0.0, 0.0, n - 1)
+        rotate_in(R, filled, 1.0, 0.0, 0.0, n - 1)
     for i in range(max(j0 - 1, 0), n):
         if not (filled[i] and R[0, i] != 0.0):
             return False

@@ -29,7 +29,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .face_kernel import _rotate_in, _save, face_residual
+from .face_kernel import face_residual, rotate_in, save_snapshot
 from .face_kernel import restore_before as _restore  # columns beyond: see _pass
 
 
@@ -51,17 +51,17 @@ def _pass(rows, fixed, R, filled, snap, j0, m):
     for c in range(j0 + 1, min(m + 2, n)):  # what this pass may reach: assigned, not added
         filled[c] = False
     for j in range(j0, m):
-        _save(R, filled, snap, j)
+        save_snapshot(R, filled, snap, j)
         if j >= 1 and fixed[j - 1]:
-            _rotate_in(R, filled, 1.0, 0.0, 0.0, j - 1)
+            rotate_in(R, filled, 1.0, 0.0, 0.0, j - 1)
         w0 = rows[j, 0] if (j >= 1 and not fixed[j - 1]) else 0.0
         w1 = rows[j, 1] if not fixed[j] else 0.0
         w2 = rows[j, 2] if (j + 1 < n and not fixed[j + 1]) else 0.0
         if j == 0:
-            _rotate_in(R, filled, w1, w2, 0.0, 0)
+            rotate_in(R, filled, w1, w2, 0.0, 0)
         else:
-            _rotate_in(R, filled, w0, w1, w2, j - 1)
-    _save(R, filled, snap, m)
+            rotate_in(R, filled, w0, w1, w2, j - 1)
+    save_snapshot(R, filled, snap, m)
 
 
 @njit(cache=True)
@@ -124,7 +124,7 @@ def factor(rows, rrows, fixed, rfixed, R, filled, snap, B, bfilled, bsnap, tri,
 
 
 @njit(cache=True)
-def _middle(R, B, tri, m, mb, r1, r2, x):
+def twist_middle(R, B, tri, m, mb, r1, r2, x):
     """The twist's 2×2 block: x[m − 1] and x[m] (the bottom's mb and mb − 1) from their
     right-hand sides r1, r2 and the swept neighbours x[m − 3 .. m − 2], x[m + 1 .. m + 2]
     (Mᵀy there, then M x back)."""
@@ -167,7 +167,7 @@ def resolve(R, B, tri, invR, invB, m, x):
         if i < mb - 1:  # bottom row i: original index n − 1 − i
             j = n - 1 - i
             x[j] = (x[j] - B[1, i - 1] * x[j + 1] - B[2, i - 2] * x[j + 2]) * invB[i]
-    _middle(R, B, tri, m, mb, x[m - 1], x[m], x)
+    twist_middle(R, B, tri, m, mb, x[m - 1], x[m], x)
     # M x = y from the twist outwards: top row m − 2 − s and bottom row mb − 2 − s
     for s in range(max(m - 1, mb - 1)):
         i = m - 2 - s

@@ -27,8 +27,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .twisted_kernel import _middle, factor
-from .walk_kernel import _add_picks, _mix, _picks_in, _set, _twist_window, _viol
+from .twisted_kernel import factor, twist_middle
+from .walk_kernel import add_picks, mix_key, picks_in, set_node, twist_window, violation
 
 
 @njit(cache=True)
@@ -106,7 +106,7 @@ def _solve(R, B, tri, invR, invB, m, S, g, hd, x):
     for i in range(max(both, 2), mb - 1):
         j = n - 1 - i
         x[j] = (_r(S, g, hd, j) - B[1, i - 1] * x[j + 1] - B[2, i - 2] * x[j + 2]) * invB[i]
-    _middle(R, B, tri, m, mb, _r(S, g, hd, m - 1), _r(S, g, hd, m), x)
+    twist_middle(R, B, tri, m, mb, _r(S, g, hd, m - 1), _r(S, g, hd, m), x)
     for s in range(min(m - 1, mb - 1)):  # top row m − 2 − s, bottom row mb − 2 − s
         i = m - 2 - s
         x[i] = (x[i] - R[1, i] * x[i + 1] - R[2, i] * x[i + 2]) * invR[i]
@@ -125,7 +125,7 @@ def _update(A, S, wall, u, g, x, step, hi, lo, has_lo, slack):
     """u += step d and g += step (g_face − g) (step 1: g = g_face), g_face = g + Aᵀ(A d),
     d = d₀ − x, in one pass (d and A d in registers). Returns the first and last node
     (−1 when none) off S whose wall the new u violates beyond ``slack`` (at step 1:
-    the range the next picks scan; :func:`_picks_in`)."""
+    the range the next picks scan; :func:`picks_in`)."""
     n = u.size
     first, last = n, -1
     # window: d at i, i + 1 (d0, d1); A d at i − 1, i (ym, y0)
@@ -179,7 +179,7 @@ def walk(rows, rrows, R, filled, snap, B, bfilled, bsnap, tri, invR, invB, prev,
         S[i] = sigma[i] != 0.0
         rfixed[n - 1 - i] = S[i]
         if S[i]:
-            key += _mix(i, sigma[i])
+            key += mix_key(i, sigma[i])
         hd[i] = 0.0
     ctl[6] = 0
     at_minimiser = True
@@ -190,17 +190,17 @@ def walk(rows, rrows, R, filled, snap, B, bfilled, bsnap, tri, invR, invB, prev,
             if ctl[3]:  # first, the warm contact set, where it is violated
                 ctl[3] = 0
                 for i in range(n):
-                    if warm_up[i] and _viol(u, hi, S, 1, i) > slack[i]:
+                    if warm_up[i] and violation(u, hi, S, 1, i) > slack[i]:
                         picks[npick] = i + 1
                         npick += 1
-                    elif has_lo and warm_lo[i] and _viol(u, lo, S, -1, i) > slack[i]:
+                    elif has_lo and warm_lo[i] and violation(u, lo, S, -1, i) > slack[i]:
                         picks[npick] = -(i + 1)
                         npick += 1
             if npick == 0:
                 if vlast >= 0:  # the violated nodes lie in vfirst .. vlast
-                    npick = _picks_in(u, hi, 1, slack, S, ctl[2], picks, 0, vfirst, vlast)
+                    npick = picks_in(u, hi, 1, slack, S, ctl[2], picks, 0, vfirst, vlast)
                     if has_lo:
-                        npick = _picks_in(u, lo, -1, slack, S, ctl[2], picks, npick,
+                        npick = picks_in(u, lo, -1, slack, S, ctl[2], picks, npick,
                                           vfirst, vlast)
                 if ctl[2] > 0:
                     ctl[2] *= 2
@@ -208,14 +208,14 @@ def walk(rows, rrows, R, filled, snap, B, bfilled, bsnap, tri, invR, invB, prev,
                     for k in range(ctl[6]):
                         prev[chg[k]] = S[chg[k]]
                     return 0
-            repeat, key = _add_picks(picks, npick, seen, key, hi, lo, sigma, wall, S, rfixed,
+            repeat, key = add_picks(picks, npick, seen, key, hi, lo, sigma, wall, S, rfixed,
                                      chg, ctl)
             if repeat:
                 return 1
         if ctl[1] >= max_iter:
             return 2
         ctl[1] += 1
-        j0, k0, m = _twist_window(chg, ctl, S, prev, n)
+        j0, k0, m = twist_window(chg, ctl, S, prev, n)
         if not factor(rows, rrows, S, rfixed, R, filled, snap, B, bfilled, bsnap, tri,
                       invR, invB, j0, k0, m):
             return 3
@@ -251,7 +251,7 @@ def walk(rows, rrows, R, filled, snap, B, bfilled, bsnap, tri, invR, invB, prev,
         if step < 1.0:
             for k in range(nfall):
                 if ratio[k] <= step + tie:
-                    key = _set(held[k], 0.0, 0.0, sigma, wall, S, rfixed, chg, ctl, key)
+                    key = set_node(held[k], 0.0, 0.0, sigma, wall, S, rfixed, chg, ctl, key)
             at_minimiser = False
             continue
         at_minimiser = True

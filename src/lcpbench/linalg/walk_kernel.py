@@ -10,7 +10,7 @@ the rounded H; the face solve of :mod:`.twisted_kernel`), with the face solve's
 refinement optional: the walk carries g by exact products, so an unrefined face
 solve leaves a residual on the free nodes that the next move's r takes up,
 and every optimum the walk finds is refined to round-off before it is accepted
-(:func:`lcpbench.solvers.banded._refine`).
+(:func:`lcpbench.solvers.compiled_walk.refine_on_face`).
 """
 
 from __future__ import annotations
@@ -73,7 +73,7 @@ def face_move(rows, rrows, fixed, rfixed, R, filled, snap, B, bfilled, bsnap, tr
 
 
 @njit(cache=True)
-def _viol(u, wall, S, side, i):
+def violation(u, wall, S, side, i):
     """The violation of node i's wall (``side`` +1: u − upper, −1: lower − u); −inf on
     held nodes (as the numpy walk's v)."""
     if S[i]:
@@ -87,22 +87,22 @@ def _picks(u, wall, side, slack, S, reach, picks, npick):
     this wall: :func:`lcpbench.solvers.gallop.gallop_picks` when ``reach`` > 0, else
     :func:`lcpbench.solvers.banded._run_maxima`, in one pass without the v array.
     Returns the new count."""
-    return _picks_in(u, wall, side, slack, S, reach, picks, npick, 0, u.size - 1)
+    return picks_in(u, wall, side, slack, S, reach, picks, npick, 0, u.size - 1)
 
 
 @njit(cache=True)
-def _picks_in(u, wall, side, slack, S, reach, picks, npick, start, stop):
+def picks_in(u, wall, side, slack, S, reach, picks, npick, start, stop):
     """:func:`_picks` scanning nodes ``start`` .. ``stop`` only (the fused walk of
     :mod:`lcpbench.linalg.twisted_walk_kernel` passes the violated range: every
     violated node lies there, so the same runs and the same picks)."""
     n = u.size
     i = start
     while i <= stop:
-        if not _viol(u, wall, S, side, i) > slack[i]:
+        if not violation(u, wall, S, side, i) > slack[i]:
             i += 1
             continue
         a = i
-        while i + 1 < n and _viol(u, wall, S, side, i + 1) > slack[i + 1]:
+        while i + 1 < n and violation(u, wall, S, side, i + 1) > slack[i + 1]:
             i += 1
         b = i
         if reach > 0:
@@ -119,15 +119,15 @@ def _picks_in(u, wall, side, slack, S, reach, picks, npick, start, stop):
                 continue
             best = a  # the run's deepest node (the first of equal ones)
             for k in range(a + 1, b + 1):
-                if _viol(u, wall, S, side, k) > _viol(u, wall, S, side, best):
+                if violation(u, wall, S, side, k) > violation(u, wall, S, side, best):
                     best = k
             picks[npick] = side * (best + 1)
             npick += 1
         else:  # every local maximum of the run (v_i >= v_{i-1}, v_i > v_{i+1})
             for k in range(a, b + 1):
-                vk = _viol(u, wall, S, side, k)
-                lft = _viol(u, wall, S, side, k - 1) if k >= 1 else -np.inf
-                rgt = _viol(u, wall, S, side, k + 1) if k + 1 < n else -np.inf
+                vk = violation(u, wall, S, side, k)
+                lft = violation(u, wall, S, side, k - 1) if k >= 1 else -np.inf
+                rgt = violation(u, wall, S, side, k + 1) if k + 1 < n else -np.inf
                 if vk >= lft and vk > rgt:
                     picks[npick] = side * (k + 1)
                     npick += 1
@@ -136,7 +136,7 @@ def _picks_in(u, wall, side, slack, S, reach, picks, npick, start, stop):
 
 
 @njit(cache=True)
-def _add_picks(picks, npick, seen, key, hi, lo, sigma, wall, S, rfixed, chg, ctl):
+def add_picks(picks, npick, seen, key, hi, lo, sigma, wall, S, rfixed, chg, ctl):
     """The walk's step to its next working set: ``(True, key)`` where the set ``key``
     was met before (the walk stops), else the set recorded in ``seen`` and the picks
     fixed on their walls: ``(False, the new set's key)``."""
@@ -151,14 +151,14 @@ def _add_picks(picks, npick, seen, key, hi, lo, sigma, wall, S, rfixed, chg, ctl
         if S[i]:  # (a node violates one wall at a time; the upper first)
             continue
         if picks[k] > 0:
-            key = _set(i, 1.0, hi[i], sigma, wall, S, rfixed, chg, ctl, key)
+            key = set_node(i, 1.0, hi[i], sigma, wall, S, rfixed, chg, ctl, key)
         else:
-            key = _set(i, -1.0, lo[i], sigma, wall, S, rfixed, chg, ctl, key)
+            key = set_node(i, -1.0, lo[i], sigma, wall, S, rfixed, chg, ctl, key)
     return False, key
 
 
 @njit(cache=True)
-def _twist_window(chg, ctl, S, prev, n):
+def twist_window(chg, ctl, S, prev, n):
     """(j0, k0, m) of this face's factor against the last one (TwistedFactor._twist),
     from the nodes changed since (``chg``, the first ``ctl[6]``) and the last twist
     ``ctl[0]``."""
@@ -177,7 +177,7 @@ def _twist_window(chg, ctl, S, prev, n):
 
 
 @njit(cache=True)
-def _mix(i, side):
+def mix_key(i, side):
     """A 64-bit mix of (node, side) (splitmix64); the working set's key is their sum."""
     z = np.uint64(2 * i + (1 if side > 0 else 0)) + np.uint64(0x9E3779B97F4A7C15)
     z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
@@ -186,16 +186,16 @@ def _mix(i, side):
 
 
 @njit(cache=True)
-def _set(i, side, value, sigma, wall, S, rfixed, chg, ctl, key):
+def set_node(i, side, value, sigma, wall, S, rfixed, chg, ctl, key):
     """Node i onto its wall (side ±1, wall height ``value``) or off it (side 0);
     returns the working set's key after the change."""
     n = S.size
     if sigma[i] != 0.0:
-        key -= _mix(i, sigma[i])
+        key -= mix_key(i, sigma[i])
     sigma[i] = side
     if side != 0.0:
         wall[i] = value
-        key += _mix(i, side)
+        key += mix_key(i, side)
     S[i] = side != 0.0
     rfixed[n - 1 - i] = S[i]
     chg[ctl[6]] = i
@@ -227,7 +227,7 @@ def walk(rows, rrows, R, filled, snap, B, bfilled, bsnap, tri, invR, invB, prev,
         S[i] = sigma[i] != 0.0
         rfixed[n - 1 - i] = S[i]
         if S[i]:
-            key += _mix(i, sigma[i])
+            key += mix_key(i, sigma[i])
     ctl[6] = 0
     at_minimiser = True
     while True:
@@ -236,10 +236,10 @@ def walk(rows, rrows, R, filled, snap, B, bfilled, bsnap, tri, invR, invB, prev,
             if ctl[3]:  # first, the warm contact set, where it is violated
                 ctl[3] = 0
                 for i in range(n):
-                    if warm_up[i] and _viol(u, hi, S, 1, i) > slack[i]:
+                    if warm_up[i] and violation(u, hi, S, 1, i) > slack[i]:
                         picks[npick] = i + 1
                         npick += 1
-                    elif has_lo and warm_lo[i] and _viol(u, lo, S, -1, i) > slack[i]:
+                    elif has_lo and warm_lo[i] and violation(u, lo, S, -1, i) > slack[i]:
                         picks[npick] = -(i + 1)
                         npick += 1
             if npick == 0:
@@ -252,14 +252,14 @@ def walk(rows, rrows, R, filled, snap, B, bfilled, bsnap, tri, invR, invB, prev,
                     for k in range(ctl[6]):
                         prev[chg[k]] = S[chg[k]]
                     return 0
-            repeat, key = _add_picks(picks, npick, seen, key, hi, lo, sigma, wall, S, rfixed,
+            repeat, key = add_picks(picks, npick, seen, key, hi, lo, sigma, wall, S, rfixed,
                                      chg, ctl)
             if repeat:
                 return 1
         if ctl[1] >= max_iter:
             return 2
         ctl[1] += 1
-        j0, k0, m = _twist_window(chg, ctl, S, prev, n)
+        j0, k0, m = twist_window(chg, ctl, S, prev, n)
         if not face_move(rows, rrows, S, rfixed, R, filled, snap, B, bfilled, bsnap, tri,
                          invR, invB, j0, k0, m, wall, u, g, False, d, g_face, r, x, y):
             return 3
@@ -289,7 +289,7 @@ def walk(rows, rrows, R, filled, snap, B, bfilled, bsnap, tri, invR, invB, prev,
             # round-off included (a symmetric chain has its contacts in mirror pairs)
             for k in range(nfall):
                 if ratio[k] <= step + tie:
-                    key = _set(held[k], 0.0, 0.0, sigma, wall, S, rfixed, chg, ctl, key)
+                    key = set_node(held[k], 0.0, 0.0, sigma, wall, S, rfixed, chg, ctl, key)
             at_minimiser = False
             continue
         for i in range(n):

@@ -10,7 +10,7 @@ and h; flat rigid walls, one wall, no heavy load). For each scene, in order:
    are loops (numpy's are BLAS products: the prediction agrees to round-off);
 2. the wall-free search of :func:`lcpbench.model.wall_free.solve_without_contact`
    (its tests; the first free step is the compiled step with no walls,
-   :func:`~lcpbench.model.compiled_kernel._contact_step`, the numpy one's twin);
+   :func:`~lcpbench.model.compiled_kernel.contact_step`, the numpy one's twin);
 3. the solve kernel's entry :func:`~lcpbench.model.compiled_kernel.solve_chain`;
 4. the judge kernel's entry :func:`~lcpbench.model.judge_kernel.judge_answer` on the
    answer, and its verdict from the judge's numbers alone
@@ -31,7 +31,7 @@ import numpy as np
 from numba import njit
 
 from .batch_verdict import accepted
-from .compiled_kernel import CONVERGED, LINE_SEARCH, MAX_OUTER, NO_FIT, _contact_step, solve_chain
+from .compiled_kernel import CONVERGED, LINE_SEARCH, MAX_OUTER, NO_FIT, contact_step, solve_chain
 from .judge_kernel import SETTLED, STATS, judge_answer
 
 __all__ = ["ARC", "CONTACT", "CONVERGED", "FREE", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "SETTLED",
@@ -95,7 +95,7 @@ def _wall_free_kind(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
             return CONTACT
         z = np.zeros(n)
         b = np.zeros(n, np.bool_)
-        got = _contact_step(ra, a, jl, jr, k, rest, fs, n, nodal_load, free_lo, free_hi, L, F,
+        got = contact_step(ra, a, jl, jr, k, rest, fs, n, nodal_load, free_lo, free_hi, L, F,
                             z[:0], z[:0], z, b, b, 0, max_iter, request)
         if got[0] == BAIL_NOT_PD:
             return CONTACT

@@ -27,18 +27,19 @@ import numpy as np
 
 from ..problems.scenes import Chain
 from ..solvers.base import Status
-from .driver import (
+from .kernel_call import applies
+from .outer import (
     DriverOutput,
     DriverStart,
     StepRecord,
-    _converged,
-    _fail,
-    _feasible_start,
-    _setup,
-    _step_failed,
+    converged_output,
+    failed_output,
+    feasible_start,
     line_search_failed,
     out_of_iterations,
     starting_point,
+    step_failed,
+    step_setup_time,
 )
 from .step import ContactStep, LCPForm
 
@@ -73,8 +74,6 @@ def takes_backend(chain: Chain, backend, scaled: bool, method: str) -> bool:
     """:func:`takes` from the registry's data on the back-end (a
     :class:`~lcpbench.solvers.registry.Backend`) and whether its step is ``scaled``
     (what :func:`lcpbench.plan.make_plan` knows before the step solver is made)."""
-    from .compiled import applies
-
     if (method != "globalised" or backend.form not in ("qp", "lcp") or not scaled
             or hasattr(backend.load(), "solve_step")):
         return False
@@ -149,9 +148,9 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
     a, jl, jr, k, rest, fs, load, link_load, _, _ = c
     n = chain.free_nodes.size
     steps: list[StepRecord] = []
-    u, alpha, warm = starting_point(chain, start, _feasible_start)
+    u, alpha, warm = starting_point(chain, start, feasible_start)
     if alpha is None:
-        return _fail(chain.rest_alpha, n, steps, "cannot fit the chain between the walls")
+        return failed_output(chain.rest_alpha, n, steps, "cannot fit the chain between the walls")
     u, alpha = np.ascontiguousarray(u, dtype=float), np.ascontiguousarray(alpha, dtype=float)
     E = kd.energy(alpha, a, jl, jr, k, rest, link_load)
     noise_k = float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6
@@ -161,7 +160,7 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
         t_asm = time.perf_counter() - t0
         sol = solver(step, warm)
         if sol.status not in (Status.SOLVED, Status.INACCURATE):
-            return _step_failed(alpha, n, steps, sol, t_asm, E)
+            return step_failed(alpha, n, steps, sol, t_asm, E)
         dalpha, t, trial, E_t = kd.advance(
             np.ascontiguousarray(sol.u, dtype=float), u, alpha, E,
             1e-12 * (abs(E) + noise_k), step.inv_a_cos, step.alpha0, step.origin,
@@ -170,10 +169,10 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
             return line_search_failed(alpha, n, steps, sol, t_asm, dalpha, E)
         u, alpha, E = u + t * (sol.u - u), trial, E_t
         steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
-                                t, dalpha, E, _setup(sol)))
+                                t, dalpha, E, step_setup_time(sol)))
         warm = sol
         if dalpha < tol:
-            return _converged(chain, alpha, sol, steps, step)
+            return converged_output(chain, alpha, sol, steps, step)
     return out_of_iterations(alpha, n, steps, max_outer, tol)
 
 

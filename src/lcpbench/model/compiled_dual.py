@@ -52,7 +52,7 @@ def add_compensated(y, lost, term):
 
 
 @njit(cache=True)
-def _grad_into(out, m, u, gp, T):
+def grad_into(out, m, u, gp, T):
     """ContactStep.gradient, Jᵀ k (φ̂(u) − φ*) − f + T (u − u₀) about the
     linearisation point u₀, into ``out``; ``gp`` = (coef, b0, fs, links, origin,
     phi_origin, k, rest, nodal_load); T: the Newton step's geometric bands (zero for
@@ -95,7 +95,7 @@ def _grad_into(out, m, u, gp, T):
 
 @njit(cache=True)
 def _grad_and_scale(out, size, m, ms, u, gp, T):
-    """:func:`_grad_into` at u without and with ``scale`` (into ``out`` and ``size``),
+    """:func:`grad_into` at u without and with ``scale`` (into ``out`` and ``size``),
     in one pass over the joints and one over the nodes: the same operations on the
     same numbers, so the same bits as the two calls (the certificate's pair)."""
     coef, b0, fs, links, origin, phi_origin, k, rest, load = gp
@@ -135,7 +135,7 @@ def _grad_and_scale(out, size, m, ms, u, gp, T):
 
 
 @njit(cache=True)
-def _mv(bands, x, i, n, absolute):
+def matvec_row(bands, x, i, n, absolute):
     """Row i of H x (of |H| |x| when ``absolute``), summed in the order of
     solvers.banded._Banded.matvec."""
     if absolute:
@@ -199,7 +199,7 @@ def _run_picks(u, bound, S, slack, sign, picks, npick):
 @njit(cache=True)
 def _move(bands, d, u, g, s, n):
     """u + s d and the gradient carried, g + s (g_face − g) with g_face = g + H d
-    (s = 1: u + d and g_face), in one pass, H d row by row as :func:`_mv` sums it
+    (s = 1: u + d and g_face), in one pass, H d row by row as :func:`matvec_row` sums it
     (the interior rows without its end tests); d is zeroed behind (the next face's
     d₀ is zero off its held nodes)."""
     full = s >= 1.0
@@ -208,7 +208,7 @@ def _move(bands, d, u, g, s, n):
             hd = (((bands[2, i - 2] * d[i - 2] + bands[1, i - 1] * d[i - 1]) + bands[0, i] * d[i])
                   + bands[1, i] * d[i + 1]) + bands[2, i] * d[i + 2]
         else:
-            hd = _mv(bands, d, i, n, False)
+            hd = matvec_row(bands, d, i, n, False)
         gf = g[i] + hd
         if full:
             u[i] = u[i] + d[i]
@@ -223,7 +223,7 @@ def _move(bands, d, u, g, s, n):
 
 
 @njit(cache=True)
-def _dual(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, gp, ws):
+def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, gp, ws):
     """(code, face solves): code 0 at the optimum (after refinement); u, g and sigma
     in the rows U, G, SIG of the work array ``ws[0]``.
 
@@ -285,14 +285,14 @@ def _dual(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, gp, ws):
                     for i in range(n):
                         if E[i]:
                             u[i] = wall[i]
-                    _grad_into(g, m, u, gp, ws[10])
+                    grad_into(g, m, u, gp, ws[10])
                     for i in range(n):
                         r[i] = 0.0 if E[i] else g[i]
                         if S[i] and not E[i]:  # the spring's pull on a node it holds
                             r[i] += (u[i] - wall[i]) / shift[i]
                     _resolve(fac, r)
                     for i in range(n):
-                        gf[i] = g[i] - _mv(bands, r, i, n, False)
+                        gf[i] = g[i] - matvec_row(bands, r, i, n, False)
                     for i in range(n):
                         u[i] = u[i] - r[i]
                         g[i] = gf[i]
@@ -337,7 +337,7 @@ def _dual(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, gp, ws):
             if d[j] != 0.0:
                 for i in range(max(j - 2, 0), min(j + 3, n)):
                     if not E[i]:
-                        r[i] = g[i] + _mv(bands, d, i, n, False)
+                        r[i] = g[i] + matvec_row(bands, d, i, n, False)
         first, last = n, -1  # the nodes whose wall changed since the last factorisation
         for q in range(nchg):
             i = chg[q]
@@ -359,7 +359,7 @@ def _dual(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, gp, ws):
         s = np.inf  # the ratio test, on the held nodes (g_face = g + H d there)
         for q in range(nheld):
             j = held[q]
-            sg = sigma[j] * (g[j] + _mv(bands, d, j, n, False))
+            sg = sigma[j] * (g[j] + matvec_row(bands, d, j, n, False))
             ratio[j] = np.inf
             if sg > 0.0:
                 lam = max(-sigma[j] * g[j], 0.0)
@@ -388,7 +388,7 @@ def _dual(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, gp, ws):
 
 
 @njit(cache=True)
-def _certify(u, ru, rl, lo, hi, cu, cl, gp, grad, size, m, ms, T):
+def certify(u, ru, rl, lo, hi, cu, cl, gp, grad, size, m, ms, T):
     """The certificate's residual; ``grad``: the gradient at u (when finite); ``cu``,
     ``cl``: the walls' compliances (empty: rigid), whose gap is g + c R."""
     n = u.size
@@ -418,11 +418,11 @@ def _certify(u, ru, rl, lo, hi, cu, cl, gp, grad, size, m, ms, T):
 
 
 @njit(cache=True)
-def _certificate(u, ru, rl, lo, hi, gp):
+def step_certificate(u, ru, rl, lo, hi, gp):
     """solvers.banded.step_certificate: the scaled KKT residual of a step answer."""
     n = u.size
     nj = gp[0].shape[0]
-    return _certify(u, ru, rl, lo, hi, np.empty(0), np.empty(0), gp, np.empty(n), np.empty(n),
+    return certify(u, ru, rl, lo, hi, np.empty(0), np.empty(0), gp, np.empty(n), np.empty(n),
                     np.empty(nj), np.empty(nj),
                     np.zeros((2, n)))
 
@@ -473,8 +473,8 @@ def wall_residuals(u2, R, bands, linear, lo, hi, L, F):
 
 
 @njit(cache=True)
-def _judge(u, bands, linear, lo, hi, cu, cl, gp, L, F, out, R, u2, rows, fac, m, T, g0):
-    """_residuals into ``out`` and ``R`` (u2, rows, fac, m: work arrays); ``g0``: the
+def judge_step(u, bands, linear, lo, hi, cu, cl, gp, L, F, out, R, u2, rows, fac, m, T, g0):
+    """step_residuals into ``out`` and ``R`` (u2, rows, fac, m: work arrays); ``g0``: the
     gradient at u where the caller has it (the certificate's), else empty; ``cu``,
     ``cl``: the walls' compliances (empty: rigid)."""
     n = u.size
@@ -487,7 +487,7 @@ def _judge(u, bands, linear, lo, hi, cu, cl, gp, L, F, out, R, u2, rows, fac, m,
         if g0.size == n:
             R[:] = g0
         else:
-            _grad_into(R, m, u2, gp, T)
+            grad_into(R, m, u2, gp, T)
         if not _refactor(fac, bands, rows, cu[:0], 0, n):
             out[:] = 0.0
             return False
@@ -498,7 +498,7 @@ def _judge(u, bands, linear, lo, hi, cu, cl, gp, L, F, out, R, u2, rows, fac, m,
         for i in range(n):
             if not rows[i]:
                 u2[i] -= R[i]
-    _grad_into(R, m, u2, gp, T)
+    grad_into(R, m, u2, gp, T)
     nat, min_gap, min_r, comp_up, comp_lo, term = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0
     soft = cu.size == n
     for i in range(n):
@@ -508,19 +508,19 @@ def _judge(u, bands, linear, lo, hi, cu, cl, gp, L, F, out, R, u2, rows, fac, m,
             hi[i], lo[i], u2[i], R[i], cu[i] if soft else 0.0, cl[i] if soft else 0.0, L, F,
             nat, min_gap, min_r, comp_up, comp_lo)
         if up or low:
-            term = max(term, _mv(bands, u2, i, n, True) + abs(linear[i]))
+            term = max(term, matvec_row(bands, u2, i, n, True) + abs(linear[i]))
     out[0], out[1], out[2], out[3], out[4] = nat, min_gap, min_r, abs(comp_up) + abs(comp_lo), \
         term / F
     return True
 
 
 @njit(cache=True)
-def _residuals(u, bands, linear, lo, hi, gp, L, F):
+def step_residuals(u, bands, linear, lo, hi, gp, L, F):
     """model.step_solver.step_residuals: (ok, [natural, min_gap, min_reaction,
     complementarity, term_size], R) with R = −gradient on the completed heights."""
     n = u.size
     out, R = np.zeros(5), np.empty(n)
-    ok = _judge(u, bands, linear, lo, hi, np.empty(0), np.empty(0), gp, L, F, out, R,
+    ok = judge_step(u, bands, linear, lo, hi, np.empty(0), np.empty(0), gp, L, F, out, R,
                 np.empty(n), np.empty(n, np.bool_),
                 np.empty((4, n)), np.empty(gp[0].shape[0]), np.zeros((2, n)), np.empty(0))
     return ok, out, R

@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..linalg.ldl_kernel import refactor
 from .compiled_dual import (
     ALPHA,
     ALPHA0,
@@ -69,21 +70,20 @@ from .compiled_dual import (
     WUP,
     G,
     U,
-    _certificate,
-    _certify,
-    _dual,
-    _grad_into,
-    _judge,
-    _refactor,
-    _residuals,
     add_compensated,
+    certify,
+    dual_active_set,
+    grad_into,
+    judge_step,
+    step_certificate,
+    step_residuals,
 )
 
-NEWTON_SWITCH = 0.05  # model.driver.NEWTON_SWITCH (rad)
+NEWTON_SWITCH = 0.05  # model.outer.NEWTON_SWITCH (rad)
 # outcome codes of solve_chain (the Python side turns them into reasons)
 CONVERGED, MAX_OUTER, LINE_SEARCH, NO_FIT = 0, 1, 2, 3
 __all__ = ["BAIL_CERT", "BAIL_JUDGE", "BAIL_LIMIT", "BAIL_NOT_PD", "BAIL_PRIMAL", "BAIL_REPEAT",
-           "CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "_certificate", "_residuals",
+           "CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "step_certificate", "step_residuals",
            "solve_chain", "solve_step"]
 
 
@@ -239,7 +239,7 @@ def _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, 
 
 
 @njit(cache=True)
-def _assemble(alpha, a, jl, jr, k, rest, fs, n, nodal_load):
+def banded_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load):
     """model.step.assemble_step: bands, c, the stencils of J and the linearisation point."""
     links, nj = alpha.size, jr.size
     bands, linear, inv, coef = np.zeros((3, n)), np.empty(n), np.empty(links), np.empty((nj, 3))
@@ -256,11 +256,11 @@ def _newton(alpha, a, jl, jr, k, rest, fs, n, bands, linear, origin, T, fac, non
     """model.newton.newton_step: T (the geometric bands) into ``T``, and H + T,
     c − T u₀ into the step where H + T is positive definite (True); else T = 0
     and the Gauss–Newton step stands (False)."""
-    _geometric(alpha, a, jl, jr, k, rest, fs, n, T, mu, sines, cosines)
+    geometric_bands(alpha, a, jl, jr, k, rest, fs, n, T, mu, sines, cosines)
     for i in range(n):  # H + T, factored to test it (LAPACK's dpbtrf in the reference)
         fac[0, i], fac[1, i], fac[2, i] = bands[0, i] + T[0, i], bands[1, i] + T[1, i], bands[2, i]
         none[i] = False
-    if not _refactor(fac, fac, none, mu[:0], 0, n):
+    if not refactor(fac, fac, none, mu[:0], 0, n):
         T[:] = 0.0
         return False
     for i in range(n):
@@ -277,7 +277,7 @@ def _newton(alpha, a, jl, jr, k, rest, fs, n, bands, linear, origin, T, fac, non
 
 
 @njit(cache=True)
-def _geometric(alpha, a, jl, jr, k, rest, fs, n, T, mu, sines, cosines):
+def geometric_bands(alpha, a, jl, jr, k, rest, fs, n, T, mu, sines, cosines):
     """model.newton.geometric_bands into ``T`` (diagonal, sub-diagonal): the curvature
     of the link angles in the heights times the links' net spring moments."""
     links = alpha.size
@@ -338,7 +338,7 @@ def _solve_assembled(n, lo, hi, L, F, cu, cl, warm_u, warm_up, warm_lo, warm_fla
         W_lo[i] = W_lo[i] and not W_up[i]
     if bad:  # crossed walls: the reference hands this to the primal method
         return BAIL_PRIMAL, 0
-    code, it = _dual(ws[6], wn[LIN], lo, hi, cu, cl, W_up, W_lo, max_iter, gp, ws)
+    code, it = dual_active_set(ws[6], wn[LIN], lo, hi, cu, cl, W_up, W_lo, max_iter, gp, ws)
     if code != 0:
         return code, it
     u, grad, sigma, r_up, r_lo = wn[U], wn[G], wn[SIG], wn[RUP], wn[RLO]
@@ -349,11 +349,11 @@ def _solve_assembled(n, lo, hi, L, F, cu, cl, warm_u, warm_up, warm_lo, warm_fla
             u[i] = min(max(u[i], lo[i]), hi[i])
         r_up[i] = max(-grad[i], 0.0) if sigma[i] > 0 else 0.0
         r_lo[i] = max(grad[i], 0.0) if sigma[i] < 0 else 0.0
-    if not _certify(u, r_up, r_lo, lo, hi, cu, cl, gp, wn[GF], wn[RATIO], wj[2], wj[3],
+    if not certify(u, r_up, r_lo, lo, hi, cu, cl, gp, wn[GF], wn[RATIO], wj[2], wj[3],
                     T) <= RTOL:
         return BAIL_CERT, it
     res = ws[9]
-    ok = _judge(u, ws[6], wn[LIN], lo, hi, cu, cl, gp, L, F, res, wn[NET], wn[U2], wb[ROWS],
+    ok = judge_step(u, ws[6], wn[LIN], lo, hi, cu, cl, gp, L, F, res, wn[NET], wn[U2], wb[ROWS],
                 ws[5], wj[2], T, wn[GF])
     if not (ok and res[0] <= max(10.0 * request, FLOOR_ULPS * EPS * res[4])):
         return BAIL_JUDGE, it
@@ -361,7 +361,7 @@ def _solve_assembled(n, lo, hi, L, F, cu, cl, warm_u, warm_up, warm_lo, warm_fla
 
 
 @njit(cache=True)
-def _contact_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, cu, cl,
+def contact_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, cu, cl,
                   warm_u, warm_up, warm_lo, warm_flags, max_iter, request):
     """One cold contact step at α, its work arrays allocated: (code, u, r_up, r_lo,
     sigma, face solves, inv, α₀, origin, gp, residuals, R), code 0: solved (other codes:
@@ -482,7 +482,7 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
             cur = su[node] - origin[node] if 0 <= node < n else 0.0
             dalpha = max(dalpha, abs((alpha0[i] + (cur - prev) * inv[i]) - alpha[i]))
             prev = cur
-        _grad_into(g_u, m, u, gp, ws[10])
+        grad_into(g_u, m, u, gp, ws[10])
         _penalty(u, lo, hi, cu, cl, g_u)  # (nothing where no wall yields)
         slope = 0.0
         for i in range(n):  # the dot product, a loop (see _max_abs)

@@ -29,7 +29,7 @@ import numpy as np
 from numba import njit
 
 from .compiled_dual import wall_residuals  # one copy of the judge's rows (numba_cache)
-from .compiled_kernel import _assemble as _banded_step  # and of the banded step
+from .compiled_kernel import banded_step  # and of the banded step
 
 TINY = np.finfo(np.float64).tiny
 
@@ -81,9 +81,9 @@ def _chain_at(u, reference, a, fs, links):
 def assemble(alpha, a, jl, jr, k, rest, fs, n, nodal_load):
     """assemble_step's arrays: (bands, c, 1/(a cos α), v, φ₀, J's coefficients,
     u₀, α̂(u₀), φ̂(u₀)); ``fs`` the shifted index (node + 1) of the first free node.
-    The banded step is the solve kernel's (:func:`.compiled_kernel._assemble`);
+    The banded step is the solve kernel's (:func:`.compiled_kernel.banded_step`);
     v = tan α − α and φ₀ = v_l − v_r are the forms' extra terms."""
-    bands, linear, inv, coef, origin, alpha0, phi_origin = _banded_step(
+    bands, linear, inv, coef, origin, alpha0, phi_origin = banded_step(
         alpha, a, jl, jr, k, rest, fs, n, nodal_load)
     links, nj = alpha.size, jr.size
     v, phi0 = np.empty(links), np.empty(nj)

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..problems.scenes import Chain
 from .angle_step import solve_in_angles
-from .driver import DriverOutput, DriverStart, StepRecord
+from .outer import DriverOutput, DriverStart, StepRecord
 
 #: the SQP stops when a full step moved α by less than this (rad); quadratic
 #: convergence makes the last step cheap

@@ -388,7 +388,7 @@ def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0,
     return JudgeStep(upper, lower, rounds, dalpha, roundoff, worst, noise, term_size)
 
 
-def _contraction(step_sizes: list[float], judge_dalpha: float) -> float:
+def contraction_estimate(step_sizes: list[float], judge_dalpha: float) -> float:
     """ρ from the last step sizes: the larger of the last two ratios, in [½, 0.99].
 
     Step sizes at the round-off of an angle (below STEP_NOISE rad) are left out:
@@ -446,7 +446,7 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
     R_min = float(min(np.min(forces_upper, initial=0.0), np.min(forces_lower, initial=0.0)))
     bound = None
     if js is not None:
-        rho = _contraction(step_sizes, js.dalpha)
+        rho = contraction_estimate(step_sizes, js.dalpha)
         kappa = 1.0 / (1.0 - rho)
         # the judge's own round-off: its wall reactions', and the residual left on the
         # free nodes, which the chain carries to the walls

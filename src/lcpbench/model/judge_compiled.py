@@ -39,7 +39,7 @@ def _load_kernel():
 def takes(chain: Chain) -> bool:
     """Whether the judge kernel takes this chain: consecutive joints, contiguous free
     nodes (the solve kernel's layouts, :func:`lcpbench.model.compiled.applies`)."""
-    from .compiled import applies
+    from .kernel_call import applies
 
     return applies("auto", "globalised", chain)
 
@@ -49,7 +49,7 @@ def chain_args(chain: Chain, kernel_args: tuple | None = None) -> tuple:
     (``kernel_args``: the solve kernel's, :func:`lcpbench.model.compiled.kernel_args`,
     when the caller has them: the same arrays, so none is copied twice)."""
     if kernel_args is None:
-        from .compiled import kernel_args as solve_args
+        from .kernel_call import kernel_args as solve_args
 
         kernel_args = solve_args(chain)
     return (*kernel_args[1:], float(chain.wall), bool(chain.channel))

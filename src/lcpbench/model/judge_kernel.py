@@ -364,7 +364,7 @@ def _pivot(bands, fac, iw, lo, hi, cu, cl, L, pull, w, fs, b0, nj, k, rest, noda
 
 @njit(cache=True)
 def _contraction(step_sizes, judge_dalpha):
-    """model.judge._contraction: ρ from the last two ratios of step sizes, in [½, 0.99]."""
+    """model.judge.contraction_estimate: ρ from the last two ratios of step sizes, in [½, 0.99]."""
     sizes = np.empty(step_sizes.size + 1)
     m = 0
     for s in step_sizes:

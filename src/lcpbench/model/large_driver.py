@@ -23,21 +23,21 @@ import numpy as np
 
 from ..problems.scenes import Chain
 from ..solvers.base import Status
-from .driver import (
+from .driver import StepSolver
+from .judge import NODE_GROSS, contraction_estimate
+from .large_n import StepWork, energy_of, increments_at, trial_of
+from .outer import (
     DriverOutput,
     DriverStart,
     StepRecord,
-    StepSolver,
-    _converged,
-    _fail,
-    _feasible_start,
-    _setup,
-    _step_failed,
+    converged_output,
+    failed_output,
+    feasible_start,
     line_search_failed,
     out_of_iterations,
+    step_failed,
+    step_setup_time,
 )
-from .judge import NODE_GROSS, _contraction
-from .large_n import StepWork, energy_of, increments_at, trial_of
 
 #: past max|Δα| < tol the driver goes on while its prediction of the judge's per-node
 #: force error bound (:func:`_node_change`) exceeds this share of NODE_GROSS, for at
@@ -63,13 +63,13 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
     warm = None
     alpha = None
     if start is not None:
-        _, alpha = _feasible_start(chain, np.asarray(start.alpha, float))
+        _, alpha = feasible_start(chain, np.asarray(start.alpha, float))
     if alpha is None:
-        _, alpha = _feasible_start(chain, chain.rest_alpha)
+        _, alpha = feasible_start(chain, chain.rest_alpha)
     elif start is not None and start.warm is not None:  # its contact set, no heights
         warm = replace(start.warm, u=np.full(n, np.nan))
     if alpha is None:
-        return _fail(chain.rest_alpha.copy(), n, steps, "cannot fit the chain between the walls")
+        return failed_output(chain.rest_alpha.copy(), n, steps, "cannot fit the chain between the walls")
     E = energy_of(chain, alpha)
     noise = 1e-12 * (abs(E) + float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6)
     last_net, extra = None, 0
@@ -85,7 +85,7 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
         t_asm = time.perf_counter() - t0
         sol = solver(step, warm)
         if sol.status not in (Status.SOLVED, Status.INACCURATE):
-            return _step_failed(alpha, n, steps, sol, t_asm, E)
+            return step_failed(alpha, n, steps, sol, t_asm, E)
         d = sol.u  # the increment to the step's answer
         dalpha = float(np.max(np.abs(step.predict_alpha(d) - alpha), initial=0.0))
         slope = float(step.linear @ d)  # the gradient at u₀ along d
@@ -93,11 +93,11 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
         if trial is None:
             return line_search_failed(alpha, n, steps, sol, t_asm, dalpha, E)
         steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
-                                t, dalpha, E_t, _setup(sol)))
+                                t, dalpha, E_t, step_setup_time(sol)))
         node_change, last_net = _node_change(chain, sol.forces_net, last_net, steps)
         if dalpha < tol and (node_change <= NODE_SETTLED * NODE_GROSS or extra >= EXTRA_STEPS):
             final = replace(sol, u=step.heights + d)  # in heights, as every driver reports
-            return _converged(chain, trial, final, steps)
+            return converged_output(chain, trial, final, steps)
         extra += dalpha < tol
         # the warm start of the next step: this answer, in the next step's increments
         warm = replace(sol, u=(1.0 - t) * d)
@@ -133,7 +133,7 @@ def _node_change(chain: Chain, net, last_net, steps: list[StepRecord]):
         return np.inf, net
     F0 = max(float(np.sum(np.maximum(net, 0.0))), float(np.sum(np.maximum(-net, 0.0))),
              chain.force_scale)
-    rho = _contraction([s.max_dalpha for s in steps[:-1]], steps[-1].max_dalpha)
+    rho = contraction_estimate([s.max_dalpha for s in steps[:-1]], steps[-1].max_dalpha)
     change = float(np.max(np.abs(net - last_net), initial=0.0))
     return rho / (1.0 - rho) * change / F0, net
 

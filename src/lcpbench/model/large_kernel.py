@@ -330,7 +330,7 @@ def walk_refine(coef, k, phi_origin, rest, load, origin, R, B, tri, invR, invB, 
                 rounds):
     """The dual walk's refinement at an optimum it found
     (:func:`lcpbench.solvers.compiled_walk.dual_walk`): one step with the exact gradient
-    on the face last factored, then :func:`lcpbench.solvers.banded._refine` (more
+    on the face last factored, then :func:`lcpbench.solvers.compiled_walk.refine_on_face` (more
     while the free nodes' residual halves, at most ``rounds``), the same arithmetic.
     ``u`` on the walls on S; returns (u, g)."""
     n = u.size

@@ -200,7 +200,7 @@ class IncrementStep(ContactStep):
         in one compiled call on the face its twisted factor holds
         (:func:`~lcpbench.model.large_kernel.walk_refine`: the arithmetic of
         :func:`lcpbench.solvers.compiled_walk.dual_walk` and
-        :func:`lcpbench.solvers.banded._refine`)."""
+        :func:`lcpbench.solvers.compiled_walk.refine_on_face`)."""
         H = self.factor
         return _kernel().walk_refine(self.coef, self.stiffness, self.phi_origin,
                                      self.rest_joint, self.nodal_load, self.origin, H.R, H.B,

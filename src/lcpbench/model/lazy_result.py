@@ -6,7 +6,7 @@ fields (the scene, α, the reactions R, F, the outer iterations, the verdict
 (:data:`LAZY`: the step records, the reason, the certificate, the judgement,
 ``extra``, the node positions...) are built at the first access of any of them, by
 the callable kept in its ``_build``: the complete result, made by the same functions
-as before (the DriverOutput by :func:`lcpbench.model.compiled.kernel_output`, the
+as before (the DriverOutput by :func:`lcpbench.model.kernel_call.kernel_output`, the
 Judgement by :func:`lcpbench.model.judge_compiled.verdict_from_stats` from the judge
 kernel's numbers, the result by :func:`lcpbench.model.finish.finish`). Its fields fill those
 not set (a field set by hand keeps its value); the verdict set at once must be the

@@ -36,8 +36,8 @@ from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from .angle_step import load_parameter
 from .chain import alpha_from_heights, heights
-from .driver import DriverOutput, DriverStart
 from .heavy_driver import MODERATE
+from .outer import DriverOutput, DriverStart
 
 #: links of the coarse chain (a solve of ~1 ms in the compiled kernel); 0: no nested start
 COARSE_LINKS = 1000

@@ -32,20 +32,20 @@ import numpy as np
 from ..problems.scenes import Chain
 from ..solvers.base import Status
 from .chain import alpha_from_heights, energy, heights, node_positions
-from .driver import (
+from .judge import split_reactions
+from .newton import newton_step
+from .outer import (
     NEWTON_SWITCH,
     DriverOutput,
     DriverStart,
     StepRecord,
-    _converged,
-    _fail,
-    _setup,
-    _step_failed,
+    converged_output,
+    failed_output,
     out_of_iterations,
     starting_point,
+    step_failed,
+    step_setup_time,
 )
-from .judge import split_reactions
-from .newton import newton_step
 from .profile import profile_gaps, profile_step, walls_at
 
 #: the driver's own criterion on the exact walls: penetration at most this × ℓ
@@ -126,7 +126,7 @@ def run_profile_driver(chain: Chain, solver, *, tol: float, max_outer: int, meth
     undamped = method == "undamped"
     u, alpha, warm = starting_point(chain, start, _profile_start)
     if alpha is None:
-        return _fail(chain.rest_alpha.copy(), n, steps, "cannot fit the chain between the walls")
+        return failed_output(chain.rest_alpha.copy(), n, steps, "cannot fit the chain between the walls")
     mu_up, mu_lo = np.zeros(n), np.zeros(n)
     if warm is not None and warm.forces_net is not None and np.all(np.isfinite(warm.forces_net)):
         mu_up, mu_lo = split_reactions(walls_at(chain, alpha), warm.forces_net, u)
@@ -141,7 +141,7 @@ def run_profile_driver(chain: Chain, solver, *, tol: float, max_outer: int, meth
         t_asm = time.perf_counter() - t0
         sol = solver(step, warm)
         if sol.status not in (Status.SOLVED, Status.INACCURATE):
-            return _step_failed(alpha, n, steps, sol, t_asm, E)
+            return step_failed(alpha, n, steps, sol, t_asm, E)
         dalpha = float(np.max(np.abs(step.predict_alpha(sol.u) - alpha), initial=0.0))
         d = sol.u - u
         t = 1.0
@@ -150,8 +150,8 @@ def run_profile_driver(chain: Chain, solver, *, tol: float, max_outer: int, meth
             if not np.all(np.isfinite(trial)) or np.any(np.sign(np.cos(trial))
                                                          != np.sign(np.cos(alpha))):
                 steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time,
-                                        t_asm, 1.0, dalpha, E, _setup(sol)))
-                return _fail(alpha, n, steps, "diverged: a link passed the vertical, where "
+                                        t_asm, 1.0, dalpha, E, step_setup_time(sol)))
+                return failed_output(alpha, n, steps, "diverged: a link passed the vertical, where "
                                               "the linearisation of eq. (20) is singular")
             new_u = heights(chain, trial)
         else:
@@ -181,17 +181,17 @@ def run_profile_driver(chain: Chain, solver, *, tol: float, max_outer: int, meth
                 if t < 1e-12:
                     steps.append(StepRecord(sol.iterations, sol.status.value,
                                             sol.solve_time, t_asm, 0.0, dalpha, E,
-                                            _setup(sol)))
-                    return _fail(alpha, n, steps, "line search failed: no decrease of the "
+                                            step_setup_time(sol)))
+                    return failed_output(alpha, n, steps, "line search failed: no decrease of the "
                                                   "merit along the step")
             new_u = u + t * d
         u, alpha = new_u, trial
         steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
-                                t, dalpha, energy(chain, alpha), _setup(sol)))
+                                t, dalpha, energy(chain, alpha), step_setup_time(sol)))
         warm = sol
         net = sol.forces_net
         if net is not None and np.all(np.isfinite(net)):
             mu_up, mu_lo = split_reactions(at, net, sol.u)
         if dalpha < tol and _penetration(chain, alpha) <= GEOMETRY_SLACK * ell:
-            return _converged(walls_at(chain, alpha), alpha, sol, steps, step)
+            return converged_output(walls_at(chain, alpha), alpha, sol, steps, step)
     return out_of_iterations(alpha, n, steps, max_outer, tol)

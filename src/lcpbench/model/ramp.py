@@ -22,7 +22,7 @@ import math
 from dataclasses import replace
 
 from .compiled import drive
-from .driver import DriverOutput, DriverStart
+from .outer import DriverOutput, DriverStart
 
 #: the largest change of a section's bend angle between two steps (degrees)
 STEP_DEG = 10.0

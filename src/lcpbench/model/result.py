@@ -9,9 +9,9 @@ import numpy as np
 
 from ..problems.scenes import Chain
 from .chain import joint_angles, node_positions, torque_residual
-from .driver import DriverOutput, StepRecord
 from .elastic import compliances, wall_pressure
 from .judge import Judgement, judge
+from .outer import DriverOutput, StepRecord
 from .profile import has_profile, joint_moments_xy, profile_gaps, wall_forces_xy
 
 

@@ -15,12 +15,14 @@ from __future__ import annotations
 
 import html
 from dataclasses import is_dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-if TYPE_CHECKING:  # pragma: no cover
-    from .result import ContactResult
+#: a :class:`~lcpbench.model.result.ContactResult`; not imported, not even for type
+#: checking: result.py imports this module (its ``summary``, ``_repr_html_``, ``nodes``),
+#: and no import cycle is allowed (tests/test_layers.py)
+ContactResult = Any
 
 #: the node table's columns, in order, with their units
 NODE_COLUMNS = {

@@ -124,7 +124,7 @@ def _derivatives(result, scene: ActuatorScene, names: set, elastic: bool) -> dic
     """{parameter: (d forces_upper, d forces_lower, d heights)} by the compiled face solve
     (:func:`lcpbench.model.sensitivity_kernel.derivatives`), and the one-sided nodes."""
     from ..numba_cache import kernel_module  # numba at the first sensitivity
-    from .compiled import kernel_args
+    from .kernel_call import kernel_args
 
     kern = kernel_module("lcpbench.model.sensitivity_kernel", "derivatives")
     chain = scene.chain()

@@ -1,11 +1,11 @@
 """The sensitivities' face solve compiled (:mod:`lcpbench.model.sensitivity`).
 
 At the answer α with reactions R: the step assembled (the solve kernel's
-:func:`~lcpbench.model.compiled_kernel._assemble`), the exact Hessian H + T (its
-:func:`~lcpbench.model.compiled_kernel._geometric`), the face of the answer's contact
+:func:`~lcpbench.model.compiled_kernel.banded_step`), the exact Hessian H + T (its
+:func:`~lcpbench.model.compiled_kernel.geometric_bands`), the face of the answer's contact
 set factored by the walk's LDLᵀ (a rigid wall's node fixed, an elastic wall's held by
 its spring in the compliance form), and per parameter one right-hand side and one
-solve. ∂∇E/∂p is the energy gradient of :func:`~lcpbench.model.compiled_dual._grad_into`
+solve. ∂∇E/∂p is the energy gradient of :func:`~lcpbench.model.compiled_dual.grad_into`
 with the parameter's derivative in place of the joint stiffness, rest angles or loads
 (the gradient is linear in each). Loaded through :func:`lcpbench.numba_cache.kernel_module`.
 """
@@ -16,8 +16,8 @@ import numpy as np
 from numba import njit
 
 from ..linalg.ldl_kernel import refactor, resolve
-from .compiled_dual import _grad_into, _mv
-from .compiled_kernel import _assemble, _geometric
+from .compiled_dual import grad_into, matvec_row
+from .compiled_kernel import banded_step, geometric_bands
 
 #: the parameters, in the rows of :func:`derivatives`' outputs
 THETA, HEIGHT, EI_, WEIGHT, WALL = range(5)
@@ -34,10 +34,10 @@ def derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu, cl, fu, f
     nodal load at unit weight; ``wall_k``: the Winkler stiffness (k_i ∝ it); ``cu``,
     ``cl``: the walls' compliances (empty: rigid)."""
     n, links, nj = lo.size, alpha.size, jr.size
-    bands, _, _, coef, origin, _, phi_origin = _assemble(alpha, a, jl, jr, k, rest, fs, n,
+    bands, _, _, coef, origin, _, phi_origin = banded_step(alpha, a, jl, jr, k, rest, fs, n,
                                                          nodal_load)
     T, mu = np.zeros((2, n)), np.empty(links)
-    _geometric(alpha, a, jl, jr, k, rest, fs, n, T, mu, np.sin(alpha), np.cos(alpha))
+    geometric_bands(alpha, a, jl, jr, k, rest, fs, n, T, mu, np.sin(alpha), np.cos(alpha))
     for i in range(n):
         bands[0, i] += T[0, i]
         bands[1, i] += T[1, i]
@@ -62,26 +62,26 @@ def derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu, cl, fu, f
         dgrad[:] = 0.0
         du0[:] = 0.0
         if p == THETA:  # ∂g = Jᵀ k (−∂φ*/∂θ)
-            _grad_into(dgrad, m, origin, (coef, jr[0], fs, links, origin, none_j, k, drest,
+            grad_into(dgrad, m, origin, (coef, jr[0], fs, links, origin, none_j, k, drest,
                                           none_n), Tz)
         elif p == HEIGHT:  # the walls move: +1 the upper, −1 the lower (at −h)
             for i in range(n):
                 du0[i] = 1.0 if up[i] else (-1.0 if down[i] else 0.0)
         elif p == EI_:  # ∂g = Jᵀ (∂k/∂EI) (φ − φ*)
-            _grad_into(dgrad, m, origin, (coef, jr[0], fs, links, origin, phi_origin, dk, rest,
+            grad_into(dgrad, m, origin, (coef, jr[0], fs, links, origin, phi_origin, dk, rest,
                                           none_n), Tz)
         elif p == WEIGHT:  # f ∝ w
             for i in range(n):
                 dgrad[i] = -unit_load[i]
         for i in range(n):
-            r[i] = 0.0 if rigid[i] else dgrad[i] + _mv(bands, du0, i, n, False)
+            r[i] = 0.0 if rigid[i] else dgrad[i] + matvec_row(bands, du0, i, n, False)
             if p == WALL and (up[i] or down[i]) and not rigid[i]:  # ∂k_i (u − h) = R_i / k
                 r[i] += (fu[i] - fl[i]) / wall_k
         resolve(fac, r)
         for i in range(n):
             du[p, i] = du0[i] - r[i]
         for i in range(n):
-            dR = -(dgrad[i] + _mv(bands, du[p], i, n, False))
+            dR = -(dgrad[i] + matvec_row(bands, du[p], i, n, False))
             dfu[p, i] = dR if up[i] else 0.0
             dfl[p, i] = -dR if down[i] else 0.0
     return OK, du, dfu, dfl

@@ -23,7 +23,8 @@ from ..solvers.base import Status, StepSolution
 from . import large_n
 from .angle_step import heavy, total_load
 from .chain import heights
-from .driver import DriverOutput, DriverStart, run_driver
+from .driver import run_driver
+from .outer import DriverOutput, DriverStart
 from .profile import walls_at
 from .step import assemble_step
 
@@ -111,10 +112,10 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
     does: a heavy chain can sag off a wall its arc crosses.
 
     ``engine="compiled"``: the search without walls runs in the compiled
-    kernel (:func:`lcpbench.model.compiled.run_compiled` on the chain with its
+    kernel (:func:`lcpbench.model.kernel_call.run_compiled` on the chain with its
     walls removed: the dual active set with no bounds is the banded solve of
     the free step, refined once); the numpy driver where the kernel stops.
-    ``args``: the chain's :func:`lcpbench.model.compiled.kernel_args`, when the
+    ``args``: the chain's :func:`lcpbench.model.kernel_call.kernel_args`, when the
     caller has them.
     """
     n = chain.free_nodes.size
@@ -147,7 +148,7 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
         start = DriverStart(start.alpha, None)
     out = None
     if engine == "compiled":
-        from .compiled import run_compiled
+        from .kernel_call import run_compiled
 
         if args is not None:  # the same arrays, the walls removed
             args = (*args[:9], free.lower, free.upper, *args[11:])

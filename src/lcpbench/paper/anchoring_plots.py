@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .data import GF, PAPER
-from .plots import _figure
+from .plots import new_figure
 
 
 def plot_force_pressure(rows: list[dict], contact: list[dict], path) -> None:
@@ -16,7 +16,7 @@ def plot_force_pressure(rows: list[dict], contact: list[dict], path) -> None:
     same, weight toward it. Grey: the paper's knee and its ~1 gf forces.
     """
     heights = sorted({r["height"] for r in rows})
-    fig = _figure((15.0, 4.8))
+    fig = new_figure((15.0, 4.8))
     for k, h in enumerate(heights):
         ax = fig.add_subplot(1, len(heights), k + 1)
         for j, act in enumerate(sorted({r["actuator"] for r in rows})):
@@ -54,7 +54,7 @@ def plot_force_pressure(rows: list[dict], contact: list[dict], path) -> None:
 def plot_shapes(cases: list[dict], path) -> None:
     """The whole actuator in its channel at a few pressures; the single section dashed
     over the middle section (centred on it), the section boundaries marked."""
-    fig = _figure((10.0, 1.6 * len(cases) + 0.6))
+    fig = new_figure((10.0, 1.6 * len(cases) + 0.6))
     for k, c in enumerate(cases):
         ax = fig.add_subplot(len(cases), 1, k + 1)
         x, y, h = np.asarray(c["whole_x"]), np.asarray(c["whole_y"]), c["height"]

@@ -13,7 +13,7 @@ import math
 import numpy as np
 
 
-def _figure(size: tuple[float, float] = (7.0, 4.5)):
+def new_figure(size: tuple[float, float] = (7.0, 4.5)):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -36,7 +36,7 @@ def plot_fig5(rows: list[dict], data: dict, path) -> None:
     curve per θ (log scale), the 0.01 % threshold and the N the grid needs.
     Right: the N the Sec. III-D rule picks for every scene of the grid.
     """
-    fig = _figure((11.0, 4.5))
+    fig = new_figure((11.0, 4.5))
     ax = fig.add_subplot(1, 2, 1)
     h = data["plot_height"]
     thetas = sorted({r["theta"] for r in rows if r["height"] == h})
@@ -78,7 +78,7 @@ def plot_fig5(rows: list[dict], data: dict, path) -> None:
 
 def plot_shapes(shapes: list[dict], key: str, path, title: str) -> None:
     """Figs. 6 and 7: constrained shapes (solid) over the unconstrained arcs (dashed)."""
-    fig = _figure((8.0, 4.5))
+    fig = new_figure((8.0, 4.5))
     ax = fig.add_subplot()
     colors = _colors(len(shapes))
     for c, s in zip(colors, shapes):
@@ -101,7 +101,7 @@ def plot_shapes(shapes: list[dict], key: str, path, title: str) -> None:
 
 def plot_fig8(a: list[dict], b: list[dict], c: list[dict], path) -> None:
     """Fig. 8: total force against θ per h (a), against EI per h (b) and per θ (c)."""
-    fig = _figure((15.0, 4.5))
+    fig = new_figure((15.0, 4.5))
     panels = [
         (a, "height", "theta", "bend angle θ (degrees)", "h = {:g} mm",
          "(a) against θ, EI = 32.01 N·mm²"),
@@ -132,7 +132,7 @@ def plot_fig8(a: list[dict], b: list[dict], c: list[dict], path) -> None:
 
 def plot_cantilever(rows: list[dict], data: dict, path) -> None:
     """Fig. 10: the cantilever against beam theory, free (a) and against the wall (b)."""
-    fig = _figure((11.0, 4.5))
+    fig = new_figure((11.0, 4.5))
     ax = fig.add_subplot(1, 2, 1)
     s = np.array([r["s"] for r in rows])
     ax.plot([r["x_free"] for r in rows], [r["y_free"] for r in rows], "-", color="C0",
@@ -177,7 +177,7 @@ def plot_fig24(rows: list[dict], data: dict, path) -> None:
     band = Patch(color="0.5", alpha=0.3,
                  label=f"shaded: EI {ei_lo:g}–{ei_hi:g} N·mm², w {w_lo:g}–{w_hi:g} N/mm "
                        "(Sec. V-E)")
-    fig = _figure((15.0, 4.5))
+    fig = new_figure((15.0, 4.5))
     for k, h in enumerate(heights):
         ax = fig.add_subplot(1, len(heights), k + 1)
         for j, act in enumerate(sorted({r["actuator"] for r in rows})):
@@ -205,7 +205,7 @@ def plot_fig26(rows: list[dict], path) -> None:
     Filled markers: the baseline's answer is a valid contact answer; open: it
     solves its equations but penetrates the wall (or needs a pulling wall).
     """
-    fig = _figure((8.0, 4.8))
+    fig = new_figure((8.0, 4.8))
     ax = fig.add_subplot()
     heights = sorted({r["height"] for r in rows})
     floor = 1e-12
@@ -236,7 +236,7 @@ def plot_fig26(rows: list[dict], path) -> None:
 
 def plot_fig27(panels: list[dict], path) -> None:
     """Fig. 27: LCP and baseline shapes at θ = 150°, h = 3 mm (a) and 1 mm (b)."""
-    fig = _figure((11.0, 4.0))
+    fig = new_figure((11.0, 4.0))
     for k, p in enumerate(panels):
         ax = fig.add_subplot(1, len(panels), k + 1)
         ax.plot(p["lcp_x"], p["lcp_y"], "-", color="C0", lw=2.0,
@@ -257,7 +257,7 @@ def plot_fig27(panels: list[dict], path) -> None:
 
 def plot_table2(rows: list[dict], paper: dict, path) -> None:
     """Table II as a plot: time over the fastest LCP solve against θ, ours and the paper's."""
-    fig = _figure((8.0, 4.8))
+    fig = new_figure((8.0, 4.8))
     ax = fig.add_subplot()
     th = [r["theta"] for r in rows]
     ax.plot(th, [r["lcp_norm"] for r in rows], "-o", color="C0", label="LCP (ours)")

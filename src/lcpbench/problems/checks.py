@@ -146,35 +146,3 @@ def check_flag(name: str, value) -> bool:
     if not _is_bool(value):
         raise ProblemError(f"{name} must be True or False, got {describe(value)}")
     return bool(value)
-
-
-_SCENE_TYPES: tuple = ()  # the scene classes, imported at the first check
-
-
-def _scene_types() -> tuple:
-    from .scenes import ActuatorScene, CantileverScene  # scenes import this module
-    from .sections import SectionedScene
-
-    global _SCENE_TYPES
-    _SCENE_TYPES = (ActuatorScene, CantileverScene, SectionedScene)
-    return _SCENE_TYPES
-
-
-def check_scene(scene) -> object:
-    """``scene`` if it is a scene lcpbench can solve, else ProblemError.
-
-    Raises
-    ------
-    ProblemError
-        ``"scene must be an ActuatorScene, SectionedScene or CantileverScene, got dict"``
-        for None, a dict, a string, a class instead of an instance, or
-        anything else.
-    """
-    kinds = _SCENE_TYPES or _scene_types()
-    if isinstance(scene, kinds):
-        return scene
-    kind = "None" if scene is None else type(scene).__name__
-    if isinstance(scene, type):
-        kind = f"the class {scene.__name__} (an instance is needed)"
-    raise ProblemError(f"scene must be an ActuatorScene, SectionedScene or CantileverScene, "
-                       f"got {kind}")

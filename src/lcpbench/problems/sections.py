@@ -58,6 +58,8 @@ from .scenes import (
     MAX_LINKS,
     MIN_LINKS,
     WEIGHT_RANGE,
+    ActuatorScene,
+    CantileverScene,
     Chain,
     reachable,
 )
@@ -428,3 +430,26 @@ def anchoring_actuator(theta: float = 150.0, height: float = 5.5, *, links: int 
     secs = tuple(Section(sign * theta, length, EI, weight) for sign in signs)
     return SectionedScene(sections=secs, height=height, links=links, channel=True,
                           gravity=gravity)
+
+
+#: every kind of scene lcpbench solves (here, the one module that sees all three)
+SCENE_KINDS = (ActuatorScene, CantileverScene, SectionedScene)
+
+
+def check_scene(scene) -> object:
+    """``scene`` if it is a scene lcpbench can solve, else ProblemError.
+
+    Raises
+    ------
+    ProblemError
+        ``"scene must be an ActuatorScene, SectionedScene or CantileverScene, got dict"``
+        for None, a dict, a string, a class instead of an instance, or
+        anything else.
+    """
+    if isinstance(scene, SCENE_KINDS):
+        return scene
+    kind = "None" if scene is None else type(scene).__name__
+    if isinstance(scene, type):
+        kind = f"the class {scene.__name__} (an instance is needed)"
+    raise ProblemError(f"scene must be an ActuatorScene, SectionedScene or CantileverScene, "
+                       f"got {kind}")

@@ -280,7 +280,7 @@ def _dual(step, warm_up, warm_lo, max_iter, reach=0):
     tie = TIE_LARGE if own else TIE
     if own and compiled_walk.ENABLED and hasattr(H, "walk") and n >= 5:  # large N
         return compiled_walk.dual_walk(step, H, u, slack, warm_up, warm_lo, has_lo,
-                                       max_iter, reach, tie, _refine)
+                                       max_iter, reach, tie, compiled_walk.refine_on_face)
     seen: set[bytes] = set()
     at_face_minimiser = True
     it = 0
@@ -318,7 +318,7 @@ def _dual(step, warm_up, warm_lo, max_iter, reach=0):
                     r[S] = 0.0
                     p = H.resolve(r)
                     if own and not refined:  # refine, then look at the walls again
-                        u, g = _refine(step, H, S, u - p)
+                        u, g = compiled_walk.refine_on_face(step, H, S, u - p)
                         refined = True
                         continue
                     if own:
@@ -380,24 +380,6 @@ def _dual(step, warm_up, warm_lo, max_iter, reach=0):
         g = g_face
         at_face_minimiser = True
         refined = False
-
-
-def _refine(step, H, S, u, rounds: int = 4):
-    """More refinement on the last face while the free nodes' residual halves (a
-    step with its own face solves, at large N: there one refinement contracts by
-    cond(J) ε only, and a height error δ costs ~16 EI δ / a³ of force)."""
-    g = step.gradient(u)
-    r = np.where(S, 0.0, g)
-    size = float(np.max(np.abs(r), initial=0.0))
-    for _ in range(rounds):
-        v = u - H.resolve(r)
-        g_v = step.gradient(v)
-        r_v = np.where(S, 0.0, g_v)
-        size_v = float(np.max(np.abs(r_v), initial=0.0))
-        if not size_v < 0.5 * size:
-            break
-        u, g, r, size = v, g_v, r_v, size_v
-    return u, g
 
 
 def _primal(step, start, W_up, W_lo, max_iter, t0, rtol, done=0) -> StepSolution:

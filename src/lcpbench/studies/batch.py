@@ -30,12 +30,12 @@ from ..escalations import Context, escalate
 from ..model.result import ContactResult
 from ..model.step_solver import make_step_solver
 from ..plan import make_plan
-from ..problems.checks import check_scene
 from ..problems.scenes import ActuatorScene
+from ..problems.sections import check_scene
 from ..solvers.registry import DEFAULT
 from .batch_compiled import AUTO_WHY, solve_line, takes
 from .batch_line import run_line
-from .continuation import _PLANE_FIELDS, PREDICTORS, solve_sequence
+from .continuation import PLANE_FIELDS, PREDICTORS, solve_sequence
 
 
 def _group_key(scene: ActuatorScene) -> tuple:
@@ -128,7 +128,7 @@ def _planes(scenes: list) -> list[list[int]]:
     :class:`~lcpbench.studies.continuation.Solved` predicts a scene from its own plane
     only. A field that does not hash: one list, as given."""
     planes: dict = {}
-    key = attrgetter(*_PLANE_FIELDS)
+    key = attrgetter(*PLANE_FIELDS)
     try:
         for j, s in enumerate(scenes):
             planes.setdefault(key(s), []).append(j)

@@ -21,10 +21,11 @@ from __future__ import annotations
 import time
 
 from ..model import large_n
-from ..model.compiled import applies, drive, heavy, kernel_args, reference, run_compiled
-from ..model.driver import DriverStart
+from ..model.compiled import drive, heavy, reference
 from ..model.finish import finish
 from ..model.judge_compiled import chain_args
+from ..model.kernel_call import applies, kernel_args, run_compiled
+from ..model.outer import DriverStart
 from ..model.result import ContactResult
 from ..model.step_solver import make_step_solver
 from ..model.wall_free import solve_without_contact

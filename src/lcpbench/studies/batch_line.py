@@ -19,12 +19,13 @@ import time
 import numpy as np
 
 from ..model import large_n
-from ..model.compiled import applies, heavy, kernel_args
+from ..model.compiled import heavy
+from ..model.kernel_call import applies, kernel_args
 from ..model.result import ContactResult
 from ..solvers.judge import requested
 from ..solvers.registry import DEFAULT, get_settings
 from .batch_result import LineOutput, results
-from .continuation import _POINTS
+from .continuation import POINTS
 
 #: (name, dtype, shape after the rows) of the kernel's outputs per attempt;
 #: "links", "n", "nj" and "stats" stand for the sizes
@@ -82,7 +83,7 @@ def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = 
     request = requested(st)
     max_iter = st.max_iter if st.max_iter else 20 * n + 50
     sizes = {"links": c0.links, "n": n, "nj": nj, "stats": len(kern.STATS)}
-    most = _POINTS.get(predictor, 0)
+    most = POINTS.get(predictor, 0)
     spare = max(SPARE, m // SPARE)
     while True:
         A = {name: np.empty((m + spare, *(sizes.get(d, d) for d in shape)), dtype=dt)

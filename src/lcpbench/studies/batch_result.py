@@ -7,7 +7,7 @@ verdict ``converged``) are set from the kernel's arrays
 fields (the step records, the reason, the certificate, the judgement, ``extra``,
 the node positions) are built at the first access of any of them: from the same
 arrays, by the same functions as a single solve (the DriverOutput by
-:func:`lcpbench.model.compiled.kernel_output`, the Judgement by
+:func:`lcpbench.model.kernel_call.kernel_output`, the Judgement by
 :func:`lcpbench.model.judge_compiled.verdict_from_stats` from the judge kernel's
 numbers, the result by :func:`lcpbench.model.finish.finish`). So a batch that is only
 read for its forces builds no Python object per scene but the result itself.
@@ -20,10 +20,10 @@ from functools import partial
 
 import numpy as np
 
-from ..model.compiled import kernel_output
-from ..model.driver import DriverOutput
 from ..model.finish import finish
+from ..model.kernel_call import kernel_output
 from ..model.lazy_result import LAZY, LazyResult, lazy_result, materialize, stats_judge
+from ..model.outer import DriverOutput
 from ..model.result import ContactResult
 from ..solvers.registry import DEFAULT, get_settings
 
@@ -59,7 +59,7 @@ def results(line: LineOutput) -> list[ContactResult]:
     judged = code == line.kernel.CONVERGED
     settled = judged & (A["j_code"][kept] == line.kernel.SETTLED)
     # the reported reactions: the judge's (round-off set to zero), else the driver's R
-    # (zero where the driver failed, as driver._fail)
+    # (zero where the driver failed, as outer.failed_output)
     forces = np.where(settled[:, None], A["j_fu"][kept],
                       np.where(judged[:, None], A["o_R"][kept], 0.0))
     totals = forces.sum(axis=1).tolist()
@@ -79,7 +79,7 @@ def results(line: LineOutput) -> list[ContactResult]:
 def driver_output(line: LineOutput, row: int, chain) -> DriverOutput:
     """The DriverOutput of the attempt in ``row``: the unconstrained arc's, else the
     solve kernel's outputs as a single solve builds them
-    (:func:`lcpbench.model.compiled.kernel_output`), with the wall-free search's reason."""
+    (:func:`lcpbench.model.kernel_call.kernel_output`), with the wall-free search's reason."""
     A, k = line.arrays, line.kernel
     kind = int(A["o_kind"][row])
     if kind == k.ARC:

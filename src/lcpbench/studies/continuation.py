@@ -29,7 +29,7 @@ from ..problems.scenes import ActuatorScene
 
 PREDICTORS = ("adaptive", "quadratic", "secant", "previous", "none")
 #: answers each predictor extrapolates through (polynomial degree + 1; "adaptive": at most)
-_POINTS = {"adaptive": 6, "quadratic": 3, "secant": 2, "previous": 1}
+POINTS = {"adaptive": 6, "quadratic": 3, "secant": 2, "previous": 1}
 
 
 def touches(res: ContactResult) -> bool:
@@ -75,7 +75,7 @@ class Solved:
     def _plane(self, scene, make: bool = False) -> tuple[dict, dict] | None:
         if not isinstance(scene, ActuatorScene):
             return None
-        key = tuple(getattr(scene, f) for f in _PLANE_FIELDS)
+        key = tuple(getattr(scene, f) for f in PLANE_FIELDS)
         if not _hashable(key):  # a field that does not hash: the planes compared one by one
             key = next((k for k in self._planes if isinstance(k, _Unhashed) and k.key == key),
                        _Unhashed(key))
@@ -130,7 +130,7 @@ class Solved:
 
 
 #: what makes two actuator scenes lie in one plane of θ and h
-_PLANE_FIELDS = tuple(f.name for f in fields(ActuatorScene) if f.name not in ("theta", "height"))
+PLANE_FIELDS = tuple(f.name for f in fields(ActuatorScene) if f.name not in ("theta", "height"))
 
 
 class _Unhashed:
@@ -206,7 +206,7 @@ def predict(history: list[tuple[ActuatorScene, ContactResult]], scene: ActuatorS
     the answer whose last contact step warm-starts the scene."""
     if predictor == "none" or not history:
         return None
-    solved = Solved(_POINTS[predictor], predictor == "adaptive")
+    solved = Solved(POINTS[predictor], predictor == "adaptive")
     for s, r in history:
         solved.add(s, r)
     got = solved.predict(scene)
@@ -215,7 +215,7 @@ def predict(history: list[tuple[ActuatorScene, ContactResult]], scene: ActuatorS
 
 def new_solved(predictor: str) -> Solved:
     """The index of solved scenes that ``predictor`` predicts from."""
-    return Solved(_POINTS.get(predictor, 0), predictor == "adaptive")
+    return Solved(POINTS.get(predictor, 0), predictor == "adaptive")
 
 
 def warm_or_cold(solve_from: Callable, start, predictor: str) -> ContactResult:

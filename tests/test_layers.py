@@ -1,0 +1,124 @@
+"""Two layer rules of docs/architecture.md, read from the sources with ``ast``.
+
+- no import cycle between modules of lcpbench, counting the imports inside
+  functions and under ``TYPE_CHECKING`` (import-linter, in tests/test_house.py,
+  sees the cycles between layers only, and not every import inside a function);
+- no private name (``_name``, not a dunder) imported from another module of
+  lcpbench: a name another module needs is public where it is defined, or lives
+  in the module that owns it. Importing a private *module* (``cli/_common.py``)
+  within its package is allowed; a private alias (``import x as _x``) too.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "lcpbench"
+
+
+def _name(path: Path) -> str:
+    parts = ("lcpbench", *path.relative_to(SRC).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+MODULES = {_name(p): p for p in sorted(SRC.rglob("*.py"))}
+PACKAGES = {_name(p) for p in SRC.rglob("__init__.py")}
+
+
+def _absolute(module: str, level: int, target: str | None) -> str:
+    """The absolute name of ``from <level dots><target> import ...`` in ``module``."""
+    if level == 0:
+        return target or ""
+    base = module.split(".") if module in PACKAGES else module.split(".")[:-1]
+    base = base[: len(base) - (level - 1)]
+    return ".".join(base + ([target] if target else []))
+
+
+def _imports(module: str) -> list[tuple[str, str | None, int]]:
+    """(imported module, name taken from it or None, line) for every import of a module
+    of lcpbench in ``module``, at any depth (functions, classes, ``if`` blocks)."""
+    found = []
+    for node in ast.walk(ast.parse(MODULES[module].read_text())):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                target = alias.name
+                while target and target not in MODULES:
+                    target = target.rpartition(".")[0]
+                if target:
+                    found.append((target, None, node.lineno))
+        elif isinstance(node, ast.ImportFrom):
+            source = _absolute(module, node.level, node.module)
+            if source not in MODULES:
+                continue
+            for alias in node.names:
+                sub = f"{source}.{alias.name}"
+                found.append((sub, None, node.lineno) if sub in MODULES
+                             else (source, alias.name, node.lineno))
+    return found
+
+
+def import_graph() -> dict[str, set[str]]:
+    """module -> the modules of lcpbench it imports (itself left out)."""
+    return {m: {t for t, _, _ in _imports(m)} - {m} for m in MODULES}
+
+
+def cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            part = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                part.append(w)
+                if w == v:
+                    break
+            if len(part) > 1:
+                found.append(sorted(part))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return found
+
+
+def private_imports() -> list[str]:
+    """``module:line imports _name from other`` for every private name imported across
+    modules of lcpbench."""
+    return [f"{m}:{line} imports {name} from {source}"
+            for m in MODULES for source, name, line in _imports(m)
+            if name is not None and source != m and name.startswith("_")
+            and not name.startswith("__")]
+
+
+def test_the_checker_sees_imports_inside_functions_and_relative_ones():
+    graph = import_graph()
+    # driver.run_driver imports profile_driver inside the function
+    assert "lcpbench.model.profile_driver" in graph["lcpbench.model.driver"]
+    assert "lcpbench.model.outer" in graph["lcpbench.model.driver"]  # from .outer import
+    assert "lcpbench.solvers.base" in graph["lcpbench.model.outer"]  # from ..solvers.base
+    assert cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+
+
+def test_no_import_cycle_between_modules():
+    assert cycles(import_graph()) == []
+
+
+def test_no_private_name_is_imported_from_another_module():
+    assert private_imports() == []
