@@ -129,3 +129,13 @@ def test_check_names_each_threshold():
 def test_too_few_points_is_an_error():
     with pytest.raises(VisionError, match="too few"):
         fit_chain(np.zeros((5, 2)), 10.0, 3)
+
+
+def test_a_section_the_centerline_does_not_show_has_no_standard_error():
+    c, _ = arc_sections(34.0, 25.15, 3)
+    v = _visible(c)[::3]
+    v = v[v[:, 0] > 0.45 * c[-1, 0]]          # the first section and a half hidden
+    fit, _, _ = analyse(v, c[-1, 0], 3, px_per_mm=12.0)
+    assert fit.confidence.section_points[0] == 0
+    assert np.isinf(fit.confidence.theta_se_deg[0])
+    assert any("section 1 has 0 centerline points" in w for w in fit.confidence.warnings)

@@ -48,13 +48,16 @@ PIN_SIGMA_PX = 0.08
 #: than LENGTH_SPREAD of their mean ((max − min)/mean; the paper's actuator has equal
 #: sections); when the joint fit and the per-section circle fits (eqs. 38-39)
 #: disagree on the middle section by more than METHODS_DIFFER; and when more than
-#: OUTLIERS of the centerline points were left out as outliers.
+#: OUTLIERS of the centerline points were left out as outliers, or a section has
+#: fewer than MIN_POINTS of them.
 RMS_PX = 1.0
 RMS_DIAMETER = 0.05
 REL_SE = 0.005
 LENGTH_SPREAD = 0.03
 METHODS_DIFFER = 0.01
 OUTLIERS = 0.05
+#: fewer centerline points than this on a section: it is not seen, no standard error.
+MIN_POINTS = 20
 
 
 @dataclass
@@ -157,6 +160,7 @@ class Confidence:
     correlation: float              # variance inflation for correlated residuals
     points: int
     outliers: int
+    section_points: list[int] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict:
@@ -164,7 +168,8 @@ class Confidence:
                 "theta_se_deg": self.theta_se_deg, "arc_length_se_mm": self.arc_length_se_mm,
                 "length_spread": self.length_spread, "length_sd_mm": self.length_sd_mm,
                 "residual_correlation": self.correlation, "points": self.points,
-                "outliers": self.outliers, "warnings": list(self.warnings)}
+                "outliers": self.outliers, "section_points": self.section_points,
+                "warnings": list(self.warnings)}
 
 
 @dataclass
@@ -308,10 +313,10 @@ def fit_chain(points: np.ndarray, span: float, sections: int, *, start=None,
     ja = _jacobian(lambda q: signed_distance(p[used], chain(th, ln, turn, q[:2], q[2:])), pins)
     tau = _inflation(r)
     s2 = float(r @ r) / max(m - n_par, 1)
-    try:
-        hinv = np.linalg.inv(jp.T @ jp)
-    except np.linalg.LinAlgError:
-        hinv = np.full((n_par, n_par), np.inf)
+    counts = np.bincount(section_of[used], minlength=k)
+    hess = jp.T @ jp
+    blind = counts.min() < MIN_POINTS or np.linalg.cond(hess) > 1e12
+    hinv = np.linalg.pinv(hess)
     g = -hinv @ jp.T @ ja                      # d x̂ / d pins
     sig_pins = pin_sigma_mm ** 2 * np.eye(4)
     cov = np.block([[tau * s2 * hinv + g @ sig_pins @ g.T, g @ sig_pins],
@@ -321,11 +326,12 @@ def fit_chain(points: np.ndarray, span: float, sections: int, *, start=None,
     var = np.diag(dd @ cov @ dd.T).copy()
     lengths = np.array([a.length for a in arcs])
     var[k:] += (lengths * scale_rel_sd) ** 2
-    se = np.sqrt(np.maximum(var, 0))
+    # a section the centerline does not see, or a singular fit: no standard error
+    se = np.where((var >= 0) & ~blind, np.sqrt(np.abs(var)), np.inf)
     rms = float(np.sqrt(np.mean(r ** 2)))
     conf = Confidence(rms, rms * px_per_mm, np.degrees(se[:k]).tolist(), se[k:].tolist(),
                       float(np.ptp(lengths) / lengths.mean()), float(lengths.std()),
-                      float(tau), int(m), int(len(p) - m))
+                      float(tau), int(m), int(len(p) - m), counts.tolist())
     return JointFit(arcs, turn, equal_sections, r_all, section_of, used, conf)
 
 
@@ -340,6 +346,10 @@ def check(fit: JointFit, middle: int, diameter_mm: float, px_per_mm: float,
         out.append(f"the arcs fit the centerline poorly: RMS residual {c.rms_px:.2f} px "
                    f"({c.rms_mm:.3f} mm) > {limit * px_per_mm:.2f} px; check the segmentation "
                    "and --sections, or the actuator is not a chain of arcs")
+    for j, n in enumerate(c.section_points):
+        if n < MIN_POINTS:
+            out.append(f"section {j + 1} has {n} centerline points (< {MIN_POINTS}): the "
+                       "photograph does not show it; check the segmentation")
     rel_t, rel_l = c.theta_se_deg[middle] / mid_t, c.arc_length_se_mm[middle] / mid_l
     if max(rel_t, rel_l) > REL_SE:
         out.append(f"the middle section is poorly determined: standard error of theta "
