@@ -77,7 +77,7 @@ def plot_measurement(meas, out, truth: dict | None = None) -> None:
     leg_a, leg_b = 0.55, 0.75 + 0.17 * n_warn
     gap = 0.45                             # title above a panel
     lab = 0.5                              # x label and tick labels below it
-    fig_h = gap + ha + lab + leg_a + gap + hb + lab + leg_b
+    fig_h = gap + ha + lab + leg_a + 1.4 * gap + hb + lab + leg_b
     fig = plt.figure(figsize=(fig_w, fig_h))
     ya = (fig_h - gap - ha) / fig_h
     a = fig.add_axes([(fig_w - wa) / 2 / fig_w, ya, wa / fig_w, ha / fig_h])
@@ -147,7 +147,7 @@ def plot_measurement(meas, out, truth: dict | None = None) -> None:
             f"{100 * conf.length_spread:.2f} %") if conf is not None else ""
     if truth is not None and "theta_deg" in truth:
         what += f"; truth θ = {truth['theta_deg']:g}°, ℓ = {truth['arc_length_mm']:g} mm"
-    b.set_title(f"(b) levelled frame (mm), joint fit of {len(meas.sections)} arcs: {what}",
+    b.set_title(f"(b) levelled frame (mm), joint fit of {len(meas.sections)} arcs\n{what}",
                 fontsize=10)
     b.set_xlim(*bx)
     b.set_ylim(*by)
