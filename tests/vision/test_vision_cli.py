@@ -156,3 +156,43 @@ def test_measure_with_a_user_hsv_range(photo, capsys):
     out = json.loads(capsys.readouterr().out)
     assert out["hsv_range"] == [[0, 70, 50], [30, 255, 255]]
     assert out["middle"]["theta_deg"] == pytest.approx(truth["theta_deg"], rel=0.015)
+
+
+def test_measure_text_gives_the_joint_fit_and_its_confidence(photo, capsys):
+    _, path, cal, _, truth = photo
+    assert main(["vision", "measure", str(path), "--calib", str(cal)]) == 0
+    out, err = capsys.readouterr()
+    assert "joint fit" in out and "+-" in out and "residual" in out and "circle fits" in out
+    assert "no warning" in out and err == ""
+    assert main(["vision", "measure", str(path), "--calib", str(cal), "--equal-sections",
+                 "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["method"] == "joint fit (equal sections)"
+    assert d["middle"]["theta_deg"] == pytest.approx(truth["theta_deg"], rel=0.002)
+
+
+def test_a_doubtful_measurement_says_so_on_stderr(photo, tmp_path, capsys):
+    d, _, cal, img, truth = photo
+    # a second, differently bent tube of the same colour over the first one's end:
+    # the chain of three arcs cannot explain the centerline
+    from lcpbench.vision.render import TUBE_BGR
+
+    bad = img.copy()
+    p = np.array(truth["pins_px"])
+    mid = (p[0] + p[1]) / 2
+    cv2.ellipse(bad, tuple(int(v) for v in mid), (140, 60), 0, 200, 340, TUBE_BGR, 14)
+    f = tmp_path / "bad.png"
+    cv2.imwrite(str(f), bad)
+    assert main(["vision", "measure", str(f), "--calib", str(cal), "--json"]) == 0
+    out, err = capsys.readouterr()
+    res = json.loads(out)
+    assert res["warnings"] and err.count("lcpbench: warning:") == len(res["warnings"])
+
+
+def test_render_tube_hue(tmp_path, capsys):
+    img = tmp_path / "g.png"
+    assert main(["vision", "render", "--theta", "34", "--length", "25.15", "--tube-hue", "120",
+                 "--nuisances", "none", "--out", str(img)]) == 0
+    truth = json.loads((tmp_path / "g.json").read_text())
+    b, g, r = truth["tube_bgr"]
+    assert g > 2 * max(b, r)  # green

@@ -13,6 +13,8 @@ Stages (each callable and tested alone):
 - :func:`centerline` — sub-pixel centerline (IV-D-4)
 - :func:`inflection_indices`, :func:`fit_circle`, :func:`bend_angle` (eq. 38),
   :func:`arc_length` (eq. 39) — IV-D-5 to 7
+- :func:`fit_chain` — one least-squares fit of the chain of k arcs between the
+  pins, with standard errors and warnings (the measurement)
 - :func:`measure` — all of the above on one photograph
 - :func:`fit_theta_pressure` — θ against pressure (eqs. 40-42)
 - :func:`compare`, :func:`icp` — model against photograph (IV-D-8, Fig. 23)
@@ -34,10 +36,13 @@ _WHERE = {
     "arc_length": "geometry", "inflection_indices": "geometry", "icp": "geometry",
     "rigid_fit": "geometry", "offset_curve": "geometry",
     "measure": "measure", "Measurement": "measure", "analyse_centerline": "measure",
+    "analyse": "measure", "fit_chain": "jointfit", "JointFit": "jointfit",
+    "Confidence": "jointfit", "chain": "jointfit",
     "fit_theta_pressure": "calibrate", "PressureFit": "calibrate",
     "compare": "compare", "model_centerline": "compare",
     "render": "render", "render_unconstrained": "render", "render_constrained": "render",
     "arc_sections": "render", "Nuisances": "render", "default_calibration": "render",
+    "tube_colour": "render",
 }
 
 __all__ = ["VisionError", *_WHERE]

@@ -59,6 +59,9 @@ def _add_measure_options(p) -> None:
                         "default automatic")
     p.add_argument("--hsv-upper", type=str, default=None, metavar="H,S,V",
                    help="upper HSV bound (give both or neither)")
+    p.add_argument("--equal-sections", action="store_true",
+                   help="the joint fit shares one theta among the sections (arc lengths "
+                        "stay per section)")
 
 
 def register(subparsers) -> None:
@@ -128,6 +131,8 @@ def register(subparsers) -> None:
     r.add_argument("--sections", type=int, default=3)
     r.add_argument("--diameter", type=float, default=3.0, metavar="MM")
     r.add_argument("--marker-mm", type=float, default=25.0, metavar="MM")
+    r.add_argument("--tube-hue", type=float, metavar="DEG",
+                   help="hue of the tube, 0-360 (default: orange, about 22)")
     r.add_argument("--px-per-mm", type=float, default=15.0)
     r.add_argument("--nuisances", choices=("none", "all"), default="all",
                    help="all: rotation in +-10 deg, lens distortion, blur, noise, JPEG, "
@@ -158,7 +163,12 @@ def _measure(args, image):
     hi = _hsv(args.hsv_upper) if args.hsv_upper else None
     return measure(image, calibration=args.calib, marker_mm=args.marker_mm,
                    sections=args.sections, diameter_mm=args.diameter, hsv_lower=lo,
-                   hsv_upper=hi)
+                   hsv_upper=hi, equal_sections=args.equal_sections)
+
+
+def _warn(meas) -> None:
+    for w in meas.warnings:
+        print(f"lcpbench: warning: {w}", file=sys.stderr)
 
 
 def cmd_measure(args) -> int:
@@ -167,15 +177,29 @@ def cmd_measure(args) -> int:
         from .plots import plot_measurement
 
         plot_measurement(meas, args.plot)
+    _warn(meas)
     if args.json:
         _dump(meas.to_dict(), None)
         return 0
+    c = meas.confidence
     print(f"scale        {meas.px_per_mm:.4f} px/mm (ArUco id {meas.marker.id})")
     print(f"level        {meas.level_deg:+.3f} deg")
+    print(f"joint fit    {len(meas.sections)} arcs between the pins"
+          f"{', one shared theta' if args.equal_sections else ''} (+- 1 s.e.)")
     for j, s in enumerate(meas.sections):
         tag = "  <- middle" if j == meas.middle else ""
-        print(f"section {j + 1}    theta {s.theta_deg:8.3f} deg   arc length {s.arc_length_mm:7.3f} "
-              f"mm   radius {s.radius_mm:8.3f} mm{tag}")
+        print(f"section {j + 1}    theta {s.theta_deg:8.3f} +- {s.theta_se_deg:.3f} deg   arc "
+              f"length {s.arc_length_mm:7.3f} +- {s.arc_length_se_mm:.3f} mm   radius "
+              f"{s.radius_mm:8.3f} mm{tag}")
+    print(f"residual     RMS {c.rms_px:.3f} px ({c.rms_mm:.4f} mm), {c.points} points"
+          f"{f', {c.outliers} outliers left out' if c.outliers else ''}; section lengths "
+          f"spread {100 * c.length_spread:.2f} %")
+    if meas.circle_fits is not None:
+        cm = meas.circle_fits[meas.middle]
+        print(f"circle fits  middle theta {cm.theta_deg:8.3f} deg   arc length "
+              f"{cm.arc_length_mm:7.3f} mm (per-section, eqs. 38-39, for comparison)")
+    print("confidence   " + (f"{len(meas.warnings)} warning(s), see above" if meas.warnings
+                             else "no warning"))
     if args.plot:
         print(f"plot         {args.plot}")
     return 0
@@ -197,7 +221,9 @@ def cmd_calibrate(args) -> int:
         rows = list(zip(args.images, ps))
     thetas = []
     for path, p in rows:
-        mid = _measure(args, path).sections[args.sections // 2]
+        meas = _measure(args, path)
+        _warn(meas)
+        mid = meas.sections[args.sections // 2]
         thetas.append(mid.theta_deg)
         print(f"{path}: P = {p:g} {args.unit}, theta = {mid.theta_deg:.3f} deg", file=sys.stderr)
     pressures = [p for _, p in rows]
@@ -257,6 +283,10 @@ def cmd_render(args) -> int:
         nz.rotation_deg = args.rotation
     kw = dict(px_per_mm=args.px_per_mm, diameter=args.diameter, marker_mm=args.marker_mm,
               nuisances=nz)
+    if args.tube_hue is not None:
+        from .render import tube_colour
+
+        kw["tube_bgr"] = tube_colour(args.tube_hue)
     if args.height is None:
         img, truth = render_unconstrained(args.theta, length=args.length,
                                           sections=args.sections, **kw)

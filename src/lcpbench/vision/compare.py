@@ -97,7 +97,9 @@ def compare(meas: Measurement, theta_deg: float, height: float, *, diameter_mm: 
     if k > 1:
         full = np.vstack([[0.0, 0.0], c, [meas.pin_span_mm, 0.0]])
         s = cumulative_length(full)
-        mid = meas.sections[meas.middle]
+        # the paper's inflection points (tangent-angle extrema): they hold for a
+        # constrained middle section, which is not an arc of the joint fit's chain
+        mid = (meas.circle_fits or meas.sections)[meas.middle]
         s1 = s[np.argmin(np.hypot(*(full - mid.start_mm).T))]
         s2 = s[np.argmin(np.hypot(*(full - mid.end_mm).T))]
         ext = 0.1 * (s2 - s1)

@@ -30,69 +30,137 @@ def _save(fig, out) -> None:
         plt.close(fig)
 
 
+def _crop(meas, pad: float = 0.06) -> tuple[float, float, float, float]:
+    """Pixel box (x0, x1, y0, y1) around the actuator, the bearings and the marker."""
+    r = meas.bearings.radius_px
+    pts = np.vstack([meas.centerline_px, meas.marker.corners,
+                     meas.bearings.left - r, meas.bearings.left + r,
+                     meas.bearings.right - r, meas.bearings.right + r])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    m = pad * max(hi - lo)
+    h, w = meas.image.shape[:2]
+    return (max(lo[0] - m, -0.5), min(hi[0] + m, w - 0.5),
+            max(lo[1] - m, -0.5), min(hi[1] + m, h - 0.5))
+
+
 def plot_measurement(meas, out, truth: dict | None = None) -> None:
-    """(a) The undistorted photograph with the marker, the bearings, the pin line,
-    the centerline, inflection points and the fitted circles (Figs. 15-18); (b) the
-    levelled centerline in mm with the circle fits and θ, ℓ per section."""
+    """Two panels stacked, each sized to its content, each legend in a strip below
+    it: (a) the undistorted photograph cropped to the fixture, with the marker, the
+    bearings, the pin line, the sub-pixel centerline and the joint fit's arcs and
+    inflection points drawn over it (Figs. 15-18); (b) the levelled centerline in mm
+    with the joint fit (θ ± s.e., ℓ ± s.e. per section) and, dashed, the paper's
+    per-section circle fits (eqs. 38-39); the warnings, if any, under it."""
     from .stages import to_px
 
     plt = _plt()
-    fig, (a, b) = plt.subplots(1, 2, figsize=(15, 5.6), gridspec_kw={"width_ratios": [1.1, 1]})
-    img = meas.image[..., ::-1]
-    a.imshow(img)
+    colours = ["tab:blue", "tab:purple", "tab:green", "tab:brown", "tab:olive"]
+    x0, x1, y0, y1 = _crop(meas)
+    asp_a = (y1 - y0) / (x1 - x0)
+    c = meas.centerline_mm
+    span = meas.pin_span_mm
+    arcs = [_arc_points(s) for s in meas.sections]
+    allb = np.vstack([c, *arcs, [[0, 0], [span, 0]]])
+    blo, bhi = allb.min(axis=0), allb.max(axis=0)
+    pad = 0.04 * (bhi[0] - blo[0])
+    bx = (blo[0] - pad, bhi[0] + pad)
+    by = (blo[1] - pad, bhi[1] + pad)
+    asp_b = (by[1] - by[0]) / (bx[1] - bx[0])
+    if asp_b < 0.2:                       # a flat actuator: give (b) some height
+        mid, half = 0.5 * (by[0] + by[1]), 0.1 * (bx[1] - bx[0])
+        by, asp_b = (mid - half, mid + half), 0.2
+    # layout in inches: [title, (a), x label, legend (a)], then the same for (b)
+    fig_w, side = 9.0, 0.75
+    wa = min(fig_w - 2 * side, 5.6 / asp_a)
+    ha, wb = wa * asp_a, fig_w - 2 * side
+    hb = wb * asp_b
+    n_warn = len(meas.warnings)
+    leg_a, leg_b = 0.55, 0.75 + 0.17 * n_warn
+    gap = 0.45                             # title above a panel
+    lab = 0.5                              # x label and tick labels below it
+    fig_h = gap + ha + lab + leg_a + 1.4 * gap + hb + lab + leg_b
+    fig = plt.figure(figsize=(fig_w, fig_h))
+    ya = (fig_h - gap - ha) / fig_h
+    a = fig.add_axes([(fig_w - wa) / 2 / fig_w, ya, wa / fig_w, ha / fig_h])
+    yb = (leg_b + lab) / fig_h
+    b = fig.add_axes([side / fig_w, yb, wb / fig_w, hb / fig_h])
+
+    a.imshow(meas.image[..., ::-1])
     q = np.vstack([meas.marker.corners, meas.marker.corners[:1]])
     a.plot(q[:, 0], q[:, 1], "-", color="deepskyblue", lw=1.5,
            label=f"ArUco marker ({meas.px_per_mm:.3f} px/mm)")
     bl, br = meas.bearings.left, meas.bearings.right
     t = np.linspace(0, 2 * np.pi, 100)
-    for k, c in enumerate((bl, br)):
-        a.plot(c[0] + meas.bearings.radius_px * np.cos(t), c[1] + meas.bearings.radius_px *
+    for k, cc in enumerate((bl, br)):
+        a.plot(cc[0] + meas.bearings.radius_px * np.cos(t), cc[1] + meas.bearings.radius_px *
                np.sin(t), "-", color="lime", lw=1.2, label="pin bearings" if k == 0 else None)
     a.plot([bl[0], br[0]], [bl[1], br[1]], "--", color="yellow", lw=1,
            label=f"pin line (level {meas.level_deg:+.2f}°)")
     cpx = meas.centerline_px
-    a.plot(cpx[:, 0], cpx[:, 1], "-", color="magenta", lw=1, label="centerline (sub-pixel)")
-    colours = ["tab:blue", "tab:purple", "tab:green", "tab:brown", "tab:olive"]
-    for j, s in enumerate(meas.sections):
-        arc = _arc_points(s)
+    a.plot(cpx[:, 0], cpx[:, 1], "-", color="magenta", lw=0.8, label="centerline (sub-pixel)")
+    for j, arc in enumerate(arcs):
         apx = to_px(arc, meas.bearings, meas.px_per_mm)
-        a.plot(apx[:, 0], apx[:, 1], ":", color=colours[j % 5], lw=2)
+        a.plot(apx[:, 0], apx[:, 1], "-", color=colours[j % 5], lw=2, alpha=0.9,
+               label="joint fit: one arc per section" if j == 0 else None)
     if len(meas.inflection_points_mm):
         ipx = to_px(meas.inflection_points_mm, meas.bearings, meas.px_per_mm)
-        a.plot(ipx[:, 0], ipx[:, 1], "s", color="red", ms=6, label="inflection points")
-    h, w = meas.image.shape[:2]
+        a.plot(ipx[:, 0], ipx[:, 1], "s", color="red", ms=6, mec="k", mew=0.5,
+               label="inflection points (joint fit)")
     bar = 10 * meas.px_per_mm
-    x0, y0 = w - bar - 0.04 * w, h - 0.05 * h
-    a.plot([x0, x0 + bar], [y0, y0], "-", color="k", lw=3)
-    a.text(x0 + bar / 2, y0 - 0.015 * h, "10 mm", ha="center", va="bottom", fontsize=8)
-    a.set_title("(a) undistorted photograph: detected features")
-    a.set_xlabel("x (px)")
-    a.set_ylabel("y (px)")
-    a.legend(loc="lower left", fontsize=7, framealpha=0.85)
+    bx0, by0 = x1 - bar - 0.04 * (x1 - x0), y1 - 0.05 * (y1 - y0)
+    a.plot([bx0, bx0 + bar], [by0, by0], "-", color="k", lw=3)
+    a.text(bx0 + bar / 2, by0 - 0.015 * (y1 - y0), "10 mm", ha="center", va="bottom",
+           fontsize=8)
+    a.set_xlim(x0, x1)
+    a.set_ylim(y1, y0)
+    a.set_title("(a) undistorted photograph: detected features and the fitted arcs",
+                fontsize=10)
+    a.set_xlabel("x (px)", fontsize=8)
+    a.set_ylabel("y (px)", fontsize=8)
+    a.tick_params(labelsize=7)
+    a.legend(loc="upper center", bbox_to_anchor=(0.5, -lab / ha), ncol=3, fontsize=7,
+             frameon=False)
 
-    c = meas.centerline_mm
-    b.plot(c[:, 0], c[:, 1], ".", color="0.3", ms=1.5, label="centerline (measured)")
-    for j, s in enumerate(meas.sections):
-        arc = _arc_points(s)
-        mid = " (middle)" if j == meas.middle else ""
-        b.plot(arc[:, 0], arc[:, 1], "-", color=colours[j % 5], lw=1.5,
-               label=f"section {j + 1}{mid}: θ = {s.theta_deg:.2f}°, ℓ = {s.arc_length_mm:.2f} mm")
+    b.plot(c[:, 0], c[:, 1], ".", color="0.35", ms=1.5, label="centerline (measured)")
+    for j, (s, arc) in enumerate(zip(meas.sections, arcs)):
+        tag = " (middle)" if j == meas.middle else ""
+        se = (f" ± {s.theta_se_deg:.2g}°" if s.theta_se_deg is not None else "°",
+              f" ± {s.arc_length_se_mm:.2g} mm" if s.arc_length_se_mm is not None else " mm")
+        b.plot(arc[:, 0], arc[:, 1], "-", color=colours[j % 5], lw=1.6,
+               label=f"section {j + 1}{tag}: θ = {s.theta_deg:.2f}{se[0]}, "
+                     f"ℓ = {s.arc_length_mm:.2f}{se[1]}")
+    if meas.circle_fits is not None:
+        for j, s in enumerate(meas.circle_fits):
+            arc = _arc_points(s)
+            cm = meas.circle_fits[meas.middle]
+            b.plot(arc[:, 0], arc[:, 1], "--", color="0.15", lw=0.8, label=None if j else
+                   f"circle per section (eqs. 38-39): middle θ = {cm.theta_deg:.2f}°, "
+                   f"ℓ = {cm.arc_length_mm:.2f} mm")
+        kn = meas.circle_knots_mm
+        b.plot(kn[:, 0], kn[:, 1], "s", mfc="none", mec="k", ms=7,
+               label="their inflection points")
     if len(meas.inflection_points_mm):
         ip = meas.inflection_points_mm
-        b.plot(ip[:, 0], ip[:, 1], "s", color="red", ms=6, label="inflection points")
-    b.plot([0, meas.pin_span_mm], [0, 0], "o", color="k", ms=6, label="pins")
+        b.plot(ip[:, 0], ip[:, 1], "s", color="red", ms=5, label="inflection points (joint fit)")
+    b.plot([0, span], [0, 0], "o", color="k", ms=6, label="pins (bearing centres)")
+    conf = meas.confidence
+    what = (f"RMS residual {conf.rms_px:.2f} px, section lengths spread "
+            f"{100 * conf.length_spread:.2f} %") if conf is not None else ""
     if truth is not None and "theta_deg" in truth:
-        b.set_title(f"(b) levelled frame, circle fits (truth: θ = {truth['theta_deg']:g}°, "
-                    f"ℓ = {truth['arc_length_mm']:g} mm)")
-    else:
-        b.set_title("(b) levelled frame, least-squares circle per section (eqs. 38-39)")
-    b.set_xlabel("x along the pin line (mm)")
-    b.set_ylabel("y (mm)")
+        what += f"; truth θ = {truth['theta_deg']:g}°, ℓ = {truth['arc_length_mm']:g} mm"
+    b.set_title(f"(b) levelled frame (mm), joint fit of {len(meas.sections)} arcs\n{what}",
+                fontsize=10)
+    b.set_xlim(*bx)
+    b.set_ylim(*by)
     b.set_aspect("equal")
+    b.set_xlabel("x along the pin line (mm)", fontsize=8)
+    b.set_ylabel("y (mm)", fontsize=8)
+    b.tick_params(labelsize=7)
     b.grid(alpha=0.3)
-    # below the flat panel (b), in figure coordinates, clear of its axis label
-    fig.legend(*b.get_legend_handles_labels(), fontsize=7, loc="lower right",
-               bbox_to_anchor=(0.99, 0.03), ncol=2)
+    b.legend(loc="upper center", bbox_to_anchor=(0.5, -lab / hb), ncol=2, fontsize=7,
+             frameon=False)
+    for k, w in enumerate(meas.warnings):
+        fig.text(0.5, (0.12 + 0.17 * (n_warn - 1 - k)) / fig_h, "warning: " + w, ha="center",
+                 va="bottom", color="tab:red", fontsize=7, wrap=True)
     _save(fig, out)
 
 

@@ -154,8 +154,17 @@ def _ccw(c):
     return c if area < 0 else c[::-1]  # image y is down: "ccw" on screen
 
 
+def tube_colour(hue_deg: float) -> tuple[int, int, int]:
+    """BGR of a tube of hue ``hue_deg`` (0-360) with the default tube's saturation
+    and brightness (the default orange is hue ≈ 22°)."""
+    s, v = cv2.cvtColor(np.uint8([[TUBE_BGR]]), cv2.COLOR_BGR2HSV_FULL)[0, 0, 1:]
+    h = int(round(hue_deg / 360 * 256)) % 256
+    return tuple(int(c) for c in cv2.cvtColor(np.uint8([[[h, s, v]]]),
+                                              cv2.COLOR_HSV2BGR_FULL)[0, 0])
+
+
 def render(centerline_mm, *, px_per_mm: float = 15.0, diameter: float = 3.0,
-           bearing_diameter: float = 6.0, marker_mm: float = 25.0,
+           bearing_diameter: float = 6.0, marker_mm: float = 25.0, tube_bgr=TUBE_BGR,
            wall_height: float | None = None, wall_span: tuple[float, float] | None = None,
            nuisances: Nuisances | None = None, margin_mm: float = 8.0,
            marker_id: int = 7) -> tuple[np.ndarray, dict]:
@@ -172,6 +181,7 @@ def render(centerline_mm, *, px_per_mm: float = 15.0, diameter: float = 3.0,
     wall_height : if given, two wall bars whose faces are at y = ±wall_height.
     wall_span : x range of the walls (default: the whole centerline).
     nuisances : see :class:`Nuisances` (default: none).
+    tube_bgr : the tube's colour, BGR (default orange; :func:`tube_colour` gives any hue).
 
     Returns
     -------
@@ -250,7 +260,7 @@ def render(centerline_mm, *, px_per_mm: float = 15.0, diameter: float = 3.0,
     d = np.minimum(d, r_px + 3)
     cov = np.clip(r_px - d + 0.5, 0, 1)
     shade = 0.72 + 0.28 * np.sqrt(np.clip(1 - (d / r_px) ** 2, 0, 1))
-    colour = np.asarray(TUBE_BGR, float)[None, :] * shade[:, None]
+    colour = np.asarray(tube_bgr, float)[None, :] * shade[:, None]
     img[iy, ix] = img[iy, ix] * (1 - cov[:, None]) + colour * cov[:, None]
 
     # the two pin bearings, on top of the tube's ends
@@ -272,7 +282,7 @@ def render(centerline_mm, *, px_per_mm: float = 15.0, diameter: float = 3.0,
         img *= light[..., None]
     truth = {"px_per_mm": px_per_mm, "rotation_deg": nz.rotation_deg,
              "pins_px": pins.tolist(), "marker_corners_px": corners.tolist(),
-             "marker_mm": marker_mm, "diameter_mm": diameter,
+             "marker_mm": marker_mm, "diameter_mm": diameter, "tube_bgr": list(tube_bgr),
              "bearing_diameter_mm": bearing_diameter, "wall_height_mm": wall_height,
              "image_size": [int(width), int(height)],
              "settings": {k: v for k, v in vars(nz).items() if k not in ("calibration", "extra")}}
