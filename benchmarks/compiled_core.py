@@ -42,7 +42,7 @@ import lcpbench  # noqa: E402
 from lcpbench.model.dense import solve_paper_dense  # noqa: E402
 from lcpbench.model.kernel_call import run_compiled, solve_kernel  # noqa: E402
 from lcpbench.model.step import assemble_step  # noqa: E402
-from lcpbench.model.step_solver import solve_step, step_lcp  # noqa: E402
+from lcpbench.model.step_solver import step_lcp  # noqa: E402
 from lcpbench.solvers import available_backends, solve_lcp  # noqa: E402
 
 SCENE = dict(theta=150.0, height=3.0, links=140)

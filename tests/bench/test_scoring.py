@@ -41,6 +41,10 @@ def test_charged_sgm_by_hand():
     assert charged_sgm([1.0, 8.0, 27.0], [True] * 3, 1.0, 0.0) == pytest.approx(6.0)
     # every run failed: the charge itself
     assert charged_sgm([0.5, 2.0], [False, False], 60.0, 1.0) == pytest.approx(60.0)
+    # a mean lies between the smallest and the largest value, round-off of the shift's
+    # subtraction included (found by the property below: -4e-16 for zeros)
+    assert charged_sgm([0.0, 0.0, 0.0], [True] * 3, 60.0, 1e-13) == 0.0
+    assert charged_sgm([2e-293], [True], 60.0, 3.34) == 2e-293
     assert math.isnan(charged_sgm([], [], 60.0, 1.0))
 
 

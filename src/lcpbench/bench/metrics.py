@@ -61,14 +61,18 @@ COLD_METHODS = ("globalised", "hybr", "lm")
 
 
 def shifted_geometric_mean(values, shift: float = SHIFT) -> float:
-    """exp(mean(log(v + shift))) − shift; NaN for no values (shift 0: the plain geometric mean)."""
+    """exp(mean(log(v + shift))) − shift; NaN for no values (shift 0: the plain geometric mean).
+
+    Held within [min v, max v], where every mean lies: the subtraction of the shift
+    cancels (values near 0 gave −4e-16)."""
     v = np.asarray(list(values), float)
     if v.size == 0:
         return float("nan")
     if np.any(v < 0):
         raise ValueError("shifted geometric mean of negative values")
     with np.errstate(divide="ignore"):  # shift 0 and a zero value: the mean is 0
-        return float(np.exp(np.mean(np.log(v + shift))) - shift)
+        m = float(np.exp(np.mean(np.log(v + shift))) - shift)
+    return min(max(m, float(v.min())), float(v.max()))
 
 
 def charged_sgm(values, solved, charge: float, shift: float) -> float:
