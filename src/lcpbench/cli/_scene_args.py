@@ -296,19 +296,25 @@ def _single(args, kw: dict) -> ActuatorScene:
             raise ProblemError("--fit needs --pressure")
         theta = DEFAULT_THETA if args.theta is None else args.theta
         return ActuatorScene(theta=theta, **kw)
-    from ..problems.calibrations import linear_calibration, scene_from_pressure
+    from ..problems.calibrations import scene_from_pressure
 
     if args.theta is not None:
         raise ProblemError("give --theta or --pressure, not both (the calibration sets theta)")
-    actuator = args.actuator
-    if args.fit is not None:
-        try:
-            slope, intercept = (float(v) for v in args.fit.split(","))
-        except ValueError:
-            raise ProblemError(f"fit must be SLOPE,INTERCEPT (two numbers), got "
-                               f"{args.fit!r}") from None
-        actuator = linear_calibration(slope, intercept)
-    return scene_from_pressure(args.pressure, actuator, **kw)
+    return scene_from_pressure(args.pressure, calibration_from(args), **kw)
+
+
+def calibration_from(args):
+    """The calibration θ(P) of ``--fit SLOPE,INTERCEPT``, else of ``--actuator``."""
+    from ..problems.calibrations import get_calibration, linear_calibration
+
+    if args.fit is None:
+        return get_calibration(args.actuator, param="actuator")
+    try:
+        slope, intercept = (float(v) for v in args.fit.split(","))
+    except ValueError:
+        raise ProblemError(f"fit must be SLOPE,INTERCEPT (two numbers), got "
+                           f"{args.fit!r}") from None
+    return linear_calibration(slope, intercept)
 
 
 def _profiles(args) -> dict:

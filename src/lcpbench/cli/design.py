@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from ..errors import ProblemError
 from ._common import add_json_option, print_json
-from ._scene_args import add_scene_options, add_wall_options, scene_from
+from ._scene_args import add_scene_options, add_wall_options, calibration_from, scene_from
 
 
 def register(subparsers) -> None:
@@ -47,19 +47,6 @@ def register(subparsers) -> None:
     d.set_defaults(func=cmd_design)
 
 
-def _calibration(args):
-    from ..problems.calibrations import get_calibration, linear_calibration
-
-    if args.fit is not None:
-        try:
-            slope, intercept = (float(v) for v in args.fit.split(","))
-        except ValueError:
-            raise ProblemError(f"--fit must be SLOPE,INTERCEPT (two numbers), got "
-                               f"{args.fit!r}") from None
-        return linear_calibration(slope, intercept)
-    return get_calibration(args.actuator)
-
-
 def cmd_design(args) -> int:
     """0 answered, 2 bad input or a target out of reach (one line)."""
     from ..studies.design import design
@@ -70,7 +57,7 @@ def cmd_design(args) -> int:
         raise ProblemError("--by-pressure searches the pressure for a force: not with --touch")
     scene = scene_from(args)
     got = design(scene, max_force=args.max_force, min_force=args.min_force, touch=args.touch,
-                 peak=args.peak, calibration=_calibration(args) if args.by_pressure else None,
+                 peak=args.peak, calibration=calibration_from(args) if args.by_pressure else None,
                  tol=args.tol)
     if args.json:
         print_json(got.as_json())

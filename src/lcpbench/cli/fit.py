@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import ProblemError
 from ._common import add_json_option, error_line, has_matplotlib, print_json
-from ._scene_args import add_scene_options, add_wall_options, scene_from
+from ._scene_args import add_scene_options, add_wall_options, calibration_from, scene_from
 
 
 def register(subparsers) -> None:
@@ -40,7 +40,6 @@ def register(subparsers) -> None:
 
 def cmd_fit(args) -> int:
     """0 fitted, 2 bad input (one line)."""
-    from ..problems.calibrations import get_calibration, linear_calibration
     from ..studies.fit import fit, read_data
 
     if args.plot is not None and not has_matplotlib():
@@ -49,15 +48,7 @@ def cmd_fit(args) -> int:
     if args.pressure is not None:
         raise ProblemError("fit takes the pressures from --data: drop --pressure")
     P, y, h = read_data(args.data)
-    if args.fit is not None:
-        try:
-            slope, intercept = (float(v) for v in args.fit.split(","))
-        except ValueError:
-            raise ProblemError(f"--fit must be SLOPE,INTERCEPT (two numbers), got "
-                               f"{args.fit!r}") from None
-        cal = linear_calibration(slope, intercept)
-    else:
-        cal = get_calibration(args.actuator)
+    cal = calibration_from(args)
     args.fit = None  # (the scene's theta comes from the data, not from --pressure)
     scene = scene_from(args)
     got = fit(scene, P, y, cal, height=h, fit_theta=args.fit_theta, tol=args.tol)

@@ -287,15 +287,16 @@ def _lookup(name, param: str) -> Calibration:
     return CALIBRATIONS[key]
 
 
-def get_calibration(name: str | int) -> Calibration:
+def get_calibration(name: str | int, param: str = "name") -> Calibration:
     """The paper's calibration of actuator ``name`` ("1", "2" or "3"; an int works too).
 
     Raises
     ------
     ProblemError
-        For any other name; the message lists the known ones.
+        For any other name, naming ``param`` (the caller's name for it, e.g. the
+        option "actuator"); the message lists the known ones.
     """
-    return _lookup(name, "name")
+    return _lookup(name, param)
 
 
 def scene_from_pressure(
