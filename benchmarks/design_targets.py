@@ -33,6 +33,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from perf import interleaved, wall  # (benchmarks/ is the script's directory)
 
 import lcpbench
 from lcpbench import ActuatorScene
@@ -112,14 +113,8 @@ def target2(rounds: int) -> list[str]:
     calls = {"lcpbench.solve (tol 1e-10)": lambda: lcpbench.solve(scene, tol=1e-10),
              "sensitivities, all parameters": lambda: sensitivities(res),
              "sensitivities, theta alone": lambda: sensitivities(res, wrt=("theta_deg",))}
-    for c in calls.values():
-        c()
-    times: dict[str, list[float]] = {k: [] for k in calls}
-    for _ in range(rounds):
-        for name, c in calls.items():
-            t0 = time.perf_counter()
-            c()
-            times[name].append(time.perf_counter() - t0)
+    times = {name: g["times"] for name, g in interleaved(
+        {name: wall(call) for name, call in calls.items()}, rounds).items()}
     base = float(np.median(times["lcpbench.solve (tol 1e-10)"]))
     lines = ["| call | median (ms) | × the solve |", "|---|---:|---:|"]
     for name, t in times.items():

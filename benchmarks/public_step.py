@@ -31,6 +31,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from perf import interleaved, wall  # (benchmarks/ is the script's directory)
 
 import lcpbench
 from lcpbench import ActuatorScene
@@ -68,12 +69,8 @@ def main(argv=None) -> int:
         "solve_lcp(M, q, 'siconos-lemke') (exported LCP)": lambda: solve_lcp(M, q,
                                                                              "siconos-lemke"),
     }
-    times: dict[str, list[float]] = {k: [] for k in calls}
-    for _ in range(a.rounds):
-        for name, call in calls.items():
-            t0 = time.perf_counter()
-            call()
-            times[name].append(time.perf_counter() - t0)
+    times = {name: g["times"] for name, g in interleaved(
+        {name: wall(call) for name, call in calls.items()}, a.rounds).items()}
     ours_med = float(np.median(times[next(iter(calls))]))
     lines = ["| call | median (µs) | min (µs) | × the compiled step |", "|---|---:|---:|---:|"]
     for name, t in times.items():

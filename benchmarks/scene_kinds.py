@@ -24,6 +24,7 @@ import time
 from pathlib import Path
 
 import numpy as np
+from perf import interleaved, wall  # (benchmarks/ is the script's directory)
 
 import lcpbench
 from lcpbench import ActuatorScene, SectionedScene
@@ -63,17 +64,14 @@ def scenes() -> dict[str, object]:
 
 
 def measure(all_scenes: dict, tol: float, rounds: int) -> dict[str, dict]:
-    out = {name: {"times": []} for name in all_scenes}
-    for name, scene in all_scenes.items():  # warm-up: kernels loaded, chains built
-        r = lcpbench.solve(scene, tol=tol)
-        out[name].update(engine=r.engine, converged=r.converged,
-                         force=r.total_force)
-    for _ in range(rounds):
-        for name, scene in all_scenes.items():
-            t0 = time.perf_counter()
-            lcpbench.solve(scene, tol=tol)
-            out[name]["times"].append(time.perf_counter() - t0)
-    return out
+    """Each scene's solve times (perf.interleaved: rotating order, one warm-up round,
+    the garbage collector off during a call), its engine, verdict and force."""
+    calls = {name: wall(lambda scene=scene: lcpbench.solve(scene, tol=tol))
+             for name, scene in all_scenes.items()}
+    got = interleaved(calls, rounds)
+    return {name: {"times": g["times"], "engine": g["payload"].engine,
+                   "converged": g["payload"].converged, "force": g["payload"].total_force}
+            for name, g in got.items()}
 
 
 def table(got: dict[str, dict]) -> list[str]:
@@ -105,7 +103,7 @@ def main(argv=None) -> int:
         "# Every scene kind against the flat wall (issue 35, target 1)", "",
         f"Measured {when}; {timing_note(start)} Command: `python benchmarks/scene_kinds.py "
         f"--rounds {a.rounds} --force`. `lcpbench.solve` with the default back-end, θ = 150°, "
-        f"h = 3 mm, N = 140; {a.rounds} interleaved rounds after one warm-up call per scene. "
+        f"h = 3 mm, N = 140; {a.rounds} interleaved rounds after one warm-up round, in rotating order. "
         "Target: every kind within 2× of the flat wall. Times of different runs are not "
         "comparable, ratios are.", "", *parts])
     a.out.write_text(text)
