@@ -46,11 +46,18 @@ def test_check_number_bounds_open_and_closed(value, ok):
             check_number("x", value, low=0.0, high=10.0, low_open=True)
 
 
-def test_message_shows_value_and_type():
+def test_message_shows_the_value_as_written_without_a_type_name():
+    """Issue 40, item 7: a type name never appears in a message."""
     with pytest.raises(ProblemError) as info:
         check_number("links", True, low=4, high=100000, integer=True, alternative="'auto'")
     assert str(info.value) == ("links must be an integer in [4, 100000] or 'auto', "
-                               "got True (bool)")
+                               "got True")
+    with pytest.raises(ProblemError) as info:
+        check_number("height", np.float64(-3.0), low=0.0, high=10.0)
+    assert str(info.value).endswith("got -3.0")
+    with pytest.raises(ProblemError) as info:
+        check_number("height", "3", low=0.0, high=10.0)
+    assert str(info.value).endswith("got '3'")
 
 
 def test_check_flag_only_real_bools():

@@ -30,11 +30,16 @@ from ..errors import ProblemError
 
 
 def describe(value) -> str:
-    """``repr`` of ``value`` (shortened) with its type name, for error messages."""
-    text = repr(value)
+    """``value`` as a user wrote it, shortened, for error messages: a string quoted, a
+    number or a flag as its value (``3.0``, ``True``, not ``np.float64(3.0)``), else its
+    ``repr``. No type name: a user reads "got -30.0", not an internal class."""
+    if isinstance(value, (numbers.Number, np.generic)) and not isinstance(value, str):
+        text = str(value)
+    else:
+        text = repr(value)
     if len(text) > 60:
         text = text[:57] + "..."
-    return f"{text} ({type(value).__name__})"
+    return text
 
 
 def _is_bool(value) -> bool:
