@@ -117,9 +117,6 @@ def sensitivities(result, wrt=None) -> Sensitivities:
     return _collect(result, scene, names, d)
 
 
-_ROWS = {"theta_deg": 0, "height_mm": 1, "EI": 2, "weight": 3, "wall_stiffness": 4}
-
-
 def _derivatives(result, scene: ActuatorScene, names: set, elastic: bool) -> dict:
     """{parameter: (d forces_upper, d forces_lower, d heights)} by the compiled face solve
     (:func:`lcpbench.model.sensitivity_kernel.derivatives`), and the one-sided nodes."""
@@ -138,9 +135,12 @@ def _derivatives(result, scene: ActuatorScene, names: set, elastic: bool) -> dic
     # building a lazy result's judgement
     F0 = max(abs(float(fu.sum())), abs(float(fl.sum())), float(chain.force_scale))
     eps_R = NODE_SHARE * force_tol(result.tol) * F0
+    # the kernel's output rows of each parameter (its constants, not a copy of them)
+    rows = {"theta_deg": kern.THETA, "height_mm": kern.HEIGHT, "EI": kern.EI_,
+            "weight": kern.WEIGHT, "wall_stiffness": kern.WALL}
     want = np.zeros(5, bool)
     for p in names:
-        want[_ROWS[p]] = True
+        want[rows[p]] = True
     # φ* = −θ/N per joint, k = EI/a, the loads ∝ w: their derivatives
     drest = rest / scene.theta if scene.theta else np.full(rest.size, -math.pi / 180 / n)
     dk = k / scene.EI
@@ -152,7 +152,7 @@ def _derivatives(result, scene: ActuatorScene, names: set, elastic: bool) -> dic
     if code != kern.OK:
         raise ProblemError("sensitivities: the Hessian on the answer's free nodes is not "
                            "positive definite (the contact set is not a stable one)")
-    out = {p: (dfu[_ROWS[p]], dfl[_ROWS[p]], du[_ROWS[p]]) for p in names}
+    out = {p: (dfu[rows[p]], dfl[rows[p]], du[rows[p]]) for p in names}
     # a node touching its wall without force: at a change of contact set (one-sided)
     u = heights(chain, alpha)
     c_max = float(np.max(cu, initial=0.0)) if cu.size else 0.0

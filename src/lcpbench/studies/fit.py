@@ -130,8 +130,6 @@ def fit(scene: ActuatorScene, pressure, force, calibration: Calibration, *, heig
         raise ProblemError("fit: every force is 0: no contact, nothing to fit EI to")
     s = np.maximum(np.abs(y), 0.05 * np.max(np.abs(y)))
     x = np.array([scene.EI, calibration.slope, calibration.intercept][:nparam], dtype=float)
-    if not fit_theta:
-        x = np.array([scene.EI])
     last: list = [None] * P.size
     solves = 0
 
