@@ -199,12 +199,20 @@ def test_the_result_says_what_ran():
     assert "engine" not in res.extra and "judge" not in res.extra
 
 
+def _bump():
+    from lcpbench.problems.walls import WallProfile
+
+    return WallProfile.from_table([0, 10, 14, 18, 30], [3.0, 3.0, 2.4, 3.0, 3.0])
+
+
 @pytest.mark.parametrize("kw, how, engine", [
     (dict(links=40), dict(), "compiled"),
     (dict(links=40, channel=True), dict(), "compiled"),
     (dict(links=30, weight=0.3), dict(), "numpy (SQP steps in the link angles"),
     (dict(links=40), dict(solver="lemke"), "compiled driver"),
     (dict(links=40), dict(method="undamped"), "numpy"),
+    (dict(links=40, wall_profile=_bump()), dict(), "compiled"),
+    (dict(links=40, wall_profile=_bump()), dict(method="newton"), "numpy"),
 ])
 def test_the_planned_engine_is_the_one_drive_runs(kw, how, engine):
     # model.compiled.drive decides again at run time: the plan must not drift from it

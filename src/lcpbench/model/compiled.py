@@ -34,7 +34,13 @@ from ..solvers.judge import requested
 from ..solvers.registry import DEFAULT, get_settings
 from . import angle_step, compiled_driver, heavy_driver, large_n, wall_free
 from .driver import run_driver
-from .kernel_call import BAIL_REASONS, applies, run_compiled
+from .kernel_call import (
+    BAIL_REASONS,
+    applies,
+    profile_applies,
+    run_compiled,
+    run_profile_compiled,
+)
 from .outer import DriverOutput, DriverStart
 from .profile import has_profile
 
@@ -117,9 +123,17 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
     if engine != "numpy" and applies(backend, method, None if args is not None else chain):
         return run_kernel(chain, lambda: step_solver, settings=settings, tol=tol,
                           max_outer=max_outer, method=method, start=start, args=args)
+    elif engine != "numpy" and profile_applies(backend, method, chain):
+        out, why = run_profile_compiled(chain, tol=tol, max_outer=max_outer, start=start,
+                                        settings=settings)
+        if out is not None:
+            return out, "compiled"
+        return (run_driver(chain, step_solver, tol=tol, max_outer=max_outer, method=method,
+                           start=start), f"numpy (the compiled kernel stopped: {why})")
     elif engine == "compiled" and chain is not None and has_profile(chain):
-        raise ProblemError("engine='compiled' does not run walls of any profile (wall_profile); "
-                           "engine='auto' or 'numpy' runs them in the numpy reference")
+        raise ProblemError("engine='compiled' runs walls of any profile (wall_profile) with the "
+                           f"default back-end ({DEFAULT}) and method='globalised' only; "
+                           "engine='auto' or 'numpy' runs the others in the numpy reference")
     elif engine != "numpy" and compiled_driver.takes(chain, step_solver, method):
         # another back-end: its calls in Python, lcpbench's parts around them compiled
         return (compiled_driver.run(chain, step_solver, tol=tol, max_outer=max_outer,

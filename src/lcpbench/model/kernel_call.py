@@ -59,7 +59,11 @@ def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
 
 def _layout(chain: Chain) -> bool:
     if chain.profiled_walls:
-        return False  # walls of any profile: the numpy reference (model/profile_driver.py)
+        return False  # walls of any profile: the profile kernel (profile_applies)
+    return _consecutive(chain)
+
+
+def _consecutive(chain: Chain) -> bool:
     if chain.consecutive is not None:  # the scene says (the test below, done at building)
         return chain.consecutive
     left, right = chain.joint_links[:, 0], chain.joint_links[:, 1]
@@ -67,6 +71,77 @@ def _layout(chain: Chain) -> bool:
     return bool(right.size and f.size and np.all(np.diff(right) == 1)
                 and np.all((left < 0) | (right == left + 1)) and np.all(np.diff(f) == 1)
                 and f[0] >= 1)
+
+
+def profile_applies(backend: str, method: str, chain: Chain) -> bool:
+    """Whether the profile kernel (:func:`lcpbench.model.profile_kernel.solve_profile_chain`)
+    runs this solve: the default back-end, the globalised scheme, a chain of consecutive
+    joints and free nodes with a wall of any profile whose table of cubic pieces exists
+    (:meth:`lcpbench.problems.walls.WallProfile.pieces`)."""
+    if backend not in (DEFAULT, "auto") or method != "globalised" or not chain.profiled_walls:
+        return False
+    return chain.derived("_profile_layout",
+                         lambda: _consecutive(chain) and profile_args(chain) is not None)
+
+
+def profile_args(chain: Chain) -> tuple | None:
+    """The profile kernel's arguments after the solve kernel's first nine: the rows, ℓ,
+    EI/ℓ², the two walls' tables (empty: flat) and whether there is a channel; None
+    where a wall has no table."""
+    return chain.derived("_profile_args", lambda: _profile_args(chain))
+
+
+_EMPTY_TABLE = (np.zeros(0), np.zeros((4, 0)))
+
+
+def _profile_args(chain: Chain) -> tuple | None:
+    reach = (-float(chain.length), float(chain.length))  # no node is further from the pin
+    tables = []
+    for profile in (chain.upper_profile, chain.lower_profile):
+        table = _EMPTY_TABLE if profile is None else profile.pieces(*reach)
+        if table is None:
+            return None
+        tables.extend(table)
+    base = kernel_args(chain)
+    return (*base[9:13], *tables, bool(chain.channel))
+
+
+def run_profile_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
+                         start: DriverStart | None = None,
+                         settings="default") -> tuple[DriverOutput | None, str]:
+    """The globalised profile driver in the profile kernel: ``(output, "")``, or
+    ``(None, why)`` where a step left the reference's path (the caller then runs the
+    numpy reference, :mod:`lcpbench.model.profile_driver`)."""
+    from dataclasses import replace
+
+    from ..numba_cache import kernel_module
+
+    k = kernel_module("lcpbench.model.profile_kernel", "solve_profile_chain")
+    s = get_settings(settings)
+    n = chain.free_nodes.size
+    max_iter = s.max_iter if s.max_iter else 20 * n + 50
+    start_alpha, mu_up, mu_lo = np.zeros(0), np.zeros(n), np.zeros(n)
+    if start is not None:
+        start_alpha = np.ascontiguousarray(start.alpha, dtype=float)
+        net = None if start.warm is None else start.warm.forces_net
+        if net is not None and np.size(net) == n and np.all(np.isfinite(net)):
+            from .judge import split_reactions
+            from .profile import walls_at
+
+            up, lo = split_reactions(walls_at(chain, start_alpha), net,
+                                     np.asarray(start.warm.u, dtype=float))
+            mu_up, mu_lo = np.array(up, dtype=float), np.array(lo, dtype=float)
+    base = kernel_args(chain)
+    t0 = time.perf_counter()
+    got = k.solve_profile_chain(*base[:9], *profile_args(chain), float(tol), int(max_outer),
+                                start_alpha, mu_up, mu_lo, int(max_iter), float(requested(s)))
+    elapsed = time.perf_counter() - t0
+    code, *rest, upper, lower = got
+    if code in BAIL_REASONS:
+        return None, BAIL_REASONS[code]
+    at = replace(chain, upper=upper, lower=lower) if chain.channel else chain
+    return kernel_output(at, code, *rest, elapsed=elapsed, settings=s.name,
+                         max_outer=max_outer, tol=tol), ""
 
 
 def solve_kernel():
