@@ -209,7 +209,7 @@ def run_plan(plan: Plan, scene, ctx: Context, begin: DriverStart | None,
                                   args=args)
         res = finish(scene, chain, out, solver=ctx.backend, method=ctx.method, tol=ctx.tol,
                      elapsed=time.perf_counter() - t0, settings=ctx.settings, engine=used,
-                     compiled_judge=kernel, why=ctx.why,
+                     compiled_judge=plan.judge == "compiled", why=ctx.why,
                      judge_args=None if args is None else chain_args(chain, args),
                      pressure_limit=ctx.pressure_limit, route=plan.route)
     return res if res.converged else escalate(res, ctx, plan.escalations)
@@ -225,7 +225,7 @@ def _load_path(plan: Plan, scene, ctx: Context, t0: float) -> ContactResult:
     if out is not None:
         res = finish(scene, ctx.chain, out, solver=ctx.backend, method=ctx.method,
                      tol=ctx.tol, elapsed=time.perf_counter() - t0, settings=ctx.settings,
-                     engine=used, compiled_judge=plan.kernel_takes, why=ctx.why,
+                     engine=used, compiled_judge=plan.judge == "compiled", why=ctx.why,
                      pressure_limit=ctx.pressure_limit, route=plan.route)
         if res.converged:
             return res

@@ -112,7 +112,8 @@ def make_plan(chain: Chain, backend: str, method: str, engine: str, tol: float,
     ``tol`` (rad), ``start`` (one of :data:`STARTS`) and the step ``scaled`` or not.
     The arguments are :func:`lcpbench.solve`'s, checked."""
     takes = _kernel(chain, DEFAULT, "globalised", engine)
-    judge = "compiled" if takes and not large_n.applies(chain) else "numpy"
+    judged = takes or (engine != "numpy" and profile_applies(DEFAULT, "globalised", chain))
+    judge = "compiled" if judged and not large_n.applies(chain) else "numpy"
     if start == "ramp":
         cold = make_plan(chain, backend, method, engine, tol, "cold", scaled=scaled)
         return Plan("load path", "ramp", (), cold.engine, takes, judge, fallback=cold)

@@ -145,6 +145,17 @@ def test_the_slope_term_is_what_makes_the_answer_exact(monkeypatch):
     assert abs(res.total_force - ref.total_force) > 1e-3 * ref.total_force  # it is off
     assert not res.converged
     assert "torque" in res.judgement.failed or "force error bound" in res.judgement.failed
+    # the compiled judge (the judge kernel on the walls' tables) refuses it too
+    from lcpbench.model.judge_compiled import judge_fast
+
+    lower = np.zeros_like(res.forces)
+    sizes = [s.max_dalpha for s in res.steps]
+    verdict = judge_fast(scene.chain(), res.alpha, res.forces, lower, tol=1e-10,
+                         driver_converged=True, driver_reason="converged",
+                         step_statuses=["solved"] * len(sizes), step_sizes=sizes,
+                         certificate=None)
+    assert not verdict.converged
+    assert "torque" in verdict.failed or "force error bound" in verdict.failed
 
 
 def test_x_jacobian_product_matches_finite_differences():
@@ -162,6 +173,12 @@ def test_x_jacobian_product_matches_finite_differences():
         J[:, m] = (xp - xm) / 2e-6
     np.testing.assert_allclose(prof.x_jacobian_t(chain, alpha, w), J.T @ w, rtol=1e-7,
                                atol=1e-9)
+    from lcpbench.numba_cache import kernel_module  # the kernels' slope load
+
+    s = np.empty(u.size)
+    kernel_module("lcpbench.model.wall_kernel", "slope_load").slope_load(
+        alpha, np.cos(alpha), np.sin(alpha), int(chain.free_nodes[0]) + 1, w, s)
+    np.testing.assert_allclose(s, J.T @ w, rtol=1e-7, atol=1e-9)
 
 
 def test_moments_with_horizontal_forces_reduce_to_the_vertical_ones():

@@ -23,7 +23,7 @@ def _gauss_slope(x):
 
 
 def _kernel_eval(table, x):
-    k = kernel_module("lcpbench.model.profile_kernel", "solve_profile_chain")
+    k = kernel_module("lcpbench.model.wall_kernel", "wall_height")
     out = np.array([k.wall_height(*table, float(t)) for t in x])
     return out[:, 0], out[:, 1], out[:, 2]
 

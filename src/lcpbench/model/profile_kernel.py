@@ -49,10 +49,7 @@ from .compiled_dual import (
     SIN_T,
     TRIAL,
     TRY,
-    WLO,
-    WUP,
     U,
-    add_compensated,
     grad_into,
 )
 from .compiled_kernel import (
@@ -68,95 +65,23 @@ from .compiled_kernel import (
     solve_assembled,
     workspace,
 )
+from .wall_kernel import slope_load, walls_at
 
 # model.profile_driver's constants (tests check they are the same numbers)
 GEOMETRY_SLACK, PENALTY, LOCAL_CUT, START_PASSES = 1e-7, 2.0, 1.0 / 64, 5
-__all__ = ["CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "solve_profile_chain",
-           "wall_height"]
+__all__ = ["CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "solve_profile_chain"]
 
 
 @njit(cache=True)
-def wall_height(knots, coef, x):
-    """(h, h', h'') of a table of cubic pieces at x: the piece holding x (binary
-    search), continued flat outside the breakpoints (the end value, h' = h'' = 0)."""
-    m = coef.shape[1]
-    if x <= knots[0]:
-        return coef[3, 0], 0.0, 0.0
-    if x >= knots[m]:
-        d = knots[m] - knots[m - 1]
-        return ((coef[0, m - 1] * d + coef[1, m - 1]) * d + coef[2, m - 1]) * d + coef[3, m - 1], \
-            0.0, 0.0
-    lo, hi = 0, m  # knots[lo] <= x < knots[hi]
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if knots[mid] <= x:
-            lo = mid
-        else:
-            hi = mid
-    d = x - knots[lo]
-    c0, c1, c2, c3 = coef[0, lo], coef[1, lo], coef[2, lo], coef[3, lo]
-    return ((c0 * d + c1) * d + c2) * d + c3, (3.0 * c0 * d + 2.0 * c1) * d + c2, \
-        6.0 * c0 * d + 2.0 * c1
-
-
-@njit(cache=True)
-def walls_at(sines, cosines, a, fs, hi_rows, lo_rows, ku, cu_, kl, cl_, xf, yf, hi, lo, h1, l1):
-    """The free nodes' x, y (``xf``, ``yf``; plain running sums, as
-    model.chain.node_positions) and the walls at their x: ``hi``, ``lo`` the profile
-    heights where a node has a row (its flat row where that wall has no table), ``h1``,
-    ``l1`` the slopes (model.profile.walls_at, slopes)."""
-    n = hi_rows.size
-    x = y = 0.0
-    first = fs - 1
-    if first == 0:
-        xf[0] = yf[0] = 0.0
-    for i in range(sines.size):
-        x += a * cosines[i]
-        y += a * sines[i]
-        node = i + 1 - first
-        if 0 <= node < n:
-            xf[node], yf[node] = x, y
-    for i in range(n):
-        hi[i], lo[i], h1[i], l1[i] = hi_rows[i], lo_rows[i], 0.0, 0.0
-        if ku.size:
-            hh, d1, _ = wall_height(ku, cu_, xf[i])
-            h1[i] = d1
-            if np.isfinite(hi_rows[i]):
-                hi[i] = hh
-        if kl.size:
-            hh, d1, _ = wall_height(kl, cl_, xf[i])
-            l1[i] = d1
-            if np.isfinite(lo_rows[i]):
-                lo[i] = hh
-
-
-@njit(cache=True)
-def slope_load(alpha, cosines, sines, fs, w, out):
-    """s = J_xᵀ w on the free nodes (model.profile.x_jacobian_t): with W_j the sum of
-    w over the nodes past link j and p_j = −tan α_j W_j, node m gets p_(m−1) − p_m."""
-    n, first, links = w.size, fs - 1, alpha.size
-    W, p_next = 0.0, 0.0
-    for i in range(n):
-        out[i] = 0.0
-    for j in range(links - 1, -1, -1):  # link j joins nodes j, j + 1
-        node = j + 1 - first
-        if 0 <= node < n:
-            W += w[node]
-        p = -(sines[j] / cosines[j]) * W
-        if 0 <= node < n:
-            out[node] += p - p_next if j + 1 < links else p
-        p_next = p
-    node = -first  # node 0 (free only without a left pin)
-    if 0 <= node < n:
-        out[node] -= p_next
-
-
-@njit(cache=True)
-def merit_parts(alpha, sines, cosines, a, jl, jr, k, rest, link_load, fs, hi_rows, lo_rows,
-                ku, cu_, kl, cl_, mu_up, mu_lo, xf, yf, hi, lo, h1, l1):
+def merit_parts(alpha, sines, cosines, chain, walls, mu_up, mu_lo, at):
     """(E − Σ μ̄ h(x) + Σ ν̄ l(x), the penetration of the exact walls summed) at α: the
-    merit P's two parts (model.profile_driver._merit: P = first + σ second)."""
-    walls_at(sines, cosines, a, fs, hi_rows, lo_rows, ku, cu_, kl, cl_, xf, yf, hi, lo, h1, l1)
+    merit P's two parts (model.profile_driver._merit: P = first + σ second).
+    ``chain`` = (a, jl, jr, k, rest, link_load, fs); ``walls`` = (hi_rows, lo_rows, ku,
+    cu_, kl, cl_); ``at``: the scratch rows of :func:`walls_at` (written)."""
+    a, jl, jr, k, rest, link_load, fs = chain
+    hi_rows, lo_rows, ku, _, kl, _ = walls
+    yf, hi, lo = at[1], at[2], at[3]
+    walls_at(sines, cosines, a, fs, *walls, *at)
     total = energy_into(alpha, a, jl, jr, k, rest, link_load, sines)
     pen = 0.0
     for i in range(hi.size):
@@ -172,16 +97,16 @@ def merit_parts(alpha, sines, cosines, a, jl, jr, k, rest, link_load, fs, hi_row
 
 
 @njit(cache=True)
-def _clipped(alpha0, a, fs, links, hi_rows, lo_rows, ku, cu_, kl, cl_, alpha, u, sin_a, cos_a,
-             xf, yf, hi, lo, h1, l1):
+def _clipped(alpha0, a, fs, walls, alpha, u, sin_a, cos_a, at):
     """model.profile_driver._clipped into ``alpha``, ``u``: the heights clipped to the
     walls at the nodes' x, START_PASSES times; False where the chain tears."""
+    links = alpha.size
     alpha[:] = alpha0
     for i in range(links):
         cos_a[i], sin_a[i] = np.cos(alpha0[i]), np.sin(alpha0[i])
+    yf, hi, lo = at[1], at[2], at[3]
     for _ in range(START_PASSES):
-        walls_at(sin_a, cos_a, a, fs, hi_rows, lo_rows, ku, cu_, kl, cl_, xf, yf, hi, lo, h1,
-                 l1)
+        walls_at(sin_a, cos_a, a, fs, *walls, *at)
         for i in range(u.size):
             u[i] = min(max(yf[i], lo[i]), hi[i])
         if not fit_heights(alpha, u, alpha.copy(), a, fs, links, np.empty(0), sin_a, cos_a):
@@ -206,26 +131,27 @@ def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, f
     """
     n, links = lo_rows.size, rest_alpha.size
     ws = workspace(n, links, jr.size, max_iter)
-    wn, wb, wa, m = ws[0], ws[1], ws[3], ws[2][2]
+    wn, wa, m = ws[0], ws[3], ws[2][2]
     rec = np.empty((4, min(max_outer, 64)))
     count, zero, none = 0, np.zeros(n), np.zeros(5)
-    xf, yf, hi, lo, h1, l1 = (np.empty(n), np.empty(n), np.empty(n), np.empty(n),
-                              np.empty(n), np.empty(n))
+    chain = (a, jl, jr, k, rest, link_load, fs)
+    walls = (hi_rows, lo_rows, ku, cu_, kl, cl_)
+    at = (np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+          np.empty(n), np.empty(n))  # x, y, upper, lower, h', l', h'', l'' (the merit's)
+    step_at = (at[0], at[1], np.empty(n), np.empty(n), at[4], at[5], at[6], at[7])
+    yf, hi, lo, hs, ls, h1, l1 = at[1], at[2], at[3], step_at[2], step_at[3], at[4], at[5]
     nl, s, w, w_u = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    hs, ls = np.empty(n), np.empty(n)  # the step's walls (hi, lo: the merit's scratch)
     w_up, w_lo = np.zeros(n, np.bool_), np.zeros(n, np.bool_)
     alpha, trial, u = wa[ALPHA], wa[TRIAL], np.empty(n)
     sin_a, sin_t, cos_a, cos_t = wa[SIN_A], wa[SIN_T], wa[COS_A], wa[COS_T]
-    geo = (a, fs, links, hi_rows, lo_rows, ku, cu_, kl, cl_)
-    ok = start_alpha.size == links and _clipped(start_alpha, *geo, alpha, u, sin_a, cos_a, xf,
-                                                yf, hi, lo, h1, l1)
+    ok = start_alpha.size == links and _clipped(start_alpha, a, fs, walls, alpha, u, sin_a,
+                                                cos_a, at)
     if not ok:
         mu_up[:] = 0.0
         mu_lo[:] = 0.0
         scale = 1.0
         while not ok and scale > 1e-6:  # the arc flattened by halves (_profile_start)
-            ok = _clipped(scale * rest_alpha, *geo, alpha, u, sin_a, cos_a, xf, yf, hi, lo, h1,
-                          l1)
+            ok = _clipped(scale * rest_alpha, a, fs, walls, alpha, u, sin_a, cos_a, at)
             scale *= 0.5
     if not ok:
         return (NO_FIT, rest_alpha.copy(), zero, zero, zero, zero, rec, count, none, zero,
@@ -240,7 +166,7 @@ def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, f
     flags, no_c = 0, np.empty(0)
     for _ in range(max_outer):
         E = energy_into(alpha, a, jl, jr, k, rest, link_load, sin_a)
-        walls_at(sin_a, cos_a, a, fs, hi_rows, lo_rows, ku, cu_, kl, cl_, xf, yf, hs, ls, h1, l1)
+        walls_at(sin_a, cos_a, a, fs, *walls, *step_at)
         for i in range(n):  # the lagged reactions' slope load, into the nodal load
             w[i] = max(mu_up[i], 0.0) * h1[i] - max(mu_lo[i], 0.0) * l1[i]
         slope_load(alpha, cos_a, sin_a, fs, w, s)
@@ -269,8 +195,7 @@ def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, f
         for i in range(n):
             d[i] = su[i] - u[i]
             slope += g_u[i] * d[i]
-        part, pen = merit_parts(alpha, sin_a, cos_a, a, jl, jr, k, rest, link_load, fs, hi_rows,
-                                lo_rows, ku, cu_, kl, cl_, mu_up, mu_lo, xf, yf, hi, lo, h1, l1)
+        part, pen = merit_parts(alpha, sin_a, cos_a, chain, walls, mu_up, mu_lo, at)
         phi = part + pen_weight * pen
         slope -= pen_weight * pen
         noise = 1e-12 * (abs(phi) + noise_k * 1e-6)
@@ -279,9 +204,7 @@ def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, f
             for i in range(n):
                 ut[i] = u[i] + t * d[i]
             if fit_heights(trial, ut, alpha, a, fs, links, inv, sin_t, cos_t):
-                part, pen = merit_parts(trial, sin_t, cos_t, a, jl, jr, k, rest, link_load, fs,
-                                        hi_rows, lo_rows, ku, cu_, kl, cl_, mu_up, mu_lo, xf, yf,
-                                        hi, lo, h1, l1)
+                part, pen = merit_parts(trial, sin_t, cos_t, chain, walls, mu_up, mu_lo, at)
                 if part + pen_weight * pen <= phi + 1e-4 * t * min(slope, 0.0) + noise:
                     break
             t *= 0.5
@@ -308,9 +231,7 @@ def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, f
             mu_up[i], mu_lo[i] = (net[i], 0.0) if near_up else (0.0, -net[i])
         flags = 7
         if dalpha < tol:
-            part, pen = merit_parts(alpha, sin_a, cos_a, a, jl, jr, k, rest, link_load, fs,
-                                    hi_rows, lo_rows, ku, cu_, kl, cl_, mu_up, mu_lo, xf, yf, hi,
-                                    lo, h1, l1)
+            merit_parts(alpha, sin_a, cos_a, chain, walls, mu_up, mu_lo, at)  # walls at α
             worst = 0.0
             for i in range(n):
                 if np.isfinite(hi_rows[i]):
