@@ -128,7 +128,7 @@ def test_the_shared_cold_start_arguments_stay_zero():
     lcpbench.solve(ActuatorScene(theta=151, height=3.0, links=30), start=first, tol=1e-8)
     lcpbench.solve(scene, method="newton")
     lcpbench.solve(ActuatorScene(theta=170, height=2.5, links=30, channel=True))
-    alpha, u, up, lo, flags = kernel_call._cold(29)
+    alpha, u, up, lo, flags = kernel_call.cold_start(29)
     assert alpha.size == 0 and flags == 0
     assert not u.any() and not up.any() and not lo.any()
     assert u.flags.writeable and up.flags.writeable  # the kernel's one signature

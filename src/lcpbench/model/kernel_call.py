@@ -160,7 +160,7 @@ def _load_kernel():
 
 
 @functools.lru_cache(maxsize=16)
-def _cold(n: int) -> tuple:
+def cold_start(n: int) -> tuple:
     """The kernel's start arguments of a cold start with ``n`` free nodes: no start α,
     no warm step (zeros), made once per n. Writable (numba types read-only arrays
     apart: another compilation) and never written: the kernel copies them into its
@@ -171,7 +171,7 @@ def _cold(n: int) -> tuple:
 def _warm(start: DriverStart | None, n: int):
     """(start α, warm heights, upper mask, lower mask, flags) for the kernel."""
     if start is None:
-        return _cold(n)
+        return cold_start(n)
     empty_f, empty_b = np.zeros(n), np.zeros(n, bool)
     alpha = np.ascontiguousarray(start.alpha, dtype=float)
     w = start.warm

@@ -280,7 +280,21 @@ class SectionedScene:
 
     # -- the model's view -------------------------------------------------------
     def chain(self) -> Chain:
-        """The Hencky bar chain of the whole row (see the module notes)."""
+        """The Hencky bar chain of the whole row (see the module notes).
+
+        Built once per scene and kept, as :meth:`ActuatorScene.chain`: the scene and
+        its Chain are immutable, so a second solve of the same scene gets the same
+        object (and what the kernels derived from it)."""
+        cached = self.__dict__.get("_chain")
+        if cached is None:
+            cached = self.__dict__["_chain"] = self._build_chain()  # (frozen: not setattr)
+        return cached
+
+    def __getstate__(self) -> dict:
+        """Pickled without the kept Chain (rebuilt on demand)."""
+        return {k: v for k, v in self.__dict__.items() if k != "_chain"}
+
+    def _build_chain(self) -> Chain:
         n, total = self._size()
         a = total / n
         counts = self.section_links()
