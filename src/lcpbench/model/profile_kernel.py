@@ -79,11 +79,17 @@ def merit_parts(alpha, sines, cosines, chain, walls, mu_up, mu_lo, at):
     ``chain`` = (a, jl, jr, k, rest, link_load, fs); ``walls`` = (hi_rows, lo_rows, ku,
     cu_, kl, cl_); ``at``: the scratch rows of :func:`walls_at` (written)."""
     a, jl, jr, k, rest, link_load, fs = chain
-    hi_rows, lo_rows, ku, _, kl, _ = walls
-    yf, hi, lo = at[1], at[2], at[3]
     walls_at(sines, cosines, a, fs, *walls, *at)
-    total = energy_into(alpha, a, jl, jr, k, rest, link_load, sines)
-    pen = 0.0
+    E = energy_into(alpha, a, jl, jr, k, rest, link_load, sines)
+    return merit_at(E, walls, mu_up, mu_lo, at[1], at[2], at[3])
+
+
+@njit(cache=True)
+def merit_at(E, walls, mu_up, mu_lo, yf, hi, lo):
+    """:func:`merit_parts` from the energy E and the walls ``hi``, ``lo`` at the nodes'
+    heights ``yf``, already evaluated."""
+    hi_rows, lo_rows, ku, _, kl, _ = walls
+    total, pen = E, 0.0
     for i in range(hi.size):
         if ku.size and mu_up[i] > 0 and np.isfinite(hi_rows[i]):  # (a reaction: a row)
             total -= mu_up[i] * hi[i]
@@ -195,7 +201,7 @@ def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, f
         for i in range(n):
             d[i] = su[i] - u[i]
             slope += g_u[i] * d[i]
-        part, pen = merit_parts(alpha, sin_a, cos_a, chain, walls, mu_up, mu_lo, at)
+        part, pen = merit_at(E, walls, mu_up, mu_lo, yf, hs, ls)  # (the step's walls: at α)
         phi = part + pen_weight * pen
         slope -= pen_weight * pen
         noise = 1e-12 * (abs(phi) + noise_k * 1e-6)
