@@ -89,7 +89,8 @@ def solve(
         or a :class:`Selection` from :func:`lcpbench.select_backend`, whose
         back-end and settings are used.
     tol : convergence threshold on max|α̂ − α| (rad), eq. (32). Default: the
-        paper's 1e-3 (``PAPER_TOL``), or with a Selection the driver
+        settings profile's ``driver_tol`` (the paper's 1e-3 for "default" and
+        "low", 1e-6 for "mid", 1e-9 for "high"), or with a Selection the driver
         tolerance its probes ran at (``selection.driver_tol``), so the
         selected force accuracy is reached.
     method : "globalised" (line search on the exact energy; default),
@@ -97,8 +98,11 @@ def solve(
         :mod:`lcpbench.model.newton`: quadratic convergence near the answer)
         or "undamped" (the paper's Fig. 3 iteration, for comparison).
     max_outer : limit on contact steps.
-    settings : accuracy profile of the back-end: "default" (its own defaults),
-        "low" (1e-3), "mid" (1e-6) or "high" (1e-9).
+    settings : accuracy profile, one for the whole solve
+        (:data:`lcpbench.solvers.base.PROFILES`: the back-end's ε and the
+        driver's ``tol``, as in ``sweep`` and ``select``): "default" (the
+        back-end's own defaults, 1e-3 rad), "low" (1e-3), "mid" (1e-6) or
+        "high" (1e-9).
     scaled : hand the back-end the nondimensionalised step (default) or the
         raw one (mm, N), to see what scaling does.
     start : a neighbouring scene's result (same N and length) to start from:
@@ -143,7 +147,7 @@ def solve(
     elif isinstance(solver, Selection):
         tol = check_tol(solver.driver_tol)
     else:
-        tol = PAPER_TOL  # (a float in range)
+        tol = get_settings(settings).driver_tol  # the profile's (a float in range)
     if method not in METHODS:
         raise ProblemError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     if isinstance(max_outer, bool) or not (isinstance(max_outer, (int, np.integer))

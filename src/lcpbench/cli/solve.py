@@ -89,7 +89,7 @@ def register(subparsers) -> None:
         description="Solve a scene, then write the contact step at its converged "
                     "configuration as an LCP (w = M z + q; z = gaps, w = reactions).")
     add_scene_options(e)
-    add_tol_option(e, "convergence threshold of the solve")
+    add_tol_option(e, "convergence threshold of the solve", by_settings=False)
     e.add_argument("--format", choices=("dat", "npz"), default=None,
                    help="Siconos .dat (dense, column-major) or numpy .npz (M, q); "
                         "default: from the suffix of --out (a .dat or .npz suffix that "
@@ -190,18 +190,21 @@ def summary(result, extra=()) -> str:
     rows = [
         ("scene", scene),
         ("converged", ("yes" if result.converged else "no") + f" ({result.reason})"),
-        ("total force", f"{1e3 * result.total_force:.6g} mN ({result.total_force:.6g} N)"),
-        ("contact nodes", node_ranges(contacts(result.forces, free))),
+        ("total force" if result.forces_lower is None else "upper wall force",
+         f"{1e3 * result.total_force:.6g} mN ({result.total_force:.6g} N)"
+         + ("" if result.forces_lower is None else ", the total force (the paper's load cell)")),
+        ("contact nodes" if result.forces_lower is None else "upper contacts",
+         node_ranges(contacts(result.forces, free))),
     ]
     # what was tried beyond the cold start (a saddle left, the loading path followed)
     if getattr(result, "route", "") == "load path":
         rows.append(("ramped", "start='ramp': followed the load from zero"))
     rows += [(name, why) for name, why in getattr(result, "retries", ())
              if name in ("escaped", "ramped", "cold")]
-    if result.forces_lower is not None:
-        lower = float(np.sum(result.forces_lower))
+    if result.total_force_lower is not None:  # a channel: each wall's total, named
+        lower = result.total_force_lower
         rows += [
-            ("lower wall", f"{1e3 * lower:.6g} mN ({lower:.6g} N)"),
+            ("lower wall force", f"{1e3 * lower:.6g} mN ({lower:.6g} N)"),
             ("lower contacts", node_ranges(contacts(result.forces_lower, free))),
         ]
     rows += pressure_rows(result)

@@ -24,7 +24,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from operator import attrgetter
 
-from ..api import PAPER_TOL, check_tol, solve
+from ..api import check_tol, solve
 from ..errors import ProblemError
 from ..escalations import Context, escalate
 from ..model.result import ContactResult
@@ -32,7 +32,7 @@ from ..model.step_solver import make_step_solver
 from ..plan import make_plan
 from ..problems.scenes import ActuatorScene
 from ..problems.sections import check_scene
-from ..solvers.registry import DEFAULT
+from ..solvers.registry import DEFAULT, get_settings
 from .batch_compiled import AUTO_WHY, solve_line, takes
 from .batch_line import run_line
 from .continuation import PLANE_FIELDS, PREDICTORS, solve_sequence
@@ -83,9 +83,10 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
         for s in scenes:
             if type(s) is not ActuatorScene:  # (an actuator scene needs no more check)
                 check_scene(s)
-        fast_kw = dict(tol=PAPER_TOL if tol is None else check_tol(tol),
-                       max_outer=solve_kw.get("max_outer", 200),
-                       settings=solve_kw.get("settings", "default"))
+        settings = solve_kw.get("settings", "default")
+        fast_kw = dict(tol=get_settings(settings).driver_tol if tol is None  # as solve()
+                       else check_tol(tol), max_outer=solve_kw.get("max_outer", 200),
+                       settings=settings)
         make_step_solver(DEFAULT, fast_kw["settings"], True)  # validates the settings
         m = fast_kw["max_outer"]
         if isinstance(m, bool) or not (isinstance(m, int) and m >= 1):
