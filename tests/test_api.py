@@ -8,6 +8,7 @@ import textwrap
 import pytest
 
 import lcpbench
+from lcpbench.api import solve_internal
 from lcpbench.errors import ProblemError
 
 PROBE = textwrap.dedent("""
@@ -74,7 +75,7 @@ def test_links_auto_is_a_study_not_a_hidden_solve():
 @pytest.mark.parametrize("scaled", ["no", 1, None])
 def test_scaled_must_be_a_real_bool(scaled):
     with pytest.raises(ProblemError, match="scaled must be True or False"):
-        lcpbench.solve(lcpbench.ActuatorScene(theta=150, height=3.0, links=20), scaled=scaled)
+        solve_internal(lcpbench.ActuatorScene(theta=150, height=3.0, links=20), scaled=scaled)
 
 
 def test_a_dense_backend_refuses_a_huge_step_before_allocating():

@@ -119,6 +119,17 @@ def test_a_channel_names_each_walls_total(capsys):
     assert f"{1e3 * d['total_force_lower']:.6g} mN" in out
 
 
+def test_accuracy_sets_the_driver_tol_and_is_met(capsys):
+    """``--accuracy 1e-6``: the driver runs at 1e-6 rad (docs/accuracy.md), the judge's
+    bound meets 1e-6, and the force is within 1e-6 of Lemke's at a tight tolerance."""
+    code, d, _ = run_json(capsys, ["solve", "--links", str(N), "--accuracy", "1e-6", "--json"])
+    scene = lcpbench.ActuatorScene(theta=150, height=3.0, links=N)
+    ref = lcpbench.solve(scene, solver="lemke", tol=1e-10).total_force
+    assert code == 0 and d["accuracy"] == 1e-6 and d["tol"] == 1e-6
+    assert d["force_error_bound"] <= 1e-6
+    assert abs(d["total_force"] - ref) <= 1e-6 * max(ref, scene.EI / scene.length**2)
+
+
 def test_solve_method_undamped(capsys):
     code, d, _ = run_json(capsys, ["solve", "--links", str(N), "--method", "undamped", "--json"])
     assert code == 0
@@ -206,6 +217,8 @@ def test_solve_plot_without_matplotlib(tmp_path, capsys, monkeypatch):
         (["solve", "--method", "newtonian"], "method"),
         (["solve", "--bogus"], "--bogus"),
         (["solve", "--settings", "ultra"], "settings"),
+        (["solve", "--accuracy", "0"], "accuracy"),
+        (["solve", "--accuracy", "1e-6", "--settings", "mid"], "accuracy or settings"),
         (["lcp", "/no/such/file.dat"], "file.dat"),
         (["lcp", "--solver", "nope", PEER + "/lcp_deudeu.dat"], "nope"),
         (["export", "--out", "x.txt"], "x.txt"),

@@ -40,6 +40,7 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..accuracy import driver_tol_for
 from ..errors import ProblemError
 from ..problems.checks import check_number
 from ..problems.scenes import ActuatorScene
@@ -114,16 +115,6 @@ def _check(force_tol, time_budget) -> tuple[float, float | None]:
     if time_budget is not None:
         time_budget = check_number("time_budget", time_budget, low=0.0, low_open=True, unit="s")
     return force_tol, time_budget
-
-
-def driver_tol_for(force_tol: float) -> float:
-    """Driver tolerance (rad) of the probes for a force accuracy ``force_tol``.
-
-    An exact contact solver reaches a force error of about x/10 at driver
-    tolerance x rad on the probe scenes (measured: 7e-5 at 1e-3 rad, 4e-8 at
-    1e-6, 2e-11 at 1e-9), so the probes run at min(force_tol, 1e-3) rad.
-    """
-    return min(force_tol, 1e-3)
 
 
 def select_backend(scene_or_grid, force_tol: float = 1e-6, time_budget: float | None = None, *,

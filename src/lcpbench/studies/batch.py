@@ -24,7 +24,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from operator import attrgetter
 
-from ..api import check_tol, solve
+from ..api import check_tol, solve_internal
 from ..errors import ProblemError
 from ..escalations import Context, escalate
 from ..model.result import ContactResult
@@ -62,7 +62,8 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
                **solve_kw) -> list[ContactResult]:
     """Solve every scene; one :class:`ContactResult` per scene, in the caller's order.
 
-    ``tol``, ``solver`` and ``solve_kw`` are :func:`lcpbench.solve`'s.
+    ``tol``, ``solver`` and ``solve_kw`` are :func:`lcpbench.solve`'s (and
+    :func:`lcpbench.api.solve_internal`'s ``engine`` and ``scaled``).
     ``continuation``: start each scene from its solved neighbours (the
     globalised or Newton driver; a failed warm start is redone cold, so the answer
     is the cold one's to the tolerance); ``predictor`` as in
@@ -76,7 +77,7 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
         raise ProblemError(f"continuation must be True or False, got {continuation!r}")
     kw = dict(solve_kw, tol=tol, solver=solver)
     if not continuation:
-        return [solve(s, **kw) for s in scenes]
+        return [solve_internal(s, **kw) for s in scenes]
     out: list[ContactResult | None] = [None] * len(scenes)
     fast = takes(solver, dict(solve_kw, tol=tol)) and predictor in PREDICTORS
     if fast:  # the checks of solve(), once for the batch
