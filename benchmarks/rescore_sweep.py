@@ -9,8 +9,9 @@ again (`bench.metrics.evaluate`, the same success rule), checks that every
 row's success rate is the committed one, and rewrites what the scoring rule
 decides: `summary.json`, `profiles.csv`, the six profile figures,
 `work-precision.png`, and in `report.md` the scoring paragraph, the table
-"Back-ends compared", the section "Unsuccessful runs" (counted against today's
-`bench.expected`) and the section "Performance and data profiles". The rest
+"Back-ends compared", the sections "Back-ends without runs here" (with today's
+install hints) and "Unsuccessful runs" (counted against today's `bench.expected`)
+and the section "Performance and data profiles". The rest
 of report.md (the reference check, Table II, continuation, the machine) and
 the force and shape figures need the store's arrays and stay as they are. `lcpbench report --out results/sweep` on the
 store rebuilds everything at once.
@@ -34,6 +35,7 @@ from lcpbench.bench.report import (
     comparison_table,
     failures,
     scoring_text,
+    skipped_backends,
 )
 from lcpbench.jsonsafe import sanitise
 
@@ -98,6 +100,9 @@ def main(folder: Path) -> None:
                             scoring_text(DEFAULT_TIME_LIMIT) + NOTE)
     text = _replace_section(text, "## Back-ends compared", "\n## Back-ends without runs here",
                             "## Back-ends compared\n\n" + comparison_table(summary) + "\n")
+    text = _replace_section(text, "## Back-ends without runs here", "\n## Unsuccessful runs",
+                            "## Back-ends without runs here\n\n"
+                            + skipped_backends({r["backend"] for r in runs}) + "\n")
     text = _replace_section(text, "## Unsuccessful runs", "\n## Computation time per bend",
                             "## Unsuccessful runs\n\n" + failures(evaluated) + "\n")
     text = _replace_section(text, "\n## Performance and data profiles", "\n## Machine and timing",

@@ -32,7 +32,7 @@ from .model.result import ContactResult, Retry
 from .model.step_solver import make_step_solver
 from .model.wall_free import solve_without_contact
 from .plan import Plan, make_plan
-from .problems.checks import check_flag, check_number
+from .problems.checks import check_flag, check_number, describe
 from .problems.sections import check_scene
 from .solvers.base import Settings
 from .solvers.registry import DEFAULT, get_settings
@@ -59,7 +59,7 @@ def _backend_of(solver, settings):
         return solver.backend, solver.settings or settings, "selected: " + solver.reason
     if not isinstance(solver, str):
         raise ProblemError(f"solver must be a back-end name, 'auto' or a Selection, got "
-                           f"{type(solver).__name__}")
+                           f"{describe(solver)}")
     if solver == "auto":
         return DEFAULT, settings, "auto: the built-in active set (exact)"
     return solver, settings, None
@@ -367,9 +367,7 @@ def _driver_start(start, chain, method: str):
         return None
     if not isinstance(start, ContactResult):
         raise ProblemError(f"start must be a ContactResult of a neighbouring scene or "
-                           f"'ramp', got {start!r}" if isinstance(start, str) else
-                           f"start must be a ContactResult of a neighbouring scene or "
-                           f"'ramp', got {type(start).__name__}")
+                           f"'ramp', got {describe(start)}")
     if method == "undamped":
         raise ProblemError("start (continuation) needs method='globalised' or 'newton'")
     if start.links != chain.links or \

@@ -42,7 +42,7 @@ from pathlib import Path
 
 from ..accuracy import driver_tol_for
 from ..errors import ProblemError
-from ..problems.checks import check_number
+from ..problems.checks import check_number, describe
 from ..problems.scenes import ActuatorScene
 from ..solvers.selection import Selection
 from .grid import Grid, scene_key
@@ -94,7 +94,7 @@ def probe_scenes(scene_or_grid) -> list[ActuatorScene]:
         scenes = list(scene_or_grid)
     else:
         raise ProblemError("scene_or_grid must be an ActuatorScene, a list of them or a "
-                           f"Grid, got {type(scene_or_grid).__name__}")
+                           f"Grid, got {describe(scene_or_grid)}")
     kinds = {}
     for s in scenes:
         if s.links == "auto":

@@ -30,6 +30,7 @@ from ..escalations import Context, escalate
 from ..model.result import ContactResult
 from ..model.step_solver import make_step_solver
 from ..plan import make_plan
+from ..problems.checks import describe
 from ..problems.scenes import ActuatorScene
 from ..problems.sections import check_scene
 from ..solvers.registry import DEFAULT, get_settings
@@ -71,7 +72,7 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
     False: every scene cold, in the given order.
     """
     if isinstance(scenes, (str, bytes)) or not isinstance(scenes, Iterable):
-        raise ProblemError(f"scenes must be a sequence of scenes, got {type(scenes).__name__}")
+        raise ProblemError(f"scenes must be a sequence of scenes, got {describe(scenes)}")
     scenes = list(scenes)
     if not isinstance(continuation, bool):
         raise ProblemError(f"continuation must be True or False, got {continuation!r}")
