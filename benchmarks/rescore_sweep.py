@@ -13,8 +13,8 @@ decides: `summary.json`, `profiles.csv`, the six profile figures,
 install hints) and "Unsuccessful runs" (counted against today's `bench.expected`)
 and the section "Performance and data profiles". The rest
 of report.md (the reference check, Table II, continuation, the machine) and
-the force and shape figures need the store's arrays and stay as they are. `lcpbench report --out results/sweep` on the
-store rebuilds everything at once.
+the force and shape figures need the store's arrays and stay as they are.
+`lcpbench report --out results/sweep` on the store rebuilds everything at once.
 """
 
 from __future__ import annotations
