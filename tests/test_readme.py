@@ -123,7 +123,7 @@ def test_readme_cli_examples_run_as_written(tmp_path):
 @pytest.mark.slow
 def test_readme_slow_cli_examples_run_as_written(tmp_path):
     slow = _lines_of(_SLOW)
-    assert {shlex.split(ln)[1] for ln in slow} == set(_SLOW)
+    assert {shlex.split(ln, comments=True)[1] for ln in slow} == set(_SLOW)
     _in_the_readme_shell(tmp_path, slow)
     assert (tmp_path / "scratch-report" / "report.md").exists()
 
@@ -131,7 +131,7 @@ def test_readme_slow_cli_examples_run_as_written(tmp_path):
 def test_readme_vision_examples_run_as_written(tmp_path):
     pytest.importorskip("cv2")
     vision = _lines_of(("vision",))
-    assert [shlex.split(ln)[2] for ln in vision] == ["render", "measure"]
+    assert [shlex.split(ln, comments=True)[2] for ln in vision] == ["render", "measure"]
     _in_the_readme_shell(tmp_path, vision)
     assert (tmp_path / "overlay.png").exists()
 
