@@ -456,13 +456,13 @@ def check_scene(scene) -> object:
     Raises
     ------
     ProblemError
-        ``"scene must be an ActuatorScene, SectionedScene or CantileverScene, got dict"``
-        for None, a dict, a string, a class instead of an instance, or
-        anything else.
+        ``"scene must be an ActuatorScene, SectionedScene or CantileverScene, got
+        {'theta': 150}"`` (the value as written) for None, a dict, a string, a class
+        instead of an instance, or anything else.
     """
     if isinstance(scene, SCENE_KINDS):
         return scene
-    kind = "None" if scene is None else type(scene).__name__
+    kind = describe(scene)
     if isinstance(scene, type):
         kind = f"the class {scene.__name__} (an instance is needed)"
     raise ProblemError(f"scene must be an ActuatorScene, SectionedScene or CantileverScene, "

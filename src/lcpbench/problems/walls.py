@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ProblemError
+from .checks import describe
 from .profile_table import exact_pieces, hermite_pieces, linear_pieces
 
 KINDS = ("linear", "pchip", "cubic")
@@ -57,8 +58,7 @@ def _checked(fun: Callable, what: str, name: str) -> Callable:
             arr = np.asarray(None)
         if arr.dtype.kind not in "biuf":
             raise ProblemError(f"wall_profile {name!r}: the {what} function must return "
-                               f"numbers (mm, one per x), it returned "
-                               f"{type(value).__name__} {repr(value)[:60]}")
+                               f"numbers (mm, one per x), it returned {describe(value)}")
         try:
             np.broadcast_shapes(arr.shape, np.shape(t))
         except ValueError:
@@ -165,7 +165,7 @@ class WallProfile:
         """
         if not callable(height):
             raise ProblemError(f"wall_profile: height must be a function of x, got "
-                               f"{type(height).__name__}")
+                               f"{describe(height)}")
         lo, hi = float(x_range[0]), float(x_range[1])
         if not lo < hi:
             raise ProblemError(f"wall_profile: x_range must be (low, high) with low < high, "
