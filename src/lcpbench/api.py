@@ -20,17 +20,23 @@ import numpy as np
 from .accuracy import accuracy_settings, check_accuracy, held_to
 from .errors import ProblemError
 from .escalations import Context, escalate
-from .model.compiled import check_engine, drive, reference, run_kernel
+from .model.compiled import check_engine, drive, profile_reference, reference, run_kernel
 from .model.driver import METHODS
 from .model.finish import fast_judge, finish
 from .model.judge_compiled import chain_args
-from .model.kernel_call import BAIL_REASONS, call_kernel, kernel_args, kernel_output
+from .model.kernel_call import (
+    BAIL_REASONS,
+    call_kernel,
+    call_profile_kernel,
+    kernel_args,
+    kernel_output,
+)
 from .model.lazy_result import LazyResult, lazy_result, stats_judge
 from .model.outer import DriverOutput, DriverStart
 from .model.ramp import follow_load
 from .model.result import ContactResult, Retry
 from .model.step_solver import make_step_solver
-from .model.wall_free import solve_without_contact
+from .model.wall_free import arc_far, solve_without_contact
 from .plan import Plan, make_plan
 from .problems.checks import check_flag, check_number, describe
 from .problems.sections import check_scene
@@ -240,10 +246,13 @@ def run_plan(plan: Plan, scene, ctx: Context, begin: DriverStart | None,
     chain = ctx.chain
     kernel = plan.kernel_takes  # the kernels take the chain: its arrays, once
     args = kernel_args(chain) if kernel else None
-    if plan.route == ONE_WALL:  # the kernels, the rest of the result when read
+    lean_profile = (plan.route == PROFILE and begin is None and not chain.channel
+                    and arc_far(chain))  # (a cold start, one wall, its arc far past it)
+    if plan.route == ONE_WALL or lean_profile:  # the kernels, the rest of the result when read
         res = _one_wall(scene, chain, args, ctx.make_step, tol=ctx.tol,
                         max_outer=ctx.max_outer, method=ctx.method, settings=ctx.settings,
-                        why=ctx.why, pressure_limit=ctx.pressure_limit, t0=t0)
+                        why=ctx.why, pressure_limit=ctx.pressure_limit, t0=t0,
+                        route=plan.route)
     else:
         out: DriverOutput | None
         if plan.route == "channel kernel":
@@ -291,35 +300,44 @@ def _load_path(plan: Plan, scene, ctx: Context, t0: float) -> ContactResult:
 
 def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_outer: int,
               method: str, settings, why: str | None, pressure_limit: float | None,
-              t0: float) -> ContactResult:
-    """:func:`solve`'s direct route on a chain with one wall: the solve kernel, then,
-    on a converged answer, the judge kernel and its verdict
+              t0: float, route: str = "one-wall kernel") -> ContactResult:
+    """:func:`solve`'s direct route on a chain with one wall: the solve kernel (``route``
+    "profile kernel": the profile kernel, its wall a profile), then, on a converged
+    answer, the judge kernel and its verdict
     (:func:`lcpbench.model.batch_verdict.accepted`, the checks of the judge, as a
     batch line decides it); the result's other fields are built when read
     (:class:`~lcpbench.model.lazy_result.LazyResult`), by the same functions as
     :func:`run_kernel` and :func:`finish`. Where the kernel stops, the numpy reference,
     as :func:`run_kernel`; where the driver did not converge, :func:`finish` at once."""
-    got, kernel_s, name = call_kernel(chain, tol=tol, max_outer=max_outer, start=None,
-                                      settings=settings, args=args, newton=method == "newton")
+    profile = route == PROFILE
+    if profile:  # (the walls at the answer's x, its last two outputs: one wall, unused)
+        got, kernel_s, name = call_profile_kernel(chain, tol=tol, max_outer=max_outer,
+                                                  start=None, settings=settings)
+        got = got[:-2]
+    else:
+        got, kernel_s, name = call_kernel(chain, tol=tol, max_outer=max_outer, start=None,
+                                          settings=settings, args=args,
+                                          newton=method == "newton")
     code = got[0]
     if code in BAIL_REASONS:
-        out, used = reference(chain, make_step, BAIL_REASONS[code], tol=tol, max_outer=max_outer,
-                              method=method, settings=settings)
+        out, used = (profile_reference if profile else reference)(
+            chain, make_step, BAIL_REASONS[code], tol=tol, max_outer=max_outer, method=method,
+            settings=settings)
         return finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol,
                       elapsed=time.perf_counter() - t0, settings=settings, engine=used,
                       compiled_judge=True, why=why, judge_args=chain_args(chain, args),
-                      pressure_limit=pressure_limit, route=ONE_WALL)
+                      pressure_limit=pressure_limit, route=route)
     elapsed = time.perf_counter() - t0
     judge_args = chain_args(chain, args)
     build = partial(_built, scene, chain, got, kernel_s, name, method=method, tol=tol,
                     max_outer=max_outer, elapsed=elapsed, settings=settings, why=why,
-                    pressure_limit=pressure_limit)
+                    pressure_limit=pressure_limit, route=route)
     jk = _JUDGE[0] if _JUDGE else _judge_kernels()
     if code != jk[0].CONVERGED:  # the driver's failure: judged at once, as always
         return build(judged=partial(fast_judge(), args=judge_args))
     alpha, rec, count, R = got[1], got[6], got[7], got[9]
     judge, f64 = jk[1], _contiguous  # (numpy's own float64: the AOT kernels' quick check)
-    settled_code, st, fu, fl, tres = judge.judge_answer(
+    settled_code, st, fu, fl, tres = (judge.judge_walls if profile else judge.judge_answer)(
         f64(alpha, dtype=float), *judge_args, f64(R, dtype=float).copy(), np.zeros(R.size), tol,
         f64(rec[2, :count], dtype=float).copy())
     settled = bool(settled_code == judge.SETTLED)
@@ -330,23 +348,24 @@ def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_ou
         "outer_iterations": count,
         "converged": bool(jk[2].accepted(settled, f64(st, dtype=float), tol)),
         "solver": DEFAULT, "method": method, "tol": tol, "time_s": elapsed,
-        "pressure_limit": pressure_limit, "route": ONE_WALL, "engine": "compiled",
+        "pressure_limit": pressure_limit, "route": route, "engine": "compiled",
         "judge": "compiled", "retries": ()},
         partial(build, judged=stats_judge(settled, judge.STATS, st, fu, fl, tres)))
 
 
 def _built(scene, chain, got: tuple, kernel_s: float, name: str, *, method: str, tol: float,
-           max_outer: int, elapsed: float, settings, why, pressure_limit, judged
+           max_outer: int, elapsed: float, settings, why, pressure_limit, judged, route: str
            ) -> ContactResult:
     """The complete result of :func:`_one_wall`, judged by ``judged``."""
     out = kernel_output(chain, *got, elapsed=kernel_s, settings=name, max_outer=max_outer,
                         tol=tol)
     return finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol, elapsed=elapsed,
                   settings=settings, engine="compiled", compiled_judge=True, why=why,
-                  judged_by=judged, pressure_limit=pressure_limit, route=ONE_WALL)
+                  judged_by=judged, pressure_limit=pressure_limit, route=route)
 
 
-ONE_WALL = "one-wall kernel"  # the route of _one_wall (lcpbench.plan.ROUTES)
+ONE_WALL = "one-wall kernel"  # the routes of _one_wall (lcpbench.plan.ROUTES)
+PROFILE = "profile kernel"
 _JUDGE: list = []  # (solve kernel, judge kernel, batch_verdict), once loaded
 _add_reduce = np.add.reduce
 _contiguous = np.ascontiguousarray

@@ -25,7 +25,8 @@ SQP            steps (the kernel where it takes the chain), finished by SQP step
                they do not converge within ``heavy_driver.FIRST_TRY``.
 profile kernel the default back-end, the globalised scheme, engine not "numpy", a wall of
                any profile with a table of cubic pieces, a chain the kernel's layout takes
-               (:func:`lcpbench.model.kernel_call.profile_applies`): the profile kernel.
+               (:func:`lcpbench.model.kernel_call.profile_applies`): the profile kernel;
+               a cold start on one wall its arc crosses far: its result built when read.
 large N        the globalised scheme and N ≥ ``large_n.LARGE_N`` (or a chain in
                increments) on a layout it takes: increments on the tridiagonal factor.
 kernel         the default back-end, globalised or Newton, engine not "numpy", a chain

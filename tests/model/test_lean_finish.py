@@ -204,3 +204,25 @@ def test_the_direct_route_is_drives_route(kw, how, route, monkeypatch):
     assert [(s.iterations, s.status, s.step_length, s.max_dalpha, s.energy)
             for s in fast.steps] == [(s.iterations, s.status, s.step_length, s.max_dalpha,
                                       s.energy) for s in slow.steps]
+
+
+def test_the_lean_profile_route_builds_what_the_full_route_builds(monkeypatch):
+    """Route against route: the profile kernel's lean result (its fields built when read)
+    against the same solve through drive and finish; only the full build can say the
+    lazy one built the same fields (the answer itself is checked against the energy
+    minimisation in tests/model/test_profile.py)."""
+    from lcpbench import api
+    from lcpbench.problems.walls import WallProfile
+
+    wall = WallProfile.from_table([0, 10, 14, 18, 30], [3.0, 3.0, 2.4, 3.0, 3.0])
+    kw = dict(theta=150, height=3.0, links=60, wall_profile=wall)
+    fast = lcpbench.solve(ActuatorScene(**kw), tol=1e-9)
+    monkeypatch.setattr(api, "arc_far", lambda chain: False)
+    slow = lcpbench.solve(ActuatorScene(**kw), tol=1e-9)
+    assert fast.route == slow.route == "profile kernel" and fast.converged
+    assert (fast.converged, fast.reason, fast.engine, fast.judge, fast.outer_iterations) == \
+        (slow.converged, slow.reason, slow.engine, slow.judge, slow.outer_iterations)
+    for name in ("alpha", "forces", "gaps", "x", "y"):
+        assert _same_bits(getattr(fast, name), getattr(slow, name)), name
+    assert fast.certificate.min_gap == slow.certificate.min_gap
+    assert fast.judgement.force_error_bound == slow.judgement.force_error_bound

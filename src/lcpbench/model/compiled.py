@@ -128,8 +128,8 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
                                         settings=settings)
         if out is not None:
             return out, "compiled"
-        return (run_driver(chain, step_solver, tol=tol, max_outer=max_outer, method=method,
-                           start=start), f"numpy (the compiled kernel stopped: {why})")
+        return profile_reference(chain, lambda: step_solver, why, tol=tol, max_outer=max_outer,
+                                 method=method, start=start)
     elif engine == "compiled" and chain is not None and has_profile(chain):
         raise ProblemError("engine='compiled' runs walls of any profile (wall_profile) with the "
                            f"default back-end ({DEFAULT}) and method='globalised' only; "
@@ -213,6 +213,16 @@ def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol:
                           max_outer=max_outer, start=start),
                 f"numpy (increments on the tridiagonal factor; the compiled kernel "
                 f"stopped: {why})")
+    return (run_driver(chain, make_step(), tol=tol, max_outer=max_outer, method=method,
+                       start=start), f"numpy (the compiled kernel stopped: {why})")
+
+
+def profile_reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol: float,
+                      max_outer: int, method: str, start: DriverStart | None = None,
+                      settings="default") -> tuple[DriverOutput, str]:
+    """The whole profile solve in the numpy reference (:mod:`.profile_driver`), where the
+    profile kernel stopped (``why``): the answer and the engine that produced it.
+    (``settings``: as :func:`reference`'s, for the same call; the step solver has them.)"""
     return (run_driver(chain, make_step(), tol=tol, max_outer=max_outer, method=method,
                        start=start), f"numpy (the compiled kernel stopped: {why})")
 

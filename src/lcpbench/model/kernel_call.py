@@ -112,15 +112,29 @@ def run_profile_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
     """The globalised profile driver in the profile kernel: ``(output, "")``, or
     ``(None, why)`` where a step left the reference's path (the caller then runs the
     numpy reference, :mod:`lcpbench.model.profile_driver`)."""
+    got, elapsed, name = call_profile_kernel(chain, tol=tol, max_outer=max_outer, start=start,
+                                             settings=settings)
+    code, *rest, upper, lower = got
+    if code in BAIL_REASONS:
+        return None, BAIL_REASONS[code]
     from dataclasses import replace
 
-    from ..numba_cache import kernel_module
+    at = replace(chain, upper=upper, lower=lower) if chain.channel else chain
+    return kernel_output(at, code, *rest, elapsed=elapsed, settings=name,
+                         max_outer=max_outer, tol=tol), ""
 
-    k = kernel_module("lcpbench.model.profile_kernel", "solve_profile_chain")
+
+def call_profile_kernel(chain: Chain, *, tol: float, max_outer: int,
+                        start: DriverStart | None, settings) -> tuple[tuple, float, str]:
+    """One call of :func:`lcpbench.model.profile_kernel.solve_profile_chain` on the chain:
+    (its outputs, its wall time in s, the name of the back-end's settings). A warm
+    ``start`` gives the starting shape and, from its last step's net reactions, the
+    lagged reactions."""
+    k = _PROFILE[0] if _PROFILE else _load_profile_kernel()
     s = get_settings(settings)
     n = chain.free_nodes.size
     max_iter = s.max_iter if s.max_iter else 20 * n + 50
-    start_alpha, mu_up, mu_lo = np.zeros(0), np.zeros(n), np.zeros(n)
+    start_alpha, mu_up, mu_lo = _NO_START, np.zeros(n), np.zeros(n)
     if start is not None:
         start_alpha = np.ascontiguousarray(start.alpha, dtype=float)
         net = None if start.warm is None else start.warm.forces_net
@@ -135,13 +149,18 @@ def run_profile_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
     t0 = time.perf_counter()
     got = k.solve_profile_chain(*base[:9], *profile_args(chain), float(tol), int(max_outer),
                                 start_alpha, mu_up, mu_lo, int(max_iter), float(requested(s)))
-    elapsed = time.perf_counter() - t0
-    code, *rest, upper, lower = got
-    if code in BAIL_REASONS:
-        return None, BAIL_REASONS[code]
-    at = replace(chain, upper=upper, lower=lower) if chain.channel else chain
-    return kernel_output(at, code, *rest, elapsed=elapsed, settings=s.name,
-                         max_outer=max_outer, tol=tol), ""
+    return got, time.perf_counter() - t0, s.name
+
+
+_PROFILE: list = []  # the profile kernel's module, once loaded
+_NO_START = np.zeros(0)  # (never written)
+
+
+def _load_profile_kernel():
+    from ..numba_cache import held, kernel_module
+
+    held(_PROFILE).append(kernel_module("lcpbench.model.profile_kernel", "solve_profile_chain"))
+    return _PROFILE[0]
 
 
 def solve_kernel():
