@@ -203,6 +203,8 @@ def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol:
     solve runs in increments on the tridiagonal factor instead, as from ``LARGE_N``
     links: the numpy reference in heights would meet the same round-off, and its step
     solver then falls back to a dense Lemke step, O(N³) (97 s at N = 3999)."""
+    if beyond_heights(chain, why):
+        return out_of_reach(chain, why), "numpy (not run: see the reason)"
     if why in ROUNDOFF_BAILS and large_n.roundoff_may_limit(chain, step_request(settings),
                                                             method):
         from dataclasses import replace
@@ -223,8 +225,33 @@ def profile_reference(chain: Chain, make_step: Callable[[], Callable], why: str,
     """The whole profile solve in the numpy reference (:mod:`.profile_driver`), where the
     profile kernel stopped (``why``): the answer and the engine that produced it.
     (``settings``: as :func:`reference`'s, for the same call; the step solver has them.)"""
+    if beyond_heights(chain, why):
+        return out_of_reach(chain, why), "numpy (not run: see the reason)"
     return (run_driver(chain, make_step(), tol=tol, max_outer=max_outer, method=method,
                        start=start), f"numpy (the compiled kernel stopped: {why})")
+
+
+def beyond_heights(chain: Chain, why: str) -> bool:
+    """Whether a kernel stop ``why`` at this N is the round-off of the height formulation
+    with nothing to take over: from ``LARGE_N`` links, a face not positive definite or
+    a round-off stop (:data:`ROUNDOFF_BAILS`), on a chain the increment formulation does
+    not take (elastic walls, wall profiles). The numpy reference in heights meets the
+    same round-off there, and its step solver's dense Lemke fallback is O(N³) (a solve
+    of elastic walls at N = 10⁵ failed after 42 s)."""
+    return (chain.links >= large_n.LARGE_N and not large_n.takes(chain)
+            and (why in ROUNDOFF_BAILS or why == BAIL_REASONS[11]))
+
+
+def out_of_reach(chain: Chain, why: str) -> DriverOutput:
+    """The failed answer of :func:`beyond_heights`, its reason naming the limit."""
+    from .outer import failed_output
+
+    cond = large_n.heights_condition(chain.links) * np.finfo(float).eps
+    return failed_output(chain.rest_alpha.copy(), chain.free_nodes.size, [],
+                         f"the compiled kernel stopped ({why}) at N = {chain.links}: the "
+                         f"round-off of the node heights (cond H · ε ≈ {cond:.1e}) is out of "
+                         f"reach there, and elastic walls and wall profiles have no increment "
+                         f"formulation yet (issue 35); N < {large_n.LARGE_N} solves them")
 
 
 def direct(chain: Chain) -> bool:
