@@ -216,7 +216,8 @@ def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol:
                 f"numpy (increments on the tridiagonal factor; the compiled kernel "
                 f"stopped: {why})")
     return (run_driver(chain, make_step(), tol=tol, max_outer=max_outer, method=method,
-                       start=start), f"numpy (the compiled kernel stopped: {why})")
+                       start=start, stop_on_stall=True),
+            f"numpy (the compiled kernel stopped: {why})")
 
 
 def profile_reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol: float,
