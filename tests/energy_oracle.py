@@ -142,7 +142,7 @@ def assert_equilibrium(scene, alpha, forces, forces_lower=None, *, stationarity=
     assert residual <= stationarity, ("stationarity", residual)
 
 
-def assert_solved(res, *, stationarity=None, wall_tol=1e-9):
+def assert_solved(res, *, stationarity=None, wall_tol=1e-9, sign_tol=1e-12):
     """:func:`assert_equilibrium` on a converged result of :func:`lcpbench.solve` (or a
     batch's), stationary to ``stationarity`` (default: 10 tol, at least 1e-6: the outer
     loop stops on max|Δα| < tol, which leaves a gradient of about that size)."""
@@ -150,4 +150,4 @@ def assert_solved(res, *, stationarity=None, wall_tol=1e-9):
     if stationarity is None:
         stationarity = max(10 * res.tol, 1e-6)
     assert_equilibrium(res.scene, res.alpha, res.forces, res.forces_lower,
-                       stationarity=stationarity, wall_tol=wall_tol)
+                       stationarity=stationarity, wall_tol=wall_tol, sign_tol=sign_tol)
