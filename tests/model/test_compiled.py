@@ -22,9 +22,9 @@ import sys
 
 import numpy as np
 import pytest
+from energy_oracle import assert_solved
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from energy_oracle import assert_solved
 from known_answers import CANTILEVER_THEORY_FORCE, PAPER_SCENE
 
 from lcpbench import ActuatorScene, CantileverScene, ProblemError, solve
