@@ -2,7 +2,9 @@
 
 Nothing here calls lcpbench's contact step, driver, judge or stability kernel: only
 the exact energy (:func:`lcpbench.model.chain.energy`) and the forward kinematics
-(:func:`lcpbench.model.chain.node_positions`), differenced numerically.
+(:func:`lcpbench.model.chain.node_positions`), differenced numerically, and, for one
+contact step, its matrix and load (``step.bands``, ``step.linear``) with the KKT
+conditions written out here. Which tests use which oracle: docs/testing.md.
 """
 
 import numpy as np
@@ -151,3 +153,26 @@ def assert_solved(res, *, stationarity=None, wall_tol=1e-9, sign_tol=1e-12):
         stationarity = max(10 * res.tol, 1e-6)
     assert_equilibrium(res.scene, res.alpha, res.forces, res.forces_lower,
                        stationarity=stationarity, wall_tol=wall_tol, sign_tol=sign_tol)
+
+
+def assert_step_kkt(step, u, *, rtol=1e-9, gap_tol=1e-12):
+    """Heights ``u`` solve a contact step (minimise ½ uᵀHu + fᵀu, lower <= u <= upper,
+    H from ``step.bands``, f = ``step.linear``), checked by its KKT conditions written
+    out here: feasible, the gradient g = H u + f zero on free rows, g <= 0 where the
+    upper wall holds the node and g >= 0 where the lower one does; g relative to the
+    size of its terms |H| |u| + |f|, lengths relative to 1 + max|u|."""
+    b, f = step.bands, step.linear
+    n = f.size
+    H = np.diag(b[0, :n])
+    for k in range(1, b.shape[0]):
+        H += np.diag(b[k, : n - k], k) + np.diag(b[k, : n - k], -k)
+    u = np.asarray(u, dtype=float)
+    g = H @ u + f
+    size = np.abs(H) @ np.abs(u) + np.abs(f)
+    span = gap_tol * (1.0 + np.max(np.abs(u)))
+    assert np.all(u <= step.upper + span) and np.all(u >= step.lower - span), "infeasible"
+    up, lo = u >= step.upper - span, u <= step.lower + span
+    free = ~(up | lo)
+    assert np.all(np.abs(g[free]) <= rtol * size[free]), "not stationary on a free row"
+    assert np.all(g[up & ~lo] <= rtol * size[up & ~lo]), "the upper wall pulls"
+    assert np.all(g[lo & ~up] >= -rtol * size[lo & ~up]), "the lower wall pulls"

@@ -98,7 +98,10 @@ def _fake(converged, touches, alpha):
 @pytest.mark.parametrize("predictor", ["adaptive", "quadratic", "previous"])
 def test_the_kernels_predictor_chooses_as_solved(seed, predictor):
     """Random histories on a plane (repeated scenes, answers that failed or touch):
-    the kernel's prediction has the same base and the same α as Solved.predict."""
+    the kernel's prediction has the same base and the same α as Solved.predict.
+
+    Route against route: the kernel's port of the predictor must choose as the Python
+    predictor (Solved) does; a prediction is a choice, with no oracle."""
     from lcpbench.numba_cache import kernel_module
     from lcpbench.studies.continuation import POINTS
 
