@@ -163,8 +163,8 @@ def test_outer_steps_that_rewrite_one_set_of_arrays_give_fresh_arrays_answer(mon
     """The large-N driver assembles every outer step into one :class:`large_n.StepWork`;
     with fresh arrays for each step (as before) the solve is the same, bit for bit.
 
-    Route against route: reusing arrays is promised to change nothing, bit for bit; at N
-    = 6000 the energy oracle is out of reach (~N² terms)."""
+    Route against route: reusing arrays is promised to change nothing, bit for bit;
+    at N = 6000 the energy oracle is out of reach (~N² terms)."""
     import lcpbench
     from lcpbench.model import large_driver
 
