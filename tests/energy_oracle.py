@@ -2,7 +2,9 @@
 
 Nothing here calls lcpbench's contact step, driver, judge or stability kernel: only
 the exact energy (:func:`lcpbench.model.chain.energy`) and the forward kinematics
-(:func:`lcpbench.model.chain.node_positions`), differenced numerically.
+(:func:`lcpbench.model.chain.node_positions`), differenced numerically, and, for one
+contact step, its matrix and load (``step.bands``, ``step.linear``) with the KKT
+conditions written out here. Which tests use which oracle: docs/testing.md.
 """
 
 import numpy as np
@@ -21,9 +23,10 @@ def _gradient(fun, a, h):
     return g
 
 
-def fd_kkt_residual(chain, alpha, fu, fl, h=1e-6):
+def fd_kkt_residual(chain, alpha, fu, fl, h=1e-6, floor=1e-300):
     """First order: max |∇_α (E + Σ (R_q − R'_q) y_q + λ y_N)| over the link angles, with
-    λ by least squares, relative to the largest term (N·mm per rad)."""
+    λ by least squares, relative to the largest term (N·mm per rad) or ``floor`` if
+    larger (a weightless chain at rest on a grazing wall has no term of any size)."""
     free = chain.free_nodes
 
     def heights(a):
@@ -38,7 +41,7 @@ def fd_kkt_residual(chain, alpha, fu, fl, h=1e-6):
     if free[-1] < chain.links:
         gN = grad(lambda a: heights(a)[-1], alpha)
         g = g - (g @ gN) / (gN @ gN) * gN
-    return float(np.max(np.abs(g)) / max(np.max(np.abs(gE)), np.max(np.abs(gR)), 1e-300))
+    return float(np.max(np.abs(g)) / max(np.max(np.abs(gE)), np.max(np.abs(gR)), floor))
 
 
 def _walls_term(chain, fu, fl):
@@ -100,3 +103,76 @@ def fd_unstable_directions(chain, alpha, fu, fl, threshold, h=1e-5):
     # a finite-difference Hessian is good to ~1e-4 here: only clear signs count
     assert np.min(np.abs(values)) > 1e-3 * np.max(np.abs(values))
     return int(np.sum(values < 0))
+
+
+def assert_equilibrium(scene, alpha, forces, forces_lower=None, *, stationarity=1e-6,
+                       wall_tol=1e-9, sign_tol=1e-12):
+    """An answer of a scene with flat walls (rigid or elastic) is its equilibrium, checked
+    from first principles: the node heights by forward kinematics, the walls and the
+    right pin from the scene's chain, the reactions' signs and complementarity (rigid:
+    R > 0 only on the wall; elastic: R = k (y − h)₊, the Winkler law), and stationarity
+    of E + Σ R y by central differences of the exact energy (:func:`fd_kkt_residual`,
+    relative to its largest term or EI/ℓ; about the outer tolerance of a converged answer). Lengths relative to the span ℓ, forces to EI/ℓ²
+    (or the largest reaction, if larger)."""
+    chain = scene.chain()
+    assert chain.upper_profile is None and chain.lower_profile is None, "flat walls only"
+    fu = np.asarray(forces, dtype=float)
+    fl = np.zeros_like(fu) if forces_lower is None else np.asarray(forces_lower, dtype=float)
+    y = node_positions(chain, np.asarray(alpha, dtype=float))[1]
+    yf = y[chain.free_nodes]
+    ell = chain.length
+    f0 = max(chain.force_scale, float(np.max(fu, initial=0.0)), float(np.max(fl, initial=0.0)))
+    if chain.free_nodes[-1] < chain.links:  # the right pin: y_N = 0
+        assert abs(y[-1]) <= wall_tol * ell, ("closure", y[-1])
+    assert np.min(fu, initial=0.0) >= -sign_tol * f0 and np.min(fl, initial=0.0) >= -sign_tol * f0
+    for R, over, k in ((fu, yf - chain.upper, chain.upper_stiffness),
+                       (fl, chain.lower - yf, chain.lower_stiffness)):
+        wall = np.isfinite(over)
+        assert not np.any(R[~wall] > sign_tol * f0), "a reaction where no wall is"
+        if k is None or not np.all(np.isfinite(k[wall])):  # rigid: y <= h, R (h − y) = 0
+            assert np.max(over[wall], initial=-np.inf) <= wall_tol * ell, "a wall crossed"
+            apart = over[wall] < -wall_tol * ell
+            assert np.max(R[wall][apart], initial=0.0) <= sign_tol * f0, "a reaction off the wall"
+        else:  # the Winkler law R = k (y − h)₊
+            law = k[wall] * np.maximum(over[wall], 0.0)
+            assert np.max(np.abs(R[wall] - law), initial=0.0) <= wall_tol * f0, "R ≠ k (y − h)₊"
+    # (elastic walls: the exact energy holds the springs' Σ ½ k δ², their reactions' work)
+    spring = chain.elastic_walls
+    residual = fd_kkt_residual(chain, np.asarray(alpha, dtype=float),
+                               0 * fu if spring else fu, 0 * fl if spring else fl,
+                               floor=chain.force_scale * chain.length)  # EI/ℓ
+    assert residual <= stationarity, ("stationarity", residual)
+
+
+def assert_solved(res, *, stationarity=None, wall_tol=1e-9, sign_tol=1e-12):
+    """:func:`assert_equilibrium` on a converged result of :func:`lcpbench.solve` (or a
+    batch's), stationary to ``stationarity`` (default: 10 tol, at least 1e-6: the outer
+    loop stops on max|Δα| < tol, which leaves a gradient of about that size)."""
+    assert res.converged, res.reason
+    if stationarity is None:
+        stationarity = max(10 * res.tol, 1e-6)
+    assert_equilibrium(res.scene, res.alpha, res.forces, res.forces_lower,
+                       stationarity=stationarity, wall_tol=wall_tol, sign_tol=sign_tol)
+
+
+def assert_step_kkt(step, u, *, rtol=1e-9, gap_tol=1e-12):
+    """Heights ``u`` solve a contact step (minimise ½ uᵀHu + fᵀu, lower <= u <= upper,
+    H from ``step.bands``, f = ``step.linear``), checked by its KKT conditions written
+    out here: feasible, the gradient g = H u + f zero on free rows, g <= 0 where the
+    upper wall holds the node and g >= 0 where the lower one does; g relative to the
+    size of its terms |H| |u| + |f|, lengths relative to 1 + max|u|."""
+    b, f = step.bands, step.linear
+    n = f.size
+    H = np.diag(b[0, :n])
+    for k in range(1, b.shape[0]):
+        H += np.diag(b[k, : n - k], k) + np.diag(b[k, : n - k], -k)
+    u = np.asarray(u, dtype=float)
+    g = H @ u + f
+    size = np.abs(H) @ np.abs(u) + np.abs(f)
+    span = gap_tol * (1.0 + np.max(np.abs(u)))
+    assert np.all(u <= step.upper + span) and np.all(u >= step.lower - span), "infeasible"
+    up, lo = u >= step.upper - span, u <= step.lower + span
+    free = ~(up | lo)
+    assert np.all(np.abs(g[free]) <= rtol * size[free]), "not stationary on a free row"
+    assert np.all(g[up & ~lo] <= rtol * size[up & ~lo]), "the upper wall pulls"
+    assert np.all(g[lo & ~up] >= -rtol * size[lo & ~up]), "the lower wall pulls"

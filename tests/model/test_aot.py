@@ -84,7 +84,11 @@ def _no_jit(*args):
 def test_the_aot_kernels_give_the_jits_answers(aot_build, served_from, monkeypatch):
     """Scene by scene (the actuator, a wide and low one, the channel, the cantilever)
     and along a continuation line (warm starts): the same path and the same
-    answer, to round-off."""
+    answer, to round-off.
+
+    Route against route: the AOT module compiles the same source as the JIT, and the
+    promise is the JIT's answers; an oracle cannot tell two compilations apart (the
+    answers are the oracle's in tests/model/test_compiled.py)."""
     line = [lcpbench.ActuatorScene(theta=t, height=3.0, links=60) for t in (120, 135, 150)]
     answers = {}
     for label, where in (("aot", aot_build[0]), ("jit", None)):

@@ -7,6 +7,7 @@ finite differences of the exact energy.
 
 import numpy as np
 import pytest
+from energy_oracle import assert_step_kkt
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -157,5 +158,6 @@ def test_lcp_form_and_qp_form_have_the_same_solution(channel):
     r = np.zeros(step.size)
     r[form.rows] = sol.w[: form.n_gap]
     assert np.allclose(r, qp.forces_upper, atol=1e-9 * max(1, r.max()))
+    assert_step_kkt(step, qp.u)  # and the step's KKT conditions, written out
     # rows only where a node can reach the wall: never the ones within h of a pin
     assert np.all(np.isinf(step.upper[: int(scene.height / (scene.length / scene.links)) - 1]))

@@ -63,6 +63,9 @@ def _bits(a, b):
                                    ActuatorScene(150.0, 3.0, links=60, channel=True),
                                    CantileverScene(links=60)], ids=str)
 def test_every_kernel_sums_the_heights_as_the_reference(scene):
+    """Route against route: the promise is the same bits in every kernel's prefix sums (the
+    correctly rounded sums are the oracle in
+    test_compensated_heights_are_the_correctly_rounded_prefix_sums)."""
     # the numpy reference (model.step) and the three kernels' loops: the same bits
     chain = scene.chain()
     rng = np.random.default_rng(7)
@@ -84,6 +87,8 @@ def test_every_kernel_sums_the_heights_as_the_reference(scene):
 
 
 def test_the_kernels_round_off_floor_is_the_judges():
+    """Route against route: a constant mirrored by hand between two modules; no oracle can
+    say what it should be."""
     assert jit_module("lcpbench.model.large_kernel").ROUNDOFF_ULPS == ROUNDOFF_ULPS
 
 
@@ -138,6 +143,10 @@ def test_a_free_nodes_reaction_is_the_gradients_round_off_at_n_1e5(tight):
 
 
 def test_n_1e5_agrees_with_a_cold_start(tight, monkeypatch):
+    """Route against route: at N = 10⁵ the oracles are out of reach (central differences of
+    the energy cost N² = 10¹⁰ operations, SLSQP far more); two independent starts
+    reaching one force within τ is the check (the joint torques are checked from statics
+    in the tests above)."""
     # another start (the rest shape clipped to the walls, no nested start): 6 outer steps
     # and a different contact search; the two certified forces within tau
     monkeypatch.setattr(compiled, "_coarse_solve", lambda *a, **k: None)

@@ -7,11 +7,13 @@ heights of an LCP answer), then whole solves: the same path (outer iterations, A
 step lengths, the back-end's iterations where they do not depend on round-off) and the
 same answer to round-off, for an LCP and QP back-ends, on the actuator with nodes that
 cannot reach the wall (condensed out of the LCP), the two-wall channel and the
-cantilever.
+cantilever; and every converged answer is the scene's equilibrium by an oracle that
+shares no code with either driver (tests/energy_oracle.py).
 """
 
 import numpy as np
 import pytest
+from energy_oracle import assert_solved
 
 from lcpbench import ActuatorScene, CantileverScene, solve
 from lcpbench.api import solve_internal
@@ -38,6 +40,10 @@ def _steps(scene):
 
 @pytest.mark.parametrize("name", SCENES)
 def test_kernel_pieces_match_the_numpy_functions(name):
+    """Route against route: the kernel's intermediate arrays (bands, LCP and QP forms,
+    residuals) have no oracle of their own; the numpy step they must equal is checked
+    against the paper's equations and finite differences of the exact energy in
+    tests/model/test_assembly.py, and the whole solves below against the energy oracle."""
     chain, ref, step = _steps(SCENES[name])
     for field in ("bands", "linear", "inv_a_cos", "v", "phi0", "coef", "origin", "alpha0",
                   "phi_origin"):
@@ -101,6 +107,8 @@ def test_solve_takes_the_numpy_drivers_path(backend, same_inner, name):
     fast = solve(scene, solver=backend, tol=1e-6, settings="high")
     assert ref.converged or name == "channel", ref.reason  # (a reason to compare, at least)
     assert_same_solve(ref, fast, same_inner=same_inner)
+    if fast.converged:  # (interior-point and ADMM answers: signs to 1e-6 F₀)
+        assert_solved(fast, stationarity=1e-5, sign_tol=1e-6)
 
 
 def test_an_iterative_lcp_back_end_with_a_warm_start():
@@ -108,6 +116,7 @@ def test_an_iterative_lcp_back_end_with_a_warm_start():
     ref = solve_internal(scene, solver="pgs", tol=1e-4, engine="numpy")
     fast = solve(scene, solver="pgs", tol=1e-4)
     assert_same_solve(ref, fast, same_inner=False)
+    assert_solved(fast, sign_tol=1e-6)  # (an iterative back-end: signs to 1e-6 F₀)
 
 
 def test_where_it_does_not_apply_the_numpy_driver_runs():

@@ -3,7 +3,8 @@
 The walk keeps its held nodes, picks and changed nodes as lists and computes
 r = g + H d₀ only where d₀ reaches; the certificate takes the gradient and its
 scale in one pass. Checked against independent computations: the contact step's
-answer against the primal active set of the numpy reference (another method on
+answer against the step's KKT conditions written out in the test
+(tests/energy_oracle.assert_step_kkt) and against the primal active set of the numpy reference (another method on
 the same strictly convex QP, whose answer is unique) on asymmetric steps, cold
 and warm-started from wrong contact sets (so that the walk releases walls), and
 the fused gradient and term size against the gradient alone (bit for bit) and
@@ -14,6 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from energy_oracle import assert_step_kkt
 
 from lcpbench.model.kernel_call import kernel_args
 from lcpbench.model.step import assemble_step
@@ -58,6 +60,7 @@ def test_contact_step_is_the_primal_active_sets_answer(seed, warm):
     got = _kernel_step(chain, alpha, warm_up)
     code, u, r_up = got[0], got[1], got[2]
     assert code == 0
+    assert_step_kkt(assemble_step(chain, alpha), u)  # the step's KKT conditions, by hand
     assert np.array_equal(u >= chain.upper, ref.active_upper)
     span = 1.0 + np.max(np.abs(ref.u))
     assert np.max(np.abs(u - ref.u)) <= 1e-9 * span

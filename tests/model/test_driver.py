@@ -5,6 +5,7 @@ import math
 
 import numpy as np
 import pytest
+from energy_oracle import assert_solved
 
 import lcpbench
 from lcpbench import ActuatorScene, solve
@@ -153,6 +154,8 @@ def test_undamped_and_globalised_agree_where_both_converge():
     assert a.converged and b.converged
     assert a.total_force == pytest.approx(b.total_force, rel=1e-8)
     assert np.allclose(a.y, b.y, atol=1e-8)
+    assert_solved(a)  # each the equilibrium (tests/energy_oracle.py)
+    assert_solved(b)
 
 
 def test_lemke_and_active_set_back_ends_agree():
@@ -161,6 +164,8 @@ def test_lemke_and_active_set_back_ends_agree():
     b = solve(scene, solver="active-set", tol=1e-10)
     assert a.converged and b.converged and a.solver == "lemke"
     assert np.allclose(a.forces, b.forces, atol=1e-8 * b.total_force)
+    assert_solved(a)  # each the equilibrium (tests/energy_oracle.py)
+    assert_solved(b)
 
 
 def test_channel_reduces_to_one_wall_when_the_lower_wall_is_untouched():
@@ -168,6 +173,7 @@ def test_channel_reduces_to_one_wall_when_the_lower_wall_is_untouched():
     two = solve(ActuatorScene(theta=150, height=3, links=80, channel=True), tol=1e-10)
     assert two.forces_lower is not None and np.all(two.forces_lower == 0)
     assert two.total_force == pytest.approx(one.total_force, rel=1e-9)
+    assert_solved(two)  # the equilibrium of the channel (tests/energy_oracle.py)
 
 
 def test_channel_holds_a_heavy_chain_from_below():

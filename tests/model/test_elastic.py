@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 import pytest
+from energy_oracle import assert_solved
 from test_elastic_reference import reference_minimiser
 
 import lcpbench
@@ -282,6 +283,7 @@ def test_continuation_over_elastic_scenes_is_the_cold_answer():
         cold = lcpbench.solve(s, tol=1e-9)
         assert r.converged and cold.converged
         assert r.total_force == pytest.approx(cold.total_force, rel=1e-7)
+        assert_solved(r)  # the Winkler law and stationarity (tests/energy_oracle.py)
 
 
 def test_elastic_walls_with_a_wall_profile_are_refused():

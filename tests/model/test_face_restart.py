@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from energy_oracle import assert_step_kkt
 
 from lcpbench.linalg.saddle import TridiagonalFactor
 from lcpbench.model.large_n import increment_step
@@ -89,6 +90,7 @@ def test_restarted_and_reference_walks_take_the_same_path(links, shrink):
     assert np.max(np.abs(new.u - ref.u)) <= 1e-9 * span
     F = np.sum(ref.forces_upper)
     assert abs(np.sum(new.forces_upper) - F) <= 1e-6 * F
+    assert_step_kkt(step, new.u + step.origin, rtol=1e-8)  # the step's KKT conditions
 
 
 def test_large_n_answers_are_judged_by_the_judge_in_increments(monkeypatch):

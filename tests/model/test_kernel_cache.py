@@ -45,6 +45,8 @@ def test_the_default_solve_loads_no_scipy_linalg_sparse_or_numba_blas():
 
 
 def test_the_light_cache_load_gives_numbas_answer():
+    """Route against route: loading the same cached kernels two ways must give the same
+    bits; an oracle cannot tell two loads apart."""
     light, full = probe(LCPBENCH_AOT="0"), probe(LCPBENCH_NUMBA_FULL_LOAD="1")
     assert light["force"] == full["force"] and light["bound"] == full["bound"]
 

@@ -38,6 +38,9 @@ def _chain_alpha(links, seed=0, shrink=0.97):
 
 @pytest.mark.parametrize("links,seed", [(300, 0), (5000, 1)])
 def test_compiled_assembly_is_the_reference_step_in_increments(links, seed):
+    """Route against route: the compiled assembly must be the numpy one bit for bit (the
+    same arithmetic); the numpy step is checked against the paper's equations in
+    tests/model/test_assembly.py."""
     chain, alpha = _chain_alpha(links, seed)
     ref = large_n.increment_step(assemble_step(chain, alpha))
     got = large_n.increments_at(chain, alpha)
@@ -128,7 +131,11 @@ def _numpy_residuals(step, u):
 def test_compiled_step_residuals_are_the_reference_residuals(links, seed):
     """The step judge's residuals in one kernel against step_residuals' numpy on a
     step answer (the walk's) and on heights off it: the same reactions and verdict
-    terms bit for bit (Σ g·r, reported only, summed in another order)."""
+    terms bit for bit (Σ g·r, reported only, summed in another order).
+
+    Route against route: the residuals are the step judge's own numbers, which only its
+    definition fixes; the step's answer is checked by its KKT conditions in
+    tests/model/test_large_n.py."""
     from lcpbench.solvers.banded import solve_banded_qp
 
     chain, alpha = _chain_alpha(links, seed)
@@ -154,7 +161,10 @@ def test_compiled_step_residuals_are_the_reference_residuals(links, seed):
 
 def test_outer_steps_that_rewrite_one_set_of_arrays_give_fresh_arrays_answer(monkeypatch):
     """The large-N driver assembles every outer step into one :class:`large_n.StepWork`;
-    with fresh arrays for each step (as before) the solve is the same, bit for bit."""
+    with fresh arrays for each step (as before) the solve is the same, bit for bit.
+
+    Route against route: reusing arrays is promised to change nothing, bit for bit;
+    at N = 6000 the energy oracle is out of reach (~N² terms)."""
     import lcpbench
     from lcpbench.model import large_driver
 

@@ -1,6 +1,8 @@
 """Large N (issue 19, item 3): the increment formulation on the tridiagonal factor.
 
-Expected values come from independent methods (dense solves of the same face,
+Expected values come from independent methods (dense solves of the same face, the
+step's KKT conditions and the equilibrium by central differences of the exact energy,
+tests/energy_oracle.py,
 the existing height formulation with the banded Cholesky at moderate N) or
 from theory (second-order convergence of the force in N).
 """
@@ -9,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from energy_oracle import assert_equilibrium, assert_step_kkt
 
 from lcpbench.linalg.saddle import TridiagonalFactor
 from lcpbench.model import step_solver
@@ -66,6 +69,7 @@ def test_increments_give_the_same_step_answer_as_heights():
     scale = np.max(np.abs(a.forces_net))
     assert np.max(np.abs(a.forces_net - b.forces_net)) <= 1e-6 * scale
     assert np.max(np.abs((b.u + step.origin) - a.u)) <= 1e-9 * chain.length
+    assert_step_kkt(step, b.u + step.origin, rtol=1e-8)  # the step's KKT conditions
 
 
 def test_alpha_from_increments_moves_the_heights_by_the_increments():
@@ -78,7 +82,8 @@ def test_alpha_from_increments_moves_the_heights_by_the_increments():
 
 @pytest.mark.parametrize("theta,height", [(150, 3.0), (90, 2.0), (180, 1.0)])
 def test_large_path_agrees_with_the_height_path_at_moderate_n(theta, height):
-    chain = ActuatorScene(theta, height, links=300).chain()
+    scene = ActuatorScene(theta, height, links=300)
+    chain = scene.chain()
     assert layout_fits(chain)
     solver = make_step_solver("active-set")
     ref = run_driver(chain, solver, tol=1e-9)
@@ -87,6 +92,7 @@ def test_large_path_agrees_with_the_height_path_at_moderate_n(theta, height):
     F_ref, F_big = float(np.sum(ref.forces_upper)), float(np.sum(big.forces_upper))
     assert abs(F_big - F_ref) <= 1e-7 * max(abs(F_ref), chain.force_scale)
     assert np.max(np.abs(big.alpha - ref.alpha)) <= 1e-7
+    assert_equilibrium(scene, big.alpha, big.forces_upper)  # (tests/energy_oracle.py)
 
 
 def test_force_converges_at_least_at_second_order_in_n():

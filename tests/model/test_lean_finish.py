@@ -17,6 +17,7 @@ import math
 
 import numpy as np
 import pytest
+from energy_oracle import assert_solved
 
 import lcpbench
 from lcpbench import ActuatorScene
@@ -137,6 +138,8 @@ def test_the_shared_cold_start_arguments_stay_zero():
 
 @pytest.mark.parametrize("kw", GRID[:3] + GRID[4:])
 def test_a_new_scene_and_the_same_scene_again_give_the_reference(kw):
+    """The compiled answer of a new scene and of the same scene again (its chain kept):
+    the numpy engine's, and the scene's equilibrium (tests/energy_oracle.py)."""
     ref = solve_internal(ActuatorScene(**kw), tol=1e-8, engine="numpy")
     scene = ActuatorScene(**kw)
     for _ in range(2):  # built, then kept
@@ -144,6 +147,8 @@ def test_a_new_scene_and_the_same_scene_again_give_the_reference(kw):
         assert res.converged == ref.converged and res.engine == "compiled"
         assert res.total_force == pytest.approx(ref.total_force, rel=1e-9, abs=1e-13)
         assert np.allclose(res.alpha, ref.alpha, rtol=0, atol=1e-10)
+        if res.converged:
+            assert_solved(res)
 
 
 @pytest.mark.parametrize("bad,match", [
@@ -188,7 +193,11 @@ ROUTES = [  # (scene, solve's arguments, whether the direct route takes it)
 @pytest.mark.parametrize("kw,how,route", ROUTES)
 def test_the_direct_route_is_drives_route(kw, how, route, monkeypatch):
     """lcpbench.solve's direct route to the kernel answers what the route through
-    solve_without_contact and drive answers, bit for bit, engine and reason included."""
+    solve_without_contact and drive answers, bit for bit, engine and reason included.
+
+    Route against route: the direct route is a shortcut promised to change nothing, bit
+    for bit (answers that do not converge included); the answers themselves are the
+    oracle's in test_a_new_scene_and_the_same_scene_again_give_the_reference."""
     from lcpbench import plan
 
     scene = ActuatorScene(**kw)

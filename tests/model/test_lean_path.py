@@ -18,6 +18,7 @@ import pickle
 
 import numpy as np
 import pytest
+from energy_oracle import assert_solved
 
 import lcpbench
 from lcpbench import ActuatorScene, CantileverScene
@@ -173,3 +174,4 @@ def test_a_batch_line_with_rigid_and_elastic_walls_gives_each_scenes_solve():
         assert res.converged and one.converged
         assert res.engine == one.engine
         assert res.total_force == pytest.approx(one.total_force, rel=1e-7, abs=1e-12)
+        assert_solved(res)  # the equilibrium, rigid or Winkler (tests/energy_oracle.py)

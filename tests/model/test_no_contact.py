@@ -9,6 +9,7 @@ the driver ever calls it.
 
 import numpy as np
 import pytest
+from energy_oracle import assert_solved
 
 import lcpbench
 import lcpbench.api as api
@@ -71,6 +72,7 @@ def test_every_back_end_gives_the_same_clearing_answer():
     b = lcpbench.solve(scene, solver="pgs")
     assert a.converged and b.converged
     assert np.array_equal(a.alpha, b.alpha)
+    assert_solved(b)  # the free equilibrium, clear of the walls (tests/energy_oracle.py)
 
 
 def test_chain_that_cannot_hang_is_not_answered_by_the_free_path():

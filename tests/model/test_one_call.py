@@ -5,7 +5,10 @@ Checked against the route it replaces, the full build of every field
 (:func:`lcpbench.model.compiled.run_kernel`, then :func:`lcpbench.model.finish.finish` with the
 compiled judge), and against the numpy reference: the same answer, the same verdict,
 the same reason, every field; a kernel that stops still falls back to the numpy
-reference; an answer the driver did not reach is judged as before.
+reference; an answer the driver did not reach is judged as before. Converged answers
+are also checked against the equilibrium oracle (tests/energy_oracle.py: kinematics,
+walls, signs, and stationarity by central differences of the exact energy), which
+shares no code with either route.
 """
 
 import dataclasses
@@ -14,6 +17,7 @@ from functools import partial
 
 import numpy as np
 import pytest
+from energy_oracle import assert_solved
 
 import lcpbench
 from lcpbench import ActuatorScene
@@ -91,6 +95,8 @@ def _equal(a, b) -> bool:
 @pytest.mark.parametrize("kw", SCENES)
 @pytest.mark.parametrize("tol", [1e-3, 1e-8])
 def test_every_field_is_the_one_the_full_build_gives(kw, tol):
+    """The lazy result is the full build bit for bit (a promise of the route: kept), and
+    its answer is the scene's equilibrium (the oracle)."""
     scene = ActuatorScene(**kw)
     res = lcpbench.solve(scene, tol=tol)
     assert type(res) is LazyResult and "_build" in res.__dict__
@@ -100,6 +106,7 @@ def test_every_field_is_the_one_the_full_build_gives(kw, tol):
     assert "_build" not in res.__dict__
     assert res.converged is converged and res.total_force == force
     assert res.total_force == float(np.sum(res.forces))  # F = ΣR, eq. (30)
+    assert_solved(res)
 
 
 @pytest.mark.parametrize("kw", SCENES[:3])
@@ -112,6 +119,7 @@ def test_the_answer_and_verdict_are_the_numpy_references(kw):
     assert np.allclose(got.alpha, ref.alpha, rtol=0, atol=1e-10)
     assert got.total_force == pytest.approx(ref.total_force, rel=1e-9)
     assert np.array_equal(got.forces > 0, ref.forces > 0)  # the same contact set
+    assert_solved(got)
 
 
 @pytest.mark.parametrize("kw", SCENES[:2])
@@ -120,10 +128,14 @@ def test_the_newton_scheme_takes_the_same_route(kw):
     res = lcpbench.solve(scene, tol=1e-9, method="newton")
     assert type(res) is LazyResult and res.method == "newton"
     _same_fields(res, _full(scene, tol=1e-9, method="newton"))
+    assert_solved(res)
 
 
 @pytest.mark.parametrize("tol, max_outer", [(1e-3, 1), (1e-3, 2), (0.5, 200), (0.3, 200)])
 def test_a_driver_that_stops_or_a_loose_tol_gives_the_full_builds_verdict(tol, max_outer):
+    """Route against route: an answer the driver did not reach, or reached only to a
+    loose tol, is no equilibrium an oracle could confirm; what is promised is that the
+    lazy route builds the full build's verdict and fields, bit for bit."""
     scene = ActuatorScene(theta=150.0, height=3.0, links=60)
     res = lcpbench.solve(scene, tol=tol, max_outer=max_outer)
     want = _full(scene, tol=tol, max_outer=max_outer)
@@ -147,6 +159,7 @@ def test_a_kernel_that_stops_falls_back_to_the_numpy_reference(monkeypatch):
     ref = solve_internal(scene, engine="numpy")
     assert res.converged and np.array_equal(res.alpha, ref.alpha)  # the same numpy run
     assert res.total_force == ref.total_force
+    assert_solved(res)
 
 
 def test_a_lazy_result_pickles_replaces_and_keeps_a_field_set_by_hand():
@@ -201,7 +214,11 @@ def test_the_compiled_verdict_is_the_judges_on_any_stats():
     (:func:`~lcpbench.model.judge_compiled.verdict_from_stats`, the reasons of
     :func:`lcpbench.model.judge.judge`): the same verdict on random stats of every sign
     and scale, NaN and ±inf among them, settled or not, at any tol. A difference would
-    let a converged flag stand that the judge's reasons refuse."""
+    let a converged flag stand that the judge's reasons refuse.
+
+    Route against route: the compiled verdict must mirror the judge's checks exactly,
+    on any numbers; an oracle of the verdicts (answers with known defects) is
+    tests/model/test_judge.py's."""
     from lcpbench.model.judge_compiled import verdict_from_stats
     from lcpbench.numba_cache import kernel_module
 

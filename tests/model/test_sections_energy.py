@@ -12,6 +12,7 @@ for the single section beyond 180°).
 
 import numpy as np
 import pytest
+from energy_oracle import assert_solved
 
 import lcpbench
 from lcpbench.api import solve_internal
@@ -92,3 +93,4 @@ def test_default_engine_is_the_compiled_kernel_on_sectioned_chains():
     ref = solve_internal(anchoring_actuator(150.0, 4.5, links=90), engine="numpy")
     assert ref.engine == "numpy"
     assert _relative(res.total_force, ref.total_force) <= 1e-9
+    assert_solved(res)  # the equilibrium (tests/energy_oracle.py)

@@ -72,6 +72,9 @@ def test_the_retried_force_is_the_independent_exact_step_of_the_rejected_answer(
 
 
 def test_a_retried_channel_answer_is_the_cold_increment_solves(monkeypatch):
+    """Route against route: the two forces must agree to τ = 1e-8 F₀ at N = 3000, finer
+    than central differences of the energy resolve and where SLSQP is out of reach; the
+    two starts are independent paths to one equilibrium."""
     # a channel at N = 3000, tol 1e-10 (τ = 1e-8): retried from the rejected height
     # answer, and solved in increments from the rest shape (LARGE_N lowered): two
     # starts, one force
@@ -87,6 +90,9 @@ def test_a_retried_channel_answer_is_the_cold_increment_solves(monkeypatch):
 
 
 def test_a_batch_retries_as_solve_does(retried):
+    """Route against route: a batch must retry as solve does, to τ at N = 3000, where the
+    energy oracles cannot resolve τ; the retried answer itself is checked against the
+    independent exact step in test_the_retried_force_is_the_independent_exact_step_of_the_rejected_answer."""
     scenes = [ActuatorScene(150, 3.0, links=N), ActuatorScene(150, 3.2, links=N)]
     got = solve_many(scenes, tol=TOL)
     assert all(r.converged for r in got), [r.reason for r in got]

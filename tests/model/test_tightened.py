@@ -9,6 +9,7 @@ from the retried answer itself.
 from __future__ import annotations
 
 import pytest
+from energy_oracle import assert_solved
 
 from lcpbench import ActuatorScene, escalations, solve, solve_many
 from lcpbench.escalations import TIGHTER
@@ -24,6 +25,7 @@ SCENE = ActuatorScene(theta=96.664, height=4.4103, links=173, length=41.55, EI=3
 def reference():
     ref = solve(SCENE, tol=1e-11, settings="high")
     assert ref.converged, ref.reason
+    assert_solved(ref)  # the reference is the scene's equilibrium (tests/energy_oracle.py)
     return ref
 
 
@@ -87,6 +89,8 @@ def test_solve_many_treats_it_as_solve_does(reference):
     assert got[0].retried("tightened") is not None
     assert _error(got[0], reference) <= 1e-3
     assert _error(got[1], solve(other, tol=1e-11, settings="high"), other) <= 1e-3
+    assert_solved(got[0])  # (tests/energy_oracle.py)
+    assert_solved(got[1])
 
 
 def test_a_continuation_that_is_refused_too_keeps_the_first_answer(monkeypatch,

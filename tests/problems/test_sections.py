@@ -5,6 +5,7 @@ from dataclasses import fields
 
 import numpy as np
 import pytest
+from energy_oracle import assert_solved
 
 import lcpbench
 from lcpbench import ActuatorScene, ProblemError
@@ -41,6 +42,8 @@ def test_one_section_builds_the_actuator_scenes_chain_exactly(kw):
 @pytest.mark.parametrize("kw", ONE_SECTION[:4])
 @pytest.mark.parametrize("engine", ["compiled", "numpy"])
 def test_one_section_solves_exactly_as_the_actuator_scene(kw, engine):
+    """One section builds the actuator's chain (above), so it is solved bit for bit as
+    the actuator (kept: a promise of the construction) and to the scene's equilibrium."""
     a = solve_internal(ActuatorScene(**kw), engine=engine)
     b = solve_internal(_one_section(kw), engine=engine)
     assert a.converged and b.converged
@@ -48,6 +51,7 @@ def test_one_section_solves_exactly_as_the_actuator_scene(kw, engine):
     for name in ("alpha", "x", "y", "forces", "gaps"):
         assert np.array_equal(getattr(a, name), getattr(b, name)), name
     assert a.engine == b.engine
+    assert_solved(b)  # (tests/energy_oracle.py)
 
 
 def test_rest_shape_is_the_joined_arcs_with_level_chord():

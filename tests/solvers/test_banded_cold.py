@@ -13,6 +13,7 @@ import itertools
 
 import numpy as np
 import pytest
+from energy_oracle import assert_step_kkt
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from known_answers import CONTACT_QP_KNOWN, PAPER_SCENE
@@ -265,6 +266,7 @@ def test_every_step_of_a_solve_matches_the_primal_method(scene):
             assert sol.status is Status.SOLVED and "took over" not in sol.message
             scale = 1.0 + np.abs(ref.u).max()
             np.testing.assert_allclose(sol.u, ref.u, atol=1e-10 * scale)
+            assert_step_kkt(step, sol.u)  # the step's KKT conditions, written out
         seen.append(sols[1].iterations)
         return sols[0]
 

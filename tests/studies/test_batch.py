@@ -3,6 +3,7 @@
 import random
 
 import pytest
+from energy_oracle import assert_solved
 
 import lcpbench
 from lcpbench import ActuatorScene, CantileverScene, ProblemError
@@ -26,6 +27,7 @@ def test_results_in_the_callers_order_and_equal_to_cold_solves():
         assert b.converged and c.converged
         scale = max(c.total_force, c.scene.EI / c.scene.length**2)
         assert abs(b.total_force - c.total_force) <= 1e-8 * scale
+        assert_solved(b)  # the equilibrium (tests/energy_oracle.py)
     # continuation along θ starts next to the answer: fewer contact steps in total
     assert total_outer(batch) < total_outer(cold)
 
@@ -37,6 +39,7 @@ def test_without_continuation_each_scene_is_a_cold_solve():
         c = lcpbench.solve(s, tol=1e-3)
         assert b.scene == s and b.outer_iterations == c.outer_iterations
         assert b.total_force == pytest.approx(c.total_force, rel=1e-12)
+        assert_solved(b)  # the equilibrium (tests/energy_oracle.py)
 
 
 def test_bad_input():
@@ -78,9 +81,13 @@ def test_the_compiled_batch_is_the_numpy_continuation(tol):
         scale = max(r.total_force, r.scene.EI / r.scene.length**2)
         assert abs(f.total_force - r.total_force) <= 2e-9 * scale + \
             (f.force_error_bound + r.force_error_bound) * scale
+        assert_solved(f)  # the equilibrium (tests/energy_oracle.py)
 
 
 def test_every_batch_result_is_judged_as_the_numpy_judge_would():
+    """Route against route: the batch's compiled verdicts must be the judge's on the same
+    answers (a verdict has no oracle but on answers with known defects,
+    tests/model/test_judge.py); the answers are the oracle's in the tests above."""
     from lcpbench.model.judge import judge
     from lcpbench.model.result import certify
 

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from energy_oracle import assert_solved
 
 import lcpbench
 from lcpbench.errors import ProblemError
@@ -28,6 +29,8 @@ def test_same_equilibrium_to_1e_8(tight):
         assert largest_difference(cold, tight[p]) < 1e-8
         for a, b in zip(cold, tight[p]):
             assert abs(a.alpha - b.alpha).max() < 1e-8  # rad
+    for r in tight["quadratic"]:  # and each the equilibrium (tests/energy_oracle.py)
+        assert_solved(r)
 
 
 def test_every_scene_but_the_first_is_warm(tight):

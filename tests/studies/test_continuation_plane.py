@@ -10,6 +10,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from energy_oracle import assert_solved
 
 import lcpbench
 from lcpbench import ActuatorScene
@@ -154,6 +155,7 @@ def test_warm_answers_are_the_cold_ones_on_a_small_grid(method):
     assert largest_difference(cold, warm) <= 1e-8
     for c, w in zip(cold, warm):
         assert np.abs(c.alpha - w.alpha).max() < 1e-8  # rad
+        assert_solved(w)  # the equilibrium (tests/energy_oracle.py)
     labels = {r.extra["continuation"] for r in warm}
     assert labels <= {"cold", "adaptive"} and "adaptive" in labels
     # both kinds of scene occur: some touch a wall and some do not
