@@ -119,6 +119,12 @@ def test_profile_scene_matches_the_energy_minimisation(theta, profile, channel, 
 @pytest.mark.parametrize("channel", [False, True])
 @pytest.mark.parametrize("theta, height", [(150, 3.0), (100, 2.0), (175, 4.5)])
 def test_flat_profile_reproduces_the_flat_wall(theta, height, channel):
+    """A flat profile is the flat wall: the profile kernel on its table gives the flat
+    wall's answer (route against route: the profile machinery must vanish on a flat
+    wall, to round-off) and that answer is the flat scene's equilibrium
+    (tests/energy_oracle.py)."""
+    from energy_oracle import assert_equilibrium
+
     flat = ActuatorScene(theta=theta, height=height, links=60, channel=channel)
     as_profile = ActuatorScene(theta=theta, height=height, links=60, channel=channel,
                                wall_profile=WallProfile.flat(height))
@@ -132,6 +138,7 @@ def test_flat_profile_reproduces_the_flat_wall(theta, height, channel):
                                atol=1e-12 * abs(a.total_force))
     assert b.total_force == pytest.approx(a.total_force, rel=1e-12)
     np.testing.assert_allclose(b.gaps, a.gaps, rtol=0, atol=1e-12)
+    assert_equilibrium(flat, b.alpha, b.forces, b.forces_lower, stationarity=max(10 * b.tol, 1e-6))
 
 
 def test_the_slope_term_is_what_makes_the_answer_exact(monkeypatch):

@@ -84,6 +84,8 @@ def test_a_function_that_needs_too_many_pieces_has_no_table():
 
 
 def test_the_kernel_constants_are_the_drivers():
+    """Route against route: the profile kernel repeats the numpy driver's constants by
+    hand (numba compiles them in); only a comparison can say they agree."""
     from lcpbench.model import profile_driver
 
     k = kernel_module("lcpbench.model.profile_kernel", "solve_profile_chain")
