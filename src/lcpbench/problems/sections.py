@@ -447,6 +447,10 @@ def check_scene(scene) -> object:
         anything else.
     """
     if isinstance(scene, SCENE_KINDS):
+        if getattr(scene, "frictional", False):  # (issue 39: friction, ends, a pull)
+            raise ProblemError("this scene has friction, a slider or free end, or a pull: "
+                               "solve it along a loading path, lcpbench.solve_path(scene, "
+                               "states) (lcpbench.solve is the frictionless model)")
         return scene
     kind = "None" if scene is None else type(scene).__name__
     if isinstance(scene, type):
