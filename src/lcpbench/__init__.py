@@ -23,6 +23,8 @@ except _PackageNotFoundError:  # running from a source tree that was never insta
 #: public name -> module that defines it
 _EXPORTS = {
     "solve": "lcpbench.api",
+    "solve_path": "lcpbench.api",
+    "FrictionResult": "lcpbench.model.friction_result",
     "solve_many": "lcpbench.studies.batch",
     "stable_states": "lcpbench.studies.states",
     "sensitivities": "lcpbench.model.sensitivity",
