@@ -18,6 +18,7 @@ import numpy as np
 
 from ..errors import ProblemError
 from ..problems.scenes import ActuatorScene, Chain
+from ..solvers.base import Status
 from ..solvers.lemke import lemke
 from .chain import alpha_from_heights, node_positions
 from .friction_step import (add_pull_curvature, delassus_form, frictional_lcp, recover,
@@ -263,7 +264,10 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
         fs = frictional_step(scene, chain, state, x_prev, pressed,
                              None if fs is None else fs.rowed)
         sol = lcp(fs.M, fs.q)
-        if not sol.solved:
+        # an inexact step only moves the iterate (the judge reads the last one, which
+        # must be SOLVED): go on from it, as the frictionless driver does
+        if not (sol.solved or (sol.status is Status.INACCURATE
+                               and np.all(np.isfinite(sol.z)))):
             return StateAnswer(state, N, T, fs, False, f"contact step {it}: "
                                f"{sol.status.name} ({sol.message})", it, sizes,
                                time.perf_counter() - t0)
@@ -284,7 +288,8 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
             state.x0 = x_right - float(np.sum(chain.link_length * np.cos(alpha)))
         # every node that is now near a wall had its row
         settled = not np.any(near_walls(chain, state.positions(chain)[1], ROW_BAND) & ~fs.rowed)
-        if dalpha < tol and abs(tau) < tol * chain.length and paired and settled:
+        if (dalpha < tol and abs(tau) < tol * chain.length and paired and settled
+                and sol.solved):
             return StateAnswer(state, N, T, fs, True, "max|Δα| < tol", it, sizes,
                                time.perf_counter() - t0)
         gross = gross + 1 if has_tau and gross_slip(fs, N, T, float(scene.pull)) else 0
@@ -292,7 +297,8 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
         if not np.isfinite(dalpha) or away:
             break
     why = ("gross slip: every contact node slides at its cone and friction holds less than "
-           "the pull (no equilibrium)" if away else f"no convergence in {it} contact steps")
+           "the pull (no equilibrium)" if away else f"no convergence in {it} contact steps"
+           + ("" if fs is None or sol.solved else f" (the last {sol.status.name})"))
     return StateAnswer(state, N, T, fs, False, why, it, sizes, time.perf_counter() - t0)
 
 

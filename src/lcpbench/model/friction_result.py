@@ -17,7 +17,7 @@ from ..jsonsafe import sanitise
 from ..problems.scenes import ActuatorScene, Chain
 from .chain import node_positions
 from .friction_driver import StateAnswer, datum, gaps_at
-from .judge import GEOMETRY_TOL, NODE_SHARE, SLIP_FACTOR, force_tol
+from .judge import GEOMETRY_TOL, NODE_SHARE, SLIP_FACTOR, SLIP_FLOOR, force_tol
 from .judge_friction import FRICTION_STATS, friction_checks
 from .result import ContactResult
 
@@ -30,7 +30,7 @@ class FrictionResult:
     reaction of the upper wall, N), ``forces_lower`` (the lower wall's, channel only),
     ``tangential_forces`` (T, N, on the chain along +x), ``slip`` (mm, x − x at the
     previous state) and ``stick`` (True: in contact, N > the judge's ε, and not
-    sliding, |slip| <= SLIP_FACTOR·tol·a). ``total_force``: ΣN over every wall.
+    sliding, |slip| <= the judge's ε_s). ``total_force``: ΣN over every wall.
     ``route``: "frictionless" (today's :func:`lcpbench.solve`, kept in ``contact``)
     or "frictional" (:mod:`lcpbench.model.friction_driver`). ``judgement``: the
     friction checks' numbers and ``fails``, the checks that failed.
@@ -83,7 +83,7 @@ def from_contact(scene, state: dict, res: ContactResult, x_prev: np.ndarray | No
     """Today's frictionless answer as a state of a path (no tangential force)."""
     f = res.free_nodes if res.free_nodes is not None else np.arange(1, res.links)
     slip = res.x[f] - x_prev[f] if x_prev is not None else np.zeros(f.size)
-    eps_s = SLIP_FACTOR * res.tol * scene.length / res.links
+    eps_s = max(SLIP_FACTOR * res.tol * scene.length / res.links, SLIP_FLOOR * scene.length)
     return FrictionResult(
         scene, state, res.links, res.x, res.y, res.alpha, res.forces, res.forces_lower,
         np.zeros(f.size), slip, (res.forces > 0) & (np.abs(slip) <= eps_s), res.total_force,
@@ -98,7 +98,7 @@ def judge_friction(scene: ActuatorScene, chain: Chain, alpha: np.ndarray, x0: fl
     tau = force_tol(tol)
     F0 = max(abs(float(np.sum(normal))), chain.force_scale, abs(float(scene.pull)))
     eps_f = NODE_SHARE * tau * F0
-    eps_s = SLIP_FACTOR * tol * chain.link_length
+    eps_s = max(SLIP_FACTOR * tol * chain.link_length, SLIP_FLOOR * chain.length)
     has_tau, right_datum = datum(scene)
     stats = friction_checks(
         alpha, float(x0), chain.link_length, chain.joint_links[:, 0].astype(np.int64),
