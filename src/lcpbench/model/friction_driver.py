@@ -21,8 +21,7 @@ from ..problems.scenes import ActuatorScene, Chain
 from ..solvers.base import Status
 from ..solvers.lemke import lemke
 from .chain import alpha_from_heights, node_positions
-from .friction_step import (add_pull_curvature, delassus_form, frictional_lcp, recover,
-                            slip_jacobian)
+from .friction_step import add_pull_curvature, delassus_form, frictional_lcp, recover, slip_jacobian
 from .step import assemble_step
 
 #: a node within NEAR · a of a wall gets a friction pair in the step (docs/friction.md)

@@ -1,21 +1,20 @@
 """The frictional contact step (issue 39), compiled: the Stewart–Trinkle LCP of a state.
 
 docs/friction.md derives it. At a configuration α of a chain held in y at both ends,
-with the free node heights' increments δy (and, when no end holds x, the
-translation τ along x) as unknowns:
+with the unknowns δ (the free node heights' increments δy, and the translation τ
+along x when no end holds x, held in the step by a spring k_τ):
 
-    H δy = f + G_n N + G_t T,      Σ T + P = 0 (only with τ),
+    K δ = f + G_n N + G_t T,
 
-H the banded step's Hessian (:func:`lcpbench.model.step.assemble_step`, dense here)
-plus the pull's curvature, f = −g₀ + P ∂x_N/∂δy, G_n the gaps' and G_t the slips'
-Jacobians. Eliminating δy leaves the LCP w = M z + q, 0 <= z ⟂ w >= 0, in
-z = (N, β⁺, β⁻, λ, τ⁺, τ⁻) with T = β⁺ − β⁻ and τ = τ⁺ − τ⁻ (:func:`frictional_lcp`);
-M is not symmetric. The same step in Siconos' form, u = W r + q with r = (N_i, T_i)
-per contact (:func:`delassus_form`).
+K the banded step's Hessian (:func:`lcpbench.model.step.assemble_step`, dense here)
+plus the pull's curvature (and k_τ), f = −g₀ + P ∂x_N/∂δ, G_n the gaps' and G_t the
+slips' Jacobians. Eliminating δ leaves the contact quantities affine in the forces,
+(g, s) = (g_f, s_f) + W (N, T) with W = Gᵀ K⁻¹ G (:func:`delassus_form`, Siconos'
+fc2d form), and the LCP w = M z + q, 0 <= z ⟂ w >= 0, in z = (N, β⁺, β⁻, λ) with
+T = β⁺ − β⁻ (:func:`frictional_lcp`); M is not symmetric.
 
 Each function is ``@njit(cache=True)``; with NUMBA_DISABLE_JIT=1 they run as plain
-Python. Nothing here is numpy-vectorised twice: the driver
-(:mod:`lcpbench.model.friction_driver`) calls these.
+Python. The driver (:mod:`lcpbench.model.friction_driver`) calls these.
 """
 
 from __future__ import annotations

@@ -26,8 +26,14 @@ import numpy as np
 
 from ..errors import ProblemError
 from .checks import check_flag, check_number
-from .friction import (check_end, check_friction, check_pull, check_support, is_frictional,
-                       wall_friction)
+from .friction import (
+    check_end,
+    check_friction,
+    check_pull,
+    check_support,
+    is_frictional,
+    wall_friction,
+)
 from .templates import filled, full, uniform_load
 from .walls import WallProfile
 
