@@ -53,6 +53,26 @@ def path_scenes(scene, states) -> list[tuple[dict, ActuatorScene]]:
     return out
 
 
+def place(scene: ActuatorScene, *, tol: float, max_outer: int, solve
+          ) -> tuple[FrictionState, object, str]:
+    """Where a path starts: the frictionless equilibrium of ``scene`` (μ = 0, both ends
+    pinned, no pull), its node x (the first slips' reference) and why it failed ("")."""
+    placed = solve(replace(scene, friction=0.0, left_end="pinned", right_end="pinned",
+                           pull=0.0), tol=tol, max_outer=max_outer)
+    why = "" if placed.converged else (
+        f"the frictionless placement did not converge ({placed.reason})")
+    return FrictionState(placed.alpha.copy(), 0.0), placed.x.copy(), why
+
+
+def advance(scene: ActuatorScene, state: dict, current: FrictionState, x_prev, *,
+            tol: float, max_outer: int, lcp=None):
+    """One state of a path solved from ``current`` (slips from ``x_prev``): its judged
+    result and the outer loop's end state."""
+    kw = {} if lcp is None else {"lcp": lcp}
+    ans = solve_state(scene, current, x_prev, tol=tol, max_outer=max_outer, **kw)
+    return build_result(scene, state, ans, x_prev, tol), ans.state
+
+
 def run_path(scene, states, *, tol: float, max_outer: int, solve, lcp=None
              ) -> list[FrictionResult]:
     """:func:`lcpbench.solve_path`'s work; ``solve`` is :func:`lcpbench.solve`."""
@@ -66,25 +86,16 @@ def run_path(scene, states, *, tol: float, max_outer: int, solve, lcp=None
         return out
     for _, s in steps:
         check_frictional_ends(s)
-    first = steps[0][1]
-    placed = solve(replace(first, friction=0.0, left_end="pinned", right_end="pinned",
-                           pull=0.0), tol=tol, max_outer=max_outer)
-    current = FrictionState(placed.alpha.copy(), 0.0)
-    x_prev = placed.x.copy()
-    out, broken = [], None if placed.converged else (
-        f"the frictionless placement did not converge ({placed.reason})")
-    kw = {} if lcp is None else {"lcp": lcp}
+    current, x_prev, broken = place(steps[0][1], tol=tol, max_outer=max_outer, solve=solve)
+    out = []
     for state, s in steps:
+        res, end = advance(s, state, current, x_prev, tol=tol,
+                           max_outer=0 if broken else max_outer, lcp=lcp)
         if broken:
-            ans = solve_state(s, current, x_prev, tol=tol, max_outer=0, **kw)
-            ans.reason, ans.converged = broken, False
-            out.append(build_result(s, state, ans, x_prev, tol))
-            continue
-        ans = solve_state(s, current, x_prev, tol=tol, max_outer=max_outer, **kw)
-        res = build_result(s, state, ans, x_prev, tol)
+            res.converged, res.reason = False, broken
         out.append(res)
-        if not res.converged:
+        if not res.converged and not broken:
             broken = f"an earlier state did not converge ({res.reason})"
-            continue
-        current, x_prev = ans.state, res.x.copy()
+        if not broken:
+            current, x_prev = end, res.x.copy()
     return out
