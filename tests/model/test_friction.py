@@ -12,7 +12,12 @@ import pytest
 
 import lcpbench
 from lcpbench import ActuatorScene, ProblemError
-from lcpbench.model.friction_driver import FrictionState, frictional_step, solve_state
+from lcpbench.model.friction_driver import (
+    FrictionState,
+    frictional_chain,
+    frictional_step,
+    solve_state,
+)
 from lcpbench.model.friction_result import build_result
 
 TIGHT = 1e-12
@@ -169,10 +174,12 @@ def test_bad_paths_give_one_clear_error(states, words):
         lcpbench.solve_path(scene, states)
 
 
-def test_a_free_end_is_refused_clearly():
-    scene = ActuatorScene(links=20, friction=0.3, right_end="free", channel=True)
-    with pytest.raises(ProblemError, match="right_end='free' is not supported"):
+def test_a_free_left_end_is_refused_clearly():
+    scene = ActuatorScene(links=20, friction=0.3, left_end="free", channel=True)
+    with pytest.raises(ProblemError, match="left_end='free' is not supported"):
         lcpbench.solve_path(scene)
+    with pytest.raises(ProblemError, match="a free end needs channel=True"):
+        ActuatorScene(links=20, friction=0.3, right_end="free")
     with pytest.raises(ProblemError, match="ActuatorScene"):
         lcpbench.solve_path(lcpbench.CantileverScene(links=20))
 
@@ -185,7 +192,7 @@ def _energy_minimiser(scene, T, x0, start):
 
     from lcpbench.model.chain import energy, node_positions
 
-    chain = scene.chain()
+    chain = frictional_chain(scene)
     free = chain.free_nodes
     up, lo = np.isfinite(chain.upper), np.isfinite(chain.lower)
 
@@ -193,7 +200,8 @@ def _energy_minimiser(scene, T, x0, start):
         x, _ = node_positions(chain, a)
         return energy(chain, a) - float(T @ (x[free] + x0)) - scene.pull * (x[-1] + x0)
 
-    cons = [{"type": "eq", "fun": lambda a: np.array([node_positions(chain, a)[1][-1]])},
+    closure = [{"type": "eq", "fun": lambda a: np.array([node_positions(chain, a)[1][-1]])}]
+    cons = (closure if scene.right_end != "free" else []) + [
             {"type": "ineq", "fun": lambda a: np.concatenate([
                 chain.upper[up] - node_positions(chain, a)[1][free][up],
                 node_positions(chain, a)[1][free][lo] - chain.lower[lo]])}]
@@ -227,19 +235,20 @@ def test_the_shape_is_the_energy_minimiser_under_its_tangential_loads(pull):
 
 
 def test_random_paths_converged_answers_obey_coulomb():
-    """Random scenes and paths (a bend ramp, a pull, a release): every state the judge
-    calls converged obeys Coulomb's law node by node and balances along x."""
+    """Random scenes and paths (a bend ramp, a pull, a release; free right ends in
+    channels): every state the judge calls converged obeys Coulomb's law node by node
+    and balances along x."""
     rng = np.random.default_rng(7)
     converged = 0
     for _ in range(12):
-        ends = [("pinned", "slider"), ("slider", "slider"), ("slider", "pinned")][
-            rng.integers(3)]
-        channel = bool(rng.random() < 0.3)
+        channel = bool(rng.random() < 0.4)
+        ends = [("pinned", "slider"), ("slider", "slider"), ("slider", "pinned"),
+                ("pinned", "free"), ("slider", "free")][rng.integers(5 if channel else 3)]
         theta = float(rng.uniform(100, 160))
         scene = ActuatorScene(theta=theta, height=float(rng.uniform(1.5, 4.0)), links=20,
                               channel=channel, left_end=ends[0], right_end=ends[1],
                               friction=float(rng.uniform(0.05, 0.8)))
-        pull = float(rng.uniform(0.0, 0.08)) if ends[1] == "slider" else 0.0
+        pull = float(rng.uniform(0.0, 0.08)) if ends[1] != "pinned" else 0.0
         states = [{}, {"theta": theta + 10}, {"pull": pull}, {"pull": 0.0}]
         for res in lcpbench.solve_path(scene, states, tol=1e-10):
             if not res.converged:
@@ -250,3 +259,24 @@ def test_random_paths_converged_answers_obey_coulomb():
                 assert abs(np.sum(res.tangential_forces) + res.pull) <= 1e-9 * max(
                     res.total_force, res.pull)
     assert converged >= 30
+
+
+@pytest.mark.parametrize("left", ["pinned", "slider"])
+def test_a_free_right_end_in_a_channel(left):
+    """A free right end (its tip's height unknown, the rotation about the left pin held
+    by the walls): Coulomb node by node, the tip on a wall, and the shape is the energy
+    minimiser (no closure) under the answer's tangential loads and the pull."""
+    scene = ActuatorScene(theta=120, height=2.0, links=20, channel=True, friction=0.3,
+                          left_end=left, right_end="free")
+    path = lcpbench.solve_path(scene, [{}, {"pull": 0.02}], tol=1e-10)
+    for res in path:
+        assert res.converged, res.reason
+        _coulomb_holds(res)
+        assert res.forces.size == scene.links  # nodes 2..N+1: the tip too
+        assert abs(abs(res.y[-1]) - scene.height) <= 1e-9  # the tip rests on a wall
+    res = path[-1]
+    placed = lcpbench.solve(replace(scene, friction=0.0, left_end="pinned",
+                                    right_end="pinned"))  # a start away from the answer
+    alpha = _energy_minimiser(replace(scene, pull=0.02), res.tangential_forces, res.x[0],
+                              placed.alpha)
+    np.testing.assert_allclose(alpha, res.alpha, rtol=0, atol=1e-6)

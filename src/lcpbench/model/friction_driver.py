@@ -12,12 +12,12 @@ are the exact ones.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..errors import ProblemError
-from ..problems.scenes import ActuatorScene, Chain
+from ..problems.scenes import ActuatorScene, Chain, reachable
 from ..solvers.base import Status
 from ..solvers.lemke import lemke
 from .chain import alpha_from_heights, node_positions
@@ -31,6 +31,11 @@ ROW_BAND = 1.0
 #: the stiffness that holds the translation τ in a step, in EI/ℓ³: a proximal term,
 #: exact at the fixed point (τ = 0 there; docs/friction.md)
 TAU_STIFFNESS = 1.0
+#: the stiffness that holds a free end's rotation about the pin in a step, in EI/ℓ per
+#: rad: a proximal term as k_τ (docs/friction.md, free ends)
+ROT_STIFFNESS = 1.0
+#: the largest turn of a link in one outer step (rad); a longer step is shortened
+MAX_TURN = 0.25
 #: a state whose chain moves along x by more than RUNAWAY · ℓ has no equilibrium
 RUNAWAY = 10.0
 #: this many steps in a row at gross slip (:func:`gross_slip`) end a state: no equilibrium
@@ -114,11 +119,38 @@ class FrictionStep:
 
 
 def check_frictional_ends(scene: ActuatorScene) -> None:
-    """ProblemError for what the frictional step does not build yet: a free end."""
-    for name in ("left_end", "right_end"):
-        if getattr(scene, name) == "free":
-            raise ProblemError(f"{name}='free' is not supported by the frictional step yet "
-                               f"(docs/friction.md, free ends): use 'pinned' or 'slider'")
+    """ProblemError for what the frictional step does not build yet: a free left end."""
+    if scene.left_end == "free":
+        raise ProblemError("left_end='free' is not supported by the frictional step yet "
+                           "(docs/friction.md, free ends): use 'pinned' or 'slider', or "
+                           "mirror the scene and free the right end")
+
+
+def frictional_chain(scene: ActuatorScene) -> Chain:
+    """The chain of a frictional state: the scene's, or with a free right end its tip's
+    height unknown too (free nodes 2..N+1) and wall rows for every node within reach
+    of the walls from the left pin (its arc length s >= h)."""
+    chain = scene.chain()
+    if scene.right_end != "free":
+        return chain
+
+    def make():
+        n = chain.links
+        free = np.arange(1, n + 1)
+        can = reachable(free * chain.link_length, chain.length, scene.height, "clamped-free")
+        upper = np.where(can, scene.height, np.inf)
+        lower = np.where(can, -scene.height, -np.inf) if scene.channel else np.full(n, -np.inf)
+        return replace(chain, free_nodes=free, upper=upper, lower=lower)
+
+    return chain.derived("friction: free right end", make)
+
+
+def rotation_mode(chain: Chain, x: np.ndarray) -> np.ndarray | None:
+    """r, the free heights' increments of a rigid rotation about node 1 by 1 rad
+    (r_i = x_i − x_1), when the right end is free (None: both ends held in y)."""
+    if chain.free_nodes[-1] < chain.links:
+        return None
+    return x[chain.free_nodes] - x[0]
 
 
 def datum(scene: ActuatorScene) -> tuple[bool, bool]:
@@ -188,8 +220,14 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
     has_tau, right_datum = datum(scene)
     step = assemble_step(chain, state.alpha)
     H = step.dense_hessian()
-    add_pull_curvature(H, state.alpha, chain.link_length, float(scene.pull))
-    D = slip_jacobian(state.alpha, right_datum)
+    first, n = int(chain.free_nodes[0]), int(chain.free_nodes.size)
+    add_pull_curvature(H, state.alpha, chain.link_length, float(scene.pull), first)
+    D = slip_jacobian(state.alpha, first, n, right_datum)
+    x, y = state.positions(chain)
+    r = rotation_mode(chain, x)
+    if r is not None:  # a free end: the rotation about the pin held by ROT_STIFFNESS
+        rr = float(r @ r)
+        H += (ROT_STIFFNESS * scene.EI / chain.length / rr**2) * np.outer(r, r)
     f = -step.gradient(step.origin)
     if scene.pull:
         f += scene.pull * D[chain.links]
@@ -199,7 +237,6 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
                                                          chain.force_scale / chain.length)]])
         D = np.hstack([D, np.ones((D.shape[0], 1))])
         f = np.append(f, float(scene.pull))
-    x, y = state.positions(chain)
     g_up, g_lo = gaps_at(chain, y)
     touching = near_walls(chain, y, NEAR)
     near = near_walls(chain, y, ROW_BAND)
@@ -231,6 +268,20 @@ def gross_slip(fs: FrictionStep, N: np.ndarray, T: np.ndarray, pull: float) -> b
     return bool(at_cone and abs(pull + float(np.sum(T))) > 1e-9 * scale)
 
 
+def damped(chain: Chain, origin: np.ndarray, dy: np.ndarray, alpha: np.ndarray):
+    """(α, share): the step's heights origin + share·δy, share = 1 unless that turns a
+    link by more than MAX_TURN or past the vertical, then halved until it does not (an
+    iterate, not the answer: a state converges on full steps only). (None, 0) when no
+    share of 2⁻³⁰ helps."""
+    share = 1.0
+    for _ in range(30):
+        new = alpha_from_heights(chain, origin + share * dy, alpha)
+        if new is not None and np.max(np.abs(new - alpha)) <= MAX_TURN:
+            return new, share
+        share *= 0.5
+    return None, 0.0
+
+
 @dataclass
 class StateAnswer:
     """The outer loop's answer for one state (before it is judged)."""
@@ -251,7 +302,7 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
     """The outer loop of one state from ``start``, slips from ``x_prev`` (docs/friction.md)."""
     check_frictional_ends(scene)
     t0 = time.perf_counter()
-    chain = scene.chain()
+    chain = frictional_chain(scene)
     has_tau, right_datum = datum(scene)
     x_right = start.positions(chain)[0][-1]  # a pinned right end stays where it starts
     state = FrictionState(start.alpha.copy(), start.x0)
@@ -260,8 +311,12 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
     fs = None
     pressed, away, it, gross = None, False, 0, 0
     for it in range(1, max_outer + 1):
-        fs = frictional_step(scene, chain, state, x_prev, pressed,
-                             None if fs is None else fs.rowed)
+        try:
+            fs = frictional_step(scene, chain, state, x_prev, pressed,
+                                 None if fs is None else fs.rowed)
+        except np.linalg.LinAlgError as exc:  # (K singular: a link at the vertical)
+            return StateAnswer(state, N, T, fs, False, f"contact step {it}: {exc}", it,
+                               sizes, time.perf_counter() - t0)
         sol = lcp(fs.M, fs.q)
         # an inexact step only moves the iterate (the judge reads the last one, which
         # must be SOLVED): go on from it, as the frictionless driver does
@@ -275,13 +330,15 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
         pressed[fs.normal_node[N > 0]] = True
         # every pressed node had its friction pair: else the step is not the answer yet
         paired = np.all(fs.pair[N > 0] >= 0)
-        alpha = alpha_from_heights(chain, fs.origin + dy, state.alpha)
+        alpha, share = damped(chain, fs.origin, dy, state.alpha)
         if alpha is None:
             return StateAnswer(state, N, T, fs, False, f"contact step {it}: a link would "
                                "pass the vertical (no chain has these heights)", it, sizes,
                                time.perf_counter() - t0)
         dalpha = float(np.max(np.abs(alpha - state.alpha)))
         sizes.append(dalpha)
+        tau *= share
+        paired = paired and share == 1.0
         state = FrictionState(alpha, state.x0 + tau)
         if right_datum:
             state.x0 = x_right - float(np.sum(chain.link_length * np.cos(alpha)))

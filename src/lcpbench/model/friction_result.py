@@ -16,7 +16,7 @@ import numpy as np
 from ..jsonsafe import sanitise
 from ..problems.scenes import ActuatorScene, Chain
 from .chain import node_positions
-from .friction_driver import StateAnswer, datum, gaps_at
+from .friction_driver import StateAnswer, datum, frictional_chain, gaps_at
 from .judge import GEOMETRY_TOL, NODE_SHARE, SLIP_FACTOR, SLIP_FLOOR, force_tol
 from .judge_friction import FRICTION_STATS, friction_checks
 from .result import ContactResult
@@ -104,7 +104,8 @@ def judge_friction(scene: ActuatorScene, chain: Chain, alpha: np.ndarray, x0: fl
         alpha, float(x0), chain.link_length, chain.joint_links[:, 0].astype(np.int64),
         chain.joint_links[:, 1].astype(np.int64), chain.joint_stiffness, chain.rest_joint,
         chain.link_load, chain.free_nodes.astype(np.int64), fy, fx, normal, limit, gap, slip,
-        float(scene.pull), right_datum, eps_f, eps_s, chain.length, F0)
+        float(scene.pull), right_datum, scene.right_end != "free", eps_f, eps_s, chain.length,
+        F0)
     v = dict(zip(FRICTION_STATS, (float(s) for s in stats)))
     v["relative_torque_residual"] = v["max_torque_residual"] / max(v["spring_max"],
                                                                    scene.EI / chain.length)
@@ -130,7 +131,7 @@ def judge_friction(scene: ActuatorScene, chain: Chain, alpha: np.ndarray, x0: fl
 def build_result(scene: ActuatorScene, state: dict, ans: StateAnswer, x_prev: np.ndarray,
                  tol: float) -> FrictionResult:
     """A judged :class:`FrictionResult` from the outer loop's answer."""
-    chain = scene.chain()
+    chain = frictional_chain(scene)
     alpha, x0 = ans.state.alpha, ans.state.x0
     x, y = node_positions(chain, alpha)
     x = x + x0

@@ -24,51 +24,54 @@ from numba import njit
 
 
 @njit(cache=True)
-def slip_jacobian(alpha, right_datum):
-    """D (N+1 × N−1): δx_i = Σ_j D[i, j] δy_j for the interior heights, δy_0 = δy_N = 0.
+def slip_jacobian(alpha, first, n, right_datum):
+    """D (N+1 × n): δx_i = Σ_j D[i, j] δu_j for the heights of the n free nodes
+    ``first`` … ``first + n − 1`` (the others held).
 
     δx_i = −Σ_{k<i} tan α_k (δy_{k+1} − δy_k) with the left end as the datum (its x
     held, or moved by τ); with ``right_datum`` each row is taken relative to the
     right end's (x_N held): δx_i − δx_N.
     """
     links = alpha.size
-    n = links - 1
     t = np.tan(alpha)
     D = np.zeros((links + 1, n))
     for i in range(links + 1):
-        for j in range(1, links):
-            c = 0.0
-            if j <= i:
-                c -= t[j - 1]
+        for c in range(n):
+            j = first + c
+            v = 0.0
+            if 1 <= j <= i:
+                v -= t[j - 1]
             if j < i:
-                c += t[j]
-            D[i, j - 1] = c
+                v += t[j]
+            D[i, c] = v
     if right_datum:
-        for i in range(links + 1):
-            for j in range(n):
-                D[i, j] -= D[links, j] if i < links else 0.0
-        for j in range(n):
-            D[links, j] = 0.0
+        for i in range(links):
+            for c in range(n):
+                D[i, c] -= D[links, c]
+        for c in range(n):
+            D[links, c] = 0.0
     return D
 
 
 @njit(cache=True)
-def add_pull_curvature(H, alpha, a, pull):
-    """H += P Σ_k d_k d_kᵀ / (a cos³ α_k), d_k = e_{k+1} − e_k on the interior heights:
-    the curvature of the pull's potential −P x_N (x_N = Σ √(a² − Δy_k²)); P > 0 only
-    (a pulled chain is stiffer; a push adds nothing)."""
+def add_pull_curvature(H, alpha, a, pull, first):
+    """H += P Σ_k d_k d_kᵀ / (a cos³ α_k), d_k = e_{k+1} − e_k on the free heights
+    (nodes ``first`` … ``first + n − 1``): the curvature of the pull's potential
+    −P x_N (x_N = Σ √(a² − Δy_k²)); P > 0 only (a pulled chain is stiffer; a push adds
+    nothing)."""
     if pull <= 0.0:
         return
-    links = alpha.size
-    for k in range(links):
+    n = H.shape[0]
+    for k in range(alpha.size):
         c = np.cos(alpha[k])
         s = pull / (a * c * c * c)
-        lo, hi = k - 1, k  # free indices of nodes k and k + 1 (−1 / n: held ends)
-        if lo >= 0:
+        lo, hi = k - first, k + 1 - first  # free indices of nodes k and k + 1
+        ok_lo, ok_hi = 0 <= lo < n, 0 <= hi < n
+        if ok_lo:
             H[lo, lo] += s
-        if hi < links - 1:
+        if ok_hi:
             H[hi, hi] += s
-        if lo >= 0 and hi < links - 1:
+        if ok_lo and ok_hi:
             H[lo, hi] -= s
             H[hi, lo] -= s
 

@@ -22,11 +22,11 @@ FRICTION_STATS = ("spring_max", "max_torque_residual", "x_balance", "cone_excess
 
 @njit(cache=True)
 def friction_checks(alpha, x0, a, jl, jr, k, rest, link_load, free, fy, fx, normal, limit,
-                    gap, slip, pull, right_x_held, eps_f, eps_s, L, F0):
+                    gap, slip, pull, right_x_held, right_y_held, eps_f, eps_s, L, F0):
     """The frictional answer's residuals on the exact geometry: the torque residual with
     the nodes' vertical fy and horizontal fx forces (N, per free node), the pull P on
     the right end and the supports' reactions (the right one's vertical from moments
-    about node 1, its horizontal when it holds x); the horizontal balance ΣF_x (what no
+    about node 1 when it holds y, its horizontal when it holds x); the horizontal balance ΣF_x (what no
     support takes); per node the cone max(|T| − μN), and for nodes that slide
     (|s| > eps_s) the cone deficit μN − |T| and T·sign(s) (<= 0: T opposes the slip);
     the largest |s| of a node inside the cone by more than eps_f; the smallest gap
@@ -49,7 +49,8 @@ def friction_checks(alpha, x0, a, jl, jr, k, rest, link_load, free, fy, fx, norm
         m0 += FY[q] * (x[q] - x[0]) - FX[q] * (y[q] - y[0])
     for i in range(links):
         m0 += link_load[i] * (0.5 * (x[i] + x[i + 1]) - x[0])
-    FY[links] -= m0 / (x[links] - x[0])
+    if right_y_held:  # (a free right end has no reaction)
+        FY[links] -= m0 / (x[links] - x[0])
     sx = 0.0
     for q in range(links + 1):
         sx += FX[q]

@@ -60,9 +60,12 @@ def check_pull(value) -> float:
     return check_number("pull", value, low=-PULL_LIMIT, high=PULL_LIMIT, unit="N")
 
 
-def check_support(left: str, right: str, pull: float, mu: tuple[float, float]) -> None:
+def check_support(left: str, right: str, pull: float, mu: tuple[float, float],
+                  channel: bool = True) -> None:
     """ProblemError when the chain is not held: a pull on a pinned end, both ends free,
-    or nothing that holds x (no pinned end and frictionless walls)."""
+    a free end without a channel (one wall above and the weight both push a free end
+    away: it swings about the other end), or nothing that holds x (no pinned end and
+    frictionless walls)."""
     if pull != 0.0 and right == "pinned":
         raise ProblemError(f"pull acts on the right end, which must be 'slider' or 'free' "
                            f"(right_end='pinned' holds x); got pull={describe(pull)} "
@@ -70,6 +73,10 @@ def check_support(left: str, right: str, pull: float, mu: tuple[float, float]) -
     if left == "free" and right == "free":
         raise ProblemError("left_end and right_end cannot both be 'free': nothing holds "
                            "the chain (pin an end or make it a slider)")
+    if "free" in (left, right) and not channel:
+        raise ProblemError("a free end needs channel=True: with one wall above, the wall and "
+                           "the weight both push the free end away and nothing holds the "
+                           "chain (it swings about the other end)")
     if "pinned" not in (left, right) and not any(m > 0 for m in mu):
         raise ProblemError(f"nothing holds the chain along x: left_end={left!r} and "
                            f"right_end={right!r} with frictionless walls; pin an end "

@@ -310,7 +310,8 @@ class ActuatorScene:
         object.__setattr__(self, "left_end", check_end("left_end", self.left_end))
         object.__setattr__(self, "right_end", check_end("right_end", self.right_end))
         object.__setattr__(self, "pull", check_pull(self.pull))
-        check_support(self.left_end, self.right_end, self.pull, self.wall_friction)
+        check_support(self.left_end, self.right_end, self.pull, self.wall_friction,
+                      self.channel)
         if self.frictional and (self.wall_profile is not None
                                 or not math.isinf(self.wall_stiffness)):
             raise ProblemError("friction, a slider or free end, or a pull cannot be combined "
