@@ -52,9 +52,10 @@ COVERING_SEED = 39
 def step_lemke(M: np.ndarray, q: np.ndarray):
     """The default solver of the frictional step: Lemke with :data:`PIVOT_TOL`, and
     where it stops short of SOLVED (near gross slip the LCP is degenerate: every node
-    at its cone), again with the covering vectors (2 … 1) and (1 … n)/n: another
-    pivot path to the same solution set, then three seeded random ones in [1, 2). The step's LCP always has a solution (W is
-    positive semidefinite: Stewart–Trinkle), so a ray is a numerical failure."""
+    at its cone), again with the covering vectors (2 … 1) and (1 … n)/n, then three
+    seeded random ones in [1, 2): other pivot paths to the same solution set. The
+    step's LCP always has a solution (W is positive semidefinite: Stewart–Trinkle), so
+    a ray is a numerical failure."""
     n = q.size
     sol = lemke(M, q, pivot_tol=PIVOT_TOL)
     rng = np.random.default_rng(COVERING_SEED)

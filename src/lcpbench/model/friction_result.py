@@ -84,9 +84,11 @@ def from_contact(scene, state: dict, res: ContactResult, x_prev: np.ndarray | No
     f = res.free_nodes if res.free_nodes is not None else np.arange(1, res.links)
     slip = res.x[f] - x_prev[f] if x_prev is not None else np.zeros(f.size)
     eps_s = max(SLIP_FACTOR * res.tol * scene.length / res.links, SLIP_FLOOR * scene.length)
+    lower = res.forces_lower if res.forces_lower is not None else 0.0
     return FrictionResult(
         scene, state, res.links, res.x, res.y, res.alpha, res.forces, res.forces_lower,
-        np.zeros(f.size), slip, (res.forces > 0) & (np.abs(slip) <= eps_s), res.total_force,
+        np.zeros(f.size), slip, (res.forces + lower > 0) & (np.abs(slip) <= eps_s),
+        res.total_force,
         0.0, res.converged, res.reason, res.outer_iterations, res.tol, res.time_s,
         "frictionless", {}, res)
 
