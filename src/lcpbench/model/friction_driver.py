@@ -21,7 +21,6 @@ from ..problems.scenes import ActuatorScene, Chain, reachable
 from ..solvers.base import Status
 from ..solvers.lemke import lemke
 from .chain import alpha_from_heights, node_positions
-from .friction_step import add_pull_curvature, delassus_form, frictional_lcp, recover, slip_jacobian
 from .step import assemble_step
 
 #: a node within NEAR · a of a wall gets a friction pair in the step (docs/friction.md)
@@ -47,6 +46,20 @@ GROSS_STEPS = 3
 PIVOT_TOL = 1e-9
 #: the seed of the random covering vectors :func:`step_lemke` tries last
 COVERING_SEED = 39
+
+
+_KERNELS: list = []  # the compiled step (model/friction_step.py), once loaded
+
+
+def step_kernels():
+    """The frictional step's compiled functions (:mod:`lcpbench.model.friction_step`),
+    loaded once through :func:`lcpbench.numba_cache.kernel_module` (numba's cache
+    under the hash of every kernel file)."""
+    if not _KERNELS:
+        from ..numba_cache import held, kernel_module
+
+        held(_KERNELS).append(kernel_module("lcpbench.model.friction_step", "delassus_form"))
+    return _KERNELS[0]
 
 
 def step_lemke(M: np.ndarray, q: np.ndarray):
@@ -115,7 +128,7 @@ class FrictionStep:
         zz = z.copy()
         zz[:mn + 2 * mt] *= self.force
         zz[mn + 2 * mt:] *= self.length
-        N, T, d = recover(zz, self.X, mn, mt)
+        N, T, d = step_kernels().recover(zz, self.X, mn, mt)
         return (N, T, d[:-1], float(d[-1])) if self.has_tau else (N, T, d, 0.0)
 
 
@@ -222,8 +235,9 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
     step = assemble_step(chain, state.alpha)
     H = step.dense_hessian()
     first, n = int(chain.free_nodes[0]), int(chain.free_nodes.size)
-    add_pull_curvature(H, state.alpha, chain.link_length, float(scene.pull), first)
-    D = slip_jacobian(state.alpha, first, n, right_datum)
+    k = step_kernels()
+    k.add_pull_curvature(H, state.alpha, chain.link_length, float(scene.pull), first)
+    D = k.slip_jacobian(state.alpha, first, n, right_datum)
     x, y = state.positions(chain)
     r = rotation_mode(chain, x)
     if r is not None:  # a free end: the rotation about the pin held by ROT_STIFFNESS
@@ -250,9 +264,9 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
                                                        g_up, g_lo)
     gap = np.where(signs < 0, g_up[rows], g_lo[rows])
     slip = x[pair_nodes] - x_prev[pair_nodes]
-    W, g_f, s_f, X = delassus_form(H, f, rows, signs, gap, D, pair_nodes, slip)
+    W, g_f, s_f, X = k.delassus_form(H, f, rows, signs, gap, D, pair_nodes, slip)
     L, F = chain.length, chain.force_scale
-    M, q = frictional_lcp(W * (F / L), g_f / L, s_f / L, mus, pairs)
+    M, q = k.frictional_lcp(W * (F / L), g_f / L, s_f / L, mus, pairs)
     return FrictionStep(M, q, W, g_f, s_f, X, rows, signs, pair_nodes, pairs, mus, has_tau,
                         step.origin, L, F, near)
 

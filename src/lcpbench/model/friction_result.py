@@ -1,6 +1,6 @@
 """The result of a frictional state, and its judgement (issue 39, docs/friction.md).
 
-The judge's friction checks (:func:`judge_friction`) use the thresholds of the one
+The judge's friction checks (:func:`friction_verdict`) use the thresholds of the one
 judge (:data:`lcpbench.model.judge.THRESHOLDS`: τ = force_tol(tol), NODE_SHARE,
 GEOMETRY_TOL, SLIP_FACTOR) and its compiled residuals
 (:func:`lcpbench.model.judge_friction.friction_checks`). A frictional answer is
@@ -18,7 +18,6 @@ from ..problems.scenes import ActuatorScene, Chain
 from .chain import node_positions
 from .friction_driver import StateAnswer, datum, frictional_chain, gaps_at
 from .judge import GEOMETRY_TOL, NODE_SHARE, SLIP_FACTOR, SLIP_FLOOR, force_tol
-from .judge_friction import FRICTION_STATS, friction_checks
 from .result import ContactResult
 
 
@@ -93,7 +92,18 @@ def from_contact(scene, state: dict, res: ContactResult, x_prev: np.ndarray | No
         "frictionless", {}, res)
 
 
-def judge_friction(scene: ActuatorScene, chain: Chain, alpha: np.ndarray, x0: float,
+_KERNEL: list = []  # the compiled checks (model/judge_friction.py), once loaded
+
+
+def _checks():
+    if not _KERNEL:
+        from ..numba_cache import held, kernel_module
+
+        held(_KERNEL).append(kernel_module("lcpbench.model.judge_friction", "friction_checks"))
+    return _KERNEL[0]
+
+
+def friction_verdict(scene: ActuatorScene, chain: Chain, alpha: np.ndarray, x0: float,
                    fy: np.ndarray, fx: np.ndarray, normal: np.ndarray, limit: np.ndarray,
                    gap: np.ndarray, slip: np.ndarray, tol: float) -> dict:
     """The friction checks of an answer (docs/friction.md, the judge): numbers and fails."""
@@ -102,13 +112,14 @@ def judge_friction(scene: ActuatorScene, chain: Chain, alpha: np.ndarray, x0: fl
     eps_f = NODE_SHARE * tau * F0
     eps_s = max(SLIP_FACTOR * tol * chain.link_length, SLIP_FLOOR * chain.length)
     has_tau, right_datum = datum(scene)
-    stats = friction_checks(
+    kern = _checks()
+    stats = kern.friction_checks(
         alpha, float(x0), chain.link_length, chain.joint_links[:, 0].astype(np.int64),
         chain.joint_links[:, 1].astype(np.int64), chain.joint_stiffness, chain.rest_joint,
         chain.link_load, chain.free_nodes.astype(np.int64), fy, fx, normal, limit, gap, slip,
         float(scene.pull), right_datum, scene.right_end != "free", eps_f, eps_s, chain.length,
         F0)
-    v = dict(zip(FRICTION_STATS, (float(s) for s in stats)))
+    v = dict(zip(kern.FRICTION_STATS, (float(s) for s in stats)))
     v["relative_torque_residual"] = v["max_torque_residual"] / max(v["spring_max"],
                                                                    scene.EI / chain.length)
     fails = []
@@ -153,7 +164,7 @@ def build_result(scene: ActuatorScene, state: dict, ans: StateAnswer, x_prev: np
     gap = np.concatenate([g_up[rows_up], g_lo[rows_lo]])
     normal = np.concatenate([up[rows_up], lo[rows_lo]])
     slip = x[chain.free_nodes] - x_prev[chain.free_nodes]
-    verdict = judge_friction(scene, chain, alpha, x0, lo - up, T, normal, limit, gap, slip,
+    verdict = friction_verdict(scene, chain, alpha, x0, lo - up, T, normal, limit, gap, slip,
                              tol)
     converged = ans.converged and not verdict["fails"]
     reason = ans.reason if not ans.converged else (

@@ -1,12 +1,12 @@
 """The result judge's friction checks, compiled (issue 39, docs/friction.md).
 
 Part of the one judge (:mod:`lcpbench.model.judge`, whose :data:`~lcpbench.model.judge.THRESHOLDS`
-hold their thresholds; :func:`lcpbench.model.friction_result.judge_friction` applies
+hold their thresholds; :func:`lcpbench.model.friction_result.friction_verdict` applies
 them): the residuals of a frictional answer on the exact geometry. Kept beside
-:mod:`lcpbench.model.judge_kernel`, not in it: numba's on-disk cache of a kernel is
-invalidated when its file changes, and the frictionless judge's kernels need not
-recompile for checks they never run (they are skipped when μ = 0 and the ends are
-the paper's).
+:mod:`lcpbench.model.judge_kernel`, not in it: they run only for frictional answers
+(never when μ = 0 and the ends are the paper's), that file stays the frictionless
+judge's arithmetic, and both stay under the modules' 600 lines. Loaded through
+:func:`lcpbench.numba_cache.kernel_module`.
 """
 
 from __future__ import annotations
