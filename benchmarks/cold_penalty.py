@@ -162,7 +162,7 @@ def kernel_parts(scene, small, repeat: int) -> dict:
     from lcpbench.model.compiled import DEFAULT_TOL
     from lcpbench.model.judge_compiled import _kernel as judge_kernel
     from lcpbench.model.judge_compiled import chain_args
-    from lcpbench.model.kernel_call import _cold, kernel_args, solve_kernel
+    from lcpbench.model.kernel_call import cold_start, kernel_args, solve_kernel
 
     chain = scene.chain()
     args = kernel_args(chain)
@@ -171,7 +171,7 @@ def kernel_parts(scene, small, repeat: int) -> dict:
     k, jk = solve_kernel(), judge_kernel()
 
     def solve_kernel():  # the call of lcpbench.solve (compiled.call_kernel, cold start)
-        return k.solve_chain(*args, TOL, 200, *_cold(n), 20 * n + 50, DEFAULT_TOL, False)
+        return k.solve_chain(*args, TOL, 200, *cold_start(n), 20 * n + 50, DEFAULT_TOL, False)
 
     got = solve_kernel()
     alpha, rec, count, R = got[1], got[6], got[7], got[9]

@@ -39,6 +39,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from perf import interleaved, machine, med, wall  # noqa: E402
 
 import lcpbench  # noqa: E402
+from lcpbench.api import solve_internal  # noqa: E402
 from lcpbench.model.dense import solve_paper_dense  # noqa: E402
 from lcpbench.model.kernel_call import run_compiled, solve_kernel  # noqa: E402
 from lcpbench.model.step import assemble_step  # noqa: E402
@@ -54,7 +55,7 @@ def full_solve(scene, repeat: int) -> dict:
     runs = interleaved({
         "compiled (lcpbench.solve)": wall(lambda: lcpbench.solve(scene, tol=TOL)),
         "numpy reference (engine='numpy')": wall(
-            lambda: lcpbench.solve(scene, tol=TOL, engine="numpy")),
+            lambda: solve_internal(scene, tol=TOL, engine="numpy")),
         "dense paper path (Lemke)": wall(lambda: solve_paper_dense(scene, tol=TOL)),
         "kernel alone (run_compiled)": wall(lambda: run_compiled(chain, tol=TOL)),
     }, repeat)

@@ -33,8 +33,8 @@ from pathlib import Path
 
 from perf import interleaved, wall  # the interleaved protocol of results/perf.md
 
-import lcpbench
 from lcpbench import ActuatorScene
+from lcpbench.api import solve_internal
 from lcpbench.bench.machine import timing_note, timing_start
 from lcpbench.solvers import available_backends, get_backend
 
@@ -83,7 +83,7 @@ def measure(backend: str, repeat: int, settings: str) -> dict:
     def contender(name, engine):
         def run():
             spent[0] = 0.0
-            seconds, res = wall(lambda: lcpbench.solve(scene, solver=backend, tol=TOL,
+            seconds, res = wall(lambda: solve_internal(scene, solver=backend, tol=TOL,
                                                        settings=settings, engine=engine))()
             own[name].append((seconds, spent[0], own_time(res)))
             return seconds, res

@@ -34,6 +34,7 @@ from start_up import start_up, steady_state
 
 import lcpbench
 from lcpbench import ActuatorScene
+from lcpbench.api import solve_internal
 from lcpbench.baseline import solve_baseline
 from lcpbench.bench.grid import PAPER_GRID
 from lcpbench.model.dense import solve_paper_dense
@@ -65,7 +66,7 @@ def _full_contenders(wall) -> dict:
         "baseline analytic (hybr)": wall(lambda: solve_baseline(scene, jacobian="analytic")),
         "baseline fd (lm)": wall(lambda: solve_baseline(scene, jacobian="fd", method="lm")),
         "numpy reference (engine='numpy')": wall(
-            lambda: lcpbench.solve(scene, tol=TOL, engine="numpy")),
+            lambda: solve_internal(scene, tol=TOL, engine="numpy")),
     }
 
 

@@ -40,6 +40,7 @@ import numpy as np
 
 import lcpbench
 from lcpbench import ActuatorScene
+from lcpbench.api import solve_internal
 from lcpbench.bench.machine import timing_note, timing_start
 from lcpbench.model.energy_reference import minimise_energy
 from lcpbench.problems.walls import WallProfile, load_profile_csv
@@ -72,8 +73,8 @@ def validation(mod) -> tuple[list[str], dict]:
         ref = minimise_energy(scene)
         flat = ActuatorScene(theta=theta, height=_flat_height(profile, scene), links=mod.LINKS,
                              channel=channel, **({} if weight is None else {"weight": weight}))
-        f_fine = lcpbench.solve(flat, tol=1e-10, engine="numpy")
-        f_coarse = lcpbench.solve(flat, tol=1e-3, engine="numpy")
+        f_fine = solve_internal(flat, tol=1e-10, engine="numpy")
+        f_coarse = solve_internal(flat, tol=1e-3, engine="numpy")
         F0 = max(abs(ref.total_force), scene.EI / scene.length**2)
         e_f = abs(res.total_force - ref.total_force) / F0
         e_lo = (abs(res.forces_lower.sum() - ref.forces_lower.sum()) / F0
@@ -129,7 +130,7 @@ def cost(repeats: int) -> list[str]:
     for _ in range(repeats):
         for key, scene in (("flat", flat), ("stenosis", sten)):
             t0 = time.perf_counter()
-            r = lcpbench.solve(scene, engine="numpy")
+            r = solve_internal(scene, engine="numpy")
             times[key].append(time.perf_counter() - t0)
             outer[key] = r.outer_iterations
     med = {k: float(np.median(v)) for k, v in times.items()}

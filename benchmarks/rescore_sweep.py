@@ -9,11 +9,12 @@ again (`bench.metrics.evaluate`, the same success rule), checks that every
 row's success rate is the committed one, and rewrites what the scoring rule
 decides: `summary.json`, `profiles.csv`, the six profile figures,
 `work-precision.png`, and in `report.md` the scoring paragraph, the table
-"Back-ends compared" and the section "Performance and data profiles". The
-rest of report.md (the reference check, the unsuccessful runs, Table II,
-continuation, the machine) and the force and shape figures need the store's
-arrays and stay as they are. `lcpbench report --out results/sweep` on the
-store rebuilds everything at once.
+"Back-ends compared", the sections "Back-ends without runs here" (with today's
+install hints) and "Unsuccessful runs" (counted against today's `bench.expected`)
+and the section "Performance and data profiles". The rest
+of report.md (the reference check, Table II, continuation, the machine) and
+the force and shape figures need the store's arrays and stay as they are.
+`lcpbench report --out results/sweep` on the store rebuilds everything at once.
 """
 
 from __future__ import annotations
@@ -32,14 +33,17 @@ from lcpbench.bench.report import (
     _attach_continuation,
     _write_profiles,
     comparison_table,
+    failures,
     scoring_text,
+    skipped_backends,
 )
 from lcpbench.jsonsafe import sanitise
 
-NOTE = ("\n\n*The scores, the table below, the profiles and the work-precision figure were "
-        "recomputed from [runs.csv](runs.csv) by `benchmarks/rescore_sweep.py` (issue 37: "
-        "scores over every scene, failures charged), with the same successes; the rest of "
-        "this report is as the standard run built it.*")
+NOTE = ("\n\n*The scores, the table below, the profiles, the work-precision figure and the "
+        "unsuccessful runs' expected and unexpected counts were recomputed from "
+        "[runs.csv](runs.csv) by `benchmarks/rescore_sweep.py` (issue 37: scores over every "
+        "scene, failures charged; issue 40: the documented refusals of `bench.expected`), "
+        "with the same successes; the rest of this report is as the standard run built it.*")
 FLOATS = ("tol", "theta", "height", "length", "EI", "weight", "total_force", "wall_time",
           "solver_time", "setup_time", "wall_time_min", "wall_time_max")
 INTS = ("links", "outer_iterations", "inner_iterations", "repeats")
@@ -96,6 +100,11 @@ def main(folder: Path) -> None:
                             scoring_text(DEFAULT_TIME_LIMIT) + NOTE)
     text = _replace_section(text, "## Back-ends compared", "\n## Back-ends without runs here",
                             "## Back-ends compared\n\n" + comparison_table(summary) + "\n")
+    text = _replace_section(text, "## Back-ends without runs here", "\n## Unsuccessful runs",
+                            "## Back-ends without runs here\n\n"
+                            + skipped_backends({r["backend"] for r in runs}) + "\n")
+    text = _replace_section(text, "## Unsuccessful runs", "\n## Computation time per bend",
+                            "## Unsuccessful runs\n\n" + failures(evaluated) + "\n")
     text = _replace_section(text, "\n## Performance and data profiles", "\n## Machine and timing",
                             profiles_section(figures))
     (folder / "report.md").write_text(text)

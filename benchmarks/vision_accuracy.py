@@ -193,7 +193,7 @@ def write_md(path, per, overall, hard, cmp, cal, argv):
                 f"{r['length_spread_pct']:.2f} | {len(r['warnings'])} |")
     if cmp is not None:
         lines += ["", "## Model against a photograph of its own shape (Fig. 23)", "",
-                  f"θ = {cmp['theta_deg']:g}°, walls at ±{cmp['height_mm']:g} mm, N = 200: "
+                  f"θ = {cmp['theta_deg']:g}°, wall faces at ±{cmp['wall_face_mm']:g} mm, N = 200: "
                   f"mean point-pair distance after ICP {cmp['mean_distance_mm']:.4f} mm "
                   f"({cmp['mean_percent']:.4f} % of the span), max "
                   f"{cmp['max_distance_mm']:.4f} mm (target: mean < 0.05 mm; the paper "

@@ -8,6 +8,7 @@ import textwrap
 import pytest
 
 import lcpbench
+from lcpbench.api import solve_internal
 from lcpbench.errors import ProblemError
 
 PROBE = textwrap.dedent("""
@@ -74,7 +75,7 @@ def test_links_auto_is_a_study_not_a_hidden_solve():
 @pytest.mark.parametrize("scaled", ["no", 1, None])
 def test_scaled_must_be_a_real_bool(scaled):
     with pytest.raises(ProblemError, match="scaled must be True or False"):
-        lcpbench.solve(lcpbench.ActuatorScene(theta=150, height=3.0, links=20), scaled=scaled)
+        solve_internal(lcpbench.ActuatorScene(theta=150, height=3.0, links=20), scaled=scaled)
 
 
 def test_a_dense_backend_refuses_a_huge_step_before_allocating():
@@ -93,3 +94,15 @@ def test_a_dense_backend_refuses_a_huge_step_before_allocating():
     tracemalloc.stop()
     assert sol.status.value == "failed" and "GiB" in sol.message
     assert peak < 100e6
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda s: lcpbench.solve(s, solver=3), "got 3$"),
+    (lambda s: lcpbench.solve(s, start={"alpha": 1}), r"got \{'alpha': 1\}$"),
+    (lambda s: lcpbench.solve_many([{"theta": 150}]), r"got \{'theta': 150\}$"),
+])
+def test_a_bad_argument_is_shown_as_written_not_by_its_type(call, match):
+    """Issue 40, item 7: no type name in a message ("got 3", not "got int")."""
+    with pytest.raises(ProblemError, match=match) as err:
+        call(lcpbench.ActuatorScene(theta=150, height=3.0, links=10))
+    assert not any(t in str(err.value) for t in ("int", "dict", "NoneType"))

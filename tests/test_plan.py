@@ -13,6 +13,7 @@ import pytest
 
 import lcpbench
 from lcpbench import ActuatorScene
+from lcpbench.api import solve_internal
 from lcpbench.escalations import ESCALATIONS, Context, escalate
 from lcpbench.model import angle_step, heavy_driver, large_n
 from lcpbench.model.result import Retry
@@ -194,9 +195,15 @@ def test_the_result_says_what_ran():
     res = lcpbench.solve(scene)
     assert (res.route, res.engine, res.judge, res.retries) == \
         ("one-wall kernel", "compiled", "compiled", ())
-    ref = lcpbench.solve(scene, engine="numpy")
+    ref = solve_internal(scene, engine="numpy")
     assert (ref.route, ref.engine, ref.judge) == ("numpy", "numpy", "numpy")
     assert "engine" not in res.extra and "judge" not in res.extra
+
+
+def _bump():
+    from lcpbench.problems.walls import WallProfile
+
+    return WallProfile.from_table([0, 10, 14, 18, 30], [3.0, 3.0, 2.4, 3.0, 3.0])
 
 
 @pytest.mark.parametrize("kw, how, engine", [
@@ -205,6 +212,8 @@ def test_the_result_says_what_ran():
     (dict(links=30, weight=0.3), dict(), "numpy (SQP steps in the link angles"),
     (dict(links=40), dict(solver="lemke"), "compiled driver"),
     (dict(links=40), dict(method="undamped"), "numpy"),
+    (dict(links=40, wall_profile=_bump()), dict(), "compiled"),
+    (dict(links=40, wall_profile=_bump()), dict(method="newton"), "numpy"),
 ])
 def test_the_planned_engine_is_the_one_drive_runs(kw, how, engine):
     # model.compiled.drive decides again at run time: the plan must not drift from it

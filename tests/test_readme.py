@@ -1,9 +1,14 @@
-"""The README works on copy-paste: its Python snippets run, and CI runs its test command."""
+"""The README works on copy-paste: its Python snippets run, its command lines run as
+pasted in the shell its two commands leave (bash, the virtual environment's bin first on
+PATH, as `. .venv/bin/activate` puts it), and CI runs its test command."""
 
 from __future__ import annotations
 
+import os
 import re
 import shlex
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -66,11 +71,15 @@ def test_activation_comes_right_under_the_two_commands():
     assert commands[last + 1] == ". .venv/bin/activate", commands
 
 
+def _use_lines() -> list[str]:
+    """The `lcpbench ...` lines of the Use section, as written (comments included)."""
+    part = README.split("## Use", 1)[1].split("\n## ", 1)[0]
+    return [ln.strip() for ln in part.splitlines() if ln.startswith("    lcpbench ")]
+
+
 def _use_commands() -> list[list[str]]:
     """The `lcpbench ...` lines of the Use section, as argument lists (comments dropped)."""
-    part = README.split("## Use", 1)[1].split("\n## ", 1)[0]
-    return [shlex.split(ln.strip(), comments=True) for ln in part.splitlines()
-            if ln.startswith("    lcpbench ")]
+    return [shlex.split(ln, comments=True) for ln in _use_lines()]
 
 
 #: commands of the Use section that take more than a few seconds, or touch the
@@ -80,35 +89,50 @@ _SLOW = ("select", "sweep", "report", "reproduce")
 _ELSEWHERE = ("compile",)
 
 
-def _run_in_clone_like(tmp_path, monkeypatch, argvs):
-    from lcpbench.cli import main
-
-    (tmp_path / "examples").symlink_to(ROOT / "examples")  # the README runs from the clone
-    monkeypatch.chdir(tmp_path)
-    for argv in argvs:
-        assert main(argv[1:]) == 0, argv
+def _lines_of(commands: tuple[str, ...], *, but: tuple[str, ...] = ()) -> list[str]:
+    """The Use lines whose command (``lcpbench COMMAND``) is in ``commands`` (or, with
+    ``commands`` empty, every one not in ``but``), as written."""
+    return [ln for ln, argv in zip(_use_lines(), _use_commands(), strict=True)
+            if (argv[1] in commands if commands else argv[1] not in but)]
 
 
-def test_readme_cli_examples_run_as_written(tmp_path, monkeypatch):
-    fast = [a for a in _use_commands() if a[1] not in _SLOW + _ELSEWHERE + ("vision",)]
-    assert any(a[1] == "solve" for a in fast)
-    _run_in_clone_like(tmp_path, monkeypatch, fast)
-    assert (tmp_path / "shape.png").exists()
+def _in_the_readme_shell(tmp_path, lines: list[str]) -> None:
+    """Each line as pasted, run by bash in the shell `. .venv/bin/activate` leaves (the
+    environment's bin first on PATH, ``VIRTUAL_ENV`` set), from a directory that holds
+    the clone's ``examples/``, as the README's "run from the clone's root"."""
+    bin_dir = Path(sys.executable).parent
+    if not (bin_dir / "lcpbench").exists():
+        pytest.skip(f"no lcpbench script beside {sys.executable} (not an installed venv)")
+    (tmp_path / "examples").symlink_to(ROOT / "examples")
+    env = {**os.environ, "VIRTUAL_ENV": str(bin_dir.parent),
+           "PATH": f"{bin_dir}{os.pathsep}{os.environ.get('PATH', '')}"}
+    env.pop("LCPBENCH_STORE", None)
+    for line in lines:
+        out = subprocess.run(["bash", "-c", line], cwd=tmp_path, env=env, text=True,
+                             capture_output=True, timeout=1200)
+        assert out.returncode == 0, f"{line}\nexit {out.returncode}: {out.stderr[-2000:]}"
+
+
+def test_readme_cli_examples_run_as_written(tmp_path):
+    fast = _lines_of((), but=_SLOW + _ELSEWHERE + ("vision",))
+    assert any(ln.startswith("lcpbench solve ") for ln in fast)
+    _in_the_readme_shell(tmp_path, fast)
+    assert (tmp_path / "shape.png").exists() and (tmp_path / "fit.png").exists()
 
 
 @pytest.mark.slow
-def test_readme_slow_cli_examples_run_as_written(tmp_path, monkeypatch):
-    slow = [a for a in _use_commands() if a[1] in _SLOW]
-    assert {a[1] for a in slow} == set(_SLOW)
-    _run_in_clone_like(tmp_path, monkeypatch, slow)
+def test_readme_slow_cli_examples_run_as_written(tmp_path):
+    slow = _lines_of(_SLOW)
+    assert {shlex.split(ln, comments=True)[1] for ln in slow} == set(_SLOW)
+    _in_the_readme_shell(tmp_path, slow)
     assert (tmp_path / "scratch-report" / "report.md").exists()
 
 
-def test_readme_vision_examples_run_as_written(tmp_path, monkeypatch):
+def test_readme_vision_examples_run_as_written(tmp_path):
     pytest.importorskip("cv2")
-    vision = [a for a in _use_commands() if a[1] == "vision"]
-    assert [a[2] for a in vision] == ["render", "measure"]
-    _run_in_clone_like(tmp_path, monkeypatch, vision)
+    vision = _lines_of(("vision",))
+    assert [shlex.split(ln, comments=True)[2] for ln in vision] == ["render", "measure"]
+    _in_the_readme_shell(tmp_path, vision)
     assert (tmp_path / "overlay.png").exists()
 
 

@@ -17,22 +17,30 @@ from functools import partial
 
 import numpy as np
 
+from .accuracy import accuracy_settings, check_accuracy, held_to
 from .errors import ProblemError
 from .escalations import Context, escalate
-from .model.compiled import check_engine, drive, reference, run_kernel
+from .model.compiled import check_engine, drive, profile_reference, reference, run_kernel
 from .model.driver import METHODS
 from .model.finish import fast_judge, finish
 from .model.judge_compiled import chain_args
-from .model.kernel_call import BAIL_REASONS, call_kernel, kernel_args, kernel_output
+from .model.kernel_call import (
+    BAIL_REASONS,
+    call_kernel,
+    call_profile_kernel,
+    kernel_args,
+    kernel_output,
+)
 from .model.lazy_result import LazyResult, lazy_result, stats_judge
 from .model.outer import DriverOutput, DriverStart
 from .model.ramp import follow_load
 from .model.result import ContactResult, Retry
 from .model.step_solver import make_step_solver
-from .model.wall_free import solve_without_contact
+from .model.wall_free import arc_far, solve_without_contact
 from .plan import Plan, make_plan
-from .problems.checks import check_flag, check_number
+from .problems.checks import check_flag, check_number, describe
 from .problems.sections import check_scene
+from .solvers.base import Settings
 from .solvers.registry import DEFAULT, get_settings
 from .solvers.selection import Selection
 
@@ -57,7 +65,7 @@ def _backend_of(solver, settings):
         return solver.backend, solver.settings or settings, "selected: " + solver.reason
     if not isinstance(solver, str):
         raise ProblemError(f"solver must be a back-end name, 'auto' or a Selection, got "
-                           f"{type(solver).__name__}")
+                           f"{describe(solver)}")
     if solver == "auto":
         return DEFAULT, settings, "auto: the built-in active set (exact)"
     return solver, settings, None
@@ -68,12 +76,11 @@ def solve(
     solver: str | Selection = "auto",
     tol: float | None = None,
     *,
+    accuracy: float | None = None,
     method: str = "globalised",
     max_outer: int = 200,
-    settings: str = "default",
-    scaled: bool = True,
+    settings: str | Settings = "default",
     start: ContactResult | str | None = None,
-    engine: str = "auto",
     pressure_limit: float | None = None,
 ) -> ContactResult:
     """Find the constrained equilibrium of a scene.
@@ -88,8 +95,17 @@ def solve(
         all), "auto" (the built-in active set: a fixed rule, nothing is read),
         or a :class:`Selection` from :func:`lcpbench.select_backend`, whose
         back-end and settings are used.
-    tol : convergence threshold on max|α̂ − α| (rad), eq. (32). Default: the
-        paper's 1e-3 (``PAPER_TOL``), or with a Selection the driver
+    accuracy : the relative accuracy of the total force F = ΣR wanted, in
+        [1e-9, 0.1] (F₀ = max(|F|, EI/ℓ²), as lcpbench's judge measures it):
+        translated into the driver's tol, min(accuracy, 1e-3) rad, and the
+        back-end's ε, min(accuracy, 1e-3) (:mod:`lcpbench.accuracy`,
+        docs/accuracy.md). A converged answer's judge's bound meets it: one whose
+        bound is over it is continued at tol accuracy/100, else returned
+        ``converged=False``. Not with ``settings`` or a Selection (they set
+        both); ``tol``, if given, is used instead of the translated one.
+    tol : convergence threshold on max|α̂ − α| (rad), eq. (32), for experts.
+        Default: the settings profile's ``driver_tol`` (the paper's 1e-3 for "default" and
+        "low", 1e-6 for "mid", 1e-9 for "high"), or with a Selection the driver
         tolerance its probes ran at (``selection.driver_tol``), so the
         selected force accuracy is reached.
     method : "globalised" (line search on the exact energy; default),
@@ -97,10 +113,11 @@ def solve(
         :mod:`lcpbench.model.newton`: quadratic convergence near the answer)
         or "undamped" (the paper's Fig. 3 iteration, for comparison).
     max_outer : limit on contact steps.
-    settings : accuracy profile of the back-end: "default" (its own defaults),
-        "low" (1e-3), "mid" (1e-6) or "high" (1e-9).
-    scaled : hand the back-end the nondimensionalised step (default) or the
-        raw one (mm, N), to see what scaling does.
+    settings : accuracy profile, one for the whole solve
+        (:data:`lcpbench.solvers.base.PROFILES`: the back-end's ε and the
+        driver's ``tol``, as in ``sweep`` and ``select``): "default" (the
+        back-end's own defaults, 1e-3 rad), "low" (1e-3), "mid" (1e-6) or
+        "high" (1e-9).
     start : a neighbouring scene's result (same N and length) to start from:
         continuation along θ or h. Its shape, clipped to this scene's walls, is
         the first iterate and its last contact step warm-starts back-ends that
@@ -113,19 +130,6 @@ def solve(
         back-end): ``result.route`` is "load path" for the first, and
         ``result.retries`` names "ramped" for the second (or "cold" where the
         path stopped).
-    engine : "auto" (default: the default back-end with the globalised driver
-        runs in one compiled kernel, :mod:`lcpbench.model.compiled`; another
-        back-end that takes a QP or an LCP has the driver's own parts around
-        its calls compiled, :mod:`lcpbench.model.compiled_driver`; every other
-        solve in numpy), "compiled" (the kernel or the compiled driver, or
-        ProblemError where neither applies) or "numpy" (the readable
-        reference). Both engines
-        take the same path and give the same answer to round-off;
-        ``result.engine`` says which one ran.
-
-    The route, the start and the escalations are planned once
-    (:func:`lcpbench.plan.make_plan`); the result's ``route``, ``engine``, ``judge`` and
-    ``retries`` say what ran.
     pressure_limit : a safety threshold on the contact pressure per length (N/mm,
         >= 0; None: none). The result reports ``pressure`` and ``indentation``
         per node, and ``pressure_exceeded`` is True when the largest pressure
@@ -135,15 +139,62 @@ def solve(
     -------
     ContactResult
         Never raises on non-convergence: ``converged`` is False with a reason.
+        The route, the start and the escalations are planned once
+        (:func:`lcpbench.plan.make_plan`); the result's ``route``, ``engine``,
+        ``judge`` and ``retries`` say what ran.
+    """
+    return solve_internal(scene, solver, tol, accuracy=accuracy, method=method,
+                          max_outer=max_outer, settings=settings, start=start,
+                          pressure_limit=pressure_limit)
+
+
+def solve_internal(
+    scene,
+    solver: str | Selection = "auto",
+    tol: float | None = None,
+    *,
+    accuracy: float | None = None,
+    method: str = "globalised",
+    max_outer: int = 200,
+    settings: str | Settings = "default",
+    scaled: bool = True,
+    start: ContactResult | str | None = None,
+    engine: str = "auto",
+    pressure_limit: float | None = None,
+) -> ContactResult:
+    """:func:`solve` with its internals reachable, for the tests, the benchmarks and
+    ``lcpbench solve --raw``; the other parameters are :func:`solve`'s.
+
+    Parameters
+    ----------
+    scaled : hand the back-end the nondimensionalised step (default) or the
+        raw one (mm, N), to see what scaling does.
+    engine : "auto" (default: the default back-end with the globalised driver
+        runs in one compiled kernel, :mod:`lcpbench.model.compiled`; another
+        back-end that takes a QP or an LCP has the driver's own parts around
+        its calls compiled, :mod:`lcpbench.model.compiled_driver`; every other
+        solve in numpy), "compiled" (the kernel or the compiled driver, or
+        ProblemError where neither applies) or "numpy" (the readable
+        reference). Both engines
+        take the same path and give the same answer to round-off;
+        ``result.engine`` says which one ran.
     """
     check_scene(scene)
     scaled = check_flag("scaled", scaled)
+    if accuracy is not None:  # one knob: the driver tol and the back-end ε
+        if isinstance(solver, Selection):
+            raise ProblemError("accuracy: a Selection carries its own accuracy "
+                               f"(force_tol {solver.force_tol:g}); give one of them")
+        if not (isinstance(settings, str) and settings == "default"):
+            raise ProblemError("accuracy sets the back-end's tolerance and the driver's: "
+                               f"give accuracy or settings, not both (settings {settings!r})")
+        settings = accuracy_settings(accuracy)
     if tol is not None:
         tol = check_tol(tol)
     elif isinstance(solver, Selection):
         tol = check_tol(solver.driver_tol)
     else:
-        tol = PAPER_TOL  # (a float in range)
+        tol = get_settings(settings).driver_tol  # the profile's (a float in range)
     if method not in METHODS:
         raise ProblemError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     if isinstance(max_outer, bool) or not (isinstance(max_outer, (int, np.integer))
@@ -176,7 +227,13 @@ def solve(
         else lambda: step
     ctx = Context(chain, make_step, name, settings, engine, tol, int(max_outer), method, why,
                   pressure_limit)
-    return run_plan(plan, scene, ctx, begin, t0)
+    res = run_plan(plan, scene, ctx, begin, t0)
+    if accuracy is None:
+        return res
+    return held_to(res, check_accuracy(accuracy), lambda t, r: solve_internal(
+        scene, solver, t, method=method, max_outer=max_outer, settings=settings,
+        scaled=scaled, start=None if method == "undamped" else r, engine=engine,
+        pressure_limit=pressure_limit))
 
 
 def run_plan(plan: Plan, scene, ctx: Context, begin: DriverStart | None,
@@ -189,10 +246,13 @@ def run_plan(plan: Plan, scene, ctx: Context, begin: DriverStart | None,
     chain = ctx.chain
     kernel = plan.kernel_takes  # the kernels take the chain: its arrays, once
     args = kernel_args(chain) if kernel else None
-    if plan.route == ONE_WALL:  # the kernels, the rest of the result when read
+    lean_profile = (plan.route == PROFILE and begin is None and not chain.channel
+                    and arc_far(chain))  # (a cold start, one wall, its arc far past it)
+    if plan.route == ONE_WALL or lean_profile:  # the kernels, the rest of the result when read
         res = _one_wall(scene, chain, args, ctx.make_step, tol=ctx.tol,
                         max_outer=ctx.max_outer, method=ctx.method, settings=ctx.settings,
-                        why=ctx.why, pressure_limit=ctx.pressure_limit, t0=t0)
+                        why=ctx.why, pressure_limit=ctx.pressure_limit, t0=t0,
+                        route=plan.route)
     else:
         out: DriverOutput | None
         if plan.route == "channel kernel":
@@ -209,7 +269,7 @@ def run_plan(plan: Plan, scene, ctx: Context, begin: DriverStart | None,
                                   args=args)
         res = finish(scene, chain, out, solver=ctx.backend, method=ctx.method, tol=ctx.tol,
                      elapsed=time.perf_counter() - t0, settings=ctx.settings, engine=used,
-                     compiled_judge=kernel, why=ctx.why,
+                     compiled_judge=plan.judge == "compiled", why=ctx.why,
                      judge_args=None if args is None else chain_args(chain, args),
                      pressure_limit=ctx.pressure_limit, route=plan.route)
     return res if res.converged else escalate(res, ctx, plan.escalations)
@@ -225,7 +285,7 @@ def _load_path(plan: Plan, scene, ctx: Context, t0: float) -> ContactResult:
     if out is not None:
         res = finish(scene, ctx.chain, out, solver=ctx.backend, method=ctx.method,
                      tol=ctx.tol, elapsed=time.perf_counter() - t0, settings=ctx.settings,
-                     engine=used, compiled_judge=plan.kernel_takes, why=ctx.why,
+                     engine=used, compiled_judge=plan.judge == "compiled", why=ctx.why,
                      pressure_limit=ctx.pressure_limit, route=plan.route)
         if res.converged:
             return res
@@ -240,35 +300,44 @@ def _load_path(plan: Plan, scene, ctx: Context, t0: float) -> ContactResult:
 
 def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_outer: int,
               method: str, settings, why: str | None, pressure_limit: float | None,
-              t0: float) -> ContactResult:
-    """:func:`solve`'s direct route on a chain with one wall: the solve kernel, then,
-    on a converged answer, the judge kernel and its verdict
+              t0: float, route: str = "one-wall kernel") -> ContactResult:
+    """:func:`solve`'s direct route on a chain with one wall: the solve kernel (``route``
+    "profile kernel": the profile kernel, its wall a profile), then, on a converged
+    answer, the judge kernel and its verdict
     (:func:`lcpbench.model.batch_verdict.accepted`, the checks of the judge, as a
     batch line decides it); the result's other fields are built when read
     (:class:`~lcpbench.model.lazy_result.LazyResult`), by the same functions as
     :func:`run_kernel` and :func:`finish`. Where the kernel stops, the numpy reference,
     as :func:`run_kernel`; where the driver did not converge, :func:`finish` at once."""
-    got, kernel_s, name = call_kernel(chain, tol=tol, max_outer=max_outer, start=None,
-                                      settings=settings, args=args, newton=method == "newton")
+    profile = route == PROFILE
+    if profile:  # (the walls at the answer's x, its last two outputs: one wall, unused)
+        got, kernel_s, name = call_profile_kernel(chain, tol=tol, max_outer=max_outer,
+                                                  start=None, settings=settings)
+        got = got[:-2]
+    else:
+        got, kernel_s, name = call_kernel(chain, tol=tol, max_outer=max_outer, start=None,
+                                          settings=settings, args=args,
+                                          newton=method == "newton")
     code = got[0]
     if code in BAIL_REASONS:
-        out, used = reference(chain, make_step, BAIL_REASONS[code], tol=tol, max_outer=max_outer,
-                              method=method, settings=settings)
+        out, used = (profile_reference if profile else reference)(
+            chain, make_step, BAIL_REASONS[code], tol=tol, max_outer=max_outer, method=method,
+            settings=settings)
         return finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol,
                       elapsed=time.perf_counter() - t0, settings=settings, engine=used,
                       compiled_judge=True, why=why, judge_args=chain_args(chain, args),
-                      pressure_limit=pressure_limit, route=ONE_WALL)
+                      pressure_limit=pressure_limit, route=route)
     elapsed = time.perf_counter() - t0
     judge_args = chain_args(chain, args)
     build = partial(_built, scene, chain, got, kernel_s, name, method=method, tol=tol,
                     max_outer=max_outer, elapsed=elapsed, settings=settings, why=why,
-                    pressure_limit=pressure_limit)
+                    pressure_limit=pressure_limit, route=route)
     jk = _JUDGE[0] if _JUDGE else _judge_kernels()
     if code != jk[0].CONVERGED:  # the driver's failure: judged at once, as always
         return build(judged=partial(fast_judge(), args=judge_args))
     alpha, rec, count, R = got[1], got[6], got[7], got[9]
     judge, f64 = jk[1], _contiguous  # (numpy's own float64: the AOT kernels' quick check)
-    settled_code, st, fu, fl, tres = judge.judge_answer(
+    settled_code, st, fu, fl, tres = (judge.judge_walls if profile else judge.judge_answer)(
         f64(alpha, dtype=float), *judge_args, f64(R, dtype=float).copy(), np.zeros(R.size), tol,
         f64(rec[2, :count], dtype=float).copy())
     settled = bool(settled_code == judge.SETTLED)
@@ -279,23 +348,24 @@ def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_ou
         "outer_iterations": count,
         "converged": bool(jk[2].accepted(settled, f64(st, dtype=float), tol)),
         "solver": DEFAULT, "method": method, "tol": tol, "time_s": elapsed,
-        "pressure_limit": pressure_limit, "route": ONE_WALL, "engine": "compiled",
+        "pressure_limit": pressure_limit, "route": route, "engine": "compiled",
         "judge": "compiled", "retries": ()},
         partial(build, judged=stats_judge(settled, judge.STATS, st, fu, fl, tres)))
 
 
 def _built(scene, chain, got: tuple, kernel_s: float, name: str, *, method: str, tol: float,
-           max_outer: int, elapsed: float, settings, why, pressure_limit, judged
+           max_outer: int, elapsed: float, settings, why, pressure_limit, judged, route: str
            ) -> ContactResult:
     """The complete result of :func:`_one_wall`, judged by ``judged``."""
     out = kernel_output(chain, *got, elapsed=kernel_s, settings=name, max_outer=max_outer,
                         tol=tol)
     return finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol, elapsed=elapsed,
                   settings=settings, engine="compiled", compiled_judge=True, why=why,
-                  judged_by=judged, pressure_limit=pressure_limit, route=ONE_WALL)
+                  judged_by=judged, pressure_limit=pressure_limit, route=route)
 
 
-ONE_WALL = "one-wall kernel"  # the route of _one_wall (lcpbench.plan.ROUTES)
+ONE_WALL = "one-wall kernel"  # the routes of _one_wall (lcpbench.plan.ROUTES)
+PROFILE = "profile kernel"
 _JUDGE: list = []  # (solve kernel, judge kernel, batch_verdict), once loaded
 _add_reduce = np.add.reduce
 _contiguous = np.ascontiguousarray
@@ -316,9 +386,7 @@ def _driver_start(start, chain, method: str):
         return None
     if not isinstance(start, ContactResult):
         raise ProblemError(f"start must be a ContactResult of a neighbouring scene or "
-                           f"'ramp', got {start!r}" if isinstance(start, str) else
-                           f"start must be a ContactResult of a neighbouring scene or "
-                           f"'ramp', got {type(start).__name__}")
+                           f"'ramp', got {describe(start)}")
     if method == "undamped":
         raise ProblemError("start (continuation) needs method='globalised' or 'newton'")
     if start.links != chain.links or \

@@ -23,6 +23,10 @@ heavy SQP      the default back-end, not undamped, a chain in reach of the SQP i
 heights, then  the same with ``heavy_driver.MODERATE`` ≤ wℓ³/EI < ``HEAVY``: height
 SQP            steps (the kernel where it takes the chain), finished by SQP steps where
                they do not converge within ``heavy_driver.FIRST_TRY``.
+profile kernel the default back-end, the globalised scheme, engine not "numpy", a wall of
+               any profile with a table of cubic pieces, a chain the kernel's layout takes
+               (:func:`lcpbench.model.kernel_call.profile_applies`): the profile kernel;
+               a cold start on one wall its arc crosses far: its result built when read.
 large N        the globalised scheme and N ≥ ``large_n.LARGE_N`` (or a chain in
                increments) on a layout it takes: increments on the tridiagonal factor.
 kernel         the default back-end, globalised or Newton, engine not "numpy", a chain
@@ -30,8 +34,8 @@ kernel         the default back-end, globalised or Newton, engine not "numpy", a
 compiled       another back-end that takes a QP or an LCP, the globalised scheme, a
 driver         scaled step, flat rigid walls the kernel's layout takes, engine not
                "numpy": its calls in Python, the driver around them compiled.
-numpy          everything else (engine="numpy", the undamped scheme, wall profiles,
-               back-ends and chains no compiled route takes): the numpy reference.
+numpy          everything else (engine="numpy", the undamped scheme, back-ends and chains
+               no compiled route takes): the numpy reference.
 ============== ==========================================================================
 
 Every route but the first two and the load path begins with the wall-free search
@@ -54,20 +58,21 @@ from dataclasses import dataclass
 from .escalations import ESCALATIONS
 from .model import angle_step, heavy_driver, large_n
 from .model.compiled import direct
-from .model.kernel_call import applies
+from .model.kernel_call import applies, profile_applies
 from .problems.scenes import Chain
 from .solvers.registry import DEFAULT, get_backend
 
 #: The routes of a plan, by name (see the module).
 ROUTES = ("load path", "one-wall kernel", "channel kernel", "heavy SQP", "heights, then SQP",
-          "large N", "kernel", "compiled driver", "numpy")
+          "profile kernel", "large N", "kernel", "compiled driver", "numpy")
 #: The starts: from the free arc (cold), from a neighbour's answer (warm), along the
 #: loading path (ramp).
 STARTS = ("cold", "warm", "ramp")
 #: The engine each route plans for ("compiled", "compiled driver" or "numpy"; the
 #: result's ``engine`` says what ran).
 ENGINE = {"load path": "", "one-wall kernel": "compiled", "channel kernel": "compiled",
-          "heavy SQP": "numpy", "heights, then SQP": "", "large N": "numpy",
+          "heavy SQP": "numpy", "heights, then SQP": "", "profile kernel": "compiled",
+          "large N": "numpy",
           "kernel": "compiled", "compiled driver": "compiled driver", "numpy": "numpy"}
 
 
@@ -108,7 +113,8 @@ def make_plan(chain: Chain, backend: str, method: str, engine: str, tol: float,
     ``tol`` (rad), ``start`` (one of :data:`STARTS`) and the step ``scaled`` or not.
     The arguments are :func:`lcpbench.solve`'s, checked."""
     takes = _kernel(chain, DEFAULT, "globalised", engine)
-    judge = "compiled" if takes and not large_n.applies(chain) else "numpy"
+    judged = takes or (engine != "numpy" and profile_applies(DEFAULT, "globalised", chain))
+    judge = "compiled" if judged and not large_n.applies(chain) else "numpy"
     if start == "ramp":
         cold = make_plan(chain, backend, method, engine, tol, "cold", scaled=scaled)
         return Plan("load path", "ramp", (), cold.engine, takes, judge, fallback=cold)
@@ -136,6 +142,8 @@ def _route(chain: Chain, backend: str, method: str, engine: str, start: str,
             return "heavy SQP"
         if q >= heavy_driver.MODERATE:
             return "heights, then SQP"
+    if engine != "numpy" and profile_applies(backend, method, chain):
+        return "profile kernel"
     if method == "globalised" and large_n.applies(chain):
         return "large N"
     if _kernel(chain, backend, method, engine):

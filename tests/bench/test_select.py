@@ -232,3 +232,15 @@ def test_without_a_store_the_probes_stay_in_memory(tmp_path, monkeypatch):
     cached = select_backend(SCENE, force_tol=1e-3, probe=False)
     assert cached.backend is None and "no store given" in cached.reason
     assert list(tmp_path.iterdir()) == []
+
+
+def test_select_without_a_store_leaves_no_file_in_the_working_directory(tmp_path,
+                                                                        monkeypatch):
+    """Issue 40, Done when: `select_backend` without a store (nor $LCPBENCH_STORE) keeps
+    its probes in memory; the scratch working directory it ran in stays empty."""
+    monkeypatch.delenv("LCPBENCH_STORE", raising=False)
+    monkeypatch.chdir(tmp_path)
+    s = select_backend(lcpbench.ActuatorScene(theta=150, height=3.0, links=20), force_tol=1e-3,
+                       candidates=["active-set", "lemke"], repeat=1)
+    assert s.backend in ("active-set", "lemke")
+    assert sorted(p.name for p in tmp_path.rglob("*")) == []

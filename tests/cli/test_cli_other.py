@@ -31,7 +31,10 @@ def test_select_cli(tmp_path, capsys):
     assert d["force_tol"] == 1e-3 and d["driver_tol"] == 1e-3  # relative force error; rad
     assert main(args) == 0  # cached the second time; one line with the reason
     out = capsys.readouterr().out.strip()
-    assert out.startswith(d["backend"]) and len(out.splitlines()) == 1
+    assert len(out.splitlines()) == 1
+    # the options that run the selection with `lcpbench solve`: back-end, profile, the
+    # probes' driver tol (the accuracy's, which the profile alone would not give)
+    assert out.startswith(f"--solver {d['backend']} --settings {d['settings']} --tol 0.001:")
 
 
 def test_a_second_sweep_on_a_locked_store_exits_2_naming_the_holder(tmp_path, capsys):

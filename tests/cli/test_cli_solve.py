@@ -81,6 +81,55 @@ def test_solve_json_matches_library(capsys):
     assert math.isclose(d["total_force"], ref.total_force, rel_tol=1e-9)
 
 
+@pytest.mark.parametrize("profile", ["default", "low", "mid", "high"])
+def test_a_settings_profile_means_the_sweeps_driver_tol(capsys, profile):
+    """One meaning per profile (issue 40): ``solve --settings P`` runs at the driver
+    tol the sweep plans for P, and its answer is within that accuracy of a tight
+    solve (the judge's force bound, min(1e-3, 100 tol))."""
+    from lcpbench.bench.jobs import RunJob
+    from lcpbench.bench.sweep import plan_sweep
+
+    scene = lcpbench.ActuatorScene(theta=150, height=3.0, links=N)
+    swept = {j.tol for j in plan_sweep([scene], ["active-set"], [profile])
+             if type(j) is RunJob}
+    code, d, _ = run_json(capsys, ["solve", "--links", str(N), "--settings", profile,
+                                   "--json"])
+    assert code == 0 and d["converged"]
+    assert swept == {d["tol"]}
+    tight = lcpbench.solve(scene, tol=1e-12)
+    assert abs(d["total_force"] - tight.total_force) <= min(1e-3, 100 * d["tol"]) * \
+        max(tight.total_force, scene.EI / scene.length**2)
+
+
+def test_a_channel_names_each_walls_total(capsys):
+    """In a channel the CLI prints both walls' totals, named; ``total_force`` stays the
+    upper wall's (the load cell). A chain of wℓ³/EI = 10⁴ hangs off the upper wall
+    onto the lower one, which carries most of its weight ℓw (vertical balance with
+    the pins' reactions)."""
+    weight = 1e4 * 32.01 / 30.0**3
+    argv = ["solve", "--links", "30", "--channel", "--weight", f"{weight!r}"]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    labels = [line.split("  ")[0] for line in out.splitlines()]
+    assert "upper wall force" in labels and "lower wall force" in labels
+    code, d, _ = run_json(capsys, [*argv, "--json"])
+    assert code == 0 and d["total_force"] == sum(d["forces"]) == 0.0
+    assert d["total_force_lower"] == pytest.approx(sum(d["forces_lower"]), rel=1e-12)
+    assert d["total_force_lower"] > 0.5 * 30.0 * weight
+    assert f"{1e3 * d['total_force_lower']:.6g} mN" in out
+
+
+def test_accuracy_sets_the_driver_tol_and_is_met(capsys):
+    """``--accuracy 1e-6``: the driver runs at 1e-6 rad (docs/accuracy.md), the judge's
+    bound meets 1e-6, and the force is within 1e-6 of Lemke's at a tight tolerance."""
+    code, d, _ = run_json(capsys, ["solve", "--links", str(N), "--accuracy", "1e-6", "--json"])
+    scene = lcpbench.ActuatorScene(theta=150, height=3.0, links=N)
+    ref = lcpbench.solve(scene, solver="lemke", tol=1e-10).total_force
+    assert code == 0 and d["accuracy"] == 1e-6 and d["tol"] == 1e-6
+    assert d["force_error_bound"] <= 1e-6
+    assert abs(d["total_force"] - ref) <= 1e-6 * max(ref, scene.EI / scene.length**2)
+
+
 def test_solve_method_undamped(capsys):
     code, d, _ = run_json(capsys, ["solve", "--links", str(N), "--method", "undamped", "--json"])
     assert code == 0
@@ -168,6 +217,8 @@ def test_solve_plot_without_matplotlib(tmp_path, capsys, monkeypatch):
         (["solve", "--method", "newtonian"], "method"),
         (["solve", "--bogus"], "--bogus"),
         (["solve", "--settings", "ultra"], "settings"),
+        (["solve", "--accuracy", "0"], "accuracy"),
+        (["solve", "--accuracy", "1e-6", "--settings", "mid"], "accuracy or settings"),
         (["lcp", "/no/such/file.dat"], "file.dat"),
         (["lcp", "--solver", "nope", PEER + "/lcp_deudeu.dat"], "nope"),
         (["export", "--out", "x.txt"], "x.txt"),

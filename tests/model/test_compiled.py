@@ -24,13 +24,14 @@ from hypothesis import strategies as st
 from known_answers import CANTILEVER_THEORY_FORCE, PAPER_SCENE
 
 from lcpbench import ActuatorScene, CantileverScene, ProblemError, solve
+from lcpbench.api import solve_internal
 from lcpbench.bench.grid import hard_scenes
 from lcpbench.model.angle_step import heavy
 from lcpbench.solvers.base import Settings
 
 
 def both(scene, **kw):
-    return solve(scene, engine="numpy", **kw), solve(scene, engine="auto", **kw)
+    return solve_internal(scene, engine="numpy", **kw), solve_internal(scene, engine="auto", **kw)
 
 
 def assert_same(ref, fast, *, compiled=True):
@@ -156,12 +157,13 @@ def test_random_scenes_same_path_and_answer(scene, tol):
 def test_continuation_start_takes_the_same_path():
     a = ActuatorScene(theta=150, height=3.0, links=140)
     b = ActuatorScene(theta=152, height=3.0, links=140)
-    ref = solve(b, start=solve(a, engine="numpy"), engine="numpy", tol=1e-8)
+    ref = solve_internal(b, start=solve_internal(a, engine="numpy"), engine="numpy", tol=1e-8)
     fast = solve(b, start=solve(a), tol=1e-8)
     assert_same(ref, fast)
     assert fast.outer_iterations < solve(b, tol=1e-8).outer_iterations  # the start helped
     # Newton: a warm start's first step is a Newton step
-    ref = solve(b, start=solve(a, engine="numpy"), engine="numpy", tol=1e-8, method="newton")
+    ref = solve_internal(b, start=solve_internal(a, engine="numpy"), engine="numpy", tol=1e-8,
+                         method="newton")
     fast = solve(b, start=solve(a), tol=1e-8, method="newton")
     assert_same(ref, fast)
 
@@ -172,7 +174,7 @@ def test_kernel_hands_over_to_the_reference_when_it_leaves_its_path():
     tight = Settings("tight", None, max_iter=1)
     scene = ActuatorScene(**PAPER_SCENE)
     fast = solve(scene, settings=tight)
-    ref = solve(scene, settings=tight, engine="numpy")
+    ref = solve_internal(scene, settings=tight, engine="numpy")
     assert fast.engine.startswith("numpy (the compiled kernel stopped")
     assert np.array_equal(fast.alpha, ref.alpha) and fast.reason == ref.reason
 
@@ -180,15 +182,15 @@ def test_kernel_hands_over_to_the_reference_when_it_leaves_its_path():
 def test_engine_argument():
     scene = ActuatorScene(theta=150, height=3.0, links=40)
     with pytest.raises(ProblemError, match="engine must be one of"):
-        solve(scene, engine="fast")
+        solve_internal(scene, engine="fast")
     with pytest.raises(ProblemError, match="engine='compiled' runs method='globalised'"):
-        solve(scene, method="undamped", engine="compiled")
-    assert solve(scene, engine="compiled").engine == "compiled"
+        solve_internal(scene, method="undamped", engine="compiled")
+    assert solve_internal(scene, engine="compiled").engine == "compiled"
     # another back-end: the driver around it compiled (model.compiled_driver)
-    assert solve(scene, solver="lemke", engine="compiled").engine == "compiled driver"
+    assert solve_internal(scene, solver="lemke", engine="compiled").engine == "compiled driver"
     assert solve(scene, solver="lemke").engine == "compiled driver"
-    assert solve(scene, solver="lemke", engine="numpy").engine == "numpy"
-    assert solve(scene, engine="compiled", method="newton").engine == "compiled"
+    assert solve_internal(scene, solver="lemke", engine="numpy").engine == "numpy"
+    assert solve_internal(scene, engine="compiled", method="newton").engine == "compiled"
 
 
 def test_import_does_not_load_numba_and_the_first_solve_does():

@@ -20,6 +20,7 @@ import pytest
 
 import lcpbench
 from lcpbench import ActuatorScene
+from lcpbench.api import solve_internal
 from lcpbench.errors import ProblemError
 from lcpbench.model import compiled, kernel_call
 from lcpbench.model.result import ContactResult, new_result
@@ -128,7 +129,7 @@ def test_the_shared_cold_start_arguments_stay_zero():
     lcpbench.solve(ActuatorScene(theta=151, height=3.0, links=30), start=first, tol=1e-8)
     lcpbench.solve(scene, method="newton")
     lcpbench.solve(ActuatorScene(theta=170, height=2.5, links=30, channel=True))
-    alpha, u, up, lo, flags = kernel_call._cold(29)
+    alpha, u, up, lo, flags = kernel_call.cold_start(29)
     assert alpha.size == 0 and flags == 0
     assert not u.any() and not up.any() and not lo.any()
     assert u.flags.writeable and up.flags.writeable  # the kernel's one signature
@@ -136,7 +137,7 @@ def test_the_shared_cold_start_arguments_stay_zero():
 
 @pytest.mark.parametrize("kw", GRID[:3] + GRID[4:])
 def test_a_new_scene_and_the_same_scene_again_give_the_reference(kw):
-    ref = lcpbench.solve(ActuatorScene(**kw), tol=1e-8, engine="numpy")
+    ref = solve_internal(ActuatorScene(**kw), tol=1e-8, engine="numpy")
     scene = ActuatorScene(**kw)
     for _ in range(2):  # built, then kept
         res = lcpbench.solve(scene, tol=1e-8)
@@ -155,7 +156,7 @@ def test_a_new_scene_and_the_same_scene_again_give_the_reference(kw):
 ])
 def test_bad_arguments_still_name_the_parameter(bad, match):
     with pytest.raises(ProblemError, match=match):
-        lcpbench.solve(ActuatorScene(links=10), **bad)
+        solve_internal(ActuatorScene(links=10), **bad)
     with pytest.raises(ProblemError, match="scene must be"):
         lcpbench.solve({"theta": 150})
 
@@ -203,3 +204,25 @@ def test_the_direct_route_is_drives_route(kw, how, route, monkeypatch):
     assert [(s.iterations, s.status, s.step_length, s.max_dalpha, s.energy)
             for s in fast.steps] == [(s.iterations, s.status, s.step_length, s.max_dalpha,
                                       s.energy) for s in slow.steps]
+
+
+def test_the_lean_profile_route_builds_what_the_full_route_builds(monkeypatch):
+    """Route against route: the profile kernel's lean result (its fields built when read)
+    against the same solve through drive and finish; only the full build can say the
+    lazy one built the same fields (the answer itself is checked against the energy
+    minimisation in tests/model/test_profile.py)."""
+    from lcpbench import api
+    from lcpbench.problems.walls import WallProfile
+
+    wall = WallProfile.from_table([0, 10, 14, 18, 30], [3.0, 3.0, 2.4, 3.0, 3.0])
+    kw = dict(theta=150, height=3.0, links=60, wall_profile=wall)
+    fast = lcpbench.solve(ActuatorScene(**kw), tol=1e-9)
+    monkeypatch.setattr(api, "arc_far", lambda chain: False)
+    slow = lcpbench.solve(ActuatorScene(**kw), tol=1e-9)
+    assert fast.route == slow.route == "profile kernel" and fast.converged
+    assert (fast.converged, fast.reason, fast.engine, fast.judge, fast.outer_iterations) == \
+        (slow.converged, slow.reason, slow.engine, slow.judge, slow.outer_iterations)
+    for name in ("alpha", "forces", "gaps", "x", "y"):
+        assert _same_bits(getattr(fast, name), getattr(slow, name)), name
+    assert fast.certificate.min_gap == slow.certificate.min_gap
+    assert fast.judgement.force_error_bound == slow.judgement.force_error_bound

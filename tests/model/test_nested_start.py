@@ -12,6 +12,7 @@ import pytest
 
 import lcpbench
 from lcpbench import ActuatorScene
+from lcpbench.api import solve_internal
 from lcpbench.model import large_n, nested_start
 from lcpbench.model.chain import heights
 from lcpbench.model.judge import force_tol
@@ -160,7 +161,7 @@ def test_the_coarse_solve_uses_the_built_in_active_set_whatever_the_back_end(mon
         return real(chain, coarse, out)
 
     monkeypatch.setattr(nested_start, "interpolated_start", spy)
-    res = lcpbench.solve(ActuatorScene(150, 3.0, links=5000), solver="osqp",
+    res = solve_internal(ActuatorScene(150, 3.0, links=5000), solver="osqp",
                          engine="compiled", scaled=False)
     assert len(coarse_answers) == 1 and coarse_answers[0].converged
     assert isinstance(res.converged, bool) and res.reason

@@ -15,6 +15,7 @@ from __future__ import annotations
 import pytest
 
 from lcpbench import ActuatorScene, solve
+from lcpbench.api import solve_internal
 from lcpbench.model import compiled, large_n, step_solver
 from lcpbench.model.judge import force_tol
 from lcpbench.model.kernel_call import BAIL_REASONS
@@ -110,6 +111,24 @@ def test_past_the_vertical_at_n_3000_the_cold_start_fails_without_a_dense_step(d
     # (documented; the answer then comes by the loading path); before, each uncertified
     # step fell back to dense Lemke, minutes
     for engine in ("auto", "numpy"):
-        res = solve(ActuatorScene(200, 3.0, links=3000), tol=1e-3, engine=engine)
+        res = solve_internal(ActuatorScene(200, 3.0, links=3000), tol=1e-3, engine=engine)
         assert "theta > 180 deg" in res.retried("ramped")
     assert all(n <= step_solver.MAX_DENSE_FALLBACK for _, n in dense_steps)
+
+
+def test_a_roundoff_stop_past_large_n_without_increments_is_a_reason_not_minutes():
+    """From LARGE_N links a kernel stop for round-off on elastic walls or a profile (no
+    increment formulation takes them) ends the solve with a reason naming the limit,
+    instead of the numpy reference in heights (the same round-off, and O(N³) Lemke
+    fallbacks); a flat rigid chain keeps its increments."""
+    n = large_n.LARGE_N
+    soft = ActuatorScene(theta=150, height=3.0, links=n, wall_stiffness=10.0).chain()
+    rigid = ActuatorScene(theta=150, height=3.0, links=n).chain()
+    assert compiled.beyond_heights(soft, BAIL_REASONS[12])
+    assert compiled.beyond_heights(soft, BAIL_REASONS[11])
+    assert not compiled.beyond_heights(soft, BAIL_REASONS[10])  # crossed walls: not round-off
+    assert not compiled.beyond_heights(rigid, BAIL_REASONS[12])  # increments take it
+    small = ActuatorScene(theta=150, height=3.0, links=n - 1, wall_stiffness=10.0).chain()
+    assert not compiled.beyond_heights(small, BAIL_REASONS[12])
+    out = compiled.out_of_reach(soft, BAIL_REASONS[12])
+    assert not out.converged and f"N = {n}" in out.reason and "increment" in out.reason

@@ -150,3 +150,27 @@ def test_at_first_touch_the_derivative_is_one_sided_and_listed():
     assert s.total_force["height_mm"] == pytest.approx((up.total_force - res.total_force) / h,
                                                        abs=1e-6)
     assert (res.total_force - down.total_force) / h < -1e-3  # the other side presses
+
+
+@pytest.mark.parametrize("links", [140, 560])
+def test_the_cantilever_follows_its_closed_form(links):
+    """Sec. III-G's cantilever, its tip on the wall: linear beam theory gives the tip
+    reaction R = 3qL/8 − 3EIh/L³ (the free cantilever's tip deflection qL⁴/8EI less h,
+    over the tip compliance L³/3EI), so dR/dEI = −3h/L³, dR/dq = 3L/8, dR/dh = −3EI/L³
+    and dR/dL = 3q/8 + 9EIh/L⁴ exactly. With 8 < qL⁴/(EIh) < 72 only the tip touches
+    (the propped beam's slope at the tip stays toward the wall); h/L = 3e-4 keeps the
+    chain's geometric nonlinearity ~1e-7 relative, and the chain (the clamp's half-link
+    spring 2EI/a) is second-order accurate: a relative error below 1/N² (0.5/N² seen)."""
+    from lcpbench.problems.scenes import CantileverScene
+
+    L, EI, h = 30.0, 32.01, 0.01
+    q = 20.0 * EI * h / L**4
+    res = lcpbench.solve(CantileverScene(load=q, height=h, links=links), tol=1e-11)
+    assert res.converged, res.reason
+    assert np.count_nonzero(res.forces > 0) == 1 and res.forces[-1] > 0  # the tip alone
+    s = sensitivities(res)
+    theory = {"EI": -3 * h / L**3, "load": 3 * L / 8, "height_mm": -3 * EI / L**3,
+              "length_mm": 3 * q / 8 + 9 * EI * h / L**4}
+    assert set(s.total_force) == set(theory)
+    for name, want in theory.items():
+        assert s.total_force[name] == pytest.approx(want, rel=1.0 / links**2 + 1e-6), name

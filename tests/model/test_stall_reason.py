@@ -18,6 +18,7 @@ import pytest
 
 import lcpbench
 from lcpbench import ActuatorScene
+from lcpbench.api import solve_internal
 from lcpbench.model.outer import (
     STALL_STEPS,
     STEP_ACCURACY_DALPHA,
@@ -75,7 +76,7 @@ def test_a_short_run_out_of_iterations_says_nothing_more():
 
 @pytest.mark.parametrize("engine", ["compiled", "numpy"])
 def test_tol_below_the_step_accuracy_is_named_out_of_reach(engine):
-    r = lcpbench.solve(ActuatorScene(theta=150.0, height=3.0, links=2000), tol=1e-14,
+    r = solve_internal(ActuatorScene(theta=150.0, height=3.0, links=2000), tol=1e-14,
                        engine=engine)
     assert not r.converged
     m = re.search(r"no convergence in 200 outer iterations .*no lower than ([0-9.e+-]+) rad "
@@ -86,3 +87,25 @@ def test_tol_below_the_step_accuracy_is_named_out_of_reach(engine):
     level, since = float(m[1]), int(m[2])
     assert 1e-14 < level <= STEP_ACCURACY_DALPHA
     assert since <= 200 - STALL_STEPS
+
+
+def test_stop_on_stall_ends_a_stalled_run_and_leaves_a_converging_one_alone():
+    """run_driver(stop_on_stall=True), the reference run after a kernel stop: a row of
+    two sections whose height steps crawl (a link near the vertical, the steps cut to
+    ~1e-4) ends at the first stall (2 STALL_STEPS steps, the stall named in the reason)
+    instead of running all of max_outer; a run that converges is the same run."""
+    from lcpbench import SectionedScene
+    from lcpbench.model.driver import run_driver
+    from lcpbench.model.step_solver import make_step_solver
+
+    chain = SectionedScene(sections=[(179.6, 15.0), (-179.6, 15.0)], height=4.38,
+                           links=140).chain()
+    out = run_driver(chain, make_step_solver("active-set"), tol=1e-3, max_outer=200,
+                     stop_on_stall=True)
+    assert not out.converged and len(out.steps) < 200 and "stalled" in out.reason
+    assert stall(out.steps) is not None  # (the definition, on the steps it took)
+    paper = ActuatorScene(theta=150, height=3.0, links=40).chain()
+    runs = [run_driver(paper, make_step_solver("active-set"), tol=1e-10, stop_on_stall=flag)
+            for flag in (False, True)]
+    assert runs[0].converged and runs[1].converged
+    assert np.array_equal(runs[0].alpha, runs[1].alpha)

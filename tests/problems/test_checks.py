@@ -76,8 +76,8 @@ def test_check_choice_compares_type_too():
         check_choice("n", True, (1, 2))
 
 
-@pytest.mark.parametrize("scene,kind", [(None, "None"), ({"theta": 150}, "dict"),
-                                        ("ActuatorScene()", "str"), (42, "int")])
+@pytest.mark.parametrize("scene,kind", [(None, "None"), ({"theta": 150}, "{'theta': 150}"),
+                                        ("ActuatorScene()", "'ActuatorScene()'"), (42, "42")])
 def test_check_scene_refuses_non_scenes(scene, kind):
     with pytest.raises(ProblemError) as info:
         check_scene(scene)

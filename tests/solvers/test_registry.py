@@ -149,3 +149,30 @@ def test_cli_solvers_json_lists_everything():
     rows = json.loads(out.stdout)
     assert {r["name"] for r in rows} == set(backends())
     assert main(["solvers"]) == 0
+
+
+def test_a_qpsolvers_hint_names_the_package_the_extra_does_not_install():
+    """Issue 40, item 7: 'pip install lcpbench[qpsolvers]' only where that extra installs
+    the solver (pyproject.toml); else the solver's package, and a commercial licence."""
+    import re
+    from pathlib import Path
+
+    from lcpbench.solvers import qp_qpsolvers as qq
+
+    text = (Path(__file__).parents[2] / "pyproject.toml").read_text()  # (no tomllib in 3.10)
+    line = re.search(r"^qpsolvers = \[(.*)\]$", text, flags=re.M).group(1)
+    extra = {re.split(r"[<>=\[ ]", r.strip(' "'))[0].lower() for r in line.split(",")}
+    assert "qpsolvers" in extra and "daqp" in extra
+    table = backends()
+    for solver, module in qq.KNOWN_SOLVERS.items():
+        b = table.get(f"qpsolvers-{solver}")
+        if b is None:  # the native back-ends (osqp, clarabel, proxqp)
+            continue
+        hint = b.install_hint()
+        if module.lower() in extra:
+            assert hint == "pip install 'lcpbench[qpsolvers]'", solver
+        else:
+            assert hint.startswith("pip install ") and "does not include it" in hint, hint
+            assert hint.removeprefix("pip install ").startswith(qq.PIP_NAMES.get(solver, module))
+    for solver, owner in (("gurobi", "Gurobi"), ("mosek", "MOSEK"), ("copt", "COPT")):
+        assert f"{owner} licence" in table[f"qpsolvers-{solver}"].install_hint()

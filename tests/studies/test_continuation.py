@@ -86,7 +86,7 @@ def test_quadratic_predictor_reproduces_a_parabola_exactly(tight):
 def test_a_failed_warm_start_is_redone_cold_and_its_cost_counted(monkeypatch):
     import lcpbench.studies.continuation as cont
 
-    real = cont.solve
+    real = cont.solve_internal
 
     def warm_fails(scene, start=None, **kw):
         res = real(scene, start=start, **kw)
@@ -94,7 +94,7 @@ def test_a_failed_warm_start_is_redone_cold_and_its_cost_counted(monkeypatch):
             res.converged, res.reason = False, "made to fail"
         return res
 
-    monkeypatch.setattr(cont, "solve", warm_fails)
+    monkeypatch.setattr(cont, "solve_internal", warm_fails)
     line = LINE[:3]
     out = solve_sequence(line, predictor="secant", solver="active-set", tol=1e-8)
     cold = [lcpbench.solve(s, solver="active-set", tol=1e-8) for s in line]

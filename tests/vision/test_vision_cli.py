@@ -76,7 +76,10 @@ def test_missing_subcommand_and_bad_options(photo, capsys):
     _one_line_error(capsys, ["vision"], "SUBCOMMAND")
     _one_line_error(capsys, ["vision", "measure", str(path), "--hsv-lower", "1,2",
                              "--hsv-upper", "20,255,255"], "H,S,V")
-    _one_line_error(capsys, ["vision", "compare", str(path), "--height", "5"], "--theta")
+    _one_line_error(capsys, ["vision", "compare", str(path), "--wall-face", "5"], "--theta")
+    _one_line_error(capsys, ["vision", "compare", str(path), "--theta", "120"], "--wall-face")
+    _one_line_error(capsys, ["vision", "compare", str(path), "--theta", "120", "--wall-face",
+                             "5", "--height", "3.5"], "--height")
 
 
 def test_measure_json(photo, capsys):
@@ -128,15 +131,25 @@ def test_calibrate_writes_a_fit_that_solve_accepts(tmp_path, capsys):
 
 def test_render_then_compare(tmp_path, capsys):
     img = tmp_path / "c.png"
-    assert main(["vision", "render", "--theta", "120", "--height", "5", "--px-per-mm", "11",
+    assert main(["vision", "render", "--theta", "120", "--wall-face", "5", "--px-per-mm", "11",
                  "--out", str(img)]) == 0
     capsys.readouterr()
     assert main(["vision", "compare", str(img), "--calib", str(tmp_path / "c.calib.json"),
-                 "--height", "5", "--theta", "120", "--json"]) == 0
+                 "--wall-face", "5", "--theta", "120", "--json"]) == 0
     d = json.loads(capsys.readouterr().out)
     assert d["mean_distance_mm"] < 0.05 and d["contact_force_n"] > 0
     truth = json.loads((tmp_path / "c.json").read_text())
     assert d["contact_force_n"] == pytest.approx(truth["contact_force_n"], rel=1e-9)
+    # height is the centre-line height, as in solve: the wall face less the radius 1.5 mm
+    assert (d["wall_face_mm"], d["height_mm"]) == (5.0, 3.5)
+    assert main(["vision", "compare", str(img), "--calib", str(tmp_path / "c.calib.json"),
+                 "--height", "3.5", "--theta", "120", "--json"]) == 0
+    same = json.loads(capsys.readouterr().out)
+    assert same["contact_force_n"] == d["contact_force_n"]
+    assert main(["solve", "--theta", "120", "--height", "3.5", "--links", "200", "--channel",
+                 "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["total_force"] == pytest.approx(
+        d["contact_force_n"], rel=1e-9)
 
 
 def test_import_lcpbench_does_not_load_opencv():

@@ -90,6 +90,7 @@ from scipy.optimize import root
 
 from ..errors import ProblemError
 from ..model.chain import node_positions, torque_residual
+from ..problems.checks import describe
 from ..problems.scenes import ActuatorScene, Chain
 from ..studies.discretisation import auto_links
 
@@ -335,7 +336,7 @@ def _check_options(scene, method, tol, max_nfev, time_limit):
     if not isinstance(scene, ActuatorScene):
         raise ProblemError(
             "the root-finding baseline models the pinned-pinned actuator only: scene must be "
-            f"an ActuatorScene, got {type(scene).__name__}"
+            f"an ActuatorScene, got {describe(scene)}"
         )
     if method not in METHODS:
         raise ProblemError(f"method must be one of {', '.join(METHODS)}, got {method!r}")

@@ -64,10 +64,13 @@ class Expectation:
     reason: str | None = None  # a part of the run's stored reason
     scene: tuple[tuple[str, float, float], ...] = ()  # (column, low, high), inclusive
     within_tol: bool = False  # only where |F − F_ref| / F₀ <= τ (the error is needed)
+    #: only where τ·low < |F − F_ref| / F₀ <= τ·high: an answer off by a documented margin
+    off_by: tuple[float, float] | None = None
 
     @property
     def needs_run(self) -> bool:
-        return bool(self.method or self.reason or self.scene or self.within_tol)
+        return bool(self.method or self.reason or self.scene or self.within_tol
+                    or self.off_by is not None)
 
     def matches_run(self, run: dict, error: float | None) -> bool:
         """The run-level conditions: driver, reason, scene and error within τ."""
@@ -79,9 +82,13 @@ class Expectation:
             value = run.get(column)
             if value is None or not low <= float(value) <= high:
                 return False
+        known = error is not None and math.isfinite(error)
+        tau = force_tol(float(run["tol"])) if self.within_tol or self.off_by else math.nan
+        if self.off_by is not None and not (
+                known and self.off_by[0] * tau < error <= self.off_by[1] * tau):
+            return False
         if self.within_tol:
-            return (error is not None and math.isfinite(error)
-                    and error <= force_tol(float(run["tol"])))
+            return known and error <= tau
         return True
 
 
@@ -209,6 +216,51 @@ HARD_EXPECTED: tuple[Expectation, ...] = (
 )
 
 
+_STD = "docs/bench.md, Expected failures; results/sweep/report.md"
+#: The standard run's (results/sweep) documented refusals beyond :data:`EXPECTED`, each
+#: by back-end, settings, a part of the stored reason and, for the judge's refusals,
+#: the run's error against the reference, so that a new kind of failure stays unexpected.
+STANDARD_EXPECTED: tuple[Expectation, ...] = (
+    # (a) the answer is within τ of the reference, and the judge refuses it all the
+    # same: its force error bound (×1/(1 − ρ)) or the residual test of the last step
+    # is conservative where the back-end's last step is inexact
+    *(Expectation(b, frozenset({"not_converged"}),
+                  "the answer is within τ of the reference, but the judge's force error "
+                  "bound or its residual test of the (inexact) last step is over its "
+                  f"allowance: the judge is conservative, the answer is not wrong ({_STD})",
+                  settings=s, reason=JUDGE, within_tol=True, partial=True)
+      for b, s in (("cvxpy", "default"), ("lemke", "high"), ("qpsolvers-daqp", "default"),
+                   ("qpsolvers-highs", "high"), ("qpsolvers-quadprog", "high"),
+                   ("quantecon-lemke", "high"), ("siconos-lemke", "high"),
+                   ("siconos-newton-fb", "default"))),
+    # (b) just over τ at high: an inexact last step, rightly refused (the margin: the
+    # largest error of its refused answers in the standard run, rounded up)
+    *(Expectation(b, frozenset({"not_converged"}),
+                  "at settings high its last contact step is inexact (ε = 1e-9 on the "
+                  "scaled step, cond(K) ≈ 1e8): the answer is off the reference by more "
+                  f"than τ but at most {high:g} τ, and the judge rightly refuses it ({_STD})",
+                  settings="high", reason=JUDGE, off_by=(1.0, high), partial=True)
+      for b, high in (("cvxpy", 1.5), ("qpsolvers-piqp", 2.0), ("qpsolvers-daqp", 5.0),
+                      ("qpsolvers-highs", 5.0))),
+    # (c) the back-end's own stops
+    Expectation("siconos-newton-fb", frozenset({"not_converged"}),
+                "at default settings Siconos' Newton-FB reaches its 1000-iteration limit on "
+                f"a contact step (its merit function stalls at cond(K) ≈ 1e8) ({_STD})",
+                settings="default", reason="siconos newton-fb: iteration limit",
+                partial=True),
+    Expectation("cvxpy", frozenset({"not_converged"}),
+                "at default settings cvxpy's QP solver (OSQP, eps 1e-5) returns inexact "
+                "steps and the driver stalls above its tolerance in 200 outer steps "
+                f"({_STD})",
+                settings="default", reason="max|Δα| stalled", partial=True),
+    Expectation("cvxpy", frozenset({"not_converged"}),
+                "at settings high its QP solver (OSQP through cvxpy) reaches its iteration "
+                f"limit on a θ = 180° contact step ({_STD})",
+                settings="high", reason="cvxpy/OSQP: user_limit",
+                scene=(("theta", 180.0, 180.0),), partial=True),
+)
+
+
 def expectation(backend: str, settings: str, status: str, *, run: dict | None = None,
                 error: float | None = None) -> Expectation | None:
     """The documented expectation this failure matches, or None (unexpected).
@@ -228,7 +280,7 @@ def expectation(backend: str, settings: str, status: str, *, run: dict | None = 
         (:func:`lcpbench.bench.metrics.error_of`): entries ``within_tol`` match
         only where it is known and at most τ.
     """
-    for e in (*EXPECTED, *HARD_EXPECTED):
+    for e in (*EXPECTED, *HARD_EXPECTED, *STANDARD_EXPECTED):
         if e.backend not in (None, backend) or status not in e.statuses:
             continue
         if e.settings not in (None, settings):
@@ -259,5 +311,5 @@ def is_expected(backend: str, settings: str, status: str, *, run: dict | None = 
     return expectation(backend, settings, status, run=run, error=error) is not None
 
 
-__all__ = ["EXPECTED", "HARD_EXPECTED", "OFF_REFERENCE", "Expectation", "expectation", "is_expected",
-           "never_converges"]
+__all__ = ["EXPECTED", "HARD_EXPECTED", "OFF_REFERENCE", "STANDARD_EXPECTED", "Expectation",
+           "expectation", "is_expected", "never_converges"]

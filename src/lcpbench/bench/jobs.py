@@ -31,11 +31,13 @@ import traceback
 from dataclasses import dataclass, field
 from typing import ClassVar
 
+from ..solvers.base import PROFILES
 from .grid import scene_from_key
 from .rows import baseline_row, failed_row, repeated, solution_row
 
-#: driver tolerance (rad) per settings profile; "default" keeps the paper's 1e-3
-PROFILE_TOL = {"default": 1e-3, "low": 1e-3, "mid": 1e-6, "high": 1e-9}
+#: driver tolerance (rad) per settings profile, read from the one profile table
+#: (:data:`lcpbench.solvers.base.PROFILES`): "default" keeps the paper's 1e-3
+PROFILE_TOL = {name: s.driver_tol for name, s in PROFILES.items()}
 REFERENCE_TOL = 1e-11  # rad, driver tolerance of the reference
 #: the baselines: (Jacobian, MINPACK method). With finite differences Powell's
 #: hybrid method (fsolve's default, "hybr") fails at N = 140 on every scene of

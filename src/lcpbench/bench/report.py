@@ -167,7 +167,10 @@ def failures(evaluated) -> str:
             "the result judge refuses Clarabel, OSQP, ProxSuite and SCS where their last "
             "step fails lcpbench's residual test; the hard suite's undamped driver past "
             "the vertical, N = 2000 out of time, and the judge's refusals named by "
-            "reason, scene and error; see `lcpbench.bench.expected`), "
+            "reason, scene and error; the standard run's judge refusals of answers within "
+            "τ (a conservative bound) or just over it (an inexact last step at high), "
+            "Siconos Newton-FB's iteration limit and cvxpy's stalls; see "
+            "`lcpbench.bench.expected`), "
             f"**{n_unexp} unexpected**.\n\n")
     return lead + _table(["back-end", "settings", "driver", "unsuccessful runs by status",
                           "expected", "unexpected"], rows, "llllrr")

@@ -40,8 +40,9 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ..accuracy import driver_tol_for
 from ..errors import ProblemError
-from ..problems.checks import check_number
+from ..problems.checks import check_number, describe
 from ..problems.scenes import ActuatorScene
 from ..solvers.selection import Selection
 from .grid import Grid, scene_key
@@ -93,7 +94,7 @@ def probe_scenes(scene_or_grid) -> list[ActuatorScene]:
         scenes = list(scene_or_grid)
     else:
         raise ProblemError("scene_or_grid must be an ActuatorScene, a list of them or a "
-                           f"Grid, got {type(scene_or_grid).__name__}")
+                           f"Grid, got {describe(scene_or_grid)}")
     kinds = {}
     for s in scenes:
         if s.links == "auto":
@@ -114,16 +115,6 @@ def _check(force_tol, time_budget) -> tuple[float, float | None]:
     if time_budget is not None:
         time_budget = check_number("time_budget", time_budget, low=0.0, low_open=True, unit="s")
     return force_tol, time_budget
-
-
-def driver_tol_for(force_tol: float) -> float:
-    """Driver tolerance (rad) of the probes for a force accuracy ``force_tol``.
-
-    An exact contact solver reaches a force error of about x/10 at driver
-    tolerance x rad on the probe scenes (measured: 7e-5 at 1e-3 rad, 4e-8 at
-    1e-6, 2e-11 at 1e-9), so the probes run at min(force_tol, 1e-3) rad.
-    """
-    return min(force_tol, 1e-3)
 
 
 def select_backend(scene_or_grid, force_tol: float = 1e-6, time_budget: float | None = None, *,

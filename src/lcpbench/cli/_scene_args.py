@@ -161,8 +161,10 @@ def add_wall_options(parser) -> None:
            "when the largest pressure passes it")
 
 
-def add_tol_option(parser, what: str = "convergence threshold on max|d alpha|") -> None:
-    """Add ``--tol RAD``, the driver's convergence threshold.
+def add_tol_option(parser, what: str = "convergence threshold on max|d alpha|",
+                   by_settings: bool = True) -> None:
+    """Add ``--tol RAD``, the driver's convergence threshold (default None: the
+    ``--settings`` profile's ``driver_tol``, :data:`lcpbench.solvers.base.PROFILES`).
 
     Parameters
     ----------
@@ -170,9 +172,14 @@ def add_tol_option(parser, what: str = "convergence threshold on max|d alpha|") 
         The sub-command's parser.
     what : str
         The start of the help text.
+    by_settings : bool
+        Whether the command has ``--settings`` (the help names the profiles' tols).
     """
-    parser.add_argument("--tol", type=float, default=DEFAULT_TOL, metavar="RAD",
-                        help=f"{what}, rad (default {DEFAULT_TOL:g})")
+    said = ("the --settings profile's: " + ", ".join(
+        f"{n} {s.driver_tol:g}" for n, s in PROFILES.items())) if by_settings \
+        else f"{DEFAULT_TOL:g}"
+    parser.add_argument("--tol", type=float, default=None, metavar="RAD",
+                        help=f"{what}, rad (default {said})")
 
 
 def add_solver_options(parser, default: str | None = DEFAULT_SOLVER,
@@ -192,8 +199,10 @@ def add_solver_options(parser, default: str | None = DEFAULT_SOLVER,
     parser.add_argument("--solver", default=default, metavar="NAME",
                         help=f"back-end (default {said}; `lcpbench solvers` lists them)")
     parser.add_argument("--settings", choices=tuple(PROFILES), default="default",
-                        help="accuracy profile: the solver's own defaults, or a generic "
-                             "tolerance low 1e-3, mid 1e-6, high 1e-9 (default: default)")
+                        help="accuracy profile, one for the whole solve (back-end "
+                             "tolerance and driver --tol): default (the back-end's own "
+                             "defaults, 1e-3 rad), low 1e-3, mid 1e-6, high 1e-9 "
+                             "(default: default)")
 
 
 def scene_from(args, *, resolve_links: bool = True):

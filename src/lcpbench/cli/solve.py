@@ -4,7 +4,8 @@
 
     lcpbench solve --theta 150 --height 3 [--links N|auto] [--channel] [--solver NAME]
                    [--wall-profile F.csv [--lower-profile F.csv] [--profile-kind K]]
-                   [--settings default|low|mid|high] [--raw] [--json] [--plot F.png]
+                   [--accuracy A | --settings default|low|mid|high] [--tol RAD] [--raw]
+                   [--json] [--plot F.png]
                    [--start cold|ramp] [--sections THETA:LENGTH,...|anchoring] [--gravity away|toward]
     lcpbench export --theta 150 --height 3 [scene options] --format dat|npz --out FILE
     lcpbench lcp FILE [--solver NAME] [--settings PROFILE] [--json]
@@ -19,7 +20,7 @@ from pathlib import PurePath
 
 import numpy as np
 
-from ..api import solve
+from ..api import solve, solve_internal
 from ..errors import ProblemError
 from ..model.driver import METHODS
 from ..model.result_view import pressure_rows
@@ -65,6 +66,10 @@ def register(subparsers) -> None:
     add_scene_options(s)
     add_section_options(s)
     add_profile_options(s)
+    s.add_argument("--accuracy", type=float, default=None, metavar="A",
+                   help="relative accuracy of the total force wanted (e.g. 1e-6): sets the "
+                        "driver --tol and the back-end tolerance (docs/accuracy.md); not "
+                        "with --settings")
     add_tol_option(s)
     add_solver_options(s)
     s.add_argument("--raw", action="store_true",
@@ -92,7 +97,7 @@ def register(subparsers) -> None:
         description="Solve a scene, then write the contact step at its converged "
                     "configuration as an LCP (w = M z + q; z = gaps, w = reactions).")
     add_scene_options(e)
-    add_tol_option(e, "convergence threshold of the solve")
+    add_tol_option(e, "convergence threshold of the solve", by_settings=False)
     e.add_argument("--format", choices=("dat", "npz"), default=None,
                    help="Siconos .dat (dense, column-major) or numpy .npz (M, q); "
                         "default: from the suffix of --out (a .dat or .npz suffix that "
@@ -193,18 +198,21 @@ def summary(result, extra=()) -> str:
     rows = [
         ("scene", scene),
         ("converged", ("yes" if result.converged else "no") + f" ({result.reason})"),
-        ("total force", f"{1e3 * result.total_force:.6g} mN ({result.total_force:.6g} N)"),
-        ("contact nodes", node_ranges(contacts(result.forces, free))),
+        ("total force" if result.forces_lower is None else "upper wall force",
+         f"{1e3 * result.total_force:.6g} mN ({result.total_force:.6g} N)"
+         + ("" if result.forces_lower is None else ", the total force (the paper's load cell)")),
+        ("contact nodes" if result.forces_lower is None else "upper contacts",
+         node_ranges(contacts(result.forces, free))),
     ]
     # what was tried beyond the cold start (a saddle left, the loading path followed)
     if getattr(result, "route", "") == "load path":
         rows.append(("ramped", "start='ramp': followed the load from zero"))
     rows += [(name, why) for name, why in getattr(result, "retries", ())
              if name in ("escaped", "ramped", "cold")]
-    if result.forces_lower is not None:
-        lower = float(np.sum(result.forces_lower))
+    if result.total_force_lower is not None:  # a channel: each wall's total, named
+        lower = result.total_force_lower
         rows += [
-            ("lower wall", f"{1e3 * lower:.6g} mN ({lower:.6g} N)"),
+            ("lower wall force", f"{1e3 * lower:.6g} mN ({lower:.6g} N)"),
             ("lower contacts", node_ranges(contacts(result.forces_lower, free))),
         ]
     rows += pressure_rows(result)
@@ -256,10 +264,10 @@ def cmd_solve(args) -> int:
         return solve_frictional(args, scene, DEFAULT_SOLVER)
     if args.sensitivities and (why := unsupported(scene)) is not None:
         raise ProblemError(f"--sensitivities: {why}")
-    result = solve(scene, solver=args.solver, tol=args.tol, method=args.method,
-                   settings=args.settings, scaled=not args.raw,
-                   pressure_limit=args.pressure_limit,
-                   start="ramp" if args.start == "ramp" else None)
+    result = solve_internal(scene, solver=args.solver, tol=args.tol, accuracy=args.accuracy,
+                            method=args.method, settings=args.settings, scaled=not args.raw,
+                            pressure_limit=args.pressure_limit,
+                            start="ramp" if args.start == "ramp" else None)
     plot_error = None
     if args.plot is not None:
         from ..bench.plot import plot_shape
@@ -274,6 +282,8 @@ def cmd_solve(args) -> int:
     sens = sensitivities(result) if args.sensitivities and result.converged else None
     if args.json:
         out = result.to_dict()
+        if args.accuracy is not None:
+            out["accuracy"] = args.accuracy
         if args.sensitivities:  # null where the solve did not converge (its reason says why)
             out["sensitivities"] = None if sens is None else sens.as_json()
         print_json(out)

@@ -486,5 +486,8 @@ def cmd_select(args) -> int:
     elif sel.backend is None:
         print(f"no back-end: {sel.reason}")
     else:
-        print(f"{sel.backend} --settings {sel.settings}: {sel.reason}")
+        # the options of `lcpbench solve` that run it as selected: the profile's ε, and the
+        # driver tol the probes ran at (the accuracy's, not the profile's)
+        print(f"--solver {sel.backend} --settings {sel.settings} --tol {sel.driver_tol:g}: "
+              f"{sel.reason}")
     return 0 if sel.backend is not None else 1

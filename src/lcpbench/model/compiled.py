@@ -34,7 +34,13 @@ from ..solvers.judge import requested
 from ..solvers.registry import DEFAULT, get_settings
 from . import angle_step, compiled_driver, heavy_driver, large_n, wall_free
 from .driver import run_driver
-from .kernel_call import BAIL_REASONS, applies, run_compiled
+from .kernel_call import (
+    BAIL_REASONS,
+    applies,
+    profile_applies,
+    run_compiled,
+    run_profile_compiled,
+)
 from .outer import DriverOutput, DriverStart
 from .profile import has_profile
 
@@ -117,9 +123,17 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
     if engine != "numpy" and applies(backend, method, None if args is not None else chain):
         return run_kernel(chain, lambda: step_solver, settings=settings, tol=tol,
                           max_outer=max_outer, method=method, start=start, args=args)
+    elif engine != "numpy" and profile_applies(backend, method, chain):
+        out, why = run_profile_compiled(chain, tol=tol, max_outer=max_outer, start=start,
+                                        settings=settings)
+        if out is not None:
+            return out, "compiled"
+        return profile_reference(chain, lambda: step_solver, why, tol=tol, max_outer=max_outer,
+                                 method=method, start=start)
     elif engine == "compiled" and chain is not None and has_profile(chain):
-        raise ProblemError("engine='compiled' does not run walls of any profile (wall_profile); "
-                           "engine='auto' or 'numpy' runs them in the numpy reference")
+        raise ProblemError("engine='compiled' runs walls of any profile (wall_profile) with the "
+                           f"default back-end ({DEFAULT}) and method='globalised' only; "
+                           "engine='auto' or 'numpy' runs the others in the numpy reference")
     elif engine != "numpy" and compiled_driver.takes(chain, step_solver, method):
         # another back-end: its calls in Python, lcpbench's parts around them compiled
         return (compiled_driver.run(chain, step_solver, tol=tol, max_outer=max_outer,
@@ -189,6 +203,8 @@ def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol:
     solve runs in increments on the tridiagonal factor instead, as from ``LARGE_N``
     links: the numpy reference in heights would meet the same round-off, and its step
     solver then falls back to a dense Lemke step, O(N³) (97 s at N = 3999)."""
+    if beyond_heights(chain, why):
+        return out_of_reach(chain, why), "numpy (not run: see the reason)"
     if why in ROUNDOFF_BAILS and large_n.roundoff_may_limit(chain, step_request(settings),
                                                             method):
         from dataclasses import replace
@@ -200,7 +216,43 @@ def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol:
                 f"numpy (increments on the tridiagonal factor; the compiled kernel "
                 f"stopped: {why})")
     return (run_driver(chain, make_step(), tol=tol, max_outer=max_outer, method=method,
+                       start=start, stop_on_stall=True),
+            f"numpy (the compiled kernel stopped: {why})")
+
+
+def profile_reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol: float,
+                      max_outer: int, method: str, start: DriverStart | None = None,
+                      settings="default") -> tuple[DriverOutput, str]:
+    """The whole profile solve in the numpy reference (:mod:`.profile_driver`), where the
+    profile kernel stopped (``why``): the answer and the engine that produced it.
+    (``settings``: as :func:`reference`'s, for the same call; the step solver has them.)"""
+    if beyond_heights(chain, why):
+        return out_of_reach(chain, why), "numpy (not run: see the reason)"
+    return (run_driver(chain, make_step(), tol=tol, max_outer=max_outer, method=method,
                        start=start), f"numpy (the compiled kernel stopped: {why})")
+
+
+def beyond_heights(chain: Chain, why: str) -> bool:
+    """Whether a kernel stop ``why`` at this N is the round-off of the height formulation
+    with nothing to take over: from ``LARGE_N`` links, a face not positive definite or
+    a round-off stop (:data:`ROUNDOFF_BAILS`), on a chain the increment formulation does
+    not take (elastic walls, wall profiles). The numpy reference in heights meets the
+    same round-off there, and its step solver's dense Lemke fallback is O(N³) (a solve
+    of elastic walls at N = 10⁵ failed after 42 s)."""
+    return (chain.links >= large_n.LARGE_N and not large_n.takes(chain)
+            and (why in ROUNDOFF_BAILS or why == BAIL_REASONS[11]))
+
+
+def out_of_reach(chain: Chain, why: str) -> DriverOutput:
+    """The failed answer of :func:`beyond_heights`, its reason naming the limit."""
+    from .outer import failed_output
+
+    cond = large_n.heights_condition(chain.links) * np.finfo(float).eps
+    return failed_output(chain.rest_alpha.copy(), chain.free_nodes.size, [],
+                         f"the compiled kernel stopped ({why}) at N = {chain.links}: the "
+                         f"round-off of the node heights (cond H · ε ≈ {cond:.1e}) is out of "
+                         f"reach there, and elastic walls and wall profiles have no increment "
+                         f"formulation yet (issue 35); N < {large_n.LARGE_N} solves them")
 
 
 def direct(chain: Chain) -> bool:

@@ -26,7 +26,7 @@ FLOOR_ULPS = 256.0  # solvers.judge.FLOOR_ULPS
 # the step left the path of the reference: the caller runs the numpy driver
 BAIL_PRIMAL, BAIL_NOT_PD, BAIL_REPEAT, BAIL_LIMIT, BAIL_CERT, BAIL_JUDGE = 10, 11, 12, 13, 14, 15
 
-# Work arrays, allocated once per solve (compiled_kernel._workspace); no loop
+# Work arrays, allocated once per solve (compiled_kernel.workspace); no loop
 # allocates. Rows of ``wn`` (free nodes):
 U, G, SIG, WALL, D, RES, GF, RATIO, LIN, ORIG, RUP, RLO, NET, U2, OUT_U, DIR, TRY, WU, SHIFT, \
     FSHIFT = range(20)

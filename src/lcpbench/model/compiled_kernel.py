@@ -88,7 +88,7 @@ __all__ = ["BAIL_CERT", "BAIL_JUDGE", "BAIL_LIMIT", "BAIL_NOT_PD", "BAIL_PRIMAL"
 
 
 @njit(cache=True)
-def _workspace(n, links, nj, max_iter):
+def workspace(n, links, nj, max_iter):
     """The solve's work arrays, uninitialised: every entry is written before it is
     read (each pass sets its rows; the walk its lists and the hashes it compares),
     so nothing is zeroed that is not read (``seen`` alone holds 20 n + 50 hashes)."""
@@ -101,9 +101,9 @@ def _workspace(n, links, nj, max_iter):
 
 # -- the chain (model.chain) ----------------------------------------------------
 @njit(cache=True)
-def _energy_into(alpha, a, jl, jr, k, rest, link_load, sines):
+def energy_into(alpha, a, jl, jr, k, rest, link_load, sines):
     """chain.energy: ½Σk(φ−φ*)² − Σ P·(centre height), ``sines``: sin α (given: the
-    fit's Δy / a, :func:`_fit`)."""
+    fit's Δy / a, :func:`fit_heights`)."""
     s = 0.0
     for j in range(jr.size):
         left = alpha[jl[j]] if jl[j] >= 0 else 0.0
@@ -118,7 +118,7 @@ def _energy_into(alpha, a, jl, jr, k, rest, link_load, sines):
 
 
 @njit(cache=True)
-def _penalty(u, lo, hi, cu, cl, grad):
+def wall_penalty(u, lo, hi, cu, cl, grad):
     """The elastic walls' energy Σ ½ δ_i² / c_i at the free nodes' heights u
     (model.elastic.penalty, δ the indentation, c = 1/k the compliance; 0 at a rigid
     wall, c = 0, which u never passes); ``grad``: its gradient added into it, unless
@@ -143,11 +143,11 @@ def _penalty(u, lo, hi, cu, cl, grad):
 @njit(cache=True)
 def _energy(alpha, a, jl, jr, k, rest, link_load):
     """chain.energy: ½Σk(φ−φ*)² − Σ P·(centre height)."""
-    return _energy_into(alpha, a, jl, jr, k, rest, link_load, np.sin(alpha))
+    return energy_into(alpha, a, jl, jr, k, rest, link_load, np.sin(alpha))
 
 
 @njit(cache=True)
-def _fit(out, u, reference, a, fs, links, inv, sines, cosines):
+def fit_heights(out, u, reference, a, fs, links, inv, sines, cosines):
     """chain.alpha_from_heights into ``out``; False when some |Δy| >= a. ``inv``:
     1 / (a cos α) of ``reference`` if known (its sign is the branch), else empty.
 
@@ -176,19 +176,11 @@ def _fit(out, u, reference, a, fs, links, inv, sines, cosines):
     return True
 
 
-@njit(cache=True)
-def _alpha_from_heights(u, reference, a, fs, links):
-    """chain.alpha_from_heights: (ok, α); not ok when some |Δy| >= a."""
-    out = np.empty(links)
-    return _fit(out, u, reference, a, fs, links, np.empty(0), np.empty(links),
-                np.empty(links)), out
-
-
 # -- the banded step (model.step) -------------------------------------------------
 @njit(cache=True)
-def _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, inv, coef,
+def assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, inv, coef,
                    origin, alpha0, phi_origin, t, wl, sines, cosines, tangent):
-    """``sines``, ``cosines``: sin α and cos α (the solve kernel's from :func:`_fit`).
+    """``sines``, ``cosines``: sin α and cos α (the solve kernel's from :func:`fit_heights`).
     ``tangent``: v = tan α − α as the reference (the compiled driver's assembly);
     else with tan α = sin α / cos α (equal to round-off, one transcendental call
     less per link: the solve kernel's)."""
@@ -244,7 +236,7 @@ def banded_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load):
     links, nj = alpha.size, jr.size
     bands, linear, inv, coef = np.zeros((3, n)), np.empty(n), np.empty(links), np.empty((nj, 3))
     origin, alpha0, phi_origin = np.empty(n), np.empty(links), np.empty(nj)
-    _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, inv, coef,
+    assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, inv, coef,
                    origin, alpha0, phi_origin, np.empty(nj), np.empty((5, links + 2)),
                    np.sin(alpha), np.cos(alpha), True)
     return bands, linear, inv, coef, origin, alpha0, phi_origin
@@ -305,19 +297,19 @@ def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, cu, cl, wa
     arrays: assemble, dual walk, certificate, judge; (code, face solves), code 0:
     solved. ``cu``, ``cl``: the walls' compliances (empty: rigid walls)."""
     wn, wb, wj, wa = ws[0], ws[1], ws[2], ws[3]
-    _assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, ws[6], wn[LIN], wa[INV], ws[7],
+    assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, ws[6], wn[LIN], wa[INV], ws[7],
                    wn[ORIG], wa[ALPHA0], wj[0], wj[1], ws[4], sines, cosines, False)
     T = ws[10]
     T[:] = 0.0
     if newton:  # T = 0 where H + T is not positive definite
         _newton(alpha, a, jl, jr, k, rest, fs, n, ws[6], wn[LIN], wn[ORIG], T, ws[5],
                 wb[FACT], ws[4][0], sines, cosines)
-    return _solve_assembled(n, lo, hi, L, F, cu, cl, warm_u, warm_up, warm_lo, warm_flags,
+    return solve_assembled(n, lo, hi, L, F, cu, cl, warm_u, warm_up, warm_lo, warm_flags,
                             max_iter, request, ws, gp, T)
 
 
 @njit(cache=True)
-def _solve_assembled(n, lo, hi, L, F, cu, cl, warm_u, warm_up, warm_lo, warm_flags, max_iter,
+def solve_assembled(n, lo, hi, L, F, cu, cl, warm_u, warm_up, warm_lo, warm_flags, max_iter,
                      request, ws, gp, T):
     """The contact step assembled in the work arrays (H in ``ws[6]``, c in row LIN, the
     stencils and u₀ in ``gp``, the Newton bands in ``T``): dual walk from the warm
@@ -366,7 +358,7 @@ def contact_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, cu,
     """One cold contact step at α, its work arrays allocated: (code, u, r_up, r_lo,
     sigma, face solves, inv, α₀, origin, gp, residuals, R), code 0: solved (other codes:
     the arrays after the code are work rows, some never written, not an answer)."""
-    ws = _workspace(n, alpha.size, jr.size, max_iter)
+    ws = workspace(n, alpha.size, jr.size, max_iter)
     wn, wa = ws[0], ws[3]
     gp = (ws[7], jr[0], fs, alpha.size, wn[ORIG], ws[2][0], k, rest, nodal_load)
     code, it = _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, cu, cl, warm_u,
@@ -387,7 +379,7 @@ def solve_step(bands, linear, lo, hi, cu, cl, coef, b0, fs, links, origin, phi_o
     answer). The public step call's compiled route
     (:func:`lcpbench.model.step_solver.solve_step` with the default back-end)."""
     n, nj = linear.size, coef.shape[0]
-    ws = _workspace(n, links, nj, max_iter)
+    ws = workspace(n, links, nj, max_iter)
     wn = ws[0]
     ws[6][:] = bands
     wn[LIN][:] = linear
@@ -396,13 +388,13 @@ def solve_step(bands, linear, lo, hi, cu, cl, coef, b0, fs, links, origin, phi_o
     ws[2][0][:] = phi_origin
     ws[10][:] = T
     gp = (ws[7], b0, fs, links, wn[ORIG], ws[2][0], k, rest, nodal_load)
-    code, it = _solve_assembled(n, lo, hi, L, F, cu, cl, warm_u, warm_up, warm_lo, warm_flags,
+    code, it = solve_assembled(n, lo, hi, L, F, cu, cl, warm_u, warm_up, warm_lo, warm_flags,
                                 max_iter, request, ws, gp, ws[10])
     return code, wn[U], wn[RUP], wn[RLO], wn[SIG], it, ws[9], wn[NET]
 
 
 @njit(cache=True)
-def _record(rec, count, it, t, dalpha, E):
+def record_step(rec, count, it, t, dalpha, E):
     if count == rec.shape[1]:
         bigger = np.empty((4, 2 * rec.shape[1]))
         bigger[:, :count] = rec
@@ -444,23 +436,23 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
     length t, max|Δα|, energy; ``sigma`` +1/−1 on the upper/lower walls.
     """
     n, links = lo.size, rest_alpha.size
-    ws = _workspace(n, links, jr.size, max_iter)
+    ws = workspace(n, links, jr.size, max_iter)
     wn, wb, wa, m = ws[0], ws[1], ws[3], ws[2][2]
     rec = np.empty((4, min(max_outer, 64)))
     count, zero, none, ok = 0, np.zeros(n), np.zeros(5), False
     alpha, trial, u = wa[ALPHA], wa[TRIAL], wn[OUT_U]
     if start_alpha.size == links:  # a neighbour's answer, clipped to the walls
         _clipped_heights(u, start_alpha, a, fs, lo, hi)
-        ok = _fit(alpha, u, start_alpha, a, fs, links, none[:0], wa[SIN_A], wa[COS_A])
+        ok = fit_heights(alpha, u, start_alpha, a, fs, links, none[:0], wa[SIN_A], wa[COS_A])
     near = ok and warm_flags != 0  # a neighbour's answer and its last step: near already
     if not ok:
         warm_flags = 0
         _clipped_heights(u, rest_alpha, a, fs, lo, hi)
-        ok = _fit(alpha, u, rest_alpha, a, fs, links, none[:0], wa[SIN_A], wa[COS_A])
+        ok = fit_heights(alpha, u, rest_alpha, a, fs, links, none[:0], wa[SIN_A], wa[COS_A])
     if not ok:
         return NO_FIT, rest_alpha.copy(), zero, zero, zero, zero, rec, count, none, zero
     sin_a, sin_t, cos_a, cos_t = wa[SIN_A], wa[SIN_T], wa[COS_A], wa[COS_T]
-    E = _energy_into(alpha, a, jl, jr, k, rest, link_load, sin_a) + _penalty(u, lo, hi, cu, cl,
+    E = energy_into(alpha, a, jl, jr, k, rest, link_load, sin_a) + wall_penalty(u, lo, hi, cu, cl,
                                                                             none[:0])
     noise_k = 0.0
     for j in range(k.size):
@@ -483,7 +475,7 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
             dalpha = max(dalpha, abs((alpha0[i] + (cur - prev) * inv[i]) - alpha[i]))
             prev = cur
         grad_into(g_u, m, u, gp, ws[10])
-        _penalty(u, lo, hi, cu, cl, g_u)  # (nothing where no wall yields)
+        wall_penalty(u, lo, hi, cu, cl, g_u)  # (nothing where no wall yields)
         slope = 0.0
         for i in range(n):  # the dot product, a loop (see _max_abs)
             d[i] = su[i] - u[i]
@@ -493,20 +485,20 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
         while True:
             for i in range(n):
                 ut[i] = u[i] + t * d[i]
-            if _fit(trial, ut, alpha, a, fs, links, inv, sin_t, cos_t):
-                E_t = _energy_into(trial, a, jl, jr, k, rest, link_load, sin_t) + _penalty(
+            if fit_heights(trial, ut, alpha, a, fs, links, inv, sin_t, cos_t):
+                E_t = energy_into(trial, a, jl, jr, k, rest, link_load, sin_t) + wall_penalty(
                     ut, lo, hi, cu, cl, none[:0])
                 if E_t <= E + 1e-4 * t * min(slope, 0.0) + noise:
                     break
             t *= 0.5
             if t < 1e-12:
-                rec, count = _record(rec, count, it, 0.0, dalpha, E)
+                rec, count = record_step(rec, count, it, 0.0, dalpha, E)
                 return (LINE_SEARCH, alpha.copy(), zero, zero, u.copy(), sigma.copy(), rec, count,
                         none, zero)
         u[:] = ut
         alpha, trial, sin_a, sin_t, E = trial, alpha, sin_t, sin_a, E_t
         cos_a, cos_t = cos_t, cos_a
-        rec, count = _record(rec, count, it, t, dalpha, E)
+        rec, count = record_step(rec, count, it, t, dalpha, E)
         for i in range(n):
             w_u[i], w_up[i], w_lo[i] = su[i], sigma[i] > 0, sigma[i] < 0
         warm_flags, near = 7, dalpha < NEWTON_SWITCH

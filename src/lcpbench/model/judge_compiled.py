@@ -39,9 +39,9 @@ def _load_kernel():
 def takes(chain: Chain) -> bool:
     """Whether the judge kernel takes this chain: consecutive joints, contiguous free
     nodes (the solve kernel's layouts, :func:`lcpbench.model.compiled.applies`)."""
-    from .kernel_call import applies
+    from .kernel_call import applies, profile_applies
 
-    return applies("auto", "globalised", chain)
+    return applies("auto", "globalised", chain) or profile_applies("auto", "globalised", chain)
 
 
 def chain_args(chain: Chain, kernel_args: tuple | None = None) -> tuple:
@@ -52,7 +52,12 @@ def chain_args(chain: Chain, kernel_args: tuple | None = None) -> tuple:
         from .kernel_call import kernel_args as solve_args
 
         kernel_args = solve_args(chain)
-    return (*kernel_args[1:], float(chain.wall), bool(chain.channel))
+    args = (*kernel_args[1:], float(chain.wall), bool(chain.channel))
+    if chain.profiled_walls:  # (judge_walls: the walls' tables after these)
+        from .kernel_call import profile_args
+
+        return (*args, *profile_args(chain)[4:8])
+    return args
 
 
 def judge_fast(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
@@ -76,7 +81,8 @@ def judge_fast(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
     k = _KERNEL[0] if _KERNEL else _load_kernel()
     if args is None:
         args = chain_args(chain)
-    code, st, fu, fl, res = k.judge_answer(
+    entry = k.judge_walls if len(args) > 16 else k.judge_answer
+    code, st, fu, fl, res = entry(
         _contiguous(alpha, dtype=float), *args, _contiguous(forces_upper, dtype=float),
         _contiguous(forces_lower, dtype=float), float(tol), np.array(step_sizes, dtype=float))
     return verdict_from_stats(code == k.SETTLED, dict(zip(k.STATS, st.tolist(), strict=True)),

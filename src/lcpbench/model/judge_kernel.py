@@ -32,6 +32,7 @@ import numpy as np
 from numba import njit
 
 from .stability_kernel import CHECKED, unstable_directions
+from .wall_kernel import slope_load, walls_at
 
 EPS = np.finfo(np.float64).eps
 TINY = np.finfo(np.float64).tiny
@@ -57,9 +58,9 @@ SETTLED, NOT_SETTLED = 0, 1
 # node index, node + 1). The certificate's suffix sums reuse the step's rows, which
 # are spent by then.
 (X, Y, COS, INV, V, ALPHA0, DIAG, OFF1, OFF2, LIN, C0, C1, C2, PHI0, ORIGIN, LINEAR, U, NET,
- SCALE, ROUNDOFF, NOISE, RHS, HY, HG, HGA, JU, JLO, SIZE, YC) = range(29)
-ROWS = 29
-FORCE, F_SUM, FX_SUM, P_SUM, PX_SUM = DIAG, OFF1, OFF2, LIN, HY
+ SCALE, ROUNDOFF, NOISE, RHS, HY, HG, HGA, JU, JLO, SIZE, YC, HX) = range(30)
+ROWS = 30
+FORCE, F_SUM, FX_SUM, P_SUM, PX_SUM, H_SUM, HY_SUM = DIAG, OFF1, OFF2, LIN, HY, C0, C1
 # a node's place in the judge step's contact set
 FREE, UP, LO = 0, 1, 2
 
@@ -86,22 +87,27 @@ def _positions(alpha, a, w):
 
 
 @njit(cache=True)
-def _torque_residual(alpha, w, jl, jr, k, rest, link_load, fs, fu, fl, pinned_right, res):
+def _torque_residual(alpha, w, jl, jr, k, rest, link_load, fs, fu, fl, h1, l1, pinned_right,
+                     res):
     """chain.torque_residual of the net reactions fl − fu into ``res``: k(φ − φ*) minus
-    the moment statics demands at each joint; returns the largest spring torque."""
-    links, x = alpha.size, w[X]
-    force = w[FORCE]
+    the moment statics demands at each joint; returns the largest spring torque. On a
+    wall of slope h', l' (empty: flat) the reactions are normal to it, with horizontal
+    parts fu h' − fl l' (model.profile.joint_moments_xy)."""
+    links, x, y = alpha.size, w[X], w[Y]
+    force, hx = w[FORCE], w[HX]
     for i in range(links + 1):
-        force[i] = 0.0
+        force[i] = hx[i] = 0.0
     for i in range(fu.size):
         force[fs - 1 + i] = fl[i] - fu[i]
+        if h1.size:
+            hx[fs - 1 + i] = fu[i] * h1[i] - fl[i] * l1[i]
     if pinned_right:
         m = 0.0
         for i in range(links):
             m += link_load[i] * (0.5 * (x[i] + x[i + 1]))
         fx = 0.0
         for i in range(links + 1):
-            fx += force[i] * x[i]
+            fx += force[i] * x[i] - hx[i] * y[i]
         force[links] = -(m + fx) / x[links]
     f_sum, fx_sum, p_sum, px_sum = w[F_SUM], w[FX_SUM], w[P_SUM], w[PX_SUM]  # Σ_{q>=p}
     f_sum[links + 1] = fx_sum[links + 1] = 0.0
@@ -112,11 +118,19 @@ def _torque_residual(alpha, w, jl, jr, k, rest, link_load, fs, fu, fl, pinned_ri
     for p in range(links - 1, -1, -1):
         p_sum[p] = p_sum[p + 1] + link_load[p]
         px_sum[p] = px_sum[p + 1] + link_load[p] * (0.5 * (x[p] + x[p + 1]))
+    h_sum, hy_sum = w[H_SUM], w[HY_SUM]  # the horizontal parts: −Σ_{q>=p} F_x,q (y_q − y_p)
+    if h1.size:
+        h_sum[links + 1] = hy_sum[links + 1] = 0.0
+        for p in range(links, -1, -1):
+            h_sum[p] = h_sum[p + 1] + hx[p]
+            hy_sum[p] = hy_sum[p + 1] + hx[p] * y[p]
     spring_max = 0.0
     for j in range(jr.size):
         at = jr[j]
         xp = x[at]
         moment = (fx_sum[at] - xp * f_sum[at]) + (px_sum[at] - xp * p_sum[at])
+        if h1.size:
+            moment += y[at] * h_sum[at] - hy_sum[at]
         phi = alpha[jr[j]] - (alpha[jl[j]] if jl[j] >= 0 else 0.0)
         spring = k[j] * (phi - rest[j])
         res[j] = spring - moment
@@ -388,13 +402,27 @@ def _contraction(step_sizes, judge_dalpha):
 @njit(cache=True)
 def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl,
                  wall, channel, forces_upper, forces_lower, tol, step_sizes):
+    """:func:`judge_walls` on flat walls (no table)."""
+    no_table = (np.empty(0), np.empty((4, 0)))
+    return judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu,
+                       cl, wall, channel, *no_table, *no_table, forces_upper, forces_lower, tol,
+                       step_sizes)
+
+
+@njit(cache=True)
+def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl,
+                wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower, tol, step_sizes):
     """model.judge.judge's numbers for an answer whose driver converged.
 
     ``fs``: shifted index (node + 1) of the first free node; ``F`` the force
     scale EI/ℓ²; ``L`` the length ℓ; ``cu``, ``cl``: the compliance 1/k of the
     upper and lower wall per free node (0: rigid; empty: no wall yields), whose
     gap is the compliant one, g + R/k; ``wall`` the upper wall's height (inf:
-    none); ``channel`` a lower wall at −wall too.
+    none); ``channel`` a lower wall at −wall too; ``ku``, ``cu_`` (``kl``, ``cl_``):
+    the upper (lower) wall's table of cubic pieces (:mod:`lcpbench.model.wall_kernel`;
+    empty: flat), whose heights at the nodes' x replace ``hi`` (``lo``) on their rows,
+    and whose slope carries the answer's reactions' horizontal parts (the checks of the
+    exact profile problem, model.profile).
 
     Returns ``(code, stats, forces_upper, forces_lower, torque_residual)``:
     ``code`` SETTLED or NOT_SETTLED (the judge step did not settle), ``stats``
@@ -418,6 +446,25 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
     bands, fac = np.empty((3, n)), np.empty((4, n))
     iw = np.empty((3, n), np.int64)
     _positions(alpha, a, w)
+    profiled = ku.size > 0 or kl.size > 0
+    h1 = l1 = h2 = l2 = g_up = g_lo = np.empty(0)
+    if profiled:  # the walls at the nodes' x; the answer's reactions load along them
+        sines, xf, yf = np.sin(alpha), np.empty(n), np.empty(n)
+        g_up, g_lo, h1, l1, h2, l2 = (np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+                                      np.empty(n), np.empty(n))
+        walls_at(sines, w[COS][:links], a, fs, np.zeros(n), np.zeros(n), ku, cu_, kl, cl_, xf,
+                 yf, g_up, g_lo, h1, l1, h2, l2)  # (h(x), l(x) at every node)
+        hi, lo, load = hi.copy(), lo.copy(), np.empty(n)
+        for i in range(n):
+            if ku.size and np.isfinite(hi[i]):
+                hi[i] = g_up[i]
+            if kl.size and np.isfinite(lo[i]):
+                lo[i] = g_lo[i]
+            g_up[i] = (g_up[i] if ku.size else wall) - yf[i]  # the exact gaps
+            g_lo[i] = yf[i] - (g_lo[i] if kl.size else -wall)
+            load[i] = max(forces_upper[i], 0.0) * h1[i] - max(forces_lower[i], 0.0) * l1[i]
+        slope_load(alpha, w[COS][:links], sines, fs, load, xf)
+        nodal_load = nodal_load + xf
     # the judge step at α, from the answer's contact set
     _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, w, bands)
     origin, linear, noise, state = w[ORIGIN], w[LINEAR], w[NOISE], iw[0]
@@ -429,6 +476,9 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
         on_up = hi[i] - origin[i] <= touch
         on_lo = origin[i] - lo[i] <= touch
         noise[i] = ROUNDOFF_ULPS * EPS * (scale0[i] if on_up or on_lo else size0[i])
+        if profiled:  # on the wall at the x of its last step: its loaded nodes start on it
+            on_up = on_up or (forces_upper[i] > eps_R and np.isfinite(hi[i]))
+            on_lo = on_lo or (forces_lower[i] > eps_R and np.isfinite(lo[i]))
         up = on_up and (not on_lo or hi[i] - origin[i] <= origin[i] - lo[i])
         state[i] = UP if up else (LO if on_lo else FREE)
     rounds, worst, S = _pivot(bands, fac, iw, lo, hi, cu, cl, L, eps_R, w, fs, b0, nj, k, rest,
@@ -451,7 +501,7 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
     # the certificate of the cleaned reactions (model.result.certify)
     y = w[Y]
     min_gap, min_force, cmp = np.inf, 0.0, 0.0
-    has_gap = np.isfinite(wall)
+    has_gap = np.isfinite(wall) or ku.size > 0
     comp = 0.0  # complementarity and sign on the answer's heights
     R_min = 0.0
     soft = cu.size == n
@@ -461,20 +511,22 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
         iu = cu[i] * max(fu[i], 0.0) if soft else 0.0
         il = cl[i] * max(fl[i], 0.0) if soft else 0.0
         min_force = min(min_force, fu[i])
+        gap_up = g_up[i] if profiled else wall - yf
+        gap_lo = g_lo[i] if profiled else yf + wall
         if has_gap:
-            min_gap = min(min_gap, wall - yf + iu)
-            cmp = max(cmp, abs((wall - yf + iu) * fu[i]))
+            min_gap = min(min_gap, gap_up + iu)
+            cmp = max(cmp, abs((gap_up + iu) * fu[i]))
         if channel:
             min_force = min(min_force, fl[i])
-            min_gap = min(min_gap, yf + wall + il)
-            cmp = max(cmp, abs((yf + wall + il) * fl[i]))
+            min_gap = min(min_gap, gap_lo + il)
+            cmp = max(cmp, abs((gap_lo + il) * fl[i]))
         comp = max(comp, min(fu[i] / F0, (hi[i] - yf + iu) / L))
         comp = max(comp, min(fl[i] / F0, (yf - lo[i] + il) / L))
         R_min = min(R_min, min(fu[i], fl[i]))
     pinned_right = fs - 1 + n - 1 < links
     closure = abs(y[links]) if pinned_right else 0.0
     res = np.empty(nj)
-    spring_max = _torque_residual(alpha, w, jl, jr, k, rest, link_load, fs, fu, fl,
+    spring_max = _torque_residual(alpha, w, jl, jr, k, rest, link_load, fs, fu, fl, h1, l1,
                                   pinned_right, res)
     worst_t = 0.0
     for j in range(nj):
@@ -490,15 +542,17 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
         c_max = max(c_max, max(cu[i], cl[i]))
     stats[19] = min(GEOMETRY_TOL, NODE_SHARE * tau) * L + eps_R * c_max
     stats[20] = GEOMETRY_TOL * L
-    # the second-order check (model.stability_kernel): flat walls here, rigid or elastic
-    ku, kl, flat = np.full(n, np.inf), np.full(n, np.inf), np.zeros(n)
+    # the second-order check (model.stability_kernel): the walls' springs (rigid: inf), and
+    # their slopes and curvatures at the nodes' x (flat: 0)
+    k_up, k_lo, flat = np.full(n, np.inf), np.full(n, np.inf), np.zeros(n)
     if soft:
         for i in range(n):
-            ku[i] = 1.0 / cu[i] if cu[i] > 0.0 else np.inf
-            kl[i] = 1.0 / cl[i] if cl[i] > 0.0 else np.inf
+            k_up[i] = 1.0 / cu[i] if cu[i] > 0.0 else np.inf
+            k_lo[i] = 1.0 / cl[i] if cl[i] > 0.0 else np.inf
+    if not profiled:
+        h1 = l1 = h2 = l2 = flat
     code, unstable, _ = unstable_directions(alpha, a, jl, jr, k, rest, link_load, fs - 1, fu,
-                                            fl, ku, kl, flat, flat, flat, flat, eps_R,
-                                            pinned_right)
+                                            fl, k_up, k_lo, h1, l1, h2, l2, eps_R, pinned_right)
     stats[21] = unstable if code == CHECKED else 0.0
     if not settled:
         return NOT_SETTLED, stats, fu, fl, res

@@ -59,7 +59,11 @@ def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
 
 def _layout(chain: Chain) -> bool:
     if chain.profiled_walls:
-        return False  # walls of any profile: the numpy reference (model/profile_driver.py)
+        return False  # walls of any profile: the profile kernel (profile_applies)
+    return _consecutive(chain)
+
+
+def _consecutive(chain: Chain) -> bool:
     if chain.consecutive is not None:  # the scene says (the test below, done at building)
         return chain.consecutive
     left, right = chain.joint_links[:, 0], chain.joint_links[:, 1]
@@ -67,6 +71,96 @@ def _layout(chain: Chain) -> bool:
     return bool(right.size and f.size and np.all(np.diff(right) == 1)
                 and np.all((left < 0) | (right == left + 1)) and np.all(np.diff(f) == 1)
                 and f[0] >= 1)
+
+
+def profile_applies(backend: str, method: str, chain: Chain) -> bool:
+    """Whether the profile kernel (:func:`lcpbench.model.profile_kernel.solve_profile_chain`)
+    runs this solve: the default back-end, the globalised scheme, a chain of consecutive
+    joints and free nodes with a wall of any profile whose table of cubic pieces exists
+    (:meth:`lcpbench.problems.walls.WallProfile.pieces`)."""
+    if backend not in (DEFAULT, "auto") or method != "globalised" or not chain.profiled_walls:
+        return False
+    return chain.derived("_profile_layout",
+                         lambda: _consecutive(chain) and profile_args(chain) is not None)
+
+
+def profile_args(chain: Chain) -> tuple | None:
+    """The profile kernel's arguments after the solve kernel's first nine: the rows, ℓ,
+    EI/ℓ², the two walls' tables (empty: flat) and whether there is a channel; None
+    where a wall has no table."""
+    return chain.derived("_profile_args", lambda: _profile_args(chain))
+
+
+_EMPTY_TABLE = (np.zeros(0), np.zeros((4, 0)))
+
+
+def _profile_args(chain: Chain) -> tuple | None:
+    reach = (-float(chain.length), float(chain.length))  # no node is further from the pin
+    tables = []
+    for profile in (chain.upper_profile, chain.lower_profile):
+        table = _EMPTY_TABLE if profile is None else profile.pieces(*reach)
+        if table is None:
+            return None
+        tables.extend(table)
+    base = kernel_args(chain)
+    return (*base[9:13], *tables, bool(chain.channel))
+
+
+def run_profile_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
+                         start: DriverStart | None = None,
+                         settings="default") -> tuple[DriverOutput | None, str]:
+    """The globalised profile driver in the profile kernel: ``(output, "")``, or
+    ``(None, why)`` where a step left the reference's path (the caller then runs the
+    numpy reference, :mod:`lcpbench.model.profile_driver`)."""
+    got, elapsed, name = call_profile_kernel(chain, tol=tol, max_outer=max_outer, start=start,
+                                             settings=settings)
+    code, *rest, upper, lower = got
+    if code in BAIL_REASONS:
+        return None, BAIL_REASONS[code]
+    from dataclasses import replace
+
+    at = replace(chain, upper=upper, lower=lower) if chain.channel else chain
+    return kernel_output(at, code, *rest, elapsed=elapsed, settings=name,
+                         max_outer=max_outer, tol=tol), ""
+
+
+def call_profile_kernel(chain: Chain, *, tol: float, max_outer: int,
+                        start: DriverStart | None, settings) -> tuple[tuple, float, str]:
+    """One call of :func:`lcpbench.model.profile_kernel.solve_profile_chain` on the chain:
+    (its outputs, its wall time in s, the name of the back-end's settings). A warm
+    ``start`` gives the starting shape and, from its last step's net reactions, the
+    lagged reactions."""
+    k = _PROFILE[0] if _PROFILE else _load_profile_kernel()
+    s = get_settings(settings)
+    n = chain.free_nodes.size
+    max_iter = s.max_iter if s.max_iter else 20 * n + 50
+    start_alpha, mu_up, mu_lo = _NO_START, np.zeros(n), np.zeros(n)
+    if start is not None:
+        start_alpha = np.ascontiguousarray(start.alpha, dtype=float)
+        net = None if start.warm is None else start.warm.forces_net
+        if net is not None and np.size(net) == n and np.all(np.isfinite(net)):
+            from .judge import split_reactions
+            from .profile import walls_at
+
+            up, lo = split_reactions(walls_at(chain, start_alpha), net,
+                                     np.asarray(start.warm.u, dtype=float))
+            mu_up, mu_lo = np.array(up, dtype=float), np.array(lo, dtype=float)
+    base = kernel_args(chain)
+    t0 = time.perf_counter()
+    got = k.solve_profile_chain(*base[:9], *profile_args(chain), float(tol), int(max_outer),
+                                start_alpha, mu_up, mu_lo, int(max_iter), float(requested(s)))
+    return got, time.perf_counter() - t0, s.name
+
+
+_PROFILE: list = []  # the profile kernel's module, once loaded
+_NO_START = np.zeros(0)  # (never written)
+
+
+def _load_profile_kernel():
+    from ..numba_cache import held, kernel_module
+
+    held(_PROFILE).append(kernel_module("lcpbench.model.profile_kernel", "solve_profile_chain"))
+    return _PROFILE[0]
 
 
 def solve_kernel():
@@ -85,7 +179,7 @@ def _load_kernel():
 
 
 @functools.lru_cache(maxsize=16)
-def _cold(n: int) -> tuple:
+def cold_start(n: int) -> tuple:
     """The kernel's start arguments of a cold start with ``n`` free nodes: no start α,
     no warm step (zeros), made once per n. Writable (numba types read-only arrays
     apart: another compilation) and never written: the kernel copies them into its
@@ -96,7 +190,7 @@ def _cold(n: int) -> tuple:
 def _warm(start: DriverStart | None, n: int):
     """(start α, warm heights, upper mask, lower mask, flags) for the kernel."""
     if start is None:
-        return _cold(n)
+        return cold_start(n)
     empty_f, empty_b = np.zeros(n), np.zeros(n, bool)
     alpha = np.ascontiguousarray(start.alpha, dtype=float)
     w = start.warm

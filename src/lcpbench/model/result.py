@@ -121,7 +121,9 @@ class ContactResult:
         as R = K g + z from the last step's primal gaps, whichever back-end
         solved it; the back-end's own multipliers are ``multipliers``.
     gaps_lower, forces_lower : the same for the lower wall of a channel (else None).
-    total_force : F = ΣR, the sum of ``forces`` (N).
+    total_force : F = ΣR, the sum of ``forces`` (N): the upper wall's, the paper's
+        load cell (in a channel too).
+    total_force_lower : the lower wall's ΣR in a channel (N), else None.
     outer_iterations : contact steps taken.
     steps : per-step inner statistics.
     converged, reason : whether lcpbench's judge accepts the answer
@@ -191,6 +193,11 @@ class ContactResult:
         if "_derive_from" in self.__dict__:
             _derive(self)
         return dict(self.__dict__)
+
+    @property
+    def total_force_lower(self) -> float | None:
+        """The lower wall's total force ΣR in a channel (N); None with one wall."""
+        return None if self.forces_lower is None else float(np.sum(self.forces_lower))
 
     @property
     def max_indentation(self) -> float:
@@ -314,7 +321,7 @@ class ContactResult:
         if self.forces_lower is not None and self.gaps_lower is not None:
             out["forces_lower"] = self.forces_lower.tolist()
             out["gaps_lower"] = self.gaps_lower.tolist()
-            out["total_force_lower"] = float(self.forces_lower.sum())
+            out["total_force_lower"] = self.total_force_lower
         return out
 
 

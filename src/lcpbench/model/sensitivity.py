@@ -27,8 +27,9 @@ Where a node is at a change of contact set (reaction at most ε_R and gap at mos
 the judge's penetration allowance: touching without force) the derivative is
 one-sided: it is taken with that node free (the side where it leaves the wall), and
 ``one_sided`` lists the node. Actuator scenes with flat walls (one wall or a
-channel, rigid or elastic) are covered; sections, wall profiles and the cantilever
-are refused with a ProblemError.
+channel, rigid or elastic) and the cantilever of Sec. III-G (its load q in N/mm in
+place of θ and w: ``load``) are covered; sections and wall profiles are refused
+with a ProblemError.
 """
 
 from __future__ import annotations
@@ -39,13 +40,17 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import ProblemError
-from ..problems.scenes import ActuatorScene, wall_share
+from ..problems.scenes import ActuatorScene, CantileverScene, wall_share
 from .chain import heights
 from .judge import NODE_SHARE, force_tol
 
 #: the parameters (and their units) a sensitivity is taken with respect to
 PARAMETERS = {"theta_deg": "deg", "height_mm": "mm", "EI": "N mm²", "weight": "N/mm",
-              "length_mm": "mm", "wall_stiffness": "N/mm²"}
+              "length_mm": "mm", "wall_stiffness": "N/mm²", "load": "N/mm"}
+#: the parameters of each scene kind covered
+OF_SCENE = {ActuatorScene: ("theta_deg", "height_mm", "EI", "weight", "length_mm",
+                            "wall_stiffness"),
+            CantileverScene: ("height_mm", "EI", "load", "length_mm", "wall_stiffness")}
 
 
 @dataclass
@@ -83,11 +88,12 @@ class Sensitivities:
 
 def unsupported(scene) -> str | None:
     """Why :func:`sensitivities` does not cover ``scene``, or None."""
-    if isinstance(scene, ActuatorScene) and scene.wall_profile is None:
+    if isinstance(scene, CantileverScene) or (isinstance(scene, ActuatorScene)
+                                              and scene.wall_profile is None):
         return None
     what = "a wall profile" if isinstance(scene, ActuatorScene) else type(scene).__name__
     return ("sensitivities cover actuator scenes with flat walls (one wall or a channel, "
-            f"rigid or elastic); got {what}")
+            f"rigid or elastic) and the cantilever; got {what}")
 
 
 def sensitivities(result, wrt=None) -> Sensitivities:
@@ -102,22 +108,22 @@ def sensitivities(result, wrt=None) -> Sensitivities:
         raise ProblemError("sensitivities need a converged result (result.converged is False: "
                            f"{result.reason})")
     elastic = not math.isinf(scene.wall_stiffness)
-    names = tuple(p for p in PARAMETERS if elastic or p != "wall_stiffness") if wrt is None \
-        else tuple(wrt)
+    own = tuple(p for p in OF_SCENE[type(scene)] if elastic or p != "wall_stiffness")
+    names = own if wrt is None else tuple(wrt)
     for p in names:
-        if p not in PARAMETERS or (p == "wall_stiffness" and not elastic):
-            allowed = ", ".join(q for q in PARAMETERS if elastic or q != "wall_stiffness")
-            raise ProblemError(f"wrt must name parameters among {allowed}; got {p!r}")
+        if p not in own:
+            raise ProblemError(f"wrt must name parameters among {', '.join(own)}; got {p!r}")
+    load = "load" if isinstance(scene, CantileverScene) else "weight"
     need = {p for p in names if p != "length_mm"}
     if "length_mm" in names:  # from the others, by dimensional analysis
-        need |= {"height_mm", "weight"} | ({"wall_stiffness"} if elastic else set())
+        need |= {"height_mm", load} | ({"wall_stiffness"} if elastic else set())
     d = _derivatives(result, scene, need, elastic)
     if "length_mm" in names:
         d["length_mm"] = _by_dimensions(result, scene, d, elastic)
     return _collect(result, scene, names, d)
 
 
-def _derivatives(result, scene: ActuatorScene, names: set, elastic: bool) -> dict:
+def _derivatives(result, scene, names: set, elastic: bool) -> dict:
     """{parameter: (d forces_upper, d forces_lower, d heights)} by the compiled face solve
     (:func:`lcpbench.model.sensitivity_kernel.derivatives`), and the one-sided nodes."""
     from ..numba_cache import kernel_module  # numba at the first sensitivity
@@ -137,15 +143,20 @@ def _derivatives(result, scene: ActuatorScene, names: set, elastic: bool) -> dic
     eps_R = NODE_SHARE * force_tol(result.tol) * F0
     # the kernel's output rows of each parameter (its constants, not a copy of them)
     rows = {"theta_deg": kern.THETA, "height_mm": kern.HEIGHT, "EI": kern.EI_,
-            "weight": kern.WEIGHT, "wall_stiffness": kern.WALL}
+            "weight": kern.WEIGHT, "load": kern.WEIGHT, "wall_stiffness": kern.WALL}
     want = np.zeros(5, bool)
     for p in names:
         want[rows[p]] = True
-    # φ* = −θ/N per joint, k = EI/a, the loads ∝ w: their derivatives
-    drest = rest / scene.theta if scene.theta else np.full(rest.size, -math.pi / 180 / n)
+    # φ* = −θ/N per joint, k = EI/a, the loads ∝ w (the cantilever's: ∝ q): their
+    # derivatives (the cantilever has no rest curvature)
+    theta = getattr(scene, "theta", None)
+    drest = np.zeros(rest.size) if theta is None else (
+        rest / theta if theta else np.full(rest.size, -math.pi / 180 / n))
     dk = k / scene.EI
-    unit = nodal_load / scene.weight if scene.weight else \
-        np.ascontiguousarray(replace(scene, weight=1.0).chain().nodal_load, dtype=float)
+    field_ = "load" if isinstance(scene, CantileverScene) else "weight"
+    w = getattr(scene, field_)
+    unit = nodal_load / w if w else np.ascontiguousarray(
+        replace(scene, **{field_: 1.0}).chain().nodal_load, dtype=float)
     code, du, dfu, dfl = kern.derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu,
                                           cl, fu, fl, float(eps_R), drest, dk, unit,
                                           float(scene.wall_stiffness), want)
@@ -163,13 +174,15 @@ def _derivatives(result, scene: ActuatorScene, names: set, elastic: bool) -> dic
     return out
 
 
-def _by_dimensions(result, scene: ActuatorScene, d: dict, elastic: bool):
-    """∂/∂ℓ from dimensional analysis: ℓ ∂F/∂ℓ = −2F − h F_h + 3w F_w (+ 4k F_k)."""
-    L, h, w = scene.length, scene.height, scene.weight
+def _by_dimensions(result, scene, d: dict, elastic: bool):
+    """∂/∂ℓ from dimensional analysis: ℓ ∂F/∂ℓ = −2F − h F_h + 3w F_w (+ 4k F_k); the
+    cantilever's load q (N/mm) scales as w."""
+    load = "load" if isinstance(scene, CantileverScene) else "weight"
+    L, h, w = scene.length, scene.height, getattr(scene, load)
     fu = np.asarray(result.forces, dtype=float)
     fl = np.zeros_like(fu) if result.forces_lower is None else np.asarray(result.forces_lower)
     u = d["_heights"]
-    parts = [("height_mm", -h), ("weight", 3 * w)] + ([("wall_stiffness",
+    parts = [("height_mm", -h), (load, 3 * w)] + ([("wall_stiffness",
                                                          4 * scene.wall_stiffness)]
                                                        if elastic else [])
     dfu, dfl, du = -2.0 * fu, -2.0 * fl, np.asarray(u, dtype=float).copy()
@@ -192,5 +205,6 @@ def _collect(result, scene, names, d) -> Sensitivities:
         total[p] = float(np.sum(dfu))
         forces[p], lower[p], heights[p] = dfu, dfl, du
         peak_d[p] = float((dfu[peak] + dfl[peak]) / share[peak]) if peak >= 0 else 0.0
-    return Sensitivities(names, total, forces, lower if scene.channel else None, heights, peak_d,
+    channel = getattr(scene, "channel", False)
+    return Sensitivities(names, total, forces, lower if channel else None, heights, peak_d,
                          np.asarray(d["_one_sided"], dtype=np.int64))

@@ -25,7 +25,7 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 
 from ..errors import ProblemError
-from .checks import check_flag, check_number
+from .checks import check_flag, check_number, describe
 from .friction import (
     check_end,
     check_friction,
@@ -333,7 +333,7 @@ class ActuatorScene:
             value = getattr(self, name)
             if value is not None and not isinstance(value, WallProfile):
                 raise ProblemError(f"{name} must be a WallProfile (lcpbench.problems.walls) "
-                                   f"or None, got {type(value).__name__}")
+                                   f"or None, got {describe(value)}")
         if self.lower_profile is not None and not (self.channel and self.wall_profile):
             raise ProblemError("lower_profile needs channel=True and a wall_profile")
         if self.wall_profile is not None and math.isfinite(self.wall_stiffness):

@@ -280,7 +280,21 @@ class SectionedScene:
 
     # -- the model's view -------------------------------------------------------
     def chain(self) -> Chain:
-        """The Hencky bar chain of the whole row (see the module notes)."""
+        """The Hencky bar chain of the whole row (see the module notes).
+
+        Built once per scene and kept, as :meth:`ActuatorScene.chain`: the scene and
+        its Chain are immutable, so a second solve of the same scene gets the same
+        object (and what the kernels derived from it)."""
+        cached = self.__dict__.get("_chain")
+        if cached is None:
+            cached = self.__dict__["_chain"] = self._build_chain()  # (frozen: not setattr)
+        return cached
+
+    def __getstate__(self) -> dict:
+        """Pickled without the kept Chain (rebuilt on demand)."""
+        return {k: v for k, v in self.__dict__.items() if k != "_chain"}
+
+    def _build_chain(self) -> Chain:
         n, total = self._size()
         a = total / n
         counts = self.section_links()
@@ -442,9 +456,9 @@ def check_scene(scene) -> object:
     Raises
     ------
     ProblemError
-        ``"scene must be an ActuatorScene, SectionedScene or CantileverScene, got dict"``
-        for None, a dict, a string, a class instead of an instance, or
-        anything else.
+        ``"scene must be an ActuatorScene, SectionedScene or CantileverScene, got
+        {'theta': 150}"`` (the value as written) for None, a dict, a string, a class
+        instead of an instance, or anything else.
     """
     if isinstance(scene, SCENE_KINDS):
         if getattr(scene, "frictional", False):  # (issue 39: friction, ends, a pull)
@@ -452,7 +466,7 @@ def check_scene(scene) -> object:
                                "solve it along a loading path, lcpbench.solve_path(scene, "
                                "states) (lcpbench.solve is the frictionless model)")
         return scene
-    kind = "None" if scene is None else type(scene).__name__
+    kind = describe(scene)
     if isinstance(scene, type):
         kind = f"the class {scene.__name__} (an instance is needed)"
     raise ProblemError(f"scene must be an ActuatorScene, SectionedScene or CantileverScene, "

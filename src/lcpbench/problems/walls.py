@@ -28,6 +28,8 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ProblemError
+from .checks import describe
+from .profile_table import exact_pieces, hermite_pieces, linear_pieces
 
 KINDS = ("linear", "pchip", "cubic")
 #: points at which a function profile is sampled to check it against the pin line
@@ -56,8 +58,7 @@ def _checked(fun: Callable, what: str, name: str) -> Callable:
             arr = np.asarray(None)
         if arr.dtype.kind not in "biuf":
             raise ProblemError(f"wall_profile {name!r}: the {what} function must return "
-                               f"numbers (mm, one per x), it returned "
-                               f"{type(value).__name__} {repr(value)[:60]}")
+                               f"numbers (mm, one per x), it returned {describe(value)}")
         try:
             np.broadcast_shapes(arr.shape, np.shape(t))
         except ValueError:
@@ -78,11 +79,14 @@ class WallProfile:
     """
 
     def __init__(self, height: Callable, slope: Callable, curvature: Callable, *,
-                 x_range: tuple[float, float], name: str, key: tuple):
+                 x_range: tuple[float, float], name: str, key: tuple,
+                 pieces: tuple[np.ndarray, np.ndarray] | None = None):
         self._h, self._dh, self._d2h = height, slope, curvature
         self.x_range = (float(x_range[0]), float(x_range[1]))
         self.name = name
         self._key = key
+        self._pieces = pieces  # a table's own pieces (exact); else tabulated on demand
+        self._tabulated: dict = {}
 
     # -- construction ---------------------------------------------------------
     @classmethod
@@ -130,7 +134,8 @@ class WallProfile:
             def d2h(t):
                 return np.zeros_like(np.asarray(t, dtype=float))
 
-            return cls(h, dh, d2h, x_range=(lo, hi), name=name, key=key)
+            return cls(h, dh, d2h, x_range=(lo, hi), name=name, key=key,
+                       pieces=linear_pieces(xs, ys))
         from scipy.interpolate import CubicSpline, PchipInterpolator
 
         f = PchipInterpolator(xs, ys) if kind == "pchip" else \
@@ -144,7 +149,7 @@ class WallProfile:
 
         return cls(lambda t: inside(f, t, f), lambda t: inside(f1, t, np.zeros_like),
                    lambda t: inside(f2, t, np.zeros_like), x_range=(lo, hi), name=name,
-                   key=key)
+                   key=key, pieces=exact_pieces(f.x, f.c))
 
     @classmethod
     def from_function(cls, height: Callable, slope: Callable | None = None,
@@ -160,7 +165,7 @@ class WallProfile:
         """
         if not callable(height):
             raise ProblemError(f"wall_profile: height must be a function of x, got "
-                               f"{type(height).__name__}")
+                               f"{describe(height)}")
         lo, hi = float(x_range[0]), float(x_range[1])
         if not lo < hi:
             raise ProblemError(f"wall_profile: x_range must be (low, high) with low < high, "
@@ -204,9 +209,25 @@ class WallProfile:
 
     def mirrored(self) -> WallProfile:
         """The wall y = −h(x) (the lower wall of a symmetric channel)."""
+        own = None if self._pieces is None else (self._pieces[0], -self._pieces[1])
         return WallProfile(lambda t: -self._h(t), lambda t: -self._dh(t),
                            lambda t: -self._d2h(t), x_range=self.x_range,
-                           name=f"mirror of {self.name}", key=("mirror", self._key))
+                           name=f"mirror of {self.name}", key=("mirror", self._key),
+                           pieces=own)
+
+    def pieces(self, x_low: float, x_high: float) -> tuple[np.ndarray, np.ndarray] | None:
+        """The wall as cubic pieces (breakpoints, coefficients) over the x range
+        [x_low, x_high] (mm) that a chain can reach, the form the compiled kernels
+        evaluate (:mod:`lcpbench.problems.profile_table`): a table's own pieces, or a
+        function's tabulated once per range; None where a function needs more
+        pieces than :data:`~lcpbench.problems.profile_table.MAX_PIECES`."""
+        if self._pieces is not None:
+            return self._pieces
+        lo, hi = max(self.x_range[0], float(x_low)), min(self.x_range[1], float(x_high))
+        key = (lo, hi)
+        if key not in self._tabulated:
+            self._tabulated[key] = hermite_pieces(self, self.slope, lo, hi)
+        return self._tabulated[key]
 
     # -- evaluation -----------------------------------------------------------
     def __call__(self, x):

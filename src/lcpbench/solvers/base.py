@@ -138,21 +138,31 @@ class Settings:
     ``eps`` is a tolerance on the residuals of the (nondimensionalised)
     problem: primal and dual feasibility and complementarity, absolute and
     relative alike (each back-end's own ``eps_abs``/``tol``/``feastol``...).
-    ``None`` means "the solver's own defaults". It is not the driver's
-    ``tol`` (rad), which bounds the change of the link angles α.
+    ``None`` means "the solver's own defaults".
+
+    ``driver_tol`` is the driver's ``tol`` (rad) that goes with the profile:
+    the bound on the change of the link angles α between contact steps
+    (eq. 32). A profile is one accuracy for the whole solve, so ``solve``,
+    ``sweep`` and ``select`` run a profile at this tolerance unless a ``tol``
+    is given. Back-ends ignore it.
     """
 
     name: str
     eps: float | None
     max_iter: int | None = None
     time_limit: float | None = None  # seconds, where the solver supports it
+    driver_tol: float = 1e-3  # rad; the paper's 1e-3 unless the profile says otherwise
 
 
+#: The settings profiles: one table of the back-end ε and the driver tol (rad).
+#: "default" is each back-end's own defaults at the paper's 1e-3 rad; "low", "mid"
+#: and "high" ask for a relative force accuracy of 1e-3, 1e-6 and 1e-9
+#: (:func:`lcpbench.accuracy.accuracy_settings`, docs/accuracy.md).
 PROFILES: dict[str, Settings] = {
-    "default": Settings("default", None),
-    "low": Settings("low", 1e-3),
-    "mid": Settings("mid", 1e-6),
-    "high": Settings("high", 1e-9),
+    "default": Settings("default", None, driver_tol=1e-3),
+    "low": Settings("low", 1e-3, driver_tol=1e-3),
+    "mid": Settings("mid", 1e-6, driver_tol=1e-6),
+    "high": Settings("high", 1e-9, driver_tol=1e-9),
 }
 
 

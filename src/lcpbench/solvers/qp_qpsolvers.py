@@ -113,6 +113,20 @@ KNOWN_SOLVERS: dict[str, str] = {
 #: pip distribution names where they differ from the module name.
 PIP_NAMES = {"proxqp": "proxsuite", "qpswift": "qpSWIFT", "jaxopt_osqp": "jaxopt",
              "sip": "sip-python", "hpipm": "hpipm_python (build from source)"}
+#: the solvers that lcpbench's ``qpsolvers`` extra installs (pyproject.toml)
+EXTRA_SOLVERS = ("daqp", "highs", "piqp", "quadprog")
+#: solvers that need a commercial licence besides their package
+COMMERCIAL = {"copt": "COPT", "gurobi": "Gurobi", "mosek": "MOSEK"}
+
+
+def install_hint(solver: str) -> str:
+    """How to install the qpsolvers solver ``solver``: the extra where it installs it,
+    else the solver's own package (and its licence where it needs a commercial one)."""
+    if solver in EXTRA_SOLVERS:
+        return "pip install 'lcpbench[qpsolvers]'"
+    licence = f", and a {COMMERCIAL[solver]} licence" if solver in COMMERCIAL else ""
+    return (f"pip install {PIP_NAMES.get(solver, KNOWN_SOLVERS[solver])}{licence} "
+            "(lcpbench[qpsolvers] does not include it)")
 
 #: solver -> (tolerance keywords, iteration-limit keyword or None).
 TOLERANCE_KEYS: dict[str, tuple[tuple[str, ...], str | None]] = {
@@ -274,8 +288,7 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None, *,
     if solver not in qpsolvers.available_solvers:
         return QPResult.failure(
             n, Status.FAILED, f"qpsolvers solver {solver!r} unavailable (module "
-            f"{KNOWN_SOLVERS[solver]!r} not importable); pip install "
-            f"{PIP_NAMES.get(solver, KNOWN_SOLVERS[solver])}")
+            f"{KNOWN_SOLVERS[solver]!r} not importable); {install_hint(solver)}")
 
     kwargs = {**translate(settings, solver), **options}
     t0 = time.perf_counter()

@@ -47,6 +47,8 @@ class Backend:
     module : the lcpbench module with ``solve_lcp`` / ``solve_qp``.
     requires : top-level modules that must be importable.
     extra : the pip extra of lcpbench that installs it (None: built in).
+    hint : how to install it where the extra alone does not (a separate package, a
+        commercial licence); None: from ``extra``.
     distribution : the distribution whose version is reported.
     options : keyword arguments for the module's solve function.
     check : "module:function" returning availability, instead of ``requires``.
@@ -65,6 +67,7 @@ class Backend:
     options: dict = field(default_factory=dict, hash=False, compare=False)
     check: str | None = None
     fallback: str | None = None  # back-end to run when this one cannot certify a step
+    hint: str | None = None
 
     def __post_init__(self):
         if self.form not in FORMS:
@@ -94,6 +97,8 @@ class Backend:
         return dist_version(dist)
 
     def install_hint(self) -> str:
+        if self.hint is not None:
+            return self.hint
         if self.extra is None:
             return "built in"
         if self.extra.startswith("apt:"):
@@ -207,7 +212,7 @@ _QPSOLVERS_KIND = {
 
 def _qpsolvers_backends() -> list[Backend]:
     try:
-        from .qp_qpsolvers import KNOWN_SOLVERS  # pure Python: a table, no native imports
+        from .qp_qpsolvers import KNOWN_SOLVERS, install_hint  # pure Python: no native imports
     except ImportError:  # pragma: no cover - the adapter ships with lcpbench
         return []
 
@@ -219,7 +224,8 @@ def _qpsolvers_backends() -> list[Backend]:
         out.append(Backend(
             f"qpsolvers-{solver}", "qp", storage, True, method, "lcpbench.solvers.qp_qpsolvers",
             f"{solver} through qpsolvers", requires=("qpsolvers", module.split(".")[0]),
-            extra="qpsolvers", distribution="qpsolvers", options={"solver": solver}))
+            extra="qpsolvers", distribution="qpsolvers", options={"solver": solver},
+            hint=install_hint(solver)))
     return out
 
 

@@ -24,15 +24,16 @@ from __future__ import annotations
 from collections.abc import Iterable
 from operator import attrgetter
 
-from ..api import PAPER_TOL, check_tol, solve
+from ..api import check_tol, solve_internal
 from ..errors import ProblemError
 from ..escalations import Context, escalate
 from ..model.result import ContactResult
 from ..model.step_solver import make_step_solver
 from ..plan import make_plan
+from ..problems.checks import describe
 from ..problems.scenes import ActuatorScene
 from ..problems.sections import check_scene
-from ..solvers.registry import DEFAULT
+from ..solvers.registry import DEFAULT, get_settings
 from .batch_compiled import AUTO_WHY, solve_line, takes
 from .batch_line import run_line
 from .continuation import PLANE_FIELDS, PREDICTORS, solve_sequence
@@ -62,7 +63,8 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
                **solve_kw) -> list[ContactResult]:
     """Solve every scene; one :class:`ContactResult` per scene, in the caller's order.
 
-    ``tol``, ``solver`` and ``solve_kw`` are :func:`lcpbench.solve`'s.
+    ``tol``, ``solver`` and ``solve_kw`` are :func:`lcpbench.solve`'s (and
+    :func:`lcpbench.api.solve_internal`'s ``engine`` and ``scaled``).
     ``continuation``: start each scene from its solved neighbours (the
     globalised or Newton driver; a failed warm start is redone cold, so the answer
     is the cold one's to the tolerance); ``predictor`` as in
@@ -70,22 +72,23 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
     False: every scene cold, in the given order.
     """
     if isinstance(scenes, (str, bytes)) or not isinstance(scenes, Iterable):
-        raise ProblemError(f"scenes must be a sequence of scenes, got {type(scenes).__name__}")
+        raise ProblemError(f"scenes must be a sequence of scenes, got {describe(scenes)}")
     scenes = list(scenes)
     if not isinstance(continuation, bool):
         raise ProblemError(f"continuation must be True or False, got {continuation!r}")
     kw = dict(solve_kw, tol=tol, solver=solver)
     if not continuation:
-        return [solve(s, **kw) for s in scenes]
+        return [solve_internal(s, **kw) for s in scenes]
     out: list[ContactResult | None] = [None] * len(scenes)
     fast = takes(solver, dict(solve_kw, tol=tol)) and predictor in PREDICTORS
     if fast:  # the checks of solve(), once for the batch
         for s in scenes:
             if type(s) is not ActuatorScene:  # (an actuator scene needs no more check)
                 check_scene(s)
-        fast_kw = dict(tol=PAPER_TOL if tol is None else check_tol(tol),
-                       max_outer=solve_kw.get("max_outer", 200),
-                       settings=solve_kw.get("settings", "default"))
+        settings = solve_kw.get("settings", "default")
+        fast_kw = dict(tol=get_settings(settings).driver_tol if tol is None  # as solve()
+                       else check_tol(tol), max_outer=solve_kw.get("max_outer", 200),
+                       settings=settings)
         make_step_solver(DEFAULT, fast_kw["settings"], True)  # validates the settings
         m = fast_kw["max_outer"]
         if isinstance(m, bool) or not (isinstance(m, int) and m >= 1):

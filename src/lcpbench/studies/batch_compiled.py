@@ -24,7 +24,7 @@ from ..model import large_n
 from ..model.compiled import drive, heavy, reference
 from ..model.finish import finish
 from ..model.judge_compiled import chain_args
-from ..model.kernel_call import applies, kernel_args, run_compiled
+from ..model.kernel_call import applies, kernel_args, profile_applies, run_compiled
 from ..model.outer import DriverStart
 from ..model.result import ContactResult
 from ..model.step_solver import make_step_solver
@@ -63,6 +63,7 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
     chain = scene.chain()
     # not from LARGE_N links: those run in increments (model.large_driver, via drive)
     kernel = applies(DEFAULT, "globalised", chain) and not large_n.applies(chain)
+    profiled = not kernel and profile_applies(DEFAULT, "globalised", chain)  # (its kernel)
     if kernel and not const:
         full = kernel_args(chain)
         const["arrays"] = full[2:4] + (full[7],)
@@ -74,7 +75,8 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
         # large N, a layout the kernel does not take, or a heavy chain (SQP steps in the
         # angles, first or as the rescue): solve()'s choice, in model.compiled.drive
         out, used = drive(chain, make_step_solver(DEFAULT, settings, True), backend=DEFAULT,
-                          settings=settings, engine="auto" if kernel else "numpy", tol=tol,
+                          settings=settings, engine="auto" if kernel or profiled else "numpy",
+                          tol=tol,
                           max_outer=max_outer, method="globalised", start=start,
                           args=args)
     if out is None:
@@ -87,7 +89,7 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
                                   start=start, settings=settings)
     return finish(scene, chain, out, solver=DEFAULT, method="globalised", tol=tol,
                   elapsed=time.perf_counter() - t0, settings=settings, engine=used,
-                  compiled_judge=kernel, why=AUTO_WHY,
+                  compiled_judge=kernel or profiled, why=AUTO_WHY,
                   judge_args=chain_args(chain, args) if kernel else None, route=BATCH_SCENE)
 
 

@@ -22,7 +22,7 @@ from dataclasses import fields, replace
 
 import numpy as np
 
-from ..api import solve
+from ..api import solve_internal
 from ..errors import ProblemError
 from ..model.result import ContactResult
 from ..problems.scenes import ActuatorScene
@@ -260,7 +260,8 @@ def solve_sequence(scenes: Sequence[ActuatorScene], *, predictor: str = "adaptiv
     for k, scene in enumerate(scenes):
         got = solved.predict(scene)
         start = None if got is None else replace(got[1], alpha=got[0])
-        res = warm_or_cold(lambda s, sc=scene: solve(sc, start=s, **solve_kw), start, predictor)
+        res = warm_or_cold(lambda s, sc=scene: solve_internal(sc, start=s, **solve_kw), start,
+                           predictor)
         solved.add(scene, res)
         out.append(res)
         if progress is not None:

@@ -100,12 +100,11 @@ def register(subparsers) -> None:
 
     k = cmds.add_parser("compare", help="model against photograph by ICP (Fig. 23)",
                         description="Solve the constrained model (N = 200) for the "
-                                    "photograph's wall height and theta, register it to the "
+                                    "photograph's wall faces and theta, register it to the "
                                     "photographed middle section by ICP, report point-pair "
                                     "distances and the predicted contact force.")
     k.add_argument("image", metavar="IMAGE")
-    k.add_argument("--height", type=float, required=True, metavar="MM",
-                   help="distance from the pin line to each wall's face, mm")
+    _add_wall_options(k, required=True)
     k.add_argument("--theta", type=float, metavar="DEG", help="unconstrained bend angle")
     k.add_argument("--pressure", type=float, metavar="P",
                    help="pressure instead of --theta (with --fit or --actuator)")
@@ -123,10 +122,10 @@ def register(subparsers) -> None:
 
     r = cmds.add_parser("render", help="a photograph-like test image with its ground truth",
                         description="Draw the fixture from a known theta (unconstrained), "
-                                    "or the model's constrained shape with --height.")
+                                    "or the model's constrained shape with --wall-face "
+                                    "(or --height).")
     r.add_argument("--theta", type=float, required=True, metavar="DEG")
-    r.add_argument("--height", type=float, metavar="MM",
-                   help="draw walls at +-h and the model's constrained shape (solved at h - r)")
+    _add_wall_options(r, required=False)
     r.add_argument("--length", type=float, default=30.0, metavar="MM")
     r.add_argument("--sections", type=int, default=3)
     r.add_argument("--diameter", type=float, default=3.0, metavar="MM")
@@ -243,6 +242,24 @@ def cmd_calibrate(args) -> int:
     return 0
 
 
+def _add_wall_options(parser, *, required: bool) -> None:
+    """``--wall-face MM`` or ``--height MM``: where the walls are, one of the two."""
+    g = parser.add_mutually_exclusive_group(required=required)
+    g.add_argument("--wall-face", type=float, metavar="MM",
+                   help="distance from the pin line to each wall's face, mm (the "
+                        "photograph's walls)")
+    g.add_argument("--height", type=float, metavar="MM",
+                   help="the centre-line height h, as in `lcpbench solve --height`: the "
+                        "wall face minus the tube radius, mm")
+
+
+def _wall_face(args) -> float | None:
+    """The wall faces' distance from the pin line (mm): --wall-face, or --height + r."""
+    if args.wall_face is not None:
+        return args.wall_face
+    return None if args.height is None else args.height + args.diameter / 2
+
+
 def cmd_compare(args) -> int:
     from .compare import compare, theta_from_pressure
 
@@ -253,7 +270,7 @@ def cmd_compare(args) -> int:
     theta = args.theta if args.theta is not None else \
         theta_from_pressure(args.pressure, args.fit, args.actuator)
     meas = _measure(args, args.image)
-    cmp = compare(meas, theta, args.height, diameter_mm=args.diameter, offset=args.offset,
+    cmp = compare(meas, theta, _wall_face(args), diameter_mm=args.diameter, offset=args.offset,
                   channel=not args.one_wall, links=args.links)
     if args.plot:
         from .plots import plot_comparison
@@ -263,7 +280,8 @@ def cmd_compare(args) -> int:
     if args.json:
         _dump(d, None)
     else:
-        print(f"model        theta {theta:.3f} deg, h {args.height:g} mm, N = {args.links}, "
+        print(f"model        theta {theta:.3f} deg, wall faces at +-{d['wall_face_mm']:g} mm "
+              f"(centre-line height h {d['height_mm']:g} mm), N = {args.links}, "
               f"{'converged' if d['model_converged'] else 'NOT converged'}")
         print(f"distance     mean {d['mean_distance_mm']:.4f} mm (sd {d['sd_distance_mm']:.4f}), "
               f"max {d['max_distance_mm']:.4f} mm")
@@ -287,18 +305,20 @@ def cmd_render(args) -> int:
         from .render import tube_colour
 
         kw["tube_bgr"] = tube_colour(args.tube_hue)
-    if args.height is None:
+    face = _wall_face(args)
+    if face is None:
         img, truth = render_unconstrained(args.theta, length=args.length,
                                           sections=args.sections, **kw)
     else:
         from .compare import model_centerline
 
-        pts, res = model_centerline(args.theta, args.height, diameter_mm=args.diameter,
+        pts, res = model_centerline(args.theta, face, diameter_mm=args.diameter,
                                     length=args.length)
-        img, truth = render_constrained(pts[:, 0], pts[:, 1], wall_height=args.height,
+        img, truth = render_constrained(pts[:, 0], pts[:, 1], wall_height=face,
                                         length=args.length, sections=args.sections, **kw)
         truth.update(theta_deg=args.theta, contact_force_n=res.total_force,
-                     model="lcpbench.solve, N = 200, walls at height - r (channel)")
+                     model="lcpbench.solve, N = 200, walls at the centre-line height "
+                           "h = wall face - r (channel)")
     if not cv2.imwrite(args.out, img):
         raise VisionError(f"{args.out}: cannot write an image there (give a .png or .jpg path)")
     base = os.path.splitext(args.out)[0]

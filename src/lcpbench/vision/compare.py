@@ -31,13 +31,15 @@ class Comparison:
     registration: Registration
     result: object
     theta_deg: float
-    height_mm: float
+    wall_face_mm: float
     radius_mm: float = 1.5
 
     def to_dict(self) -> dict:
         d, pc = self.distances_mm, self.percent
         return {
-            "theta_deg": self.theta_deg, "height_mm": self.height_mm,
+            "theta_deg": self.theta_deg, "wall_face_mm": self.wall_face_mm,
+            # the model's centre-line wall height h, as in ``lcpbench solve --height``
+            "height_mm": float(self.result.scene.height),
             "links": len(self.model_mm) - 1,
             "mean_distance_mm": float(d.mean()), "sd_distance_mm": float(d.std()),
             "max_distance_mm": float(d.max()), "mean_percent": float(pc.mean()),
@@ -51,25 +53,27 @@ class Comparison:
         }
 
 
-def model_centerline(theta_deg: float, height: float, *, diameter_mm: float = 3.0,
+def model_centerline(theta_deg: float, wall_face: float, *, diameter_mm: float = 3.0,
                      offset: str = "wall", channel: bool = True, links: int = COMPARE_LINKS,
                      **scene_kw):
     """The model's constrained centerline of the tube (mm) and its ContactResult.
 
-    ``height`` is the distance from the pin line to the wall's face. The model is a
-    line; the tube's centerline stays a radius r from the wall. ``offset="wall"``
-    solves with the walls at height − r (exact for a flat wall: the tube touches
-    where its centerline is r away); ``offset="curve"`` solves at ``height`` and
-    offsets the model's centerline by r, as the paper did (Sec. IV-D-8).
+    ``wall_face`` is the distance from the pin line to the wall's face (mm). The
+    model is a line; the tube's centerline stays a radius r from the wall.
+    ``offset="wall"`` solves with the walls at the centre-line height
+    h = wall_face − r (exact for a flat wall: the tube touches where its centerline
+    is r away); ``offset="curve"`` solves at h = ``wall_face`` and offsets the
+    model's centerline by r, as the paper did (Sec. IV-D-8).
     """
     from ..api import solve
 
     r = diameter_mm / 2
     if offset not in ("wall", "curve"):
         raise VisionError(f"offset must be 'wall' or 'curve', got {offset!r}")
-    h = height - r if offset == "wall" else height
+    h = wall_face - r if offset == "wall" else wall_face
     if h <= 0:
-        raise VisionError(f"--height must exceed the tube radius {r:g} mm, got {height:g}")
+        raise VisionError(f"--wall-face must exceed the tube radius {r:g} mm, got "
+                          f"{wall_face:g}")
     res = solve(ActuatorScene(theta=theta_deg, height=h, links=links, channel=channel,
                               **scene_kw))
     pts = np.column_stack([res.x, res.y])
@@ -78,7 +82,7 @@ def model_centerline(theta_deg: float, height: float, *, diameter_mm: float = 3.
     return pts, res
 
 
-def compare(meas: Measurement, theta_deg: float, height: float, *, diameter_mm: float = 3.0,
+def compare(meas: Measurement, theta_deg: float, wall_face: float, *, diameter_mm: float = 3.0,
             offset: str = "wall", channel: bool = True, links: int = COMPARE_LINKS,
             **scene_kw) -> Comparison:
     """Register the model's constrained middle section to the photographed one.
@@ -90,7 +94,7 @@ def compare(meas: Measurement, theta_deg: float, height: float, *, diameter_mm: 
     the moved photographed curve is its point-pair distance; eq. (43) divides it
     by the model's span in x.
     """
-    model, res = model_centerline(theta_deg, height, diameter_mm=diameter_mm, offset=offset,
+    model, res = model_centerline(theta_deg, wall_face, diameter_mm=diameter_mm, offset=offset,
                                   channel=channel, links=links, **scene_kw)
     c = meas.centerline_mm
     k = len(meas.sections)
@@ -120,7 +124,7 @@ def compare(meas: Measurement, theta_deg: float, height: float, *, diameter_mm: 
     span = float(model[:, 0].max() - model[:, 0].min())
     return Comparison(reg.distances, 100 * reg.distances / span, span,
                       float(res.total_force), model, reg.moved, reg, res, float(theta_deg),
-                      float(height), diameter_mm / 2)
+                      float(wall_face), diameter_mm / 2)
 
 
 def theta_from_pressure(pressure: float, fit: str | None, actuator: str = "1") -> float:

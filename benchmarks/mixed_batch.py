@@ -1,0 +1,106 @@
+"""Issue 35, target 3: ``solve_many`` on 100 mixed scenes at tol 1e-3.
+
+The scenes (seeded, N = 140, θ uniform in 90°–180°, h in 2–5 mm): 25 with elastic walls
+(k log-uniform in 0.1–1e4 N/mm²), 25 against a wall profile (the stenosis of
+``scene_kinds.py`` or a PCHIP bump, h 3 mm), 25 rows of two sections (θ, −θ), 25 in a
+channel. Beside them, for scale, 100 scenes of the paper's grid (one flat wall).
+Each round solves both batches once, in rotating order (``perf.interleaved``), fresh
+scene objects every round (nothing a scene derives once is reused). Reports scenes/s
+(median over rounds) and how many were certified. Writes ``results/mixed-batch.md``
+(``--out``; not overwritten unless ``--force``).
+
+    python benchmarks/mixed_batch.py --force
+"""
+
+# ruff: noqa: E402  (BLAS is pinned to one thread before numpy is imported)
+from __future__ import annotations
+
+import os
+
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_v] = "1"
+
+import argparse
+import collections
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from perf import interleaved, wall
+from scene_kinds import stenosis
+
+import lcpbench
+from lcpbench import ActuatorScene, SectionedScene
+from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
+from lcpbench.problems.walls import WallProfile
+
+ROOT = Path(__file__).resolve().parents[1]
+KINDS = ("elastic walls", "wall profile", "two sections", "channel")
+
+
+def mixed(seed: int) -> list:
+    rng = np.random.default_rng(seed)
+    walls = (stenosis(), WallProfile.from_table([0, 10, 14, 18, 30], [3.0, 3.0, 2.4, 3.0, 3.0]))
+    out = []
+    for i in range(100):
+        th, h = float(rng.uniform(90, 180)), float(rng.uniform(2, 5))
+        kind = KINDS[i % 4]
+        if kind == "elastic walls":
+            out.append(ActuatorScene(theta=th, height=h, links=140,
+                                     wall_stiffness=float(10 ** rng.uniform(-1, 4))))
+        elif kind == "wall profile":
+            out.append(ActuatorScene(theta=th, height=3.0, links=140,
+                                     wall_profile=walls[(i // 4) % 2]))
+        elif kind == "two sections":
+            out.append(SectionedScene(sections=[(th, 15.0), (-th, 15.0)], height=h, links=140))
+        else:
+            out.append(ActuatorScene(theta=th, height=h, links=140, channel=True))
+    return out
+
+
+def paper_grid() -> list:
+    return [ActuatorScene(theta=float(t), height=float(h), links=140)
+            for t in np.linspace(90, 180, 10) for h in np.linspace(2, 5, 10)]
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--rounds", type=int, default=7)
+    p.add_argument("--seed", type=int, default=7)
+    p.add_argument("--out", type=Path, default=ROOT / "results" / "mixed-batch.md")
+    p.add_argument("--force", action="store_true", help="overwrite a committed result")
+    a = p.parse_args(argv)
+    refuse_overwrite([a.out], a.force)
+    start = timing_start()
+    calls = {"100 mixed scenes": wall(lambda: lcpbench.solve_many(mixed(a.seed), tol=1e-3)),
+             "100 paper-grid scenes": wall(lambda: lcpbench.solve_many(paper_grid(), tol=1e-3))}
+    got = interleaved(calls, a.rounds)
+    lines = ["| batch | median (s) | scenes/s | certified |", "|---|---:|---:|---:|"]
+    for name, g in got.items():
+        med = float(np.median(g["times"]))
+        ok = sum(r.converged for r in g["payload"])
+        lines.append(f"| {name} | {med:.3f} | {100 / med:.0f} | {ok} of 100 |")
+    res = got["100 mixed scenes"]["payload"]
+    by_kind = collections.defaultdict(list)
+    for i, r in enumerate(res):
+        by_kind[KINDS[i % 4]].append(r)
+    kinds = ["| kind | certified | routes (count) |", "|---|---:|---|"]
+    for kind, rs in by_kind.items():
+        routes = collections.Counter(f"{r.route} / {r.engine.split(' (')[0]}" for r in rs)
+        kinds.append(f"| {kind} | {sum(r.converged for r in rs)} of {len(rs)} | "
+                     + ", ".join(f"{k} ({v})" for k, v in routes.most_common()) + " |")
+    when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    text = "\n".join([
+        "# solve_many on mixed scenes (issue 35, target 3)", "",
+        f"Measured {when}; {timing_note(start)} Command: `python benchmarks/mixed_batch.py "
+        f"--rounds {a.rounds} --seed {a.seed} --force`. Target: 100 mixed scenes (elastic and "
+        "profiled walls, sections, channels) at ≥ 5,000 scenes/s, tol 1e-3.", "",
+        *lines, "", "The mixed batch by kind:", "", *kinds, ""])
+    a.out.write_text(text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

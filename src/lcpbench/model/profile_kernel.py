@@ -1,0 +1,252 @@
+"""Walls of any profile in the compiled solve: the lagged-slope outer loop in numba.
+
+The scheme of :mod:`lcpbench.model.profile` (each contact step the paper's
+banded box QP, its bounds the wall heights h(x_k) at the nodes' current x, the
+slope of the wall entering the linear term through the last step's reactions
+μ̄, ν̄ as the nodal load s = J_xᵀ(μ̄ h'(x) − ν̄ l'(x))), and the driver of
+:mod:`lcpbench.model.profile_driver`: an Armijo search on the merit
+
+    P(u) = E(u) − Σ μ̄_k h(x_k(u)) + Σ ν̄_k l(x_k(u)) + σ Σ (penetration of the walls)
+
+σ = PENALTY × the largest reaction, a full step near the answer where the
+merit would cut it below LOCAL_CUT, and the stop at max|Δα| < tol with every
+node on its side of the exact walls to GEOMETRY_SLACK ℓ. Each step is the
+solve kernel's (:func:`lcpbench.model.compiled_kernel.solve_assembled`: the
+dual active set, its certificate and the step judge).
+
+A wall is a table of cubic pieces (:mod:`lcpbench.problems.profile_table`):
+breakpoints ``knots`` and coefficients ``coef`` (4 × pieces, scipy's PPoly
+layout), continued flat outside; an empty table is a flat wall whose rows
+(``hi_rows``, ``lo_rows``) stand as they are. Rigid walls only (a profile and
+an elastic wall do not combine, :class:`lcpbench.problems.scenes.ActuatorScene`).
+
+Nothing here decides "converged": the caller judges the answer
+(:mod:`lcpbench.model.judge_compiled`). A step the kernel cannot take as the
+reference does ends the solve with its bail code, and the caller runs the
+reference driver.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .compiled_dual import (
+    ALPHA,
+    ALPHA0,
+    COS_A,
+    COS_T,
+    DIR,
+    GF,
+    INV,
+    LIN,
+    NET,
+    ORIG,
+    RLO,
+    RUP,
+    SIG,
+    SIN_A,
+    SIN_T,
+    TRIAL,
+    TRY,
+    U,
+    grad_into,
+)
+from .compiled_kernel import (
+    CONVERGED,
+    LINE_SEARCH,
+    MAX_OUTER,
+    NEWTON_SWITCH,
+    NO_FIT,
+    assemble_into,
+    energy_into,
+    fit_heights,
+    record_step,
+    solve_assembled,
+    workspace,
+)
+from .wall_kernel import slope_load, walls_at
+
+# model.profile_driver's constants (tests check they are the same numbers)
+GEOMETRY_SLACK, PENALTY, LOCAL_CUT, START_PASSES = 1e-7, 2.0, 1.0 / 64, 5
+__all__ = ["CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "solve_profile_chain"]
+
+
+@njit(cache=True)
+def merit_parts(alpha, sines, cosines, chain, walls, mu_up, mu_lo, at):
+    """(E − Σ μ̄ h(x) + Σ ν̄ l(x), the penetration of the exact walls summed) at α: the
+    merit P's two parts (model.profile_driver._merit: P = first + σ second).
+    ``chain`` = (a, jl, jr, k, rest, link_load, fs); ``walls`` = (hi_rows, lo_rows, ku,
+    cu_, kl, cl_); ``at``: the scratch rows of :func:`walls_at` (written)."""
+    a, jl, jr, k, rest, link_load, fs = chain
+    walls_at(sines, cosines, a, fs, *walls, *at)
+    E = energy_into(alpha, a, jl, jr, k, rest, link_load, sines)
+    return merit_at(E, walls, mu_up, mu_lo, at[1], at[2], at[3])
+
+
+@njit(cache=True)
+def merit_at(E, walls, mu_up, mu_lo, yf, hi, lo):
+    """:func:`merit_parts` from the energy E and the walls ``hi``, ``lo`` at the nodes'
+    heights ``yf``, already evaluated."""
+    hi_rows, lo_rows, ku, _, kl, _ = walls
+    total, pen = E, 0.0
+    for i in range(hi.size):
+        if ku.size and mu_up[i] > 0 and np.isfinite(hi_rows[i]):  # (a reaction: a row)
+            total -= mu_up[i] * hi[i]
+        if kl.size and mu_lo[i] > 0 and np.isfinite(lo_rows[i]):
+            total += mu_lo[i] * lo[i]
+        if np.isfinite(hi_rows[i]):
+            pen += max(yf[i] - hi[i], 0.0)
+        if np.isfinite(lo_rows[i]):
+            pen += max(lo[i] - yf[i], 0.0)
+    return total, pen
+
+
+@njit(cache=True)
+def _clipped(alpha0, a, fs, walls, alpha, u, sin_a, cos_a, at):
+    """model.profile_driver._clipped into ``alpha``, ``u``: the heights clipped to the
+    walls at the nodes' x, START_PASSES times; False where the chain tears."""
+    links = alpha.size
+    alpha[:] = alpha0
+    for i in range(links):
+        cos_a[i], sin_a[i] = np.cos(alpha0[i]), np.sin(alpha0[i])
+    yf, hi, lo = at[1], at[2], at[3]
+    for _ in range(START_PASSES):
+        walls_at(sin_a, cos_a, a, fs, *walls, *at)
+        for i in range(u.size):
+            u[i] = min(max(yf[i], lo[i]), hi[i])
+        if not fit_heights(alpha, u, alpha.copy(), a, fs, links, np.empty(0), sin_a, cos_a):
+            return False
+    return True
+
+
+@njit(cache=True)
+def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo_rows,
+                        hi_rows, L, F, ku, cu_, kl, cl_, channel, tol, max_outer, start_alpha,
+                        mu_up, mu_lo, max_iter, request):
+    """The globalised profile driver (model.profile_driver.run_profile_driver) around
+    the solve kernel's step. ``ku``, ``cu_`` (``kl``, ``cl_``): the upper (lower)
+    wall's table, empty for a flat wall; ``hi_rows``, ``lo_rows``: the chain's rows
+    (±inf: no wall at that node); ``channel``: reactions split between two walls;
+    ``start_alpha`` empty for a cold start; ``mu_up``, ``mu_lo``: the starting lagged
+    reactions (zeros cold; written).
+
+    Returns ``(code, alpha, forces_upper, forces_lower, u, sigma, records, count,
+    residuals, forces_net, upper, lower)``, the last two the walls at the answer's
+    nodes (as :func:`lcpbench.model.compiled_kernel.solve_chain`, plus the walls).
+    """
+    n, links = lo_rows.size, rest_alpha.size
+    ws = workspace(n, links, jr.size, max_iter)
+    wn, wa, m = ws[0], ws[3], ws[2][2]
+    rec = np.empty((4, min(max_outer, 64)))
+    count, zero, none = 0, np.zeros(n), np.zeros(5)
+    chain = (a, jl, jr, k, rest, link_load, fs)
+    walls = (hi_rows, lo_rows, ku, cu_, kl, cl_)
+    at = (np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+          np.empty(n), np.empty(n))  # x, y, upper, lower, h', l', h'', l'' (the merit's)
+    step_at = (at[0], at[1], np.empty(n), np.empty(n), at[4], at[5], at[6], at[7])
+    yf, hi, lo, hs, ls, h1, l1 = at[1], at[2], at[3], step_at[2], step_at[3], at[4], at[5]
+    nl, s, w, w_u = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    w_up, w_lo = np.zeros(n, np.bool_), np.zeros(n, np.bool_)
+    alpha, trial, u = wa[ALPHA], wa[TRIAL], np.empty(n)
+    sin_a, sin_t, cos_a, cos_t = wa[SIN_A], wa[SIN_T], wa[COS_A], wa[COS_T]
+    ok = start_alpha.size == links and _clipped(start_alpha, a, fs, walls, alpha, u, sin_a,
+                                                cos_a, at)
+    if not ok:
+        mu_up[:] = 0.0
+        mu_lo[:] = 0.0
+        scale = 1.0
+        while not ok and scale > 1e-6:  # the arc flattened by halves (_profile_start)
+            ok = _clipped(scale * rest_alpha, a, fs, walls, alpha, u, sin_a, cos_a, at)
+            scale *= 0.5
+    if not ok:
+        return (NO_FIT, rest_alpha.copy(), zero, zero, zero, zero, rec, count, none, zero,
+                zero, zero)
+    noise_k = 0.0
+    for j in range(k.size):
+        noise_k += abs(k[j])
+    su, sigma, inv, alpha0, origin = wn[U], wn[SIG], wa[INV], wa[ALPHA0], wn[ORIG]
+    d, ut, g_u, T = wn[DIR], wn[TRY], wn[GF], ws[10]
+    T[:] = 0.0
+    gp = (ws[7], jr[0], fs, links, origin, ws[2][0], k, rest, nl)
+    flags, no_c = 0, np.empty(0)
+    for _ in range(max_outer):
+        E = energy_into(alpha, a, jl, jr, k, rest, link_load, sin_a)
+        walls_at(sin_a, cos_a, a, fs, *walls, *step_at)
+        for i in range(n):  # the lagged reactions' slope load, into the nodal load
+            w[i] = max(mu_up[i], 0.0) * h1[i] - max(mu_lo[i], 0.0) * l1[i]
+        slope_load(alpha, cos_a, sin_a, fs, w, s)
+        for i in range(n):
+            nl[i] = nodal_load[i] + s[i]
+        assemble_into(alpha, a, jl, jr, k, rest, fs, n, nl, ws[6], wn[LIN], inv, ws[7], origin,
+                      alpha0, ws[2][0], ws[2][1], ws[4], sin_a, cos_a, False)
+        code, it = solve_assembled(n, ls, hs, L, F, no_c, no_c, w_u, w_up, w_lo, flags,
+                                   max_iter, request, ws, gp, T)
+        if code != 0:
+            return (code, alpha.copy(), zero, zero, u.copy(), zero, rec, count, none, zero, zero,
+                    zero)
+        dalpha = prev = 0.0
+        for i in range(links):  # predict_alpha, eq. (21), about u0
+            node = i + 1 - (fs - 1)
+            cur = su[node] - origin[node] if 0 <= node < n else 0.0
+            dalpha = max(dalpha, abs((alpha0[i] + (cur - prev) * inv[i]) - alpha[i]))
+            prev = cur
+        net = wn[NET]
+        big = F
+        for i in range(n):
+            big = max(big, max(abs(net[i]), max(mu_up[i], mu_lo[i])))
+        pen_weight = PENALTY * big
+        grad_into(g_u, m, u, gp, T)
+        slope = 0.0
+        for i in range(n):
+            d[i] = su[i] - u[i]
+            slope += g_u[i] * d[i]
+        part, pen = merit_at(E, walls, mu_up, mu_lo, yf, hs, ls)  # (the step's walls: at α)
+        phi = part + pen_weight * pen
+        slope -= pen_weight * pen
+        noise = 1e-12 * (abs(phi) + noise_k * 1e-6)
+        t, full = 1.0, False
+        while True:
+            for i in range(n):
+                ut[i] = u[i] + t * d[i]
+            if fit_heights(trial, ut, alpha, a, fs, links, inv, sin_t, cos_t):
+                part, pen = merit_parts(trial, sin_t, cos_t, chain, walls, mu_up, mu_lo, at)
+                if part + pen_weight * pen <= phi + 1e-4 * t * min(slope, 0.0) + noise:
+                    break
+            t *= 0.5
+            if t < LOCAL_CUT and dalpha < NEWTON_SWITCH:  # near the answer: the full step
+                if fit_heights(trial, su, alpha, a, fs, links, inv, sin_t, cos_t):
+                    t, full = 1.0, True
+                    break
+            if t < 1e-12:
+                rec, count = record_step(rec, count, it, 0.0, dalpha, E)
+                return (LINE_SEARCH, alpha.copy(), zero, zero, u.copy(), sigma.copy(), rec,
+                        count, none, zero, zero, zero)
+        for i in range(n):
+            u[i] = su[i] if full else ut[i]
+        alpha, trial, sin_a, sin_t = trial, alpha, sin_t, sin_a
+        cos_a, cos_t = cos_t, cos_a
+        rec, count = record_step(rec, count, it, t, dalpha,
+                                 energy_into(alpha, a, jl, jr, k, rest, link_load, sin_a))
+        for i in range(n):  # the warm sets, and the lagged reactions (judge.split_reactions)
+            w_u[i], w_up[i], w_lo[i] = su[i], sigma[i] > 0, sigma[i] < 0
+            near_up = True
+            if channel:
+                mid = 0.5 * (hs[i] + ls[i])
+                near_up = su[i] >= mid if np.isfinite(mid) else np.isfinite(hs[i])
+            mu_up[i], mu_lo[i] = (net[i], 0.0) if near_up else (0.0, -net[i])
+        flags = 7
+        if dalpha < tol:
+            merit_parts(alpha, sin_a, cos_a, chain, walls, mu_up, mu_lo, at)  # walls at α
+            worst = 0.0
+            for i in range(n):
+                if np.isfinite(hi_rows[i]):
+                    worst = max(worst, yf[i] - hi[i])
+                if np.isfinite(lo_rows[i]):
+                    worst = max(worst, lo[i] - yf[i])
+            if worst <= GEOMETRY_SLACK * L:
+                return (CONVERGED, alpha.copy(), wn[RUP].copy(), wn[RLO].copy(), su.copy(),
+                        sigma.copy(), rec, count, ws[9].copy(), net.copy(), hi.copy(),
+                        lo.copy())
+    return (MAX_OUTER, alpha.copy(), zero, zero, u.copy(), zero, rec, count, none, zero, zero,
+            zero)
