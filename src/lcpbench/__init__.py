@@ -23,6 +23,9 @@ except _PackageNotFoundError:  # running from a source tree that was never insta
 #: public name -> module that defines it
 _EXPORTS = {
     "solve": "lcpbench.api",
+    "solve_path": "lcpbench.api",
+    "pull_out": "lcpbench.studies.pull_out",
+    "FrictionResult": "lcpbench.model.friction_result",
     "solve_many": "lcpbench.studies.batch",
     "stable_states": "lcpbench.studies.states",
     "sensitivities": "lcpbench.model.sensitivity",

@@ -394,3 +394,35 @@ def _driver_start(start, chain, method: str):
         raise ProblemError(f"start must have the same links and length as the scene "
                            f"(start: N = {start.links}; scene: N = {chain.links})")
     return DriverStart(np.asarray(start.alpha, float), start.extra.get("last_step"))
+
+
+def solve_path(scene, states=None, tol: float | None = None, *, max_outer: int = 100,
+               lcp=None) -> list:
+    """Solve a loading path: one :class:`~lcpbench.model.friction_result.FrictionResult`
+    per state, each state solved from the last (issue 39, docs/friction.md).
+
+    Parameters
+    ----------
+    scene : ActuatorScene
+        With ``friction``, ``left_end``, ``right_end`` and ``pull`` as it needs.
+    states : sequence of dict, optional
+        The scene fields each state changes, applied in turn (``theta``, ``height``,
+        ``pull``, ``friction``, ``weight``, ``EI``); default: one state, the scene.
+    tol : the outer loop's threshold on max|Δα| (rad; the paper's 1e-3 by default).
+    max_outer : limit on contact steps per state.
+    lcp : the step's LCP solver, ``(M, q) -> LCPSolution`` (default: Lemke,
+        :func:`lcpbench.solvers.lemke.lemke`).
+
+    The path starts from the frictionless equilibrium of its first state; slips are
+    measured from the previous state. A path in the paper's model (μ = 0, both ends
+    pinned, no pull) is :func:`solve` for each state, unchanged. Never raises on
+    non-convergence: a state's ``converged`` is False with a reason, and the states
+    after it say so.
+    """
+    from .model.friction_path import run_path
+
+    tol = PAPER_TOL if tol is None else check_tol(tol)
+    if isinstance(max_outer, bool) or not (isinstance(max_outer, (int, np.integer))
+                                           and max_outer >= 1):
+        raise ProblemError(f"max_outer must be an integer >= 1, got {max_outer!r}")
+    return run_path(scene, states, tol=tol, max_outer=int(max_outer), solve=solve, lcp=lcp)

@@ -155,6 +155,11 @@ def scene_key(scene: ActuatorScene | SectionedScene) -> str:
         elif k in d:
             raise ProblemError(f"{k}: the benchmark's scenes have flat walls (a scene key "
                                f"cannot hold a wall profile)")
+    if getattr(scene, "frictional", False):
+        raise ProblemError("friction, a slider or free end, or a pull: the benchmark's scenes "
+                           "are frictionless (a scene key cannot hold them)")
+    for k in ("friction", "left_end", "right_end", "pull"):  # the key as before friction
+        d.pop(k, None)
     d["links"] = int(d["links"])
     if isinstance(scene, SectionedScene):
         d["sections"] = [{k: float(repr_float(v)) for k, v in sec.items()}

@@ -26,6 +26,7 @@ from ..problems.scenes import (
     ActuatorScene,
 )
 from ..solvers.base import PROFILES
+from ._friction_args import friction_kw
 from ._units import implausible, quantity_type
 
 _FIELDS = ActuatorScene.__dataclass_fields__
@@ -266,7 +267,8 @@ def _scene_as_given(args):
         print(f"lcpbench: warning: {warning}", file=sys.stderr)
     links = DEFAULT_LINKS if args.links is None else args.links
     kw = {"height": height, "links": links, "length": args.length, "EI": args.EI,
-          "weight": args.weight, "channel": args.channel, **_profiles(args)}
+          "weight": args.weight, "channel": args.channel, **_profiles(args),
+          **friction_kw(args)}
     if getattr(args, "wall_stiffness", math.inf) != math.inf:
         kw["wall_stiffness"] = args.wall_stiffness
     if sections is not None:  # the anchoring preset: theta as for one section

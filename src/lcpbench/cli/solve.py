@@ -35,8 +35,10 @@ from ._common import (
     node_ranges,
     print_json,
 )
+from ._friction_args import add_friction_options, solve_frictional
 from ._scene_args import (
     DEFAULT_METHOD,
+    DEFAULT_SOLVER,
     add_profile_options,
     add_scene_options,
     add_section_options,
@@ -80,6 +82,7 @@ def register(subparsers) -> None:
                         "anyway); ramp: follow the load from zero first, the state the "
                         "pressurised actuator reaches where there are several")
     add_json_option(s)
+    add_friction_options(s)
     s.add_argument("--sensitivities", action="store_true",
                    help="the derivatives of the total force, node forces and heights and the "
                         "peak pressure with respect to theta, h, EI, w, length (and the wall "
@@ -257,6 +260,8 @@ def cmd_solve(args) -> int:
     if args.plot is not None:
         _not_a_directory("--plot", args.plot, "shape.png")
     scene = scene_from(args)
+    if getattr(scene, "frictional", False):  # issue 39: a path of one state
+        return solve_frictional(args, scene, DEFAULT_SOLVER)
     if args.sensitivities and (why := unsupported(scene)) is not None:
         raise ProblemError(f"--sensitivities: {why}")
     result = solve_internal(scene, solver=args.solver, tol=args.tol, accuracy=args.accuracy,

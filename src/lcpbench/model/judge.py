@@ -121,6 +121,10 @@ STALL = 3
 #: in increments (large N) the single pivots are capped at 2 × this many, not 2 per node:
 #: each round is an O(N) face solve, and a judge that cannot settle says so
 LARGE_ROUNDS = 100
+#: friction (issue 39): a node slides when its slip |s| > max(SLIP_FACTOR · tol · a,
+#: SLIP_FLOOR · ℓ) (a = ℓ/N; the floor: ten times Lemke's accepted residual on the
+#: dimensionless step, what a SOLVED step leaves on a slip)
+SLIP_FACTOR, SLIP_FLOOR = 10.0, 1e-7
 
 THRESHOLDS = {
     "force_tol": "min(1e-3, 100·tol), relative to F₀ = max(|F|, EI/ℓ²)",
@@ -134,6 +138,10 @@ THRESHOLDS = {
                          "NODE_FACTOR·FLOOR_ULPS·ε·S/F₀)",
     "contact": "R_i > NODE_SHARE·τ·F₀",
     "stability": "no negative curvature of the energy on the contact set (R_i > ε_R held)",
+    "cone": "friction: |T_i| <= μ N_i + NODE_SHARE·τ·F₀ (F₀ also >= |pull|)",
+    "slip": "friction: |s_i| > ε_s = max(SLIP_FACTOR·tol·a, SLIP_FLOOR·ℓ): μ N_i − |T_i| "
+            "and T_i·sign(s_i) <= NODE_SHARE·τ·F₀; inside the cone by more: |s_i| <= ε_s",
+    "x balance": "friction, no end holding x: |ΣT + pull| <= NODE_SHARE·τ·F₀",
 }
 
 

@@ -281,6 +281,9 @@ class ContactResult:
                 del scene[key]
             elif key in scene:  # a WallProfile: its name and x range
                 scene[key] = getattr(self.scene, key).to_dict()
+        if not getattr(self.scene, "frictional", True):  # (issue 39) the JSON as before
+            for key in ("friction", "left_end", "right_end", "pull"):
+                scene.pop(key, None)
         out = {
             "scene": {**scene, "links": self.links},
             "total_force": self.total_force,

@@ -26,6 +26,14 @@ import numpy as np
 
 from ..errors import ProblemError
 from .checks import check_flag, check_number, describe
+from .friction import (
+    check_end,
+    check_friction,
+    check_pull,
+    check_support,
+    is_frictional,
+    wall_friction,
+)
 from .templates import filled, full, uniform_load
 from .walls import WallProfile
 
@@ -247,6 +255,17 @@ class ActuatorScene:
         With ``channel=True`` and a ``wall_profile``: the lower wall's profile
         (below y = 0). Default: the mirror image y = −h(x) of the upper wall
         (a symmetric narrowing).
+    friction : float or tuple
+        Coulomb coefficient μ of the walls (issue 39, docs/friction.md), in [0, 1e3]:
+        one number, or one per wall (upper, lower). 0 (default): the paper's
+        frictionless walls.
+    left_end, right_end : str
+        "pinned" (default; both pinned is the paper's support, the right pin on a
+        roller), "slider" (held in y, free along x) or "free".
+    pull : float
+        Axial force P on the right end (N, along +x), which must then be a slider
+        or free. A scene with friction, another end or a pull is solved along a
+        loading path, :func:`lcpbench.solve_path`.
 
     Raises
     ------
@@ -266,6 +285,10 @@ class ActuatorScene:
     wall_stiffness: float = math.inf
     wall_profile: WallProfile | None = None
     lower_profile: WallProfile | None = None
+    friction: float | tuple[float, ...] = 0.0
+    left_end: str = "pinned"
+    right_end: str = "pinned"
+    pull: float = 0.0
 
     def __post_init__(self):
         object.__setattr__(self, "wall_stiffness", wall_stiffness(self.wall_stiffness))
@@ -279,6 +302,31 @@ class ActuatorScene:
         object.__setattr__(self, "weight", _in("weight", self.weight, WEIGHT_RANGE, "N/mm"))
         object.__setattr__(self, "channel", check_flag("channel", self.channel))
         self._check_profiles()
+        self._check_friction()
+
+    def _check_friction(self) -> None:
+        walls = 2 if self.channel else 1
+        object.__setattr__(self, "friction", check_friction(self.friction, walls))
+        object.__setattr__(self, "left_end", check_end("left_end", self.left_end))
+        object.__setattr__(self, "right_end", check_end("right_end", self.right_end))
+        object.__setattr__(self, "pull", check_pull(self.pull))
+        check_support(self.left_end, self.right_end, self.pull, self.wall_friction,
+                      self.channel)
+        if self.frictional and (self.wall_profile is not None
+                                or not math.isinf(self.wall_stiffness)):
+            raise ProblemError("friction, a slider or free end, or a pull cannot be combined "
+                               "with wall_profile or wall_stiffness yet: flat rigid walls only")
+
+    @property
+    def wall_friction(self) -> tuple[float, float]:
+        """(μ of the upper wall, μ of the lower wall); 0 where there is no wall."""
+        return wall_friction(self.friction, 2 if self.channel else 1)
+
+    @property
+    def frictional(self) -> bool:
+        """Whether the scene leaves the paper's model (friction, an end other than
+        pinned, a pull): solved along a path, :func:`lcpbench.solve_path`."""
+        return is_frictional(self.friction, self.left_end, self.right_end, self.pull)
 
     def _check_profiles(self) -> None:
         for name in ("wall_profile", "lower_profile"):

@@ -461,6 +461,10 @@ def check_scene(scene) -> object:
         instead of an instance, or anything else.
     """
     if isinstance(scene, SCENE_KINDS):
+        if getattr(scene, "frictional", False):  # (issue 39: friction, ends, a pull)
+            raise ProblemError("this scene has friction, a slider or free end, or a pull: "
+                               "solve it along a loading path, lcpbench.solve_path(scene, "
+                               "states) (lcpbench.solve is the frictionless model)")
         return scene
     kind = describe(scene)
     if isinstance(scene, type):

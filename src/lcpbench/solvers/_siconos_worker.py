@@ -26,7 +26,11 @@ own, before the driver's error check), ``iterations``, ``residu``, ``tol``,
 ``max_iter``, ``solve_time``, ``setup_time``, ``error``; for Lemke
 ``gap_min``/``gap_max`` of ``w_basic - (M z + q)``) followed by z (n) and w
 (n) of every problem. ``{"op": "ping"}`` answers the start message again;
-``{"op": "exit"}`` or end of input stops the worker.
+``{"op": "exit"}`` or end of input stops the worker. ``{"op": "fc2d", "method":
+"NSGS" | "LEMKE" | "ENUM", "tol", "max_iter", "problems": [{"nc": nc}, ...]}`` then per
+problem W (2nc × 2nc, column-major), q (2nc), mu (nc) solves 2-D frictional contact
+problems (``fc2d_driver``); the reply carries ``info``, ``iterations``, ``residu`` per
+problem, then r and u (2nc each) of every problem.
 
 Siconos's C code prints to file descriptor 1 (e.g. NewtonMin on
 non-convergence), so the protocol uses a duplicate of the original stdout and
@@ -128,6 +132,43 @@ def _solve_one(sn, solver_id, M, q, z0, tol, max_iter, lemke=False):
     return res, z, w
 
 
+def _solve_fc2d(sn, name, W, q, mu, tol, max_iter):
+    """One 2-D frictional contact problem u = W r + q, r in the Coulomb cones (fc2d)."""
+    nc = mu.size
+    res = {"info": -1, "iterations": 0, "residu": None, "solve_time": 0.0, "error": None}
+    r, u = np.zeros(2 * nc), np.zeros(2 * nc)
+    try:
+        problem = sn.FrictionContactProblem(2, nc, W, q, mu)
+        options = sn.SolverOptions(getattr(sn, "SICONOS_FRICTION_2D_" + name))
+        if tol is not None:
+            options.dparam[sn.SICONOS_DPARAM_TOL] = tol
+        if max_iter is not None:
+            options.iparam[sn.SICONOS_IPARAM_MAX_ITER] = max_iter
+        t0 = time.perf_counter()
+        res["info"] = int(sn.fc2d_driver(problem, r, u, options))
+        res["solve_time"] = time.perf_counter() - t0
+        res["iterations"] = int(options.iparam[sn.SICONOS_IPARAM_ITER_DONE])
+        res["residu"] = float(options.dparam[sn.SICONOS_DPARAM_RESIDU])
+    except Exception as exc:  # a Siconos error must not kill the worker
+        res["error"] = f"{type(exc).__name__}: {exc}"
+    return res, r, u
+
+
+def _fc2d_request(sn, req, data):
+    """The ``fc2d`` op: per problem W (2nc × 2nc, column-major), q (2nc), mu (nc)."""
+    reader, results, arrays = _Reader(data), [], []
+    for p in req["problems"]:
+        m = 2 * int(p["nc"])
+        W = reader.array((m, m), order="F")
+        q = reader.array((m,))
+        mu = reader.array((m // 2,))
+        res, r, u = _solve_fc2d(sn, str(req["method"]), W, q, mu, req.get("tol"),
+                                req.get("max_iter"))
+        results.append(res)
+        arrays += [r, u]
+    _send({"ok": True, "results": results}, arrays)
+
+
 def main():
     global _CHANNEL, _W
     _W = _load_worker_module()
@@ -156,6 +197,9 @@ def main():
             return 0
         if op == "ping":
             _send(hello)
+            continue
+        if op == "fc2d":  # (issue 39: the frictional step's peers)
+            _fc2d_request(sn, req, data)
             continue
         if op != "solve":
             _send({"ok": False, "error": f"unknown op {op!r}"})

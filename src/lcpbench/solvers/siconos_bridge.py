@@ -580,5 +580,20 @@ def solve_lcp(M, q, settings: Settings, warm=None, *, method: str = "lemke",
                       accept_tol=accept_tol)[0]
 
 
+def call_worker(header: dict, payload: list, timeout: float = 60.0) -> tuple[dict, np.ndarray]:
+    """(reply, data) of one request of another op (:mod:`.siconos_fc2d`); RuntimeError if
+    siconos is absent or the worker fails (it is then killed)."""
+    global _WORKER
+    with _LOCK:
+        if not available():
+            raise RuntimeError(NOT_INSTALLED)
+        try:
+            worker = _get_worker(system_python())
+            return worker.request(header, payload, time.monotonic() + timeout)
+        except (ImportError, TimeoutError, _WorkerDied, OSError, ValueError) as exc:
+            _WORKER = _WORKER.kill(force=True) if _WORKER is not None else None
+            raise RuntimeError(f"siconos worker failed: {exc!r}") from exc
+
+
 __all__ = ["ENUM_MAX_N", "METHODS", "available", "version", "system_python", "solve_lcp",
-           "solve_many", "shutdown", "worker_info"]
+           "solve_many", "shutdown", "worker_info", "call_worker"]

@@ -1,0 +1,390 @@
+"""The outer loop of a frictional state and the loading path (issue 39, docs/friction.md).
+
+A state is solved from the last: its slips s_i = x_i − x_i^prev are measured from
+the previous state's node positions. Each outer step assembles the frictional
+contact step at the current α (:mod:`lcpbench.model.friction_step`), solves its LCP
+(Lemke by default; any function ``(M, q) -> LCPSolution``), moves the heights by δy
+(exact inverse kinematics) and the chain by τ, and re-linearises until
+max|Δα| < tol and |τ| < tol·ℓ. At that fixed point the linearised gaps and slips
+are the exact ones.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..errors import ProblemError
+from ..problems.scenes import ActuatorScene, Chain, reachable
+from ..solvers.base import Status
+from ..solvers.lemke import lemke
+from .chain import alpha_from_heights, node_positions
+from .step import assemble_step
+
+#: a node within NEAR · a of a wall gets a friction pair in the step (docs/friction.md)
+NEAR = 1e-3
+#: a node within ROW_BAND · a of a wall gets a normal row (docs/friction.md)
+ROW_BAND = 1.0
+#: the stiffness that holds the translation τ in a step, in EI/ℓ³: a proximal term,
+#: exact at the fixed point (τ = 0 there; docs/friction.md)
+TAU_STIFFNESS = 1.0
+#: the stiffness that holds a free end's rotation about the pin in a step, in EI/ℓ per
+#: rad: a proximal term as k_τ (docs/friction.md, free ends)
+ROT_STIFFNESS = 1.0
+#: the largest turn of a link in one outer step (rad); a longer step is shortened
+MAX_TURN = 0.25
+#: a state whose chain moves along x by more than RUNAWAY · ℓ has no equilibrium
+RUNAWAY = 10.0
+#: this many steps in a row at gross slip (:func:`gross_slip`) end a state: no equilibrium
+GROSS_STEPS = 3
+#: Lemke's pivot tolerance on the frictional LCP (solvers.lemke's default: 1e-12). Its
+#: W is singular where many nodes have rows (the chain is inextensible: a node's x
+#: follows from the heights), and entries that are 0 but for round-off (1e-12 of the
+#: column) must not be pivots
+PIVOT_TOL = 1e-9
+#: the seed of the random covering vectors :func:`step_lemke` tries last
+COVERING_SEED = 39
+
+
+_KERNELS: list = []  # the compiled step (model/friction_step.py), once loaded
+
+
+def step_kernels():
+    """The frictional step's compiled functions (:mod:`lcpbench.model.friction_step`),
+    loaded once through :func:`lcpbench.numba_cache.kernel_module` (numba's cache
+    under the hash of every kernel file)."""
+    if not _KERNELS:
+        from ..numba_cache import held, kernel_module
+
+        held(_KERNELS).append(kernel_module("lcpbench.model.friction_step", "delassus_form"))
+    return _KERNELS[0]
+
+
+def step_lemke(M: np.ndarray, q: np.ndarray):
+    """The default solver of the frictional step: Lemke with :data:`PIVOT_TOL`, and
+    where it stops short of SOLVED (near gross slip the LCP is degenerate: every node
+    at its cone), again with the covering vectors (2 … 1) and (1 … n)/n, then three
+    seeded random ones in [1, 2): other pivot paths to the same solution set. The
+    step's LCP always has a solution (W is positive semidefinite: Stewart–Trinkle), so
+    a ray is a numerical failure."""
+    n = q.size
+    sol = lemke(M, q, pivot_tol=PIVOT_TOL)
+    rng = np.random.default_rng(COVERING_SEED)
+    coverings = [np.linspace(2.0, 1.0, n), np.arange(1, n + 1) / n]
+    coverings += [1.0 + rng.random(n) for _ in range(3)]
+    for covering in coverings:
+        if sol.solved:
+            break
+        sol = lemke(M, q, pivot_tol=PIVOT_TOL, covering=covering)
+    return sol
+
+
+@dataclass
+class FrictionState:
+    """Where a path stands: link angles α (rad) and the x of node 1 (mm)."""
+
+    alpha: np.ndarray
+    x0: float = 0.0
+
+    def positions(self, chain: Chain) -> tuple[np.ndarray, np.ndarray]:
+        x, y = node_positions(chain, self.alpha)
+        return x + self.x0, y
+
+
+@dataclass
+class FrictionStep:
+    """One frictional contact step: the LCP, its Delassus form and how to map back.
+
+    ``normal_node``/``normal_sign``: the free node and ∂g/∂y of each wall row;
+    ``friction_node``: the node (0..N) of each friction pair; ``pair``: the pair of
+    each wall row; ``mu``: the Coulomb coefficient of each wall row. ``W``,
+    ``g_f``, ``s_f``: the contact quantities (g, s) = (g_f, s_f) + W (N, T), the
+    Siconos fc2d form; ``M``, ``q``: the LCP in units of ℓ and EI/ℓ²
+    (``length``, ``force``).
+    """
+
+    M: np.ndarray
+    q: np.ndarray
+    W: np.ndarray
+    g_f: np.ndarray
+    s_f: np.ndarray
+    X: np.ndarray
+    normal_node: np.ndarray
+    normal_sign: np.ndarray
+    friction_node: np.ndarray
+    pair: np.ndarray
+    mu: np.ndarray
+    has_tau: bool
+    origin: np.ndarray
+    length: float
+    force: float
+    rowed: np.ndarray  # the free nodes with a normal row
+
+    def forces(self, z: np.ndarray):
+        """(N, T, δy, τ) in N and mm of an LCP solution z (dimensionless)."""
+        mn, mt = self.normal_node.size, self.friction_node.size
+        zz = z.copy()
+        zz[:mn + 2 * mt] *= self.force
+        zz[mn + 2 * mt:] *= self.length
+        N, T, d = step_kernels().recover(zz, self.X, mn, mt)
+        return (N, T, d[:-1], float(d[-1])) if self.has_tau else (N, T, d, 0.0)
+
+
+def check_frictional_ends(scene: ActuatorScene) -> None:
+    """ProblemError for what the frictional step does not build yet: a free left end."""
+    if scene.left_end == "free":
+        raise ProblemError("left_end='free' is not supported by the frictional step yet "
+                           "(docs/friction.md, free ends): use 'pinned' or 'slider', or "
+                           "mirror the scene and free the right end")
+
+
+def frictional_chain(scene: ActuatorScene) -> Chain:
+    """The chain of a frictional state: the scene's, or with a free right end its tip's
+    height unknown too (free nodes 2..N+1) and wall rows for every node within reach
+    of the walls from the left pin (its arc length s >= h)."""
+    chain = scene.chain()
+    if scene.right_end != "free":
+        return chain
+
+    def make():
+        n = chain.links
+        free = np.arange(1, n + 1)
+        can = reachable(free * chain.link_length, chain.length, scene.height, "clamped-free")
+        upper = np.where(can, scene.height, np.inf)
+        lower = np.where(can, -scene.height, -np.inf) if scene.channel else np.full(n, -np.inf)
+        return replace(chain, free_nodes=free, upper=upper, lower=lower)
+
+    return chain.derived("friction: free right end", make)
+
+
+def rotation_mode(chain: Chain, x: np.ndarray) -> np.ndarray | None:
+    """r, the free heights' increments of a rigid rotation about node 1 by 1 rad
+    (r_i = x_i − x_1), when the right end is free (None: both ends held in y)."""
+    if chain.free_nodes[-1] < chain.links:
+        return None
+    return x[chain.free_nodes] - x[0]
+
+
+def datum(scene: ActuatorScene) -> tuple[bool, bool]:
+    """(has_tau, right_datum): τ is an unknown when no end holds x; the right end is
+    the datum when only it is pinned."""
+    left, right = scene.left_end == "pinned", scene.right_end == "pinned"
+    return (not left and not right), (right and not left)
+
+
+def contact_rows(scene: ActuatorScene, chain: Chain, rowed: np.ndarray,
+                 touching: np.ndarray, g_up: np.ndarray, g_lo: np.ndarray):
+    """The wall rows (free node, ∂g/∂y, μ, pair) and the friction pairs' nodes.
+
+    The nodes ``rowed`` (near a wall: bool per free node) have a normal row; the
+    others are left out of the step (their rows would make W singular, more columns
+    than unknowns; the outer loop adds the row of a node that comes near, and
+    converges only when none does). In a channel the row is for the nearer wall only
+    (gaps ``g_up``, ``g_lo``: the two rows of a node are each other's negatives, and
+    both would make W singular; the outer loop re-picks the wall at every step).
+    Only the free nodes ``touching`` (at a wall, or pressed in the last step) get a
+    friction pair (pair −1: none): a node away from the walls carries no friction,
+    and its pair would only make the LCP degenerate.
+    """
+    mu_up, mu_lo = scene.wall_friction
+    nodes, signs, mus, pairs, pair_nodes = [], [], [], [], []
+    for j in range(chain.free_nodes.size):
+        up, lo = np.isfinite(chain.upper[j]), np.isfinite(chain.lower[j])
+        if not rowed[j]:
+            continue
+        if up and lo:
+            up, lo = bool(g_up[j] <= g_lo[j]), bool(g_lo[j] < g_up[j])
+        if not (up or lo):
+            continue
+        p = -1
+        if touching[j]:
+            p = len(pair_nodes)
+            pair_nodes.append(int(chain.free_nodes[j]))
+        for ok, sign, mu in ((up, -1.0, mu_up), (lo, 1.0, mu_lo)):
+            if ok:
+                nodes.append(j)
+                signs.append(sign)
+                mus.append(mu)
+                pairs.append(p)
+    return (np.array(nodes, np.int64), np.array(signs), np.array(mus),
+            np.array(pairs, np.int64), np.array(pair_nodes, np.int64))
+
+
+def gaps_at(chain: Chain, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Exact gaps of the free nodes to the upper and lower walls (mm; inf: no wall)."""
+    yf = y[chain.free_nodes]
+    return chain.upper - yf, yf - chain.lower
+
+
+def near_walls(chain: Chain, y: np.ndarray, band: float) -> np.ndarray:
+    """Free nodes within ``band`` · a of a wall (or through it)."""
+    g_up, g_lo = gaps_at(chain, y)
+    return np.minimum(g_up, g_lo) <= band * chain.link_length
+
+
+def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
+                    x_prev: np.ndarray, pressed: np.ndarray | None = None,
+                    rowed: np.ndarray | None = None) -> FrictionStep:
+    """The frictional contact step of ``scene`` at ``state``, slips from ``x_prev``:
+    normal rows for the nodes within ROW_BAND·a of a wall or ``rowed`` before,
+    friction pairs for those within NEAR·a or ``pressed`` (bool per free node: a
+    normal force in the last step)."""
+    has_tau, right_datum = datum(scene)
+    step = assemble_step(chain, state.alpha)
+    H = step.dense_hessian()
+    first, n = int(chain.free_nodes[0]), int(chain.free_nodes.size)
+    k = step_kernels()
+    k.add_pull_curvature(H, state.alpha, chain.link_length, float(scene.pull), first)
+    D = k.slip_jacobian(state.alpha, first, n, right_datum)
+    x, y = state.positions(chain)
+    r = rotation_mode(chain, x)
+    if r is not None:  # a free end: the rotation about the pin held by ROT_STIFFNESS
+        rr = float(r @ r)
+        H += (ROT_STIFFNESS * scene.EI / chain.length / rr**2) * np.outer(r, r)
+    f = -step.gradient(step.origin)
+    if scene.pull:
+        f += scene.pull * D[chain.links]
+    if has_tau:  # τ: one more unknown, moving every node's x, held by TAU_STIFFNESS
+        H = np.block([[H, np.zeros((H.shape[0], 1))],
+                      [np.zeros((1, H.shape[0])), np.full((1, 1), TAU_STIFFNESS *
+                                                         chain.force_scale / chain.length)]])
+        D = np.hstack([D, np.ones((D.shape[0], 1))])
+        f = np.append(f, float(scene.pull))
+    g_up, g_lo = gaps_at(chain, y)
+    touching = near_walls(chain, y, NEAR)
+    near = near_walls(chain, y, ROW_BAND)
+    if pressed is not None:
+        touching |= pressed
+    if rowed is not None:
+        near |= rowed
+    touching &= near
+    rows, signs, mus, pairs, pair_nodes = contact_rows(scene, chain, near, touching,
+                                                       g_up, g_lo)
+    gap = np.where(signs < 0, g_up[rows], g_lo[rows])
+    slip = x[pair_nodes] - x_prev[pair_nodes]
+    W, g_f, s_f, X = k.delassus_form(H, f, rows, signs, gap, D, pair_nodes, slip)
+    L, F = chain.length, chain.force_scale
+    M, q = k.frictional_lcp(W * (F / L), g_f / L, s_f / L, mus, pairs)
+    return FrictionStep(M, q, W, g_f, s_f, X, rows, signs, pair_nodes, pairs, mus, has_tau,
+                        step.origin, L, F, near)
+
+
+def gross_slip(fs: FrictionStep, N: np.ndarray, T: np.ndarray, pull: float) -> bool:
+    """Whether a step of a chain that no end holds in x slides as a whole: every pair
+    at its cone (|T| = μN) and ΣT + P ≠ 0. On flat walls the next step is the same one
+    moved along x, so there is no equilibrium (docs/friction.md)."""
+    limit = np.zeros(T.size)
+    paired = fs.pair >= 0
+    np.add.at(limit, fs.pair[paired], (fs.mu * N)[paired])
+    scale = max(abs(pull), float(np.sum(limit)), 1e-300)
+    at_cone = np.all(np.abs(T) >= limit - 1e-9 * scale)
+    return bool(at_cone and abs(pull + float(np.sum(T))) > 1e-9 * scale)
+
+
+def damped(chain: Chain, origin: np.ndarray, dy: np.ndarray, alpha: np.ndarray):
+    """(α, share): the step's heights origin + share·δy, share = 1 unless that turns a
+    link by more than MAX_TURN or past the vertical, then halved until it does not (an
+    iterate, not the answer: a state converges on full steps only). (None, 0) when no
+    share of 2⁻³⁰ helps."""
+    share = 1.0
+    for _ in range(30):
+        new = alpha_from_heights(chain, origin + share * dy, alpha)
+        if new is not None and np.max(np.abs(new - alpha)) <= MAX_TURN:
+            return new, share
+        share *= 0.5
+    return None, 0.0
+
+
+@dataclass
+class StateAnswer:
+    """The outer loop's answer for one state (before it is judged)."""
+
+    state: FrictionState
+    normal: np.ndarray  # N per wall row (N)
+    tangential: np.ndarray  # T per friction pair (N)
+    step: FrictionStep | None
+    converged: bool
+    reason: str
+    iterations: int
+    step_sizes: list = field(default_factory=list)
+    time_s: float = 0.0
+
+
+def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, *,
+                tol: float, max_outer: int = 100, lcp=step_lemke) -> StateAnswer:
+    """The outer loop of one state from ``start``, slips from ``x_prev`` (docs/friction.md)."""
+    check_frictional_ends(scene)
+    t0 = time.perf_counter()
+    chain = frictional_chain(scene)
+    has_tau, right_datum = datum(scene)
+    x_right = start.positions(chain)[0][-1]  # a pinned right end stays where it starts
+    state = FrictionState(start.alpha.copy(), start.x0)
+    sizes: list[float] = []
+    N = T = np.zeros(0)
+    fs = None
+    pressed, away, it, gross = None, False, 0, 0
+    for it in range(1, max_outer + 1):
+        try:
+            fs = frictional_step(scene, chain, state, x_prev, pressed,
+                                 None if fs is None else fs.rowed)
+        except np.linalg.LinAlgError as exc:  # (K singular: a link at the vertical)
+            return StateAnswer(state, N, T, fs, False, f"contact step {it}: {exc}", it,
+                               sizes, time.perf_counter() - t0)
+        sol = lcp(fs.M, fs.q)
+        # an inexact step only moves the iterate (the judge reads the last one, which
+        # must be SOLVED): go on from it, as the frictionless driver does
+        if not (sol.solved or (sol.status is Status.INACCURATE
+                               and np.all(np.isfinite(sol.z)))):
+            return StateAnswer(state, N, T, fs, False, f"contact step {it}: "
+                               f"{sol.status.name} ({sol.message})", it, sizes,
+                               time.perf_counter() - t0)
+        N, T, dy, tau = fs.forces(sol.z)
+        pressed = np.zeros(chain.free_nodes.size, bool)
+        pressed[fs.normal_node[N > 0]] = True
+        # every pressed node had its friction pair: else the step is not the answer yet
+        paired = np.all(fs.pair[N > 0] >= 0)
+        alpha, share = damped(chain, fs.origin, dy, state.alpha)
+        if alpha is None:
+            return StateAnswer(state, N, T, fs, False, f"contact step {it}: a link would "
+                               "pass the vertical (no chain has these heights)", it, sizes,
+                               time.perf_counter() - t0)
+        dalpha = float(np.max(np.abs(alpha - state.alpha)))
+        sizes.append(dalpha)
+        tau *= share
+        paired = paired and share == 1.0
+        state = FrictionState(alpha, state.x0 + tau)
+        if right_datum:
+            state.x0 = x_right - float(np.sum(chain.link_length * np.cos(alpha)))
+        # every node that is now near a wall had its row
+        settled = not np.any(near_walls(chain, state.positions(chain)[1], ROW_BAND) & ~fs.rowed)
+        if (dalpha < tol and abs(tau) < tol * chain.length and paired and settled
+                and sol.solved):
+            return StateAnswer(state, N, T, fs, True, "max|Δα| < tol", it, sizes,
+                               time.perf_counter() - t0)
+        gross = gross + 1 if has_tau and gross_slip(fs, N, T, float(scene.pull)) else 0
+        away = abs(state.x0 - start.x0) > RUNAWAY * chain.length or gross >= GROSS_STEPS
+        if not np.isfinite(dalpha) or away:
+            break
+    why = ("gross slip: every contact node slides at its cone and friction holds less than "
+           "the pull (no equilibrium)" if away else f"no convergence in {it} contact steps"
+           + ("" if fs is None or sol.solved else f" (the last {sol.status.name})"))
+    return StateAnswer(state, N, T, fs, False, why, it, sizes, time.perf_counter() - t0)
+
+
+def fc2d_form(fs: FrictionStep) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The step in Siconos' fc2d form (:mod:`lcpbench.solvers.siconos_fc2d`),
+    dimensionless (lengths by ℓ, forces by EI/ℓ²): wall row r is a contact with
+    u = (g_r, s_p), r = (N_r, T_p), p its friction pair. Needs one row per pair
+    (a step built with every rowed node ``pressed``); ProblemError otherwise."""
+    mn, pairs = fs.normal_node.size, fs.pair
+    if np.any(pairs < 0) or np.unique(pairs).size != mn or fs.friction_node.size != mn:
+        raise ProblemError("fc2d_form needs one friction pair per wall row (build the step "
+                           "with every rowed node pressed)")
+    idx = np.empty(2 * mn, np.int64)
+    idx[0::2] = np.arange(mn)
+    idx[1::2] = mn + pairs
+    W = fs.W[np.ix_(idx, idx)] * (fs.force / fs.length)
+    q = np.concatenate([fs.g_f, fs.s_f])[idx] / fs.length
+    return W, q, fs.mu.copy()

@@ -1,0 +1,176 @@
+"""The result of a frictional state, and its judgement (issue 39, docs/friction.md).
+
+The judge's friction checks (:func:`friction_verdict`) use the thresholds of the one
+judge (:data:`lcpbench.model.judge.THRESHOLDS`: τ = force_tol(tol), NODE_SHARE,
+GEOMETRY_TOL, SLIP_FACTOR) and its compiled residuals
+(:func:`lcpbench.model.judge_friction.friction_checks`). A frictional answer is
+converged only when the outer loop stopped by its criterion and every check passes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, is_dataclass
+
+import numpy as np
+
+from ..jsonsafe import sanitise
+from ..problems.scenes import ActuatorScene, Chain
+from .chain import node_positions
+from .friction_driver import StateAnswer, datum, frictional_chain, gaps_at
+from .judge import GEOMETRY_TOL, NODE_SHARE, SLIP_FACTOR, SLIP_FLOOR, force_tol
+from .result import ContactResult
+
+
+@dataclass
+class FrictionResult:
+    """One state of a loading path (:func:`lcpbench.solve_path`).
+
+    Per free node (nodes 2..N, as ``ContactResult.forces``): ``forces`` (normal
+    reaction of the upper wall, N), ``forces_lower`` (the lower wall's, channel only),
+    ``tangential_forces`` (T, N, on the chain along +x), ``slip`` (mm, x − x at the
+    previous state) and ``stick`` (True: in contact, N > the judge's ε, and not
+    sliding, |slip| <= the judge's ε_s). ``total_force``: ΣN over every wall.
+    ``route``: "frictionless" (today's :func:`lcpbench.solve`, kept in ``contact``)
+    or "frictional" (:mod:`lcpbench.model.friction_driver`). ``judgement``: the
+    friction checks' numbers and ``fails``, the checks that failed.
+    """
+
+    scene: object
+    state: dict
+    links: int
+    x: np.ndarray
+    y: np.ndarray
+    alpha: np.ndarray
+    forces: np.ndarray
+    forces_lower: np.ndarray | None
+    tangential_forces: np.ndarray
+    slip: np.ndarray
+    stick: np.ndarray
+    total_force: float
+    pull: float
+    converged: bool
+    reason: str
+    outer_iterations: int
+    tol: float
+    time_s: float = 0.0
+    route: str = "frictional"
+    judgement: dict = field(default_factory=dict)
+    contact: ContactResult | None = None
+
+    def __repr__(self) -> str:
+        return (f"FrictionResult(N={self.links}, F={1e3 * self.total_force:.6g} mN, "
+                f"ΣT={1e3 * float(np.sum(self.tangential_forces)):.6g} mN, "
+                f"pull={1e3 * self.pull:.6g} mN, converged={self.converged})")
+
+    def to_dict(self) -> dict:
+        """A JSON-ready summary (N, mm)."""
+        scene = asdict(self.scene) if is_dataclass(self.scene) else {}
+        return sanitise({
+            "scene": scene, "state": self.state, "route": self.route,
+            "converged": self.converged, "reason": self.reason,
+            "total_force": self.total_force, "pull": self.pull,
+            "forces": self.forces, "forces_lower": self.forces_lower,
+            "tangential_forces": self.tangential_forces, "stick": self.stick,
+            "slip": self.slip, "x": self.x, "y": self.y,
+            "outer_iterations": self.outer_iterations, "tol": self.tol,
+            "time_s": self.time_s, "judgement": self.judgement,
+        })
+
+
+def from_contact(scene, state: dict, res: ContactResult, x_prev: np.ndarray | None
+                 ) -> FrictionResult:
+    """Today's frictionless answer as a state of a path (no tangential force)."""
+    f = res.free_nodes if res.free_nodes is not None else np.arange(1, res.links)
+    slip = res.x[f] - x_prev[f] if x_prev is not None else np.zeros(f.size)
+    eps_s = max(SLIP_FACTOR * res.tol * scene.length / res.links, SLIP_FLOOR * scene.length)
+    lower = res.forces_lower if res.forces_lower is not None else 0.0
+    return FrictionResult(
+        scene, state, res.links, res.x, res.y, res.alpha, res.forces, res.forces_lower,
+        np.zeros(f.size), slip, (res.forces + lower > 0) & (np.abs(slip) <= eps_s),
+        res.total_force,
+        0.0, res.converged, res.reason, res.outer_iterations, res.tol, res.time_s,
+        "frictionless", {}, res)
+
+
+_KERNEL: list = []  # the compiled checks (model/judge_friction.py), once loaded
+
+
+def _checks():
+    if not _KERNEL:
+        from ..numba_cache import held, kernel_module
+
+        held(_KERNEL).append(kernel_module("lcpbench.model.judge_friction", "friction_checks"))
+    return _KERNEL[0]
+
+
+def friction_verdict(scene: ActuatorScene, chain: Chain, alpha: np.ndarray, x0: float,
+                   fy: np.ndarray, fx: np.ndarray, normal: np.ndarray, limit: np.ndarray,
+                   gap: np.ndarray, slip: np.ndarray, tol: float) -> dict:
+    """The friction checks of an answer (docs/friction.md, the judge): numbers and fails."""
+    tau = force_tol(tol)
+    F0 = max(abs(float(np.sum(normal))), chain.force_scale, abs(float(scene.pull)))
+    eps_f = NODE_SHARE * tau * F0
+    eps_s = max(SLIP_FACTOR * tol * chain.link_length, SLIP_FLOOR * chain.length)
+    has_tau, right_datum = datum(scene)
+    kern = _checks()
+    stats = kern.friction_checks(
+        alpha, float(x0), chain.link_length, chain.joint_links[:, 0].astype(np.int64),
+        chain.joint_links[:, 1].astype(np.int64), chain.joint_stiffness, chain.rest_joint,
+        chain.link_load, chain.free_nodes.astype(np.int64), fy, fx, normal, limit, gap, slip,
+        float(scene.pull), right_datum, scene.right_end != "free", eps_f, eps_s, chain.length,
+        F0)
+    v = dict(zip(kern.FRICTION_STATS, (float(s) for s in stats)))
+    v["relative_torque_residual"] = v["max_torque_residual"] / max(v["spring_max"],
+                                                                   scene.EI / chain.length)
+    fails = []
+    if v["relative_torque_residual"] > max(10 * tol, 1e-6):
+        fails.append("torque")
+    if has_tau and abs(v["x_balance"]) > eps_f:
+        fails.append("x balance")
+    if v["cone_excess"] > eps_f:
+        fails.append("cone")
+    if v["slide_deficit"] > eps_f or v["slide_direction"] > eps_f or v["stick_slip"] > eps_s:
+        fails.append("slip")
+    if v["min_gap"] < -min(GEOMETRY_TOL, NODE_SHARE * tau):
+        fails.append("penetration")
+    if v["min_normal"] < -eps_f:
+        fails.append("sign")
+    if v["complementarity"] > NODE_SHARE * tau:
+        fails.append("complementarity")
+    v.update(tau=tau, F0=F0, eps_f=eps_f, eps_s=eps_s, fails=fails)
+    return v
+
+
+def build_result(scene: ActuatorScene, state: dict, ans: StateAnswer, x_prev: np.ndarray,
+                 tol: float) -> FrictionResult:
+    """A judged :class:`FrictionResult` from the outer loop's answer."""
+    chain = frictional_chain(scene)
+    alpha, x0 = ans.state.alpha, ans.state.x0
+    x, y = node_positions(chain, alpha)
+    x = x + x0
+    n = chain.free_nodes.size
+    up, lo, T, limit = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
+    fs = ans.step
+    if fs is not None and ans.normal.size:
+        upper = fs.normal_sign < 0
+        up[fs.normal_node[upper]] = ans.normal[upper]
+        lo[fs.normal_node[~upper]] = ans.normal[~upper]
+        T[fs.friction_node - chain.free_nodes[0]] = ans.tangential
+        paired = fs.pair >= 0
+        np.add.at(limit, fs.normal_node[paired], (fs.mu * ans.normal)[paired])
+    # every wall row, both walls of a channel: the exact gaps and the normal forces
+    g_up, g_lo = gaps_at(chain, y)
+    rows_up, rows_lo = np.isfinite(g_up), np.isfinite(g_lo)
+    gap = np.concatenate([g_up[rows_up], g_lo[rows_lo]])
+    normal = np.concatenate([up[rows_up], lo[rows_lo]])
+    slip = x[chain.free_nodes] - x_prev[chain.free_nodes]
+    verdict = friction_verdict(scene, chain, alpha, x0, lo - up, T, normal, limit, gap, slip,
+                             tol)
+    converged = ans.converged and not verdict["fails"]
+    reason = ans.reason if not ans.converged else (
+        "max|Δα| < tol; judged" if converged else "judge: " + ", ".join(verdict["fails"]))
+    stick = (up + lo > verdict["eps_f"]) & (np.abs(slip) <= verdict["eps_s"])
+    return FrictionResult(
+        scene, state, chain.links, x, y, alpha, up, lo if chain.channel else None, T, slip,
+        stick, float(up.sum() + lo.sum()), float(scene.pull), converged, reason,
+        ans.iterations, tol, ans.time_s, "frictional", verdict)

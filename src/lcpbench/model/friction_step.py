@@ -1,0 +1,170 @@
+"""The frictional contact step (issue 39), compiled: the Stewart–Trinkle LCP of a state.
+
+docs/friction.md derives it. At a configuration α of a chain held in y at both ends,
+with the unknowns δ (the free node heights' increments δy, and the translation τ
+along x when no end holds x, held in the step by a spring k_τ):
+
+    K δ = f + G_n N + G_t T,
+
+K the banded step's Hessian (:func:`lcpbench.model.step.assemble_step`, dense here)
+plus the pull's curvature (and k_τ), f = −g₀ + P ∂x_N/∂δ, G_n the gaps' and G_t the
+slips' Jacobians. Eliminating δ leaves the contact quantities affine in the forces,
+(g, s) = (g_f, s_f) + W (N, T) with W = Gᵀ K⁻¹ G (:func:`delassus_form`, Siconos'
+fc2d form), and the LCP w = M z + q, 0 <= z ⟂ w >= 0, in z = (N, β⁺, β⁻, λ) with
+T = β⁺ − β⁻ (:func:`frictional_lcp`); M is not symmetric.
+
+Each function is ``@njit(cache=True)``; with NUMBA_DISABLE_JIT=1 they run as plain
+Python. The driver (:mod:`lcpbench.model.friction_driver`) calls these.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def slip_jacobian(alpha, first, n, right_datum):
+    """D (N+1 × n): δx_i = Σ_j D[i, j] δu_j for the heights of the n free nodes
+    ``first`` … ``first + n − 1`` (the others held).
+
+    δx_i = −Σ_{k<i} tan α_k (δy_{k+1} − δy_k) with the left end as the datum (its x
+    held, or moved by τ); with ``right_datum`` each row is taken relative to the
+    right end's (x_N held): δx_i − δx_N.
+    """
+    links = alpha.size
+    t = np.tan(alpha)
+    D = np.zeros((links + 1, n))
+    for i in range(links + 1):
+        for c in range(n):
+            j = first + c
+            v = 0.0
+            if 1 <= j <= i:
+                v -= t[j - 1]
+            if j < i:
+                v += t[j]
+            D[i, c] = v
+    if right_datum:
+        for i in range(links):
+            for c in range(n):
+                D[i, c] -= D[links, c]
+        for c in range(n):
+            D[links, c] = 0.0
+    return D
+
+
+@njit(cache=True)
+def add_pull_curvature(H, alpha, a, pull, first):
+    """H += P Σ_k d_k d_kᵀ / (a cos³ α_k), d_k = e_{k+1} − e_k on the free heights
+    (nodes ``first`` … ``first + n − 1``): the curvature of the pull's potential
+    −P x_N (x_N = Σ √(a² − Δy_k²)); P > 0 only (a pulled chain is stiffer; a push adds
+    nothing)."""
+    if pull <= 0.0:
+        return
+    n = H.shape[0]
+    for k in range(alpha.size):
+        c = np.cos(alpha[k])
+        s = pull / (a * c * c * c)
+        lo, hi = k - first, k + 1 - first  # free indices of nodes k and k + 1
+        ok_lo, ok_hi = 0 <= lo < n, 0 <= hi < n
+        if ok_lo:
+            H[lo, lo] += s
+        if ok_hi:
+            H[hi, hi] += s
+        if ok_lo and ok_hi:
+            H[lo, hi] -= s
+            H[hi, lo] -= s
+
+
+@njit(cache=True)
+def _solve_columns(H, f, normal_node, normal_sign, D, friction_node):
+    """X = H⁻¹ [G_n | G_t | f] (n × (m_n + m_t + 1))."""
+    n = f.size
+    mn, mt = normal_node.size, friction_node.size
+    B = np.zeros((n, mn + mt + 1))
+    for r in range(mn):
+        B[normal_node[r], r] = normal_sign[r]
+    for c in range(mt):
+        for j in range(n):
+            B[j, mn + c] = D[friction_node[c], j]
+    for j in range(n):
+        B[j, mn + mt] = f[j]
+    return B, np.linalg.solve(H, B)
+
+
+@njit(cache=True)
+def delassus_form(H, f, normal_node, normal_sign, gap, D, friction_node, slip):
+    """The contact quantities as affine functions of the forces (docs/friction.md):
+
+    (g, s) = (g_f, s_f) + W (N, T), W = Gᵀ H⁻¹ G. Returns W ((m_n+m_t)²), the free
+    parts g_f, s_f, and X = H⁻¹ [G_n | G_t | f] to recover δy = X (N, T, 1).
+    ``normal_node`` / ``normal_sign``: the free node and ∂g/∂y (−1 upper, +1 lower)
+    of each wall row; ``friction_node``: the node (0..N) of each friction pair.
+    """
+    mn, mt = normal_node.size, friction_node.size
+    B, X = _solve_columns(H, f, normal_node, normal_sign, D, friction_node)
+    m = mn + mt
+    BX = np.ascontiguousarray(B.T) @ X
+    W = np.ascontiguousarray(BX[:m, :m])
+    free = BX[:m, m].copy()
+    g_f = gap + free[:mn]
+    s_f = slip + free[mn:]
+    return W, g_f, s_f, X
+
+
+@njit(cache=True)
+def frictional_lcp(W, g_f, s_f, mu, pair):
+    """(M, q) of the step: z = (N, β⁺, β⁻, λ).
+
+    ``mu[r]`` and ``pair[r]``: the Coulomb coefficient of wall row r and its friction
+    pair (a channel node's two rows share one pair, cone μ_up N_up + μ_lo N_lo;
+    −1: a row without friction).
+    """
+    mn, mt = g_f.size, s_f.size
+    size = mn + 3 * mt
+    M = np.zeros((size, size))
+    q = np.zeros(size)
+    bp, bm, lam = mn, mn + mt, mn + 2 * mt
+    for r in range(mn):
+        q[r] = g_f[r]
+        for c in range(mn):
+            M[r, c] = W[r, c]
+        for c in range(mt):
+            M[r, bp + c] = W[r, mn + c]
+            M[r, bm + c] = -W[r, mn + c]
+    for i in range(mt):
+        q[bp + i] = s_f[i]
+        q[bm + i] = -s_f[i]
+        for c in range(mn):
+            M[bp + i, c] = W[mn + i, c]
+            M[bm + i, c] = -W[mn + i, c]
+        for c in range(mt):
+            M[bp + i, bp + c] = W[mn + i, mn + c]
+            M[bp + i, bm + c] = -W[mn + i, mn + c]
+            M[bm + i, bp + c] = -W[mn + i, mn + c]
+            M[bm + i, bm + c] = W[mn + i, mn + c]
+        M[bp + i, lam + i] = 1.0
+        M[bm + i, lam + i] = 1.0
+        M[lam + i, bp + i] = -1.0
+        M[lam + i, bm + i] = -1.0
+    for r in range(mn):
+        if pair[r] >= 0:
+            M[lam + pair[r], r] += mu[r]
+    return M, q
+
+
+@njit(cache=True)
+def recover(z, X, mn, mt):
+    """(N, T, δ) of an LCP solution z (docs/friction.md: δ = X (N, T, 1))."""
+    N = z[:mn].copy()
+    T = z[mn:mn + mt] - z[mn + mt:mn + 2 * mt]
+    n = X.shape[0]
+    d = X[:, mn + mt].copy()
+    for j in range(n):
+        acc = 0.0
+        for r in range(mn):
+            acc += X[j, r] * N[r]
+        for c in range(mt):
+            acc += X[j, mn + c] * T[c]
+        d[j] += acc
+    return N, T, d

@@ -1,0 +1,156 @@
+"""Pull-out: the largest axial pull an actuator holds by wall friction (issue 39, item 5).
+
+A chain that no end holds along x (``left_end="slider"``, the pull on the right slider)
+holds a pull P while friction can balance it: Σ T + P = 0 with |T_i| <= μ_i N_i. The
+capacity C(P) = Σ μ_i N_i(P) falls as the pull straightens the chain, and the pull-out
+force P* is the root of g(P) = C(P) − P: at P* every contact node slides (gross slip).
+
+:func:`pull_out` follows the pull as a loading path (each state solved from the last,
+:mod:`lcpbench.model.friction_path`), stepping towards P* by the secant of g through the
+states held so far, from below: a step past P* (no equilibrium) is not kept, and the
+next one goes half as far. The nodes that pass from stick to slip between two held
+states are its events. P* is the secant's root once it is within ``rtol`` of the
+last state held, or of the root before it (g is smooth: the root's error is second
+order in the secant's span; within ~1e-7 of P* Lemke is inexact on the degenerate
+step, docs/friction.md, so the states stop short of it).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..errors import ProblemError
+from ..model.friction_path import advance, place
+from ..model.friction_result import FrictionResult
+from ..problems.checks import check_number
+from ..problems.scenes import ActuatorScene
+
+#: a step goes this share of the way to the secant's root (from below)
+APPROACH = 0.999
+
+
+@dataclass
+class PullOut:
+    """The pull-out force of a scene and the path that found it (N, mm).
+
+    ``force``: P*; ``capacity``: Σ μ_i N_i at the last state held; ``normal_forces``,
+    ``tangential_forces``: per free node there; ``normal_force_total``: ΣN over every
+    wall there; ``path``: the states held, in order; ``events``: (node, pull) where a
+    node passed from stick to slip (the first held pull at which it slides);
+    ``solves``: frictional states solved (held or not).
+    """
+
+    force: float
+    capacity: float
+    normal_forces: np.ndarray
+    tangential_forces: np.ndarray
+    normal_force_total: float
+    converged: bool
+    reason: str
+    solves: int
+    path: list[FrictionResult] = field(default_factory=list)
+    events: list[tuple[int, float]] = field(default_factory=list)
+
+    def __repr__(self) -> str:
+        total = 1e3 * self.normal_force_total
+        return (f"PullOut(force={1e3 * self.force:.6g} mN, ΣN={total:.6g} mN, "
+                f"solves={self.solves}, converged={self.converged})")
+
+
+def capacity(res: FrictionResult) -> float:
+    """C = Σ μ_i N_i over every wall (N)."""
+    mu_up, mu_lo = res.scene.wall_friction
+    lower = 0.0 if res.forces_lower is None else mu_lo * float(np.sum(res.forces_lower))
+    return mu_up * float(np.sum(res.forces)) + lower
+
+
+def _check(scene) -> ActuatorScene:
+    if not isinstance(scene, ActuatorScene):
+        raise ProblemError(f"pull_out takes an ActuatorScene, got {type(scene).__name__}")
+    if scene.left_end == "pinned" or scene.right_end != "slider":
+        raise ProblemError("pull_out needs left_end='slider' and right_end='slider' (a "
+                           "pinned end holds any pull; the pull acts on the right end), got "
+                           f"left_end={scene.left_end!r}, right_end={scene.right_end!r}")
+    if not any(m > 0 for m in scene.wall_friction):
+        raise ProblemError("pull_out needs friction > 0 on a wall")
+    return scene
+
+
+def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int = 20,
+             max_outer: int = 100) -> PullOut:
+    """The largest axial pull the scene holds (N): see the module's note.
+
+    Parameters
+    ----------
+    scene : ActuatorScene
+        Sliders at both ends and friction; its ``pull`` (>= 0) is the path's start.
+    tol : the outer loop's threshold on max|Δα| (rad) per state.
+    rtol : P* is returned once the secant's root is within ``rtol`` (relative) of the
+        last pull held or of the previous root.
+    max_solves : the budget of frictional states.
+
+    Returns
+    -------
+    PullOut
+        ``converged`` False (with a reason) when the budget runs out first or the
+        start does not hold.
+    """
+    from ..api import solve
+
+    _check(scene)
+    rtol = check_number("rtol", rtol, low=1e-12, high=0.1)
+    max_solves = int(check_number("max_solves", max_solves, low=2, high=1000, integer=True))
+    if scene.pull < 0:
+        raise ProblemError(f"pull_out starts from pull >= 0, got {scene.pull!r}")
+    current, x_prev, why = place(scene, tol=tol, max_outer=max_outer, solve=solve)
+    if why:
+        return PullOut(np.nan, np.nan, np.zeros(0), np.zeros(0), np.nan, False, why, 0)
+    path, held, events, solves = [], [], [], 0
+    P, fail, before = float(scene.pull), None, np.inf
+    while solves < max_solves:
+        res, end = advance(replace(scene, pull=P), {"pull": P}, current, x_prev, tol=tol,
+                           max_outer=max_outer)
+        solves += 1
+        if res.converged:
+            if path:
+                slid = path[-1].stick & ~res.stick
+                events += [(int(j), P) for j in np.flatnonzero(slid)]
+            path.append(res)
+            held.append((P, capacity(res) - P))
+            current, x_prev = end, res.x.copy()
+        elif not path:
+            return PullOut(np.nan, np.nan, np.zeros(0), np.zeros(0), np.nan, False,
+                           f"the start (pull {P:g} N) does not hold: {res.reason}", solves)
+        else:
+            fail = P
+        root, last = _secant_root(held), held[-1][0]
+        if len(held) >= 2 and (abs(root - last) <= rtol * abs(root) or (
+                res.converged and abs(root - before) <= rtol * abs(root))):
+            return _answer(root, path, events, solves, True, "secant root within rtol")
+        before = root
+        P = last + APPROACH * (root - last)
+        if fail is not None and P >= fail:
+            P = last + 0.5 * (fail - last)
+    return _answer(_secant_root(held), path, events, solves, False,
+                   f"the budget of {max_solves} frictional solves ran out")
+
+
+def _secant_root(held: list[tuple[float, float]]) -> float:
+    """The root of g(P) = C(P) − P on the secant through the last two held states (the
+    slope −1 with one: C unchanged)."""
+    P1, g1 = held[-1]
+    if len(held) < 2:
+        return P1 + g1
+    P0, g0 = held[-2]
+    slope = (g1 - g0) / (P1 - P0) if P1 != P0 else -1.0
+    return P1 - g1 / slope if slope < 0 else P1 + g1
+
+
+def _answer(force, path, events, solves, converged, reason) -> PullOut:
+    last = path[-1]
+    lower = last.forces_lower if last.forces_lower is not None else 0.0
+    return PullOut(float(force), capacity(last), last.forces + lower,
+                   last.tangential_forces.copy(), last.total_force, converged, reason, solves,
+                   path, events)

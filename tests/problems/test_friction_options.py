@@ -1,0 +1,57 @@
+"""The frictional options of a scene (issue 39): friction, end conditions, a pull."""
+
+import math
+
+import numpy as np
+import pytest
+
+import lcpbench
+from lcpbench import ActuatorScene, ProblemError
+
+
+@pytest.mark.parametrize("kwargs,words", [
+    (dict(friction=-0.1), "friction"),
+    (dict(friction=math.nan), "friction"),
+    (dict(friction=math.inf), "friction"),
+    (dict(friction="0.3"), "friction"),
+    (dict(friction=(0.1, 0.2)), "one per wall"),  # one wall here
+    (dict(friction=(0.1, -0.2), channel=True), "friction"),
+    (dict(left_end="clamped"), "left_end"),
+    (dict(right_end="Slider"), "right_end"),
+    (dict(pull=math.nan), "pull"),
+    (dict(pull=0.1), "pull acts on the right end"),  # the right end is pinned
+    (dict(pull=0.1, right_end="pinned", left_end="slider", friction=0.2), "right_end='pinned'"),
+    (dict(left_end="free", right_end="free", friction=0.3), "both be 'free'"),
+    (dict(left_end="slider", right_end="slider"), "nothing holds the chain along x"),
+    (dict(friction=0.2, wall_stiffness=0.1), "flat rigid walls only"),
+])
+def test_bad_frictional_input_is_one_clear_error(kwargs, words):
+    with pytest.raises(ProblemError, match=words) as info:
+        ActuatorScene(**kwargs)
+    assert "Traceback" not in str(info.value) and "\n" not in str(info.value)
+
+
+def test_defaults_are_the_paper_model():
+    scene = ActuatorScene()
+    assert scene.friction == 0.0 and scene.pull == 0.0
+    assert (scene.left_end, scene.right_end) == ("pinned", "pinned")
+    assert not scene.frictional
+    # the chain is built as before: the frictional fields do not enter it
+    a = ActuatorScene(theta=120, height=4.0, links=30).chain()
+    b = ActuatorScene(theta=120, height=4.0, links=30, friction=0.3).chain()
+    for f in ("rest_alpha", "joint_stiffness", "link_load", "upper", "lower", "free_nodes"):
+        np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
+
+
+def test_friction_per_wall():
+    s = ActuatorScene(channel=True, friction=(0.1, 0.4))
+    assert s.wall_friction == (0.1, 0.4) and s.frictional
+    assert ActuatorScene(channel=True, friction=0.2).wall_friction == (0.2, 0.2)
+    assert ActuatorScene(friction=0.2).wall_friction == (0.2, 0.0)
+    assert ActuatorScene(friction=[0.3]).wall_friction == (0.3, 0.0)
+
+
+def test_solve_refuses_a_frictional_scene_and_names_solve_path():
+    scene = ActuatorScene(links=20, friction=0.3, right_end="slider", pull=0.01)
+    with pytest.raises(ProblemError, match="solve_path"):
+        lcpbench.solve(scene)

@@ -1,0 +1,51 @@
+"""Pull-out (issue 39, item 5): the largest pull held by wall friction."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import lcpbench
+from lcpbench import ActuatorScene, ProblemError
+
+SCENE = ActuatorScene(theta=150, height=3.0, links=30, friction=0.3, left_end="slider",
+                      right_end="slider")
+
+
+def _held(scene, pull):
+    (res,) = lcpbench.solve_path(replace(scene, pull=pull), [{}], tol=1e-10)
+    return res.converged
+
+
+@pytest.mark.parametrize("scene", [SCENE, replace(SCENE, channel=True, theta=200,
+                                                  friction=(0.3, 0.1))],
+                         ids=["flat", "channel"])
+def test_pull_out_is_the_largest_pull_held(scene):
+    """Against an independent bisection on whether one state from the placement holds:
+    the same force to 1e-6; at it, the capacity Σ μ N equals the pull (gross slip)."""
+    po = lcpbench.pull_out(scene)
+    assert po.converged, po.reason
+    assert po.solves <= 20  # issue 39, target 5
+    lo, hi = 0.0, 2.0 * po.force
+    assert not _held(scene, hi)
+    for _ in range(30):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if _held(scene, mid) else (lo, mid)
+    assert abs(po.force - lo) <= 1e-6 * po.force
+    assert abs(po.capacity - po.force) <= 1e-6 * po.force
+    assert abs(np.sum(po.tangential_forces) + po.path[-1].pull) <= 1e-9 * po.force
+    pulls = [r.pull for r in po.path]
+    assert pulls == sorted(pulls) and pulls[0] == 0.0  # a loading path, from the start
+    assert all(r.converged for r in po.path)
+
+
+@pytest.mark.parametrize("kw,words", [
+    (dict(left_end="pinned"), "left_end='slider'"),
+    (dict(right_end="pinned", pull=0.0), "right_end='slider'"),
+    (dict(pull=-0.01), "pull >= 0"),
+])
+def test_pull_out_bad_input(kw, words):
+    with pytest.raises(ProblemError, match=words):
+        lcpbench.pull_out(replace(SCENE, **kw))
+    with pytest.raises(ProblemError, match="rtol"):
+        lcpbench.pull_out(SCENE, rtol=-1)
