@@ -22,6 +22,7 @@ from .escalations import Context, escalate
 from .model.compiled import check_engine, drive, reference, run_kernel
 from .model.driver import METHODS
 from .model.finish import fast_judge, finish
+from .model.formulations import resolve_formulation
 from .model.judge_compiled import chain_args
 from .model.kernel_call import BAIL_REASONS, call_kernel, kernel_args, kernel_output
 from .model.lazy_result import LazyResult, lazy_result, stats_judge
@@ -33,7 +34,7 @@ from .model.wall_free import solve_without_contact
 from .plan import Plan, make_plan
 from .problems.checks import check_flag, check_number
 from .problems.sections import check_scene
-from .solvers.registry import DEFAULT, get_settings
+from .solvers.registry import DEFAULT, get_backend, get_settings
 from .solvers.selection import Selection
 
 #: The paper's driver tolerance (rad), the default of :func:`solve`.
@@ -75,6 +76,7 @@ def solve(
     start: ContactResult | str | None = None,
     engine: str = "auto",
     pressure_limit: float | None = None,
+    formulation: str | None = None,
 ) -> ContactResult:
     """Find the constrained equilibrium of a scene.
 
@@ -130,6 +132,12 @@ def solve(
         >= 0; None: none). The result reports ``pressure`` and ``indentation``
         per node, and ``pressure_exceeded`` is True when the largest pressure
         passes the limit (tissue walls, ``wall_stiffness``).
+    formulation : the form each contact step is handed to the back-end in
+        (:mod:`lcpbench.model.formulations`, docs/formulations.md): "gaps" (F1, the
+        LCP), "heights" (F2, the box QP), "lifted" (F3), "reactions" (F4), "angles"
+        (F5), each also "+ruiz" (equilibrated); "best": the back-end's best on the
+        committed evidence (results/formulations); None (default): the back-end's own
+        form, as before. ``result.extra["formulation"]`` says what ran.
 
     Returns
     -------
@@ -154,11 +162,13 @@ def solve(
         pressure_limit = float(check_number("pressure_limit", pressure_limit, low=0.0,
                                             high=1e12, unit="N/mm"))
     name, settings, why = _backend_of(solver, settings)
-    if name == DEFAULT:  # built in: only its settings to check; its step solver when used
+    # None: the back-end's own form (today's path)
+    form = None if formulation is None else resolve_formulation(get_backend(name), formulation)
+    if name == DEFAULT and form is None:  # built in: its settings to check; its solver later
         get_settings(settings)
         step = None
     else:
-        step = make_step_solver(name, settings, scaled)  # validates them first
+        step = make_step_solver(name, settings, scaled, form)  # validates them first
     if getattr(scene, "links", None) == "auto":
         raise ProblemError("links='auto' is resolved by the discretisation study (Sec. III-D), "
                            "which runs several solves: use lcpbench.studies.discretisation."
@@ -172,11 +182,14 @@ def solve(
     begin = None if ramp else _driver_start(start, chain, method)
     plan = make_plan(chain, name, method, engine, tol,
                      "ramp" if ramp else "cold" if begin is None else "warm", scaled=scaled)
-    make_step = partial(make_step_solver, name, settings, scaled) if step is None or ramp \
-        else lambda: step
+    make_step = partial(make_step_solver, name, settings, scaled, form) \
+        if step is None or ramp else lambda: step
     ctx = Context(chain, make_step, name, settings, engine, tol, int(max_outer), method, why,
                   pressure_limit)
-    return run_plan(plan, scene, ctx, begin, t0)
+    res = run_plan(plan, scene, ctx, begin, t0)
+    if form is not None:
+        res.extra["formulation"] = str(form)
+    return res
 
 
 def run_plan(plan: Plan, scene, ctx: Context, begin: DriverStart | None,
