@@ -20,7 +20,7 @@ the solve time over every scene with failures charged at 60 s, shift 1 ms) and
 (``src/lcpbench/model/best_formulations.json``), which ``formulation="best"`` reads.
 
     python benchmarks/formulation_success.py [--level solve|step] [--backends a,b]
-        [--formulations f,g] [--settings high] [--tol 1e-9] [--theta 10:180:10]
+        [--formulations f,g | --pairs b:f,c:g] [--settings high] [--tol 1e-9] [--theta 10:180:10]
         [--height 2:7:1] [--workers 2] [--out results/formulations/success-high]
         [--best] [--force | --resume]
 """
@@ -134,6 +134,8 @@ def main(argv=None) -> None:
     p.add_argument("--level", choices=("solve", "step"), default="solve")
     p.add_argument("--backends", default=",".join(BACKENDS))
     p.add_argument("--formulations", default=None)
+    p.add_argument("--pairs", default=None,
+                   help="back-end:formulation pairs, comma-separated (instead of the cross)")
     p.add_argument("--settings", default="high")
     p.add_argument("--tol", type=float, default=1e-9)
     p.add_argument("--theta", default="10:180:10")
@@ -168,7 +170,9 @@ def main(argv=None) -> None:
     out.parent.mkdir(parents=True, exist_ok=True)
     with ProcessPoolExecutor(a.workers) as pool:
         refs = {r["key"]: r for r in pool.map(_reference, keys)}
-        tasks = [(k, b, f, a.settings, a.tol, refs[k], a.level) for b in backends for f in forms
+        pairs = ([tuple(x.split(":", 1)) for x in a.pairs.split(",")] if a.pairs
+                 else [(b, f) for b in backends for f in forms])
+        tasks = [(k, b, f, a.settings, a.tol, refs[k], a.level) for b, f in pairs
                  for k in keys if (k, b, f) not in seen]
         print(f"{len(tasks)} runs ({len(seen)} done before)", file=sys.stderr)
         with jl.open("a") as fh:
