@@ -293,3 +293,20 @@ def test_the_default_answer_does_not_move():
     for form in ("heights", "best"):
         b = lcpbench.solve(scene, formulation=form)
         assert np.array_equal(a.forces, b.forces) and "formulation" not in b.extra
+
+
+def test_best_table_names_forms_its_back_ends_take():
+    """The committed evidence behind formulation="best": every entry parses and is
+    accepted by its back-end (from the registry's data)."""
+    from lcpbench.model.formulations import best_formulations
+    from lcpbench.solvers.registry import backends
+
+    table = best_formulations()
+    known = backends()
+    for name, form in table.items():
+        assert name in known
+        assert accepts(known[name], parse_formulation(form))
+    for name in table:
+        if name in available_backends():
+            got = resolve_formulation(known[name], "best")
+            assert got is None or str(got) == str(parse_formulation(table[name]))
