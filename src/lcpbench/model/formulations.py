@@ -92,14 +92,18 @@ def parse_formulation(value: str | Formulation | None) -> Formulation | None:
 BEST_FILE = "best_formulations.json"
 
 
-def best_formulations() -> dict[str, str]:
-    """Back-end name -> its best formulation on the paper grid at ``high`` (the
-    committed table; a back-end not in it keeps its own form)."""
+def best_formulations(settings: str = "high") -> dict[str, str]:
+    """Back-end name -> its best formulation on the paper grid at ``settings`` (the
+    committed table, per profile: at ``default`` a solver's own tolerance means
+    something else in an equilibrated form, so the forms best at ``high`` are not
+    best there). A back-end or a profile not in it keeps its own form."""
     import json
     from importlib.resources import files
 
     path = files("lcpbench.model").joinpath(BEST_FILE)
-    return dict(json.loads(path.read_text(encoding="utf-8"))["best"]) if path.is_file() else {}
+    if not path.is_file():
+        return {}
+    return dict(json.loads(path.read_text(encoding="utf-8"))["best"].get(settings, {}))
 
 
 def native(backend) -> Formulation:
@@ -107,14 +111,15 @@ def native(backend) -> Formulation:
     return Formulation("heights" if backend.form == "qp" else "gaps")
 
 
-def resolve_formulation(backend, value) -> Formulation | None:
-    """The formulation ``backend`` is handed for ``value`` (a name, "best" or None);
-    None where that is its own form (today's path, unchanged). A form the back-end
-    does not take is one ProblemError naming those it takes."""
+def resolve_formulation(backend, value, settings="high") -> Formulation | None:
+    """The formulation ``backend`` is handed for ``value`` (a name, "best" or None) at
+    ``settings`` (a profile's name or Settings: "best" is per profile); None where that
+    is its own form (today's path, unchanged). A form the back-end does not take is one
+    ProblemError naming those it takes."""
     if value is None:
         return None
     if isinstance(value, str) and value.strip().lower() == "best":
-        best = best_formulations().get(backend.name)
+        best = best_formulations(getattr(settings, "name", settings)).get(backend.name)
         form = native(backend) if best is None else parse_formulation(best)
     else:
         form = parse_formulation(value)
