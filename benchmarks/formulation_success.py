@@ -193,9 +193,11 @@ def main(argv=None) -> None:
             f"Machine: {timing_note(start)}\n\n")
     md.write_text(head + text + "\n")
     print(head + text)
-    if a.best:
-        BEST.write_text(json.dumps({"source": str(md), "settings": a.settings, "tol": a.tol,
-                                    "best": best}, indent=1) + "\n")
+    if a.best:  # this profile's row of the table, the others kept
+        table_ = json.loads(BEST.read_text()) if BEST.exists() else {"best": {}}
+        table_.setdefault("source", {})[a.settings] = f"{md} (driver tol {a.tol:g})"
+        table_["best"][a.settings] = best
+        BEST.write_text(json.dumps(table_, indent=1) + "\n")
 
 
 if __name__ == "__main__":

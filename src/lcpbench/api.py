@@ -163,7 +163,8 @@ def solve(
                                             high=1e12, unit="N/mm"))
     name, settings, why = _backend_of(solver, settings)
     # None: the back-end's own form (today's path)
-    form = None if formulation is None else resolve_formulation(get_backend(name), formulation)
+    form = None if formulation is None else resolve_formulation(get_backend(name), formulation,
+                                                                get_settings(settings))
     if name == DEFAULT and form is None:  # built in: its settings to check; its solver later
         get_settings(settings)
         step = None

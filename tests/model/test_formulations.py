@@ -303,10 +303,27 @@ def test_best_table_names_forms_its_back_ends_take():
 
     table = best_formulations()
     known = backends()
-    for name, form in table.items():
+    for name, form in table.items():  # at high
         assert name in known
         assert accepts(known[name], parse_formulation(form))
     for name in table:
         if name in available_backends():
             got = resolve_formulation(known[name], "best")
             assert got is None or str(got) == str(parse_formulation(table[name]))
+    osqp = known["osqp"]
+    assert resolve_formulation(osqp, "best", "default") is None  # no evidence: its own
+
+
+def test_best_through_the_library_call():
+    """lcpbench.solve(..., settings="high", tol=1e-9, formulation="best") runs the
+    table's form and is judged as any solve."""
+    if "osqp" not in available_backends():
+        pytest.skip("osqp not installed")
+    from lcpbench.model.formulations import best_formulations
+
+    scene = ActuatorScene(theta=150, height=3, links=40)
+    ref = lcpbench.solve(scene, settings="high", tol=1e-11)
+    res = lcpbench.solve(scene, solver="osqp", settings="high", tol=1e-9, formulation="best")
+    assert res.extra["formulation"] == best_formulations()["osqp"]
+    assert res.converged
+    assert abs(res.total_force - ref.total_force) <= 1e-7 * abs(ref.total_force)

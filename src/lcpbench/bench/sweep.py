@@ -110,8 +110,8 @@ def plan_sweep(grid: Grid | Iterable, backends: list[str], settings: list[str], 
     from ..model.formulations import resolve_formulation
     from ..solvers.registry import get_backend
 
-    forms = {name: resolve_formulation(get_backend(name), formulation)
-             for name in backends} if formulation is not None else {}
+    forms = {(name, p): resolve_formulation(get_backend(name), formulation, p)
+             for name in backends for p in settings} if formulation is not None else {}
     if forms and continuation is not None:
         raise ProblemError("--formulation runs single solves; not with --continuation")
 
@@ -154,7 +154,7 @@ def plan_sweep(grid: Grid | Iterable, backends: list[str], settings: list[str], 
         for m in methods:
             for name in backends:
                 for p in settings:
-                    form = forms.get(name)
+                    form = forms.get((name, p))
                     jobs.append(RunJob(k, name, p, PROFILE_TOL[p] if tol is None else tol,
                                        driver=m, repeat=repeat,
                                        formulation=None if form is None else str(form)))

@@ -195,7 +195,7 @@ def solve_step(step, solver: str | Backend = "auto", settings: str | Settings = 
     """
     backend = solver if isinstance(solver, Backend) else get_backend(solver)
     s = get_settings(settings)
-    form = resolve_formulation(backend, formulation)
+    form = resolve_formulation(backend, formulation, s)
     t0 = time.perf_counter()
     if form is not None:
         out = _formulated(backend, step, s, scaled, form)
@@ -392,7 +392,7 @@ def make_step_solver(solver: str = "auto", settings: str | Settings = "default",
     :func:`solve_step`, resolved once here)."""
     backend = get_backend(solver)
     s = get_settings(settings)
-    form = resolve_formulation(backend, formulation)
+    form = resolve_formulation(backend, formulation, s)
 
     def run(step, warm):
         return solve_step(step, backend, s, scaled=scaled, warm=warm, formulation=form)
