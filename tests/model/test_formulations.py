@@ -327,3 +327,17 @@ def test_best_through_the_library_call():
     assert res.extra["formulation"] == best_formulations()["osqp"]
     assert res.converged
     assert abs(res.total_force - ref.total_force) <= 1e-7 * abs(ref.total_force)
+
+
+def test_elastic_walls_keep_their_own_forms():
+    """A step with elastic walls is handed over in its own forms whatever the
+    formulation asked for, and says so (an empty ``formulation``)."""
+    if "osqp" not in available_backends():
+        pytest.skip("osqp not installed")
+    scene = ActuatorScene(theta=150, height=3, links=30, wall_stiffness=1.0)
+    step = _step(scene)
+    assert step.elastic
+    a = solve_step(step, "osqp", "high")
+    b = solve_step(step, "osqp", "high", formulation="lifted")
+    assert b.formulation == "" and b.status == a.status
+    assert np.allclose(a.u, b.u, rtol=0, atol=1e-9 * scene.length)

@@ -200,7 +200,7 @@ def solve_step(step, solver: str | Backend = "auto", settings: str | Settings = 
     if form is not None:
         out = _formulated(backend, step, s, scaled, form)
         out.backend, out.settings, out.scaled = backend.name, s.name, scaled
-        out.formulation = str(form)
+        out.formulation = "" if step.elastic else str(form)  # elastic walls: their own
         _judge_safely(step, out, s)
         out.wall_time = time.perf_counter() - t0
         return out
