@@ -99,29 +99,8 @@ def accuracy(step, links: int) -> dict:
     return out
 
 
-def main(argv=None) -> None:
-    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--links", default="40,140,1000,4000")
-    p.add_argument("--out", default="results/formulations/conditioning")
-    p.add_argument("--force", action="store_true")
-    a = p.parse_args(argv)
-
-    import lcpbench
-    from lcpbench import ActuatorScene
-    from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
-    from lcpbench.model.step import assemble_step
-
-    out = Path(a.out)
-    md, js = out.with_suffix(".md"), out.with_suffix(".json")
-    refuse_overwrite([md, js], a.force)
-    start = timing_start()
-    data = {}
-    for n in (int(x) for x in a.links.split(",")):
-        scene = ActuatorScene(theta=150, height=3, links=n)
-        res = lcpbench.solve(scene, settings="high", tol=1e-10)
-        step = assemble_step(scene.chain(), np.asarray(res.alpha))
-        data[n] = {"cond": conditioning(step), "accuracy": accuracy(step, n)}
-        print(n, json.dumps(data[n]), flush=True)
+def render(data: dict, links: str, machine: str) -> str:
+    """The markdown of the results ``data`` (N -> {"cond", "accuracy"})."""
     forms = ("gaps", "heights", "lifted", "reactions", "angles")
     lines = ["| N | " + " | ".join(f"cond {f}" for f in forms) + " |",
              "| ---: |" + " ---: |" * len(forms)]
@@ -146,14 +125,48 @@ def main(argv=None) -> None:
             nat = r["natural"]
             acc.append(f"| {n} | {f} | `{r['backend']}` | {r['status']} | {r['error']:.1e} | "
                        f"{'—' if nat is None else f'{nat:.1e}'} | {r['time_s']:.2f} |")
-    text = (f"# Conditioning of the formulations (θ = 150°, h = 3 mm)\n\n"
-            f"Command: `python benchmarks/formulation_conditioning.py --links {a.links}`. "
+    return (f"# Conditioning of the formulations (θ = 150°, h = 3 mm)\n\n"
+            f"Command: `python benchmarks/formulation_conditioning.py --links {links}`. "
             f"Each step at its converged configuration, nondimensionalised as handed to a "
-            f"back-end. Derivation: docs/formulations.md.\n\nMachine: {timing_note(start)}"
+            f"back-end. Derivation: docs/formulations.md.\n\nMachine: {machine}"
             f"\n\n" + "\n".join(lines) + f"\n\nFitted growth: {', '.join(slopes)}.\n\n"
             "## Accuracy each formulation reaches at settings `high`\n\n"
             "Reactions mapped back from the formulation's multipliers, against the built-in "
             "active set's (exact to round-off).\n\n" + "\n".join(acc) + "\n")
+
+
+def main(argv=None) -> None:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--links", default="40,140,1000,4000")
+    p.add_argument("--out", default="results/formulations/conditioning")
+    p.add_argument("--force", action="store_true")
+    p.add_argument("--from-log", default=None, metavar="FILE",
+                   help="write the results from the 'N {json}' lines a run printed")
+    a = p.parse_args(argv)
+
+    import lcpbench
+    from lcpbench import ActuatorScene
+    from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
+    from lcpbench.model.step import assemble_step
+
+    out = Path(a.out)
+    md, js = out.with_suffix(".md"), out.with_suffix(".json")
+    refuse_overwrite([md, js], a.force)
+    start = timing_start()
+    data = {}
+    if a.from_log:  # a run stopped before its end: the sizes it finished
+        for line in Path(a.from_log).read_text().splitlines():
+            n, _, rest = line.partition(" ")
+            if n.isdigit() and rest.startswith("{"):
+                data[int(n)] = json.loads(rest)
+        a.links = ",".join(map(str, data))
+    for n in ([] if a.from_log else (int(x) for x in a.links.split(","))):
+        scene = ActuatorScene(theta=150, height=3, links=n)
+        res = lcpbench.solve(scene, settings="high", tol=1e-10)
+        step = assemble_step(scene.chain(), np.asarray(res.alpha))
+        data[n] = {"cond": conditioning(step), "accuracy": accuracy(step, n)}
+        print(n, json.dumps(data[n]), flush=True)
+    text = render(data, a.links, timing_note(start))
     md.parent.mkdir(parents=True, exist_ok=True)
     md.write_text(text)
     js.write_text(json.dumps({str(k): v for k, v in data.items()}, indent=1) + "\n")
