@@ -16,7 +16,8 @@ error of its reactions (mapped back) against the built-in active set's, over the
 largest reaction, with the judge's verdict.
 
     python benchmarks/formulation_conditioning.py [--links 40,140,1000,4000]
-        [--out results/formulations/conditioning] [--force]
+        [--accuracy-up-to N] [--out results/formulations/conditioning] [--force]
+        [--from-log FILE[,FILE]]
 
 Writes PATH.md and PATH.json; refuses to overwrite committed results without --force.
 """
@@ -78,7 +79,7 @@ def conditioning(step) -> dict:
     return out
 
 
-def accuracy(step, links: int) -> dict:
+def accuracy(step, links: int, up_to: int) -> dict:
     from lcpbench.model.step_solver import solve_step
 
     ref = solve_step(step, "active-set", "high")
@@ -86,8 +87,10 @@ def accuracy(step, links: int) -> dict:
     scale = float(np.max(np.abs(R0)))
     out = {}
     for form, (backend, top) in SOLVER.items():
-        if links > top:
-            out[form] = {"backend": backend, "run": False}
+        if links > min(top, up_to):
+            out[form] = {"backend": backend, "run": False,
+                         "why": "dense form too large for this back-end" if links > top
+                         else f"--accuracy-up-to {up_to}"}
             continue
         t0 = time.perf_counter()
         sol = solve_step(step, backend, "high", formulation=form)
@@ -119,8 +122,8 @@ def render(data: dict, links: str, machine: str) -> str:
     for n, d in data.items():
         for f, r in d["accuracy"].items():
             if not r["run"]:
-                acc.append(f"| {n} | {f} | `{r['backend']}` | not run (dense form too large "
-                           f"for this back-end) | — | — | — |")
+                why = r.get("why", "dense form too large for this back-end")
+                acc.append(f"| {n} | {f} | `{r['backend']}` | not run ({why}) | — | — | — |")
                 continue
             nat = r["natural"]
             acc.append(f"| {n} | {f} | `{r['backend']}` | {r['status']} | {r['error']:.1e} | "
@@ -140,8 +143,10 @@ def main(argv=None) -> None:
     p.add_argument("--links", default="40,140,1000,4000")
     p.add_argument("--out", default="results/formulations/conditioning")
     p.add_argument("--force", action="store_true")
-    p.add_argument("--from-log", default=None, metavar="FILE",
-                   help="write the results from the 'N {json}' lines a run printed")
+    p.add_argument("--accuracy-up-to", type=int, default=10**6, metavar="N",
+                   help="solve the formulations (the accuracy table) up to N links only")
+    p.add_argument("--from-log", default=None, metavar="FILE[,FILE]",
+                   help="write the results from the 'N {json}' lines runs printed")
     a = p.parse_args(argv)
 
     import lcpbench
@@ -155,16 +160,18 @@ def main(argv=None) -> None:
     start = timing_start()
     data = {}
     if a.from_log:  # a run stopped before its end: the sizes it finished
-        for line in Path(a.from_log).read_text().splitlines():
-            n, _, rest = line.partition(" ")
-            if n.isdigit() and rest.startswith("{"):
-                data[int(n)] = json.loads(rest)
+        for log in a.from_log.split(","):
+            for line in Path(log).read_text().splitlines():
+                n, _, rest = line.partition(" ")
+                if n.isdigit() and rest.startswith("{"):
+                    data[int(n)] = json.loads(rest)
+        data = dict(sorted(data.items()))
         a.links = ",".join(map(str, data))
     for n in ([] if a.from_log else (int(x) for x in a.links.split(","))):
         scene = ActuatorScene(theta=150, height=3, links=n)
         res = lcpbench.solve(scene, settings="high", tol=1e-10)
         step = assemble_step(scene.chain(), np.asarray(res.alpha))
-        data[n] = {"cond": conditioning(step), "accuracy": accuracy(step, n)}
+        data[n] = {"cond": conditioning(step), "accuracy": accuracy(step, n, a.accuracy_up_to)}
         print(n, json.dumps(data[n]), flush=True)
     text = render(data, a.links, timing_note(start))
     md.parent.mkdir(parents=True, exist_ok=True)
