@@ -23,6 +23,7 @@ from .escalations import Context, escalate
 from .model.compiled import check_engine, drive, profile_reference, reference, run_kernel
 from .model.driver import METHODS
 from .model.finish import fast_judge, finish
+from .model.formulations import resolve_formulation
 from .model.judge_compiled import chain_args
 from .model.kernel_call import (
     BAIL_REASONS,
@@ -41,7 +42,7 @@ from .plan import Plan, make_plan
 from .problems.checks import check_flag, check_number, describe
 from .problems.sections import check_scene
 from .solvers.base import Settings
-from .solvers.registry import DEFAULT, get_settings
+from .solvers.registry import DEFAULT, get_backend, get_settings
 from .solvers.selection import Selection
 
 #: The paper's driver tolerance (rad), the default of :func:`solve`.
@@ -82,6 +83,7 @@ def solve(
     settings: str | Settings = "default",
     start: ContactResult | str | None = None,
     pressure_limit: float | None = None,
+    formulation: str | None = None,
 ) -> ContactResult:
     """Find the constrained equilibrium of a scene.
 
@@ -134,6 +136,12 @@ def solve(
         >= 0; None: none). The result reports ``pressure`` and ``indentation``
         per node, and ``pressure_exceeded`` is True when the largest pressure
         passes the limit (tissue walls, ``wall_stiffness``).
+    formulation : the form each contact step is handed to the back-end in
+        (:mod:`lcpbench.model.formulations`, docs/formulations.md): "gaps" (F1, the
+        LCP), "heights" (F2, the box QP), "lifted" (F3), "reactions" (F4), "angles"
+        (F5), each also "+ruiz" (equilibrated); "best": the back-end's best on the
+        committed evidence (results/formulations); None (default): the back-end's own
+        form, as before. ``result.extra["formulation"]`` says what ran.
 
     Returns
     -------
@@ -145,7 +153,7 @@ def solve(
     """
     return solve_internal(scene, solver, tol, accuracy=accuracy, method=method,
                           max_outer=max_outer, settings=settings, start=start,
-                          pressure_limit=pressure_limit)
+                          pressure_limit=pressure_limit, formulation=formulation)
 
 
 def solve_internal(
@@ -161,6 +169,7 @@ def solve_internal(
     start: ContactResult | str | None = None,
     engine: str = "auto",
     pressure_limit: float | None = None,
+    formulation: str | None = None,
 ) -> ContactResult:
     """:func:`solve` with its internals reachable, for the tests, the benchmarks and
     ``lcpbench solve --raw``; the other parameters are :func:`solve`'s.
@@ -205,11 +214,14 @@ def solve_internal(
         pressure_limit = float(check_number("pressure_limit", pressure_limit, low=0.0,
                                             high=1e12, unit="N/mm"))
     name, settings, why = _backend_of(solver, settings)
-    if name == DEFAULT:  # built in: only its settings to check; its step solver when used
+    # None: the back-end's own form (today's path)
+    form = None if formulation is None else resolve_formulation(get_backend(name), formulation,
+                                                                get_settings(settings))
+    if name == DEFAULT and form is None:  # built in: its settings to check; its solver later
         get_settings(settings)
         step = None
     else:
-        step = make_step_solver(name, settings, scaled)  # validates them first
+        step = make_step_solver(name, settings, scaled, form)  # validates them first
     if getattr(scene, "links", None) == "auto":
         raise ProblemError("links='auto' is resolved by the discretisation study (Sec. III-D), "
                            "which runs several solves: use lcpbench.studies.discretisation."
@@ -223,17 +235,19 @@ def solve_internal(
     begin = None if ramp else _driver_start(start, chain, method)
     plan = make_plan(chain, name, method, engine, tol,
                      "ramp" if ramp else "cold" if begin is None else "warm", scaled=scaled)
-    make_step = partial(make_step_solver, name, settings, scaled) if step is None or ramp \
-        else lambda: step
+    make_step = partial(make_step_solver, name, settings, scaled, form) \
+        if step is None or ramp else lambda: step
     ctx = Context(chain, make_step, name, settings, engine, tol, int(max_outer), method, why,
                   pressure_limit)
     res = run_plan(plan, scene, ctx, begin, t0)
+    if form is not None:
+        res.extra["formulation"] = str(form)
     if accuracy is None:
         return res
     return held_to(res, check_accuracy(accuracy), lambda t, r: solve_internal(
         scene, solver, t, method=method, max_outer=max_outer, settings=settings,
         scaled=scaled, start=None if method == "undamped" else r, engine=engine,
-        pressure_limit=pressure_limit))
+        pressure_limit=pressure_limit, formulation=formulation))
 
 
 def run_plan(plan: Plan, scene, ctx: Context, begin: DriverStart | None,

@@ -7,6 +7,7 @@ from lcpbench.bench.jobs import PROFILE_TOL, REFERENCE_TOL
 from lcpbench.bench.metrics import error_of, success_tol
 from lcpbench.bench.store import Store
 from lcpbench.bench.sweep import plan_sweep, sweep
+from lcpbench.errors import ProblemError
 from lcpbench.problems.scenes import ActuatorScene
 
 # Two scenes of N = 30: one in contact at h >= 4 mm, where the paper's baseline
@@ -123,3 +124,23 @@ def test_hang_crash_and_raise_cost_one_row_each(tmp_path, misbehaving_backends):
     assert rows["test-raise"]["status"] == "not_converged"
     assert "always raises" in rows["test-raise"]["reason"]
     assert not any(rows[b]["converged"] for b in misbehaving_backends)
+
+
+def test_a_formulation_is_a_run_of_its_own(tmp_path):
+    """--formulation: each back-end's runs stored as method driver@form, beside and
+    equal (to the tolerance) to the reference; a back-end's own form is the plain run."""
+    with pytest.raises(ProblemError, match="active-set does not take reactions"):
+        plan_sweep(SCENES[:1], ["active-set"], ["high"], formulation="reactions")
+    jobs = plan_sweep(SCENES[:1], ["lemke"], ["high"], baselines=(), formulation="reactions")
+    assert [j.label for j in jobs if hasattr(j, "driver")] == ["globalised@reactions"]
+    assert [j.label for j in plan_sweep(SCENES[:1], ["lemke"], ["high"], baselines=(),
+                                        formulation="gaps") if hasattr(j, "driver")] \
+        == ["globalised"]  # Lemke's own form: the plain run
+    with Store(tmp_path / "f.sqlite") as st:
+        sweep(st, jobs, workers=1)
+        runs, refs = st.runs(), st.refs()
+    (row,) = runs
+    assert row["method"] == "globalised@reactions" and row["converged"]
+    ref = refs[row["scene"]]
+    assert error_of(row["total_force"], ref["total_force"], 32.01 / 30 ** 2) <= success_tol(
+        PROFILE_TOL["high"])

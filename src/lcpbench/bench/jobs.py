@@ -196,10 +196,13 @@ class RunJob(Job):
     kind: ClassVar[str] = "run"
 
     driver: str = "globalised"  # the driver's scheme (model.driver.METHODS)
+    #: the contact step's form (model.formulations), None: the back-end's own
+    formulation: str | None = None
 
     @property
     def label(self) -> str:
-        return self.driver
+        """The stored method: the driver, and ``@formulation`` where one was asked for."""
+        return self.driver if self.formulation is None else f"{self.driver}@{self.formulation}"
 
     def _run(self, time_limit):
         from ..api import solve
@@ -209,7 +212,8 @@ class RunJob(Job):
 
         def once():
             return solution_row(solve(scene, solver=self.backend, tol=self.tol,
-                                      settings=self.settings, method=self.driver))
+                                      settings=self.settings, method=self.driver,
+                                      formulation=self.formulation))
 
         first = once()
         return [repeated(first, once, self.repeats(first))]

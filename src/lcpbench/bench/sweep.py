@@ -91,7 +91,8 @@ def _lines(scenes: list) -> list[list]:
 def plan_sweep(grid: Grid | Iterable, backends: list[str], settings: list[str], *,
                tol: float | None = None, method: str | Iterable[str] = "globalised",
                baselines: Iterable[str] = ("baseline",),
-               continuation: str | None = None, repeat: int = 1) -> list[Job]:
+               continuation: str | None = None, repeat: int = 1,
+               formulation: str | None = None) -> list[Job]:
     """Every job of a sweep, in a fixed order: references, then scene by scene.
 
     ``method`` is one driver scheme or several (each back-end runs with each).
@@ -101,8 +102,18 @@ def plan_sweep(grid: Grid | Iterable, backends: list[str], settings: list[str], 
     "globalised+<continuation>". It needs the globalised driver only.
     ``repeat``: solves timed per run (back-ends and baselines; a converged
     run's times are the median of ``repeat``, the spread is stored).
+    ``formulation``: the contact step's form for every back-end run
+    (:mod:`lcpbench.model.formulations`; "best": each back-end's, resolved here), stored
+    in the method as ``driver@formulation``; a back-end's own form is the plain run.
     """
     from ..model.driver import METHODS
+    from ..model.formulations import resolve_formulation
+    from ..solvers.registry import get_backend
+
+    forms = {(name, p): resolve_formulation(get_backend(name), formulation, p)
+             for name in backends for p in settings} if formulation is not None else {}
+    if forms and continuation is not None:
+        raise ProblemError("--formulation runs single solves; not with --continuation")
 
     methods = [method] if isinstance(method, str) else list(method)
     for m in methods:
@@ -143,8 +154,10 @@ def plan_sweep(grid: Grid | Iterable, backends: list[str], settings: list[str], 
         for m in methods:
             for name in backends:
                 for p in settings:
+                    form = forms.get((name, p))
                     jobs.append(RunJob(k, name, p, PROFILE_TOL[p] if tol is None else tol,
-                                       driver=m, repeat=repeat))
+                                       driver=m, repeat=repeat,
+                                       formulation=None if form is None else str(form)))
     return jobs
 
 

@@ -77,6 +77,11 @@ def register(subparsers) -> None:
                         "nondimensionalised one")
     s.add_argument("--method", choices=METHODS, default=DEFAULT_METHOD,
                    help=f"outer iteration (default {DEFAULT_METHOD})")
+    s.add_argument("--formulation", default=None, metavar="NAME|best",
+                   help="the form each contact step is handed to the back-end in: gaps, "
+                        "heights, lifted, reactions or angles (F1-F5), each also +ruiz; "
+                        "best: the back-end's best on the committed evidence "
+                        "(docs/formulations.md); default: the back-end's own form")
     s.add_argument("--start", choices=("cold", "ramp"), default="cold",
                    help="cold: from the free arc (default; a refused answer is ramped "
                         "anyway); ramp: follow the load from zero first, the state the "
@@ -218,7 +223,9 @@ def summary(result, extra=()) -> str:
     rows += pressure_rows(result)
     rows += [
         ("iterations", f"{result.outer_iterations} outer, {result.inner_iterations} inner "
-                       f"({result.solver}, {result.method}, tol {result.tol:g} rad)"),
+                       f"({result.solver}, {result.method}, tol {result.tol:g} rad"
+                       + (f", formulation {form}" if (form := result.extra.get("formulation"))
+                          else "") + ")"),
         ("time", f"{result.time_s:.3g} s"),
         ("certificate", f"min gap {cert.min_gap:.3g} mm, min force {cert.min_force:.3g} N, "
                         f"complementarity {cert.complementarity:.3g} N*mm, "
@@ -267,7 +274,8 @@ def cmd_solve(args) -> int:
     result = solve_internal(scene, solver=args.solver, tol=args.tol, accuracy=args.accuracy,
                             method=args.method, settings=args.settings, scaled=not args.raw,
                             pressure_limit=args.pressure_limit,
-                            start="ramp" if args.start == "ramp" else None)
+                            start="ramp" if args.start == "ramp" else None,
+                            formulation=args.formulation)
     plot_error = None
     if args.plot is not None:
         from ..bench.plot import plot_shape

@@ -138,6 +138,11 @@ def register(subparsers) -> None:
     sw.add_argument("--method", default=DEFAULT_METHOD, metavar="M[,M]",
                     help=f"outer iteration(s): globalised, newton, undamped, comma-separated "
                          f"(default {DEFAULT_METHOD})")
+    sw.add_argument("--formulation", default=None, metavar="NAME|best",
+                    help="the form each contact step is handed to every back-end in (gaps, "
+                         "heights, lifted, reactions, angles, each also +ruiz; best: each "
+                         "back-end's on the committed evidence); stored as method "
+                         "DRIVER@NAME; default: each back-end's own form")
     sw.add_argument("--continuation", nargs="?", const="adaptive", default=None,
                     choices=CONTINUATION, metavar="PREDICTOR",
                     help="warm-start along theta: run each back-end over each line of "
@@ -305,7 +310,7 @@ def cmd_sweep(args) -> int:
                  "both": ["baseline", "baseline-fd"], "none": []}[args.baseline]
     jobs = plan_sweep(scenes, solvers, settings, tol=args.tol, method=methods,
                       baselines=baselines, continuation=args.continuation,
-                      repeat=args.repeat)
+                      repeat=args.repeat, formulation=args.formulation)
     planned = {k for j in jobs if not isinstance(j, ReferenceJob) for k in j.keys}
     with Store(args.store) as store, store.lock("lcpbench sweep", wait=args.wait) as sweep_id:
         store.put_plan(sweep_id, planned)  # what `lcpbench report` covers by default

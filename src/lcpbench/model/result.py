@@ -315,6 +315,8 @@ class ContactResult:
             "judge": self.judge,
             "retries": [{"name": r.name, "why": r.why} for r in self.retries],
         }
+        if "formulation" in self.extra:  # the step's form, when one was asked for
+            out["formulation"] = self.extra["formulation"]
         if self.indentation is not None and self.pressure is not None:
             out["indentation"] = self.indentation.tolist()
             out["pressure"] = self.pressure.tolist()

@@ -30,14 +30,13 @@ from ..solvers.registry import DEFAULT, Backend, get_backend, get_settings
 from ..solvers.runner import fallback_message
 from .elastic import compliances
 from .elastic_step import run_elastic_step
+from .formulations import (
+    Formulation,
+    resolve_formulation,
+    run_formulation,
+    step_scales,
+)
 from .judge import ROUNDOFF_ULPS
-
-
-def step_scales(step, scaled: bool) -> tuple[float, float]:
-    """(length, force) units of the form handed to the back-end."""
-    if not scaled:
-        return 1.0, 1.0
-    return float(step.length_scale), float(step.force_scale)
 
 
 def step_qp(step, scaled: bool = True) -> BoxQP:
@@ -186,11 +185,25 @@ def dense_fallback_refused(fallback: str, n: int) -> str | None:
 
 
 def solve_step(step, solver: str | Backend = "auto", settings: str | Settings = "default",
-               *, scaled: bool = True, warm: StepSolution | None = None) -> StepSolution:
-    """Solve one contact step with any back-end; never raises on solver trouble."""
+               *, scaled: bool = True, warm: StepSolution | None = None,
+               formulation: str | Formulation | None = None) -> StepSolution:
+    """Solve one contact step with any back-end; never raises on solver trouble.
+
+    ``formulation`` (:mod:`lcpbench.model.formulations`: a name, ``"best"`` or None)
+    is the form the back-end is handed; None or the back-end's own form (F2, the box
+    QP, for a QP back-end; F1, the LCP in gaps, for an LCP back-end) is today's path.
+    """
     backend = solver if isinstance(solver, Backend) else get_backend(solver)
     s = get_settings(settings)
+    form = resolve_formulation(backend, formulation, s)
     t0 = time.perf_counter()
+    if form is not None:
+        out = _formulated(backend, step, s, scaled, form)
+        out.backend, out.settings, out.scaled = backend.name, s.name, scaled
+        out.formulation = "" if step.elastic else str(form)  # elastic walls: their own
+        _judge_safely(step, out, s)
+        out.wall_time = time.perf_counter() - t0
+        return out
     if backend.name == DEFAULT and (sol := _compiled_step(step, s, warm)) is not None:
         sol.backend, sol.settings, sol.scaled = backend.name, s.name, scaled
         sol.status, sol.message = verdict(sol.status, sol.residuals["natural"],
@@ -204,11 +217,7 @@ def solve_step(step, solver: str | Backend = "auto", settings: str | Settings = 
         sol = StepSolution(np.full(n, np.nan), np.zeros(n), np.zeros(n), Status.FAILED,
                            message=f"{backend.name} raised {type(exc).__name__}: {exc}")
     sol.backend, sol.settings, sol.scaled = backend.name, s.name, scaled
-    try:
-        _judge(step, sol, s)
-    except np.linalg.LinAlgError as exc:  # the residuals' own solve: H not positive definite
-        sol.status = Status.FAILED
-        sol.message = f"lcpbench's residuals could not be computed ({exc})"
+    _judge_safely(step, sol, s)
     if sol.status is not Status.SOLVED and backend.fallback:
         if refused := dense_fallback_refused(backend.fallback, step.size):
             sol.message = f"{sol.message}; {refused}" if sol.message else refused
@@ -289,6 +298,33 @@ def _warm_args(warm: StepSolution | None, n: int):
     return u, up, lo, flags
 
 
+def _formulated(backend: Backend, step, s: Settings, scaled: bool,
+                form: Formulation) -> StepSolution:
+    """The back-end's answer in ``form`` (:func:`~.formulations.run_formulation`); a
+    step with elastic walls keeps its own forms, a dense form its size limit."""
+    n = step.size
+    try:
+        if step.elastic:
+            return run_elastic_step(backend, backend.load(), step, s, scaled, None)
+        if form.name in ("gaps", "reactions", "angles") and (why := dense_form_too_large(n)):
+            return StepSolution(np.full(n, np.nan), np.zeros(n), np.zeros(n), Status.FAILED,
+                                message=why)
+        return run_formulation(backend, step, s, form, scaled,
+                               step_lcp if form.name == "gaps" else step_qp)
+    except Exception as exc:
+        return StepSolution(np.full(n, np.nan), np.zeros(n), np.zeros(n), Status.FAILED,
+                            message=f"{backend.name} ({form}) raised "
+                                    f"{type(exc).__name__}: {exc}")
+
+
+def _judge_safely(step, sol: StepSolution, s: Settings) -> None:
+    try:
+        _judge(step, sol, s)
+    except np.linalg.LinAlgError as exc:  # the residuals' own solve: H not positive definite
+        sol.status = Status.FAILED
+        sol.message = f"lcpbench's residuals could not be computed ({exc})"
+
+
 def _judge(step, sol: StepSolution, s: Settings) -> None:
     res, R = step_residuals(step, sol.u)
     sol.residuals, sol.forces_net = res, R
@@ -350,14 +386,18 @@ def _run_step(backend: Backend, step, s: Settings, scaled: bool, warm) -> StepSo
 
 
 def make_step_solver(solver: str = "auto", settings: str | Settings = "default",
-                     scaled: bool = True) -> Callable:
-    """A ``(step, warm) -> StepSolution`` callable for the driver."""
+                     scaled: bool = True,
+                     formulation: str | Formulation | None = None) -> Callable:
+    """A ``(step, warm) -> StepSolution`` callable for the driver (``formulation``: as
+    :func:`solve_step`, resolved once here)."""
     backend = get_backend(solver)
     s = get_settings(settings)
+    form = resolve_formulation(backend, formulation, s)
 
     def run(step, warm):
-        return solve_step(step, backend, s, scaled=scaled, warm=warm)
+        return solve_step(step, backend, s, scaled=scaled, warm=warm, formulation=form)
 
     run.backend = backend  # type: ignore[attr-defined]  # read by the harness
     run.scaled = scaled  # type: ignore[attr-defined]  # model.compiled_driver.takes
+    run.formulation = None if form is None else str(form)  # type: ignore[attr-defined]
     return run

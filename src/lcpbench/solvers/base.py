@@ -123,6 +123,7 @@ class StepSolution:
     residuals: dict = field(default_factory=dict)
     forces_net: np.ndarray | None = None  # net R = K g + z (eq. 30) from the gaps (N)
     wall_time: float = 0.0
+    formulation: str = ""  # the form handed over (model.formulations); "": its own
 
     @property
     def solved(self) -> bool:
@@ -198,6 +199,52 @@ class BoxQP:
 
 
 @dataclass
+class LinearQP(BoxQP):
+    """A :class:`BoxQP` with linear rows: also ``row_lower <= A x <= row_upper``.
+
+    ``A`` is an m x n ``scipy.sparse`` matrix; a row with equal bounds is an
+    equality, ±inf leaves a side open. The back-ends whose registry record has
+    ``constraints="linear"`` accept it; the multiplier of the rows is
+    :attr:`QPResult.y_rows`, with ``P x + c + y + Aᵀ y_rows = 0``.
+    """
+
+    A: object = None
+    row_lower: np.ndarray | None = None
+    row_upper: np.ndarray | None = None
+
+    @property
+    def rows(self) -> int:
+        return 0 if self.A is None else int(self.A.shape[0])
+
+    def row_kinds(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Indices of the equality rows, of the rows with a finite upper side and of
+        those with a finite lower side (the last two exclude the equalities)."""
+        lo, hi = np.asarray(self.row_lower, float), np.asarray(self.row_upper, float)
+        eq = lo == hi
+        return (np.flatnonzero(eq), np.flatnonzero(~eq & np.isfinite(hi)),
+                np.flatnonzero(~eq & np.isfinite(lo)))
+
+
+def prepare_rows(qp: BoxQP, n: int):
+    """``(A, row_lower, row_upper)`` of a :class:`LinearQP` (A as float csr), or
+    ``(None, None, None)`` for a plain box QP; one ProblemError on bad shapes."""
+    if getattr(qp, "A", None) is None:
+        return None, None, None
+    import scipy.sparse as sp
+
+    A = sp.csr_matrix(qp.A, dtype=float)
+    m = A.shape[0]
+    lo = np.asarray(qp.row_lower, dtype=float).ravel()
+    hi = np.asarray(qp.row_upper, dtype=float).ravel()
+    if A.shape[1] != n or lo.shape != (m,) or hi.shape != (m,):
+        raise ProblemError(f"A must be m x {n} with row bounds of length m, got A "
+                           f"{A.shape}, bounds {lo.shape} and {hi.shape}")
+    if np.isnan(lo).any() or np.isnan(hi).any():
+        raise ProblemError("NaN in the row bounds")
+    return A, lo, hi
+
+
+@dataclass
 class QPWarm:
     """A warm start for a QP back-end: primal x and signed bound multiplier y."""
 
@@ -225,6 +272,7 @@ class QPResult:
     message: str = ""
     time_source: str = "solver"
     extra: dict = field(default_factory=dict)
+    y_rows: np.ndarray | None = None  # multiplier of a LinearQP's rows A x
 
     @classmethod
     def failure(cls, n: int, status: Status, message: str, **kw) -> QPResult:

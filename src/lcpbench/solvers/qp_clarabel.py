@@ -4,7 +4,9 @@ Clarabel solves ``min ½xᵀPx + qᵀx  s.t.  A x + s = b, s ∈ K``. Each finit
 upper bound is a row ``x_i + s = u_i`` and each finite lower bound a row
 ``-x_i + s = -l_i``, all in one ``NonnegativeConeT``. Its dual ``z >= 0``
 satisfies ``P x + q + Aᵀ z = 0``, so the signed multiplier is
-``y_i = z_upper,i - z_lower,i`` (zero on rows without a bound).
+``y_i = z_upper,i - z_lower,i`` (zero on rows without a bound). A
+:class:`~lcpbench.solvers.base.LinearQP`'s equality rows go in a ``ZeroConeT``, its
+other rows' finite sides beside the bounds in the ``NonnegativeConeT``.
 
 Times: ``solve_time`` is Clarabel's own (seconds; it covers equilibration,
 factorisation and the iterations). Clarabel reports no setup time, so
@@ -29,6 +31,7 @@ from .base import (
     dist_version,
     iteration_limits,
     open_box_qp,
+    prepare_rows,
 )
 
 DIST = "clarabel"
@@ -107,6 +110,14 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None,
         shape=(mu + ml, n))
     b = np.r_[upper[iu], -lower[il]]
     cones = [clarabel.NonnegativeConeT(mu + ml)] if mu + ml else []
+    Ar, lr, ur = prepare_rows(qp, n)
+    if Ar is not None:  # a LinearQP: equalities (a zero cone) first, then its sides
+        eq, ru, rl = qp.row_kinds()
+        A = sp.vstack([Ar[eq], A, Ar[ru], -Ar[rl]], format="csc")
+        b = np.r_[ur[eq], b, ur[ru], -lr[rl]]
+        cones = ([clarabel.ZeroConeT(eq.size)] if eq.size else []) + \
+            ([clarabel.NonnegativeConeT(mu + ml + ru.size + rl.size)]
+             if mu + ml + ru.size + rl.size else [])
     opts = {"verbose": False, **translate(settings), **options}
     t0 = time.perf_counter()
     try:
@@ -125,11 +136,19 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None,
     x = np.array(res.x, dtype=float)
     z = np.array(res.z, dtype=float)
     y = np.zeros(n)
+    y_rows = None
+    if Ar is not None:
+        y_rows = np.zeros(Ar.shape[0])
+        y_rows[eq] = z[:eq.size]
+        z = z[eq.size:]
+        y_rows[ru] += z[mu + ml: mu + ml + ru.size]
+        y_rows[rl] -= z[mu + ml + ru.size:]
     y[iu] += z[:mu]
-    y[il] -= z[mu:]
+    y[il] -= z[mu:mu + ml]
     if status in (Status.INFEASIBLE, Status.FAILED) or not np.all(np.isfinite(x)):
         x = np.full(n, np.nan)
         y = np.full(n, np.nan)
+        y_rows = None if y_rows is None else np.full(y_rows.size, np.nan)
         if status is Status.SOLVED:
             status = Status.FAILED
     name = str(res.status).rsplit(".", 1)[-1]
@@ -141,4 +160,5 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None,
         extra={"solver_status": name, "objective": float(res.obj_val),
                "objective_dual": float(res.obj_val_dual), "r_prim": float(res.r_prim),
                "r_dual": float(res.r_dual), "setup_time_source": "wall", "settings": opts},
+        y_rows=y_rows,
     )

@@ -60,6 +60,7 @@ from .base import (
     Status,
     dist_version,
     open_box_qp,
+    prepare_rows,
 )
 
 DIST = "cvxpy"
@@ -151,8 +152,19 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None,
         x = cp.Variable(n)
         cons_u = x[iu] <= upper[iu] if iu.size else None
         cons_l = x[il] >= lower[il] if il.size else None
+        Ar, lr, ur = prepare_rows(qp, n)  # a LinearQP's rows: A x == b, A x <= u, A x >= l
+        row_cons = []  # (constraint, its rows, the sign of its dual in y_rows)
+        if Ar is not None:
+            eq, ru, rl = qp.row_kinds()
+            if eq.size:
+                row_cons.append((Ar[eq] @ x == ur[eq], eq, 1.0))
+            if ru.size:
+                row_cons.append((Ar[ru] @ x <= ur[ru], ru, 1.0))
+            if rl.size:
+                row_cons.append((Ar[rl] @ x >= lr[rl], rl, -1.0))
         prob = cp.Problem(cp.Minimize(0.5 * cp.quad_form(x, cp.psd_wrap(P)) + c @ x),
-                          [k for k in (cons_u, cons_l) if k is not None])
+                          [k for k in (cons_u, cons_l) if k is not None]
+                          + [rc for rc, _, _ in row_cons])
         if solver is None:  # the solver cvxpy would pick, to translate for it
             solver = prob._construct_chain().solver.name()
         solver = str(solver).upper()
@@ -178,9 +190,16 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None,
                 ok = False
             else:
                 y[idx] += sign * np.asarray(dual, dtype=float).ravel()
+    y_rows = None if Ar is None else np.zeros(Ar.shape[0])
+    for rc, idx, sign in row_cons:  # cvxpy's dual of == is that of P x + c + Aᵀy = 0
+        if rc.dual_value is None:
+            ok = False
+        else:
+            y_rows[idx] += sign * np.asarray(rc.dual_value, dtype=float).ravel()
     if not ok or status in (Status.INFEASIBLE, Status.FAILED) or not np.all(np.isfinite(xv)):
         xv = np.full(n, np.nan)
         y = np.full(n, np.nan)
+        y_rows = None if y_rows is None else np.full(y_rows.size, np.nan)
         if status in (Status.SOLVED, Status.INACCURATE):
             status = Status.FAILED
     compile_time = prob.compilation_time
@@ -202,4 +221,5 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None,
                "native_setup_time": stats.setup_time, "wall_total": t2 - t0,
                "tolerance_applied": settings.eps is not None and bool(translate(settings, solver)),
                "kwargs": kwargs, "warnings": [str(w.message) for w in caught]},
+        y_rows=y_rows,
     )

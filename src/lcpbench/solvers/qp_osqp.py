@@ -6,7 +6,8 @@ bound), not the identity. Rows without any bound would be dead rows of the
 ADMM iteration (OSQP gives them the minimum rho) that still enlarge the KKT
 factorisation and every iterate; dropping them costs nothing, and with no
 constrained row at all OSQP accepts a 0 x n ``A``. In the contact step every
-row carries the wall bound, so there ``A = I`` anyway.
+row carries the wall bound, so there ``A = I`` anyway. A
+:class:`~lcpbench.solvers.base.LinearQP`'s rows follow the bounds' rows in ``A``.
 
 Multipliers: OSQP's ``y`` obeys ``P x + q + Aᵀ y = 0`` with ``y_i > 0`` where
 the upper bound is active, which is exactly lcpbench's signed ``y`` once
@@ -34,6 +35,7 @@ from .base import (
     dist_version,
     iteration_limits,
     open_box_qp,
+    prepare_rows,
 )
 
 DIST = "osqp"
@@ -116,13 +118,19 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None,
     rows = qp.constrained_rows()
     m = rows.size
     A = sp.csc_matrix((np.ones(m), (np.arange(m), rows)), shape=(m, n))
+    l_all, u_all = lower[rows], upper[rows]
+    Ar, lr, ur = prepare_rows(qp, n)  # a LinearQP's rows, after the bounds
+    if Ar is not None:
+        A = sp.vstack([A, Ar], format="csc")
+        l_all, u_all = np.r_[l_all, lr], np.r_[u_all, ur]
     opts = {"verbose": False, **translate(settings), **options}
     t_wall = time.perf_counter()
     try:
         solver = osqp.OSQP()
-        solver.setup(P=sp.triu(P, format="csc"), q=c, A=A, l=lower[rows], u=upper[rows], **opts)
+        solver.setup(P=sp.triu(P, format="csc"), q=c, A=A, l=l_all, u=u_all, **opts)
         if warm is not None:
-            wy = None if warm.y is None else np.asarray(warm.y, dtype=float)[rows]
+            wy = None if warm.y is None or Ar is not None \
+                else np.asarray(warm.y, dtype=float)[rows]
             solver.warm_start(x=np.asarray(warm.x, dtype=float), y=wy)
         with c_stdout_to_stderr():  # OSQP 1.1 prints "Polishing not needed" regardless
             res = solver.solve(raise_error=False)
@@ -133,12 +141,15 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None,
     status = map_status(info.status)
     x = np.array(res.x, dtype=float)
     y = np.zeros(n)
+    y_all = np.asarray(res.y, dtype=float)
     if m:
-        y[rows] = np.asarray(res.y, dtype=float)
+        y[rows] = y_all[:m]
+    y_rows = None if Ar is None else y_all[m:].copy()
     if status in (Status.INFEASIBLE, Status.FAILED) or not np.all(np.isfinite(x)):
         # x and y hold certificates or garbage: do not pass them on as an answer
         x = np.full(n, np.nan)
         y = np.full(n, np.nan)
+        y_rows = None if y_rows is None else np.full(y_rows.size, np.nan)
         if status is Status.SOLVED:
             status = Status.FAILED
     message = "" if status is Status.SOLVED else f"OSQP: {info.status}"
@@ -151,4 +162,5 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None,
                "dual_res": float(info.dual_res), "duality_gap": float(info.duality_gap),
                "polish_time": float(info.polish_time), "rho_updates": int(info.rho_updates),
                "settings": opts},
+        y_rows=y_rows,
     )

@@ -12,6 +12,9 @@ Two variants, chosen by ``variant=``:
     ``proxqp.sparse.QP(n, 0, m)`` with ``C`` the m x n selection matrix of
     the rows with a finite bound, and ``l <= C x <= u`` (again ±inf allowed).
 
+A :class:`~lcpbench.solvers.base.LinearQP`'s equality rows are ProxQP's ``A``, its
+other rows join ``C`` (after the bounds' rows in the sparse variant).
+
 Multipliers: ProxQP's ``z`` obeys ``H x + g + Cᵀ z (+ z_box) = 0`` with
 ``z > 0`` at an upper bound: lcpbench's signed ``y`` (scattered back to full
 length for ``C``). Times: ``info.setup_time`` and ``info.solve_time`` are
@@ -39,6 +42,7 @@ from .base import (
     Status,
     dist_version,
     open_box_qp,
+    prepare_rows,
 )
 
 DIST = "proxsuite"
@@ -118,22 +122,37 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None, *,
     m = rows.size
     opts = {"verbose": False, **translate(settings), **options, "compute_timings": True}
     warm_dual = False
+    Ar, lr, ur = prepare_rows(qp, n)  # a LinearQP: its equalities as A, the rest in C
+    eq, ri = np.zeros(0, int), np.zeros(0, int)
+    if Ar is not None:
+        eq, ru, rl = qp.row_kinds()
+        ri = np.union1d(ru, rl)
+    Ae, be = (Ar[eq], ur[eq]) if eq.size else (None, None)
+    ne, ni = eq.size, ri.size
     try:
         if variant == "dense":
             H = P.toarray()
+            Ae = None if Ae is None else Ae.toarray()
+            Ci = Ar[ri].toarray() if ni else np.zeros((0, n))
             if native_box:
-                solver = proxqp.dense.QP(n, 0, 0, True)
-                init_args = (H, c, None, None, None, None, None, lower, upper)
+                solver = proxqp.dense.QP(n, ne, ni, True)
+                init_args = (H, c, Ae, be, Ci if ni else None, lr[ri] if ni else None,
+                             ur[ri] if ni else None, lower, upper)
             else:
-                C = np.eye(n)[rows] if m else None
-                solver = proxqp.dense.QP(n, 0, m)
-                init_args = (H, c, None, None, C, lower[rows] if m else None,
-                             upper[rows] if m else None)
+                C = np.vstack([np.eye(n)[rows], Ci])
+                solver = proxqp.dense.QP(n, ne, m + ni)
+                init_args = (H, c, Ae, be, C if m + ni else None,
+                             np.r_[lower[rows], lr[ri] if ni else []] if m + ni else None,
+                             np.r_[upper[rows], ur[ri] if ni else []] if m + ni else None)
         else:
-            C = sp.csc_matrix((np.ones(m), (np.arange(m), rows)), shape=(m, n)) if m else None
-            solver = proxqp.sparse.QP(n, 0, m)
-            init_args = (P, c, None, None, C, lower[rows] if m else None,
-                         upper[rows] if m else None)
+            C = sp.csc_matrix((np.ones(m), (np.arange(m), rows)), shape=(m, n))
+            if ni:
+                C = sp.vstack([C, Ar[ri]], format="csc")
+            solver = proxqp.sparse.QP(n, ne, m + ni)
+            init_args = (P, c, None if Ae is None else sp.csc_matrix(Ae), be,
+                         C if m + ni else None,
+                         np.r_[lower[rows], lr[ri] if ni else []] if m + ni else None,
+                         np.r_[upper[rows], ur[ri] if ni else []] if m + ni else None)
         for key, value in opts.items():
             setattr(solver.settings, key, value)
         if warm is not None:
@@ -143,7 +162,7 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None, *,
             solver.solve()
         else:
             z0 = None
-            if warm.y is not None and not native_box and m:
+            if warm.y is not None and not native_box and m and Ar is None:
                 z0 = np.asarray(warm.y, dtype=float)[rows]
                 warm_dual = True
             solver.solve(np.asarray(warm.x, dtype=float), None, z0)
@@ -155,11 +174,20 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None, *,
     status = map_status(info.status)
     x = np.array(res.x, dtype=float)
     y = np.zeros(n)
+    zall = np.asarray(res.z, dtype=float)
     if m:
-        y[rows] = np.asarray(res.z, dtype=float)[-m:] if native_box else np.asarray(res.z)
+        y[rows] = zall[-m:] if native_box else zall[:m]
+    y_rows = None
+    if Ar is not None:
+        y_rows = np.zeros(Ar.shape[0])
+        if ne:
+            y_rows[eq] = np.asarray(res.y, dtype=float)
+        if ni:
+            y_rows[ri] = zall[:ni] if native_box else zall[m:m + ni]
     if status in (Status.INFEASIBLE, Status.FAILED) or not np.all(np.isfinite(x)):
         x = np.full(n, np.nan)
         y = np.full(n, np.nan)
+        y_rows = None if y_rows is None else np.full(y_rows.size, np.nan)
         if status is Status.SOLVED:
             status = Status.FAILED
     name = info.status.name
@@ -172,4 +200,5 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None, *,
                "pri_res": float(info.pri_res), "dua_res": float(info.dua_res),
                "duality_gap": float(info.duality_gap), "warm_dual": warm_dual,
                "settings": opts},
+        y_rows=y_rows,
     )

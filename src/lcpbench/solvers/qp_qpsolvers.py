@@ -76,6 +76,7 @@ from .base import (
     Status,
     dist_version,
     open_box_qp,
+    prepare_rows,
 )
 
 DIST = "qpsolvers"
@@ -304,6 +305,23 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None, *,
                            (np.arange(m), np.r_[iu, il])), shape=(m, n))
         G = G.toarray() if use_dense else G
         h = np.r_[upper[iu], -lower[il]]
+    Ar, lr, ur = prepare_rows(qp, n)  # a LinearQP: equalities A x = b, sides G x <= h
+    Ae = be = None
+    k0 = 0 if G is None else G.shape[0]
+    if Ar is not None:
+        eq, ru, rl = qp.row_kinds()
+        if eq.size:
+            Ae, be = Ar[eq], ur[eq]
+            Ae = Ae.toarray() if use_dense else Ae.tocsc()
+        if ru.size + rl.size:
+            Gr = sp.vstack([Ar[ru], -Ar[rl]], format="csc")
+            hr = np.r_[ur[ru], -lr[rl]]
+            Gr = Gr.toarray() if use_dense else Gr
+            if G is None:
+                G, h = Gr, hr
+            else:
+                G = np.vstack([G, Gr]) if use_dense else sp.vstack([G, Gr], format="csc")
+                h = np.r_[h, hr]
     convert = time.perf_counter() - t0
     initvals = None
     if warm is not None:
@@ -312,14 +330,15 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None, *,
             from proxsuite import proxqp
 
             kwargs.setdefault("initial_guess", proxqp.InitialGuess.WARM_START)
-            if warm.y is not None:  # ProxQP's z: on the rows G, or on all n box rows
+            if warm.y is not None and Ar is None:  # ProxQP's z: on the rows G, or on all n box rows
                 wy = np.asarray(warm.y, dtype=float)
                 kwargs.setdefault("z", np.r_[wy[iu], -wy[il]] if G is not None else wy)
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            problem = (qpsolvers.Problem(P_in, c, G, h) if G is not None
-                       else qpsolvers.Problem(P_in, c, lb=lower, ub=upper))
+            box = k0 == 0  # the bounds as lb/ub unless they are rows of G already
+            problem = qpsolvers.Problem(P_in, c, G, h, Ae, be, lower if box else None,
+                                        upper if box else None)
             sol = qpsolvers.solve_problem(problem, solver=solver, initvals=initvals, **kwargs)
     except Exception as exc:  # noqa: BLE001 - never raise on solver trouble (ProblemError, ...)
         return QPResult.failure(n, Status.FAILED,
@@ -333,25 +352,42 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None, *,
     else:
         status = native if native not in (None, Status.SOLVED) else Status.FAILED
     x = None if sol.x is None else np.array(sol.x, dtype=float)
-    if G is not None:  # z >= 0 on the rows: y = z_upper - z_lower
+    if k0:  # z >= 0 on the rows: y = z_upper - z_lower
         y = None
-        if sol.z is not None and np.size(sol.z) == iu.size + il.size:
+        if sol.z is not None and np.size(sol.z) == (0 if G is None else G.shape[0]):
             z = np.asarray(sol.z, dtype=float)
             y = np.zeros(n)
             y[iu] += z[:iu.size]
-            y[il] -= z[iu.size:]
-    else:
-        y = None if sol.z_box is None or np.size(sol.z_box) != n \
-            else np.array(sol.z_box, float)
+            y[il] -= z[iu.size:k0]
+    elif sol.z_box is not None and np.size(sol.z_box) == n:
+        y = np.array(sol.z_box, float)
+    else:  # no bound at all: qpsolvers may leave z_box empty
+        y = np.zeros(n) if not (np.isfinite(lower).any() or np.isfinite(upper).any()) else None
+    y_rows = None
+    if Ar is not None:
+        y_rows = np.zeros(Ar.shape[0])
+        z = None if sol.z is None else np.asarray(sol.z, dtype=float)[k0:]
+        if eq.size:
+            if sol.y is None:
+                y = None
+            else:
+                y_rows[eq] = np.asarray(sol.y, dtype=float)
+        if ru.size + rl.size:
+            if z is None or z.size != ru.size + rl.size:
+                y = None
+            else:
+                y_rows[ru] += z[:ru.size]
+                y_rows[rl] -= z[ru.size:]
     if x is None or y is None or status in (Status.INFEASIBLE, Status.FAILED) \
             or not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
         x = np.full(n, np.nan)
         y = np.full(n, np.nan)
+        y_rows = None if y_rows is None else np.full(y_rows.size, np.nan)
         if status in (Status.SOLVED, Status.INACCURATE):
             status = Status.FAILED
     iters = _iterations(solver, extras)
     extra = {"solver": solver, "found": bool(sol.found), "objective": sol.obj,
-             "dense": use_dense, "box_as_rows": G is not None,
+             "dense": use_dense, "box_as_rows": k0 > 0,
              "iterations_reported": iters is not None,
              "tolerance_applied": settings.eps is not None and solver not in IGNORES_TOLERANCE,
              "wall_total": wall, "warnings": [str(w.message) for w in caught],
@@ -375,4 +411,4 @@ def solve_qp(qp: BoxQP, settings: Settings, warm: QPWarm | None = None, *,
         x=x, y=y, status=status, iterations=iters or 0,
         solve_time=float(sol.solve_time or 0.0),
         setup_time=convert + float(sol.build_time or 0.0),
-        message=message, time_source="wall", extra=extra)
+        message=message, time_source="wall", extra=extra, y_rows=y_rows)

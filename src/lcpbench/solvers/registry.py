@@ -52,6 +52,12 @@ class Backend:
     distribution : the distribution whose version is reported.
     options : keyword arguments for the module's solve function.
     check : "module:function" returning availability, instead of ``requires``.
+    fallback : the back-end run where this one cannot certify a step.
+    linear_rows : a "qp" back-end that takes linear rows besides the bounds
+        (equalities ``A x = b`` and ``l <= A x <= u``). Which formulation of the
+        contact step a back-end accepts follows from ``form``, ``linear_rows`` and
+        whether it runs the contact step itself
+        (:func:`lcpbench.model.formulations.accepts`).
     """
 
     name: str
@@ -68,6 +74,9 @@ class Backend:
     check: str | None = None
     fallback: str | None = None  # back-end to run when this one cannot certify a step
     hint: str | None = None
+    #: a "qp" back-end that also takes linear rows, equalities and general inequalities
+    #: (a :class:`~lcpbench.solvers.base.LinearQP`), not only bounds
+    linear_rows: bool = False
 
     def __post_init__(self):
         if self.form not in FORMS:
@@ -115,7 +124,8 @@ class Backend:
         return {
             "name": self.name, "available": ok, "version": self.version() if ok else None,
             "form": self.form, "storage": self.storage, "warm_start": self.warm_start,
-            "method": self.method, "exact": self.exact, "install": self.install_hint(),
+            "method": self.method, "exact": self.exact, "linear_rows": self.linear_rows,
+            "install": self.install_hint(),
             "description": self.description,
         }
 
@@ -156,21 +166,22 @@ def _builtin() -> list[Backend]:
              options={"omega": 1.5}),
         Backend("osqp", "qp", "sparse", True, "iterative", "lcpbench.solvers.qp_osqp",
                 "OSQP 1.x (ADMM), native API", requires=("osqp",), extra="osqp",
-                distribution="osqp"),
+                distribution="osqp", linear_rows=True),
         Backend("clarabel", "qp", "sparse", False, "interior-point",
                 "lcpbench.solvers.qp_clarabel", "Clarabel interior point, native API",
-                requires=("clarabel",), extra="clarabel", distribution="clarabel"),
+                requires=("clarabel",), extra="clarabel", distribution="clarabel",
+                linear_rows=True),
         Backend("proxsuite-dense", "qp", "dense", True, "augmented-lagrangian",
                 "lcpbench.solvers.qp_proxsuite", "ProxQP (ProxSuite), dense back-end",
                 requires=("proxsuite",), extra="proxsuite", distribution="proxsuite",
-                options={"variant": "dense"}),
+                options={"variant": "dense"}, linear_rows=True),
         Backend("proxsuite-sparse", "qp", "sparse", True, "augmented-lagrangian",
                 "lcpbench.solvers.qp_proxsuite", "ProxQP (ProxSuite), sparse back-end",
                 requires=("proxsuite",), extra="proxsuite", distribution="proxsuite",
-                options={"variant": "sparse"}),
+                options={"variant": "sparse"}, linear_rows=True),
         Backend("cvxpy", "qp", "sparse", False, "modelling", "lcpbench.solvers.qp_cvxpy",
                 "the QP stated in cvxpy, solved by the solver cvxpy picks",
-                requires=("cvxpy",), extra="cvxpy", distribution="cvxpy"),
+                requires=("cvxpy",), extra="cvxpy", distribution="cvxpy", linear_rows=True),
     ]
     out.append(Backend(
         "quantecon-lemke", "lcp", "dense", False, "pivoting", "lcpbench.solvers.peer_quantecon",
@@ -225,7 +236,7 @@ def _qpsolvers_backends() -> list[Backend]:
             f"qpsolvers-{solver}", "qp", storage, True, method, "lcpbench.solvers.qp_qpsolvers",
             f"{solver} through qpsolvers", requires=("qpsolvers", module.split(".")[0]),
             extra="qpsolvers", distribution="qpsolvers", options={"solver": solver},
-            hint=install_hint(solver)))
+            hint=install_hint(solver), linear_rows=True))
     return out
 
 

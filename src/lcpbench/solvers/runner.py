@@ -117,7 +117,7 @@ def solve_lcp(M, q, solver: str = "lemke", settings: str | Settings = "default",
     s = get_settings(settings)
     M, q = _check_lcp(M, q)
     try:
-        sol = _run_lcp(backend, M, q, s, warm)
+        sol = run_lcp(backend, M, q, s, warm)
     except Exception as exc:  # a back-end failure is a status, never an exception
         sol = _failed_lcp(q.size, f"{backend.name} raised {type(exc).__name__}: {exc}")
     sol.extra["backend"] = backend.name
@@ -152,7 +152,9 @@ def _lcp_scale(M, q, z) -> float:
     return float(np.max(np.abs(M) @ np.abs(z) + np.abs(q), initial=0.0)) / scale
 
 
-def _run_lcp(backend: Backend, M, q, s: Settings, warm) -> LCPSolution:
+def run_lcp(backend: Backend, M, q, s: Settings, warm) -> LCPSolution:
+    """``backend``'s answer to the LCP (M, q), not judged: an LCP back-end's own, a QP
+    back-end's ``min ½zᵀMz + qᵀz, z >= 0`` (FAILED for a non-symmetric M)."""
     mod = backend.load()
     if backend.form == "lcp":
         z0 = None if warm is None else np.maximum(np.asarray(warm, dtype=float), 0.0)
