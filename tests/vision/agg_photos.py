@@ -16,8 +16,8 @@ rasteriser's habits:
   compound path) above, below, left or right of the actuator, any tube hue;
 - **camera**: in-plane rotation, radial and tangential lens distortion applied
   through OpenCV's iterative ``undistortPoints`` (not the fixed point of the
-  other renderer), Pillow's Gaussian blur and JPEG encoder, signal-dependent
-  noise.
+  other renderer) and scipy's cubic-spline resampling, Pillow's Gaussian blur and
+  JPEG encoder, signal-dependent noise.
 
 World frame (mm): the left pin at the origin, x along the pin line, y up.
 Pixel coordinates are OpenCV's (the centre of the top-left pixel is (0, 0)).
@@ -56,6 +56,7 @@ class Scene:
     hub_mm: float = 1.8            # light hub in the dark bearing
     texture: float = 5.0           # paper grain, grey levels
     shadow: bool = True            # a soft shadow band across the scene
+    highlight: bool = True         # the cylinder's highlight, off the tube's axis
     distortion: bool = True
     blur_px: float = 1.0
     noise: float = 3.0             # sensor noise at mid grey, grey levels
@@ -215,7 +216,8 @@ def draw(scene: Scene) -> tuple[np.ndarray, dict]:
     poly(outline, base * 0.78)
     poly(_band(chain, -0.75 * rad, 0.75 * rad), base * 0.92)
     poly(_band(chain, -0.45 * rad, 0.45 * rad), base)
-    poly(_band(chain, 0.05 * rad, 0.35 * rad), np.minimum(base * 0.75 + 0.25, 1))
+    if s.highlight:
+        poly(_band(chain, 0.05 * rad, 0.35 * rad), np.minimum(base * 0.75 + 0.25, 1))
     # bearings with a light hub, over the tube's ends
     pins_mm = np.array([[0.0, 0.0], [span, 0.0]])
     for p in px(pins_mm):
@@ -267,7 +269,11 @@ def draw(scene: Scene) -> tuple[np.ndarray, dict]:
 
 def _distort(rgb: np.ndarray, calib: dict) -> np.ndarray:
     """The image a lens with ``calib`` makes of the ideal image: each output pixel
-    samples the ideal image where OpenCV's iterative undistortion sends it."""
+    samples the ideal image (cubic spline, scipy) where OpenCV's iterative
+    undistortion sends it. Not ``cv2.remap``: it rounds positions to 1/32 px, which
+    biased θ by up to 0.03 % here (three times the pipeline's standard error)."""
+    from scipy.ndimage import map_coordinates
+
     k = np.asarray(calib["camera_matrix"], float)
     d = np.asarray(calib["dist_coeffs"], float)
     h, w = rgb.shape[:2]
@@ -275,6 +281,5 @@ def _distort(rgb: np.ndarray, calib: dict) -> np.ndarray:
     pts = np.column_stack([xx.ravel(), yy.ravel()]).reshape(-1, 1, 2)
     crit = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-10)
     und = cv2.undistortPoints(pts, k, d, None, None, k, crit).reshape(h, w, 2)
-    return cv2.remap(rgb.astype(np.float32), und[..., 0].astype(np.float32),
-                     und[..., 1].astype(np.float32), cv2.INTER_CUBIC,
-                     borderMode=cv2.BORDER_REPLICATE).astype(np.float64)
+    return np.dstack([map_coordinates(rgb[..., c], [und[..., 1], und[..., 0]], order=3,
+                                      mode="nearest") for c in range(3)])
