@@ -57,6 +57,7 @@ class Scene:
     texture: float = 5.0           # paper grain, grey levels
     shadow: bool = True            # a soft shadow band across the scene
     highlight: bool = True         # the cylinder's highlight, off the tube's axis
+    occluder: tuple[float, float] | None = None   # a grey bar across the tube: (x, width) mm
     distortion: bool = True
     blur_px: float = 1.0
     noise: float = 3.0             # sensor noise at mid grey, grey levels
@@ -218,6 +219,11 @@ def draw(scene: Scene) -> tuple[np.ndarray, dict]:
     poly(_band(chain, -0.45 * rad, 0.45 * rad), base)
     if s.highlight:
         poly(_band(chain, 0.05 * rad, 0.35 * rad), np.minimum(base * 0.75 + 0.25, 1))
+    if s.occluder is not None:    # a bar across the pin line's upper side (not the marker)
+        x, bw = s.occluder
+        top = outline[:, 1].max() + 1.0
+        poly([[x - bw / 2, -1.0], [x + bw / 2, -1.0], [x + bw / 2, top], [x - bw / 2, top]],
+             (0.45, 0.45, 0.46))
     # bearings with a light hub, over the tube's ends
     pins_mm = np.array([[0.0, 0.0], [span, 0.0]])
     for p in px(pins_mm):

@@ -70,3 +70,21 @@ def test_measured_middle_section_matches_the_second_renderers_truth(theta, lengt
     assert mid.theta_deg == pytest.approx(theta, rel=MAX_ERROR)
     assert mid.arc_length_mm == pytest.approx(length, rel=MAX_ERROR)
     assert not m.warnings, m.warnings
+
+
+def test_measures_through_an_occluder_across_the_middle_section():
+    """A bar hides the middle section's crest and cuts the tube in two: the pieces are
+    chained and the joint fit measures the whole actuator across the gap."""
+    theta, length = 60.0, 30.0
+    chord = 2 * length / math.radians(theta) * math.sin(math.radians(theta) / 2)
+    scene = Scene(theta_deg=theta, length_mm=length, px_per_mm=12.0, rotation_deg=3.0,
+                  occluder=(1.5 * chord, 4.0), seed=5)
+    img, truth = draw(scene)
+    m = measure(img, calibration=truth["calibration"])
+    mid = m.sections[m.middle]
+    assert mid.theta_deg == pytest.approx(theta, rel=MAX_ERROR)
+    assert mid.arc_length_mm == pytest.approx(length, rel=MAX_ERROR)
+    # the hidden part has no centerline points
+    x = m.centerline_mm[:, 0]
+    inside = (x > 1.5 * chord - 1.5) & (x < 1.5 * chord + 1.5)
+    assert not inside.any()
