@@ -237,10 +237,18 @@ def to_px(points_mm: np.ndarray, bearings: Bearings, px_per_mm: float) -> np.nda
 
 
 # -- segmentation ------------------------------------------------------------------
+#: Pieces of the actuator seen between occluders: every component of the HSV mask
+#: with at least this fraction of the largest one's area is kept; :func:`centerline`
+#: chains them from the left bearing across gaps up to MAX_GAP_MM.
+PIECE_FRACTION = 0.05
+MAX_GAP_MM = 15.0
+
+
 @dataclass
 class Segmentation:
-    """Binary mask of the actuator (largest component), the HSV range used, and a
-    continuous membership image (0 background … 1 actuator) for sub-pixel edges."""
+    """Binary mask of the actuator (its pieces, see PIECE_FRACTION), the HSV range
+    used, and a continuous membership image (0 background … 1 actuator) for sub-pixel
+    edges."""
 
     mask: np.ndarray
     lower: tuple[int, int, int]
@@ -264,7 +272,8 @@ def auto_hsv_range(hsv: np.ndarray) -> tuple[tuple[int, int, int], tuple[int, in
 
 def segment(img: np.ndarray, lower=None, upper=None) -> Segmentation:
     """HSV segmentation (Sec. IV-D-3): pixels in [lower, upper] (OpenCV H 0-179; a hue
-    range may wrap, e.g. lower H = -10), the largest connected component kept."""
+    range may wrap, e.g. lower H = -10), the largest connected component kept with
+    every other one at least PIECE_FRACTION of its area (the actuator cut by occluders)."""
     blur = cv2.GaussianBlur(img, (0, 0), 1.0)
     hsv = cv2.cvtColor(blur, cv2.COLOR_BGR2HSV)
     if lower is None or upper is None:
@@ -284,8 +293,8 @@ def segment(img: np.ndarray, lower=None, upper=None) -> Segmentation:
     if n < 2 or stats[1:, cv2.CC_STAT_AREA].max() < 100:
         raise VisionError(f"segmentation is empty: no actuator pixels in HSV {lower}-{upper}; "
                           "set --hsv-lower H,S,V --hsv-upper H,S,V to the actuator's colour")
-    keep = 1 + int(np.argmax(stats[1:, cv2.CC_STAT_AREA]))
-    mask = (lab == keep)
+    areas = stats[1:, cv2.CC_STAT_AREA]
+    mask = np.isin(lab, 1 + np.nonzero(areas >= PIECE_FRACTION * areas.max())[0])
     # membership: projection of the colour on the line background -> actuator colour
     f = cv2.GaussianBlur(img.astype(np.float32), (0, 0), 0.8)
     inner = cv2.erode(mask.astype(np.uint8), np.ones((5, 5), np.uint8)).astype(bool)
@@ -390,22 +399,53 @@ def centerline(seg: Segmentation, bearings: Bearings, px_per_mm: float,
                diameter_mm: float = 3.0) -> tuple[np.ndarray, np.ndarray]:
     """Ordered sub-pixel centerline (px), left bearing to right, and local widths (px).
 
-    Method (docs/vision.md): skeleton of the mask (scikit-image), its longest
-    path ordered from the left bearing, smoothed, then :func:`refine_centerline`
-    along the normals. Points hidden by or touching a bearing are dropped.
+    Method (docs/vision.md): skeleton of the mask (scikit-image), the longest path
+    of each of its pieces, the pieces chained from the left bearing (each next piece
+    the one with an end nearest the chain's end, within MAX_GAP_MM: the actuator seen
+    between occluders), each smoothed and refined along its normals
+    (:func:`refine_centerline`). Points hidden by or touching a bearing are dropped.
     """
+    from scipy.ndimage import label
     from skimage.morphology import skeletonize
 
     skel = skeletonize(seg.mask)
     if skel.sum() < 10:
         raise VisionError("segmentation is empty: the actuator mask has no centerline")
-    path = _longest_path(skel)
-    if np.hypot(*(path[0] - bearings.left)) > np.hypot(*(path[-1] - bearings.left)):
-        path = path[::-1]
+    lab, n = label(skel, structure=np.ones((3, 3)))
+    paths = [_longest_path(lab == i) for i in range(1, n + 1) if (lab == i).sum() >= 10]
     r_px = diameter_mm / 2 * px_per_mm
-    path = gaussian_filter1d(path, max(r_px * 0.5, 2), axis=0, mode="nearest")
-    pts, width = refine_centerline(path, seg.membership, r_px)
+    pts, width = [], []
+    for path in _chain(paths, bearings.left, MAX_GAP_MM * px_per_mm):
+        path = gaussian_filter1d(path, max(r_px * 0.5, 2), axis=0, mode="nearest")
+        try:
+            p, w = refine_centerline(path, seg.membership, r_px)
+        except VisionError:
+            continue
+        pts.append(p)
+        width.append(w)
+    if not pts:
+        raise VisionError("the actuator's edges were not found along its centerline: "
+                          "check the segmentation (--hsv-lower/--hsv-upper) and --diameter")
+    pts, width = np.vstack(pts), np.concatenate(width)
     clear = bearings.radius_px + r_px + 3
     keep = (np.hypot(*(pts - bearings.left).T) > clear) & \
         (np.hypot(*(pts - bearings.right).T) > clear)
     return pts[keep], width[keep]
+
+
+def _chain(paths: list[np.ndarray], start: np.ndarray, max_gap: float) -> list[np.ndarray]:
+    """The paths in order from ``start``, each oriented: first the one with an end
+    nearest ``start``, then each time the one with an end nearest the last one's end,
+    if within ``max_gap`` (px)."""
+    left, out, end = list(paths), [], np.asarray(start, float)
+    while left:
+        gaps = [min(np.hypot(*(p[0] - end)), np.hypot(*(p[-1] - end))) for p in left]
+        k = int(np.argmin(gaps))
+        if out and gaps[k] > max_gap:
+            break
+        p = left.pop(k)
+        if np.hypot(*(p[-1] - end)) < np.hypot(*(p[0] - end)):
+            p = p[::-1]
+        out.append(p)
+        end = p[-1]
+    return out
