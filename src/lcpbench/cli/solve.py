@@ -22,7 +22,7 @@ import numpy as np
 from ..api import solve
 from ..errors import ProblemError
 from ..model.driver import METHODS
-from ..model.result_view import pressure_rows
+from ..model.result_view import pressure_rows, states_line
 from ..problems.scenes import DEFAULT_LINKS
 from ._common import (
     ArgumentParser,
@@ -198,6 +198,8 @@ def summary(result, extra=()) -> str:
         rows.append(("ramped", "start='ramp': followed the load from zero"))
     rows += [(name, why) for name, why in getattr(result, "retries", ())
              if name in ("escaped", "ramped", "cold")]
+    if getattr(result, "states", ()):  # the starts reached more than one stable state
+        rows.append(("stable states", states_line(result)))
     if result.forces_lower is not None:
         lower = float(np.sum(result.forces_lower))
         rows += [
