@@ -147,6 +147,7 @@ def main(argv=None) -> int:
                          total_force=r.total_force, min_reduced_eig=lam,
                          escaped=r.retried("escaped") is not None and r.converged,
                          ramped=r.retried("ramped") is not None and r.converged,
+                         states=len(r.states),
                          time_s=dt, reason=r.reason[:160],
                          last_tried="" if r.converged or not r.retries
                          else f"{r.retries[-1].name}: {r.retries[-1].why}"[:400]))
@@ -171,6 +172,7 @@ def main(argv=None) -> int:
             f"| {kind} | {len(got)} | {len(conv)} ({100 * len(conv) / max(len(got), 1):.0f} %) "
             f"| {sum(r['min_reduced_eig'] < 0 for r in conv)} "
             f"| {sum(r['escaped'] for r in conv)} | {sum(r['ramped'] for r in conv)} "
+            f"| {sum(r['states'] > 1 for r in conv)} "
             f"| {len(got) - len(conv)}: "
             + (", ".join(f"{k} {v}" for k, v in sorted(reasons.items(), key=lambda kv: -kv[1]))
                or "none") + " |")
@@ -188,10 +190,12 @@ def main(argv=None) -> int:
         f"same seed.\n\n"
         f"Each certified answer is checked by an independent second-order test: the energy "
         f"reference's dense Hessian of the Lagrangian (its closed-form derivatives) on the "
-        f"null space of the closure and the walls that carry a reaction.\n\n"
+        f"null space of the closure and the walls that carry a reaction. \"Several states "
+        f"reached\": the solve's own starts (an escape's restarts, then the loading path) "
+        f"reached distinct stable states, listed in `result.states` with their energies.\n\n"
         f"| scenes | count | certified | saddles certified | after an escape | after "
-        f"following the load | refused (first failed check) |\n"
-        f"|---|---:|---:|---:|---:|---:|---|\n" + "\n".join(lines) + "\n\n"
+        f"following the load | several states reached | refused (first failed check) |\n"
+        f"|---|---:|---:|---:|---:|---:|---:|---|\n" + "\n".join(lines) + "\n\n"
         "Refused scenes, with the last escalation's account:\n\n"
         + ("\n".join(f"- {r['kind']}, {r['scene']}: {r['last_tried'] or r['reason']}"
                      for r in rows if not r["converged"]) or "- none") + "\n\n"
