@@ -283,11 +283,12 @@ def escaped(res: ContactResult, ctx: Context) -> tuple[ContactResult, str]:
                      + (f", none certified: {tried[0]}" if tried else ""))
     path = ""
     if _own_globalised(chain, ctx.backend, ctx.method, ctx.tol):
-        out, used, path = follow_load(res.scene, ctx.make_step, backend=ctx.backend,
-                                      settings=ctx.settings, engine=ctx.engine, tol=ctx.tol,
-                                      max_outer=ctx.max_outer, method=ctx.method)
-        if out is not None:
-            loaded = _restart_judged(res, ctx, out, used, elapsed=0.0)
+        ended, used, path = follow_load(res.scene, ctx.make_step, backend=ctx.backend,
+                                        settings=ctx.settings, engine=ctx.engine,
+                                        tol=ctx.tol, max_outer=ctx.max_outer,
+                                        method=ctx.method)
+        if ended is not None:
+            loaded = _restart_judged(res, ctx, ended, used, elapsed=0.0)
             if loaded.converged:
                 certified.append(("loading path", loaded))
             else:
