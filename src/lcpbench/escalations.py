@@ -15,7 +15,9 @@ In the table's order:
   round-off of node heights may have kept the judge from certifying it;
 - ``tightened``: continued at a tenth of the driver's tolerance, where the force error
   bound alone refused it;
-- ``escaped``: restarted downhill where it is a saddle (the check "stability" alone);
+- ``escaped``: restarted downhill where it is a saddle (the check "stability" alone),
+  then, where a restart is certified, the loading path as a second start; the distinct
+  stable states these starts reach are the result's ``states``;
 - ``ramped``: solved again along the loading path (the bend angles from zero).
 
 The built-in back-end only, but ``escaped`` (a saddle is a fixed point of any exact
