@@ -255,9 +255,8 @@ def escaped(res: ContactResult, ctx: Context) -> tuple[ContactResult, str]:
     too, as a second start: it costs a few warm solves, a tenth of the restarts
     (16–31 ms against 360–590 ms on the channel scenes of issue 36). The answer stays
     the escape's; where the certified answers of all these starts hold distinct states,
-    the result's ``states``
-    lists each with its exact energy (:func:`reached_states`: distinct in the force
-    of a wall, :func:`same_state`)."""
+    the result's ``states`` lists each with its exact energy (:func:`reached_states`:
+    distinct in the force of a wall, :func:`same_state`)."""
     from .model.escape import escape_starts
 
     judgement = _judgement(res)

@@ -23,7 +23,7 @@ there are inaccurate or rejected, and the height driver stalls (max|Δα| stuck 
 rows of sections). Where the chain is in reach of the SQP in the link angles
 (:func:`lcpbench.model.angle_step.in_reach`: rigid flat walls) and the built-in
 back-end solves, a step that starts with a link within :data:`NEAR_VERTICAL_DEG` of
-the vertical (|cos α_i| ≤ cos of it), or whose height steps did not converge, takes
+the vertical (|cos α_i| ≤ sin 10°), or whose height steps did not converge, takes
 outer steps in α instead (:func:`lcpbench.model.heavy_driver.run_heavy`, the same
 SQP as a heavy chain's), where every angle is regular; its answer is judged as every
 answer.
@@ -109,16 +109,15 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
         kw = dict(backend=backend, settings=settings, engine=engine, tol=tol,
                   max_outer=max_outer, method=method)
         angles = angles_ok and start is not None and in_reach(chain)
-        out = None
-        if angles and near_vertical(start.alpha):
-            out = _in_angles(chain, start, tol, max_outer)
-        if out is None:
+        sqp = _in_angles(chain, start, tol, max_outer) \
+            if angles and start is not None and near_vertical(start.alpha) else None
+        if sqp is None:
             out, used = drive(chain, make_step(), start=start, **kw)
             if not out.converged and angles:
-                out = _in_angles(chain, start, tol, max_outer) or out
-        if _ANGLES in out.reason:
-            in_angles += 1
-            used = "numpy" if engine == "numpy" else f"numpy ({_ANGLES}: {_WHY})"
+                sqp = _in_angles(chain, start, tol, max_outer)
+        if sqp is not None:
+            out, in_angles = sqp, in_angles + 1
+            used = "numpy" if engine == "numpy" else f"numpy (SQP steps in the link angles: {_WHY})"
         if not out.converged and start is not None:
             out, used = drive(chain, make_step(), start=None, **kw)
         if not out.converged:
@@ -133,10 +132,10 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
 
 
 _WHY = "a step of the loading path with a link near the vertical"
-_ANGLES = "SQP steps in the link angles"  # (in run_heavy's reason)
 
 
-def _in_angles(chain, start: DriverStart, tol: float, max_outer: int) -> DriverOutput | None:
+def _in_angles(chain, start: DriverStart | None, tol: float,
+               max_outer: int) -> DriverOutput | None:
     """The SQP's answer from ``start`` (:func:`lcpbench.model.heavy_driver.run_heavy`), or
     None where it did not converge."""
     return run_heavy(chain, start, tol, min(max_outer, PATH_ANGLE_STEPS), why=_WHY)
