@@ -23,8 +23,8 @@ there are inaccurate or rejected, and the height driver stalls (max|Δα| stuck 
 rows of sections). Where the chain is in reach of the SQP in the link angles
 (:func:`lcpbench.model.angle_step.in_reach`: rigid flat walls) and the built-in
 back-end solves, a step that starts with a link within :data:`NEAR_VERTICAL_DEG` of
-the vertical (|cos α_i| ≤ sin 10°), or whose height steps did not converge, takes
-outer steps in α instead (:func:`lcpbench.model.heavy_driver.run_heavy`, the same
+the vertical (|cos α_i| ≤ sin 10°), or whose height steps did not converge and left
+one there, takes outer steps in α instead (:func:`lcpbench.model.heavy_driver.run_heavy`, the same
 SQP as a heavy chain's), where every angle is regular; its answer is judged as every
 answer.
 """
@@ -113,7 +113,7 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
             if angles and start is not None and near_vertical(start.alpha) else None
         if sqp is None:
             out, used = drive(chain, make_step(), start=start, **kw)
-            if not out.converged and angles:
+            if not out.converged and angles and near_vertical(out.alpha):
                 sqp = _in_angles(chain, start, tol, max_outer)
         if sqp is not None:
             out, in_angles = sqp, in_angles + 1
