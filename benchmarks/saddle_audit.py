@@ -14,7 +14,11 @@ null space of the rows of the closure and of the walls that carry a reaction abo
 the judge's contact threshold, and its eigenvalues. Writes
 results/stability/saddle-grid.md and .csv (refuses to overwrite unless --force).
 
-    python benchmarks/saddle_audit.py [--links 140] [--rows 40] [--random 204] [--force]
+    python benchmarks/saddle_audit.py [--links 140] [--rows 40] [--random 204]
+        [--only channel|sections|random] [--out DIR] [--force]
+
+The Markdown lists every refused scene with the last escalation's account of it
+(where the loading path stopped, and why).
 """
 
 from __future__ import annotations
@@ -76,9 +80,12 @@ def main(argv=None) -> int:
     p.add_argument("--random", type=int, default=204,
                    help="random scenes of every kind (wall, channel, elastic, profile, "
                         "sections, heavy), in turn")
+    p.add_argument("--only", choices=("channel", "sections", "random"),
+                   help="one set of scenes (the others are not solved)")
+    p.add_argument("--out", type=Path, default=OUT, help="folder of the results")
     p.add_argument("--force", action="store_true", help="overwrite committed results")
     args = p.parse_args(argv)
-    md, csv_path = OUT / "saddle-grid.md", OUT / "saddle-grid.csv"
+    md, csv_path = args.out / "saddle-grid.md", args.out / "saddle-grid.csv"
     if md.exists() and not args.force:
         print(f"{md} exists: --force to overwrite", file=sys.stderr)
         return 2
@@ -125,6 +132,8 @@ def main(argv=None) -> int:
             name = ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}"
                              for k, v in kw.items() if k != "wall_profile")
         scenes.append((f"random: {kind}", name, scene))
+    if args.only:
+        scenes = [s for s in scenes if s[0].split(":")[0] == args.only]
     for kind, name, scene in scenes:
         t = time.perf_counter()
         r = lcpbench.solve(scene)
@@ -138,9 +147,12 @@ def main(argv=None) -> int:
                          total_force=r.total_force, min_reduced_eig=lam,
                          escaped=r.retried("escaped") is not None and r.converged,
                          ramped=r.retried("ramped") is not None and r.converged,
-                         time_s=dt, reason=r.reason[:160]))
+                         states=len(r.states),
+                         time_s=dt, reason=r.reason[:160],
+                         last_tried="" if r.converged or not r.retries
+                         else f"{r.retries[-1].name}: {r.retries[-1].why}"[:400]))
     wall = time.perf_counter() - t0
-    OUT.mkdir(parents=True, exist_ok=True)
+    args.out.mkdir(parents=True, exist_ok=True)
     with open(csv_path, "w", newline="") as f:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
@@ -148,6 +160,8 @@ def main(argv=None) -> int:
     lines = []
     for kind in ("channel", "sections", *(f"random: {k}" for k in kinds)):
         got = [r for r in rows if r["kind"] == kind]
+        if not got:
+            continue
         conv = [r for r in got if r["converged"]]
         reasons: dict[str, int] = {}
         for r in got:
@@ -158,12 +172,13 @@ def main(argv=None) -> int:
             f"| {kind} | {len(got)} | {len(conv)} ({100 * len(conv) / max(len(got), 1):.0f} %) "
             f"| {sum(r['min_reduced_eig'] < 0 for r in conv)} "
             f"| {sum(r['escaped'] for r in conv)} | {sum(r['ramped'] for r in conv)} "
+            f"| {sum(r['states'] > 1 for r in conv)} "
             f"| {len(got) - len(conv)}: "
             + (", ".join(f"{k} {v}" for k, v in sorted(reasons.items(), key=lambda kv: -kv[1]))
                or "none") + " |")
     md.write_text(
         f"# Saddles and answers past 180° and in rows of sections ({date.today().isoformat()})\n\n"
-        f"`python benchmarks/saddle_audit.py --links {args.links} --rows {args.rows} --random {args.random}`, "
+        f"`python benchmarks/saddle_audit.py --links {args.links} --rows {args.rows} --random {args.random}{' --only ' + args.only if args.only else ''}`, "
         f"`lcpbench.solve(scene)` at tol 1e-3:\n\n"
         f"- channel: θ {thetas[0]}–{thetas[-1]}° by 10, h {gaps[0]}–{gaps[-1]} mm by 0.1, "
         f"N = {args.links};\n"
@@ -175,10 +190,15 @@ def main(argv=None) -> int:
         f"same seed.\n\n"
         f"Each certified answer is checked by an independent second-order test: the energy "
         f"reference's dense Hessian of the Lagrangian (its closed-form derivatives) on the "
-        f"null space of the closure and the walls that carry a reaction.\n\n"
+        f"null space of the closure and the walls that carry a reaction. \"Several states "
+        f"reached\": the solve's own starts (an escape's restarts, then the loading path) "
+        f"reached distinct stable states, listed in `result.states` with their energies.\n\n"
         f"| scenes | count | certified | saddles certified | after an escape | after "
-        f"following the load | refused (first failed check) |\n"
-        f"|---|---:|---:|---:|---:|---:|---|\n" + "\n".join(lines) + "\n\n"
+        f"following the load | several states reached | refused (first failed check) |\n"
+        f"|---|---:|---:|---:|---:|---:|---:|---|\n" + "\n".join(lines) + "\n\n"
+        "Refused scenes, with the last escalation's account:\n\n"
+        + ("\n".join(f"- {r['kind']}, {r['scene']}: {r['last_tried'] or r['reason']}"
+                     for r in rows if not r["converged"]) or "- none") + "\n\n"
         f"Wall time {wall:.0f} s on {platform.machine()}, {os.cpu_count()} cores, load "
         f"average {load0:.2f} at the start; per-scene rows in saddle-grid.csv.\n")
     print(md.read_text())

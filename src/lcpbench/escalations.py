@@ -15,7 +15,9 @@ In the table's order:
   round-off of node heights may have kept the judge from certifying it;
 - ``tightened``: continued at a tenth of the driver's tolerance, where the force error
   bound alone refused it;
-- ``escaped``: restarted downhill where it is a saddle (the check "stability" alone);
+- ``escaped``: restarted downhill where it is a saddle (the check "stability" alone),
+  then, where a restart is certified, the loading path as a second start; the distinct
+  stable states these starts reach are the result's ``states``;
 - ``ramped``: solved again along the loading path (the bend angles from zero).
 
 The built-in back-end only, but ``escaped`` (a saddle is a fixed point of any exact
@@ -33,13 +35,14 @@ from typing import Any
 import numpy as np
 
 from .model import large_n
+from .model.chain import energy
 from .model.compiled import drive, heavy
 from .model.finish import finish
 from .model.judge import Judgement, force_tol
 from .model.kernel_call import applies as kernel_applies
 from .model.outer import DriverOutput, DriverStart
 from .model.ramp import follow_load
-from .model.result import ContactResult, Retry
+from .model.result import ContactResult, ReachedState, Retry
 from .problems.scenes import Chain
 from .solvers.registry import DEFAULT
 
@@ -244,8 +247,16 @@ def escaped(res: ContactResult, ctx: Context) -> tuple[ContactResult, str]:
     negative curvature on its contact set (:func:`lcpbench.model.escape.escape_starts`)
     and the lowest-energy certified answer is returned. Every back-end: a saddle is a
     fixed point of any exact contact step, not a failure of one back-end. Where no
-    restart is certified, ``res``; ``time_s`` counts every solve."""
-    from .model.chain import energy
+    restart is certified, ``res``; ``time_s`` counts every solve.
+
+    A saddle separates stable states, so the scene has more than one in reach. Where
+    a restart is certified and the built-in back-end solves, the loading path
+    (:func:`lcpbench.model.ramp.follow_load`, the bend angles from zero) is followed
+    too, as a second start: it costs a few warm solves, a tenth of the restarts
+    (16–31 ms against 360–590 ms on the channel scenes of issue 36). The answer stays
+    the escape's; where the certified answers of all these starts hold distinct states,
+    the result's ``states`` lists each with its exact energy (:func:`reached_states`:
+    distinct in the force of a wall, :func:`same_state`)."""
     from .model.escape import escape_starts
 
     judgement = _judgement(res)
@@ -254,26 +265,78 @@ def escaped(res: ContactResult, ctx: Context) -> tuple[ContactResult, str]:
     lower = res.forces_lower if res.forces_lower is not None else np.zeros_like(res.forces)
     starts = escape_starts(chain, np.asarray(res.alpha, float), res.forces, lower,
                            judgement.contact_threshold)
-    best, tried = None, []
+    certified: list[tuple[str, ContactResult]] = []
+    tried = []
     for alpha in starts:
         out, used = drive(chain, ctx.make_step(), backend=ctx.backend, settings=ctx.settings,
                           engine=ctx.engine, tol=ctx.tol, max_outer=ctx.max_outer,
                           method=ctx.method, start=DriverStart(alpha))
         again = _restart_judged(res, ctx, out, used, elapsed=0.0)
         tried.append(again.reason)
-        if again.converged and (best is None or energy(chain, again.alpha)
-                                < energy(chain, best.alpha)):
-            best = again
-    elapsed = res.time_s + time.perf_counter() - t0
+        if again.converged:
+            certified.append(("escape", again))
+    best = min((r for _, r in certified), key=lambda r: energy(chain, r.alpha), default=None)
     told = (f"the driver reached a saddle (F = {res.total_force:.6g} N, "
             f"{judgement.unstable_directions} unstable directions)")
     if best is None:
-        res.time_s = elapsed
+        res.time_s = res.time_s + time.perf_counter() - t0
         return res, (f"{told}; {len(starts)} restarts downhill of it"
                      + (f", none certified: {tried[0]}" if tried else ""))
-    best.time_s = elapsed
+    path = ""
+    if _own_globalised(chain, ctx.backend, ctx.method, ctx.tol):
+        ended, used, path = follow_load(res.scene, ctx.make_step, backend=ctx.backend,
+                                        settings=ctx.settings, engine=ctx.engine,
+                                        tol=ctx.tol, max_outer=ctx.max_outer,
+                                        method=ctx.method)
+        if ended is not None:
+            loaded = _restart_judged(res, ctx, ended, used, elapsed=0.0)
+            if loaded.converged:
+                certified.append(("loading path", loaded))
+            else:
+                path = f"{path}; refused: {loaded.reason}"
+    best.states = reached_states(chain, best, certified)
+    best.time_s = res.time_s + time.perf_counter() - t0
+    several = (f"; {len(best.states)} distinct stable states reached, the answer's energy "
+               f"{next(s.energy for s in best.states if s.answer):.6g} N·mm (result.states)"
+               if best.states else "")
     return best, (f"{told}; restarted downhill along its negative curvature "
-                  f"({len(starts)} restarts) to this stable equilibrium")
+                  f"({len(starts)} restarts) to this stable equilibrium"
+                  + (f"; the loading path as a second start: {path}" if path else "")
+                  + several)
+
+
+def same_state(a: ContactResult, b: ContactResult) -> bool:
+    """Whether two certified answers of one scene are one state for the user: the total
+    force of each wall agrees to the accuracy asked of both, the larger of their τ·F₀
+    (:func:`lcpbench.model.judge.force_tol`, F₀ = max(|F|, EI/ℓ²)). Not the link
+    angles: a folded chain in a channel has a valley of equal energy along which
+    certified answers at tol 1e-3 differ by up to 1.1 rad but by 10⁻⁵ in force."""
+    ja, jb = _judgement(a), _judgement(b)
+    allowed = max(ja.force_tol * ja.force_unit, jb.force_tol * jb.force_unit)
+
+    def lower(r: ContactResult) -> float:
+        return 0.0 if r.forces_lower is None else float(np.sum(r.forces_lower))
+
+    return (abs(a.total_force - b.total_force) <= allowed
+            and abs(lower(a) - lower(b)) <= allowed)
+
+
+def reached_states(chain: Chain, answer: ContactResult,
+                   certified: list[tuple[str, ContactResult]]) -> tuple[ReachedState, ...]:
+    """The distinct states (:func:`same_state`) among the ``certified`` answers of a
+    solve's starts ((start, result) pairs, ``answer`` among them), lowest energy first,
+    each with its exact energy (:func:`lcpbench.model.chain.energy`); of answers that
+    are one state the answer is kept, else the first. () where there is one state."""
+    kept: list[tuple[str, ContactResult]] = []
+    for start, r in sorted(certified, key=lambda sr: sr[1] is not answer):
+        if not any(same_state(r, k) for _, k in kept):
+            kept.append((start, r))
+    if len(kept) < 2:
+        return ()
+    states = [ReachedState(start, float(energy(chain, np.asarray(r.alpha, float))),
+                           float(r.total_force), r is answer, np.array(r.alpha, float))
+              for start, r in kept]
+    return tuple(sorted(states, key=lambda s: s.energy))
 
 
 # -- ramped -------------------------------------------------------------------------
@@ -309,5 +372,6 @@ ESCALATIONS: dict[str, Escalation] = {
     "ramped": Escalation(_own_globalised, _judged_at_all, ramped),
 }
 
-__all__ = ["ESCALATIONS", "TIGHTEN_STEPS", "TIGHTER", "Context", "Escalation", "escalate",
-           "escaped", "in_increments", "ramped", "tightened"]
+__all__ = ["ESCALATIONS", "TIGHTEN_STEPS", "TIGHTER", "Context", "Escalation",
+           "escalate", "escaped", "in_increments", "ramped", "reached_states", "same_state",
+           "tightened"]

@@ -149,9 +149,11 @@ def test_solve_human_output(capsys):
 
 
 def test_solve_not_converged_exit_1(capsys):
-    # a row of sections whose loading path reaches a link past the vertical, where the
-    # height parametrisation of the contact step breaks down (results/stability/)
-    code = main(["solve", "--sections", "159.2:30,-70.9:30,-80.5:30", "--height", "3.44"])
+    # an elastic wall past 180 degrees, whose loading path reaches a link past the
+    # vertical, where the height parametrisation of the contact step breaks down and the
+    # SQP in the link angles does not reach (rigid flat walls only; results/stability/)
+    code = main(["solve", "--theta", "327.4", "--height", "6.69", "--links", "78",
+                 "--wall-stiffness", "3.352"])
     out = capsys.readouterr().out
     assert code == 1
     assert "converged" in out and "no (" in out

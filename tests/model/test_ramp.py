@@ -3,7 +3,8 @@ escalations.ramped), against independent checks: the answer is a KKT point of th
 (central differences of the energy and kinematics, tests/energy_oracle.py) with its
 reactions feasible, and a strict local minimum on its contact set (the same oracle's
 second-order test). Scenes whose cold start fails: past 180° in a channel (the
-issue's grid) and a row of sections with large signed angles (the issue's kind)."""
+issue's grid) and rows of sections with large signed angles (the issue's kind), some
+of whose links pass the vertical along the path."""
 
 import numpy as np
 import pytest
@@ -11,8 +12,9 @@ from energy_oracle import fd_kkt_residual, fd_unstable_directions
 
 import lcpbench
 from lcpbench.errors import ProblemError
+from lcpbench.model import ramp
 from lcpbench.model.compiled import drive
-from lcpbench.model.ramp import STEP_DEG, at_fraction, fractions
+from lcpbench.model.ramp import NEAR_VERTICAL_DEG, STEP_DEG, at_fraction, fractions, near_vertical
 from lcpbench.model.step_solver import make_step_solver
 from lcpbench.problems.sections import SectionedScene
 from lcpbench.solvers.registry import DEFAULT
@@ -82,3 +84,36 @@ def test_start_must_be_a_result_or_ramp():
         lcpbench.solve(lcpbench.ActuatorScene(), start="rmp")
     with pytest.raises(ProblemError, match="globalised"):
         lcpbench.solve(lcpbench.ActuatorScene(), start="ramp", method="undamped")
+
+
+# Rows of sections whose loading path stalled in the node heights (issue 36's audit,
+# results/stability/saddle-grid.md, at N = 10 per section): a step of the path starts
+# with links at 82-90 degrees and ends with them past the vertical, where the height
+# step divides by a cos(alpha) ~ 0.
+PAST_THE_VERTICAL = [
+    SectionedScene(sections=[(159.2, 30.0), (-70.9, 30.0), (-80.5, 30.0)], height=3.44,
+                   links=30),
+    SectionedScene(sections=[(64.6, 30.0), (-112.0, 30.0), (-75.0, 30.0)], height=6.93,
+                   links=30),
+    SectionedScene(sections=[(-166.5, 30.0), (146.8, 30.0), (167.8, 30.0)], height=5.05,
+                   links=30),
+]
+
+
+@pytest.mark.parametrize("scene", PAST_THE_VERTICAL)
+def test_a_path_whose_links_pass_the_vertical_takes_steps_in_the_link_angles(scene,
+                                                                             monkeypatch):
+    res = lcpbench.solve(scene)
+    assert res.converged and "in the link angles" in res.retried("ramped")
+    assert np.max(np.abs(res.alpha)) > np.pi / 2  # the answer has links past the vertical
+    _assert_stable_kkt_point(scene, res)
+    # the premise: in the node heights alone the path stops (or its answer is refused)
+    monkeypatch.setattr(ramp, "in_reach", lambda chain: False)
+    assert not lcpbench.solve(scene).converged
+
+
+def test_near_vertical_is_measured_from_the_vertical():
+    limit = np.radians(90.0 - NEAR_VERTICAL_DEG)
+    assert not near_vertical([0.0, limit - 1e-3, -limit + 1e-3])
+    assert near_vertical([0.0, limit + 1e-3])
+    assert near_vertical([np.pi - limit - 1e-3])  # past it, folded back

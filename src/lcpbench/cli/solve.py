@@ -23,7 +23,7 @@ import numpy as np
 from ..api import solve, solve_internal
 from ..errors import ProblemError
 from ..model.driver import METHODS
-from ..model.result_view import pressure_rows
+from ..model.result_view import pressure_rows, states_line
 from ..problems.scenes import DEFAULT_LINKS
 from ._common import (
     ArgumentParser,
@@ -214,6 +214,8 @@ def summary(result, extra=()) -> str:
         rows.append(("ramped", "start='ramp': followed the load from zero"))
     rows += [(name, why) for name, why in getattr(result, "retries", ())
              if name in ("escaped", "ramped", "cold")]
+    if getattr(result, "states", ()):  # the starts reached more than one stable state
+        rows.append(("stable states", states_line(result)))
     if result.total_force_lower is not None:  # a channel: each wall's total, named
         lower = result.total_force_lower
         rows += [

@@ -333,6 +333,7 @@ def minimise_energy(
     maxiter: int = 1000,
     polish: bool = True,
     check: float = 1e-9,
+    start: np.ndarray | None = None,
 ) -> EnergyReference:
     """Equilibrium of a chain by direct minimisation of its exact energy (SLSQP).
 
@@ -351,6 +352,8 @@ def minimise_energy(
         about sqrt(ftol) in the angles.
     check : float
         ``success`` requires ``kkt_residual <= check``.
+    start : link angles α (rad) to start from; None: the free arc clipped to the
+        walls. A scene with several stable states gives the one nearest the start.
 
     Returns
     -------
@@ -377,7 +380,7 @@ def minimise_energy(
         })
     res = minimize(
         lambda al: energy(chain, al) / e0,
-        _start(chain),
+        _start(chain) if start is None else np.array(start, float),
         jac=lambda al: energy_gradient(chain, al) / e0,
         method="SLSQP",
         constraints=constraints,

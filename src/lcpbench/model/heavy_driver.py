@@ -37,9 +37,11 @@ def no_contact(out: DriverOutput) -> bool:
 
 
 def run_heavy(chain: Chain, start: DriverStart | None, tol: float,
-              max_outer: int) -> DriverOutput | None:
+              max_outer: int, *, why: str = "a heavy chain") -> DriverOutput | None:
     """The driver's output for a heavy chain, or None when the angle steps did not
-    converge within ``max_outer`` (and :data:`ANGLE_STEPS`)."""
+    converge within ``max_outer`` (and :data:`ANGLE_STEPS`). ``why`` the SQP ran, for
+    the output's reason (also a step of the loading path with a link near the
+    vertical, :mod:`lcpbench.model.ramp`)."""
     if max_outer <= 0:
         return None
     begin = None if start is None else np.asarray(start.alpha, float)
@@ -51,7 +53,7 @@ def run_heavy(chain: Chain, start: DriverStart | None, tol: float,
                for s, e in zip(outcome.step_sizes, outcome.energies, strict=True)]
     up, lo = outcome.forces_upper, outcome.forces_lower
     free = not (np.any(up) or np.any(lo))
-    reason = ("no contact: the equilibrium clears every wall (found by SQP steps in the "
-              "link angles: a heavy chain)" if free
-              else "converged (SQP steps in the link angles: a heavy chain)")
+    reason = (f"no contact: the equilibrium clears every wall (found by SQP steps in the "
+              f"link angles: {why})" if free
+              else f"converged (SQP steps in the link angles: {why})")
     return DriverOutput(outcome.alpha, up, lo, True, reason, records)

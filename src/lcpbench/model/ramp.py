@@ -14,6 +14,19 @@ section's θ moves by more than :data:`STEP_DEG` degrees a step (at most
 :data:`MAX_STEPS` steps). The answer at s = 1 is judged by the caller like every
 answer. It is also the state the loading path reaches, where a scene has several
 stable states.
+
+Along the path of a row of sections with large signed angles, links pass the
+vertical: the equilibrium at the next s has links at 91°–98° while the last one had
+them at 82°–90°. The height step's linearisation divides by a cos α_i, so its steps
+there are inaccurate or rejected, and the height driver stalls (max|Δα| stuck at
+0.03–1.3 rad for 200 outer steps; every refusal of ``benchmarks/saddle_audit.py``'s
+rows of sections). Where the chain is in reach of the SQP in the link angles
+(:func:`lcpbench.model.angle_step.in_reach`: rigid flat walls) and the built-in
+back-end solves, a step that starts with a link within :data:`NEAR_VERTICAL_DEG` of
+the vertical (|cos α_i| ≤ sin 10°), or whose height steps did not converge and left
+one there, takes outer steps in α instead (:func:`lcpbench.model.heavy_driver.run_heavy`, the same
+SQP as a heavy chain's), where every angle is regular; its answer is judged as every
+answer.
 """
 
 from __future__ import annotations
@@ -21,13 +34,25 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import numpy as np
+
+from ..solvers.registry import DEFAULT
+from .angle_step import in_reach
 from .compiled import drive
+from .heavy_driver import run_heavy
 from .outer import DriverOutput, DriverStart
 
 #: the largest change of a section's bend angle between two steps (degrees)
 STEP_DEG = 10.0
 #: the longest path
 MAX_STEPS = 72
+#: a step of the path starting with a link this close to the vertical (degrees) takes
+#: its outer steps in the link angles (where they are in reach)
+NEAR_VERTICAL_DEG = 10.0
+#: the SQP steps a step of the path may take: a step of 10° from the last answer takes
+#: 5-8 (rows of 3-4 sections, N = 420); a dense SQP step at N = 560 in a channel costs
+#: seconds, so one that does not converge gives way to the height steps early
+PATH_ANGLE_STEPS = 12
 
 
 def rest_angles(scene) -> list[float] | None:
@@ -57,6 +82,13 @@ def fractions(scene) -> list[float]:
     return [k / steps for k in range(1, steps + 1)]
 
 
+def near_vertical(alpha) -> bool:
+    """Whether a link of ``alpha`` (rad) is within :data:`NEAR_VERTICAL_DEG` of the
+    vertical, where the height step's linearisation divides by a cos α_i ≈ 0."""
+    return bool(np.min(np.abs(np.cos(np.asarray(alpha, float))), initial=1.0)
+                <= math.sin(math.radians(NEAR_VERTICAL_DEG)))
+
+
 def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: float,
                 max_outer: int, method: str) -> tuple[DriverOutput | None, str, str]:
     """The driver's answer for ``scene`` at the end of the loading path.
@@ -68,20 +100,47 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
     path = fractions(scene)
     if not path:
         return None, engine, "the scene has no bend angle to follow from zero"
-    start, used, out = None, engine, None
+    # the SQP's reactions stand in for the built-in back-end's steps only
+    angles_ok = backend == DEFAULT and method != "undamped"
+    start, used, out, in_angles = None, engine, None, 0
     for k, s in enumerate(path):
         step_scene = scene if k == len(path) - 1 else at_fraction(scene, s)
         chain = step_scene.chain()
         kw = dict(backend=backend, settings=settings, engine=engine, tol=tol,
                   max_outer=max_outer, method=method)
-        out, used = drive(chain, make_step(), start=start, **kw)
+        angles = angles_ok and start is not None and in_reach(chain)
+        sqp = _in_angles(chain, start, tol, max_outer) \
+            if angles and start is not None and near_vertical(start.alpha) else None
+        if sqp is None:
+            out, used = drive(chain, make_step(), start=start, **kw)
+            if not out.converged and angles and near_vertical(out.alpha):
+                sqp = _in_angles(chain, start, tol, max_outer)
+        if sqp is not None:
+            out, in_angles = sqp, in_angles + 1
+            used = "numpy" if engine == "numpy" else f"numpy (SQP steps in the link angles: {_WHY})"
         if not out.converged and start is not None:
             out, used = drive(chain, make_step(), start=None, **kw)
         if not out.converged:
             if k == len(path) - 1:
-                return out, used, (f"followed the load from zero in {len(path)} steps; "
-                                   f"the last did not converge")
+                return out, used, (f"followed the load from zero in {len(path)} steps"
+                                   f"{_told(in_angles)}; the last did not converge")
             return None, used, (f"the loading path stopped at {s:.3g} of the bend angles "
-                                f"(step {k + 1} of {len(path)}): {out.reason}")
+                                f"(step {k + 1} of {len(path)}{_told(in_angles)}): "
+                                f"{out.reason}")
         start = DriverStart(out.alpha, out.last_step)
-    return out, used, f"followed the load from zero in {len(path)} steps"
+    return out, used, f"followed the load from zero in {len(path)} steps{_told(in_angles)}"
+
+
+_WHY = "a step of the loading path with a link near the vertical"
+
+
+def _in_angles(chain, start: DriverStart | None, tol: float,
+               max_outer: int) -> DriverOutput | None:
+    """The SQP's answer from ``start`` (:func:`lcpbench.model.heavy_driver.run_heavy`), or
+    None where it did not converge."""
+    return run_heavy(chain, start, tol, min(max_outer, PATH_ANGLE_STEPS), why=_WHY)
+
+
+def _told(in_angles: int) -> str:
+    return (f", {in_angles} of them in the link angles (a link near the vertical)"
+            if in_angles else "")

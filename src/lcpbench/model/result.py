@@ -103,6 +103,21 @@ class Retry(NamedTuple):
     why: str
 
 
+class ReachedState(NamedTuple):
+    """A distinct stable state (certified by the judge, the second-order check included)
+    that one of the solve's starts reached: which start ("escape": a restart downhill
+    of a saddle; "loading path": the bend angles grown from zero), its exact energy
+    E(α) (N·mm, :func:`lcpbench.model.chain.energy`: springs, the loads' work and
+    elastic walls), its total force F (N), whether it is the answer returned, and its
+    link angles α (rad; a start for :func:`lcpbench.solve` of that state)."""
+
+    start: str
+    energy: float
+    total_force: float
+    answer: bool
+    alpha: np.ndarray
+
+
 @dataclass
 class ContactResult:
     """The equilibrium of a scene: shape, gaps, forces and how it was found.
@@ -153,6 +168,11 @@ class ContactResult:
     judge : the result judge that ran: "compiled" (the judge kernel) or "numpy".
     retries : the escalations that ran after the route, in order
         (:class:`Retry`: name and why); () where the first answer was kept.
+    states : where the solve's starts reached more than one distinct stable state
+        (the restarts of ``escaped`` and the loading path it then follows), each of
+        them (:class:`ReachedState`), lowest energy first, the answer's marked;
+        () where the solve reached one. Not a search for every state:
+        :func:`lcpbench.stable_states` solves the cold start and the loading path.
     """
 
     scene: object
@@ -187,6 +207,7 @@ class ContactResult:
     engine: str = ""
     judge: str = ""
     retries: tuple[Retry, ...] = ()
+    states: tuple[ReachedState, ...] = ()
 
     def __getstate__(self) -> dict:
         """Pickled (and copied) with every derived field computed (``DERIVED``)."""
@@ -314,6 +335,7 @@ class ContactResult:
             "engine": self.engine,
             "judge": self.judge,
             "retries": [{"name": r.name, "why": r.why} for r in self.retries],
+            "states": [{**s._asdict(), "alpha": s.alpha.tolist()} for s in self.states],
         }
         if "formulation" in self.extra:  # the step's form, when one was asked for
             out["formulation"] = self.extra["formulation"]

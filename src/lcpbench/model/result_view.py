@@ -169,6 +169,8 @@ def summary_rows(res: ContactResult) -> list[tuple[str, str]]:
         rows.append(("lower wall ΣR", f"{1e3 * res.total_force_lower:.6g} mN "
                                       "(total_force_lower)"))
     rows += pressure_rows(res)
+    if res.states:
+        rows.append(("stable states", states_line(res)))
     rows.append(("force error bound", f"{res.force_error_bound:.2g} (relative to "
                                       "max(|F|, EI/ℓ²), lcpbench's judge)"))
     c = res.certificate
@@ -180,6 +182,14 @@ def summary_rows(res: ContactResult) -> list[tuple[str, str]]:
                               f"{res.outer_iterations} outer / {res.inner_iterations} inner "
                               f"iterations, {1e3 * res.time_s:.3g} ms"))
     return rows
+
+
+def states_line(res: ContactResult) -> str:
+    """One line on the distinct stable states the solve's starts reached
+    (``res.states``), lowest energy first, the answer's marked."""
+    return (f"{len(res.states)} reached, lowest energy first: " + "; ".join(
+        f"E = {s.energy:.6g} N·mm, F = {s.total_force:.6g} N ({s.start}"
+        + (", this answer)" if s.answer else ")") for s in res.states))
 
 
 def summary_text(res: ContactResult) -> str:
@@ -199,4 +209,4 @@ def summary_html(res: ContactResult) -> str:
 
 
 __all__ = ["ELASTIC_COLUMNS", "LOWER_COLUMNS", "NODE_COLUMNS", "free_node_indices", "node_columns",
-           "node_table", "summary_html", "summary_rows", "summary_text"]
+           "node_table", "states_line", "summary_html", "summary_rows", "summary_text"]

@@ -18,11 +18,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..api import solve
+from ..escalations import same_state
 from ..model.chain import energy
 from ..model.result import ContactResult
-
-#: two certified answers are one state when their link angles agree to this (rad)
-SAME_STATE = 1e-4
 
 
 @dataclass
@@ -41,9 +39,10 @@ def stable_states(scene, **solve_kw) -> list[StableState]:
 
     ``solve_kw`` are :func:`lcpbench.solve`'s (not ``start``). Each answer is
     certified by lcpbench's judge, the second-order check included; a start whose
-    answer is refused contributes nothing. States whose link angles agree to
-    :data:`SAME_STATE` rad are one (the first start's kept). Sorted by energy, lowest
-    first; empty when neither start is certified.
+    answer is refused contributes nothing. Answers whose wall forces agree to the
+    accuracy asked for are one state (:func:`lcpbench.escalations.same_state`; the
+    first start's kept). Sorted by energy, lowest first; empty when neither start is
+    certified.
     """
     if "start" in solve_kw:
         from ..errors import ProblemError
@@ -55,8 +54,8 @@ def stable_states(scene, **solve_kw) -> list[StableState]:
         res = solve(scene, start="ramp" if start == "ramp" else None, **solve_kw)
         if not res.converged:
             continue
-        alpha = np.asarray(res.alpha, float)
-        if any(np.max(np.abs(alpha - s.result.alpha)) <= SAME_STATE for s in states):
+        if any(same_state(res, s.result) for s in states):
             continue
-        states.append(StableState(res, float(energy(chain, alpha)), start))
+        states.append(StableState(res, float(energy(chain, np.asarray(res.alpha, float))),
+                                  start))
     return sorted(states, key=lambda s: s.energy)
