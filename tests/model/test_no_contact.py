@@ -22,8 +22,8 @@ def no_lcp(monkeypatch):
     """Any contact step handed to a back-end fails the test."""
     real = api.make_step_solver
 
-    def guarded(solver, settings, scaled):
-        real(solver, settings, scaled)  # still validates the names
+    def guarded(solver, settings, scaled, *form):
+        real(solver, settings, scaled, *form)  # still validates the names
 
         def step(*_):
             raise AssertionError("a contact step (LCP) was solved")

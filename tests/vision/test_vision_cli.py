@@ -146,6 +146,12 @@ def test_render_then_compare(tmp_path, capsys):
                  "--height", "3.5", "--theta", "120", "--json"]) == 0
     same = json.loads(capsys.readouterr().out)
     assert same["contact_force_n"] == d["contact_force_n"]
+    pytest.importorskip("matplotlib")
+    picture = tmp_path / "compare.png"  # the figure draws the wall faces it was given
+    assert main(["vision", "compare", str(img), "--calib", str(tmp_path / "c.calib.json"),
+                 "--wall-face", "5", "--theta", "120", "--plot", str(picture)]) == 0
+    assert picture.stat().st_size > 10_000
+    capsys.readouterr()
     assert main(["solve", "--theta", "120", "--height", "3.5", "--links", "200", "--channel",
                  "--json"]) == 0
     assert json.loads(capsys.readouterr().out)["total_force"] == pytest.approx(

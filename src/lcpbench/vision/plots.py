@@ -226,12 +226,12 @@ def plot_comparison(cmp, out) -> None:
         a.plot(e[:, 0], e[:, 1], "-", color="0.5", lw=0.8,
                label=f"model tube surface (±{cmp.radius_mm:g} mm)" if k == 0 else None)
     xs = [cmp.model_mm[:, 0].min() - 2, cmp.model_mm[:, 0].max() + 2]
-    for k, h in enumerate((cmp.height_mm, -cmp.height_mm)):
+    for k, h in enumerate((cmp.wall_face_mm, -cmp.wall_face_mm)):
         a.plot(xs, [h, h], "k-", lw=2, label="wall faces (±h)" if k == 0 else None)
     a.set_aspect("equal")
     a.set_xlabel("x (mm)")
     a.set_ylabel("y (mm)")
-    a.set_title(f"(a) θ = {cmp.theta_deg:.1f}°, h = {cmp.height_mm:g} mm, "
+    a.set_title(f"(a) θ = {cmp.theta_deg:.1f}°, wall face {cmp.wall_face_mm:g} mm, "
                 f"force {1e3 * cmp.force_n:.2f} mN")
     a.grid(alpha=0.3)
     a.legend(fontsize=7, loc="lower center", bbox_to_anchor=(0.5, 0.06), ncol=2)
