@@ -54,6 +54,15 @@ def import_main(src: str):
     return module
 
 
+def _solve_kernel(package: str):
+    """The solve kernel's module of a tree: ``kernel_call.solve_kernel`` (since the kernel's
+    Python side moved there), else the older ``compiled._kernel``."""
+    try:
+        return importlib.import_module(f"{package}.model.kernel_call").solve_kernel()
+    except (ImportError, AttributeError):
+        return importlib.import_module(f"{package}.model.compiled")._kernel()
+
+
 class Tree:
     """One tree's solve, scene class and kernel modules."""
 
@@ -63,7 +72,7 @@ class Tree:
         self.solve = api.solve
         self.Scene = importlib.import_module(f"{package}.problems.scenes").ActuatorScene
         self.first = self.solve(self.Scene(**SCENE), tol=TOL)  # loads the kernels
-        self.kernels = (importlib.import_module(f"{package}.model.compiled")._kernel(),
+        self.kernels = (_solve_kernel(package),
                         importlib.import_module(f"{package}.model.judge_compiled")._kernel())
         self.served = "AOT" if type(self.kernels[0]).__name__ == "AotKernels" else "JIT"
 
