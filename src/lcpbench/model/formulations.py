@@ -324,6 +324,18 @@ def _solve_lcp(backend, M: np.ndarray, q: np.ndarray, s: Settings, equilibrated:
     return z, w, res
 
 
+def gaps_answer(step, form, z: np.ndarray, w: np.ndarray):
+    """Heights and reactions (u, R_upper, R_lower) of an answer (z, w) of the step's LCP
+    in gaps (F1, ``form``: ``step.lcp_form``'s): the upper rows' reactions are w, a
+    channel's lower rows' are z past the gap rows."""
+    n, m = step.size, form.n_gap
+    r_up, r_lo = np.zeros(n), np.zeros(n)
+    r_up[form.rows] = w[:m]
+    if z.size > m:
+        r_lo[form.rows] = z[m:]
+    return step.from_lcp(form, z), r_up, r_lo
+
+
 def run_formulation(backend, step, s: Settings, formulation: Formulation, scaled: bool,
                     given=None) -> StepSolution:
     """``backend``'s answer to ``step`` in ``formulation``, mapped back to heights and
@@ -346,13 +358,7 @@ def run_formulation(backend, step, s: Settings, formulation: Formulation, scaled
             z, w, res = _solve_lcp(backend, M, q, s, formulation.equilibrated)
             if not np.all(np.isfinite(z)):
                 return _failed(n, res.message, _not_solved(res.status), build_time=build)
-            z, w = z * dz, w * dw
-            u = step.from_lcp(form, z)
-            r_up, r_lo = np.zeros(n), np.zeros(n)
-            m = form.n_gap
-            r_up[form.rows] = w[:m]
-            if q.size > m:
-                r_lo[form.rows] = z[m:]
+            u, r_up, r_lo = gaps_answer(step, form, z * dz, w * dw)
         elif formulation.name == "reactions":
             lcp = reaction_lcp(step, scaled)
             build = time.perf_counter() - t0

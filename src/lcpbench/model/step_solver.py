@@ -32,6 +32,7 @@ from .elastic import compliances
 from .elastic_step import run_elastic_step
 from .formulations import (
     Formulation,
+    gaps_answer,
     resolve_formulation,
     run_formulation,
     step_scales,
@@ -372,12 +373,8 @@ def _run_step(backend: Backend, step, s: Settings, scaled: bool, warm) -> StepSo
                             res.iterations, res.solve_time, res.setup_time, res.message,
                             build_time=build)
     z, w = res.z * dz, res.w * dw
-    u = step.from_lcp(form, z)
-    r_up, r_lo = np.zeros(n), np.zeros(n)
+    u, r_up, r_lo = gaps_answer(step, form, z, w)
     m = form.n_gap
-    r_up[form.rows] = w[:m]
-    if q.size > m:
-        r_lo[form.rows] = z[m:]
     upper = np.zeros(n, bool)
     upper[form.rows] = z[:m] <= 0.0
     return StepSolution(u, r_up, r_lo, res.status, res.iterations, res.solve_time,
