@@ -237,7 +237,7 @@ def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, f
             mu_up[i], mu_lo[i] = (net[i], 0.0) if near_up else (0.0, -net[i])
         flags = 7
         if dalpha < tol:
-            merit_parts(alpha, sin_a, cos_a, chain, walls, mu_up, mu_lo, at)  # walls at α
+            walls_at(sin_a, cos_a, a, fs, *walls, *at)  # the exact walls at the new α
             worst = 0.0
             for i in range(n):
                 if np.isfinite(hi_rows[i]):
