@@ -140,9 +140,14 @@ def test_small_scene_matches_the_energy_minimum(small, name):
 @pytest.mark.parametrize("name, backend", [
     ("gaps", "lemke"), ("heights", "active-set"), ("heights+ruiz", "proxsuite-sparse"),
     ("lifted", "osqp"), ("lifted+ruiz", "osqp"), ("reactions", "lemke"),
-    ("reactions+ruiz", "proxsuite-dense"), ("angles", "qpsolvers-scs"),
+    ("reactions+ruiz", "proxsuite-dense"), ("angles", "qpsolvers-daqp"),
     ("angles+ruiz", "osqp")])
 def test_paper_scene_matches_the_energy_minimum_and_each_other(paper, name, backend):
+    """Each form's multipliers, mapped back, against the energy minimisation. The angles
+    form runs on DAQP, an active-set QP solver: its answer is the KKT point of the form,
+    not where a first-order method stopped (SCS 3.3.1 stops at 1.7e-5 of the largest
+    reaction there: its accuracy is a property of the build's iteration path, and this
+    test is of the form)."""
     scene = ActuatorScene(theta=150, height=3, links=140)
     res = lcpbench.solve(scene, settings="high", tol=1e-10)
     u_ref, R_ref = _slsqp(paper, scene.chain(), np.asarray(res.alpha), polish=True)
