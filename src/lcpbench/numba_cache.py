@@ -20,7 +20,7 @@ Every numba kernel of lcpbench (:data:`KERNEL_FILES`) is imported through
 their sources (:func:`kernel_cache_dir`). numba invalidates a function's cache
 entry only when *its own* file changes, and kernels call each other across
 files (``compiled_kernel.py`` the dual walk of ``compiled_dual.py``,
-``walk_kernel.py`` the twisted factor, which calls the face kernel): without the
+``twisted_walk_kernel.py`` the twisted factor, which calls the face kernel): without the
 hash an edit of one file could leave another file's cached code running stale.
 Any edit of any kernel moves the directory, so every kernel compiles once
 afresh. The base is numba's ``NUMBA_CACHE_DIR`` where set, else the user's cache
@@ -69,7 +69,7 @@ _HOLDERS: list = []  # callers' one-element caches of a kernel module (see held)
 #: (tests/model/test_kernel_cache.py checks that no file with ``@njit`` is missing)
 KERNEL_FILES = ("model/compiled_kernel.py", "model/compiled_dual.py", "model/judge_kernel.py",
                 "model/driver_kernel.py", "model/large_kernel.py", "linalg/givens_kernel.py",
-                "linalg/face_kernel.py", "linalg/twisted_kernel.py", "linalg/walk_kernel.py",
+                "linalg/face_kernel.py", "linalg/twisted_kernel.py",
                 "linalg/ldl_kernel.py", "model/batch_kernel.py", "model/batch_verdict.py",
                 "model/sensitivity_kernel.py",
                 "linalg/twisted_walk_kernel.py", "model/stability_kernel.py",

@@ -74,9 +74,9 @@ def test_the_kernels_are_cached_under_a_hash_of_all_their_files(tmp_path):
     k = jit_module("lcpbench.model.compiled_kernel", "solve_chain")
     here = Path(compiled.__file__).parent.parent
     where = kernel_cache_dir([here / f for f in KERNEL_FILES], config.CACHE_DIR)
-    walk = jit_module("lcpbench.linalg.walk_kernel")
+    walk = jit_module("lcpbench.linalg.twisted_walk_kernel")
     twisted = jit_module("lcpbench.linalg.twisted_kernel")
-    for dispatcher in (k.solve_chain, k.dual_active_set, walk.face_move, twisted.factor):
+    for dispatcher in (k.solve_chain, k.dual_active_set, walk.walk, twisted.factor):
         assert dispatcher._cache._cache_path.startswith(where)
 
 

@@ -11,10 +11,6 @@ import numpy as np
 
 from .saddle import TridiagonalFactor
 
-#: the dual walk's face moves fused into three passes (:mod:`.twisted_walk_kernel`);
-#: False: one compiled face move at a time (:mod:`.walk_kernel`), the same path
-FUSED = True
-
 
 def _kernel():
     from ..numba_cache import kernel_module  # numba: loads or compiles at first use
@@ -67,9 +63,9 @@ class TwistedFactor(TridiagonalFactor):
         if "B" not in state:
             state.update(B=np.empty((3, n)), bfilled=np.empty(n, np.bool_),
                          bsnap=np.empty((n, 4)), invB=np.empty(n), tri=np.zeros(3),
-                         work=np.empty((3, n)), walk_work=None)
+                         walk_work=None)
         self.B, self._bfilled, self._bsnap = state["B"], state["bfilled"], state["bsnap"]
-        self._invB, self._tri, self._work = state["invB"], state["tri"], state["work"]
+        self._invB, self._tri = state["invB"], state["tri"]
         self._m = n // 2
         self.rows_touched = 0
         self._walk_work: tuple | None = state["walk_work"]  # walk's (made at first use)
@@ -109,39 +105,10 @@ class TwistedFactor(TridiagonalFactor):
         self.rows_touched = (m - j0) + (n - m - k0)
         return x
 
-    def face_move(self, fixed: np.ndarray, wall: np.ndarray, u: np.ndarray, g: np.ndarray,
-                  *, refine: bool = False) -> tuple[np.ndarray, np.ndarray] | None:
-        """``(d, g_face)``: the dual walk's move from ``u`` (gradient ``g``) to the minimiser
-        on the face ``fixed`` (held on ``wall``) and the gradient there, in one compiled
-        call (:mod:`.walk_kernel`); None when n < 5 (the caller does it in numpy)."""
-        n = self.n
-        if n < 5:
-            return None
-        fixed = np.ascontiguousarray(fixed, dtype=np.bool_)
-        j0, k0, m = self._twist(fixed)
-        self._fixed = None
-        d, g_face = np.empty(n), np.empty(n)
-        from ..numba_cache import kernel_module  # numba: loads or compiles at first use
-
-        walk_kernel = kernel_module("lcpbench.linalg.walk_kernel")
-
-        ok = walk_kernel.face_move(self.rows, self.rrows, fixed, np.ascontiguousarray(fixed[::-1]),
-                                   self.R, self._filled, self._snap, self.B, self._bfilled,
-                                   self._bsnap, self._tri, self._inv, self._invB, j0, k0, m,
-                                   np.ascontiguousarray(wall, float), np.ascontiguousarray(u, float),
-                                   np.ascontiguousarray(g, float), refine, d, g_face,
-                                   self._work[0], self._work[1], self._work[2])
-        if not ok:
-            raise np.linalg.LinAlgError("a face of H is singular (zero pivot)")
-        self._fixed, self._m = fixed.copy(), m
-        self.rows_touched = (m - j0) + (n - m - k0)
-        return d, g_face
-
     def walk(self, ctl: np.ndarray, step, slack, u, g, sigma, wall, warm_up, warm_lo,
              has_lo: bool, tie: float, max_iter: int, seen: np.ndarray) -> int:
         """The dual walk's moves up to its next unviolated point, compiled
-        (:func:`lcpbench.linalg.twisted_walk_kernel.walk`, its return code; ``FUSED``
-        False: :func:`lcpbench.linalg.walk_kernel.walk`, the same path), after a face
+        (:func:`lcpbench.linalg.twisted_walk_kernel.walk`, its return code), after a face
         solve (the walk starts at the unconstrained minimiser); the factor is left on
         the walk's last face (``resolve`` solves with it)."""
         from ..numba_cache import kernel_module  # numba: loads or compiles at first use
@@ -160,14 +127,9 @@ class TwistedFactor(TridiagonalFactor):
                 self._bsnap, self._tri, self._inv, self._invB, prev, ctl, step.lower,
                 step.upper, has_lo, slack, u, g, sigma, wall, warm_up, warm_lo, tie, max_iter,
                 seen)
-        if FUSED:
-            code = kernel_module("lcpbench.linalg.twisted_walk_kernel").walk(
-                *head, f[0], f[1], b[0], b[1], i[:2 * n], i[2 * n:5 * n], i[5 * n:6 * n],
-                f[2], i[6 * n:])
-        else:
-            code = kernel_module("lcpbench.linalg.walk_kernel").walk(
-                *head, f[0], f[1], self._work[0], self._work[1], self._work[2], b[0], b[1],
-                i[:2 * n], i[2 * n:5 * n], i[5 * n:6 * n], f[2])
+        code = kernel_module("lcpbench.linalg.twisted_walk_kernel").walk(
+            *head, f[0], f[1], b[0], b[1], i[:2 * n], i[2 * n:5 * n], i[5 * n:6 * n], f[2],
+            i[6 * n:])
         if code != 3:
             self._fixed, self._m = prev, int(ctl[0])
         return int(code)

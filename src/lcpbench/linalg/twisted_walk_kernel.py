@@ -1,15 +1,20 @@
-"""The dual walk on a twisted factor with each face move fused into three passes (large N).
+"""The dual walk on a twisted factor, compiled, each face move fused into three passes (large N).
 
-:func:`lcpbench.linalg.walk_kernel.walk` moves from a face minimiser to the
-next by :func:`~lcpbench.linalg.walk_kernel.face_move`: the face's twisted
+The walk of :func:`lcpbench.solvers.banded._dual` moves from a face minimiser
+to the next: the held nodes onto their walls, d₀ = (wall − u) on S, then Newton
+on the free nodes, d = d₀ − H_S⁻¹ r with r = g + H d₀ zeroed on S, and the
+gradient there, g + H d. Written as numpy passes that is the face's twisted
 factor (local: the rows between the first and last change), then about a dozen
 full-length passes (d₀, H d₀, r, the two sweeps of the solve, d, the two
 halves of H d, g_face, the ratio test, the update of u and g). At N = 10⁵ the
 walk has 2–6 held nodes and the arrays (~20 of 0.8 MB) do not fit in the
 cache: a move costs its memory traffic, ~2.3 ms, and the walk ~half of a solve.
 
-Here the same move, the same arithmetic in the same order (so the same path and
-the same answer, bit for bit; tests/solvers/test_gallop.py), in three passes:
+Here the same move (H x as Aᵀ(A x), never the rounded H; the face solve of
+:mod:`.twisted_kernel`, unrefined: the walk carries g by exact products, so the
+face solve's residual on the free nodes is taken up by the next move's r, and
+every optimum the walk finds is refined to round-off before it is accepted,
+:func:`lcpbench.solvers.compiled_walk.refine_on_face`), in three passes:
 
 1. the forward sweeps of M y = r from both ends, r = g + H d₀ (zero on S)
    formed on the fly (H d₀ lives next to the held nodes: :func:`_held_product`
@@ -28,14 +33,146 @@ import numpy as np
 from numba import njit
 
 from .twisted_kernel import factor, twist_middle
-from .walk_kernel import add_picks, mix_key, picks_in, set_node, twist_window, violation
+
+# the walk's bookkeeping: picks, working-set keys, the twist window
+
+@njit(cache=True)
+def violation(u, wall, S, side, i):
+    """The violation of node i's wall (``side`` +1: u − upper, −1: lower − u); −inf on
+    held nodes (as the numpy walk's v)."""
+    if S[i]:
+        return -np.inf
+    return u[i] - wall[i] if side > 0 else wall[i] - u[i]
+
+
+@njit(cache=True)
+def _picks(u, wall, side, slack, S, reach, picks, npick):
+    """Append to ``picks`` (node index; ``side`` in the sign) the nodes the walk adds on
+    this wall: :func:`lcpbench.solvers.gallop.gallop_picks` when ``reach`` > 0, else
+    :func:`lcpbench.solvers.banded._run_maxima`, in one pass without the v array.
+    Returns the new count."""
+    return picks_in(u, wall, side, slack, S, reach, picks, npick, 0, u.size - 1)
+
+
+@njit(cache=True)
+def picks_in(u, wall, side, slack, S, reach, picks, npick, start, stop):
+    """:func:`_picks` scanning nodes ``start`` .. ``stop`` only (:func:`walk` passes the
+    violated range: every violated node lies there, so the same runs and the same
+    picks)."""
+    n = u.size
+    i = start
+    while i <= stop:
+        if not violation(u, wall, S, side, i) > slack[i]:
+            i += 1
+            continue
+        a = i
+        while i + 1 < n and violation(u, wall, S, side, i + 1) > slack[i + 1]:
+            i += 1
+        b = i
+        if reach > 0:
+            left = a >= 1 and S[a - 1]
+            right = b + 1 < n and S[b + 1]
+            if (left or right) and b - a + 1 > reach:
+                if left:
+                    picks[npick] = side * (a + reach - 1 + 1)
+                    npick += 1
+                if right and not (left and b - reach + 1 == a + reach - 1):
+                    picks[npick] = side * (b - reach + 1 + 1)
+                    npick += 1
+                i += 1
+                continue
+            best = a  # the run's deepest node (the first of equal ones)
+            for k in range(a + 1, b + 1):
+                if violation(u, wall, S, side, k) > violation(u, wall, S, side, best):
+                    best = k
+            picks[npick] = side * (best + 1)
+            npick += 1
+        else:  # every local maximum of the run (v_i >= v_{i-1}, v_i > v_{i+1})
+            for k in range(a, b + 1):
+                vk = violation(u, wall, S, side, k)
+                lft = violation(u, wall, S, side, k - 1) if k >= 1 else -np.inf
+                rgt = violation(u, wall, S, side, k + 1) if k + 1 < n else -np.inf
+                if vk >= lft and vk > rgt:
+                    picks[npick] = side * (k + 1)
+                    npick += 1
+        i += 1
+    return npick
+
+
+@njit(cache=True)
+def add_picks(picks, npick, seen, key, hi, lo, sigma, wall, S, rfixed, chg, ctl):
+    """The walk's step to its next working set: ``(True, key)`` where the set ``key``
+    was met before (the walk stops), else the set recorded in ``seen`` and the picks
+    fixed on their walls: ``(False, the new set's key)``."""
+    for k in range(ctl[5]):
+        if seen[k] == key:
+            return True, key
+    if ctl[5] < seen.size:
+        seen[ctl[5]] = key
+        ctl[5] += 1
+    for k in range(npick):
+        i = abs(picks[k]) - 1
+        if S[i]:  # (a node violates one wall at a time; the upper first)
+            continue
+        if picks[k] > 0:
+            key = set_node(i, 1.0, hi[i], sigma, wall, S, rfixed, chg, ctl, key)
+        else:
+            key = set_node(i, -1.0, lo[i], sigma, wall, S, rfixed, chg, ctl, key)
+    return False, key
+
+
+@njit(cache=True)
+def twist_window(chg, ctl, S, prev, n):
+    """(j0, k0, m) of this face's factor against the last one (TwistedFactor._twist),
+    from the nodes changed since (``chg``, the first ``ctl[6]``) and the last twist
+    ``ctl[0]``."""
+    first, last = n, -1
+    for k in range(ctl[6]):
+        i = chg[k]
+        if S[i] != prev[i]:
+            first = min(first, i)
+            last = max(last, i)
+    m0 = ctl[0]
+    if last >= 0:
+        j0 = max(min(first - 1, m0), 0)
+        k0 = max(min(n - 2 - last, n - m0), 0)
+        return j0, k0, min(max((j0 + n - k0) // 2, 2), n - 2)
+    return m0, n - m0, m0
+
+
+@njit(cache=True)
+def mix_key(i, side):
+    """A 64-bit mix of (node, side) (splitmix64); the working set's key is their sum."""
+    z = np.uint64(2 * i + (1 if side > 0 else 0)) + np.uint64(0x9E3779B97F4A7C15)
+    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+@njit(cache=True)
+def set_node(i, side, value, sigma, wall, S, rfixed, chg, ctl, key):
+    """Node i onto its wall (side ±1, wall height ``value``) or off it (side 0);
+    returns the working set's key after the change."""
+    n = S.size
+    if sigma[i] != 0.0:
+        key -= mix_key(i, sigma[i])
+    sigma[i] = side
+    if side != 0.0:
+        wall[i] = value
+        key += mix_key(i, side)
+    S[i] = side != 0.0
+    rfixed[n - 1 - i] = S[i]
+    chg[ctl[6]] = i
+    ctl[6] += 1
+    return key
 
 
 @njit(cache=True)
 def _held_product(A, hl, nh, wall, u, hd):
     """hd += Aᵀ (A d₀), d₀ = wall − u on the held nodes ``hl[:nh]`` (ascending), zero
-    elsewhere: the terms of :func:`lcpbench.linalg.walk_kernel._held_product` in its
-    order (hd is zero outside ±2 of the held nodes)."""
+    elsewhere: O(held nodes), the terms of :func:`lcpbench.linalg.face_kernel.matvec_into`
+    (column i of A lives in rows i − 1 .. i + 1; hd is zero outside ±2 of the held
+    nodes)."""
     n = u.size
     for h in range(nh):
         i = hl[h]
@@ -50,7 +187,7 @@ def _held_product(A, hl, nh, wall, u, hd):
 
 @njit(cache=True)
 def _d(S, wall, u, x, i):
-    """d_i = d₀_i − x_i (:func:`~lcpbench.linalg.walk_kernel.face_move`'s d)."""
+    """d_i = d₀_i − x_i, the move to the face minimiser."""
     return ((wall[i] - u[i]) if S[i] else 0.0) - x[i]
 
 
@@ -170,9 +307,20 @@ def _update(A, S, wall, u, g, x, step, hi, lo, has_lo, slack):
 def walk(rows, rrows, R, filled, snap, B, bfilled, bsnap, tri, invR, invB, prev, ctl,
          lo, hi, has_lo, slack, u, g, sigma, wall, warm_up, warm_lo, tie, max_iter, seen,
          x, hd, S, rfixed, picks, chg, held, ratio, hl):
-    """:func:`lcpbench.linalg.walk_kernel.walk` (the same arguments, return codes and
-    path), each face move fused (see the module). Work: x, hd (n floats), S, rfixed
-    (n bools), picks (2n ints), chg (3n ints), held, hl (n ints), ratio (n floats)."""
+    """The dual walk of :func:`lcpbench.solvers.banded._dual` on a twisted factor (large
+    N), from a face minimiser (u, g, sigma, wall) to the next point where no wall is
+    violated beyond ``slack``, each face move fused (see the module). Returns 0 there
+    (the caller refines), 1 when a working set repeats, 2 at ``max_iter`` face solves,
+    3 on a zero pivot. ``prev``: the face of the last factorisation (the walk's face on
+    entry); ``ctl`` = [twist m, face solves, reach, warm, refined, seen count, (work)]
+    (in and out); ``seen``: the working sets' keys (a collision only hands over to the
+    primal method). Work: x, hd (n floats), S, rfixed (n bools), picks (2n ints), chg
+    (3n ints), held, hl (n ints), ratio (n floats).
+
+    The bookkeeping is incremental (the numpy walk's ~20 full-length passes per face
+    were as costly as the face solve's own): violations are computed where they are
+    scanned, the working set's key is a sum of per-node hashes, the twist comes from
+    the nodes changed since the last factorisation."""
     n = u.size
     key = np.uint64(0)
     for i in range(n):

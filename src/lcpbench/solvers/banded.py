@@ -254,7 +254,6 @@ def _dual(step, warm_up, warm_lo, max_iter, reach=0):
     # a step may bring its own face solves (the tridiagonal factor at large N)
     H = getattr(step, "factor", None) or _Banded(step.bands)
     matvec, face_solve = H.matvec, H.face_solve
-    face_move = getattr(H, "face_move", None)
     has_lo = bool(np.count_nonzero(np.isfinite(lo)))
     S = np.zeros(n, bool)  # the working set: nodes held against a wall
     u = H.solve(-np.asarray(step.linear, dtype=float))  # the unconstrained minimiser
@@ -346,16 +345,11 @@ def _dual(step, warm_up, warm_lo, max_iter, reach=0):
         it += 1
         # d: from u to the minimiser on the face S (S onto its walls, then Newton
         # on the free nodes), as an increment
-        moved = face_move(S, wall, u, g) if face_move is not None else None
-        if moved is not None:  # the same move in one compiled call (large N; its face solve
-            # unrefined: every optimum the walk finds is refined before it is accepted)
-            d, g_face = moved
-        else:
-            d = (wall - u) * S
-            r = g + matvec(d)
-            r[S] = 0.0
-            d -= face_solve(S, r)
-            g_face = g + matvec(d)
+        d = (wall - u) * S
+        r = g + matvec(d)
+        r[S] = 0.0
+        d -= face_solve(S, r)
+        g_face = g + matvec(d)
         # the reactions there are −σ g_face; move towards it until one turns negative
         # (only held nodes have reactions: the tests run on them, not on all n)
         held = np.flatnonzero(S)

@@ -1,4 +1,4 @@
-"""The dual walk at large N with its loop compiled (:func:`lcpbench.linalg.walk_kernel.walk`).
+"""The dual walk at large N with its loop compiled (:func:`lcpbench.linalg.twisted_walk_kernel.walk`).
 
 :func:`lcpbench.solvers.banded._dual` on a step with its own twisted factor
 (large N, in increments): the same walk — the warm contact set first, then
