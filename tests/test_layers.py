@@ -122,3 +122,28 @@ def test_no_import_cycle_between_modules():
 
 def test_no_private_name_is_imported_from_another_module():
     assert private_imports() == []
+
+
+def thresholds_defined_again() -> list[str]:
+    """``module:line`` for every module-level assignment, outside ``thresholds.py``, of a
+    name that ``lcpbench.thresholds`` defines: a threshold that kernels and Python both
+    read is written once (a second copy could drift from the first unseen). The machine
+    epsilon ``EPS`` is a fact of the doubles, not a threshold: modules may name it."""
+    own = SRC / "thresholds.py"
+    names = {t.id for node in ast.parse(own.read_text()).body if isinstance(node, ast.Assign)
+             for t in ast.walk(node) if isinstance(t, ast.Name)} - {"EPS"}
+    found = []
+    for module, path in MODULES.items():
+        if path == own:
+            continue
+        for node in ast.parse(path.read_text()).body:
+            targets = node.targets if isinstance(node, ast.Assign) else (
+                [node.target] if isinstance(node, ast.AnnAssign) else [])
+            for t in targets:
+                hit = {n.id for n in ast.walk(t) if isinstance(n, ast.Name)} & names
+                found += [f"{module}:{node.lineno} defines {h}" for h in sorted(hit)]
+    return found
+
+
+def test_the_thresholds_are_defined_once():
+    assert thresholds_defined_again() == []

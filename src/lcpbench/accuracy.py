@@ -23,10 +23,10 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from .model.judge import FORCE_TOL_PER_RAD
 from .model.result import ContactResult, Retry
 from .problems.checks import check_number
 from .solvers.base import PROFILES, Settings
+from .thresholds import FORCE_TOL_PER_RAD
 
 #: the range of ``accuracy`` (relative force error). Below 1e-9 the force is at the
 #: round-off of the reference on the paper grid (N = 140): asked 1e-10, the measured

@@ -75,6 +75,8 @@ KERNEL_FILES = ("model/compiled_kernel.py", "model/compiled_dual.py", "model/jud
                 "linalg/twisted_walk_kernel.py", "model/stability_kernel.py",
                 "model/wall_kernel.py", "model/profile_kernel.py",
                 "model/friction_step.py", "model/judge_friction.py")
+#: files without kernels whose numbers the kernels freeze in (hashed with KERNEL_FILES)
+CONSTANT_FILES = ("thresholds.py",)
 #: the name of the ahead-of-time extension module (one per cache directory and machine)
 AOT_NAME = "lcpbench_aot"
 MANIFEST = "manifest.json"
@@ -93,11 +95,11 @@ def kernel_cache_dir(files, base: str | None = None) -> str:
 
 def kernels_dir() -> str:
     """The cache directory of this process's kernels: :func:`kernel_cache_dir` of
-    :data:`KERNEL_FILES` under ``NUMBA_CACHE_DIR`` (numba's own setting; read from
+    :data:`KERNEL_FILES` and :data:`CONSTANT_FILES` under ``NUMBA_CACHE_DIR`` (numba's own setting; read from
     the environment, so that finding the AOT module needs no numba)."""
     if not _DIR:
         here = Path(__file__).parent
-        _DIR.append(kernel_cache_dir([here / f for f in KERNEL_FILES],
+        _DIR.append(kernel_cache_dir([here / f for f in KERNEL_FILES + CONSTANT_FILES],
                                      os.environ.get("NUMBA_CACHE_DIR")))
     return _DIR[0]
 

@@ -17,10 +17,11 @@ import pytest
 
 from lcpbench import ActuatorScene, solve
 from lcpbench.model.energy_reference import minimise_energy
-from lcpbench.model.judge import FORCE_TOL_CAP, force_tol, judge
+from lcpbench.model.judge import force_tol, judge
 from lcpbench.model.result import certify
 from lcpbench.solvers import registry
 from lcpbench.solvers.registry import Backend, available_backends
+from lcpbench.thresholds import FORCE_TOL_CAP
 
 PROFILE_TOL = {"default": 1e-3, "high": 1e-9}
 #: the energy reference's own accuracy (its KKT check is 1e-9, dimensionless)

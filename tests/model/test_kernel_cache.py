@@ -62,7 +62,7 @@ def test_the_kernels_are_cached_under_a_hash_of_all_their_files(tmp_path):
     from numba.core import config
 
     from lcpbench.model import compiled
-    from lcpbench.numba_cache import KERNEL_FILES, jit_module, kernel_cache_dir
+    from lcpbench.numba_cache import CONSTANT_FILES, KERNEL_FILES, jit_module, kernel_cache_dir
 
     a, b = tmp_path / "a.py", tmp_path / "b.py"
     a.write_text("x = 1\n")
@@ -73,7 +73,8 @@ def test_the_kernels_are_cached_under_a_hash_of_all_their_files(tmp_path):
     assert first.startswith(str(tmp_path / "lcpbench-numba"))
     k = jit_module("lcpbench.model.compiled_kernel", "solve_chain")
     here = Path(compiled.__file__).parent.parent
-    where = kernel_cache_dir([here / f for f in KERNEL_FILES], config.CACHE_DIR)
+    where = kernel_cache_dir([here / f for f in KERNEL_FILES + CONSTANT_FILES],
+                             config.CACHE_DIR)
     walk = jit_module("lcpbench.linalg.twisted_walk_kernel")
     twisted = jit_module("lcpbench.linalg.twisted_kernel")
     for dispatcher in (k.solve_chain, k.dual_active_set, walk.walk, twisted.factor):

@@ -16,8 +16,9 @@ import pytest
 
 from lcpbench import ActuatorScene, solve
 from lcpbench.model import large_driver, nested_start
-from lcpbench.model.judge import NODE_GROSS, force_tol, judge
+from lcpbench.model.judge import force_tol, judge
 from lcpbench.model.result import certify
+from lcpbench.thresholds import NODE_GROSS
 
 N = 10_000
 

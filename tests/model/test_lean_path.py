@@ -27,13 +27,13 @@ from lcpbench.model.chain import heights, node_positions
 from lcpbench.model.kernel_call import _layout
 from lcpbench.model.result import DERIVED
 from lcpbench.model.wall_free import (
-    SAG_BOUND,
     arc_far_past_wall,
     beam_sag,
     free_heights,
     wall_overlap,
 )
 from lcpbench.problems.sections import Section, SectionedScene
+from lcpbench.thresholds import SAG_BOUND
 
 
 def _positions(alpha, a):

@@ -81,14 +81,3 @@ def test_a_function_that_needs_too_many_pieces_has_no_table():
     prof = WallProfile.from_function(lambda x: 3.0 + 1e-3 * np.sin(1e5 * np.asarray(x)),
                                      lambda x: 1e2 * np.cos(1e5 * np.asarray(x)))
     assert prof.pieces(-30.0, 30.0) is None
-
-
-def test_the_kernel_constants_are_the_drivers():
-    """Route against route: the profile kernel repeats the numpy driver's constants by
-    hand (numba compiles them in); only a comparison can say they agree."""
-    from lcpbench.model import profile_driver
-
-    k = kernel_module("lcpbench.model.profile_kernel", "solve_profile_chain")
-    assert (k.GEOMETRY_SLACK, k.PENALTY, k.LOCAL_CUT, k.START_PASSES) == (
-        profile_driver.GEOMETRY_SLACK, profile_driver.PENALTY, profile_driver.LOCAL_CUT,
-        profile_driver.START_PASSES)

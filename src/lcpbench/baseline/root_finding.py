@@ -97,7 +97,7 @@ from ..studies.discretisation import auto_links
 METHODS = ("hybr", "lm")
 JACOBIANS = ("analytic", "fd")  # "fd": MINPACK's forward differences, fsolve's default
 
-GEOMETRY_TOL = 1e-6  # mm: closure, midspan height and penetration
+GEOMETRY_TOL_MM = 1e-6  # the baseline's own: closure, midspan height and penetration (mm)
 RESIDUAL_TOL = 1e-8  # dimensionless residual (moments / (EI/ℓ), lengths / ℓ)
 
 
@@ -484,7 +484,7 @@ def _judge(scene, chain, system, watched, z, status, message, method, tol, elaps
     beyond = np.maximum(above, below)
     penetration = float(np.max(beyond))
     rel_torque = float(np.max(np.abs(tr))) / (system.fs * system.ell) if finite else float("inf")
-    geom_tol = max(GEOMETRY_TOL, tol * chain.length)
+    geom_tol = max(GEOMETRY_TOL_MM, tol * chain.length)
 
     converged = status == "solved"
     if converged and not finite:

@@ -30,13 +30,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..thresholds import SAG_BOUND
 from .batch_verdict import accepted
 from .compiled_kernel import CONVERGED, LINE_SEARCH, MAX_OUTER, NO_FIT, contact_step, solve_chain
 from .judge_kernel import SETTLED, STATS, judge_answer
 
 __all__ = ["ARC", "CONTACT", "CONVERGED", "FREE", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "SETTLED",
            "STATS", "solve_line"]
-SAG_BOUND = 10.0  # model.wall_free.SAG_BOUND
 BAIL_NOT_PD = 11  # compiled_dual.BAIL_NOT_PD: the free step has no minimiser
 # what an attempt is (o_kind): a contact solve, the wall-free search's answer, the arc
 CONTACT, FREE, ARC = 0, 1, 2

@@ -17,12 +17,10 @@ from numba import njit
 
 from ..linalg.ldl_kernel import refactor as _refactor  # the faces' LDLᵀ (one dependent
 from ..linalg.ldl_kernel import resolve as _resolve  # chain: a division, not a square root)
+from ..thresholds import TIE
 
 EPS = np.finfo(np.float64).eps
 TINY = np.finfo(np.float64).tiny
-TIE = 1e-6  # solvers.banded.TIE
-RTOL = 1e-9  # solvers.banded.solve_banded_qp(rtol=)
-FLOOR_ULPS = 256.0  # solvers.judge.FLOOR_ULPS
 # the step left the path of the reference: the caller runs the numpy driver
 BAIL_PRIMAL, BAIL_NOT_PD, BAIL_REPEAT, BAIL_LIMIT, BAIL_CERT, BAIL_JUDGE = 10, 11, 12, 13, 14, 15
 

@@ -30,6 +30,7 @@ import numpy as np
 from numba import njit
 
 from ..linalg.ldl_kernel import refactor
+from ..thresholds import FLOOR_ULPS, NEWTON_SWITCH, WALK_RTOL
 from .compiled_dual import (
     ALPHA,
     ALPHA0,
@@ -45,7 +46,6 @@ from .compiled_dual import (
     ELIM,
     EPS,
     FACT,
-    FLOOR_ULPS,
     GF,
     INV,
     LIN,
@@ -57,7 +57,6 @@ from .compiled_dual import (
     RATIO,
     RLO,
     ROWS,
-    RTOL,
     RUP,
     SIG,
     SIN_A,
@@ -79,7 +78,6 @@ from .compiled_dual import (
     step_residuals,
 )
 
-NEWTON_SWITCH = 0.05  # model.outer.NEWTON_SWITCH (rad)
 # outcome codes of solve_chain (the Python side turns them into reasons)
 CONVERGED, MAX_OUTER, LINE_SEARCH, NO_FIT = 0, 1, 2, 3
 __all__ = ["BAIL_CERT", "BAIL_JUDGE", "BAIL_LIMIT", "BAIL_NOT_PD", "BAIL_PRIMAL", "BAIL_REPEAT",
@@ -342,7 +340,7 @@ def solve_assembled(n, lo, hi, L, F, cu, cl, warm_u, warm_up, warm_lo, warm_flag
         r_up[i] = max(-grad[i], 0.0) if sigma[i] > 0 else 0.0
         r_lo[i] = max(grad[i], 0.0) if sigma[i] < 0 else 0.0
     if not certify(u, r_up, r_lo, lo, hi, cu, cl, gp, wn[GF], wn[RATIO], wj[2], wj[3],
-                    T) <= RTOL:
+                    T) <= WALK_RTOL:
         return BAIL_CERT, it
     res = ws[9]
     ok = judge_step(u, ws[6], wn[LIN], lo, hi, cu, cl, gp, L, F, res, wn[NET], wn[U2], wb[ROWS],

@@ -32,11 +32,11 @@ import numpy as np
 from ..errors import ProblemError
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
+from ..thresholds import NEWTON_SWITCH
 from .chain import alpha_from_heights, energy
 from .elastic import penalty_gradient
 from .newton import newton_step
 from .outer import (
-    NEWTON_SWITCH,
     STALL_STEPS,
     DriverOutput,
     DriverStart,

@@ -15,9 +15,10 @@ import numpy as np
 
 from ..jsonsafe import sanitise
 from ..problems.scenes import ActuatorScene, Chain
+from ..thresholds import GEOMETRY_TOL, NODE_SHARE
 from .chain import node_positions
 from .friction_driver import StateAnswer, datum, frictional_chain, gaps_at
-from .judge import GEOMETRY_TOL, NODE_SHARE, SLIP_FACTOR, SLIP_FLOOR, force_tol
+from .judge import SLIP_FACTOR, SLIP_FLOOR, force_tol
 from .result import ContactResult
 
 

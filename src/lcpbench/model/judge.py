@@ -82,6 +82,22 @@ from numpy.linalg import LinAlgError  # scipy.linalg's LinAlgError is this class
 
 from ..linalg import banded_matvec, solveh_banded, sub_bands
 from ..problems.scenes import Chain
+from ..thresholds import (  # the rule's numbers, read by the judge kernel too
+    EPS,
+    FLOOR_ULPS,
+    FORCE_TOL_CAP,
+    FORCE_TOL_PER_RAD,
+    GEOMETRY_TOL,
+    NODE_FACTOR,
+    NODE_GROSS,
+    NODE_SHARE,
+    PIVOT_ROUNDS,
+    RHO_MAX,
+    RHO_MIN,
+    ROUNDOFF_ULPS,
+    STALL,
+    STEP_NOISE,
+)
 from . import large_n
 from .chain import heights
 from .elastic import compliances
@@ -89,35 +105,6 @@ from .judge_large import primal_step
 from .profile import has_profile, node_x, profile_step, walls_at
 from .step import ContactStep, assemble_step
 
-EPS = np.finfo(float).eps
-#: the success rule's parts: τ = min(FORCE_TOL_CAP, FORCE_TOL_PER_RAD · tol)
-FORCE_TOL_CAP = 1e-3
-FORCE_TOL_PER_RAD = 100.0
-#: per-node checks (sign, complementarity, contact threshold) at this share of τ
-NODE_SHARE = 0.1
-#: per-node force error bound: at most NODE_FACTOR·τ or NODE_GROSS (in F₀), whichever is
-#: larger. Node forces converge more slowly than their sum: force shifts between
-#: neighbouring contact nodes (default scene, tol 1e-3 rad: nodes 8e-4 F₀ off while F
-#: is 7e-5 off; N = 2000: nodes 1.2e-2 off, F 7e-5). The success rule is on F; the
-#: per-node bound rejects a wrong distribution (13 % of a node's force moved to its
-#: neighbour) without rejecting a slow one.
-NODE_FACTOR = 10.0
-NODE_GROSS = 0.05
-#: the round-off of a reaction recomputed from rounded gaps, R = K g + z, in ulps
-#: of S = max_i (|K| |g| + |z|)_i: the step judge's floor (solvers.judge)
-FLOOR_ULPS = 256
-#: penetration and closure of the exact geometry, in units of ℓ, at most
-GEOMETRY_TOL = 1e-6
-#: round-off of a reaction, in units of ε × the size of the terms summed for it
-ROUNDOFF_ULPS = 64
-#: the contraction estimate ρ is kept in [RHO_MIN, RHO_MAX]
-RHO_MIN, RHO_MAX = 0.5, 0.99
-#: step sizes max|Δα| below this (rad) are round-off, not contraction
-STEP_NOISE = 1e4 * EPS
-#: block principal pivoting rounds of the judge step before it gives up (plus 2 per node,
-#: for the single pivots after STALL rounds without fewer infeasible nodes)
-PIVOT_ROUNDS = 30
-STALL = 3
 #: in increments (large N) the single pivots are capped at 2 × this many, not 2 per node:
 #: each round is an O(N) face solve, and a judge that cannot settle says so
 LARGE_ROUNDS = 100

@@ -31,19 +31,26 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..thresholds import (  # the rule's numbers, as model.judge reads them
+    EPS,
+    FLOOR_ULPS,
+    FORCE_TOL_CAP,
+    FORCE_TOL_PER_RAD,
+    GEOMETRY_TOL,
+    NODE_FACTOR,
+    NODE_GROSS,
+    NODE_SHARE,
+    PIVOT_ROUNDS,
+    RHO_MAX,
+    RHO_MIN,
+    ROUNDOFF_ULPS,
+    STALL,
+    STEP_NOISE,
+)
 from .stability_kernel import CHECKED, unstable_directions
 from .wall_kernel import slope_load, walls_at
 
-EPS = np.finfo(np.float64).eps
 TINY = np.finfo(np.float64).tiny
-# model.judge's thresholds (tests check they are the same numbers)
-FORCE_TOL_CAP, FORCE_TOL_PER_RAD = 1e-3, 100.0
-NODE_SHARE, NODE_FACTOR, NODE_GROSS = 0.1, 10.0, 0.05
-FLOOR_ULPS, ROUNDOFF_ULPS = 256.0, 64.0
-RHO_MIN, RHO_MAX = 0.5, 0.99
-STEP_NOISE = 1e4 * EPS
-GEOMETRY_TOL = 1e-6
-PIVOT_ROUNDS, STALL = 30, 3
 
 #: names of the entries of the ``stats`` array that :func:`judge_answer` returns
 STATS = ("tau", "F0", "eps_R", "comp", "comp_allowed", "min_gap", "min_force",

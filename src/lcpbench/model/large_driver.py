@@ -23,8 +23,9 @@ import numpy as np
 
 from ..problems.scenes import Chain
 from ..solvers.base import Status
+from ..thresholds import NODE_GROSS
 from .driver import StepSolver
-from .judge import NODE_GROSS, contraction_estimate
+from .judge import contraction_estimate
 from .large_n import StepWork, energy_of, increments_at, trial_of
 from .outer import (
     DriverOutput,

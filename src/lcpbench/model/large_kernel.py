@@ -30,10 +30,8 @@ from numba import njit
 
 from ..linalg.twisted_kernel import face_solve as _face_solve
 from ..linalg.twisted_kernel import resolve as _resolve
+from ..thresholds import ROUNDOFF_ULPS  # a residual below it stays where the heights are
 from .compiled_dual import EPS, add_compensated, wall_residuals  # one copy (numba_cache)
-
-#: model.judge.ROUNDOFF_ULPS: a residual below it stays where the heights are completed
-ROUNDOFF_ULPS = 64.0
 
 
 @njit(cache=True)

@@ -25,12 +25,6 @@ from .judge import split_reactions
 from .step import ContactStep
 from .step_solver import step_residuals
 
-#: the Newton scheme takes Gauss–Newton steps until the last step moved α by less
-#: than this (rad): far from the answer the exact curvature of the energy only
-#: lengthens the steps the line search then cuts (6 outer iterations instead of 4
-#: on the default scene at 1e-3 with Newton from the start)
-NEWTON_SWITCH = 0.05
-
 
 @dataclass
 class StepRecord:

@@ -31,11 +31,11 @@ import numpy as np
 
 from ..problems.scenes import Chain
 from ..solvers.base import Status
+from ..thresholds import GEOMETRY_SLACK, LOCAL_CUT, NEWTON_SWITCH, PENALTY, START_PASSES
 from .chain import alpha_from_heights, energy, heights, node_positions
 from .judge import split_reactions
 from .newton import newton_step
 from .outer import (
-    NEWTON_SWITCH,
     DriverOutput,
     DriverStart,
     StepRecord,
@@ -47,20 +47,6 @@ from .outer import (
     step_setup_time,
 )
 from .profile import profile_gaps, profile_step, walls_at
-
-#: the driver's own criterion on the exact walls: penetration at most this × ℓ
-#: (a tenth of the judge's GEOMETRY_TOL)
-GEOMETRY_SLACK = 1e-7
-#: the line search's penalty on penetration, in units of the largest reaction
-PENALTY = 2.0
-#: near the answer (max|Δα| < NEWTON_SWITCH) a step the merit cuts below this
-#: length is taken in full instead: the lagged fixed point converges there
-#: (the undamped scheme's local convergence), while the merit, which changes
-#: with the lagged reactions and the walls under the moving nodes, can refuse
-#: every short step (a stenosis crest, two contact nodes: 200 steps of 2e-6)
-LOCAL_CUT = 1.0 / 64
-#: passes of "clip the heights to the walls at the nodes' x" for the first iterate
-START_PASSES = 5
 
 
 def _penetration(chain: Chain, alpha: np.ndarray) -> float:

@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..thresholds import GEOMETRY_SLACK, LOCAL_CUT, NEWTON_SWITCH, PENALTY, START_PASSES
 from .compiled_dual import (
     ALPHA,
     ALPHA0,
@@ -56,7 +57,6 @@ from .compiled_kernel import (
     CONVERGED,
     LINE_SEARCH,
     MAX_OUTER,
-    NEWTON_SWITCH,
     NO_FIT,
     assemble_into,
     energy_into,
@@ -67,8 +67,6 @@ from .compiled_kernel import (
 )
 from .wall_kernel import slope_load, walls_at
 
-# model.profile_driver's constants (tests check they are the same numbers)
-GEOMETRY_SLACK, PENALTY, LOCAL_CUT, START_PASSES = 1e-7, 2.0, 1.0 / 64, 5
 __all__ = ["CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "solve_profile_chain"]
 
 

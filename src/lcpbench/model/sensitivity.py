@@ -41,8 +41,9 @@ import numpy as np
 
 from ..errors import ProblemError
 from ..problems.scenes import ActuatorScene, CantileverScene, wall_share
+from ..thresholds import NODE_SHARE
 from .chain import heights
-from .judge import NODE_SHARE, force_tol
+from .judge import force_tol
 
 #: the parameters (and their units) a sensitivity is taken with respect to
 PARAMETERS = {"theta_deg": "deg", "height_mm": "mm", "EI": "N mm²", "weight": "N/mm",

@@ -28,6 +28,7 @@ from ..solvers.judge import EPS, accept_tol, requested, verdict
 from ..solvers.lemke import too_large
 from ..solvers.registry import DEFAULT, Backend, get_backend, get_settings
 from ..solvers.runner import fallback_message
+from ..thresholds import ROUNDOFF_ULPS
 from .elastic import compliances
 from .elastic_step import run_elastic_step
 from .formulations import (
@@ -37,7 +38,6 @@ from .formulations import (
     run_formulation,
     step_scales,
 )
-from .judge import ROUNDOFF_ULPS
 
 
 def step_qp(step, scaled: bool = True) -> BoxQP:

@@ -20,6 +20,7 @@ from numpy.linalg import LinAlgError  # scipy.linalg's LinAlgError is this class
 from ..linalg import solveh_banded
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
+from ..thresholds import SAG_BOUND  # the arc will not sag off a wall it crosses by more
 from . import large_n
 from .angle_step import heavy, total_load
 from .chain import heights
@@ -27,12 +28,6 @@ from .driver import run_driver
 from .outer import DriverOutput, DriverStart
 from .profile import walls_at
 from .step import assemble_step
-
-#: Skip the wall-free search when the arc crosses a wall by more than this many
-#: times the mid-span sag of a straight pinned beam under the same load
-#: (5 w ℓ⁴ / 384 EI): the arc will not sag off it. A heuristic that only saves
-#: time: a scene it sends to the contact solve still gets the right answer.
-SAG_BOUND = 10.0
 
 
 def wall_overlap(chain: Chain, u: np.ndarray) -> float:

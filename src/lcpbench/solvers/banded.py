@@ -51,14 +51,13 @@ from scipy.linalg.lapack import dpbsv, dpbtrs
 
 from ..errors import ProblemError
 from ..linalg import dense_to_bands, sub_bands
+from ..thresholds import TIE, WALK_RTOL  # ties of the walk; its stationarity on a face
 from . import compiled_walk
 from .base import Status, StepSolution
 from .gallop import gallop_picks
 
 EPS = np.finfo(float).eps
 METHODS = ("dual", "primal")
-#: Step fractions of the dual walk closer than this are ties (released together).
-TIE = 1e-6
 #: the same in a galloping walk at large N (:mod:`.gallop`), whose mirror pairs differ
 #: by its round-off, ~cond(J) ε ~ N² ε (1e-6 at N = 10⁵)
 TIE_LARGE = 1e-4
@@ -72,7 +71,7 @@ def solve_banded_qp(
     active_upper: np.ndarray | None = None,
     active_lower: np.ndarray | None = None,
     max_iter: int | None = None,
-    rtol: float = 1e-9,
+    rtol: float = WALK_RTOL,
     method: str = "dual",
     reach: int = 0,
 ) -> StepSolution:

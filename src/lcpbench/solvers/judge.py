@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..thresholds import FLOOR_ULPS  # the round-off floor, in ulps of the residual's terms
 from .base import Settings, Status
 
 EPS = np.finfo(float).eps
@@ -24,11 +25,6 @@ EPS = np.finfo(float).eps
 #: the round-off floor, whichever is larger.
 ACCEPT_FACTOR = 10.0
 DEFAULT_TOL = 1e-6
-#: The round-off floor in units of eps × S, where S = max_i Σ_j |M_ij z_j| + |q_i|
-#: is the size of the terms that make up w = M z + q: even the exact solution,
-#: rounded to doubles, has a residual of up to eps × S. At N = 140 (cond K ~ 1e8)
-#: S ~ 4e6 in scaled units, so "high" (1e-9) is limited by this floor (~2e-7).
-FLOOR_ULPS = 256
 
 
 def requested(settings: Settings) -> float:

@@ -1,0 +1,84 @@
+"""Every threshold that both a compiled kernel and plain Python read, defined once.
+
+The kernels (numba) and the Python around them (the judge, the drivers, the dual
+walk) take these numbers from here; numba freezes them into the compiled code,
+so this file is part of the kernel cache's hash (:mod:`lcpbench.numba_cache`):
+an edit here recompiles every kernel. Plain numbers only: this module is at the
+bottom of the layers and imports nothing of lcpbench.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+EPS = float(np.finfo(np.float64).eps)
+
+# --- the result judge --------------------------------------------------------------
+
+#: the success rule's parts: τ = min(FORCE_TOL_CAP, FORCE_TOL_PER_RAD · tol)
+FORCE_TOL_CAP = 1e-3
+FORCE_TOL_PER_RAD = 100.0
+#: per-node checks (sign, complementarity, contact threshold) at this share of τ
+NODE_SHARE = 0.1
+#: per-node force error bound: at most NODE_FACTOR·τ or NODE_GROSS (in F₀), whichever is
+#: larger. Node forces converge more slowly than their sum: force shifts between
+#: neighbouring contact nodes (default scene, tol 1e-3 rad: nodes 8e-4 F₀ off while F
+#: is 7e-5 off; N = 2000: nodes 1.2e-2 off, F 7e-5). The success rule is on F; the
+#: per-node bound rejects a wrong distribution (13 % of a node's force moved to its
+#: neighbour) without rejecting a slow one.
+NODE_FACTOR = 10.0
+NODE_GROSS = 0.05
+#: the round-off of a residual w = M z + q (a step's, :mod:`lcpbench.solvers.judge`) or
+#: of a reaction recomputed from rounded gaps, R = K g + z (the result judge's), in ulps
+#: of the size of the terms summed, S = max_i (|K| |g| + |z|)_i: even the exact answer,
+#: rounded to doubles, leaves up to ε S. At N = 140 (cond K ~ 1e8) S ~ 4e6 in scaled
+#: units, so a step asked for 1e-9 is limited by this floor (~2e-7).
+FLOOR_ULPS = 256.0
+#: penetration and closure of the exact geometry, in units of ℓ, at most
+GEOMETRY_TOL = 1e-6
+#: round-off of a reaction, in units of ε × the size of the terms summed for it
+ROUNDOFF_ULPS = 64.0
+#: the contraction estimate ρ is kept in [RHO_MIN, RHO_MAX]
+RHO_MIN, RHO_MAX = 0.5, 0.99
+#: step sizes max|Δα| below this (rad) are round-off, not contraction
+STEP_NOISE = 1e4 * EPS
+#: block principal pivoting rounds of the judge step before it gives up (plus 2 per node,
+#: for the single pivots after STALL rounds without fewer infeasible nodes)
+PIVOT_ROUNDS = 30
+STALL = 3
+
+# --- the outer loop ----------------------------------------------------------------
+
+#: the Newton scheme takes Gauss–Newton steps until the last step moved α by less
+#: than this (rad): far from the answer the exact curvature of the energy only
+#: lengthens the steps the line search then cuts (6 outer iterations instead of 4
+#: on the default scene at 1e-3 with Newton from the start)
+NEWTON_SWITCH = 0.05
+#: skip the wall-free search when the arc crosses a wall by more than this many
+#: times the mid-span sag of a straight pinned beam under the same load
+#: (5 w ℓ⁴ / 384 EI): the arc will not sag off it. A heuristic that only saves
+#: time: a scene it sends to the contact solve still gets the right answer.
+SAG_BOUND = 10.0
+
+# --- walls of any profile (the lagged-slope driver) --------------------------------
+
+#: the driver's own criterion on the exact walls: penetration at most this × ℓ
+#: (a tenth of the judge's GEOMETRY_TOL)
+GEOMETRY_SLACK = 1e-7
+#: the line search's penalty on penetration, in units of the largest reaction
+PENALTY = 2.0
+#: near the answer (max|Δα| < NEWTON_SWITCH) a step the merit cuts below this
+#: length is taken in full instead: the lagged fixed point converges there
+#: (the undamped scheme's local convergence), while the merit, which changes
+#: with the lagged reactions and the walls under the moving nodes, can refuse
+#: every short step (a stenosis crest, two contact nodes: 200 steps of 2e-6)
+LOCAL_CUT = 1.0 / 64
+#: passes of "clip the heights to the walls at the nodes' x" for the first iterate
+START_PASSES = 5
+
+# --- the dual active-set walk ------------------------------------------------------
+
+#: step fractions of the dual walk closer than this are ties (released together)
+TIE = 1e-6
+#: the walk's relative stationarity on a face (solve_banded_qp's ``rtol``)
+WALK_RTOL = 1e-9
