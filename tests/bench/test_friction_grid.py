@@ -46,6 +46,9 @@ def test_grid_resumes_computing_only_the_missing_points(tmp_path):
         assert run_friction_grid(store, full) == (1, 2)
         assert run_friction_grid(store, full) == (0, 3)
         assert len(friction_rows(store, full)) == 3
+        assert run_friction_grid(store, part, rerun=True) == (2, 0)
+    with Store.in_memory() as fresh:  # --rerun into a new store
+        assert run_friction_grid(fresh, part, rerun=True) == (2, 0)
 
 
 def test_sweep_grid_friction_cli_writes_csv_in_newtons(tmp_path, capsys):

@@ -127,6 +127,7 @@ def run_friction_grid(store, grid: FrictionGrid = FRICTION_GRID, *, rerun: bool 
     (points computed, points already there)."""
     from datetime import datetime, timezone
 
+    ensure_table(store)
     have = set() if rerun else stored_keys(store)
     done = skipped = 0
     for (mu, scene), pressure in zip(grid.points(), _pressures(grid), strict=True):
