@@ -15,6 +15,7 @@ frictionless solve's.
 from __future__ import annotations
 
 import math
+import sqlite3
 import time
 from dataclasses import dataclass, replace
 
@@ -84,7 +85,7 @@ def ensure_table(store) -> None:
     try:
         with store.db:
             store.db.execute(_CREATE)
-    except Exception as exc:  # sqlite3.Error
+    except sqlite3.Error as exc:
         raise StoreError(f"store {store.path}: cannot write to it ({exc})") from exc
 
 
@@ -140,9 +141,12 @@ def run_friction_grid(store, grid: FrictionGrid = FRICTION_GRID, *, rerun: bool 
         row["created"] = datetime.now(timezone.utc).isoformat(timespec="seconds")
         row["sweep_id"] = store.sweep_id
         values = tuple(_cell(row.get(c)) for c in COLUMNS)
-        with store.db:
-            store.db.execute(f"INSERT OR REPLACE INTO {TABLE} ({', '.join(COLUMNS)}) VALUES "
-                             f"({', '.join('?' * len(COLUMNS))})", values)
+        try:
+            with store.db:  # one transaction per point: a killed run keeps the points done
+                store.db.execute(f"INSERT OR REPLACE INTO {TABLE} ({', '.join(COLUMNS)}) "
+                                 f"VALUES ({', '.join('?' * len(COLUMNS))})", values)
+        except sqlite3.Error as exc:
+            raise StoreError(f"store {store.path}: cannot write to it ({exc})") from exc
         done += 1
         if progress is not None:
             progress(row)

@@ -4,6 +4,7 @@
 
     lcpbench solve --theta 150 --height 3 [--links N|auto] [--channel] [--solver NAME]
                    [--settings default|low|mid|high] [--raw] [--json] [--plot F.png]
+    lcpbench anchor --pressure KPA | --theta DEG --height MM --friction MU [--channel] [--json]
     lcpbench solvers [--json]
     lcpbench export --theta 150 --height 3 [scene options] --format dat|npz --out FILE
     lcpbench lcp FILE [--solver NAME] [--settings PROFILE] [--json]
