@@ -138,4 +138,5 @@ def test_readme_vision_examples_run_as_written(tmp_path):
 
 def test_every_use_command_is_run_by_a_test():
     names = {a[1] for a in _use_commands()}
-    assert names <= {"solve", "solvers", "design", "fit", "vision", *_SLOW, *_ELSEWHERE}, names
+    assert names <= {"solve", "anchor", "solvers", "design", "fit", "vision", *_SLOW,
+                     *_ELSEWHERE}, names

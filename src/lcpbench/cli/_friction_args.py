@@ -1,9 +1,10 @@
-"""``lcpbench solve --friction MU --left-end E --right-end E --pull N`` (issue 39).
+"""``lcpbench solve --friction MU --left-end E --right-end E --pull N [--plot F]`` (issue 39).
 
 The options make the scene frictional (docs/friction.md); such a scene is solved as a
 path of one state (:func:`lcpbench.solve_path`) and printed here: the summary, or with
 ``--json`` the result's fields (``tangential_forces`` in N, ``stick``, ``slip`` in mm,
-per node).
+per node); ``--plot`` draws the normal and tangential forces along the chain with stick
+and slip marked (:func:`lcpbench.bench.friction_plot.plot_friction_forces`).
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ from argparse import ArgumentTypeError
 
 from ..errors import ProblemError
 from ..problems.friction import END_CONDITIONS
-from ._common import print_json
+from ._common import error_line, print_json
 
 _OPTIONS = ("friction", "left_end", "right_end", "pull")
 
@@ -47,10 +48,29 @@ def friction_kw(args) -> dict:
     return {k: getattr(args, k) for k in _OPTIONS if getattr(args, k, None) is not None}
 
 
+def with_friction(scene, args):
+    """A row of sections with the frictional options of the command line, where its
+    kind of scene takes them; else the scene as it is (the frictional route then
+    refuses it in the model's own words: ``solve_path``, ``pull_out``)."""
+    kw = friction_kw(args)
+    fields = getattr(type(scene), "__dataclass_fields__", {})
+    if kw and all(k in fields for k in kw):
+        from dataclasses import replace
+
+        return replace(scene, **kw)
+    return scene
+
+
+def wants_friction(args, scene) -> bool:
+    """Whether the scene goes the frictional route: it is frictional, or frictional
+    options were given for a kind of scene that does not hold them (refused there)."""
+    return bool(getattr(scene, "frictional", False)) or (
+        bool(friction_kw(args)) and not hasattr(scene, "frictional"))
+
+
 def refuse_options(args, default_solver: str) -> None:
     """ProblemError for the options of ``solve`` that the frictional route does not take."""
     taken = [("--sensitivities", getattr(args, "sensitivities", False)),
-             ("--plot", getattr(args, "plot", None) is not None),
              ("--start ramp", getattr(args, "start", "cold") == "ramp"),
              ("--solver", getattr(args, "solver", default_solver) != default_solver),
              ("--raw", getattr(args, "raw", False))]
@@ -66,10 +86,22 @@ def solve_frictional(args, scene, default_solver: str) -> int:
 
     refuse_options(args, default_solver)
     (res,) = solve_path(scene, [{}], tol=args.tol)
+    plot_error = None
+    if getattr(args, "plot", None) is not None:  # (matplotlib checked by the command)
+        from ..bench.friction_plot import plot_friction_forces
+
+        try:
+            plot_friction_forces(res, args.plot)
+        except (OSError, ValueError) as exc:
+            plot_error = f"--plot {args.plot}: {exc}"
     if args.json:
         print_json(res.to_dict())
     else:
-        print(summary(res))
+        print(summary(res) + (f"\nplot                {args.plot}"
+                              if args.plot is not None and plot_error is None else ""))
+    if plot_error is not None:
+        error_line(plot_error)
+        return 2
     return 0 if res.converged else 1
 
 

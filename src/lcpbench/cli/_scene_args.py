@@ -26,7 +26,7 @@ from ..problems.scenes import (
     ActuatorScene,
 )
 from ..solvers.base import PROFILES
-from ._friction_args import friction_kw
+from ._friction_args import friction_kw, with_friction
 from ._units import implausible, quantity_type
 
 _FIELDS = ActuatorScene.__dataclass_fields__
@@ -278,9 +278,10 @@ def _scene_as_given(args):
         one = _single(args, {**kw, "links": DEFAULT_LINKS})
         from ..problems.sections import anchoring_actuator
 
-        return anchoring_actuator(one.theta, height, links=args.links,
-                                  length=args.length, EI=args.EI, weight=args.weight,
-                                  gravity=_GRAVITY[args.gravity])
+        return with_friction(anchoring_actuator(one.theta, height, links=args.links,
+                                                length=args.length, EI=args.EI,
+                                                weight=args.weight,
+                                                gravity=_GRAVITY[args.gravity]), args)
     return _single(args, kw)
 
 
@@ -297,8 +298,9 @@ def _sectioned(args, text: str, height: float):
     if args.links == "auto":
         raise ProblemError("--links auto is for one section; give N with --sections")
     secs = parse_sections(text, length=args.length, EI=args.EI, weight=args.weight)
-    return SectionedScene(sections=secs, height=height, links=args.links,
-                          channel=args.channel, gravity=_GRAVITY[args.gravity])
+    return with_friction(SectionedScene(sections=secs, height=height, links=args.links,
+                                        channel=args.channel,
+                                        gravity=_GRAVITY[args.gravity]), args)
 
 
 def _single(args, kw: dict) -> ActuatorScene:

@@ -35,7 +35,7 @@ from ._common import (
     node_ranges,
     print_json,
 )
-from ._friction_args import add_friction_options, solve_frictional
+from ._friction_args import add_friction_options, solve_frictional, wants_friction
 from ._scene_args import (
     DEFAULT_METHOD,
     DEFAULT_SOLVER,
@@ -269,7 +269,7 @@ def cmd_solve(args) -> int:
     if args.plot is not None:
         _not_a_directory("--plot", args.plot, "shape.png")
     scene = scene_from(args)
-    if getattr(scene, "frictional", False):  # issue 39: a path of one state
+    if wants_friction(args, scene):  # issue 39: a path of one state
         return solve_frictional(args, scene, DEFAULT_SOLVER)
     if args.sensitivities and (why := unsupported(scene)) is not None:
         raise ProblemError(f"--sensitivities: {why}")

@@ -2,7 +2,7 @@
 
 ::
 
-    lcpbench sweep [--grid paper|hard|anchoring|tissue] [--wall-stiffness LIST] [--theta A:B:STEP] [--height A:B:STEP] ...
+    lcpbench sweep [--grid paper|hard|anchoring|tissue|friction] [--wall-stiffness LIST] [--theta A:B:STEP] [--height A:B:STEP] ...
                    [--solvers A,B] [--settings P,Q] [--continuation [PREDICTOR]]
                    [--store PATH] [--out DIR] [--jobs K] [--time-limit S] [--repeat K]
     lcpbench report [--store PATH] [--out DIR] [--all] [--format F] [--table2-height MM] [--no-plots]
@@ -80,7 +80,8 @@ def register(subparsers) -> None:
                     "grid (all parameters but theta equal) in order of theta, each scene "
                     "started from its neighbours' answers; those runs are stored as driver "
                     "globalised+secant (or +previous), apart from the cold ones.")
-    sw.add_argument("--grid", choices=("paper", "hard", "anchoring", "tissue"), default="paper",
+    sw.add_argument("--grid", choices=("paper", "hard", "anchoring", "tissue", "friction"),
+                    default="paper",
                     help="paper: the theta x height grid below (default); hard: the "
                          "hard-case suite (theta 170-180, h down to 0.02 l, N up to 2000, "
                          "grazing, no contact, heavy, EI 1-1000, channel); anchoring: the "
@@ -92,9 +93,17 @@ def register(subparsers) -> None:
                          "over the whole actuator; no baseline: the appendix's baseline models one section); tissue: "
                          "elastic walls, the paper's pressures (theta by actuator 1's "
                          "calibration) x h 4.5,5.5,6.5 mm x wall stiffness 0.01,0.1,1,inf N/mm "
-                         "per mm, in the channel")
+                         "per mm, in the channel; friction: the pull-out force (lcpbench."
+                         "pull_out, sliders at both ends) over --friction x --pressure x "
+                         "--height in the paper's channel, theta by actuator 1's calibration "
+                         "(default mu 0,0.1,0.3,0.5 x 68.95,103.42,137.9,172.37 kPa x h "
+                         "4.5,5.5,6.5 mm, N 140), into the store's pull_outs table")
+    sw.add_argument("--friction", default=None, metavar="LIST",
+                    help="--grid friction: Coulomb coefficients mu (a comma list or "
+                         "A:B:STEP; 0 gives a pull-out force of 0)")
     sw.add_argument("--pressure", default=None, metavar="LIST",
-                    help="--grid anchoring: input pressures, kPa (A:B:STEP or a comma list), "
+                    help="--grid anchoring and friction: input pressures, kPa (A:B:STEP or a "
+                         "comma list), "
                          "theta from actuator 1's calibration (eq. 40); default the paper's "
                          "17.24-172.37 kPa in 10 steps unless --theta is given")
     sw.add_argument("--sections-count", default=None, metavar="LIST",
@@ -275,6 +284,12 @@ def cmd_sweep(args) -> int:
     from ..bench.store import Store
     from ..bench.sweep import plan_sweep, sweep
 
+    if args.grid == "friction":
+        from ._sweep_friction import sweep_friction
+
+        return sweep_friction(args)
+    if args.friction is not None:
+        raise ProblemError("--friction is for --grid friction")
     if args.grid == "anchoring":
         if args.baseline not in (None, "none"):
             raise ProblemError("--grid anchoring has no baseline: the appendix's root-finding "

@@ -1,0 +1,94 @@
+"""`lcpbench anchor` (issue 39, item 6): the pull-out force on the command line."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from lcpbench.cli import main
+
+BASE = ["anchor", "--height", "5.5", "--channel", "--links", "30"]
+
+
+def _json(argv, capsys):
+    code = main([*BASE, *argv, "--json"])
+    return code, json.loads(capsys.readouterr().out)
+
+
+def test_anchor_json_keys_units_and_the_gross_slip_identity(capsys):
+    code, d = _json(["--theta", "150", "--friction", "0.3"], capsys)
+    assert code == 0 and d["converged"]
+    for key in ("pull_out_force", "normal_force_total", "solves", "capacity",
+                "normal_forces", "tangential_forces", "stick_to_slip"):
+        assert key in d
+    assert d["units"]["pull_out_force"] == "N" and d["units"]["normal_force_total"] == "N"
+    # at pull-out every contact node slides: P* = μ ΣN(P*) (Coulomb, flat walls), in N;
+    # ΣN is the last held state's (pull P_h), and ΣN falls as the pull grows:
+    # P_h <= P* <= μ ΣN(P_h)
+    P, Ph, C = d["pull_out_force"], d["held_pull"], d["capacity"]
+    assert C == pytest.approx(0.3 * d["normal_force_total"], rel=1e-9)
+    assert 0 < Ph <= P <= C * (1 + 1e-9) and P == pytest.approx(C, rel=1e-2)
+    # newtons, not millinewtons: the paper's scene presses its walls with ~0.1-1 N
+    assert 1e-3 < d["normal_force_total"] < 1.0
+    assert d["normal_force_total"] == pytest.approx(sum(d["normal_forces"]), rel=1e-12)
+    assert 1 <= d["solves"] <= 20  # the issue's budget
+
+
+def test_anchor_pressure_goes_through_the_paper_calibration(capsys):
+    """--pressure P is --theta 0.81 P + 9.78 (actuator 1, eq. 40 of the paper)."""
+    _, by_p = _json(["--pressure", "137.9", "--friction", "0.2"], capsys)
+    _, by_t = _json(["--theta", str(0.81 * 137.9 + 9.78), "--friction", "0.2"], capsys)
+    assert by_p["pressure"] == 137.9 and by_t["pressure"] is None
+    assert by_p["pull_out_force"] == pytest.approx(by_t["pull_out_force"], rel=1e-9)
+
+
+def test_anchor_without_contact_holds_no_pull(capsys):
+    """17.24 kPa bends the actuator to 24°, far from walls 5.5 mm away: no N, no T."""
+    code, d = _json(["--pressure", "17.24", "--friction", "0.5"], capsys)
+    assert code == 0 and d["pull_out_force"] == 0.0 and d["normal_force_total"] == 0.0
+
+
+def test_anchor_text_says_mN_and_solves(capsys):
+    code = main([*BASE, "--theta", "150", "--friction", "0.3"])
+    out = capsys.readouterr().out
+    assert code == 0 and "pull-out force" in out and "mN" in out and "frictional" in out
+
+
+def test_anchor_plot_writes_the_figure(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    f = tmp_path / "anchor.png"
+    code = main([*BASE, "--theta", "150", "--friction", "0.3", "--plot", str(f)])
+    assert code == 0 and f.stat().st_size > 1000
+
+
+@pytest.mark.parametrize("argv,words", [
+    (["--theta", "150"], "--friction"),
+    (["--theta", "150", "--friction", "0"], "nothing holds the chain"),
+    (["--theta", "150", "--friction", "-0.1"], "friction must be"),
+    (["--theta", "150", "--friction", "x"], "--friction"),
+    (["--theta", "150", "--pressure", "100", "--friction", "0.3"], "not both"),
+    (["--theta", "150", "--friction", "0.3", "--sections", "anchoring"], "SectionedScene"),
+])
+def test_anchor_bad_input_is_one_line_exit_2(argv, words, capsys):
+    code = main([*BASE, *argv])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and words in err[0]
+
+
+def test_solve_friction_plot_writes_the_figure(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    f = tmp_path / "forces.png"
+    code = main(["solve", "--theta", "150", "--height", "3", "--links", "30", "--friction",
+                 "0.3", "--left-end", "slider", "--right-end", "slider", "--pull", "0.05",
+                 "--plot", str(f)])
+    assert code == 0 and f.stat().st_size > 1000
+
+
+def test_solve_friction_on_sections_is_refused_not_dropped(capsys):
+    """Friction given with --sections goes the frictional route, which refuses a row of
+    sections in one line today (it is never silently solved without friction)."""
+    code = main(["solve", "--sections", "anchoring", "--theta", "150", "--height", "5.5",
+                 "--links", "30", "--friction", "0.3"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "SectionedScene" in err[0]
