@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .plot import _figure
+from .plot import new_figure
 
 
 def plot_friction_forces(res, path):
@@ -30,7 +30,7 @@ def plot_friction_forces(res, path):
     stick = np.asarray(res.stick, bool)
     slide = contact & ~stick
 
-    fig = _figure((7.0, 5.0))
+    fig = new_figure((7.0, 5.0))
     ax_n, ax_t = fig.subplots(2, 1, sharex=True)
     ax_n.plot(x, up, "-", color="C0", lw=1.2, label="upper wall")
     if res.forces_lower is not None:
@@ -65,7 +65,7 @@ def plot_pull_out_pressure(rows: list[dict], path):
     """
     heights = sorted({r["height"] for r in rows})
     mus = sorted({r["friction"] for r in rows})
-    fig = _figure((3.2 * max(1, len(heights)) + 1.0, 3.8))
+    fig = new_figure((3.2 * max(1, len(heights)) + 1.0, 3.8))
     axes = np.atleast_1d(fig.subplots(1, len(heights), sharey=True))
     for ax, h in zip(axes, heights, strict=True):
         for k, mu in enumerate(mus):
@@ -87,7 +87,7 @@ def plot_load_cycle(cycles: list, path):
     """Contact force (ΣN, mN) against input pressure (kPa) for each
     :class:`~lcpbench.studies.load_cycle.LoadCycle`: loading solid, unloading dashed,
     the frictionless model dotted. Returns the Figure."""
-    fig = _figure((6.0, 4.2))
+    fig = new_figure((6.0, 4.2))
     ax = fig.add_subplot()
     first = cycles[0]
     up = first.loading

@@ -159,7 +159,8 @@ def _nice(value: float) -> float:
     return min((m * 10.0 ** k for m in (1, 2, 5, 10)), key=lambda v: abs(v - target))
 
 
-def _figure(size=(7.0, 4.5)):
+def new_figure(size=(7.0, 4.5)):
+    """A matplotlib Figure on the Agg canvas (no pyplot state), ``size`` in inches."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -277,7 +278,7 @@ def plot_work_precision(summary: list[dict], evaluated, path, *,
 
     pts_by = work_precision_points(summary, evaluated, time_limit=time_limit)
     groups = indistinguishable(pts_by)
-    fig = _figure((10.0, 6.0))
+    fig = new_figure((10.0, 6.0))
     ax = fig.add_subplot()
     finite = [p["error"] for ps in pts_by.values() for p in ps
               if math.isfinite(p["error"]) and p["error"] > 0]
@@ -413,7 +414,7 @@ def plot_forces(refs: dict, evaluated, path) -> None:
     import json
 
     lines, common = force_lines(refs)
-    fig = _figure((12.0, 5.0) if len(lines) > 6 else (9.0, 5.0))
+    fig = new_figure((12.0, 5.0) if len(lines) > 6 else (9.0, 5.0))
     ax = fig.add_subplot()
     base: dict[str, list] = {}
     for e in evaluated:
@@ -489,7 +490,7 @@ def plot_shapes(refs: dict, path, theta: float | None = None, height: float | No
     shared, panels = shape_panels(refs, theta, height)
     if not panels:
         return
-    fig = _figure((12.0, 4.2))
+    fig = new_figure((12.0, 4.2))
     fig.suptitle(", ".join(_param_text(k, shared[k]) for k, _, _ in _PARAMS if k in shared
                            and k != "height"), fontsize=9)
     for k, (title, sel, labels) in enumerate(panels):

@@ -21,7 +21,7 @@ _OPTIONS = ("friction", "left_end", "right_end", "pull")
 def add_friction_options(parser) -> None:
     """Add ``--friction``, ``--left-end``, ``--right-end`` and ``--pull``."""
     a = parser.add_argument
-    a("--friction", type=_mu_arg, default=None, metavar="MU",
+    a("--friction", type=mu_arg, default=None, metavar="MU",
       help="Coulomb coefficient of the walls: one number, or MU_UPPER,MU_LOWER in a "
            "channel (default 0: frictionless); the scene is then solved along a path")
     a("--left-end", dest="left_end", choices=END_CONDITIONS, default=None,
@@ -33,7 +33,7 @@ def add_friction_options(parser) -> None:
       help="axial force on the right end along +x, N (needs --right-end slider)")
 
 
-def _mu_arg(text: str):
+def mu_arg(text: str):
     """One μ, or a comma-separated one per wall (checked by the scene)."""
     parts = [p.strip() for p in text.split(",")]
     try:

@@ -38,7 +38,7 @@ def friction_grid_from(args):
     """The :class:`FrictionGrid` of the command line, every scene checked."""
     from ..bench.friction_grid import FrictionGrid
     from ..bench.grid import parse_range
-    from ._sweep_scenes import _in_model_units
+    from ._sweep_scenes import in_model_units
 
     given = [f"--{k.replace('_', '-')}" for k, default in _NOT_FOR_FRICTION.items()
              if getattr(args, k, default) != default]
@@ -52,7 +52,7 @@ def friction_grid_from(args):
     if args.pressure is not None:
         kw["pressure"] = parse_range(args.pressure, "pressure")
     if args.height is not None:
-        kw["height"] = parse_range(_in_model_units(args.height, "height"), "height")
+        kw["height"] = parse_range(in_model_units(args.height, "height"), "height")
     if args.links is not None:
         links = parse_range(args.links, "links", integer=True)
         if len(links) != 1:

@@ -16,7 +16,7 @@ _RANGE_UNITS = {"theta": "angle", "height": "length", "length": "length",
                 "EI": "stiffness", "weight": "weight"}
 
 
-def _in_model_units(text: str | None, name: str) -> str | None:
+def in_model_units(text: str | None, name: str) -> str | None:
     """A range or list whose items may carry units (``2mm:7mm:1mm``, ``0.17rad,2.6rad``),
     rewritten in the model's units for :func:`~lcpbench.bench.grid.parse_range`."""
     import argparse
@@ -42,7 +42,7 @@ def _in_model_units(text: str | None, name: str) -> str | None:
 def _float_list(text, name) -> tuple | None:
     from ..bench.grid import parse_range
 
-    return None if text is None else parse_range(_in_model_units(text, name), name)
+    return None if text is None else parse_range(in_model_units(text, name), name)
 
 
 def _stiffness_list(text) -> tuple[float, ...] | None:
@@ -83,12 +83,12 @@ def sweep_scenes(args) -> list:
         if args.theta is not None and pressure is not None:
             raise ProblemError("give --theta or --pressure, not both (the calibration sets theta)")
         kw = {"theta": None if args.theta is None else
-              parse_range(_in_model_units(args.theta, "theta"), "theta"),
+              parse_range(in_model_units(args.theta, "theta"), "theta"),
               "pressure": (grids.TISSUE_PRESSURES if args.theta is None and pressure is None
                            else None if pressure is None else parse_range(pressure, "pressure")),
               "sections": (grids.ANCHORING_SECTIONS if count is None
                            else parse_range(count, "sections-count", integer=True)),
-              "height": parse_range(_in_model_units(args.height or grids.ANCHORING_HEIGHT,
+              "height": parse_range(in_model_units(args.height or grids.ANCHORING_HEIGHT,
                                                     "height"), "height"),
               "links": (None,) if args.links is None else parse_range(args.links, "links",
                                                                        integer=True)}
@@ -108,15 +108,15 @@ def sweep_scenes(args) -> list:
         if given:
             raise ProblemError("--grid tissue sets theta from the paper's pressures; it "
                                f"takes no {', '.join(given)}")
-        heights = (parse_range(_in_model_units(args.height, "height"), "height")
+        heights = (parse_range(in_model_units(args.height, "height"), "height")
                    if args.height is not None else TISSUE_HEIGHTS)
         links = parse_range(args.links or str(DEFAULT_LINKS), "links", integer=True)
         tissue = [tissue_grid(stiffness or TISSUE_STIFFNESS, heights, links=int(n))
                   for n in links]
         return [sc for g in tissue for sc in g.scenes()]
-    grid_kw = {"theta": parse_range(_in_model_units(args.theta or "10:180:10", "theta"),
+    grid_kw = {"theta": parse_range(in_model_units(args.theta or "10:180:10", "theta"),
                                     "theta"),
-               "height": parse_range(_in_model_units(args.height or "2:7:1", "height"),
+               "height": parse_range(in_model_units(args.height or "2:7:1", "height"),
                                      "height"),
                "links": parse_range(args.links or str(DEFAULT_LINKS), "links", integer=True),
                "channel": args.channel}

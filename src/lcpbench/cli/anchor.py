@@ -20,7 +20,7 @@ from dataclasses import asdict, is_dataclass
 import numpy as np
 
 from ._common import add_json_option, error_line, format_rows, has_matplotlib, print_json
-from ._friction_args import _mu_arg
+from ._friction_args import mu_arg
 from ._scene_args import add_scene_options, add_section_options, scene_from
 
 
@@ -35,7 +35,7 @@ def register(subparsers) -> None:
                     "number of frictional solves.")
     add_scene_options(a)
     add_section_options(a)
-    a.add_argument("--friction", type=_mu_arg, required=True, metavar="MU",
+    a.add_argument("--friction", type=mu_arg, required=True, metavar="MU",
                    help="Coulomb coefficient of the walls, > 0: one number, or "
                         "MU_UPPER,MU_LOWER with --channel")
     a.add_argument("--tol", type=float, default=1e-10, metavar="RAD",
