@@ -214,6 +214,8 @@ def solve_internal(
         pressure_limit = float(check_number("pressure_limit", pressure_limit, low=0.0,
                                             high=1e12, unit="N/mm"))
     name, settings, why = _backend_of(solver, settings)
+    if formulation is None and isinstance(solver, Selection):
+        formulation = solver.formulation  # the form it was selected in
     # None: the back-end's own form (today's path)
     form = None if formulation is None else resolve_formulation(get_backend(name), formulation,
                                                                 get_settings(settings))

@@ -286,9 +286,13 @@ def test_translate_osqp():
 
 def test_translate_clarabel():
     assert qp_clarabel.translate(PROFILES["default"]) == {}
-    for prof, tol in (("low", 1e-3), ("mid", 1e-6), ("high", 1e-9)):
-        assert qp_clarabel.translate(PROFILES[prof]) == {
-            "tol_gap_abs": tol, "tol_gap_rel": tol, "tol_feas": tol}
+    # the IPM's gap tolerance 1e-3 x lcpbench's natural-residual eps (qp_clarabel.GAP_FACTOR)
+    for prof, eps in (("low", 1e-3), ("mid", 1e-6), ("high", 1e-9)):
+        tol = 1e-3 * eps
+        assert qp_clarabel.translate(PROFILES[prof]) == pytest.approx({
+            "tol_gap_abs": tol, "tol_gap_rel": tol, "tol_feas": tol})
+        assert qp_clarabel.translate(PROFILES[prof], 1.0) == pytest.approx({
+            "tol_gap_abs": eps, "tol_gap_rel": eps, "tol_feas": eps})
     floor = qp_clarabel.translate(Settings("x", 1e-14, max_iter=50))
     assert floor["tol_feas"] == qp_clarabel.MIN_TOL and floor["max_iter"] == 50
 
@@ -306,8 +310,10 @@ def test_translate_qpsolvers():
     T = qp_qpsolvers.translate
     assert T(PROFILES["default"], "daqp") == {}
     assert T(PROFILES["mid"], "daqp") == {"primal_tol": 1e-6, "dual_tol": 1e-6}
-    assert T(PROFILES["high"], "piqp") == {
-        "eps_abs": 1e-9, "eps_rel": 1e-9, "eps_duality_gap_abs": 1e-9, "eps_duality_gap_rel": 1e-9}
+    # an interior point gets a tighter gap than eps (qp_qpsolvers._FACTORS)
+    assert T(PROFILES["high"], "piqp") == pytest.approx({
+        "eps_abs": 1e-11, "eps_rel": 1e-11, "eps_duality_gap_abs": 1e-11,
+        "eps_duality_gap_rel": 1e-11})
     assert T(PROFILES["low"], "scs") == {"eps_abs": 1e-3, "eps_rel": 1e-3}
     assert T(PROFILES["low"], "highs") == {
         "primal_feasibility_tolerance": 1e-3, "dual_feasibility_tolerance": 1e-3,
@@ -315,7 +321,9 @@ def test_translate_qpsolvers():
     assert T(PROFILES["high"], "highs")["qp_regularization_value"] == 1e-9
     assert T(PROFILES["high"], "gurobi") == {"FeasibilityTol": 1e-9, "OptimalityTol": 1e-9}
     assert T(PROFILES["high"], "osqp") == qp_osqp.translate(PROFILES["high"])
-    assert T(PROFILES["mid"], "clarabel") == qp_clarabel.translate(PROFILES["mid"])
+    # through qpsolvers (which drops an AlmostSolved answer) Clarabel's tolerances are eps
+    assert T(PROFILES["mid"], "clarabel") == {"tol_gap_abs": 1e-6, "tol_gap_rel": 1e-6,
+                                              "tol_feas": 1e-6}
     assert T(PROFILES["mid"], "proxqp") == qp_proxsuite.translate(PROFILES["mid"])
     assert T(PROFILES["high"], "quadprog") == {}  # exact active set: ignores tol
     assert T(Settings("x", None, max_iter=5), "scs") == {"max_iters": 5}
@@ -329,7 +337,7 @@ def test_translate_cvxpy():
     assert T(PROFILES["default"], "OSQP") == {}
     assert T(PROFILES["mid"], "OSQP") == {
         "eps_abs": 1e-6, "eps_rel": 1e-6, "polishing": True, "max_iter": 25_000}
-    assert T(PROFILES["high"], "clarabel") == qp_clarabel.translate(PROFILES["high"])
+    assert T(PROFILES["high"], "clarabel") == qp_clarabel.translate(PROFILES["high"], 1.0)
     assert T(PROFILES["low"], "SCS") == {"eps_abs": 1e-3, "eps_rel": 1e-3}
     assert T(PROFILES["mid"], "PROXQP") == {"eps_abs": 1e-6, "eps_rel": 1e-6}
     assert T(PROFILES["high"], "DAQP") == {"primal_tol": 1e-9, "dual_tol": 1e-9}
@@ -407,3 +415,4 @@ def test_max_iter_is_a_status():
     assert res.status is Status.MAX_ITER and res.iterations == 3
     res = qp_clarabel.solve_qp(qp, Settings("tight", 1e-9, max_iter=1))
     assert res.status is Status.MAX_ITER
+

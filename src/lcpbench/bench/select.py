@@ -123,7 +123,8 @@ def select_backend(scene_or_grid, force_tol: float = 1e-6, time_budget: float | 
                    settings: tuple[str, ...] = ("default", "low", "mid", "high"),
                    probe: bool = True, workers: int = 1, progress=None,
                    repeat: int = DEFAULT_REPEAT,
-                   evidence: list[str | os.PathLike] | None = None) -> Selection:
+                   evidence: list[str | os.PathLike] | None = None,
+                   formulation: str | None = None) -> Selection:
     """The fastest back-end that meets the accuracy ``force_tol`` on this kind of scene.
 
     Parameters
@@ -146,6 +147,11 @@ def select_backend(scene_or_grid, force_tol: float = 1e-6, time_budget: float | 
         candidates out (default: the committed standard sweep, when the
         package runs from a checkout that has it; ``[]``: none). The
         store's own runs always count.
+    formulation : the form every candidate's contact steps are handed in
+        (:mod:`lcpbench.model.formulations`: a name, or "best": each back-end's at
+        each profile); None: each back-end's own. The probes are stored as method
+        ``globalised@form``, the evidence counts the runs of the same form, and the
+        Selection carries the chosen pair's form (``solve(scene, solver=sel)`` runs it).
 
     Returns
     -------
@@ -163,6 +169,7 @@ def select_backend(scene_or_grid, force_tol: float = 1e-6, time_budget: float | 
         get_backend(n)
     for p in settings:
         get_settings(p)
+    forms = _forms(names, settings, formulation)
     if evidence is None:
         evidence = [COMMITTED_RUNS] if COMMITTED_RUNS.exists() else []
     dtol = driver_tol_for(force_tol)
@@ -180,10 +187,29 @@ def select_backend(scene_or_grid, force_tol: float = 1e-6, time_budget: float | 
     try:
         return _select(store, probes, [(n, p) for n in names for p in settings], force_tol,
                        dtol, time_budget, probe=probe, workers=workers, limit=limit,
-                       progress=progress, repeat=repeat, evidence=evidence)
+                       progress=progress, repeat=repeat, evidence=evidence, forms=forms)
     finally:
         if own:
             store.close()
+
+
+def _forms(names, settings, formulation) -> dict[tuple[str, str], str]:
+    """(back-end, profile) -> the form its probes run in, for the pairs not in their own
+    form (:func:`~lcpbench.model.formulations.resolve_formulation`: a form a back-end does
+    not take is one ProblemError)."""
+    if formulation is None:
+        return {}
+    from ..model.formulations import resolve_formulation
+    from ..solvers.registry import get_backend
+
+    pairs = {(n, p): resolve_formulation(get_backend(n), formulation, p)
+             for n in names for p in settings}
+    return {c: str(f) for c, f in pairs.items() if f is not None}
+
+
+def _method(cand, forms) -> str:
+    """The stored method of a candidate's probes (as :attr:`.jobs.RunJob.label`)."""
+    return "globalised" if cand not in forms else f"globalised@{forms[cand]}"
 
 
 def _fallback(force_tol, dtol, why, evidence=()) -> Selection:
@@ -191,7 +217,7 @@ def _fallback(force_tol, dtol, why, evidence=()) -> Selection:
 
 
 def _select(store: Store, probes, pairs, force_tol, dtol, time_budget, *, probe, workers,
-            limit, progress, repeat, evidence) -> Selection:
+            limit, progress, repeat, evidence, forms) -> Selection:
     keys = [scene_key(s) for s in probes]
     screen = [k for i, k in enumerate(keys) if i % len(PROBES) == SCREEN]
     rest = [k for k in keys if k not in screen]
@@ -200,21 +226,26 @@ def _select(store: Store, probes, pairs, force_tol, dtol, time_budget, *, probe,
                  if kind_of(r) in kinds]
     for f in evidence:
         collected += read_runs_csv(f)
-    out = ruled_out(pairs, kinds, force_tol, dtol, collected)
+    out = ruled_out(pairs, kinds, force_tol, dtol, collected,
+                    methods={c: _method(c, forms) for c in pairs})
     report = [{"backend": b, "settings": s, "ok": False, "stage": "ruled out", "why": why}
               for (b, s), why in out.items()]
     live = [c for c in pairs if c not in out]
 
     def run(scene_keys, cands):
         jobs = [ReferenceJob(k) for k in keys] + [
-            ProbeJob(k, b, s, dtol, repeat=repeat) for k in scene_keys for b, s in cands]
+            ProbeJob(k, b, s, dtol, repeat=repeat, formulation=forms.get((b, s)))
+            for k in scene_keys for b, s in cands]
         if probe:
             sweep(store, jobs, workers=workers, time_limit=limit, progress=progress)
         refs = {k: r for k, r in store.refs(arrays=False).items() if k in keys}
         marks = ", ".join("?" * len(keys))
+        methods = sorted({_method(c, forms) for c in pairs})
         rows = {(r["scene"], r["backend"], r["settings"]): r
-                for r in store.runs(arrays=False, where=f"WHERE tol = ? AND method = ? AND "
-                                    f"scene IN ({marks})", params=(dtol, "globalised", *keys))}
+                for r in store.runs(arrays=False, where=f"WHERE tol = ? AND method IN "
+                                    f"({', '.join('?' * len(methods))}) AND scene IN ({marks})",
+                                    params=(dtol, *methods, *keys))
+                if r["method"] == _method((r["backend"], r["settings"]), forms)}
         return refs, rows
 
     refs, rows = run(screen, live)
@@ -253,8 +284,11 @@ def _select(store: Store, probes, pairs, force_tol, dtol, time_budget, *, probe,
             e.update(ok=False, why=f"time {e['time_s']:.3g} s > budget {time_budget:g} s")
         report.append({**e, "stage": "all probes"})
     cut.sort(key=lambda c: passed[c]["time_s"])
-    return _choose(full, rows, keys, probes, force_tol, dtol, time_budget, out, report,
-                   cut, screen)
+    sel = _choose(full, rows, keys, probes, force_tol, dtol, time_budget, out, report,
+                  cut, screen)
+    if sel.backend is not None:
+        sel.formulation = forms.get((sel.backend, sel.settings))
+    return sel
 
 
 def _screen_time(cand, scene_keys, rows, column) -> float:

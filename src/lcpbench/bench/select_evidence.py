@@ -73,11 +73,13 @@ def read_runs_csv(path: str | Path) -> list[dict]:
 
 
 def ruled_out(candidates: list[tuple[str, str]], kinds: set[tuple], force_tol: float,
-              driver_tol: float, evidence: list[dict]) -> dict[tuple[str, str], str]:
+              driver_tol: float, evidence: list[dict],
+              methods: dict[tuple[str, str], str] | None = None) -> dict[tuple[str, str], str]:
     """The candidates (back-end, profile) that cannot meet ``force_tol``, each with why.
 
     ``kinds``: the kinds of scene selected for; ``evidence``: run rows (store
-    rows or :func:`read_runs_csv` rows) on any scenes.
+    rows or :func:`read_runs_csv` rows) on any scenes; ``methods``: each candidate's
+    stored method (default "globalised": its own form), whose runs alone count.
     """
     from ..solvers.registry import get_backend, get_settings
 
@@ -101,7 +103,8 @@ def ruled_out(candidates: list[tuple[str, str]], kinds: set[tuple], force_tol: f
                            f"force accuracy {force_tol:.0e}, and {b} is not exact")
     for r in evidence:
         key = (r["backend"], r["settings"])
-        if (key not in candidates or key in out or r["method"] != "globalised"
+        if (key not in candidates or key in out
+                or r["method"] != (methods or {}).get(key, "globalised")
                 or r["status"] not in FAILED or bool(int(r["converged"]))
                 or float(r["tol"]) < driver_tol or kind_of(r) not in kinds):
             continue

@@ -7,7 +7,7 @@
     lcpbench anchor --pressure KPA | --theta DEG --height MM --friction MU [--channel] [--json]
     lcpbench solvers [--json]
     lcpbench export --theta 150 --height 3 [scene options] --format dat|npz --out FILE
-    lcpbench lcp FILE [--solver NAME] [--settings PROFILE] [--json]
+    lcpbench lcp FILE [--solver NAME] [--settings PROFILE] [--formulation NAME|best] [--json]
     lcpbench validate cantilever [--links N] [--json]
     lcpbench sweep | report | select | reproduce ...
     lcpbench compile [--dir DIR]

@@ -8,7 +8,7 @@
                    [--json] [--plot F.png]
                    [--start cold|ramp] [--sections THETA:LENGTH,...|anchoring] [--gravity away|toward]
     lcpbench export --theta 150 --height 3 [scene options] --format dat|npz --out FILE
-    lcpbench lcp FILE [--solver NAME] [--settings PROFILE] [--json]
+    lcpbench lcp FILE [--solver NAME] [--settings PROFILE] [--formulation NAME|best] [--json]
     lcpbench validate cantilever [--links N] [--json]
 """
 
@@ -123,6 +123,11 @@ def register(subparsers) -> None:
     add_solver_options(lp, default=None,
                        default_help="active-set where M is symmetric positive definite, "
                                     f"lemke otherwise, up to n = {LEMKE_DEFAULT_MAX_SIZE}")
+    lp.add_argument("--formulation", default=None, metavar="NAME|best",
+                    help="the form the LCP is handed in: gaps (as given), gaps+ruiz (D M D), "
+                         "reactions (the dual in w, M symmetric positive definite), "
+                         "reactions+ruiz; best: the back-end's best of these on the committed "
+                         "evidence, else as given (docs/formulations.md)")
     add_json_option(lp)
     lp.set_defaults(func=cmd_lcp)
 
@@ -343,8 +348,9 @@ def cmd_export(args) -> int:
 
 def cmd_lcp(args) -> int:
     """``lcpbench lcp``: solve an LCP file; 0 solved, 1 not."""
+    from ..model.formulations import solve_lcp_in
     from ..problems.lcpfile import read_lcp
-    from ..solvers.runner import default_lcp_solver, solve_lcp
+    from ..solvers.runner import default_lcp_solver
 
     prob = read_lcp(args.file)
     if args.solver is None:
@@ -352,13 +358,13 @@ def cmd_lcp(args) -> int:
         choice = f"the default, as {why}"
     else:
         solver, choice = args.solver, "given by --solver"
-    sol = solve_lcp(prob.M, prob.q, solver, args.settings)
+    sol = solve_lcp_in(prob.M, prob.q, solver, args.settings, args.formulation)
     res = sol.extra.get("residuals", {})
     # lcp_residuals divides natural, min_w and complementarity by max(1, |q|_inf); say so
     scale = max(1.0, float(np.max(np.abs(prob.q), initial=0.0)))
     out = {
         "file": args.file, "size": int(prob.q.size), "solver": sol.extra.get("backend"),
-        "solver_choice": choice,
+        "solver_choice": choice, "formulation": sol.extra.get("formulation", "gaps"),
         "settings": args.settings, "status": sol.status.value, "message": sol.message,
         "iterations": sol.iterations, "solve_time_s": sol.solve_time,
         "setup_time_s": sol.setup_time, "time_source": sol.extra.get("time_source", "solver"),
@@ -373,7 +379,8 @@ def cmd_lcp(args) -> int:
         with np.printoptions(precision=6, threshold=20, edgeitems=5, linewidth=100):
             rows = [
                 ("problem", f"{args.file} (n = {prob.q.size})"),
-                ("solver", f"{out['solver']} (settings {args.settings}; {choice})"),
+                ("solver", f"{out['solver']} (settings {args.settings}; {choice}; "
+                           f"formulation {out['formulation']})"),
                 ("status", sol.status.value + (f" ({sol.message})" if sol.message else "")),
                 ("iterations", str(sol.iterations)),
                 ("time", f"solve {1e6 * sol.solve_time:.1f} us, setup "

@@ -7,6 +7,7 @@
                    [--store PATH] [--out DIR] [--jobs K] [--time-limit S] [--repeat K]
     lcpbench report [--store PATH] [--out DIR] [--all] [--format F] [--table2-height MM] [--no-plots]
     lcpbench select [scene options] [--force-tol REL] [--time-budget S] [--solvers A,B] [--repeat K]
+                    [--formulation NAME|best]
 """
 
 from __future__ import annotations
@@ -233,6 +234,11 @@ def register(subparsers) -> None:
                     help="runs.csv of an earlier sweep whose failures rule candidates out "
                          "before probing (default: the committed results/sweep/runs.csv "
                          "when present; 'none': only the store's own runs)")
+    se.add_argument("--formulation", default=None, metavar="NAME|best",
+                    help="the form every candidate's contact steps are probed in (gaps, "
+                         "heights, lifted, reactions, angles, each also +ruiz; best: each "
+                         "back-end's on the committed evidence, docs/formulations.md); "
+                         "default: each back-end's own form")
     add_jobs_option(se)
     add_json_option(se, "the selection as JSON")
     se.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -497,7 +503,8 @@ def cmd_select(args) -> int:
         sel = select_backend(scene, force_tol=args.force_tol, time_budget=args.time_budget,
                              store=_select_store(args.store), candidates=candidates, workers=workers,
                              progress=bar.update if bar else None, repeat=args.repeat,
-                             evidence=_evidence(args.evidence))
+                             evidence=_evidence(args.evidence),
+                             formulation=args.formulation)
     finally:
         if bar:
             bar.close()
@@ -508,6 +515,7 @@ def cmd_select(args) -> int:
     else:
         # the options of `lcpbench solve` that run it as selected: the profile's ε, and the
         # driver tol the probes ran at (the accuracy's, not the profile's)
-        print(f"--solver {sel.backend} --settings {sel.settings} --tol {sel.driver_tol:g}: "
-              f"{sel.reason}")
+        form = f" --formulation {sel.formulation}" if sel.formulation else ""
+        print(f"--solver {sel.backend} --settings {sel.settings} --tol {sel.driver_tol:g}"
+              f"{form}: {sel.reason}")
     return 0 if sel.backend is not None else 1

@@ -409,3 +409,66 @@ def _back_from_qp(step, name: str, qp, x, y, yr, L: float, F: float):
     walls = np.union1d(*wall_rows(step))
     R[walls] = yr[: walls.size] * F
     return u, R
+
+
+# -- a bare LCP (an LCP file): the forms it has -----------------------------------------
+def lcp_formulation(backend, value, settings="default") -> Formulation | None:
+    """The form a bare LCP ``w = M z + q`` (``lcpbench lcp FILE``) is handed to ``backend``
+    in, for ``value`` (a name, "best" or None); None: as given (F1). A bare LCP has F1
+    and F4 (each ±ruiz) only: F2, F3 and F5 need the contact step's chain (one
+    ProblemError). "best": the back-end's best form at ``settings`` where it is one of
+    these, else the LCP as given."""
+    if value is None:
+        return None
+    if isinstance(value, str) and value.strip().lower() == "best":
+        best = best_formulations(getattr(settings, "name", settings)).get(backend.name)
+        form = None if best is None else parse_formulation(best)
+        if form is None or form.kind != "lcp":
+            return None
+    else:
+        form = parse_formulation(value)
+    if form.kind != "lcp":
+        raise ProblemError(f"formulation: an LCP file has the forms gaps, gaps+ruiz, "
+                           f"reactions and reactions+ruiz only ({form} needs the contact "
+                           "step's chain)")
+    return None if form == Formulation("gaps") else form
+
+
+def solve_lcp_in(M, q, solver: str, settings="default",
+                 formulation: str | Formulation | None = None):
+    """:func:`lcpbench.solvers.runner.solve_lcp` with the LCP handed in ``formulation``
+    (:func:`lcp_formulation`): ``gaps+ruiz`` the Ruiz-scaled D M D; ``reactions`` the
+    dual in w, 0 <= w ⟂ M⁻¹ w − M⁻¹ q >= 0 (z its slack: M symmetric positive definite,
+    else one ProblemError). The answer's z is mapped back and judged on (M, q) itself;
+    ``sol.extra["formulation"]`` says which form ran."""
+    import scipy.linalg as sla
+
+    from ..solvers.registry import get_backend, get_settings
+    from ..solvers.runner import check_lcp, is_symmetric, judge_lcp, solve_lcp
+
+    s = get_settings(settings)
+    form = lcp_formulation(get_backend(solver), formulation, s)
+    if form is None:
+        return solve_lcp(M, q, solver, s)
+    M, q = check_lcp(M, q)
+    Mt, qt, cho = M, q, None
+    if form.name == "reactions":
+        try:
+            if not is_symmetric(M):
+                raise np.linalg.LinAlgError
+            cho = sla.cho_factor(0.5 * (M + M.T))
+        except (np.linalg.LinAlgError, ValueError):
+            raise ProblemError("formulation reactions (the dual in w) needs M symmetric "
+                               "positive definite") from None
+        Mt = sla.cho_solve(cho, np.eye(q.size))
+        Mt, qt = 0.5 * (Mt + Mt.T), -sla.cho_solve(cho, q)
+    D = None
+    if form.equilibrated:
+        Mt, qt, D = equilibrate_lcp(Mt, qt)
+    sol = solve_lcp(Mt, qt, solver, s)
+    zt = sol.z if D is None else D * sol.z
+    # in F4 the unknown is w and z is its slack: z = M⁻¹ (w − q)
+    z = sla.cho_solve(cho, zt - q, check_finite=False) if form.name == "reactions" else zt
+    sol.z, sol.w = z, M @ z + q
+    sol.extra["formulation"] = str(form)
+    return judge_lcp(M, q, sol, s)

@@ -68,7 +68,7 @@ def _is_number(x) -> bool:
     return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool)
 
 
-def _validate(M, q, omega, eps, max_sweeps, z0, time_limit):
+def check_inputs(M, q, omega, eps, max_sweeps, z0, time_limit):
     """Convert and check the inputs; raise ProblemError on caller errors."""
     M = _as_real(M, "M")
     if M.ndim != 2 or M.shape[0] != M.shape[1] or M.shape[0] == 0:
@@ -186,7 +186,7 @@ def pgs(M, q, *, omega: float = 1.0, eps: float = 1e-10, max_sweeps: int = 100_0
     sweep budget or the time limit is exhausted.
     """
     t_setup = time.perf_counter()
-    M, q, omega, eps, max_sweeps, z = _validate(M, q, omega, eps, max_sweeps, z0, time_limit)
+    M, q, omega, eps, max_sweeps, z = check_inputs(M, q, omega, eps, max_sweeps, z0, time_limit)
     n = q.size
     diag = M.diagonal().copy()
 

@@ -106,8 +106,8 @@ def translate(settings: Settings, solver: str) -> dict:
         opts = qp_osqp.translate(settings)
         opts.pop("time_limit", None)
         return opts
-    if solver == "CLARABEL":
-        opts = qp_clarabel.translate(settings)
+    if solver == "CLARABEL":  # as through qpsolvers: eps itself (qp_clarabel.translate)
+        opts = qp_clarabel.translate(settings, 1.0)
         opts.pop("time_limit", None)
         return opts
     opts: dict = {}

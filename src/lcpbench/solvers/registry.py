@@ -164,6 +164,9 @@ def _builtin() -> list[Backend]:
         _own("psor", "lcp", "dense", True, "iterative", "lcpbench.solvers.pgs",
              "projected successive over-relaxation (PGS with omega = 1.5)",
              options={"omega": 1.5}),
+        _own("pgs-sm", "lcp", "dense", True, "iterative", "lcpbench.solvers.pgs_sm",
+             "projected Gauss-Seidel with subspace minimisation (Morales, Nocedal & "
+             "Smelyanskiy 2008; symmetric M; numba)", requires=("numba",)),
         Backend("osqp", "qp", "sparse", True, "iterative", "lcpbench.solvers.qp_osqp",
                 "OSQP 1.x (ADMM), native API", requires=("osqp",), extra="osqp",
                 distribution="osqp", linear_rows=True),

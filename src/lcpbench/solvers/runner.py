@@ -27,7 +27,7 @@ def _failed_lcp(n: int, message: str, status: Status = Status.FAILED) -> LCPSolu
 
 
 # -- LCPs ---------------------------------------------------------------------
-def _check_lcp(M, q):
+def check_lcp(M, q):
     """Dense real ``M`` (n x n, n >= 1) and ``q`` (n), finite, or one ProblemError.
 
     Refused rather than cast: complex entries (the imaginary part would be
@@ -53,7 +53,7 @@ def _check_lcp(M, q):
     return M, q
 
 
-def _is_symmetric(M: np.ndarray) -> bool:
+def is_symmetric(M: np.ndarray) -> bool:
     return bool(np.max(np.abs(M - M.T), initial=0.0) <= 1e-12 * max(np.max(np.abs(M)), 1e-300))
 
 
@@ -87,7 +87,7 @@ def default_lcp_solver(M) -> tuple[str, str]:
     """
     M = np.asarray(M, dtype=float)
     n = M.shape[0]
-    if _is_symmetric(M):
+    if is_symmetric(M):
         try:
             np.linalg.cholesky(0.5 * (M + M.T))
         except np.linalg.LinAlgError:
@@ -115,13 +115,28 @@ def solve_lcp(M, q, solver: str = "lemke", settings: str | Settings = "default",
     """
     backend = get_backend(solver)
     s = get_settings(settings)
-    M, q = _check_lcp(M, q)
+    M, q = check_lcp(M, q)
     try:
         sol = run_lcp(backend, M, q, s, warm)
     except Exception as exc:  # a back-end failure is a status, never an exception
         sol = _failed_lcp(q.size, f"{backend.name} raised {type(exc).__name__}: {exc}")
     sol.extra["backend"] = backend.name
     sol.extra["settings"] = s.name
+    judge_lcp(M, q, sol, s)
+    if sol.status is not Status.SOLVED and backend.fallback:
+        first = sol
+        sol = solve_lcp(M, q, backend.fallback, s, warm)
+        sol.message = fallback_message(backend, first, sol)
+        sol.iterations += first.iterations
+        sol.solve_time += first.solve_time
+        sol.extra["backend"] = f"{backend.name}>{backend.fallback}"
+    return sol
+
+
+def judge_lcp(M: np.ndarray, q: np.ndarray, sol: LCPSolution, s: Settings) -> LCPSolution:
+    """``sol`` judged on (M, q) by lcpbench's residuals of its z alone, in place: the
+    residuals in ``sol.extra["residuals"]``, a SOLVED that fails them demoted
+    (:func:`~.judge.verdict`; never promoted), a non-finite z FAILED."""
     if np.all(np.isfinite(sol.z)):
         res = lcp_residuals(M, q, sol.z)
         sol.extra["residuals"] = res
@@ -130,13 +145,6 @@ def solve_lcp(M, q, solver: str = "lemke", settings: str | Settings = "default",
             sol.status, sol.message = status, why
     elif sol.status is Status.SOLVED:
         sol.status, sol.message = Status.FAILED, "non-finite solution"
-    if sol.status is not Status.SOLVED and backend.fallback:
-        first = sol
-        sol = solve_lcp(M, q, backend.fallback, s, warm)
-        sol.message = fallback_message(backend, first, sol)
-        sol.iterations += first.iterations
-        sol.solve_time += first.solve_time
-        sol.extra["backend"] = f"{backend.name}>{backend.fallback}"
     return sol
 
 
@@ -159,7 +167,7 @@ def run_lcp(backend: Backend, M, q, s: Settings, warm) -> LCPSolution:
     if backend.form == "lcp":
         z0 = None if warm is None else np.maximum(np.asarray(warm, dtype=float), 0.0)
         return mod.solve_lcp(M, q, s, z0, **backend.options)
-    if not _is_symmetric(M):
+    if not is_symmetric(M):
         return _failed_lcp(q.size, f"{backend.name} is a QP back-end: it needs symmetric M "
                                    "(min ½zᵀMz + qᵀz over z >= 0)")
     n = q.size

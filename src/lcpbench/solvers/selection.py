@@ -31,6 +31,9 @@ class Selection:
         the probes and the spread of the repeats), ``tied``.
     ties : the candidates within the noise of the fastest, the choice among
         them made by preferring the simpler profile, then an exact back-end.
+    formulation : the form the chosen pair's contact steps were probed in
+        (docs/formulations.md); None: the back-end's own. :func:`lcpbench.solve`
+        runs a Selection in it.
     """
 
     backend: str | None
@@ -43,8 +46,9 @@ class Selection:
     evidence: list[dict] = field(default_factory=list)
     confidence: dict | None = None
     ties: list[dict] = field(default_factory=list)
+    formulation: str | None = None
 
     def to_dict(self) -> dict:
         return {k: getattr(self, k) for k in
                 ("backend", "settings", "force_tol", "driver_tol", "time_s", "error", "reason",
-                 "evidence", "confidence", "ties")}
+                 "evidence", "confidence", "ties", "formulation")}
