@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from ..api import check_tol, solve
 from ..errors import ProblemError
 from ..model.result import ContactResult
-from ..model.sensitivity import sensitivities, unsupported
+from ..model.sensitivity import sensitivities
 from ..problems.calibrations import Calibration
 from ..problems.scenes import ActuatorScene
 
@@ -94,8 +94,10 @@ def design(scene: ActuatorScene, *, max_force: float | None = None,
     if len(asked) != 1:
         raise ProblemError("design needs exactly one of max_force, min_force or touch; got "
                            + (", ".join(asked) if asked else "none"))
-    if (why := unsupported(scene)) is not None:
-        raise ProblemError(f"design: {why}")
+    if not (isinstance(scene, ActuatorScene) and scene.wall_profile is None):
+        what = "a wall profile" if isinstance(scene, ActuatorScene) else type(scene).__name__
+        raise ProblemError(f"design covers actuator scenes with flat walls (one wall or a "
+                           f"channel, rigid or elastic); got {what}")
     tol = check_tol(tol)
     if touch:
         return _touch(scene, tol, calibration)
