@@ -33,7 +33,8 @@ section k ``theta_deg[k]``, ``EI[k]``, ``weight[k]``; a joint on a boundary has 
 series spring 2 EI_l EI_r / (a (EI_l + EI_r)) and the rest angle of both halves, so
 ∂k/∂EI_l = 2 EI_r² / (a (EI_l + EI_r)²) and ∂φ*/∂θ_k = −1/(2 n_k) there; ``length_mm``
 scales every section's length together: ℓ ∂F/∂ℓ = −2F − h F_h + 3 Σ_k w_k F_{w_k}).
-Wall profiles: :mod:`lcpbench.model.sensitivity_profile`.
+Walls of any profile (``height_mm``: both walls moved apart): a dense KKT solve,
+:mod:`lcpbench.model.sensitivity_profile`.
 """
 
 from __future__ import annotations
@@ -48,6 +49,7 @@ from ..problems.scenes import ActuatorScene, CantileverScene, wall_share
 from ..problems.sections import SectionedScene
 from .chain import heights
 from .judge import NODE_SHARE, force_tol
+from .sensitivity_profile import OF_PROFILE, profile_derivatives
 
 #: the parameters (and their units) a sensitivity is taken with respect to
 PARAMETERS = {"theta_deg": "deg", "height_mm": "mm", "EI": "N mm²", "weight": "N/mm",
@@ -72,6 +74,8 @@ def parameters(scene) -> tuple[str, ...]:
         return (*(f"theta_deg[{i}]" for i in range(m)), "height_mm",
                 *(f"EI[{i}]" for i in range(m)), *(f"weight[{i}]" for i in range(m)),
                 "length_mm")
+    if getattr(scene, "wall_profile", None) is not None:
+        return OF_PROFILE
     elastic = not math.isinf(scene.wall_stiffness)
     return tuple(p for p in OF_SCENE[type(scene)] if elastic or p != "wall_stiffness")
 
@@ -111,12 +115,11 @@ class Sensitivities:
 
 def unsupported(scene) -> str | None:
     """Why :func:`sensitivities` does not cover ``scene``, or None."""
-    if isinstance(scene, (CantileverScene, SectionedScene)) or (
-            isinstance(scene, ActuatorScene) and scene.wall_profile is None):
+    if isinstance(scene, (CantileverScene, SectionedScene, ActuatorScene)):
         return None
-    what = "a wall profile" if isinstance(scene, ActuatorScene) else type(scene).__name__
-    return ("sensitivities cover actuator scenes with flat walls (one wall or a channel, "
-            f"rigid or elastic), rows of sections and the cantilever; got {what}")
+    return ("sensitivities cover actuator scenes (flat walls, one wall or a channel, rigid "
+            "or elastic, or walls of any profile), rows of sections and the cantilever; got "
+            f"{type(scene).__name__}")
 
 
 def sensitivities(result, wrt=None) -> Sensitivities:
@@ -136,6 +139,9 @@ def sensitivities(result, wrt=None) -> Sensitivities:
     for p in names:
         if p not in own:
             raise ProblemError(f"wrt must name parameters among {', '.join(own)}; got {p!r}")
+    if getattr(scene, "wall_profile", None) is not None:
+        d = profile_derivatives(result, scene, set(names), _contact_threshold(result, scene))
+        return _collect(result, scene, names, d)
     need = {p for p in names if p != "length_mm"}
     if "length_mm" in names:  # from the others, by dimensional analysis
         need |= {"height_mm", *_loads(scene)} | ({"wall_stiffness"} if elastic else set())
@@ -159,10 +165,7 @@ def _derivatives(result, scene, names: set, elastic: bool) -> dict:
     fu = np.ascontiguousarray(result.forces, dtype=float)
     fl = np.zeros(n) if result.forces_lower is None else \
         np.ascontiguousarray(result.forces_lower, dtype=float)
-    # the judge's contact threshold ε_R = NODE_SHARE τ F₀ (model.judge.judge), without
-    # building a lazy result's judgement
-    F0 = max(abs(float(fu.sum())), abs(float(fl.sum())), float(chain.force_scale))
-    eps_R = NODE_SHARE * force_tol(result.tol) * F0
+    eps_R = _contact_threshold(result, scene)
     drest, dk, unit_load, rows = _parameter_rows(scene, chain, rest, k, nodal_load)
     want = np.zeros(len(rows), bool)
     for p in names:
@@ -183,6 +186,15 @@ def _derivatives(result, scene, names: set, elastic: bool) -> dict:
     out["_one_sided"] = np.flatnonzero(touching & ~((fu > eps_R) | (fl > eps_R)))
     out["_heights"] = u
     return out
+
+
+def _contact_threshold(result, scene) -> float:
+    """The judge's contact threshold ε_R = NODE_SHARE τ F₀ (model.judge.judge), without
+    building a lazy result's judgement."""
+    fu = np.asarray(result.forces, dtype=float)
+    fl = np.zeros(0) if result.forces_lower is None else np.asarray(result.forces_lower)
+    F0 = max(abs(float(fu.sum())), abs(float(fl.sum())), float(scene.chain().force_scale))
+    return NODE_SHARE * force_tol(result.tol) * F0
 
 
 def _parameter_rows(scene, chain, rest, k, nodal_load):
