@@ -8,9 +8,10 @@ of sensitivities and inverse queries.
    each parameter, the total force's derivative against the central difference of two
    solves (relative step 1e-4, started from the answer), kept only where both keep
    the centre's contact set (away from a change of it).
-2. At N = 140 (θ = 150°, h = 3 mm, tol 1e-10), interleaved: ``lcpbench.solve``,
-   ``sensitivities`` (all parameters, and θ alone); and ``lcpbench.design`` max-force
-   queries (forward solves and wall time).
+2. At N = 140 (θ = 150°, h = 3 mm, tol 1e-10; a row of two sections in a channel; a
+   stenosis, a wall profile), interleaved: ``lcpbench.solve``, ``sensitivities`` (all
+   parameters, and the first alone); and ``lcpbench.design`` queries (forward solves
+   and wall time).
 4. The design answers' force error and the force 0.01° beyond.
 
 Writes ``results/design-targets.md`` (``--out``; not overwritten without ``--force``).
@@ -36,9 +37,10 @@ import numpy as np
 from perf import interleaved, wall  # (benchmarks/ is the script's directory)
 
 import lcpbench
-from lcpbench import ActuatorScene
+from lcpbench import ActuatorScene, SectionedScene
 from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
 from lcpbench.model.sensitivity import sensitivities
+from lcpbench.problems.walls import WallProfile
 from lcpbench.studies.design import design
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -107,18 +109,33 @@ def target1(n_scenes: int, seed: int) -> tuple[list[str], dict]:
                    "scaled_max": float(e[:, 1].max())}
 
 
+#: the scenes of target 2 (N = 140): the paper's, a row of two sections, a stenosis
+STENOSIS = WallProfile.from_function(
+    lambda x: 3.0 - 0.8 * np.exp(-((x - 14.0) / 3.0) ** 2),
+    lambda x: 1.6 * (x - 14.0) / 9.0 * np.exp(-((x - 14.0) / 3.0) ** 2), name="stenosis")
+COST_SCENES = {
+    "one wall": ActuatorScene(theta=150, height=3.0, links=140),
+    "two sections, channel": SectionedScene(sections=[(150.0, 15.0), (-150.0, 15.0)],
+                                            height=1.0, links=140, channel=True),
+    "wall profile (stenosis)": ActuatorScene(theta=150, links=140, wall_profile=STENOSIS),
+}
+
+
 def target2(rounds: int) -> list[str]:
-    scene = ActuatorScene(theta=150, height=3.0, links=140)
-    res = lcpbench.solve(scene, tol=1e-10)
-    calls = {"lcpbench.solve (tol 1e-10)": lambda: lcpbench.solve(scene, tol=1e-10),
-             "sensitivities, all parameters": lambda: sensitivities(res),
-             "sensitivities, theta alone": lambda: sensitivities(res, wrt=("theta_deg",))}
-    times = {name: g["times"] for name, g in interleaved(
-        {name: wall(call) for name, call in calls.items()}, rounds).items()}
-    base = float(np.median(times["lcpbench.solve (tol 1e-10)"]))
-    lines = ["| call | median (ms) | × the solve |", "|---|---:|---:|"]
-    for name, t in times.items():
-        lines.append(f"| {name} | {1e3 * np.median(t):.3f} | {np.median(t) / base:.2f} |")
+    lines = ["| scene | call | median (ms) | × its solve |", "|---|---|---:|---:|"]
+    for label, scene in COST_SCENES.items():
+        res = lcpbench.solve(scene, tol=1e-10)
+        first = sensitivities(res).wrt[0]
+        calls = {"lcpbench.solve (tol 1e-10)": lambda sc=scene: lcpbench.solve(sc, tol=1e-10),
+                 "sensitivities, all parameters": lambda r=res: sensitivities(r),
+                 f"sensitivities, {first} alone": lambda r=res, p=first: sensitivities(
+                     r, wrt=(p,))}
+        times = {name: g["times"] for name, g in interleaved(
+            {name: wall(call) for name, call in calls.items()}, rounds).items()}
+        base = float(np.median(times["lcpbench.solve (tol 1e-10)"]))
+        for name, t in times.items():
+            lines.append(f"| {label} | {name} | {1e3 * np.median(t):.3f} | "
+                         f"{np.median(t) / base:.2f} |")
     return lines
 
 

@@ -47,7 +47,6 @@ import numpy as np
 from ..errors import ProblemError
 from ..problems.scenes import ActuatorScene, CantileverScene, wall_share
 from ..problems.sections import SectionedScene
-from .chain import heights
 from .judge import NODE_SHARE, force_tol
 from .sensitivity_profile import OF_PROFILE, profile_derivatives
 
@@ -170,7 +169,7 @@ def _derivatives(result, scene, names: set, elastic: bool) -> dict:
     want = np.zeros(len(rows), bool)
     for p in names:
         want[rows[p]] = True
-    code, du, dfu, dfl = kern.derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu,
+    code, du, dfu, dfl, u = kern.derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu,
                                           cl, fu, fl, float(eps_R), drest, dk, unit_load,
                                           float(getattr(scene, "wall_stiffness", math.inf)),
                                           want)
@@ -179,7 +178,6 @@ def _derivatives(result, scene, names: set, elastic: bool) -> dict:
                            "positive definite (the contact set is not a stable one)")
     out = {p: (dfu[rows[p]], dfl[rows[p]], du[rows[p]]) for p in names}
     # a node touching its wall without force: at a change of contact set (one-sided)
-    u = heights(chain, alpha)
     c_max = float(np.max(cu, initial=0.0)) if cu.size else 0.0
     touching = (hi - u <= max(1e-9 * scene.length, c_max * eps_R)) | \
         (u - lo <= 1e-9 * scene.length)
@@ -200,26 +198,9 @@ def _contact_threshold(result, scene) -> float:
 def _parameter_rows(scene, chain, rest, k, nodal_load):
     """The kernel's per-parameter inputs: ∂φ*/∂θ_k (mt, nj) per degree, ∂k/∂EI_k (me, nj),
     the nodal load at unit w_k (mw, n), and {parameter: its output row}."""
-    if isinstance(scene, SectionedScene):
-        counts = scene.section_links()
-        m, a = counts.size, chain.link_length
-        section = np.repeat(np.arange(m), counts)  # of each link
-        left, right = section[:-1], section[1:]
-        ei = np.array([s.EI for s in scene.sections])[section]
-        el, er = ei[:-1], ei[1:]
-        drest = np.empty((m, rest.size))
-        dk = np.empty((m, rest.size))
-        unit_load = np.empty((m, nodal_load.size))
-        sign = -1.0 if scene.gravity == "-y" else 1.0
-        for i in range(m):  # φ*_j = −(t_l + t_r)/2, t = θ_k/n_k per link (rad)
-            drest[i] = -0.5 * math.pi / 180 / counts[i] * ((left == i) * 1.0 + (right == i))
-            # k_j = 2 EI_l EI_r / (a (EI_l + EI_r)) (EI_k / a inside a section)
-            dk[i] = (2 * ((left == i) * er**2 + (right == i) * el**2) / (a * (el + er) ** 2))
-            unit_load[i] = replace(chain, link_load=sign * a * (section == i)).nodal_load
-        names = ([f"theta_deg[{i}]" for i in range(m)] + ["height_mm"]
-                 + [f"EI[{i}]" for i in range(m)] + [f"weight[{i}]" for i in range(m)]
-                 + ["wall_stiffness"])
-        return drest, dk, unit_load, {p: r for r, p in enumerate(names)}
+    if isinstance(scene, SectionedScene):  # (the chain's data only: kept with it)
+        return chain.derived("_section_rows", lambda: _section_rows(scene, chain, rest,
+                                                                    nodal_load))
     # φ* = −θ/N per joint, k = EI/a, the loads ∝ w (the cantilever's: ∝ q): their
     # derivatives (the cantilever has no rest curvature)
     theta = getattr(scene, "theta", None)
@@ -233,6 +214,29 @@ def _parameter_rows(scene, chain, rest, k, nodal_load):
     rows = {"theta_deg": 0, "height_mm": 1, "EI": 2, "weight": 3, "load": 3,
             "wall_stiffness": 4}
     return drest[None, :], (k / scene.EI)[None, :], unit_load[None, :], rows
+
+
+def _section_rows(scene, chain, rest, nodal_load):
+    """:func:`_parameter_rows` of a row of sections: θ_k, EI_k, w_k per section."""
+    counts = scene.section_links()
+    m, a = counts.size, chain.link_length
+    section = np.repeat(np.arange(m), counts)  # of each link
+    left, right = section[:-1], section[1:]
+    ei = np.array([s.EI for s in scene.sections])[section]
+    el, er = ei[:-1], ei[1:]
+    drest = np.empty((m, rest.size))
+    dk = np.empty((m, rest.size))
+    unit_load = np.empty((m, nodal_load.size))
+    sign = -1.0 if scene.gravity == "-y" else 1.0
+    for i in range(m):  # φ*_j = −(t_l + t_r)/2, t = θ_k/n_k per link (rad)
+        drest[i] = -0.5 * math.pi / 180 / counts[i] * ((left == i) * 1.0 + (right == i))
+        # k_j = 2 EI_l EI_r / (a (EI_l + EI_r)) (EI_k / a inside a section)
+        dk[i] = (2 * ((left == i) * er**2 + (right == i) * el**2) / (a * (el + er) ** 2))
+        unit_load[i] = replace(chain, link_load=sign * a * (section == i)).nodal_load
+    names = ([f"theta_deg[{i}]" for i in range(m)] + ["height_mm"]
+             + [f"EI[{i}]" for i in range(m)] + [f"weight[{i}]" for i in range(m)]
+             + ["wall_stiffness"])
+    return drest, dk, unit_load, {p: r for r, p in enumerate(names)}
 
 
 def _loads(scene) -> tuple[str, ...]:
@@ -263,7 +267,8 @@ def _by_dimensions(result, scene, d: dict, elastic: bool):
 
 def _collect(result, scene, names, d) -> Sensitivities:
     chain = scene.chain()
-    share = wall_share(chain.links, chain.link_length, chain.free_nodes)
+    share = chain.derived("_wall_share", lambda: wall_share(chain.links, chain.link_length,
+                                                            chain.free_nodes))
     fu = np.asarray(result.forces, dtype=float)
     fl = np.zeros_like(fu) if result.forces_lower is None else np.asarray(result.forces_lower)
     pressure = (fu + fl) / share

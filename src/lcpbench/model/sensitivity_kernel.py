@@ -28,7 +28,7 @@ OK, NOT_PD = 0, 1
 @njit(cache=True)
 def derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu, cl, fu, fl, eps_R,
                 drest, dk, unit_load, wall_k, want):
-    """(code, du, dfu, dfl): the derivatives of the free nodes' heights and the upper and
+    """(code, du, dfu, dfl, u): the derivatives of the free nodes' heights and the upper and
     lower reactions, one output row per parameter, those of ``want`` (bool per row)
     written, the rest zero; code NOT_PD where the face is not positive definite.
 
@@ -36,7 +36,7 @@ def derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu, cl, fu, f
     then the wall height, one per row of ``dk`` (me, nj) (∂k/∂EI_k per joint), one per
     row of ``unit_load`` (mw, n) (the nodal load at unit weight w_k), then the Winkler
     stiffness ``wall_k`` (k_i ∝ it). ``cu``, ``cl``: the walls' compliances (empty:
-    rigid)."""
+    rigid); ``u``: the free nodes' heights at α (the step's linearisation point)."""
     n, links, nj = lo.size, alpha.size, jr.size
     mt, me, mw = drest.shape[0], dk.shape[0], unit_load.shape[0]
     rows = mt + me + mw + 2
@@ -59,7 +59,7 @@ def derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu, cl, fu, f
     du, dfu, dfl = np.zeros((rows, n)), np.zeros((rows, n)), np.zeros((rows, n))
     fac = np.empty((4, n))
     if not refactor(fac, bands, rigid, comp if soft else comp[:0], 0, n):
-        return NOT_PD, du, dfu, dfl
+        return NOT_PD, du, dfu, dfl, origin
     none_n, none_j, m, Tz = np.zeros(n), np.zeros(nj), np.empty(nj), np.zeros((2, n))
     dgrad, du0, r = np.empty(n), np.empty(n), np.empty(n)
     for p in range(rows):
@@ -90,4 +90,4 @@ def derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu, cl, fu, f
             dR = -(dgrad[i] + matvec_row(bands, du[p], i, n, False))
             dfu[p, i] = dR if up[i] else 0.0
             dfl[p, i] = -dR if down[i] else 0.0
-    return OK, du, dfu, dfl
+    return OK, du, dfu, dfl, origin
