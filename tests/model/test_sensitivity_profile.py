@@ -113,17 +113,18 @@ def test_a_flat_profile_gives_the_flat_walls_derivatives():
         assert b.total_force[p] == pytest.approx(a.total_force[p], rel=1e-7), p
 
 
-def test_profile_sensitivities_refuse_a_dense_system_too_large():
+def test_profile_sensitivities_refuse_too_many_contact_nodes():
     from lcpbench.model import sensitivity_profile
 
-    res = lcpbench.solve(ActuatorScene(theta=150, links=60, wall_profile=STENOSIS))
-    old = sensitivity_profile.MAX_LINKS
+    res = lcpbench.solve(ActuatorScene(theta=150, links=60, wall_profile=RAMP))
+    assert np.count_nonzero(res.forces > 0) == 4
+    old = sensitivity_profile.MAX_ROWS
     try:
-        sensitivity_profile.MAX_LINKS = 40
-        with pytest.raises(ProblemError, match="wall profile.*N = 40.*Flat walls"):
+        sensitivity_profile.MAX_ROWS = 3
+        with pytest.raises(ProblemError, match="wall profile.*up to 3 contact.*has 4.*Flat"):
             sensitivities(res)
     finally:
-        sensitivity_profile.MAX_LINKS = old
+        sensitivity_profile.MAX_ROWS = old
 
 
 def test_the_cli_gives_them_for_a_wall_profile(tmp_path):

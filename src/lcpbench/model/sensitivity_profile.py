@@ -21,8 +21,11 @@ with G the rows ∇c_rᵀ = s_r (h'_r J_x[k] − e_k) and
 
 the slope load J_xᵀ(μ ⊙ h') moves with x (its Jacobian: the h'' term, rank one per
 row) and with α (the ∇²x term, tridiagonal). J_x (∂x_k/∂u_m = −Σ_{j<k} tan α_j
-∂Δ_j/∂u_m) is lower triangular and dense, so the system is dense: one LU of size
-n + |A|, O(N³) (0.5–3 ms at N = 140); refused above :data:`MAX_LINKS`.
+∂Δ_j/∂u_m) is lower triangular and dense, but only the |A| rows of the active nodes
+enter: with B = H + T − Σ_r λ_r s_r h'_r ∇²x_k (pentadiagonal) and U the active rows
+of J_x, W = B − U diag(λ s h'') Uᵀ, so B⁻¹ on the right-hand sides, U and Gᵀ (banded
+LU, O(N) each) leave a dense system of 2|A| unknowns (w = diag(λ s h'') Uᵀ du and dλ):
+O(N |A|) in all; refused above :data:`MAX_ROWS` contact nodes.
 
 ∂_p∇E for θ, EI and w is the flat walls' (the energy does not see the walls). The
 walls' own parameters: ``height_mm`` moves both walls apart, h(x) + δ and, in a
@@ -44,98 +47,87 @@ import numpy as np
 from ..errors import ProblemError
 from .chain import joint_angles, node_positions
 from .newton import geometric_bands
+from .profile import profile_gaps
 from .step import assemble_step
 
-#: the largest N whose profile sensitivities are computed (the dense system: O(N²)
-#: memory, O(N³) time; 2000 links take ~1 s)
-MAX_LINKS = 2000
+#: the most contact nodes whose profile sensitivities are computed (the dense system of
+#: twice their number; U and Gᵀ take N × their number)
+MAX_ROWS = 2000
 #: the parameters covered on a profiled wall
 OF_PROFILE = ("theta_deg", "height_mm", "EI", "weight", "length_mm")
 
 
-def _walls(chain, x: np.ndarray):
-    """(h, h', h'') of the upper and the lower wall at the free nodes' x, as the solve
-    evaluates them (tables of cubic pieces, continued flat; a function without a table:
-    itself); zeros for a wall without a profile."""
+def _walls(chain, x: np.ndarray, lower: bool = False):
+    """(h, h', h'') of the upper (``lower``: the lower) wall at ``x``, as the solve
+    evaluates it (its table of cubic pieces, continued flat; a function without a
+    table: itself)."""
     from ..numba_cache import kernel_module
 
+    prof = chain.lower_profile if lower else chain.upper_profile
+    if prof is None or x.size == 0:
+        return (np.zeros_like(x),) * 3
+    table = prof.pieces(-float(chain.length), float(chain.length))
+    if table is None:
+        return prof(x), prof.slope(x), prof.curvature(x)
     kern = kernel_module("lcpbench.model.wall_kernel", "wall_height")
-    out = []
-    for prof in (chain.upper_profile, chain.lower_profile):
-        if prof is None:
-            out.append((np.zeros_like(x),) * 3)
-            continue
-        table = prof.pieces(-float(chain.length), float(chain.length))
-        if table is None:
-            out.append((prof(x), prof.slope(x), prof.curvature(x)))
-            continue
-        knots, coef = table
-        vals = np.array([kern.wall_height(knots, coef, float(t)) for t in x]).reshape(-1, 3)
-        out.append((vals[:, 0], vals[:, 1], vals[:, 2]))
-    return out
-
-
-def _dense(bands: np.ndarray) -> np.ndarray:
-    """A symmetric matrix from its lower banded storage (k, n)."""
-    n = bands.shape[1]
-    M = np.diag(bands[0]).astype(float)
-    for k in range(1, bands.shape[0]):
-        off = np.diag(bands[k, : n - k], -k)
-        M += off + off.T
-    return M
+    vals = np.array([kern.wall_height(*table, float(t)) for t in x]).reshape(-1, 3)
+    return vals[:, 0], vals[:, 1], vals[:, 2]
 
 
 def profile_derivatives(result, scene, names, eps_R: float) -> dict:
     """{parameter: (d forces_upper, d forces_lower, d heights)} of a converged answer
     against a profiled wall (module docstring), with ``_one_sided`` and ``_heights``."""
+    from scipy.linalg import solve_banded
+
     chain = scene.chain()
-    if chain.links > MAX_LINKS:
-        raise ProblemError(f"sensitivities against a wall profile are computed up to "
-                           f"N = {MAX_LINKS} links (a dense system); got N = {chain.links}. "
-                           "Flat walls and rows of sections have them at any N")
     alpha = np.asarray(result.alpha, dtype=float)
     free = chain.free_nodes
     n, links, a = free.size, chain.links, chain.link_length
     x_all, y_all = node_positions(chain, alpha)
     x, u = x_all[free], y_all[free]
-    (hu, hu1, hu2), (hl, hl1, hl2) = _walls(chain, x)
     fu = np.asarray(result.forces, dtype=float)
     fl = np.zeros(n) if result.forces_lower is None else np.asarray(result.forces_lower, float)
     up = (fu > eps_R) & np.isfinite(chain.upper)
     down = (fl > eps_R) & np.isfinite(chain.lower) & ~up
-    # the rows: node, side s, slope, curvature, multiplier λ, the wall's height there
+    # the rows: node, side s, the wall's height, slope and curvature there, multiplier λ
     node = np.concatenate([np.flatnonzero(up), np.flatnonzero(down)])
     side = np.concatenate([np.ones(up.sum()), -np.ones(down.sum())])
-    slope = np.concatenate([hu1[up], hl1[down]])
-    curv = np.concatenate([hu2[up], hl2[down]])
+    (hu, hu1, hu2), (hl, hl1, hl2) = _walls(chain, x[up]), _walls(chain, x[down], lower=True)
+    hgt, slope, curv = (np.concatenate(pair) for pair in ((hu, hl), (hu1, hl1), (hu2, hl2)))
     lam = np.concatenate([fu[up], fl[down]])
     m = node.size
-    # J_x on the free nodes: x_k = Σ_{j<k} a cos α_j, ∂x_k/∂Δ_j = −tan α_j, and link j's
-    # Δ_j = y_{j+1} − y_j (d_j: +1 at node j+1, −1 at node j; the pins are fixed)
-    col = np.full(links + 1, -1)
-    col[free] = np.arange(n)
-    D = np.zeros((links, n))
-    j = np.arange(links)
-    for end, sign in ((j + 1, 1.0), (j, -1.0)):
-        ok = col[end] >= 0
-        D[j[ok], col[end[ok]]] = sign
-    G_links = -np.tan(alpha)[:, None] * D
-    Jx = np.vstack([np.zeros((1, n)), np.cumsum(G_links, axis=0)])[free]  # rows: nodes k
-    # W = H + T − Σ λ_r ∇²c_r
+    if m > MAX_ROWS:
+        raise ProblemError(f"sensitivities against a wall profile are computed with up to "
+                           f"{MAX_ROWS} contact nodes (a dense system of twice as many); "
+                           f"this answer has {m}. Flat walls and rows of sections have them "
+                           "at any number")
+    # U: the rows ∇x_k of the active nodes (n × m); x_k = Σ_{j<k} a cos α_j, so
+    # ∂x_k/∂u_i = t_{i−1} − t_i with t_j = −tan α_j for the links j < k (else 0)
+    k_full = free[node]
+    t = np.where(np.arange(links)[None, :] < k_full[:, None], -np.tan(alpha)[None, :], 0.0)
+    U = (t[:, free - 1] - np.where(free < links, t[:, np.minimum(free, links - 1)], 0.0)).T
+    # B = H + T − Σ_r λ_r s_r h'_r ∇²x_k (pentadiagonal): ∇²x_k = −Σ_{j<k} d_j d_jᵀ /
+    # (a cos³ α_j), so the sum is Σ_j c_j d_j d_jᵀ with c_j the rows past link j
     step = assemble_step(chain, alpha)
-    W = _dense(step.bands) + _dense(geometric_bands(chain, alpha))
-    if m:
-        rows_x = Jx[node]
-        W -= rows_x.T @ ((lam * side * curv)[:, None] * rows_x)
-        # Σ_r λ_r s_r h'_r ∇²x_k = Σ_j c_j d_j d_jᵀ, c_j = −Σ_{r: k_r > j} λ s h' / (a cos³ α_j)
-        wk = np.zeros(links + 1)
-        np.add.at(wk, free[node], lam * side * slope)
-        past = np.cumsum(wk[::-1])[::-1][1:]  # link j: the rows at nodes > j
-        c = -past / (a * np.cos(alpha) ** 3)
-        W -= D.T @ (c[:, None] * D)
-    Gm = side[:, None] * (slope[:, None] * Jx[node] - np.eye(n)[node])
-    K = np.block([[W, -Gm.T], [-Gm, np.zeros((m, m))]])
-    rhs_cols, tags = [], []
+    low = step.bands + geometric_bands(chain, alpha)
+    wk = np.zeros(links + 1)
+    np.add.at(wk, k_full, lam * side * slope)
+    c = -np.cumsum(wk[::-1])[::-1][1:] / (a * np.cos(alpha) ** 3)
+    cn = np.zeros(links + 2)  # (link j joins nodes j, j + 1; −c on the diagonal of both)
+    cn[:links] += c
+    cn[1:links + 1] += c
+    low[0] -= cn[free]
+    low[1, : n - 1] += c[free[:-1]]
+    ab = np.zeros((5, n))  # solve_banded's storage of the symmetric B
+    ab[2] = low[0]
+    ab[3, : n - 1] = ab[1, 1:] = low[1, : n - 1]
+    ab[4, : n - 2] = ab[0, 2:] = low[2, : n - 2]
+    # G: the rows ∇c_rᵀ = s_r (h'_r ∇x_k − e_k); W = B − U diag(β) Uᵀ, β = λ s h''
+    E = np.zeros((n, m))
+    E[node, np.arange(m)] = 1.0
+    Gt = (U * slope - E) * side  # Gᵀ (n × m)
+    beta = lam * side * curv
+    rhs_cols, dcs, tags = [], [], []
     phi = joint_angles(chain, alpha)
     for p in _needed(names):
         dgrad, dc, dgc = np.zeros(n), np.zeros(m), np.zeros(m)  # dgc: ∂_p of c_r's slope
@@ -151,30 +143,47 @@ def profile_derivatives(result, scene, names, eps_R: float) -> dict:
         elif p == "height_mm":
             dc = np.ones(m)
         elif p == "scale":  # the walls scaled about the pin: δh = h − x h', δh' = −x h''
-            hgt = np.concatenate([hu[up], hl[down]])
             xr = x[node]
             dc = side * (hgt - xr * slope)
             dgc = -xr * curv
-        # −(∂_p∇E − Σ λ_r ∂_p∇c_r), ∂_p∇c_r = s_r ∂_p h'_r J_x[k]
-        top = -(dgrad - Jx[node].T @ (lam * side * dgc))
-        rhs_cols.append(np.concatenate([top, dc]))
+        # −(∂_p∇E − Σ λ_r ∂_p∇c_r), ∂_p∇c_r = s_r ∂_p h'_r ∇x_k
+        rhs_cols.append(-(dgrad - U @ (lam * side * dgc)))
+        dcs.append(dc)
         tags.append(p)
+    # B⁻¹ on the right-hand sides, U and Gᵀ (banded, O(N) each), then the 2m × 2m system
+    # in (w = β Uᵀ du, dλ): du = X + Z w + Q dλ
     try:
-        sol = np.linalg.solve(K, np.column_stack(rhs_cols))
+        sol = solve_banded((2, 2), ab, np.column_stack([*rhs_cols, U, Gt]),
+                           check_finite=False)
+    except (np.linalg.LinAlgError, ValueError):
+        sol = None
+    if sol is None or not np.all(np.isfinite(sol)):
+        raise ProblemError("sensitivities: the Hessian at the answer's contact set is "
+                           "singular (the contact set is not a stable one)")
+    P = len(tags)
+    X, Z, Q = sol[:, :P], sol[:, P:P + m], sol[:, P + m:]
+    bU = beta[:, None] * U.T
+    S = np.block([[np.eye(m) - bU @ Z, -bU @ Q], [Gt.T @ Z, Gt.T @ Q]])
+    R = np.vstack([bU @ X, -np.column_stack(dcs) - Gt.T @ X]) if m else np.zeros((0, P))
+    try:
+        wl = np.linalg.solve(S, R) if m else np.zeros((0, P))
     except np.linalg.LinAlgError:
         raise ProblemError("sensitivities: the KKT matrix at the answer's contact set is "
                            "singular (the contact set is not a stable one)") from None
+    dU = X + Z @ wl[:m] + Q @ wl[m:]
     out = {}
     for i, p in enumerate(tags):
-        du, dlam = sol[:n, i], sol[n:, i]
+        dlam = wl[m:, i]
         dfu, dfl = np.zeros(n), np.zeros(n)
         dfu[node[side > 0]] = dlam[side > 0]
         dfl[node[side < 0]] = dlam[side < 0]
-        out[p] = (dfu, dfl, du)
+        out[p] = (dfu, dfl, dU[:, i])
     if "length_mm" in names:
         out["length_mm"] = _length(result, scene, out, u)
-    gap_u = np.where(np.isfinite(chain.upper), hu - u, np.inf)
-    gap_l = np.where(np.isfinite(chain.lower), u - hl, np.inf)
+    gap_u, gap_l = profile_gaps(chain, alpha)
+    gap_u = np.where(np.isfinite(chain.upper), gap_u, np.inf)
+    gap_l = np.full(n, np.inf) if gap_l is None else np.where(np.isfinite(chain.lower),
+                                                               gap_l, np.inf)
     touching = (gap_u <= 1e-9 * scene.length) | (gap_l <= 1e-9 * scene.length)
     out["_one_sided"] = np.flatnonzero(touching & ~((fu > eps_R) | (fl > eps_R)))
     out["_heights"] = u
@@ -198,4 +207,4 @@ def _length(result, scene, d: dict, u: np.ndarray):
             (u + 3 * w * ah - sh) / L)
 
 
-__all__ = ["MAX_LINKS", "OF_PROFILE", "profile_derivatives"]
+__all__ = ["MAX_ROWS", "OF_PROFILE", "profile_derivatives"]
