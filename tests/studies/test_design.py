@@ -81,3 +81,12 @@ def test_the_cli_prints_the_answer_as_json_and_refuses_in_one_line():
                           "--height", "4"], capture_output=True, text=True)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1
     assert "largest total force found" in bad.stderr
+
+
+@pytest.mark.parametrize("query", ["max_force", "min_force"])
+def test_a_limit_passed_at_the_smallest_angle_is_one_clear_error(query):
+    """A wall 0.01 mm above the pins: the arc of 1° (sagitta ℓθ/8 ≈ 0.065 mm) already
+    presses it, with more than 1e-9 N."""
+    scene = ActuatorScene(theta=5.0, height=0.01, links=40, weight=0.0)
+    with pytest.raises(ProblemError, match="already .* at the smallest bend angle searched"):
+        design(scene, **{query: 1e-9})

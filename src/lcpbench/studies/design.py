@@ -120,6 +120,8 @@ class _Forward:
         self.done: dict[float, ContactResult] = {}
 
     def __call__(self, theta: float) -> tuple[float, ContactResult]:
+        if theta in self.done:
+            return self.value(self.done[theta]), self.done[theta]
         near = min(self.done, key=lambda t: abs(t - theta), default=None)
         start = self.done[near] if near is not None and self.done[near].converged else None
         res = solve(dataclasses.replace(self.scene, theta=theta), tol=self.tol, start=start)
@@ -166,7 +168,9 @@ def _crossing(scene, target: float, query: str, peak: bool, calibration, tol: fl
             (qb - target) if not upper and qb is not None else math.inf
         if near <= FORCE_RTOL * target:  # the answer's own end, within 1e-6 of F
             break
-        if b - a <= 1e-12 * max(1.0, b):
+        if b - a <= 1e-12 * max(1.0, b):  # a jump of q across F: the bracket is the answer
+            if qa is None:
+                qa, _ = q(a)
             break
         new = _next(q, aim, a, qa, b, qb)
         qn, _ = q(new)
@@ -176,11 +180,9 @@ def _crossing(scene, target: float, query: str, peak: bool, calibration, tol: fl
             b, qb = new, qn
     else:
         raise ProblemError(f"design: no answer to 1e-6 in {MAX_SOLVES} solves")
-    if upper and qa is None:  # (the bracket closed on lo, never solved)
-        qa, _ = q(a)
-        if qa > target:
-            raise ProblemError(f"{query} {target:g} {unit}: the {what} is already {qb:.6g} "
-                               f"{unit} at the smallest bend angle searched, {lo:g} deg")
+    if qa is not None and qa > target:  # (the bracket closed on lo: q(lo) > F)
+        raise ProblemError(f"{query} {target:g} {unit}: the {what} is already {qa:.6g} "
+                           f"{unit} at the smallest bend angle searched, {lo:g} deg")
     theta = a if query == "max_force" else b
     res = q.done[theta]
     step = BEYOND_DEG if query == "max_force" else -BEYOND_DEG
@@ -191,13 +193,16 @@ def _crossing(scene, target: float, query: str, peak: bool, calibration, tol: fl
 def _next(q, aim: float, a: float, qa, b: float, qb) -> float:
     """The next θ inside (a, b): a Newton step (dq/dθ from the sensitivities) from the
     solved end nearest the target whose slope is positive, where it lands strictly
-    inside; else the secant through both ends; else the bracket's midpoint."""
+    inside (where it lands beyond a not yet solved: a itself); else the secant through
+    both ends; else the bracket's midpoint."""
     ends = sorted(((abs(v - aim), t, v) for t, v in ((a, qa), (b, qb)) if v is not None))
     for _, t, v in ends:
         slope = q.slope(q.done[t])
         new = t - (v - aim) / slope if slope > 0 else math.nan
         if math.isfinite(new) and a < new < b:
             return new
+        if qa is None and math.isfinite(new) and new <= a:  # beyond the unsolved end
+            return a
         if v > 0:  # a slope at a contact point that overshoots: the secant next
             break
     if qa is not None and qb is not None and qb > qa:
