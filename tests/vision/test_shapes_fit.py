@@ -108,9 +108,11 @@ def test_the_cli_reads_vision_measure_json_and_fits(tmp_path):
     rows += [(pressed_shape(P, rng, 0.0), P, 4.0) for P in (150, 170)]
     path = _write(tmp_path, rows)
     assert len(read_shapes(path)) == 5
+    plot = tmp_path / "fit.png"
     run = subprocess.run([sys.executable, "-m", "lcpbench.cli", "fit", "--shapes", str(path),
-                          "--height", "4", "--channel", "--weight", str(W), "--json"],
-                         capture_output=True, text=True, check=True)
+                          "--height", "4", "--channel", "--weight", str(W), "--json",
+                          "--plot", str(plot)], capture_output=True, text=True, check=True)
+    assert plot.stat().st_size > 10_000
     got = json.loads(run.stdout)
     assert got["slope"] == pytest.approx(SLOPE, rel=1e-9)
     assert got["EI"] == pytest.approx(EI, rel=1e-5)

@@ -82,6 +82,8 @@ def cmd_fit(args) -> int:
     print(f"residuals      rms {1e3 * rms:.4g} mN over {P.size} points; largest "
           f"{1e3 * float(np.max(np.abs(got.residuals))):.4g} mN")
     print(f"solves         {got.solves} ({got.iterations} Gauss-Newton iterations)")
+    if args.plot is not None:
+        print(f"plot           {args.plot}")
     return 0
 
 
@@ -119,14 +121,18 @@ def _fit_shapes(args) -> int:
     """``fit --shapes``: the line from the free shapes, EI from the pressed ones."""
     from ..vision.shapes_fit import fit_shapes, read_shapes
 
-    if args.fit_theta or args.plot is not None:
+    if args.fit_theta:
         raise ProblemError("--shapes fits the theta(P) line from the free shapes itself; "
-                           "--fit-theta and --plot go with --data")
+                           "--fit-theta goes with --data")
     shapes = read_shapes(args.shapes)
     cal = calibration_from(args)
     args.fit = None
     scene = scene_from(args)
     got = fit_shapes(scene, shapes, cal, tol=args.tol)
+    if args.plot is not None:
+        from ..vision.plots import plot_shape_fit
+
+        plot_shape_fit(args.plot, shapes, got)
     if args.json:
         print_json(got.as_json())
         return 0
@@ -146,4 +152,6 @@ def _fit_shapes(args) -> int:
               "+-25 %): a pressed shape depends on EI only through w l^3/EI")
     print(f"residuals      rms {1e3 * got.rms_mm:.4g} um over {got.points} points")
     print(f"solves         {got.solves} ({got.iterations} Gauss-Newton iterations)")
+    if args.plot is not None:
+        print(f"plot           {args.plot}")
     return 0

@@ -83,10 +83,13 @@ class ShapeFit:
     pressed: int
     iterations: int
     solves: int
+    #: per pressed shape (x of its points in mm, their residuals in mm, ∂residual/∂ln EI),
+    #: the points used: for the plot (not in the JSON)
+    shape_residuals: list = dataclasses.field(default_factory=list, repr=False)
 
     def as_json(self) -> dict:
         return {k: (list(v) if isinstance(v, tuple) else v)
-                for k, v in dataclasses.asdict(self).items()}
+                for k, v in dataclasses.asdict(self).items() if k != "shape_residuals"}
 
 
 def section_points(meas: dict, where: str = "shape") -> tuple[np.ndarray, float]:
@@ -234,8 +237,11 @@ def _fit_EI(scene, pressed, slope, intercept, cov_line, tol, out: ShapeFit) -> N
     S = len(pressed)
     frames = np.zeros((S, 3))  # (shift x, shift y, turn) of each shape's points
 
+    xs: list = []
+
     def residual(EI, frames):  # signed normal distances to the model's centre line
         got = model(EI)
+        xs.clear()
         r, J, T = [], [], []
         cols = 1 + 3 * S
         for i, (sh, (nodes, d_ei, d_th)) in enumerate(zip(pressed, got, strict=True)):
@@ -246,6 +252,7 @@ def _fit_EI(scene, pressed, slope, intercept, cov_line, tol, out: ShapeFit) -> N
             # (the measured inflection points are uncertain along the curve): left out
             n = n * ((k > 0) & (k < nodes.shape[0] - 2))[:, None]
             r.append(np.einsum("ij,ij->i", n, _interp(nodes, k, w) - p))
+            xs.append(p[:, 0])
             block = np.zeros((p.shape[0], cols))
             block[:, 0] = np.einsum("ij,ij->i", n, _interp(d_ei, k, w))
             block[:, 1 + 3 * i] = -n[:, 0]
@@ -259,6 +266,7 @@ def _fit_EI(scene, pressed, slope, intercept, cov_line, tol, out: ShapeFit) -> N
 
     z = math.log(scene.EI)
     r, J, Jt = residual(scene.EI, frames)
+    xs_at = list(xs)  # (the points' x of the state accepted last)
     for it in range(1, MAX_ITER + 1):
         out.iterations = it
         step, *_ = np.linalg.lstsq(J, -r, rcond=None)
@@ -273,11 +281,15 @@ def _fit_EI(scene, pressed, slope, intercept, cov_line, tol, out: ShapeFit) -> N
                 z, frames, r, J, Jt, moved = (z + t * step[0],
                                               frames + t * step[1:].reshape(S, 3), r2, J2,
                                               Jt2, True)
+                xs_at = list(xs)
                 break
             t *= 0.5
         if not moved or abs(t * step[0]) <= STEP_TOL:
             break
     used = np.any(J != 0.0, axis=1)  # (the points left out have zero rows)
+    ends = np.cumsum([0] + [x.size for x in xs_at])
+    out.shape_residuals = [(xs_at[i][used[a:b]], r[a:b][used[a:b]], J[a:b, 0][used[a:b]])
+                           for i, (a, b) in enumerate(zip(ends[:-1], ends[1:], strict=True))]
     r, J, Jt = r[used], J[used], Jt[used]
     m, k = r.size, J.shape[1]
     dof = max(m - k, 1)
