@@ -96,10 +96,13 @@ def design(scene: ActuatorScene, *, max_force: float | None = None,
     if len(asked) != 1:
         raise ProblemError("design needs exactly one of max_force, min_force or touch; got "
                            + (", ".join(asked) if asked else "none"))
-    if not (isinstance(scene, ActuatorScene) and scene.wall_profile is None):
-        what = "a wall profile" if isinstance(scene, ActuatorScene) else type(scene).__name__
-        raise ProblemError(f"design covers actuator scenes with flat walls (one wall or a "
-                           f"channel, rigid or elastic); got {what}")
+    if not isinstance(scene, ActuatorScene):
+        raise ProblemError(f"design covers actuator scenes (flat walls, one wall or a "
+                           f"channel, rigid or elastic, or a wall profile); got "
+                           f"{type(scene).__name__}")
+    if touch and scene.wall_profile is not None:
+        raise ProblemError("design --touch finds the height of a flat wall; this scene has "
+                           "a wall profile (its max_force and min_force queries are covered)")
     tol = check_tol(tol)
     if touch:
         return _touch(scene, tol, calibration)
