@@ -8,9 +8,10 @@ of sensitivities and inverse queries.
    each parameter, the total force's derivative against the central difference of two
    solves (relative step 1e-4, started from the answer), kept only where both keep
    the centre's contact set (away from a change of it).
-2. At N = 140 (θ = 150°, h = 3 mm, tol 1e-10), interleaved: ``lcpbench.solve``,
-   ``sensitivities`` (all parameters, and θ alone); and ``lcpbench.design`` max-force
-   queries (forward solves and wall time).
+2. At N = 140 (θ = 150°, h = 3 mm, tol 1e-10; a row of two sections in a channel; a
+   stenosis, a wall profile), interleaved: ``lcpbench.solve``, ``sensitivities`` (all
+   parameters, and the first alone); and ``lcpbench.design`` queries (forward solves
+   and wall time).
 4. The design answers' force error and the force 0.01° beyond.
 
 Writes ``results/design-targets.md`` (``--out``; not overwritten without ``--force``).
@@ -36,9 +37,10 @@ import numpy as np
 from perf import interleaved, wall  # (benchmarks/ is the script's directory)
 
 import lcpbench
-from lcpbench import ActuatorScene
+from lcpbench import ActuatorScene, SectionedScene
 from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
 from lcpbench.model.sensitivity import sensitivities
+from lcpbench.problems.walls import WallProfile
 from lcpbench.studies.design import design
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -107,18 +109,123 @@ def target1(n_scenes: int, seed: int) -> tuple[list[str], dict]:
                    "scaled_max": float(e[:, 1].max())}
 
 
+def _moved(scene, p, d):
+    """``scene`` with parameter ``p`` moved by ``d``: a row of sections' θ_k, EI_k, w_k
+    (``name[k]``), its height or every length scaled (``length_mm``); a profiled wall's
+    ``height_mm`` by the profile moved up by d (no channel here)."""
+    if isinstance(scene, SectionedScene):
+        secs = list(scene.sections)
+        if p == "height_mm":
+            return dataclasses.replace(scene, height=scene.height + d)
+        if p == "length_mm":
+            f = 1 + d / scene.length
+            return dataclasses.replace(scene, length=None, sections=[
+                dataclasses.replace(x, length=x.length * f) for x in secs])
+        name, k = p.split("[")
+        attr = {"theta_deg": "theta", "EI": "EI", "weight": "weight"}[name]
+        k = int(k[:-1])
+        secs[k] = dataclasses.replace(secs[k], **{attr: getattr(secs[k], attr) + d})
+        return dataclasses.replace(scene, sections=secs)
+    if p == "height_mm":
+        w = scene.wall_profile
+        return dataclasses.replace(scene, wall_profile=WallProfile.from_function(
+            lambda x: w(x) + d, w.slope, w.curvature, x_range=w.x_range))
+    return dataclasses.replace(scene, **{ATTR[p]: getattr(scene, ATTR[p]) + d})
+
+
+def _size(scene, p):
+    if isinstance(scene, SectionedScene) and "[" in p:
+        name, k = p.split("[")
+        return getattr(scene.sections[int(k[:-1])],
+                       {"theta_deg": "theta", "EI": "EI", "weight": "weight"}[name])
+    if p == "height_mm" and getattr(scene, "wall_profile", None) is not None:
+        return 3.0
+    return getattr(scene, ATTR[p])
+
+
+def target1_more(n_scenes: int, seed: int) -> tuple[list[str], dict]:
+    """Rows of sections and walls of any profile: random scenes, every parameter against
+    central differences (relative step 1e-4, the weights 1e-2), tol 1e-11."""
+    rng = np.random.default_rng(seed + 1)
+    rows, kept, tried, skipped = [], {"sections": 0, "profile": 0}, 0, 0
+    while min(kept.values()) < n_scenes and tried < 20 * n_scenes:
+        tried += 1
+        if kept["sections"] <= kept["profile"]:
+            kind = "sections"
+            k = int(rng.choice([2, 3]))
+            secs = [(float(rng.uniform(90, 170) * rng.choice([1, -1] if kk else [1])),
+                     30.0 / k, float(rng.uniform(20, 50)), 2.45e-4 * float(rng.choice([1, 5])))
+                    for kk in range(k)]
+            scene = SectionedScene(sections=secs, height=float(rng.uniform(1.0, 4.0)),
+                                   links=60 * k // 2 * 2, channel=bool(rng.random() < 0.5))
+        else:
+            kind = "profile"
+            depth, centre = float(rng.uniform(0.2, 1.0)), float(rng.uniform(8, 22))
+            width, h0 = float(rng.uniform(2, 6)), float(rng.uniform(2.5, 4.5))
+            wall = WallProfile.from_function(
+                lambda x, h0=h0, d=depth, c=centre, w=width: h0 - d * np.exp(-((x - c) / w) ** 2),
+                lambda x, d=depth, c=centre, w=width: 2 * d * (x - c) / w**2
+                * np.exp(-((x - c) / w) ** 2), x_range=(-5.0, 40.0), name="bump")
+            scene = ActuatorScene(theta=float(rng.uniform(120, 175)), links=int(rng.choice(
+                [60, 140])), wall_profile=wall, weight=2.45e-4 * float(rng.choice([1, 5])))
+        res = lcpbench.solve(scene, tol=1e-11)
+        if not res.converged or res.total_force <= 0:
+            continue
+        sens = sensitivities(res)
+        if sens.one_sided.size:
+            continue
+        kept[kind] += 1
+        for p in sens.wrt:
+            d = (1e-2 if p.startswith("weight") else 1e-4) * abs(_size(scene, p))
+            start = None if p == "length_mm" else res
+            up = lcpbench.solve(_moved(scene, p, d), tol=1e-11, start=start)
+            dn = lcpbench.solve(_moved(scene, p, -d), tol=1e-11, start=start)
+            if not (up.converged and dn.converged) or _contacts(up) != _contacts(res) \
+                    or _contacts(dn) != _contacts(res):
+                skipped += 1
+                continue
+            fd = (up.total_force - dn.total_force) / (2 * d)
+            err = abs(sens.total_force[p] - fd) / abs(fd) if fd else np.inf
+            rows.append((kind, p.split("[")[0], err))
+    lines = ["| scenes | parameter | pairs | median relative difference | within 1e-6 | "
+             "largest |", "|---|---|---:|---:|---:|---:|"]
+    for kind in ("sections", "profile"):
+        for name in dict.fromkeys(r[1] for r in rows if r[0] == kind):
+            e = np.array([r[2] for r in rows if r[0] == kind and r[1] == name])
+            lines.append(f"| {kind} | {name} | {e.size} | {np.median(e):.1e} | "
+                         f"{np.mean(e <= 1e-6):.0%} | {e.max():.1e} |")
+    e = np.array([r[2] for r in rows])
+    return lines, {"kept": kept, "tried": tried, "skipped": skipped, "pairs": e.size,
+                   "within": float(np.mean(e <= 1e-6)), "median": float(np.median(e))}
+
+
+#: the scenes of target 2 (N = 140): the paper's, a row of two sections, a stenosis
+STENOSIS = WallProfile.from_function(
+    lambda x: 3.0 - 0.8 * np.exp(-((x - 14.0) / 3.0) ** 2),
+    lambda x: 1.6 * (x - 14.0) / 9.0 * np.exp(-((x - 14.0) / 3.0) ** 2), name="stenosis")
+COST_SCENES = {
+    "one wall": ActuatorScene(theta=150, height=3.0, links=140),
+    "two sections, channel": SectionedScene(sections=[(150.0, 15.0), (-150.0, 15.0)],
+                                            height=1.0, links=140, channel=True),
+    "wall profile (stenosis)": ActuatorScene(theta=150, links=140, wall_profile=STENOSIS),
+}
+
+
 def target2(rounds: int) -> list[str]:
-    scene = ActuatorScene(theta=150, height=3.0, links=140)
-    res = lcpbench.solve(scene, tol=1e-10)
-    calls = {"lcpbench.solve (tol 1e-10)": lambda: lcpbench.solve(scene, tol=1e-10),
-             "sensitivities, all parameters": lambda: sensitivities(res),
-             "sensitivities, theta alone": lambda: sensitivities(res, wrt=("theta_deg",))}
-    times = {name: g["times"] for name, g in interleaved(
-        {name: wall(call) for name, call in calls.items()}, rounds).items()}
-    base = float(np.median(times["lcpbench.solve (tol 1e-10)"]))
-    lines = ["| call | median (ms) | × the solve |", "|---|---:|---:|"]
-    for name, t in times.items():
-        lines.append(f"| {name} | {1e3 * np.median(t):.3f} | {np.median(t) / base:.2f} |")
+    lines = ["| scene | call | median (ms) | × its solve |", "|---|---|---:|---:|"]
+    for label, scene in COST_SCENES.items():
+        res = lcpbench.solve(scene, tol=1e-10)
+        first = sensitivities(res).wrt[0]
+        calls = {"lcpbench.solve (tol 1e-10)": lambda sc=scene: lcpbench.solve(sc, tol=1e-10),
+                 "sensitivities, all parameters": lambda r=res: sensitivities(r),
+                 f"sensitivities, {first} alone": lambda r=res, p=first: sensitivities(
+                     r, wrt=(p,))}
+        times = {name: g["times"] for name, g in interleaved(
+            {name: wall(call) for name, call in calls.items()}, rounds).items()}
+        base = float(np.median(times["lcpbench.solve (tol 1e-10)"]))
+        for name, t in times.items():
+            lines.append(f"| {label} | {name} | {1e3 * np.median(t):.3f} | "
+                         f"{np.median(t) / base:.2f} |")
     return lines
 
 
@@ -145,6 +252,8 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--scenes", type=int, default=200)
     p.add_argument("--seed", type=int, default=38)
+    p.add_argument("--more", type=int, default=40,
+                   help="random rows of sections and profiled scenes, each")
     p.add_argument("--rounds", type=int, default=31)
     p.add_argument("--out", type=Path, default=ROOT / "results" / "design-targets.md")
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
@@ -152,13 +261,14 @@ def main(argv=None) -> int:
     refuse_overwrite([a.out], a.force)
     start = timing_start()
     t1, s1 = target1(a.scenes, a.seed)
+    t1b, s1b = target1_more(a.more, a.seed)
     t2 = target2(a.rounds)
     t4 = design_rows(max(3, a.rounds // 5))
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     text = "\n".join([
         "# Sensitivities and inverse queries (issue 38, targets 1, 2 and 4)", "",
         f"Measured {when}; {timing_note(start)} Command: `python benchmarks/design_targets.py "
-        f"--scenes {a.scenes} --seed {a.seed} --rounds {a.rounds} --force`.", "",
+        f"--scenes {a.scenes} --seed {a.seed} --more {a.more} --rounds {a.rounds} --force`.", "",
         "## Target 1: sensitivities against central differences", "",
         f"{s1['kept']} random scenes with a stable contact set (of {s1['tried']} drawn; the "
         "rest touch no wall, do not converge at tol 1e-11 or have a node at a change of "
@@ -174,6 +284,14 @@ def main(argv=None) -> int:
         "that error is larger than 1e-6 of it, and the differences move by as much "
         "between δ = 1e-4, 1e-3 and 1e-2 as they differ from the implicit one; they bound "
         "the error from above.", "", *t1, "",
+        f"Rows of sections ({s1b['kept']['sections']}: 2 or 3 sections, θ_k in ±[90°, "
+        "170°], EI_k in [20, 50] N mm², w 1× or 5×, h in [1, 4] mm, a channel in half) and "
+        f"walls of any profile ({s1b['kept']['profile']}: a Gaussian narrowing of random "
+        "depth, centre and width, θ in [120°, 175°], N 60 or 140), drawn from seed + 1 "
+        f"({s1b['tried']} drawn), {s1b['pairs']} pairs ({s1b['skipped']} dropped where a "
+        "moved scene changed its contact set); central differences with relative steps "
+        f"1e-4 (weights 1e-2): median {s1b['median']:.1e}, {s1b['within']:.1%} within 1e-6.",
+        "", *t1b, "",
         "## Target 2: cost", "", *t2, "",
         "## Targets 2 and 4: inverse queries (θ from 150°, h = 4 mm, N = 140)", "", *t4, ""])
     a.out.write_text(text)

@@ -88,6 +88,81 @@ def test_the_EI_derivative_satisfies_dimensional_analysis(scene, tol):
     assert scene.EI * s.total_force["EI"] == pytest.approx(rhs, rel=1e-9)
 
 
+def _rows_moved(scene, p, d):
+    """``scene`` (a row of sections) with parameter ``p`` moved by ``d``: θ, EI or w of
+    one section, the wall height, or every section's length scaled (ℓ by d)."""
+    secs = list(scene.sections)
+    if p == "height_mm":
+        return dataclasses.replace(scene, height=scene.height + d)
+    if p == "length_mm":
+        f = 1 + d / scene.length
+        return dataclasses.replace(scene, length=None, sections=[
+            dataclasses.replace(s, length=s.length * f) for s in secs])
+    name, k = p.split("[")
+    k, attr = int(k[:-1]), {"theta_deg": "theta", "EI": "EI", "weight": "weight"}[name]
+    secs[k] = dataclasses.replace(secs[k], **{attr: getattr(secs[k], attr) + d})
+    return dataclasses.replace(scene, sections=secs)
+
+
+def _rows_value(scene, p):
+    if p in ("height_mm", "length_mm"):
+        return scene.height if p == "height_mm" else scene.length
+    name, k = p.split("[")
+    return getattr(scene.sections[int(k[:-1])],
+                   {"theta_deg": "theta", "EI": "EI", "weight": "weight"}[name])
+
+
+ROWS = [
+    pytest.param(SectionedScene(sections=[(150.0, 15.0, 30.0), (120.0, 15.0, 40.0, 5e-4)],
+                                height=2.0, links=60), id="two-sections-one-wall"),
+    pytest.param(SectionedScene(sections=[(150.0, 15.0), (-150.0, 15.0)], height=1.0,
+                                links=80, channel=True), id="s-shape-channel"),
+    pytest.param(SectionedScene(sections=[(100.0, 10.0, 20.0), (160.0, 10.0), (90.0, 10.0,
+                                                                             50.0)],
+                                height=2.5, links=60, channel=True), id="three-sections"),
+]
+
+
+@pytest.mark.parametrize("scene", ROWS)
+def test_rows_of_sections_follow_the_central_differences(scene):
+    """Every parameter of a row (θ, EI, w per section; h; all lengths scaled): the total
+    force, the per-node forces on both walls and the heights against central differences
+    of independent solves at tol 1e-12 (relative step 1e-5; 1e-3 for a weight)."""
+    res = lcpbench.solve(scene, tol=1e-12)
+    assert res.converged, res.reason
+    s = sensitivities(res)
+    assert s.one_sided.size == 0
+    free = scene.chain().free_nodes
+    lower = (lambda r: r.forces_lower) if scene.channel else (lambda r: np.zeros_like(r.forces))
+    for p in s.wrt:
+        d = (1e-3 if p.startswith("weight") else 1e-5) * abs(_rows_value(scene, p))
+        start = None if p == "length_mm" else res
+        up = lcpbench.solve(_rows_moved(scene, p, d), tol=1e-12, start=start)
+        dn = lcpbench.solve(_rows_moved(scene, p, -d), tol=1e-12, start=start)
+        assert up.converged and dn.converged
+        fd = (up.total_force - dn.total_force) / (2 * d)
+        assert s.total_force[p] == pytest.approx(fd, rel=1e-6, abs=1e-9 * res.total_force), p
+        dF = (up.forces - dn.forces) / (2 * d)
+        dL = (lower(up) - lower(dn)) / (2 * d)
+        dy = (np.asarray(up.y)[free] - np.asarray(dn.y)[free]) / (2 * d)
+        scale = max(np.max(np.abs(dF)), np.max(np.abs(dL)))
+        assert np.max(np.abs(s.forces[p] - dF)) <= 1e-5 * scale, p
+        if scene.channel:
+            assert np.max(np.abs(s.forces_lower[p] - dL)) <= 1e-5 * scale, p
+        assert np.max(np.abs(s.heights[p] - dy)) <= 1e-5 * np.max(np.abs(dy)), p
+
+
+def test_one_section_row_is_the_actuator():
+    """A row of one section is ActuatorScene's chain: the same derivatives by name."""
+    one = lcpbench.solve(SectionedScene(sections=[(150.0, 30.0)], height=3.0, links=60),
+                         tol=1e-12)
+    act = lcpbench.solve(ActuatorScene(theta=150, height=3.0, links=60), tol=1e-12)
+    a, b = sensitivities(one), sensitivities(act)
+    for row, flat in (("theta_deg[0]", "theta_deg"), ("EI[0]", "EI"), ("weight[0]", "weight"),
+                      ("height_mm", "height_mm"), ("length_mm", "length_mm")):
+        assert a.total_force[row] == pytest.approx(b.total_force[flat], rel=1e-9), row
+
+
 def test_a_chain_off_the_wall_has_no_force_to_move():
     res = lcpbench.solve(ActuatorScene(theta=40, height=6.0, links=30), tol=1e-10)
     assert res.converged and res.total_force == 0.0
@@ -103,8 +178,8 @@ def test_refusals_name_the_problem():
         sensitivities(paper, wrt=("wall_stiffness",))  # a rigid wall has none
     rows = lcpbench.solve(SectionedScene(sections=[(150.0, 15.0), (-150.0, 15.0)],
                                          height=3.0, links=40))
-    with pytest.raises(ProblemError, match="SectionedScene"):
-        sensitivities(rows)
+    with pytest.raises(ProblemError, match=r"theta_deg\[0\]"):
+        sensitivities(rows, wrt=("theta_deg",))  # a row has one θ per section
     stopped = lcpbench.solve(ActuatorScene(theta=150, height=3.0, links=40), max_outer=1,
                              tol=1e-12)
     assert not stopped.converged
@@ -112,7 +187,7 @@ def test_refusals_name_the_problem():
         sensitivities(stopped)
 
 
-def test_the_cli_adds_them_to_the_json_and_refuses_sections():
+def test_the_cli_adds_them_to_the_json_for_a_row_of_sections():
     import json
 
     run = subprocess.run([sys.executable, "-m", "lcpbench.cli", "solve", "--theta", "150",
@@ -122,10 +197,13 @@ def test_the_cli_adds_them_to_the_json_and_refuses_sections():
     assert set(got["total_force"]) == {"theta_deg", "height_mm", "EI", "weight", "length_mm"}
     assert got["units"]["height_mm"] == "mm"
     assert got["total_force"]["height_mm"] < 0  # a higher wall is pressed less
-    bad = subprocess.run([sys.executable, "-m", "lcpbench.cli", "solve", "--sections",
-                          "150:15,-150:15", "--height", "3", "--sensitivities"],
-                         capture_output=True, text=True)
-    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "sensitivities" in bad.stderr
+    run = subprocess.run([sys.executable, "-m", "lcpbench.cli", "solve", "--sections",
+                          "150:15,-150:15", "--height", "1", "--channel", "--links", "40",
+                          "--json", "--sensitivities"], capture_output=True, text=True,
+                         check=True)
+    got = json.loads(run.stdout)["sensitivities"]
+    assert got["units"]["EI[1]"] == "N mm²" and got["units"]["theta_deg[0]"] == "deg"
+    assert len(got["forces_lower"]["theta_deg[1]"]) == 39
 
 
 def test_at_first_touch_the_derivative_is_one_sided_and_listed():

@@ -81,3 +81,34 @@ def test_the_cli_prints_the_answer_as_json_and_refuses_in_one_line():
                           "--height", "4"], capture_output=True, text=True)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1
     assert "largest total force found" in bad.stderr
+
+
+@pytest.mark.parametrize("query", ["max_force", "min_force"])
+def test_a_limit_passed_at_the_smallest_angle_is_one_clear_error(query):
+    """A wall 0.01 mm above the pins: the arc of 1° (sagitta ℓθ/8 ≈ 0.065 mm) already
+    presses it, with more than 1e-9 N."""
+    scene = ActuatorScene(theta=5.0, height=0.01, links=40, weight=0.0)
+    with pytest.raises(ProblemError, match="already .* at the smallest bend angle searched"):
+        design(scene, **{query: 1e-9})
+
+
+def test_max_force_against_a_wall_profile():
+    """A stenosis (a Gaussian narrowing): the answer checked by independent cold solves
+    at it and 0.01° beyond, as on a flat wall."""
+    import numpy as np
+
+    from lcpbench.problems.walls import WallProfile
+
+    wall = WallProfile.from_function(lambda x: 3.0 - 0.8 * np.exp(-((x - 14.0) / 3.0) ** 2),
+                                     x_range=(-5.0, 40.0), name="stenosis")
+    scene = ActuatorScene(theta=150, links=60, wall_profile=wall)
+    got = design(scene, max_force=0.2)
+    assert got.solves <= 10
+    at = lcpbench.solve(ActuatorScene(theta=got.theta_deg, links=60, wall_profile=wall),
+                        tol=1e-10)
+    assert 0.2 * (1 - 1e-6) <= at.total_force <= 0.2 * (1 + 1e-9)
+    past = lcpbench.solve(ActuatorScene(theta=got.theta_deg + 0.01, links=60,
+                                        wall_profile=wall), tol=1e-10)
+    assert past.total_force > 0.2
+    with pytest.raises(ProblemError, match="touch.*flat wall"):
+        design(scene, touch=True)

@@ -13,7 +13,13 @@ from __future__ import annotations
 
 from ..errors import ProblemError
 from ._common import add_json_option, print_json
-from ._scene_args import add_scene_options, add_wall_options, calibration_from, scene_from
+from ._scene_args import (
+    add_profile_options,
+    add_scene_options,
+    add_wall_options,
+    calibration_from,
+    scene_from,
+)
 
 
 def register(subparsers) -> None:
@@ -27,6 +33,7 @@ def register(subparsers) -> None:
                     "forward solve; the output says how many solves it took.")
     add_scene_options(d)
     add_wall_options(d)
+    add_profile_options(d)
     d.add_argument("--tol", type=float, default=1e-10, metavar="RAD",
                    help="convergence threshold of each forward solve, rad (default 1e-10: "
                         "the answer's force to 1e-6 needs forces to better than that)")

@@ -266,7 +266,7 @@ def _not_a_directory(option: str, path: str, example: str) -> None:
 
 def cmd_solve(args) -> int:
     """``lcpbench solve``: 0 converged, 1 not converged, 2 bad input or plot error."""
-    from ..model.sensitivity import PARAMETERS, sensitivities, unsupported
+    from ..model.sensitivity import sensitivities, unit, unsupported
 
     if args.plot is not None and not has_matplotlib():
         error_line("--plot needs matplotlib: pip install 'lcpbench[plot]'")
@@ -306,7 +306,7 @@ def cmd_solve(args) -> int:
         extra = [("plot", args.plot)] if args.plot is not None and plot_error is None else []
         if sens is not None:
             extra.append(("dF/dp", ", ".join(
-                f"{v:.4g} N per {PARAMETERS[p]} ({p})" for p, v in sens.total_force.items())))
+                f"{v:.4g} N per {unit(p)} ({p})" for p, v in sens.total_force.items())))
         print(summary(result, extra))
     if plot_error is not None:  # the result is printed all the same
         error_line(plot_error)

@@ -26,10 +26,15 @@ kℓ⁴/EI), so ℓ ∂F/∂ℓ = −2F − h F_h + 3w F_w + 4k F_k (a height: u
 Where a node is at a change of contact set (reaction at most ε_R and gap at most
 the judge's penetration allowance: touching without force) the derivative is
 one-sided: it is taken with that node free (the side where it leaves the wall), and
-``one_sided`` lists the node. Actuator scenes with flat walls (one wall or a
-channel, rigid or elastic) and the cantilever of Sec. III-G (its load q in N/mm in
-place of θ and w: ``load``) are covered; sections and wall profiles are refused
-with a ProblemError.
+``one_sided`` lists the node. Covered: actuator scenes with flat walls (one wall or
+a channel, rigid or elastic), the cantilever of Sec. III-G (its load q in N/mm in
+place of θ and w: ``load``) and rows of sections (:class:`SectionedScene`: per
+section k ``theta_deg[k]``, ``EI[k]``, ``weight[k]``; a joint on a boundary has the
+series spring 2 EI_l EI_r / (a (EI_l + EI_r)) and the rest angle of both halves, so
+∂k/∂EI_l = 2 EI_r² / (a (EI_l + EI_r)²) and ∂φ*/∂θ_k = −1/(2 n_k) there; ``length_mm``
+scales every section's length together: ℓ ∂F/∂ℓ = −2F − h F_h + 3 Σ_k w_k F_{w_k}).
+Walls of any profile (``height_mm``: both walls moved apart): a dense KKT solve,
+:mod:`lcpbench.model.sensitivity_profile`.
 """
 
 from __future__ import annotations
@@ -41,17 +46,38 @@ import numpy as np
 
 from ..errors import ProblemError
 from ..problems.scenes import ActuatorScene, CantileverScene, wall_share
+from ..problems.sections import SectionedScene
 from ..thresholds import NODE_SHARE
-from .chain import heights
 from .judge import force_tol
+from .sensitivity_profile import OF_PROFILE, profile_derivatives
 
 #: the parameters (and their units) a sensitivity is taken with respect to
 PARAMETERS = {"theta_deg": "deg", "height_mm": "mm", "EI": "N mm²", "weight": "N/mm",
               "length_mm": "mm", "wall_stiffness": "N/mm²", "load": "N/mm"}
-#: the parameters of each scene kind covered
+#: the parameters of each scene kind covered (a row of sections: one θ, EI and w per
+#: section, ``theta_deg[k]``, …, see :func:`parameters`)
 OF_SCENE = {ActuatorScene: ("theta_deg", "height_mm", "EI", "weight", "length_mm",
                             "wall_stiffness"),
             CantileverScene: ("height_mm", "EI", "load", "length_mm", "wall_stiffness")}
+PER_SECTION = ("theta_deg", "EI", "weight")
+
+
+def unit(name: str) -> str:
+    """The unit of parameter ``name`` (a per-section name ``EI[1]`` has EI's)."""
+    return PARAMETERS[name.split("[", 1)[0]]
+
+
+def parameters(scene) -> tuple[str, ...]:
+    """The parameters :func:`sensitivities` covers for ``scene`` (all that apply)."""
+    if isinstance(scene, SectionedScene):
+        m = len(scene.sections)
+        return (*(f"theta_deg[{i}]" for i in range(m)), "height_mm",
+                *(f"EI[{i}]" for i in range(m)), *(f"weight[{i}]" for i in range(m)),
+                "length_mm")
+    if getattr(scene, "wall_profile", None) is not None:
+        return OF_PROFILE
+    elastic = not math.isinf(scene.wall_stiffness)
+    return tuple(p for p in OF_SCENE[type(scene)] if elastic or p != "wall_stiffness")
 
 
 @dataclass
@@ -80,7 +106,7 @@ class Sensitivities:
         out = {"total_force": dict(self.total_force), "peak_pressure": dict(self.peak_pressure),
                "forces": {k: v.tolist() for k, v in self.forces.items()},
                "heights": {k: v.tolist() for k, v in self.heights.items()},
-               "units": {k: PARAMETERS[k] for k in self.wrt},
+               "units": {k: unit(k) for k in self.wrt},
                "one_sided_nodes": self.one_sided.tolist()}
         if self.forces_lower is not None:
             out["forces_lower"] = {k: v.tolist() for k, v in self.forces_lower.items()}
@@ -89,12 +115,11 @@ class Sensitivities:
 
 def unsupported(scene) -> str | None:
     """Why :func:`sensitivities` does not cover ``scene``, or None."""
-    if isinstance(scene, CantileverScene) or (isinstance(scene, ActuatorScene)
-                                              and scene.wall_profile is None):
+    if isinstance(scene, (CantileverScene, SectionedScene, ActuatorScene)):
         return None
-    what = "a wall profile" if isinstance(scene, ActuatorScene) else type(scene).__name__
-    return ("sensitivities cover actuator scenes with flat walls (one wall or a channel, "
-            f"rigid or elastic) and the cantilever; got {what}")
+    return ("sensitivities cover actuator scenes (flat walls, one wall or a channel, rigid "
+            "or elastic, or walls of any profile), rows of sections and the cantilever; got "
+            f"{type(scene).__name__}")
 
 
 def sensitivities(result, wrt=None) -> Sensitivities:
@@ -108,16 +133,18 @@ def sensitivities(result, wrt=None) -> Sensitivities:
     if not result.converged:
         raise ProblemError("sensitivities need a converged result (result.converged is False: "
                            f"{result.reason})")
-    elastic = not math.isinf(scene.wall_stiffness)
-    own = tuple(p for p in OF_SCENE[type(scene)] if elastic or p != "wall_stiffness")
+    elastic = not math.isinf(getattr(scene, "wall_stiffness", math.inf))
+    own = parameters(scene)
     names = own if wrt is None else tuple(wrt)
     for p in names:
         if p not in own:
             raise ProblemError(f"wrt must name parameters among {', '.join(own)}; got {p!r}")
-    load = "load" if isinstance(scene, CantileverScene) else "weight"
+    if getattr(scene, "wall_profile", None) is not None:
+        d = profile_derivatives(result, scene, set(names), _contact_threshold(result, scene))
+        return _collect(result, scene, names, d)
     need = {p for p in names if p != "length_mm"}
     if "length_mm" in names:  # from the others, by dimensional analysis
-        need |= {"height_mm", load} | ({"wall_stiffness"} if elastic else set())
+        need |= {"height_mm", *_loads(scene)} | ({"wall_stiffness"} if elastic else set())
     d = _derivatives(result, scene, need, elastic)
     if "length_mm" in names:
         d["length_mm"] = _by_dimensions(result, scene, d, elastic)
@@ -138,35 +165,20 @@ def _derivatives(result, scene, names: set, elastic: bool) -> dict:
     fu = np.ascontiguousarray(result.forces, dtype=float)
     fl = np.zeros(n) if result.forces_lower is None else \
         np.ascontiguousarray(result.forces_lower, dtype=float)
-    # the judge's contact threshold ε_R = NODE_SHARE τ F₀ (model.judge.judge), without
-    # building a lazy result's judgement
-    F0 = max(abs(float(fu.sum())), abs(float(fl.sum())), float(chain.force_scale))
-    eps_R = NODE_SHARE * force_tol(result.tol) * F0
-    # the kernel's output rows of each parameter (its constants, not a copy of them)
-    rows = {"theta_deg": kern.THETA, "height_mm": kern.HEIGHT, "EI": kern.EI_,
-            "weight": kern.WEIGHT, "load": kern.WEIGHT, "wall_stiffness": kern.WALL}
-    want = np.zeros(5, bool)
+    eps_R = _contact_threshold(result, scene)
+    drest, dk, unit_load, rows = _parameter_rows(scene, chain, rest, k, nodal_load)
+    want = np.zeros(len(rows), bool)
     for p in names:
         want[rows[p]] = True
-    # φ* = −θ/N per joint, k = EI/a, the loads ∝ w (the cantilever's: ∝ q): their
-    # derivatives (the cantilever has no rest curvature)
-    theta = getattr(scene, "theta", None)
-    drest = np.zeros(rest.size) if theta is None else (
-        rest / theta if theta else np.full(rest.size, -math.pi / 180 / n))
-    dk = k / scene.EI
-    field_ = "load" if isinstance(scene, CantileverScene) else "weight"
-    w = getattr(scene, field_)
-    unit = nodal_load / w if w else np.ascontiguousarray(
-        replace(scene, **{field_: 1.0}).chain().nodal_load, dtype=float)
-    code, du, dfu, dfl = kern.derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu,
-                                          cl, fu, fl, float(eps_R), drest, dk, unit,
-                                          float(scene.wall_stiffness), want)
+    code, du, dfu, dfl, u = kern.derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu,
+                                          cl, fu, fl, float(eps_R), drest, dk, unit_load,
+                                          float(getattr(scene, "wall_stiffness", math.inf)),
+                                          want)
     if code != kern.OK:
         raise ProblemError("sensitivities: the Hessian on the answer's free nodes is not "
                            "positive definite (the contact set is not a stable one)")
     out = {p: (dfu[rows[p]], dfl[rows[p]], du[rows[p]]) for p in names}
     # a node touching its wall without force: at a change of contact set (one-sided)
-    u = heights(chain, alpha)
     c_max = float(np.max(cu, initial=0.0)) if cu.size else 0.0
     touching = (hi - u <= max(1e-9 * scene.length, c_max * eps_R)) | \
         (u - lo <= 1e-9 * scene.length)
@@ -175,17 +187,78 @@ def _derivatives(result, scene, names: set, elastic: bool) -> dict:
     return out
 
 
+def _contact_threshold(result, scene) -> float:
+    """The judge's contact threshold ε_R = NODE_SHARE τ F₀ (model.judge.judge), without
+    building a lazy result's judgement."""
+    fu = np.asarray(result.forces, dtype=float)
+    fl = np.zeros(0) if result.forces_lower is None else np.asarray(result.forces_lower)
+    F0 = max(abs(float(fu.sum())), abs(float(fl.sum())), float(scene.chain().force_scale))
+    return NODE_SHARE * force_tol(result.tol) * F0
+
+
+def _parameter_rows(scene, chain, rest, k, nodal_load):
+    """The kernel's per-parameter inputs: ∂φ*/∂θ_k (mt, nj) per degree, ∂k/∂EI_k (me, nj),
+    the nodal load at unit w_k (mw, n), and {parameter: its output row}."""
+    if isinstance(scene, SectionedScene):  # (the chain's data only: kept with it)
+        return chain.derived("_section_rows", lambda: _section_rows(scene, chain, rest,
+                                                                    nodal_load))
+    # φ* = −θ/N per joint, k = EI/a, the loads ∝ w (the cantilever's: ∝ q): their
+    # derivatives (the cantilever has no rest curvature)
+    theta = getattr(scene, "theta", None)
+    n = nodal_load.size
+    drest = np.zeros(rest.size) if theta is None else (
+        rest / theta if theta else np.full(rest.size, -math.pi / 180 / n))
+    field_ = "load" if isinstance(scene, CantileverScene) else "weight"
+    w = getattr(scene, field_)
+    unit_load = nodal_load / w if w else np.ascontiguousarray(
+        replace(scene, **{field_: 1.0}).chain().nodal_load, dtype=float)
+    rows = {"theta_deg": 0, "height_mm": 1, "EI": 2, "weight": 3, "load": 3,
+            "wall_stiffness": 4}
+    return drest[None, :], (k / scene.EI)[None, :], unit_load[None, :], rows
+
+
+def _section_rows(scene, chain, rest, nodal_load):
+    """:func:`_parameter_rows` of a row of sections: θ_k, EI_k, w_k per section."""
+    counts = scene.section_links()
+    m, a = counts.size, chain.link_length
+    section = np.repeat(np.arange(m), counts)  # of each link
+    left, right = section[:-1], section[1:]
+    ei = np.array([s.EI for s in scene.sections])[section]
+    el, er = ei[:-1], ei[1:]
+    drest = np.empty((m, rest.size))
+    dk = np.empty((m, rest.size))
+    unit_load = np.empty((m, nodal_load.size))
+    sign = -1.0 if scene.gravity == "-y" else 1.0
+    for i in range(m):  # φ*_j = −(t_l + t_r)/2, t = θ_k/n_k per link (rad)
+        drest[i] = -0.5 * math.pi / 180 / counts[i] * ((left == i) * 1.0 + (right == i))
+        # k_j = 2 EI_l EI_r / (a (EI_l + EI_r)) (EI_k / a inside a section)
+        dk[i] = (2 * ((left == i) * er**2 + (right == i) * el**2) / (a * (el + er) ** 2))
+        unit_load[i] = replace(chain, link_load=sign * a * (section == i)).nodal_load
+    names = ([f"theta_deg[{i}]" for i in range(m)] + ["height_mm"]
+             + [f"EI[{i}]" for i in range(m)] + [f"weight[{i}]" for i in range(m)]
+             + ["wall_stiffness"])
+    return drest, dk, unit_load, {p: r for r, p in enumerate(names)}
+
+
+def _loads(scene) -> tuple[str, ...]:
+    """The names of the scene's weights (the cantilever: its load q)."""
+    if isinstance(scene, SectionedScene):
+        return tuple(f"weight[{i}]" for i in range(len(scene.sections)))
+    return ("load",) if isinstance(scene, CantileverScene) else ("weight",)
+
+
 def _by_dimensions(result, scene, d: dict, elastic: bool):
-    """∂/∂ℓ from dimensional analysis: ℓ ∂F/∂ℓ = −2F − h F_h + 3w F_w (+ 4k F_k); the
-    cantilever's load q (N/mm) scales as w."""
-    load = "load" if isinstance(scene, CantileverScene) else "weight"
-    L, h, w = scene.length, scene.height, getattr(scene, load)
+    """∂/∂ℓ from dimensional analysis: ℓ ∂F/∂ℓ = −2F − h F_h + 3 Σ w_k F_{w_k} (+ 4k F_k);
+    the cantilever's load q (N/mm) scales as w; a row of sections is scaled whole."""
+    L, h = scene.length, scene.height
+    weights = ([s.weight for s in scene.sections] if isinstance(scene, SectionedScene)
+               else [getattr(scene, _loads(scene)[0])])
     fu = np.asarray(result.forces, dtype=float)
     fl = np.zeros_like(fu) if result.forces_lower is None else np.asarray(result.forces_lower)
     u = d["_heights"]
-    parts = [("height_mm", -h), (load, 3 * w)] + ([("wall_stiffness",
-                                                         4 * scene.wall_stiffness)]
-                                                       if elastic else [])
+    parts = [("height_mm", -h)] + [(p, 3 * w) for p, w in zip(_loads(scene), weights,
+                                                               strict=True)]
+    parts += [("wall_stiffness", 4 * scene.wall_stiffness)] if elastic else []
     dfu, dfl, du = -2.0 * fu, -2.0 * fl, np.asarray(u, dtype=float).copy()
     for name, factor in parts:
         a, b, c = d[name]
@@ -195,7 +268,8 @@ def _by_dimensions(result, scene, d: dict, elastic: bool):
 
 def _collect(result, scene, names, d) -> Sensitivities:
     chain = scene.chain()
-    share = wall_share(chain.links, chain.link_length, chain.free_nodes)
+    share = chain.derived("_wall_share", lambda: wall_share(chain.links, chain.link_length,
+                                                            chain.free_nodes))
     fu = np.asarray(result.forces, dtype=float)
     fl = np.zeros_like(fu) if result.forces_lower is None else np.asarray(result.forces_lower)
     pressure = (fu + fl) / share

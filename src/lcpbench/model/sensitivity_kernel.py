@@ -19,7 +19,8 @@ from ..linalg.ldl_kernel import refactor, resolve
 from .compiled_dual import grad_into, matvec_row
 from .compiled_kernel import banded_step, geometric_bands
 
-#: the parameters, in the rows of :func:`derivatives`' outputs
+#: the flat actuator's output rows (one θ, EI and weight row each): the layout of
+#: :func:`rows_of` with one of each
 THETA, HEIGHT, EI_, WEIGHT, WALL = range(5)
 OK, NOT_PD = 0, 1
 
@@ -27,13 +28,18 @@ OK, NOT_PD = 0, 1
 @njit(cache=True)
 def derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu, cl, fu, fl, eps_R,
                 drest, dk, unit_load, wall_k, want):
-    """(code, du, dfu, dfl): rows THETA, HEIGHT, EI_, WEIGHT, WALL of the derivatives of
-    the free nodes' heights and the upper and lower reactions, those of ``want`` (bool
-    per row) written, the rest zero; code NOT_PD where the face is not positive
-    definite. ``drest``: ∂φ*/∂θ per joint; ``dk``: ∂k/∂EI per joint; ``unit_load``: the
-    nodal load at unit weight; ``wall_k``: the Winkler stiffness (k_i ∝ it); ``cu``,
-    ``cl``: the walls' compliances (empty: rigid)."""
+    """(code, du, dfu, dfl, u): the derivatives of the free nodes' heights and the upper and
+    lower reactions, one output row per parameter, those of ``want`` (bool per row)
+    written, the rest zero; code NOT_PD where the face is not positive definite.
+
+    The rows: one per row of ``drest`` (mt, nj) (∂φ*/∂θ_k per joint: a bend angle),
+    then the wall height, one per row of ``dk`` (me, nj) (∂k/∂EI_k per joint), one per
+    row of ``unit_load`` (mw, n) (the nodal load at unit weight w_k), then the Winkler
+    stiffness ``wall_k`` (k_i ∝ it). ``cu``, ``cl``: the walls' compliances (empty:
+    rigid); ``u``: the free nodes' heights at α (the step's linearisation point)."""
     n, links, nj = lo.size, alpha.size, jr.size
+    mt, me, mw = drest.shape[0], dk.shape[0], unit_load.shape[0]
+    rows = mt + me + mw + 2
     bands, _, _, coef, origin, _, phi_origin = banded_step(alpha, a, jl, jr, k, rest, fs, n,
                                                          nodal_load)
     T, mu = np.zeros((2, n)), np.empty(links)
@@ -50,32 +56,32 @@ def derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu, cl, fu, f
         if soft:
             comp[i] = cu[i] if up[i] else (cl[i] if down[i] else 0.0)
         rigid[i] = (up[i] or down[i]) and not comp[i] > 0.0
-    du, dfu, dfl = np.zeros((5, n)), np.zeros((5, n)), np.zeros((5, n))
+    du, dfu, dfl = np.zeros((rows, n)), np.zeros((rows, n)), np.zeros((rows, n))
     fac = np.empty((4, n))
     if not refactor(fac, bands, rigid, comp if soft else comp[:0], 0, n):
-        return NOT_PD, du, dfu, dfl
+        return NOT_PD, du, dfu, dfl, origin
     none_n, none_j, m, Tz = np.zeros(n), np.zeros(nj), np.empty(nj), np.zeros((2, n))
     dgrad, du0, r = np.empty(n), np.empty(n), np.empty(n)
-    for p in range(5):
+    for p in range(rows):
         if not want[p]:
             continue
         dgrad[:] = 0.0
         du0[:] = 0.0
-        if p == THETA:  # ∂g = Jᵀ k (−∂φ*/∂θ)
-            grad_into(dgrad, m, origin, (coef, jr[0], fs, links, origin, none_j, k, drest,
+        if p < mt:  # ∂g = Jᵀ k (−∂φ*/∂θ_k)
+            grad_into(dgrad, m, origin, (coef, jr[0], fs, links, origin, none_j, k, drest[p],
                                           none_n), Tz)
-        elif p == HEIGHT:  # the walls move: +1 the upper, −1 the lower (at −h)
+        elif p == mt:  # the walls move: +1 the upper, −1 the lower (at −h)
             for i in range(n):
                 du0[i] = 1.0 if up[i] else (-1.0 if down[i] else 0.0)
-        elif p == EI_:  # ∂g = Jᵀ (∂k/∂EI) (φ − φ*)
-            grad_into(dgrad, m, origin, (coef, jr[0], fs, links, origin, phi_origin, dk, rest,
-                                          none_n), Tz)
-        elif p == WEIGHT:  # f ∝ w
+        elif p <= mt + me:  # ∂g = Jᵀ (∂k/∂EI_k) (φ − φ*)
+            grad_into(dgrad, m, origin, (coef, jr[0], fs, links, origin, phi_origin,
+                                          dk[p - mt - 1], rest, none_n), Tz)
+        elif p <= mt + me + mw:  # f ∝ w_k
             for i in range(n):
-                dgrad[i] = -unit_load[i]
+                dgrad[i] = -unit_load[p - mt - me - 1, i]
         for i in range(n):
             r[i] = 0.0 if rigid[i] else dgrad[i] + matvec_row(bands, du0, i, n, False)
-            if p == WALL and (up[i] or down[i]) and not rigid[i]:  # ∂k_i (u − h) = R_i / k
+            if p == rows - 1 and (up[i] or down[i]) and not rigid[i]:  # ∂k_i (u − h) = R_i / k
                 r[i] += (fu[i] - fl[i]) / wall_k
         resolve(fac, r)
         for i in range(n):
@@ -84,4 +90,4 @@ def derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu, cl, fu, f
             dR = -(dgrad[i] + matvec_row(bands, du[p], i, n, False))
             dfu[p, i] = dR if up[i] else 0.0
             dfl[p, i] = -dR if down[i] else 0.0
-    return OK, du, dfu, dfl
+    return OK, du, dfu, dfl, origin

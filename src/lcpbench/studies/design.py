@@ -10,10 +10,12 @@ Issue 38, item 2. :func:`design` answers one of
 
 The force queries are a root of q(θ) − F, q the total force (or peak pressure) of a
 forward solve at θ (tol 1e-10 by default, each solve started from the nearest answer
-so far), found by safeguarded Newton with bracketing: a Newton step from the
-bracket's end nearest the target, with dq/dθ from :func:`lcpbench.sensitivities`
-(one face solve), taken where it lands strictly inside the bracket and the derivative
-is positive, else the bracket is bisected. It is robust across contact-set changes
+so far), found by safeguarded Newton with bracketing: the scene's θ is solved first,
+and the range's far end only where the crossing lies beyond it; then a Newton step
+from the solved end of the bracket nearest the target, with dq/dθ from
+:func:`lcpbench.sensitivities` (one face solve), taken where it lands strictly inside
+the bracket and the derivative is positive, else the secant through both ends, else
+the bracket is bisected. It is robust across contact-set changes
 (the derivative is one-sided there, and the bracket holds) and force plateaus (no
 contact: q = 0, dq/dθ = 0, a bisection). q is assumed to cross F once in the range
 (it grows with θ for an actuator pressed against a wall); the answer is the crossing
@@ -30,7 +32,7 @@ from dataclasses import dataclass
 from ..api import check_tol, solve
 from ..errors import ProblemError
 from ..model.result import ContactResult
-from ..model.sensitivity import sensitivities, unsupported
+from ..model.sensitivity import sensitivities
 from ..problems.calibrations import Calibration
 from ..problems.scenes import ActuatorScene
 
@@ -94,8 +96,13 @@ def design(scene: ActuatorScene, *, max_force: float | None = None,
     if len(asked) != 1:
         raise ProblemError("design needs exactly one of max_force, min_force or touch; got "
                            + (", ".join(asked) if asked else "none"))
-    if (why := unsupported(scene)) is not None:
-        raise ProblemError(f"design: {why}")
+    if not isinstance(scene, ActuatorScene):
+        raise ProblemError(f"design covers actuator scenes (flat walls, one wall or a "
+                           f"channel, rigid or elastic, or a wall profile); got "
+                           f"{type(scene).__name__}")
+    if touch and scene.wall_profile is not None:
+        raise ProblemError("design --touch finds the height of a flat wall; this scene has "
+                           "a wall profile (its max_force and min_force queries are covered)")
     tol = check_tol(tol)
     if touch:
         return _touch(scene, tol, calibration)
@@ -116,6 +123,8 @@ class _Forward:
         self.done: dict[float, ContactResult] = {}
 
     def __call__(self, theta: float) -> tuple[float, ContactResult]:
+        if theta in self.done:
+            return self.value(self.done[theta]), self.done[theta]
         near = min(self.done, key=lambda t: abs(t - theta), default=None)
         start = self.done[near] if near is not None and self.done[near].converged else None
         res = solve(dataclasses.replace(self.scene, theta=theta), tol=self.tol, start=start)
@@ -138,33 +147,35 @@ def _crossing(scene, target: float, query: str, peak: bool, calibration, tol: fl
     q = _Forward(scene, peak, tol)
     what = "peak contact pressure" if peak else "total force"
     unit = "N/mm" if peak else "N"
-    q_hi, r_hi = q(hi)
-    if q_hi <= target:
-        if query == "min_force":
-            raise ProblemError(f"min_force {target:g} {unit}: no bend angle in [{lo:g}, {hi:g}] "
-                               f"deg reaches it (the largest {what} found is {q_hi:.6g} {unit} "
-                               f"at {hi:g} deg)")
-        return _answer(q, query, hi, r_hi, q_hi, calibration, peak, beyond=math.nan)
-    t0 = min(max(scene.theta, lo), hi)
-    q0, r0 = q(t0) if t0 != hi else (q_hi, r_hi)
-    a, qa, b, qb = (t0, q0, hi, q_hi) if q0 <= target else (lo, None, t0, q0)
-    if qa is None:
-        qa, _ = q(lo)
-        if qa > target:
-            raise ProblemError(f"{query} {target:g} {unit}: the {what} is already {qa:.6g} "
-                               f"{unit} at the smallest bend angle searched, {lo:g} deg")
     upper = query == "max_force"  # the answer: a (q ≤ F) for max_force, b (q ≥ F) for min
     aim = target * (1 - 0.5 * FORCE_RTOL if upper else 1 + 0.5 * FORCE_RTOL)
+    # the bracket [a, b], q(a) ≤ F < q(b); a value None: not solved yet (q crosses F once,
+    # so an end is only solved where it is needed)
+    t0 = min(max(scene.theta, lo), hi)
+    q0, _ = q(t0)
+    if q0 <= target:
+        a, qa, b, qb = t0, q0, hi, None
+        if t0 != hi:
+            qb, _ = q(hi)
+        if qb is None or qb <= target:
+            if query == "min_force":
+                raise ProblemError(f"min_force {target:g} {unit}: no bend angle in [{lo:g}, "
+                                   f"{hi:g}] deg reaches it (the largest {what} found is "
+                                   f"{q.value(q.done[hi]):.6g} {unit} at {hi:g} deg)")
+            return _answer(q, query, hi, q.done[hi], q.value(q.done[hi]), calibration, peak,
+                           beyond=math.nan)
+    else:
+        a, qa, b, qb = lo, None, t0, q0
     for _ in range(MAX_SOLVES):
-        if (target - qa if upper else qb - target) <= FORCE_RTOL * target:
+        near = (target - qa) if upper and qa is not None else \
+            (qb - target) if not upper and qb is not None else math.inf
+        if near <= FORCE_RTOL * target:  # the answer's own end, within 1e-6 of F
             break
-        if b - a <= 1e-12 * max(1.0, b):
+        if b - a <= 1e-12 * max(1.0, b):  # a jump of q across F: the bracket is the answer
+            if qa is None:
+                qa, _ = q(a)
             break
-        t, qt = (a, qa) if abs(qa - aim) <= abs(qb - aim) else (b, qb)
-        slope = q.slope(q.done[t])
-        new = t - (qt - aim) / slope if slope > 0 else math.nan
-        if not (math.isfinite(new) and a < new < b):
-            new = 0.5 * (a + b)
+        new = _next(q, aim, a, qa, b, qb)
         qn, _ = q(new)
         if qn <= target:
             a, qa = new, qn
@@ -172,11 +183,36 @@ def _crossing(scene, target: float, query: str, peak: bool, calibration, tol: fl
             b, qb = new, qn
     else:
         raise ProblemError(f"design: no answer to 1e-6 in {MAX_SOLVES} solves")
+    if qa is not None and qa > target:  # (the bracket closed on lo: q(lo) > F)
+        raise ProblemError(f"{query} {target:g} {unit}: the {what} is already {qa:.6g} "
+                           f"{unit} at the smallest bend angle searched, {lo:g} deg")
     theta = a if query == "max_force" else b
     res = q.done[theta]
     step = BEYOND_DEG if query == "max_force" else -BEYOND_DEG
     beyond, _ = q(theta + step)
     return _answer(q, query, theta, res, q.value(res), calibration, peak, beyond)
+
+
+def _next(q, aim: float, a: float, qa, b: float, qb) -> float:
+    """The next θ inside (a, b): a Newton step (dq/dθ from the sensitivities) from the
+    solved end nearest the target whose slope is positive, where it lands strictly
+    inside (where it lands beyond a not yet solved: a itself); else the secant through
+    both ends; else the bracket's midpoint."""
+    ends = sorted(((abs(v - aim), t, v) for t, v in ((a, qa), (b, qb)) if v is not None))
+    for _, t, v in ends:
+        slope = q.slope(q.done[t])
+        new = t - (v - aim) / slope if slope > 0 else math.nan
+        if math.isfinite(new) and a < new < b:
+            return new
+        if qa is None and math.isfinite(new) and new <= a:  # beyond the unsolved end
+            return a
+        if v > 0:  # a slope at a contact point that overshoots: the secant next
+            break
+    if qa is not None and qb is not None and qb > qa:
+        new = a + (aim - qa) * (b - a) / (qb - qa)
+        if a < new < b:
+            return new
+    return 0.5 * (a + b)
 
 
 def _answer(q, query, theta, res, value, calibration, peak, beyond) -> DesignResult:

@@ -25,7 +25,7 @@ import numpy as np
 
 from ..api import check_tol, solve
 from ..errors import ProblemError
-from ..model.sensitivity import sensitivities, unsupported
+from ..model.sensitivity import sensitivities
 from ..problems.calibrations import Calibration
 from ..problems.scenes import ActuatorScene
 
@@ -111,8 +111,10 @@ def fit(scene: ActuatorScene, pressure, force, calibration: Calibration, *, heig
     ``calibration``) to the forces ``force`` (N) measured at ``pressure`` (the
     calibration's unit) and ``height`` (mm; default the scene's); the scene gives the
     rest (N, ℓ, w, walls) and the starting EI."""
-    if (why := unsupported(scene)) is not None:
-        raise ProblemError(f"fit: {why}")
+    if not (isinstance(scene, ActuatorScene) and scene.wall_profile is None):
+        what = "a wall profile" if isinstance(scene, ActuatorScene) else type(scene).__name__
+        raise ProblemError(f"fit covers actuator scenes with flat walls (one wall or a "
+                           f"channel, rigid or elastic); got {what}")
     tol = check_tol(tol)
     P, y = np.asarray(pressure, dtype=float), np.asarray(force, dtype=float)
     h = np.full(P.size, scene.height) if height is None else np.asarray(height, dtype=float)

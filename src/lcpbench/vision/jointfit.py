@@ -227,7 +227,7 @@ def _jacobian(f, x, rel=1e-6):
     return jac
 
 
-def _inflation(r: np.ndarray) -> float:
+def correlation_inflation(r: np.ndarray) -> float:
     """Variance inflation 1 + 2 Σ ρ_m of a correlated residual sequence (Geyer's
     initial positive sequence), ≥ 1."""
     r = r - r.mean()
@@ -311,7 +311,7 @@ def fit_chain(points: np.ndarray, span: float, sections: int, *, start=None,
     # then the pins' uncertainty carried through the fit
     jp = _jacobian(lambda v: resid(v, turn, p[used]), x)
     ja = _jacobian(lambda q: signed_distance(p[used], chain(th, ln, turn, q[:2], q[2:])), pins)
-    tau = _inflation(r)
+    tau = correlation_inflation(r)
     s2 = float(r @ r) / max(m - n_par, 1)
     counts = np.bincount(section_of[used], minlength=k)
     hess = jp.T @ jp

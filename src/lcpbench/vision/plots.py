@@ -1,5 +1,6 @@
 """Figures of the pipeline: the detections over the photograph (Figs. 15-18), θ
-against pressure (Fig. 20) and the model-photograph comparison (Fig. 23)."""
+against pressure (Fig. 20), the model-photograph comparison (Fig. 23) and the fit
+from shapes (`fit --shapes`)."""
 
 from __future__ import annotations
 
@@ -247,4 +248,49 @@ def plot_comparison(cmp, out) -> None:
     b.set_title(f"(b) mean {cmp.distances_mm.mean():.4f} mm ({cmp.percent.mean():.3f} %), "
                 f"max {cmp.distances_mm.max():.4f} mm")
     b.grid(alpha=0.3)
+    _save(fig, out)
+
+
+def plot_shape_fit(out, shapes, got) -> None:
+    """``fit --shapes``: (a) the free shapes' θ against pressure and the fitted line;
+    (b) each pressed shape's residuals (normal distance to the model at the fitted EI,
+    µm) along x, with the change that EI at either end of its 95 % interval would make
+    (what the photographs have to resolve)."""
+    plt = _plt()
+    fig, (ax, bx) = plt.subplots(2, 1, figsize=(6.4, 7.2))
+    free = [s for s in shapes if s.height is None]
+    ps = np.array([s.pressure for s in shapes])
+    x = np.linspace(ps.min(), ps.max(), 50)
+    if free:
+        ax.plot([s.pressure for s in free], [s.theta_deg for s in free], "o", color="tab:blue",
+                label=f"free shapes ({len(free)})")
+    ax.plot(x, got.slope * x + got.intercept, "-", color="tab:red",
+            label=f"θ = {got.slope:.4g}·P + {got.intercept:.4g}"
+            + ("" if got.line_fitted else " (given)"))
+    ax.set_xlabel("pressure P (kPa)")
+    ax.set_ylabel("middle-section θ (deg)")
+    ax.set_title("(a) the calibration line (eqs. 40-42)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    pressed = [s for s in shapes if s.height is not None]
+    for i, (sh, (xs, r, d)) in enumerate(zip(pressed, got.shape_residuals, strict=False)):
+        order = np.argsort(xs)
+        c = f"C{i % 10}"
+        bx.plot(xs[order], 1e3 * r[order], ".", ms=2, color=c,
+                label=f"P = {sh.pressure:g} kPa, h = {sh.height:g} mm")
+        if got.EI_high is not None and np.isfinite(got.EI_high) and got.EI_low > 0:
+            for end in (got.EI_low, got.EI_high):
+                bx.plot(xs[order], 1e3 * d[order] * np.log(end / got.EI), "-", lw=0.8,
+                        color=c, alpha=0.6)
+    title = "(b) pressed shapes: residuals at the fitted EI"
+    if got.EI is not None:
+        title += (f", EI = {got.EI:.4g} N mm²; lines: the model at the interval's ends "
+                  f"({got.EI_low:.3g} .. {got.EI_high:.3g})")
+    bx.set_title(title, fontsize=8)
+    bx.set_xlabel("x along the section's chord (mm)")
+    bx.set_ylabel("normal distance to the model (µm)")
+    bx.grid(alpha=0.3)
+    if pressed:
+        bx.legend(fontsize=8)
+    fig.tight_layout()
     _save(fig, out)
