@@ -22,10 +22,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import ProblemError
-from ..model.friction_path import advance, place
+from ..model.friction_path import PATH_SCENES, advance, place
 from ..model.friction_result import FrictionResult
 from ..problems.checks import check_number
 from ..problems.scenes import ActuatorScene
+from ..problems.sections import SectionedScene
 
 #: a step goes this share of the way to the secant's root (from below)
 APPROACH = 0.999
@@ -66,9 +67,10 @@ def capacity(res: FrictionResult) -> float:
     return mu_up * float(np.sum(res.forces)) + lower
 
 
-def _check(scene) -> ActuatorScene:
-    if not isinstance(scene, ActuatorScene):
-        raise ProblemError(f"pull_out takes an ActuatorScene, got {type(scene).__name__}")
+def _check(scene) -> ActuatorScene | SectionedScene:
+    if not isinstance(scene, PATH_SCENES):
+        raise ProblemError(f"pull_out takes an ActuatorScene or a SectionedScene, got "
+                           f"{type(scene).__name__}")
     if scene.left_end == "pinned" or scene.right_end != "slider":
         raise ProblemError("pull_out needs left_end='slider' and right_end='slider' (a "
                            "pinned end holds any pull; the pull acts on the right end), got "
@@ -84,7 +86,7 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
 
     Parameters
     ----------
-    scene : ActuatorScene
+    scene : ActuatorScene or SectionedScene
         Sliders at both ends and friction; its ``pull`` (>= 0) is the path's start.
     tol : the outer loop's threshold on max|Δα| (rad) per state.
     rtol : P* is returned once the secant's root is within ``rtol`` (relative) of the
