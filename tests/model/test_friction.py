@@ -157,10 +157,7 @@ def test_bad_paths_give_one_clear_error(states, words):
         lcpbench.solve_path(scene, states)
 
 
-def test_a_free_left_end_is_refused_clearly():
-    scene = ActuatorScene(links=20, friction=0.3, left_end="free", channel=True)
-    with pytest.raises(ProblemError, match="left_end='free' is not supported"):
-        lcpbench.solve_path(scene)
+def test_unsupported_ends_and_scenes_are_refused_clearly():
     with pytest.raises(ProblemError, match="a free end needs channel=True"):
         ActuatorScene(links=20, friction=0.3, right_end="free")
     with pytest.raises(ProblemError, match="ActuatorScene"):

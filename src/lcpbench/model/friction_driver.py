@@ -133,11 +133,12 @@ class FrictionStep:
 
 
 def check_frictional_ends(scene: ActuatorScene) -> None:
-    """ProblemError for what the frictional step does not build yet: a free left end."""
+    """ProblemError for a free left end here: the step frees the right end only, and a
+    path solves a free left end as its mirror image
+    (:mod:`lcpbench.model.friction_mirror`, docs/friction.md, free ends)."""
     if scene.left_end == "free":
-        raise ProblemError("left_end='free' is not supported by the frictional step yet "
-                           "(docs/friction.md, free ends): use 'pinned' or 'slider', or "
-                           "mirror the scene and free the right end")
+        raise ProblemError("left_end='free': the frictional step frees the right end only; "
+                           "solve the scene along a path (lcpbench.solve_path mirrors it)")
 
 
 def frictional_chain(scene: ActuatorScene) -> Chain:
@@ -226,11 +227,14 @@ def near_walls(chain: Chain, y: np.ndarray, band: float) -> np.ndarray:
 
 def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
                     x_prev: np.ndarray, pressed: np.ndarray | None = None,
-                    rowed: np.ndarray | None = None) -> FrictionStep:
+                    rowed: np.ndarray | None = None, left_pull: float = 0.0
+                    ) -> FrictionStep:
     """The frictional contact step of ``scene`` at ``state``, slips from ``x_prev``:
     normal rows for the nodes within ROW_BAND·a of a wall or ``rowed`` before,
     friction pairs for those within NEAR·a or ``pressed`` (bool per free node: a
-    normal force in the last step)."""
+    normal force in the last step). ``left_pull``: a force along x (N) on the left
+    end (a mirrored scene's pull, :mod:`lcpbench.model.friction_mirror`); the left end
+    is the datum, so it loads τ only and has no curvature."""
     has_tau, right_datum = datum(scene)
     step = assemble_step(chain, state.alpha)
     H = step.dense_hessian()
@@ -251,7 +255,7 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
                       [np.zeros((1, H.shape[0])), np.full((1, 1), TAU_STIFFNESS *
                                                          chain.force_scale / chain.length)]])
         D = np.hstack([D, np.ones((D.shape[0], 1))])
-        f = np.append(f, float(scene.pull))
+        f = np.append(f, float(scene.pull) + left_pull)
     g_up, g_lo = gaps_at(chain, y)
     touching = near_walls(chain, y, NEAR)
     near = near_walls(chain, y, ROW_BAND)
@@ -310,11 +314,14 @@ class StateAnswer:
     iterations: int
     step_sizes: list = field(default_factory=list)
     time_s: float = 0.0
+    left_pull: float = 0.0  # N along x on the left end (a mirrored scene's pull)
 
 
 def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, *,
-                tol: float, max_outer: int = 100, lcp=step_lemke) -> StateAnswer:
-    """The outer loop of one state from ``start``, slips from ``x_prev`` (docs/friction.md)."""
+                tol: float, max_outer: int = 100, lcp=step_lemke,
+                left_pull: float = 0.0) -> StateAnswer:
+    """The outer loop of one state from ``start``, slips from ``x_prev`` (docs/friction.md);
+    ``left_pull`` as :func:`frictional_step`'s."""
     check_frictional_ends(scene)
     t0 = time.perf_counter()
     chain = frictional_chain(scene)
@@ -328,10 +335,10 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
     for it in range(1, max_outer + 1):
         try:
             fs = frictional_step(scene, chain, state, x_prev, pressed,
-                                 None if fs is None else fs.rowed)
+                                 None if fs is None else fs.rowed, left_pull)
         except np.linalg.LinAlgError as exc:  # (K singular: a link at the vertical)
             return StateAnswer(state, N, T, fs, False, f"contact step {it}: {exc}", it,
-                               sizes, time.perf_counter() - t0)
+                               sizes, time.perf_counter() - t0, left_pull)
         sol = lcp(fs.M, fs.q)
         # an inexact step only moves the iterate (the judge reads the last one, which
         # must be SOLVED): go on from it, as the frictionless driver does
@@ -339,7 +346,7 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
                                and np.all(np.isfinite(sol.z)))):
             return StateAnswer(state, N, T, fs, False, f"contact step {it}: "
                                f"{sol.status.name} ({sol.message})", it, sizes,
-                               time.perf_counter() - t0)
+                               time.perf_counter() - t0, left_pull)
         N, T, dy, tau = fs.forces(sol.z)
         pressed = np.zeros(chain.free_nodes.size, bool)
         pressed[fs.normal_node[N > 0]] = True
@@ -349,7 +356,7 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
         if alpha is None:
             return StateAnswer(state, N, T, fs, False, f"contact step {it}: a link would "
                                "pass the vertical (no chain has these heights)", it, sizes,
-                               time.perf_counter() - t0)
+                               time.perf_counter() - t0, left_pull)
         dalpha = float(np.max(np.abs(alpha - state.alpha)))
         sizes.append(dalpha)
         tau *= share
@@ -362,15 +369,17 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
         if (dalpha < tol and abs(tau) < tol * chain.length and paired and settled
                 and sol.solved):
             return StateAnswer(state, N, T, fs, True, "max|Δα| < tol", it, sizes,
-                               time.perf_counter() - t0)
-        gross = gross + 1 if has_tau and gross_slip(fs, N, T, float(scene.pull)) else 0
+                               time.perf_counter() - t0, left_pull)
+        gross = gross + 1 if has_tau and gross_slip(fs, N, T, float(scene.pull) + left_pull
+                                                    ) else 0
         away = abs(state.x0 - start.x0) > RUNAWAY * chain.length or gross >= GROSS_STEPS
         if not np.isfinite(dalpha) or away:
             break
     why = ("gross slip: every contact node slides at its cone and friction holds less than "
            "the pull (no equilibrium)" if away else f"no convergence in {it} contact steps"
            + ("" if fs is None or sol.solved else f" (the last {sol.status.name})"))
-    return StateAnswer(state, N, T, fs, False, why, it, sizes, time.perf_counter() - t0)
+    return StateAnswer(state, N, T, fs, False, why, it, sizes, time.perf_counter() - t0,
+                       left_pull)
 
 
 def fc2d_form(fs: FrictionStep) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

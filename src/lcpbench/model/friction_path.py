@@ -21,7 +21,8 @@ from ..errors import ProblemError
 from ..problems.checks import describe
 from ..problems.scenes import ActuatorScene
 from ..problems.sections import Section, SectionedScene
-from .friction_driver import FrictionState, check_frictional_ends, solve_state
+from .friction_driver import FrictionState, solve_state
+from .friction_mirror import mirror_result, mirror_state, mirror_x, mirrored_scene
 from .friction_result import FrictionResult, build_result, from_contact
 
 #: the scene fields a state may change (a row of sections: ``sections`` too)
@@ -91,8 +92,16 @@ def place(scene, *, tol: float, max_outer: int, solve
 def advance(scene, state: dict, current: FrictionState, x_prev, *,
             tol: float, max_outer: int, lcp=None):
     """One state of a path solved from ``current`` (slips from ``x_prev``): its judged
-    result and the outer loop's end state."""
+    result and the outer loop's end state. A free left end is solved as its mirror
+    image (:mod:`lcpbench.model.friction_mirror`)."""
     kw = {} if lcp is None else {"lcp": lcp}
+    if scene.left_end == "free":
+        mirror, left_pull = mirrored_scene(scene)
+        a, xm = scene.length / scene.links, mirror_x(x_prev)
+        ans = solve_state(mirror, mirror_state(current, a), xm, tol=tol,
+                          max_outer=max_outer, left_pull=left_pull, **kw)
+        res = build_result(mirror, state, ans, xm, tol)
+        return mirror_result(res, scene, state), mirror_state(ans.state, a)
     ans = solve_state(scene, current, x_prev, tol=tol, max_outer=max_outer, **kw)
     return build_result(scene, state, ans, x_prev, tol), ans.state
 
@@ -108,8 +117,6 @@ def run_path(scene, states, *, tol: float, max_outer: int, solve, lcp=None
             out.append(from_contact(s, state, res, x_prev))
             x_prev = res.x
         return out
-    for _, s in steps:
-        check_frictional_ends(s)
     current, x_prev, broken = place(steps[0][1], tol=tol, max_outer=max_outer, solve=solve)
     out = []
     for state, s in steps:
