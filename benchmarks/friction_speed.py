@@ -1,7 +1,7 @@
 """Issue 39, target 5: the speed of a frictional solve and of a pull-out at N = 140.
 
 Scenes: the paper's (θ 150°, h 3 mm, N = 140) on one flat wall, and the same in the
-channel (θ 200°, μ 0.3 above and 0.1 below); sliders at both ends, μ = 0.3. Contenders,
+channel (θ 180°, h 2 mm, μ 0.3 above and 0.1 below); sliders at both ends, μ = 0.3. Contenders,
 timed around the call and interleaved in rotating order (``perf.interleaved``), one
 BLAS thread:
 
