@@ -54,32 +54,21 @@ PULL = 0.05
 def lemke_calls(fn) -> tuple[int, int]:
     """(contact steps, Lemke calls) of one call of ``fn`` (counted, not timed)."""
     count = {"steps": 0, "calls": 0}
-    lemke, step = driver.lemke, driver.step_lemke
+    lemke, step = driver.lemke, driver.StepLemke.__call__
 
     def counted_lemke(*args, **kw):
         count["calls"] += 1
         return lemke(*args, **kw)
 
-    def counted_step(M, q):
+    def counted_step(self, M, q):
         count["steps"] += 1
-        return step(M, q)
+        return step(self, M, q)
 
-    driver.lemke = counted_lemke
+    driver.lemke, driver.StepLemke.__call__ = counted_lemke, counted_step
     try:
-        _solve_state = driver.solve_state
-
-        def solve_state(*args, **kw):
-            kw.setdefault("lcp", counted_step)
-            return _solve_state(*args, **kw)
-
-        import lcpbench.model.friction_path as path
-        path.solve_state, before = solve_state, path.solve_state
-        try:
-            fn()
-        finally:
-            path.solve_state = before
+        fn()
     finally:
-        driver.lemke = lemke
+        driver.lemke, driver.StepLemke.__call__ = lemke, step
     return count["steps"], count["calls"]
 
 

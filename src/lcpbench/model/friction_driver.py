@@ -44,8 +44,13 @@ GROSS_STEPS = 3
 #: follows from the heights), and entries that are 0 but for round-off (1e-12 of the
 #: column) must not be pivots
 PIVOT_TOL = 1e-9
-#: the seed of the random covering vectors :func:`step_lemke` tries last
+#: the seed of the random covering vectors :class:`StepLemke` tries last
 COVERING_SEED = 39
+#: Lemke's pivot budget on the frictional step, in pivots per unknown (solvers.lemke's
+#: default is 50): a solved step takes at most ~1.3 n at N = 140 (issue 39's speed
+#: benchmark), and a degenerate one that cycles is cut short and tried with another
+#: covering vector
+PIVOT_BUDGET = 4
 
 
 _KERNELS: list = []  # the compiled step (model/friction_step.py), once loaded
@@ -62,23 +67,47 @@ def step_kernels():
     return _KERNELS[0]
 
 
-def step_lemke(M: np.ndarray, q: np.ndarray):
-    """The default solver of the frictional step: Lemke with :data:`PIVOT_TOL`, and
-    where it stops short of SOLVED (near gross slip the LCP is degenerate: every node
-    at its cone), again with the covering vectors (2 … 1) and (1 … n)/n, then three
-    seeded random ones in [1, 2): other pivot paths to the same solution set. The
-    step's LCP always has a solution (W is positive semidefinite: Stewart–Trinkle), so
-    a ray is a numerical failure."""
-    n = q.size
-    sol = lemke(M, q, pivot_tol=PIVOT_TOL)
+def step_coverings(n: int) -> list[np.ndarray]:
+    """The covering vectors :class:`StepLemke` tries: all ones (Lemke's default), (2 … 1),
+    (1 … n)/n, then three seeded random ones in [1, 2)."""
     rng = np.random.default_rng(COVERING_SEED)
-    coverings = [np.linspace(2.0, 1.0, n), np.arange(1, n + 1) / n]
-    coverings += [1.0 + rng.random(n) for _ in range(3)]
-    for covering in coverings:
-        if sol.solved:
-            break
-        sol = lemke(M, q, pivot_tol=PIVOT_TOL, covering=covering)
-    return sol
+    return ([np.ones(n), np.linspace(2.0, 1.0, n), np.arange(1, n + 1) / n]
+            + [1.0 + rng.random(n) for _ in range(3)])
+
+
+class StepLemke:
+    """The default solver of the frictional step: Lemke with :data:`PIVOT_TOL` and at
+    most :data:`PIVOT_BUDGET` · n pivots, and where it stops short of SOLVED (near gross
+    slip the LCP is degenerate: every node at its cone) again with the other covering
+    vectors (:func:`step_coverings`): other pivot paths to the same solution set. The
+    step's LCP always has a solution (W is positive semidefinite: Stewart–Trinkle), so a
+    ray is a numerical failure.
+
+    One instance serves a path: it tries first the covering that solved its last step
+    (the steps of a path are alike, and so is the covering that gets through), so the
+    restarts are paid once, not at every step. A fresh instance starts with all ones.
+    """
+
+    def __init__(self) -> None:
+        self.first = 0
+
+    def __call__(self, M: np.ndarray, q: np.ndarray):
+        n = q.size
+        coverings = step_coverings(n)
+        order = [self.first] + [i for i in range(len(coverings)) if i != self.first]
+        sol = None
+        for i in order:
+            sol = lemke(M, q, pivot_tol=PIVOT_TOL, max_pivots=PIVOT_BUDGET * max(n, 25),
+                        covering=coverings[i])
+            if sol.solved:
+                self.first = i
+                break
+        return sol
+
+
+def step_lemke(M: np.ndarray, q: np.ndarray):
+    """One frictional step solved by a fresh :class:`StepLemke`."""
+    return StepLemke()(M, q)
 
 
 @dataclass
@@ -318,11 +347,13 @@ class StateAnswer:
 
 
 def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, *,
-                tol: float, max_outer: int = 100, lcp=step_lemke,
+                tol: float, max_outer: int = 100, lcp=None,
                 left_pull: float = 0.0) -> StateAnswer:
     """The outer loop of one state from ``start``, slips from ``x_prev`` (docs/friction.md);
-    ``left_pull`` as :func:`frictional_step`'s."""
+    ``lcp``: the step's solver (default a :class:`StepLemke`); ``left_pull`` as
+    :func:`frictional_step`'s."""
     check_frictional_ends(scene)
+    lcp = StepLemke() if lcp is None else lcp
     t0 = time.perf_counter()
     chain = frictional_chain(scene)
     has_tau, right_datum = datum(scene)

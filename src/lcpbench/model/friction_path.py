@@ -21,7 +21,7 @@ from ..errors import ProblemError
 from ..problems.checks import describe
 from ..problems.scenes import ActuatorScene
 from ..problems.sections import Section, SectionedScene
-from .friction_driver import FrictionState, solve_state
+from .friction_driver import FrictionState, StepLemke, solve_state
 from .friction_mirror import mirror_result, mirror_state, mirror_x, mirrored_scene
 from .friction_result import FrictionResult, build_result, from_contact
 
@@ -118,6 +118,7 @@ def run_path(scene, states, *, tol: float, max_outer: int, solve, lcp=None
             x_prev = res.x
         return out
     current, x_prev, broken = place(steps[0][1], tol=tol, max_outer=max_outer, solve=solve)
+    lcp = StepLemke() if lcp is None else lcp  # one for the path: its covering carries over
     out = []
     for state, s in steps:
         res, end = advance(s, state, current, x_prev, tol=tol,

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import ProblemError
+from ..model.friction_driver import StepLemke
 from ..model.friction_path import PATH_SCENES, advance, place
 from ..model.friction_result import FrictionResult
 from ..problems.checks import check_number
@@ -110,10 +111,11 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
     if why:
         return PullOut(np.nan, np.nan, np.zeros(0), np.zeros(0), np.nan, False, why, 0)
     path, held, events, solves = [], [], [], 0
+    lcp = StepLemke()  # one for the path: the covering that solves a step carries over
     P, fail, before = float(scene.pull), None, np.inf
     while solves < max_solves:
         res, end = advance(replace(scene, pull=P), {"pull": P}, current, x_prev, tol=tol,
-                           max_outer=max_outer)
+                           max_outer=max_outer, lcp=lcp)
         solves += 1
         if res.converged:
             if path:
