@@ -44,6 +44,10 @@ GROSS_STEPS = 3
 #: follows from the heights), and entries that are 0 but for round-off (1e-12 of the
 #: column) must not be pivots
 PIVOT_TOL = 1e-9
+#: this many steps in a row that Lemke solves only INACCURATE end a state (not converged:
+#: it converges on a SOLVED step only; near gross slip the step is degenerate and
+#: stays so, and the outer loop would spend its budget there)
+INEXACT_STEPS = 5
 #: the seed of the random covering vectors :class:`StepLemke` tries last
 COVERING_SEED = 39
 #: Lemke's pivot budget on the frictional step, in pivots per unknown (solvers.lemke's
@@ -362,7 +366,7 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
     sizes: list[float] = []
     N = T = np.zeros(0)
     fs = None
-    pressed, away, it, gross = None, False, 0, 0
+    pressed, away, it, gross, inexact = None, False, 0, 0, 0
     for it in range(1, max_outer + 1):
         try:
             fs = frictional_step(scene, chain, state, x_prev, pressed,
@@ -404,7 +408,8 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
         gross = gross + 1 if has_tau and gross_slip(fs, N, T, float(scene.pull) + left_pull
                                                     ) else 0
         away = abs(state.x0 - start.x0) > RUNAWAY * chain.length or gross >= GROSS_STEPS
-        if not np.isfinite(dalpha) or away:
+        inexact = 0 if sol.solved else inexact + 1
+        if not np.isfinite(dalpha) or away or inexact >= INEXACT_STEPS:
             break
     why = ("gross slip: every contact node slides at its cone and friction holds less than "
            "the pull (no equilibrium)" if away else f"no convergence in {it} contact steps"
