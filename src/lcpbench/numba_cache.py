@@ -74,7 +74,8 @@ KERNEL_FILES = ("model/compiled_kernel.py", "model/compiled_dual.py", "model/jud
                 "model/sensitivity_kernel.py",
                 "linalg/twisted_walk_kernel.py", "model/stability_kernel.py",
                 "model/wall_kernel.py", "model/profile_kernel.py",
-                "model/friction_step.py", "model/judge_friction.py")
+                "model/friction_step.py", "model/judge_friction.py",
+                "solvers/lemke_kernel.py")
 #: the name of the ahead-of-time extension module (one per cache directory and machine)
 AOT_NAME = "lcpbench_aot"
 MANIFEST = "manifest.json"
