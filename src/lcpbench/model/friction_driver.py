@@ -72,10 +72,12 @@ def step_kernels():
 
 
 def step_coverings(n: int) -> list[np.ndarray]:
-    """The covering vectors :class:`StepLemke` tries: all ones (Lemke's default), (2 … 1),
-    (1 … n)/n, then three seeded random ones in [1, 2)."""
+    """The covering vectors :class:`StepLemke` tries, in order: (1 … n)/n, all ones
+    (Lemke's default), (2 … 1), then three seeded random ones in [1, 2). (1 … n)/n
+    first: on 20 steps of four pulled scenes at N = 140 it solved 13, all ones none
+    (Lemke stops on a ray)."""
     rng = np.random.default_rng(COVERING_SEED)
-    return ([np.ones(n), np.linspace(2.0, 1.0, n), np.arange(1, n + 1) / n]
+    return ([np.arange(1, n + 1) / n, np.ones(n), np.linspace(2.0, 1.0, n)]
             + [1.0 + rng.random(n) for _ in range(3)])
 
 
@@ -89,7 +91,7 @@ class StepLemke:
 
     One instance serves a path: it tries first the covering that solved its last step
     (the steps of a path are alike, and so is the covering that gets through), so the
-    restarts are paid once, not at every step. A fresh instance starts with all ones.
+    restarts are paid once, not at every step. A fresh instance starts with the first.
     """
 
     def __init__(self) -> None:
@@ -223,27 +225,18 @@ def contact_rows(scene: ActuatorScene, chain: Chain, rowed: np.ndarray,
     and its pair would only make the LCP degenerate.
     """
     mu_up, mu_lo = scene.wall_friction
-    nodes, signs, mus, pairs, pair_nodes = [], [], [], [], []
-    for j in range(chain.free_nodes.size):
-        up, lo = np.isfinite(chain.upper[j]), np.isfinite(chain.lower[j])
-        if not rowed[j]:
-            continue
-        if up and lo:
-            up, lo = bool(g_up[j] <= g_lo[j]), bool(g_lo[j] < g_up[j])
-        if not (up or lo):
-            continue
-        p = -1
-        if touching[j]:
-            p = len(pair_nodes)
-            pair_nodes.append(int(chain.free_nodes[j]))
-        for ok, sign, mu in ((up, -1.0, mu_up), (lo, 1.0, mu_lo)):
-            if ok:
-                nodes.append(j)
-                signs.append(sign)
-                mus.append(mu)
-                pairs.append(p)
-    return (np.array(nodes, np.int64), np.array(signs), np.array(mus),
-            np.array(pairs, np.int64), np.array(pair_nodes, np.int64))
+    up, lo = np.isfinite(chain.upper) & rowed, np.isfinite(chain.lower) & rowed
+    both = up & lo  # a channel node: the nearer wall only
+    up, lo = np.where(both, g_up <= g_lo, up), np.where(both, g_lo < g_up, lo)
+    rows = up | lo
+    paired = rows & touching
+    pair_of = np.full(rows.size, -1, np.int64)
+    pair_of[paired] = np.arange(int(np.count_nonzero(paired)))
+    nodes = np.flatnonzero(rows)  # (one wall per node: up and lo exclude each other)
+    upper = up[nodes]
+    return (nodes.astype(np.int64), np.where(upper, -1.0, 1.0),
+            np.where(upper, mu_up, mu_lo), pair_of[nodes],
+            chain.free_nodes[paired].astype(np.int64))
 
 
 def gaps_at(chain: Chain, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -412,7 +405,9 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
         if not np.isfinite(dalpha) or away or inexact >= INEXACT_STEPS:
             break
     why = ("gross slip: every contact node slides at its cone and friction holds less than "
-           "the pull (no equilibrium)" if away else f"no convergence in {it} contact steps"
+           "the pull (no equilibrium)" if away else
+           f"the step's LCP solved only INACCURATE in {inexact} contact steps in a row"
+           if inexact >= INEXACT_STEPS else f"no convergence in {it} contact steps"
            + ("" if fs is None or sol.solved else f" (the last {sol.status.name})"))
     return StateAnswer(state, N, T, fs, False, why, it, sizes, time.perf_counter() - t0,
                        left_pull)
