@@ -263,23 +263,21 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
     is the datum, so it loads τ only and has no curvature."""
     has_tau, right_datum = datum(scene)
     step = assemble_step(chain, state.alpha)
-    H = step.dense_hessian()
+    bands = step.bands.copy()
     first, n = int(chain.free_nodes[0]), int(chain.free_nodes.size)
     k = step_kernels()
-    k.add_pull_curvature(H, state.alpha, chain.link_length, float(scene.pull), first)
+    k.add_pull_curvature(bands, state.alpha, chain.link_length, float(scene.pull), first)
     D = k.slip_jacobian(state.alpha, first, n, right_datum)
     x, y = state.positions(chain)
     r = rotation_mode(chain, x)
+    rot, rot_k = np.empty(0), 0.0
     if r is not None:  # a free end: the rotation about the pin held by ROT_STIFFNESS
-        rr = float(r @ r)
-        H += (ROT_STIFFNESS * scene.EI / chain.length / rr**2) * np.outer(r, r)
+        rot, rot_k = r, ROT_STIFFNESS * scene.EI / chain.length / float(r @ r) ** 2
     f = -step.gradient(step.origin)
     if scene.pull:
         f += scene.pull * D[chain.links]
-    if has_tau:  # τ: one more unknown, moving every node's x, held by TAU_STIFFNESS
-        H = np.block([[H, np.zeros((H.shape[0], 1))],
-                      [np.zeros((1, H.shape[0])), np.full((1, 1), TAU_STIFFNESS *
-                                                         chain.force_scale / chain.length)]])
+    k_tau = TAU_STIFFNESS * chain.force_scale / chain.length
+    if has_tau:  # τ: one more unknown, moving every node's x, held by k_τ
         D = np.hstack([D, np.ones((D.shape[0], 1))])
         f = np.append(f, float(scene.pull) + left_pull)
     g_up, g_lo = gaps_at(chain, y)
@@ -294,7 +292,10 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
                                                        g_up, g_lo)
     gap = np.where(signs < 0, g_up[rows], g_lo[rows])
     slip = x[pair_nodes] - x_prev[pair_nodes]
-    W, g_f, s_f, X = k.delassus_form(H, f, rows, signs, gap, D, pair_nodes, slip)
+    W, g_f, s_f, X, ok = k.delassus_form(bands, rot, rot_k, k_tau, f, rows, signs, gap,
+                                         np.ascontiguousarray(D), pair_nodes, slip)
+    if not ok:
+        raise np.linalg.LinAlgError("the step's matrix is not positive definite")
     L, F = chain.length, chain.force_scale
     M, q = k.frictional_lcp(W * (F / L), g_f / L, s_f / L, mus, pairs)
     return FrictionStep(M, q, W, g_f, s_f, X, rows, signs, pair_nodes, pairs, mus, has_tau,
