@@ -2,8 +2,8 @@
 of each state.
 
 Random scenes (seed 7 by default: θ 100-170°, h 1-5 mm, N 20 or 40, μ 0.05-0.8, 40 %
-channels; ends pin–slider, slider–slider, slider–pin, and in channels pin–free and
-slider–free) along the path {}, θ + 10°, a pull (0-150 mN, none on a pinned right end),
+channels; ends pin–slider, slider–slider, slider–pin, and in channels pin–free,
+slider–free, free–pin and free–slider) along the path {}, θ + 10°, a pull (0-150 mN, none on a pinned right end),
 a release. Every state the judge calls converged is checked again here, independently
 of the judge: Coulomb's law node by node (|T| <= μN; a node that slides more than
 1e-6 ℓ at its cone with T opposite; a node inside its cone by more than 1e-9 of the
@@ -25,7 +25,7 @@ import lcpbench
 from lcpbench import ActuatorScene
 
 ENDS = [("pinned", "slider"), ("slider", "slider"), ("slider", "pinned"),
-        ("pinned", "free"), ("slider", "free")]
+        ("pinned", "free"), ("slider", "free"), ("free", "pinned"), ("free", "slider")]
 
 
 def breaks_coulomb(res, rtol=1e-9, slip=1e-6) -> bool:
@@ -56,7 +56,7 @@ def main() -> int:
     count, reasons, broken = Counter(), Counter(), 0
     for _ in range(args.paths):
         channel = bool(rng.random() < 0.4)
-        ends = ENDS[rng.integers(5 if channel else 3)]
+        ends = ENDS[rng.integers(7 if channel else 3)]
         theta = float(rng.uniform(100, 170))
         scene = ActuatorScene(theta=theta, height=float(rng.uniform(1.0, 5.0)),
                               links=int(rng.choice([20, 40])), channel=channel,

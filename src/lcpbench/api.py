@@ -419,11 +419,12 @@ def solve_path(scene, states=None, tol: float | None = None, *, max_outer: int =
 
     Parameters
     ----------
-    scene : ActuatorScene
+    scene : ActuatorScene or SectionedScene
         With ``friction``, ``left_end``, ``right_end`` and ``pull`` as it needs.
     states : sequence of dict, optional
         The scene fields each state changes, applied in turn (``theta``, ``height``,
-        ``pull``, ``friction``, ``weight``, ``EI``); default: one state, the scene.
+        ``pull``, ``friction``, ``weight``, ``EI``; a row of sections also ``sections``,
+        and its ``theta`` scales every section's θ); default: one state, the scene.
     tol : the outer loop's threshold on max|Δα| (rad; the paper's 1e-3 by default).
     max_outer : limit on contact steps per state.
     lcp : the step's LCP solver, ``(M, q) -> LCPSolution`` (default: Lemke,

@@ -41,7 +41,8 @@ def test_solve_friction_gross_slip_is_exit_1(capsys):
     (["--friction", "0.3", "--pull", "0.1"], "pull acts on the right end"),
     (["--left-end", "slider", "--right-end", "slider"], "nothing holds the chain"),
     (["--friction", "0.3", "--right-end", "slider", "--sensitivities"], "--sensitivities"),
-    (["--friction", "0.3", "--left-end", "free", "--channel"], "not supported"),
+    (["--friction", "0.3", "--left-end", "free", "--right-end", "free", "--channel"],
+     "cannot both be 'free'"),
     (["--friction", "0.3", "--right-end", "free"], "needs channel=True"),
 ])
 def test_solve_bad_friction_input_is_one_line_exit_2(argv, words, capsys):

@@ -55,3 +55,13 @@ def test_solve_refuses_a_frictional_scene_and_names_solve_path():
     scene = ActuatorScene(links=20, friction=0.3, right_end="slider", pull=0.01)
     with pytest.raises(ProblemError, match="solve_path"):
         lcpbench.solve(scene)
+
+
+def test_friction_with_a_wall_profile_names_what_is_supported():
+    from lcpbench.problems.walls import WallProfile
+
+    wall = WallProfile.from_table([0, 10, 20, 30], [3.0, 2.5, 2.5, 3.0])
+    for kw in (dict(friction=0.3, right_end="slider"), dict(right_end="slider"),
+               dict(right_end="slider", pull=0.01)):
+        with pytest.raises(ProblemError, match="flat rigid walls only"):
+            ActuatorScene(wall_profile=wall, **kw)

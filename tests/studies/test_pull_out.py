@@ -49,3 +49,25 @@ def test_pull_out_bad_input(kw, words):
         lcpbench.pull_out(replace(SCENE, **kw))
     with pytest.raises(ProblemError, match="rtol"):
         lcpbench.pull_out(SCENE, rtol=-1)
+
+
+def test_a_state_that_fails_for_another_reason_is_not_a_pull_out(monkeypatch):
+    """A state that fails for another reason than gross slip (here: every state above
+    a cut-off, as if Lemke stopped on a ray) says nothing of P*: pull_out does not call
+    a secant extrapolation from below the cut-off converged."""
+    import lcpbench.studies.pull_out as study
+
+    real = study.advance
+    cut = 0.5 * lcpbench.pull_out(SCENE).force
+
+    def failing(scene, state, *args, **kw):
+        res, end = real(scene, state, *args, **kw)
+        if scene.pull > cut:
+            res = replace(res, converged=False, reason="contact step 1: RAY (a test)")
+        return res, end
+
+    monkeypatch.setattr(study, "advance", failing)
+    po = lcpbench.pull_out(SCENE)
+    assert not po.converged
+    assert "did not converge (contact step 1: RAY (a test))" in po.reason
+    assert all(r.pull <= cut for r in po.path)

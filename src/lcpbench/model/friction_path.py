@@ -1,7 +1,10 @@
 """Loading paths (issue 39): a sequence of states, each solved from the last.
 
 A state is a dict of scene fields that change from the previous state (``theta``,
-``height``, ``pull``, ``friction``, ``weight``, ``EI``), applied in turn. The path
+``height``, ``pull``, ``friction``, ``weight``, ``EI``; on a row of sections also
+``sections``), applied in turn. On a row of sections ``theta`` sets the sharpest
+section's |θ| and scales the others with it (signs kept: the anchoring actuator's
+pressure ramp), and ``weight``, ``EI`` set every section's. The path
 starts from the frictionless equilibrium of its first state's scene (the actuator
 placed in its walls without friction; :func:`lcpbench.solve` of that scene with
 μ = 0, both ends pinned and no pull); each state's slips are measured from the
@@ -17,18 +20,39 @@ from dataclasses import replace
 from ..errors import ProblemError
 from ..problems.checks import describe
 from ..problems.scenes import ActuatorScene
-from .friction_driver import FrictionState, check_frictional_ends, solve_state
+from ..problems.sections import Section, SectionedScene
+from .friction_driver import FrictionState, StepLemke, solve_state
+from .friction_mirror import mirror_result, mirror_state, mirror_x, mirrored_scene
 from .friction_result import FrictionResult, build_result, from_contact
 
-#: the scene fields a state may change
+#: the scene fields a state may change (a row of sections: ``sections`` too)
 STATE_FIELDS = ("theta", "height", "pull", "friction", "weight", "EI")
+#: the scene kinds a path takes
+PATH_SCENES = (ActuatorScene, SectionedScene)
+
+
+def apply_state(scene, state: dict):
+    """``scene`` with the fields of ``state`` changed (see the module's note)."""
+    if not isinstance(scene, SectionedScene):
+        return replace(scene, **state)
+    state = dict(state)
+    secs = state.pop("sections", scene.sections)
+    per = {k: state.pop(k) for k in ("theta", "weight", "EI") if k in state}
+    if per:
+        secs = SectionedScene(sections=secs).sections  # (checked, as Sections)
+        top = max(abs(s.theta) for s in secs)
+        secs = tuple(Section(s.theta * per.get("theta", top) / top, s.length,
+                             per.get("EI", s.EI), per.get("weight", s.weight))
+                     for s in secs)
+    return replace(scene, sections=secs, **state)
 
 
 def path_scenes(scene, states) -> list[tuple[dict, ActuatorScene]]:
     """(state, its scene) for each state, each applied to the previous scene."""
-    if not isinstance(scene, ActuatorScene):
-        raise ProblemError(f"solve_path takes an ActuatorScene (friction, end conditions "
-                           f"and a pull are built for it), got {type(scene).__name__}")
+    if not isinstance(scene, PATH_SCENES):
+        raise ProblemError(f"solve_path takes an ActuatorScene or a SectionedScene (friction, "
+                           f"end conditions and a pull are built for them), got "
+                           f"{type(scene).__name__}")
     if isinstance(scene.links, str):
         raise ProblemError("solve_path needs an integer links (resolve 'auto' with "
                            "lcpbench.studies.discretisation.auto_links first)")
@@ -42,18 +66,19 @@ def path_scenes(scene, states) -> list[tuple[dict, ActuatorScene]]:
         if not isinstance(state, dict):
             raise ProblemError(f"states[{i}] must be a dict of scene fields, got "
                                f"{describe(state)}")
-        bad = sorted(set(state) - set(STATE_FIELDS))
+        allowed = STATE_FIELDS + (("sections",) if isinstance(scene, SectionedScene) else ())
+        bad = sorted(set(state) - set(allowed))
         if bad:
-            raise ProblemError(f"states[{i}] may change {', '.join(STATE_FIELDS)}; got "
+            raise ProblemError(f"states[{i}] may change {', '.join(allowed)}; got "
                                f"{', '.join(map(repr, bad))}")
-        current = replace(current, **state)  # (the scene checks the values)
+        current = apply_state(current, state)  # (the scene checks the values)
         out.append((dict(state), current))
     if not out:
         raise ProblemError("states must hold at least one state")
     return out
 
 
-def place(scene: ActuatorScene, *, tol: float, max_outer: int, solve
+def place(scene, *, tol: float, max_outer: int, solve
           ) -> tuple[FrictionState, object, str]:
     """Where a path starts: the frictionless equilibrium of ``scene`` (μ = 0, both ends
     pinned, no pull), its node x (the first slips' reference) and why it failed ("")."""
@@ -64,11 +89,19 @@ def place(scene: ActuatorScene, *, tol: float, max_outer: int, solve
     return FrictionState(placed.alpha.copy(), 0.0), placed.x.copy(), why
 
 
-def advance(scene: ActuatorScene, state: dict, current: FrictionState, x_prev, *,
+def advance(scene, state: dict, current: FrictionState, x_prev, *,
             tol: float, max_outer: int, lcp=None):
     """One state of a path solved from ``current`` (slips from ``x_prev``): its judged
-    result and the outer loop's end state."""
+    result and the outer loop's end state. A free left end is solved as its mirror
+    image (:mod:`lcpbench.model.friction_mirror`)."""
     kw = {} if lcp is None else {"lcp": lcp}
+    if scene.left_end == "free":
+        mirror, left_pull = mirrored_scene(scene)
+        a, xm = scene.length / scene.links, mirror_x(x_prev)
+        ans = solve_state(mirror, mirror_state(current, a), xm, tol=tol,
+                          max_outer=max_outer, left_pull=left_pull, **kw)
+        res = build_result(mirror, state, ans, xm, tol)
+        return mirror_result(res, scene, state), mirror_state(ans.state, a)
     ans = solve_state(scene, current, x_prev, tol=tol, max_outer=max_outer, **kw)
     return build_result(scene, state, ans, x_prev, tol), ans.state
 
@@ -84,9 +117,8 @@ def run_path(scene, states, *, tol: float, max_outer: int, solve, lcp=None
             out.append(from_contact(s, state, res, x_prev))
             x_prev = res.x
         return out
-    for _, s in steps:
-        check_frictional_ends(s)
     current, x_prev, broken = place(steps[0][1], tol=tol, max_outer=max_outer, solve=solve)
+    lcp = StepLemke() if lcp is None else lcp  # one for the path: its covering carries over
     out = []
     for state, s in steps:
         res, end = advance(s, state, current, x_prev, tol=tol,

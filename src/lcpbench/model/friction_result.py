@@ -106,10 +106,13 @@ def _checks():
 
 def friction_verdict(scene: ActuatorScene, chain: Chain, alpha: np.ndarray, x0: float,
                    fy: np.ndarray, fx: np.ndarray, normal: np.ndarray, limit: np.ndarray,
-                   gap: np.ndarray, slip: np.ndarray, tol: float) -> dict:
-    """The friction checks of an answer (docs/friction.md, the judge): numbers and fails."""
+                   gap: np.ndarray, slip: np.ndarray, tol: float, left_pull: float = 0.0
+                   ) -> dict:
+    """The friction checks of an answer (docs/friction.md, the judge): numbers and fails;
+    ``left_pull``: a force along x on the left end (a mirrored scene's pull)."""
     tau = force_tol(tol)
-    F0 = max(abs(float(np.sum(normal))), chain.force_scale, abs(float(scene.pull)))
+    F0 = max(abs(float(np.sum(normal))), chain.force_scale, abs(float(scene.pull)),
+             abs(left_pull))
     eps_f = NODE_SHARE * tau * F0
     eps_s = max(SLIP_FACTOR * tol * chain.link_length, SLIP_FLOOR * chain.length)
     has_tau, right_datum = datum(scene)
@@ -119,7 +122,7 @@ def friction_verdict(scene: ActuatorScene, chain: Chain, alpha: np.ndarray, x0: 
         chain.joint_links[:, 1].astype(np.int64), chain.joint_stiffness, chain.rest_joint,
         chain.link_load, chain.free_nodes.astype(np.int64), fy, fx, normal, limit, gap, slip,
         float(scene.pull), right_datum, scene.right_end != "free", eps_f, eps_s, chain.length,
-        F0)
+        F0, float(left_pull))
     v = dict(zip(kern.FRICTION_STATS, (float(s) for s in stats)))
     v["relative_torque_residual"] = v["max_torque_residual"] / max(v["spring_max"],
                                                                    scene.EI / chain.length)
@@ -166,7 +169,7 @@ def build_result(scene: ActuatorScene, state: dict, ans: StateAnswer, x_prev: np
     normal = np.concatenate([up[rows_up], lo[rows_lo]])
     slip = x[chain.free_nodes] - x_prev[chain.free_nodes]
     verdict = friction_verdict(scene, chain, alpha, x0, lo - up, T, normal, limit, gap, slip,
-                             tol)
+                               tol, ans.left_pull)
     converged = ans.converged and not verdict["fails"]
     reason = ans.reason if not ans.converged else (
         "max|Δα| < tol; judged" if converged else "judge: " + ", ".join(verdict["fails"]))

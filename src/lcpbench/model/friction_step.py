@@ -6,8 +6,8 @@ along x when no end holds x, held in the step by a spring k_τ):
 
     K δ = f + G_n N + G_t T,
 
-K the banded step's Hessian (:func:`lcpbench.model.step.assemble_step`, dense here)
-plus the pull's curvature (and k_τ), f = −g₀ + P ∂x_N/∂δ, G_n the gaps' and G_t the
+K the banded step's Hessian (:func:`lcpbench.model.step.assemble_step`) plus the
+pull's curvature (and k_τ, and a free end's rotation spring), f = −g₀ + P ∂x_N/∂δ, G_n the gaps' and G_t the
 slips' Jacobians. Eliminating δ leaves the contact quantities affine in the forces,
 (g, s) = (g_f, s_f) + W (N, T) with W = Gᵀ K⁻¹ G (:func:`delassus_form`, Siconos'
 fc2d form), and the LCP w = M z + q, 0 <= z ⟂ w >= 0, in z = (N, β⁺, β⁻, λ) with
@@ -21,6 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
+
+from ..linalg.ldl_kernel import refactor, resolve
 
 
 @njit(cache=True)
@@ -54,62 +56,95 @@ def slip_jacobian(alpha, first, n, right_datum):
 
 
 @njit(cache=True)
-def add_pull_curvature(H, alpha, a, pull, first):
+def add_pull_curvature(bands, alpha, a, pull, first):
     """H += P Σ_k d_k d_kᵀ / (a cos³ α_k), d_k = e_{k+1} − e_k on the free heights
-    (nodes ``first`` … ``first + n − 1``): the curvature of the pull's potential
-    −P x_N (x_N = Σ √(a² − Δy_k²)); P > 0 only (a pulled chain is stiffer; a push adds
-    nothing)."""
+    (nodes ``first`` … ``first + n − 1``), H in lower band storage (``bands[p, i] =
+    H[i + p, i]``): the curvature of the pull's potential −P x_N (x_N = Σ √(a² −
+    Δy_k²)); P > 0 only (a pulled chain is stiffer; a push adds nothing)."""
     if pull <= 0.0:
         return
-    n = H.shape[0]
+    n = bands.shape[1]
     for k in range(alpha.size):
         c = np.cos(alpha[k])
         s = pull / (a * c * c * c)
         lo, hi = k - first, k + 1 - first  # free indices of nodes k and k + 1
         ok_lo, ok_hi = 0 <= lo < n, 0 <= hi < n
         if ok_lo:
-            H[lo, lo] += s
+            bands[0, lo] += s
         if ok_hi:
-            H[hi, hi] += s
+            bands[0, hi] += s
         if ok_lo and ok_hi:
-            H[lo, hi] -= s
-            H[hi, lo] -= s
+            bands[1, lo] -= s
 
 
 @njit(cache=True)
-def _solve_columns(H, f, normal_node, normal_sign, D, friction_node):
-    """X = H⁻¹ [G_n | G_t | f] (n × (m_n + m_t + 1))."""
+def _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_sign, D, friction_node):
+    """(B, X = K⁻¹ B) with B = [G_n | G_t | f] (n × (m_n + m_t + 1)) and K the step's
+    matrix: H in lower band storage (``bands``), plus ``rot_k`` r rᵀ when ``rot`` = r
+    is not empty (a free end's rotation about the pin), plus k_τ on τ when ``f`` has
+    one more entry than H has rows. With both ends held in y, H is positive definite
+    and banded: a banded LDLᵀ (:mod:`lcpbench.linalg.ldl_kernel`), O(n) per column.
+    A free end's H is singular on the rotation and H + k r rᵀ is dense: solved
+    dense. ok False when K is not positive definite (a link at the vertical)."""
     n = f.size
+    ny = bands.shape[1]
     mn, mt = normal_node.size, friction_node.size
-    B = np.zeros((n, mn + mt + 1))
+    cols = mn + mt + 1
+    BT = np.zeros((cols, n))
     for r in range(mn):
-        B[normal_node[r], r] = normal_sign[r]
+        BT[r, normal_node[r]] = normal_sign[r]
     for c in range(mt):
         for j in range(n):
-            B[j, mn + c] = D[friction_node[c], j]
+            BT[mn + c, j] = D[friction_node[c], j]
     for j in range(n):
-        B[j, mn + mt] = f[j]
-    return B, np.linalg.solve(H, B)
+        BT[mn + mt, j] = f[j]
+    XT = BT.copy()
+    if rot.size:
+        K = np.zeros((ny, ny))
+        for i in range(ny):
+            K[i, i] = bands[0, i]
+            for p in (1, 2):
+                if i + p < ny:
+                    K[i + p, i] = K[i, i + p] = bands[p, i]
+            for j in range(ny):
+                K[i, j] += rot_k * rot[i] * rot[j]
+        XT[:, :ny] = np.linalg.solve(K, np.ascontiguousarray(BT[:, :ny].T)).T
+        ok = True
+    else:
+        fac = np.empty((4, ny))
+        ok = refactor(fac, bands, np.zeros(ny, np.bool_), np.empty(0), 0, ny)
+        if ok:
+            for c in range(cols):
+                x = BT[c, :ny].copy()
+                resolve(fac, x)
+                XT[c, :ny] = x
+    if n > ny:  # τ, held by k_τ alone
+        for c in range(cols):
+            XT[c, ny] = BT[c, ny] / k_tau
+    return np.ascontiguousarray(BT.T), np.ascontiguousarray(XT.T), ok
 
 
 @njit(cache=True)
-def delassus_form(H, f, normal_node, normal_sign, gap, D, friction_node, slip):
+def delassus_form(bands, rot, rot_k, k_tau, f, normal_node, normal_sign, gap, D,
+                  friction_node, slip):
     """The contact quantities as affine functions of the forces (docs/friction.md):
 
-    (g, s) = (g_f, s_f) + W (N, T), W = Gᵀ H⁻¹ G. Returns W ((m_n+m_t)²), the free
-    parts g_f, s_f, and X = H⁻¹ [G_n | G_t | f] to recover δy = X (N, T, 1).
-    ``normal_node`` / ``normal_sign``: the free node and ∂g/∂y (−1 upper, +1 lower)
-    of each wall row; ``friction_node``: the node (0..N) of each friction pair.
+    (g, s) = (g_f, s_f) + W (N, T), W = Gᵀ K⁻¹ G (K: :func:`_solve_columns`). Returns W
+    ((m_n+m_t)²), the free parts g_f, s_f, X = K⁻¹ [G_n | G_t | f] to recover
+    δy = X (N, T, 1), and whether K was positive definite. ``normal_node`` /
+    ``normal_sign``: the free node and ∂g/∂y (−1 upper, +1 lower) of each wall row;
+    ``friction_node``: the node (0..N) of each friction pair.
     """
     mn, mt = normal_node.size, friction_node.size
-    B, X = _solve_columns(H, f, normal_node, normal_sign, D, friction_node)
+    B, X, ok = _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_sign, D,
+                              friction_node)
     m = mn + mt
     BX = np.ascontiguousarray(B.T) @ X
     W = np.ascontiguousarray(BX[:m, :m])
     free = BX[:m, m].copy()
     g_f = gap + free[:mn]
     s_f = slip + free[mn:]
-    return W, g_f, s_f, X
+    return W, g_f, s_f, X, ok
 
 
 @njit(cache=True)

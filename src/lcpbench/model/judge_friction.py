@@ -22,10 +22,12 @@ FRICTION_STATS = ("spring_max", "max_torque_residual", "x_balance", "cone_excess
 
 @njit(cache=True)
 def friction_checks(alpha, x0, a, jl, jr, k, rest, link_load, free, fy, fx, normal, limit,
-                    gap, slip, pull, right_x_held, right_y_held, eps_f, eps_s, L, F0):
+                    gap, slip, pull, right_x_held, right_y_held, eps_f, eps_s, L, F0,
+                    left_pull):
     """The frictional answer's residuals on the exact geometry: the torque residual with
     the nodes' vertical fy and horizontal fx forces (N, per free node), the pull P on
-    the right end and the supports' reactions (the right one's vertical from moments
+    the right end (and ``left_pull`` along x on the left end: a mirrored scene's) and
+    the supports' reactions (the right one's vertical from moments
     about node 1 when it holds y, its horizontal when it holds x); the horizontal balance ΣF_x (what no
     support takes); per node the cone max(|T| − μN), and for nodes that slide
     (|s| > eps_s) the cone deficit μN − |T| and T·sign(s) (<= 0: T opposes the slip);
@@ -44,6 +46,7 @@ def friction_checks(alpha, x0, a, jl, jr, k, rest, link_load, free, fy, fx, norm
         FX[free[i]] += fx[i]
         FY[free[i]] += fy[i]
     FX[links] += pull
+    FX[0] += left_pull
     m0 = 0.0
     for q in range(links + 1):
         m0 += FY[q] * (x[q] - x[0]) - FX[q] * (y[q] - y[0])

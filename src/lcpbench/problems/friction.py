@@ -83,6 +83,34 @@ def check_support(left: str, right: str, pull: float, mu: tuple[float, float],
                            f"('pinned') or give friction > 0")
 
 
+class FrictionOptions:
+    """The frictional options of a scene (``friction``, ``left_end``, ``right_end``,
+    ``pull``: fields of the frozen dataclass that takes this in), checked once for
+    every scene kind that has them (:class:`~lcpbench.problems.scenes.ActuatorScene`,
+    :class:`~lcpbench.problems.sections.SectionedScene`)."""
+
+    def _check_friction_options(self) -> None:
+        walls = 2 if self.channel else 1
+        put = object.__setattr__
+        put(self, "friction", check_friction(self.friction, walls))
+        put(self, "left_end", check_end("left_end", self.left_end))
+        put(self, "right_end", check_end("right_end", self.right_end))
+        put(self, "pull", check_pull(self.pull))
+        check_support(self.left_end, self.right_end, self.pull, self.wall_friction,
+                      self.channel)
+
+    @property
+    def wall_friction(self) -> tuple[float, float]:
+        """(μ of the upper wall, μ of the lower wall); 0 where there is no wall."""
+        return wall_friction(self.friction, 2 if self.channel else 1)
+
+    @property
+    def frictional(self) -> bool:
+        """Whether the scene leaves the paper's model (friction, an end other than
+        pinned, a pull): solved along a path, :func:`lcpbench.solve_path`."""
+        return is_frictional(self.friction, self.left_end, self.right_end, self.pull)
+
+
 def is_frictional(friction, left: str, right: str, pull: float) -> bool:
     """Whether the options leave the paper's model: μ > 0 on a wall, an end other than
     pinned, or a pull."""

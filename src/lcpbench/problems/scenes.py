@@ -26,14 +26,7 @@ import numpy as np
 
 from ..errors import ProblemError
 from .checks import check_flag, check_number, describe
-from .friction import (
-    check_end,
-    check_friction,
-    check_pull,
-    check_support,
-    is_frictional,
-    wall_friction,
-)
+from .friction import FrictionOptions
 from .templates import filled, full, uniform_load
 from .walls import WallProfile
 
@@ -219,7 +212,7 @@ def reachable(node_arclength: np.ndarray, length: float, height: float, ends: st
 
 
 @dataclass(frozen=True)
-class ActuatorScene:
+class ActuatorScene(FrictionOptions):
     """An actuator bending section pinned at both ends against a rigid wall.
 
     Parameters
@@ -305,28 +298,11 @@ class ActuatorScene:
         self._check_friction()
 
     def _check_friction(self) -> None:
-        walls = 2 if self.channel else 1
-        object.__setattr__(self, "friction", check_friction(self.friction, walls))
-        object.__setattr__(self, "left_end", check_end("left_end", self.left_end))
-        object.__setattr__(self, "right_end", check_end("right_end", self.right_end))
-        object.__setattr__(self, "pull", check_pull(self.pull))
-        check_support(self.left_end, self.right_end, self.pull, self.wall_friction,
-                      self.channel)
+        self._check_friction_options()
         if self.frictional and (self.wall_profile is not None
                                 or not math.isinf(self.wall_stiffness)):
             raise ProblemError("friction, a slider or free end, or a pull cannot be combined "
                                "with wall_profile or wall_stiffness yet: flat rigid walls only")
-
-    @property
-    def wall_friction(self) -> tuple[float, float]:
-        """(μ of the upper wall, μ of the lower wall); 0 where there is no wall."""
-        return wall_friction(self.friction, 2 if self.channel else 1)
-
-    @property
-    def frictional(self) -> bool:
-        """Whether the scene leaves the paper's model (friction, an end other than
-        pinned, a pull): solved along a path, :func:`lcpbench.solve_path`."""
-        return is_frictional(self.friction, self.left_end, self.right_end, self.pull)
 
     def _check_profiles(self) -> None:
         for name in ("wall_profile", "lower_profile"):

@@ -47,6 +47,7 @@ import numpy as np
 
 from ..errors import ProblemError
 from .checks import check_choice, check_flag, check_number, describe
+from .friction import FrictionOptions
 from .scenes import (
     DEFAULT_EI,
     DEFAULT_LENGTH,
@@ -139,7 +140,7 @@ def _section(k: int, item) -> Section:
 
 
 @dataclass(frozen=True)
-class SectionedScene:
+class SectionedScene(FrictionOptions):
     """A row of bending sections, pinned at both ends, against a wall or in a channel.
 
     Parameters
@@ -161,6 +162,10 @@ class SectionedScene:
     gravity : "-y" or "+y"
         Direction of the self-weight: "-y" (default, the paper's model, away
         from the upper wall) or "+y" (toward it).
+    friction, left_end, right_end, pull :
+        Coulomb walls, end conditions and an axial pull on the right end, as for
+        :class:`~.scenes.ActuatorScene` (issue 39, docs/friction.md); solved along a
+        loading path, :func:`lcpbench.solve_path`.
 
     Raises
     ------
@@ -176,6 +181,10 @@ class SectionedScene:
     channel: bool = False
     length: float | None = None
     gravity: str = "-y"
+    friction: float | tuple[float, ...] = 0.0
+    left_end: str = "pinned"
+    right_end: str = "pinned"
+    pull: float = 0.0
 
     def __post_init__(self):
         put = object.__setattr__
@@ -209,6 +218,7 @@ class SectionedScene:
         put(self, "links", int(links))
         self.section_links()  # boundaries on nodes, or ProblemError
         self.rest_alpha()  # a chord, or ProblemError
+        self._check_friction_options()
 
     # -- what the user reads --------------------------------------------------
     @property
@@ -406,7 +416,7 @@ def sections_text(scene: SectionedScene) -> str:
 def anchoring_actuator(theta: float = 150.0, height: float = 5.5, *, links: int | None = None,
                        length: float = DEFAULT_LENGTH, EI: float = DEFAULT_EI,
                        weight: float = DEFAULT_WEIGHT, gravity: str = "-y",
-                       sections: int = 3) -> SectionedScene:
+                       sections: int = 3, **friction) -> SectionedScene:
     """The paper's 3-section anchoring actuator in its two-wall fixture (Fig. 1b, 14).
 
     Three identical sections of length ℓ bending alternately: the middle one
@@ -429,6 +439,8 @@ def anchoring_actuator(theta: float = 150.0, height: float = 5.5, *, links: int 
         paper's 140 per section, 420 for three).
     length, EI, weight, gravity :
         As for :class:`Section` and :class:`SectionedScene`.
+    **friction :
+        ``friction``, ``left_end``, ``right_end``, ``pull`` of :class:`SectionedScene`.
     sections : int
         How many alternating sections (odd, 1 to 15; default 3, the paper's):
         the middle one bends toward the upper wall, its neighbours away, and so
@@ -442,8 +454,12 @@ def anchoring_actuator(theta: float = 150.0, height: float = 5.5, *, links: int 
                            f"the others alternating), got {count}")
     signs = [(-1.0) ** abs(k - count // 2) for k in range(count)]
     secs = tuple(Section(sign * theta, length, EI, weight) for sign in signs)
+    bad = sorted(set(friction) - {"friction", "left_end", "right_end", "pull"})
+    if bad:
+        raise ProblemError(f"anchoring_actuator takes friction, left_end, right_end and pull "
+                           f"besides its own parameters; got {', '.join(map(repr, bad))}")
     return SectionedScene(sections=secs, height=height, links=links, channel=True,
-                          gravity=gravity)
+                          gravity=gravity, **friction)
 
 
 #: every kind of scene lcpbench solves (here, the one module that sees all three)

@@ -10,7 +10,9 @@ half the update work). The columns of ``B^{-1}`` are those of the initial
 identity, which the lexicographic minimum-ratio test uses to break ties
 (Cottle, Pang & Stone, *The Linear Complementarity Problem*, 1992, sec. 4.4-4.9);
 this rules out cycling under degeneracy. Each pivot is one matrix-vector
-product and one rank-one numpy update, ``O(n^2)`` operations.
+product and one rank-one update, ``O(n^2)`` operations, compiled
+(:mod:`lcpbench.solvers.lemke_kernel`); this module sets the problem up and checks
+the answer.
 
 The answer is never trusted blindly: on termination ``w`` is recomputed as
 ``M z + q`` and the scaled natural residual is checked before SOLVED is
@@ -62,24 +64,17 @@ def _max_size() -> int:
     return n
 
 
-def _ties(col: np.ndarray, a: np.ndarray, noise: np.ndarray) -> np.ndarray:
-    """Mask of rows whose ratio ``col / a`` ties with the minimum, per column.
+_KERNEL: list = []  # the compiled pivots (solvers/lemke_kernel.py), once loaded
 
-    ``col`` is 1-D or 2-D (rows x columns). ``noise[i]`` is the magnitude of
-    the quantities row ``i`` of ``col`` was computed from (the size of its
-    round-off, up to a factor). Row ``i`` ties with the minimising row ``j``
-    if their ratios differ by at most ``TIE_RTOL`` times ``|min|`` plus both
-    rows' noise over ``a``. The noise must not be taken from ``col`` itself:
-    an entry that is exactly zero in exact arithmetic holds round-off only,
-    and a tolerance relative to that round-off would let it decide the order.
-    """
-    two_d = col.ndim == 2
-    ratios = col / (a[:, None] if two_d else a)
-    j = ratios.argmin(axis=0)
-    m = ratios.min(axis=0)
-    err = noise / a
-    slack = TIE_RTOL * (np.abs(m) + err[j] + (err[:, None] if two_d else err))
-    return ratios <= m + slack
+
+def _kernel():
+    """Lemke's compiled pivots (:mod:`lcpbench.solvers.lemke_kernel`), loaded once
+    through :func:`lcpbench.numba_cache.kernel_module`."""
+    if not _KERNEL:
+        from ..numba_cache import held, kernel_module
+
+        held(_KERNEL).append(kernel_module("lcpbench.solvers.lemke_kernel", "pivots"))
+    return _KERNEL[0]
 
 
 def _lexmin_row(tab: np.ndarray, rows: np.ndarray, a: np.ndarray, n: int,
@@ -89,36 +84,21 @@ def _lexmin_row(tab: np.ndarray, rows: np.ndarray, a: np.ndarray, n: int,
     Ratios are ``tab[i, k] / a_i`` taken first on the right-hand side column
     (``k = n``), then on the ``B^{-1}`` columns ``k = 0 .. n-1`` in order,
     keeping at each stage only the rows tied (to a relative tolerance) with
-    the minimum. The tolerance is relative to the size of the whole row of
-    ``B^{-1}`` (times ``qnorm = |q|_inf`` for the right-hand side), the scale
-    of the round-off in its entries. If ``prefer`` (the row of ``z0``, or -1)
-    survives the first stage, it wins. Columns on which all remaining rows
-    tie are skipped in one vectorised step, so deep degeneracy costs no
-    Python loop over ``n``.
+    the minimum. Row ``i`` ties with the minimising row ``j`` if their ratios
+    differ by at most ``TIE_RTOL`` times ``|min|`` plus both rows' noise over
+    ``a``, the noise being the size of the whole row of ``B^{-1}`` (times
+    ``qnorm = |q|_inf`` for the right-hand side), the scale of the round-off in
+    its entries: an entry that is exactly zero in exact arithmetic holds
+    round-off only, and a tolerance relative to that round-off would let it
+    decide the order. If ``prefer`` (the row of ``z0``, or -1) survives the
+    first stage, it wins. Compiled (:func:`lcpbench.solvers.lemke_kernel.lexmin_row`).
     """
-    noise = np.abs(tab[rows, :n]).max(axis=1)
-    keep = _ties(tab[rows, n], a, noise * qnorm)
-    rows, a, noise = rows[keep], a[keep], noise[keep]
-    if prefer in rows:
-        return prefer
-    k = 0
-    while rows.size > 1 and k < n:
-        tied = _ties(tab[rows, k:n], a, noise)
-        split = np.flatnonzero(~tied.all(axis=0))
-        if split.size == 0:
-            break
-        keep = tied[:, split[0]]
-        rows, a, noise = rows[keep], a[keep], noise[keep]
-        k += int(split[0]) + 1
-    return int(rows[0])
-
-
-def _pivot(tab: np.ndarray, a: np.ndarray, r: int) -> None:
-    """Pivot ``tab = [B^{-1} | rhs]`` in place on row ``r`` of entering column ``a``."""
-    tab[r] /= a[r]
-    col = a.copy()
-    col[r] = 0.0
-    tab -= col[:, None] * tab[r]
+    tab = np.asarray(tab, dtype=float)
+    return int(_kernel().lexmin_row(np.ascontiguousarray(tab[:, :n]),
+                                    np.ascontiguousarray(tab[:, n]),
+                                    np.asarray(rows, dtype=np.int64),
+                                    np.asarray(a, dtype=float), int(prefer),
+                                    float(qnorm), TIE_RTOL))
 
 
 def _z_of(values: np.ndarray, basis: np.ndarray, n: int) -> np.ndarray:
@@ -220,47 +200,23 @@ def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
 
     qnorm = float(np.abs(q).max())
     z0 = 2 * n  # variable index of the artificial (w: 0..n-1, z: n..2n-1)
-    tab = np.hstack([np.eye(n), q[:, None]])  # [B^{-1} | B^{-1} q]
-    binv = tab[:, :n]
-    basis = np.arange(n)  # basis[i] = variable basic in row i
-    status, msg, it = None, "", 0
+    k = _kernel()
     t0 = time.perf_counter()
-    try:
-        with np.errstate(divide="raise", over="raise", invalid="raise"):
-            # Initial pivot: z0 enters (column -d), the lexicographically most violated row leaves.
-            a = -d
-            r = _lexmin_row(tab, np.arange(n), d, n, -1, qnorm)
-            entering = z0
-            while True:
-                if it >= max_pivots:
-                    status, msg = Status.MAX_ITER, f"pivot budget {max_pivots} exhausted"
-                    break
-                _pivot(tab, a, r)
-                it += 1
-                leaving, basis[r] = basis[r], entering
-                if leaving == z0:
-                    break
-                if not np.all(np.isfinite(tab[r])):
-                    raise FloatingPointError("non-finite pivot row")
-                # The complement of the leaving variable enters.
-                if leaving < n:
-                    entering = leaving + n
-                    a = -(binv @ M[:, leaving])
-                else:
-                    entering = leaving - n
-                    a = binv[:, entering].copy()
-                amax = np.abs(a).max()
-                rows = np.flatnonzero(a > pivot_tol * amax) if amax > 0 else np.array([], int)
-                if rows.size == 0:
-                    kind = "w" if entering < n else "z"
-                    status = Status.RAY
-                    msg = (f"secondary ray: no eligible pivot for entering "
-                           f"{kind}[{entering % n}] (LCP may be infeasible)")
-                    break
-                zrow = np.flatnonzero(basis == z0)
-                r = _lexmin_row(tab, rows, a[rows], n, int(zrow[0]) if zrow.size else -1, qnorm)
-    except (np.linalg.LinAlgError, FloatingPointError) as exc:
-        status, msg = Status.FAILED, f"arithmetic failure after {it} pivots: {exc}"
+    binv, rhs, basis, end, it, entering = k.pivots(np.ascontiguousarray(M),
+                                                   np.ascontiguousarray(q),
+                                                   np.ascontiguousarray(d), float(pivot_tol),
+                                                   int(max_pivots), qnorm, TIE_RTOL)
+    tab = np.hstack([binv, rhs[:, None]])  # [B^{-1} | B^{-1} q]
+    status, msg = None, ""
+    if end == k.MAX_ITER:
+        status, msg = Status.MAX_ITER, f"pivot budget {max_pivots} exhausted"
+    elif end == k.RAY:
+        kind = "w" if entering < n else "z"
+        status = Status.RAY
+        msg = (f"secondary ray: no eligible pivot for entering "
+               f"{kind}[{entering % n}] (LCP may be infeasible)")
+    elif end == k.FAILED:
+        status, msg = Status.FAILED, f"arithmetic failure after {it} pivots: non-finite pivot row"
     t = time.perf_counter() - t0
 
     z = _z_of(tab[:, -1], basis, n)

@@ -7,12 +7,17 @@ force P* is the root of g(P) = C(P) − P: at P* every contact node slides (gros
 
 :func:`pull_out` follows the pull as a loading path (each state solved from the last,
 :mod:`lcpbench.model.friction_path`), stepping towards P* by the secant of g through the
-states held so far, from below: a step past P* (no equilibrium) is not kept, and the
-next one goes half as far. The nodes that pass from stick to slip between two held
+states held so far, from below, each state's outer loop started on the line through
+the last two held states (:func:`predicted`): a step past P* (gross slip: no
+equilibrium) is not kept, and the next one goes at most half way to it; a state that
+fails for another reason (a step Lemke cannot solve) says nothing of P*, and the next
+step goes half as far. The nodes that pass from stick to slip between two held
 states are its events. P* is the secant's root once it is within ``rtol`` of the
-last state held, or of the root before it (g is smooth: the root's error is second
-order in the secant's span; within ~1e-7 of P* Lemke is inexact on the degenerate
-step, docs/friction.md, so the states stop short of it).
+last pull held (g(P) ≈ 0 there: the state is at gross slip), or of the root before
+it while within :data:`SECANT_REACH` of the last pull held (within ~1e-7 of P* Lemke
+is inexact on the degenerate step, docs/friction.md, so the states stop short of
+it), or once the last pull held and a gross slip are within ``rtol`` of each other.
+An extrapolation from states far below P* is never called converged.
 """
 
 from __future__ import annotations
@@ -22,13 +27,19 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import ProblemError
-from ..model.friction_path import advance, place
+from ..model.friction_driver import FrictionState, StepLemke
+from ..model.friction_path import PATH_SCENES, advance, place
 from ..model.friction_result import FrictionResult
 from ..problems.checks import check_number
 from ..problems.scenes import ActuatorScene
+from ..problems.sections import SectionedScene
 
 #: a step goes this share of the way to the secant's root (from below)
 APPROACH = 0.999
+#: two successive secant roots that agree to rtol give P* only within this share of
+#: P* from the last pull held (the error of a secant root is second order in the
+#: distance it reaches; an extrapolation from far below P* is never called converged)
+SECANT_REACH = 1e-5
 
 
 @dataclass
@@ -66,9 +77,10 @@ def capacity(res: FrictionResult) -> float:
     return mu_up * float(np.sum(res.forces)) + lower
 
 
-def _check(scene) -> ActuatorScene:
-    if not isinstance(scene, ActuatorScene):
-        raise ProblemError(f"pull_out takes an ActuatorScene, got {type(scene).__name__}")
+def _check(scene) -> ActuatorScene | SectionedScene:
+    if not isinstance(scene, PATH_SCENES):
+        raise ProblemError(f"pull_out takes an ActuatorScene or a SectionedScene, got "
+                           f"{type(scene).__name__}")
     if scene.left_end == "pinned" or scene.right_end != "slider":
         raise ProblemError("pull_out needs left_end='slider' and right_end='slider' (a "
                            "pinned end holds any pull; the pull acts on the right end), got "
@@ -79,17 +91,20 @@ def _check(scene) -> ActuatorScene:
 
 
 def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int = 20,
-             max_outer: int = 100) -> PullOut:
+             max_outer: int = 30) -> PullOut:
     """The largest axial pull the scene holds (N): see the module's note.
 
     Parameters
     ----------
-    scene : ActuatorScene
+    scene : ActuatorScene or SectionedScene
         Sliders at both ends and friction; its ``pull`` (>= 0) is the path's start.
     tol : the outer loop's threshold on max|Δα| (rad) per state.
     rtol : P* is returned once the secant's root is within ``rtol`` (relative) of the
         last pull held or of the previous root.
     max_solves : the budget of frictional states.
+    max_outer : the outer steps of each state (they take at most 7 on the scenes of
+        ``benchmarks/friction_speed.py``; within ~1e-7 of P* a state on the degenerate
+        step does not converge and would spend them all).
 
     Returns
     -------
@@ -107,11 +122,12 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
     current, x_prev, why = place(scene, tol=tol, max_outer=max_outer, solve=solve)
     if why:
         return PullOut(np.nan, np.nan, np.zeros(0), np.zeros(0), np.nan, False, why, 0)
-    path, held, events, solves = [], [], [], 0
-    P, fail, before = float(scene.pull), None, np.inf
+    path, held, events, solves, ends = [], [], [], 0, []
+    lcp = StepLemke()  # one for the path: the covering that solves a step carries over
+    P, fail, trouble, before = float(scene.pull), None, "", np.inf
     while solves < max_solves:
-        res, end = advance(replace(scene, pull=P), {"pull": P}, current, x_prev, tol=tol,
-                           max_outer=max_outer)
+        res, end = advance(replace(scene, pull=P), {"pull": P}, predicted(ends, P, current),
+                           x_prev, tol=tol, max_outer=max_outer, lcp=lcp)
         solves += 1
         if res.converged:
             if path:
@@ -120,21 +136,43 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
             path.append(res)
             held.append((P, capacity(res) - P))
             current, x_prev = end, res.x.copy()
+            ends.append((P, end))
         elif not path:
             return PullOut(np.nan, np.nan, np.zeros(0), np.zeros(0), np.nan, False,
                            f"the start (pull {P:g} N) does not hold: {res.reason}", solves)
-        else:
-            fail = P
+        elif res.reason.startswith("gross slip"):  # no equilibrium: P* < P
+            fail = P if fail is None else min(fail, P)
+        else:  # a state that failed for another reason says nothing of P*
+            trouble = f"; the state at pull {P:g} N did not converge ({res.reason})"
         root, last = _secant_root(held), held[-1][0]
+        near = abs(root - last) <= SECANT_REACH * abs(root)
         if len(held) >= 2 and (abs(root - last) <= rtol * abs(root) or (
-                res.converged and abs(root - before) <= rtol * abs(root))):
+                near and res.converged and abs(root - before) <= rtol * abs(root))):
             return _answer(root, path, events, solves, True, "secant root within rtol")
+        if fail is not None and fail - last <= rtol * abs(root):
+            return _answer(min(max(root, last), fail), path, events, solves, True,
+                           "bracketed within rtol: the last pull held and a gross slip")
         before = root
-        P = last + APPROACH * (root - last)
-        if fail is not None and P >= fail:
-            P = last + 0.5 * (fail - last)
+        step = APPROACH * (root - last)
+        if fail is not None:
+            step = min(step, 0.5 * (fail - last))
+        if not res.converged and P != fail:  # go half as far as the step that failed
+            step = min(step, 0.5 * (P - last))
+        P = last + step
     return _answer(_secant_root(held), path, events, solves, False,
-                   f"the budget of {max_solves} frictional solves ran out")
+                   f"the budget of {max_solves} frictional solves ran out{trouble}")
+
+
+def predicted(ends: list, P: float, current: FrictionState) -> FrictionState:
+    """Where the outer loop of the state at pull ``P`` starts: on the line through the
+    last two held states' end states (α and x of node 1, against the pull), else at
+    ``current``. A start only: the state is the fixed point whatever its start, its
+    slips measured from the last held state."""
+    if len(ends) < 2:
+        return current
+    (P0, s0), (P1, s1) = ends[-2:]
+    t = (P - P1) / (P1 - P0)
+    return FrictionState(s1.alpha + t * (s1.alpha - s0.alpha), s1.x0 + t * (s1.x0 - s0.x0))
 
 
 def _secant_root(held: list[tuple[float, float]]) -> float:

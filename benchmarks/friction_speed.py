@@ -1,0 +1,128 @@
+"""Issue 39, target 5: the speed of a frictional solve and of a pull-out at N = 140.
+
+Scenes: the paper's (θ 150°, h 3 mm, N = 140) on one flat wall, and the same in the
+channel (θ 180°, h 2 mm, μ 0.3 above and 0.1 below); sliders at both ends, μ = 0.3. Contenders,
+timed around the call and interleaved in rotating order (``perf.interleaved``), one
+BLAS thread:
+
+* the frictionless solve, ``lcpbench.solve`` of the scene with μ = 0 and pinned ends;
+* a frictional solve: ``lcpbench.solve_path(scene with pull 0.05 N, [{}])``, one state,
+  which includes its start (the frictionless placement, itself a solve);
+* a pull-out: ``lcpbench.pull_out(scene)``.
+
+Targets: a frictional solve within 10× the frictionless one (the ratio per round,
+median over rounds), a pull-out in <= 20 frictional solves and under 20 ms. Also
+reported: the outer steps of each and the Lemke calls per contact step (restarts with
+other covering vectors where one stops short of SOLVED). Writes
+``results/friction/speed.md`` (``--out``; not overwritten unless ``--force``).
+
+    python benchmarks/friction_speed.py --force
+"""
+
+# ruff: noqa: E402  (BLAS is pinned to one thread before numpy is imported)
+from __future__ import annotations
+
+import os
+
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_v] = "1"
+
+import argparse
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+from perf import interleaved, wall
+
+import lcpbench
+import lcpbench.model.friction_driver as driver
+from lcpbench import ActuatorScene
+from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENES = {
+    "flat wall": ActuatorScene(theta=150, height=3.0, links=140, friction=0.3,
+                               left_end="slider", right_end="slider"),
+    "channel": ActuatorScene(theta=180, height=2.0, links=140, channel=True,
+                             friction=(0.3, 0.1), left_end="slider", right_end="slider"),
+}
+PULL = 0.05
+
+
+def lemke_calls(fn) -> tuple[int, int]:
+    """(contact steps, Lemke calls) of one call of ``fn`` (counted, not timed)."""
+    count = {"steps": 0, "calls": 0}
+    lemke, step = driver.lemke, driver.StepLemke.__call__
+
+    def counted_lemke(*args, **kw):
+        count["calls"] += 1
+        return lemke(*args, **kw)
+
+    def counted_step(self, M, q):
+        count["steps"] += 1
+        return step(self, M, q)
+
+    driver.lemke, driver.StepLemke.__call__ = counted_lemke, counted_step
+    try:
+        fn()
+    finally:
+        driver.lemke, driver.StepLemke.__call__ = lemke, step
+    return count["steps"], count["calls"]
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--rounds", type=int, default=7)
+    p.add_argument("--out", type=Path, default=ROOT / "results" / "friction" / "speed.md")
+    p.add_argument("--force", action="store_true", help="overwrite a committed result")
+    a = p.parse_args(argv)
+    refuse_overwrite([a.out], a.force)
+    start = timing_start()
+    rows, ratios = [], []
+    for name, scene in SCENES.items():
+        plain = replace(scene, friction=0.0, left_end="pinned", right_end="pinned")
+        pulled = replace(scene, pull=PULL)
+        calls = {"frictionless": wall(lambda plain=plain: lcpbench.solve(plain)),
+                 "frictional": wall(lambda s=pulled: lcpbench.solve_path(s, [{}])),
+                 "pull-out": wall(lambda s=scene: lcpbench.pull_out(s))}
+        got = interleaved(calls, a.rounds)
+        t = {k: np.array(v["times"]) for k, v in got.items()}
+        ratio = float(np.median(t["frictional"] / t["frictionless"]))
+        (state,) = got["frictional"]["payload"]
+        po = got["pull-out"]["payload"]
+        s_steps, s_calls = lemke_calls(lambda s=pulled: lcpbench.solve_path(s, [{}]))
+        p_steps, p_calls = lemke_calls(lambda s=scene: lcpbench.pull_out(s))
+        rows.append(
+            f"| {name} | {1e3 * np.median(t['frictionless']):.3f} | "
+            f"{1e3 * np.median(t['frictional']):.2f} | {ratio:.0f}× | "
+            f"{state.outer_iterations} / {s_calls / max(s_steps, 1):.1f} | "
+            f"{1e3 * np.median(t['pull-out']):.1f} | {po.solves} | "
+            f"{sum(r.outer_iterations for r in po.path)} / {p_calls / max(p_steps, 1):.1f} | "
+            f"{1e3 * po.force:.4g} | {state.converged and po.converged} |")
+        ratios.append(ratio)
+    when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
+    text = "\n".join([
+        "# Speed of the frictional solve and of pull-out (issue 39, target 5)", "",
+        f"Measured {when}; {timing_note(start)} Command: `python benchmarks/friction_speed.py "
+        f"--rounds {a.rounds} --force`. N = 140, sliders at both ends, μ 0.3 (the channel: "
+        f"0.3 above, 0.1 below), each call at its defaults (`solve` and `solve_path`: tol "
+        "1e-3, the paper's; `pull_out`: tol 1e-10, rtol 1e-6). Medians over rounds, interleaved; the "
+        "ratio is the median of the per-round ratios. The frictional solve is one state of "
+        f"a path, pull {PULL} N, and includes its start (the frictionless placement).", "",
+        "Targets: frictional solve <= 10× the frictionless one; pull-out in <= 20 "
+        "frictional solves and < 20 ms.", "",
+        "| scene | frictionless (ms) | frictional (ms) | ratio | its outer steps / Lemke "
+        "calls per step | pull-out (ms) | its solves | outer steps (all states) / Lemke "
+        "calls per step | pull-out force (mN) | converged |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|",
+        *rows, ""])
+    a.out.parent.mkdir(parents=True, exist_ok=True)
+    a.out.write_text(text)
+    print(text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
