@@ -68,7 +68,6 @@ def test_anchor_plot_writes_the_figure(tmp_path, capsys):
     (["--theta", "150", "--friction", "-0.1"], "friction must be"),
     (["--theta", "150", "--friction", "x"], "--friction"),
     (["--theta", "150", "--pressure", "100", "--friction", "0.3"], "not both"),
-    (["--theta", "150", "--friction", "0.3", "--sections", "anchoring"], "SectionedScene"),
 ])
 def test_anchor_bad_input_is_one_line_exit_2(argv, words, capsys):
     code = main([*BASE, *argv])
@@ -85,10 +84,30 @@ def test_solve_friction_plot_writes_the_figure(tmp_path, capsys):
     assert code == 0 and f.stat().st_size > 1000
 
 
-def test_solve_friction_on_sections_is_refused_not_dropped(capsys):
-    """Friction given with --sections goes the frictional route, which refuses a row of
-    sections in one line today (it is never silently solved without friction)."""
+def test_anchor_takes_the_papers_three_section_actuator(capsys):
+    """--sections anchoring: the 3-section actuator in its channel holds a pull; at
+    pull-out its contact nodes slide, so P* = μ ΣN (Coulomb on flat walls), as for one
+    section."""
+    code, d = _json(["--theta", "150", "--friction", "0.3", "--sections", "anchoring"],
+                    capsys)
+    assert code == 0 and d["converged"]
+    P, Ph, C = d["pull_out_force"], d["held_pull"], d["capacity"]
+    assert C == pytest.approx(0.3 * d["normal_force_total"], rel=1e-9)
+    assert 0 < Ph <= P <= C * (1 + 1e-9) and P == pytest.approx(C, rel=1e-2)
+
+
+def test_solve_friction_on_sections_is_not_dropped(capsys):
+    """Friction given with --sections is solved with friction: every node's tangential
+    force within its cone, |T| <= μ N, N the node's normal force on either wall of the
+    channel (with sliders at both ends and no pull, friction
+    alone holds the row along x: ΣT = 0)."""
     code = main(["solve", "--sections", "anchoring", "--theta", "150", "--height", "5.5",
-                 "--links", "30", "--friction", "0.3"])
-    err = capsys.readouterr().err.strip().splitlines()
-    assert code == 2 and len(err) == 1 and "SectionedScene" in err[0]
+                 "--links", "30", "--friction", "0.3", "--left-end", "slider",
+                 "--right-end", "slider", "--json"])
+    d = json.loads(capsys.readouterr().out)
+    assert code == 0 and d["converged"]
+    N = [up + lo for up, lo in zip(d["forces"], d["forces_lower"], strict=True)]
+    T = d["tangential_forces"]
+    assert len(T) == len(N) and sum(N) > 0
+    assert all(abs(t) <= 0.3 * n + 1e-9 for t, n in zip(T, N, strict=True))
+    assert abs(sum(T)) <= 1e-6 * sum(N)
