@@ -19,6 +19,7 @@ from ..problems.checks import describe
 from ..problems.scenes import ActuatorScene
 from .friction_driver import FrictionState, check_frictional_ends, solve_state
 from .friction_result import FrictionResult, build_result, from_contact
+from .friction_solvers import step_runner
 
 #: the scene fields a state may change
 STATE_FIELDS = ("theta", "height", "pull", "friction", "weight", "EI")
@@ -73,10 +74,16 @@ def advance(scene: ActuatorScene, state: dict, current: FrictionState, x_prev, *
     return build_result(scene, state, ans, x_prev, tol), ans.state
 
 
-def run_path(scene, states, *, tol: float, max_outer: int, solve, lcp=None
-             ) -> list[FrictionResult]:
-    """:func:`lcpbench.solve_path`'s work; ``solve`` is :func:`lcpbench.solve`."""
+def run_path(scene, states, *, tol: float, max_outer: int, solve, lcp=None,
+             solver: str | None = None) -> list[FrictionResult]:
+    """:func:`lcpbench.solve_path`'s work; ``solve`` is :func:`lcpbench.solve`; the
+    frictional step by ``lcp`` (a function ``(M, q) -> LCPSolution``) or by the back-end
+    named ``solver`` (:func:`~.friction_solvers.step_runner`; default Lemke)."""
+    if lcp is not None and solver is not None:
+        raise ProblemError("give solver= (a back-end's name) or lcp= (a function), not both")
     steps = path_scenes(scene, states)
+    if lcp is None and solver is not None:
+        lcp = step_runner(solver)
     if not any(s.frictional for _, s in steps):  # the paper's model: today's solve
         out, x_prev = [], None
         for state, s in steps:

@@ -1,0 +1,158 @@
+"""An active set on the stick / slide / separate states of 2-D frictional contact.
+
+The problem is Siconos' fc2d form (:mod:`.siconos_fc2d`): per contact c the local
+velocity u_c = (u_n, u_t) (gap, slip) and reaction r_c = (r_n, r_t) (N, T), with
+u = W r + q, W symmetric positive semidefinite (the Delassus matrix), and
+Signorini–Coulomb: 0 <= r_n ⟂ u_n >= 0, |r_t| <= μ_c r_n, r_t = −μ_c r_n sign(u_t)
+where u_t ≠ 0.
+
+Each contact is in one of four states, and a state fixes two linear conditions:
+
+| state | conditions |
+|---|---|
+| separate (0) | r_n = 0, r_t = 0 |
+| stick (1) | u_n = 0, u_t = 0 |
+| slide forward (2), u_t > 0 | u_n = 0, r_t = −μ r_n |
+| slide back (3), u_t < 0 | u_n = 0, r_t = +μ r_n |
+
+Given the states, r follows from one linear solve (least squares of the minimum norm:
+in a run of sticking nodes on a flat wall the individual r_t are statically
+indeterminate, W is singular there, and any split of their sum is an answer). The
+states are then checked: a separate contact must not penetrate (u_n >= 0), a contact
+must push (r_n >= 0), a stick must lie in its cone, a slide must move the way its
+force opposes. Every violated contact changes state at once (block pivoting, as
+Júdice–Pires for the LCP); after :data:`BLOCK_TRIES` block changes without fewer
+violations, one at a time, the lowest index first (Murty's rule). The method is
+finite on no class of these problems that we know of, so it has an iteration limit
+and reports MAX_ITER there. SOLVED only when no state is violated and lcpbench's own
+Signorini–Coulomb residual (:func:`.siconos_fc2d.coulomb_residual`) is below
+:data:`.siconos_fc2d.ACCEPT_TOL`.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from ..errors import ProblemError
+from .base import Status
+from .siconos_fc2d import ACCEPT_TOL, FC2DSolution, coulomb_residual
+
+SEPARATE, STICK, FORWARD, BACK = 0, 1, 2, 3
+#: block changes without fewer violations before changing one state at a time
+BLOCK_TRIES = 3
+#: a state is violated beyond this share of the problem's scale (max(1, |q|, |r|))
+VIOLATION_RTOL = 1e-12
+
+
+def initial_states(q: np.ndarray, mu: np.ndarray) -> np.ndarray:
+    """Where the free motion penetrates (q_n < 0) a contact sticks (slides where μ = 0),
+    elsewhere it separates."""
+    st = np.where(q[0::2] < 0.0, STICK, SEPARATE)
+    return np.where((st == STICK) & (mu <= 0.0), FORWARD, st).astype(np.int64)
+
+
+def reactions(W: np.ndarray, q: np.ndarray, mu: np.ndarray, states: np.ndarray
+              ) -> np.ndarray:
+    """r (interleaved (r_n, r_t)) from the states: one least-squares solve of the
+    states' conditions (minimum norm where they do not fix r)."""
+    nc = mu.size
+    contact = np.flatnonzero(states != SEPARATE)
+    stick = np.flatnonzero(states == STICK)
+    k = contact.size + stick.size
+    r = np.zeros(2 * nc)
+    if k == 0:
+        return r
+    E = np.zeros((2 * nc, k))  # r = E x, x = (r_n of the contacts, r_t of the sticks)
+    for j, c in enumerate(contact):
+        E[2 * c, j] = 1.0
+        if states[c] == FORWARD:
+            E[2 * c + 1, j] = -mu[c]
+        elif states[c] == BACK:
+            E[2 * c + 1, j] = mu[c]
+    for j, c in enumerate(stick):
+        E[2 * c + 1, contact.size + j] = 1.0
+    rows = np.concatenate([2 * contact, 2 * stick + 1])
+    A = W[rows] @ E
+    x = np.linalg.lstsq(A, -q[rows], rcond=None)[0]
+    return E @ x
+
+
+def violations(W: np.ndarray, q: np.ndarray, mu: np.ndarray, states: np.ndarray,
+               r: np.ndarray) -> np.ndarray:
+    """The state each contact should change to (−1: its state holds)."""
+    u = W @ r + q
+    rn, rt, un, ut = r[0::2], r[1::2], u[0::2], u[1::2]
+    eps = VIOLATION_RTOL * max(1.0, float(np.abs(q).max(initial=0.0)),
+                               float(np.abs(r).max(initial=0.0)))
+    frictional = mu > 0.0
+    slide = np.where(ut > 0.0, FORWARD, BACK)
+    to = np.full(mu.size, -1, np.int64)
+    sep = states == SEPARATE
+    to[sep & (un < -eps)] = np.where(frictional, STICK, slide)[sep & (un < -eps)]
+    on = ~sep
+    to[on & (rn < -eps)] = SEPARATE
+    free = to < 0
+    stick = free & (states == STICK)
+    to[stick & (rt > mu * rn + eps)] = BACK  # pushed forward beyond the cone: it slides back
+    to[stick & (rt < -mu * rn - eps)] = FORWARD
+    fwd = free & (states == FORWARD) & frictional & (ut < -eps)
+    back = free & (states == BACK) & frictional & (ut > eps)
+    to[fwd | back] = STICK
+    return to
+
+
+def solve_fc2d_active(W, q, mu, *, states: np.ndarray | None = None,
+                      max_iter: int | None = None) -> FC2DSolution:
+    """Solve u = W r + q with 2-D Coulomb friction by the active set on the contacts'
+    states (module docstring). ``states``: a start (one of 0–3 per contact; default
+    :func:`initial_states`); ``max_iter``: the limit on state changes (default
+    20 + 10 nc). Never raises for a failure: MAX_ITER or INACCURATE with a message;
+    ProblemError for shapes."""
+    W, q, mu = (np.asarray(x, dtype=float) for x in (W, q, mu))
+    nc = mu.size
+    if q.shape != (2 * nc,) or W.shape != (2 * nc, 2 * nc):
+        raise ProblemError(f"W must be (2nc, 2nc) and q (2nc,) for nc = {nc} contacts, got "
+                           f"{W.shape} and {q.shape}")
+    t0 = time.perf_counter()
+    st = initial_states(q, mu) if states is None else np.asarray(states, np.int64).copy()
+    if st.shape != (nc,) or np.any((st < 0) | (st > 3)):
+        raise ProblemError(f"states must be {nc} values in 0..3, got {states!r}")
+    st[(st == STICK) & (mu <= 0.0)] = FORWARD
+    limit = 20 + 10 * nc if max_iter is None else int(max_iter)
+    best, stalled, changes, done = np.inf, 0, 0, False
+    r = np.zeros(2 * nc)
+    for changes in range(1, limit + 1):  # noqa: B007 (the count is reported)
+        r = reactions(W, q, mu, st)
+        if not np.all(np.isfinite(r)):
+            break
+        to = violations(W, q, mu, st, r)
+        bad = np.flatnonzero(to >= 0)
+        if bad.size == 0:
+            done = True
+            break
+        if bad.size < best:
+            best, stalled = bad.size, 0
+        else:
+            stalled += 1
+        if stalled < BLOCK_TRIES:
+            st[bad] = to[bad]
+        else:
+            st[bad[0]] = to[bad[0]]
+    u = W @ r + q
+    residual = coulomb_residual(W, q, mu, r) if np.all(np.isfinite(r)) else np.inf
+    elapsed = time.perf_counter() - t0
+    extra = {"states": st.copy(), "solve_time": elapsed}
+    if done and residual <= ACCEPT_TOL:
+        return FC2DSolution(r, u, Status.SOLVED, changes, residual, "", extra)
+    if not np.isfinite(residual):
+        return FC2DSolution(r, u, Status.FAILED, changes, residual,
+                            "the states' linear solve was not finite", extra)
+    if done:
+        return FC2DSolution(r, u, Status.INACCURATE, changes, residual,
+                            f"states consistent but the Coulomb residual is {residual:.3g}",
+                            extra)
+    return FC2DSolution(r, u, Status.MAX_ITER, changes, residual,
+                        f"no consistent states in {limit} changes (Coulomb residual "
+                        f"{residual:.3g})", extra)
