@@ -152,6 +152,8 @@ def step_runner(solver: str | None = None):
                 fresh = initial_states(q, mu)
                 start = np.where(guess >= 0, guess, fresh)
             peer = solve_fc2d_active(W, q, mu, states=start)
+            if start is not None and not peer.solved:  # the last step's states misled it
+                peer = solve_fc2d_active(W, q, mu)
             last.clear()
             last.update(zip(fs.normal_node.tolist(), peer.extra["states"].tolist()))
             return from_fc2d(fs, peer, t0)

@@ -80,8 +80,10 @@ def reactions(W: np.ndarray, q: np.ndarray, mu: np.ndarray, states: np.ndarray
 
 
 def violations(W: np.ndarray, q: np.ndarray, mu: np.ndarray, states: np.ndarray,
-               r: np.ndarray) -> np.ndarray:
-    """The state each contact should change to (−1: its state holds)."""
+               r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The state each contact should change to (−1: its state holds), and by how much
+    its state is violated (a penetration, a pull, a force beyond the cone, a slip the
+    wrong way; dimensionless)."""
     u = W @ r + q
     rn, rt, un, ut = r[0::2], r[1::2], u[0::2], u[1::2]
     eps = VIOLATION_RTOL * max(1.0, float(np.abs(q).max(initial=0.0)),
@@ -89,45 +91,37 @@ def violations(W: np.ndarray, q: np.ndarray, mu: np.ndarray, states: np.ndarray,
     frictional = mu > 0.0
     slide = np.where(ut > 0.0, FORWARD, BACK)
     to = np.full(mu.size, -1, np.int64)
+    size = np.zeros(mu.size)
     sep = states == SEPARATE
-    to[sep & (un < -eps)] = np.where(frictional, STICK, slide)[sep & (un < -eps)]
-    on = ~sep
-    to[on & (rn < -eps)] = SEPARATE
+    hit = sep & (un < -eps)
+    to[hit] = np.where(frictional, STICK, slide)[hit]
+    size[hit] = -un[hit]
+    pulls = ~sep & (rn < -eps)
+    to[pulls] = SEPARATE
+    size[pulls] = -rn[pulls]
     free = to < 0
     stick = free & (states == STICK)
-    to[stick & (rt > mu * rn + eps)] = BACK  # pushed forward beyond the cone: it slides back
-    to[stick & (rt < -mu * rn - eps)] = FORWARD
-    fwd = free & (states == FORWARD) & frictional & (ut < -eps)
-    back = free & (states == BACK) & frictional & (ut > eps)
-    to[fwd | back] = STICK
-    return to
+    over = stick & (rt > mu * rn + eps)  # pushed forward beyond the cone: it slides back
+    under = stick & (rt < -mu * rn - eps)
+    to[over], to[under] = BACK, FORWARD
+    size[over | under] = (np.abs(rt) - mu * rn)[over | under]
+    wrong = free & frictional & (((states == FORWARD) & (ut < -eps))
+                                 | ((states == BACK) & (ut > eps)))
+    to[wrong] = STICK
+    size[wrong] = np.abs(ut[wrong])
+    return to, size
 
 
-def solve_fc2d_active(W, q, mu, *, states: np.ndarray | None = None,
-                      max_iter: int | None = None) -> FC2DSolution:
-    """Solve u = W r + q with 2-D Coulomb friction by the active set on the contacts'
-    states (module docstring). ``states``: a start (one of 0–3 per contact; default
-    :func:`initial_states`); ``max_iter``: the limit on state changes (default
-    20 + 10 nc). Never raises for a failure: MAX_ITER or INACCURATE with a message;
-    ProblemError for shapes."""
-    W, q, mu = (np.asarray(x, dtype=float) for x in (W, q, mu))
-    nc = mu.size
-    if q.shape != (2 * nc,) or W.shape != (2 * nc, 2 * nc):
-        raise ProblemError(f"W must be (2nc, 2nc) and q (2nc,) for nc = {nc} contacts, got "
-                           f"{W.shape} and {q.shape}")
-    t0 = time.perf_counter()
-    st = initial_states(q, mu) if states is None else np.asarray(states, np.int64).copy()
-    if st.shape != (nc,) or np.any((st < 0) | (st > 3)):
-        raise ProblemError(f"states must be {nc} values in 0..3, got {states!r}")
-    st[(st == STICK) & (mu <= 0.0)] = FORWARD
-    limit = 20 + 10 * nc if max_iter is None else int(max_iter)
+def pivot(W, q, mu, st: np.ndarray, limit: int, block_tries: int):
+    """Change states until none is violated (or ``limit`` changes): (r, states, changes,
+    done)."""
     best, stalled, changes, done = np.inf, 0, 0, False
-    r = np.zeros(2 * nc)
+    r = np.zeros(q.size)
     for changes in range(1, limit + 1):  # noqa: B007 (the count is reported)
         r = reactions(W, q, mu, st)
         if not np.all(np.isfinite(r)):
             break
-        to = violations(W, q, mu, st, r)
+        to, size = violations(W, q, mu, st, r)
         bad = np.flatnonzero(to >= 0)
         if bad.size == 0:
             done = True
@@ -136,10 +130,42 @@ def solve_fc2d_active(W, q, mu, *, states: np.ndarray | None = None,
             best, stalled = bad.size, 0
         else:
             stalled += 1
-        if stalled < BLOCK_TRIES:
+        if stalled < block_tries:
             st[bad] = to[bad]
-        else:
-            st[bad[0]] = to[bad[0]]
+        else:  # the most violated first
+            worst = bad[np.argmax(size[bad])]
+            st[worst] = to[worst]
+    return r, st, changes, done
+
+
+def solve_fc2d_active(W, q, mu, *, states: np.ndarray | None = None,
+                      max_iter: int | None = None) -> FC2DSolution:
+    """Solve u = W r + q with 2-D Coulomb friction by the active set on the contacts'
+    states (module docstring). ``states``: a start (one of 0–3 per contact); by default
+    the frictionless contact set (the same pivoting with μ = 0, where W_nn is positive
+    definite and the lowest-index rule is finite), its contacts then sticking.
+    ``max_iter``: the limit on state changes per phase (default 20 + 10 nc). Never
+    raises for a failure: MAX_ITER or INACCURATE with a message; ProblemError for
+    shapes."""
+    W, q, mu = (np.asarray(x, dtype=float) for x in (W, q, mu))
+    nc = mu.size
+    if q.shape != (2 * nc,) or W.shape != (2 * nc, 2 * nc):
+        raise ProblemError(f"W must be (2nc, 2nc) and q (2nc,) for nc = {nc} contacts, got "
+                           f"{W.shape} and {q.shape}")
+    t0 = time.perf_counter()
+    limit = 20 + 10 * nc if max_iter is None else int(max_iter)
+    used = 0
+    if states is None:
+        frictionless = np.zeros(nc)
+        _, st, used, _ = pivot(W, q, frictionless, initial_states(q, frictionless), limit, 0)
+        st = np.where((st != SEPARATE) & (mu > 0.0), STICK, st)
+    else:
+        st = np.asarray(states, np.int64).copy()
+    if st.shape != (nc,) or np.any((st < 0) | (st > 3)):
+        raise ProblemError(f"states must be {nc} values in 0..3, got {states!r}")
+    st[(st == STICK) & (mu <= 0.0)] = FORWARD
+    r, st, changes, done = pivot(W, q, mu, st, limit, BLOCK_TRIES)
+    changes += used
     u = W @ r + q
     residual = coulomb_residual(W, q, mu, r) if np.all(np.isfinite(r)) else np.inf
     elapsed = time.perf_counter() - t0
