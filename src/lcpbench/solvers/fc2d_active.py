@@ -42,6 +42,8 @@ from .siconos_fc2d import ACCEPT_TOL, FC2DSolution, coulomb_residual
 SEPARATE, STICK, FORWARD, BACK = 0, 1, 2, 3
 #: block changes without fewer violations before changing one state at a time
 BLOCK_TRIES = 3
+#: the limit on Tresca problems where the pivoting on the cone cycles
+TRESCA_STEPS = 60
 #: a state is violated beyond this share of the problem's scale (max(1, |q|, |r|))
 VIOLATION_RTOL = 1e-12
 
@@ -53,10 +55,11 @@ def initial_states(q: np.ndarray, mu: np.ndarray) -> np.ndarray:
     return np.where((st == STICK) & (mu <= 0.0), FORWARD, st).astype(np.int64)
 
 
-def reactions(W: np.ndarray, q: np.ndarray, mu: np.ndarray, states: np.ndarray
-              ) -> np.ndarray:
+def reactions(W: np.ndarray, q: np.ndarray, mu: np.ndarray, states: np.ndarray,
+              bound: np.ndarray | None = None) -> np.ndarray:
     """r (interleaved (r_n, r_t)) from the states: one least-squares solve of the
-    states' conditions (minimum norm where they do not fix r)."""
+    states' conditions (minimum norm where they do not fix r). With ``bound`` (Tresca:
+    a fixed slip bound b per contact) a sliding contact has r_t = ∓b, not ∓μ r_n."""
     nc = mu.size
     contact = np.flatnonzero(states != SEPARATE)
     stick = np.flatnonzero(states == STICK)
@@ -64,26 +67,29 @@ def reactions(W: np.ndarray, q: np.ndarray, mu: np.ndarray, states: np.ndarray
     r = np.zeros(2 * nc)
     if k == 0:
         return r
-    E = np.zeros((2 * nc, k))  # r = E x, x = (r_n of the contacts, r_t of the sticks)
+    E = np.zeros((2 * nc, k))  # r = E x + r0, x = (r_n of the contacts, r_t of the sticks)
+    r0 = np.zeros(2 * nc)
     for j, c in enumerate(contact):
         E[2 * c, j] = 1.0
-        if states[c] == FORWARD:
-            E[2 * c + 1, j] = -mu[c]
-        elif states[c] == BACK:
-            E[2 * c + 1, j] = mu[c]
+        sign = {FORWARD: -1.0, BACK: 1.0}.get(int(states[c]), 0.0)
+        if bound is None:
+            E[2 * c + 1, j] = sign * mu[c]
+        else:
+            r0[2 * c + 1] = sign * bound[c]
     for j, c in enumerate(stick):
         E[2 * c + 1, contact.size + j] = 1.0
     rows = np.concatenate([2 * contact, 2 * stick + 1])
     A = W[rows] @ E
-    x = np.linalg.lstsq(A, -q[rows], rcond=None)[0]
-    return E @ x
+    x = np.linalg.lstsq(A, -(q + W @ r0)[rows], rcond=None)[0]
+    return E @ x + r0
 
 
 def violations(W: np.ndarray, q: np.ndarray, mu: np.ndarray, states: np.ndarray,
-               r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+               r: np.ndarray, bound: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray]:
     """The state each contact should change to (−1: its state holds), and by how much
-    its state is violated (a penetration, a pull, a force beyond the cone, a slip the
-    wrong way; dimensionless)."""
+    its state is violated (a penetration, a pull, a force beyond the cone — μ r_n, or
+    ``bound`` — a slip the wrong way; dimensionless)."""
     u = W @ r + q
     rn, rt, un, ut = r[0::2], r[1::2], u[0::2], u[1::2]
     eps = VIOLATION_RTOL * max(1.0, float(np.abs(q).max(initial=0.0)),
@@ -101,27 +107,32 @@ def violations(W: np.ndarray, q: np.ndarray, mu: np.ndarray, states: np.ndarray,
     size[pulls] = -rn[pulls]
     free = to < 0
     stick = free & (states == STICK)
-    over = stick & (rt > mu * rn + eps)  # pushed forward beyond the cone: it slides back
-    under = stick & (rt < -mu * rn - eps)
+    limit = mu * rn if bound is None else bound
+    over = stick & (rt > limit + eps)  # pushed forward beyond the cone: it slides back
+    under = stick & (rt < -limit - eps)
     to[over], to[under] = BACK, FORWARD
-    size[over | under] = (np.abs(rt) - mu * rn)[over | under]
+    size[over | under] = (np.abs(rt) - limit)[over | under]
     wrong = free & frictional & (((states == FORWARD) & (ut < -eps))
                                  | ((states == BACK) & (ut > eps)))
-    to[wrong] = STICK
+    # a slide the wrong way sticks; at a cone of size 0 (r_n = 0) it slides the other way
+    # (a stick there could hold no force, and would flip back)
+    to[wrong] = np.where(limit[wrong] > eps, STICK,
+                         np.where(states[wrong] == FORWARD, BACK, FORWARD))
     size[wrong] = np.abs(ut[wrong])
     return to, size
 
 
-def pivot(W, q, mu, st: np.ndarray, limit: int, block_tries: int):
+def pivot(W, q, mu, st: np.ndarray, limit: int, block_tries: int,
+          bound: np.ndarray | None = None):
     """Change states until none is violated (or ``limit`` changes): (r, states, changes,
-    done)."""
+    done). ``bound``: Tresca's fixed slip bounds in place of the cone μ r_n."""
     best, stalled, changes, done = np.inf, 0, 0, False
     r = np.zeros(q.size)
     for changes in range(1, limit + 1):  # noqa: B007 (the count is reported)
-        r = reactions(W, q, mu, st)
+        r = reactions(W, q, mu, st, bound)
         if not np.all(np.isfinite(r)):
             break
-        to, size = violations(W, q, mu, st, r)
+        to, size = violations(W, q, mu, st, r, bound)
         bad = np.flatnonzero(to >= 0)
         if bad.size == 0:
             done = True
@@ -136,6 +147,29 @@ def pivot(W, q, mu, st: np.ndarray, limit: int, block_tries: int):
             worst = bad[np.argmax(size[bad])]
             st[worst] = to[worst]
     return r, st, changes, done
+
+
+def tresca_fixed_point(W, q, mu, st: np.ndarray, limit: int):
+    """Where the pivoting on the cone cycles: from ``st``, Tresca problems (slip bounds
+    b = μ r_n of the last answer, fixed), each solved by the same pivoting with the
+    bounds in place of the cone, until the answer satisfies Coulomb (lcpbench's
+    residual) or the bounds stop moving or :data:`TRESCA_STEPS` problems. (r, states,
+    changes, done)."""
+    r = reactions(W, q, np.zeros(mu.size), np.where(st == STICK, FORWARD, st))
+    bound = mu * np.maximum(r[0::2], 0.0)
+    changes = 0
+    for _ in range(TRESCA_STEPS):
+        r, st, used, ok = pivot(W, q, mu, st, limit, BLOCK_TRIES, bound)
+        changes += used
+        if not ok:
+            return r, st, changes, False
+        if coulomb_residual(W, q, mu, r) <= ACCEPT_TOL:
+            return r, st, changes, True
+        new = mu * np.maximum(r[0::2], 0.0)
+        if np.max(np.abs(new - bound), initial=0.0) <= 1e-13 * max(1.0, new.max(initial=0)):
+            break
+        bound = new
+    return r, st, changes, False
 
 
 def solve_fc2d_active(W, q, mu, *, states: np.ndarray | None = None,
@@ -166,6 +200,9 @@ def solve_fc2d_active(W, q, mu, *, states: np.ndarray | None = None,
     st[(st == STICK) & (mu <= 0.0)] = FORWARD
     r, st, changes, done = pivot(W, q, mu, st, limit, BLOCK_TRIES)
     changes += used
+    if not done:  # cycling on the cone: Tresca problems, each by the same pivoting
+        r, st, more, done = tresca_fixed_point(W, q, mu, st, limit)
+        changes += more
     u = W @ r + q
     residual = coulomb_residual(W, q, mu, r) if np.all(np.isfinite(r)) else np.inf
     elapsed = time.perf_counter() - t0
