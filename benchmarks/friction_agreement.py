@@ -103,12 +103,13 @@ def differences(N1, T1, N2, T2, contact, scale) -> tuple[float, float, float]:
 
 
 def step_forces(fs, z, n_free, first):
-    """N (both walls, per free node) and T per free node of a step's answer z."""
-    N, T, _, _ = fs.forces(z)
+    """N (both walls, per free node), T per free node, and the step's move (δy, τ) in mm
+    of a step's answer z."""
+    N, T, dy, tau = fs.forces(z)
     Nn, Tn = np.zeros(n_free), np.zeros(n_free)
     np.add.at(Nn, fs.normal_node, N)
     Tn[fs.friction_node - first] = T
-    return Nn, Tn
+    return Nn, Tn, np.append(dy, tau)
 
 
 class Recorder:
@@ -140,9 +141,10 @@ def main() -> int:
     solvers = [s for s in SOLVERS if backends()[s].available()]
     missing = [s for s in SOLVERS if s not in solvers]
     z = {s: {"steps": 0, "answered": 0, "dn": 0.0, "dr": 0.0, "dt": 0.0, "time": 0.0,
-             "agree": 0} for s in solvers}
+             "agree": 0, "dm": 0.0} for s in solvers}
     p = {s: {"states": 0, "converged": 0, "both": 0, "dn": 0.0, "dr": 0.0, "dt": 0.0,
-             "broken": 0, "broken_judge": 0, "time": 0.0, "agree": 0} for s in solvers}
+             "broken": 0, "broken_judge": 0, "time": 0.0, "agree": 0, "dm": 0.0}
+         for s in solvers}
     worst = {s: (0.0, "") for s in solvers}  # the largest ΔN on the same step, and where
     t_all = time.perf_counter()
     for index, (scene, states) in enumerate(scenes(args.paths, args.seed)):
@@ -158,7 +160,8 @@ def main() -> int:
                 continue
             fs, sol = rec.steps[end - 1]
             n_free = r.forces.size
-            N0, T0 = step_forces(fs, sol.z, n_free, chain_first)
+            N0, T0, m0 = step_forces(fs, sol.z, n_free, chain_first)
+            a = scene.length / scene.links
             scale = max(float(N0.max(initial=0.0)), float(np.abs(T0).max(initial=0.0)),
                         abs(r.pull), 1e-300)
             for s in solvers:
@@ -169,7 +172,8 @@ def main() -> int:
                 if not other.solved:
                     continue
                 z[s]["answered"] += 1
-                N1, T1 = step_forces(fs, other.z, n_free, chain_first)
+                N1, T1, m1 = step_forces(fs, other.z, n_free, chain_first)
+                z[s]["dm"] = max(z[s]["dm"], float(np.max(np.abs(m1 - m0))) / a)
                 d = differences(N0, T0, N1, T1, (N0 > 0) | (N1 > 0) | on_wall(r), scale)
                 z[s]["agree"] += max(d[0], d[1]) <= TARGET
                 if d[0] > worst[s][0]:
@@ -196,6 +200,9 @@ def main() -> int:
                 if not a.converged:
                     continue
                 p[s]["both"] += 1
+                a_len = scene.length / scene.links
+                p[s]["dm"] = max(p[s]["dm"], float(max(np.abs(b.x - a.x).max(),
+                                                       np.abs(b.y - a.y).max())) / a_len)
                 lo_a = a.forces_lower if a.forces_lower is not None else 0.0
                 lo_b = b.forces_lower if b.forces_lower is not None else 0.0
                 Na, Nb = a.forces + lo_a, b.forces + lo_b
@@ -218,21 +225,26 @@ def main() -> int:
         f"({total:.0f} s in all).", "",
         f"{args.paths} random frictional scenes and paths of 4 states (seed {args.seed}, "
         f"N 12-140, μ 0.05-1, tol {args.tol:g}; `benchmarks/friction_agreement.py` says "
-        "how they are drawn). Lemke is the reference. Differences are relative to the "
-        "largest force of the state; target 1e-6 in N per node and in T per run of "
-        "consecutive contact nodes (T per node is statically indeterminate in a run that "
-        "sticks to a flat wall, reported only).", "",
+        "how they are drawn). Lemke is the reference. Force differences are relative to "
+        "the largest force of the state; target 1e-6 in N per node and in T per run "
+        "(consecutive nodes within 1e-3 a of a wall, the nodes with a friction pair). T "
+        "per node is reported, not judged: between nodes of a run, and between runs "
+        "joined by a straight stretch of chain, a horizontal force moves without moving "
+        "the chain (an inextensible straight bar carries it; W is singular there), so "
+        "it is statically indeterminate. What the forces do to the chain is: the step's "
+        "move (δy, τ), and along a path the shape (x, y), in link lengths a.", "",
         "## On the same step", "",
         "The last contact step of each state Lemke's path converges, handed to each "
         "back-end. Answers: its status SOLVED (lcpbench's natural residual of the "
         "step's LCP <= 1e-8).", "",
         "| back-end | form | steps | answered | agree to 1e-6 | max ΔN | max ΔT per run "
-        "| max ΔT per node | time (s) |", "|---|---|---|---|---|---|---|---|---|"]
+        "| max ΔT per node | max Δ move (a) | time (s) |",
+        "|---|---|---|---|---|---|---|---|---|---|"]
     for s in solvers:
         r = z[s]
         lines.append(f"| {s} | {backends()[s].friction_form} | {r['steps']} | "
-                     f"{r['answered']} | {r['agree']} | {r['dn']:.1e} | {r['dr']:.1e} | {r['dt']:.1e} | "
-                     f"{r['time']:.1f} |")
+                     f"{r['answered']} | {r['agree']} | {r['dn']:.1e} | {r['dr']:.1e} | "
+                     f"{r['dt']:.1e} | {r['dm']:.1e} | {r['time']:.1f} |")
     lines += ["", "The largest ΔN on the same step, where: " + "; ".join(
         f"{s} {worst[s][0]:.1e}, {worst[s][1]}" for s in solvers if worst[s][1]) + "."]
     lines += ["", "## Along its own path", "",
@@ -244,13 +256,14 @@ def main() -> int:
               "states both Lemke and the back-end converge.", "",
               "| back-end | states | converged | broken at 1e-9 | broken at the judge's ε "
               "| both | agree to 1e-6 | max ΔN | max ΔT per run | max ΔT per node "
-              "| time (s) |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+              "| max Δ shape (a) | time (s) |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for s in solvers:
         r = p[s]
         lines.append(f"| {s} | {r['states']} | {r['converged']} | {r['broken']} | "
                      f"{r['broken_judge']} | "
-                     f"{r['both']} | {r['agree']} | {r['dn']:.1e} | {r['dr']:.1e} | {r['dt']:.1e} | "
-                     f"{r['time']:.1f} |")
+                     f"{r['both']} | {r['agree']} | {r['dn']:.1e} | {r['dr']:.1e} | "
+                     f"{r['dt']:.1e} | {r['dm']:.1e} | {r['time']:.1f} |")
     if missing:
         lines += ["", f"Not installed here: {', '.join(missing)}."]
     out.parent.mkdir(parents=True, exist_ok=True)
