@@ -120,3 +120,12 @@ def test_cli_solver_reaches_the_frictional_step(capsys):
     code = main([*args, "--solver", "pgs"])
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and "does not take the frictional step" in err[0]
+
+
+def test_siconos_fc2d_enumeration_is_refused_on_a_large_step():
+    if not backends()["siconos-enum"].available():
+        pytest.skip("siconos not installed")
+    fs = _step()
+    assert fs.normal_node.size > 6
+    sol = step_runner("siconos-enum")(fs)
+    assert sol.status is Status.FAILED and "up to 6 contacts" in sol.message
