@@ -20,11 +20,14 @@ in a run of sticking nodes on a flat wall the individual r_t are statically
 indeterminate, W is singular there, and any split of their sum is an answer). The
 states are then checked: a separate contact must not penetrate (u_n >= 0), a contact
 must push (r_n >= 0), a stick must lie in its cone, a slide must move the way its
-force opposes. Every violated contact changes state at once (block pivoting, as
-Júdice–Pires for the LCP); after :data:`BLOCK_TRIES` block changes without fewer
-violations, one at a time, the lowest index first (Murty's rule). The method is
-finite on no class of these problems that we know of, so it has an iteration limit
-and reports MAX_ITER there. SOLVED only when no state is violated and lcpbench's own
+force opposes. It starts from the frictionless contact set (the same pivoting with
+μ = 0), its contacts sticking. Every violated contact changes state at once (block
+pivoting, as Júdice–Pires for the LCP); after :data:`BLOCK_TRIES` block changes without
+fewer violations, one at a time, the most violated first (at a set of states seen
+before, a random one of the violated, seeded, to leave a cycle). Where that fails, it
+solves Tresca problems (:func:`tresca_fixed_point`). The method is finite on no class
+of these problems that we know of, so it has an iteration limit and reports MAX_ITER
+there. SOLVED only when no state is violated and lcpbench's own
 Signorini–Coulomb residual (:func:`.siconos_fc2d.coulomb_residual`) is below
 :data:`.siconos_fc2d.ACCEPT_TOL`.
 """
@@ -42,6 +45,8 @@ from .siconos_fc2d import ACCEPT_TOL, FC2DSolution, coulomb_residual
 SEPARATE, STICK, FORWARD, BACK = 0, 1, 2, 3
 #: block changes without fewer violations before changing one state at a time
 BLOCK_TRIES = 3
+#: the seed of the random choice among violated contacts at states seen before
+RANDOM_SEED = 39
 #: the limit on Tresca problems where the pivoting on the cone cycles
 TRESCA_STEPS = 60
 #: a state is violated beyond this share of the problem's scale (max(1, |q|, |r|))
@@ -128,6 +133,8 @@ def pivot(W, q, mu, st: np.ndarray, limit: int, block_tries: int,
     done). ``bound``: Tresca's fixed slip bounds in place of the cone μ r_n."""
     best, stalled, changes, done = np.inf, 0, 0, False
     r = np.zeros(q.size)
+    seen: set = set()
+    rng = np.random.default_rng(RANDOM_SEED)
     for changes in range(1, limit + 1):  # noqa: B007 (the count is reported)
         r = reactions(W, q, mu, st, bound)
         if not np.all(np.isfinite(r)):
@@ -143,8 +150,10 @@ def pivot(W, q, mu, st: np.ndarray, limit: int, block_tries: int,
             stalled += 1
         if stalled < block_tries:
             st[bad] = to[bad]
-        else:  # the most violated first
-            worst = bad[np.argmax(size[bad])]
+        else:  # the most violated first; at states seen before, a random one of them
+            key = st.tobytes()
+            worst = bad[np.argmax(size[bad])] if key not in seen else rng.choice(bad)
+            seen.add(key)
             st[worst] = to[worst]
     return r, st, changes, done
 
