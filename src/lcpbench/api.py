@@ -413,7 +413,7 @@ def _driver_start(start, chain, method: str):
 
 
 def solve_path(scene, states=None, tol: float | None = None, *, max_outer: int = 100,
-               lcp=None) -> list:
+               solver: str | None = None, lcp=None) -> list:
     """Solve a loading path: one :class:`~lcpbench.model.friction_result.FrictionResult`
     per state, each state solved from the last (issue 39, docs/friction.md).
 
@@ -427,8 +427,11 @@ def solve_path(scene, states=None, tol: float | None = None, *, max_outer: int =
         and its ``theta`` scales every section's θ); default: one state, the scene.
     tol : the outer loop's threshold on max|Δα| (rad; the paper's 1e-3 by default).
     max_outer : limit on contact steps per state.
-    lcp : the step's LCP solver, ``(M, q) -> LCPSolution`` (default: Lemke,
-        :func:`lcpbench.solvers.lemke.lemke`).
+    solver : the back-end of the frictional step, by name (default "lemke"): one whose
+        registry record takes friction (``Backend.friction_form``: "lcp", Lemke and
+        the LCP back-ends; "fc2d", the active set and Siconos' fc2d solvers; "tresca",
+        the QP back-ends by a fixed point of Tresca steps; docs/friction.md).
+    lcp : instead of ``solver``, a function ``(M, q) -> LCPSolution`` on the step's LCP.
 
     The path starts from the frictionless equilibrium of its first state; slips are
     measured from the previous state. A path in the paper's model (μ = 0, both ends
@@ -442,4 +445,5 @@ def solve_path(scene, states=None, tol: float | None = None, *, max_outer: int =
     if isinstance(max_outer, bool) or not (isinstance(max_outer, (int, np.integer))
                                            and max_outer >= 1):
         raise ProblemError(f"max_outer must be an integer >= 1, got {max_outer!r}")
-    return run_path(scene, states, tol=tol, max_outer=int(max_outer), solve=solve, lcp=lcp)
+    return run_path(scene, states, tol=tol, max_outer=int(max_outer), solve=solve, lcp=lcp,
+                    solver=solver)

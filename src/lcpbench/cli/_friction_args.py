@@ -72,12 +72,11 @@ def refuse_options(args, default_solver: str) -> None:
     """ProblemError for the options of ``solve`` that the frictional route does not take."""
     taken = [("--sensitivities", getattr(args, "sensitivities", False)),
              ("--start ramp", getattr(args, "start", "cold") == "ramp"),
-             ("--solver", getattr(args, "solver", default_solver) != default_solver),
              ("--raw", getattr(args, "raw", False))]
     given = [name for name, on in taken if on]
     if given:
         raise ProblemError(f"{', '.join(given)}: not for a frictional scene (--friction, "
-                           f"--left-end, --right-end, --pull; solved by Lemke along a path)")
+                           f"--left-end, --right-end, --pull; solved along a path)")
 
 
 def solve_frictional(args, scene, default_solver: str) -> int:
@@ -85,7 +84,9 @@ def solve_frictional(args, scene, default_solver: str) -> int:
     from ..api import solve_path
 
     refuse_options(args, default_solver)
-    (res,) = solve_path(scene, [{}], tol=args.tol)
+    solver = getattr(args, "solver", default_solver)
+    (res,) = solve_path(scene, [{}], tol=args.tol,
+                        solver=None if solver == default_solver else solver)
     plot_error = None
     if getattr(args, "plot", None) is not None:  # (matplotlib checked by the command)
         from ..bench.friction_plot import plot_friction_forces

@@ -17,8 +17,9 @@ def register(subparsers) -> None:
     """
     ls = subparsers.add_parser(
         "solvers", help="list every back-end, installed or not, with its capabilities",
-        description="List every back-end: availability, version, form, storage, warm "
-                    "start, method and how to install it.")
+        description="List every back-end: availability, version, form, the form of the "
+                    "frictional step it takes, storage, warm start, method and how to "
+                    "install it.")
     add_json_option(ls, "one JSON array")
     ls.set_defaults(func=cmd_solvers)
 
@@ -31,9 +32,11 @@ def cmd_solvers(args) -> int:
     if args.json:
         print_json(rows)
         return 0
-    head = ("name", "installed", "version", "form", "storage", "warm", "method", "install")
+    head = ("name", "installed", "version", "form", "friction", "storage", "warm", "method",
+            "install")
     table = [[r["name"], "yes" if r["available"] else "no", r["version"] or "-", r["form"],
-              r["storage"], "yes" if r["warm_start"] else "no", r["method"], r["install"]]
+              r["friction"] or "-", r["storage"], "yes" if r["warm_start"] else "no",
+              r["method"], r["install"]]
              for r in rows]
     widths = [max(len(str(x)) for x in col) for col in zip(head, *table)]
     for line in [head, *table]:

@@ -368,7 +368,8 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
         except np.linalg.LinAlgError as exc:  # (K singular: a link at the vertical)
             return StateAnswer(state, N, T, fs, False, f"contact step {it}: {exc}", it,
                                sizes, time.perf_counter() - t0, left_pull)
-        sol = lcp(fs.M, fs.q)
+        # a solver by name (model.friction_solvers.step_runner) takes the whole step
+        sol = lcp(fs) if getattr(lcp, "takes_step", False) else lcp(fs.M, fs.q)
         # an inexact step only moves the iterate (the judge reads the last one, which
         # must be SOLVED): go on from it, as the frictionless driver does
         if not (sol.solved or (sol.status is Status.INACCURATE

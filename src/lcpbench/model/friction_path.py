@@ -24,6 +24,7 @@ from ..problems.sections import Section, SectionedScene
 from .friction_driver import FrictionState, StepLemke, solve_state
 from .friction_mirror import mirror_result, mirror_state, mirror_x, mirrored_scene
 from .friction_result import FrictionResult, build_result, from_contact
+from .friction_solvers import step_runner
 
 #: the scene fields a state may change (a row of sections: ``sections`` too)
 STATE_FIELDS = ("theta", "height", "pull", "friction", "weight", "EI")
@@ -106,10 +107,16 @@ def advance(scene, state: dict, current: FrictionState, x_prev, *,
     return build_result(scene, state, ans, x_prev, tol), ans.state
 
 
-def run_path(scene, states, *, tol: float, max_outer: int, solve, lcp=None
-             ) -> list[FrictionResult]:
-    """:func:`lcpbench.solve_path`'s work; ``solve`` is :func:`lcpbench.solve`."""
+def run_path(scene, states, *, tol: float, max_outer: int, solve, lcp=None,
+             solver: str | None = None) -> list[FrictionResult]:
+    """:func:`lcpbench.solve_path`'s work; ``solve`` is :func:`lcpbench.solve`; the
+    frictional step by ``lcp`` (a function ``(M, q) -> LCPSolution``) or by the back-end
+    named ``solver`` (:func:`~.friction_solvers.step_runner`; default Lemke)."""
+    if lcp is not None and solver is not None:
+        raise ProblemError("give solver= (a back-end's name) or lcp= (a function), not both")
     steps = path_scenes(scene, states)
+    if lcp is None and solver is not None:
+        lcp = step_runner(solver)
     if not any(s.frictional for _, s in steps):  # the paper's model: today's solve
         out, x_prev = [], None
         for state, s in steps:

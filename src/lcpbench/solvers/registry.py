@@ -25,6 +25,11 @@ from ..errors import ProblemError, SolverNotFound
 from .base import PROFILES, Settings, dist_version
 
 FORMS = ("lcp", "qp")
+#: How a back-end takes the frictional contact step (issue 39, docs/friction.md):
+#: "lcp", the Stewart–Trinkle LCP in z = (N, β⁺, β⁻, λ); "fc2d", the Delassus form
+#: u = W r + q with a Coulomb cone per contact (Siconos' fc2d problem); "tresca", a
+#: fixed point of Tresca box QPs in r = (N, T)
+FRICTION_FORMS = ("lcp", "fc2d", "tresca")
 STORAGES = ("dense", "sparse", "banded")
 ENTRY_POINT_GROUP = "lcpbench.solvers"
 
@@ -58,6 +63,9 @@ class Backend:
         contact step a back-end accepts follows from ``form``, ``linear_rows`` and
         whether it runs the contact step itself
         (:func:`lcpbench.model.formulations.accepts`).
+    friction : how it takes the frictional contact step, one of
+        :data:`FRICTION_FORMS`; None: by its form (a "qp" back-end by the Tresca
+        fixed point, an "lcp" one not at all). See :attr:`friction_form`.
     """
 
     name: str
@@ -77,12 +85,27 @@ class Backend:
     #: a "qp" back-end that also takes linear rows, equalities and general inequalities
     #: (a :class:`~lcpbench.solvers.base.LinearQP`), not only bounds
     linear_rows: bool = False
+    #: how it takes the frictional step (:data:`FRICTION_FORMS`; None: by ``form``,
+    #: :attr:`friction_form`); "none": not at all
+    friction: str | None = None
 
     def __post_init__(self):
         if self.form not in FORMS:
             raise ValueError(f"Backend {self.name!r}: form must be one of {FORMS}")
         if self.storage not in STORAGES:
             raise ValueError(f"Backend {self.name!r}: storage must be one of {STORAGES}")
+        if self.friction not in (None, "none") + FRICTION_FORMS:
+            raise ValueError(f"Backend {self.name!r}: friction must be one of "
+                             f"{FRICTION_FORMS} or 'none'")
+
+    @property
+    def friction_form(self) -> str | None:
+        """The form in which it takes the frictional contact step (one of
+        :data:`FRICTION_FORMS`), or None: a "qp" back-end takes the Tresca fixed point
+        unless its record says otherwise."""
+        if self.friction is not None:
+            return None if self.friction == "none" else self.friction
+        return "tresca" if self.form == "qp" else None
 
     @property
     def exact(self) -> bool:
@@ -125,6 +148,7 @@ class Backend:
             "name": self.name, "available": ok, "version": self.version() if ok else None,
             "form": self.form, "storage": self.storage, "warm_start": self.warm_start,
             "method": self.method, "exact": self.exact, "linear_rows": self.linear_rows,
+            "friction": self.friction_form,
             "install": self.install_hint(),
             "description": self.description,
         }
@@ -151,14 +175,22 @@ def _own(name, form, storage, warm, method, module, description, **kw) -> Backen
                    distribution="lcpbench", **kw)
 
 
+#: the Siconos back-ends' frictional form: their fc2d solvers where Siconos has one
+#: (lemke, enum; its projected Gauss–Seidel is fc2d's NSGS), else the LCP
+SICONOS_FRICTION = {"lemke": "fc2d", "enum": "fc2d", "pgs": "fc2d", "newton-min": "lcp",
+                    "newton-fb": "lcp", "murty": "lcp", "bard": "lcp", "pathsearch": "lcp"}
+
+
 def _builtin() -> list[Backend]:
     out = [
         _own("active-set", "qp", "banded", True, "active-set", "lcpbench.solvers.banded",
              "primal active set on the banded Cholesky factor, O(N) per change; "
-             "falls back to Lemke when it cannot certify (a solve's steps: up to 1000 nodes)",
-             fallback="lemke"),
+             "falls back to Lemke when it cannot certify (a solve's steps: up to 1000 nodes); "
+             "on a frictional step, the active set on the stick/slide/separate states",
+             fallback="lemke", friction="fc2d"),
         _own("lemke", "lcp", "dense", False, "pivoting", "lcpbench.solvers.lemke",
-             "Lemke's complementary pivoting, lexicographic anti-cycling rule"),
+             "Lemke's complementary pivoting, lexicographic anti-cycling rule",
+             friction="lcp"),
         _own("pgs", "lcp", "dense", True, "iterative", "lcpbench.solvers.pgs",
              "projected Gauss-Seidel"),
         _own("psor", "lcp", "dense", True, "iterative", "lcpbench.solvers.pgs",
@@ -189,7 +221,7 @@ def _builtin() -> list[Backend]:
     out.append(Backend(
         "quantecon-lemke", "lcp", "dense", False, "pivoting", "lcpbench.solvers.peer_quantecon",
         "QuantEcon's Lemke (numba, lexicographic rule): quantecon.optimize.lcp_lemke",
-        requires=("quantecon",), extra="peer", distribution="quantecon"))
+        requires=("quantecon",), extra="peer", distribution="quantecon", friction="lcp"))
     out += _qpsolvers_backends()
     for method, label in (("lemke", "Lemke"), ("pgs", "projected Gauss-Seidel"),
                           ("newton-min", "Newton on the min function"),
@@ -205,7 +237,8 @@ def _builtin() -> list[Backend]:
             "lcpbench.solvers.siconos_bridge", f"Siconos numerics (C): {label}, via a "
             "subprocess bridge to the system Python", extra="apt:python3-siconos",
             distribution="call:lcpbench.solvers.siconos_bridge:version",
-            check="lcpbench.solvers.siconos_bridge:available", options={"method": method}))
+            check="lcpbench.solvers.siconos_bridge:available", options={"method": method},
+            friction=SICONOS_FRICTION.get(method)))
     return out
 
 
