@@ -68,13 +68,12 @@ def main(argv=None) -> None:
 
     import lcpbench
     from lcpbench import ActuatorScene
-    from lcpbench.bench.machine import refuse_overwrite
+    from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
     from lcpbench.model.step import assemble_step
-    from lcpbench.bench.machine import timing_note, timing_start
+    from lcpbench.solvers.base import PROFILES
     from lcpbench.solvers.pgs import pgs
     from lcpbench.solvers.pgs_sm import pgs_sm
     from lcpbench.solvers.runner import judge_lcp
-    from lcpbench.solvers.base import PROFILES
 
     md = Path(a.out).with_suffix(".md")
     refuse_overwrite([md], a.force)
