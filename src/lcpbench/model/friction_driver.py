@@ -359,14 +359,14 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
     state = FrictionState(start.alpha.copy(), start.x0)
     sizes: list[float] = []
     N = T = np.zeros(0)
-    fs = None
+    fs = held = None  # held: the step whose answer N, T are (a failed step is not theirs)
     pressed, away, it, gross, inexact = None, False, 0, 0, 0
     for it in range(1, max_outer + 1):
         try:
             fs = frictional_step(scene, chain, state, x_prev, pressed,
                                  None if fs is None else fs.rowed, left_pull)
         except np.linalg.LinAlgError as exc:  # (K singular: a link at the vertical)
-            return StateAnswer(state, N, T, fs, False, f"contact step {it}: {exc}", it,
+            return StateAnswer(state, N, T, held, False, f"contact step {it}: {exc}", it,
                                sizes, time.perf_counter() - t0, left_pull)
         # a solver by name (model.friction_solvers.step_runner) takes the whole step
         sol = lcp(fs) if getattr(lcp, "takes_step", False) else lcp(fs.M, fs.q)
@@ -374,10 +374,11 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
         # must be SOLVED): go on from it, as the frictionless driver does
         if not (sol.solved or (sol.status is Status.INACCURATE
                                and np.all(np.isfinite(sol.z)))):
-            return StateAnswer(state, N, T, fs, False, f"contact step {it}: "
+            return StateAnswer(state, N, T, held, False, f"contact step {it}: "
                                f"{sol.status.name} ({sol.message})", it, sizes,
                                time.perf_counter() - t0, left_pull)
         N, T, dy, tau = fs.forces(sol.z)
+        held = fs
         pressed = np.zeros(chain.free_nodes.size, bool)
         pressed[fs.normal_node[N > 0]] = True
         # every pressed node had its friction pair: else the step is not the answer yet

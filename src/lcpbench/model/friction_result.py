@@ -155,9 +155,7 @@ def build_result(scene: ActuatorScene, state: dict, ans: StateAnswer, x_prev: np
     n = chain.free_nodes.size
     up, lo, T, limit = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
     fs = ans.step
-    # (a state that failed mid-loop holds the last forces and the step after them)
-    if (fs is not None and ans.normal.size and ans.normal.size == fs.normal_node.size
-            and ans.tangential.size == fs.friction_node.size):
+    if fs is not None and ans.normal.size:
         upper = fs.normal_sign < 0
         up[fs.normal_node[upper]] = ans.normal[upper]
         lo[fs.normal_node[~upper]] = ans.normal[~upper]
