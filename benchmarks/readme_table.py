@@ -33,8 +33,9 @@ def table(rows: list[dict]) -> str:
                                         r["time_sgm_ms"], -r["success"]))
     lines = [head]
     for r in order:
-        driver = r["method"].replace("globalised+", "continuation (") + (
-            ")" if "+" in r["method"] else "")
+        driver, at, form = r["method"].partition("@")  # DRIVER@FORM: --formulation
+        driver = driver.replace("globalised+", "continuation (") + (
+            ")" if "+" in driver else "") + at + form
         speed = (f"{_fmt(r['speedup_vs_baseline'], '.0f')} / "
                  f"{_fmt(r['speedup_vs_baseline_fd'], '.0f')}")
         if r["backend"].startswith("baseline"):

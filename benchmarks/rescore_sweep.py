@@ -10,7 +10,7 @@ row's success rate is the committed one, and rewrites what the scoring rule
 decides: `summary.json`, `profiles.csv`, the six profile figures,
 `work-precision.png`, and in `report.md` the scoring paragraph, the table
 "Back-ends compared", the sections "Back-ends without runs here" (with today's
-install hints) and "Unsuccessful runs" (counted against today's `bench.expected`)
+install hints), "Back-ends and formulations" and "Unsuccessful runs" (counted against today's `bench.expected`)
 and the section "Performance and data profiles". The rest
 of report.md (the reference check, Table II, continuation, the machine) and
 the force and shape figures need the store's arrays and stay as they are.
@@ -34,6 +34,7 @@ from lcpbench.bench.report import (
     _write_profiles,
     comparison_table,
     failures,
+    formulation_table,
     scoring_text,
     skipped_backends,
 )
@@ -98,8 +99,11 @@ def main(folder: Path) -> None:
     text = (folder / "report.md").read_text()
     text = _replace_section(text, "**Error** of a run", "\n\n## Back-ends compared",
                             scoring_text(DEFAULT_TIME_LIMIT) + NOTE)
+    forms = formulation_table(summary)
     text = _replace_section(text, "## Back-ends compared", "\n## Back-ends without runs here",
-                            "## Back-ends compared\n\n" + comparison_table(summary) + "\n")
+                            "## Back-ends compared\n\n" + comparison_table(summary) + "\n"
+                            + (f"\n## Back-ends and formulations\n\n{forms}\n" if forms
+                               else ""))
     text = _replace_section(text, "## Back-ends without runs here", "\n## Unsuccessful runs",
                             "## Back-ends without runs here\n\n"
                             + skipped_backends({r["backend"] for r in runs}) + "\n")

@@ -122,3 +122,28 @@ def test_a_selection_in_a_formulation_is_solved_in_it(tmp_path):
     assert sel.backend == "lemke" and sel.formulation == "gaps+ruiz"
     res = lcpbench.solve(scene, solver=sel)
     assert res.converged and res.extra["formulation"] == "gaps+ruiz"
+
+
+# -- what native code prints stays off stdout ------------------------------------------
+def test_lcp_osqp_high_json_is_json_alone(tmp_path):
+    """OSQP 1.1 prints "Polishing not needed ..." from C at `high` (polishing on) even
+    when told verbose=False; `--json` output must stay one JSON document. Run in a
+    process of its own: only there does C's stdout reach the real file descriptor 1."""
+    import os
+    import subprocess
+    import sys
+
+    import numpy as np
+    import pytest
+
+    pytest.importorskip("osqp")
+    # M = [[2, 1], [1, 2]], q = (-5, -6): both rows active, z = M⁻¹(−q) = (4/3, 7/3)
+    path = _npz(tmp_path, [[2, 1], [1, 2]], [-5, -6])
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
+    proc = subprocess.run([sys.executable, "-m", "lcpbench.cli", "lcp", path, "--solver",
+                           "osqp", "--settings", "high", "--json"],
+                          capture_output=True, text=True, timeout=120, env=env)
+    assert proc.returncode == 0, proc.stderr
+    d = json.loads(proc.stdout)  # nothing but the document on stdout
+    assert d["solver"] == "osqp" and d["status"] == "solved"
+    assert np.allclose(d["z"], [4 / 3, 7 / 3], atol=1e-7)

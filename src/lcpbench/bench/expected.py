@@ -230,7 +230,8 @@ STANDARD_EXPECTED: tuple[Expectation, ...] = (
                   f"allowance: the judge is conservative, the answer is not wrong ({_STD})",
                   settings=s, reason=JUDGE, within_tol=True, partial=True)
       for b, s in (("cvxpy", "default"), ("lemke", "high"), ("qpsolvers-daqp", "default"),
-                   ("qpsolvers-highs", "high"), ("qpsolvers-quadprog", "high"),
+                   ("pgs-sm", "high"), ("qpsolvers-highs", "high"),
+                   ("qpsolvers-quadprog", "high"),
                    ("quantecon-lemke", "high"), ("siconos-lemke", "high"),
                    ("siconos-newton-fb", "default"))),
     # (b) just over τ at high: an inexact last step, rightly refused (the margin: the

@@ -92,6 +92,62 @@ def comparison_table(summary: list[dict]) -> str:
     return _table(head, rows, lead + "r" * (len(head) - len(lead)))
 
 
+def _form_of(backend: str, method: str) -> tuple[str, str]:
+    """(driver, formulation) of a stored method ``DRIVER`` or ``DRIVER@FORM``: a plain
+    run is the back-end's own form (:func:`~lcpbench.model.formulations.native`)."""
+    driver, _, form = method.partition("@")
+    if form:
+        return driver, form
+    from ..model.formulations import native
+    from ..solvers.registry import get_backend
+
+    try:
+        return driver, f"{native(get_backend(backend))} (own)"
+    except Exception:  # noqa: BLE001 - a back-end this install does not know
+        return driver, "own"
+
+
+def formulation_table(summary: list[dict]) -> str:
+    """Back-end × formulation: success, time score and median force error per settings.
+
+    Built from the runs a sweep with ``--formulation`` stores as method ``DRIVER@FORM``
+    beside the plain runs (each back-end's own form). Cold drivers only (continuation
+    runs are compared with cold ones in their own section); "" when no run was handed
+    a formulation other than its own.
+    """
+    rows = [r for r in summary if not r["backend"].startswith("baseline")
+            and "+" not in r["method"].partition("@")[0]]
+    if not any("@" in r["method"] for r in rows):
+        return ""
+    order = {"default": 0, "low": 1, "mid": 2, "high": 3}
+    profiles = sorted({r["settings"] for r in rows}, key=lambda p: (order.get(p, 9), p))
+    cells: dict[tuple, dict[str, dict]] = {}
+    for r in rows:
+        cells.setdefault((r["backend"], *_form_of(r["backend"], r["method"])),
+                         {})[r["settings"]] = r
+    drivers = len({k[1] for k in cells}) > 1
+    head = ["back-end"] + (["driver"] if drivers else []) + ["formulation"]
+    for p in profiles:
+        head += [f"{p}: success", f"{p}: time sgm (ms)", f"{p}: median error"]
+    body = []
+    for (backend, driver, form), by in sorted(cells.items()):
+        line = [f"`{backend}`"] + ([driver] if drivers else []) + [form]
+        for p in profiles:
+            r = by.get(p)
+            line += (["—"] * 3 if r is None else
+                     [f"{100 * r['success']:.0f} %", _fmt(r["time_sgm_ms"], ".3g"),
+                      _fmt(r["error_median"], ".1e")])
+        body.append(line)
+    lead = "lll" if drivers else "ll"
+    return ("Each back-end in each form its contact steps were handed "
+            "(docs/formulations.md; `lcpbench sweep --formulation NAME|best` stores "
+            "method DRIVER@FORM, a plain run is the back-end's own form), at each settings "
+            "profile: success, the time score of the table above (every scene, failures "
+            "charged) and the median force error of the runs with an answer; —: not run in that "
+            "form at that profile.\n\n"
+            + _table(head, body, lead + "r" * (len(head) - len(lead))))
+
+
 def scoring_text(time_limit: float) -> str:
     """The report's paragraph on the success rule and the scores."""
     return (
@@ -354,6 +410,10 @@ def _markdown(store, runs, refs, evaluated, summary, h2, figures, time_limit,
         "",
         comparison_table(summary),
         "",
+    ]
+    if forms := formulation_table(summary):
+        lines += ["## Back-ends and formulations", "", forms, ""]
+    lines += [
         "## Back-ends without runs here",
         "",
         skipped_backends({r["backend"] for r in runs}),
@@ -391,4 +451,5 @@ def _markdown(store, runs, refs, evaluated, summary, h2, figures, time_limit,
 
 
 __all__ = ["DEFAULT_OUT", "build_report", "comparison_table", "continuation_table",
-           "default_out", "scoring_text", "skipped_backends", "success_tol", "table_two"]
+           "default_out", "formulation_table", "scoring_text", "skipped_backends",
+           "success_tol", "table_two"]
