@@ -22,51 +22,58 @@ __all__ = ["band_solve"]
 def band_solve(ab, kl, ku, rhs):
     """Solve A X = ``rhs`` (N × P, overwritten by X) with A in ``ab`` (overwritten by its
     factor); every row scaled first by its largest entry. False where a pivot is zero
-    or not finite (A singular to working precision)."""
-    n, p = ab.shape[0], rhs.shape[1]
+    or not finite (A singular to working precision). Each row's last nonzero column is
+    followed through the exchanges and updates, so a sparse band costs its entries, not
+    its width."""
+    n, p, width = ab.shape[0], rhs.shape[1], ab.shape[1]
+    last = np.empty(n, np.int64)  # the last column of each row that may be nonzero
     for r in range(n):  # row equilibration: the pivots compare like with like
-        big = 0.0
-        for c in range(ab.shape[1]):
-            big = max(big, abs(ab[r, c]))
+        big, last[r] = 0.0, r
+        for j in range(width):
+            v = abs(ab[r, j])
+            if v > 0.0:
+                big = max(big, v)
+                last[r] = r + j - kl
         if big == 0.0 or not np.isfinite(big):
             return False
-        for c in range(ab.shape[1]):
-            ab[r, c] /= big
+        for j in range(width):
+            ab[r, j] /= big
         for q in range(p):
             rhs[r, q] /= big
     for i in range(n):
-        last, cmax = min(n - 1, i + kl), min(n - 1, i + kl + ku)
+        below = min(n - 1, i + kl)
         piv, best = i, abs(ab[i, kl])
-        for r in range(i + 1, last + 1):
+        for r in range(i + 1, below + 1):
             v = abs(ab[r, i - r + kl])
             if v > best:
                 piv, best = r, v
         if best == 0.0 or not np.isfinite(best):
             return False
         if piv != i:
-            for c in range(i, cmax + 1):
+            for c in range(i, max(last[i], last[piv]) + 1):
                 t = ab[i, c - i + kl]
                 ab[i, c - i + kl] = ab[piv, c - piv + kl]
                 ab[piv, c - piv + kl] = t
+            last[i], last[piv] = last[piv], last[i]
             for q in range(p):
                 t = rhs[i, q]
                 rhs[i, q] = rhs[piv, q]
                 rhs[piv, q] = t
-        d = ab[i, kl]
-        for r in range(i + 1, last + 1):
+        d, end = ab[i, kl], last[i]
+        for r in range(i + 1, below + 1):
             f = ab[r, i - r + kl] / d
             if f == 0.0:
                 continue
             ab[r, i - r + kl] = 0.0
-            for c in range(i + 1, cmax + 1):
+            for c in range(i + 1, end + 1):
                 ab[r, c - r + kl] -= f * ab[i, c - i + kl]
+            last[r] = max(last[r], end)
             for q in range(p):
                 rhs[r, q] -= f * rhs[i, q]
     for i in range(n - 1, -1, -1):
-        cmax = min(n - 1, i + kl + ku)
         for q in range(p):
             s = rhs[i, q]
-            for c in range(i + 1, cmax + 1):
+            for c in range(i + 1, last[i] + 1):
                 s -= ab[i, c - i + kl] * rhs[c, q]
             rhs[i, q] = s / ab[i, kl]
     for i in range(n):

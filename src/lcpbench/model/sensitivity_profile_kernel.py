@@ -16,10 +16,11 @@ makes the system banded: per node i, in the order (du_i, dx_i, W_i, dλ_i),
     (B du)_i + tan α_{i−1} W_{i−1} − tan α_i W_i + s_i dλ_i = −(∂_p∇E)_i   (J_xᵀ: p_{i−1} − p_i,
                                                                     p_j = −tan α_j W_j),
 
-and the row of the constraint at an active node (dλ_i = 0 elsewhere; du_i = 0 at a
-pinned node). 4 (N + 1) unknowns, 8 bands either side, solved by the banded LU with
-partial pivoting (:func:`lcpbench.linalg.band_lu_kernel.band_solve`) for every
-parameter at once: O(N) whatever the number of contact nodes. The walls are read as the
+and the row of the constraint at an active node. The unknowns that are fixed (dλ_i = 0
+off the active rows, du_i = 0 at a pinned node, dx_0 = 0, W_N = 0) are left out: about
+3 per node, at most 8 bands either side (B couples nodes two apart), solved by the
+banded LU with partial pivoting (:func:`lcpbench.linalg.band_lu_kernel.band_solve`) for
+the parameters wanted at once: O(N) whatever the number of contact nodes. The walls are read as the
 solve reads them (:func:`lcpbench.model.wall_kernel.walls_at`, their tables of cubic
 pieces), or from ``given_u``/``given_l`` where a wall has no table. Loaded through
 :func:`lcpbench.numba_cache.kernel_module`.
@@ -39,9 +40,8 @@ from .wall_kernel import walls_at
 #: the pin (ℓ's derivative is made of the weight's and this one's)
 THETA, HEIGHT, EI_, WEIGHT, SCALE = range(5)
 OK, SINGULAR = 0, 1
-#: bands of the lifted system below and above the diagonal (4 unknowns per node; B
-#: couples nodes two apart)
-KL = KU = 8
+#: the lifted system's unknowns at a node
+DU, DX, W, DL = range(4)
 
 
 @njit(cache=True)
@@ -123,68 +123,104 @@ def derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo_rows, hi_rows, ku,
             # scaled about the pin: δh = h − x h', δh' = −x h''
             dc[SCALE, i] = side[i] * (hgt[i] - xf[i] * slope[i])
             dgc[SCALE, i] = -xf[i] * curv[i]
-    # the lifted system, node by node (module docstring)
-    N = 4 * (links + 1)
-    ab, rhs = np.zeros((N, 2 * KL + KU + 1)), np.zeros((N, P))
+    # the right-hand sides' columns: the parameters wanted
+    cols = np.full(P, -1, np.int64)
+    nw = 0
+    for p in range(P):
+        if want[p]:
+            cols[p] = nw
+            nw += 1
+    # the lifted system's unknowns, node by node (du, dx, W, dλ), those that are not
+    # fixed: du at a pinned node, dx_0 (the left pin's x), W_N (no link N), dλ off the
+    # active rows are 0; each has its own row
+    at = np.full((links + 1, 4), -1, np.int64)
+    N = 0
     for node in range(links + 1):
         i = node - first
-        free = 0 <= i < n
-        act = free and side[i] != 0.0
-        r = 4 * node  # the force balance (free) or du = 0 (pinned)
-        if free:
+        for c, there in ((DU, 0 <= i < n), (DX, node >= 1), (W, node < links),
+                         (DL, 0 <= i < n and side[i] != 0.0)):
+            if there:
+                at[node, c] = N
+                N += 1
+    rows, cols_, vals = np.empty(18 * (links + 1), np.int64), \
+        np.empty(18 * (links + 1), np.int64), np.empty(18 * (links + 1))
+    rhs = np.zeros((N, max(nw, 1)))
+    ne = 0
+    for node in range(links + 1):
+        i = node - first
+        r = at[node, DU]  # the force balance of a free node
+        if r >= 0:
             for off in range(-2, 3):
                 i2 = i + off
                 if 0 <= i2 < n:
                     b = bands[0, i] if off == 0 else (
                         bands[1, min(i, i2)] if abs(off) == 1 else bands[2, min(i, i2)])
-                    ab[r, 4 * off + KL] += b
+                    ne = _put(rows, cols_, vals, ne, r, at[node + off, DU], b)
             if node >= 1:
-                ab[r, -2 + KL] += tan[node - 1]
+                ne = _put(rows, cols_, vals, ne, r, at[node - 1, W], tan[node - 1])
             if node < links:
-                ab[r, 2 + KL] -= tan[node]
-            if act:
-                ab[r, 3 + KL] += side[i]
+                ne = _put(rows, cols_, vals, ne, r, at[node, W], -tan[node])
+            if at[node, DL] >= 0:
+                ne = _put(rows, cols_, vals, ne, r, at[node, DL], side[i])
             for p in range(P):
-                rhs[r, p] = -dgrad[p, i]
-        else:
-            ab[r, KL] = 1.0
-        r += 1  # dx: the running sum
-        ab[r, KL] = 1.0
-        if node >= 1:
-            ab[r, -4 + KL] -= 1.0
-            if free:
-                ab[r, -1 + KL] += tan[node - 1]
-            if 0 <= i - 1 < n:
-                ab[r, -5 + KL] -= tan[node - 1]
-        r += 1  # W: the suffix sums of q + v
-        ab[r, KL] = 1.0
-        if node < links:
-            ab[r, 4 + KL] -= 1.0
+                if cols[p] >= 0:
+                    rhs[r, cols[p]] = -dgrad[p, i]
+        r = at[node, DX]  # dx: the running sum
+        if r >= 0:
+            ne = _put(rows, cols_, vals, ne, r, r, 1.0)
+            if at[node - 1, DX] >= 0:
+                ne = _put(rows, cols_, vals, ne, r, at[node - 1, DX], -1.0)
+            if at[node, DU] >= 0:
+                ne = _put(rows, cols_, vals, ne, r, at[node, DU], tan[node - 1])
+            if at[node - 1, DU] >= 0:
+                ne = _put(rows, cols_, vals, ne, r, at[node - 1, DU], -tan[node - 1])
+        r = at[node, W]  # W: the suffix sums of q + v
+        if r >= 0:
+            ne = _put(rows, cols_, vals, ne, r, r, 1.0)
+            if at[node + 1, W] >= 0:
+                ne = _put(rows, cols_, vals, ne, r, at[node + 1, W], -1.0)
             i2 = i + 1
-            if 0 <= i2 < n and side[i2] != 0.0:
-                ab[r, 3 + KL] -= lam[i2] * side[i2] * curv[i2]  # β dx
-                ab[r, 5 + KL] -= side[i2] * slope[i2]  # s h' dλ
+            if at[node + 1, DL] >= 0:
+                ne = _put(rows, cols_, vals, ne, r, at[node + 1, DX],
+                          -lam[i2] * side[i2] * curv[i2])  # β dx
+                ne = _put(rows, cols_, vals, ne, r, at[node + 1, DL], -side[i2] * slope[i2])
                 for p in range(P):
-                    rhs[r, p] = lam[i2] * side[i2] * dgc[p, i2]
-        r += 1  # the constraint (active) or dλ = 0
-        if act:
-            ab[r, -2 + KL] = slope[i]
-            ab[r, -3 + KL] = -1.0
+                    if cols[p] >= 0:
+                        rhs[r, cols[p]] = lam[i2] * side[i2] * dgc[p, i2]
+        r = at[node, DL]  # the constraint of an active row
+        if r >= 0:
+            ne = _put(rows, cols_, vals, ne, r, at[node, DX], slope[i])
+            ne = _put(rows, cols_, vals, ne, r, at[node, DU], -1.0)
             for p in range(P):
-                rhs[r, p] = -side[i] * dc[p, i]
-        else:
-            ab[r, KL] = 1.0
+                if cols[p] >= 0:
+                    rhs[r, cols[p]] = -side[i] * dc[p, i]
+    kl = ku = 0
+    for e in range(ne):
+        kl, ku = max(kl, rows[e] - cols_[e]), max(ku, cols_[e] - rows[e])
+    ab = np.zeros((N, 2 * kl + ku + 1))
+    for e in range(ne):
+        ab[rows[e], cols_[e] - rows[e] + kl] += vals[e]
     du, dfu, dfl = np.zeros((P, n)), np.zeros((P, n)), np.zeros((P, n))
-    if not band_solve(ab, KL, KU, rhs):
+    if not band_solve(ab, kl, ku, rhs):
         return SINGULAR, du, dfu, dfl, origin, one_sided
     for p in range(P):
-        if not want[p]:
+        if cols[p] < 0:
             continue
         for i in range(n):
             node = first + i
-            du[p, i] = rhs[4 * node, p]
-            if side[i] > 0.0:
-                dfu[p, i] = rhs[4 * node + 3, p]
-            elif side[i] < 0.0:
-                dfl[p, i] = rhs[4 * node + 3, p]
+            du[p, i] = rhs[at[node, DU], cols[p]]
+            if at[node, DL] >= 0:
+                if side[i] > 0.0:
+                    dfu[p, i] = rhs[at[node, DL], cols[p]]
+                else:
+                    dfl[p, i] = rhs[at[node, DL], cols[p]]
     return OK, du, dfu, dfl, origin, one_sided
+
+
+@njit(cache=True)
+def _put(rows, cols, vals, ne, r, c, v):
+    """Entry (r, c) = v of the lifted system (c < 0: a fixed unknown, left out)."""
+    if c < 0:
+        return ne
+    rows[ne], cols[ne], vals[ne] = r, c, v
+    return ne + 1
