@@ -19,7 +19,6 @@ import pytest
 
 import lcpbench
 from lcpbench import ActuatorScene
-from lcpbench.errors import ProblemError
 from lcpbench.model.sensitivity import sensitivities
 from lcpbench.problems.walls import WallProfile
 
@@ -69,6 +68,22 @@ def _moved(scene, p, d):
 
 @pytest.mark.parametrize("scene", SCENES)
 def test_profile_derivatives_are_the_central_differences(scene):
+    _against_central_differences(scene)
+
+
+def test_a_wall_without_a_table_is_read_from_its_function(monkeypatch):
+    """A function profile that would need more cubic pieces than MAX_PIECES has no table:
+    the solve evaluates the function itself (the numpy reference driver), and so do the
+    sensitivities (their kernel is given h, h', h'' at the nodes)."""
+    from lcpbench.problems import profile_table
+
+    monkeypatch.setattr(profile_table, "MAX_PIECES", 8)
+    scene = ActuatorScene(theta=150, links=60, wall_profile=bump(3.0, 0.8, 14.0, 3.0))
+    assert scene.wall_profile.pieces(-scene.length, scene.length) is None
+    _against_central_differences(scene)
+
+
+def _against_central_differences(scene):
     res = lcpbench.solve(scene, tol=TOL)
     assert res.converged, res.reason
     s = sensitivities(res)
@@ -113,18 +128,6 @@ def test_a_flat_profile_gives_the_flat_walls_derivatives():
         assert b.total_force[p] == pytest.approx(a.total_force[p], rel=1e-7), p
 
 
-def test_profile_sensitivities_refuse_too_many_contact_nodes():
-    from lcpbench.model import sensitivity_profile
-
-    res = lcpbench.solve(ActuatorScene(theta=150, links=60, wall_profile=RAMP))
-    assert np.count_nonzero(res.forces > 0) == 4
-    old = sensitivity_profile.MAX_ROWS
-    try:
-        sensitivity_profile.MAX_ROWS = 3
-        with pytest.raises(ProblemError, match="wall profile.*up to 3 contact.*has 4.*Flat"):
-            sensitivities(res)
-    finally:
-        sensitivity_profile.MAX_ROWS = old
 
 
 def test_the_cli_gives_them_for_a_wall_profile(tmp_path):

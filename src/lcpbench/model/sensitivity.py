@@ -33,8 +33,8 @@ section k ``theta_deg[k]``, ``EI[k]``, ``weight[k]``; a joint on a boundary has 
 series spring 2 EI_l EI_r / (a (EI_l + EI_r)) and the rest angle of both halves, so
 ∂k/∂EI_l = 2 EI_r² / (a (EI_l + EI_r)²) and ∂φ*/∂θ_k = −1/(2 n_k) there; ``length_mm``
 scales every section's length together: ℓ ∂F/∂ℓ = −2F − h F_h + 3 Σ_k w_k F_{w_k}).
-Walls of any profile (``height_mm``: both walls moved apart): a dense KKT solve,
-:mod:`lcpbench.model.sensitivity_profile`.
+Walls of any profile (``height_mm``: both walls moved apart): a banded KKT solve with
+the nodes' x lifted into it, :mod:`lcpbench.model.sensitivity_profile`.
 """
 
 from __future__ import annotations
@@ -140,7 +140,13 @@ def sensitivities(result, wrt=None) -> Sensitivities:
         if p not in own:
             raise ProblemError(f"wrt must name parameters among {', '.join(own)}; got {p!r}")
     if getattr(scene, "wall_profile", None) is not None:
-        d = profile_derivatives(result, scene, set(names), _contact_threshold(result, scene))
+        from .kernel_call import kernel_args
+
+        chain = scene.chain()
+        _, _, _, _, k, rest, _, nodal_load, *_ = kernel_args(chain)
+        drest, dk, unit_load, _ = _parameter_rows(scene, chain, rest, k, nodal_load)
+        d = profile_derivatives(result, scene, set(names), _contact_threshold(result, scene),
+                                (drest[0], dk[0], unit_load[0]))
         return _collect(result, scene, names, d)
     need = {p for p in names if p != "length_mm"}
     if "length_mm" in names:  # from the others, by dimensional analysis
@@ -202,6 +208,11 @@ def _parameter_rows(scene, chain, rest, k, nodal_load):
     if isinstance(scene, SectionedScene):  # (the chain's data only: kept with it)
         return chain.derived("_section_rows", lambda: _section_rows(scene, chain, rest,
                                                                     nodal_load))
+    return chain.derived("_parameter_rows", lambda: _scene_rows(scene, rest, k, nodal_load))
+
+
+def _scene_rows(scene, rest, k, nodal_load):
+    """:func:`_parameter_rows` of an actuator or a cantilever (one row of each)."""
     # φ* = −θ/N per joint, k = EI/a, the loads ∝ w (the cantilever's: ∝ q): their
     # derivatives (the cantilever has no rest curvature)
     theta = getattr(scene, "theta", None)

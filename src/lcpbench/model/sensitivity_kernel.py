@@ -23,6 +23,26 @@ from .compiled_kernel import banded_step, geometric_bands
 #: :func:`rows_of` with one of each
 THETA, HEIGHT, EI_, WEIGHT, WALL = range(5)
 OK, NOT_PD = 0, 1
+#: what a parameter changes in the energy's gradient (:func:`gradient_derivative`)
+REST, SPRING, LOAD = range(3)
+
+
+@njit(cache=True)
+def gradient_derivative(dgrad, kind, vec, coef, b0, fs, links, origin, phi_origin, k, rest, m,
+                        none_n, none_j, Tz):
+    """∂∇E/∂p at the linearisation point into ``dgrad``; the gradient Jᵀ k (φ − φ*) − f
+    is linear in each of k, φ* and f: ``kind`` REST, ``vec`` = ∂φ*/∂p per joint
+    (∂∇E = Jᵀ k (−∂φ*)); SPRING, ``vec`` = ∂k/∂p per joint (Jᵀ ∂k (φ − φ*)); LOAD,
+    ``vec`` = ∂f/∂p per free node (−∂f). ``m``: scratch per joint; ``none_n``,
+    ``none_j``, ``Tz``: zeros (per node, per joint, 2 × n)."""
+    if kind == REST:
+        grad_into(dgrad, m, origin, (coef, b0, fs, links, origin, none_j, k, vec, none_n), Tz)
+    elif kind == SPRING:
+        grad_into(dgrad, m, origin, (coef, b0, fs, links, origin, phi_origin, vec, rest,
+                                      none_n), Tz)
+    else:
+        for i in range(dgrad.size):
+            dgrad[i] = -vec[i]
 
 
 @njit(cache=True)
@@ -67,18 +87,18 @@ def derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu, cl, fu, f
             continue
         dgrad[:] = 0.0
         du0[:] = 0.0
-        if p < mt:  # ∂g = Jᵀ k (−∂φ*/∂θ_k)
-            grad_into(dgrad, m, origin, (coef, jr[0], fs, links, origin, none_j, k, drest[p],
-                                          none_n), Tz)
+        if p < mt:
+            gradient_derivative(dgrad, REST, drest[p], coef, jr[0], fs, links, origin, phi_origin,
+                                k, rest, m, none_n, none_j, Tz)
         elif p == mt:  # the walls move: +1 the upper, −1 the lower (at −h)
             for i in range(n):
                 du0[i] = 1.0 if up[i] else (-1.0 if down[i] else 0.0)
-        elif p <= mt + me:  # ∂g = Jᵀ (∂k/∂EI_k) (φ − φ*)
-            grad_into(dgrad, m, origin, (coef, jr[0], fs, links, origin, phi_origin,
-                                          dk[p - mt - 1], rest, none_n), Tz)
-        elif p <= mt + me + mw:  # f ∝ w_k
-            for i in range(n):
-                dgrad[i] = -unit_load[p - mt - me - 1, i]
+        elif p <= mt + me:
+            gradient_derivative(dgrad, SPRING, dk[p - mt - 1], coef, jr[0], fs, links,
+                                origin, phi_origin, k, rest, m, none_n, none_j, Tz)
+        elif p <= mt + me + mw:
+            gradient_derivative(dgrad, LOAD, unit_load[p - mt - me - 1], coef, jr[0], fs,
+                                links, origin, phi_origin, k, rest, m, none_n, none_j, Tz)
         for i in range(n):
             r[i] = 0.0 if rigid[i] else dgrad[i] + matvec_row(bands, du0, i, n, False)
             if p == rows - 1 and (up[i] or down[i]) and not rigid[i]:  # ∂k_i (u − h) = R_i / k
