@@ -26,9 +26,9 @@ def test_anchor_json_keys_units_and_the_gross_slip_identity(capsys):
     # at pull-out every contact node slides: P* = μ ΣN(P*) (Coulomb, flat walls), in N;
     # ΣN is the last held state's (pull P_h), and ΣN falls as the pull grows:
     # P_h <= P* <= μ ΣN(P_h)
-    P, Ph, C = d["pull_out_force"], d["held_pull"], d["capacity"]
-    assert C == pytest.approx(0.3 * d["normal_force_total"], rel=1e-9)
-    assert 0 < Ph <= P <= C * (1 + 1e-9) and P == pytest.approx(C, rel=1e-2)
+    P, Ph = d["pull_out_force"], d["held_pull"]
+    muN = 0.3 * d["normal_force_total"]  # μ as given, ΣN as printed
+    assert 0 < Ph <= P <= muN * (1 + 1e-9) and P == pytest.approx(muN, rel=1e-5)
     # newtons, not millinewtons: the paper's scene presses its walls with ~0.1-1 N
     assert 1e-3 < d["normal_force_total"] < 1.0
     assert d["normal_force_total"] == pytest.approx(sum(d["normal_forces"]), rel=1e-12)
@@ -91,9 +91,9 @@ def test_anchor_takes_the_papers_three_section_actuator(capsys):
     code, d = _json(["--theta", "150", "--friction", "0.3", "--sections", "anchoring"],
                     capsys)
     assert code == 0 and d["converged"]
-    P, Ph, C = d["pull_out_force"], d["held_pull"], d["capacity"]
-    assert C == pytest.approx(0.3 * d["normal_force_total"], rel=1e-9)
-    assert 0 < Ph <= P <= C * (1 + 1e-9) and P == pytest.approx(C, rel=1e-2)
+    P, Ph = d["pull_out_force"], d["held_pull"]
+    muN = 0.3 * d["normal_force_total"]  # μ as given, ΣN as printed
+    assert 0 < Ph <= P <= muN * (1 + 1e-9) and P == pytest.approx(muN, rel=1e-5)
 
 
 def test_solve_friction_on_sections_is_not_dropped(capsys):

@@ -82,6 +82,8 @@ def test_lcp_file_best_is_the_backends_lcp_form_or_as_given(tmp_path, capsys):
     from lcpbench.model.formulations import best_formulations, parse_formulation
 
     path = _npz(tmp_path, [[2, 1], [1, 2]], [-5, -6])
+    # the expected form is read from the committed table best resolves from (a wiring
+    # check: which form ran; the answer itself is checked against z = (4/3, 7/3) above)
     best = best_formulations("high")
     for solver in ("qpsolvers-scs", "clarabel", "lemke"):
         main(["lcp", path, "--solver", solver, "--settings", "high", "--formulation", "best",

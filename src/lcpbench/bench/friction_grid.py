@@ -30,15 +30,17 @@ FRICTION_PRESSURES = (68.95, 103.42, 137.9, 172.37)
 FRICTION_HEIGHTS = (4.5, 5.5, 6.5)
 
 TABLE = "pull_outs"
-COLUMNS = ("scene", "friction", "actuator", "pressure", "theta", "height", "links", "channel",
+COLUMNS = ("scene", "friction", "tol", "actuator", "pressure", "theta", "height", "links",
+           "channel",
            "pull_out_force", "normal_force_total", "capacity", "held_pull", "solves",
            "converged",
            "reason", "wall_time", "created", "sweep_id")
 _CREATE = f"""CREATE TABLE IF NOT EXISTS {TABLE} (
-    scene TEXT NOT NULL, friction REAL NOT NULL, actuator TEXT, pressure REAL, theta REAL,
+    scene TEXT NOT NULL, friction REAL NOT NULL, tol REAL NOT NULL, actuator TEXT,
+    pressure REAL, theta REAL,
     height REAL, links INTEGER, channel INTEGER, pull_out_force REAL,
     normal_force_total REAL, capacity REAL, held_pull REAL, solves INTEGER, converged INTEGER, reason TEXT,
-    wall_time REAL, created TEXT, sweep_id TEXT, PRIMARY KEY (scene, friction))"""
+    wall_time REAL, created TEXT, sweep_id TEXT, PRIMARY KEY (scene, friction, tol))"""
 
 
 @dataclass(frozen=True)
@@ -89,9 +91,11 @@ def ensure_table(store) -> None:
         raise StoreError(f"store {store.path}: cannot write to it ({exc})") from exc
 
 
-def stored_keys(store) -> set[tuple[str, float]]:
+def stored_keys(store) -> set[tuple[str, float, float]]:
+    """(scene, μ, tol) of every point stored (a point at another tol is another point)."""
     ensure_table(store)
-    return {(s, float(m)) for s, m in store.db.execute(f"SELECT scene, friction FROM {TABLE}")}
+    return {(s, float(m), float(t)) for s, m, t in
+            store.db.execute(f"SELECT scene, friction, tol FROM {TABLE}")}
 
 
 def point_row(mu: float, scene: ActuatorScene, pressure: float, actuator: str, *,
@@ -101,7 +105,7 @@ def point_row(mu: float, scene: ActuatorScene, pressure: float, actuator: str, *
     from ..studies.pull_out import pull_out
 
     t0 = time.perf_counter()
-    row = {"scene": scene_key(scene), "friction": mu, "actuator": str(actuator),
+    row = {"scene": scene_key(scene), "friction": mu, "tol": tol, "actuator": str(actuator),
            "pressure": pressure, "theta": scene.theta, "height": scene.height,
            "links": scene.links, "channel": int(scene.channel)}
     if mu == 0:
@@ -132,7 +136,7 @@ def run_friction_grid(store, grid: FrictionGrid = FRICTION_GRID, *, rerun: bool 
     have = set() if rerun else stored_keys(store)
     done = skipped = 0
     for (mu, scene), pressure in zip(grid.points(), _pressures(grid), strict=True):
-        if (scene_key(scene), mu) in have:
+        if (scene_key(scene), mu, float(tol)) in have:
             skipped += 1
             if progress is not None:
                 progress(None)
@@ -163,9 +167,10 @@ def _cell(v):
     return v
 
 
-def friction_rows(store, grid: FrictionGrid | None = None) -> list[dict]:
-    """The stored pull-outs as dicts (every row, or the points of ``grid``), ordered by
-    h, pressure, μ; ``converged`` as bool."""
+def friction_rows(store, grid: FrictionGrid | None = None, tol: float | None = None
+                  ) -> list[dict]:
+    """The stored pull-outs as dicts (every row, or the points of ``grid``; every tol, or
+    ``tol``'s), ordered by h, pressure, μ; ``converged`` as bool."""
     ensure_table(store)
     rows = [dict(zip(COLUMNS, r, strict=True)) for r in store.db.execute(
         f"SELECT {', '.join(COLUMNS)} FROM {TABLE} ORDER BY height, pressure, friction")]
@@ -175,4 +180,6 @@ def friction_rows(store, grid: FrictionGrid | None = None) -> list[dict]:
     if grid is not None:
         want = {(scene_key(sc), mu) for mu, sc in grid.points()}
         rows = [r for r in rows if (r["scene"], r["friction"]) in want]
+    if tol is not None:
+        rows = [r for r in rows if r["tol"] == float(tol)]
     return rows

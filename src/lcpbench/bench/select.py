@@ -137,7 +137,8 @@ def select_backend(scene_or_grid, force_tol: float = 1e-6, time_budget: float | 
         ``$LCPBENCH_STORE`` when set, else an in-memory store: nothing is
         written to disk and nothing is cached for the next call; ``lcpbench
         select`` caches in ``results/lcpbench.sqlite`` unless told otherwise).
-    candidates : back-end names (default: every installed one).
+    candidates : back-end names (default: every installed one; with a named
+        ``formulation``, every installed one that takes it).
     settings : the profiles tried for each back-end.
     probe : run the probes that are not cached (False: use the cache only,
         and answer with what it holds).
@@ -169,6 +170,10 @@ def select_backend(scene_or_grid, force_tol: float = 1e-6, time_budget: float | 
         get_backend(n)
     for p in settings:
         get_settings(p)
+    if formulation is not None and candidates is None:  # every installed one that takes it
+        names = [n for n in names if _takes(n, settings, formulation)]
+        if not names:
+            raise ProblemError(f"formulation {formulation!r}: no installed back-end takes it")
     forms = _forms(names, settings, formulation)
     if evidence is None:
         evidence = [COMMITTED_RUNS] if COMMITTED_RUNS.exists() else []
@@ -205,6 +210,15 @@ def _forms(names, settings, formulation) -> dict[tuple[str, str], str]:
     pairs = {(n, p): resolve_formulation(get_backend(n), formulation, p)
              for n in names for p in settings}
     return {c: str(f) for c, f in pairs.items() if f is not None}
+
+
+def _takes(name: str, settings, formulation) -> bool:
+    """Whether back-end ``name`` takes ``formulation`` at every profile of ``settings``."""
+    try:
+        _forms([name], settings, formulation)
+    except ProblemError:
+        return False
+    return True
 
 
 def _method(cand, forms) -> str:

@@ -117,5 +117,6 @@ def summary(res) -> str:
         f"stick / slide       {int(res.stick.sum())} / {int(sliding.sum())} nodes in contact",
         f"largest slip        {float(abs(res.slip).max(initial=0.0)):.3g} mm",
         f"converged           {res.converged} ({res.reason}; {res.outer_iterations} steps)",
+        f"step solved by      {res.solver}",
     ]
     return "\n".join(lines)

@@ -12,15 +12,18 @@ from __future__ import annotations
 
 import sys
 
+from ..bench.sweep import DEFAULT_TIME_LIMIT
 from ..errors import ProblemError
 from ._common import error_line, has_matplotlib
+from ._scene_args import DEFAULT_METHOD
 
 #: options of ``sweep`` that are for the back-end grids, with their defaults
 _NOT_FOR_FRICTION = {"theta": None, "EI": None, "weight": None, "length": None,
                      "wall_stiffness": None, "sections_count": None, "solvers": None,
                      "settings": None, "continuation": None, "baseline": None,
                      "formulation": None, "standard": False, "dask": None, "repeat": None,
-                     "channel": False}
+                     "channel": False, "jobs": None, "oversubscribe": False, "all": False,
+                     "time_limit": DEFAULT_TIME_LIMIT, "method": DEFAULT_METHOD}
 
 
 def _advance(bar):
@@ -95,7 +98,7 @@ def sweep_friction(args) -> int:
             return 130
         if bar:
             bar.close()
-        rows = friction_rows(store, grid)
+        rows = friction_rows(store, grid, tol)
     print(f"{done} pull-outs computed, {there} already in {args.store}")
     bad = [r for r in rows if not r["converged"]]
     if not args.no_report:

@@ -54,6 +54,10 @@ def cmd_anchor(args) -> int:
     if args.plot is not None and not has_matplotlib():
         error_line("--plot needs matplotlib: pip install 'lcpbench[plot]'")
         return 2
+    if getattr(args, "links", None) == "auto":
+        error_line("--links auto is not for a frictional scene (its discretisation study "
+                   "solves the frictionless model); give an integer N")
+        return 2
     args.left_end, args.right_end, args.pull = "slider", "slider", None
     scene = scene_from(args)
     po = pull_out(scene, tol=args.tol)  # (refuses what it cannot take, in one line)

@@ -124,6 +124,9 @@ def _fit_shapes(args) -> int:
     if args.fit_theta:
         raise ProblemError("--shapes fits the theta(P) line from the free shapes itself; "
                            "--fit-theta goes with --data")
+    if getattr(args, "pressure_limit", None) is not None:
+        raise ProblemError("--pressure-limit is not for --shapes (a fit reports no contact "
+                           "pressure)")
     shapes = read_shapes(args.shapes)
     cal = calibration_from(args)
     args.fit = None

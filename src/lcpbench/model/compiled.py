@@ -235,7 +235,8 @@ def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol:
     from .outer import failed_output
 
     return (failed_output(chain.rest_alpha.copy(), chain.free_nodes.size, [],
-                          f"the compiled kernel stopped: {why}"),
+                          f"the compiled kernel stopped: {why} (no answer: the shape "
+                          f"given is the unconstrained arc)"),
             f"compiled (stopped: {why})")
 
 

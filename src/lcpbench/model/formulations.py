@@ -439,7 +439,8 @@ def solve_lcp_in(M, q, solver: str, settings="default",
     """:func:`lcpbench.solvers.runner.solve_lcp` with the LCP handed in ``formulation``
     (:func:`lcp_formulation`): ``gaps+ruiz`` the Ruiz-scaled D M D; ``reactions`` the
     dual in w, 0 <= w ⟂ M⁻¹ w − M⁻¹ q >= 0 (z its slack: M symmetric positive definite,
-    else one ProblemError). The answer's z is mapped back and judged on (M, q) itself;
+    else one ProblemError; with ``best``, the LCP as given). The answer's z is mapped back
+    and judged on (M, q) itself;
     ``sol.extra["formulation"]`` says which form ran."""
     import scipy.linalg as sla
 
@@ -458,6 +459,8 @@ def solve_lcp_in(M, q, solver: str, settings="default",
                 raise np.linalg.LinAlgError
             cho = sla.cho_factor(0.5 * (M + M.T))
         except (np.linalg.LinAlgError, ValueError):
+            if formulation == "best":  # the best form is for the contact step's M: else
+                return solve_lcp(M, q, solver, s)  # the LCP as given
             raise ProblemError("formulation reactions (the dual in w) needs M symmetric "
                                "positive definite") from None
         Mt = sla.cho_solve(cho, np.eye(q.size))

@@ -4,10 +4,11 @@ A state is a dict of scene fields that change from the previous state (``theta``
 ``height``, ``pull``, ``friction``, ``weight``, ``EI``; on a row of sections also
 ``sections``), applied in turn. On a row of sections ``theta`` sets the sharpest
 section's |θ| and scales the others with it (signs kept: the anchoring actuator's
-pressure ramp), and ``weight``, ``EI`` set every section's. The path
-starts from the frictionless equilibrium of its first state's scene (the actuator
-placed in its walls without friction; :func:`lcpbench.solve` of that scene with
-μ = 0, both ends pinned and no pull); each state's slips are measured from the
+pressure ramp; a row straightened by θ = 0 bends each section back to |θ| on its own
+side), and ``weight``, ``EI`` set every section's. The path starts from the
+frictionless equilibrium of its first state's scene (the actuator placed in its walls
+without friction; :func:`lcpbench.solve` of that scene with μ = 0, both ends pinned
+and no pull); each state's slips are measured from the
 previous state's node positions (docs/friction.md). A path whose states are all the
 paper's model (μ = 0, both ends pinned, no pull) runs today's :func:`lcpbench.solve`
 for each state, unchanged.
@@ -15,10 +16,11 @@ for each state, unchanged.
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 from ..errors import ProblemError
-from ..problems.checks import describe
+from ..problems.checks import check_number, describe
 from ..problems.scenes import ActuatorScene
 from ..problems.sections import Section, SectionedScene
 from .friction_driver import FrictionState, StepLemke, solve_state
@@ -38,13 +40,20 @@ def apply_state(scene, state: dict):
         return replace(scene, **state)
     state = dict(state)
     secs = state.pop("sections", scene.sections)
-    per = {k: state.pop(k) for k in ("theta", "weight", "EI") if k in state}
+    per = {k: check_number(f"state's {k}", state.pop(k)) for k in ("theta", "weight", "EI")
+           if k in state}
     if per:
         secs = SectionedScene(sections=secs).sections  # (checked, as Sections)
         top = max(abs(s.theta) for s in secs)
-        secs = tuple(Section(s.theta * per.get("theta", top) / top, s.length,
-                             per.get("EI", s.EI), per.get("weight", s.weight))
-                     for s in secs)
+        if "theta" not in per:
+            angle = [s.theta for s in secs]
+        elif top > 0.0:  # the sharpest section to |θ|, the others scaled, signs kept
+            angle = [s.theta * per["theta"] / top for s in secs]
+        else:  # every section straight (a ramp from 0): each bends to |θ| on its own
+            # side, the sign its zero kept from the scaling that straightened it
+            angle = [math.copysign(per["theta"], s.theta) for s in secs]
+        secs = tuple(Section(th, s.length, per.get("EI", s.EI), per.get("weight", s.weight))
+                     for th, s in zip(angle, secs, strict=True))
     return replace(scene, sections=secs, **state)
 
 
@@ -125,6 +134,7 @@ def run_path(scene, states, *, tol: float, max_outer: int, solve, lcp=None,
             x_prev = res.x
         return out
     current, x_prev, broken = place(steps[0][1], tol=tol, max_outer=max_outer, solve=solve)
+    name = getattr(lcp, "backend", "lemke" if lcp is None else "given")
     lcp = StepLemke() if lcp is None else lcp  # one for the path: its covering carries over
     out = []
     for state, s in steps:
@@ -132,6 +142,7 @@ def run_path(scene, states, *, tol: float, max_outer: int, solve, lcp=None,
                            max_outer=0 if broken else max_outer, lcp=lcp)
         if broken:
             res.converged, res.reason = False, broken
+        res.solver = name
         out.append(res)
         if not res.converged and not broken:
             broken = f"an earlier state did not converge ({res.reason})"

@@ -57,6 +57,9 @@ class FrictionResult:
     route: str = "frictional"
     judgement: dict = field(default_factory=dict)
     contact: ContactResult | None = None
+    #: the back-end of the frictional step ("lemke" by default; a ``lcp=`` function:
+    #: "given"; the frictionless route: ``contact``'s)
+    solver: str = "lemke"
 
     def __repr__(self) -> str:
         return (f"FrictionResult(N={self.links}, F={1e3 * self.total_force:.6g} mN, "
@@ -67,7 +70,7 @@ class FrictionResult:
         """A JSON-ready summary (N, mm)."""
         scene = asdict(self.scene) if is_dataclass(self.scene) else {}
         return sanitise({
-            "scene": scene, "state": self.state, "route": self.route,
+            "scene": scene, "state": self.state, "route": self.route, "solver": self.solver,
             "converged": self.converged, "reason": self.reason,
             "total_force": self.total_force, "pull": self.pull,
             "forces": self.forces, "forces_lower": self.forces_lower,
@@ -90,7 +93,7 @@ def from_contact(scene, state: dict, res: ContactResult, x_prev: np.ndarray | No
         np.zeros(f.size), slip, (res.forces + lower > 0) & (np.abs(slip) <= eps_s),
         res.total_force,
         0.0, res.converged, res.reason, res.outer_iterations, res.tol, res.time_s,
-        "frictionless", {}, res)
+        "frictionless", {}, res, res.solver)
 
 
 _KERNEL: list = []  # the compiled checks (model/judge_friction.py), once loaded

@@ -5,8 +5,8 @@ Each back-end's registry record says how it takes the step
 
 - "lcp": the Stewart–Trinkle LCP w = M z + q in z = (N, β⁺, β⁻, λ)
   (:func:`lcpbench.model.friction_step.frictional_lcp`): ``lemke`` (with the step's
-  pivot tolerance and covering vectors, :func:`~.friction_driver.step_lemke`) and any
-  LCP back-end's ``solve_lcp``;
+  pivot tolerance and covering vectors, one :class:`~.friction_driver.StepLemke` per
+  runner, as a path's default) and any LCP back-end's ``solve_lcp``;
 - "fc2d": the Delassus form u = W r + q per wall row (:func:`fc2d_contacts`): Siconos'
   fc2d solvers (:mod:`lcpbench.solvers.siconos_fc2d`) and lcpbench's active set on the
   stick/slide/separate states (``active-set``, :mod:`lcpbench.solvers.fc2d_active`);
@@ -26,11 +26,12 @@ import numpy as np
 
 from ..errors import ProblemError
 from ..solvers.base import LCPSolution, Settings, Status, lcp_residuals
+from ..solvers.lemke import RESIDUAL_TOL
 from ..solvers.registry import FRICTION_FORMS, backends, get_backend
-from .friction_driver import step_lemke
+from .friction_driver import StepLemke
 
 #: the largest scaled natural residual of the step's LCP accepted as SOLVED (Lemke's)
-STEP_TOL = 1e-8
+STEP_TOL = RESIDUAL_TOL
 #: Siconos' fc2d method of each Siconos back-end whose frictional form is "fc2d"
 FC2D_METHODS = {"lemke": "lemke", "enum": "enum", "pgs": "nsgs"}
 #: the most contacts handed to Siconos' fc2d enumeration (4^n states: on random problems
@@ -125,6 +126,9 @@ def step_runner(solver: str | None = None):
     """The frictional step's solver ``(fs) -> LCPSolution`` (z in the LCP's form) for a
     back-end named ``solver`` (default :data:`DEFAULT`, Lemke). SolverNotFound for an
     unknown or absent name; ProblemError for a back-end that does not take friction."""
+    if solver is not None and not isinstance(solver, str):
+        raise ProblemError(f"solver must be a back-end's name (a str), got "
+                           f"{type(solver).__name__}")
     name = DEFAULT if solver in (None, "auto") else solver
     backend = get_backend(name)
     form = backend.friction_form
@@ -134,8 +138,10 @@ def step_runner(solver: str | None = None):
     settings = STEP_SETTINGS
     if form == "lcp":
         if name == "lemke":
+            lemke = StepLemke()  # one per runner, as a path's default (its last covering first)
+
             def run(fs):
-                return judged(fs, step_lemke(fs.M, fs.q))
+                return judged(fs, lemke(fs.M, fs.q))
         else:
             mod = backend.load()
 
@@ -187,8 +193,17 @@ def step_runner(solver: str | None = None):
             peer = solve_fc2d_tresca(W, q, mu, mod.solve_qp, settings,
                                      options=backend.options, warm=backend.warm_start)
             return from_fc2d(fs, peer, t0)
-    run.takes_step = True  # type: ignore[attr-defined]  # friction_driver.solve_state
-    run.backend = name  # type: ignore[attr-defined]
-    run.form = form  # type: ignore[attr-defined]
-    return run
+
+    def guarded(fs):
+        """``run``, a back-end that raises answering FAILED (as the LCP runner does)."""
+        try:
+            return run(fs)
+        except Exception as exc:  # a back-end failure is a status, never an exception
+            nan = np.full(fs.q.size, np.nan)
+            return LCPSolution(nan, nan.copy(), Status.FAILED,
+                               message=f"{name} raised {type(exc).__name__}: {exc}")
+    guarded.takes_step = True  # type: ignore[attr-defined]  # friction_driver.solve_state
+    guarded.backend = name  # type: ignore[attr-defined]
+    guarded.form = form  # type: ignore[attr-defined]
+    return guarded
 

@@ -115,6 +115,9 @@ class Sensitivities:
 
 def unsupported(scene) -> str | None:
     """Why :func:`sensitivities` does not cover ``scene``, or None."""
+    if getattr(scene, "frictional", False):
+        return ("sensitivities cover the frictionless model (both ends pinned, no friction "
+                "or pull); a frictional answer depends on its path and has none here yet")
     if isinstance(scene, (CantileverScene, SectionedScene, ActuatorScene)):
         return None
     return ("sensitivities cover actuator scenes (flat walls, one wall or a channel, rigid "

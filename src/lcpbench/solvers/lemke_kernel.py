@@ -21,7 +21,7 @@ DONE, MAX_ITER, RAY, FAILED = 0, 1, 2, 3
 @njit(cache=True)
 def _tied(col, a, noise, tie_rtol):
     """Mask of the rows whose ratio ``col / a`` ties with the smallest: within
-    ``tie_rtol`` (|min| + both rows' noise over a) (lemke._ties)."""
+    ``tie_rtol`` (|min| + both rows' noise over a): the lexicographic rule's ties."""
     m = col.size
     ratios = col / a
     j = 0

@@ -149,7 +149,7 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
         if len(held) >= 2 and (abs(root - last) <= rtol * abs(root) or (
                 near and res.converged and abs(root - before) <= rtol * abs(root))):
             return _answer(root, path, events, solves, True, "secant root within rtol")
-        if fail is not None and fail - last <= rtol * abs(root):
+        if fail is not None and fail - last <= rtol * fail:  # P* in [last, fail]
             return _answer(min(max(root, last), fail), path, events, solves, True,
                            "bracketed within rtol: the last pull held and a gross slip")
         before = root
@@ -159,8 +159,14 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
         if not res.converged and P != fail:  # go half as far as the step that failed
             step = min(step, 0.5 * (P - last))
         P = last + step
-    return _answer(_secant_root(held), path, events, solves, False,
-                   f"the budget of {max_solves} frictional solves ran out{trouble}")
+    root = _secant_root(held)
+    if fail is not None:  # never past a pull seen to slip: P* lies in [last held, fail]
+        root = min(max(root, held[-1][0]), fail)
+    return _answer(root, path, events, solves, False,
+                   f"the budget of {max_solves} frictional solves ran out{trouble}"
+                   + ("" if fail is None else
+                      f"; P* lies between {held[-1][0]:.6g} N (held) and {fail:.6g} N "
+                      f"(gross slip)"))
 
 
 def predicted(ends: list, P: float, current: FrictionState) -> FrictionState:

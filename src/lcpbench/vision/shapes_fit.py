@@ -30,7 +30,10 @@ Gauss–Newton in ln EI; the Jacobian from :func:`lcpbench.sensitivities` (∂y/
 node, and ∂x = −Σ_{j<k} tan α_j ∂Δy_j). The covariance is s² (JᵀJ)⁻¹,
 s² inflated by the residuals' correlation along the curve (as the joint fit's), plus
 the calibration line's covariance carried through (∂EI/∂(slope, intercept) from the
-θ sensitivities); the interval is ± t(0.975, m − 1) s.e.
+θ sensitivities); the interval is ± t(0.975, m − k) s.e., m the points used and k the
+unknowns (ln EI and a shift and a turn per shape). With exactly two free shapes the
+line has no scatter to estimate its uncertainty from: EI's interval then leaves the
+line's out (its intervals are nan).
 """
 
 from __future__ import annotations
