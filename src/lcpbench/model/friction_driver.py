@@ -11,6 +11,7 @@ are the exact ones.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field, replace
 
@@ -191,7 +192,9 @@ def frictional_chain(scene: ActuatorScene) -> Chain:
         can = reachable(free * chain.link_length, chain.length, scene.height, "clamped-free")
         upper = np.where(can, scene.height, np.inf)
         lower = np.where(can, -scene.height, -np.inf) if scene.channel else np.full(n, -np.inf)
-        k = node_stiffness(scene.wall_stiffness, can, wall_share(n, chain.link_length, free))
+        # the walls' springs (a row of sections has rigid walls only)
+        k = node_stiffness(getattr(scene, "wall_stiffness", math.inf), can,
+                           wall_share(n, chain.link_length, free))
         return replace(chain, free_nodes=free, upper=upper, lower=lower, upper_stiffness=k,
                        lower_stiffness=k if scene.channel else None)
 

@@ -17,8 +17,8 @@ from ..jsonsafe import sanitise
 from ..problems.scenes import ActuatorScene, Chain
 from ..thresholds import NODE_SHARE
 from .chain import node_positions
-from .friction_driver import StateAnswer, datum, frictional_chain, gaps_at
 from .elastic import compliances
+from .friction_driver import StateAnswer, datum, frictional_chain, gaps_at
 from .judge import SLIP_FACTOR, SLIP_FLOOR, force_tol, penetration_allowed
 from .result import ContactResult
 
