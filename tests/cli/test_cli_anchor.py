@@ -68,6 +68,7 @@ def test_anchor_plot_writes_the_figure(tmp_path, capsys):
     (["--theta", "150", "--friction", "-0.1"], "friction must be"),
     (["--theta", "150", "--friction", "x"], "--friction"),
     (["--theta", "150", "--pressure", "100", "--friction", "0.3"], "not both"),
+    (["--theta", "150", "--friction", "0.3", "--wall-stiffness", "-1"], "wall_stiffness"),
 ])
 def test_anchor_bad_input_is_one_line_exit_2(argv, words, capsys):
     code = main([*BASE, *argv])
@@ -111,3 +112,27 @@ def test_solve_friction_on_sections_is_not_dropped(capsys):
     assert len(T) == len(N) and sum(N) > 0
     assert all(abs(t) <= 0.3 * n + 1e-9 for t, n in zip(T, N, strict=True))
     assert abs(sum(T)) <= 1e-6 * sum(N)
+
+
+def test_anchor_on_elastic_walls_passes_the_stiffness_through(capsys):
+    """--wall-stiffness K: the same pull-out as lcpbench.pull_out of the elastic scene,
+    which holds the gross-slip identity P* = μ ΣN (flat walls, elastic or not)."""
+    from lcpbench import ActuatorScene, pull_out
+
+    code, d = _json(["--theta", "150", "--friction", "0.3", "--wall-stiffness", "0.1"], capsys)
+    assert code == 0 and d["converged"] and d["scene"]["wall_stiffness"] == 0.1
+    ref = pull_out(ActuatorScene(theta=150, height=5.5, channel=True, links=30, friction=0.3,
+                                 left_end="slider", right_end="slider", wall_stiffness=0.1))
+    assert d["pull_out_force"] == ref.force
+    assert d["capacity"] == pytest.approx(0.3 * d["normal_force_total"], rel=1e-9)
+    assert d["pull_out_force"] == pytest.approx(d["capacity"], rel=1e-6)
+    assert "wall k=0.1" in (main([*BASE, "--theta", "150", "--friction", "0.3",
+                                  "--wall-stiffness", "0.1"]) == 0 and capsys.readouterr().out)
+
+
+def test_solve_friction_refuses_a_pressure_limit(capsys):
+    code = main(["solve", "--theta", "150", "--height", "3", "--links", "30", "--friction",
+                 "0.3", "--right-end", "slider", "--wall-stiffness", "0.1",
+                 "--pressure-limit", "0.03"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and "--pressure-limit" in err[0]

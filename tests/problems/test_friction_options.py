@@ -23,7 +23,6 @@ from lcpbench import ActuatorScene, ProblemError
     (dict(pull=0.1, right_end="pinned", left_end="slider", friction=0.2), "right_end='pinned'"),
     (dict(left_end="free", right_end="free", friction=0.3), "both be 'free'"),
     (dict(left_end="slider", right_end="slider"), "nothing holds the chain along x"),
-    (dict(friction=0.2, wall_stiffness=0.1), "flat rigid walls only"),
 ])
 def test_bad_frictional_input_is_one_clear_error(kwargs, words):
     with pytest.raises(ProblemError, match=words) as info:
@@ -63,5 +62,15 @@ def test_friction_with_a_wall_profile_names_what_is_supported():
     wall = WallProfile.from_table([0, 10, 20, 30], [3.0, 2.5, 2.5, 3.0])
     for kw in (dict(friction=0.3, right_end="slider"), dict(right_end="slider"),
                dict(right_end="slider", pull=0.01)):
-        with pytest.raises(ProblemError, match="flat rigid walls only"):
+        with pytest.raises(ProblemError, match="wall_profile yet: flat walls only") as info:
             ActuatorScene(wall_profile=wall, **kw)
+        assert "\n" not in str(info.value)
+
+
+def test_friction_takes_elastic_walls():
+    """Elastic (Winkler) walls take friction, one μ or one per wall, in a channel too."""
+    for kw in (dict(friction=0.3, right_end="slider"),
+               dict(friction=(0.3, 0.1), channel=True, left_end="slider",
+                    right_end="slider", pull=0.01)):
+        scene = ActuatorScene(wall_stiffness=0.1, **kw)
+        assert scene.frictional and scene.chain().elastic_walls

@@ -72,7 +72,8 @@ def refuse_options(args, default_solver: str) -> None:
     """ProblemError for the options of ``solve`` that the frictional route does not take."""
     taken = [("--sensitivities", getattr(args, "sensitivities", False)),
              ("--start ramp", getattr(args, "start", "cold") == "ramp"),
-             ("--raw", getattr(args, "raw", False))]
+             ("--raw", getattr(args, "raw", False)),
+             ("--pressure-limit", getattr(args, "pressure_limit", None) is not None)]
     given = [name for name, on in taken if on]
     if given:
         raise ProblemError(f"{', '.join(given)}: not for a frictional scene (--friction, "

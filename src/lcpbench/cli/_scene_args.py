@@ -152,13 +152,18 @@ def add_wall_options(parser) -> None:
     parser : argparse.ArgumentParser
         The sub-command's parser (``solve``).
     """
+    add_wall_stiffness_option(parser)
     a = parser.add_argument
-    a("--wall-stiffness", type=float, default=math.inf, metavar="K",
-      help="Winkler stiffness of the walls, N/mm per mm of wall; 'inf' is a rigid wall "
-           "(default inf)")
     a("--pressure-limit", type=float, default=None, metavar="NPMM",
       help="safety threshold on the contact pressure per length, N/mm: the run says "
            "when the largest pressure passes it")
+
+
+def add_wall_stiffness_option(parser) -> None:
+    """Add ``--wall-stiffness`` (elastic, tissue-like walls; ``solve`` and ``anchor``)."""
+    parser.add_argument("--wall-stiffness", type=float, default=math.inf, metavar="K",
+                        help="Winkler stiffness of the walls, N/mm per mm of wall; 'inf' is "
+                             "a rigid wall (default inf)")
 
 
 def add_tol_option(parser, what: str = "convergence threshold on max|d alpha|",

@@ -3,7 +3,7 @@
 ::
 
     lcpbench anchor --pressure KPA | --theta DEG --height MM --friction MU [--channel]
-                    [--sections anchoring] [--json] [--plot F.png]
+                    [--wall-stiffness K] [--sections anchoring] [--json] [--plot F.png]
 
 Both ends are sliders (held in y, free along x) and the pull acts on the right end;
 :func:`lcpbench.pull_out` follows the pull up to gross slip. The output gives the
@@ -21,7 +21,12 @@ import numpy as np
 
 from ._common import add_json_option, error_line, format_rows, has_matplotlib, print_json
 from ._friction_args import mu_arg
-from ._scene_args import add_scene_options, add_section_options, scene_from
+from ._scene_args import (
+    add_scene_options,
+    add_section_options,
+    add_wall_stiffness_option,
+    scene_from,
+)
 
 
 def register(subparsers) -> None:
@@ -35,6 +40,7 @@ def register(subparsers) -> None:
                     "number of frictional solves.")
     add_scene_options(a)
     add_section_options(a)
+    add_wall_stiffness_option(a)
     a.add_argument("--friction", type=mu_arg, required=True, metavar="MU",
                    help="Coulomb coefficient of the walls, > 0: one number, or "
                         "MU_UPPER,MU_LOWER with --channel")
@@ -113,6 +119,8 @@ def summary(po, scene, pressure, plot) -> str:
     rows = [
         ("scene", f"theta={scene.theta:.6g} deg{made}, h={scene.height:g} mm, "
                   f"N={scene.links}, mu={mu}" + (", channel" if scene.channel else "")
+         + (f", wall k={scene.wall_stiffness:g} N/mm per mm"
+            if getattr(scene, "wall_stiffness", np.inf) < np.inf else "")
          + ", sliders at both ends, the pull on the right end"),
         ("pull-out force", f"{1e3 * po.force:.6g} mN ({po.force:.6g} N)"),
         ("normal force", f"{1e3 * po.normal_force_total:.6g} mN over every wall, at pull-out "

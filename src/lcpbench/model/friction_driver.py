@@ -11,16 +11,18 @@ are the exact ones.
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..errors import ProblemError
-from ..problems.scenes import ActuatorScene, Chain, reachable
+from ..problems.scenes import ActuatorScene, Chain, node_stiffness, reachable, wall_share
 from ..solvers.base import Status
 from ..solvers.lemke import lemke
 from .chain import alpha_from_heights, node_positions
+from .elastic import compliances
 from .step import assemble_step
 
 #: a node within NEAR · a of a wall gets a friction pair in the step (docs/friction.md)
@@ -135,8 +137,8 @@ class FrictionStep:
     ``normal_node``/``normal_sign``: the free node and ∂g/∂y of each wall row;
     ``friction_node``: the node (0..N) of each friction pair; ``pair``: the pair of
     each wall row; ``mu``: the Coulomb coefficient of each wall row. ``W``,
-    ``g_f``, ``s_f``: the contact quantities (g, s) = (g_f, s_f) + W (N, T), the
-    Siconos fc2d form; ``M``, ``q``: the LCP in units of ℓ and EI/ℓ²
+    ``g_f``, ``s_f``: the contact quantities (g + N/k, s) = (g_f, s_f) + W (N, T), the
+    Siconos fc2d form (an elastic wall's compliance 1/k on W_nn's diagonal, 0 if rigid); ``M``, ``q``: the LCP in units of ℓ and EI/ℓ²
     (``length``, ``force``).
     """
 
@@ -190,7 +192,11 @@ def frictional_chain(scene: ActuatorScene) -> Chain:
         can = reachable(free * chain.link_length, chain.length, scene.height, "clamped-free")
         upper = np.where(can, scene.height, np.inf)
         lower = np.where(can, -scene.height, -np.inf) if scene.channel else np.full(n, -np.inf)
-        return replace(chain, free_nodes=free, upper=upper, lower=lower)
+        # the walls' springs (a row of sections has rigid walls only)
+        k = node_stiffness(getattr(scene, "wall_stiffness", math.inf), can,
+                           wall_share(n, chain.link_length, free))
+        return replace(chain, free_nodes=free, upper=upper, lower=lower, upper_stiffness=k,
+                       lower_stiffness=k if scene.channel else None)
 
     return chain.derived("friction: free right end", make)
 
@@ -296,6 +302,11 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
                                          np.ascontiguousarray(D), pair_nodes, slip)
     if not ok:
         raise np.linalg.LinAlgError("the step's matrix is not positive definite")
+    # an elastic wall's row: 0 <= N ⟂ g + N/k >= 0, its compliance 1/k (mm/N) on W_nn's
+    # diagonal (docs/friction.md, elastic walls); 0 for a rigid wall: W unchanged
+    c_up, c_lo = compliances(chain)
+    W[np.arange(rows.size), np.arange(rows.size)] += np.where(signs < 0, c_up[rows],
+                                                              c_lo[rows])
     L, F = chain.length, chain.force_scale
     M, q = k.frictional_lcp(W * (F / L), g_f / L, s_f / L, mus, pairs)
     return FrictionStep(M, q, W, g_f, s_f, X, rows, signs, pair_nodes, pairs, mus, has_tau,

@@ -15,10 +15,11 @@ import numpy as np
 
 from ..jsonsafe import sanitise
 from ..problems.scenes import ActuatorScene, Chain
-from ..thresholds import GEOMETRY_TOL, NODE_SHARE
+from ..thresholds import NODE_SHARE
 from .chain import node_positions
+from .elastic import compliances
 from .friction_driver import StateAnswer, datum, frictional_chain, gaps_at
-from .judge import SLIP_FACTOR, SLIP_FLOOR, force_tol
+from .judge import SLIP_FACTOR, SLIP_FLOOR, force_tol, penetration_allowed
 from .result import ContactResult
 
 
@@ -112,7 +113,11 @@ def friction_verdict(scene: ActuatorScene, chain: Chain, alpha: np.ndarray, x0: 
                    gap: np.ndarray, slip: np.ndarray, tol: float, left_pull: float = 0.0
                    ) -> dict:
     """The friction checks of an answer (docs/friction.md, the judge): numbers and fails;
-    ``left_pull``: a force along x on the left end (a mirrored scene's pull)."""
+    ``left_pull``: a force along x on the left end (a mirrored scene's pull). ``gap``:
+    per wall row, the compliant gap g + N/k at an elastic wall (the Winkler law
+    N = k (y − h)₊ holds when it is 0 where N > 0), the gap g at a rigid one; the
+    penetration allowance is the frictionless judge's (:func:`~.judge.penetration_allowed`,
+    with ε_R/k at an elastic wall)."""
     tau = force_tol(tol)
     F0 = max(abs(float(np.sum(normal))), chain.force_scale, abs(float(scene.pull)),
              abs(left_pull))
@@ -138,7 +143,9 @@ def friction_verdict(scene: ActuatorScene, chain: Chain, alpha: np.ndarray, x0: 
         fails.append("cone")
     if v["slide_deficit"] > eps_f or v["slide_direction"] > eps_f or v["stick_slip"] > eps_s:
         fails.append("slip")
-    if v["min_gap"] < -min(GEOMETRY_TOL, NODE_SHARE * tau):
+    c_up, c_lo = compliances(chain)
+    if v["min_gap"] * chain.length < -penetration_allowed(tau, chain.length, eps_f, c_up,
+                                                          c_lo):
         fails.append("penetration")
     if v["min_normal"] < -eps_f:
         fails.append("sign")
@@ -168,8 +175,10 @@ def build_result(scene: ActuatorScene, state: dict, ans: StateAnswer, x_prev: np
     # every wall row, both walls of a channel: the exact gaps and the normal forces
     g_up, g_lo = gaps_at(chain, y)
     rows_up, rows_lo = np.isfinite(g_up), np.isfinite(g_lo)
-    gap = np.concatenate([g_up[rows_up], g_lo[rows_lo]])
     normal = np.concatenate([up[rows_up], lo[rows_lo]])
+    c_up, c_lo = compliances(chain)  # elastic walls: the compliant gap g + N/k
+    gap = (np.concatenate([g_up[rows_up], g_lo[rows_lo]])
+           + np.concatenate([c_up[rows_up], c_lo[rows_lo]]) * np.maximum(normal, 0.0))
     slip = x[chain.free_nodes] - x_prev[chain.free_nodes]
     verdict = friction_verdict(scene, chain, alpha, x0, lo - up, T, normal, limit, gap, slip,
                                tol, ans.left_pull)

@@ -191,7 +191,7 @@ def wall_share(links: int, link_length: float, free_nodes: np.ndarray) -> np.nda
     return 0.5 * link_length * ends
 
 
-def _node_stiffness(k: float, rows: np.ndarray, share: np.ndarray) -> np.ndarray | None:
+def node_stiffness(k: float, rows: np.ndarray, share: np.ndarray) -> np.ndarray | None:
     """k_i = Winkler k × share_i on the wall rows (inf elsewhere); None when rigid."""
     if math.isinf(k):
         return None
@@ -299,10 +299,10 @@ class ActuatorScene(FrictionOptions):
 
     def _check_friction(self) -> None:
         self._check_friction_options()
-        if self.frictional and (self.wall_profile is not None
-                                or not math.isinf(self.wall_stiffness)):
+        if self.frictional and self.wall_profile is not None:
             raise ProblemError("friction, a slider or free end, or a pull cannot be combined "
-                               "with wall_profile or wall_stiffness yet: flat rigid walls only")
+                               "with wall_profile yet: flat walls only (rigid, or elastic "
+                               "with wall_stiffness)")
 
     def _check_profiles(self) -> None:
         for name in ("wall_profile", "lower_profile"):
@@ -416,9 +416,9 @@ class ActuatorScene(FrictionOptions):
             length=self.length,
             wall=self.height,
             channel=bool(self.channel),
-            upper_stiffness=(_node_stiffness(self.wall_stiffness, can, wall_share(
+            upper_stiffness=(node_stiffness(self.wall_stiffness, can, wall_share(
                 n, a, interior)) if elastic else None),
-            lower_stiffness=(_node_stiffness(self.wall_stiffness, can, wall_share(
+            lower_stiffness=(node_stiffness(self.wall_stiffness, can, wall_share(
                 n, a, interior)) if elastic and self.channel else None),
             upper_profile=prof_up,
             lower_profile=prof_lo,
@@ -543,7 +543,7 @@ class CantileverScene:
             force_scale=self.EI / self.length**2,
             length=self.length,
             wall=self.height,
-            upper_stiffness=_node_stiffness(self.wall_stiffness, can, wall_share(n, a, free)),
+            upper_stiffness=node_stiffness(self.wall_stiffness, can, wall_share(n, a, free)),
             consecutive=True,
         )
 
