@@ -40,6 +40,7 @@ import numpy as np
 
 from ..errors import ProblemError
 from .base import Status
+from .fc2d_tresca import MAX_FIXED, next_bounds
 from .siconos_fc2d import ACCEPT_TOL, FC2DSolution, coulomb_residual
 
 SEPARATE, STICK, FORWARD, BACK = 0, 1, 2, 3
@@ -47,8 +48,6 @@ SEPARATE, STICK, FORWARD, BACK = 0, 1, 2, 3
 BLOCK_TRIES = 3
 #: the seed of the random choice among violated contacts at states seen before
 RANDOM_SEED = 39
-#: the limit on Tresca problems where the pivoting on the cone cycles
-TRESCA_STEPS = 60
 #: a state is violated beyond this share of the problem's scale (max(1, |q|, |r|))
 VIOLATION_RTOL = 1e-12
 
@@ -162,22 +161,21 @@ def tresca_fixed_point(W, q, mu, st: np.ndarray, limit: int):
     """Where the pivoting on the cone cycles: from ``st``, Tresca problems (slip bounds
     b = μ r_n of the last answer, fixed), each solved by the same pivoting with the
     bounds in place of the cone, until the answer satisfies Coulomb (lcpbench's
-    residual) or the bounds stop moving or :data:`TRESCA_STEPS` problems. (r, states,
+    residual) or the bounds stop moving or :data:`~.fc2d_tresca.MAX_FIXED` problems. (r, states,
     changes, done)."""
     r = reactions(W, q, np.zeros(mu.size), np.where(st == STICK, FORWARD, st))
     bound = mu * np.maximum(r[0::2], 0.0)
     changes = 0
-    for _ in range(TRESCA_STEPS):
+    for _ in range(MAX_FIXED):
         r, st, used, ok = pivot(W, q, mu, st, limit, BLOCK_TRIES, bound)
         changes += used
         if not ok:
             return r, st, changes, False
-        if coulomb_residual(W, q, mu, r) <= ACCEPT_TOL:
+        bound, solved, fixed, _ = next_bounds(W, q, mu, r, bound)
+        if solved:
             return r, st, changes, True
-        new = mu * np.maximum(r[0::2], 0.0)
-        if np.max(np.abs(new - bound), initial=0.0) <= 1e-13 * max(1.0, new.max(initial=0)):
+        if fixed:
             break
-        bound = new
     return r, st, changes, False
 
 

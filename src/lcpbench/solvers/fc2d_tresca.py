@@ -36,6 +36,20 @@ FIXED_TOL = 1e-13
 MAX_FIXED = 60
 
 
+def next_bounds(W, q, mu, r, bound) -> tuple[np.ndarray, bool, bool, float]:
+    """One update of the fixed point from a Tresca answer ``r`` (bounds ``bound``):
+    ``(b = μ r_n, solved, fixed, residual)``: solved where ``r`` satisfies Coulomb's law
+    (lcpbench's residual below ACCEPT_TOL: a Tresca answer whose bounds are μ r_n of its
+    own r_n is a Coulomb answer), fixed where the bounds no longer move
+    (:data:`FIXED_TOL`). The loop around it is the caller's: a QP back-end's here, the
+    active set's pivoting in :func:`lcpbench.solvers.fc2d_active.tresca_fixed_point`."""
+    new = mu * np.maximum(r[0::2], 0.0)
+    moved = float(np.max(np.abs(new - bound), initial=0.0))
+    residual = coulomb_residual(W, q, mu, r)
+    return (new, residual <= ACCEPT_TOL,
+            moved <= FIXED_TOL * max(1.0, float(np.max(new, initial=0.0))), residual)
+
+
 def tresca_qp(W: np.ndarray, q: np.ndarray, bound: np.ndarray) -> BoxQP:
     """The Tresca problem with slip bounds ``bound`` (one per contact) as a box QP."""
     import scipy.sparse as sp  # at the first QP, not at start-up
@@ -79,14 +93,7 @@ def solve_fc2d_tresca(W, q, mu, solve_qp, settings: Settings, *, options: dict |
                                 extra={"qps": qps, "solve_time": time.perf_counter() - t0})
         r = res.x.copy()
         last = QPWarm(res.x, res.y)
-        new = mu * np.maximum(r[0::2], 0.0)
-        moved = float(np.max(np.abs(new - bound), initial=0.0))
-        bound = new
-        # a Tresca answer whose bounds are μ N of its own N is a Coulomb answer: stop
-        # there (lcpbench's residual), or where the bounds no longer move
-        residual = coulomb_residual(W, q, mu, r)
-        solved = residual <= ACCEPT_TOL
-        fixed = moved <= FIXED_TOL * max(1.0, float(np.max(new, initial=0.0)))
+        bound, solved, fixed, residual = next_bounds(W, q, mu, r, bound)
         if solved or fixed:
             break
     u = W @ r + q
