@@ -60,7 +60,7 @@ def lemke_calls(fn) -> tuple[int, int]:
         count["calls"] += 1
         return lemke(*args, **kw)
 
-    def counted_step(self, M, q):
+    def counted_step(self, M, q=None):
         count["steps"] += 1
         return step(self, M, q)
 

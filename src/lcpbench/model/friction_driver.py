@@ -19,8 +19,8 @@ import numpy as np
 
 from ..errors import ProblemError
 from ..problems.scenes import ActuatorScene, Chain, node_stiffness, reachable, wall_share
-from ..solvers.base import Status
-from ..solvers.lemke import lemke
+from ..solvers.base import LCPSolution, Status, lcp_residuals
+from ..solvers.lemke import RESIDUAL_TOL, lemke
 from .chain import alpha_from_heights, node_positions
 from .elastic import compliances
 from .step import assemble_step
@@ -93,14 +93,54 @@ class StepLemke:
 
     One instance serves a path: it tries first the covering that solved its last step
     (the steps of a path are alike, and so is the covering that gets through), so the
-    restarts are paid once, not at every step. A fresh instance starts with the first.
+    restarts are paid once, not at every step. And before any pivot, the complementary
+    basis of its last answer (:meth:`last_support`): the outer steps of a state, and the
+    states of a path, mostly keep their stick/slip/separate pattern, so the next step's
+    answer is one linear solve on it. That answer is taken only where lcpbench's natural
+    residual meets Lemke's own bound (``RESIDUAL_TOL``), as any Lemke answer; else
+    Lemke runs. A fresh instance starts with the first covering and no support.
     """
+
+    #: the driver hands it the whole step (its rows' nodes name the support)
+    takes_step = True
 
     def __init__(self) -> None:
         self.first = 0
+        self.support: set = set()  # the unknowns > 0 in the last answer, by z_keys
 
-    def __call__(self, M: np.ndarray, q: np.ndarray):
+    def last_support(self, M: np.ndarray, q: np.ndarray, keys: list | None):
+        """The LCP's answer on the last answer's support S (z_S = −M_SS⁻¹ q_S, z = 0
+        off S; S read by node from ``keys``, :func:`z_keys`), SOLVED where its natural
+        residual meets RESIDUAL_TOL; None otherwise (no support, M_SS singular, or the
+        pattern changed)."""
+        if keys is None or not self.support:
+            return None
+        S = np.fromiter((k in self.support for k in keys), bool, len(keys))
+        if not S.any():
+            return None
+        t0 = time.perf_counter()
+        z = np.zeros(q.size)
+        try:
+            z[S] = np.linalg.solve(M[np.ix_(S, S)], -q[S])
+        except np.linalg.LinAlgError:
+            return None
+        if not np.all(np.isfinite(z)):
+            return None
+        res = lcp_residuals(M, q, z)
+        if not res["natural"] <= RESIDUAL_TOL:
+            return None
+        return LCPSolution(z, M @ z + q, Status.SOLVED, 0, time.perf_counter() - t0,
+                           extra={"residuals": res, "start": "the last answer's support"})
+
+    def __call__(self, M, q: np.ndarray | None = None):
+        """Solve the step ``M`` (a :class:`FrictionStep`), or the LCP (``M``, ``q``)."""
+        keys = None
+        if q is None:
+            M, q, keys = M.M, M.q, z_keys(M)
         n = q.size
+        sol = self.last_support(M, q, keys)
+        if sol is not None:  # (the support stays: an unknown that reached 0 on it may
+            return sol       # be > 0 again at the next step)
         coverings = step_coverings(n)
         order = [self.first] + [i for i in range(len(coverings)) if i != self.first]
         sol = None
@@ -109,8 +149,20 @@ class StepLemke:
                         covering=coverings[i])
             if sol.solved:
                 self.first = i
+                if keys is not None:
+                    self.support = {k for k, v in zip(keys, sol.z, strict=True) if v > 0.0}
                 break
         return sol
+
+
+def z_keys(fs) -> list:
+    """Each unknown of the step's LCP, z = (N, β⁺, β⁻, λ), named by its node: a wall
+    row by (node, side), a friction pair's three by their node; the same names from step
+    to step, whatever rows a step has."""
+    rows = [("N", int(j), float(s)) for j, s in zip(fs.normal_node, fs.normal_sign,
+                                                  strict=True)]
+    pairs = [int(j) for j in fs.friction_node]
+    return rows + [(b, j) for b in ("b+", "b-", "lambda") for j in pairs]
 
 
 def step_lemke(M: np.ndarray, q: np.ndarray):

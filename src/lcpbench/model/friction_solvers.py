@@ -141,7 +141,7 @@ def step_runner(solver: str | None = None):
             lemke = StepLemke()  # one per runner, as a path's default (its last covering first)
 
             def run(fs):
-                return judged(fs, lemke(fs.M, fs.q))
+                return judged(fs, lemke(fs))
         else:
             mod = backend.load()
 
