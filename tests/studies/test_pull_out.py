@@ -71,3 +71,16 @@ def test_a_state_that_fails_for_another_reason_is_not_a_pull_out(monkeypatch):
     assert not po.converged
     assert "did not converge (contact step 1: RAY (a test))" in po.reason
     assert all(r.pull <= cut for r in po.path)
+
+
+def test_a_cycling_outer_loop_is_not_a_gross_slip():
+    """Actuator 1 at 25 psi in its channel, h 4.5 mm, μ 0.5, N 140: a state pulled far
+    beyond the last held one cycled between contact sets and ran along x, and was called
+    a gross slip, so that pull-out bracketed P* at 68.5 mN while friction held μΣN =
+    144 mN there. At pull-out every contact node slides (Coulomb, flat walls):
+    P* = μ ΣN(P*), the identity checked here."""
+    scene = ActuatorScene(theta=0.81 * 172.37 + 9.78, height=4.5, links=140, channel=True,
+                          friction=0.5, left_end="slider", right_end="slider")
+    po = lcpbench.pull_out(scene)
+    assert po.converged, po.reason
+    assert po.force == pytest.approx(0.5 * po.normal_force_total, rel=1e-5)

@@ -367,14 +367,19 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
 
 def gross_slip(fs: FrictionStep, N: np.ndarray, T: np.ndarray, pull: float) -> bool:
     """Whether a step of a chain that no end holds in x slides as a whole: every pair
-    at its cone (|T| = μN) and ΣT + P ≠ 0. On flat walls the next step is the same one
-    moved along x, so there is no equilibrium (docs/friction.md)."""
+    at its cone (|T| = μN) and the pull beyond what they hold, |P| > Σ μN (so ΣT + P ≠ 0
+    whatever the directions of T). On flat walls the next step is the same one moved
+    along x, so there is no equilibrium (docs/friction.md). Every pair at its cone with
+    |P| <= Σ μN is not that: the tangential forces then oppose each other in part (a
+    chain turning or rolling in a channel), and the step is an iterate on the way to an
+    equilibrium that friction can hold."""
     limit = np.zeros(T.size)
     paired = fs.pair >= 0
     np.add.at(limit, fs.pair[paired], (fs.mu * N)[paired])
-    scale = max(abs(pull), float(np.sum(limit)), 1e-300)
+    capacity = float(np.sum(limit))
+    scale = max(abs(pull), capacity, 1e-300)
     at_cone = np.all(np.abs(T) >= limit - 1e-9 * scale)
-    return bool(at_cone and abs(pull + float(np.sum(T))) > 1e-9 * scale)
+    return bool(at_cone and abs(pull) > capacity + 1e-9 * scale)
 
 
 def damped(chain: Chain, origin: np.ndarray, dy: np.ndarray, alpha: np.ndarray):
@@ -466,12 +471,18 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
                                time.perf_counter() - t0, left_pull)
         gross = gross + 1 if has_tau and gross_slip(fs, N, T, float(scene.pull) + left_pull
                                                     ) else 0
-        away = abs(state.x0 - start.x0) > RUNAWAY * chain.length or gross >= GROSS_STEPS
+        runaway = abs(state.x0 - start.x0) > RUNAWAY * chain.length
+        away = runaway or gross >= GROSS_STEPS
         inexact = 0 if sol.solved else inexact + 1
         if not np.isfinite(dalpha) or away or inexact >= INEXACT_STEPS:
             break
+    # gross slip only where GROSS_STEPS steps in a row were, or every step of a chain that
+    # ran away: one that ran along x while its steps changed contact sets (an outer loop
+    # cycling) has not shown that there is no equilibrium
     why = ("gross slip: every contact node slides at its cone and friction holds less than "
-           "the pull (no equilibrium)" if away else
+           "the pull (no equilibrium)" if gross >= GROSS_STEPS or (away and gross == it) else
+           f"no convergence: the chain ran {RUNAWAY:g} ℓ along x in {it} contact steps "
+           "without its steps sliding as a whole" if away else
            f"the step's LCP solved only INACCURATE in {inexact} contact steps in a row"
            if inexact >= INEXACT_STEPS else f"no convergence in {it} contact steps"
            + ("" if fs is None or sol.solved else f" (the last {sol.status.name})"))
