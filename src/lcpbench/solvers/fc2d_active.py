@@ -41,7 +41,7 @@ import numpy as np
 from ..errors import ProblemError
 from .base import Status
 from .fc2d_tresca import MAX_FIXED, next_bounds
-from .siconos_fc2d import ACCEPT_TOL, FC2DSolution, coulomb_residual
+from .siconos_fc2d import ACCEPT_TOL, FC2DSolution, coulomb_residual, fc2d_arrays
 
 SEPARATE, STICK, FORWARD, BACK = 0, 1, 2, 3
 #: block changes without fewer violations before changing one state at a time
@@ -188,11 +188,8 @@ def solve_fc2d_active(W, q, mu, *, states: np.ndarray | None = None,
     ``max_iter``: the limit on state changes per phase (default 20 + 10 nc). Never
     raises for a failure: MAX_ITER or INACCURATE with a message; ProblemError for
     shapes."""
-    W, q, mu = (np.asarray(x, dtype=float) for x in (W, q, mu))
+    W, q, mu = fc2d_arrays(W, q, mu)
     nc = mu.size
-    if q.shape != (2 * nc,) or W.shape != (2 * nc, 2 * nc):
-        raise ProblemError(f"W must be (2nc, 2nc) and q (2nc,) for nc = {nc} contacts, got "
-                           f"{W.shape} and {q.shape}")
     t0 = time.perf_counter()
     limit = 20 + 10 * nc if max_iter is None else int(max_iter)
     used = 0

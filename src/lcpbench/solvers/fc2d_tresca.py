@@ -26,9 +26,8 @@ import time
 
 import numpy as np
 
-from ..errors import ProblemError
 from .base import BoxQP, QPWarm, Settings, Status
-from .siconos_fc2d import ACCEPT_TOL, FC2DSolution, coulomb_residual
+from .siconos_fc2d import ACCEPT_TOL, FC2DSolution, coulomb_residual, fc2d_arrays
 
 #: the fixed point stops, SOLVED or not, when max|b_new − b| <= FIXED_TOL · max(1, max b)
 FIXED_TOL = 1e-13
@@ -69,11 +68,8 @@ def solve_fc2d_tresca(W, q, mu, solve_qp, settings: Settings, *, options: dict |
     hand each QP the last answer (back-ends without a warm start ignore it). Never
     raises for a solver failure: the QP's status (not SOLVED) or MAX_ITER with a message.
     """
-    W, q, mu = (np.asarray(x, dtype=float) for x in (W, q, mu))
+    W, q, mu = fc2d_arrays(W, q, mu)
     nc = mu.size
-    if q.shape != (2 * nc,) or W.shape != (2 * nc, 2 * nc):
-        raise ProblemError(f"W must be (2nc, 2nc) and q (2nc,) for nc = {nc} contacts, got "
-                           f"{W.shape} and {q.shape}")
     t0 = time.perf_counter()
     bound = np.zeros(nc)
     r = np.full(2 * nc, np.nan)

@@ -63,6 +63,17 @@ def coulomb_residual(W: np.ndarray, q: np.ndarray, mu: np.ndarray, r: np.ndarray
     return worst / scale
 
 
+def fc2d_arrays(W, q, mu) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(W, q, mu)`` of the fc2d form as float arrays: W (2nc × 2nc), q (2nc), mu (nc);
+    one ProblemError for other shapes."""
+    W, q, mu = (np.asarray(x, dtype=float) for x in (W, q, mu))
+    nc = mu.size
+    if q.shape != (2 * nc,) or W.shape != (2 * nc, 2 * nc):
+        raise ProblemError(f"W must be (2nc, 2nc) and q (2nc,) for nc = {nc} contacts, got "
+                           f"{W.shape} and {q.shape}")
+    return W, q, mu
+
+
 def solve_fc2d(W, q, mu, *, method: str = "nsgs", tol: float | None = 1e-12,
                max_iter: int | None = None, timeout: float = 60.0) -> FC2DSolution:
     """Solve u = W r + q with 2-D Coulomb friction by a Siconos fc2d solver.
@@ -73,11 +84,8 @@ def solve_fc2d(W, q, mu, *, method: str = "nsgs", tol: float | None = 1e-12,
     """
     if method not in METHODS:
         raise ProblemError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    W, q, mu = (np.asarray(x, dtype=float) for x in (W, q, mu))
+    W, q, mu = fc2d_arrays(W, q, mu)
     nc = mu.size
-    if q.shape != (2 * nc,) or W.shape != (2 * nc, 2 * nc):
-        raise ProblemError(f"W must be (2nc, 2nc) and q (2nc,) for nc = {nc} contacts, got "
-                           f"{W.shape} and {q.shape}")
     nan = np.full(2 * nc, np.nan)
     if not available():
         return FC2DSolution(nan, nan, Status.FAILED, message="siconos not installed")
