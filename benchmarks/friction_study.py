@@ -130,8 +130,8 @@ def main() -> int:
         f"most {shift:.2f} percentage points (every state converged: "
         f"{summary_check['converged']}). N = {a.links}, not the paper's 140: at N = 140 the "
         "frictional outer loop does not converge in 100 steps on part of these paths "
-        "(e.g. actuator 1, h = 5.5 mm, μ = 0.3 at 25 psi; smaller pressure steps do not "
-        "help), and a path ends at its first state that does not converge.", "",
+        "(`--links 140`: 2 of the 54, actuator 1 at h = 4.5 mm with μ = 0.4 and 0.5, "
+        "near 25 psi), and a path ends at its first state that does not converge.", "",
     ]
     md.write_text("\n".join(lines))
     js.write_text(json.dumps({"command": "python benchmarks/friction_study.py --force",
