@@ -59,7 +59,29 @@ COVERING_SEED = 39
 PIVOT_BUDGET = 4
 
 
+#: the most supports the warm start (:meth:`StepLemke.last_support`) tries before Lemke
+WARM_CHANGES = 20
+#: the warm start's candidate is feasible where no z or w is below −this · max(1, |q|, |z|)
+WARM_FEAS_RTOL = 1e-10
+#: the warm start's M_SS is singular where a pivot is at most this share of its largest entry
+WARM_PIVOT_RTOL = 1e-13
+#: where it is, the candidate is M_SS's least-squares solution, singular values below this
+#: share of the largest cut (a run of sticking nodes: T per node is indeterminate)
+WARM_RCOND = 1e-12
+
 _KERNELS: list = []  # the compiled step (model/friction_step.py), once loaded
+_PIVOTING: list = []  # the warm start's pivots (solvers/pivoting_kernel.py), once loaded
+
+
+def pivoting_kernels():
+    """Block principal pivoting from a support (:mod:`lcpbench.solvers.pivoting_kernel`),
+    loaded once through :func:`lcpbench.numba_cache.kernel_module`."""
+    if not _PIVOTING:
+        from ..numba_cache import held, kernel_module
+
+        held(_PIVOTING).append(kernel_module("lcpbench.solvers.pivoting_kernel",
+                                             "support_pivots"))
+    return _PIVOTING[0]
 
 
 def step_kernels():
@@ -107,38 +129,48 @@ class StepLemke:
     def __init__(self) -> None:
         self.first = 0
         self.support: set = set()  # the unknowns > 0 in the last answer, by z_keys
+        self.warm_solves = 0  # the linear solves of the warm start (counted, for benchmarks)
 
-    def last_support(self, M: np.ndarray, q: np.ndarray, keys: list | None):
-        """The LCP's answer on the last answer's support S (z_S = −M_SS⁻¹ q_S, z = 0
-        off S; S read by node from ``keys``, :func:`z_keys`), SOLVED where its natural
-        residual meets RESIDUAL_TOL; None otherwise (no support, M_SS singular, or the
-        pattern changed)."""
-        if keys is None or not self.support:
+    def last_support(self, M: np.ndarray, q: np.ndarray, keys: list | None,
+                     start: np.ndarray | None = None):
+        """The LCP's answer by block principal pivoting (:func:`lcpbench.solvers.
+        pivoting_kernel.support_pivots`, at most :data:`WARM_CHANGES` supports) from the
+        last answer's support S (read by node from ``keys``, :func:`z_keys`), SOLVED where
+        its natural residual meets RESIDUAL_TOL; None otherwise (no support, a singular
+        M_SS, the budget, or a residual above the bound)."""
+        if keys is None:
             return None
-        S = np.fromiter((k in self.support for k in keys), bool, len(keys))
+        if self.support:
+            S = np.fromiter((k in self.support for k in keys), bool, len(keys))
+        elif start is not None:  # no answer yet: the caller's start
+            S = start.copy()
+        else:
+            return None
         if not S.any():
             return None
         t0 = time.perf_counter()
-        z = np.zeros(q.size)
-        try:
-            z[S] = np.linalg.solve(M[np.ix_(S, S)], -q[S])
-        except np.linalg.LinAlgError:
-            return None
-        if not np.all(np.isfinite(z)):
+        k = pivoting_kernels()
+        z, w, S, end, solves = k.support_pivots(np.ascontiguousarray(M), q, S, WARM_CHANGES,
+                                                WARM_FEAS_RTOL, WARM_PIVOT_RTOL, WARM_RCOND)
+        self.warm_solves += int(solves)
+        if end != k.DONE or not np.all(np.isfinite(z)):
             return None
         res = lcp_residuals(M, q, z)
         if not res["natural"] <= RESIDUAL_TOL:
             return None
-        return LCPSolution(z, M @ z + q, Status.SOLVED, 0, time.perf_counter() - t0,
+        self.support = {key for key, s in zip(keys, S, strict=True) if s}
+        return LCPSolution(z, M @ z + q, Status.SOLVED, int(solves), time.perf_counter() - t0,
                            extra={"residuals": res, "start": "the last answer's support"})
 
     def __call__(self, M, q: np.ndarray | None = None):
         """Solve the step ``M`` (a :class:`FrictionStep`), or the LCP (``M``, ``q``)."""
-        keys = None
-        if q is None:
+        keys = start = None
+        if q is None:  # no answer yet: start from the wall rows of the nodes at a wall
+            start = np.zeros(M.q.size, bool)  # (those with a friction pair)
+            start[:M.normal_node.size] = M.pair >= 0
             M, q, keys = M.M, M.q, z_keys(M)
         n = q.size
-        sol = self.last_support(M, q, keys)
+        sol = self.last_support(M, q, keys, start)
         if sol is not None:  # (the support stays: an unknown that reached 0 on it may
             return sol       # be > 0 again at the next step)
         coverings = step_coverings(n)
@@ -149,8 +181,9 @@ class StepLemke:
                         covering=coverings[i])
             if sol.solved:
                 self.first = i
-                if keys is not None:
-                    self.support = {k for k, v in zip(keys, sol.z, strict=True) if v > 0.0}
+                if keys is not None:  # the basic z (M_SS nonsingular), not only z > 0
+                    basic = sol.extra.get("basic_z", np.flatnonzero(sol.z > 0.0))
+                    self.support = {keys[j] for j in basic}
                 break
         return sol
 

@@ -239,6 +239,7 @@ def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
                 z, res = refined, res_refined
     t = time.perf_counter() - t0
     sol = result(z, Status.SOLVED, it, t)
+    sol.extra["basic_z"] = np.sort(basis[(basis >= n) & (basis < 2 * n)] - n)
     _clipped(sol.w, scale)
     sol.extra["residuals"] = res
     if not res["natural"] <= RESIDUAL_TOL:
