@@ -115,12 +115,14 @@ class StepLemke:
 
     One instance serves a path: it tries first the covering that solved its last step
     (the steps of a path are alike, and so is the covering that gets through), so the
-    restarts are paid once, not at every step. And before any pivot, the complementary
-    basis of its last answer (:meth:`last_support`): the outer steps of a state, and the
-    states of a path, mostly keep their stick/slip/separate pattern, so the next step's
-    answer is one linear solve on it. That answer is taken only where lcpbench's natural
-    residual meets Lemke's own bound (``RESIDUAL_TOL``), as any Lemke answer; else
-    Lemke runs. A fresh instance starts with the first covering and no support.
+    restarts are paid once, not at every step. And before any pivot, block principal
+    pivoting from the support of its last answer (:meth:`last_support`; Lemke's basic z,
+    named by node): the outer steps of a state, and the states of a path, mostly keep
+    their stick/slip/separate pattern, so the next step's answer is one linear solve on
+    that support, or a few where some nodes change state. That answer is taken only
+    where lcpbench's natural residual meets Lemke's own bound (``RESIDUAL_TOL``), as any
+    Lemke answer; else (a cycle, the budget :data:`WARM_CHANGES`) Lemke runs. A fresh
+    instance starts with the first covering and no support: its first step is Lemke's.
     """
 
     #: the driver hands it the whole step (its rows' nodes name the support)
@@ -128,24 +130,18 @@ class StepLemke:
 
     def __init__(self) -> None:
         self.first = 0
-        self.support: set = set()  # the unknowns > 0 in the last answer, by z_keys
+        self.support: set = set()  # the last answer's support (basic z), by z_keys
         self.warm_solves = 0  # the linear solves of the warm start (counted, for benchmarks)
 
-    def last_support(self, M: np.ndarray, q: np.ndarray, keys: list | None,
-                     start: np.ndarray | None = None):
+    def last_support(self, M: np.ndarray, q: np.ndarray, keys: list | None):
         """The LCP's answer by block principal pivoting (:func:`lcpbench.solvers.
         pivoting_kernel.support_pivots`, at most :data:`WARM_CHANGES` supports) from the
         last answer's support S (read by node from ``keys``, :func:`z_keys`), SOLVED where
         its natural residual meets RESIDUAL_TOL; None otherwise (no support, a singular
         M_SS, the budget, or a residual above the bound)."""
-        if keys is None:
+        if keys is None or not self.support:
             return None
-        if self.support:
-            S = np.fromiter((k in self.support for k in keys), bool, len(keys))
-        elif start is not None:  # no answer yet: the caller's start
-            S = start.copy()
-        else:
-            return None
+        S = np.fromiter((k in self.support for k in keys), bool, len(keys))
         if not S.any():
             return None
         t0 = time.perf_counter()
@@ -164,15 +160,13 @@ class StepLemke:
 
     def __call__(self, M, q: np.ndarray | None = None):
         """Solve the step ``M`` (a :class:`FrictionStep`), or the LCP (``M``, ``q``)."""
-        keys = start = None
-        if q is None:  # no answer yet: start from the wall rows of the nodes at a wall
-            start = np.zeros(M.q.size, bool)  # (those with a friction pair)
-            start[:M.normal_node.size] = M.pair >= 0
+        keys = None
+        if q is None:
             M, q, keys = M.M, M.q, z_keys(M)
         n = q.size
-        sol = self.last_support(M, q, keys, start)
-        if sol is not None:  # (the support stays: an unknown that reached 0 on it may
-            return sol       # be > 0 again at the next step)
+        sol = self.last_support(M, q, keys)
+        if sol is not None:
+            return sol
         coverings = step_coverings(n)
         order = [self.first] + [i for i in range(len(coverings)) if i != self.first]
         sol = None

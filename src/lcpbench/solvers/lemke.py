@@ -28,7 +28,7 @@ import numpy as np
 from lcpbench.solvers.base import LCPSolution, Status, lcp_residuals
 
 #: Relative tolerance under which two ratios count as tied.
-TIE_RTOL = 1e-9
+TIE_RTOL = 1e-12
 #: Largest scaled natural residual accepted as SOLVED.
 RESIDUAL_TOL = 1e-8
 #: Round-off (relative to the problem scale) clipped from negative z and w.
