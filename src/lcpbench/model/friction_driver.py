@@ -62,7 +62,7 @@ PIVOT_BUDGET = 4
 #: the most supports the warm start (:meth:`StepLemke.last_support`) tries before Lemke
 WARM_CHANGES = 20
 #: the warm start's candidate is feasible where no z or w is below −this · max(1, |q|, |z|)
-WARM_FEAS_RTOL = 1e-10
+WARM_FEAS_RTOL = 1e-9
 #: the warm start's M_SS is singular where a pivot is at most this share of its largest entry
 WARM_PIVOT_RTOL = 1e-13
 #: where it is, the candidate is M_SS's least-squares solution, singular values below this
