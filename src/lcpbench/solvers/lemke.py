@@ -28,7 +28,7 @@ import numpy as np
 from lcpbench.solvers.base import LCPSolution, Status, lcp_residuals
 
 #: Relative tolerance under which two ratios count as tied.
-TIE_RTOL = 1e-12
+TIE_RTOL = 1e-9
 #: Largest scaled natural residual accepted as SOLVED.
 RESIDUAL_TOL = 1e-8
 #: Round-off (relative to the problem scale) clipped from negative z and w.
@@ -140,7 +140,7 @@ def _refined(tab: np.ndarray, basis: np.ndarray, M: np.ndarray, q: np.ndarray) -
 
 
 def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
-          covering: np.ndarray | None = None) -> LCPSolution:
+          covering: np.ndarray | None = None, tie_rtol: float | None = None) -> LCPSolution:
     """Solve an LCP with Lemke's method and lexicographic anti-cycling.
 
     Parameters
@@ -156,6 +156,8 @@ def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
         eligible pivots.
     covering : ndarray, shape (n,), optional
         Strictly positive covering vector ``d`` of ``z0``; default all ones.
+    tie_rtol : float, optional
+        The ratio test's tie tolerance, default :data:`TIE_RTOL`.
 
     Returns
     -------
@@ -205,7 +207,9 @@ def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
     binv, rhs, basis, end, it, entering = k.pivots(np.ascontiguousarray(M),
                                                    np.ascontiguousarray(q),
                                                    np.ascontiguousarray(d), float(pivot_tol),
-                                                   int(max_pivots), qnorm, TIE_RTOL)
+                                                   int(max_pivots), qnorm,
+                                                   TIE_RTOL if tie_rtol is None else
+                                                   float(tie_rtol))
     tab = np.hstack([binv, rhs[:, None]])  # [B^{-1} | B^{-1} q]
     status, msg = None, ""
     if end == k.MAX_ITER:
