@@ -59,7 +59,35 @@ COVERING_SEED = 39
 PIVOT_BUDGET = 4
 
 
+#: Lemke's tie tolerance in its last try on a step where every covering stopped short
+#: (solvers.lemke.TIE_RTOL, 1e-9, is the default): on elastic steps (cond(B) ≈ 2.6e8) the
+#: ratio test at 1e-9 keeps z0's row as tied where it is not and stops with a basic w at
+#: −1.5e-3; at 1e-12 the step is solved. Not the default: on the 100 paths of
+#: benchmarks/friction_agreement.py it made 11 more states fail than it saved
+STRICT_TIES = 1e-12
+#: the most supports the warm start (:meth:`StepLemke.last_support`) tries before Lemke
+WARM_CHANGES = 20
+#: the warm start's candidate is feasible where no z or w is below −this · max(1, |q|, |z|)
+WARM_FEAS_RTOL = 1e-9
+#: the warm start's M_SS is singular where a pivot is at most this share of its largest entry
+WARM_PIVOT_RTOL = 1e-13
+#: where it is, the candidate is M_SS's least-squares solution, singular values below this
+#: share of the largest cut (a run of sticking nodes: T per node is indeterminate)
+WARM_RCOND = 1e-12
+
 _KERNELS: list = []  # the compiled step (model/friction_step.py), once loaded
+_PIVOTING: list = []  # the warm start's pivots (solvers/pivoting_kernel.py), once loaded
+
+
+def pivoting_kernels():
+    """Block principal pivoting from a support (:mod:`lcpbench.solvers.pivoting_kernel`),
+    loaded once through :func:`lcpbench.numba_cache.kernel_module`."""
+    if not _PIVOTING:
+        from ..numba_cache import held, kernel_module
+
+        held(_PIVOTING).append(kernel_module("lcpbench.solvers.pivoting_kernel",
+                                             "support_pivots"))
+    return _PIVOTING[0]
 
 
 def step_kernels():
@@ -93,12 +121,14 @@ class StepLemke:
 
     One instance serves a path: it tries first the covering that solved its last step
     (the steps of a path are alike, and so is the covering that gets through), so the
-    restarts are paid once, not at every step. And before any pivot, the complementary
-    basis of its last answer (:meth:`last_support`): the outer steps of a state, and the
-    states of a path, mostly keep their stick/slip/separate pattern, so the next step's
-    answer is one linear solve on it. That answer is taken only where lcpbench's natural
-    residual meets Lemke's own bound (``RESIDUAL_TOL``), as any Lemke answer; else
-    Lemke runs. A fresh instance starts with the first covering and no support.
+    restarts are paid once, not at every step. And before any pivot, block principal
+    pivoting from the support of its last answer (:meth:`last_support`; Lemke's basic z,
+    named by node): the outer steps of a state, and the states of a path, mostly keep
+    their stick/slip/separate pattern, so the next step's answer is one linear solve on
+    that support, or a few where some nodes change state. That answer is taken only
+    where lcpbench's natural residual meets Lemke's own bound (``RESIDUAL_TOL``), as any
+    Lemke answer; else (a cycle, the budget :data:`WARM_CHANGES`) Lemke runs. A fresh
+    instance starts with the first covering and no support: its first step is Lemke's.
     """
 
     #: the driver hands it the whole step (its rows' nodes name the support)
@@ -106,30 +136,32 @@ class StepLemke:
 
     def __init__(self) -> None:
         self.first = 0
-        self.support: set = set()  # the unknowns > 0 in the last answer, by z_keys
+        self.support: set = set()  # the last answer's support (basic z), by z_keys
+        self.warm_solves = 0  # the linear solves of the warm start (counted, for benchmarks)
 
     def last_support(self, M: np.ndarray, q: np.ndarray, keys: list | None):
-        """The LCP's answer on the last answer's support S (z_S = −M_SS⁻¹ q_S, z = 0
-        off S; S read by node from ``keys``, :func:`z_keys`), SOLVED where its natural
-        residual meets RESIDUAL_TOL; None otherwise (no support, M_SS singular, or the
-        pattern changed)."""
+        """The LCP's answer by block principal pivoting (:func:`lcpbench.solvers.
+        pivoting_kernel.support_pivots`, at most :data:`WARM_CHANGES` supports) from the
+        last answer's support S (read by node from ``keys``, :func:`z_keys`), SOLVED where
+        its natural residual meets RESIDUAL_TOL; None otherwise (no support, a singular
+        M_SS, the budget, or a residual above the bound)."""
         if keys is None or not self.support:
             return None
         S = np.fromiter((k in self.support for k in keys), bool, len(keys))
         if not S.any():
             return None
         t0 = time.perf_counter()
-        z = np.zeros(q.size)
-        try:
-            z[S] = np.linalg.solve(M[np.ix_(S, S)], -q[S])
-        except np.linalg.LinAlgError:
-            return None
-        if not np.all(np.isfinite(z)):
+        k = pivoting_kernels()
+        z, w, S, end, solves = k.support_pivots(np.ascontiguousarray(M), q, S, WARM_CHANGES,
+                                                WARM_FEAS_RTOL, WARM_PIVOT_RTOL, WARM_RCOND)
+        self.warm_solves += int(solves)
+        if end != k.DONE or not np.all(np.isfinite(z)):
             return None
         res = lcp_residuals(M, q, z)
         if not res["natural"] <= RESIDUAL_TOL:
             return None
-        return LCPSolution(z, M @ z + q, Status.SOLVED, 0, time.perf_counter() - t0,
+        self.support = {key for key, s in zip(keys, S, strict=True) if s}
+        return LCPSolution(z, M @ z + q, Status.SOLVED, int(solves), time.perf_counter() - t0,
                            extra={"residuals": res, "start": "the last answer's support"})
 
     def __call__(self, M, q: np.ndarray | None = None):
@@ -139,18 +171,19 @@ class StepLemke:
             M, q, keys = M.M, M.q, z_keys(M)
         n = q.size
         sol = self.last_support(M, q, keys)
-        if sol is not None:  # (the support stays: an unknown that reached 0 on it may
-            return sol       # be > 0 again at the next step)
+        if sol is not None:
+            return sol
         coverings = step_coverings(n)
         order = [self.first] + [i for i in range(len(coverings)) if i != self.first]
         sol = None
-        for i in order:
+        for i, tie in [(i, None) for i in order] + [(i, STRICT_TIES) for i in order]:
             sol = lemke(M, q, pivot_tol=PIVOT_TOL, max_pivots=PIVOT_BUDGET * max(n, 25),
-                        covering=coverings[i])
+                        covering=coverings[i], tie_rtol=tie)
             if sol.solved:
                 self.first = i
-                if keys is not None:
-                    self.support = {k for k, v in zip(keys, sol.z, strict=True) if v > 0.0}
+                if keys is not None:  # the basic z (M_SS nonsingular), not only z > 0
+                    basic = sol.extra.get("basic_z", np.flatnonzero(sol.z > 0.0))
+                    self.support = {keys[j] for j in basic}
                 break
         return sol
 

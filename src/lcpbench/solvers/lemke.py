@@ -140,7 +140,7 @@ def _refined(tab: np.ndarray, basis: np.ndarray, M: np.ndarray, q: np.ndarray) -
 
 
 def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
-          covering: np.ndarray | None = None) -> LCPSolution:
+          covering: np.ndarray | None = None, tie_rtol: float | None = None) -> LCPSolution:
     """Solve an LCP with Lemke's method and lexicographic anti-cycling.
 
     Parameters
@@ -156,6 +156,8 @@ def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
         eligible pivots.
     covering : ndarray, shape (n,), optional
         Strictly positive covering vector ``d`` of ``z0``; default all ones.
+    tie_rtol : float, optional
+        The ratio test's tie tolerance, default :data:`TIE_RTOL`.
 
     Returns
     -------
@@ -205,7 +207,9 @@ def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
     binv, rhs, basis, end, it, entering = k.pivots(np.ascontiguousarray(M),
                                                    np.ascontiguousarray(q),
                                                    np.ascontiguousarray(d), float(pivot_tol),
-                                                   int(max_pivots), qnorm, TIE_RTOL)
+                                                   int(max_pivots), qnorm,
+                                                   TIE_RTOL if tie_rtol is None else
+                                                   float(tie_rtol))
     tab = np.hstack([binv, rhs[:, None]])  # [B^{-1} | B^{-1} q]
     status, msg = None, ""
     if end == k.MAX_ITER:
@@ -239,6 +243,7 @@ def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
                 z, res = refined, res_refined
     t = time.perf_counter() - t0
     sol = result(z, Status.SOLVED, it, t)
+    sol.extra["basic_z"] = np.sort(basis[(basis >= n) & (basis < 2 * n)] - n)
     _clipped(sol.w, scale)
     sol.extra["residuals"] = res
     if not res["natural"] <= RESIDUAL_TOL:
