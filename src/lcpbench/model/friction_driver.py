@@ -23,7 +23,6 @@ from ..solvers.base import LCPSolution, Status, lcp_residuals
 from ..solvers.lemke import RESIDUAL_TOL, lemke
 from .chain import alpha_from_heights, node_positions
 from .elastic import compliances
-from .step import assemble_step
 
 #: a node within NEAR · a of a wall gets a friction pair in the step (docs/friction.md)
 NEAR = 1e-3
@@ -353,20 +352,20 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
     end (a mirrored scene's pull, :mod:`lcpbench.model.friction_mirror`); the left end
     is the datum, so it loads τ only and has no curvature."""
     has_tau, right_datum = datum(scene)
-    step = assemble_step(chain, state.alpha)
-    bands = step.bands.copy()
     first, n = int(chain.free_nodes[0]), int(chain.free_nodes.size)
     k = step_kernels()
-    k.add_pull_curvature(bands, state.alpha, chain.link_length, float(scene.pull), first)
-    D = k.slip_jacobian(state.alpha, first, n, right_datum)
+    f64 = np.ascontiguousarray
+    # the chain's part: the banded step (model.step.assemble_step, compiled), the pull
+    bands, f, D, origin = k.step_arrays(
+        f64(state.alpha, dtype=float), float(chain.link_length),
+        f64(chain.joint_links[:, 0], dtype=np.int64), f64(chain.joint_links[:, 1], dtype=np.int64),
+        f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float), first + 1, n,
+        f64(chain.nodal_load, dtype=float), float(scene.pull), right_datum)
     x, y = state.positions(chain)
     r = rotation_mode(chain, x)
     rot, rot_k = np.empty(0), 0.0
     if r is not None:  # a free end: the rotation about the pin held by ROT_STIFFNESS
         rot, rot_k = r, ROT_STIFFNESS * scene.EI / chain.length / float(r @ r) ** 2
-    f = -step.gradient(step.origin)
-    if scene.pull:
-        f += scene.pull * D[chain.links]
     k_tau = TAU_STIFFNESS * chain.force_scale / chain.length
     if has_tau:  # τ: one more unknown, moving every node's x, held by k_τ
         D = np.hstack([D, np.ones((D.shape[0], 1))])
@@ -395,7 +394,7 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
     L, F = chain.length, chain.force_scale
     M, q = k.frictional_lcp(W * (F / L), g_f / L, s_f / L, mus, pairs)
     return FrictionStep(M, q, W, g_f, s_f, X, rows, signs, pair_nodes, pairs, mus, has_tau,
-                        step.origin, L, F, near)
+                        origin, L, F, near)
 
 
 def gross_slip(fs: FrictionStep, N: np.ndarray, T: np.ndarray, pull: float) -> bool:

@@ -23,6 +23,7 @@ import numpy as np
 from numba import njit
 
 from ..linalg.ldl_kernel import refactor, resolve
+from .compiled_kernel import banded_step
 
 
 @njit(cache=True)
@@ -75,6 +76,34 @@ def add_pull_curvature(bands, alpha, a, pull, first):
             bands[0, hi] += s
         if ok_lo and ok_hi:
             bands[1, lo] -= s
+
+
+@njit(cache=True)
+def step_arrays(alpha, a, jl, jr, k, rest, fs, n, nodal_load, pull, right_datum):
+    """The chain's part of the step at α, compiled: (bands, f, D, u₀). H (lower band
+    storage) is the banded step's (:func:`lcpbench.model.compiled_kernel.banded_step`,
+    i.e. :func:`lcpbench.model.step.assemble_step`) plus the pull's curvature
+    (:func:`add_pull_curvature`); f = −(H u₀ + c) at the linearisation point u₀
+    (``ContactStep.gradient(origin)``: Jᵀ k (φ̂(u₀) − φ*) − f_load, in its order) plus
+    P ∂x_N/∂δ; D the slips' Jacobian (:func:`slip_jacobian`). ``fs``: the shifted
+    index (node + 1) of the first free node, as the banded step's."""
+    bands, _, _, coef, origin, _, phi_origin = banded_step(alpha, a, jl, jr, k, rest, fs, n,
+                                                         nodal_load)
+    first = fs - 1
+    add_pull_curvature(bands, alpha, a, pull, first)
+    D = slip_jacobian(alpha, first, n, right_datum)
+    links, nj = alpha.size, jr.size
+    b0 = jr[0]
+    g = np.zeros(links + 2)
+    for kk in range(3):  # Jᵀ m at u₀ (δu = 0: φ̂ = φ̂(u₀)), in ContactStep._JT's order
+        for j in range(nj):
+            g[b0 + kk + j] += coef[j, kk] * ((phi_origin[j] - rest[j]) * k[j])
+    f = np.empty(n)
+    for i in range(n):
+        f[i] = -(g[fs + i] - nodal_load[i])
+        if pull != 0.0:
+            f[i] += pull * D[links, i]
+    return bands, f, D, origin
 
 
 @njit(cache=True)
