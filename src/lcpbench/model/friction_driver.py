@@ -135,18 +135,18 @@ class StepLemke:
 
     def __init__(self) -> None:
         self.first = 0
-        self.support: set = set()  # the last answer's support (basic z), by z_keys
+        self.support = np.empty(0, np.int64)  # the last answer's support (basic z), by z_keys
         self.warm_solves = 0  # the linear solves of the warm start (counted, for benchmarks)
 
-    def last_support(self, M: np.ndarray, q: np.ndarray, keys: list | None):
+    def last_support(self, M: np.ndarray, q: np.ndarray, keys: np.ndarray | None):
         """The LCP's answer by block principal pivoting (:func:`lcpbench.solvers.
         pivoting_kernel.support_pivots`, at most :data:`WARM_CHANGES` supports) from the
         last answer's support S (read by node from ``keys``, :func:`z_keys`), SOLVED where
         its natural residual meets RESIDUAL_TOL; None otherwise (no support, a singular
         M_SS, the budget, or a residual above the bound)."""
-        if keys is None or not self.support:
+        if keys is None or not self.support.size:
             return None
-        S = np.fromiter((k in self.support for k in keys), bool, len(keys))
+        S = np.isin(keys, self.support)
         if not S.any():
             return None
         t0 = time.perf_counter()
@@ -159,7 +159,7 @@ class StepLemke:
         res = lcp_residuals(M, q, z)
         if not res["natural"] <= RESIDUAL_TOL:
             return None
-        self.support = {key for key, s in zip(keys, S, strict=True) if s}
+        self.support = keys[S]
         return LCPSolution(z, M @ z + q, Status.SOLVED, int(solves), time.perf_counter() - t0,
                            extra={"residuals": res, "start": "the last answer's support"})
 
@@ -182,19 +182,19 @@ class StepLemke:
                 self.first = i
                 if keys is not None:  # the basic z (M_SS nonsingular), not only z > 0
                     basic = sol.extra.get("basic_z", np.flatnonzero(sol.z > 0.0))
-                    self.support = {keys[j] for j in basic}
+                    self.support = keys[basic]
                 break
         return sol
 
 
-def z_keys(fs) -> list:
-    """Each unknown of the step's LCP, z = (N, β⁺, β⁻, λ), named by its node: a wall
-    row by (node, side), a friction pair's three by their node; the same names from step
-    to step, whatever rows a step has."""
-    rows = [("N", int(j), float(s)) for j, s in zip(fs.normal_node, fs.normal_sign,
-                                                  strict=True)]
-    pairs = [int(j) for j in fs.friction_node]
-    return rows + [(b, j) for b in ("b+", "b-", "lambda") for j in pairs]
+def z_keys(fs) -> np.ndarray:
+    """Each unknown of the step's LCP, z = (N, β⁺, β⁻, λ), named by its node: 5 j + c,
+    j the node, c 0 for the upper wall's N (∂g/∂y = −1), 1 the lower's, 2 β⁺, 3 β⁻, 4 λ
+    (a wall row by node and side, a friction pair's three by their node); the same names
+    from step to step, whatever rows a step has."""
+    rows = 5 * np.asarray(fs.normal_node, np.int64) + (np.asarray(fs.normal_sign) > 0)
+    pairs = 5 * np.asarray(fs.friction_node, np.int64)
+    return np.concatenate([rows, pairs + 2, pairs + 3, pairs + 4])
 
 
 def step_lemke(M: np.ndarray, q: np.ndarray):
@@ -388,7 +388,7 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
         raise np.linalg.LinAlgError("the step's matrix is not positive definite")
     # an elastic wall's row: 0 <= N ⟂ g + N/k >= 0, its compliance 1/k (mm/N) on W_nn's
     # diagonal (docs/friction.md, elastic walls); 0 for a rigid wall: W unchanged
-    c_up, c_lo = compliances(chain)
+    c_up, c_lo = chain.derived("friction: compliances", lambda: compliances(chain))
     W[np.arange(rows.size), np.arange(rows.size)] += np.where(signs < 0, c_up[rows],
                                                               c_lo[rows])
     L, F = chain.length, chain.force_scale
