@@ -116,6 +116,7 @@ class Recorder:
     """Lemke's step solver, keeping every step it is handed."""
 
     takes_step = True
+    newton = True  # as the default path's (step_runner("lemke").newton)
 
     def __init__(self):
         self.run = step_runner("lemke")

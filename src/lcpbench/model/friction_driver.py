@@ -21,6 +21,7 @@ from ..errors import ProblemError
 from ..problems.scenes import ActuatorScene, Chain, node_stiffness, reachable, wall_share
 from ..solvers.base import LCPSolution, Status, lcp_residuals
 from ..solvers.lemke import RESIDUAL_TOL, lemke
+from ..thresholds import NEWTON_SWITCH
 from .chain import alpha_from_heights, node_positions
 from .elastic import compliances
 
@@ -132,6 +133,9 @@ class StepLemke:
 
     #: the driver hands it the whole step (its rows' nodes name the support)
     takes_step = True
+    #: the driver's steps near the answer take the springs' exact curvature (Newton:
+    #: :func:`frictional_step`'s ``newton``); the peers by name get Gauss–Newton steps
+    newton = True
 
     def __init__(self) -> None:
         self.first = 0
@@ -343,8 +347,8 @@ def near_walls(chain: Chain, y: np.ndarray, band: float) -> np.ndarray:
 
 def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
                     x_prev: np.ndarray, pressed: np.ndarray | None = None,
-                    rowed: np.ndarray | None = None, left_pull: float = 0.0
-                    ) -> FrictionStep:
+                    rowed: np.ndarray | None = None, left_pull: float = 0.0,
+                    newton: bool = False) -> FrictionStep:
     """The frictional contact step of ``scene`` at ``state``, slips from ``x_prev``:
     normal rows for the nodes within ROW_BAND·a of a wall or ``rowed`` before,
     friction pairs for those within NEAR·a or ``pressed`` (bool per free node: a
@@ -360,7 +364,7 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
         f64(state.alpha, dtype=float), float(chain.link_length),
         f64(chain.joint_links[:, 0], dtype=np.int64), f64(chain.joint_links[:, 1], dtype=np.int64),
         f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float), first + 1, n,
-        f64(chain.nodal_load, dtype=float), float(scene.pull), right_datum)
+        f64(chain.nodal_load, dtype=float), float(scene.pull), right_datum, newton)
     x, y = state.positions(chain)
     r = rotation_mode(chain, x)
     rot, rot_k = np.empty(0), 0.0
@@ -452,6 +456,7 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
     :func:`frictional_step`'s."""
     check_frictional_ends(scene)
     lcp = StepLemke() if lcp is None else lcp
+    newton = getattr(lcp, "newton", False)
     t0 = time.perf_counter()
     chain = frictional_chain(scene)
     has_tau, right_datum = datum(scene)
@@ -463,8 +468,10 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
     pressed, away, it, gross, inexact = None, False, 0, 0, 0
     for it in range(1, max_outer + 1):
         try:
+            # Newton on the springs once the last step turned no link by NEWTON_SWITCH
             fs = frictional_step(scene, chain, state, x_prev, pressed,
-                                 None if fs is None else fs.rowed, left_pull)
+                                 None if fs is None else fs.rowed, left_pull,
+                                 newton and bool(sizes) and sizes[-1] < NEWTON_SWITCH)
         except np.linalg.LinAlgError as exc:  # (K singular: a link at the vertical)
             return StateAnswer(state, N, T, held, False, f"contact step {it}: {exc}", it,
                                sizes, time.perf_counter() - t0, left_pull)

@@ -203,6 +203,9 @@ def step_runner(solver: str | None = None):
             return LCPSolution(nan, nan.copy(), Status.FAILED,
                                message=f"{name} raised {type(exc).__name__}: {exc}")
     guarded.takes_step = True  # type: ignore[attr-defined]  # friction_driver.solve_state
+    # Newton's steps near the answer for Lemke, the default (StepLemke.newton); the peers
+    # get the paper's Gauss–Newton steps, as they were measured
+    guarded.newton = name == "lemke"  # type: ignore[attr-defined]
     guarded.backend = name  # type: ignore[attr-defined]
     guarded.form = form  # type: ignore[attr-defined]
     return guarded

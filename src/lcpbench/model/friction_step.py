@@ -23,7 +23,7 @@ import numpy as np
 from numba import njit
 
 from ..linalg.ldl_kernel import refactor, resolve
-from .compiled_kernel import banded_step
+from .compiled_kernel import banded_step, geometric_bands
 
 
 @njit(cache=True)
@@ -79,7 +79,7 @@ def add_pull_curvature(bands, alpha, a, pull, first):
 
 
 @njit(cache=True)
-def step_arrays(alpha, a, jl, jr, k, rest, fs, n, nodal_load, pull, right_datum):
+def step_arrays(alpha, a, jl, jr, k, rest, fs, n, nodal_load, pull, right_datum, newton):
     """The chain's part of the step at α, compiled: (bands, f, D, u₀). H (lower band
     storage) is the banded step's (:func:`lcpbench.model.compiled_kernel.banded_step`,
     i.e. :func:`lcpbench.model.step.assemble_step`) plus the pull's curvature
@@ -91,6 +91,17 @@ def step_arrays(alpha, a, jl, jr, k, rest, fs, n, nodal_load, pull, right_datum)
                                                          nodal_load)
     first = fs - 1
     add_pull_curvature(bands, alpha, a, pull, first)
+    if newton:  # the springs' exact curvature where H + T stays positive definite
+        T = np.zeros((2, n))
+        geometric_bands(alpha, a, jl, jr, k, rest, fs, n, T, np.empty(alpha.size),
+                        np.sin(alpha), np.cos(alpha))
+        fac = np.empty((4, n))
+        trial = bands.copy()
+        for i in range(n):
+            trial[0, i] += T[0, i]
+            trial[1, i] += T[1, i]
+        if refactor(fac, trial, np.zeros(n, np.bool_), np.empty(0), 0, n):
+            bands = trial
     D = slip_jacobian(alpha, first, n, right_datum)
     links, nj = alpha.size, jr.size
     b0 = jr[0]
