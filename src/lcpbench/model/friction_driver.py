@@ -468,7 +468,12 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
     pressed, away, it, gross, inexact = None, False, 0, 0, 0
     for it in range(1, max_outer + 1):
         try:
-            # Newton on the springs once the last step turned no link by NEWTON_SWITCH
+            # Newton on the springs once the last step turned no link by NEWTON_SWITCH;
+            # for the rest of the state not after a Newton step that did not halve
+            # (a cycle: Gauss–Newton's steps then)
+            if newton and len(sizes) >= 2 and sizes[-2] < NEWTON_SWITCH \
+                    and sizes[-1] > 0.5 * sizes[-2]:
+                newton = False
             fs = frictional_step(scene, chain, state, x_prev, pressed,
                                  None if fs is None else fs.rowed, left_pull,
                                  newton and bool(sizes) and sizes[-1] < NEWTON_SWITCH)
