@@ -6,7 +6,8 @@ along x when no end holds x, held in the step by a spring k_τ):
 
     K δ = f + G_n N + G_t T,
 
-K the banded step's Hessian (:func:`lcpbench.model.step.assemble_step`) plus the
+K the banded step's Hessian (:func:`lcpbench.model.step.assemble_step`, compiled:
+:func:`step_arrays`; near the answer with the springs' curvature T, Newton) plus the
 pull's curvature (and k_τ, and a free end's rotation spring), f = −g₀ + P ∂x_N/∂δ, G_n the gaps' and G_t the
 slips' Jacobians. Eliminating δ leaves the contact quantities affine in the forces,
 (g, s) = (g_f, s_f) + W (N, T) with W = Gᵀ K⁻¹ G (:func:`delassus_form`, Siconos'
@@ -86,7 +87,10 @@ def step_arrays(alpha, a, jl, jr, k, rest, fs, n, nodal_load, pull, right_datum,
     (:func:`add_pull_curvature`); f = −(H u₀ + c) at the linearisation point u₀
     (``ContactStep.gradient(origin)``: Jᵀ k (φ̂(u₀) − φ*) − f_load, in its order) plus
     P ∂x_N/∂δ; D the slips' Jacobian (:func:`slip_jacobian`). ``fs``: the shifted
-    index (node + 1) of the first free node, as the banded step's."""
+    index (node + 1) of the first free node, as the banded step's. With ``newton``, H
+    also takes the springs' curvature T (:func:`lcpbench.model.compiled_kernel.
+    geometric_bands`) where H + T is positive definite (the fixed point is the same:
+    δ = 0 there)."""
     bands, _, _, coef, origin, _, phi_origin = banded_step(alpha, a, jl, jr, k, rest, fs, n,
                                                          nodal_load)
     first = fs - 1
