@@ -10,8 +10,16 @@ the step is :func:`~.large_n.increment_step` (unknowns d = u − u₀, face solv
 on the tridiagonal factor of H) and the iterate moves by
 :func:`~.large_n.alpha_from_increments`, so the state is α, never heights
 rounded to doubles. The step is solved by the caller's step solver (the
-default back-end's active set, judged by lcpbench's step residuals); the
+default back-end's active set, judged by lcpbench's step residuals; with elastic
+walls Newton on the springs, :mod:`lcpbench.solvers.spring_newton`); the
 answer is judged by :mod:`.judge` as every other.
+
+The walls are parameters of the same loop (:class:`WallTerms`), not a second
+driver: elastic walls add their springs' energy to the merit and start from a
+nested start unclipped (a node may indent the wall); a wall profile gives each
+step the walls at the nodes' x and the slope load of the lagged reactions, and
+the merit and the stop of :mod:`.profile_driver` (the l1 penalty on the exact
+walls, a full step near the answer, the chain on the exact walls).
 """
 
 from __future__ import annotations
@@ -29,8 +37,6 @@ from .driver import StepSolver
 from .elastic import penalty, penalty_gradient
 from .judge import contraction_estimate, split_reactions
 from .large_n import StepWork, energy_of, increments_at, trial_of
-from .profile import slope_load, walls_at
-from .profile_driver import merit, penetration, profile_start
 from .outer import (
     DriverOutput,
     DriverStart,
@@ -43,6 +49,8 @@ from .outer import (
     step_failed,
     step_setup_time,
 )
+from .profile import slope_load, walls_at
+from .profile_driver import merit, penetration, profile_start
 
 #: past max|Δα| < tol the driver goes on while its prediction of the judge's per-node
 #: force error bound (:func:`_node_change`) exceeds this share of NODE_GROSS, for at

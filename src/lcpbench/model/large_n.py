@@ -185,7 +185,8 @@ class IncrementStep(ContactStep):
     def compiled_residuals(self, u: np.ndarray):
         """step_residuals' ``(residuals, R)`` in one compiled call
         (:func:`~lcpbench.model.large_kernel.residuals`, independent of the walk), or
-        None (the numpy reference decides). Rigid walls only, as every step here."""
+        None (the numpy reference decides). Rigid walls only: with elastic walls the
+        numpy reference (its compliant gaps g + R/k)."""
         if self.upper_stiffness is not None or self.lower_stiffness is not None:
             return None
         ok, res, R = _kernel().residuals(

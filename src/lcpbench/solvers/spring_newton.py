@@ -119,7 +119,9 @@ def solve_step(step, warm: StepSolution | None = None) -> StepSolution:
     hold = _warm_sets(warm, n)  # the first step's springs: the warm contact set's
     wall_size = np.where(np.isfinite(step.upper), np.abs(step.upper), 0.0) + \
         np.where(np.isfinite(step.lower), np.abs(step.lower), 0.0)
-    for it in range(1, MAX_NEWTON + 1):
+    it = 0
+    while it < MAX_NEWTON:
+        it += 1
         r, pu, pl, g = _residual(step, d, ku, kl)
         if last is not None and np.array_equal(pu, last[0]) and np.array_equal(pl, last[1]):
             break  # the springs of the full step are those it was computed with
