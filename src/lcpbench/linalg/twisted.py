@@ -18,6 +18,14 @@ def _kernel():
     return kernel_module("lcpbench.linalg.twisted_kernel")
 
 
+#: no springs on a face (the kernels read an empty array as none)
+NO_SPRING = np.zeros(0)
+
+
+def _springs(root: np.ndarray, n: int) -> np.ndarray:
+    return root if root.size else np.zeros(n)
+
+
 class TwistedFactor(TridiagonalFactor):
     """:class:`TridiagonalFactor` with rows rotated in from both ends (see the kernel).
 
@@ -67,7 +75,7 @@ class TwistedFactor(TridiagonalFactor):
         self.B, self._bfilled, self._bsnap = state["B"], state["bfilled"], state["bsnap"]
         self._invB, self._tri = state["invB"], state["tri"]
         self._m = n // 2
-        self._spring = np.zeros(n)  # √k of the springs of the face factored last
+        self._spring = NO_SPRING  # √k of the springs of the face factored last (none)
         self.rows_touched = 0
         self._walk_work: tuple | None = state["walk_work"]  # walk's (made at first use)
         self._shared = state
@@ -78,7 +86,10 @@ class TwistedFactor(TridiagonalFactor):
         if self._fixed is None:
             j0, k0, m = 0, 0, n // 2
         else:
-            changed = np.flatnonzero((fixed != self._fixed) | (spring != self._spring))
+            differ = fixed != self._fixed
+            if spring.size or self._spring.size:  # a spring changed is a face changed
+                differ |= _springs(spring, self.n) != _springs(self._spring, self.n)
+            changed = np.flatnonzero(differ)
             if changed.size:
                 j0 = min(int(changed[0]) - 1, self._m)  # the top pass: from its first row
                 k0 = min(n - 2 - int(changed[-1]), n - self._m)  # the bottom's, mirrored
@@ -100,13 +111,14 @@ class TwistedFactor(TridiagonalFactor):
             if spring is not None and np.any(spring > 0):
                 raise ValueError("springs on a face need n >= 5 nodes")
             return super().face_solve(fixed, rhs)
-        root = (np.zeros(n) if spring is None
+        root = (NO_SPRING if spring is None or not np.any(spring)
                 else np.sqrt(np.ascontiguousarray(spring, dtype=float)))
         j0, k0, m = self._twist(fixed, root)
         self._fixed = None  # invalid until the factorisation succeeds
         x = np.empty(n)
         ok = _kernel().face_solve(self.rows, self.rrows, fixed, np.ascontiguousarray(fixed[::-1]),
-                                  root, np.ascontiguousarray(root[::-1]), self.R, self._filled, self._snap, self.B, self._bfilled,
+                                  root, np.ascontiguousarray(root[::-1]) if root.size
+                                  else root, self.R, self._filled, self._snap, self.B, self._bfilled,
                                   self._bsnap, self._tri, self._inv, self._invB, j0, k0, m,
                                   np.ascontiguousarray(rhs, float), x)
         if not ok:
@@ -123,7 +135,7 @@ class TwistedFactor(TridiagonalFactor):
         the walk's last face (``resolve`` solves with it)."""
         from ..numba_cache import kernel_module  # numba: loads or compiles at first use
 
-        if self._fixed is None or np.any(self._spring):
+        if self._fixed is None or self._spring.size:
             raise ValueError("the compiled walk starts after a face solve without springs")
         n = self.n
         ctl[0] = self._m
@@ -141,7 +153,7 @@ class TwistedFactor(TridiagonalFactor):
             *head, f[0], f[1], b[0], b[1], i[:2 * n], i[2 * n:5 * n], i[5 * n:6 * n], f[2],
             i[6 * n:])
         if code != 3:
-            self._fixed, self._m, self._spring = prev, int(ctl[0]), np.zeros(n)
+            self._fixed, self._m, self._spring = prev, int(ctl[0]), NO_SPRING
         return int(code)
 
     def resolve(self, rhs: np.ndarray) -> np.ndarray:
