@@ -160,7 +160,7 @@ class WallTerms:
         if not chain.profiled_walls:
             return increments_at(chain, alpha, work)
         self.at = walls_at(chain, alpha)
-        s = slope_load(chain, alpha, self.mu_up, self.mu_lo)
+        s = slope_load(chain, alpha, np.maximum(self.mu_up, 0.0), np.maximum(self.mu_lo, 0.0))
         return increments_at(chain, alpha, work, walls=(self.at.lower, self.at.upper),
                              load=chain.nodal_load + s)
 
