@@ -160,7 +160,11 @@ class WallTerms:
         if not chain.profiled_walls:
             return increments_at(chain, alpha, work)
         self.at = walls_at(chain, alpha)
-        s = slope_load(chain, alpha, np.maximum(self.mu_up, 0.0), np.maximum(self.mu_lo, 0.0))
+        # the lagged reactions as the last step gave them, round-off of either sign kept
+        # (clipped at 0, as profile.profile_step does, the stenosis at θ 150°, tol 1e-3
+        # needed the escalations at N = 8·10⁴ and 10⁵, 9–10 s; kept: none of 12 solves,
+        # N = 10⁴…10⁵, θ 120° and 150°)
+        s = slope_load(chain, alpha, self.mu_up, self.mu_lo)
         return increments_at(chain, alpha, work, walls=(self.at.lower, self.at.upper),
                              load=chain.nodal_load + s)
 
