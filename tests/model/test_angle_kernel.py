@@ -4,6 +4,9 @@ The oracle is a linear-algebra one, not a route of lcpbench: the same QP written
 densely (B = Dᵀ diag(k) D + diag(δ) from its definition, the closure and wall rows as
 the prefix sums they are) and solved by enumerating the wall active sets, each by a
 dense KKT solve, keeping the one whose multipliers are ≥ 0 and whose other walls hold.
+The whole SQP is checked against an independent minimisation of the exact energy
+(SLSQP and a Newton polish, model/energy_reference.py) on a row of two sections whose
+answer has links past the vertical.
 """
 
 import itertools
@@ -11,7 +14,11 @@ import itertools
 import numpy as np
 import pytest
 
+import lcpbench
 from lcpbench.model import angle_kernel as ak
+from lcpbench.model.angle_step import solve_in_angles
+from lcpbench.model.energy_reference import minimise_energy
+from lcpbench.problems.sections import SectionedScene
 
 
 def _instance(seed, n=7, walls=5, pinned=True):
@@ -92,12 +99,48 @@ def test_the_banded_qp_step_is_the_dense_qp_answer(seed, pinned):
         assert lam[0] == pytest.approx(lam_ref[0], abs=1e-10)
 
 
-def test_the_convexity_test_reads_the_reduced_inertia():
-    # B = diag(1, −1), closure row c: convex on cᵀd = 0 iff cᵀB⁻¹c < 0, i.e. |c₂| > |c₁|
-    diag, off = np.array([1.0, -1.0]), np.zeros(1)
-    assert ak.convex_on_closure(diag, off, np.array([0.5, 1.0]), True)
-    assert not ak.convex_on_closure(diag, off, np.array([1.0, 0.5]), True)
-    assert not ak.convex_on_closure(diag, off, np.array([0.5, 1.0]), False)
-    # two negative eigenvalues: no single constraint makes it convex
-    assert not ak.convex_on_closure(np.array([-1.0, -1.0, 1.0]), np.zeros(2),
-                                    np.array([1.0, 1.0, 1.0]), True)
+def _face_convex_by_eigenvalues(bd, off, c, fixed):
+    """The oracle: the smallest eigenvalue of Zᵀ B Z, Z a null-space basis (SVD) of the
+    runs' constraints Σ_{k in run} c_k d_k = 0."""
+    n = bd.size
+    B = np.diag(bd) + np.diag(off, 1) + np.diag(off, -1)
+    rows, p = [], 0
+    for q in range(1, n + 1):
+        if fixed[q]:
+            row = np.zeros(n)
+            row[p:q] = c[p:q]
+            rows.append(row)
+            p = q
+    if not rows:
+        return np.min(np.linalg.eigvalsh(B)) > 0
+    A = np.array(rows)
+    Z = np.linalg.svd(A)[2][len(rows):].T
+    return np.min(np.linalg.eigvalsh(Z.T @ B @ Z)) > 0
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_the_face_convexity_test_reads_the_reduced_inertia(seed):
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(3, 12))
+    bd = rng.normal(1.0, 1.5, n)  # often indefinite
+    off = rng.normal(0.0, 0.7, n - 1)
+    c = rng.uniform(-1, 1, n)
+    fixed = np.concatenate(([True], rng.uniform(size=n) < 0.3))
+    expect = _face_convex_by_eigenvalues(bd, off, c, fixed)
+    assert ak.convex_on_face(bd, off, c, fixed) == expect
+
+
+@pytest.mark.parametrize("links", [20, 30])
+def test_two_sections_at_174_degrees_agree_with_the_energy_minimum(links):
+    scene = SectionedScene(sections=[(174.0, 15.0), (-174.0, 15.0)], height=2.02, links=links)
+    ref = minimise_energy(scene)
+    assert ref.success, ref.message
+    scale = scene.EI / scene.length**2
+    out = solve_in_angles(scene.chain(), tol=1e-12)  # from the rest shape clipped to the wall
+    assert out.converged, out.reason
+    assert np.degrees(np.max(np.abs(out.alpha))) > 95.0  # links past the vertical
+    assert abs(np.sum(out.forces_upper) - np.sum(ref.forces)) <= 1e-9 * scale
+    res = lcpbench.solve(scene, tol=1e-8)  # along the loading path, judged
+    assert res.converged, res.reason
+    assert abs(res.total_force - np.sum(ref.forces)) <= 1e-9 * scale
+    assert np.max(np.abs(res.y - ref.y)) <= 1e-9 * scene.length

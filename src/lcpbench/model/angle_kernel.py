@@ -26,15 +26,18 @@ is its row's residual ν_j − ν_{j−1} =: R_j: the closure's λ = R_N, a wall
 
 The walls are handled by the dual active-set method of Goldfarb and Idnani (Math.
 Prog. 27, 1983) with the KKT solves above in place of B⁻¹: started from the last step's
-active walls (those whose multipliers are negative dropped one by one), each
+active walls, improved by up to :data:`GUESSES` primal-dual guesses (Hintermüller, Ito
+and Kunisch 2002: walls with negative multipliers out, violated walls in, all at
+once), then the walls whose multipliers are negative dropped one by one; each
 iteration adds the most violated wall or drops one whose multiplier reaches zero, one
-O(N) factorisation each. It needs the QP convex on the closure's tangent space:
-:func:`convexify` checks that by the inertia of the tridiagonal B (its LDLᵀ pivots,
-Sylvester) and of the closure's Schur complement (Haynsworth), and where it fails
-adds a shift σ I, the smallest of a geometric sequence that passes. A shifted step is not Newton's: the
-SQP's quadratic rate holds only where the exact Hessian is positive on the closure's
-tangent (as near a stable answer with its walls); elsewhere the steps are descent
-steps of the merit function, with a linear rate. Loaded through
+O(N) factorisation each. It needs the QP convex on the face of its active set:
+:func:`convex_on_face` counts the negative eigenvalues of that face's KKT matrix in O(N)
+(the runs of links between fixed nodes eliminated one after the other), on the face the
+solve starts from and on the face of its answer. Where either is not convex, B gets a
+shift σ I, the smallest of a geometric sequence that passes (:func:`qp_step`). A shifted
+step is not Newton's: the SQP's quadratic rate holds only where the exact Hessian is
+positive on the active face (as near a stable answer); elsewhere the steps are descent
+steps of the merit function, at a linear rate. Loaded through
 :func:`lcpbench.numba_cache.kernel_module`.
 """
 
@@ -50,6 +53,8 @@ from ..thresholds import ANGLE_SHIFT_GROWTH, ANGLE_SHIFT_START, ANGLE_SHIFT_TRIE
 OK, SINGULAR, INFEASIBLE, NO_END = range(4)
 #: bands of the interleaved KKT matrix either side of the diagonal
 BANDS = 3
+#: primal-dual active-set guesses before the dual active set (each one banded solve)
+GUESSES = 8
 
 
 @njit(cache=True)
@@ -76,63 +81,54 @@ def hessian_bands(alpha, a, jl, jr, k, W, lam, mu, node, side):
 
 
 @njit(cache=True)
-def _ldl_inertia(diag, off, rhs):
-    """(negative pivots, smallest |pivot| over the largest, rhsᵀ T⁻¹ rhs) of the symmetric
-    tridiagonal T (LDLᵀ without pivoting: its pivots' signs are T's inertia)."""
-    n = diag.size
-    piv, z = np.empty(n), np.empty(n)
-    neg, small, big = 0, np.inf, 0.0
-    for i in range(n):
-        if i == 0:
-            piv[i], z[i] = diag[i], rhs[i]
-        else:
-            m = off[i - 1] / piv[i - 1]
-            piv[i] = diag[i] - m * off[i - 1]
-            z[i] = rhs[i] - m * z[i - 1]
-        if piv[i] < 0.0:
-            neg += 1
-        small, big = min(small, abs(piv[i])), max(big, abs(diag[i]))
-        if piv[i] == 0.0 or not np.isfinite(piv[i]):
-            return n, 0.0, 0.0
-    s = 0.0
-    for i in range(n):
-        s += z[i] * z[i] / piv[i]
-    return neg, small / max(big, 1e-300), s
+def convex_on_face(bd, off, c, fixed):
+    """Whether the QP with the tridiagonal B (diagonal ``bd``, ``off``) is strictly convex
+    on the face where the node heights with ``fixed`` (per node 0 … N; node 0 always)
+    do not move: on each run of links between two fixed nodes Σ c_k d_k = 0.
 
-
-@njit(cache=True)
-def convex_on_closure(diag, off, c, pinned):
-    """Whether the QP with the tridiagonal B is strictly convex on the closure's tangent
-    (cᵀ d = 0 where ``pinned``): In([B c; cᵀ 0]) = In(B) + In(−cᵀB⁻¹c), so B positive
-    definite, or B with one negative eigenvalue and cᵀB⁻¹c < 0. A pivot below 1e-13
-    of the largest diagonal entry counts as singular."""
-    neg, small, s = _ldl_inertia(diag, off, c)
-    if small < 1e-13:
-        return False
-    if not pinned:
-        return neg == 0
-    return (neg == 0 and s > 0.0) or (neg == 1 and s < 0.0)
-
-
-@njit(cache=True)
-def convexify(dk, off, dg, c, pinned):
-    """(diag of B, σ): B = K + diag(δ) + σ I with the first σ of 0, σ₀, σ₀ g, σ₀ g², …
-    (σ₀ = :data:`~lcpbench.thresholds.ANGLE_SHIFT_START` × the largest |K_jj|, |δ_j|;
-    g = :data:`~lcpbench.thresholds.ANGLE_SHIFT_GROWTH`) at which the QP is strictly
-    convex on the closure's tangent (:func:`convex_on_closure`); σ = −1 where none was."""
-    n = dk.size
-    d = dk + dg
-    top = 0.0
-    for j in range(n):
-        top = max(top, abs(dk[j]), abs(dg[j]))
-    sigma = 0.0
-    for t in range(ANGLE_SHIFT_TRIES + 1):
-        for j in range(n):
-            d[j] = dk[j] + dg[j] + sigma
-        if convex_on_closure(d, off, c, pinned):
-            return d, sigma
-        sigma = ANGLE_SHIFT_START * top if t == 0 else sigma * ANGLE_SHIFT_GROWTH
-    return d, -1.0
+    The KKT matrix of that face, ordered run by run (the run's d, then its multiplier),
+    is block tridiagonal, coupled by one entry of B between runs. Eliminating run after
+    run (each run's block M = [T c; cᵀ 0] gives In(T) + In(−cᵀT⁻¹c), Haynsworth, and
+    passes −b² (M⁻¹)_ll to the next run's first diagonal entry) counts its negative
+    eigenvalues in O(N): the face is convex iff they are as many as the runs' constraints.
+    A pivot below 1e-13 of the largest diagonal entry (or such a cᵀT⁻¹c) counts as
+    singular: not convex."""
+    n = bd.size
+    big = 0.0
+    for k in range(n):
+        big = max(big, abs(bd[k]))
+    tiny = 1e-13 * max(big, 1e-300)
+    neg, rows, carry, p = 0, 0, 0.0, 0
+    while p < n:
+        q = p + 1
+        while q < n and not fixed[q]:
+            q += 1
+        piv, z, s, size = 0.0, 0.0, 0.0, 0.0  # the run p … q−1 (links), LDLᵀ in place
+        for k in range(p, q):
+            if k == p:
+                piv, z = bd[k] - carry, c[k]
+            else:
+                m = off[k - 1] / piv
+                piv, z = bd[k] - m * off[k - 1], c[k] - m * z
+            if not abs(piv) > tiny or not np.isfinite(piv):
+                return False
+            if piv < 0.0:
+                neg += 1
+            s += z * z / piv
+            size += z * z / abs(piv)
+        inv_last = 1.0 / piv  # (T⁻¹)_ll
+        if fixed[q]:  # the run's constraint (q = N: the closure)
+            if not abs(s) > 1e-13 * size:
+                return False
+            rows += 1
+            if s > 0.0:
+                neg += 1
+            x_last = z / piv  # (T⁻¹c)_l
+            inv_last -= x_last * x_last / s
+        if q < n:
+            carry = off[q - 1] * off[q - 1] * inv_last
+        p = q
+    return neg == rows
 
 
 @njit(cache=True)
@@ -190,19 +186,50 @@ def _gap(r, y, v, node, side, limit):
 def qp_step(alpha, a, jl, jr, k, W, grad, y, pinned, node, side, limit, lam, mu, gap_tol):
     """(code, d, λ', μ', σ, changes): the step d of the SQP at α (the QP of the module's
     docstring with B from the multipliers ``lam`` (one value, read where ``pinned``) and
-    ``mu`` of the last step), the step's closure and wall multipliers, the shift σ of
-    :func:`convexify` and the number of active-set changes. ``grad``: ∇E at α; ``y``:
-    the node heights (N + 1); ``node``/``side``/``limit`` per wall row: its node (1 … N),
-    +1 an upper and −1 a lower wall, its height. The last step's walls with μ > 0 start
-    the active set. A wall counts as violated where its gap is below −``gap_tol``."""
+    ``mu`` of the last step), the step's closure and wall multipliers, the shift σ and
+    the number of active-set changes. ``grad``: ∇E at α; ``y``: the node heights
+    (N + 1); ``node``/``side``/``limit`` per wall row: its node (1 … N), +1 an upper and
+    −1 a lower wall, its height. The last step's walls with μ > 0 start the active set.
+    A wall counts as violated where its gap is below −``gap_tol``.
+
+    σ is the first of 0, σ₀, σ₀ g, σ₀ g², … (σ₀ = :data:`~lcpbench.thresholds.ANGLE_SHIFT_START`
+    × the largest |K_jj|, |δ_j|; g = :data:`~lcpbench.thresholds.ANGLE_SHIFT_GROWTH`) at
+    which B = K + diag(δ) + σ I is convex on the face of the starting active set and on
+    the face of the answer's (:func:`convex_on_face`), and the QP was solved."""
     n, nw = alpha.size, node.size
     dk, off, dg = hessian_bands(alpha, a, jl, jr, k, W, lam[0] if pinned else 0.0, mu, node,
                                 side)
     c = a * np.cos(alpha)
+    top = 0.0
+    for j in range(n):
+        top = max(top, abs(dk[j]), abs(dg[j]))
+    bd, sigma, changes = np.empty(n), 0.0, 0
+    warm = np.zeros(n + 1, np.bool_)
+    warm[n] = pinned
+    for r in range(nw):
+        if mu[r] > 0.0:
+            warm[node[r]] = True
+    code = SINGULAR
+    d, lam_out, u = np.zeros(n), np.zeros(1 if pinned else 0), np.zeros(nw)
+    for t in range(ANGLE_SHIFT_TRIES + 1):
+        for j in range(n):
+            bd[j] = dk[j] + dg[j] + sigma
+        if convex_on_face(bd, off, c, warm):
+            code, d, lam_out, u, more, face = _solve_qp(bd, off, c, grad, y, pinned, node,
+                                                        side, limit, mu, gap_tol)
+            changes += more
+            if code == OK and convex_on_face(bd, off, c, face):
+                return OK, d, lam_out, u, sigma, changes
+        sigma = ANGLE_SHIFT_START * top if t == 0 else sigma * ANGLE_SHIFT_GROWTH
+    return code if code != OK else SINGULAR, d, lam_out, u, -1.0, changes
+
+
+@njit(cache=True)
+def _solve_qp(bd, off, c, grad, y, pinned, node, side, limit, mu, gap_tol):
+    """(code, d, λ', μ', changes, fixed): the QP with the tridiagonal B (:func:`qp_step`)
+    and the nodes fixed at its answer (its active set, and the closure)."""
+    n, nw = bd.size, node.size
     lam_out, u = np.zeros(1 if pinned else 0), np.zeros(nw)
-    bd, sigma = convexify(dk, off, dg, c, pinned)
-    if sigma < 0.0:
-        return SINGULAR, np.zeros(n), lam_out, u, sigma, 0
     fixed, value, zero_v = np.zeros(n + 1, np.bool_), np.zeros(n + 1), np.zeros(n + 1)
     zero_d, zero_val, minus_grad = np.zeros(n), np.zeros(n + 1), -grad
     if pinned:
@@ -212,10 +239,24 @@ def qp_step(alpha, a, jl, jr, k, W, grad, y, pinned, node, side, limit, lam, mu,
         if mu[r] > 0.0 and not fixed[node[r]]:
             act[r], fixed[node[r]], value[node[r]] = True, True, limit[r] - y[node[r]]
     changes = 0
+    for _ in range(GUESSES):  # primal-dual guesses of the active set: many changes a solve
+        ok, d, nu, v, R = kkt_solve(bd, off, c, fixed, value, minus_grad, zero_v)
+        if not ok:
+            break
+        moved = False
+        for r in range(nw):
+            j = node[r]
+            if act[r] and -side[r] * R[j] < 0.0:
+                act[r], fixed[j], moved = False, False, True
+            elif not act[r] and not fixed[j] and _gap(r, y, v, node, side, limit) < -gap_tol:
+                act[r], fixed[j], value[j], moved = True, True, limit[r] - y[j], True
+        if not moved:
+            break
+        changes += 1
     while True:  # the warm set's walls with negative multipliers dropped, most negative first
         ok, d, nu, v, R = kkt_solve(bd, off, c, fixed, value, minus_grad, zero_v)
         if not ok:
-            return SINGULAR, d, lam_out, u, sigma, changes
+            return SINGULAR, d, lam_out, u, changes, fixed
         worst, low = -1, 0.0
         for r in range(nw):
             if act[r]:
@@ -248,14 +289,14 @@ def qp_step(alpha, a, jl, jr, k, W, grad, y, pinned, node, side, limit, lam, mu,
                     u[r] = max(-side[r] * R2[node[r]], 0.0) if act[r] else 0.0
             if pinned:
                 lam_out[0] = lam_now
-            return OK, d, lam_out, u, sigma, changes
+            return OK, d, lam_out, u, changes, fixed
         up = 0.0
         rhs_v = np.zeros(n + 1)
         rhs_v[node[p]] = -side[p]
         while True:  # Goldfarb-Idnani: move toward wall p, dropping walls whose μ reaches 0
             ok, z, nz, zv, Rz = kkt_solve(bd, off, c, fixed, zero_val, zero_d, rhs_v)
             if not ok:
-                return SINGULAR, d, lam_out, u, sigma, changes
+                return SINGULAR, d, lam_out, u, changes, fixed
             npz = -side[p] * zv[node[p]]
             t1 = -_gap(p, y, v, node, side, limit) / npz if npz > 0.0 else np.inf
             t2, block = np.inf, -1
@@ -266,7 +307,7 @@ def qp_step(alpha, a, jl, jr, k, W, grad, y, pinned, node, side, limit, lam, mu,
                         t2, block = -u[r] / w, r
             t = min(t1, t2)
             if not np.isfinite(t):
-                return INFEASIBLE, d, lam_out, u, sigma, changes
+                return INFEASIBLE, d, lam_out, u, changes, fixed
             for j in range(n):
                 d[j] += t * z[j]
             for j in range(n + 1):
@@ -281,4 +322,4 @@ def qp_step(alpha, a, jl, jr, k, W, grad, y, pinned, node, side, limit, lam, mu,
                 act[p], fixed[node[p]], value[node[p]], u[p] = True, True, limit[p] - y[node[p]], up
                 break
             act[block], fixed[node[block]], u[block] = False, False, 0.0
-    return NO_END, d, lam_out, u, sigma, changes
+    return NO_END, d, lam_out, u, changes, fixed
