@@ -54,7 +54,7 @@ OK, SINGULAR, INFEASIBLE, NO_END = range(4)
 #: bands of the interleaved KKT matrix either side of the diagonal
 BANDS = 3
 #: primal-dual active-set guesses before the dual active set (each one banded solve)
-GUESSES = 8
+GUESSES = 64
 
 
 @njit(cache=True)

@@ -39,7 +39,7 @@ from ..problems.scenes import Chain
 from .chain import alpha_from_heights, energy, heights, joint_angles, node_positions
 
 #: chains of more links than this are not solved in angles
-MAX_LINKS = 1500
+MAX_LINKS = 5000
 #: the constraints (closure, walls) are met to this fraction of ℓ at an answer
 FEASIBLE = 1e-11
 #: load parameter wℓ³/EI (total load over EI/ℓ²) from which a chain is solved in
