@@ -44,6 +44,8 @@ from .chain import alpha_from_heights, energy, heights, joint_angles, node_posit
 MAX_LINKS = 5000
 #: the constraints (closure, walls) are met to this fraction of ℓ at an answer
 FEASIBLE = 1e-11
+#: a wall counts as violated in a step's QP where its linearised gap is below −this × ℓ
+QP_GAP = 1e-13
 #: load parameter wℓ³/EI (total load over EI/ℓ²) from which a chain is solved in
 #: angles first: from about 40 the height steps crawl (41 outer iterations at 1e-3
 #: for a chain hanging at wℓ³/EI = 42) and from a few hundred they stall
@@ -155,7 +157,7 @@ def solve_in_angles(chain: Chain, *, tol: float = 1e-10, max_iter: int = 30,
     energies: list = []
     near = False
     scale = float(chain.force_scale) * chain.length  # EI/ℓ
-    gap_tol = 1e-13 * chain.length
+    gap_tol = QP_GAP * chain.length
     for _ in range(max_iter):
         grad = p.gradient(alpha)
         y = node_positions(chain, alpha)[1]
