@@ -158,11 +158,11 @@ def solve_in_angles(chain: Chain, *, tol: float = 1e-10, max_iter: int = 30,
     near = False
     scale = float(chain.force_scale) * chain.length  # EI/ℓ
     gap_tol = QP_GAP * chain.length
+    y = node_positions(chain, alpha)[1]
+    state = (p.energy(alpha), p.closure(alpha), p.walls(alpha, y))  # E, c, g at α
     for _ in range(max_iter):
         grad = p.gradient(alpha)
-        y = node_positions(chain, alpha)[1]
-        c = p.closure(alpha)
-        g = p.walls(alpha, y)
+        _, c, g = state
         code, d, lam_new, mu_new, _, _ = kern.qp_step(
             alpha, p.a, p.jl, p.jr, p.k, p.W, grad, y, p.pinned, p.node, p.side, p.limit,
             lam, mu, gap_tol)
@@ -175,32 +175,32 @@ def solve_in_angles(chain: Chain, *, tol: float = 1e-10, max_iter: int = 30,
         rho = 2.0 * float(np.max(np.abs(np.concatenate((lam_new, mu_new))), initial=0.0)) \
             + 1e-8 * scale / chain.length
 
-        def merit(al, rho=rho):
-            cc = p.closure(al)
-            gg = p.walls(al)
-            return p.energy(al) + rho * (float(np.sum(np.abs(cc)))
-                                         + float(np.sum(np.maximum(-gg, 0.0))))
+        def merit(st, rho=rho):
+            return st[0] + rho * (float(np.sum(np.abs(st[1])))
+                                  + float(np.sum(np.maximum(-st[2], 0.0))))
 
-        m0 = merit(alpha)
+        m0 = merit(state)
         slope = float(grad @ d) - rho * (float(np.sum(np.abs(c)))
                                          + float(np.sum(np.maximum(-g, 0.0))))
         noise = 1e-13 * (abs(m0) + scale)
         t = 1.0
         while True:  # a step below tol is taken whole: the merit is round-off there
             trial = alpha + t * d
+            y = node_positions(chain, trial)[1]
+            new = (p.energy(trial), p.closure(trial), p.walls(trial, y))
             if size < tol:
                 break
-            if merit(trial) <= m0 + 1e-4 * t * min(slope, 0.0) + noise:
+            if merit(new) <= m0 + 1e-4 * t * min(slope, 0.0) + noise:
                 break
             t *= 0.5
             if t < 1e-10:
                 break
-        alpha = trial
+        alpha, state = trial, new
         lam, mu = (lam_new if p.pinned else lam), mu_new
         sizes.append(float(t * np.max(np.abs(d), initial=0.0)))
-        energies.append(p.energy(alpha))
-        viol = max(float(np.max(np.abs(p.closure(alpha)), initial=0.0)),
-                   float(np.max(-p.walls(alpha), initial=0.0)))
+        energies.append(state[0])
+        viol = max(float(np.max(np.abs(state[1]), initial=0.0)),
+                   float(np.max(-state[2], initial=0.0)))
         # one more full step after the first that meets the test: the active walls'
         # gaps then sit at round-off, not at the size of the step before
         polished = bool(t == 1.0 and size < tol and viol < FEASIBLE * chain.length and near)
