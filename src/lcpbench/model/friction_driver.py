@@ -345,10 +345,11 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
     if has_tau:  # τ: one more unknown, moving every node's x, held by k_τ
         D = np.hstack([D, np.ones((D.shape[0], 1))])
         f = np.append(f, float(scene.pull) + left_pull)
-    _, _, s_up, s_lo = walls_at_x(chain, x)
-    g_up, g_lo = gaps_at(chain, x, y)
-    touching = near_walls(chain, x, y, NEAR)
-    near = near_walls(chain, x, y, ROW_BAND)
+    walls = walls_at_x(chain, x)  # (the profile evaluated once per step)
+    s_up, s_lo = walls[2], walls[3]
+    g_up, g_lo = gaps_at(chain, x, y, walls)
+    touching = near_walls(chain, x, y, NEAR, walls)
+    near = near_walls(chain, x, y, ROW_BAND, walls)
     if pressed is not None:
         touching |= pressed
     if rowed is not None:

@@ -38,17 +38,20 @@ def walls_at_x(chain: Chain, x: np.ndarray):
     return up, lo, su, sl
 
 
-def gaps_at(chain: Chain, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def gaps_at(chain: Chain, x: np.ndarray, y: np.ndarray, walls=None
+            ) -> tuple[np.ndarray, np.ndarray]:
     """Exact vertical gaps of the free nodes to the upper and lower walls at the nodes'
-    x (mm; inf: no wall): h(x) − y and y − l(x)."""
-    up, lo, _, _ = walls_at_x(chain, x)
+    x (mm; inf: no wall): h(x) − y and y − l(x); ``walls``: :func:`walls_at_x` at x when
+    known."""
+    up, lo, _, _ = walls_at_x(chain, x) if walls is None else walls
     yf = y[chain.free_nodes]
     return up - yf, yf - lo
 
 
-def near_walls(chain: Chain, x: np.ndarray, y: np.ndarray, band: float) -> np.ndarray:
+def near_walls(chain: Chain, x: np.ndarray, y: np.ndarray, band: float, walls=None
+               ) -> np.ndarray:
     """Free nodes within ``band`` · a of a wall (or through it)."""
-    g_up, g_lo = gaps_at(chain, x, y)
+    g_up, g_lo = gaps_at(chain, x, y, walls)
     return np.minimum(g_up, g_lo) <= band * chain.link_length
 
 
