@@ -382,14 +382,15 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
                         step.origin, L, F, near, normal_xy, tangent_xy)
 
 
-def gross_slip(fs: FrictionStep, N: np.ndarray, T: np.ndarray, pull: float) -> bool:
+def gross_slip(fs: FrictionStep, N: np.ndarray, T: np.ndarray, pull: float) -> float:
     """Whether a step of a chain that no end holds in x slides as a whole: every pair
     at its cone (|T| = μN) and the pull beyond what they hold, |P| > Σ μN (so ΣT + P ≠ 0
-    whatever the directions of T). On flat walls the next step is the same one moved
-    along x, so there is no equilibrium (docs/friction.md). Every pair at its cone with
-    |P| <= Σ μN is not that: the tangential forces then oppose each other in part (a
-    chain turning or rolling in a channel), and the step is an iterate on the way to an
-    equilibrium that friction can hold."""
+    whatever the directions of T); returned as the excess |P| − Σ μN (N), 0.0 when not.
+    On flat walls the next step is the same one moved along x, so there is no
+    equilibrium (docs/friction.md). Every pair at its cone with |P| <= Σ μN is not that:
+    the tangential forces then oppose each other in part (a chain turning or rolling in
+    a channel), and the step is an iterate on the way to an equilibrium that friction
+    can hold. Against a wall of any profile, P is P + Σ N n_x and Σ μN is Σ μN t_x."""
     limit = np.zeros(T.size)
     paired = fs.pair >= 0
     np.add.at(limit, fs.pair[paired], (fs.mu * N)[paired])
@@ -399,7 +400,8 @@ def gross_slip(fs: FrictionStep, N: np.ndarray, T: np.ndarray, pull: float) -> b
     capacity = float(limit @ fs.tangent_xy[:, 0])
     scale = max(abs(load), capacity, 1e-300)
     at_cone = np.all(np.abs(T) >= limit - 1e-9 * scale)
-    return bool(at_cone and abs(load) > capacity + 1e-9 * scale)
+    excess = abs(load) - capacity
+    return float(excess) if at_cone and excess > 1e-9 * scale else 0.0
 
 
 def damped(chain: Chain, origin: np.ndarray, dy: np.ndarray, alpha: np.ndarray):
@@ -449,7 +451,7 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
     sizes: list[float] = []
     N = T = np.zeros(0)
     fs = held = None  # held: the step whose answer N, T are (a failed step is not theirs)
-    pressed, away, it, gross, inexact = None, False, 0, 0, 0
+    pressed, away, it, gross, inexact, excess = None, False, 0, 0, 0, 0.0
     stiff = TAU_STIFFEN  # k_τ's multiple (:data:`TAU_REACH`)
     for it in range(1, max_outer + 1):
         # a step starts one stiffening softer than the last, and is solved again stiffer
@@ -500,8 +502,13 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
                 and sol.solved):
             return StateAnswer(state, N, T, fs, True, "max|Δα| < tol", it, sizes,
                                time.perf_counter() - t0, left_pull)
-        gross = gross + 1 if has_tau and gross_slip(fs, N, T, float(scene.pull) + left_pull
-                                                    ) else 0
+        ex = gross_slip(fs, N, T, float(scene.pull) + left_pull) if has_tau else 0.0
+        # on a profile the capacity changes as the chain moves: a run of steps at gross
+        # slip counts only while the excess does not shrink (a chain sliding towards
+        # where friction holds it is on its way to an equilibrium; docs/friction.md)
+        gross = (0 if not ex else 1 if chain.profiled_walls and gross
+                 and ex < excess * (1.0 - 1e-9) else gross + 1)
+        excess = ex
         runaway = abs(state.x0 - start.x0) > RUNAWAY * chain.length
         away = runaway or gross >= GROSS_STEPS
         inexact = 0 if sol.solved else inexact + 1
