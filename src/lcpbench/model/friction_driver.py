@@ -34,8 +34,10 @@ ROW_BAND = 1.0
 #: exact at the fixed point (τ = 0 there; docs/friction.md)
 TAU_STIFFNESS = 1.0
 #: against a sloped wall a translation opens or closes the gaps (n_x τ), and with k_τ
-#: soft the step's LCP has a spurious answer beside the one friction holds: every node
-#: off its wall, the chain carried |τ| = P/k_τ away. A step whose |τ| exceeds TAU_REACH · a
+#: soft one step can carry the chain far along x, beyond where its linearised gaps
+#: hold: the step's LCP has a spurious answer beside the one friction holds (every node
+#: off its wall, the chain carried |τ| = P/k_τ away), or steps of ~1 mm that the
+#: gross-slip rule takes for sliding as a whole. A step whose |τ| exceeds TAU_REACH · a
 #: there is solved again with k_τ TAU_STIFFEN times stiffer (a proximal term: the fixed
 #: point does not depend on it), up to TAU_STIFFEN_MAX times (docs/friction.md)
 TAU_REACH = 1.0
