@@ -32,7 +32,9 @@ class FrictionResult:
     reaction of the upper wall, N), ``forces_lower`` (the lower wall's, channel only),
     ``tangential_forces`` (T, N, on the chain along +x), ``slip`` (mm, x − x at the
     previous state) and ``stick`` (True: in contact, N > the judge's ε, and not
-    sliding, |slip| <= the judge's ε_s). ``total_force``: ΣN over every wall.
+    sliding, |slip| <= the judge's ε_s). ``total_force``: ΣN over every wall. Against a
+    wall of any profile N is along the wall's normal (its vertical part is N/√(1 + h'²)),
+    T and the slip along its tangent (docs/friction.md, walls of any profile).
     ``route``: "frictionless" (today's :func:`lcpbench.solve`, kept in ``contact``)
     or "frictional" (:mod:`lcpbench.model.friction_driver`). ``judgement``: the
     friction checks' numbers and ``fails``, the checks that failed.
