@@ -1,7 +1,9 @@
 """Issue 39, target 5: the speed of a frictional solve and of a pull-out at N = 140.
 
-Scenes: the paper's (θ 150°, h 3 mm, N = 140) on one flat wall, and the same in the
-channel (θ 180°, h 2 mm, μ 0.3 above and 0.1 below); sliders at both ends, μ = 0.3. Contenders,
+Scenes: the paper's (θ 150°, h 3 mm, N = 140) on one flat wall, the same in the
+channel (θ 180°, h 2 mm, μ 0.3 above and 0.1 below), and against a stenosis (the wall
+profile of ``benchmarks/scene_kinds.py``: 0.8 mm deep at x = 14 mm, 3 mm wide, from
+3 mm); sliders at both ends, μ = 0.3. Contenders,
 timed around the call and interleaved in rotating order (``perf.interleaved``), one
 BLAS thread:
 
@@ -41,12 +43,17 @@ import lcpbench.model.friction_driver as driver
 from lcpbench import ActuatorScene
 from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from scene_kinds import stenosis
+
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = {
     "flat wall": ActuatorScene(theta=150, height=3.0, links=140, friction=0.3,
                                left_end="slider", right_end="slider"),
     "channel": ActuatorScene(theta=180, height=2.0, links=140, channel=True,
                              friction=(0.3, 0.1), left_end="slider", right_end="slider"),
+    "stenosis": ActuatorScene(theta=150, wall_profile=stenosis(), links=140, friction=0.3,
+                              left_end="slider", right_end="slider"),
 }
 PULL = 0.05
 
@@ -126,7 +133,8 @@ def main(argv=None) -> int:
         "# Speed of the frictional solve and of pull-out (issue 39, target 5)", "",
         f"Measured {when}; {timing_note(start)} Command: `python benchmarks/friction_speed.py "
         f"--rounds {a.rounds} --force`. N = 140, sliders at both ends, μ 0.3 (the channel: "
-        f"0.3 above, 0.1 below), each call at its defaults (`solve` and `solve_path`: tol "
+        f"0.3 above, 0.1 below; the stenosis: the wall profile of benchmarks/scene_kinds.py, "
+        f"its frictionless solve the compiled profile driver), each call at its defaults (`solve` and `solve_path`: tol "
         "1e-3, the paper's; `pull_out`: tol 1e-10, rtol 1e-6). Medians over rounds, interleaved; the "
         "ratio is the median of the per-round ratios, on the wall clock and on the process's "
         "CPU time (which does not count the time a loaded machine keeps the process "

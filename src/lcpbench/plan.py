@@ -25,10 +25,13 @@ SQP            steps (the kernel where it takes the chain), finished by SQP step
                they do not converge within ``heavy_driver.FIRST_TRY``.
 profile kernel the default back-end, the globalised scheme, engine not "numpy", a wall of
                any profile with a table of cubic pieces, a chain the kernel's layout takes
-               (:func:`lcpbench.model.kernel_call.profile_applies`): the profile kernel;
+               (:func:`lcpbench.model.kernel_call.profile_applies`, below ``LARGE_N``):
+               the profile kernel;
                a cold start on one wall its arc crosses far: its result built when read.
 large N        the globalised scheme and N ≥ ``large_n.LARGE_N`` (or a chain in
-               increments) on a layout it takes: increments on the tridiagonal factor.
+               increments) on a layout it takes: increments on the tridiagonal factor,
+               every wall model (rigid or elastic, flat or profiled) a parameter of the
+               step (:class:`lcpbench.model.large_driver.WallTerms`).
 kernel         the default back-end, globalised or Newton, engine not "numpy", a chain
                the kernel takes (a warm start, or an arc near the wall): the solve kernel.
 compiled       another back-end that takes a QP or an LCP, the globalised scheme, a

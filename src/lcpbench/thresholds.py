@@ -82,3 +82,13 @@ START_PASSES = 5
 TIE = 1e-6
 #: the walk's relative stationarity on a face (solve_banded_qp's ``rtol``)
 WALK_RTOL = 1e-9
+
+# --- the SQP in the link angles (model/angle_kernel.py) ------------------------------
+
+#: where the Lagrangian's Hessian is not positive on the closure's tangent, the shift σ I
+#: tried first, in units of the largest diagonal entry of the springs and curvatures ...
+ANGLE_SHIFT_START = 1e-8
+#: ... then grown by this factor ...
+ANGLE_SHIFT_GROWTH = 10.0
+#: ... at most this many times
+ANGLE_SHIFT_TRIES = 20

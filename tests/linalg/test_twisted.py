@@ -55,6 +55,52 @@ def test_twisted_face_solves_match_dense_solves_along_a_walk(seed):
             assert np.max(np.abs(fac.resolve(rhs) - expected)) <= 1e-7 * scale
 
 
+@pytest.mark.parametrize("seed", [0, 1])
+def test_faces_with_springs_match_dense_solves_along_a_walk(seed):
+    # an elastic wall's spring k on a node it holds: (H + diag(k))_face, springs from
+    # 1e-3 to 1e12 of H's entries, changing node by node as a walk's sets do
+    rng = np.random.default_rng(seed)
+    for _ in range(30):
+        n = int(rng.integers(5, 50))
+        coef = rng.standard_normal((n, 3))
+        coef[:, 1] += 3.0
+        k = rng.uniform(0.5, 2.0, n)
+        H = _dense(coef, k)
+        fac = TwistedFactor(coef, k)
+        fixed = rng.random(n) < 0.2
+        spring = np.where(rng.random(n) < 0.4, 10.0 ** rng.uniform(-3, 12, n), 0.0)
+        for _ in range(8):
+            flip = rng.integers(0, n, size=int(rng.integers(0, 3)))
+            spring[flip] = np.where(spring[flip] > 0, 0.0, 10.0 ** rng.uniform(-3, 12))
+            rhs = rng.standard_normal(n)
+            face = _face(H + np.diag(np.where(fixed, 0.0, spring)), fixed)
+            expected = np.linalg.solve(face, rhs)
+            got = fac.face_solve(fixed, rhs, np.where(fixed, 0.0, spring))
+            assert np.max(np.abs(got - expected)) <= 1e-8 * np.max(np.abs(expected))
+
+
+def test_a_stiff_spring_is_the_fixed_node_in_the_limit():
+    # the rigid wall as k → ∞: the free nodes' solution tends to that of the face with
+    # the node fixed (rhs 0 there), at the rate 1/k
+    rng = np.random.default_rng(3)
+    n = 40
+    coef = rng.standard_normal((n, 3))
+    coef[:, 1] += 3.0
+    k = rng.uniform(0.5, 2.0, n)
+    fac = TwistedFactor(coef, k)
+    held = np.zeros(n, bool)
+    held[[7, 8, 21]] = True
+    rhs = rng.standard_normal(n)
+    rhs[held] = 0.0
+    rigid = fac.face_solve(held, rhs)
+    prev = np.inf
+    for stiff in (1e4, 1e8, 1e12, 1e16):
+        x = fac.face_solve(np.zeros(n, bool), rhs, np.where(held, stiff, 0.0))
+        err = float(np.max(np.abs(x - rigid)))
+        assert err <= 1e2 / stiff + 1e-13 and err <= prev + 1e-15
+        prev = err
+
+
 @pytest.mark.parametrize("n", [2_000, 20_000])
 def test_a_face_change_refactors_locally(n):
     rng = np.random.default_rng(5)

@@ -119,18 +119,21 @@ def test_past_the_vertical_at_n_3000_the_cold_start_fails_without_a_dense_step(d
     assert all(n <= step_solver.MAX_DENSE_FALLBACK for _, n in dense_steps)
 
 
-def test_a_roundoff_stop_past_large_n_without_increments_is_a_reason_not_minutes():
-    """From LARGE_N links a kernel stop for round-off on elastic walls or a profile (no
-    increment formulation takes them) ends the solve with a reason naming the limit,
-    instead of the numpy reference in heights (the same round-off, and O(N³) Lemke
-    fallbacks); a flat rigid chain keeps its increments."""
+def test_a_roundoff_stop_past_large_n_without_increments_is_a_reason_not_minutes(monkeypatch):
+    """From LARGE_N links a kernel stop for round-off on a chain no increment formulation
+    takes (a joint layout other than large_n.layout_fits) ends the solve with a reason
+    naming the limit, instead of the numpy reference in heights (the same round-off,
+    and O(N³) Lemke fallbacks); flat rigid, elastic and profiled walls keep their
+    increments (every wall model is a parameter of the increment assembly)."""
     n = large_n.LARGE_N
     soft = ActuatorScene(theta=150, height=3.0, links=n, wall_stiffness=10.0).chain()
     rigid = ActuatorScene(theta=150, height=3.0, links=n).chain()
+    for chain in (soft, rigid):
+        assert not compiled.beyond_heights(chain, BAIL_REASONS[12])  # increments take it
+    monkeypatch.setattr(large_n, "layout_fits", lambda chain: False)  # another layout
     assert compiled.beyond_heights(soft, BAIL_REASONS[12])
     assert compiled.beyond_heights(soft, BAIL_REASONS[11])
     assert not compiled.beyond_heights(soft, BAIL_REASONS[10])  # crossed walls: not round-off
-    assert not compiled.beyond_heights(rigid, BAIL_REASONS[12])  # increments take it
     small = ActuatorScene(theta=150, height=3.0, links=n - 1, wall_stiffness=10.0).chain()
     assert not compiled.beyond_heights(small, BAIL_REASONS[12])
     out = compiled.out_of_reach(soft, BAIL_REASONS[12])

@@ -56,13 +56,19 @@ def test_solve_refuses_a_frictional_scene_and_names_solve_path():
         lcpbench.solve(scene)
 
 
-def test_friction_with_a_wall_profile_names_what_is_supported():
+def test_friction_with_a_wall_profile_is_taken_and_a_free_end_refused():
+    """Friction, sliders and a pull take a wall profile (docs/friction.md); a free end
+    with one is refused in one line naming what is supported."""
     from lcpbench.problems.walls import WallProfile
 
     wall = WallProfile.from_table([0, 10, 20, 30], [3.0, 2.5, 2.5, 3.0])
     for kw in (dict(friction=0.3, right_end="slider"), dict(right_end="slider"),
                dict(right_end="slider", pull=0.01)):
-        with pytest.raises(ProblemError, match="wall_profile yet: flat walls only") as info:
+        assert ActuatorScene(wall_profile=wall, **kw).frictional
+    for kw in (dict(channel=True, friction=0.3, right_end="free"),
+               dict(channel=True, friction=0.3, left_end="free")):
+        with pytest.raises(ProblemError, match="free end cannot be combined with "
+                                               "wall_profile") as info:
             ActuatorScene(wall_profile=wall, **kw)
         assert "\n" not in str(info.value)
 

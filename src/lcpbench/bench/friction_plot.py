@@ -48,7 +48,9 @@ def plot_friction_forces(res, path):
     ax_t.set_ylabel("tangential force T (mN)")
     ax_t.legend(loc="upper right", fontsize=8)
     mu = f"{mu_up:g}" if mu_up == mu_lo or res.forces_lower is None else f"{mu_up:g}/{mu_lo:g}"
-    fig.suptitle(f"θ = {scene.theta:.4g}°, h = {scene.height:g} mm, μ = {mu}, pull "
+    profile = getattr(scene, "wall_profile", None)
+    wall = f"h = {scene.height:g} mm" if profile is None else f"wall {profile.name}"
+    fig.suptitle(f"θ = {scene.theta:.4g}°, {wall}, μ = {mu}, pull "
                  f"{1e3 * res.pull:.4g} mN, ends {scene.left_end}/{scene.right_end}: "
                  f"ΣN = {1e3 * res.total_force:.4g} mN, ΣT = {float(T.sum()):.4g} mN",
                  fontsize=9)

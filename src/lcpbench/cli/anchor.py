@@ -4,24 +4,26 @@
 
     lcpbench anchor --pressure KPA | --theta DEG --height MM --friction MU [--channel]
                     [--wall-stiffness K] [--sections anchoring] [--json] [--plot F.png]
+                    [--wall-profile F.csv [--lower-profile F.csv] [--profile-kind K]]
 
 Both ends are sliders (held in y, free along x) and the pull acts on the right end;
 :func:`lcpbench.pull_out` follows the pull up to gross slip. The output gives the
 pull-out force P* (N), ΣN over every wall at pull-out (N; at the last state held, whose
-pull ``held_pull`` is just below P*), the capacity Σ μ N there, the
+pull ``held_pull`` is just below P*), the capacity Σ μ N there (against a wall of any
+profile, Σ N (μ t_x − n_x): the pull that gross slip balances), the
 nodes that pass from stick to slip and the number of frictional solves. Exit status 0
 when the pull-out force was found, 1 when not (with the reason), 2 on bad input.
 """
 
 from __future__ import annotations
 
-from dataclasses import asdict, is_dataclass
-
 import numpy as np
 
+from ..model.friction_result import scene_fields
 from ._common import add_json_option, error_line, format_rows, has_matplotlib, print_json
 from ._friction_args import mu_arg
 from ._scene_args import (
+    add_profile_options,
     add_scene_options,
     add_section_options,
     add_wall_stiffness_option,
@@ -40,6 +42,7 @@ def register(subparsers) -> None:
                     "number of frictional solves.")
     add_scene_options(a)
     add_section_options(a)
+    add_profile_options(a)
     add_wall_stiffness_option(a)
     a.add_argument("--friction", type=mu_arg, required=True, metavar="MU",
                    help="Coulomb coefficient of the walls, > 0: one number, or "
@@ -105,7 +108,7 @@ def anchor_json(po, scene, pressure) -> dict:
         "units": {"pull_out_force": "N", "normal_force_total": "N", "capacity": "N",
                   "held_pull": "N", "normal_forces": "N", "tangential_forces": "N", "pressure": "kPa",
                   "stick_to_slip.pull": "N"},
-        "scene": asdict(scene) if is_dataclass(scene) else {},
+        "scene": scene_fields(scene),
     }
 
 
@@ -117,7 +120,9 @@ def summary(po, scene, pressure, plot) -> str:
     events = ", ".join(f"{e['node']} at {1e3 * e['pull']:.4g} mN" for e in _events(po))
     held = f"{1e3 * po.path[-1].pull:.6g} mN" if po.path else "none"
     rows = [
-        ("scene", f"theta={scene.theta:.6g} deg{made}, h={scene.height:g} mm, "
+        ("scene", f"theta={scene.theta:.6g} deg{made}, " + (
+                  f"h={scene.height:g} mm, " if getattr(scene, "wall_profile", None) is None
+                  else f"wall profile {scene.wall_profile.name}, ") +
                   f"N={scene.links}, mu={mu}" + (", channel" if scene.channel else "")
          + (f", wall k={scene.wall_stiffness:g} N/mm per mm"
             if getattr(scene, "wall_stiffness", np.inf) < np.inf else "")
@@ -125,7 +130,9 @@ def summary(po, scene, pressure, plot) -> str:
         ("pull-out force", f"{1e3 * po.force:.6g} mN ({po.force:.6g} N)"),
         ("normal force", f"{1e3 * po.normal_force_total:.6g} mN over every wall, at pull-out "
                          f"(the last state held, pull {held})"),
-        ("capacity", f"{1e3 * po.capacity:.6g} mN (sum of mu N there)"),
+        ("capacity", f"{1e3 * po.capacity:.6g} mN (" + (
+            "sum of mu N there" if getattr(scene, "wall_profile", None) is None else
+            "the pull gross slip balances there: sum of N (mu t_x - n_x)") + ")"),
         ("stick to slip", events or "none between the states held"),
         ("solves", f"{po.solves} frictional"),
         ("converged", ("yes" if po.converged else "no") + f" ({po.reason})"),

@@ -18,6 +18,14 @@ def _kernel():
     return kernel_module("lcpbench.linalg.twisted_kernel")
 
 
+#: no springs on a face (the kernels read an empty array as none)
+NO_SPRING = np.zeros(0)
+
+
+def _springs(root: np.ndarray, n: int) -> np.ndarray:
+    return root if root.size else np.zeros(n)
+
+
 class TwistedFactor(TridiagonalFactor):
     """:class:`TridiagonalFactor` with rows rotated in from both ends (see the kernel).
 
@@ -67,17 +75,21 @@ class TwistedFactor(TridiagonalFactor):
         self.B, self._bfilled, self._bsnap = state["B"], state["bfilled"], state["bsnap"]
         self._invB, self._tri = state["invB"], state["tri"]
         self._m = n // 2
+        self._spring = NO_SPRING  # √k of the springs of the face factored last (none)
         self.rows_touched = 0
         self._walk_work: tuple | None = state["walk_work"]  # walk's (made at first use)
         self._shared = state
 
-    def _twist(self, fixed: np.ndarray) -> tuple[int, int, int]:
+    def _twist(self, fixed: np.ndarray, spring: np.ndarray) -> tuple[int, int, int]:
         """(j0, k0, m): where the two passes restart for the face ``fixed``, and the twist."""
         n = self.n
         if self._fixed is None:
             j0, k0, m = 0, 0, n // 2
         else:
-            changed = np.flatnonzero(fixed != self._fixed)
+            differ = fixed != self._fixed
+            if spring.size or self._spring.size:  # a spring changed is a face changed
+                differ |= _springs(spring, self.n) != _springs(self._spring, self.n)
+            changed = np.flatnonzero(differ)
             if changed.size:
                 j0 = min(int(changed[0]) - 1, self._m)  # the top pass: from its first row
                 k0 = min(n - 2 - int(changed[-1]), n - self._m)  # the bottom's, mirrored
@@ -87,21 +99,31 @@ class TwistedFactor(TridiagonalFactor):
                 j0, k0, m = self._m, n - self._m, self._m
         return j0, k0, m
 
-    def face_solve(self, fixed: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    def face_solve(self, fixed: np.ndarray, rhs: np.ndarray,
+                   spring: np.ndarray | None = None) -> np.ndarray:
+        """x with (H + diag(k))_face x = rhs: the ``fixed`` nodes held (identity rows),
+        ``spring`` (N/mm, 0 where none; None: no springs) the stiffness k_i of the
+        elastic walls' springs on the nodes they hold, rotated in as rows √k e_i
+        (:func:`~.twisted_kernel.factor`: nothing grows with k)."""
         n = self.n
         fixed = np.ascontiguousarray(fixed, dtype=np.bool_)
         if n < 5:  # no room for a twist
+            if spring is not None and np.any(spring > 0):
+                raise ValueError("springs on a face need n >= 5 nodes")
             return super().face_solve(fixed, rhs)
-        j0, k0, m = self._twist(fixed)
+        root = (NO_SPRING if spring is None or not np.any(spring)
+                else np.sqrt(np.ascontiguousarray(spring, dtype=float)))
+        j0, k0, m = self._twist(fixed, root)
         self._fixed = None  # invalid until the factorisation succeeds
         x = np.empty(n)
         ok = _kernel().face_solve(self.rows, self.rrows, fixed, np.ascontiguousarray(fixed[::-1]),
-                                  self.R, self._filled, self._snap, self.B, self._bfilled,
+                                  root, np.ascontiguousarray(root[::-1]) if root.size
+                                  else root, self.R, self._filled, self._snap, self.B, self._bfilled,
                                   self._bsnap, self._tri, self._inv, self._invB, j0, k0, m,
                                   np.ascontiguousarray(rhs, float), x)
         if not ok:
             raise np.linalg.LinAlgError("a face of H is singular (zero pivot)")
-        self._fixed, self._m = fixed.copy(), m
+        self._fixed, self._m, self._spring = fixed.copy(), m, root
         self.rows_touched = (m - j0) + (n - m - k0)
         return x
 
@@ -113,8 +135,8 @@ class TwistedFactor(TridiagonalFactor):
         the walk's last face (``resolve`` solves with it)."""
         from ..numba_cache import kernel_module  # numba: loads or compiles at first use
 
-        if self._fixed is None:
-            raise ValueError("the compiled walk starts after a face solve")
+        if self._fixed is None or self._spring.size:
+            raise ValueError("the compiled walk starts after a face solve without springs")
         n = self.n
         ctl[0] = self._m
         prev, self._fixed = self._fixed, None  # invalid until the walk returns
@@ -131,7 +153,7 @@ class TwistedFactor(TridiagonalFactor):
             *head, f[0], f[1], b[0], b[1], i[:2 * n], i[2 * n:5 * n], i[5 * n:6 * n], f[2],
             i[6 * n:])
         if code != 3:
-            self._fixed, self._m = prev, int(ctl[0])
+            self._fixed, self._m, self._spring = prev, int(ctl[0]), NO_SPRING
         return int(code)
 
     def resolve(self, rhs: np.ndarray) -> np.ndarray:

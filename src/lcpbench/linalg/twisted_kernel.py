@@ -34,10 +34,12 @@ from .face_kernel import restore_before as _restore  # columns beyond: see _pass
 
 
 @njit(cache=True)
-def _pass(rows, fixed, R, filled, snap, j0, m):
-    """Rotate rows j0..m−1 (and the unit rows of fixed nodes ≤ m − 2) into R from the
-    state before row j0 (``snap[j0]``; j0 = 0: from scratch); keeps the state before
-    every row up to m. Only columns < m + 1 are touched."""
+def _pass(rows, fixed, spring, R, filled, snap, j0, m):
+    """Rotate rows j0..m−1 (and the unit rows of fixed nodes ≤ m − 2, the spring rows
+    √k_i e_i of nodes ≤ m − 2 held by an elastic wall: ``spring`` = √k per node, 0 or
+    empty where none) into R from the state before row j0 (``snap[j0]``; j0 = 0: from
+    scratch); keeps the state before every row up to m. Only columns < m + 1 are
+    touched."""
     n = rows.shape[0]
     if j0 <= 0:
         j0 = 0
@@ -54,6 +56,8 @@ def _pass(rows, fixed, R, filled, snap, j0, m):
         save_snapshot(R, filled, snap, j)
         if j >= 1 and fixed[j - 1]:
             rotate_in(R, filled, 1.0, 0.0, 0.0, j - 1)
+        elif j >= 1 and spring.size and spring[j - 1] > 0.0:  # a wall's spring row
+            rotate_in(R, filled, spring[j - 1], 0.0, 0.0, j - 1)
         w0 = rows[j, 0] if (j >= 1 and not fixed[j - 1]) else 0.0
         w1 = rows[j, 1] if not fixed[j] else 0.0
         w2 = rows[j, 2] if (j + 1 < n and not fixed[j + 1]) else 0.0
@@ -87,15 +91,21 @@ def _rot2(T, filled2, a, b):
 
 
 @njit(cache=True)
-def factor(rows, rrows, fixed, rfixed, R, filled, snap, B, bfilled, bsnap, tri,
-           invR, invB, j0, k0, m):
+def factor(rows, rrows, fixed, rfixed, spring, rspring, R, filled, snap, B, bfilled, bsnap,
+           tri, invR, invB, j0, k0, m):
     """The twisted factor of the face ``fixed`` (``rfixed`` = fixed reversed, ``rrows``
-    = the reversed rows): top pass from row j0 to the twist m, bottom pass from
-    reversed row k0 to n − m, the middle triangle. False on a zero pivot."""
+    = the reversed rows) of H + diag(spring²) (``spring``: √k of the elastic walls'
+    springs on the nodes they hold, ``rspring`` reversed; empty: none): top pass from
+    row j0 to the twist m, bottom pass from reversed row k0 to n − m, the middle
+    triangle. False on a zero pivot.
+
+    A spring is a row √k e_i of A, so its stiffness never forms a sum with H's entries:
+    as k → ∞ the Givens rotations take node i's column out of the other rows, the
+    fixed node's limit (the rigid wall), whatever k."""
     n = rows.shape[0]
     mb = n - m
-    _pass(rows, fixed, R, filled, snap, j0, m)
-    _pass(rrows, rfixed, B, bfilled, bsnap, k0, mb)
+    _pass(rows, fixed, spring, R, filled, snap, j0, m)
+    _pass(rrows, rfixed, rspring, B, bfilled, bsnap, k0, mb)
     for i in range(max(j0 - 1, 0), m - 1):
         if not (filled[i] and R[0, i] != 0.0):
             return False
@@ -118,8 +128,12 @@ def factor(rows, rrows, fixed, rfixed, R, filled, snap, B, bfilled, bsnap, tri,
         _rot2(tri, f2, B[0, mb], 0.0)
     if fixed[m - 1]:
         _rot2(tri, f2, 1.0, 0.0)
+    elif spring.size and spring[m - 1] > 0.0:
+        _rot2(tri, f2, spring[m - 1], 0.0)
     if fixed[m]:
         _rot2(tri, f2, 0.0, 1.0)
+    elif spring.size and spring[m] > 0.0:
+        _rot2(tri, f2, 0.0, spring[m])
     return bool(f2[0] and f2[1] and tri[0] != 0.0 and tri[2] != 0.0)
 
 
@@ -181,17 +195,22 @@ def resolve(R, B, tri, invR, invB, m, x):
 
 
 @njit(cache=True)
-def face_solve(rows, rrows, fixed, rfixed, R, filled, snap, B, bfilled, bsnap, tri,
-               invR, invB, j0, k0, m, rhs, x):
-    """x with H_face x = rhs, refined once with the face's residual (H = AᵀA, never
-    the rounded H: the corrected seminormal equations, as :mod:`.face_kernel`)."""
-    if not factor(rows, rrows, fixed, rfixed, R, filled, snap, B, bfilled, bsnap, tri,
-                  invR, invB, j0, k0, m):
+def face_solve(rows, rrows, fixed, rfixed, spring, rspring, R, filled, snap, B, bfilled,
+               bsnap, tri, invR, invB, j0, k0, m, rhs, x):
+    """x with H_face x = rhs (+ the springs, :func:`factor`), refined once with the
+    face's residual (H = AᵀA, never the rounded H: the corrected seminormal equations,
+    as :mod:`.face_kernel`)."""
+    if not factor(rows, rrows, fixed, rfixed, spring, rspring, R, filled, snap, B, bfilled,
+                  bsnap, tri, invR, invB, j0, k0, m):
         return False
     n = rhs.size
     x[:] = rhs
     resolve(R, B, tri, invR, invB, m, x)
     xf = face_residual(rows, fixed, rhs, x)
+    if spring.size:  # the springs' part of the residual: −k x on the nodes they hold
+        for i in range(n):
+            if spring[i] > 0.0 and not fixed[i]:
+                xf[i] -= (spring[i] * spring[i]) * x[i]
     resolve(R, B, tri, invR, invB, m, xf)
     for i in range(n):
         x[i] += xf[i]

@@ -364,8 +364,9 @@ def walk(rows, rrows, R, filled, snap, B, bfilled, bsnap, tri, invR, invB, prev,
             return 2
         ctl[1] += 1
         j0, k0, m = twist_window(chg, ctl, S, prev, n)
-        if not factor(rows, rrows, S, rfixed, R, filled, snap, B, bfilled, bsnap, tri,
-                      invR, invB, j0, k0, m):
+        # the walk holds nodes on rigid walls only: no spring rows (x[:0], empty)
+        if not factor(rows, rrows, S, rfixed, x[:0], x[:0], R, filled, snap, B, bfilled,
+                      bsnap, tri, invR, invB, j0, k0, m):
             return 3
         for k in range(ctl[6]):
             prev[chg[k]] = S[chg[k]]

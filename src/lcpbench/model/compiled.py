@@ -256,9 +256,10 @@ def beyond_heights(chain: Chain, why: str) -> bool:
     """Whether a kernel stop ``why`` at this N is the round-off of the height formulation
     with nothing to take over: from ``LARGE_N`` links, a face not positive definite or
     a round-off stop (:data:`ROUNDOFF_BAILS`), on a chain the increment formulation does
-    not take (elastic walls, wall profiles). The numpy reference in heights meets the
-    same round-off there, and its step solver's dense Lemke fallback is O(N³) (a solve
-    of elastic walls at N = 10⁵ failed after 42 s)."""
+    not take (a joint layout other than :func:`lcpbench.model.large_n.layout_fits`). The
+    numpy reference in heights meets the same round-off there, and its step solver's
+    dense Lemke fallback is O(N³) (a solve of elastic walls at N = 10⁵ failed after
+    42 s before elastic walls ran in increments)."""
     return (chain.links >= large_n.LARGE_N and not large_n.takes(chain)
             and (why in ROUNDOFF_BAILS or why == BAIL_REASONS[11]))
 
@@ -271,8 +272,8 @@ def out_of_reach(chain: Chain, why: str) -> DriverOutput:
     return failed_output(chain.rest_alpha.copy(), chain.free_nodes.size, [],
                          f"the compiled kernel stopped ({why}) at N = {chain.links}: the "
                          f"round-off of the node heights (cond H · ε ≈ {cond:.1e}) is out of "
-                         f"reach there, and elastic walls and wall profiles have no increment "
-                         f"formulation yet (issue 35); N < {large_n.LARGE_N} solves them")
+                         f"reach there, and the increment formulation does not take this "
+                         f"joint layout; N < {large_n.LARGE_N} solves it")
 
 
 def direct(chain: Chain) -> bool:

@@ -24,6 +24,7 @@ from ..solvers.lemke import RESIDUAL_TOL, lemke
 from ..thresholds import NEWTON_SWITCH
 from .chain import alpha_from_heights, node_positions
 from .elastic import compliances
+from .friction_walls import gaps_at, near_walls, tangential_slip, wall_frames, walls_at_x
 
 #: a node within NEAR · a of a wall gets a friction pair in the step (docs/friction.md)
 NEAR = 1e-3
@@ -32,6 +33,16 @@ ROW_BAND = 1.0
 #: the stiffness that holds the translation τ in a step, in EI/ℓ³: a proximal term,
 #: exact at the fixed point (τ = 0 there; docs/friction.md)
 TAU_STIFFNESS = 1.0
+#: against a sloped wall a translation opens or closes the gaps (n_x τ), and with k_τ
+#: soft one step can carry the chain far along x, beyond where its linearised gaps
+#: hold: the step's LCP has a spurious answer beside the one friction holds (every node
+#: off its wall, the chain carried |τ| = P/k_τ away), or steps of ~1 mm that the
+#: gross-slip rule takes for sliding as a whole. A step whose |τ| exceeds TAU_REACH · a
+#: there is solved again with k_τ TAU_STIFFEN times stiffer (a proximal term: the fixed
+#: point does not depend on it), up to TAU_STIFFEN_MAX times (docs/friction.md)
+TAU_REACH = 1.0
+TAU_STIFFEN = 100.0
+TAU_STIFFEN_MAX = 1e6
 #: the stiffness that holds a free end's rotation about the pin in a step, in EI/ℓ per
 #: rad: a proximal term as k_τ (docs/friction.md, free ends)
 ROT_STIFFNESS = 1.0
@@ -224,7 +235,10 @@ class FrictionStep:
 
     ``normal_node``/``normal_sign``: the free node and ∂g/∂y of each wall row;
     ``friction_node``: the node (0..N) of each friction pair; ``pair``: the pair of
-    each wall row; ``mu``: the Coulomb coefficient of each wall row. ``W``,
+    each wall row; ``mu``: the Coulomb coefficient of each wall row; ``normal_xy``,
+    ``tangent_xy``: the wall's normal at each row and tangent at each pair (a wall
+    y = h(x): n = (h', −1)/√(1 + h'²) at an upper wall, (−l', 1)/√(1 + l'²) at a lower
+    one, t = (1, h')/√(1 + h'²); N along n, T along t). ``W``,
     ``g_f``, ``s_f``: the contact quantities (g + N/k, s) = (g_f, s_f) + W (N, T), the
     Siconos fc2d form (an elastic wall's compliance 1/k on W_nn's diagonal, 0 if rigid); ``M``, ``q``: the LCP in units of ℓ and EI/ℓ²
     (``length``, ``force``).
@@ -246,6 +260,10 @@ class FrictionStep:
     length: float
     force: float
     rowed: np.ndarray  # the free nodes with a normal row
+    #: per wall row, the wall's normal n (the direction its gap grows) and per friction
+    #: pair its tangent t, at the nodes' x (flat walls: (0, ∓1) and (1, 0))
+    normal_xy: np.ndarray
+    tangent_xy: np.ndarray
 
     def forces(self, z: np.ndarray):
         """(N, T, δy, τ) in N and mm of an LCP solution z (dimensionless)."""
@@ -333,28 +351,19 @@ def contact_rows(scene: ActuatorScene, chain: Chain, rowed: np.ndarray,
             chain.free_nodes[paired].astype(np.int64))
 
 
-def gaps_at(chain: Chain, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Exact gaps of the free nodes to the upper and lower walls (mm; inf: no wall)."""
-    yf = y[chain.free_nodes]
-    return chain.upper - yf, yf - chain.lower
-
-
-def near_walls(chain: Chain, y: np.ndarray, band: float) -> np.ndarray:
-    """Free nodes within ``band`` · a of a wall (or through it)."""
-    g_up, g_lo = gaps_at(chain, y)
-    return np.minimum(g_up, g_lo) <= band * chain.link_length
-
-
 def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
                     x_prev: np.ndarray, pressed: np.ndarray | None = None,
                     rowed: np.ndarray | None = None, left_pull: float = 0.0,
+                    y_prev: np.ndarray | None = None, tau_stiffening: float = 1.0,
                     newton: bool = False) -> FrictionStep:
     """The frictional contact step of ``scene`` at ``state``, slips from ``x_prev``:
     normal rows for the nodes within ROW_BAND·a of a wall or ``rowed`` before,
     friction pairs for those within NEAR·a or ``pressed`` (bool per free node: a
     normal force in the last step). ``left_pull``: a force along x (N) on the left
     end (a mirrored scene's pull, :mod:`lcpbench.model.friction_mirror`); the left end
-    is the datum, so it loads τ only and has no curvature."""
+    is the datum, so it loads τ only and has no curvature. ``y_prev``: the previous
+    state's node heights (the slip along a sloped wall, :func:`tangential_slip`);
+    ``tau_stiffening``: k_τ's multiple (:data:`TAU_REACH`)."""
     has_tau, right_datum = datum(scene)
     first, n = int(chain.free_nodes[0]), int(chain.free_nodes.size)
     k = step_kernels()
@@ -370,13 +379,15 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
     rot, rot_k = np.empty(0), 0.0
     if r is not None:  # a free end: the rotation about the pin held by ROT_STIFFNESS
         rot, rot_k = r, ROT_STIFFNESS * scene.EI / chain.length / float(r @ r) ** 2
-    k_tau = TAU_STIFFNESS * chain.force_scale / chain.length
+    k_tau = TAU_STIFFNESS * tau_stiffening * chain.force_scale / chain.length
     if has_tau:  # τ: one more unknown, moving every node's x, held by k_τ
         D = np.hstack([D, np.ones((D.shape[0], 1))])
         f = np.append(f, float(scene.pull) + left_pull)
-    g_up, g_lo = gaps_at(chain, y)
-    touching = near_walls(chain, y, NEAR)
-    near = near_walls(chain, y, ROW_BAND)
+    walls = walls_at_x(chain, x)  # (the profile evaluated once per step)
+    s_up, s_lo = walls[2], walls[3]
+    g_up, g_lo = gaps_at(chain, x, y, walls)
+    touching = near_walls(chain, x, y, NEAR, walls)
+    near = near_walls(chain, x, y, ROW_BAND, walls)
     if pressed is not None:
         touching |= pressed
     if rowed is not None:
@@ -384,10 +395,18 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
     touching &= near
     rows, signs, mus, pairs, pair_nodes = contact_rows(scene, chain, near, touching,
                                                        g_up, g_lo)
-    gap = np.where(signs < 0, g_up[rows], g_lo[rows])
-    slip = x[pair_nodes] - x_prev[pair_nodes]
-    W, g_f, s_f, X, ok = k.delassus_form(bands, rot, rot_k, k_tau, f, rows, signs, gap,
-                                         np.ascontiguousarray(D), pair_nodes, slip)
+    # a wall y = h(x): N along its normal, T along its tangent, at the nodes' x (lagged)
+    slope = np.where(signs < 0, s_up[rows], s_lo[rows])
+    normal_xy = wall_frames(signs, slope)
+    gap = np.where(signs < 0, g_up[rows], g_lo[rows]) * np.abs(normal_xy[:, 1])
+    pslope = np.zeros(pair_nodes.size)
+    pslope[pairs[pairs >= 0]] = slope[pairs >= 0]
+    pc = np.sqrt(1.0 + pslope * pslope)
+    tangent_xy = np.column_stack([1.0 / pc, pslope / pc])
+    slip = tangential_slip(x, y, x_prev, y_prev, pair_nodes, pslope)
+    W, g_f, s_f, X, ok = k.delassus_form(bands, rot, rot_k, k_tau, f, rows, normal_xy, gap,
+                                         np.ascontiguousarray(D), pair_nodes, tangent_xy,
+                                         slip, first)
     if not ok:
         raise np.linalg.LinAlgError("the step's matrix is not positive definite")
     # an elastic wall's row: 0 <= N ⟂ g + N/k >= 0, its compliance 1/k (mm/N) on W_nn's
@@ -398,24 +417,29 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
     L, F = chain.length, chain.force_scale
     M, q = k.frictional_lcp(W * (F / L), g_f / L, s_f / L, mus, pairs)
     return FrictionStep(M, q, W, g_f, s_f, X, rows, signs, pair_nodes, pairs, mus, has_tau,
-                        origin, L, F, near)
+                        origin, L, F, near, normal_xy, tangent_xy)
 
 
-def gross_slip(fs: FrictionStep, N: np.ndarray, T: np.ndarray, pull: float) -> bool:
+def gross_slip(fs: FrictionStep, N: np.ndarray, T: np.ndarray, pull: float) -> float:
     """Whether a step of a chain that no end holds in x slides as a whole: every pair
     at its cone (|T| = μN) and the pull beyond what they hold, |P| > Σ μN (so ΣT + P ≠ 0
-    whatever the directions of T). On flat walls the next step is the same one moved
-    along x, so there is no equilibrium (docs/friction.md). Every pair at its cone with
-    |P| <= Σ μN is not that: the tangential forces then oppose each other in part (a
-    chain turning or rolling in a channel), and the step is an iterate on the way to an
-    equilibrium that friction can hold."""
+    whatever the directions of T); returned as the excess |P| − Σ μN (N), 0.0 when not.
+    On flat walls the next step is the same one moved along x, so there is no
+    equilibrium (docs/friction.md). Every pair at its cone with |P| <= Σ μN is not that:
+    the tangential forces then oppose each other in part (a chain turning or rolling in
+    a channel), and the step is an iterate on the way to an equilibrium that friction
+    can hold. Against a wall of any profile, P is P + Σ N n_x and Σ μN is Σ μN t_x."""
     limit = np.zeros(T.size)
     paired = fs.pair >= 0
     np.add.at(limit, fs.pair[paired], (fs.mu * N)[paired])
-    capacity = float(np.sum(limit))
-    scale = max(abs(pull), capacity, 1e-300)
+    # against sloped walls the normal reactions' x parts load the chain along x too, and
+    # friction holds along x only its tangent's x part of μN
+    load = pull + float(fs.normal_xy[:, 0] @ N)
+    capacity = float(limit @ fs.tangent_xy[:, 0])
+    scale = max(abs(load), capacity, 1e-300)
     at_cone = np.all(np.abs(T) >= limit - 1e-9 * scale)
-    return bool(at_cone and abs(pull) > capacity + 1e-9 * scale)
+    excess = abs(load) - capacity
+    return float(excess) if at_cone and excess > 1e-9 * scale else 0.0
 
 
 def damped(chain: Chain, origin: np.ndarray, dy: np.ndarray, alpha: np.ndarray):
@@ -450,8 +474,9 @@ class StateAnswer:
 
 def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, *,
                 tol: float, max_outer: int = 100, lcp=None,
-                left_pull: float = 0.0) -> StateAnswer:
-    """The outer loop of one state from ``start``, slips from ``x_prev`` (docs/friction.md);
+                left_pull: float = 0.0, y_prev: np.ndarray | None = None) -> StateAnswer:
+    """The outer loop of one state from ``start``, slips from ``x_prev`` (and ``y_prev``,
+    the previous node heights, against a wall of any profile; docs/friction.md);
     ``lcp``: the step's solver (default a :class:`StepLemke`); ``left_pull`` as
     :func:`frictional_step`'s."""
     check_frictional_ends(scene)
@@ -465,31 +490,39 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
     sizes: list[float] = []
     N = T = np.zeros(0)
     fs = held = None  # held: the step whose answer N, T are (a failed step is not theirs)
-    pressed, away, it, gross, inexact = None, False, 0, 0, 0
+    pressed, away, it, gross, inexact, excess = None, False, 0, 0, 0, 0.0
+    stiff = TAU_STIFFEN  # k_τ's multiple (:data:`TAU_REACH`)
     for it in range(1, max_outer + 1):
-        try:
-            # Newton on the springs once the last step turned no link by NEWTON_SWITCH;
-            # for the rest of the state not after a Newton step that did not halve
-            # (a cycle: Gauss–Newton's steps then)
-            if newton and len(sizes) >= 2 and sizes[-2] < NEWTON_SWITCH \
-                    and sizes[-1] > 0.5 * sizes[-2]:
-                newton = False
-            fs = frictional_step(scene, chain, state, x_prev, pressed,
-                                 None if fs is None else fs.rowed, left_pull,
-                                 newton and bool(sizes) and sizes[-1] < NEWTON_SWITCH)
-        except np.linalg.LinAlgError as exc:  # (K singular: a link at the vertical)
-            return StateAnswer(state, N, T, held, False, f"contact step {it}: {exc}", it,
-                               sizes, time.perf_counter() - t0, left_pull)
-        # a solver by name (model.friction_solvers.step_runner) takes the whole step
-        sol = lcp(fs) if getattr(lcp, "takes_step", False) else lcp(fs.M, fs.q)
-        # an inexact step only moves the iterate (the judge reads the last one, which
-        # must be SOLVED): go on from it, as the frictionless driver does
-        if not (sol.solved or (sol.status is Status.INACCURATE
-                               and np.all(np.isfinite(sol.z)))):
-            return StateAnswer(state, N, T, held, False, f"contact step {it}: "
-                               f"{sol.status.name} ({sol.message})", it, sizes,
-                               time.perf_counter() - t0, left_pull)
-        N, T, dy, tau = fs.forces(sol.z)
+        # Newton on the springs once the last step turned no link by NEWTON_SWITCH; for
+        # the rest of the state not after a Newton step that did not halve (a cycle)
+        if newton and len(sizes) >= 2 and sizes[-2] < NEWTON_SWITCH \
+                and sizes[-1] > 0.5 * sizes[-2]:
+            newton = False
+        # a step starts one stiffening softer than the last, and is solved again stiffer
+        # where a sloped wall gives the spurious slide (:data:`TAU_REACH`)
+        stiff, rowed = max(1.0, stiff / TAU_STIFFEN), None if fs is None else fs.rowed
+        while True:
+            try:
+                fs = frictional_step(scene, chain, state, x_prev, pressed, rowed, left_pull,
+                                     y_prev, stiff, newton and bool(sizes)
+                                     and sizes[-1] < NEWTON_SWITCH)
+            except np.linalg.LinAlgError as exc:  # (K singular: a link at the vertical)
+                return StateAnswer(state, N, T, held, False, f"contact step {it}: {exc}", it,
+                                   sizes, time.perf_counter() - t0, left_pull)
+            # a solver by name (model.friction_solvers.step_runner) takes the whole step
+            sol = lcp(fs) if getattr(lcp, "takes_step", False) else lcp(fs.M, fs.q)
+            # an inexact step only moves the iterate (the judge reads the last one, which
+            # must be SOLVED): go on from it, as the frictionless driver does
+            if not (sol.solved or (sol.status is Status.INACCURATE
+                                   and np.all(np.isfinite(sol.z)))):
+                return StateAnswer(state, N, T, held, False, f"contact step {it}: "
+                                   f"{sol.status.name} ({sol.message})", it, sizes,
+                                   time.perf_counter() - t0, left_pull)
+            N, T, dy, tau = fs.forces(sol.z)
+            if not (chain.profiled_walls and abs(tau) > TAU_REACH * chain.link_length
+                    and stiff < TAU_STIFFEN_MAX):
+                break
+            stiff *= TAU_STIFFEN
         held = fs
         pressed = np.zeros(chain.free_nodes.size, bool)
         pressed[fs.normal_node[N > 0]] = True
@@ -508,13 +541,19 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
         if right_datum:
             state.x0 = x_right - float(np.sum(chain.link_length * np.cos(alpha)))
         # every node that is now near a wall had its row
-        settled = not np.any(near_walls(chain, state.positions(chain)[1], ROW_BAND) & ~fs.rowed)
-        if (dalpha < tol and abs(tau) < tol * chain.length and paired and settled
+        settled = not np.any(near_walls(chain, *state.positions(chain), ROW_BAND) & ~fs.rowed)
+        # (k_τ τ is the imbalance along x: with k_τ stiffened, τ is held to tol·ℓ/stiff)
+        if (dalpha < tol and abs(tau) * stiff < tol * chain.length and paired and settled
                 and sol.solved):
             return StateAnswer(state, N, T, fs, True, "max|Δα| < tol", it, sizes,
                                time.perf_counter() - t0, left_pull)
-        gross = gross + 1 if has_tau and gross_slip(fs, N, T, float(scene.pull) + left_pull
-                                                    ) else 0
+        ex = gross_slip(fs, N, T, float(scene.pull) + left_pull) if has_tau else 0.0
+        # on a profile the capacity changes as the chain moves: a run of steps at gross
+        # slip counts only while the excess does not shrink (a chain sliding towards
+        # where friction holds it is on its way to an equilibrium; docs/friction.md)
+        gross = (0 if not ex else 1 if chain.profiled_walls and gross
+                 and ex < excess * (1.0 - 1e-9) else gross + 1)
+        excess = ex
         runaway = abs(state.x0 - start.x0) > RUNAWAY * chain.length
         away = runaway or gross >= GROSS_STEPS
         inexact = 0 if sol.solved else inexact + 1

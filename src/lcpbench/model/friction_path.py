@@ -89,21 +89,23 @@ def path_scenes(scene, states) -> list[tuple[dict, ActuatorScene]]:
 
 
 def place(scene, *, tol: float, max_outer: int, solve
-          ) -> tuple[FrictionState, object, str]:
+          ) -> tuple[FrictionState, object, str, object]:
     """Where a path starts: the frictionless equilibrium of ``scene`` (μ = 0, both ends
-    pinned, no pull), its node x (the first slips' reference) and why it failed ("")."""
+    pinned, no pull), its node x, why it failed ("") and its node y (x and y: the first
+    slips' reference)."""
     placed = solve(replace(scene, friction=0.0, left_end="pinned", right_end="pinned",
                            pull=0.0), tol=tol, max_outer=max_outer)
     why = "" if placed.converged else (
         f"the frictionless placement did not converge ({placed.reason})")
-    return FrictionState(placed.alpha.copy(), 0.0), placed.x.copy(), why
+    return FrictionState(placed.alpha.copy(), 0.0), placed.x.copy(), why, placed.y.copy()
 
 
 def advance(scene, state: dict, current: FrictionState, x_prev, *,
-            tol: float, max_outer: int, lcp=None):
-    """One state of a path solved from ``current`` (slips from ``x_prev``): its judged
-    result and the outer loop's end state. A free left end is solved as its mirror
-    image (:mod:`lcpbench.model.friction_mirror`)."""
+            tol: float, max_outer: int, lcp=None, y_prev=None):
+    """One state of a path solved from ``current`` (slips from the previous node
+    positions ``x_prev``, ``y_prev``): its judged result and the outer loop's end state.
+    A free left end is solved as its mirror image (:mod:`lcpbench.model.friction_mirror`;
+    flat walls only, where the slip is along x)."""
     kw = {} if lcp is None else {"lcp": lcp}
     if scene.left_end == "free":
         mirror, left_pull = mirrored_scene(scene)
@@ -112,8 +114,9 @@ def advance(scene, state: dict, current: FrictionState, x_prev, *,
                           max_outer=max_outer, left_pull=left_pull, **kw)
         res = build_result(mirror, state, ans, xm, tol)
         return mirror_result(res, scene, state), mirror_state(ans.state, a)
-    ans = solve_state(scene, current, x_prev, tol=tol, max_outer=max_outer, **kw)
-    return build_result(scene, state, ans, x_prev, tol), ans.state
+    ans = solve_state(scene, current, x_prev, tol=tol, max_outer=max_outer, y_prev=y_prev,
+                      **kw)
+    return build_result(scene, state, ans, x_prev, tol, y_prev), ans.state
 
 
 def run_path(scene, states, *, tol: float, max_outer: int, solve, lcp=None,
@@ -133,13 +136,14 @@ def run_path(scene, states, *, tol: float, max_outer: int, solve, lcp=None,
             out.append(from_contact(s, state, res, x_prev))
             x_prev = res.x
         return out
-    current, x_prev, broken = place(steps[0][1], tol=tol, max_outer=max_outer, solve=solve)
+    current, x_prev, broken, y_prev = place(steps[0][1], tol=tol, max_outer=max_outer,
+                                            solve=solve)
     name = getattr(lcp, "backend", "lemke" if lcp is None else "given")
     lcp = StepLemke() if lcp is None else lcp  # one for the path: its covering carries over
     out = []
     for state, s in steps:
         res, end = advance(s, state, current, x_prev, tol=tol,
-                           max_outer=0 if broken else max_outer, lcp=lcp)
+                           max_outer=0 if broken else max_outer, lcp=lcp, y_prev=y_prev)
         if broken:
             res.converged, res.reason = False, broken
         res.solver = name
@@ -147,5 +151,5 @@ def run_path(scene, states, *, tol: float, max_outer: int, solve, lcp=None,
         if not res.converged and not broken:
             broken = f"an earlier state did not converge ({res.reason})"
         if not broken:
-            current, x_prev = end, res.x.copy()
+            current, x_prev, y_prev = end, res.x.copy(), res.y.copy()
     return out

@@ -18,7 +18,8 @@ from ..problems.scenes import ActuatorScene, Chain
 from ..thresholds import NODE_SHARE
 from .chain import node_positions
 from .elastic import compliances
-from .friction_driver import StateAnswer, datum, frictional_chain, gaps_at
+from .friction_driver import StateAnswer, datum, frictional_chain
+from .friction_walls import gaps_at, tangential_slip, wall_frames, walls_at_x
 from .judge import SLIP_FACTOR, SLIP_FLOOR, force_tol, penetration_allowed
 from .result import ContactResult
 
@@ -31,7 +32,9 @@ class FrictionResult:
     reaction of the upper wall, N), ``forces_lower`` (the lower wall's, channel only),
     ``tangential_forces`` (T, N, on the chain along +x), ``slip`` (mm, x − x at the
     previous state) and ``stick`` (True: in contact, N > the judge's ε, and not
-    sliding, |slip| <= the judge's ε_s). ``total_force``: ΣN over every wall.
+    sliding, |slip| <= the judge's ε_s). ``total_force``: ΣN over every wall. Against a
+    wall of any profile N is along the wall's normal (its vertical part is N/√(1 + h'²)),
+    T and the slip along its tangent (docs/friction.md, walls of any profile).
     ``route``: "frictionless" (today's :func:`lcpbench.solve`, kept in ``contact``)
     or "frictional" (:mod:`lcpbench.model.friction_driver`). ``judgement``: the
     friction checks' numbers and ``fails``, the checks that failed.
@@ -69,7 +72,7 @@ class FrictionResult:
 
     def to_dict(self) -> dict:
         """A JSON-ready summary (N, mm)."""
-        scene = asdict(self.scene) if is_dataclass(self.scene) else {}
+        scene = scene_fields(self.scene)
         return sanitise({
             "scene": scene, "state": self.state, "route": self.route, "solver": self.solver,
             "converged": self.converged, "reason": self.reason,
@@ -80,6 +83,15 @@ class FrictionResult:
             "outer_iterations": self.outer_iterations, "tol": self.tol,
             "time_s": self.time_s, "judgement": self.judgement,
         })
+
+
+def scene_fields(scene) -> dict:
+    """The scene's fields for JSON: a wall profile as its name and x range."""
+    out = asdict(scene) if is_dataclass(scene) and not isinstance(scene, type) else {}
+    for key in ("wall_profile", "lower_profile"):
+        if out.get(key) is not None:
+            out[key] = getattr(scene, key).to_dict()
+    return out
 
 
 def from_contact(scene, state: dict, res: ContactResult, x_prev: np.ndarray | None
@@ -110,14 +122,16 @@ def _checks():
 
 def friction_verdict(scene: ActuatorScene, chain: Chain, alpha: np.ndarray, x0: float,
                    fy: np.ndarray, fx: np.ndarray, normal: np.ndarray, limit: np.ndarray,
-                   gap: np.ndarray, slip: np.ndarray, tol: float, left_pull: float = 0.0
-                   ) -> dict:
+                   gap: np.ndarray, slip: np.ndarray, tol: float, left_pull: float = 0.0,
+                   tangential: np.ndarray | None = None) -> dict:
     """The friction checks of an answer (docs/friction.md, the judge): numbers and fails;
     ``left_pull``: a force along x on the left end (a mirrored scene's pull). ``gap``:
     per wall row, the compliant gap g + N/k at an elastic wall (the Winkler law
     N = k (y − h)₊ holds when it is 0 where N > 0), the gap g at a rigid one; the
     penetration allowance is the frictionless judge's (:func:`~.judge.penetration_allowed`,
-    with ε_R/k at an elastic wall)."""
+    with ε_R/k at an elastic wall). ``fx``, ``fy``: the wall forces on each free node
+    (N); ``tangential``: T along the wall's tangent, per free node (``fx`` when None: flat
+    walls), and ``slip`` the tangential slip, for the cone and stick/slip checks."""
     tau = force_tol(tol)
     F0 = max(abs(float(np.sum(normal))), chain.force_scale, abs(float(scene.pull)),
              abs(left_pull))
@@ -128,7 +142,8 @@ def friction_verdict(scene: ActuatorScene, chain: Chain, alpha: np.ndarray, x0: 
     stats = kern.friction_checks(
         alpha, float(x0), chain.link_length, chain.joint_links[:, 0].astype(np.int64),
         chain.joint_links[:, 1].astype(np.int64), chain.joint_stiffness, chain.rest_joint,
-        chain.link_load, chain.free_nodes.astype(np.int64), fy, fx, normal, limit, gap, slip,
+        chain.link_load, chain.free_nodes.astype(np.int64), fy, fx,
+        fx if tangential is None else tangential, normal, limit, gap, slip,
         float(scene.pull), right_datum, scene.right_end != "free", eps_f, eps_s, chain.length,
         F0, float(left_pull))
     v = dict(zip(kern.FRICTION_STATS, (float(s) for s in stats)))
@@ -156,8 +171,11 @@ def friction_verdict(scene: ActuatorScene, chain: Chain, alpha: np.ndarray, x0: 
 
 
 def build_result(scene: ActuatorScene, state: dict, ans: StateAnswer, x_prev: np.ndarray,
-                 tol: float) -> FrictionResult:
-    """A judged :class:`FrictionResult` from the outer loop's answer."""
+                 tol: float, y_prev: np.ndarray | None = None) -> FrictionResult:
+    """A judged :class:`FrictionResult` from the outer loop's answer; slips from the
+    previous node positions ``x_prev``, ``y_prev`` (``y_prev`` needed against a sloped
+    wall only). Against a wall y = h(x) the normal force N acts along the wall's normal
+    and T along its tangent at the answer's x (docs/friction.md, walls of any profile)."""
     chain = frictional_chain(scene)
     alpha, x0 = ans.state.alpha, ans.state.x0
     x, y = node_positions(chain, alpha)
@@ -172,16 +190,27 @@ def build_result(scene: ActuatorScene, state: dict, ans: StateAnswer, x_prev: np
         T[fs.friction_node - chain.free_nodes[0]] = ans.tangential
         paired = fs.pair >= 0
         np.add.at(limit, fs.normal_node[paired], (fs.mu * ans.normal)[paired])
+    # the walls' slopes at the answer's x: N along the normal, T along the tangent of the
+    # wall each node's row is on (the upper one for a node without a row: T = 0 there)
+    _, _, s_up, s_lo = walls_at_x(chain, x)
+    on_lower = np.zeros(n, bool)
+    if fs is not None and ans.normal.size:
+        on_lower[fs.normal_node[fs.normal_sign > 0]] = True
+    slope = np.where(on_lower, s_lo, s_up)
+    n_up, n_lo = wall_frames(-np.ones(n), s_up), wall_frames(np.ones(n), s_lo)
+    c = np.sqrt(1.0 + slope * slope)
+    fx = up * n_up[:, 0] + lo * n_lo[:, 0] + T / c
+    fy = up * n_up[:, 1] + lo * n_lo[:, 1] + T * slope / c
     # every wall row, both walls of a channel: the exact gaps and the normal forces
-    g_up, g_lo = gaps_at(chain, y)
+    g_up, g_lo = gaps_at(chain, x, y)
     rows_up, rows_lo = np.isfinite(g_up), np.isfinite(g_lo)
     normal = np.concatenate([up[rows_up], lo[rows_lo]])
     c_up, c_lo = compliances(chain)  # elastic walls: the compliant gap g + N/k
     gap = (np.concatenate([g_up[rows_up], g_lo[rows_lo]])
            + np.concatenate([c_up[rows_up], c_lo[rows_lo]]) * np.maximum(normal, 0.0))
-    slip = x[chain.free_nodes] - x_prev[chain.free_nodes]
-    verdict = friction_verdict(scene, chain, alpha, x0, lo - up, T, normal, limit, gap, slip,
-                               tol, ans.left_pull)
+    slip = tangential_slip(x, y, x_prev, y_prev, chain.free_nodes, slope)
+    verdict = friction_verdict(scene, chain, alpha, x0, fy, fx, normal, limit, gap, slip,
+                               tol, ans.left_pull, T)
     converged = ans.converged and not verdict["fails"]
     reason = ans.reason if not ans.converged else (
         "max|Δα| < tol; judged" if converged else "judge: " + ", ".join(verdict["fails"]))

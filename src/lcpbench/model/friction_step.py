@@ -14,6 +14,11 @@ slips' Jacobians. Eliminating δ leaves the contact quantities affine in the for
 fc2d form), and the LCP w = M z + q, 0 <= z ⟂ w >= 0, in z = (N, β⁺, β⁻, λ) with
 T = β⁺ − β⁻ (:func:`frictional_lcp`); M is not symmetric.
 
+Against a wall y = h(x) (a profile), N acts along the wall's normal and T along its
+tangent t = (1, h')/√(1 + h'²), both at the nodes' current x (lagged: fixed within a
+step): a row's gap and a pair's slip are the normal and tangential parts of the
+node's displacement, whose x part is the dense row D of :func:`slip_jacobian`.
+
 Each function is ``@njit(cache=True)``; with NUMBA_DISABLE_JIT=1 they run as plain
 Python. The driver (:mod:`lcpbench.model.friction_driver`) calls these.
 """
@@ -122,24 +127,35 @@ def step_arrays(alpha, a, jl, jr, k, rest, fs, n, nodal_load, pull, right_datum,
 
 
 @njit(cache=True)
-def _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_sign, D, friction_node):
+def _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, D, friction_node,
+                   tangent_xy, first):
     """(B, X = K⁻¹ B) with B = [G_n | G_t | f] (n × (m_n + m_t + 1)) and K the step's
     matrix: H in lower band storage (``bands``), plus ``rot_k`` r rᵀ when ``rot`` = r
     is not empty (a free end's rotation about the pin), plus k_τ on τ when ``f`` has
     one more entry than H has rows. With both ends held in y, H is positive definite
     and banded: a banded LDLᵀ (:mod:`lcpbench.linalg.ldl_kernel`), O(n) per column.
     A free end's H is singular on the rotation and H + k r rᵀ is dense: solved
-    dense. ok False when K is not positive definite (a link at the vertical)."""
+    dense. ok False when K is not positive definite (a link at the vertical).
+
+    A wall row r's column is n_x D[node] + n_y e_node (``normal_xy[r]`` = (n_x, n_y):
+    the direction in which its gap grows, the wall's normal), a friction pair c's is
+    t_x D[node] + t_y e_node (``tangent_xy[c]``: the wall's tangent); on flat walls
+    n = (0, ∓1) and t = (1, 0). ``first``: the node of the first free height."""
     n = f.size
     ny = bands.shape[1]
     mn, mt = normal_node.size, friction_node.size
     cols = mn + mt + 1
     BT = np.zeros((cols, n))
     for r in range(mn):
-        BT[r, normal_node[r]] = normal_sign[r]
+        BT[r, normal_node[r]] = normal_xy[r, 1]
+        if normal_xy[r, 0] != 0.0:
+            for j in range(n):
+                BT[r, j] += normal_xy[r, 0] * D[first + normal_node[r], j]
     for c in range(mt):
         for j in range(n):
-            BT[mn + c, j] = D[friction_node[c], j]
+            BT[mn + c, j] = tangent_xy[c, 0] * D[friction_node[c], j]
+        if tangent_xy[c, 1] != 0.0:
+            BT[mn + c, friction_node[c] - first] += tangent_xy[c, 1]
     for j in range(n):
         BT[mn + mt, j] = f[j]
     XT = BT.copy()
@@ -169,19 +185,21 @@ def _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_sign, D, fri
 
 
 @njit(cache=True)
-def delassus_form(bands, rot, rot_k, k_tau, f, normal_node, normal_sign, gap, D,
-                  friction_node, slip):
+def delassus_form(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, gap, D,
+                  friction_node, tangent_xy, slip, first):
     """The contact quantities as affine functions of the forces (docs/friction.md):
 
     (g, s) = (g_f, s_f) + W (N, T), W = Gᵀ K⁻¹ G (K: :func:`_solve_columns`). Returns W
     ((m_n+m_t)²), the free parts g_f, s_f, X = K⁻¹ [G_n | G_t | f] to recover
     δy = X (N, T, 1), and whether K was positive definite. ``normal_node`` /
-    ``normal_sign``: the free node and ∂g/∂y (−1 upper, +1 lower) of each wall row;
-    ``friction_node``: the node (0..N) of each friction pair.
+    ``normal_xy``: the free node and the wall's normal n (the direction in which the
+    gap grows: (0, −1) at a flat upper wall, (0, 1) at a flat lower one) of each wall
+    row; ``friction_node``, ``tangent_xy``: the node (0..N) and the wall's tangent t of
+    each friction pair (:func:`_solve_columns`; ``first``: the first free node).
     """
     mn, mt = normal_node.size, friction_node.size
-    B, X, ok = _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_sign, D,
-                              friction_node)
+    B, X, ok = _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, D,
+                              friction_node, tangent_xy, first)
     m = mn + mt
     BX = np.ascontiguousarray(B.T) @ X
     W = np.ascontiguousarray(BX[:m, :m])

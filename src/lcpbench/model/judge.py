@@ -102,7 +102,7 @@ from . import large_n
 from .chain import heights
 from .elastic import compliances
 from .judge_large import primal_step
-from .profile import has_profile, node_x, profile_step, walls_at
+from .profile import has_profile, node_x, profile_step, slope_load, walls_at
 from .step import ContactStep, assemble_step
 
 #: in increments (large N) the single pivots are capped at 2 × this many, not 2 per node:
@@ -241,8 +241,8 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
     # N = 1e5)
     height_size = step.length_scale if step.factor is None else _wall_size(step)
     cap = PIVOT_ROUNDS + 2 * (step.size if step.factor is None else LARGE_ROUNDS)
-    if step.factor is not None:  # increments (large N): one change at a time (judge_large)
-        return _large_step(step, up, lo, pull, height_size, cap)
+    if step.factor is not None and not step.elastic:  # increments (large N), rigid walls:
+        return _large_step(step, up, lo, pull, height_size, cap)  # one change at a time
     for rounds in range(1, cap + 1):
         # a node on a rigid wall is held on it; on an elastic wall it stays free, held
         # by the wall's spring k (u − h) (model.elastic): a banded solve all the same
@@ -256,7 +256,14 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
         free = np.flatnonzero(~(hard_up | hard_lo))
         if free.size:
             try:
-                if np.any(spring[free] > 0):  # elastic walls (never large N): banded
+                if np.any(spring[free] > 0) and step.factor is not None:  # large N: the
+                    # springs as rows of the twisted factor (nothing grows with k)
+                    fixed = hard_up | hard_lo
+                    for _ in range(2):  # solve, then refine with the factored gradient
+                        grad = step.gradient(u) + spring * (u - rest)
+                        grad[fixed] = 0.0
+                        u -= step.factor.face_solve(fixed, grad, spring)
+                elif np.any(spring[free] > 0):  # elastic walls: banded
                     bands = sub_bands(step.bands, free)
                     bands[0] += spring[free]
                     for _ in range(2):  # solve, then refine with the factored gradient
@@ -348,7 +355,14 @@ def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0,
     if has_profile(chain):
         n = chain.free_nodes.size
         up_lo = forces if forces is not None else (np.zeros(n), np.zeros(n))
-        step, chain = profile_step(chain, alpha, *up_lo)
+        if large_n.applies(chain):  # the profile step in increments (as the driver's)
+            at = walls_at(chain, alpha)
+            s = slope_load(chain, alpha, *(np.maximum(f, 0.0) for f in up_lo))
+            step = large_n.increments_at(chain, alpha, walls=(at.lower, at.upper),
+                                         load=chain.nodal_load + s)
+            chain = at
+        else:
+            step, chain = profile_step(chain, alpha, *up_lo)
     elif large_n.applies(chain):  # in increments, on the tridiagonal factor
         step = large_n.increments_at(chain, alpha)
     else:

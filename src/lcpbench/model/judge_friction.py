@@ -21,15 +21,16 @@ FRICTION_STATS = ("spring_max", "max_torque_residual", "x_balance", "cone_excess
 
 
 @njit(cache=True)
-def friction_checks(alpha, x0, a, jl, jr, k, rest, link_load, free, fy, fx, normal, limit,
-                    gap, slip, pull, right_x_held, right_y_held, eps_f, eps_s, L, F0,
-                    left_pull):
+def friction_checks(alpha, x0, a, jl, jr, k, rest, link_load, free, fy, fx, tangential,
+                    normal, limit, gap, slip, pull, right_x_held, right_y_held, eps_f, eps_s,
+                    L, F0, left_pull):
     """The frictional answer's residuals on the exact geometry: the torque residual with
     the nodes' vertical fy and horizontal fx forces (N, per free node), the pull P on
     the right end (and ``left_pull`` along x on the left end: a mirrored scene's) and
     the supports' reactions (the right one's vertical from moments
     about node 1 when it holds y, its horizontal when it holds x); the horizontal balance ΣF_x (what no
-    support takes); per node the cone max(|T| − μN), and for nodes that slide
+    support takes); per node, in the wall's frame (``tangential``: T along the wall's
+    tangent, ``slip``: the tangential slip, ``limit``: μN), the cone max(|T| − μN), and for nodes that slide
     (|s| > eps_s) the cone deficit μN − |T| and T·sign(s) (<= 0: T opposes the slip);
     the largest |s| of a node inside the cone by more than eps_f; the smallest gap
     (in ℓ), normal force and max min(N/F₀, g/ℓ) over the wall rows."""
@@ -82,7 +83,7 @@ def friction_checks(alpha, x0, a, jl, jr, k, rest, link_load, free, fy, fx, norm
     out[0], out[1], out[2] = spring_max, worst, sx
     cone = deficit = direction = stick = 0.0
     for i in range(fx.size):
-        T = fx[i]
+        T = tangential[i]
         cone = max(cone, abs(T) - limit[i])
         if abs(slip[i]) > eps_s:
             deficit = max(deficit, limit[i] - abs(T))

@@ -31,7 +31,8 @@ def primal_step(step, up: np.ndarray, lo: np.ndarray, *, slack_of, reach_of, cap
 
     ``slack_of(u)``: per node, the pull that releases a wall; ``reach_of(u)``: per
     node, the depth through a wall that joins it (both as the block pivoting uses).
-    Rigid walls only (large N has no elastic walls).
+    Rigid walls only (elastic walls at large N take the block pivoting of
+    :func:`lcpbench.model.judge._pivot_step`, its springs in the twisted factor).
     """
     up, lo = up.copy(), lo.copy()
     hi_w, lo_w = step.upper, step.lower

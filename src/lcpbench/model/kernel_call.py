@@ -26,6 +26,7 @@ from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from ..solvers.judge import requested
 from ..solvers.registry import DEFAULT, get_settings
+from . import large_n
 from .outer import (
     DriverOutput,
     DriverStart,
@@ -77,8 +78,11 @@ def profile_applies(backend: str, method: str, chain: Chain) -> bool:
     """Whether the profile kernel (:func:`lcpbench.model.profile_kernel.solve_profile_chain`)
     runs this solve: the default back-end, the globalised scheme, a chain of consecutive
     joints and free nodes with a wall of any profile whose table of cubic pieces exists
-    (:meth:`lcpbench.problems.walls.WallProfile.pieces`)."""
+    (:meth:`lcpbench.problems.walls.WallProfile.pieces`), below large N
+    (:func:`lcpbench.model.large_n.applies`: there the increments take profiles)."""
     if backend not in (DEFAULT, "auto") or method != "globalised" or not chain.profiled_walls:
+        return False
+    if large_n.applies(chain):
         return False
     return chain.derived("_profile_layout",
                          lambda: _consecutive(chain) and profile_args(chain) is not None)

@@ -251,7 +251,8 @@ def _block_solve(rows, idx, a, b, grad, u2):
         full[idx[q] - r0] = grad[idx[q]]
     rfixed = fixed[::-1].copy()
     x = np.empty(nb)
-    ok = _face_solve(sub, rsub, fixed, rfixed, np.empty((3, nb)), np.empty(nb, np.bool_),
+    ok = _face_solve(sub, rsub, fixed, rfixed, x[:0], x[:0], np.empty((3, nb)),
+                     np.empty(nb, np.bool_),
                      np.empty((nb, 4)), np.empty((3, nb)), np.empty(nb, np.bool_),
                      np.empty((nb, 4)), np.zeros(3), np.empty(nb), np.empty(nb), 0, 0,
                      nb // 2, full, x)

@@ -60,9 +60,12 @@ def layout_fits(chain: Chain) -> bool:
 
 
 def takes(chain: Chain) -> bool:
-    """Whether the increment formulation takes the chain at all: rigid, flat walls
-    (elastic walls and wall profiles keep their own steps) and :func:`layout_fits`."""
-    return not (chain.elastic_walls or chain.profiled_walls) and layout_fits(chain)
+    """Whether the increment formulation takes the chain at all: :func:`layout_fits`.
+    Every wall model is a parameter of its assembly (:func:`increments_at`): rigid or
+    elastic walls (their springs in the step's face solves,
+    :mod:`lcpbench.solvers.spring_newton`), flat or of any profile (the walls at the
+    nodes' x and the lagged slope load, :mod:`.large_driver`)."""
+    return layout_fits(chain)
 
 
 def applies(chain: Chain) -> bool:
@@ -182,7 +185,8 @@ class IncrementStep(ContactStep):
     def compiled_residuals(self, u: np.ndarray):
         """step_residuals' ``(residuals, R)`` in one compiled call
         (:func:`~lcpbench.model.large_kernel.residuals`, independent of the walk), or
-        None (the numpy reference decides). Rigid walls only, as every step here."""
+        None (the numpy reference decides). Rigid walls only: with elastic walls the
+        numpy reference (its compliant gaps g + R/k)."""
         if self.upper_stiffness is not None or self.lower_stiffness is not None:
             return None
         ok, res, R = _kernel().residuals(
@@ -264,12 +268,19 @@ class StepWork:
         self.factor_state: dict = {}  # TwistedFactor.from_rows's arrays, once made
 
 
-def increments_at(chain: Chain, alpha: np.ndarray, work: StepWork | None = None
-                  ) -> IncrementStep:
+def increments_at(chain: Chain, alpha: np.ndarray, work: StepWork | None = None, *,
+                  walls: tuple[np.ndarray, np.ndarray] | None = None,
+                  load: np.ndarray | None = None) -> IncrementStep:
     """``increment_step(assemble_step(chain, alpha))`` in one compiled pass (a chain of
     :func:`applies`), its face solves on the twisted factor; the same numbers. ``work``:
-    the arrays to write (:class:`StepWork`; default: new ones)."""
-    k, rest, load, lower, upper, _, base, sk = _chain_arrays(chain)
+    the arrays to write (:class:`StepWork`; default: new ones). A wall profile's step
+    (:func:`lcpbench.model.profile.profile_step`) gives ``walls`` = (lower, upper), the
+    profile at the nodes' x, and ``load``, the nodal load f plus the slope load s of
+    the lagged reactions; elastic walls' springs ride on the chain."""
+    k, rest, load0, lower, upper, _, base, sk = _chain_arrays(chain)
+    if walls is not None:
+        lower, upper = (np.ascontiguousarray(w, dtype=float) for w in walls)
+    load = load0 if load is None else np.ascontiguousarray(load, dtype=float)
     alpha = np.array(alpha, dtype=float)
     nl = alpha.size
     if work is None:

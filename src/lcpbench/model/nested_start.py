@@ -77,8 +77,15 @@ def coarse_chain(chain: Chain, links: int) -> Chain:
         free_nodes=np.arange(1, links),
         upper=chain.upper[near].copy(),
         lower=chain.lower[near].copy(),
+        # elastic walls: a node's spring is k times its share of wall, ∝ its link length
+        upper_stiffness=_resampled(chain.upper_stiffness, near, ac / a),
+        lower_stiffness=_resampled(chain.lower_stiffness, near, ac / a),
         consecutive=True,
     )
+
+
+def _resampled(stiffness: np.ndarray | None, near: np.ndarray, ratio: float):
+    return None if stiffness is None else np.asarray(stiffness, float)[near] * ratio
 
 
 def interpolated_start(chain: Chain, coarse: Chain, out: DriverOutput) -> DriverStart | None:
@@ -87,14 +94,15 @@ def interpolated_start(chain: Chain, coarse: Chain, out: DriverOutput) -> Driver
     Its node heights are the cubic spline in arc length through the coarse node
     heights (:func:`_spline`; both pins on y = 0, and a coarse node on a wall puts the
     fine node at its arc length on it when N is a multiple of N_c), clipped to the
-    fine walls; α is their exact inverse kinematics (on the branch of the coarse link
+    fine walls where they are rigid; α is their exact inverse kinematics (on the branch of the coarse link
     angles). The coarse contact nodes, mapped to the nearest fine nodes, are the warm
     contact set. None when no chain of the fine links has those heights."""
     n, nc = chain.links, coarse.links
     yc = np.zeros(nc + 1)
     yc[coarse.free_nodes] = heights(coarse, out.alpha)
-    u = np.clip(_spline(yc, np.arange(n + 1) * (nc / n))[chain.free_nodes],
-                chain.lower, chain.upper)
+    u = _spline(yc, np.arange(n + 1) * (nc / n))[chain.free_nodes]
+    if not chain.elastic_walls:  # (an elastic wall's nodes indent it)
+        u = np.clip(u, chain.lower, chain.upper)
     ref = np.interp((np.arange(n) + 0.5) / n, (np.arange(nc) + 0.5) / nc, out.alpha)
     alpha = alpha_from_heights(chain, u, ref)
     if alpha is None:

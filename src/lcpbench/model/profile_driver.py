@@ -32,7 +32,8 @@ import numpy as np
 from ..problems.scenes import Chain
 from ..solvers.base import Status
 from ..thresholds import GEOMETRY_SLACK, LOCAL_CUT, NEWTON_SWITCH, PENALTY, START_PASSES
-from .chain import alpha_from_heights, energy, heights, node_positions
+from .chain import alpha_from_heights, heights, node_positions
+from .chain import energy as chain_energy
 from .judge import split_reactions
 from .newton import newton_step
 from .outer import (
@@ -49,7 +50,7 @@ from .outer import (
 from .profile import profile_gaps, profile_step, walls_at
 
 
-def _penetration(chain: Chain, alpha: np.ndarray) -> float:
+def penetration(chain: Chain, alpha: np.ndarray) -> float:
     up, lo = profile_gaps(chain, alpha)
     rows_up = np.isfinite(chain.upper)
     worst = max(0.0, -float(np.min(up[rows_up], initial=np.inf)))
@@ -59,13 +60,14 @@ def _penetration(chain: Chain, alpha: np.ndarray) -> float:
     return worst
 
 
-def _merit(chain: Chain, alpha: np.ndarray, mu_up: np.ndarray, mu_lo: np.ndarray,
-           sigma: float) -> float:
+def merit(chain: Chain, alpha: np.ndarray, mu_up: np.ndarray, mu_lo: np.ndarray,
+          sigma: float, energy: float | None = None) -> float:
     """P = E − Σ μ̄ h(x_k) + Σ ν̄ l(x_k) + σ·Σ(penetration of the exact walls) (N·mm):
-    one forward kinematics and one evaluation of each profile."""
+    one forward kinematics and one evaluation of each profile. ``energy``: E given
+    (the large-N driver adds its compensated E itself, 0 here); None: computed."""
     x, y = node_positions(chain, alpha)
     xf, yf = x[chain.free_nodes], y[chain.free_nodes]
-    total = energy(chain, alpha)
+    total = chain_energy(chain, alpha) if energy is None else energy
     for prof, mu, limit, sign in ((chain.upper_profile, mu_up, chain.upper, 1.0),
                                   (chain.lower_profile, mu_lo, chain.lower, -1.0)):
         rows = np.isfinite(limit)
@@ -91,7 +93,7 @@ def _clipped(chain: Chain, alpha0: np.ndarray):
     return u, alpha
 
 
-def _profile_start(chain: Chain, alpha0: np.ndarray):
+def profile_start(chain: Chain, alpha0: np.ndarray):
     """The clipped shape of ``alpha0``; where a steep wall makes clipping tear the
     chain (neighbours more than a apart), the unconstrained arc flattened by
     halves until its clipped shape is a chain (the arc's angles scaled by 2^-k: a
@@ -110,7 +112,7 @@ def run_profile_driver(chain: Chain, solver, *, tol: float, max_outer: int, meth
     n = chain.free_nodes.size
     steps: list[StepRecord] = []
     undamped = method == "undamped"
-    u, alpha, warm = starting_point(chain, start, _profile_start)
+    u, alpha, warm = starting_point(chain, start, profile_start)
     if alpha is None:
         return failed_output(chain.rest_alpha.copy(), n, steps, "cannot fit the chain between the walls")
     mu_up, mu_lo = np.zeros(n), np.zeros(n)
@@ -118,7 +120,7 @@ def run_profile_driver(chain: Chain, solver, *, tol: float, max_outer: int, meth
         mu_up, mu_lo = split_reactions(walls_at(chain, alpha), warm.forces_net, u)
     ell = chain.length
     for _ in range(max_outer):
-        E = energy(chain, alpha)
+        E = chain_energy(chain, alpha)
         step, at = profile_step(chain, alpha, mu_up, mu_lo)
         near = method == "newton" and bool(steps) and steps[-1].max_dalpha < NEWTON_SWITCH
         t0 = time.perf_counter()
@@ -148,14 +150,14 @@ def run_profile_driver(chain: Chain, solver, *, tol: float, max_outer: int, meth
                                   if sol.forces_net is not None else 0.0,
                                   float(np.max(mu_up, initial=0.0)),
                                   float(np.max(mu_lo, initial=0.0)), chain.force_scale)
-            phi = _merit(chain, alpha, mu_up, mu_lo, sigma)
-            violation = (phi - _merit(chain, alpha, mu_up, mu_lo, 0.0)) / sigma
+            phi = merit(chain, alpha, mu_up, mu_lo, sigma)
+            violation = (phi - merit(chain, alpha, mu_up, mu_lo, 0.0)) / sigma
             slope = float(step.gradient(u) @ d) - sigma * violation
             noise = 1e-12 * (abs(phi) + float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6)
             while True:
                 trial = alpha_from_heights(chain, u + t * d, alpha)
                 if trial is not None:
-                    phi_t = _merit(chain, trial, mu_up, mu_lo, sigma)
+                    phi_t = merit(chain, trial, mu_up, mu_lo, sigma)
                     if phi_t <= phi + 1e-4 * t * min(slope, 0.0) + noise:
                         break
                 t *= 0.5
@@ -173,11 +175,11 @@ def run_profile_driver(chain: Chain, solver, *, tol: float, max_outer: int, meth
             new_u = u + t * d
         u, alpha = new_u, trial
         steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
-                                t, dalpha, energy(chain, alpha), step_setup_time(sol)))
+                                t, dalpha, chain_energy(chain, alpha), step_setup_time(sol)))
         warm = sol
         net = sol.forces_net
         if net is not None and np.all(np.isfinite(net)):
             mu_up, mu_lo = split_reactions(at, net, sol.u)
-        if dalpha < tol and _penetration(chain, alpha) <= GEOMETRY_SLACK * ell:
+        if dalpha < tol and penetration(chain, alpha) <= GEOMETRY_SLACK * ell:
             return converged_output(walls_at(chain, alpha), alpha, sol, steps, step)
     return out_of_iterations(alpha, n, steps, max_outer, tol)

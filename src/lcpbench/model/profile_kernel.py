@@ -73,7 +73,7 @@ __all__ = ["CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "solve_profile_cha
 @njit(cache=True)
 def merit_parts(alpha, sines, cosines, chain, walls, mu_up, mu_lo, at):
     """(E − Σ μ̄ h(x) + Σ ν̄ l(x), the penetration of the exact walls summed) at α: the
-    merit P's two parts (model.profile_driver._merit: P = first + σ second).
+    merit P's two parts (model.profile_driver.merit: P = first + σ second).
     ``chain`` = (a, jl, jr, k, rest, link_load, fs); ``walls`` = (hi_rows, lo_rows, ku,
     cu_, kl, cl_); ``at``: the scratch rows of :func:`walls_at` (written)."""
     a, jl, jr, k, rest, link_load, fs = chain
@@ -154,7 +154,7 @@ def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, f
         mu_up[:] = 0.0
         mu_lo[:] = 0.0
         scale = 1.0
-        while not ok and scale > 1e-6:  # the arc flattened by halves (_profile_start)
+        while not ok and scale > 1e-6:  # the arc flattened by halves (profile_driver.profile_start)
             ok = _clipped(scale * rest_alpha, a, fs, walls, alpha, u, sin_a, cos_a, at)
             scale *= 0.5
     if not ok:

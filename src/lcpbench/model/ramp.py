@@ -50,8 +50,8 @@ MAX_STEPS = 72
 #: its outer steps in the link angles (where they are in reach)
 NEAR_VERTICAL_DEG = 10.0
 #: the SQP steps a step of the path may take: a step of 10° from the last answer takes
-#: 5-8 (rows of 3-4 sections, N = 420); a dense SQP step at N = 560 in a channel costs
-#: seconds, so one that does not converge gives way to the height steps early
+#: 5-8 (rows of 3-4 sections, N = 420); one that does not converge in 12 gives way to
+#: the height steps
 PATH_ANGLE_STEPS = 12
 
 

@@ -23,6 +23,7 @@ import numpy as np
 
 from ..errors import ProblemError
 from ..linalg import banded_matvec
+from ..solvers import spring_newton
 from ..solvers.base import BoxQP, QPWarm, Settings, Status, StepSolution
 from ..solvers.judge import EPS, accept_tol, requested, verdict
 from ..solvers.lemke import too_large
@@ -337,6 +338,8 @@ def _judge(step, sol: StepSolution, s: Settings) -> None:
 def _run_step(backend: Backend, step, s: Settings, scaled: bool, warm) -> StepSolution:
     mod = backend.load()
     n = step.size
+    if step.elastic and backend.name == DEFAULT and spring_newton.takes(step):
+        return spring_newton.solve_step(step, warm)  # in increments (large N)
     if step.elastic:
         return run_elastic_step(backend, mod, step, s, scaled, warm)
     if hasattr(mod, "solve_step"):

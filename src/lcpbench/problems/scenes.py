@@ -299,10 +299,9 @@ class ActuatorScene(FrictionOptions):
 
     def _check_friction(self) -> None:
         self._check_friction_options()
-        if self.frictional and self.wall_profile is not None:
-            raise ProblemError("friction, a slider or free end, or a pull cannot be combined "
-                               "with wall_profile yet: flat walls only (rigid, or elastic "
-                               "with wall_stiffness)")
+        if self.wall_profile is not None and "free" in (self.left_end, self.right_end):
+            raise ProblemError("a free end cannot be combined with wall_profile yet: with a "
+                               "wall of any profile the ends are 'pinned' or 'slider'")
 
     def _check_profiles(self) -> None:
         for name in ("wall_profile", "lower_profile"):

@@ -71,10 +71,22 @@ class PullOut:
 
 
 def capacity(res: FrictionResult) -> float:
-    """C = Σ μ_i N_i over every wall (N)."""
+    """C = Σ μ_i N_i over every wall (N); against a wall y = h(x) (a profile) the pull
+    that gross slip along +x balances, Σ N_i (μ_i t_x,i − n_x,i) = Σ N_i (μ_i ∓ h'_i) /
+    √(1 + h'_i²) (− at the upper wall, + at the lower; h' at the nodes' x): the normal
+    reactions' x parts take a share of the pull too (docs/friction.md)."""
     mu_up, mu_lo = res.scene.wall_friction
-    lower = 0.0 if res.forces_lower is None else mu_lo * float(np.sum(res.forces_lower))
-    return mu_up * float(np.sum(res.forces)) + lower
+    walls = getattr(res.scene, "profiles", (None, None))
+    xf = res.x[1:1 + res.forces.size]
+
+    def share(N, mu, profile, side):
+        if profile is None:
+            return mu * float(np.sum(N))
+        h1 = profile.slope(xf)
+        return float(np.sum(N * (mu + side * h1) / np.sqrt(1.0 + h1 * h1)))
+
+    lower = 0.0 if res.forces_lower is None else share(res.forces_lower, mu_lo, walls[1], 1.0)
+    return share(res.forces, mu_up, walls[0], -1.0) + lower
 
 
 def _check(scene) -> ActuatorScene | SectionedScene:
@@ -119,7 +131,7 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
     max_solves = int(check_number("max_solves", max_solves, low=2, high=1000, integer=True))
     if scene.pull < 0:
         raise ProblemError(f"pull_out starts from pull >= 0, got {scene.pull!r}")
-    current, x_prev, why = place(scene, tol=tol, max_outer=max_outer, solve=solve)
+    current, x_prev, why, y_prev = place(scene, tol=tol, max_outer=max_outer, solve=solve)
     if why:
         return PullOut(np.nan, np.nan, np.zeros(0), np.zeros(0), np.nan, False, why, 0)
     path, held, events, solves, ends = [], [], [], 0, []
@@ -127,7 +139,7 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
     P, fail, trouble, before = float(scene.pull), None, "", np.inf
     while solves < max_solves:
         res, end = advance(replace(scene, pull=P), {"pull": P}, predicted(ends, P, current),
-                           x_prev, tol=tol, max_outer=max_outer, lcp=lcp)
+                           x_prev, tol=tol, max_outer=max_outer, lcp=lcp, y_prev=y_prev)
         solves += 1
         if res.converged:
             if path:
@@ -135,7 +147,7 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
                 events += [(int(j), P) for j in np.flatnonzero(slid)]
             path.append(res)
             held.append((P, capacity(res) - P))
-            current, x_prev = end, res.x.copy()
+            current, x_prev, y_prev = end, res.x.copy(), res.y.copy()
             ends.append((P, end))
         elif not path:
             return PullOut(np.nan, np.nan, np.zeros(0), np.zeros(0), np.nan, False,
