@@ -93,14 +93,15 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
     path = fractions(scene)
     if not path:
         return None, engine, "the scene has no bend angle to follow from zero"
-    # the SQP's reactions stand in for the built-in back-end's steps only
-    angles_ok = backend == DEFAULT and method != "undamped"
+    # the SQP's reactions stand in for the built-in back-end's steps only; its reach
+    # (walls, layout, N) is the same at every s
+    angles_ok = backend == DEFAULT and method != "undamped" and in_reach(scene.chain())
     start, used, out, in_angles = None, engine, None, 0
     for k, s in enumerate(path):
         chain = scene.chain_at(s)  # every bend angle θ scaled to s·θ; s = 1: the scene's
         kw = dict(backend=backend, settings=settings, engine=engine, tol=tol,
                   max_outer=max_outer, method=method)
-        angles = angles_ok and start is not None and in_reach(chain)
+        angles = angles_ok and start is not None
         sqp = _in_angles(chain, start, tol, max_outer) \
             if angles and start is not None and near_vertical(start.alpha) else None
         if sqp is None:

@@ -251,7 +251,15 @@ class SectionedScene(FrictionOptions):
         return replace(self, links=links)
 
     def section_links(self) -> np.ndarray:
-        """n_k, the links of each section (ints summing to N), or ProblemError."""
+        """n_k, the links of each section (ints summing to N), or ProblemError. Found once
+        per scene and kept (read only)."""
+        kept = self.__dict__.get("_section_links")
+        if kept is None:
+            kept = self.__dict__["_section_links"] = self._fit_links()  # (frozen: not setattr)
+            kept.setflags(write=False)
+        return kept
+
+    def _fit_links(self) -> np.ndarray:
         n, total = self._size()
         share = np.array([n * s.length / total for s in self.sections])
         counts = np.rint(share)
@@ -302,8 +310,9 @@ class SectionedScene(FrictionOptions):
         return cached
 
     def __getstate__(self) -> dict:
-        """Pickled without the kept Chain (rebuilt on demand)."""
-        return {k: v for k, v in self.__dict__.items() if k != "_chain"}
+        """Pickled without the kept Chain and section links (rebuilt on demand)."""
+        return {k: v for k, v in self.__dict__.items()
+                if k not in ("_chain", "_section_links")}
 
     def chain_at(self, fraction: float) -> Chain:
         """The chain of the row with every bend angle θ_k scaled to s·θ_k (``fraction`` s):
