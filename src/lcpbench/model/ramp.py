@@ -26,9 +26,11 @@ back-end solves, a step that starts with a link within :data:`NEAR_VERTICAL_DEG`
 the vertical (|cos α_i| ≤ sin 10°), or whose height steps did not converge and left
 one there, takes outer steps in α instead (:func:`lcpbench.model.heavy_driver.run_heavy`, the same
 SQP as a heavy chain's), where every angle is regular; its answer is judged as every
-answer. The SQP starts from the last step's angles with its wall reactions (and closure
-multiplier λ, where the SQP found it) as first multipliers, so its first QP starts from
-the last active set (the ±174° row: 0–1 active-set changes instead of 69).
+answer. The SQP starts from the last step's angles and, where the SQP found that
+answer, its multipliers (wall reactions and closure λ), so its first QP starts from the
+last active set (the ±174° row: 0–1 active-set changes). The height steps' reactions
+are not handed on: tol-accurate, they are small but positive on many walls (71 where
+the SQP's answer presses on 1: 69 changes).
 """
 
 from __future__ import annotations
@@ -120,8 +122,12 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
             return None, used, (f"the loading path stopped at {s:.3g} of the bend angles "
                                 f"(step {k + 1} of {len(path)}{_told(in_angles)}): "
                                 f"{out.reason}")
-        start = DriverStart(out.alpha, out.last_step, (out.closure_multiplier or 0.0,
-                                                       out.forces_upper, out.forces_lower))
+        # the SQP's own multipliers start the next SQP's QP; the height steps' reactions
+        # (tol-accurate, on many walls with R ≈ 0) would start it on walls it then drops
+        sqp_made = out.closure_multiplier is not None
+        start = DriverStart(out.alpha, out.last_step,
+                            (out.closure_multiplier, out.forces_upper, out.forces_lower)
+                            if sqp_made else None)
     return out, used, f"followed the load from zero in {len(path)} steps{_told(in_angles)}"
 
 
