@@ -17,6 +17,7 @@ import pytest
 import lcpbench
 from lcpbench.model import angle_kernel as ak
 from lcpbench.model.angle_step import solve_in_angles
+from lcpbench.model.chain import node_positions
 from lcpbench.model.energy_reference import minimise_energy
 from lcpbench.problems.sections import SectionedScene
 
@@ -144,3 +145,20 @@ def test_two_sections_at_174_degrees_agree_with_the_energy_minimum(links):
     assert res.converged, res.reason
     assert abs(res.total_force - np.sum(ref.forces)) <= 1e-9 * scale
     assert np.max(np.abs(res.y - ref.y)) <= 1e-9 * scene.length
+
+
+def test_a_start_from_a_neighbours_answer_and_multipliers_reaches_the_energy_minimum():
+    # the loading path's warm start (model.ramp): the answer at 0.95 θ, its angles and
+    # reactions (and λ) the first iterate and multipliers; the oracle is SLSQP on the energy
+    scene = SectionedScene(sections=[(174.0, 15.0), (-174.0, 15.0)], height=2.02, links=20)
+    ref = minimise_energy(scene)
+    assert ref.success, ref.message
+    scale = scene.EI / scene.length**2
+    near = solve_in_angles(scene.chain_at(0.95), tol=1e-12)
+    assert near.converged, near.reason
+    out = solve_in_angles(scene.chain(), tol=1e-12, start=near.alpha,
+                          multipliers=(near.closure, near.forces_upper, near.forces_lower))
+    assert out.converged, out.reason
+    assert abs(np.sum(out.forces_upper) - np.sum(ref.forces)) <= 1e-9 * scale
+    y = node_positions(scene.chain(), out.alpha)[1]
+    assert np.max(np.abs(y - ref.y)) <= 1e-9 * scene.length

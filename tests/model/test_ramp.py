@@ -6,6 +6,8 @@ second-order test). Scenes whose cold start fails: past 180° in a channel (the
 issue's grid) and rows of sections with large signed angles (the issue's kind), some
 of whose links pass the vertical along the path."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 from energy_oracle import fd_kkt_residual, fd_unstable_directions
@@ -14,7 +16,7 @@ import lcpbench
 from lcpbench.errors import ProblemError
 from lcpbench.model import ramp
 from lcpbench.model.compiled import drive
-from lcpbench.model.ramp import NEAR_VERTICAL_DEG, STEP_DEG, at_fraction, fractions, near_vertical
+from lcpbench.model.ramp import NEAR_VERTICAL_DEG, STEP_DEG, fractions, near_vertical
 from lcpbench.model.step_solver import make_step_solver
 from lcpbench.problems.sections import SectionedScene
 from lcpbench.solvers.registry import DEFAULT
@@ -54,8 +56,21 @@ def test_the_path_ends_at_the_scene_in_steps_of_at_most_ten_degrees():
                   for s in [0.0, *path]]
         steps = np.diff(np.array(thetas), axis=0)
         assert np.all(steps <= STEP_DEG + 1e-9)
-    scaled = at_fraction(SectionedScene(sections=[(-80, 30.0), (154, 30.0)]), 0.5)
-    assert [s.theta for s in scaled.sections] == [-40.0, 77.0]
+
+
+
+def test_a_step_of_the_path_is_the_chain_of_the_row_at_the_scaled_bend_angles():
+    # property: the row's chain at s = 1/2 is the chain of the row built with θ/2
+    scaled = SectionedScene(sections=[(-80, 30.0), (154, 30.0)]).chain_at(0.5)
+    built = SectionedScene(sections=[(-40, 30.0), (77, 30.0)]).chain()
+    for f in dataclasses.fields(built):
+        got, want = getattr(scaled, f.name), getattr(built, f.name)
+        if isinstance(want, np.ndarray):
+            np.testing.assert_allclose(got, want, rtol=1e-15, atol=1e-15, err_msg=f.name)
+        else:
+            assert got == want, f.name
+    whole = SectionedScene(sections=[(-80, 30.0), (154, 30.0)])
+    assert whole.chain_at(1.0) is whole.chain()
 
 
 @pytest.mark.parametrize("scene", [

@@ -239,6 +239,7 @@ def _solve_qp(bd, off, c, grad, y, pinned, node, side, limit, mu, gap_tol):
         if mu[r] > 0.0 and not fixed[node[r]]:
             act[r], fixed[node[r]], value[node[r]] = True, True, limit[r] - y[node[r]]
     changes = 0
+    solved = False  # whether d, ν, v, R are the KKT solve of the present fixed set
     for _ in range(GUESSES):  # primal-dual guesses of the active set: many changes a solve
         ok, d, nu, v, R = kkt_solve(bd, off, c, fixed, value, minus_grad, zero_v)
         if not ok:
@@ -251,12 +252,15 @@ def _solve_qp(bd, off, c, grad, y, pinned, node, side, limit, mu, gap_tol):
             elif not act[r] and not fixed[j] and _gap(r, y, v, node, side, limit) < -gap_tol:
                 act[r], fixed[j], value[j], moved = True, True, limit[r] - y[j], True
         if not moved:
+            solved = True
             break
         changes += 1
     while True:  # the warm set's walls with negative multipliers dropped, most negative first
-        ok, d, nu, v, R = kkt_solve(bd, off, c, fixed, value, minus_grad, zero_v)
-        if not ok:
-            return SINGULAR, d, lam_out, u, changes, fixed
+        if not solved:
+            ok, d, nu, v, R = kkt_solve(bd, off, c, fixed, value, minus_grad, zero_v)
+            if not ok:
+                return SINGULAR, d, lam_out, u, changes, fixed
+        solved = False
         worst, low = -1, 0.0
         for r in range(nw):
             if act[r]:
@@ -264,6 +268,7 @@ def _solve_qp(bd, off, c, grad, y, pinned, node, side, limit, mu, gap_tol):
                 if u[r] < low:
                     worst, low = r, u[r]
         if worst < 0:
+            solved = True
             break
         act[worst], fixed[node[worst]], u[worst] = False, False, 0.0
         changes += 1
@@ -275,6 +280,10 @@ def _solve_qp(bd, off, c, grad, y, pinned, node, side, limit, mu, gap_tol):
                 s = _gap(r, y, v, node, side, limit)
                 if s < low:
                     p, low = r, s
+        if p < 0 and solved:  # no step since the last solve: that is the QP's answer
+            if pinned:
+                lam_out[0] = lam_now
+            return OK, d, lam_out, u, changes, fixed
         if p < 0:  # the QP's answer: once more from its active set, to round-off
             ok, d2, nu2, v2, R2 = kkt_solve(bd, off, c, fixed, value, minus_grad, zero_v)
             good = ok
@@ -290,7 +299,7 @@ def _solve_qp(bd, off, c, grad, y, pinned, node, side, limit, mu, gap_tol):
             if pinned:
                 lam_out[0] = lam_now
             return OK, d, lam_out, u, changes, fixed
-        up = 0.0
+        up, solved = 0.0, False
         rhs_v = np.zeros(n + 1)
         rhs_v[node[p]] = -side[p]
         while True:  # Goldfarb-Idnani: move toward wall p, dropping walls whose μ reaches 0

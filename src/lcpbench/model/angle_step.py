@@ -65,6 +65,7 @@ class AngleOutcome:
     reason: str
     forces_upper: np.ndarray | None = None  # the wall multipliers per free node (N)
     forces_lower: np.ndarray | None = None
+    closure: float = 0.0  # λ, the closure's multiplier (the right pin's vertical reaction, N)
 
 
 def load_parameter(chain: Chain) -> float:
@@ -134,6 +135,18 @@ class _Problem:
         return self.side * (self.limit - y[self.node])
 
 
+def _first_multipliers(p: _Problem, multipliers) -> tuple[np.ndarray, np.ndarray]:
+    """(λ, μ per wall row) to start from: ``multipliers`` (λ, R upper, R lower per free
+    node), reactions below zero read as 0; zero where None."""
+    if multipliers is None:
+        return np.zeros(1), np.zeros(p.free.size)
+    lam, upper, lower = multipliers
+    n_up = int(np.count_nonzero(p.side > 0))
+    mu = np.concatenate((np.asarray(upper, float)[p.free[:n_up]],
+                         np.asarray(lower, float)[p.free[n_up:]]))
+    return np.array([float(lam) if p.pinned else 0.0]), np.maximum(mu, 0.0)
+
+
 def _start(chain: Chain) -> np.ndarray:
     u = np.clip(heights(chain, chain.rest_alpha), chain.lower, chain.upper)
     alpha = alpha_from_heights(chain, u, chain.rest_alpha)
@@ -141,8 +154,13 @@ def _start(chain: Chain) -> np.ndarray:
 
 
 def solve_in_angles(chain: Chain, *, tol: float = 1e-10, max_iter: int = 30,
-                    start: np.ndarray | None = None) -> AngleOutcome:
+                    start: np.ndarray | None = None,
+                    multipliers: tuple | None = None) -> AngleOutcome:
     """The equilibrium of ``chain`` by SQP steps in the link angles α.
+
+    ``multipliers``: (λ, R upper, R lower per free node) of a neighbouring answer (a
+    step of the loading path), the first step's multipliers: its walls with R > 0 start
+    the QP's active set. None: all zero.
 
     Stops when a full step moved α by less than ``tol`` (rad) with the
     constraints met to round-off, or after ``max_iter`` steps. Never raises on
@@ -151,8 +169,7 @@ def solve_in_angles(chain: Chain, *, tol: float = 1e-10, max_iter: int = 30,
     p = _Problem(chain)
     kern = kernel_module("lcpbench.model.angle_kernel", "qp_step")
     alpha = _start(chain) if start is None else np.array(start, float)
-    lam = np.zeros(1)
-    mu = np.zeros(p.free.size)
+    lam, mu = _first_multipliers(p, multipliers)
     sizes: list = []
     energies: list = []
     near = False
@@ -210,6 +227,7 @@ def solve_in_angles(chain: Chain, *, tol: float = 1e-10, max_iter: int = 30,
             upper, lower = np.zeros(n), np.zeros(n)
             upper[p.free[p.side > 0]] = mu[p.side > 0]
             lower[p.free[p.side < 0]] = mu[p.side < 0]
-            return AngleOutcome(alpha, True, sizes, energies, "converged", upper, lower)
+            return AngleOutcome(alpha, True, sizes, energies, "converged", upper, lower,
+                                float(lam[0]))
     return AngleOutcome(alpha, False, sizes, energies,
                         f"no convergence in {max_iter} angle steps")

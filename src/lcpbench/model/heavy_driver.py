@@ -39,14 +39,16 @@ def no_contact(out: DriverOutput) -> bool:
 def run_heavy(chain: Chain, start: DriverStart | None, tol: float,
               max_outer: int, *, why: str = "a heavy chain") -> DriverOutput | None:
     """The driver's output for a heavy chain, or None when the angle steps did not
-    converge within ``max_outer`` (and :data:`ANGLE_STEPS`). ``why`` the SQP ran, for
+    converge within ``max_outer`` (and :data:`ANGLE_STEPS`). The SQP starts from
+    ``start``'s angles and multipliers where it has them. ``why`` the SQP ran, for
     the output's reason (also a step of the loading path with a link near the
     vertical, :mod:`lcpbench.model.ramp`)."""
     if max_outer <= 0:
         return None
     begin = None if start is None else np.asarray(start.alpha, float)
     outcome = solve_in_angles(chain, tol=min(ANGLE_TOL, tol),
-                              max_iter=min(ANGLE_STEPS, max_outer), start=begin)
+                              max_iter=min(ANGLE_STEPS, max_outer), start=begin,
+                              multipliers=None if start is None else start.multipliers)
     if not outcome.converged:
         return None
     records = [StepRecord(0, "solved", 0.0, 0.0, 1.0, s, e)
@@ -56,4 +58,5 @@ def run_heavy(chain: Chain, start: DriverStart | None, tol: float,
     reason = (f"no contact: the equilibrium clears every wall (found by SQP steps in the "
               f"link angles: {why})" if free
               else f"converged (SQP steps in the link angles: {why})")
-    return DriverOutput(outcome.alpha, up, lo, True, reason, records)
+    return DriverOutput(outcome.alpha, up, lo, True, reason, records,
+                        closure_multiplier=outcome.closure)

@@ -56,6 +56,8 @@ class DriverOutput:
     # the back-end's own multipliers of the last step, kept beside R for comparison
     multipliers_upper: np.ndarray | None = None
     multipliers_lower: np.ndarray | None = None
+    # λ, the closure's multiplier, where the SQP in the link angles found the answer
+    closure_multiplier: float | None = None
 
 
 @dataclass
@@ -63,11 +65,14 @@ class DriverStart:
     """Where a continuation starts: a neighbouring scene's answer (same chain size).
 
     ``alpha`` are its link angles; ``warm`` its last contact step, handed to
-    back-ends that accept a warm start.
+    back-ends that accept a warm start; ``multipliers`` its (λ, R upper, R lower per
+    free node), the first multipliers and active set of the SQP in the link angles
+    (:func:`lcpbench.model.angle_step.solve_in_angles`), λ = 0 where unknown.
     """
 
     alpha: np.ndarray
     warm: StepSolution | None = None
+    multipliers: tuple | None = None
 
 
 def failed_output(alpha, n, steps, reason) -> DriverOutput:

@@ -8,9 +8,9 @@ trouble. Their equilibria, pressed flat by the walls, often have no link near th
 vertical at all: only the start is bad.
 
 :func:`follow_load` solves the scene at the fractions s = d, 2d, …, 1 of its rest
-curvature (every section's θ times s), each started from the previous answer (a
-continuation, as ``start=`` of :func:`lcpbench.solve`), with d such that no
-section's θ moves by more than :data:`STEP_DEG` degrees a step (at most
+curvature (every section's θ times s: the scene's ``chain_at(s)``), each started from
+the previous answer (a continuation, as ``start=`` of :func:`lcpbench.solve`), with d
+such that no section's θ moves by more than :data:`STEP_DEG` degrees a step (at most
 :data:`MAX_STEPS` steps). The answer at s = 1 is judged by the caller like every
 answer. It is also the state the loading path reaches, where a scene has several
 stable states.
@@ -26,13 +26,16 @@ back-end solves, a step that starts with a link within :data:`NEAR_VERTICAL_DEG`
 the vertical (|cos α_i| ≤ sin 10°), or whose height steps did not converge and left
 one there, takes outer steps in α instead (:func:`lcpbench.model.heavy_driver.run_heavy`, the same
 SQP as a heavy chain's), where every angle is regular; its answer is judged as every
-answer.
+answer. The SQP starts from the last step's angles and, where the SQP found that
+answer, its multipliers (wall reactions and closure λ), so its first QP starts from the
+last active set (the ±174° row: 0–1 active-set changes). The height steps' reactions
+are not handed on: tol-accurate, they are small but positive on many walls (71 where
+the SQP's answer presses on 1: 69 changes).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 
@@ -64,14 +67,6 @@ def rest_angles(scene) -> list[float] | None:
     return None if theta is None else [theta]
 
 
-def at_fraction(scene, s: float):
-    """The scene with every bend angle θ scaled to s·θ."""
-    if hasattr(scene, "sections"):
-        return replace(scene, sections=tuple(replace(x, theta=s * x.theta)
-                                             for x in scene.sections))
-    return replace(scene, theta=s * scene.theta)
-
-
 def fractions(scene) -> list[float]:
     """The load fractions of the path, the last one 1; [] where nothing is scaled."""
     angles = rest_angles(scene)
@@ -100,15 +95,15 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
     path = fractions(scene)
     if not path:
         return None, engine, "the scene has no bend angle to follow from zero"
-    # the SQP's reactions stand in for the built-in back-end's steps only
-    angles_ok = backend == DEFAULT and method != "undamped"
+    # the SQP's reactions stand in for the built-in back-end's steps only; its reach
+    # (walls, layout, N) is the same at every s
+    angles_ok = backend == DEFAULT and method != "undamped" and in_reach(scene.chain())
     start, used, out, in_angles = None, engine, None, 0
     for k, s in enumerate(path):
-        step_scene = scene if k == len(path) - 1 else at_fraction(scene, s)
-        chain = step_scene.chain()
+        chain = scene.chain_at(s)  # every bend angle θ scaled to s·θ; s = 1: the scene's
         kw = dict(backend=backend, settings=settings, engine=engine, tol=tol,
                   max_outer=max_outer, method=method)
-        angles = angles_ok and start is not None and in_reach(chain)
+        angles = angles_ok and start is not None
         sqp = _in_angles(chain, start, tol, max_outer) \
             if angles and start is not None and near_vertical(start.alpha) else None
         if sqp is None:
@@ -127,7 +122,12 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
             return None, used, (f"the loading path stopped at {s:.3g} of the bend angles "
                                 f"(step {k + 1} of {len(path)}{_told(in_angles)}): "
                                 f"{out.reason}")
-        start = DriverStart(out.alpha, out.last_step)
+        # the SQP's own multipliers start the next SQP's QP; the height steps' reactions
+        # (tol-accurate, on many walls with R ≈ 0) would start it on walls it then drops
+        sqp_made = out.closure_multiplier is not None
+        start = DriverStart(out.alpha, out.last_step,
+                            (out.closure_multiplier, out.forces_upper, out.forces_lower)
+                            if sqp_made else None)
     return out, used, f"followed the load from zero in {len(path)} steps{_told(in_angles)}"
 
 

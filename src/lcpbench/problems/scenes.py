@@ -365,6 +365,14 @@ class ActuatorScene(FrictionOptions):
             self.__dict__["_chain"] = cached  # (a frozen dataclass: not via setattr)
         return cached
 
+    def chain_at(self, fraction: float) -> Chain:
+        """The chain with the bend angle θ scaled to s·θ (``fraction`` s): a step of the
+        loading path (:mod:`lcpbench.model.ramp`); s = 1 gives :meth:`chain` itself. Built
+        as the scene at s·θ: a wall profile's rows and heights follow the arc's x."""
+        if fraction == 1.0:
+            return self.chain()
+        return replace(self, theta=fraction * self.theta).chain()
+
     def __getstate__(self) -> dict:
         """Pickled without the kept Chain (rebuilt on demand)."""
         return {k: v for k, v in self.__dict__.items() if k != "_chain"}

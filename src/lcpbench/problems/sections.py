@@ -251,7 +251,15 @@ class SectionedScene(FrictionOptions):
         return replace(self, links=links)
 
     def section_links(self) -> np.ndarray:
-        """n_k, the links of each section (ints summing to N), or ProblemError."""
+        """n_k, the links of each section (ints summing to N), or ProblemError. Found once
+        per scene and kept (read only)."""
+        kept = self.__dict__.get("_section_links")
+        if kept is None:
+            kept = self.__dict__["_section_links"] = self._fit_links()  # (frozen: not setattr)
+            kept.setflags(write=False)
+        return kept
+
+    def _fit_links(self) -> np.ndarray:
         n, total = self._size()
         share = np.array([n * s.length / total for s in self.sections])
         counts = np.rint(share)
@@ -267,9 +275,10 @@ class SectionedScene(FrictionOptions):
         ends = np.concatenate(([0], np.cumsum(self.section_links())))
         return [(int(ends[k]), int(ends[k + 1])) for k in range(len(self.sections))]
 
-    def rest_alpha(self) -> np.ndarray:
-        """Link angles α* of the unconstrained row, chord levelled (rad), or ProblemError."""
-        th = [math.radians(s.theta) for s in self.sections]
+    def rest_alpha(self, fraction: float = 1.0) -> np.ndarray:
+        """Link angles α* of the unconstrained row, chord levelled (rad), or ProblemError;
+        with every bend angle θ_k scaled to s·θ_k (``fraction`` s) where given."""
+        th = [math.radians(fraction * s.theta) for s in self.sections]
         counts = self.section_links()
         turn = th[0] if len(th) == 1 else math.fsum(th)  # θ > 0 turns clockwise
         before, parts = 0.0, []
@@ -301,22 +310,40 @@ class SectionedScene(FrictionOptions):
         return cached
 
     def __getstate__(self) -> dict:
-        """Pickled without the kept Chain (rebuilt on demand)."""
-        return {k: v for k, v in self.__dict__.items() if k != "_chain"}
+        """Pickled without the kept Chain and section links (rebuilt on demand)."""
+        return {k: v for k, v in self.__dict__.items()
+                if k not in ("_chain", "_section_links")}
+
+    def chain_at(self, fraction: float) -> Chain:
+        """The chain of the row with every bend angle θ_k scaled to s·θ_k (``fraction`` s):
+        a step of the loading path (:mod:`lcpbench.model.ramp`). Only the rest shape
+        (α*, φ*) depends on θ: the other arrays are the whole row's (:meth:`chain`,
+        read only), and s = 1 gives that chain itself."""
+        whole = self.chain()
+        if fraction == 1.0:
+            return whole
+        return replace(whole, rest_alpha=self.rest_alpha(fraction),
+                       rest_joint=self._rest_joint(fraction))
+
+    def _rest_joint(self, fraction: float = 1.0) -> np.ndarray:
+        """Rest joint angles φ* (rad), minus the mean of the two links' turns θ_k/n_k, with
+        every θ_k scaled to s·θ_k (``fraction`` s)."""
+        counts = self.section_links()
+        turn = np.repeat([math.radians(fraction * s.theta) / m
+                          for s, m in zip(self.sections, counts, strict=True)],
+                         counts)  # θ_k/n_k per link
+        return -(0.5 * (turn[:-1] + turn[1:]))
 
     def _build_chain(self) -> Chain:
         n, total = self._size()
         a = total / n
         counts = self.section_links()
         secs = self.sections
-        turn = np.repeat([math.radians(s.theta) / m for s, m in zip(secs, counts, strict=True)],
-                         counts)  # θ_k/n_k per link
         ei = np.repeat([s.EI for s in secs], counts)
         w = np.repeat([s.weight for s in secs], counts)
         left, right = ei[:-1], ei[1:]
         same = left == right
         stiffness = np.where(same, left / a, 2 * left * right / (a * (left + right)))
-        rest_joint = -(0.5 * (turn[:-1] + turn[1:]))
         interior = np.arange(1, n)
         can = reachable(interior * a, total, self.height, "pinned-pinned")
         return Chain(
@@ -325,7 +352,7 @@ class SectionedScene(FrictionOptions):
             rest_alpha=self.rest_alpha(),
             joint_stiffness=stiffness,
             joint_links=np.column_stack([np.arange(n - 1), np.arange(1, n)]),
-            rest_joint=rest_joint,
+            rest_joint=self._rest_joint(),
             link_load=(-w if self.gravity == "-y" else w) * a,  # μ = w a (eq. 5)
             free_nodes=interior,
             upper=np.where(can, self.height, np.inf),
