@@ -11,12 +11,18 @@ def coulomb_holds(res, rtol=1e-9, slip=1e-6):
     mu_up, mu_lo = res.scene.wall_friction
     limit = mu_up * res.forces + (mu_lo * res.forces_lower if res.forces_lower is not None
                                   else 0.0)
-    T, s = res.tangential_forces, res.slip
-    F = max(float(np.sum(N)), abs(res.pull))
+    return coulomb_on(res.tangential_forces, res.slip, limit,
+                      max(float(np.sum(N)), abs(res.pull)), slip * res.scene.length, rtol)
+
+
+def coulomb_on(T, s, limit, F, slip_length, rtol):
+    """Coulomb's law node by node for tangential forces ``T``, slips ``s`` and cone limits
+    ``limit`` (μN), to ``rtol`` of the force scale ``F``: a node slides when |s| >
+    ``slip_length``. Returns the sliding nodes."""
     assert np.all(np.abs(T) <= limit + rtol * F)
-    sliding = np.abs(s) > slip * res.scene.length
+    sliding = np.abs(s) > slip_length
     assert np.all(np.abs(np.abs(T[sliding]) - limit[sliding]) <= rtol * F)
     assert np.all(T[sliding] * s[sliding] <= rtol * F * np.abs(s[sliding]))
     inside = np.abs(T) < limit - rtol * F
-    assert np.all(np.abs(s[inside]) <= slip * res.scene.length)
+    assert np.all(np.abs(s[inside]) <= slip_length)
     return sliding
