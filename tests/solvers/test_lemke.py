@@ -345,3 +345,9 @@ def test_size_guard_message_at_the_documented_maximum():
     msg = lemke_mod.too_large(100_000)  # the scenes' largest N
     assert msg.startswith("problem too large for dense Lemke: n = 100000 needs a 74.51 GiB")
     assert lemke_mod.too_large(140) is None
+
+
+@pytest.mark.parametrize("bad", [-1e-9, float("nan"), 0.5])
+def test_a_tie_tolerance_out_of_range_is_refused_by_name(bad):
+    with pytest.raises(ValueError, match="tie_rtol"):
+        lemke(np.eye(2), np.array([-1.0, 1.0]), tie_rtol=bad)

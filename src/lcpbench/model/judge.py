@@ -355,7 +355,8 @@ def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0,
     if has_profile(chain):
         n = chain.free_nodes.size
         up_lo = forces if forces is not None else (np.zeros(n), np.zeros(n))
-        if large_n.applies(chain):  # the profile step in increments (as the driver's)
+        if large_n.applies(chain):  # the profile step in increments; its slope load from
+            # the reactions clipped at 0, as profile.profile_step's (the driver's are not)
             at = walls_at(chain, alpha)
             s = slope_load(chain, alpha, *(np.maximum(f, 0.0) for f in up_lo))
             step = large_n.increments_at(chain, alpha, walls=(at.lower, at.upper),

@@ -182,6 +182,8 @@ def lemke(M, q, *, max_pivots: int | None = None, pivot_tol: float = 1e-12,
     d = np.ones(n) if covering is None else np.asarray(covering, dtype=float).ravel()
     if d.shape != (n,) or not np.all(d > 0):
         raise ValueError("covering must be a strictly positive vector of length n")
+    if tie_rtol is not None and not 0.0 <= float(tie_rtol) <= 1e-3:
+        raise ValueError(f"tie_rtol must be a number in [0, 1e-3], got {tie_rtol!r}")
     if max_pivots is None:
         max_pivots = max(100, 50 * n)
     refused = too_large(n)

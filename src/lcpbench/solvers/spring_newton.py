@@ -107,6 +107,9 @@ def _warm_sets(warm, n: int):
 
 def solve_step(step, warm: StepSolution | None = None) -> StepSolution:
     """The elastic step's minimiser by Newton on its springs (see the module)."""
+    if not takes(step):
+        raise ValueError("spring_newton.solve_step takes a step in increments (its own "
+                         "factor) whose every wall row is elastic (finite k > 0)")
     t0 = time.perf_counter()
     n = step.size
     ku, kl = springs(step)
