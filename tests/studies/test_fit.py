@@ -86,3 +86,19 @@ def test_the_cli_prints_the_fit(tmp_path):
     bad = subprocess.run([sys.executable, "-m", "lcpbench.cli", "fit", "--data",
                           str(tmp_path / "missing.csv")], capture_output=True, text=True)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1
+
+
+def test_without_weight_the_fit_is_the_mean_of_the_force_ratios():
+    """Theory: with w = 0 the forces scale exactly with EI, F_i = EI c_i, so the fixed
+    point of the reweighted fit, Σ c_i (EI c_i − y_i)/(EI c_i)² = 0, is
+    EI = mean(y_i / c_i) — the efficient estimate under noise proportional to the force
+    (scales read off the noisy y_i would give a different, biased weighting)."""
+    P9 = np.linspace(130.0, 170.0, 9)  # every point presses well (F_i > 5 % of the largest)
+    c = np.array([lcpbench.solve(ActuatorScene(theta=float(CAL.theta(p)), height=4.0,
+                                               links=40, EI=1.0, weight=0.0),
+                                 tol=1e-11).total_force for p in P9])
+    assert np.all(c > 0.05 * c.max())
+    e = np.array([0.04, -0.07, 0.02, 0.09, -0.03, -0.05, 0.06, 0.01, -0.08])
+    y = 40.0 * c * (1 + e)
+    got = fit(ActuatorScene(theta=150, height=4.0, links=40, weight=0.0), P9, y, CAL)
+    assert got.EI == pytest.approx(40.0 * np.mean(1 + e), rel=1e-7)

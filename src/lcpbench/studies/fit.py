@@ -3,8 +3,12 @@
 Issue 38, item 3. Measured total forces y_i at pressures P_i (and heights h_i) are
 matched by the model's F_i = F(θ(P_i), h_i; EI), θ(P) = slope·P + intercept (the
 calibration given, or fitted too with ``fit_theta``), by Gauss–Newton on relative
-residuals r_i = (F_i − y_i)/s_i, s_i = max(|y_i|, 5 % of max|y|) (measurement noise
-proportional to the force), its Jacobian from :func:`lcpbench.sensitivities`
+residuals r_i = (F_i − y_i)/s_i (measurement noise proportional to the force), its
+scales s_i = max(|F_i|, 5 % of max|F|) taken from the model at the start of each
+iteration and held through its line search (iteratively reweighted least squares: the
+fixed point solves Σ J_i (F_i − y_i)/s_i² = 0, the quasi-likelihood equation of noise
+σ_i ∝ F_i; scales read off the noisy y_i instead weight the points that happened to
+fall low more and make the estimate biased and less efficient), its Jacobian from :func:`lcpbench.sensitivities`
 (dF/dEI; dF/dθ · P and dF/dθ for the line), each forward solve started from the
 last iteration's answer at that point. The 95 % interval of each parameter is
 ± t(0.975, m − p) σ̂ √C_jj with C = (JᵀJ)⁻¹ at the optimum and σ̂² = Σr²/(m − p), the
@@ -130,7 +134,10 @@ def fit(scene: ActuatorScene, pressure, force, calibration: Calibration, *, heig
         raise ProblemError("fit: a negative force; forces are the wall's push, >= 0 N")
     if not np.any(y > 0):
         raise ProblemError("fit: every force is 0: no contact, nothing to fit EI to")
-    s = np.maximum(np.abs(y), 0.05 * np.max(np.abs(y)))
+
+    def scales(F):  # s_i of the module docstring, from the model's forces
+        return np.maximum(np.abs(F), 0.05 * np.max(np.abs(F)))
+
     x = np.array([scene.EI, calibration.slope, calibration.intercept][:nparam], dtype=float)
     last: list = [None] * P.size
     solves = 0
@@ -159,7 +166,7 @@ def fit(scene: ActuatorScene, pressure, force, calibration: Calibration, *, heig
                 J[i, 1], J[i, 2] = d["theta_deg"] * P[i], d["theta_deg"]
         return F, J
 
-    def cost(F):
+    def cost(F, s):
         r = (F - y) / s
         return float(r @ r)
 
@@ -175,6 +182,7 @@ def fit(scene: ActuatorScene, pressure, force, calibration: Calibration, *, heig
     it = 0
     while it < MAX_ITER:  # Gauss–Newton, the step halved until the cost falls
         it += 1
+        s = scales(F)
         dx, *_ = np.linalg.lstsq(J / s[:, None], -(F - y) / s, rcond=None)
         t, moved = 1.0, False
         while t >= 1e-6:
@@ -184,12 +192,13 @@ def fit(scene: ActuatorScene, pressure, force, calibration: Calibration, *, heig
                     F_try, J_try = model(x_try)
                 except ProblemError:  # a forward solve out of its range: a shorter step
                     F_try = None
-                if F_try is not None and cost(F_try) <= cost(F) * (1 + 1e-12):
+                if F_try is not None and cost(F_try, s) <= cost(F, s) * (1 + 1e-12):
                     x, F, J, moved = x_try, F_try, J_try, True
                     break
             t *= 0.5
         if not moved or np.all(np.abs(t * dx) <= STEP_RTOL * np.maximum(np.abs(x), 1.0)):
             break
+    s = scales(F)
     r, Js = (F - y) / s, J / s[:, None]
     dof = P.size - nparam
     sigma2 = float(r @ r) / dof
