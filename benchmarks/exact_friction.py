@@ -19,13 +19,15 @@ every sign condition exactly: N >= 0 in contact, g >= 0 when separate, |T| <= μ
 sticking, s of its sign when sliding.
 
 Where the index set makes the equations dependent (two sticking neighbours on a wall:
-the link between them fixes the second slip), the step's doubles satisfy the
-dependent equation only to their own round-off: it is dropped and its residual
-reported (``inconsistency``, relative to the size of its terms); its null
-direction is a free unknown (T per node in a stick run), set where the exact solution
-is nearest the answer (least squares over the exact null directions: any choice is an
-exact solution). Links level to round-off (|tan α| <= :data:`LEVEL`) are level. A null direction that moves the chain (δy, δx,
-τ) and not only the forces is a ray of answers (``ray``).
+the link between them fixes the second slip), the step's doubles meet the dependent
+equation only to their own round-off: it is dropped and its residual reported
+(``inconsistency``, relative to the size of its terms); beyond
+:data:`CONSISTENT_RTOL` the set has no exact solution (the neighbours make that node
+slip). A null direction is a free unknown (T per node in a stick run), set where the
+exact solution is nearest the answer (least squares over the exact null directions:
+any choice is an exact solution). Links level to round-off (|tan α| <= :data:`LEVEL`)
+are level. A null direction that moves the chain (δy, δx, τ) and not only the forces
+is a ray of answers (``ray``).
 
 Not library code: the tests and benchmarks/friction_agreement.py use it.
 """
@@ -63,8 +65,8 @@ class PrimalStep:
     ``normal[r]``/``gap[r]``: wall row r's N unknown and its gap (constant,
     coefficients), ``tangential[c]``/``slip[c]`` the same for pair c; ``mu``, ``pair``
     per row; ``moves``: the unknowns that move the chain; ``force``/``length``: the
-    scales of N and of g, s (the LCP's units); ``values``: an answer's unknowns, set
-    by :func:`answer_values`."""
+    scales of N and of g, s (the LCP's units); ``link``: the link length (the move's
+    scale); ``names``: the unknowns by kind and node (:func:`chain_step`)."""
 
     n: int
     mechanics: list
