@@ -52,6 +52,7 @@ from lcpbench.model.judge import force_tol
 from lcpbench.solvers.registry import backends
 
 sys.path.insert(0, str(Path(__file__).parent))
+import exact_friction as ef  # noqa: E402
 from friction_paths import ENDS, breaks_coulomb  # noqa: E402
 
 #: the contenders: Lemke (the reference), the active set, Siconos' fc2d Lemke (the
@@ -144,9 +145,13 @@ def main() -> int:
     z = {s: {"steps": 0, "answered": 0, "dn": 0.0, "dr": 0.0, "dt": 0.0, "time": 0.0,
              "agree": 0, "dm": 0.0} for s in solvers}
     p = {s: {"states": 0, "converged": 0, "both": 0, "dn": 0.0, "dr": 0.0, "dt": 0.0,
-             "broken": 0, "broken_judge": 0, "time": 0.0, "agree": 0, "dm": 0.0}
+             "broken": 0, "broken_judge": 0, "time": 0.0, "agree": 0, "dm": 0.0,
+             "both_clean": 0, "agree_clean": 0}
          for s in solvers}
     worst = {s: (0.0, "") for s in solvers}  # the largest ΔN on the same step, and where
+    # the disagreements on the same step by class (exact_friction.classify), and where
+    classes = {s: {} for s in solvers}
+    lemke_exact = {"steps": 0, "confirmed": 0, "worst": 0.0, "ray": 0, "missed": []}
     t_all = time.perf_counter()
     for index, (scene, states) in enumerate(scenes(args.paths, args.seed)):
         rec = Recorder()
@@ -156,7 +161,7 @@ def main() -> int:
         chain_first = int(scene.chain().free_nodes[0]) if scene.right_end != "free" else 1
         # the last step of each converged state, by the outer steps each state took
         ends = np.cumsum([r.outer_iterations if r.route == "frictional" else 0 for r in ref])
-        for r, end in zip(ref, ends):
+        for si, (r, end) in enumerate(zip(ref, ends)):
             if not r.converged or r.route != "frictional":
                 continue
             fs, sol = rec.steps[end - 1]
@@ -165,6 +170,17 @@ def main() -> int:
             a = scene.length / scene.links
             scale = max(float(N0.max(initial=0.0)), float(np.abs(T0).max(initial=0.0)),
                         abs(r.pull), 1e-300)
+            where = f"{index}.{si}"
+            primal = ef.chain_step(fs)  # the step in exact arithmetic (exact_friction.py)
+            v0 = ef.answer_values(fs, primal, sol.z)
+            mine = ef.nearest_exact(primal, v0)
+            lemke_exact["steps"] += 1
+            if ef.confirmed(mine[0], mine[1]):
+                lemke_exact["confirmed"] += 1
+                lemke_exact["worst"] = max(lemke_exact["worst"], mine[1][0], mine[1][2])
+            else:
+                lemke_exact["missed"].append(where)
+            lemke_exact["ray"] += mine[0].ray
             for s in solvers:
                 z[s]["steps"] += 1
                 t0 = time.perf_counter()
@@ -177,8 +193,14 @@ def main() -> int:
                 z[s]["dm"] = max(z[s]["dm"], float(np.max(np.abs(m1 - m0))) / a)
                 d = differences(N0, T0, N1, T1, (N0 > 0) | (N1 > 0) | on_wall(r), scale)
                 z[s]["agree"] += max(d[0], d[1]) <= TARGET
+                if max(d[0], d[1]) > TARGET:
+                    kind, info = ef.classify(primal, v0,
+                                             ef.answer_values(fs, primal, other.z), a=mine)
+                    mark = ("L" if info.get("which") == "a" else "") + (
+                        "*" if info.get("exact_there") else "")
+                    classes[s].setdefault(kind, []).append(where + mark)
                 if d[0] > worst[s][0]:
-                    worst[s] = (d[0], f"path {index} state {states.index(r.state)} "
+                    worst[s] = (d[0], f"path {index} state {si} "
                                       f"(N = {scene.links}, μ = {scene.friction:.2f}, "
                                       f"{scene.left_end}–{scene.right_end}"
                                       f"{', channel' if scene.channel else ''})")
@@ -191,14 +213,17 @@ def main() -> int:
                 t0 = time.perf_counter()
                 mine = lcpbench.solve_path(scene, states, tol=args.tol, solver=s)
                 p[s]["time"] += time.perf_counter() - t0
+            clean = True  # every previous state of this path converged by both and agreed
             for a, b in zip(ref, mine):
                 p[s]["states"] += 1
                 if not b.converged:
+                    clean = False
                     continue
                 p[s]["converged"] += 1
                 p[s]["broken"] += breaks_coulomb(b)
                 p[s]["broken_judge"] += breaks_coulomb(b, rtol=JUDGE_SHARE * force_tol(args.tol))
                 if not a.converged:
+                    clean = False
                     continue
                 p[s]["both"] += 1
                 a_len = scene.length / scene.links
@@ -212,7 +237,12 @@ def main() -> int:
                             1e-300)
                 d = differences(Na, a.tangential_forces, Nb, b.tangential_forces,
                                 (Na > 0) | (Nb > 0) | on_wall(a) | on_wall(b), scale)
-                p[s]["agree"] += max(d[0], d[1]) <= TARGET
+                ok = max(d[0], d[1]) <= TARGET
+                p[s]["agree"] += ok
+                if clean:
+                    p[s]["both_clean"] += 1
+                    p[s]["agree_clean"] += ok
+                clean &= ok
                 for k, v in zip(("dn", "dr", "dt"), d):
                     p[s][k] = max(p[s][k], v)
     total = time.perf_counter() - t_all
@@ -248,22 +278,63 @@ def main() -> int:
                      f"{r['dt']:.1e} | {r['dm']:.1e} | {r['time']:.1f} |")
     lines += ["", "The largest ΔN on the same step, where: " + "; ".join(
         f"{s} {worst[s][0]:.1e}, {worst[s][1]}" for s in solvers if worst[s][1]) + "."]
+    kinds = (ef.MULTIPLE, ef.INACCURATE, ef.RAY, ef.SAME)
+    lines += ["", "## The disagreements on the same step, solved exactly", "",
+              "Each step where a back-end answers and differs from Lemke by more than "
+              "1e-6 (N per node or T per run) is solved exactly "
+              "(`benchmarks/exact_friction.py`: the step's primal equations from its "
+              "doubles, in `fractions.Fraction`) on the index set read from each answer "
+              "(per wall row contact or separate, per friction pair stick, slide forward "
+              "or backward; nodes that the answer leaves at the edge of two states, to "
+              "its round-off, flipped where the first reading breaks a sign condition), "
+              "and every complementarity and sign condition is checked exactly. An answer "
+              "is confirmed when that exact solution exists and is within 1e-6 of it in "
+              "N and in the move (T per node is ill-conditioned along a nearly straight "
+              "stretch and is not judged). Classes: (i) both answers confirmed, their "
+              "exact solutions 1e-6 apart: the step has two answers and no solver can "
+              "be required to agree; (ii) an answer not confirmed; (iii) an index set "
+              "whose exact null space moves the chain (a ray of answers: every null "
+              "direction is computed exactly); (iv) both confirmed as the same exact "
+              "answer in N and the move, apart in T per run only. Steps are named "
+              "path.state; in (ii), L marks a step where Lemke's answer is the one not "
+              "confirmed, and * one where that answer's index set has an exact solution, "
+              "farther from it than 1e-6 (the others: none found on the sets read from "
+              "it).", "",
+              "| back-end | disagreements | " + " | ".join(kinds) + " |",
+              "|---|---|" + "---|" * len(kinds)]
+    for s in solvers:
+        if s == "lemke":
+            continue
+        c = classes[s]
+        lines.append(f"| {s} | {sum(len(v) for v in c.values())} | " + " | ".join(
+            f"{len(c.get(k, []))}" + (f": {' '.join(c[k])}" if c.get(k) else "")
+            for k in kinds) + " |")
+    le = lemke_exact
+    lines += ["", f"Lemke's own answers (every step, agreeing or not): {le['confirmed']} of "
+              f"{le['steps']} confirmed by the exact solution on their index set (largest "
+              f"distance in N and the move {le['worst']:.1e}); {le['ray']} with a ray"
+              + (f"; not confirmed: {' '.join(le['missed'])}" if le["missed"] else "")
+              + "."]
     lines += ["", "## Along its own path", "",
               "Each back-end's own path (each state from its own last). Converged: the "
               "judge's verdict. Broken: converged states that break Coulomb's law node by "
               "node or Σ T + P = 0, checked outside the judge (target 0), to 1e-9 of the "
               "largest force (`friction_paths.breaks_coulomb`) and to the judge's own "
               f"ε_F = {JUDGE_SHARE:g} · force_tol(tol) of it. ΔN, ΔT over the "
-              "states both Lemke and the back-end converge.", "",
+              "states both Lemke and the back-end converge. After a state with two "
+              "answers the paths may part legitimately (each goes on from its own "
+              "answer), so the states are also counted only while every earlier state "
+              "of the path was converged by both and agreed ('all before agreed').", "",
               "| back-end | states | converged | broken at 1e-9 | broken at the judge's ε "
-              "| both | agree to 1e-6 | max ΔN | max ΔT per run | max ΔT per node "
-              "| max Δ shape (a) | time (s) |",
-              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+              "| both | agree to 1e-6 | both, all before agreed | agree | max ΔN "
+              "| max ΔT per run | max ΔT per node | max Δ shape (a) | time (s) |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for s in solvers:
         r = p[s]
         lines.append(f"| {s} | {r['states']} | {r['converged']} | {r['broken']} | "
                      f"{r['broken_judge']} | "
-                     f"{r['both']} | {r['agree']} | {r['dn']:.1e} | {r['dr']:.1e} | "
+                     f"{r['both']} | {r['agree']} | {r['both_clean']} | "
+                     f"{r['agree_clean']} | {r['dn']:.1e} | {r['dr']:.1e} | "
                      f"{r['dt']:.1e} | {r['dm']:.1e} | {r['time']:.1f} |")
     if missing:
         lines += ["", f"Not installed here: {', '.join(missing)}."]

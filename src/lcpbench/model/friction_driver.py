@@ -264,6 +264,9 @@ class FrictionStep:
     #: pair its tangent t, at the nodes' x (flat walls: (0, ∓1) and (1, 0))
     normal_xy: np.ndarray
     tangent_xy: np.ndarray
+    #: the chain's part of the step as doubles (H's bands, f, tan α, gap, slip, …): what
+    #: an exact oracle solves from (benchmarks/exact_friction.py)
+    parts: dict | None = None
 
     def forces(self, z: np.ndarray):
         """(N, T, δy, τ) in N and mm of an LCP solution z (dimensionless)."""
@@ -412,12 +415,15 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
     # an elastic wall's row: 0 <= N ⟂ g + N/k >= 0, its compliance 1/k (mm/N) on W_nn's
     # diagonal (docs/friction.md, elastic walls); 0 for a rigid wall: W unchanged
     c_up, c_lo = chain.derived("friction: compliances", lambda: compliances(chain))
-    W[np.arange(rows.size), np.arange(rows.size)] += np.where(signs < 0, c_up[rows],
-                                                              c_lo[rows])
+    compliance = np.where(signs < 0, c_up[rows], c_lo[rows])
+    W[np.arange(rows.size), np.arange(rows.size)] += compliance
     L, F = chain.length, chain.force_scale
     M, q = k.frictional_lcp(W * (F / L), g_f / L, s_f / L, mus, pairs)
+    parts = dict(bands=bands, f=f, tan=np.tan(state.alpha), rot=rot, rot_k=rot_k, k_tau=k_tau,
+                 gap=gap, slip=slip, compliance=compliance, first=first,
+                 right_datum=right_datum)
     return FrictionStep(M, q, W, g_f, s_f, X, rows, signs, pair_nodes, pairs, mus, has_tau,
-                        origin, L, F, near, normal_xy, tangent_xy)
+                        origin, L, F, near, normal_xy, tangent_xy, parts)
 
 
 def gross_slip(fs: FrictionStep, N: np.ndarray, T: np.ndarray, pull: float) -> float:

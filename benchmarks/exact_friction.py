@@ -1,0 +1,525 @@
+"""The frictional step on an index set, solved exactly in rational arithmetic: an oracle
+that says whether a back-end's answer is an answer, and whether a step has several.
+
+The step (``lcpbench.model.friction_driver.FrictionStep``, docs/friction.md) is taken
+from the doubles it was built from (``FrictionStep.parts``: H's bands, f, tan α, the
+gaps and slips, k_τ, a free end's rotation), not from its Delassus matrix W = GᵀK⁻¹G:
+in floating point W is only nearly singular where it is singular in fact (a run of
+nodes sticking to a wall: T per node is statically indeterminate), and an exact solve
+on the rounded W would decide T per node by round-off. In its primal form the step is
+sparse and banded, node by node: the heights' equilibrium K δ = f + G_n N + G_t T,
+with the slips' Jacobian D (dense) written as its recurrence δx_i − δx_{i−1} =
+−tan α_{i−1} (δy_i − δy_{i−1}) (from the datum: the left end, τ, or the right end),
+and Dᵀ F^x as the links' horizontal forces L_k (F^x: n_x N + t_x T at each node). The
+index set (per wall row: contact or separate; per friction pair: stick, slide forward
+(s ≥ 0, T = −μN), slide backward (s ≤ 0, T = +μN), or off when its row is separate)
+adds one equation per row and per pair; :func:`solve` eliminates the whole system in
+:class:`fractions.Fraction` (exact Gaussian elimination, sparse rows) and then checks
+every sign condition exactly: N >= 0 in contact, g >= 0 when separate, |T| <= μN when
+sticking, s of its sign when sliding.
+
+Where the index set makes the equations dependent (two sticking neighbours on a wall:
+the link between them fixes the second slip), the step's doubles meet the dependent
+equation only to their own round-off: it is dropped and its residual reported
+(``inconsistency``, relative to the size of its terms); beyond
+:data:`CONSISTENT_RTOL` the set has no exact solution (the neighbours make that node
+slip). A null direction is a free unknown (T per node in a stick run), set where the
+exact solution is nearest the answer (least squares over the exact null directions:
+any choice is an exact solution). Links level to round-off (|tan α| <= :data:`LEVEL`)
+are level. A null direction that moves the chain (δy, δx, τ) and not only the forces
+is a ray of answers (``ray``).
+
+Not library code: the tests and benchmarks/friction_agreement.py use it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from fractions import Fraction
+
+import numpy as np
+
+#: a pair's states: stick, slide forward (s >= 0, T = −μN), backward, off (row separate)
+STICK, FORWARD, BACKWARD, OFF = 0, 1, -1, None
+#: an answer is near its exact solution when N and the move differ by at most this
+#: (relative to the answer's largest force, and to the link length): target 2's 1e-6
+NEAR_RTOL = 1e-6
+#: dropped dependent equations may be off by at most this share of their terms' size
+CONSISTENT_RTOL = 1e-12
+#: a link whose |tan α| is at most this is level (both its nodes at a wall to round-off):
+#: its tan α is taken as 0, so that T per node along a run at a wall is exactly
+#: indeterminate, as it is in fact, not decided by the round-off of the nodes' heights
+LEVEL = 1e-12
+#: index sets tried per answer: the one read from it, then with failing nodes flipped
+FLIP_ROUNDS = 6
+
+
+def _q(x) -> Fraction:
+    return Fraction(float(x))
+
+
+@dataclass
+class PrimalStep:
+    """A frictional step as sparse exact equations. Unknowns 0..n−1; ``mechanics``: the
+    equalities every index set shares [(coefficients by unknown, right-hand side)];
+    ``normal[r]``/``gap[r]``: wall row r's N unknown and its gap (constant,
+    coefficients), ``tangential[c]``/``slip[c]`` the same for pair c; ``mu``, ``pair``
+    per row; ``moves``: the unknowns that move the chain; ``force``/``length``: the
+    scales of N and of g, s (the LCP's units); ``link``: the link length (the move's
+    scale); ``names``: the unknowns by kind and node (:func:`chain_step`)."""
+
+    n: int
+    mechanics: list
+    normal: list
+    gap: list
+    tangential: list
+    slip: list
+    mu: list
+    pair: list
+    moves: list
+    force: float = 1.0
+    length: float = 1.0
+    link: float = 1.0
+    names: dict = field(default_factory=dict)
+
+
+def chain_step(fs) -> PrimalStep:
+    """The :class:`PrimalStep` of a ``FrictionStep`` (see the module's note)."""
+    P = fs.parts
+    bands, f, t = P["bands"], P["f"], P["tan"]
+    first, right_datum = int(P["first"]), bool(P["right_datum"])
+    nh, links = bands.shape[1], t.size
+    rot = P["rot"]
+    nxy, txy = fs.normal_xy, fs.tangent_xy
+    rows_at = {}
+    for r, j in enumerate(fs.normal_node):
+        rows_at.setdefault(first + int(j), []).append(r)
+    pairs_at = {}
+    for c, node in enumerate(fs.friction_node):
+        pairs_at.setdefault(int(node), []).append(c)
+    count = [0]
+
+    def new():
+        count[0] += 1
+        return count[0] - 1
+
+    tau = new() if fs.has_tau else None
+    Y, X, L = {}, {}, {}
+    Nv, Tv = [None] * fs.normal_node.size, [None] * fs.friction_node.size
+    for i in range(links + 1):  # node by node: a narrow band
+        if first <= i < first + nh:
+            Y[i] = new()
+        X[i] = new()
+        if i < links:
+            L[i] = new()
+        for r in rows_at.get(i, []):
+            Nv[r] = new()
+        for c in pairs_at.get(i, []):
+            Tv[c] = new()
+    rho = new() if rot.size else None
+    T = [Fraction(0) if abs(v) <= LEVEL else _q(v) for v in t]
+
+    def Fx(i):  # the force along x at node i
+        d = {Nv[r]: _q(nxy[r, 0]) for r in rows_at.get(i, []) if nxy[r, 0] != 0.0}
+        d.update({Tv[c]: _q(txy[c, 0]) for c in pairs_at.get(i, []) if txy[c, 0] != 0.0})
+        return d
+
+    def add(d, k, v):
+        if v != 0:
+            d[k] = d.get(k, 0) + v
+
+    eqs = []
+    for j in range(nh):  # the heights' equilibrium (H symmetric, lower band storage)
+        J, row = first + j, {}
+        for jj in range(max(0, j - 2), min(nh, j + 3)):
+            add(row, Y[first + jj], _q(bands[abs(j - jj), min(j, jj)]))
+        if rho is not None:
+            add(row, rho, _q(P["rot_k"]) * _q(rot[j]))
+        for r in rows_at.get(J, []):
+            add(row, Nv[r], -_q(nxy[r, 1]))
+        for c in pairs_at.get(J, []):
+            add(row, Tv[c], -_q(txy[c, 1]))
+        if J >= 1:
+            add(row, L[J - 1], T[J - 1])
+        if J < links:
+            add(row, L[J], -T[J])
+        eqs.append((row, _q(f[j])))
+    if tau is not None:  # k_τ τ = f_τ + Σ F^x (= L_0 + F^x_0, the left datum)
+        row = {tau: _q(P["k_tau"]), L[0]: Fraction(-1)}
+        for k, v in Fx(0).items():
+            add(row, k, -v)
+        eqs.append((row, _q(f[nh])))
+    if rho is not None:
+        row = {rho: Fraction(1)}
+        for j in range(nh):
+            add(row, Y[first + j], -_q(rot[j]))
+        eqs.append((row, Fraction(0)))
+    for i in range(1, links + 1):  # δx_i − δx_{i−1} = −tan α_{i−1} (δy_i − δy_{i−1})
+        row = {X[i]: Fraction(1), X[i - 1]: Fraction(-1)}
+        if i in Y:
+            add(row, Y[i], T[i - 1])
+        if i - 1 in Y:
+            add(row, Y[i - 1], -T[i - 1])
+        eqs.append((row, Fraction(0)))
+    if right_datum:
+        eqs.append(({X[links]: Fraction(1)}, Fraction(0)))
+    elif tau is not None:
+        eqs.append(({X[0]: Fraction(1), tau: Fraction(-1)}, Fraction(0)))
+    else:
+        eqs.append(({X[0]: Fraction(1)}, Fraction(0)))
+    for k in range(links):  # the links' horizontal forces: Dᵀ F^x = Σ_k e_k L_k
+        row = {L[k]: Fraction(1)}
+        if right_datum:  # L_k = −Σ_{i<=k} F^x_i
+            if k >= 1:
+                row[L[k - 1]] = Fraction(-1)
+            for key, v in Fx(k).items():
+                add(row, key, v)
+        else:  # L_k = Σ_{i>k} F^x_i
+            if k + 1 < links:
+                row[L[k + 1]] = Fraction(-1)
+            for key, v in Fx(k + 1).items():
+                add(row, key, -v)
+        eqs.append((row, Fraction(0)))
+    gap, slip = [], []
+    for r, j in enumerate(fs.normal_node):
+        J, d = first + int(j), {}
+        add(d, X[J], _q(nxy[r, 0]))
+        add(d, Y[J], _q(nxy[r, 1]))
+        add(d, Nv[r], _q(P["compliance"][r]))
+        gap.append((_q(P["gap"][r]), d))
+    for c, node in enumerate(fs.friction_node):
+        node, d = int(node), {}
+        add(d, X[node], _q(txy[c, 0]))
+        if node in Y:
+            add(d, Y[node], _q(txy[c, 1]))
+        slip.append((_q(P["slip"][c]), d))
+    moves = list(Y.values()) + list(X.values()) + ([tau] if tau is not None else [])
+    return PrimalStep(count[0], eqs, Nv, gap, Tv, slip, [_q(m) for m in fs.mu],
+                      [int(p) for p in fs.pair], moves, fs.force, fs.length,
+                      fs.length / links, dict(Y=Y, X=X, L=L, tau=tau, rho=rho))
+
+
+def answer_values(fs, step: PrimalStep, z: np.ndarray) -> np.ndarray:
+    """Every unknown of ``step`` (a :func:`chain_step`) from the LCP answer z, in floats."""
+    N, T, dy, tau = fs.forces(z)
+    nm = step.names
+    v = np.zeros(step.n)
+    first = int(fs.parts["first"])
+    t = fs.parts["tan"]
+    links = t.size
+    Yd = np.zeros(links + 1)
+    for i, k in nm["Y"].items():
+        Yd[i] = dy[i - first]
+        v[k] = dy[i - first]
+    if nm["tau"] is not None:
+        v[nm["tau"]] = tau
+    if nm["rho"] is not None:
+        v[nm["rho"]] = float(fs.parts["rot"] @ dy)
+    x = np.zeros(links + 1)
+    x[0] = tau
+    for i in range(1, links + 1):
+        x[i] = x[i - 1] - t[i - 1] * (Yd[i] - Yd[i - 1])
+    if fs.parts["right_datum"]:
+        x -= x[links]
+    Fx = np.zeros(links + 1)
+    first_node = first + np.asarray(fs.normal_node)
+    np.add.at(Fx, first_node, fs.normal_xy[:, 0] * N)
+    np.add.at(Fx, np.asarray(fs.friction_node), fs.tangent_xy[:, 0] * T)
+    Lk = -np.cumsum(Fx)[:links] if fs.parts["right_datum"] else np.cumsum(Fx[::-1])[::-1][1:]
+    for i, k in nm["X"].items():
+        v[k] = x[i]
+    for i, k in nm["L"].items():
+        v[k] = Lk[i]
+    v[step.normal] = N
+    v[step.tangential] = T
+    return v
+
+
+def _affine(expr, v):
+    const, d = expr
+    return float(const) + sum(float(c) * v[k] for k, c in d.items())
+
+
+def read_states(step: PrimalStep, v: np.ndarray) -> tuple[list, list]:
+    """The index set of an answer (its unknowns v, floats), each LCP pair's larger side:
+    a row is in contact when N/F >= g/ℓ; a pair sticks when its cone's margin
+    (μN − |T|)/F is at least |s|/ℓ, else slides against T."""
+    F, ell = step.force, step.length
+    rows = [v[step.normal[r]] / F >= _affine(step.gap[r], v) / ell
+            for r in range(len(step.normal))]
+    pairs = []
+    for c in range(len(step.tangential)):
+        mine = [r for r in range(len(rows)) if step.pair[r] == c]
+        if not any(rows[r] for r in mine):
+            pairs.append(OFF)
+            continue
+        limit = sum(float(step.mu[r]) * v[step.normal[r]] for r in mine)
+        T, s = v[step.tangential[c]], _affine(step.slip[c], v)
+        if (limit - abs(T)) / F >= abs(s) / ell:
+            pairs.append(STICK)
+        else:
+            pairs.append(FORWARD if (T < 0 or (T == 0 and s > 0)) else BACKWARD)
+    return rows, pairs
+
+
+def _eliminate(eqs, n, first_choice=0):
+    """Exact Gaussian elimination of sparse rows, columns in order (the band), as pivot
+    the sparsest of the rows before ``first_choice`` (the mechanics), else the
+    sparsest: a dependent equation left over is one of the index set's. (pivots
+    {column: row}, rows, rhs, the rows left over)."""
+    rows = [dict(c) for c, _ in eqs]
+    rhs = [Fraction(r) for _, r in eqs]
+    where: dict = {}
+    for i, r in enumerate(rows):
+        for c in r:
+            where.setdefault(c, set()).add(i)
+    pivots, used = {}, set()
+    for c in range(n):
+        cands = [i for i in where.get(c, ()) if i not in used]
+        if not cands:
+            continue
+        p = min(cands, key=lambda i: (i >= first_choice, len(rows[i])))
+        used.add(p)
+        pivots[c] = p
+        prow, pv = rows[p], rows[p][c]
+        for i in cands:
+            if i == p:
+                continue
+            r = rows[i]
+            m = r[c] / pv
+            for cc, val in prow.items():
+                new = r.get(cc, 0) - m * val
+                if new == 0:
+                    if cc in r:
+                        del r[cc]
+                        where[cc].discard(i)
+                else:
+                    if cc not in r:
+                        where.setdefault(cc, set()).add(i)
+                    r[cc] = new
+            rhs[i] -= m * rhs[p]
+    left = [i for i in range(len(rows)) if i not in used]
+    return pivots, rows, rhs, left
+
+
+def _back(pivots, rows, rhs, n, free_value):
+    x: list = [None] * n
+    for c in range(n):
+        if c not in pivots:
+            x[c] = free_value(c)
+    for c in sorted(pivots, reverse=True):
+        p = pivots[c]
+        s = rhs[p] - sum(v * x[cc] for cc, v in rows[p].items() if cc != c)
+        x[c] = s / rows[p][c]
+    return x
+
+
+@dataclass
+class Exact:
+    """The exact solution of a step on one index set and what it satisfies."""
+
+    rows: list
+    pairs: list
+    x: list  # the unknowns (Fractions)
+    failed: list  # the sign conditions it breaks: ("row"/"pair", index)
+    inconsistency: float  # the dropped equations' largest residual, relative to their terms
+    ray: bool  # a null direction that moves the chain
+    free: int  # null directions (free unknowns)
+
+    @property
+    def solution(self) -> bool:
+        return not self.failed
+
+
+def solve(step: PrimalStep, rows: list, pairs: list, v: np.ndarray | None = None,
+          ) -> Exact:
+    """The step on the index set (``rows``: contact per wall row; ``pairs``: STICK,
+    FORWARD, BACKWARD or OFF per pair), exactly; free unknowns (null directions) at
+    the answer's values ``v`` (0 without)."""
+    eqs = list(step.mechanics)
+    for r, contact in enumerate(rows):
+        if contact:
+            const, d = step.gap[r]
+            eqs.append((d, -const))
+        else:
+            eqs.append(({step.normal[r]: Fraction(1)}, Fraction(0)))
+    for c, state in enumerate(pairs):
+        Tc = step.tangential[c]
+        if state is OFF:
+            eqs.append(({Tc: Fraction(1)}, Fraction(0)))
+        elif state == STICK:
+            const, d = step.slip[c]
+            eqs.append((d, -const))
+        else:
+            d = {Tc: Fraction(1)}
+            for r in range(len(rows)):
+                if step.pair[r] == c:
+                    d[step.normal[r]] = d.get(step.normal[r], 0) + state * step.mu[r]
+            eqs.append((d, Fraction(0)))
+    pivots, erows, rhs, left = _eliminate(eqs, step.n, len(step.mechanics))
+    free = [c for c in range(step.n) if c not in pivots]
+    guess = [_q(v[c]) if v is not None else Fraction(0) for c in free]
+    x = _back(pivots, erows, rhs, step.n, dict(zip(free, guess)).__getitem__)
+    ray = False
+    if free:  # the null directions, exactly: one per free unknown
+        zero = [Fraction(0)] * len(rhs)
+        basis = [_back(pivots, erows, zero, step.n,
+                       lambda c, f=f: Fraction(int(c == f))) for f in free]
+        ray = any(b[k] != 0 for b in basis for k in step.moves)
+        if v is not None:  # the exact solution nearest the answer (least squares in
+            # floats over the null directions: every choice is an exact solution)
+            keys = step.normal + step.tangential
+            scale = max(float(np.max(np.abs(v[keys]), initial=0.0)), 1e-300)
+            keys = keys + list(step.moves)
+            w = np.array([1 / scale] * (len(step.normal) + len(step.tangential))
+                         + [1 / step.link] * len(step.moves))
+            B = np.array([[float(b[k]) for b in basis] for k in keys]) * w[:, None]
+            r = (v[keys] - np.array([float(x[k]) for k in keys])) * w
+            theta = np.linalg.lstsq(B, r, rcond=None)[0]
+            shift = dict(zip(free, (g + _q(t) for g, t in zip(guess, theta))))
+            x = _back(pivots, erows, rhs, step.n, shift.__getitem__)
+
+    def off(i):  # a dropped equation's residual at x, relative to its terms' size
+        d, r = eqs[i]
+        terms = [c * x[k] for k, c in d.items()]
+        size = sum(abs(t) for t in terms) + abs(r)
+        return abs(sum(terms) - r) / size if size else Fraction(0)
+
+    bad = max((off(i) for i in left), default=Fraction(0))
+    m, mr = len(step.mechanics), len(rows)
+    failed = []
+    for i in left:  # a dependent equation the answer's own round-off cannot explain
+        if off(i) > CONSISTENT_RTOL:
+            failed.append(("mechanics", i) if i < m else ("gap", i - m) if i < m + mr
+                          else ("slip", i - m - mr))
+
+    def val(expr):
+        const, d = expr
+        return const + sum(cf * x[k] for k, cf in d.items())
+
+    for r, contact in enumerate(rows):
+        if (x[step.normal[r]] < 0) if contact else (val(step.gap[r]) < 0):
+            failed.append(("row", r))
+    for c, state in enumerate(pairs):
+        if state is OFF:
+            continue
+        if state == STICK:
+            limit = sum((step.mu[r] * x[step.normal[r]] for r in range(len(rows))
+                         if step.pair[r] == c), Fraction(0))
+            if abs(x[step.tangential[c]]) > limit:
+                failed.append(("pair", c))
+        elif state * val(step.slip[c]) < 0:
+            failed.append(("pair", c))
+    return Exact(list(rows), list(pairs), x, failed, float(bad), ray, len(free))
+
+
+def distance(step: PrimalStep, ex: Exact, v: np.ndarray, scale: float | None = None
+             ) -> tuple[float, float, float]:
+    """How far an answer v is from an exact solution: the largest difference in N and
+    in T (relative to ``scale``, by default the larger of the two's largest force) and
+    in the move (in link lengths)."""
+    forces = step.normal + step.tangential
+    if scale is None:
+        scale = max(float(np.max(np.abs(v[forces]), initial=0.0)),
+                    max((abs(float(ex.x[k])) for k in forces), default=0.0))
+    scale = max(scale, 1e-300)
+
+    def d(keys, by):
+        return max((abs(float(ex.x[k]) - v[k]) for k in keys), default=0.0) / by
+
+    return d(step.normal, scale), d(step.tangential, scale), d(step.moves, step.link)
+
+
+def _flip(rows, pairs, ex, step, tried):
+    """The index set with the nodes that break a sign condition in ``ex`` flipped: a row
+    to the other side, a pair that sticks outside its cone to sliding against its
+    exact T, a sliding pair whose slip has the wrong sign to sliding the other way (or,
+    when that was tried, to sticking); ``tried``: the slides flipped from, by pair."""
+    rows, pairs = list(rows), list(pairs)
+    for kind, i in ex.failed:
+        if kind == "slip":  # a sticking pair its neighbours make slip: it slides
+            const, d = step.slip[i]
+            pairs[i] = FORWARD if const + sum(c * ex.x[k] for k, c in d.items()) > 0 \
+                else BACKWARD
+        elif kind == "gap":  # a row in contact its neighbours lift off: it separates
+            rows[i] = False
+        elif kind == "mechanics":
+            continue
+        elif kind == "row":
+            rows[i] = not rows[i]
+        elif pairs[i] == STICK:
+            pairs[i] = FORWARD if ex.x[step.tangential[i]] < 0 else BACKWARD
+        else:  # sliding with the slip against T: the other way, then sticking
+            pairs[i] = STICK if tried.get(i) == -pairs[i] else -pairs[i]
+            tried[i] = -pairs[i] if pairs[i] != STICK else tried.get(i)
+    for c in range(len(pairs)):  # a pair whose rows all separate is off, and back
+        mine = [r for r in range(len(rows)) if step.pair[r] == c]
+        if not any(rows[r] for r in mine):
+            pairs[c] = OFF
+        elif pairs[c] is OFF:
+            pairs[c] = STICK
+    return rows, pairs
+
+
+def nearest_exact(step: PrimalStep, v: np.ndarray) -> tuple[Exact, float, int]:
+    """(the exact solution on the index set read from the answer v, its distance, the
+    rounds of flips it took): where the exact solution on the read set breaks a sign
+    condition (a node the answer leaves at the edge of two states, or whose T per node
+    is ill-determined), or makes a dependent equation inconsistent (a sticking node its
+    neighbours make slip), those nodes are flipped (:func:`_flip`),
+    up to :data:`FLIP_ROUNDS` times. When none is a solution, the first (the set as read)."""
+    rows, pairs = read_states(step, v)
+    ex = first = solve(step, rows, pairs, v)
+    rounds, tried = 0, {}
+    while ex.failed and rounds < FLIP_ROUNDS:
+        rounds += 1
+        new = _flip(rows, pairs, ex, step, tried)
+        if new == (rows, pairs):
+            break
+        rows, pairs = new
+        ex = solve(step, rows, pairs, v)
+    if ex.failed:  # none found: the answer's own index set, as read
+        ex = first
+    return ex, distance(step, ex, v), rounds
+
+
+#: the classes of a disagreement
+MULTIPLE = "(i) two exact answers"
+INACCURATE = "(ii) not near an exact answer"
+RAY = "(iii) a ray"
+SAME = "(iv) one exact answer, T apart"
+
+
+def confirmed(ex: Exact, dist: tuple) -> bool:
+    """Whether an answer is an exact answer's rounding: the exact solution on its index
+    set satisfies every condition and is within :data:`NEAR_RTOL` of it in N and in the
+    move (T per node is not judged: along a stretch of chain that is straight to a few
+    1e-5 rad a horizontal force moves between nodes at almost no cost, and its split is
+    as ill-conditioned as that)."""
+    return ex.solution and max(dist[0], dist[2]) <= NEAR_RTOL
+
+
+def classify(step: PrimalStep, va: np.ndarray, vb: np.ndarray, a=None) -> tuple[str, dict]:
+    """The class of a disagreement between two answers va, vb of one step (unknowns,
+    floats; ``a``: va's :func:`nearest_exact` when known): RAY when either's index set
+    has a null direction that moves the chain; INACCURATE when either is not
+    :func:`confirmed`; MULTIPLE when both are and their exact solutions differ by more
+    than :data:`NEAR_RTOL` in N or the move; SAME when both are the same exact answer in
+    N and the move (the answers then differ in T only)."""
+    ea, da, _ = a if a is not None else nearest_exact(step, va)
+    eb, db, _ = nearest_exact(step, vb)
+    info = dict(a=(ea, da), b=(eb, db))
+    if ea.ray or eb.ray:
+        return RAY, info
+    if not confirmed(ea, da) or not confirmed(eb, db):
+        info["which"] = "a" if not confirmed(ea, da) else "b"
+        # an exact answer on its index set, but farther than NEAR_RTOL (ill-conditioned),
+        # or none found on the sets read from it
+        info["exact_there"] = (ea if info["which"] == "a" else eb).solution
+        return INACCURATE, info
+    xa = np.array([float(v) for v in ea.x])
+    forces = step.normal + step.tangential
+    gap = distance(step, eb, xa, float(max(np.max(np.abs(va[forces]), initial=0.0),
+                                            np.max(np.abs(vb[forces]), initial=0.0))))
+    info["apart"] = gap
+    return (MULTIPLE if max(gap[0], gap[2]) > NEAR_RTOL else SAME), info

@@ -1,0 +1,102 @@
+"""The exact oracle of the frictional step (benchmarks/exact_friction.py) and its
+classifier, on steps whose answers are known by construction."""
+
+from __future__ import annotations
+
+import sys
+from fractions import Fraction as Q
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+import exact_friction as ef  # noqa: E402
+
+
+def one_contact(mu):
+    """One contact, unknowns (δ1, δ2, N, T): K = I, G_n = (1, 0), G_t = (9/10, 3/10),
+    f = 0, so g = 4/5 + N + (9/10) T and s = 2 + (9/10) N + (9/10) T (W = GᵀG, positive
+    definite). With μ = 2 it has two answers: separate (N = T = 0, g = 4/5) and sliding
+    forward (g = 0: 4/5 + N − (9/5) N = 0, N = 1, T = −2, s = 2 + 9/10 − 9/5 = 11/10 >=
+    0). With μ = 1/10 only the first: in contact, sliding forward needs
+    N = −(4/5)/(1 − 9/100) < 0, backward N = −(4/5)/(1 + 9/100) < 0, and sticking
+    (W (N, T) = −(4/5, 2)) gives N = 12, T = −128/9, outside its cone μN = 6/5."""
+    mech = [({0: Q(1), 2: Q(-1), 3: Q(-9, 10)}, Q(0)), ({1: Q(1), 3: Q(-3, 10)}, Q(0))]
+    return ef.PrimalStep(4, mech, [2], [(Q(4, 5), {0: Q(1)})], [3],
+                         [(Q(2), {0: Q(9, 10), 1: Q(3, 10)})], [Q(mu)], [0], [0, 1])
+
+
+SEPARATE = np.array([0.0, 0.0, 0.0, 0.0])
+SLIDING = np.array([1 - 1.8, -0.6, 1.0, -2.0])  # δ = G_n N + G_t T
+
+
+def test_both_answers_of_a_two_answer_step_are_exact_and_classified_as_two():
+    step = one_contact(Q(2))
+    for v, rows, pairs in ((SEPARATE, [False], [ef.OFF]), (SLIDING, [True], [ef.FORWARD])):
+        assert ef.read_states(step, v) == (rows, pairs)
+        ex = ef.solve(step, rows, pairs, v)
+        assert ex.solution and not ex.ray
+        assert max(ef.distance(step, ex, v)) < 1e-15
+    assert [float(x) for x in ef.solve(step, [True], [ef.FORWARD]).x] == [-0.8, -0.6, 1, -2]
+    kind, info = ef.classify(step, SEPARATE, SLIDING)
+    # ΔN = 1 against the largest force |T| = 2
+    assert kind == ef.MULTIPLE and info["apart"][0] == pytest.approx(0.5)
+
+
+def test_a_unique_answer_step_has_no_second_exact_answer_and_a_wrong_one_is_caught():
+    step = one_contact(Q(1, 10))
+    assert ef.solve(step, [False], [ef.OFF]).solution
+    for pairs in ([ef.FORWARD], [ef.BACKWARD], [ef.STICK]):
+        ex = ef.solve(step, [True], pairs)
+        assert not ex.solution, pairs  # N < 0 when sliding, outside the cone sticking
+    stick = ef.solve(step, [True], [ef.STICK])
+    assert (stick.x[2], stick.x[3]) == (Q(12), Q(-128, 9))
+    # an answer pressing on the wall by 1e-3 (separated in fact): not an answer
+    wrong = np.array([1e-3, 0.0, 1e-3, 0.0])
+    kind, info = ef.classify(step, SEPARATE, wrong)
+    assert kind == ef.INACCURATE and info["which"] == "b"
+    # two roundings of one answer: the same exact answer
+    two = one_contact(Q(2))
+    assert ef.classify(two, SLIDING, SLIDING * (1 + 1e-15))[0] == ef.SAME
+
+
+def test_a_pull_at_mu_N_on_a_chain_nothing_holds_in_x_is_a_ray():
+    """Unknowns (δy, δx, N, T): δy = N − 1 (pressed on the wall, g = δy), nothing holds
+    δx (k = 0: −T = P = 1/2), μ = 1/2: in contact N = 1 and T = −μN = −P, sliding
+    forward by any δx >= 0."""
+    mech = [({0: Q(1), 2: Q(-1)}, Q(-1)), ({3: Q(-1)}, Q(1, 2))]
+    step = ef.PrimalStep(4, mech, [2], [(Q(0), {0: Q(1)})], [3], [(Q(0), {1: Q(1)})],
+                         [Q(1, 2)], [0], [0, 1])
+    a, b = np.array([0.0, 0.0, 1.0, -0.5]), np.array([0.0, 1.0, 1.0, -0.5])
+    ex = ef.solve(step, [True], [ef.FORWARD], b)
+    assert ex.solution and ex.ray and ex.free == 1
+    assert ef.classify(step, a, b)[0] == ef.RAY
+
+
+def test_lemke_answer_of_a_chain_step_is_exact_on_its_index_set():
+    """The primal equations rebuilt from the step's doubles (recurrences for D and Dᵀ,
+    no Delassus matrix) confirm Lemke's answer, solved on W = GᵀK⁻¹G in floats."""
+    import lcpbench
+    from lcpbench import ActuatorScene
+    from lcpbench.model.friction_solvers import step_runner
+
+    steps = []
+    run = step_runner("lemke")
+
+    def keep(fs):
+        sol = run(fs)
+        steps.append((fs, sol))
+        return sol
+
+    keep.takes_step, keep.newton = True, True
+    scene = ActuatorScene(theta=150.0, height=3.0, links=20, left_end="pinned",
+                          right_end="slider", friction=0.3)
+    res = lcpbench.solve_path(scene, [{}, {"pull": 0.05}], lcp=keep)
+    assert all(r.converged for r in res)
+    fs, sol = steps[-1]
+    step = ef.chain_step(fs)
+    v = ef.answer_values(fs, step, sol.z)
+    ex, dist, _ = ef.nearest_exact(step, v)
+    assert ex.solution and not ex.ray and ef.confirmed(ex, dist)
+    assert sum(v[step.normal]) > 0  # it presses on the wall
