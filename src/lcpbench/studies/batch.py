@@ -96,7 +96,19 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
     for line in continuation_order(scenes):
         line_scenes = [scenes[i] for i in line]
         if fast and all(isinstance(s, ActuatorScene) for s in line_scenes):
-            for plane in _planes(line_scenes):
+            planes = _planes(line_scenes)
+            if len(planes) > 1:  # every plane in one kernel call where it takes them all
+                ids = [0] * len(line_scenes)
+                for p, plane in enumerate(planes):
+                    for j in plane:
+                        ids[j] = p
+                got = run_line(line_scenes, predictor=predictor, plane=ids, **fast_kw)
+                if got is not None:
+                    for j, res in enumerate(got):
+                        out[line[j]] = res if res.converged else _retried(
+                            res, line_scenes[j], **fast_kw)
+                    continue
+            for plane in planes:
                 # a plane in one kernel call where it takes it, else scene by scene
                 ps = [line_scenes[j] for j in plane]
                 got = run_line(ps, predictor=predictor, **fast_kw)
