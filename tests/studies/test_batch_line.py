@@ -238,3 +238,23 @@ def test_planes_of_elastic_walls_run_in_one_call_each_from_its_own_answers(monke
             g = by_scene[id(w.scene)]
             assert g.extra["continuation"] == w.extra["continuation"]
             np.testing.assert_array_equal(g.forces, w.forces)
+
+
+def test_rows_of_sections_run_in_one_call_and_a_row_it_stops_on_as_solve_runs_it():
+    """Rows of two sections (θ, −θ), each cold and alone in its plane: one call of the line
+    kernel for all; the rows past ~157° on which the solve kernel stops (its own step
+    refused at the free arc) are solved as lcpbench.solve solves them, along the loading
+    path. Every answer is an equilibrium (tests/energy_oracle.py: stationary,
+    feasible, complementary)."""
+    from lcpbench import SectionedScene
+
+    rows = [SectionedScene(sections=[(t, 15.0), (-t, 15.0)], height=h, links=40)
+            for t, h in ((100, 2.5), (140, 3.0), (170, 2.0), (175, 2.7), (120, 4.0))]
+    got = lcpbench.solve_many(rows, tol=1e-3)
+    assert [r.scene for r in got] == rows
+    assert [_from_line(r) for r in got] == [True, True, False, False, True]
+    for res in got:
+        assert res.converged
+        assert_solved(res)
+    for res in got[2:4]:  # the kernel stopped cold: the plan's escalation, as in solve()
+        assert "followed the load from zero" in res.retried("ramped")

@@ -335,10 +335,15 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
     ``records``: the step records (face solves, step length, max|Δα|, energy) of
     every attempt, from column ``o_off[row]``, ``o_count[row]`` of them. ``cu``, ``cl``:
     each scene's walls' compliances 1/k per free node (0: rigid; no columns where no
-    wall yields). ``plane``: each scene's plane (an index): a scene is predicted from the
-    answers of its own plane only, so several planes in one call give the answers of a
-    call per plane."""
+    wall yields). ``plane``: each scene's plane (an index, 0 to the number of planes − 1):
+    a scene is predicted from the answers of its own plane only, so several planes in
+    one call give the answers of a call per plane. Where the solve kernel stops on a
+    scene alone in its plane (no other scene's start depends on it), ``kept[s]`` is −1
+    and the call goes on: the caller solves that scene by itself."""
     m, n = lo.shape
+    members = np.zeros(np.max(plane) + 1 if m else 0, np.int64)
+    for s in range(m):
+        members[plane[s]] += 1
     spare = o_code.size
     free_lo, free_hi = np.full(n, -np.inf), np.full(n, np.inf)
     ok = np.zeros(m, np.bool_)  # accepted answers, what Solved.add records
@@ -360,7 +365,10 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
         done, recs, used = _attempt(s, start, w_u, w_up, w_lo, flags, *args, *outs, recs,
                                     used)
         if not done:
-            return s, recs
+            if members[plane[s]] > 1:
+                return s, recs
+            kept[s] = -1  # alone in its plane: solved by the caller (ok[s] stays False)
+            continue
         kept[s] = s
         if b >= 0 and not conv[s]:  # the warm start failed: cold, in a spare row
             if retry >= spare:

@@ -68,13 +68,15 @@ def _shares(chain, c0, args0: tuple) -> bool:
 
 def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = "default",
              predictor: str = "adaptive", plane: list[int] | None = None
-             ) -> list[ContactResult] | None:
+             ) -> list[ContactResult | None] | None:
     """The results of the line (actuator scenes of one plane, checked, in
     continuation order), or None: the kernel does not take it (the caller solves it
-    scene by scene). ``plane``: each scene's plane (an index), where the line holds
-    several (:func:`lcpbench.studies.batch._planes`): one call for all of them, each
-    scene predicted from its own plane, where every chain shares the first one's
-    layout (:func:`_shares`); None: one plane."""
+    scene by scene). ``plane``: each scene's plane (an index from 0), where the line
+    holds several (:func:`lcpbench.studies.batch._planes`; rows of sections, each a
+    plane of its own): one call for all of them, each scene predicted from its own
+    plane, where every chain shares the first one's layout (:func:`_shares`); None:
+    one plane. A scene alone in its plane on which the solve kernel stops is None in
+    the list (the caller solves it by itself)."""
     if not scenes:
         return []
     chains = [s.chain() for s in scenes]
@@ -97,7 +99,8 @@ def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = 
     cu, cl = (np.ascontiguousarray(np.stack([kernel_args(c)[13 + w] for c in chains]))
               if c0.elastic_walls else np.zeros((m, 0)) for w in (0, 1))
     wall = np.array([c.wall for c in chains], dtype=float)
-    theta = np.array([s.theta for s in scenes], dtype=float)
+    theta = np.array([getattr(s, "theta", 0.0) for s in scenes], dtype=float)  # (rows of
+    # sections have none: each is a plane of its own, never predicted)
     height = np.array([s.height for s in scenes], dtype=float)
     kern = _kernel()
     st = get_settings(settings)
