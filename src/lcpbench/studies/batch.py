@@ -35,7 +35,7 @@ from ..problems.scenes import ActuatorScene
 from ..problems.sections import SectionedScene, check_scene
 from ..solvers.registry import DEFAULT, get_settings
 from .batch_compiled import AUTO_WHY, solve_line, takes
-from .batch_line import run_line
+from .batch_line import run_line, takes_line
 from .continuation import PLANE_FIELDS, PREDICTORS, solve_sequence
 
 
@@ -99,17 +99,18 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
             continue
         line_scenes = [scenes[i] for i in line]
         if fast and all(isinstance(s, ActuatorScene) for s in line_scenes):
-            planes = _planes(line_scenes)
-            if len(planes) > 1:  # every plane in one kernel call where it takes them all
-                ids = [0] * len(line_scenes)
-                for p, plane in enumerate(planes):
-                    for j in plane:
-                        ids[j] = p
-                got = run_line(line_scenes, predictor=predictor, plane=ids, **fast_kw)
-                if got is not None:
-                    for j, res in enumerate(got):
-                        out[line[j]] = _kept(res, line_scenes[j], predictor, fast_kw)
+            planes = []
+            for group in _kernel_groups(line_scenes, _planes(line_scenes)):
+                # the planes of a group in one kernel call where it takes them all
+                rows = [j for plane in group for j in plane]
+                got = None if len(group) < 2 else run_line(
+                    [line_scenes[j] for j in rows], predictor=predictor,
+                    plane=[p for p, plane in enumerate(group) for _ in plane], **fast_kw)
+                if got is None:
+                    planes.extend(group)
                     continue
+                for j, res in zip(rows, got, strict=True):
+                    out[line[j]] = _kept(res, line_scenes[j], predictor, fast_kw)
             for plane in planes:
                 # a plane in one kernel call where it takes it, else scene by scene
                 ps = [line_scenes[j] for j in plane]
@@ -164,6 +165,21 @@ def _retried(res: ContactResult, scene, *, tol: float, max_outer: int,
     ctx = Context(chain, lambda: make_step_solver(DEFAULT, settings, True), DEFAULT, settings,
                   "auto", tol, max_outer, "globalised", AUTO_WHY, None)
     return escalate(res, ctx, plan.escalations)
+
+
+def _kernel_groups(scenes: list, planes: list[list[int]]) -> list[list[list[int]]]:
+    """``planes`` (of ``scenes``) in groups the line kernel may take in one call: those
+    it takes (:func:`lcpbench.studies.batch_line.takes_line`) by whether their walls
+    yield; each plane it does not take a group of its own."""
+    groups: dict = {}
+    alone = []
+    for plane in planes:
+        chain = scenes[plane[0]].chain()
+        if takes_line(chain):
+            groups.setdefault(chain.elastic_walls, []).append(plane)
+        else:
+            alone.append([plane])
+    return [*groups.values(), *alone]
 
 
 def _planes(scenes: list) -> list[list[int]]:
