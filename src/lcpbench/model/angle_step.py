@@ -80,7 +80,11 @@ def total_load(chain: Chain) -> float:
 
 def in_reach(chain: Chain) -> bool:
     """Whether the SQP takes the chain: rigid flat walls, joints between adjacent links
-    (or a clamp of the first), at most :data:`MAX_LINKS` links."""
+    (or a clamp of the first), at most :data:`MAX_LINKS` links. Kept with the chain."""
+    return chain.derived("_in_reach", lambda: _in_reach(chain))
+
+
+def _in_reach(chain: Chain) -> bool:
     if chain.elastic_walls or chain.profiled_walls:
         return False
     jl, jr = chain.joint_links[:, 0], chain.joint_links[:, 1]
