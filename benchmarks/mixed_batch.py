@@ -69,6 +69,71 @@ def paper_grid() -> list:
             for t in np.linspace(90, 180, 10) for h in np.linspace(2, 5, 10)]
 
 
+#: the phases timed inside solve_many (inclusive: a phase's time holds the phases under
+#: it): (label, depth, module, attribute, class or None), each wrapped where it is looked
+#: up (with ahead-of-time kernels, lcpbench.aot, the kernel's own row reads 0)
+PHASES = (
+    ("line kernel: plan checks, arrays, one call per group", 0, "lcpbench.studies.batch",
+     "run_line", None),
+    ("the kernel (predict, solve, judge each scene)", 1, "lcpbench.model.batch_kernel",
+     "solve_line", None),
+    ("per-scene loop (profiles, channels)", 0, "lcpbench.studies.batch_compiled",
+     "_solve_one", None),
+    ("the driver (profile kernel; solve kernel)", 1, "lcpbench.studies.batch_compiled",
+     "drive", None),
+    ("the driver (profile kernel; solve kernel)", 1, "lcpbench.studies.batch_compiled",
+     "run_compiled", None),
+    ("result and judge (finish)", 1, "lcpbench.studies.batch_compiled", "finish", None),
+    ("solve() of a row the line kernel stopped on", 0, "lcpbench.studies.batch",
+     "solve_internal", None),
+    ("loading path (escalation 'ramped')", 1, "lcpbench.escalations", "follow_load", None),
+    ("SQP in the link angles", 2, "lcpbench.model.ramp", "run_heavy", None),
+    ("height steps (solve kernel)", 2, "lcpbench.model.ramp", "drive", None),
+    ("chain at s·θ", 2, "lcpbench.problems.sections", "chain_at", "SectionedScene"),
+    ("scene build (the chain, inside the phases above where first read)", 0,
+     "lcpbench.problems.scenes", "_build_chain", "ActuatorScene"),
+    ("scene build (the chain, inside the phases above where first read)", 0,
+     "lcpbench.problems.sections", "_build_chain", "SectionedScene"),
+)
+
+
+def phases(seed: int, rounds: int) -> list[str]:
+    """Table rows: the time of each of :data:`PHASES` per mixed batch (mean over
+    ``rounds`` batches, after the timed rounds: the wrappers cost a little)."""
+    import importlib
+
+    spent: dict = collections.defaultdict(float)
+    calls: dict = collections.defaultdict(int)
+    saved = []
+    for label, _, mod, attr, cls in PHASES:
+        owner = importlib.import_module(mod)
+        owner = getattr(owner, cls) if cls else owner
+        real = getattr(owner, attr)
+
+        def timed(*a, _real=real, _label=label, **kw):
+            t0 = time.perf_counter()
+            try:
+                return _real(*a, **kw)
+            finally:
+                spent[_label] += time.perf_counter() - t0
+                calls[_label] += 1
+        saved.append((owner, attr, real))
+        setattr(owner, attr, timed)
+    try:
+        t0 = time.perf_counter()
+        for _ in range(rounds):
+            lcpbench.solve_many(mixed(seed), tol=1e-3)
+        total = (time.perf_counter() - t0) / rounds
+    finally:
+        for owner, attr, real in saved:
+            setattr(owner, attr, real)
+    rows = [f"| solve_many, 100 mixed scenes (timers on) | {total * 1e3:.1f} | 1 |"]
+    for label, depth in dict.fromkeys((lab, d) for lab, d, *_ in PHASES):
+        rows.append(f"| {'  ' * depth}{'└ ' if depth else ''}{label} | "
+                    f"{spent[label] / rounds * 1e3:.1f} | {calls[label] / rounds:.0f} |")
+    return rows
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--rounds", type=int, default=7)
@@ -100,6 +165,7 @@ def main(argv=None) -> int:
         kinds.append(f"| {kind} | {sum(r.converged for r in rs)} of {len(rs)} | "
                      + ", ".join(f"{k} ({v})" for k, v in routes.most_common())
                      + f" | {med:.4f} | {len(rs) / med:.0f} |")
+    phase_rows = phases(a.seed, a.rounds)
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     text = "\n".join([
         "# solve_many on mixed scenes (issue 35, target 3)", "",
@@ -107,7 +173,11 @@ def main(argv=None) -> int:
         f"--rounds {a.rounds} --seed {a.seed} --force`. Target: 100 mixed scenes (elastic and "
         "profiled walls, sections, channels) at ≥ 5,000 scenes/s, tol 1e-3.", "",
         *lines, "", "The mixed batch by kind (alone: the kind's 25 scenes as a batch of their "
-        "own, timed in the same rounds):", "", *kinds, ""])
+        "own, timed in the same rounds):", "", *kinds, "",
+        "Where the time of the mixed batch goes (per-phase timers wrapped around the "
+        f"functions named in `PHASES`, {a.rounds} batches after the timed rounds; "
+        "inclusive: an indented phase is part of the one above it):", "",
+        "| phase | ms per batch | calls per batch |", "|---|---:|---:|", *phase_rows, ""])
     a.out.write_text(text)
     print(text)
     return 0

@@ -97,8 +97,9 @@ def _fake(converged, touches, alpha):
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("predictor", ["adaptive", "quadratic", "previous"])
 def test_the_kernels_predictor_chooses_as_solved(seed, predictor):
-    """Random histories on a plane (repeated scenes, answers that failed or touch):
-    the kernel's prediction has the same base and the same α as Solved.predict.
+    """Random histories on two planes (rigid and elastic walls; repeated scenes, answers
+    that failed or touch): the kernel's prediction has the same base and the same α as
+    Solved.predict, which predicts from the scene's own plane only.
 
     Route against route: the kernel's port of the predictor must choose as the Python
     predictor (Solved) does; a prediction is a choice, with no oracle."""
@@ -110,8 +111,10 @@ def test_the_kernels_predictor_chooses_as_solved(seed, predictor):
     thetas = [90.0 + 7.5 * i for i in range(8)]
     heights = [2.0, 2.5, 3.0, 4.0]
     m, links = 40, 5
-    scenes = [ActuatorScene(theta=rng.choice(thetas), height=rng.choice(heights), links=links)
-              for _ in range(m)]
+    stiffness = [np.inf, 50.0]
+    plane = np.array([rng.randrange(2) for _ in range(m)], np.int64)
+    scenes = [ActuatorScene(theta=rng.choice(thetas), height=rng.choice(heights), links=links,
+                            wall_stiffness=stiffness[p]) for p in plane]
     ok = np.array([rng.random() < 0.8 for _ in range(m)])
     touch = np.array([rng.random() < 0.6 for _ in range(m)])
     alphas = np.array([np.sin(np.arange(links) + s.theta / 30) * s.height
@@ -122,7 +125,7 @@ def test_the_kernels_predictor_chooses_as_solved(seed, predictor):
     fakes = [_fake(bool(o), bool(t), a) for o, t, a in zip(ok, touch, alphas)]
     for s in range(m):
         want = solved.predict(scenes[s])
-        start, base = k._predict(s, theta, height, ok, touch, alphas, POINTS[predictor],
+        start, base = k._predict(s, theta, height, plane, ok, touch, alphas, POINTS[predictor],
                                  predictor == "adaptive")
         if want is None:
             assert base == -1 and start.size == 0
@@ -205,3 +208,53 @@ def test_failed_warm_starts_are_redone_cold_as_scene_by_scene():
         assert abs(g.total_force - w.total_force) <= 1e-9 * F0
         if g.converged:
             assert_solved(g, stationarity=1e-5)  # (tests/energy_oracle.py)
+
+
+def test_planes_of_elastic_walls_run_in_one_call_each_from_its_own_answers(monkeypatch):
+    """Two lines in θ at each of two wall stiffnesses (two planes of one group): one call
+    of the line kernel for both, each answer an equilibrium on its elastic walls
+    (tests/energy_oracle.py), and each plane's answers those of a call for that plane
+    alone (route against route, kept because only it shows that no scene was predicted
+    from another plane's answers: the oracle accepts any start)."""
+    from lcpbench.studies import batch_line
+
+    planes = [[ActuatorScene(theta=t, height=h, links=40, wall_stiffness=k)
+               for t in (110, 130, 150, 170)] for k in (5.0, 500.0) for h in (2.5, 3.0)]
+    scenes = [s for p in planes for s in p]
+    random.Random(5).shuffle(scenes)
+    calls = []
+    real = batch_line.run_line
+    monkeypatch.setattr(lcpbench.studies.batch, "run_line",
+                        lambda *a, **kw: calls.append(kw.get("plane")) or real(*a, **kw))
+    got = lcpbench.solve_many(scenes, tol=1e-6)
+    assert len(calls) == 1 and sorted(set(calls[0])) == [0, 1]  # the planes: k
+    for res in got:
+        assert _from_line(res) and res.converged
+        assert_solved(res)
+    by_scene = {id(r.scene): r for r in got}
+    for k in (5.0, 500.0):
+        alone = [s for s in scenes if s.wall_stiffness == k]
+        for w in lcpbench.solve_many(alone, tol=1e-6):
+            g = by_scene[id(w.scene)]
+            assert g.extra["continuation"] == w.extra["continuation"]
+            np.testing.assert_array_equal(g.forces, w.forces)
+
+
+def test_rows_of_sections_run_in_one_call_and_a_row_it_stops_on_as_solve_runs_it():
+    """Rows of two sections (θ, −θ), each cold and alone in its plane: one call of the line
+    kernel for all; the rows past ~157° on which the solve kernel stops (its own step
+    refused at the free arc) are solved as lcpbench.solve solves them, along the loading
+    path. Every answer is an equilibrium (tests/energy_oracle.py: stationary,
+    feasible, complementary)."""
+    from lcpbench import SectionedScene
+
+    rows = [SectionedScene(sections=[(t, 15.0), (-t, 15.0)], height=h, links=40)
+            for t, h in ((100, 2.5), (140, 3.0), (170, 2.0), (175, 2.7), (120, 4.0))]
+    got = lcpbench.solve_many(rows, tol=1e-3)
+    assert [r.scene for r in got] == rows
+    assert [_from_line(r) for r in got] == [True, True, False, False, True]
+    for res in got:
+        assert res.converged
+        assert_solved(res)
+    for res in got[2:4]:  # the kernel stopped cold: the plan's escalation, as in solve()
+        assert "followed the load from zero" in res.retried("ramped")

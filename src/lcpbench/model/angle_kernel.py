@@ -48,9 +48,14 @@ from numba import njit
 
 from ..linalg.band_lu_kernel import band_solve
 from ..thresholds import ANGLE_SHIFT_GROWTH, ANGLE_SHIFT_START, ANGLE_SHIFT_TRIES
+from .compiled_kernel import energy_into
 
 #: the step's outcome codes
 OK, SINGULAR, INFEASIBLE, NO_END = range(4)
+#: the SQP's outcome codes (:func:`solve_sqp`)
+CONVERGED, QP_FAILED, MAX_STEPS = range(3)
+#: no link turns by more than this in one SQP step (rad)
+STEP_CAP = 0.5
 #: bands of the interleaved KKT matrix either side of the diagonal
 BANDS = 3
 #: primal-dual active-set guesses before the dual active set (each one banded solve)
@@ -332,3 +337,115 @@ def _solve_qp(bd, off, c, grad, y, pinned, node, side, limit, mu, gap_tol):
                 break
             act[block], fixed[node[block]], u[block] = False, False, 0.0
     return NO_END, d, lam_out, u, changes, fixed
+
+
+# -- the SQP's outer loop (model.angle_step.solve_in_angles) ---------------------------
+@njit(cache=True)
+def _state(alpha, a, jl, jr, k, rest, link_load, pinned, node, side, limit):
+    """(y, E, |c|, Σ max(−g, 0), max(0, max −g)) at α: the node heights (N + 1), the exact
+    energy, the closure c = a Σ sin α (pinned; else 0) and the walls' gaps g."""
+    n = alpha.size
+    sines = np.sin(alpha)
+    y = np.empty(n + 1)
+    y[0] = 0.0
+    for i in range(n):
+        y[i + 1] = y[i] + a * sines[i]
+    E = energy_into(alpha, a, jl, jr, k, rest, link_load, sines)
+    c = 0.0
+    if pinned:
+        for i in range(n):
+            c += sines[i]
+        c = abs(a * c)
+    short, worst = 0.0, 0.0
+    for r in range(node.size):
+        g = side[r] * (limit[r] - y[node[r]])
+        if g < 0.0:
+            short -= g
+        worst = max(worst, -g)
+    return y, E, c, short, worst
+
+
+@njit(cache=True)
+def _gradient(alpha, a, jl, jr, k, rest, W):
+    """∇E at α: the springs' torques k(φ − φ*) on their two links, minus a cos α_i W_i."""
+    grad = np.zeros(alpha.size)
+    for j in range(jr.size):
+        left = alpha[jl[j]] if jl[j] >= 0 else 0.0
+        t = k[j] * ((alpha[jr[j]] - left) - rest[j])
+        grad[jr[j]] += t
+        if jl[j] >= 0:
+            grad[jl[j]] -= t
+    for i in range(alpha.size):
+        grad[i] -= a * np.cos(alpha[i]) * W[i]
+    return grad
+
+
+@njit(cache=True)
+def solve_sqp(alpha, a, jl, jr, k, rest, link_load, W, pinned, node, side, limit, lam, mu,
+              gap_tol, tol, max_iter, scale, length, feasible):
+    """(code, α, step sizes, energies, λ, μ): the SQP in the link angles from ``alpha``
+    with the first step's multipliers ``lam`` (closure) and ``mu`` (per wall row).
+
+    Each step: the QP of :func:`qp_step` at α (its step d capped at :data:`STEP_CAP`
+    per link), then an Armijo search on the ℓ₁ merit E + ρ(|c| + Σ max(−g, 0)),
+    ρ = 2 max|(λ', μ')| + 1e-8 ``scale``/``length`` (``scale`` = EI/ℓ), halving t
+    from 1 to 1e-10; a step below ``tol`` is taken whole (the merit is round-off
+    there). :data:`CONVERGED` after the second full step in a row below ``tol`` with
+    the constraints met to ``feasible`` × ``length`` (the active walls' gaps then sit
+    at round-off); :data:`QP_FAILED` where a QP failed; :data:`MAX_STEPS` after
+    ``max_iter`` steps. ``k``, ``rest``: the joints' stiffness and rest angle,
+    ``link_load``: μ per link, ``W``: the load's weights of a cos α_i in ∇E."""
+    alpha = alpha.copy()
+    sizes, energies = np.empty(max_iter), np.empty(max_iter)
+    y, E, c, short, worst = _state(alpha, a, jl, jr, k, rest, link_load, pinned, node, side,
+                                   limit)
+    near = False
+    for it in range(max_iter):
+        grad = _gradient(alpha, a, jl, jr, k, rest, W)
+        code, d, lam_new, mu_new, _, _ = qp_step(alpha, a, jl, jr, k, W, grad, y, pinned,
+                                                 node, side, limit, lam, mu, gap_tol)
+        if code != OK:
+            return QP_FAILED, alpha, sizes[:it], energies[:it], lam, mu
+        size = 0.0
+        for i in range(d.size):
+            size = max(size, abs(d[i]))
+        if size > STEP_CAP:
+            d = d * (STEP_CAP / size)
+        big = 0.0
+        for v in lam_new:
+            big = max(big, abs(v))
+        for v in mu_new:
+            big = max(big, abs(v))
+        rho = 2.0 * big + 1e-8 * scale / length
+        m0 = E + rho * (c + short)
+        slope = -rho * (c + short)
+        dot = 0.0
+        for i in range(d.size):
+            dot += grad[i] * d[i]
+        slope += dot
+        noise = 1e-13 * (abs(m0) + scale)
+        t = 1.0
+        while True:
+            trial = alpha + t * d
+            y, E_t, c_t, short_t, worst_t = _state(trial, a, jl, jr, k, rest, link_load,
+                                                   pinned, node, side, limit)
+            if size < tol:
+                break
+            if E_t + rho * (c_t + short_t) <= m0 + 1e-4 * t * min(slope, 0.0) + noise:
+                break
+            t *= 0.5
+            if t < 1e-10:
+                break
+        alpha, E, c, short, worst = trial, E_t, c_t, short_t, worst_t
+        if pinned:
+            lam = lam_new
+        mu = mu_new
+        moved = 0.0
+        for i in range(d.size):
+            moved = max(moved, abs(d[i]))
+        sizes[it], energies[it] = t * moved, E
+        whole = t == 1.0 and size < tol
+        if whole and max(c, worst) < feasible * length and near:
+            return CONVERGED, alpha, sizes[:it + 1], energies[:it + 1], lam, mu
+        near = whole
+    return MAX_STEPS, alpha, sizes, energies, lam, mu

@@ -38,7 +38,7 @@ import numpy as np
 
 from ..numba_cache import kernel_module
 from ..problems.scenes import Chain
-from .chain import alpha_from_heights, energy, heights, joint_angles, node_positions
+from .chain import alpha_from_heights, heights
 
 #: chains of more links than this are not solved in angles
 MAX_LINKS = 5000
@@ -80,7 +80,11 @@ def total_load(chain: Chain) -> float:
 
 def in_reach(chain: Chain) -> bool:
     """Whether the SQP takes the chain: rigid flat walls, joints between adjacent links
-    (or a clamp of the first), at most :data:`MAX_LINKS` links."""
+    (or a clamp of the first), at most :data:`MAX_LINKS` links. Kept with the chain."""
+    return chain.derived("_in_reach", lambda: _in_reach(chain))
+
+
+def _in_reach(chain: Chain) -> bool:
     if chain.elastic_walls or chain.profiled_walls:
         return False
     jl, jr = chain.joint_links[:, 0], chain.joint_links[:, 1]
@@ -96,15 +100,16 @@ def heavy(chain: Chain) -> bool:
 
 
 class _Problem:
-    """E, c, g of a chain and the arrays of the QP kernel (O(N) each)."""
+    """The arrays of the SQP kernel for a chain (:func:`angle_kernel.solve_sqp`), O(N)."""
 
     def __init__(self, chain: Chain):
-        self.chain = chain
         self.a = float(chain.link_length)
         self.jl = np.ascontiguousarray(chain.joint_links[:, 0], dtype=np.int64)
         self.jr = np.ascontiguousarray(chain.joint_links[:, 1], dtype=np.int64)
         self.k = np.ascontiguousarray(chain.joint_stiffness, dtype=float)
+        self.rest = np.ascontiguousarray(chain.rest_joint, dtype=float)
         load = chain.link_load  # Σ μ_k y_c,k = a Σ_i W_i sin α_i
+        self.load = np.ascontiguousarray(load, dtype=float)
         self.W = np.concatenate((np.cumsum(load[::-1])[::-1][1:], [0.0])) + 0.5 * load
         self.pinned = bool(chain.free_nodes[-1] < chain.links)
         up = np.flatnonzero(np.isfinite(chain.upper))
@@ -113,26 +118,6 @@ class _Problem:
         self.node = np.ascontiguousarray(chain.free_nodes[self.free], dtype=np.int64)
         self.side = np.concatenate((np.ones(up.size), -np.ones(lo.size)))
         self.limit = np.concatenate((chain.upper[up], chain.lower[lo])).astype(float)
-        self.clamped = self.jl >= 0
-
-    def energy(self, alpha):
-        return energy(self.chain, alpha)
-
-    def gradient(self, alpha):
-        n = alpha.size
-        t = self.k * (joint_angles(self.chain, alpha) - self.chain.rest_joint)
-        grad = np.bincount(self.jr, t, n) - np.bincount(self.jl[self.clamped],
-                                                         t[self.clamped], n)
-        return grad - self.a * np.cos(alpha) * self.W
-
-    def closure(self, alpha):
-        if not self.pinned:
-            return np.zeros(0)
-        return np.array([self.a * np.sum(np.sin(alpha))])
-
-    def walls(self, alpha, y=None):
-        y = node_positions(self.chain, alpha)[1] if y is None else y
-        return self.side * (self.limit - y[self.node])
 
 
 def _first_multipliers(p: _Problem, multipliers) -> tuple[np.ndarray, np.ndarray]:
@@ -167,67 +152,22 @@ def solve_in_angles(chain: Chain, *, tol: float = 1e-10, max_iter: int = 30,
     non-convergence.
     """
     p = _Problem(chain)
-    kern = kernel_module("lcpbench.model.angle_kernel", "qp_step")
+    kern = kernel_module("lcpbench.model.angle_kernel", "solve_sqp")
     alpha = _start(chain) if start is None else np.array(start, float)
     lam, mu = _first_multipliers(p, multipliers)
-    sizes: list = []
-    energies: list = []
-    near = False
-    scale = float(chain.force_scale) * chain.length  # EI/ℓ
-    gap_tol = QP_GAP * chain.length
-    y = node_positions(chain, alpha)[1]
-    state = (p.energy(alpha), p.closure(alpha), p.walls(alpha, y))  # E, c, g at α
-    for _ in range(max_iter):
-        grad = p.gradient(alpha)
-        _, c, g = state
-        code, d, lam_new, mu_new, _, _ = kern.qp_step(
-            alpha, p.a, p.jl, p.jr, p.k, p.W, grad, y, p.pinned, p.node, p.side, p.limit,
-            lam, mu, gap_tol)
-        if code != 0:
-            return AngleOutcome(alpha, False, sizes, energies, "the QP of a step failed")
-        size = float(np.max(np.abs(d), initial=0.0))
-        cap = 0.5  # rad: no link turns by more than this in one step
-        if size > cap:
-            d = d * (cap / size)
-        rho = 2.0 * float(np.max(np.abs(np.concatenate((lam_new, mu_new))), initial=0.0)) \
-            + 1e-8 * scale / chain.length
-
-        def merit(st, rho=rho):
-            return st[0] + rho * (float(np.sum(np.abs(st[1])))
-                                  + float(np.sum(np.maximum(-st[2], 0.0))))
-
-        m0 = merit(state)
-        slope = float(grad @ d) - rho * (float(np.sum(np.abs(c)))
-                                         + float(np.sum(np.maximum(-g, 0.0))))
-        noise = 1e-13 * (abs(m0) + scale)
-        t = 1.0
-        while True:  # a step below tol is taken whole: the merit is round-off there
-            trial = alpha + t * d
-            y = node_positions(chain, trial)[1]
-            new = (p.energy(trial), p.closure(trial), p.walls(trial, y))
-            if size < tol:
-                break
-            if merit(new) <= m0 + 1e-4 * t * min(slope, 0.0) + noise:
-                break
-            t *= 0.5
-            if t < 1e-10:
-                break
-        alpha, state = trial, new
-        lam, mu = (lam_new if p.pinned else lam), mu_new
-        sizes.append(float(t * np.max(np.abs(d), initial=0.0)))
-        energies.append(state[0])
-        viol = max(float(np.max(np.abs(state[1]), initial=0.0)),
-                   float(np.max(-state[2], initial=0.0)))
-        # one more full step after the first that meets the test: the active walls'
-        # gaps then sit at round-off, not at the size of the step before
-        polished = bool(t == 1.0 and size < tol and viol < FEASIBLE * chain.length and near)
-        near = bool(t == 1.0 and size < tol)
-        if t == 1.0 and size < tol and viol < FEASIBLE * chain.length and polished:
-            n = chain.free_nodes.size
-            upper, lower = np.zeros(n), np.zeros(n)
-            upper[p.free[p.side > 0]] = mu[p.side > 0]
-            lower[p.free[p.side < 0]] = mu[p.side < 0]
-            return AngleOutcome(alpha, True, sizes, energies, "converged", upper, lower,
-                                float(lam[0]))
-    return AngleOutcome(alpha, False, sizes, energies,
-                        f"no convergence in {max_iter} angle steps")
+    code, alpha, sizes, energies, lam, mu = kern.solve_sqp(
+        alpha, p.a, p.jl, p.jr, p.k, p.rest, p.load, p.W, p.pinned, p.node, p.side, p.limit,
+        lam, mu, QP_GAP * chain.length, float(tol), int(max_iter),
+        float(chain.force_scale) * chain.length, float(chain.length), FEASIBLE)
+    sizes, energies = sizes.tolist(), energies.tolist()
+    if code == kern.QP_FAILED:
+        return AngleOutcome(alpha, False, sizes, energies, "the QP of a step failed")
+    if code != kern.CONVERGED:
+        return AngleOutcome(alpha, False, sizes, energies,
+                            f"no convergence in {max_iter} angle steps")
+    n = chain.free_nodes.size
+    upper, lower = np.zeros(n), np.zeros(n)
+    upper[p.free[p.side > 0]] = mu[p.side > 0]
+    lower[p.free[p.side < 0]] = mu[p.side < 0]
+    return AngleOutcome(alpha, True, sizes, energies, "converged", upper, lower,
+                        float(lam[0]))

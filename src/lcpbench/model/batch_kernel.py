@@ -2,7 +2,8 @@
 
 :func:`solve_line` is :func:`lcpbench.studies.batch_compiled.solve_line` in one
 compiled call, for a line of actuator scenes of one plane (the same chain but for θ
-and h; flat rigid walls, one wall, no heavy load). For each scene, in order:
+and h; flat walls, rigid or elastic, one wall, no heavy load), or of several planes that
+share the chain's layout (each scene predicted from its own plane). For each scene, in order:
 
 1. the start, as :class:`lcpbench.studies.continuation.Solved` chooses it (its
    rules 1-4 and the ``adaptive`` choice of degree, :func:`_predict`); the
@@ -183,16 +184,17 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
 
 
 @njit(cache=True)
-def _nearest(s, by_h, theta, height, ok, touch, most, idx, val):
-    """Solved's _nearest over the accepted answers before ``s``: on its line in θ
-    (``by_h``) or at its θ (the other lines); nearest first, the latest answer per
-    value, all touching a wall as the nearest does. Fills ``idx``, ``val``; the count."""
+def _nearest(s, by_h, theta, height, plane, ok, touch, most, idx, val):
+    """Solved's _nearest over the accepted answers before ``s`` of its plane (``plane``:
+    each row's): on its line in θ (``by_h``) or at its θ (the other lines); nearest
+    first, the latest answer per value, all touching a wall as the nearest does. Fills
+    ``idx``, ``val``; the count."""
     at = theta[s] if by_h else height[s]
     vals = np.empty(s)
     ids = np.empty(s, np.int64)
     c = 0
     for i in range(s):
-        if not ok[i]:
+        if not ok[i] or plane[i] != plane[s]:
             continue
         if by_h:
             if height[i] != height[s]:
@@ -276,17 +278,17 @@ def _best_degree(ps, m):
 
 
 @njit(cache=True)
-def _predict(s, theta, height, ok, touch, alphas, most, adaptive):
-    """Solved.predict for scene ``s``: (start α, index of the answer whose last step
-    warm-starts it); index −1: a cold start."""
+def _predict(s, theta, height, plane, ok, touch, alphas, most, adaptive):
+    """Solved.predict for scene ``s`` (from the answers of its plane): (start α, index of
+    the answer whose last step warm-starts it); index −1: a cold start."""
     links = alphas.shape[1]
     none = np.empty(0)
     if most == 0:
         return none, -1
     li, lv = np.empty(most, np.int64), np.empty(most)
     ai, av = np.empty(1, np.int64), np.empty(1)
-    nl = _nearest(s, True, theta, height, ok, touch, most, li, lv)
-    na = _nearest(s, False, theta, height, ok, touch, 1, ai, av)
+    nl = _nearest(s, True, theta, height, plane, ok, touch, most, li, lv)
+    na = _nearest(s, False, theta, height, plane, ok, touch, 1, ai, av)
     line_touches = nl > 0 and touch[li[0]]
     if na and not touch[ai[0]] and not line_touches:  # 1.
         return alphas[ai[0]].copy(), ai[0]
@@ -296,7 +298,8 @@ def _predict(s, theta, height, ok, touch, alphas, most, adaptive):
         for q in range(nl):
             o = -1
             for i in range(s):  # the latest accepted answer at (other_h, θ_q)
-                if ok[i] and height[i] == other_h and theta[i] == lv[q]:
+                if ok[i] and plane[i] == plane[s] and height[i] == other_h \
+                        and theta[i] == lv[q]:
                     o = i
             if o < 0 or not touch[o]:
                 break
@@ -320,7 +323,7 @@ def _predict(s, theta, height, ok, touch, alphas, most, adaptive):
 @njit(cache=True)
 def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, cu, cl, L, F,
                wall,
-               theta, height, tol, max_outer, max_iter, request, most, adaptive,
+               theta, height, plane, tol, max_outer, max_iter, request, most, adaptive,
                o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res, o_off, o_count,
                j_code, j_stats, j_fu, j_fl, j_tres, conv, kept, failed, base):
     """Every scene of the line in order; returns ``(code, records)``: code −1 all done,
@@ -332,8 +335,15 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
     ``records``: the step records (face solves, step length, max|Δα|, energy) of
     every attempt, from column ``o_off[row]``, ``o_count[row]`` of them. ``cu``, ``cl``:
     each scene's walls' compliances 1/k per free node (0: rigid; no columns where no
-    wall yields)."""
+    wall yields). ``plane``: each scene's plane (an index, 0 to the number of planes − 1):
+    a scene is predicted from the answers of its own plane only, so several planes in
+    one call give the answers of a call per plane. Where the solve kernel stops on a
+    scene alone in its plane (no other scene's start depends on it), ``kept[s]`` is −1
+    and the call goes on: the caller solves that scene by itself."""
     m, n = lo.shape
+    members = np.zeros(np.max(plane) + 1 if m else 0, np.int64)
+    for s in range(m):
+        members[plane[s]] += 1
     spare = o_code.size
     free_lo, free_hi = np.full(n, -np.inf), np.full(n, np.inf)
     ok = np.zeros(m, np.bool_)  # accepted answers, what Solved.add records
@@ -344,7 +354,7 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
     outs = (o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res, o_off, o_count,
             j_code, j_stats, j_fu, j_fl, j_tres, conv)
     for s in range(m):
-        start, b = _predict(s, theta, height, ok, touch, alphas, most, adaptive)
+        start, b = _predict(s, theta, height, plane, ok, touch, alphas, most, adaptive)
         base[s], failed[s] = b, -1
         w_u, w_up, w_lo, flags = zf, zb, zb, 0
         if b >= 0 and o_kind[kept[b]] != ARC:  # the base's last contact step
@@ -355,7 +365,10 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
         done, recs, used = _attempt(s, start, w_u, w_up, w_lo, flags, *args, *outs, recs,
                                     used)
         if not done:
-            return s, recs
+            if members[plane[s]] > 1:
+                return s, recs
+            kept[s] = -1  # alone in its plane: solved by the caller (ok[s] stays False)
+            continue
         kept[s] = s
         if b >= 0 and not conv[s]:  # the warm start failed: cold, in a spare row
             if retry >= spare:

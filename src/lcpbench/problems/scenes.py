@@ -158,6 +158,21 @@ class Chain:
             value = d[key] = make()  # (a frozen dataclass: not via setattr)
             return value
 
+    def with_rest_shape(self, rest_alpha: np.ndarray, rest_joint: np.ndarray) -> Chain:
+        """The same chain with another rest shape α*, φ* (a step of the loading path,
+        :mod:`lcpbench.model.ramp`): ``dataclasses.replace`` without its per-field
+        work, keeping the derived values that depend on the layout and the load only
+        (:data:`LAYOUT_DERIVED`); the others are derived again."""
+        new = object.__new__(Chain)
+        d, own = new.__dict__, self.__dict__
+        for name in _CHAIN_FIELDS:
+            d[name] = own[name]
+        d["rest_alpha"], d["rest_joint"] = rest_alpha, rest_joint
+        for key in LAYOUT_DERIVED:
+            if key in own:
+                d[key] = own[key]
+        return new
+
     @property
     def nodal_load(self) -> np.ndarray:
         """Link loads lumped half to each end node (exact for rigid links)."""
@@ -166,6 +181,13 @@ class Chain:
         f[1:] += 0.5 * self.link_load
         return f[self.free_nodes]
 
+
+#: the Chain's fields, in order
+_CHAIN_FIELDS = tuple(f.name for f in fields(Chain))
+#: the values a chain derives (:meth:`Chain.derived`) from its layout, walls and load,
+#: not from its rest shape: :meth:`Chain.with_rest_shape` keeps them
+LAYOUT_DERIVED = ("_free_nodes_below", "_in_reach", "_kernel_layout", "_loaded",
+                  "_nodal_load", "_total_load")
 
 STIFFNESS_RANGE = (1e-9, 1e12)  # N/mm per mm of wall (Winkler k); inf = rigid
 

@@ -67,6 +67,7 @@ from .scenes import (
 
 #: Rest shapes turned by less than this (rad) to level their chord are left as they are.
 LEVEL_TOL = 1e-13
+_add_reduce = np.add.reduce
 #: Relative tolerance on N ℓ_k / L being an integer, and on Σℓ_k = length.
 FIT_TOL = 1e-9
 GRAVITY = ("-y", "+y")
@@ -282,13 +283,14 @@ class SectionedScene(FrictionOptions):
         counts = self.section_links()
         turn = th[0] if len(th) == 1 else math.fsum(th)  # θ > 0 turns clockwise
         before, parts = 0.0, []
-        for t, m in zip(th, counts, strict=True):
-            parts.append(turn / 2 - before - (np.arange(m) + 0.5) * t / m)
+        for t, m, mid in zip(th, counts, self._link_middles(), strict=True):
+            parts.append(turn / 2 - before - mid * t / m)
             before += t
         alpha = np.concatenate(parts)
         n, total = self._size()
         a = total / n
-        cx, cy = a * np.sum(np.cos(alpha)), a * np.sum(np.sin(alpha))
+        # (np.add.reduce: np.sum without its Python wrapper, the same sum)
+        cx, cy = a * _add_reduce(np.cos(alpha)), a * _add_reduce(np.sin(alpha))
         chord = math.hypot(cx, cy)
         if not chord > 1e-6 * total:
             raise ProblemError(f"sections: the rest shape closes on itself (its ends are "
@@ -310,9 +312,10 @@ class SectionedScene(FrictionOptions):
         return cached
 
     def __getstate__(self) -> dict:
-        """Pickled without the kept Chain and section links (rebuilt on demand)."""
+        """Pickled without the kept Chain, section links and link middles (rebuilt on
+        demand)."""
         return {k: v for k, v in self.__dict__.items()
-                if k not in ("_chain", "_section_links")}
+                if k not in ("_chain", "_section_links", "_middles")}
 
     def chain_at(self, fraction: float) -> Chain:
         """The chain of the row with every bend angle θ_k scaled to s·θ_k (``fraction`` s):
@@ -322,8 +325,18 @@ class SectionedScene(FrictionOptions):
         whole = self.chain()
         if fraction == 1.0:
             return whole
-        return replace(whole, rest_alpha=self.rest_alpha(fraction),
-                       rest_joint=self._rest_joint(fraction))
+        return whole.with_rest_shape(self.rest_alpha(fraction), self._rest_joint(fraction))
+
+    def _link_middles(self) -> list[np.ndarray]:
+        """Per section, its links' middles in links from its start (0.5, 1.5, …), kept
+        with the scene (read only)."""
+        kept = self.__dict__.get("_middles")
+        if kept is None:
+            kept = self.__dict__["_middles"] = [np.arange(m) + 0.5
+                                                for m in self.section_links()]
+            for mid in kept:
+                mid.setflags(write=False)
+        return kept
 
     def _rest_joint(self, fraction: float = 1.0) -> np.ndarray:
         """Rest joint angles φ* (rad), minus the mean of the two links' turns θ_k/n_k, with

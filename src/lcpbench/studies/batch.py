@@ -32,10 +32,10 @@ from ..model.step_solver import make_step_solver
 from ..plan import make_plan
 from ..problems.checks import describe
 from ..problems.scenes import ActuatorScene
-from ..problems.sections import check_scene
+from ..problems.sections import SectionedScene, check_scene
 from ..solvers.registry import DEFAULT, get_settings
 from .batch_compiled import AUTO_WHY, solve_line, takes
-from .batch_line import run_line
+from .batch_line import run_line, takes_line
 from .continuation import PLANE_FIELDS, PREDICTORS, solve_sequence
 
 
@@ -93,18 +93,32 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
         m = fast_kw["max_outer"]
         if isinstance(m, bool) or not (isinstance(m, int) and m >= 1):
             fast = False  # solve() names the error
+    done = _rows_of_sections(scenes, out, kw, fast_kw) if fast else set()
     for line in continuation_order(scenes):
+        if line[0] in done:
+            continue
         line_scenes = [scenes[i] for i in line]
         if fast and all(isinstance(s, ActuatorScene) for s in line_scenes):
-            for plane in _planes(line_scenes):
+            planes = []
+            for group in _kernel_groups(line_scenes, _planes(line_scenes)):
+                # the planes of a group in one kernel call where it takes them all
+                rows = [j for plane in group for j in plane]
+                got = None if len(group) < 2 else run_line(
+                    [line_scenes[j] for j in rows], predictor=predictor,
+                    plane=[p for p, plane in enumerate(group) for _ in plane], **fast_kw)
+                if got is None:
+                    planes.extend(group)
+                    continue
+                for j, res in zip(rows, got, strict=True):
+                    out[line[j]] = _kept(res, line_scenes[j], predictor, fast_kw)
+            for plane in planes:
                 # a plane in one kernel call where it takes it, else scene by scene
                 ps = [line_scenes[j] for j in plane]
                 got = run_line(ps, predictor=predictor, **fast_kw)
                 results = got if got is not None else solve_line(ps, predictor=predictor,
                                                                  **fast_kw)
                 for j, res in zip(plane, results, strict=True):
-                    out[line[j]] = res if res.converged else _retried(
-                        res, line_scenes[j], **fast_kw)
+                    out[line[j]] = _kept(res, line_scenes[j], predictor, fast_kw)
             continue
         results = solve_sequence(line_scenes, predictor=predictor, **kw)
         for i, res in zip(line, results, strict=True):
@@ -112,7 +126,36 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
     return out  # type: ignore[return-value]  # every index was filled
 
 
-def _retried(res: ContactResult, scene: ActuatorScene, *, tol: float, max_outer: int,
+def _rows_of_sections(scenes: list, out: list, kw: dict, fast_kw: dict) -> set[int]:
+    """The rows of sections of the batch (each a line of its own, cold) in one call of the
+    line kernel, each row a plane of its own (:func:`run_line`), where it takes them
+    all: their results put in ``out``; a row the kernel stopped on is one
+    :func:`lcpbench.solve` (``kw``), a refused answer goes on to its plan's escalations
+    (:func:`_retried`), as :func:`lcpbench.solve` does. The indices solved; empty where
+    the kernel does not take the rows (they are solved one by one)."""
+    rows = [i for i, s in enumerate(scenes) if type(s) is SectionedScene]
+    if len(rows) < 2:
+        return set()
+    got = run_line([scenes[i] for i in rows], plane=list(range(len(rows))), **fast_kw)
+    if got is None:
+        return set()
+    for i, res in zip(rows, got, strict=True):
+        out[i] = (solve_internal(scenes[i], **kw) if res is None else
+                  res if res.converged else _retried(res, scenes[i], **fast_kw))
+    return set(rows)
+
+
+def _kept(res: ContactResult | None, scene: ActuatorScene, predictor: str,
+          fast_kw: dict) -> ContactResult:
+    """A line kernel's result of an actuator scene, as the batch keeps it: a refused
+    answer escalated (:func:`_retried`); None (the kernel stopped on the scene, alone
+    in its plane): the scene solved by the per-scene loop, as its plane would be."""
+    if res is None:
+        res = solve_line([scene], predictor=predictor, **fast_kw)[0]
+    return res if res.converged else _retried(res, scene, **fast_kw)
+
+
+def _retried(res: ContactResult, scene, *, tol: float, max_outer: int,
              settings: str) -> ContactResult:
     """A kernel line's answer that the judge did not certify, as :func:`lcpbench.solve`
     treats it: the escalations its plan lists (:func:`lcpbench.plan.make_plan`, run by
@@ -122,6 +165,21 @@ def _retried(res: ContactResult, scene: ActuatorScene, *, tol: float, max_outer:
     ctx = Context(chain, lambda: make_step_solver(DEFAULT, settings, True), DEFAULT, settings,
                   "auto", tol, max_outer, "globalised", AUTO_WHY, None)
     return escalate(res, ctx, plan.escalations)
+
+
+def _kernel_groups(scenes: list, planes: list[list[int]]) -> list[list[list[int]]]:
+    """``planes`` (of ``scenes``) in groups the line kernel may take in one call: those
+    it takes (:func:`lcpbench.studies.batch_line.takes_line`) by whether their walls
+    yield; each plane it does not take a group of its own."""
+    groups: dict = {}
+    alone = []
+    for plane in planes:
+        chain = scenes[plane[0]].chain()
+        if takes_line(chain):
+            groups.setdefault(chain.elastic_walls, []).append(plane)
+        else:
+            alone.append([plane])
+    return [*groups.values(), *alone]
 
 
 def _planes(scenes: list) -> list[list[int]]:

@@ -51,11 +51,32 @@ def takes_line(chain) -> bool:
             and not chain.channel and not heavy(chain))
 
 
+#: the solve kernel's arguments that a line's chains share (kernel_args: ℓ/N, the joint
+#: links, the nodal load, the first free node, L, EI/L²); the others are per scene
+SHARED_ARGS = (1, 2, 3, 7, 8, 11, 12)
+
+
+def _shares(chain, c0, args0: tuple) -> bool:
+    """Whether the line kernel takes ``chain`` in a call whose shared arrays are those of
+    ``c0`` (``args0``: its kernel_args): it takes the chain, its walls yield as c0's do
+    (rigid or elastic), and the shared arguments are equal."""
+    if not takes_line(chain) or chain.elastic_walls != c0.elastic_walls:
+        return False
+    args = kernel_args(chain)
+    return all(np.array_equal(args[i], args0[i]) for i in SHARED_ARGS)
+
+
 def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = "default",
-             predictor: str = "adaptive") -> list[ContactResult] | None:
+             predictor: str = "adaptive", plane: list[int] | None = None
+             ) -> list[ContactResult | None] | None:
     """The results of the line (actuator scenes of one plane, checked, in
     continuation order), or None: the kernel does not take it (the caller solves it
-    scene by scene)."""
+    scene by scene). ``plane``: each scene's plane (an index from 0), where the line
+    holds several (:func:`lcpbench.studies.batch._planes`; rows of sections, each a
+    plane of its own): one call for all of them, each scene predicted from its own
+    plane, where every chain shares the first one's layout (:func:`_shares`); None:
+    one plane. A scene alone in its plane on which the solve kernel stops is None in
+    the list (the caller solves it by itself)."""
     if not scenes:
         return []
     chains = [s.chain() for s in scenes]
@@ -63,6 +84,8 @@ def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = 
     if not takes_line(c0):
         return None
     args0 = kernel_args(c0)
+    if plane is not None and not all(_shares(c, c0, args0) for c in chains[1:]):
+        return None
     m, n, nj = len(chains), c0.free_nodes.size, args0[2].size
     stacked = []
     for f, size in (("rest_alpha", c0.links), ("joint_stiffness", nj), ("rest_joint", nj),
@@ -76,7 +99,8 @@ def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = 
     cu, cl = (np.ascontiguousarray(np.stack([kernel_args(c)[13 + w] for c in chains]))
               if c0.elastic_walls else np.zeros((m, 0)) for w in (0, 1))
     wall = np.array([c.wall for c in chains], dtype=float)
-    theta = np.array([s.theta for s in scenes], dtype=float)
+    theta = np.array([getattr(s, "theta", 0.0) for s in scenes], dtype=float)  # (rows of
+    # sections have none: each is a plane of its own, never predicted)
     height = np.array([s.height for s in scenes], dtype=float)
     kern = _kernel()
     st = get_settings(settings)
@@ -94,7 +118,9 @@ def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = 
         t0 = time.perf_counter()
         bad, A["records"] = kern.solve_line(
             ra, args0[1], args0[2], args0[3], k, rest, load, args0[7], args0[8], lo, hi, cu, cl,
-            args0[11], args0[12], wall, theta, height, float(tol), int(max_outer),
+            args0[11], args0[12], wall, theta, height,
+            np.zeros(m, np.int64) if plane is None else np.asarray(plane, np.int64),
+            float(tol), int(max_outer),
             int(max_iter), float(request), most, predictor == "adaptive",
             *(A[name] for name, _, _ in _OUTPUTS), A["kept"], A["failed"], A["base"])
         elapsed = time.perf_counter() - t0

@@ -51,10 +51,12 @@ class LineResult(LazyResult):
     """A :class:`ContactResult` of a batch line (see the module)."""
 
 
-def results(line: LineOutput) -> list[ContactResult]:
-    """One :class:`LineResult` per scene of the line, in its order."""
+def results(line: LineOutput) -> list[ContactResult | None]:
+    """One :class:`LineResult` per scene of the line, in its order; None for a scene the
+    kernel left to the caller (``kept`` −1: it stopped on a scene alone in its plane)."""
     A = line.arrays
-    kept = A["kept"]
+    left = A["kept"] < 0
+    kept = np.where(left, 0, A["kept"])  # (the rows of the left scenes are not read)
     code = A["o_code"][kept]
     judged = code == line.kernel.CONVERGED
     settled = judged & (A["j_code"][kept] == line.kernel.SETTLED)
@@ -73,7 +75,7 @@ def results(line: LineOutput) -> list[ContactResult]:
         "converged": conv[s], "solver": DEFAULT, "method": "globalised", "tol": tol,
         "time_s": t, "pressure_limit": None, "route": LINE_KERNEL, "engine": "compiled",
         "judge": "compiled", "retries": ()}, partial(_built, line, s))
-        for s, scene in enumerate(line.scenes)]
+        if not left[s] else None for s, scene in enumerate(line.scenes)]
 
 
 def driver_output(line: LineOutput, row: int, chain) -> DriverOutput:
