@@ -78,6 +78,16 @@ PIVOT_BUDGET = 4
 STRICT_TIES = 1e-12
 #: the most supports the warm start (:meth:`StepLemke.last_support`) tries before Lemke
 WARM_CHANGES = 20
+#: where the last answer's support does not hold, :class:`StepLemke` tries the guesses of
+#: :func:`lcpbench.model.friction_step.first_support` (stick, then slide) with this many
+#: supports each, then again with WARM_CHANGES: a wrong guess costs little, and on
+#: benchmarks/friction_speed.py's scenes the right one takes at most 4
+WARM_GUESS_CHANGES = 5
+#: a path's first step (no last answer): the frictionless contacts' active set
+#: (:func:`lcpbench.solvers.pivoting_kernel.symmetric_active_set`) may make this many
+#: solves per wall row (each adds or drops one row; 22 for the 87 rows of
+#: benchmarks/friction_speed.py's channel)
+WARM_NORMAL_CHANGES = 2
 #: the warm start's candidate is feasible where no z or w is below −this · max(1, |q|, |z|)
 WARM_FEAS_RTOL = 1e-9
 #: the warm start's M_SS is singular where a pivot is at most this share of its largest entry
@@ -168,23 +178,51 @@ class StepLemke:
         k = pivoting_kernels()
         z, w, S, end, solves = k.support_pivots(np.ascontiguousarray(M), q, S, WARM_CHANGES,
                                                 WARM_FEAS_RTOL, WARM_PIVOT_RTOL, WARM_RCOND)
+        return self.taken(M, q, keys, z, S, end, solves, t0, "the last answer's support")
+
+    def first_guess(self, M: np.ndarray, q: np.ndarray, keys: np.ndarray | None,
+                    pair: np.ndarray | None, slide: bool, changes: int):
+        """The answer of a step whose last answer's support does not hold (or that has
+        none: a path's first) by block principal pivoting from the frictionless
+        contacts, the pressed nodes sticking (``slide`` False) or every pair sliding
+        against its free slip (True; :func:`lcpbench.model.friction_step.first_support`,
+        compiled; at most ``changes`` supports of the whole LCP), SOLVED where its natural
+        residual meets RESIDUAL_TOL; None otherwise (Lemke then)."""
+        if keys is None:
+            return None
+        t0 = time.perf_counter()
+        z, w, S, end, solves = step_kernels().first_support(
+            np.ascontiguousarray(M), q, np.ascontiguousarray(pair, dtype=np.int64), slide,
+            max(WARM_CHANGES, WARM_NORMAL_CHANGES * pair.size), changes, WARM_FEAS_RTOL,
+            WARM_PIVOT_RTOL, WARM_RCOND)
+        how = "every pair sliding" if slide else "the pressed nodes sticking"
+        return self.taken(M, q, keys, z, S, end, solves, t0, f"the frictionless contacts, {how}")
+
+    def taken(self, M, q, keys, z, S, end, solves, t0, start):
+        """The pivoting's answer z (support S) as a SOLVED LCPSolution where it ended DONE
+        and its natural residual meets RESIDUAL_TOL (the support kept for the next step);
+        None otherwise."""
         self.warm_solves += int(solves)
-        if end != k.DONE or not np.all(np.isfinite(z)):
+        if end != pivoting_kernels().DONE or not np.all(np.isfinite(z)):
             return None
         res = lcp_residuals(M, q, z)
         if not res["natural"] <= RESIDUAL_TOL:
             return None
         self.support = keys[S]
         return LCPSolution(z, M @ z + q, Status.SOLVED, int(solves), time.perf_counter() - t0,
-                           extra={"residuals": res, "start": "the last answer's support"})
+                           extra={"residuals": res, "start": start})
 
     def __call__(self, M, q: np.ndarray | None = None):
         """Solve the step ``M`` (a :class:`FrictionStep`), or the LCP (``M``, ``q``)."""
-        keys = None
+        keys = pair = None
         if q is None:
-            M, q, keys = M.M, M.q, z_keys(M)
+            M, q, keys, pair = M.M, M.q, z_keys(M), M.pair
         n = q.size
         sol = self.last_support(M, q, keys)
+        for budget in (WARM_GUESS_CHANGES, WARM_CHANGES):  # a short try of each guess first
+            for slide in (False, True):
+                if sol is None:
+                    sol = self.first_guess(M, q, keys, pair, slide, budget)
         if sol is not None:
             return sol
         coverings = step_coverings(n)
@@ -386,10 +424,11 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
     walls = walls_at_x(chain, x)  # (the profile evaluated once per step)
     s_up, s_lo = walls[2], walls[3]
     g_up, g_lo = gaps_at(chain, x, y, walls)
-    touching = near_walls(chain, x, y, NEAR, walls)
     near = near_walls(chain, x, y, ROW_BAND, walls)
-    if pressed is not None:
-        touching |= pressed
+    # the pairs: the nodes pressed in the last step, else (a state's first step) those at
+    # a wall; a node that the step presses without its pair gets it in the next step (the
+    # outer loop converges only when every pressed node has one)
+    touching = near_walls(chain, x, y, NEAR, walls) if pressed is None else pressed.copy()
     if rowed is not None:
         near |= rowed
     touching &= near

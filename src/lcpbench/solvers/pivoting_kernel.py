@@ -132,3 +132,68 @@ def support_pivots(M, q, support, max_changes, feas_rtol, pivot_rtol, lstsq_rcon
         else:
             S[first] = not S[first]
     return z, w, S, MAX_ITER, max_changes
+
+
+@njit(cache=True)
+def symmetric_active_set(M, q, max_changes, feas_rtol, pivot_rtol):
+    """The LCP of a symmetric positive semidefinite M — the convex QP min ½ zᵀMz + qᵀz
+    over z >= 0 — by the primal active set of Lawson & Hanson (*Solving Least Squares
+    Problems*, 1974, ch. 23, NNLS): from z = 0, the unknown with the most negative w
+    joins the free set F; z_F = −M_FF⁻¹ q_F, and where that makes some z < 0 the step
+    from the last z stops at the first that reaches 0, which leaves F. Each change
+    lowers the QP's objective, so no set repeats (M_FF positive definite). Returns
+    (z, w, end, solves): DONE (no w below −``feas_rtol`` · max(1, |q|, |z|)),
+    MAX_ITER (``max_changes`` solves) or SINGULAR (M_FF singular to ``pivot_rtol``)."""
+    n = q.size
+    z = np.zeros(n)
+    F = np.zeros(n, np.bool_)
+    qmax = 0.0
+    for i in range(n):
+        qmax = max(qmax, abs(q[i]))
+    solves = 0
+    while True:
+        w = M @ z + q
+        zmax = 0.0
+        for i in range(n):
+            zmax = max(zmax, abs(z[i]))
+        eps = feas_rtol * max(1.0, qmax, zmax)
+        j = -1
+        for i in range(n):
+            if not F[i] and w[i] < -eps and (j < 0 or w[i] < w[j]):
+                j = i
+        if j < 0:
+            for i in range(n):
+                w[i] = max(w[i], 0.0)
+            return z, w, DONE, solves
+        F[j] = True
+        while True:
+            if solves >= max_changes:
+                return z, w, MAX_ITER, solves
+            idx = np.flatnonzero(F)
+            k = idx.size
+            A = np.empty((k, k))
+            b = np.empty(k)
+            for a in range(k):
+                b[a] = -q[idx[a]]
+                for c in range(k):
+                    A[a, c] = M[idx[a], idx[c]]
+            y, ok = lu_solve(A, b, pivot_rtol)
+            solves += 1
+            if not ok:
+                return z, w, SINGULAR, solves
+            share, block = 1.0, -1
+            for a in range(k):
+                i = idx[a]
+                if y[a] <= 0.0 and z[i] / (z[i] - y[a]) < share:
+                    share, block = z[i] / (z[i] - y[a]), i
+            for a in range(k):
+                i = idx[a]
+                z[i] += share * (y[a] - z[i])
+            if block < 0:
+                break
+            z[block] = 0.0  # the first to reach 0 leaves F, with any other at 0
+            for a in range(k):
+                i = idx[a]
+                if z[i] <= 0.0:
+                    z[i] = 0.0
+                    F[i] = False
