@@ -39,7 +39,7 @@ import numpy as np
 from perf import interleaved
 
 import lcpbench
-import lcpbench.model.friction_driver as driver
+import lcpbench.model.friction_lemke as driver
 from lcpbench import ActuatorScene
 from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
 

@@ -68,6 +68,92 @@ def lu_solve(A, b, pivot_rtol):
 
 
 @njit(cache=True)
+def singleton_solve(A, b, pivot_rtol, lstsq_rcond):
+    """x with A x = b (A square), its singleton rows and columns eliminated first (the
+    presolve of LP codes): a row with one nonzero among the unknowns left fixes that
+    unknown; a column with one nonzero among the rows left is solved last from that row.
+    What remains is solved by :func:`lu_solve`, and where that is singular to
+    ``pivot_rtol`` (and ``lstsq_rcond`` > 0) by its least-squares solution of the least
+    norm (singular values below ``lstsq_rcond`` of the largest cut). Both are exact on a
+    nonsingular A; they spare the dense solve the unknowns a row or column fixes alone
+    (the frictional step's pairs without a normal force: β = 0 by their cone row, λ = |s|
+    by their slip row). ok False where A is singular and no least squares is asked."""
+    k = b.size
+    big = 0.0
+    for i in range(k):
+        for j in range(k):
+            big = max(big, abs(A[i, j]))
+    x = np.zeros(k)
+    if k == 0:
+        return x, True
+    if big == 0.0:
+        return x, False
+    row_on = np.ones(k, np.bool_)
+    col_on = np.ones(k, np.bool_)
+    r = b.copy()
+    defer_row = np.empty(k, np.int64)
+    defer_col = np.empty(k, np.int64)
+    nd = 0
+    changed = True
+    while changed:
+        changed = False
+        for i in range(k):  # a singleton row fixes its unknown
+            if not row_on[i]:
+                continue
+            cnt, c = 0, -1
+            for j in range(k):
+                if col_on[j] and A[i, j] != 0.0:
+                    cnt += 1
+                    c = j
+                    if cnt > 1:
+                        break
+            if cnt == 1 and abs(A[i, c]) > pivot_rtol * big:
+                x[c] = r[i] / A[i, c]
+                for ii in range(k):
+                    if row_on[ii]:
+                        r[ii] -= A[ii, c] * x[c]
+                row_on[i], col_on[c], changed = False, False, True
+        for j in range(k):  # a singleton column is solved last, from its row
+            if not col_on[j]:
+                continue
+            cnt, rr = 0, -1
+            for i in range(k):
+                if row_on[i] and A[i, j] != 0.0:
+                    cnt += 1
+                    rr = i
+                    if cnt > 1:
+                        break
+            if cnt == 1 and abs(A[rr, j]) > pivot_rtol * big:
+                defer_row[nd], defer_col[nd] = rr, j
+                nd += 1
+                row_on[rr], col_on[j], changed = False, False, True
+    rows, cols = np.flatnonzero(row_on), np.flatnonzero(col_on)
+    m = rows.size
+    if m:
+        core = np.empty((m, m))
+        rhs = np.empty(m)
+        for a in range(m):
+            rhs[a] = r[rows[a]]
+            for c in range(m):
+                core[a, c] = A[rows[a], cols[c]]
+        y, ok = lu_solve(core.copy(), rhs.copy(), pivot_rtol)
+        if not ok:
+            if lstsq_rcond <= 0.0:
+                return x, False
+            y = np.linalg.lstsq(core, rhs, lstsq_rcond)[0]
+        for c in range(m):
+            x[cols[c]] = y[c]
+    for d in range(nd - 1, -1, -1):
+        rr, c = defer_row[d], defer_col[d]
+        acc = b[rr]
+        for j in range(k):
+            if j != c:
+                acc -= A[rr, j] * x[j]
+        x[c] = acc / A[rr, c]
+    return x, True
+
+
+@njit(cache=True)
 def support_pivots(M, q, support, max_changes, feas_rtol, pivot_rtol, lstsq_rcond):
     """Block principal pivoting from ``support`` (bool per unknown). Returns (z, w,
     support, end, solves): the last candidate, its support, DONE (no unknown infeasible
@@ -94,12 +180,11 @@ def support_pivots(M, q, support, max_changes, feas_rtol, pivot_rtol, lstsq_rcon
             b[a] = -q[idx[a]]
             for c in range(k):
                 A[a, c] = M[idx[a], idx[c]]
-        x, ok = lu_solve(A.copy(), b.copy(), pivot_rtol)
-        if not ok:  # M_SS singular (a run of sticking nodes: T per node indeterminate):
-            # the least-squares answer of the least norm, kept only if it is feasible
-            if k == 0 or lstsq_rcond <= 0.0:
-                return z, w, S, SINGULAR, it
-            x = np.linalg.lstsq(A, b, lstsq_rcond)[0]
+        # M_SS singular (a run of sticking nodes: T per node indeterminate): the
+        # least-squares answer of the least norm, kept only if it is feasible
+        x, ok = singleton_solve(A, b, pivot_rtol, lstsq_rcond)
+        if not ok:
+            return z, w, S, SINGULAR, it
         z[:] = 0.0
         zmax = 0.0
         for a in range(k):
