@@ -230,10 +230,9 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
     s_up, s_lo = walls[2], walls[3]
     g_up, g_lo = gaps_at(chain, x, y, walls)
     near = near_walls(chain, x, y, ROW_BAND, walls)
-    # the pairs: the nodes pressed in the last step, else (a state's first step) those at
-    # a wall; a node that the step presses without its pair gets it in the next step (the
-    # outer loop converges only when every pressed node has one)
-    touching = near_walls(chain, x, y, NEAR, walls) if pressed is None else pressed.copy()
+    touching = near_walls(chain, x, y, NEAR, walls)
+    if pressed is not None:
+        touching |= pressed
     if rowed is not None:
         near |= rowed
     touching &= near
