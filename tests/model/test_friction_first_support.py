@@ -12,8 +12,12 @@ import itertools
 import numpy as np
 import pytest
 
-from lcpbench.model.friction_step import first_support, frictional_lcp
-from lcpbench.solvers import pivoting_kernel as pk
+from lcpbench.numba_cache import kernel_module
+
+# (through the kernels' cache, as the library loads them: tests/model/test_kernel_cache.py)
+_step = kernel_module("lcpbench.model.friction_step", "delassus_form")
+first_support, frictional_lcp = _step.first_support, _step.frictional_lcp
+pk = kernel_module("lcpbench.solvers.pivoting_kernel", "support_pivots")
 
 FEAS, PIV, RCOND = 1e-10, 1e-13, 1e-12
 

@@ -40,8 +40,8 @@ STRICT_TIES = 1e-12
 WARM_CHANGES = 20
 #: where the last answer's support does not hold, :class:`StepLemke` tries the guesses of
 #: :func:`lcpbench.model.friction_step.first_support` (stick, then slide) with this many
-#: supports each, then again with WARM_CHANGES: a wrong guess costs little, and on
-#: benchmarks/friction_speed.py's scenes the right one takes at most 4
+#: supports each, then again with WARM_CHANGES: a wrong guess costs little, and the right
+#: one takes a few (the channel's first step of benchmarks/friction_speed.py: stick, 2)
 WARM_GUESS_CHANGES = 5
 #: a path's first step (no last answer): the frictionless contacts' active set
 #: (:func:`lcpbench.solvers.pivoting_kernel.symmetric_active_set`) may make this many

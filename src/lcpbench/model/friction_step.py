@@ -186,6 +186,22 @@ def _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, D, frict
 
 
 @njit(cache=True)
+def sparse_gram(B, X):
+    """Bᵀ X, each column of B walked over its nonzeros only: a wall row's column against a
+    flat wall is one entry (n_y at its node), so W_nn and W_nt cost O(m) per row, not
+    O(n m) as a dense product."""
+    n, cols = B.shape
+    out = np.zeros((cols, X.shape[1]))
+    for c in range(cols):
+        for j in range(n):
+            v = B[j, c]
+            if v != 0.0:
+                for k in range(X.shape[1]):
+                    out[c, k] += v * X[j, k]
+    return out
+
+
+@njit(cache=True)
 def delassus_form(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, gap, D,
                   friction_node, tangent_xy, slip, first):
     """The contact quantities as affine functions of the forces (docs/friction.md):
@@ -202,7 +218,7 @@ def delassus_form(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, gap, D,
     B, X, ok = _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, D,
                               friction_node, tangent_xy, first)
     m = mn + mt
-    BX = np.ascontiguousarray(B.T) @ X
+    BX = sparse_gram(B, X)
     W = np.ascontiguousarray(BX[:m, :m])
     free = BX[:m, m].copy()
     g_f = gap + free[:mn]
