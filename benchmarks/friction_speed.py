@@ -39,7 +39,7 @@ import numpy as np
 from perf import interleaved
 
 import lcpbench
-import lcpbench.model.friction_driver as driver
+import lcpbench.model.friction_lemke as driver
 from lcpbench import ActuatorScene
 from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
 
@@ -139,7 +139,8 @@ def main(argv=None) -> int:
         "ratio is the median of the per-round ratios, on the wall clock and on the process's "
         "CPU time (which does not count the time a loaded machine keeps the process "
         "waiting). Lemke calls per step: the steps the warm start (block principal "
-        "pivoting from the last answer's support) does not answer go to Lemke, one call "
+        "pivoting from the last answer's support, else from the frictionless contacts "
+        "sticking or sliding) does not answer go to Lemke, one call "
         "per covering vector tried. The frictional solve is one state of "
         f"a path, pull {PULL} N, and includes its start (the frictionless placement).", "",
         "Targets: frictional solve <= 10× the frictionless one; pull-out in <= 20 "

@@ -98,13 +98,35 @@ def test_mu_zero_reproduces_the_frictionless_profile_answer(profile, theta):
 ], ids=["sliders-pull", "channel", "slider-pin"])
 def test_a_flat_profile_reproduces_the_flat_wall(kw, states):
     """h(x) = 3 mm as a WallProfile (its lower wall the mirror) against the flat wall at
-    3 mm, along paths: normal and tangential forces to 1e-10 of the largest, α to 1e-10."""
+    3 mm, along paths: normal and tangential forces to 1e-10 of the largest, α to 1e-10.
+
+    In the channel the chain lies flat on the upper wall, and where it sticks there the
+    tangential force per node along that run is statically indeterminate (the links
+    between the nodes carry any axial force without moving them; docs/friction.md, the
+    warm start): two routes may end at two answers that split the same ΣT differently.
+    There the test compares what is determinate — the stick pattern, the slips, ΣT, N and
+    α (to 1e-5 of the largest N and 1e-7 rad: the run is flat only to the linearisation)
+    — and checks Coulomb's law on each route node by node."""
     flat = ActuatorScene(**{**dict(theta=150, height=3.0, links=30, friction=MU), **kw})
     prof = replace(flat, height=20.0, wall_profile=WallProfile.flat(3.0))
     for a, b in zip(lcpbench.solve_path(flat, states, tol=1e-11),
                     lcpbench.solve_path(prof, states, tol=1e-11), strict=True):
         assert a.converged and b.converged, (a.reason, b.reason)
         scale = np.max(a.forces)
+        if flat.channel:
+            mu_up, mu_lo = flat.wall_friction
+            for r in (a, b):
+                coulomb_on(r.tangential_forces, r.slip,
+                           mu_up * r.forces + mu_lo * r.forces_lower,
+                           float(np.sum(r.forces + r.forces_lower)), 1e-9 * flat.length, 1e-9)
+            np.testing.assert_array_equal(b.stick, a.stick)
+            np.testing.assert_allclose(b.slip, a.slip, rtol=0, atol=1e-10 * flat.length)
+            assert abs(np.sum(b.tangential_forces) - np.sum(a.tangential_forces)) <= 1e-10 * scale
+            np.testing.assert_allclose(b.forces, a.forces, rtol=0, atol=1e-5 * scale)
+            np.testing.assert_allclose(b.forces_lower, a.forces_lower, rtol=0,
+                                       atol=1e-5 * scale)
+            np.testing.assert_allclose(b.alpha, a.alpha, rtol=0, atol=1e-7)
+            continue
         np.testing.assert_allclose(b.forces, a.forces, rtol=0, atol=1e-10 * scale)
         np.testing.assert_allclose(b.tangential_forces, a.tangential_forces, rtol=0,
                                    atol=1e-10 * scale)

@@ -19,11 +19,13 @@ import numpy as np
 
 from ..errors import ProblemError
 from ..problems.scenes import ActuatorScene, Chain, node_stiffness, reachable, wall_share
-from ..solvers.base import LCPSolution, Status, lcp_residuals
-from ..solvers.lemke import RESIDUAL_TOL, lemke
+from ..solvers.base import Status
 from ..thresholds import NEWTON_SWITCH
 from .chain import alpha_from_heights, node_positions
 from .elastic import compliances
+
+# (step_lemke and z_keys re-exported: the step's default solver lives in friction_lemke)
+from .friction_lemke import StepLemke, step_kernels, step_lemke, z_keys  # noqa: F401
 from .friction_walls import gaps_at, near_walls, tangential_slip, wall_frames, walls_at_x
 
 #: a node within NEAR · a of a wall gets a friction pair in the step (docs/friction.md)
@@ -52,169 +54,10 @@ MAX_TURN = 0.25
 RUNAWAY = 10.0
 #: this many steps in a row at gross slip (:func:`gross_slip`) end a state: no equilibrium
 GROSS_STEPS = 3
-#: Lemke's pivot tolerance on the frictional LCP (solvers.lemke's default: 1e-12). Its
-#: W is singular where many nodes have rows (the chain is inextensible: a node's x
-#: follows from the heights), and entries that are 0 but for round-off (1e-12 of the
-#: column) must not be pivots
-PIVOT_TOL = 1e-9
 #: this many steps in a row that Lemke solves only INACCURATE end a state (not converged:
 #: it converges on a SOLVED step only; near gross slip the step is degenerate and
 #: stays so, and the outer loop would spend its budget there)
 INEXACT_STEPS = 5
-#: the seed of the random covering vectors :class:`StepLemke` tries last
-COVERING_SEED = 39
-#: Lemke's pivot budget on the frictional step, in pivots per unknown (solvers.lemke's
-#: default is 50): a solved step takes at most ~1.3 n at N = 140 (issue 39's speed
-#: benchmark), and a degenerate one that cycles is cut short and tried with another
-#: covering vector
-PIVOT_BUDGET = 4
-
-
-#: Lemke's tie tolerance in its last try on a step where every covering stopped short
-#: (solvers.lemke.TIE_RTOL, 1e-9, is the default): on elastic steps (cond(B) ≈ 2.6e8) the
-#: ratio test at 1e-9 keeps z0's row as tied where it is not and stops with a basic w at
-#: −1.5e-3; at 1e-12 the step is solved. Not the default: on the 100 paths of
-#: benchmarks/friction_agreement.py it made 11 more states fail than it saved
-STRICT_TIES = 1e-12
-#: the most supports the warm start (:meth:`StepLemke.last_support`) tries before Lemke
-WARM_CHANGES = 20
-#: the warm start's candidate is feasible where no z or w is below −this · max(1, |q|, |z|)
-WARM_FEAS_RTOL = 1e-9
-#: the warm start's M_SS is singular where a pivot is at most this share of its largest entry
-WARM_PIVOT_RTOL = 1e-13
-#: where it is, the candidate is M_SS's least-squares solution, singular values below this
-#: share of the largest cut (a run of sticking nodes: T per node is indeterminate)
-WARM_RCOND = 1e-12
-
-_KERNELS: list = []  # the compiled step (model/friction_step.py), once loaded
-_PIVOTING: list = []  # the warm start's pivots (solvers/pivoting_kernel.py), once loaded
-
-
-def pivoting_kernels():
-    """Block principal pivoting from a support (:mod:`lcpbench.solvers.pivoting_kernel`),
-    loaded once through :func:`lcpbench.numba_cache.kernel_module`."""
-    if not _PIVOTING:
-        from ..numba_cache import held, kernel_module
-
-        held(_PIVOTING).append(kernel_module("lcpbench.solvers.pivoting_kernel",
-                                             "support_pivots"))
-    return _PIVOTING[0]
-
-
-def step_kernels():
-    """The frictional step's compiled functions (:mod:`lcpbench.model.friction_step`),
-    loaded once through :func:`lcpbench.numba_cache.kernel_module` (numba's cache
-    under the hash of every kernel file)."""
-    if not _KERNELS:
-        from ..numba_cache import held, kernel_module
-
-        held(_KERNELS).append(kernel_module("lcpbench.model.friction_step", "delassus_form"))
-    return _KERNELS[0]
-
-
-def step_coverings(n: int) -> list[np.ndarray]:
-    """The covering vectors :class:`StepLemke` tries, in order: (1 … n)/n, all ones
-    (Lemke's default), (2 … 1), then three seeded random ones in [1, 2). (1 … n)/n
-    first: on 20 steps of four pulled scenes at N = 140 it solved 13, all ones none
-    (Lemke stops on a ray)."""
-    rng = np.random.default_rng(COVERING_SEED)
-    return ([np.arange(1, n + 1) / n, np.ones(n), np.linspace(2.0, 1.0, n)]
-            + [1.0 + rng.random(n) for _ in range(3)])
-
-
-class StepLemke:
-    """The default solver of the frictional step: Lemke with :data:`PIVOT_TOL` and at
-    most :data:`PIVOT_BUDGET` · n pivots, and where it stops short of SOLVED (near gross
-    slip the LCP is degenerate: every node at its cone) again with the other covering
-    vectors (:func:`step_coverings`): other pivot paths to the same solution set. The
-    step's LCP always has a solution (W is positive semidefinite: Stewart–Trinkle), so a
-    ray is a numerical failure.
-
-    One instance serves a path: it tries first the covering that solved its last step
-    (the steps of a path are alike, and so is the covering that gets through), so the
-    restarts are paid once, not at every step. And before any pivot, block principal
-    pivoting from the support of its last answer (:meth:`last_support`; Lemke's basic z,
-    named by node): the outer steps of a state, and the states of a path, mostly keep
-    their stick/slip/separate pattern, so the next step's answer is one linear solve on
-    that support, or a few where some nodes change state. That answer is taken only
-    where lcpbench's natural residual meets Lemke's own bound (``RESIDUAL_TOL``), as any
-    Lemke answer; else (a cycle, the budget :data:`WARM_CHANGES`) Lemke runs. A fresh
-    instance starts with the first covering and no support: its first step is Lemke's.
-    """
-
-    #: the driver hands it the whole step (its rows' nodes name the support)
-    takes_step = True
-    #: the driver's steps near the answer take the springs' exact curvature (Newton:
-    #: :func:`frictional_step`'s ``newton``); the peers by name get Gauss–Newton steps
-    newton = True
-
-    def __init__(self) -> None:
-        self.first = 0
-        self.support = np.empty(0, np.int64)  # the last answer's support (basic z), by z_keys
-        self.warm_solves = 0  # the linear solves of the warm start (counted, for benchmarks)
-
-    def last_support(self, M: np.ndarray, q: np.ndarray, keys: np.ndarray | None):
-        """The LCP's answer by block principal pivoting (:func:`lcpbench.solvers.
-        pivoting_kernel.support_pivots`, at most :data:`WARM_CHANGES` supports) from the
-        last answer's support S (read by node from ``keys``, :func:`z_keys`), SOLVED where
-        its natural residual meets RESIDUAL_TOL; None otherwise (no support, a singular
-        M_SS, the budget, or a residual above the bound)."""
-        if keys is None or not self.support.size:
-            return None
-        S = np.isin(keys, self.support)
-        if not S.any():
-            return None
-        t0 = time.perf_counter()
-        k = pivoting_kernels()
-        z, w, S, end, solves = k.support_pivots(np.ascontiguousarray(M), q, S, WARM_CHANGES,
-                                                WARM_FEAS_RTOL, WARM_PIVOT_RTOL, WARM_RCOND)
-        self.warm_solves += int(solves)
-        if end != k.DONE or not np.all(np.isfinite(z)):
-            return None
-        res = lcp_residuals(M, q, z)
-        if not res["natural"] <= RESIDUAL_TOL:
-            return None
-        self.support = keys[S]
-        return LCPSolution(z, M @ z + q, Status.SOLVED, int(solves), time.perf_counter() - t0,
-                           extra={"residuals": res, "start": "the last answer's support"})
-
-    def __call__(self, M, q: np.ndarray | None = None):
-        """Solve the step ``M`` (a :class:`FrictionStep`), or the LCP (``M``, ``q``)."""
-        keys = None
-        if q is None:
-            M, q, keys = M.M, M.q, z_keys(M)
-        n = q.size
-        sol = self.last_support(M, q, keys)
-        if sol is not None:
-            return sol
-        coverings = step_coverings(n)
-        order = [self.first] + [i for i in range(len(coverings)) if i != self.first]
-        sol = None
-        for i, tie in [(i, None) for i in order] + [(i, STRICT_TIES) for i in order]:
-            sol = lemke(M, q, pivot_tol=PIVOT_TOL, max_pivots=PIVOT_BUDGET * max(n, 25),
-                        covering=coverings[i], tie_rtol=tie)
-            if sol.solved:
-                self.first = i
-                if keys is not None:  # the basic z (M_SS nonsingular), not only z > 0
-                    basic = sol.extra.get("basic_z", np.flatnonzero(sol.z > 0.0))
-                    self.support = keys[basic]
-                break
-        return sol
-
-
-def z_keys(fs) -> np.ndarray:
-    """Each unknown of the step's LCP, z = (N, β⁺, β⁻, λ), named by its node: 5 j + c,
-    j the node, c 0 for the upper wall's N (∂g/∂y = −1), 1 the lower's, 2 β⁺, 3 β⁻, 4 λ
-    (a wall row by node and side, a friction pair's three by their node); the same names
-    from step to step, whatever rows a step has."""
-    rows = 5 * np.asarray(fs.normal_node, np.int64) + (np.asarray(fs.normal_sign) > 0)
-    pairs = 5 * np.asarray(fs.friction_node, np.int64)
-    return np.concatenate([rows, pairs + 2, pairs + 3, pairs + 4])
-
-
-def step_lemke(M: np.ndarray, q: np.ndarray):
-    """One frictional step solved by a fresh :class:`StepLemke`."""
-    return StepLemke()(M, q)
 
 
 @dataclass
@@ -389,8 +232,8 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
     walls = walls_at_x(chain, x)  # (the profile evaluated once per step)
     s_up, s_lo = walls[2], walls[3]
     g_up, g_lo = gaps_at(chain, x, y, walls)
-    touching = near_walls(chain, x, y, NEAR, walls)
     near = near_walls(chain, x, y, ROW_BAND, walls)
+    touching = near_walls(chain, x, y, NEAR, walls)
     if pressed is not None:
         touching |= pressed
     if rowed is not None:

@@ -29,6 +29,7 @@ import numpy as np
 from numba import njit
 
 from ..linalg.ldl_kernel import refactor, resolve
+from ..solvers.pivoting_kernel import DONE, support_pivots, symmetric_active_set
 from .compiled_kernel import banded_step, geometric_bands
 
 
@@ -185,6 +186,22 @@ def _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, D, frict
 
 
 @njit(cache=True)
+def sparse_gram(B, X):
+    """Bᵀ X, each column of B walked over its nonzeros only: a wall row's column against a
+    flat wall is one entry (n_y at its node), so W_nn and W_nt cost O(m) per row, not
+    O(n m) as a dense product."""
+    n, cols = B.shape
+    out = np.zeros((cols, X.shape[1]))
+    for c in range(cols):
+        for j in range(n):
+            v = B[j, c]
+            if v != 0.0:
+                for k in range(X.shape[1]):
+                    out[c, k] += v * X[j, k]
+    return out
+
+
+@njit(cache=True)
 def delassus_form(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, gap, D,
                   friction_node, tangent_xy, slip, first):
     """The contact quantities as affine functions of the forces (docs/friction.md):
@@ -201,7 +218,7 @@ def delassus_form(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, gap, D,
     B, X, ok = _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, D,
                               friction_node, tangent_xy, first)
     m = mn + mt
-    BX = np.ascontiguousarray(B.T) @ X
+    BX = sparse_gram(B, X)
     W = np.ascontiguousarray(BX[:m, :m])
     free = BX[:m, m].copy()
     g_f = gap + free[:mn]
@@ -265,3 +282,73 @@ def recover(z, X, mn, mt):
             acc += X[j, mn + c] * T[c]
         d[j] += acc
     return N, T, d
+
+
+@njit(cache=True)
+def first_support(M, q, pair, slide, normal_changes, max_changes, feas_rtol, pivot_rtol,
+                  lstsq_rcond):
+    """The step's answer by block principal pivoting from a stick/slide/separate guess,
+    for a step whose last answer's support does not hold (a path's first step, a chain
+    that starts or stops sliding as a whole; docs/friction.md).
+
+    Both guesses start from the frictionless contacts: the normal block's LCP
+    0 <= N ⟂ W_nn N + g_f >= 0 (M's first m_n rows and columns, symmetric positive
+    semidefinite), solved by :func:`lcpbench.solvers.pivoting_kernel.symmetric_active_set`,
+    and each pair's free slip s⁰ = s_f + W_tn N, σ = sign s⁰ (T opposes it: β⁻ where
+    σ > 0, β⁺ where σ < 0).
+
+    * ``slide`` False (stick): the pressed nodes (N > 0) stick (N, β; λ off the
+      support), every other pair slides freely (β, λ: T = 0 on a node without N).
+    * ``slide`` True (slide): every pair slides, T = −σ μ N, which leaves an LCP in N
+      alone, 0 <= N ⟂ (W_nn − W_nt σ μ) N + g_f >= 0 (not symmetric), solved by
+      :func:`~lcpbench.solvers.pivoting_kernel.support_pivots` from the frictionless
+      contacts; its contacts with every pair sliding (N, β, λ) are the guess.
+
+    Then ``support_pivots`` on the whole LCP from the guess. ``pair``: each wall row's
+    friction pair (−1: none; M's size is m_n + 3 m_t); ``normal_changes``: the budget
+    of the LCPs in N alone (their solves are of the contacts' size), ``max_changes`` the
+    whole LCP's supports. Returns
+    (z, w, support, end, solves) as ``support_pivots`` does, every solve counted; the
+    end of a normal LCP that did not end DONE."""
+    mn = pair.size
+    mt = (q.size - mn) // 3
+    lam = mn + 2 * mt
+    Mn = np.ascontiguousarray(M[:mn, :mn])
+    qn = q[:mn].copy()
+    N, _, end, solves = symmetric_active_set(Mn, qn, normal_changes, feas_rtol, pivot_rtol)
+    S = np.zeros(q.size, np.bool_)
+    if end != DONE:
+        return np.zeros(q.size), q.copy(), S, end, solves
+    sigma = np.zeros(mt)
+    for i in range(mt):
+        s0 = q[mn + i]
+        for r in range(mn):
+            s0 += M[mn + i, r] * N[r]
+        sigma[i] = 1.0 if s0 > 0.0 else -1.0 if s0 < 0.0 else 0.0
+    if slide:  # T = −σ μ N: W_nn N + W_nt T = (W_nn − W_nt σ μ) N
+        for r in range(mn):
+            p = pair[r]
+            if p >= 0:
+                c = sigma[p] * M[lam + p, r]  # σ μ (M's cone row holds μ)
+                for a in range(mn):
+                    Mn[a, r] -= M[a, mn + p] * c
+        N, _, _, end, more = support_pivots(Mn, qn, N > 0.0, normal_changes, feas_rtol,
+                                            pivot_rtol, lstsq_rcond)
+        solves += more
+        if end != DONE:
+            return np.zeros(q.size), q.copy(), S, end, solves
+    pressed = np.zeros(mt, np.bool_)
+    for r in range(mn):
+        if N[r] > 0.0:
+            S[r] = True
+            if pair[r] >= 0:
+                pressed[pair[r]] = True
+    for i in range(mt):
+        if sigma[i] > 0.0:
+            S[mn + mt + i] = True
+        elif sigma[i] < 0.0:
+            S[mn + i] = True
+        S[lam + i] = slide or not pressed[i]
+    z, w, S, end, more = support_pivots(M, q, S, max_changes, feas_rtol, pivot_rtol,
+                                        lstsq_rcond)
+    return z, w, S, end, solves + more

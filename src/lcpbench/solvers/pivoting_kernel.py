@@ -68,6 +68,92 @@ def lu_solve(A, b, pivot_rtol):
 
 
 @njit(cache=True)
+def singleton_solve(A, b, pivot_rtol, lstsq_rcond):
+    """x with A x = b (A square), its singleton rows and columns eliminated first (the
+    presolve of LP codes): a row with one nonzero among the unknowns left fixes that
+    unknown; a column with one nonzero among the rows left is solved last from that row.
+    What remains is solved by :func:`lu_solve`, and where that is singular to
+    ``pivot_rtol`` (and ``lstsq_rcond`` > 0) by its least-squares solution of the least
+    norm (singular values below ``lstsq_rcond`` of the largest cut). Both are exact on a
+    nonsingular A; they spare the dense solve the unknowns a row or column fixes alone
+    (the frictional step's pairs without a normal force: β = 0 by their cone row, λ = |s|
+    by their slip row). ok False where A is singular and no least squares is asked."""
+    k = b.size
+    big = 0.0
+    for i in range(k):
+        for j in range(k):
+            big = max(big, abs(A[i, j]))
+    x = np.zeros(k)
+    if k == 0:
+        return x, True
+    if big == 0.0:
+        return x, False
+    row_on = np.ones(k, np.bool_)
+    col_on = np.ones(k, np.bool_)
+    r = b.copy()
+    defer_row = np.empty(k, np.int64)
+    defer_col = np.empty(k, np.int64)
+    nd = 0
+    changed = True
+    while changed:
+        changed = False
+        for i in range(k):  # a singleton row fixes its unknown
+            if not row_on[i]:
+                continue
+            cnt, c = 0, -1
+            for j in range(k):
+                if col_on[j] and A[i, j] != 0.0:
+                    cnt += 1
+                    c = j
+                    if cnt > 1:
+                        break
+            if cnt == 1 and abs(A[i, c]) > pivot_rtol * big:
+                x[c] = r[i] / A[i, c]
+                for ii in range(k):
+                    if row_on[ii]:
+                        r[ii] -= A[ii, c] * x[c]
+                row_on[i], col_on[c], changed = False, False, True
+        for j in range(k):  # a singleton column is solved last, from its row
+            if not col_on[j]:
+                continue
+            cnt, rr = 0, -1
+            for i in range(k):
+                if row_on[i] and A[i, j] != 0.0:
+                    cnt += 1
+                    rr = i
+                    if cnt > 1:
+                        break
+            if cnt == 1 and abs(A[rr, j]) > pivot_rtol * big:
+                defer_row[nd], defer_col[nd] = rr, j
+                nd += 1
+                row_on[rr], col_on[j], changed = False, False, True
+    rows, cols = np.flatnonzero(row_on), np.flatnonzero(col_on)
+    m = rows.size
+    if m:
+        core = np.empty((m, m))
+        rhs = np.empty(m)
+        for a in range(m):
+            rhs[a] = r[rows[a]]
+            for c in range(m):
+                core[a, c] = A[rows[a], cols[c]]
+        y, ok = lu_solve(core.copy(), rhs.copy(), pivot_rtol)
+        if not ok:
+            if lstsq_rcond <= 0.0:
+                return x, False
+            y = np.linalg.lstsq(core, rhs, lstsq_rcond)[0]
+        for c in range(m):
+            x[cols[c]] = y[c]
+    for d in range(nd - 1, -1, -1):
+        rr, c = defer_row[d], defer_col[d]
+        acc = b[rr]
+        for j in range(k):
+            if j != c:
+                acc -= A[rr, j] * x[j]
+        x[c] = acc / A[rr, c]
+    return x, True
+
+
+@njit(cache=True)
 def support_pivots(M, q, support, max_changes, feas_rtol, pivot_rtol, lstsq_rcond):
     """Block principal pivoting from ``support`` (bool per unknown). Returns (z, w,
     support, end, solves): the last candidate, its support, DONE (no unknown infeasible
@@ -94,12 +180,11 @@ def support_pivots(M, q, support, max_changes, feas_rtol, pivot_rtol, lstsq_rcon
             b[a] = -q[idx[a]]
             for c in range(k):
                 A[a, c] = M[idx[a], idx[c]]
-        x, ok = lu_solve(A.copy(), b.copy(), pivot_rtol)
-        if not ok:  # M_SS singular (a run of sticking nodes: T per node indeterminate):
-            # the least-squares answer of the least norm, kept only if it is feasible
-            if k == 0 or lstsq_rcond <= 0.0:
-                return z, w, S, SINGULAR, it
-            x = np.linalg.lstsq(A, b, lstsq_rcond)[0]
+        # M_SS singular (a run of sticking nodes: T per node indeterminate): the
+        # least-squares answer of the least norm, kept only if it is feasible
+        x, ok = singleton_solve(A, b, pivot_rtol, lstsq_rcond)
+        if not ok:
+            return z, w, S, SINGULAR, it
         z[:] = 0.0
         zmax = 0.0
         for a in range(k):
@@ -132,3 +217,68 @@ def support_pivots(M, q, support, max_changes, feas_rtol, pivot_rtol, lstsq_rcon
         else:
             S[first] = not S[first]
     return z, w, S, MAX_ITER, max_changes
+
+
+@njit(cache=True)
+def symmetric_active_set(M, q, max_changes, feas_rtol, pivot_rtol):
+    """The LCP of a symmetric positive semidefinite M — the convex QP min ½ zᵀMz + qᵀz
+    over z >= 0 — by the primal active set of Lawson & Hanson (*Solving Least Squares
+    Problems*, 1974, ch. 23, NNLS): from z = 0, the unknown with the most negative w
+    joins the free set F; z_F = −M_FF⁻¹ q_F, and where that makes some z < 0 the step
+    from the last z stops at the first that reaches 0, which leaves F. Each change
+    lowers the QP's objective, so no set repeats (M_FF positive definite). Returns
+    (z, w, end, solves): DONE (no w below −``feas_rtol`` · max(1, |q|, |z|)),
+    MAX_ITER (``max_changes`` solves) or SINGULAR (M_FF singular to ``pivot_rtol``)."""
+    n = q.size
+    z = np.zeros(n)
+    F = np.zeros(n, np.bool_)
+    qmax = 0.0
+    for i in range(n):
+        qmax = max(qmax, abs(q[i]))
+    solves = 0
+    while True:
+        w = M @ z + q
+        zmax = 0.0
+        for i in range(n):
+            zmax = max(zmax, abs(z[i]))
+        eps = feas_rtol * max(1.0, qmax, zmax)
+        j = -1
+        for i in range(n):
+            if not F[i] and w[i] < -eps and (j < 0 or w[i] < w[j]):
+                j = i
+        if j < 0:
+            for i in range(n):
+                w[i] = max(w[i], 0.0)
+            return z, w, DONE, solves
+        F[j] = True
+        while True:
+            if solves >= max_changes:
+                return z, w, MAX_ITER, solves
+            idx = np.flatnonzero(F)
+            k = idx.size
+            A = np.empty((k, k))
+            b = np.empty(k)
+            for a in range(k):
+                b[a] = -q[idx[a]]
+                for c in range(k):
+                    A[a, c] = M[idx[a], idx[c]]
+            y, ok = lu_solve(A, b, pivot_rtol)
+            solves += 1
+            if not ok:
+                return z, w, SINGULAR, solves
+            share, block = 1.0, -1
+            for a in range(k):
+                i = idx[a]
+                if y[a] <= 0.0 and z[i] / (z[i] - y[a]) < share:
+                    share, block = z[i] / (z[i] - y[a]), i
+            for a in range(k):
+                i = idx[a]
+                z[i] += share * (y[a] - z[i])
+            if block < 0:
+                break
+            z[block] = 0.0  # the first to reach 0 leaves F, with any other at 0
+            for a in range(k):
+                i = idx[a]
+                if z[i] <= 0.0:
+                    z[i] = 0.0
+                    F[i] = False
