@@ -332,10 +332,11 @@ class Exact:
 
 
 def solve(step: PrimalStep, rows: list, pairs: list, v: np.ndarray | None = None,
-          ) -> Exact:
+          fit_t: float = 1.0) -> Exact:
     """The step on the index set (``rows``: contact per wall row; ``pairs``: STICK,
     FORWARD, BACKWARD or OFF per pair), exactly; free unknowns (null directions) at
-    the answer's values ``v`` (0 without)."""
+    the answer's values ``v`` (0 without), fitted to its N, T (T weighted by ``fit_t``)
+    and move."""
     eqs = list(step.mechanics)
     for r, contact in enumerate(rows):
         if contact:
@@ -371,7 +372,8 @@ def solve(step: PrimalStep, rows: list, pairs: list, v: np.ndarray | None = None
             keys = step.normal + step.tangential
             scale = max(float(np.max(np.abs(v[keys]), initial=0.0)), 1e-300)
             keys = keys + list(step.moves)
-            w = np.array([1 / scale] * (len(step.normal) + len(step.tangential))
+            w = np.array([1 / scale] * len(step.normal)
+                         + [fit_t / scale] * len(step.tangential)
                          + [1 / step.link] * len(step.moves))
             B = np.array([[float(b[k]) for b in basis] for k in keys]) * w[:, None]
             r = (v[keys] - np.array([float(x[k]) for k in keys])) * w
