@@ -41,14 +41,11 @@ from ..thresholds import (  # the rule's numbers, as model.judge reads them
     NODE_GROSS,
     NODE_SHARE,
     PIVOT_ROUNDS,
-    RHO_MAX,
-    RHO_MIN,
     ROUNDOFF_ULPS,
     STALL,
-    STEP_NOISE,
 )
+from .judge_bound import contraction, force_error_bound, judge_contraction, profile_rows
 from .stability_kernel import CHECKED, unstable_directions
-from .wall_kernel import slope_load, walls_at
 
 TINY = np.finfo(np.float64).tiny
 
@@ -56,7 +53,7 @@ TINY = np.finfo(np.float64).tiny
 STATS = ("tau", "F0", "eps_R", "comp", "comp_allowed", "min_gap", "min_force",
          "complementarity", "closure", "max_torque_residual", "relative_torque_residual",
          "floor_R", "R_min", "total", "node", "node_allowed", "rho", "judge_total_force",
-         "rounds", "pen", "closure_allowed", "unstable")
+         "rounds", "pen", "closure_allowed", "unstable", "judge_rho")
 SETTLED, NOT_SETTLED = 0, 1
 
 
@@ -384,29 +381,6 @@ def _pivot(bands, fac, iw, lo, hi, cu, cl, L, pull, w, fs, b0, nj, k, rest, noda
 
 
 @njit(cache=True)
-def _contraction(step_sizes, judge_dalpha):
-    """model.judge.contraction_estimate: ρ from the last two ratios of step sizes, in [½, 0.99]."""
-    sizes = np.empty(step_sizes.size + 1)
-    m = 0
-    for s in step_sizes:
-        if np.isfinite(s) and s > STEP_NOISE:
-            sizes[m] = s
-            m += 1
-    if np.isfinite(judge_dalpha) and judge_dalpha > STEP_NOISE:
-        sizes[m] = judge_dalpha
-        m += 1
-    rho, seen = RHO_MIN, 0
-    for i in range(m - 1, 0, -1):  # the last two ratios with a > 0
-        if seen == 2:
-            break
-        if sizes[i - 1] > 0:
-            r = sizes[i] / sizes[i - 1]
-            rho = r if seen == 0 else max(rho, r)
-            seen += 1
-    return min(max(rho, RHO_MIN), RHO_MAX)
-
-
-@njit(cache=True)
 def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl,
                  wall, channel, forces_upper, forces_lower, tol, step_sizes):
     """:func:`judge_walls` on flat walls (no table)."""
@@ -454,24 +428,12 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
     iw = np.empty((3, n), np.int64)
     _positions(alpha, a, w)
     profiled = ku.size > 0 or kl.size > 0
+    hi0, lo0, nodal0 = hi, lo, nodal_load  # the flat rows: the second step's walls from them
     h1 = l1 = h2 = l2 = g_up = g_lo = np.empty(0)
     if profiled:  # the walls at the nodes' x; the answer's reactions load along them
-        sines, xf, yf = np.sin(alpha), np.empty(n), np.empty(n)
-        g_up, g_lo, h1, l1, h2, l2 = (np.empty(n), np.empty(n), np.empty(n), np.empty(n),
-                                      np.empty(n), np.empty(n))
-        walls_at(sines, w[COS][:links], a, fs, np.zeros(n), np.zeros(n), ku, cu_, kl, cl_, xf,
-                 yf, g_up, g_lo, h1, l1, h2, l2)  # (h(x), l(x) at every node)
-        hi, lo, load = hi.copy(), lo.copy(), np.empty(n)
-        for i in range(n):
-            if ku.size and np.isfinite(hi[i]):
-                hi[i] = g_up[i]
-            if kl.size and np.isfinite(lo[i]):
-                lo[i] = g_lo[i]
-            g_up[i] = (g_up[i] if ku.size else wall) - yf[i]  # the exact gaps
-            g_lo[i] = yf[i] - (g_lo[i] if kl.size else -wall)
-            load[i] = max(forces_upper[i], 0.0) * h1[i] - max(forces_lower[i], 0.0) * l1[i]
-        slope_load(alpha, w[COS][:links], sines, fs, load, xf)
-        nodal_load = nodal_load + xf
+        hi, lo, nodal_load, g_up, g_lo, h1, l1, h2, l2 = profile_rows(
+            alpha, w[COS], a, fs, hi0, lo0, wall, ku, cu_, kl, cl_, forces_upper,
+            forces_lower, nodal0)
     # the judge step at α, from the answer's contact set
     _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, w, bands)
     origin, linear, noise, state = w[ORIGIN], w[LINEAR], w[NOISE], iw[0]
@@ -499,12 +461,7 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
                 fu[i] = 0.0
             if abs(fl[i]) <= noise[i]:
                 fl[i] = 0.0
-            if channel:  # model.judge.split_reactions
-                mid = 0.5 * (hi[i] + lo[i])
-                near = u[i] >= mid if np.isfinite(mid) else np.isfinite(hi[i])
-                ju[i], jlo[i] = (net[i], 0.0) if near else (0.0, -net[i])
-            else:
-                ju[i], jlo[i] = net[i], 0.0
+        _split(u, net[:n], hi, lo, channel, ju, jlo)
     # the certificate of the cleaned reactions (model.result.certify)
     y = w[Y]
     min_gap, min_force, cmp = np.inf, 0.0, 0.0
@@ -563,30 +520,59 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
     stats[21] = unstable if code == CHECKED else 0.0
     if not settled:
         return NOT_SETTLED, stats, fu, fl, res
+    alpha1 = np.empty(links)
+    dalpha = _predict(alpha, u, w, fs, n, alpha1)
+    rho = contraction(step_sizes, dalpha)
+    floor1 = (np.sum(roundoff[:n]) + worst) / F0
+    d_up, d_lo = fu - ju[:n], fl - jlo[:n]
+    J = np.sum(ju[:n])
+    # the second judge step, at α₁ where the first moves the chain, from its contact set
+    j1u, j1l = ju[:n].copy(), jlo[:n].copy()
+    _positions(alpha1, a, w)
+    if profiled:  # its walls at the nodes' new x, the first step's reactions lagged
+        hi, lo, nodal_load = profile_rows(alpha1, w[COS], a, fs, hi0, lo0, wall, ku, cu_,
+                                          kl, cl_, j1u, j1l, nodal0)[:3]
+    _step(alpha1, a, jl, jr, k, rest, fs, n, nodal_load, w, bands)
+    rounds2, worst2, _ = _pivot(bands, fac, iw, lo, hi, cu, cl, L, eps_R, w, fs, b0, nj, k,
+                                rest, nodal_load)
+    e_up, e_lo = np.zeros(n), np.zeros(n)
+    rho2, floor2 = np.nan, np.nan
+    if rounds2 > 0:
+        _split(u, net[:n], hi, lo, channel, ju, jlo)
+        for i in range(n):
+            e_up[i], e_lo[i] = j1u[i] - ju[i], j1l[i] - jlo[i]
+        rho2 = judge_contraction(dalpha, _predict(alpha1, u, w, fs, n, alpha1.copy()))
+        floor2 = (np.sum(roundoff[:n]) + worst2) / F0
+    stats[13], stats[14] = force_error_bound(d_up, d_lo, e_up, e_lo, rho, rho2, floor1,
+                                             floor2, F0, rounds2 > 0)
+    stats[15] = max(max(NODE_FACTOR * tau, NODE_GROSS), NODE_FACTOR * floor_R / F0)
+    stats[16], stats[17], stats[18], stats[22] = rho, J, rounds, rho2
+    return SETTLED, stats, fu, fl, res
+
+
+@njit(cache=True)
+def _split(u, net, hi, lo, channel, ju, jlo):
+    """The judge step's net reaction split by wall into ``ju``, ``jlo``
+    (model.judge.split_reactions): in a channel each node's to the nearer wall."""
+    for i in range(net.size):
+        if channel:
+            mid = 0.5 * (hi[i] + lo[i])
+            near = u[i] >= mid if np.isfinite(mid) else np.isfinite(hi[i])
+            ju[i], jlo[i] = (net[i], 0.0) if near else (0.0, -net[i])
+        else:
+            ju[i], jlo[i] = net[i], 0.0
+
+
+@njit(cache=True)
+def _predict(alpha, u, w, fs, n, out):
+    """ContactStep.predict_alpha, eq. (21), about u₀ (the step's rows ORIGIN, ALPHA0,
+    INV) into ``out``; returns max|α̂ − α|."""
     origin, alpha0, inv = w[ORIGIN], w[ALPHA0], w[INV]
     dalpha, prev = 0.0, 0.0
-    for i in range(links):  # ContactStep.predict_alpha, eq. (21), about u₀
+    for i in range(alpha.size):
         node = i + 1 - (fs - 1)
         cur = u[node] - origin[node] if 0 <= node < n else 0.0
-        dalpha = max(dalpha, abs((alpha0[i] + (cur - prev) * inv[i]) - alpha[i]))
+        out[i] = alpha0[i] + (cur - prev) * inv[i]
+        dalpha = max(dalpha, abs(out[i] - alpha[i]))
         prev = cur
-    rho = _contraction(step_sizes, dalpha)
-    kappa = 1.0 / (1.0 - rho)
-    floor = 0.0
-    for i in range(n):
-        floor += roundoff[i]
-    floor = (floor + worst) / F0
-    s_up = s_lo = d_max = 0.0
-    for i in range(n):
-        d_up, d_lo = fu[i] - ju[i], fl[i] - jlo[i]
-        s_up += d_up
-        s_lo += d_lo
-        d_max = max(d_max, max(abs(d_up), abs(d_lo)))
-    J = 0.0
-    for i in range(n):
-        J += ju[i]
-    stats[13] = kappa * max(abs(s_up), abs(s_lo)) / F0 + floor
-    stats[14] = kappa * d_max / F0
-    stats[15] = max(max(NODE_FACTOR * tau, NODE_GROSS), NODE_FACTOR * floor_R / F0)
-    stats[16], stats[17], stats[18] = rho, J, rounds
-    return SETTLED, stats, fu, fl, res
+    return dalpha
