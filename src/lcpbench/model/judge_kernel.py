@@ -523,11 +523,14 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
     alpha1 = np.empty(links)
     dalpha = _predict(alpha, u, w, fs, n, alpha1)
     rho = contraction(step_sizes, dalpha)
-    floor1 = (np.sum(roundoff[:n]) + worst) / F0
-    d_up, d_lo = fu - ju[:n], fl - jlo[:n]
-    J = np.sum(ju[:n])
     # the second judge step, at α₁ where the first moves the chain, from its contact set
-    j1u, j1l = ju[:n].copy(), jlo[:n].copy()
+    d_up, d_lo, j1u, j1l = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    floor1, J = worst, 0.0
+    for i in range(n):
+        floor1 += roundoff[i]
+        J += ju[i]
+        d_up[i], d_lo[i], j1u[i], j1l[i] = fu[i] - ju[i], fl[i] - jlo[i], ju[i], jlo[i]
+    floor1 /= F0
     _positions(alpha1, a, w)
     if profiled:  # its walls at the nodes' new x, the first step's reactions lagged
         hi, lo, nodal_load = profile_rows(alpha1, w[COS], a, fs, hi0, lo0, wall, ku, cu_,
@@ -541,8 +544,11 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
         _split(u, net[:n], hi, lo, channel, ju, jlo)
         for i in range(n):
             e_up[i], e_lo[i] = j1u[i] - ju[i], j1l[i] - jlo[i]
-        rho2 = judge_contraction(dalpha, _predict(alpha1, u, w, fs, n, alpha1.copy()))
-        floor2 = (np.sum(roundoff[:n]) + worst2) / F0
+        rho2 = judge_contraction(dalpha, _predict(alpha1, u, w, fs, n, np.empty(links)))
+        floor2 = worst2
+        for i in range(n):
+            floor2 += roundoff[i]
+        floor2 /= F0
     stats[13], stats[14] = force_error_bound(d_up, d_lo, e_up, e_lo, rho, rho2, floor1,
                                              floor2, F0, rounds2 > 0)
     stats[15] = max(max(NODE_FACTOR * tau, NODE_GROSS), NODE_FACTOR * floor_R / F0)
