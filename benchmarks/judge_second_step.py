@@ -23,7 +23,7 @@ Three measurements on the paper grid (θ 10…180° by 10, h 2…7 mm, N = 140):
    tree) and pass the file as ``--before PATH`` to compare: scenes not bit-identical
    and the largest relative change max_i |ΔR_i| / F₀.
 
-    python benchmarks/judge_second_step.py --dump results/judge-second-step-before.json
+    PYTHONPATH=<tree before> python benchmarks/judge_second_step.py --dump FILE
     python benchmarks/judge_second_step.py --before FILE [--workers 2] [--force]
 """
 
@@ -147,6 +147,8 @@ def main(argv=None) -> int:
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--dump", type=Path, help="write the built-in default's reactions")
     p.add_argument("--before", type=Path, help="the --dump of the code before the change")
+    p.add_argument("--before-label", default=None,
+                   help="what --before was dumped from (for the report; default its path)")
     p.add_argument("--backends", default=",".join(TARGETS))
     p.add_argument("--out", type=Path, default=OUT)
     p.add_argument("--force", action="store_true", help="overwrite committed results")
@@ -210,7 +212,7 @@ def main(argv=None) -> int:
           f"step, two-step), module docstring of lcpbench/model/judge_bound.py. "
           f"{elapsed:.0f} s on {a.workers} workers, load {load0[0]:.1f} → {load1[0]:.1f}.",
           "", "    python benchmarks/judge_second_step.py "
-          + (f"--before {a.before} " if a.before else "") + "--force", "",
+          + ("--before FILE " if a.before else "") + "--force", "",
           "| run | scenes | success | wrong (converged, off) | bound reached | two-step "
           "settled | bound < true error | min bound / error (total, node) |",
           "|---|---:|---:|---:|---:|---:|---:|---|"]
@@ -228,7 +230,8 @@ def main(argv=None) -> int:
         before = json.loads(a.before.read_text())
         now = [r for r in rows if r["label"].startswith("default ")] + rows_chan
         md += ["", "## The built-in default's answers against the code before the change", "",
-               f"Reactions of `lcpbench.solve(scene, tol=T)` against `--before {a.before}`.", ""]
+               f"Reactions of `lcpbench.solve(scene, tol=T)` against FILE = "
+               f"{a.before_label or a.before} (`--dump FILE`).", ""]
         md += compare(before, now)
     a.out.parent.mkdir(parents=True, exist_ok=True)
     a.out.write_text("\n".join(md) + "\n")

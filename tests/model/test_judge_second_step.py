@@ -96,7 +96,11 @@ def test_the_bound_is_not_below_the_true_error(scene):
         res = solve(scene, **kw)
         j = res.judgement
         assert np.isfinite(j.force_error_bound), (kw, j.reason)
-        assert np.isfinite(j.judge_contraction), kw  # the second step settled
+        # the second step is taken where the one-step estimate exceeds tau; there it
+        # settles (the audit scene at tol 1e-3: one step says 1.1e-3 > tau)
+        assert np.isfinite(j.judge_contraction) or j.force_error_bound <= j.force_tol, kw
+        if scene is SCENES[0] and kw == {"tol": 1e-3}:
+            assert np.isfinite(j.judge_contraction)
         F0 = j.force_unit
         err = abs(res.total_force - ref.total_force) / F0
         if scene.channel:

@@ -55,8 +55,10 @@ judge step holds a node in contact by the wall's spring instead of on it.
    with ρ from the driver's last two step sizes and the first judge step's, ρ' the
    judge's second step size over its first, each at least ½, at most 0.99 (the
    driver's ρ is pessimistic for a back-end whose last steps carry its own
-   inaccuracy; the judge's steps contract at the exact outer step's rate). If the
-   second step does not settle, the one-step estimate alone. Per node
+   inaccuracy; the judge's steps contract at the exact outer step's rate). The
+   second step is taken only where the one-step estimate exceeds τ (it can only
+   lower the bound, so the verdict is the same without it; ρ' is then NaN); if it
+   does not settle, the one-step estimate alone. Per node
    (max_i |R_i − R'_i|) the one-step estimate, κ = 1/(1 − ρ) times it, on which
    the per-node threshold is set. The total must be at most τ and, per node, the
    largest of NODE_FACTOR·τ, NODE_GROSS (5 % of
@@ -239,20 +241,24 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
     bound = None
     if js is not None:
         rho = contraction_estimate(step_sizes, js.dalpha)
-        # the second judge step, at α₁ where the first moves the chain, from its contacts
-        js2 = judge_step(walls_at(chain0, js.alpha_next), js.alpha_next, pull=eps_R,
-                         forces=(js.forces_upper, js.forces_lower), contacts=js.contacts)
         kern = _bound_kernel()
-        rho2 = np.nan if js2 is None else float(kern.judge_contraction(js.dalpha, js2.dalpha))
-        e_up = np.zeros_like(js.forces_upper) if js2 is None else \
-            js.forces_upper - js2.forces_upper
-        e_lo = np.zeros_like(js.forces_lower) if js2 is None else \
-            js.forces_lower - js2.forces_lower
-        total, node = kern.force_error_bound(
-            *(np.ascontiguousarray(x, dtype=float) for x in (
-                forces_upper - js.forces_upper, forces_lower - js.forces_lower, e_up, e_lo)),
-            rho, rho2, _floor(js, F0), np.nan if js2 is None else _floor(js2, F0), F0,
-            js2 is not None)
+        d_up, d_lo = (np.ascontiguousarray(x, dtype=float) for x in (
+            forces_upper - js.forces_upper, forces_lower - js.forces_lower))
+        zero = np.zeros_like(d_up)
+        total, node = kern.force_error_bound(d_up, d_lo, zero, zero, rho, np.nan,
+                                             _floor(js, F0), np.nan, F0, False)
+        js2, rho2 = None, np.nan
+        if not total <= tau:  # the second judge step, at α₁ where the first moves the
+            # chain, from its contacts (where the one-step estimate passes, it can only
+            # lower the bound)
+            js2 = judge_step(walls_at(chain0, js.alpha_next), js.alpha_next, pull=eps_R,
+                             forces=(js.forces_upper, js.forces_lower), contacts=js.contacts)
+        if js2 is not None:
+            rho2 = float(kern.judge_contraction(js.dalpha, js2.dalpha))
+            total, node = kern.force_error_bound(
+                d_up, d_lo, *(np.ascontiguousarray(x, dtype=float) for x in (
+                    js.forces_upper - js2.forces_upper, js.forces_lower - js2.forces_lower)),
+                rho, rho2, _floor(js, F0), _floor(js2, F0), F0, True)
         # per node, certified down to the round-off of R = K g + z only
         node_allowed = max(NODE_FACTOR * tau, NODE_GROSS, NODE_FACTOR * floor_R / F0)
         verdict.force_error_bound, verdict.node_error_bound = float(total), float(node)

@@ -83,8 +83,8 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
     """The step's exact solution by block principal pivoting from contact sets up/lo.
 
     Returns ``(u, net reaction, rounds, round-off of each wall reaction, the
-    largest round-off of any node, S = max_i (|H||u| + |c|)_i)`` or None if it
-    did not settle.
+    largest round-off of any node, S = max_i (|H||u| + |c|)_i, (up, lo) the settled
+    contact set)`` or None if it did not settle.
     Nodes in ``up`` sit on the upper wall, in ``lo`` on the lower; the others
     are solved for (a banded solve, refined once in factored form). A wall
     that pulls by more than ``pull`` (N) releases its node; a node more than

@@ -7,8 +7,10 @@ principal pivoting from the answer's contact set, :func:`~lcpbench.model.judge._
 the round-off of the reactions, the exact-geometry certificate
 (:func:`lcpbench.model.result.certify`: forward kinematics, closure, the
 torque residual of :func:`lcpbench.model.chain.torque_residual`), the sign,
-complementarity and penetration checks, the contraction estimate ρ and the
-force error bound. The numpy judge is the reference; the Python side
+complementarity and penetration checks, and, where the one-step estimate of the
+force error exceeds τ, the judge's second exact step at α₁, where its first moves
+the chain, from the first's contact set; the force error bound from the two (:mod:`lcpbench.model.judge_bound`, compiled once for every
+judge path). The numpy judge is the reference; the Python side
 (:mod:`lcpbench.model.judge_compiled`) turns the numbers returned here into
 the same :class:`~lcpbench.model.judge.Judgement` with the same reasons
 (tests compare both on the hard suite, random scenes and adversarial answers).
@@ -531,6 +533,13 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
         J += ju[i]
         d_up[i], d_lo[i], j1u[i], j1l[i] = fu[i] - ju[i], fl[i] - jlo[i], ju[i], jlo[i]
     floor1 /= F0
+    e_up, e_lo = np.zeros(n), np.zeros(n)
+    stats[13], stats[14] = force_error_bound(d_up, d_lo, e_up, e_lo, rho, np.nan, floor1,
+                                             np.nan, F0, False)
+    stats[15] = max(max(NODE_FACTOR * tau, NODE_GROSS), NODE_FACTOR * floor_R / F0)
+    stats[16], stats[17], stats[18] = rho, J, rounds
+    if stats[13] <= tau:  # the one-step estimate passes: the second step can only lower it
+        return SETTLED, stats, fu, fl, res
     _positions(alpha1, a, w)
     if profiled:  # its walls at the nodes' new x, the first step's reactions lagged
         hi, lo, nodal_load = profile_rows(alpha1, w[COS], a, fs, hi0, lo0, wall, ku, cu_,
@@ -538,7 +547,6 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
     _step(alpha1, a, jl, jr, k, rest, fs, n, nodal_load, w, bands)
     rounds2, worst2, _ = _pivot(bands, fac, iw, lo, hi, cu, cl, L, eps_R, w, fs, b0, nj, k,
                                 rest, nodal_load)
-    e_up, e_lo = np.zeros(n), np.zeros(n)
     rho2, floor2 = np.nan, np.nan
     if rounds2 > 0:
         _split(u, net[:n], hi, lo, channel, ju, jlo)
@@ -551,8 +559,7 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
         floor2 /= F0
     stats[13], stats[14] = force_error_bound(d_up, d_lo, e_up, e_lo, rho, rho2, floor1,
                                              floor2, F0, rounds2 > 0)
-    stats[15] = max(max(NODE_FACTOR * tau, NODE_GROSS), NODE_FACTOR * floor_R / F0)
-    stats[16], stats[17], stats[18], stats[22] = rho, J, rounds, rho2
+    stats[22] = rho2
     return SETTLED, stats, fu, fl, res
 
 
