@@ -14,11 +14,14 @@ from energy_oracle import assert_solved
 from lcpbench import ActuatorScene, escalations, solve, solve_many
 from lcpbench.escalations import TIGHTER
 
-# From the issue-14 audit (benchmarks/judge_audit.py, seed 14): at the paper's tol 1e-3
-# the driver stops after 3 outer steps, 5.4e-4 F0 from the reference, and the judge's
-# bound says 1.1e-3 F0 against the allowed 1e-3.
-SCENE = ActuatorScene(theta=96.664, height=4.4103, links=173, length=41.55, EI=35.664,
-                      weight=0.00397)
+# A bound-only refusal whose force is within tau (the old scene of the issue-14 audit,
+# theta 96.664, is accepted directly since the judge's bound takes a second judge step,
+# model.judge_bound): the paper's chain at theta 159.5, h 7 mm, tol 1e-2 rad (tau 1e-3).
+# The driver stops after 3 outer steps 9.8e-4 F0 from the reference; the judge's bound
+# says 1.01e-3 F0. (Found by solving theta 150-170 by 0.5 at h 7 with the escalations
+# off; the paper grid has none at tol 1e-3, 3e-3 or 1e-2 whose force is within tau.)
+SCENE = ActuatorScene(theta=159.5, height=7.0)
+TOL = 1e-2
 
 
 @pytest.fixture(scope="module")
@@ -36,10 +39,10 @@ def _error(res, ref, scene=SCENE) -> float:
 
 
 def test_a_bound_only_refusal_is_continued_and_then_right(reference):
-    res = solve(SCENE)  # tol 1e-3
+    res = solve(SCENE, tol=TOL)
     assert res.converged, res.reason
     assert "force error bound alone" in res.retried("tightened")
-    assert res.tol == 1e-3  # judged at the asked tolerance
+    assert res.tol == TOL  # judged at the asked tolerance
     assert _error(res, reference) <= min(1e-3, 100 * res.tol)
     assert res.force_error_bound <= res.judgement.force_tol
     # the outer steps of both solves are counted, and the last one is below the tighter
@@ -52,7 +55,7 @@ def test_the_driver_alone_stops_early_there(skip_escalations, reference):
     # the premise: the built-in back-end's answer as the driver returns it (no retry) is
     # refused on the force error bound alone, though its force is within tau
     skip_escalations("tightened", "ramped")  # (nor the load path)
-    res = solve(SCENE)
+    res = solve(SCENE, tol=TOL)
     assert not res.converged
     assert res.judgement.failed == ["force error bound"]
     assert _error(res, reference) <= res.judgement.force_tol
@@ -82,9 +85,8 @@ def test_other_back_ends_and_the_undamped_scheme_keep_their_refusal():
 
 
 def test_solve_many_treats_it_as_solve_does(reference):
-    other = ActuatorScene(theta=100.0, height=4.4103, links=173, length=41.55, EI=35.664,
-                          weight=0.00397)
-    got = solve_many([SCENE, other], continuation=True)
+    other = ActuatorScene(theta=165.0, height=7.0)
+    got = solve_many([SCENE, other], tol=TOL, continuation=True)
     assert all(r.converged for r in got), [r.reason for r in got]
     assert got[0].retried("tightened") is not None
     assert _error(got[0], reference) <= 1e-3

@@ -38,17 +38,30 @@ judge step holds a node in contact by the wall's spring instead of on it.
 6. **closure, torque**: the exact-geometry certificate
    (:func:`lcpbench.model.result.certify`): the right pin on y = 0 to 1e-6 ℓ,
    the joint torques in balance to max(10 tol, 1e-6) of the spring torques.
-7. **force error bound**: lcpbench takes one more contact step itself at the
-   final α (the *judge step*), solved exactly by block principal pivoting
-   from the answer's contact set, independent of every back-end. If the
-   answer's forces are F_k and the judge step's F_{k+1}, and the outer
-   iteration contracts by ρ per step, F_k − F* ≈ (F_k − F_{k+1}) / (1 − ρ).
-   With ρ estimated from the last two step sizes (at least ½, at most 0.99),
+7. **force error bound**: lcpbench takes contact steps itself, solved exactly by
+   block principal pivoting, independent of every back-end
+   (:mod:`lcpbench.model.judge_exact`, compiled in :mod:`lcpbench.model.judge_kernel`):
+   the *judge step* at the final α from the answer's contact set (forces F_{k+1}),
+   and a second one at α₁, where the first moves the chain, from the first's contact
+   set (F_{k+2}). If the answer's forces are F_k and the outer iteration contracts
+   linearly by ρ per step, F_k − F* ≈ (F_k − F_{k+1}) / (1 − ρ), and
+   |F_k − F*| ≤ |F_k − F_{k+1}| + |F_{k+1} − F_{k+2}| / (1 − ρ'). The bound is the
+   smaller of the two estimates (:mod:`lcpbench.model.judge_bound`),
 
-       force_error_bound = |F_k − F_{k+1}| / ((1 − ρ) F₀) + round-off,
+       force_error_bound = min(|F_k − F_{k+1}| / (1 − ρ),
+                               |F_k − F_{k+1}| + |F_{k+1} − F_{k+2}| / (1 − ρ')) / F₀
+                           + round-off (of the one judge step, or of both),
 
-   and the same per node (max_i |R_i − R'_i|), which must be at most τ for
-   the total and, per node, the largest of NODE_FACTOR·τ, NODE_GROSS (5 % of
+   with ρ from the driver's last two step sizes and the first judge step's, ρ' the
+   judge's second step size over its first, each at least ½, at most 0.99 (the
+   driver's ρ is pessimistic for a back-end whose last steps carry its own
+   inaccuracy; the judge's steps contract at the exact outer step's rate). The
+   second step is taken only where the one-step estimate exceeds τ (it can only
+   lower the bound, so the verdict is the same without it; ρ' is then NaN); if it
+   does not settle, the one-step estimate alone. Per node
+   (max_i |R_i − R'_i|) the one-step estimate, κ = 1/(1 − ρ) times it, on which
+   the per-node threshold is set. The total must be at most τ and, per node, the
+   largest of NODE_FACTOR·τ, NODE_GROSS (5 % of
    F₀: node forces converge more slowly than their sum) and NODE_FACTOR times
    the round-off of a reaction, 256 ε S. This
    is an a-posteriori estimate under linear contraction, not a proof: it is
@@ -78,9 +91,7 @@ from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
-from numpy.linalg import LinAlgError  # scipy.linalg's LinAlgError is this class
 
-from ..linalg import banded_matvec, solveh_banded, sub_bands
 from ..problems.scenes import Chain
 from ..thresholds import (  # the rule's numbers, read by the judge kernel too
     EPS,
@@ -91,23 +102,12 @@ from ..thresholds import (  # the rule's numbers, read by the judge kernel too
     NODE_FACTOR,
     NODE_GROSS,
     NODE_SHARE,
-    PIVOT_ROUNDS,
-    RHO_MAX,
-    RHO_MIN,
-    ROUNDOFF_ULPS,
-    STALL,
-    STEP_NOISE,
 )
-from . import large_n
 from .chain import heights
 from .elastic import compliances
-from .judge_large import primal_step
-from .profile import has_profile, node_x, profile_step, slope_load, walls_at
-from .step import ContactStep, assemble_step
+from .judge_exact import JudgeStep, judge_step, split_reactions  # noqa: F401 (public names)
+from .profile import node_x, walls_at
 
-#: in increments (large N) the single pivots are capped at 2 × this many, not 2 per node:
-#: each round is an O(N) face solve, and a judge that cannot settle says so
-LARGE_ROUNDS = 100
 #: friction (issue 39): a node slides when its slip |s| > max(SLIP_FACTOR · tol · a,
 #: SLIP_FLOOR · ℓ) (a = ℓ/N; the floor: ten times Lemke's accepted residual on the
 #: dimensionless step, what a SOLVED step leaves on a slip)
@@ -140,24 +140,6 @@ def force_tol(tol: float) -> float:
 
 
 @dataclass
-class JudgeStep:
-    """The judge's own contact step at the final α, solved exactly.
-
-    ``forces_upper``/``forces_lower``: its reactions R' (N); ``rounds``: block
-    principal pivoting rounds; ``dalpha``: max|α̂' − α| it would move the chain.
-    """
-
-    forces_upper: np.ndarray
-    forces_lower: np.ndarray
-    rounds: int
-    dalpha: float
-    roundoff: np.ndarray  # per node on a wall, the round-off of its reaction R' (N)
-    worst_roundoff: float  # the largest over every node (N)
-    noise: np.ndarray  # per node, the round-off of an answer's R = K g + z (N)
-    term_size: float  # S = max_i (|H| |u| + |c|)_i (N): the terms of R = K g + z
-
-
-@dataclass
 class Judgement:
     """The verdict on one answer, with the numbers behind it.
 
@@ -172,6 +154,9 @@ class Judgement:
     force_error_bound: float = float("nan")
     node_error_bound: float = float("nan")
     contraction: float = float("nan")
+    #: ρ' of the two-step bound: the judge's second step size over its first (NaN: the
+    #: second step did not settle, or the judge did not get that far)
+    judge_contraction: float = float("nan")
     contact_threshold: float = 0.0
     judge_total_force: float = float("nan")
     judge_rounds: int = 0
@@ -193,221 +178,20 @@ class Judgement:
         return d
 
 
-def split_reactions(chain: Chain, net: np.ndarray, u: np.ndarray):
-    """Upper and lower wall reactions from the net reaction ``net`` (N, + pushes down).
+def _bound_kernel():
+    """The compiled force error bound (:mod:`lcpbench.model.judge_bound`), numba at the
+    first call."""
+    from ..numba_cache import kernel_module
 
-    One wall: all of it is the upper wall's (a negative value is that wall
-    pulling). A channel: each node's reaction belongs to the wall it is nearer
-    to, with its sign kept, so a pulling wall stays visible.
-    """
-    net = np.asarray(net, dtype=float)
-    if not chain.channel:
-        return net.copy(), np.zeros_like(net)
-    with np.errstate(invalid="ignore"):  # inf - inf where a node reaches no wall
-        mid = 0.5 * (chain.upper + chain.lower)
-    near_upper = np.where(np.isfinite(mid), u >= mid, np.isfinite(chain.upper))
-    return np.where(near_upper, net, 0.0), np.where(near_upper, 0.0, -net)
-
-
-def _springs(step: ContactStep) -> tuple[np.ndarray, np.ndarray]:
-    """The elastic walls' k_i (N/mm) per free node, 0 where a wall is rigid or absent."""
-    out = []
-    for k, wall in ((step.upper_stiffness, step.upper), (step.lower_stiffness, step.lower)):
-        k = np.full(step.size, np.inf) if k is None else np.asarray(k, float)
-        out.append(np.where(np.isfinite(k) & np.isfinite(wall), k, 0.0))
-    return out[0], out[1]
-
-
-def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
-    """The step's exact solution by block principal pivoting from contact sets up/lo.
-
-    Returns ``(u, net reaction, rounds, round-off of each wall reaction, the
-    largest round-off of any node, S = max_i (|H||u| + |c|)_i)`` or None if it
-    did not settle.
-    Nodes in ``up`` sit on the upper wall, in ``lo`` on the lower; the others
-    are solved for (a banded solve, refined once in factored form). A wall
-    that pulls by more than ``pull`` (N) releases its node; a node more than
-    pull / H_ii (mm) through a wall joins its set (on an elastic wall the node is
-    not held on the wall but by its spring, and released when the spring pulls) (the height error that costs
-    ``pull`` of force), or more than the round-off where that is larger, so
-    that at large N rounding cannot make it cycle. The step's Hessian is positive definite,
-    so the LCP has one solution; the round cap only guards against cycling.
-    """
-    up, lo = up.copy(), lo.copy()
-    best, stall = step.size + 1, 0
-    k_up, k_lo = _springs(step)
-    # the round-off of a height: of ℓ; in increments (large N), of the node's own wall
-    # distance (there a height error δ costs ~16 EI δ / a³ of force: 1e-13 mm is 2 N at
-    # N = 1e5)
-    height_size = step.length_scale if step.factor is None else _wall_size(step)
-    cap = PIVOT_ROUNDS + 2 * (step.size if step.factor is None else LARGE_ROUNDS)
-    if step.factor is not None and not step.elastic:  # increments (large N), rigid walls:
-        return _large_step(step, up, lo, pull, height_size, cap)  # one change at a time
-    for rounds in range(1, cap + 1):
-        # a node on a rigid wall is held on it; on an elastic wall it stays free, held
-        # by the wall's spring k (u − h) (model.elastic): a banded solve all the same
-        soft_up, soft_lo = up & (k_up > 0), lo & (k_lo > 0)
-        spring = np.where(soft_up, k_up, 0.0) + np.where(soft_lo, k_lo, 0.0)
-        rest = np.where(soft_up, step.upper, np.where(soft_lo, step.lower, 0.0))
-        u = step.origin.copy()
-        hard_up, hard_lo = up & ~soft_up, lo & ~soft_lo
-        u[hard_up] = step.upper[hard_up]
-        u[hard_lo] = step.lower[hard_lo]
-        free = np.flatnonzero(~(hard_up | hard_lo))
-        if free.size:
-            try:
-                if np.any(spring[free] > 0) and step.factor is not None:  # large N: the
-                    # springs as rows of the twisted factor (nothing grows with k)
-                    fixed = hard_up | hard_lo
-                    for _ in range(2):  # solve, then refine with the factored gradient
-                        grad = step.gradient(u) + spring * (u - rest)
-                        grad[fixed] = 0.0
-                        u -= step.factor.face_solve(fixed, grad, spring)
-                elif np.any(spring[free] > 0):  # elastic walls: banded
-                    bands = sub_bands(step.bands, free)
-                    bands[0] += spring[free]
-                    for _ in range(2):  # solve, then refine with the factored gradient
-                        grad = step.gradient(u) + spring * (u - rest)
-                        u[free] -= solveh_banded(bands, grad[free], lower=True,
-                                                 check_finite=False)
-                else:  # on H's banded Cholesky, or its tridiagonal factor (large N)
-                    for _ in range(2):  # solve, then refine with the factored gradient
-                        u[free] -= step.solve_on(free, step.gradient(u)[free])
-            except (LinAlgError, ValueError):
-                return None
-        net = -step.gradient(u)
-        # R' is the factored gradient (round-off ~ ε × its terms), not K g + z; but the
-        # free heights carry the solve's error, which K turns into force (a few ulps
-        # of S_i): a sign within that is undecided, not a reason to pivot
-        roundoff = ROUNDOFF_ULPS * EPS * step.gradient_scale(u)
-        size = banded_matvec(np.abs(step.bands), np.abs(u)) + np.abs(step.linear)
-        if step.factor is not None:  # increments (large N): R's terms are the gradient's
-            size = np.maximum(size, step.gradient_scale(u))
-        slack = np.maximum(np.maximum(roundoff, pull), ROUNDOFF_ULPS * EPS * size)
-        # a height error δ costs H_ii δ of force: ``pull`` in force is pull / H_ii in height
-        reach = np.maximum(ROUNDOFF_ULPS * EPS * (np.abs(u) + height_size), pull / step.bands[0])
-        release_up = up & (net < -slack)
-        release_lo = lo & (net > slack)
-        join_up = ~up & ~lo & (u > step.upper + reach)
-        join_lo = ~up & ~lo & (u < step.lower - reach)
-        change = release_up | release_lo | join_up | join_lo
-        count = int(np.count_nonzero(change))
-        if count == 0:
-            return (u, net, rounds, np.where(up | lo, roundoff, 0.0), float(np.max(roundoff)),
-                    float(np.max(size, initial=0.0)))
-        # Júdice–Pires: exchange every infeasible node while their number falls; after
-        # STALL rounds without progress, only the first one (Murty's least-index rule,
-        # finite for the P-matrix of a positive definite step)
-        best, stall = (count, 0) if count < best else (best, stall + 1)
-        if stall >= STALL:
-            first = np.zeros_like(change)
-            first[np.argmax(change)] = True
-            release_up, release_lo = release_up & first, release_lo & first
-            join_up, join_lo = join_up & first, join_lo & first
-        up = (up & ~release_up) | join_up
-        lo = (lo & ~release_lo) | join_lo
-    return None
-
-
-def _large_step(step: ContactStep, up, lo, pull: float, height_size, cap: int):
-    """:func:`_pivot_step` in increments (large N), by the primal active set of
-    :mod:`.judge_large`, with the same slack, reach and settle test."""
-
-    def sizes(u):
-        roundoff = ROUNDOFF_ULPS * EPS * step.gradient_scale(u)
-        size = np.maximum(banded_matvec(np.abs(step.bands), np.abs(u)) + np.abs(step.linear),
-                          step.gradient_scale(u))
-        return roundoff, size
-
-    def slack_of(u):
-        roundoff, size = sizes(u)
-        return np.maximum(np.maximum(roundoff, pull), ROUNDOFF_ULPS * EPS * size)
-
-    def reach_of(u):
-        return np.maximum(ROUNDOFF_ULPS * EPS * (np.abs(u) + height_size), pull / step.bands[0])
-
-    found = primal_step(step, up, lo, slack_of=slack_of, reach_of=reach_of, cap=cap)
-    if found is None:
-        return None
-    u, up, lo, rounds = found
-    net = -step.gradient(u)
-    roundoff, size = sizes(u)
-    return (u, net, rounds, np.where(up | lo, roundoff, 0.0), float(np.max(roundoff)),
-            float(np.max(size, initial=0.0)))
-
-
-def _wall_size(step: ContactStep) -> np.ndarray:
-    """|wall height| per node (0 where there is none): what a node's height rounds at."""
-    lo, hi = step.lower + step.origin, step.upper + step.origin
-    return np.maximum(np.where(np.isfinite(hi), np.abs(hi), 0.0),
-                      np.where(np.isfinite(lo), np.abs(lo), 0.0))
-
-
-def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0,
-               forces: tuple[np.ndarray, np.ndarray] | None = None) -> JudgeStep | None:
-    """One more contact step at ``alpha``, solved by the judge (None if it cannot).
-
-    It starts from the answer's contact set: the nodes whose gap costs less
-    than ``pull`` of force to close. With a wall profile the step is the
-    profile step (:func:`lcpbench.model.profile.profile_step`) with the
-    answer's reactions ``forces`` (upper, lower) as its lagged multipliers.
-    """
-    if has_profile(chain):
-        n = chain.free_nodes.size
-        up_lo = forces if forces is not None else (np.zeros(n), np.zeros(n))
-        if large_n.applies(chain):  # the profile step in increments; its slope load from
-            # the reactions clipped at 0, as profile.profile_step's (the driver's are not)
-            at = walls_at(chain, alpha)
-            s = slope_load(chain, alpha, *(np.maximum(f, 0.0) for f in up_lo))
-            step = large_n.increments_at(chain, alpha, walls=(at.lower, at.upper),
-                                         load=chain.nodal_load + s)
-            chain = at
-        else:
-            step, chain = profile_step(chain, alpha, *up_lo)
-    elif large_n.applies(chain):  # in increments, on the tridiagonal factor
-        step = large_n.increments_at(chain, alpha)
-    else:
-        step = assemble_step(chain, alpha)
-    absolute = step.origin if step.factor is None else step.heights  # node heights at α
-    floor = 1e3 * EPS * chain.length
-    if step.factor is not None:  # increments (large N)
-        floor = ROUNDOFF_ULPS * EPS * (np.abs(absolute) + _wall_size(step))
-    touch = np.maximum(pull / step.bands[0], floor)
-    on_upper, on_lower = step.upper - step.origin <= touch, step.origin - step.lower <= touch
-    # R = K g + z of an answer is exact to the factored gradient's round-off on a wall
-    # (g = 0), to that of rounded heights, a few ulps of S_i = (|K||g| + |z|)_i, off it
-    size = np.where(on_upper | on_lower | (step.factor is not None),
-                    step.gradient_scale(step.origin),
-                    banded_matvec(np.abs(step.bands), np.abs(step.origin))
-                    + np.abs(step.linear))
-    noise = ROUNDOFF_ULPS * EPS * size
-    up, lo = on_upper.copy(), on_lower.copy()  # a reaction off the wall is not contact
-    if has_profile(chain) and forces is not None:
-        # the answer sits on the walls at the x of its last step, h'·Δx from the exact
-        # wall: its nodes that carry force start on the wall too (else dozens of rounds)
-        up |= (forces[0] > pull) & np.isfinite(step.upper)
-        lo |= (forces[1] > pull) & np.isfinite(step.lower)
-    up &= ~lo | (step.upper - step.origin <= step.origin - step.lower)  # the nearer wall
-    lo &= ~up
-    found = _pivot_step(step, up, lo, pull)
-    if found is None:
-        return None
-    u, net, rounds, roundoff, worst, term_size = found
-    upper, lower = split_reactions(chain, net, u - step.origin + absolute)
-    dalpha = float(np.max(np.abs(step.predict_alpha(u) - alpha), initial=0.0))
-    return JudgeStep(upper, lower, rounds, dalpha, roundoff, worst, noise, term_size)
+    return kernel_module("lcpbench.model.judge_bound", "force_error_bound")
 
 
 def contraction_estimate(step_sizes: list[float], judge_dalpha: float) -> float:
-    """ρ from the last step sizes: the larger of the last two ratios, in [½, 0.99].
-
-    Step sizes at the round-off of an angle (below STEP_NOISE rad) are left out:
-    the ratio of two rounding errors says nothing about the contraction.
-    """
-    sizes = [s for s in [*step_sizes, judge_dalpha] if np.isfinite(s) and s > STEP_NOISE]
-    ratios = [b / a for a, b in zip(sizes[:-1], sizes[1:]) if a > 0][-2:]
-    rho = max(ratios, default=RHO_MIN)
-    return float(min(max(rho, RHO_MIN), RHO_MAX))
+    """ρ from the last step sizes: the larger of the last two ratios, in [½, 0.99]
+    (:func:`lcpbench.model.judge_bound.contraction`; sizes below STEP_NOISE rad, the
+    round-off of an angle, are left out)."""
+    return float(_bound_kernel().contraction(np.asarray(step_sizes, dtype=float),
+                                             float(judge_dalpha)))
 
 
 def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
@@ -433,7 +217,7 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
                                else certificate)
         return verdict
     L = chain.length
-    chain = walls_at(chain, alpha)  # a wall profile: its rows at the nodes' x (exact gaps)
+    chain0, chain = chain, walls_at(chain, alpha)  # a wall profile: its rows at the nodes' x (exact gaps)
     js = judge_step(chain, alpha, pull=eps_R, forces=(forces_upper, forces_lower))
     if js is not None:  # values within round-off are zero, not reactions
         forces_upper = np.where(np.abs(forces_upper) <= js.noise, 0.0, forces_upper)
@@ -457,21 +241,31 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
     bound = None
     if js is not None:
         rho = contraction_estimate(step_sizes, js.dalpha)
-        kappa = 1.0 / (1.0 - rho)
-        # the judge's own round-off: its wall reactions', and the residual left on the
-        # free nodes, which the chain carries to the walls
-        floor = (float(np.sum(js.roundoff)) + js.worst_roundoff) / F0
-        d_up = forces_upper - js.forces_upper
-        d_lo = forces_lower - js.forces_lower
-        total = kappa * max(abs(float(np.sum(d_up))), abs(float(np.sum(d_lo)))) / F0 + floor
-        node = kappa * float(np.max(np.abs(np.concatenate([d_up, d_lo])), initial=0.0)) / F0
+        kern = _bound_kernel()
+        d_up, d_lo = (np.ascontiguousarray(x, dtype=float) for x in (
+            forces_upper - js.forces_upper, forces_lower - js.forces_lower))
+        zero = np.zeros_like(d_up)
+        total, node = kern.force_error_bound(d_up, d_lo, zero, zero, rho, np.nan,
+                                             _floor(js, F0), np.nan, F0, False)
+        js2, rho2 = None, np.nan
+        if not total <= tau:  # the second judge step, at α₁ where the first moves the
+            # chain, from its contacts (where the one-step estimate passes, it can only
+            # lower the bound)
+            js2 = judge_step(walls_at(chain0, js.alpha_next), js.alpha_next, pull=eps_R,
+                             forces=(js.forces_upper, js.forces_lower), contacts=js.contacts)
+        if js2 is not None:
+            rho2 = float(kern.judge_contraction(js.dalpha, js2.dalpha))
+            total, node = kern.force_error_bound(
+                d_up, d_lo, *(np.ascontiguousarray(x, dtype=float) for x in (
+                    js.forces_upper - js2.forces_upper, js.forces_lower - js2.forces_lower)),
+                rho, rho2, _floor(js, F0), _floor(js2, F0), F0, True)
         # per node, certified down to the round-off of R = K g + z only
         node_allowed = max(NODE_FACTOR * tau, NODE_GROSS, NODE_FACTOR * floor_R / F0)
-        verdict.force_error_bound, verdict.node_error_bound = total, node
-        verdict.contraction = rho
+        verdict.force_error_bound, verdict.node_error_bound = float(total), float(node)
+        verdict.contraction, verdict.judge_contraction = rho, rho2
         verdict.judge_total_force = float(np.sum(js.forces_upper))
         verdict.judge_rounds = js.rounds
-        bound = (total, node, node_allowed)
+        bound = (verdict.force_error_bound, verdict.node_error_bound, node_allowed)
     verdict.unstable_directions = unstable_directions(chain, alpha, forces_upper,
                                                       forces_lower, eps_R)
     fails = failed_checks(certificate, step_statuses, tol=tol, tau=tau, comp=comp,
@@ -482,6 +276,12 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
                           judge_total_force=verdict.judge_total_force,
                           unstable=verdict.unstable_directions or 0)
     return settle_verdict(verdict, fails, driver_reason)
+
+
+def _floor(js: JudgeStep, F0: float) -> float:
+    """A judge step's own round-off, relative to F₀: its wall reactions', and the residual
+    left on the free nodes, which the chain carries to the walls."""
+    return (float(np.sum(js.roundoff)) + js.worst_roundoff) / F0
 
 
 def unstable_directions(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,

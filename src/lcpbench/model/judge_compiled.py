@@ -126,7 +126,7 @@ def verdict_from_stats(settled: bool, s: dict, fu: np.ndarray, fl: np.ndarray,
     if settled:
         total, node = s["total"], s["node"]
         verdict.force_error_bound, verdict.node_error_bound = total, node
-        verdict.contraction = s["rho"]
+        verdict.contraction, verdict.judge_contraction = s["rho"], s["judge_rho"]
         verdict.judge_total_force = s["judge_total_force"]
         verdict.judge_rounds = int(s["rounds"])
         bound = (total, node, s["node_allowed"])

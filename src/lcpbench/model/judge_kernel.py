@@ -7,8 +7,10 @@ principal pivoting from the answer's contact set, :func:`~lcpbench.model.judge._
 the round-off of the reactions, the exact-geometry certificate
 (:func:`lcpbench.model.result.certify`: forward kinematics, closure, the
 torque residual of :func:`lcpbench.model.chain.torque_residual`), the sign,
-complementarity and penetration checks, the contraction estimate ρ and the
-force error bound. The numpy judge is the reference; the Python side
+complementarity and penetration checks, and, where the one-step estimate of the
+force error exceeds τ, the judge's second exact step at α₁, where its first moves
+the chain, from the first's contact set; the force error bound from the two (:mod:`lcpbench.model.judge_bound`, compiled once for every
+judge path). The numpy judge is the reference; the Python side
 (:mod:`lcpbench.model.judge_compiled`) turns the numbers returned here into
 the same :class:`~lcpbench.model.judge.Judgement` with the same reasons
 (tests compare both on the hard suite, random scenes and adversarial answers).
@@ -41,14 +43,11 @@ from ..thresholds import (  # the rule's numbers, as model.judge reads them
     NODE_GROSS,
     NODE_SHARE,
     PIVOT_ROUNDS,
-    RHO_MAX,
-    RHO_MIN,
     ROUNDOFF_ULPS,
     STALL,
-    STEP_NOISE,
 )
+from .judge_bound import contraction, force_error_bound, judge_contraction, profile_rows
 from .stability_kernel import CHECKED, unstable_directions
-from .wall_kernel import slope_load, walls_at
 
 TINY = np.finfo(np.float64).tiny
 
@@ -56,7 +55,7 @@ TINY = np.finfo(np.float64).tiny
 STATS = ("tau", "F0", "eps_R", "comp", "comp_allowed", "min_gap", "min_force",
          "complementarity", "closure", "max_torque_residual", "relative_torque_residual",
          "floor_R", "R_min", "total", "node", "node_allowed", "rho", "judge_total_force",
-         "rounds", "pen", "closure_allowed", "unstable")
+         "rounds", "pen", "closure_allowed", "unstable", "judge_rho")
 SETTLED, NOT_SETTLED = 0, 1
 
 
@@ -384,29 +383,6 @@ def _pivot(bands, fac, iw, lo, hi, cu, cl, L, pull, w, fs, b0, nj, k, rest, noda
 
 
 @njit(cache=True)
-def _contraction(step_sizes, judge_dalpha):
-    """model.judge.contraction_estimate: ρ from the last two ratios of step sizes, in [½, 0.99]."""
-    sizes = np.empty(step_sizes.size + 1)
-    m = 0
-    for s in step_sizes:
-        if np.isfinite(s) and s > STEP_NOISE:
-            sizes[m] = s
-            m += 1
-    if np.isfinite(judge_dalpha) and judge_dalpha > STEP_NOISE:
-        sizes[m] = judge_dalpha
-        m += 1
-    rho, seen = RHO_MIN, 0
-    for i in range(m - 1, 0, -1):  # the last two ratios with a > 0
-        if seen == 2:
-            break
-        if sizes[i - 1] > 0:
-            r = sizes[i] / sizes[i - 1]
-            rho = r if seen == 0 else max(rho, r)
-            seen += 1
-    return min(max(rho, RHO_MIN), RHO_MAX)
-
-
-@njit(cache=True)
 def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl,
                  wall, channel, forces_upper, forces_lower, tol, step_sizes):
     """:func:`judge_walls` on flat walls (no table)."""
@@ -454,24 +430,12 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
     iw = np.empty((3, n), np.int64)
     _positions(alpha, a, w)
     profiled = ku.size > 0 or kl.size > 0
+    hi0, lo0, nodal0 = hi, lo, nodal_load  # the flat rows: the second step's walls from them
     h1 = l1 = h2 = l2 = g_up = g_lo = np.empty(0)
     if profiled:  # the walls at the nodes' x; the answer's reactions load along them
-        sines, xf, yf = np.sin(alpha), np.empty(n), np.empty(n)
-        g_up, g_lo, h1, l1, h2, l2 = (np.empty(n), np.empty(n), np.empty(n), np.empty(n),
-                                      np.empty(n), np.empty(n))
-        walls_at(sines, w[COS][:links], a, fs, np.zeros(n), np.zeros(n), ku, cu_, kl, cl_, xf,
-                 yf, g_up, g_lo, h1, l1, h2, l2)  # (h(x), l(x) at every node)
-        hi, lo, load = hi.copy(), lo.copy(), np.empty(n)
-        for i in range(n):
-            if ku.size and np.isfinite(hi[i]):
-                hi[i] = g_up[i]
-            if kl.size and np.isfinite(lo[i]):
-                lo[i] = g_lo[i]
-            g_up[i] = (g_up[i] if ku.size else wall) - yf[i]  # the exact gaps
-            g_lo[i] = yf[i] - (g_lo[i] if kl.size else -wall)
-            load[i] = max(forces_upper[i], 0.0) * h1[i] - max(forces_lower[i], 0.0) * l1[i]
-        slope_load(alpha, w[COS][:links], sines, fs, load, xf)
-        nodal_load = nodal_load + xf
+        hi, lo, nodal_load, g_up, g_lo, h1, l1, h2, l2 = profile_rows(
+            alpha, w[COS], a, fs, hi0, lo0, wall, ku, cu_, kl, cl_, forces_upper,
+            forces_lower, nodal0)
     # the judge step at α, from the answer's contact set
     _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, w, bands)
     origin, linear, noise, state = w[ORIGIN], w[LINEAR], w[NOISE], iw[0]
@@ -499,12 +463,7 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
                 fu[i] = 0.0
             if abs(fl[i]) <= noise[i]:
                 fl[i] = 0.0
-            if channel:  # model.judge.split_reactions
-                mid = 0.5 * (hi[i] + lo[i])
-                near = u[i] >= mid if np.isfinite(mid) else np.isfinite(hi[i])
-                ju[i], jlo[i] = (net[i], 0.0) if near else (0.0, -net[i])
-            else:
-                ju[i], jlo[i] = net[i], 0.0
+        _split(u, net[:n], hi, lo, channel, ju, jlo)
     # the certificate of the cleaned reactions (model.result.certify)
     y = w[Y]
     min_gap, min_force, cmp = np.inf, 0.0, 0.0
@@ -563,30 +522,70 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
     stats[21] = unstable if code == CHECKED else 0.0
     if not settled:
         return NOT_SETTLED, stats, fu, fl, res
-    origin, alpha0, inv = w[ORIGIN], w[ALPHA0], w[INV]
-    dalpha, prev = 0.0, 0.0
-    for i in range(links):  # ContactStep.predict_alpha, eq. (21), about u₀
-        node = i + 1 - (fs - 1)
-        cur = u[node] - origin[node] if 0 <= node < n else 0.0
-        dalpha = max(dalpha, abs((alpha0[i] + (cur - prev) * inv[i]) - alpha[i]))
-        prev = cur
-    rho = _contraction(step_sizes, dalpha)
-    kappa = 1.0 / (1.0 - rho)
-    floor = 0.0
+    alpha1 = np.empty(links)
+    dalpha = _predict(alpha, u, w, fs, n, alpha1)
+    rho = contraction(step_sizes, dalpha)
+    # the second judge step, at α₁ where the first moves the chain, from its contact set
+    d_up, d_lo, j1u, j1l = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    floor1, J = worst, 0.0
     for i in range(n):
-        floor += roundoff[i]
-    floor = (floor + worst) / F0
-    s_up = s_lo = d_max = 0.0
-    for i in range(n):
-        d_up, d_lo = fu[i] - ju[i], fl[i] - jlo[i]
-        s_up += d_up
-        s_lo += d_lo
-        d_max = max(d_max, max(abs(d_up), abs(d_lo)))
-    J = 0.0
-    for i in range(n):
+        floor1 += roundoff[i]
         J += ju[i]
-    stats[13] = kappa * max(abs(s_up), abs(s_lo)) / F0 + floor
-    stats[14] = kappa * d_max / F0
+        d_up[i], d_lo[i], j1u[i], j1l[i] = fu[i] - ju[i], fl[i] - jlo[i], ju[i], jlo[i]
+    floor1 /= F0
+    e_up, e_lo = np.zeros(n), np.zeros(n)
+    stats[13], stats[14] = force_error_bound(d_up, d_lo, e_up, e_lo, rho, np.nan, floor1,
+                                             np.nan, F0, False)
     stats[15] = max(max(NODE_FACTOR * tau, NODE_GROSS), NODE_FACTOR * floor_R / F0)
     stats[16], stats[17], stats[18] = rho, J, rounds
+    if stats[13] <= tau:  # the one-step estimate passes: the second step can only lower it
+        return SETTLED, stats, fu, fl, res
+    _positions(alpha1, a, w)
+    if profiled:  # its walls at the nodes' new x, the first step's reactions lagged
+        hi, lo, nodal_load = profile_rows(alpha1, w[COS], a, fs, hi0, lo0, wall, ku, cu_,
+                                          kl, cl_, j1u, j1l, nodal0)[:3]
+    _step(alpha1, a, jl, jr, k, rest, fs, n, nodal_load, w, bands)
+    rounds2, worst2, _ = _pivot(bands, fac, iw, lo, hi, cu, cl, L, eps_R, w, fs, b0, nj, k,
+                                rest, nodal_load)
+    rho2, floor2 = np.nan, np.nan
+    if rounds2 > 0:
+        _split(u, net[:n], hi, lo, channel, ju, jlo)
+        for i in range(n):
+            e_up[i], e_lo[i] = j1u[i] - ju[i], j1l[i] - jlo[i]
+        rho2 = judge_contraction(dalpha, _predict(alpha1, u, w, fs, n, np.empty(links)))
+        floor2 = worst2
+        for i in range(n):
+            floor2 += roundoff[i]
+        floor2 /= F0
+    stats[13], stats[14] = force_error_bound(d_up, d_lo, e_up, e_lo, rho, rho2, floor1,
+                                             floor2, F0, rounds2 > 0)
+    stats[22] = rho2
     return SETTLED, stats, fu, fl, res
+
+
+@njit(cache=True)
+def _split(u, net, hi, lo, channel, ju, jlo):
+    """The judge step's net reaction split by wall into ``ju``, ``jlo``
+    (model.judge.split_reactions): in a channel each node's to the nearer wall."""
+    for i in range(net.size):
+        if channel:
+            mid = 0.5 * (hi[i] + lo[i])
+            near = u[i] >= mid if np.isfinite(mid) else np.isfinite(hi[i])
+            ju[i], jlo[i] = (net[i], 0.0) if near else (0.0, -net[i])
+        else:
+            ju[i], jlo[i] = net[i], 0.0
+
+
+@njit(cache=True)
+def _predict(alpha, u, w, fs, n, out):
+    """ContactStep.predict_alpha, eq. (21), about u₀ (the step's rows ORIGIN, ALPHA0,
+    INV) into ``out``; returns max|α̂ − α|."""
+    origin, alpha0, inv = w[ORIGIN], w[ALPHA0], w[INV]
+    dalpha, prev = 0.0, 0.0
+    for i in range(alpha.size):
+        node = i + 1 - (fs - 1)
+        cur = u[node] - origin[node] if 0 <= node < n else 0.0
+        out[i] = alpha0[i] + (cur - prev) * inv[i]
+        dalpha = max(dalpha, abs(out[i] - alpha[i]))
+        prev = cur
+    return dalpha
