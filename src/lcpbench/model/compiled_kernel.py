@@ -139,12 +139,6 @@ def wall_penalty(u, lo, hi, cu, cl, grad):
 
 
 @njit(cache=True)
-def _energy(alpha, a, jl, jr, k, rest, link_load):
-    """chain.energy: ½Σk(φ−φ*)² − Σ P·(centre height)."""
-    return energy_into(alpha, a, jl, jr, k, rest, link_load, np.sin(alpha))
-
-
-@njit(cache=True)
 def fit_heights(out, u, reference, a, fs, links, inv, sines, cosines):
     """chain.alpha_from_heights into ``out``; False when some |Δy| >= a. ``inv``:
     1 / (a cos α) of ``reference`` if known (its sign is the branch), else empty.

@@ -18,9 +18,9 @@ same small compiled overhead for every back-end:
 The numpy modules are the reference; this file repeats their arithmetic in the same
 order where that is cheap, so the driver of :mod:`lcpbench.model.compiled_driver`
 takes the numpy driver's path to round-off (``tests/model/test_compiled_driver.py``).
-Self-contained on purpose: numba's on-disk cache of a function is invalidated only
-when its own file changes, so nothing here calls :mod:`.compiled_kernel` (which has
-its own copies of the chain's energy, inverse kinematics and assembly).
+The chain's energy, its inverse kinematics and the banded step are
+:mod:`.compiled_kernel`'s (one copy each; :mod:`lcpbench.numba_cache` recompiles every
+kernel when any kernel file changes, so a call across files never runs stale code).
 """
 
 from __future__ import annotations
@@ -29,51 +29,16 @@ import numpy as np
 from numba import njit
 
 from .compiled_dual import wall_residuals  # one copy of the judge's rows (numba_cache)
-from .compiled_kernel import banded_step  # and of the banded step
+from .compiled_kernel import banded_step, energy_into, fit_heights  # the chain, the step
 
 TINY = np.finfo(np.float64).tiny
 
 
 # -- the chain (model.chain) ----------------------------------------------------
 @njit(cache=True)
-def _node_heights(alpha, a):
-    y = np.zeros(alpha.size + 1)
-    acc = 0.0
-    for i in range(alpha.size):
-        acc += a * np.sin(alpha[i])
-        y[i + 1] = acc
-    return y
-
-
-@njit(cache=True)
 def energy(alpha, a, jl, jr, k, rest, link_load):
     """chain.energy (rigid walls): ½Σk(φ−φ*)² − Σ P·(centre height)."""
-    s = 0.0
-    for j in range(jr.size):
-        d = (alpha[jr[j]] - (alpha[jl[j]] if jl[j] >= 0 else 0.0)) - rest[j]
-        s += k[j] * (d * d)
-    y = _node_heights(alpha, a)
-    w = 0.0
-    for i in range(alpha.size):
-        w += link_load[i] * (0.5 * (y[i] + y[i + 1]))
-    return 0.5 * s - w
-
-
-@njit(cache=True)
-def _chain_at(u, reference, a, fs, links):
-    """chain.alpha_from_heights: (ok, α); not ok when some |Δy| >= a."""
-    y = np.zeros(links + 1)
-    y[fs - 1:fs - 1 + u.size] = u
-    out = np.empty(links)
-    for i in range(links):
-        s = (y[i + 1] - y[i]) / a
-        if not np.isfinite(s) or abs(s) >= 1.0:
-            return False, out
-        base = np.arcsin(s)
-        if np.cos(reference[i]) < 0.0:
-            base = np.pi - base
-        out[i] = base + 2 * np.pi * np.rint((reference[i] - base) / (2 * np.pi))
-    return True, out
+    return energy_into(alpha, a, jl, jr, k, rest, link_load, np.sin(alpha))
 
 
 # -- the step (model.step) ----------------------------------------------------------
@@ -288,7 +253,9 @@ def advance(su, u, alpha, E, noise, inv, alpha0, origin, phi_origin, coef, fs, k
         slope += g[i] * d[i]
     t = 1.0
     while t >= 1e-12:
-        ok, trial = _chain_at(u + t * d, alpha, a, fs, links)
+        trial = np.empty(links)
+        ok = fit_heights(trial, u + t * d, alpha, a, fs, links, np.empty(0), np.empty(links),
+                         np.empty(links))
         if ok:
             E_t = energy(trial, a, jl, jr, k, rest, link_load)
             if E_t <= E + 1e-4 * t * min(slope, 0.0) + noise:
