@@ -124,12 +124,19 @@ def test_every_hard_entry_names_its_documentation():
 
 
 @pytest.mark.parametrize("name", ["sweep", "hard"])
-def test_newton_fb_at_high_succeeds_only_without_contact(name):
-    # the why of its entry, checked on the committed runs: every success has F_ref = 0
+def test_newton_fb_at_high_fails_on_most_contact_scenes(name):
+    # the why of its entry, checked on the committed runs: it fails on most scenes with
+    # contact (F_ref > 0), and what it answers there is within τ of the reference
     with (ROOT / "results" / name / "runs.csv").open() as f:
         rows = [r for r in csv.DictReader(f)
                 if r["backend"] == "siconos-newton-fb" and r["settings"] == "high"]
-    solved = [float(r["reference_force"]) for r in rows if r["status"] == "solved"]
-    assert rows and np.all(np.asarray(solved) == 0.0)
+    contact = [r for r in rows if float(r["reference_force"]) > 0.0]
+    failed = [r for r in contact if r["converged"] != "1"]
+    assert contact and len(failed) > len(contact) / 2
+    for r in contact:
+        if r["converged"] == "1":
+            F, F_ref = float(r["total_force"]), float(r["reference_force"])
+            scale = max(F_ref, float(r["EI"]) / float(r["length"]) ** 2)
+            assert abs(F - F_ref) / scale <= min(1e-3, 100 * float(r["tol"]))
     e = expectation("siconos-newton-fb", "high", "not_converged")
-    assert e is not None and "no contact scene" in e.why
+    assert e is not None and "fails on most contact scenes" in e.why

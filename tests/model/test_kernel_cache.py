@@ -100,3 +100,22 @@ def test_every_file_with_numba_kernels_is_listed_and_loaded_through_the_cache():
             if m:
                 imported = set(re.findall(r"\w+", m.group(1) or m.group(2)))
                 assert not imported & names, f"{p.name}: {line.strip()}"
+
+
+def test_no_test_module_imports_a_kernel_file_directly():
+    """A test that imports a kernel file at collection (``from lcpbench.model import
+    angle_kernel``) registers its dispatchers, and those of every kernel it imports,
+    with numba's default cache beside the sources before any solve loads them through
+    the cache: the hash test above then fails, depending on the collection order."""
+    from lcpbench.numba_cache import KERNEL_FILES
+
+    tests = Path(__file__).resolve().parents[1]
+    dotted = {"lcpbench." + f.removesuffix(".py").replace("/", ".") for f in KERNEL_FILES}
+    for p in tests.rglob("*.py"):
+        for line in p.read_text().splitlines():
+            m = re.match(r"(?:from ([\w.]+) import (.+)|import ([\w.]+))", line)
+            if not m:
+                continue
+            base = m.group(1) or m.group(3)
+            names = {f"{base}.{n}" for n in re.findall(r"\w+", m.group(2) or "")} | {base}
+            assert not names & dotted, f"{p.relative_to(tests)}: {line.strip()}"

@@ -9,8 +9,11 @@ import itertools
 import numpy as np
 import pytest
 
-from lcpbench.model.friction_step import frictional_lcp
-from lcpbench.solvers import pivoting_kernel as pk
+from lcpbench.numba_cache import jit_module
+
+# through the kernels' cache (a direct import would cache them beside their sources)
+pk = jit_module("lcpbench.solvers.pivoting_kernel")
+frictional_lcp = jit_module("lcpbench.model.friction_step").frictional_lcp
 
 FEAS, PIV, RCOND = 1e-10, 1e-13, 1e-12
 
