@@ -85,3 +85,19 @@ def test_progress_has_one_bar_per_phase_and_counts_expected_failures(tmp_path):
     assert bar.bars["runs"].total == 3 and bar.bars["runs"].n == 3
     assert (bar.failed, bar.expected) == (2, 1)
     bar.close()
+
+
+def test_a_first_use_says_the_kernels_compile_and_later_uses_do_not(tmp_path, monkeypatch,
+                                                                    capsys):
+    # the notice follows the kernels' cache directory: absent, one line; present, none
+    import lcpbench.numba_cache as nc
+    from lcpbench.cli import _first_use_notice
+
+    monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
+    monkeypatch.setattr(nc, "kernels_dir", lambda: str(tmp_path / "not-yet"))
+    _first_use_notice()
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and "compiling the solve kernels" in err
+    (tmp_path / "not-yet").mkdir()
+    _first_use_notice()
+    assert capsys.readouterr().err == ""

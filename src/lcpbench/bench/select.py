@@ -48,7 +48,8 @@ from ..solvers.selection import Selection
 from .grid import Grid, scene_key
 from .jobs import ReferenceJob, RunJob
 from .metrics import error_of, geometric_mean, succeeded
-from .select_evidence import COMMITTED_RUNS, compare, kind_of, preference, read_runs_csv, ruled_out
+from .select_evidence import (COMMITTED_RUNS, compare, kind_of, preference, read_runs_csv,
+                              ruled_out, student_t)
 from .store import Store
 from .sweep import DEFAULT_TIME_LIMIT, sweep
 
@@ -371,9 +372,12 @@ def _choose(full, rows, keys, probes, force_tol, dtol, time_budget, out, report,
         cmp = compare(times(pick, on), times(runner, on))
         confidence = {"versus": {"backend": runner[0], "settings": runner[1]},
                       "probes": len(on), **cmp}
-        reason += (f"; beats {runner[0]} ({runner[1]}) by {cmp['ratio']:.2g}x ± {cmp['se']:.1g}"
-                   + (" (within the noise)" if cmp["tied"] else "")
-                   + ("" if on is keys else " on the first probe, where it was cut"))
+        half = student_t(len(on) - 1) * cmp["log_se"]  # the 95 % interval of the ratio
+        lo, hi = math.exp(cmp["log_ratio"] - half), math.exp(cmp["log_ratio"] + half)
+        reason += (f"; {cmp['ratio']:.2g}x faster than {runner[0]} ({runner[1]})"
+                   + ("" if on is keys else " on the first probe, where it was cut")
+                   + f" (95 % interval {lo:.2g}x to {hi:.2g}x over {len(on)} probe(s)"
+                   + (": not significant, so a tie" if cmp["tied"] else "") + ")")
     others = [c for c in ties if c != pick]
     if others:
         reason += ("; tied within the noise with " + ", ".join(f"{b} ({s})" for b, s in others)

@@ -98,6 +98,22 @@ def _missing(args) -> str:
             f"see '{args.parser.prog} --help'")
 
 
+#: the commands that solve nothing (the rest may compile the kernels at their first use)
+NO_KERNELS = ("solvers", "report", "export", "compile", "vision")
+
+
+def _first_use_notice() -> None:
+    """One line on stderr when this install's kernels are not compiled yet: the first
+    solve compiles them (about a minute on two cores), which would look like a hang."""
+    import os
+
+    from ..numba_cache import kernels_dir
+
+    if os.environ.get("NUMBA_DISABLE_JIT", "0") == "0" and not os.path.isdir(kernels_dir()):
+        print("lcpbench: compiling the solve kernels for this install (once, about a minute "
+              "on two cores; `lcpbench compile` does it ahead of time)", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line.
 
@@ -119,6 +135,8 @@ def main(argv: list[str] | None = None) -> int:
         args = parser.parse_args(argv)
         if args.func is None:
             args.parser.error(_missing(args))
+        if args.command not in NO_KERNELS:
+            _first_use_notice()
         return args.func(args)
     except ParserExit as exc:
         return exc.status

@@ -34,7 +34,8 @@ def register(subparsers) -> None:
                          "results/paper). A file is rewritten only if its numbers changed "
                          "beyond round-off (relative 1e-6)")
     rr.add_argument("--quick", action="store_true",
-                    help="coarser grids and smaller N: a smoke run in seconds")
+                    help="coarser grids and smaller N: a smoke run in seconds (once the kernels are "
+                         "compiled)")
     rr.set_defaults(func=cmd_reproduce)
 
     an = subparsers.add_parser(

@@ -250,9 +250,11 @@ def _judge_rows(result) -> list[tuple[str, str]]:
     j = result.judgement
     if j is None or not np.isfinite(j.force_error_bound):
         return []
-    return [("force error", f"<= {j.force_error_bound:.2g} x {1e3 * j.force_unit:.6g} mN "
-                            f"(the judge's bound; allowed {j.force_tol:.2g}); one more "
-                            f"exact step gives {1e3 * j.judge_total_force:.6g} mN")]
+    return [("force error", f"<= {j.force_error_bound:.2g} x F0, F0 = {1e3 * j.force_unit:.6g} "
+                            f"mN (the judge's bound in its force unit; allowed "
+                            f"{j.force_tol:.2g})"),
+            ("", f"one more exact step gives a total force of "
+                 f"{1e3 * j.judge_total_force:.6g} mN")]
 
 
 # -- commands -----------------------------------------------------------------

@@ -71,8 +71,10 @@ def register(subparsers) -> None:
                     "baseline, into an SQLite store; then write the report. A killed sweep "
                     "resumes where it stopped when run again. With no arguments, the main "
                     "job: the paper's grid (theta 10-180 by 10, h 2-7 mm by 1, N = 140), "
-                    "every installed back-end but the four documented never to converge on a "
-                    "contact step (PGS/SOR, Siconos PGS and Newton-min), settings default, "
+                    "every installed back-end but those documented never to converge on its "
+                    "contact steps (PGS/SOR, Siconos PGS and Newton-min at any N; Siconos' "
+                    "enumeration and its Murty, Bard and path-search pivot rules from "
+                    "N = 140 on), settings default, "
                     "the analytic-Jacobian baseline, each run timed once (about 2 minutes "
                     "on 2 cores). --standard: the standard run (every installed back-end, "
                     "settings default and high, both baselines, times the median of 3; "
@@ -338,10 +340,10 @@ def cmd_sweep(args) -> int:
         _print_backends(solvers, explicit=args.solvers.strip() not in ("all", "main"),
                         main_job=args.solvers == "main")
         if not args.standard:
-            print(f"the main job: settings {args.settings}, baseline {args.baseline}, each run "
-                  f"timed {args.repeat}x; the standard run (every back-end, settings "
-                  "default,high, both baselines, times the median of 3) is "
-                  "`lcpbench sweep --standard`", file=sys.stderr)
+            print(f"settings {args.settings}, baseline {args.baseline}, each run timed "
+                  f"{args.repeat}x (the main job's defaults where not given); the standard "
+                  "run (every back-end, settings default,high, both baselines, times the "
+                  "median of 3) is `lcpbench sweep --standard`", file=sys.stderr)
         bar = progress_bar(args.quiet, None if args.quiet else
                            _phase_sizes(store, jobs, args.rerun))
         try:
@@ -391,11 +393,15 @@ def _print_backends(solvers: list[str], explicit: bool, main_job: bool = False) 
     from ..solvers.registry import backends
 
     print(f"running {len(solvers)} back-end(s): {', '.join(solvers)}", file=sys.stderr)
+    others = [name for name in backends() if name not in solvers]
+    if explicit:  # the user chose: one line, not a reason per back-end left out
+        if others:
+            print(f"({len(others)} other back-end(s) not in --solvers)", file=sys.stderr)
+        return
     skipped: dict[str, list[str]] = {}
     for name, b in backends().items():
         if name not in solvers:
             why = (f"not installed ({b.install_hint()})" if not b.available() else
-                   "not in --solvers" if explicit else
                    "documented never to converge on a contact step (cond(K) ~ 1e8), left "
                    "out of the main job; --standard or --solvers all runs them"
                    if main_job and never_converges(name) else "")
