@@ -186,18 +186,77 @@ def _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, D, frict
 
 
 @njit(cache=True)
-def sparse_gram(B, X):
-    """Bᵀ X, each column of B walked over its nonzeros only: a wall row's column against a
-    flat wall is one entry (n_y at its node), so W_nn and W_nt cost O(m) per row, not
-    O(n m) as a dense product."""
-    n, cols = B.shape
-    out = np.zeros((cols, X.shape[1]))
-    for c in range(cols):
-        for j in range(n):
-            v = B[j, c]
+def slip_product(D, X, first, ny):
+    """D X ((N+1) × cols) in O(N · cols), D of :func:`slip_jacobian` (with τ's column of
+    ones after its ``ny`` height columns when τ is an unknown).
+
+    Height column c (the free node j = ``first`` + c) holds one value above row j (L_c,
+    D[0, c]: 0, or the right end's datum shift), its own entry D[j, c] = −tan α_(j−1)
+    (shifted) and one value below (U_c = D[N, c]: tan α_j − tan α_(j−1), shifted): δx_i
+    sees the height of every node before i alike, and of every node after i alike. So
+    row i of D X is a prefix sum of U_c X_c over the nodes before i, a suffix sum of
+    L_c X_c over those after, and its own node's term; the columns past ``ny`` are
+    added as they are."""
+    rows, cols = D.shape[0], X.shape[1]
+    out = np.zeros((rows, cols))
+    acc = np.zeros(cols)
+    for i in range(rows):  # the nodes before i
+        for k in range(cols):
+            out[i, k] = acc[k]
+        c = i - first
+        if 0 <= c < ny and i < rows - 1:
+            u = D[rows - 1, c]
+            if u != 0.0:
+                for k in range(cols):
+                    acc[k] += u * X[c, k]
+    acc[:] = 0.0
+    for i in range(rows - 1, -1, -1):  # the nodes after i, and i's own
+        c = i - first
+        for k in range(cols):
+            out[i, k] += acc[k]
+        if 0 <= c < ny:
+            d, low = D[i, c], D[0, c] if i > 0 else 0.0
+            for k in range(cols):
+                out[i, k] += d * X[c, k]
+                acc[k] += low * X[c, k]
+    for c in range(ny, D.shape[1]):
+        for i in range(rows):
+            v = D[i, c]
             if v != 0.0:
-                for k in range(X.shape[1]):
-                    out[c, k] += v * X[j, k]
+                for k in range(cols):
+                    out[i, k] += v * X[c, k]
+    return out
+
+
+@njit(cache=True)
+def contact_gram(X, D, f, normal_node, normal_xy, friction_node, tangent_xy, first, ny):
+    """Bᵀ X for B = [G_n | G_t | f] (:func:`_solve_columns`) without walking B: a wall
+    row's column is n_y e_node + n_x D[node], a friction pair's t_x D[node] + t_y e_node,
+    so with D X (:func:`slip_product`) each row of Bᵀ X costs O(cols), not O(n cols) as
+    the dense D rows of the friction pairs (and of the normals on a sloped wall) would."""
+    mn, mt = normal_node.size, friction_node.size
+    cols = X.shape[1]
+    DX = slip_product(D, X, first, ny)
+    out = np.zeros((mn + mt + 1, cols))
+    for r in range(mn):
+        node = normal_node[r]
+        nx, ny_ = normal_xy[r, 0], normal_xy[r, 1]
+        for k in range(cols):
+            out[r, k] = ny_ * X[node, k]
+            if nx != 0.0:
+                out[r, k] += nx * DX[first + node, k]
+    for c in range(mt):
+        node = friction_node[c]
+        tx, ty = tangent_xy[c, 0], tangent_xy[c, 1]
+        for k in range(cols):
+            out[mn + c, k] = tx * DX[node, k]
+            if ty != 0.0:
+                out[mn + c, k] += ty * X[node - first, k]
+    for j in range(f.size):
+        v = f[j]
+        if v != 0.0:
+            for k in range(cols):
+                out[mn + mt, k] += v * X[j, k]
     return out
 
 
@@ -218,7 +277,8 @@ def delassus_form(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, gap, D,
     B, X, ok = _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, D,
                               friction_node, tangent_xy, first)
     m = mn + mt
-    BX = sparse_gram(B, X)
+    BX = contact_gram(X, D, f, normal_node, normal_xy, friction_node, tangent_xy, first,
+                      bands.shape[1])
     W = np.ascontiguousarray(BX[:m, :m])
     free = BX[:m, m].copy()
     g_f = gap + free[:mn]
