@@ -19,10 +19,20 @@ the solve time over every scene with failures charged at 60 s, shift 1 ms) and
 ``--best`` writes each back-end's best formulation to the package's evidence table
 (``src/lcpbench/model/best_formulations.json``), which ``formulation="best"`` reads.
 
+``--pairs B:best`` runs B through ``formulation="best"`` itself (the committed table at
+``--settings``): the library call of issue 37's target 1; a row "best" is never a
+candidate for ``--best``.
+
+``--eps E`` is an experiment, not a profile: every back-end is handed the tolerance E
+(``Settings(name=--settings, eps=E)``, so lcpbench's step judge also asks 10·E of each
+step) at the driver tol ``--tol``. With ``--settings default --eps 1e-6`` it is the
+`default` profile with the back-end told what lcpbench's judge already asks of every
+step there (``solvers.judge.DEFAULT_TOL``); ``--best`` is refused with it.
+
     python benchmarks/formulation_success.py [--level solve|step] [--backends a,b]
         [--formulations f,g | --pairs b:f,c:g] [--settings high] [--tol 1e-9] [--theta 10:180:10]
         [--height 2:7:1] [--workers 2] [--out results/formulations/success-high]
-        [--best] [--force | --resume]
+        [--eps E] [--best] [--force | --resume]
 """
 
 from __future__ import annotations
@@ -120,10 +130,12 @@ def table(rows: list[dict], tol: float, backends, forms) -> tuple[str, dict]:
             lines.append(f"| `{b}` | {f} | {len(rs)} | {100 * rate:.0f} % | {wrong} | "
                          f"{sgm:.3g} | {med:.1e} |")
             score = (rate, -wrong, -sgm)
-            if b not in best or score > best[b][0]:
+            if f != "best" and (b not in best or score > best[b][0]):
                 best[b] = (score, f, rate, wrong)
-    lines += ["", "Best per back-end (highest success, then fewest wrong, then time):", "",
-              "| back-end | best formulation | success | wrong |", "| --- | --- | ---: | ---: |"]
+    if best:  # none when every row ran formulation="best"
+        lines += ["", "Best per back-end (highest success, then fewest wrong, then time):", "",
+                  "| back-end | best formulation | success | wrong |",
+                  "| --- | --- | ---: | ---: |"]
     for b, (_, f, rate, wrong) in best.items():
         lines.append(f"| `{b}` | {f} | {100 * rate:.0f} % | {wrong} |")
     return "\n".join(lines), {b: v[1] for b, v in best.items()}
@@ -138,6 +150,8 @@ def main(argv=None) -> None:
                    help="back-end:formulation pairs, comma-separated (instead of the cross)")
     p.add_argument("--settings", default="high")
     p.add_argument("--tol", type=float, default=1e-9)
+    p.add_argument("--eps", type=float, default=None,
+                   help="hand every back-end this tolerance (an experiment; not with --best)")
     p.add_argument("--theta", default="10:180:10")
     p.add_argument("--height", default="2:7:1")
     p.add_argument("--links", type=int, default=140)
@@ -153,6 +167,13 @@ def main(argv=None) -> None:
     from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
     from lcpbench.model.formulations import NAMES
 
+    if a.eps is not None and a.best:
+        p.error("--eps is an experiment: --best reads the profiles' own runs only")
+    settings = a.settings
+    if a.eps is not None:
+        from lcpbench.solvers.base import Settings
+
+        settings = Settings(a.settings, a.eps, driver_tol=a.tol)
     out = Path(a.out)
     md, jl = out.with_suffix(".md"), out.with_suffix(".jsonl")
     start = timing_start()
@@ -172,7 +193,7 @@ def main(argv=None) -> None:
         refs = {r["key"]: r for r in pool.map(_reference, keys)}
         pairs = ([tuple(x.split(":", 1)) for x in a.pairs.split(",")] if a.pairs
                  else [(b, f) for b in backends for f in forms])
-        tasks = [(k, b, f, a.settings, a.tol, refs[k], a.level) for b, f in pairs
+        tasks = [(k, b, f, settings, a.tol, refs[k], a.level) for b, f in pairs
                  for k in keys if (k, b, f) not in seen]
         print(f"{len(tasks)} runs ({len(seen)} done before)", file=sys.stderr)
         with jl.open("a") as fh:
@@ -182,11 +203,12 @@ def main(argv=None) -> None:
                 done.append(row)
     rows = [r for r in done if r["key"] in refs]  # every back-end and form run so far
     order = list(dict.fromkeys([r["backend"] for r in rows]))
-    text, best = table(rows, a.tol, order, [f for f in NAMES
+    text, best = table(rows, a.tol, order, [f for f in (*NAMES, "best")  # --pairs B:best
                                              if any(r["formulation"] == f for r in rows)])
     head = (f"# Back-end x formulation on the paper grid ({a.level} level)\n\n"
             f"{len(keys)} scenes (θ {a.theta}°, h {a.height} mm, N = {a.links}), settings "
-            f"`{a.settings}`, driver tol {a.tol:g}; success: lcpbench's judge accepts and the "
+            f"`{a.settings}`" + ("" if a.eps is None else f" with every back-end handed eps "
+                                 f"{a.eps:g} (an experiment)") + f", driver tol {a.tol:g}; success: lcpbench's judge accepts and the "
             f"total force is within {min(1e-3, 100 * a.tol):g} of the reference (the active "
             f"set at `high`, tol 1e-11). Command: `python benchmarks/formulation_success.py "
             f"{' '.join(argv if argv is not None else sys.argv[1:])}`.\n\n"

@@ -315,8 +315,11 @@ def test_best_table_names_forms_its_back_ends_take():
         if name in available_backends():
             got = resolve_formulation(known[name], "best")
             assert got is None or str(got) == str(parse_formulation(table[name]))
-    osqp = known["osqp"]
-    assert resolve_formulation(osqp, "best", "default") is None  # no evidence: its own
+    daqp = known["qpsolvers-daqp"]  # in no table of the evidence
+    assert "qpsolvers-daqp" not in best_formulations("default")
+    assert resolve_formulation(daqp, "best", "default") is None  # no evidence: its own
+    for name, form in best_formulations("default").items():
+        assert accepts(known[name], parse_formulation(form))
 
 
 def test_best_through_the_library_call():

@@ -310,11 +310,19 @@ def test_translate_qpsolvers():
     T = qp_qpsolvers.translate
     assert T(PROFILES["default"], "daqp") == {}
     assert T(PROFILES["mid"], "daqp") == {"primal_tol": 1e-6, "dual_tol": 1e-6}
-    # an interior point gets a tighter gap than eps (qp_qpsolvers._FACTORS)
+    # an interior point gets a tighter gap than eps: first qp_qpsolvers._FIRST_FACTORS,
+    # then (where the first does not end SOLVED) _FACTORS
     assert T(PROFILES["high"], "piqp") == pytest.approx({
+        "eps_abs": 1e-12, "eps_rel": 1e-12, "eps_duality_gap_abs": 1e-12,
+        "eps_duality_gap_rel": 1e-12})
+    assert T(PROFILES["high"], "piqp", first=False) == pytest.approx({
         "eps_abs": 1e-11, "eps_rel": 1e-11, "eps_duality_gap_abs": 1e-11,
         "eps_duality_gap_rel": 1e-11})
-    assert T(PROFILES["low"], "scs") == {"eps_abs": 1e-3, "eps_rel": 1e-3}
+    assert T(PROFILES["default"], "piqp") == {}
+    assert T(PROFILES["high"], "scs") == pytest.approx({"eps_abs": 1e-10, "eps_rel": 1e-10})
+    assert T(PROFILES["high"], "scs", first=False) == {"eps_abs": 1e-9, "eps_rel": 1e-9}
+    assert T(PROFILES["default"], "scs") == {}
+    assert T(PROFILES["low"], "scs") == pytest.approx({"eps_abs": 1e-4, "eps_rel": 1e-4})
     assert T(PROFILES["low"], "highs") == {
         "primal_feasibility_tolerance": 1e-3, "dual_feasibility_tolerance": 1e-3,
         "qp_regularization_value": 1e-7}
