@@ -58,6 +58,14 @@ def test_missing_siconos_is_announced_and_reported(tmp_path, monkeypatch, capsys
     out = tmp_path / "r"
     assert main(["sweep", "--theta", "150", "--solvers", "active-set", "--store",
                  str(tmp_path / "s.sqlite"), "--out", str(out), *SMALL]) == 0
+    # back-ends named explicitly: one line for the rest, no install hints
+    err = capsys.readouterr().err
+    assert sum("not in --solvers" in ln for ln in err.splitlines()) == 1
+    assert "not installed" not in err
+    # the main job (every installed back-end) says which are missing and how to install
+    from lcpbench.cli.sweep import _print_backends
+
+    _print_backends(["active-set"], explicit=False, main_job=True)
     err = capsys.readouterr().err
     line = next(ln for ln in err.splitlines() if "siconos-lemke" in ln)
     assert line.startswith("skipping") and "apt-get install python3-siconos" in line
