@@ -53,7 +53,18 @@ if __name__ == "__main__":
     ap.add_argument("summary", nargs="?", default="results/sweep/summary.json")
     ap.add_argument("--min-success", type=float, default=0.0,
                     help="keep the rows with at least this success share, and the baselines")
+    ap.add_argument("--fastest-form", action="store_true",
+                    help="of a back-end's rows at one settings profile and driver (continuation "
+                         "or not) that pass --min-success, keep the fastest form only")
     args = ap.parse_args()
-    rows = json.load(open(args.summary))
-    print(table([r for r in rows if r["success"] >= args.min_success
-                 or r["backend"].startswith("baseline")]))
+    rows = [r for r in json.load(open(args.summary)) if r["success"] >= args.min_success
+            or r["backend"].startswith("baseline")]
+    if args.fastest_form:
+        best: dict = {}
+        for r in rows:  # the summary's method: DRIVER or DRIVER@FORM
+            key = (r["backend"], r["settings"], r["method"].split("@")[0])
+            if key not in best or r["time_sgm_ms"] < best[key]["time_sgm_ms"]:
+                best[key] = r
+        rows = [r for r in rows if best[(r["backend"], r["settings"],
+                                         r["method"].split("@")[0])] is r]
+    print(table(rows))
