@@ -18,8 +18,8 @@ import lcpbench
 from lcpbench.model.angle_step import solve_in_angles
 from lcpbench.model.chain import node_positions
 from lcpbench.model.energy_reference import minimise_energy
-from lcpbench.problems.sections import SectionedScene
 from lcpbench.numba_cache import jit_module
+from lcpbench.problems.sections import SectionedScene
 
 # through the kernels' cache (a direct import would cache them beside their sources)
 ak = jit_module("lcpbench.model.angle_kernel")

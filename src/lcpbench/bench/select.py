@@ -48,8 +48,15 @@ from ..solvers.selection import Selection
 from .grid import Grid, scene_key
 from .jobs import ReferenceJob, RunJob
 from .metrics import error_of, geometric_mean, succeeded
-from .select_evidence import (COMMITTED_RUNS, compare, kind_of, preference, read_runs_csv,
-                              ruled_out, student_t)
+from .select_evidence import (
+    COMMITTED_RUNS,
+    compare,
+    kind_of,
+    preference,
+    read_runs_csv,
+    ruled_out,
+    student_t,
+)
 from .store import Store
 from .sweep import DEFAULT_TIME_LIMIT, sweep
 
