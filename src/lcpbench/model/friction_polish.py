@@ -324,16 +324,16 @@ def answer_values(n, lay, t, right_datum, dy, tau, N, T, first, normal_node, nor
 
 
 @njit(cache=True)
-def index_set(z, w, mn, mt, pair):
+def index_set(z, w, mn, mt, pair, mu):
     """The index set of an LCP answer z, w = M z + q (z = (N, β⁺, β⁻, λ)), each pair's
-    larger side: a row is in contact when N >= its gap; a pair is off when none of its
-    rows is in contact, sticks when its cone's margin μN − |T| is at least its slip
+    larger side: a row is in contact when N >= its gap; a pair is off (T = 0, its slip
+    free) when none of its rows with μ > 0 is in contact, sticks when its cone's margin μN − |T| is at least its slip
     size λ, else slides against T (forward where β⁻ > β⁺)."""
     contact = np.empty(mn, np.bool_)
     pressed = np.zeros(mt, np.bool_)
     for r in range(mn):
         contact[r] = z[r] >= w[r]
-        if contact[r] and pair[r] >= 0:
+        if contact[r] and pair[r] >= 0 and mu[r] > 0.0:
             pressed[pair[r]] = True
     state = np.empty(mt, np.int64)
     lam = mn + 2 * mt
@@ -384,7 +384,8 @@ def signs(x, lay, first, gap, slip, normal_node, normal_xy, friction_node, tange
     set with those nodes flipped, the slips s). A contact row with N < 0 separates, a
     separate row with a gap < 0 comes into contact, a sticking pair outside its cone
     slides against its T, a sliding pair whose slip has the wrong sign sticks (and a pair
-    none of whose rows is in contact is off; one that comes into contact sticks). To
+    none of whose rows with μ > 0 is in contact is off; one that comes into contact
+    sticks). To
     ``ftol`` (forces) and ``ltol`` (lengths)."""
     tv, Y, X, L, Nv, Tv = lay
     mn, mt = contact.size, state.size
@@ -407,7 +408,7 @@ def signs(x, lay, first, gap, slip, normal_node, normal_xy, friction_node, tange
             fails += 1
     pressed = np.zeros(mt, np.bool_)
     for r in range(mn):
-        if new_contact[r] and pair[r] >= 0:
+        if new_contact[r] and pair[r] >= 0 and mu[r] > 0.0:
             pressed[pair[r]] = True
     for c in range(mt):
         if state[c] == STICK:
@@ -447,7 +448,7 @@ def polish(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, norm
     mn, mt = N.size, T.size
     z_new = z.copy()
     nan = np.nan
-    contact, state = index_set(z, w, mn, mt, pair)
+    contact, state = index_set(z, w, mn, mt, pair, mu)
     has_tau = f.size > bands.shape[1]
     tl = tan.copy()
     for k in range(tl.size):
