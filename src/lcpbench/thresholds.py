@@ -114,8 +114,9 @@ POLISH_SIGN_RTOL = 1e-12
 POLISH_STICK_COMPLIANCE = 1e-13
 POLISH_SWEEPS = 2
 #: where a sign of the answer's index set fails at the polished answer, the failing nodes
-#: are flipped and the set solved again, at most this many times (the exact oracle's
-#: search, benchmarks/exact_friction.py, flips up to 6 times). On the 375 steps of
-#: benchmarks/friction_agreement.py one flip cured the 5 of the 10 that needed one (2
-#: kept 9 more answers, none of them unconfirmed, at a third factorisation each)
-POLISH_FLIPS = 1
+#: may be flipped and the set solved again, at most this many times (the exact oracle's
+#: search, benchmarks/exact_friction.py, flips up to 6 times). 0: the polish stays on the
+#: answer's own index set. On the 375 steps of benchmarks/friction_agreement.py one flip
+#: cured 5 more of the 10 unconfirmed answers with an exact solution, but a kept flipped
+#: answer made path 74's last state cycle (kept and refused in turn, 100 outer steps)
+POLISH_FLIPS = 0
