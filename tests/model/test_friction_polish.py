@@ -82,7 +82,7 @@ def first_step(scene):
 def test_polish_refuses_an_index_set_whose_signs_fail():
     """A pressed node's answer made to slide the wrong way (T = +μN while its slip, on the
     exact solution of that set, is forward): without a flip the polish refuses it and
-    returns z unchanged; with polish_step's one flip what it keeps meets every sign:
+    returns z unchanged; whatever polish_step keeps (POLISH_FLIPS) meets every sign:
     N >= 0, |T| <= μN, a sliding node's slip against its T."""
     fs, sol = first_step(ActuatorScene(theta=150, height=3.0, links=20, friction=0.3,
                                        left_end="pinned", right_end="slider", pull=0.05))
