@@ -11,8 +11,9 @@ BLAS thread:
 * a frictional solve: ``lcpbench.solve_path(scene with pull 0.05 N, [{}])``, one state,
   which includes its start (the frictionless placement, itself a solve);
 * a pull-out: ``lcpbench.pull_out(scene)``;
-* the frictional solve without the primal polish (``friction_lemke.polish_step`` made
-  the identity for the call): the polish's cost, as the ratio of the two.
+* the frictional solve and the pull-out without the primal polish
+  (``friction_lemke.polish_step`` made the identity for the call): the polish's cost, as
+  the ratio of each to its run without it.
 
 Targets: a frictional solve within 10× the frictionless one (the ratio per round,
 median over rounds), a pull-out in <= 20 frictional solves and under 20 ms. Also
@@ -118,19 +119,23 @@ def main(argv=None) -> int:
     for name, scene in SCENES.items():
         plain = replace(scene, friction=0.0, left_end="pinned", right_end="pinned")
         pulled = replace(scene, pull=PULL)
-        sink: dict = {"frictionless": [], "frictional": [], "pull-out": [], "unpolished": []}
+        sink: dict = {"frictionless": [], "frictional": [], "pull-out": [], "unpolished": [],
+                      "pull-out unpolished": []}
         calls = {"frictionless": timed(lambda plain=plain: lcpbench.solve(plain),
                                        sink["frictionless"]),
                  "frictional": timed(lambda s=pulled: lcpbench.solve_path(s, [{}]),
                                      sink["frictional"]),
                  "pull-out": timed(lambda s=scene: lcpbench.pull_out(s), sink["pull-out"]),
                  "unpolished": timed(unpolished(lambda s=pulled: lcpbench.solve_path(s, [{}])),
-                                     sink["unpolished"])}
+                                     sink["unpolished"]),
+                 "pull-out unpolished": timed(unpolished(lambda s=scene: lcpbench.pull_out(s)),
+                                              sink["pull-out unpolished"])}
         got = interleaved(calls, a.rounds)
         t = {k: np.array(v["times"]) for k, v in got.items()}
         ratio = float(np.median(t["frictional"] / t["frictionless"]))
         bare = float(np.median(t["unpolished"] / t["frictionless"]))
         cost = float(np.median(t["frictional"] / t["unpolished"]))
+        po_cost = float(np.median(t["pull-out"] / t["pull-out unpolished"]))
         (state,) = got["frictional"]["payload"]
         po = got["pull-out"]["payload"]
         cpu = {k: np.array(v[1:]) for k, v in sink.items()}  # (the first: the warm-up)
@@ -143,6 +148,7 @@ def main(argv=None) -> int:
             f"{bare:.1f}× | {cost:.2f}× | "
             f"{state.outer_iterations} / {s_calls / max(s_steps, 1):.1f} | "
             f"{1e3 * np.median(t['pull-out']):.1f} | {1e3 * np.median(cpu['pull-out']):.1f} | "
+            f"{1e3 * np.median(t['pull-out unpolished']):.1f} | {po_cost:.2f}× | "
             f"{po.solves} | "
             f"{sum(r.outer_iterations for r in po.path)} / {p_calls / max(p_steps, 1):.1f} | "
             f"{1e3 * po.force:.4g} | {state.converged and po.converged} |")
@@ -168,9 +174,10 @@ def main(argv=None) -> int:
         "frictional solves and < 20 ms.", "",
         "| scene | frictionless (ms) | frictional (ms) | ratio | ratio (CPU) | ratio without "
         "the polish | the polish's cost (frictional / without) | its outer "
-        "steps / Lemke calls per step | pull-out (ms) | pull-out (CPU ms) | its solves | "
+        "steps / Lemke calls per step | pull-out (ms) | pull-out (CPU ms) | pull-out without "
+        "the polish (ms) | the polish's cost | its solves | "
         "outer steps (all states) / Lemke calls per step | pull-out force (mN) | converged |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
         *rows, ""])
     a.out.parent.mkdir(parents=True, exist_ok=True)
     a.out.write_text(text)
