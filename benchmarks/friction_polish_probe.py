@@ -29,7 +29,14 @@ ones. On that index set:
   equilibrium, the x recurrences, the links' horizontal forces and one equation per row
   and pair): their condition number without the exact null directions (T per node
   along a stick run), raw and with rows and columns equilibrated, and their
-  equilibrated minimum-norm least-squares solution (SVD, rcond 1e-14) to the exact one.
+  equilibrated minimum-norm least-squares solution (SVD, rcond 1e-14) to the exact one;
+- **the polish** (``friction_lemke.polish_step``, compiled, banded, O(N): what every
+  frictional step's answer now leaves through): its verdict on the answer and the
+  polished answer's distance to the exact solution in N.
+
+Every column but the polish's is of the answer before the polish
+(``sol.extra["unpolished"]`` where the polish replaced it); the tally counts how many of
+the default's answers the exact oracle confirms before and after the polish.
 
     python benchmarks/friction_polish_probe.py [--out results/friction/polish_probe.md]
         [--force]
@@ -55,7 +62,7 @@ import numpy as np
 
 import lcpbench
 from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
-from lcpbench.model.friction_driver import (
+from lcpbench.model.friction_lemke import (
     WARM_FEAS_RTOL,
     WARM_PIVOT_RTOL,
     WARM_RCOND,
@@ -153,7 +160,7 @@ def origin(fs, sol, step, ex, dist, tally: dict) -> None:
     if not cold.solved:
         key = "from scratch: not SOLVED"
     else:
-        vc = ef.answer_values(fs, step, cold.z)
+        vc = ef.answer_values(fs, step, cold.extra.get("unpolished", cold.z))
         exc, dc, _ = ef.nearest_exact(step, vc)
         key = "from scratch: " + ("confirmed" if ef.confirmed(exc, dc) else "not confirmed")
     tally[key] = tally.get(key, 0) + 1
@@ -161,6 +168,14 @@ def origin(fs, sol, step, ex, dist, tally: dict) -> None:
 
 def probe(fs, sol, rng, tally) -> dict | None:
     step = ef.chain_step(fs)
+    polished = sol.z
+    v1 = ef.answer_values(fs, step, polished)
+    ex1, dist1, _ = ef.nearest_exact(step, v1)
+    key = "after the polish: " + ("confirmed" if ef.confirmed(ex1, dist1) else "not confirmed")
+    tally[key] = tally.get(key, 0) + 1
+    verdict = sol.extra.get("polish", "")
+    tally["polish " + verdict] = tally.get("polish " + verdict, 0) + 1
+    sol = replace(sol, z=sol.extra.get("unpolished", sol.z))
     v0 = ef.answer_values(fs, step, sol.z)
     ex, dist, _ = ef.nearest_exact(step, v0)
     origin(fs, sol, step, ex, dist, tally)
@@ -169,7 +184,8 @@ def probe(fs, sol, rng, tally) -> dict | None:
     xs = np.array([float(v) for v in ex.x])
     scale = max(float(np.max(np.abs(v0[step.normal + step.tangential]))), 1e-300)
     out = {"gap": dist[0], "move": dist[2], "free": ex.free, "size": step.n,
-           "residual": sol.extra.get("residuals", {}).get("natural", np.nan)}
+           "residual": (sol.extra.get("unpolished_residuals") or sol.extra.get("residuals")
+                        or {}).get("natural", np.nan)}
     # the null directions fitted to N and the move alone (T weighted 1e-6): is N free?
     en = ef.solve(step, ex.rows, ex.pairs, v0, fit_t=1e-6)
     out["fit_n"] = ef.distance(step, en, v0, scale)[0]
@@ -226,6 +242,8 @@ def probe(fs, sol, rng, tally) -> dict | None:
     out["cond_equil"] = sv[0] / sv[-1 - ex.free]
     xp = np.linalg.lstsq(As, b * rs, rcond=1e-14)[0] * cs
     out["primal"] = dN(step, xp, xs, scale)
+    out["polished"] = dN(step, v1, xs, scale)
+    out["verdict"] = verdict
     return out
 
 
@@ -241,7 +259,7 @@ def main() -> int:
     rng = np.random.default_rng(1)
     cols = ("gap", "move", "fit_n", "ulp", "as_is", "cond_mss", "mss_refined", "mss_exact",
             "mss_compiled",
-            "cond_primal", "cond_equil", "primal", "residual", "kept")
+            "cond_primal", "cond_equil", "primal", "residual", "polished", "kept")
     rows, tally = [], {}
     for index, (scene, states) in enumerate(scenes(100, 39)):
         rec = Recorder()
@@ -253,8 +271,8 @@ def main() -> int:
             got = probe(*rec.steps[end - 1], rng, tally)
             if got is not None:
                 rows.append((f"{index}.{si}", scene.links, got))
-                print(rows[-1][0], scene.links, " ".join(f"{got[c]:.1e}" for c in cols[:-1]), got["kept"],
-                      flush=True)
+                print(rows[-1][0], scene.links, " ".join(f"{got[c]:.1e}" for c in cols[:-1]),
+                      got["kept"], got["verdict"], flush=True)
     lines = [
         "# Lemke's unconfirmed answers: conditioning or round-off? (issue 39, target 2)", "",
         f"{datetime.now(timezone.utc).strftime('%Y-%m-%d %H:%M UTC')}; "
@@ -270,11 +288,12 @@ def main() -> int:
         "| cond M_SS | M_SS, LU + refinement | M_SS exactly from its doubles "
         "| M_SS, compiled factor | cond primal "
         "| cond primal, equilibrated | primal, equilibrated lstsq | Lemke's residual "
-        "| compiled M_SS kept (feasible, residual below Lemke's) |",
-        "|---|---|" + "---|" * len(cols)]
+        "| the polish: gap N | compiled M_SS kept (feasible, residual below Lemke's) "
+        "| the polish's verdict |",
+        "|---|---|" + "---|" * (len(cols) + 1)]
     for name, links, g in rows:
         lines.append(f"| {name} | {links} | " + " | ".join(f"{g[c]:.1e}" for c in cols[:-1])
-                     + f" | {'yes' if g['kept'] else 'no'} |")
+                     + f" | {'yes' if g['kept'] else 'no'} | {g['verdict']} |")
     arr = {c: np.array([g[c] for _, _, g in rows]) for c in cols}
     if rows:
         lines += ["", f"{len(rows)} steps. Median gap N {np.median(arr['gap']):.1e} (max "
@@ -290,7 +309,9 @@ def main() -> int:
                   f"rule on {int(np.sum(arr['kept']))}; the equilibrated primal "
                   f"least squares: median {np.median(arr['primal']):.1e} (max "
                   f"{arr['primal'].max():.1e}), within 1e-8 on "
-                  f"{int(np.sum(arr['primal'] <= 1e-8))}."]
+                  f"{int(np.sum(arr['primal'] <= 1e-8))}; the polish (banded, in the library): "
+                  f"median {np.median(arr['polished']):.1e} (max {arr['polished'].max():.1e}), "
+                  f"within 1e-8 on {int(np.sum(arr['polished'] <= 1e-8))}."]
     lines += ["", "Where the default's answers come from (the last step of each state its path "
               "converges, the 100 paths): " + "; ".join(f"{k} {v}" for k, v in tally.items())
               + " (the unconfirmed answers' steps solved again by a fresh StepLemke, no "

@@ -10,7 +10,10 @@ BLAS thread:
 * the frictionless solve, ``lcpbench.solve`` of the scene with μ = 0 and pinned ends;
 * a frictional solve: ``lcpbench.solve_path(scene with pull 0.05 N, [{}])``, one state,
   which includes its start (the frictionless placement, itself a solve);
-* a pull-out: ``lcpbench.pull_out(scene)``.
+* a pull-out: ``lcpbench.pull_out(scene)``;
+* the frictional solve and the pull-out without the primal polish
+  (``friction_lemke.polish_step`` made the identity for the call): the polish's cost, as
+  the ratio of each to its run without it.
 
 Targets: a frictional solve within 10× the frictionless one (the ratio per round,
 median over rounds), a pull-out in <= 20 frictional solves and under 20 ms. Also
@@ -92,6 +95,18 @@ def lemke_calls(fn) -> tuple[int, int]:
     return count["steps"], count["calls"]
 
 
+def unpolished(fn):
+    """``fn`` run with the frictional step's primal polish off (its cost, measured)."""
+    def run():
+        polish = driver.polish_step
+        driver.polish_step = lambda fs, sol: sol
+        try:
+            return fn()
+        finally:
+            driver.polish_step = polish
+    return run
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--rounds", type=int, default=7)
@@ -104,15 +119,23 @@ def main(argv=None) -> int:
     for name, scene in SCENES.items():
         plain = replace(scene, friction=0.0, left_end="pinned", right_end="pinned")
         pulled = replace(scene, pull=PULL)
-        sink: dict = {"frictionless": [], "frictional": [], "pull-out": []}
+        sink: dict = {"frictionless": [], "frictional": [], "pull-out": [], "unpolished": [],
+                      "pull-out unpolished": []}
         calls = {"frictionless": timed(lambda plain=plain: lcpbench.solve(plain),
                                        sink["frictionless"]),
                  "frictional": timed(lambda s=pulled: lcpbench.solve_path(s, [{}]),
                                      sink["frictional"]),
-                 "pull-out": timed(lambda s=scene: lcpbench.pull_out(s), sink["pull-out"])}
+                 "pull-out": timed(lambda s=scene: lcpbench.pull_out(s), sink["pull-out"]),
+                 "unpolished": timed(unpolished(lambda s=pulled: lcpbench.solve_path(s, [{}])),
+                                     sink["unpolished"]),
+                 "pull-out unpolished": timed(unpolished(lambda s=scene: lcpbench.pull_out(s)),
+                                              sink["pull-out unpolished"])}
         got = interleaved(calls, a.rounds)
         t = {k: np.array(v["times"]) for k, v in got.items()}
         ratio = float(np.median(t["frictional"] / t["frictionless"]))
+        bare = float(np.median(t["unpolished"] / t["frictionless"]))
+        cost = float(np.median(t["frictional"] / t["unpolished"]))
+        po_cost = float(np.median(t["pull-out"] / t["pull-out unpolished"]))
         (state,) = got["frictional"]["payload"]
         po = got["pull-out"]["payload"]
         cpu = {k: np.array(v[1:]) for k, v in sink.items()}  # (the first: the warm-up)
@@ -121,9 +144,11 @@ def main(argv=None) -> int:
         p_steps, p_calls = lemke_calls(lambda s=scene: lcpbench.pull_out(s))
         rows.append(
             f"| {name} | {1e3 * np.median(t['frictionless']):.3f} | "
-            f"{1e3 * np.median(t['frictional']):.2f} | {ratio:.0f}× | {cpu_ratio:.0f}× | "
+            f"{1e3 * np.median(t['frictional']):.2f} | {ratio:.1f}× | {cpu_ratio:.1f}× | "
+            f"{bare:.1f}× | {cost:.2f}× | "
             f"{state.outer_iterations} / {s_calls / max(s_steps, 1):.1f} | "
             f"{1e3 * np.median(t['pull-out']):.1f} | {1e3 * np.median(cpu['pull-out']):.1f} | "
+            f"{1e3 * np.median(t['pull-out unpolished']):.1f} | {po_cost:.2f}× | "
             f"{po.solves} | "
             f"{sum(r.outer_iterations for r in po.path)} / {p_calls / max(p_steps, 1):.1f} | "
             f"{1e3 * po.force:.4g} | {state.converged and po.converged} |")
@@ -141,14 +166,18 @@ def main(argv=None) -> int:
         "waiting). Lemke calls per step: the steps the warm start (block principal "
         "pivoting from the last answer's support, else from the frictionless contacts "
         "sticking or sliding) does not answer go to Lemke, one call "
-        "per covering vector tried. The frictional solve is one state of "
+        "per covering vector tried. Without the polish: the same frictional solve with the "
+        "step's primal polish off (friction_lemke.polish_step made the identity), "
+        "interleaved with the others. The frictional solve is one state of "
         f"a path, pull {PULL} N, and includes its start (the frictionless placement).", "",
         "Targets: frictional solve <= 10× the frictionless one; pull-out in <= 20 "
         "frictional solves and < 20 ms.", "",
-        "| scene | frictionless (ms) | frictional (ms) | ratio | ratio (CPU) | its outer "
-        "steps / Lemke calls per step | pull-out (ms) | pull-out (CPU ms) | its solves | "
+        "| scene | frictionless (ms) | frictional (ms) | ratio | ratio (CPU) | ratio without "
+        "the polish | the polish's cost (frictional / without) | its outer "
+        "steps / Lemke calls per step | pull-out (ms) | pull-out (CPU ms) | pull-out without "
+        "the polish (ms) | the polish's cost | its solves | "
         "outer steps (all states) / Lemke calls per step | pull-out force (mN) | converged |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
         *rows, ""])
     a.out.parent.mkdir(parents=True, exist_ok=True)
     a.out.write_text(text)

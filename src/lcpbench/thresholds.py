@@ -92,3 +92,31 @@ ANGLE_SHIFT_START = 1e-8
 ANGLE_SHIFT_GROWTH = 10.0
 #: ... at most this many times
 ANGLE_SHIFT_TRIES = 20
+
+# --- the frictional step's primal polish (model/friction_polish.py) ----------------------
+
+#: a link whose |tan α| is at most this is level in the polish (its nodes at one wall to
+#: round-off): T per node along a run of sticking nodes is then exactly indeterminate,
+#: and the polish holds its split at the answer's instead of letting round-off decide it
+#: (benchmarks/exact_friction.py's LEVEL)
+POLISH_LEVEL = 1e-12
+#: the polished answer's signs hold to this share of the answer's largest force (N >= 0,
+#: |T| <= μN) and of a link length (gaps >= 0, slips of their direction)
+POLISH_SIGN_RTOL = 1e-12
+#: the polish's sticking nodes get this compliance, in link lengths per the largest force,
+#: in the system it solves (not in the equations it meets): T per node along a nearly
+#: straight run of sticking nodes (slopes of 1e-7 at N = 140) is singular in doubles, and
+#: the compliance keeps it near where the answer put it; the refinement sweeps
+#: (POLISH_SWEEPS, each against the equations without it) take its bias away where T is
+#: determined. On the 375 steps of benchmarks/friction_agreement.py 1e-14 … 1e-13 with
+#: 1 … 3 sweeps brought the 10 unconfirmed answers with an exact solution to it and
+#: moved no confirmed one; 1e-10 cured 4 of them (too stiff: it held N too)
+POLISH_STICK_COMPLIANCE = 1e-13
+POLISH_SWEEPS = 2
+#: where a sign of the answer's index set fails at the polished answer, the failing nodes
+#: may be flipped and the set solved again, at most this many times (the exact oracle's
+#: search, benchmarks/exact_friction.py, flips up to 6 times). 0: the polish stays on the
+#: answer's own index set. On the 375 steps of benchmarks/friction_agreement.py one flip
+#: cured 5 more of the 10 unconfirmed answers with an exact solution, but a kept flipped
+#: answer made path 74's last state cycle (kept and refused in turn, 100 outer steps)
+POLISH_FLIPS = 0

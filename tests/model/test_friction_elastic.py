@@ -73,8 +73,12 @@ def test_mu_zero_on_elastic_walls_is_the_frictionless_answer(kw, k):
                          ids=["one-wall", "channel"])
 def test_stiff_elastic_walls_tend_to_the_rigid_frictional_answer(kw):
     """k → ∞: along a pull path the answer on walls of k = 1e9 N/mm² is the rigid
-    walls' to 1e-6 of the total force per node (the indentation is N/k), and
-    k = 1e4 is farther off than k = 1e9."""
+    walls' to 1e-6 of the total force per node in N and in Σ T (the indentation is N/k),
+    and k = 1e4 is farther off than k = 1e9. T per node is not compared: in the channel
+    the two contact runs are joined by links of slope 4e-6, along which a horizontal force
+    moves at almost no cost, so its split between the runs is that ill-conditioned (the
+    exact oracle, benchmarks/exact_friction.py, puts the primal polish's split 5e-4 of
+    the force from the exact one and the unpolished 2.6e-2; docs/friction.md)."""
     scene = ActuatorScene(**{**dict(theta=150, height=3.0, links=30, friction=0.3,
                                     left_end="slider", right_end="slider"), **kw})
     rigid = lcpbench.solve_path(scene, PULLS, tol=1e-10)
@@ -83,10 +87,10 @@ def test_stiff_elastic_walls_tend_to_the_rigid_frictional_answer(kw):
     for r, s, m in zip(rigid, stiff, softer):
         assert r.converged and s.converged and m.converged, (r.reason, s.reason, m.reason)
         F = r.total_force
-        for name in ("forces", "tangential_forces") + (("forces_lower",) if scene.channel
-                                                        else ()):
+        for name in ("forces",) + (("forces_lower",) if scene.channel else ()):
             np.testing.assert_allclose(getattr(s, name), getattr(r, name), rtol=0,
                                        atol=1e-6 * F)
+        assert abs(np.sum(s.tangential_forces) - np.sum(r.tangential_forces)) <= 1e-6 * F
         assert abs(s.total_force - F) < abs(m.total_force - F)
 
 

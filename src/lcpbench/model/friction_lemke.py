@@ -15,6 +15,7 @@ import numpy as np
 
 from ..solvers.base import LCPSolution, Status, lcp_residuals
 from ..solvers.lemke import RESIDUAL_TOL, lemke
+from ..thresholds import POLISH_FLIPS, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS
 
 #: Lemke's pivot tolerance on the frictional LCP (solvers.lemke's default: 1e-12). Its
 #: W is singular where many nodes have rows (the chain is inextensible: a node's x
@@ -58,6 +59,10 @@ WARM_RCOND = 1e-12
 
 _KERNELS: list = []  # the compiled step (model/friction_step.py), once loaded
 _PIVOTING: list = []  # the warm start's pivots (solvers/pivoting_kernel.py), once loaded
+_POLISH: list = []  # the primal polish (model/friction_polish.py), once loaded
+#: :func:`polish_step`'s verdicts (``sol.extra["polish"]``), by the kernel's code
+POLISH_VERDICTS = ("kept", "no primal form (a free end)", "singular", "a sign fails",
+                   "primal residual not lower", "LCP residual above the bound", "not SOLVED")
 
 
 def pivoting_kernels():
@@ -80,6 +85,61 @@ def step_kernels():
 
         held(_KERNELS).append(kernel_module("lcpbench.model.friction_step", "delassus_form"))
     return _KERNELS[0]
+
+
+def polish_kernels():
+    """The frictional step's primal polish (:mod:`lcpbench.model.friction_polish`),
+    loaded once through :func:`lcpbench.numba_cache.kernel_module`."""
+    if not _POLISH:
+        from ..numba_cache import held, kernel_module
+
+        held(_POLISH).append(kernel_module("lcpbench.model.friction_polish", "polish"))
+    return _POLISH[0]
+
+
+def polish_step(fs, sol: LCPSolution) -> LCPSolution:
+    """A SOLVED answer of the step ``fs`` polished on its index set in the step's primal
+    form (:func:`lcpbench.model.friction_polish.polish`, compiled, O(N); docs/friction.md,
+    "The polish"). The polished answer replaces ``sol`` only where every sign of the index
+    set holds, its primal residual is below the answer's, and lcpbench's natural residual
+    of the LCP still meets RESIDUAL_TOL; otherwise ``sol`` is returned as it is. The
+    status is never changed (an answer that is not SOLVED is not polished). The verdict
+    is ``extra["polish"]`` (:data:`POLISH_VERDICTS`), the unpolished z
+    ``extra["unpolished"]`` where it was replaced; an answer polished already is
+    returned as it is."""
+    if "polish" in sol.extra:
+        return sol
+    if not sol.solved or fs.parts is None or not np.all(np.isfinite(sol.z)):
+        sol.extra["polish"] = POLISH_VERDICTS[6]
+        return sol
+    t0 = time.perf_counter()
+    P = fs.parts
+    code, z, r0, r1 = 1, sol.z, np.nan, np.nan
+    if not P["rot"].size:
+        N, T, dy, tau = fs.forces(sol.z)
+        w = fs.M @ sol.z + fs.q
+        code, z, r0, r1 = polish_kernels().polish(
+            P["bands"], P["f"], P["tan"], float(P["k_tau"]), int(P["first"]),
+            bool(P["right_datum"]), P["gap"], P["slip"], P["compliance"],
+            fs.normal_node, fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu, fs.pair,
+            sol.z, w, dy, float(tau), N, T, float(fs.force), float(fs.length),
+            float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS,
+            POLISH_FLIPS)
+    extra = dict(sol.extra, polish_residuals=(r0, r1))
+    if code == 0:
+        res = lcp_residuals(fs.M, fs.q, z)
+        if not res["natural"] <= RESIDUAL_TOL:
+            code = 5
+    extra["polish"] = POLISH_VERDICTS[code]
+    extra["polish_time"] = time.perf_counter() - t0
+    if code != 0:
+        sol.extra = extra
+        return sol
+    extra.update(residuals=res, unpolished=sol.z,
+                 unpolished_residuals=sol.extra.get("residuals"))
+    return LCPSolution(z, fs.M @ z + fs.q, sol.status, sol.iterations,
+                       sol.solve_time + extra["polish_time"], sol.setup_time, sol.message,
+                       extra)
 
 
 def step_coverings(n: int) -> list[np.ndarray]:
@@ -174,9 +234,14 @@ class StepLemke:
 
     def __call__(self, M, q: np.ndarray | None = None):
         """Solve the step ``M`` (a :class:`FrictionStep`), or the LCP (``M``, ``q``)."""
-        keys = pair = None
-        if q is None:
-            M, q, keys, pair = M.M, M.q, z_keys(M), M.pair
+        if q is None:  # the whole step: its answer leaves through the primal polish
+            return polish_step(M, self.solve(M.M, M.q, z_keys(M), M.pair))
+        return self.solve(M, q)
+
+    def solve(self, M, q, keys=None, pair=None):
+        """The LCP (``M``, ``q``): the warm start from the last support (``keys``, the
+        unknowns' names, :func:`z_keys`) or the frictionless contacts (``pair``), else
+        Lemke's pivots."""
         n = q.size
         sol = self.last_support(M, q, keys)
         for budget in (WARM_GUESS_CHANGES, WARM_CHANGES):  # a short try of each guess first

@@ -29,6 +29,7 @@ from ..solvers.base import LCPSolution, Settings, Status, lcp_residuals
 from ..solvers.lemke import RESIDUAL_TOL
 from ..solvers.registry import FRICTION_FORMS, backends, get_backend
 from .friction_driver import StepLemke
+from .friction_lemke import polish_step
 
 #: the largest scaled natural residual of the step's LCP accepted as SOLVED (Lemke's)
 STEP_TOL = RESIDUAL_TOL
@@ -195,13 +196,16 @@ def step_runner(solver: str | None = None):
             return from_fc2d(fs, peer, t0)
 
     def guarded(fs):
-        """``run``, a back-end that raises answering FAILED (as the LCP runner does)."""
+        """``run``, a back-end that raises answering FAILED (as the LCP runner does); a
+        SOLVED answer, judged, leaves through the primal polish (:func:`polish_step`:
+        kept only where lcpbench's residual still passes; Lemke's is polished already)."""
         try:
-            return run(fs)
+            sol = run(fs)
         except Exception as exc:  # a back-end failure is a status, never an exception
             nan = np.full(fs.q.size, np.nan)
             return LCPSolution(nan, nan.copy(), Status.FAILED,
                                message=f"{name} raised {type(exc).__name__}: {exc}")
+        return polish_step(fs, sol)
     guarded.takes_step = True  # type: ignore[attr-defined]  # friction_driver.solve_state
     # Newton's steps near the answer for Lemke, the default (StepLemke.newton); the peers
     # get the paper's Gauss–Newton steps, as they were measured

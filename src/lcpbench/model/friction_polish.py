@@ -1,0 +1,528 @@
+"""The frictional step's primal polish (issue 39, target 2; docs/friction.md, "The polish").
+
+An answer of the step's LCP (any back-end) names an index set: per wall row contact or
+separate, per friction pair stick, slide forward (s >= 0, T = −μN), slide backward or off
+(its rows separate). The polish solves the step once more on that set, in the step's
+PRIMAL form, not on the condensed LCP: the Delassus block M_SS = Gᵀ K⁻¹ G of the set is
+singular in exact arithmetic where nodes stick in a run (T per node is statically
+indeterminate there) and, formed in doubles, its rounding decides N
+(results/friction/polish_probe.md). The primal equations are those of
+benchmarks/exact_friction.py's oracle, node by node, in doubles:
+
+    H δy = f + G_n N + G_t T          heights' equilibrium, Dᵀ F^x as the links'
+                                      horizontal forces L_k (tan α_k L_k at nodes k, k+1)
+    δx_i − δx_{i−1} = −tan α_{i−1} (δy_i − δy_{i−1}),  the datum (x_0 = 0, τ; x_N = 0)
+    L_k = Σ_{i>k} F^x_i  (left datum)  or  −Σ_{i<=k} F^x_i  (right datum)
+    k_τ τ = f_τ + L_0 + F^x_0          (no end holds x)
+    contact: n·(δx, δy) + N/k = −g;  separate: N = 0
+    stick: t·(δx, δy) = −s;  slide: T = ∓μN;  off: T = 0
+
+with the unknowns ordered node by node (δy_i, δx_i, L_i, its N, its T), so the system is
+banded (a few nodes wide) and is solved by Gaussian elimination with partial pivoting
+(:func:`lcpbench.linalg.band_lu_kernel.band_factor`), rows and columns equilibrated, in
+O(N). Links level to round-off (|tan α| <= POLISH_LEVEL) are level; then two sticking
+nodes joined by level links have dependent slip equations (the link fixes the second
+slip), and the second's is replaced by its T held at the answer's split (T_c − T_p =
+T⁰_c − T⁰_p, p the run's previous sticking pair; T_c = T⁰_c in a run held by a pinned
+end): the null direction of T per node is fixed where the answer put it, N is not
+touched by it.
+
+Every function is ``@njit(cache=True)``; with NUMBA_DISABLE_JIT=1 they run as plain
+Python. :func:`lcpbench.model.friction_lemke.polish_step` calls :func:`polish` and keeps
+its answer only where lcpbench's own residual of the LCP still passes.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..linalg.band_lu_kernel import band_factor, band_resolve
+from ..thresholds import POLISH_LEVEL, POLISH_SIGN_RTOL
+
+#: a friction pair's state in the index set
+STICK, FORWARD, BACKWARD, OFF = 0, 1, -1, 2
+#: a sticking pair's slip equation kept (else: the pair p whose T it is held against,
+#: or HELD_ALONE: T held at the answer's, a run that a pinned end holds)
+KEEP, HELD_ALONE = -2, -1
+#: :func:`polish`'s verdicts
+KEPT, NO_PRIMAL, SINGULAR, SIGNS, NOT_LOWER = 0, 1, 2, 3, 4
+
+
+@njit(cache=True)
+def by_node(node, links):
+    """(start, order): the items of each node 0..links, ``order[start[i]:start[i + 1]]``
+    (a counting sort, O(N + m))."""
+    start = np.zeros(links + 2, np.int64)
+    for k in range(node.size):
+        start[node[k] + 1] += 1
+    for i in range(links + 1):
+        start[i + 1] += start[i]
+    pos = start[:-1].copy()
+    order = np.empty(node.size, np.int64)
+    for k in range(node.size):
+        order[pos[node[k]]] = k
+        pos[node[k]] += 1
+    return start, order
+
+
+@njit(cache=True)
+def layout(links, first, nh, has_tau, rs, ro, ps, po):
+    """The unknowns' indices, node by node: (count, τ, Y, X, L, N, T); −1 where none
+    (τ when an end holds x, Y at the pins)."""
+    idx = 1 if has_tau else 0
+    Y = np.full(links + 1, -1, np.int64)
+    X = np.empty(links + 1, np.int64)
+    L = np.empty(max(links, 1), np.int64)
+    Nv = np.empty(ro.size, np.int64)
+    Tv = np.empty(po.size, np.int64)
+    for i in range(links + 1):
+        if first <= i < first + nh:
+            Y[i] = idx
+            idx += 1
+        X[i] = idx
+        idx += 1
+        if i < links:
+            L[i] = idx
+            idx += 1
+        for k in range(rs[i], rs[i + 1]):
+            Nv[ro[k]] = idx
+            idx += 1
+        for k in range(ps[i], ps[i + 1]):
+            Tv[po[k]] = idx
+            idx += 1
+    return idx, (0 if has_tau else -1), Y, X, L, Nv, Tv
+
+
+@njit(cache=True)
+def _put(ei, ej, ev, ne, m, j, v):
+    if v != 0.0 and j >= 0:
+        ei[ne], ej[ne], ev[ne] = m, j, v
+        return ne + 1
+    return ne
+
+
+@njit(cache=True)
+def _fx(ei, ej, ev, ne, m, i, sign, rs, ro, ps, po, Nv, Tv, normal_xy, tangent_xy):
+    """sign · F^x_i, the force along x at node i (its rows' n_x N, its pairs' t_x T)."""
+    for k in range(rs[i], rs[i + 1]):
+        r = ro[k]
+        ne = _put(ei, ej, ev, ne, m, Nv[r], sign * normal_xy[r, 0])
+    for k in range(ps[i], ps[i + 1]):
+        c = po[k]
+        ne = _put(ei, ej, ev, ne, m, Tv[c], sign * tangent_xy[c, 0])
+    return ne
+
+
+@njit(cache=True)
+def primal_system(bands, f, t, k_tau, first, right_datum, gap, slip, compliance,
+                  normal_node, normal_xy, friction_node, tangent_xy, mu, pair, contact,
+                  state, hold, T0, eps_t):
+    """The step's primal equations on an index set, in sparse rows: (ei, ej, ev, rhs,
+    count, the unknowns' layout (τ, Y, X, L, N, T)). ``t``: tan α per link (as given:
+    the caller levels it); ``contact`` per wall row, ``state`` per pair (STICK, FORWARD,
+    BACKWARD, OFF), ``hold`` per pair (KEEP its slip equation, HELD_ALONE: T = T⁰, or
+    the pair p: T − T_p = T⁰ − T⁰_p); ``eps_t``: a sticking pair's compliance (its slip
+    equation t·(δx, δy) + ε_t (T − T⁰) = −s; 0: none). The equations come node by node, as the unknowns
+    (:func:`layout`), so the system is banded; as many equations as unknowns."""
+    nh, links = bands.shape[1], t.size
+    has_tau = f.size > nh
+    rs, ro = by_node(first + normal_node, links)
+    ps, po = by_node(friction_node, links)
+    n, tau, Y, X, L, Nv, Tv = layout(links, first, nh, has_tau, rs, ro, ps, po)
+    cap = 16 * n + 4 * (ro.size + po.size) + 16
+    ei = np.empty(cap, np.int64)
+    ej = np.empty(cap, np.int64)
+    ev = np.empty(cap)
+    rhs = np.zeros(n + 2)
+    ne, m = 0, 0
+    for i in range(links + 1):
+        if i == 0:
+            if has_tau:  # k_τ τ − L_0 − F^x_0 = f_τ
+                ne = _put(ei, ej, ev, ne, m, tau, k_tau)
+                ne = _put(ei, ej, ev, ne, m, L[0], -1.0)
+                ne = _fx(ei, ej, ev, ne, m, 0, -1.0, rs, ro, ps, po, Nv, Tv, normal_xy,
+                         tangent_xy)
+                rhs[m] = f[nh]
+                m += 1
+            if not right_datum:  # x_0 = τ (or 0)
+                ne = _put(ei, ej, ev, ne, m, X[0], 1.0)
+                ne = _put(ei, ej, ev, ne, m, tau, -1.0)
+                m += 1
+        else:  # δx_i − δx_{i−1} + tan α_{i−1} (δy_i − δy_{i−1}) = 0
+            ne = _put(ei, ej, ev, ne, m, X[i], 1.0)
+            ne = _put(ei, ej, ev, ne, m, X[i - 1], -1.0)
+            ne = _put(ei, ej, ev, ne, m, Y[i], t[i - 1])
+            ne = _put(ei, ej, ev, ne, m, Y[i - 1], -t[i - 1])
+            m += 1
+        if Y[i] >= 0:  # the heights' equilibrium at node i
+            j = i - first
+            for jj in range(max(0, j - 2), min(nh, j + 3)):
+                ne = _put(ei, ej, ev, ne, m, Y[first + jj], bands[abs(j - jj), min(j, jj)])
+            for k in range(rs[i], rs[i + 1]):
+                ne = _put(ei, ej, ev, ne, m, Nv[ro[k]], -normal_xy[ro[k], 1])
+            for k in range(ps[i], ps[i + 1]):
+                ne = _put(ei, ej, ev, ne, m, Tv[po[k]], -tangent_xy[po[k], 1])
+            if i >= 1:
+                ne = _put(ei, ej, ev, ne, m, L[i - 1], t[i - 1])
+            if i < links:
+                ne = _put(ei, ej, ev, ne, m, L[i], -t[i])
+            rhs[m] = f[j]
+            m += 1
+        if i < links:  # the link's horizontal force
+            ne = _put(ei, ej, ev, ne, m, L[i], 1.0)
+            if right_datum:  # L_i = L_{i−1} − F^x_i
+                if i >= 1:
+                    ne = _put(ei, ej, ev, ne, m, L[i - 1], -1.0)
+                ne = _fx(ei, ej, ev, ne, m, i, 1.0, rs, ro, ps, po, Nv, Tv, normal_xy,
+                         tangent_xy)
+            else:  # L_i = L_{i+1} + F^x_{i+1}
+                if i + 1 < links:
+                    ne = _put(ei, ej, ev, ne, m, L[i + 1], -1.0)
+                ne = _fx(ei, ej, ev, ne, m, i + 1, -1.0, rs, ro, ps, po, Nv, Tv, normal_xy,
+                         tangent_xy)
+            m += 1
+        for k in range(rs[i], rs[i + 1]):
+            r = ro[k]
+            if contact[r]:  # n·(δx, δy) + N/k = −g
+                ne = _put(ei, ej, ev, ne, m, X[i], normal_xy[r, 0])
+                ne = _put(ei, ej, ev, ne, m, Y[i], normal_xy[r, 1])
+                ne = _put(ei, ej, ev, ne, m, Nv[r], compliance[r])
+                rhs[m] = -gap[r]
+            else:
+                ne = _put(ei, ej, ev, ne, m, Nv[r], 1.0)
+            m += 1
+        for k in range(ps[i], ps[i + 1]):
+            c = po[k]
+            st = state[c]
+            if st == OFF:
+                ne = _put(ei, ej, ev, ne, m, Tv[c], 1.0)
+            elif st == STICK and hold[c] == KEEP:  # t·(δx, δy) = −s
+                ne = _put(ei, ej, ev, ne, m, X[i], tangent_xy[c, 0])
+                ne = _put(ei, ej, ev, ne, m, Y[i], tangent_xy[c, 1])
+                ne = _put(ei, ej, ev, ne, m, Tv[c], eps_t)
+                rhs[m] = -slip[c] + eps_t * T0[c]
+            elif st == STICK:  # T held at the answer's split
+                ne = _put(ei, ej, ev, ne, m, Tv[c], 1.0)
+                rhs[m] = T0[c]
+                if hold[c] >= 0:
+                    ne = _put(ei, ej, ev, ne, m, Tv[hold[c]], -1.0)
+                    rhs[m] -= T0[hold[c]]
+            else:  # T + σ Σ μ N = 0 (the pair's rows are at its node)
+                ne = _put(ei, ej, ev, ne, m, Tv[c], 1.0)
+                for kk in range(rs[i], rs[i + 1]):
+                    r = ro[kk]
+                    if pair[r] == c:
+                        ne = _put(ei, ej, ev, ne, m, Nv[r], st * mu[r])
+            m += 1
+        if i == links and right_datum:  # x_N held
+            ne = _put(ei, ej, ev, ne, m, X[links], 1.0)
+            m += 1
+    return ei[:ne], ej[:ne], ev[:ne], rhs[:m], n, (tau, Y, X, L, Nv, Tv)
+
+
+@njit(cache=True)
+def banded_factor(ei, ej, ev, n):
+    """A (square, in sparse rows) factored for :func:`banded_resolve`: rows then columns
+    scaled by their largest entry, banded elimination with partial pivoting
+    (:func:`lcpbench.linalg.band_lu_kernel.band_factor`); (factor, kl, row scales, column
+    scales, pivots, last columns, ok)."""
+    rmax = np.zeros(n)
+    for k in range(ei.size):
+        rmax[ei[k]] = max(rmax[ei[k]], abs(ev[k]))
+    cmax = np.zeros(n)
+    kl, ku = 0, 0
+    for k in range(ei.size):
+        cmax[ej[k]] = max(cmax[ej[k]], abs(ev[k]) / rmax[ei[k]])
+        kl = max(kl, ei[k] - ej[k])
+        ku = max(ku, ej[k] - ei[k])
+    piv = np.empty(n, np.int64)
+    last = np.empty(n, np.int64)
+    ab = np.zeros((n, 2 * kl + ku + 1))
+    for i in range(n):
+        if rmax[i] == 0.0 or cmax[i] == 0.0:
+            return ab, kl, rmax, cmax, piv, last, False
+    for k in range(ei.size):
+        i, j = ei[k], ej[k]
+        ab[i, j - i + kl] += ev[k] / rmax[i] / cmax[j]
+    ok = band_factor(ab, kl, piv, last)
+    return ab, kl, rmax, cmax, piv, last, ok
+
+
+@njit(cache=True)
+def banded_resolve(fac, rhs):
+    """x with A x = rhs from :func:`banded_factor`'s ``fac``; (x, ok)."""
+    ab, kl, rmax, cmax, piv, last, _ = fac
+    n = rhs.size
+    b = np.empty((n, 1))
+    for i in range(n):
+        b[i, 0] = rhs[i] / rmax[i]
+    ok = band_resolve(ab, kl, piv, last, b)
+    x = np.empty(n)
+    for j in range(n):
+        x[j] = b[j, 0] / cmax[j]
+    return x, ok
+
+
+@njit(cache=True)
+def primal_residual(ei, ej, ev, rhs, v, scale):
+    """The largest residual of the equations at v, each relative to its terms' size at
+    the unknowns' scales (``scale``: a force or a length per unknown) plus |rhs|."""
+    m = rhs.size
+    acc = np.zeros(m)
+    size = np.abs(rhs)
+    for k in range(ei.size):
+        acc[ei[k]] += ev[k] * v[ej[k]]
+        size[ei[k]] += abs(ev[k]) * scale[ej[k]]
+    worst = 0.0
+    for i in range(m):
+        if size[i] > 0.0:
+            worst = max(worst, abs(acc[i] - rhs[i]) / size[i])
+    return worst
+
+
+@njit(cache=True)
+def answer_values(n, lay, t, right_datum, dy, tau, N, T, first, normal_node, normal_xy,
+                  friction_node, tangent_xy):
+    """Every unknown of the primal system (:func:`layout`) from an answer's δy, τ, N, T:
+    δx by its recurrence from the datum, L by summing F^x."""
+    tv, Y, X, L, Nv, Tv = lay
+    links = t.size
+    v = np.zeros(n)
+    yd = np.zeros(links + 1)
+    for i in range(links + 1):
+        if Y[i] >= 0:
+            yd[i] = dy[i - first]
+            v[Y[i]] = yd[i]
+    if tv >= 0:
+        v[tv] = tau
+    x = np.zeros(links + 1)
+    x[0] = tau
+    for i in range(1, links + 1):
+        x[i] = x[i - 1] - t[i - 1] * (yd[i] - yd[i - 1])
+    if right_datum:
+        x -= x[links]
+    fx = np.zeros(links + 1)
+    for r in range(N.size):
+        fx[first + normal_node[r]] += normal_xy[r, 0] * N[r]
+        v[Nv[r]] = N[r]
+    for c in range(T.size):
+        fx[friction_node[c]] += tangent_xy[c, 0] * T[c]
+        v[Tv[c]] = T[c]
+    acc = 0.0
+    if right_datum:
+        for k in range(links):
+            acc -= fx[k]
+            v[L[k]] = acc
+    else:
+        for k in range(links - 1, -1, -1):
+            acc += fx[k + 1]
+            v[L[k]] = acc
+    for i in range(links + 1):
+        v[X[i]] = x[i]
+    return v
+
+
+@njit(cache=True)
+def index_set(z, w, mn, mt, pair, mu):
+    """The index set of an LCP answer z, w = M z + q (z = (N, β⁺, β⁻, λ)), each pair's
+    larger side: a row is in contact when N >= its gap; a pair is off (T = 0, its slip
+    free) when none of its rows with μ > 0 is in contact, sticks when its cone's margin μN − |T| is at least its slip
+    size λ, else slides against T (forward where β⁻ > β⁺)."""
+    contact = np.empty(mn, np.bool_)
+    pressed = np.zeros(mt, np.bool_)
+    for r in range(mn):
+        contact[r] = z[r] >= w[r]
+        if contact[r] and pair[r] >= 0 and mu[r] > 0.0:
+            pressed[pair[r]] = True
+    state = np.empty(mt, np.int64)
+    lam = mn + 2 * mt
+    for c in range(mt):
+        if not pressed[c]:
+            state[c] = OFF
+        elif w[lam + c] >= z[lam + c]:
+            state[c] = STICK
+        else:
+            state[c] = FORWARD if z[mn + mt + c] > z[mn + c] else BACKWARD
+    return contact, state
+
+
+@njit(cache=True)
+def stick_holds(t, state, friction_node, tangent_xy, has_tau, right_datum):
+    """Per pair: KEEP its slip equation, or hold its T (:func:`primal_system`) where a
+    sticking pair is joined to an earlier sticking pair, or to a pinned end, by level
+    links (t = 0: their x move together, the slip equations are dependent)."""
+    links = t.size
+    run = np.zeros(links + 1, np.int64)
+    for i in range(1, links + 1):
+        run[i] = run[i - 1] + (0 if t[i - 1] == 0.0 else 1)
+    pinned = -1
+    if right_datum:
+        pinned = run[links]
+    elif not has_tau:
+        pinned = run[0]
+    last = np.full(links + 1, -1, np.int64)
+    hold = np.full(state.size, KEEP, np.int64)
+    order = np.argsort(friction_node, kind="mergesort")
+    for k in range(order.size):
+        c = order[k]
+        if state[c] != STICK or tangent_xy[c, 1] != 0.0:
+            continue
+        g = run[friction_node[c]]
+        if g == pinned:
+            hold[c] = HELD_ALONE
+        elif last[g] >= 0:
+            hold[c] = last[g]
+        last[g] = c
+    return hold
+
+
+@njit(cache=True)
+def signs(x, lay, first, gap, slip, normal_node, normal_xy, friction_node, tangent_xy, mu,
+          pair, contact, state, ftol, ltol):
+    """The sign conditions of the index set at the primal solution x: (how many fail, the
+    set with those nodes flipped, the slips s). A contact row with N < 0 separates, a
+    separate row with a gap < 0 comes into contact, a sticking pair outside its cone
+    slides against its T, a sliding pair whose slip has the wrong sign sticks (and a pair
+    none of whose rows with μ > 0 is in contact is off; one that comes into contact
+    sticks). To
+    ``ftol`` (forces) and ``ltol`` (lengths)."""
+    tv, Y, X, L, Nv, Tv = lay
+    mn, mt = contact.size, state.size
+    new_contact, new_state = contact.copy(), state.copy()
+    s = np.zeros(mt)
+    for c in range(mt):
+        i = friction_node[c]
+        s[c] = slip[c] + tangent_xy[c, 0] * x[X[i]]
+        if Y[i] >= 0:
+            s[c] += tangent_xy[c, 1] * x[Y[i]]
+    fails = 0
+    for r in range(mn):
+        i = first + normal_node[r]
+        if contact[r]:
+            if x[Nv[r]] < -ftol:
+                new_contact[r] = False
+                fails += 1
+        elif gap[r] + normal_xy[r, 0] * x[X[i]] + normal_xy[r, 1] * x[Y[i]] < -ltol:
+            new_contact[r] = True
+            fails += 1
+    pressed = np.zeros(mt, np.bool_)
+    for r in range(mn):
+        if new_contact[r] and pair[r] >= 0 and mu[r] > 0.0:
+            pressed[pair[r]] = True
+    for c in range(mt):
+        if state[c] == STICK:
+            limit = 0.0
+            for r in range(mn):
+                if pair[r] == c:
+                    limit += mu[r] * x[Nv[r]]
+            if abs(x[Tv[c]]) > limit + ftol:
+                new_state[c] = FORWARD if x[Tv[c]] < 0.0 else BACKWARD
+                fails += 1
+        elif state[c] != OFF and state[c] * s[c] < -ltol:
+            new_state[c] = STICK
+            fails += 1
+        if not pressed[c]:
+            new_state[c] = OFF
+        elif new_state[c] == OFF:
+            new_state[c] = STICK
+    return fails, new_contact, new_state, s
+
+
+@njit(cache=True)
+def polish(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, normal_node,
+           normal_xy, friction_node, tangent_xy, mu, pair, z, w, dy, tau, N, T, force,
+           length, link, stick_compliance, sweeps, flips):
+    """The answer z (w = M z + q; its δy, τ, N, T in mm and N) polished on its index set
+    (the module's note): (verdict, z polished (the LCP's units: forces by ``force``,
+    lengths by ``length``), the primal residual before, after).
+
+    The set's primal system is solved with the sticking nodes' compliance
+    ``stick_compliance`` (link lengths per largest force) as ``sweeps`` steps of
+    refinement from the answer against the equations without it. Where a sign of the set
+    fails at the solution, those nodes are flipped (:func:`signs`) and the set solved
+    again, at most ``flips`` times. KEPT where every sign of the (last) set holds (to
+    POLISH_SIGN_RTOL of the largest force and of the link length ``link``) and the
+    residual of its primal equations (tan α as is, every stick equation) is below the
+    answer's."""
+    mn, mt = N.size, T.size
+    z_new = z.copy()
+    nan = np.nan
+    contact, state = index_set(z, w, mn, mt, pair, mu)
+    has_tau = f.size > bands.shape[1]
+    tl = tan.copy()
+    for k in range(tl.size):
+        if abs(tl[k]) <= POLISH_LEVEL:
+            tl[k] = 0.0
+    big0 = 0.0
+    for r in range(mn):
+        big0 = max(big0, abs(N[r]))
+    for c in range(mt):
+        big0 = max(big0, abs(T[c]))
+    if big0 == 0.0:
+        big0 = force
+    for attempt in range(flips + 1):
+        hold = stick_holds(tl, state, friction_node, tangent_xy, has_tau, right_datum)
+        # the equations (ei, …) and the system solved (si, …: sticking nodes compliant)
+        ei, ej, ev, rhs, n, lay = primal_system(bands, f, tl, k_tau, first, right_datum,
+                                                gap, slip, compliance, normal_node,
+                                                normal_xy, friction_node, tangent_xy, mu,
+                                                pair, contact, state, hold, T, 0.0)
+        si, sj, sv, _, _, _ = primal_system(bands, f, tl, k_tau, first, right_datum, gap,
+                                            slip, compliance, normal_node, normal_xy,
+                                            friction_node, tangent_xy, mu, pair, contact,
+                                            state, hold, T, stick_compliance * link / big0)
+        x = answer_values(n, lay, tl, right_datum, dy, tau, N, T, first, normal_node,
+                          normal_xy, friction_node, tangent_xy)
+        fac = banded_factor(si, sj, sv, n)
+        if rhs.size != n or not fac[6]:
+            return SINGULAR, z_new, nan, nan
+        for _ in range(sweeps):  # x += A_ε⁻¹ (b − A x)
+            res = rhs.copy()
+            for k in range(ei.size):
+                res[ei[k]] -= ev[k] * x[ej[k]]
+            d, ok = banded_resolve(fac, res)
+            if not ok:
+                return SINGULAR, z_new, nan, nan
+            x += d
+        big = big0
+        for r in range(mn):
+            big = max(big, abs(x[lay[4][r]]))
+        for c in range(mt):
+            big = max(big, abs(x[lay[5][c]]))
+        fails, new_contact, new_state, s = signs(
+            x, lay, first, gap, slip, normal_node, normal_xy, friction_node, tangent_xy, mu,
+            pair, contact, state, POLISH_SIGN_RTOL * big, POLISH_SIGN_RTOL * link)
+        if fails == 0:
+            break
+        if attempt == flips:
+            return SIGNS, z_new, nan, nan
+        contact, state = new_contact, new_state
+    tv, Y, X, L, Nv, Tv = lay
+    # both answers in the set's own equations: tan α as is, every stick equation
+    keep = np.full(mt, KEEP, np.int64)
+    ei, ej, ev, rhs, n, lay = primal_system(bands, f, tan, k_tau, first, right_datum, gap,
+                                            slip, compliance, normal_node, normal_xy,
+                                            friction_node, tangent_xy, mu, pair, contact,
+                                            state, keep, T, 0.0)
+    scale = np.full(n, link)
+    for r in range(mn):
+        scale[Nv[r]] = max(big, 1e-300)
+    for c in range(mt):
+        scale[Tv[c]] = max(big, 1e-300)
+    for k in range(L.size if tan.size else 0):
+        scale[L[k]] = max(big, 1e-300)
+    v0 = answer_values(n, lay, tan, right_datum, dy, tau, N, T, first, normal_node,
+                       normal_xy, friction_node, tangent_xy)
+    r0 = primal_residual(ei, ej, ev, rhs, v0, scale)
+    r1 = primal_residual(ei, ej, ev, rhs, x, scale)
+    if not r1 < r0:
+        return NOT_LOWER, z_new, r0, r1
+    for r in range(mn):
+        z_new[r] = x[Nv[r]] / force
+    for c in range(mt):
+        tc = x[Tv[c]]
+        z_new[mn + c] = max(tc, 0.0) / force
+        z_new[mn + mt + c] = max(-tc, 0.0) / force
+        z_new[mn + 2 * mt + c] = 0.0 if state[c] == STICK else abs(s[c]) / length
+    return KEPT, z_new, r0, r1

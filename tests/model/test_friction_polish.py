@@ -1,0 +1,170 @@
+"""The frictional step's primal polish (issue 39, target 2; model/friction_polish.py).
+
+Expectations are independent of the polish: the exact solution of the answer's index
+set in rational arithmetic (benchmarks/exact_friction.py, from the step's doubles, not
+from its Delassus matrix), the sign conditions read off the polished forces and slips,
+and today's frictionless solve (the μ = 0 limit).
+"""
+
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import lcpbench
+from lcpbench import ActuatorScene
+from lcpbench.model.friction_driver import FrictionState, StepLemke, solve_state
+from lcpbench.model.friction_lemke import POLISH_VERDICTS, polish_kernels, polish_step
+from lcpbench.model.friction_result import build_result
+from lcpbench.model.friction_solvers import step_runner
+from lcpbench.solvers.base import LCPSolution, Status
+from lcpbench.thresholds import POLISH_STICK_COMPLIANCE, POLISH_SWEEPS
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+import exact_friction as ef  # noqa: E402
+from friction_agreement import scenes  # noqa: E402
+
+
+def recorded(scene, states, tol=1e-8):
+    """Every step of a path solved by the default's runner, with its answer."""
+    steps, run = [], step_runner("lemke")
+
+    def keep(fs):
+        sol = run(fs)
+        steps.append((fs, sol))
+        return sol
+
+    keep.takes_step, keep.newton = True, True
+    res = lcpbench.solve_path(scene, states, tol=tol, lcp=keep)
+    return res, steps
+
+
+def exact_gap(fs, z):
+    """(the exact solution of z's index set found, its distance to z in N and the move)."""
+    step = ef.chain_step(fs)
+    v = ef.answer_values(fs, step, z)
+    ex, dist, _ = ef.nearest_exact(step, v)
+    return ex, max(dist[0], dist[2])
+
+
+def test_polish_lands_on_the_exact_answer_of_the_index_set():
+    """Path 3 of benchmarks/friction_agreement.py's set (N = 12): Lemke's warm-started
+    answers of three steps sit 1.2e-6 (in N, of the largest force) from the exact
+    solution of their own index set, solved in Fractions; polished, every answer is an
+    exact answer to 1e-9 and none is farther from it than before."""
+    scene, states = list(scenes(4, 39))[3]
+    res, steps = recorded(scene, states)
+    assert all(r.converged for r in res)
+    worst_before, kept = 0.0, 0
+    for fs, sol in steps:
+        assert sol.extra["polish"] in POLISH_VERDICTS
+        if sol.extra["polish"] != "kept":
+            continue
+        kept += 1
+        ex, after = exact_gap(fs, sol.z)
+        ex0, before = exact_gap(fs, sol.extra["unpolished"])
+        assert ex.solution and not ex.ray and after <= 1e-9
+        assert after <= max(before, 1e-12)
+        worst_before = max(worst_before, before)
+    assert kept >= len(steps) // 2
+    assert worst_before > 1e-7  # the polish had something to do
+
+
+def first_step(scene):
+    """The first frictional step of a one-state path of ``scene``, and its answer."""
+    res, steps = recorded(scene, [{}])
+    assert res[0].converged
+    return steps[-1]
+
+
+def test_polish_refuses_an_index_set_whose_signs_fail():
+    """A pressed node's answer made to slide the wrong way (T = +μN while its slip, on the
+    exact solution of that set, is forward): without a flip the polish refuses it and
+    returns z unchanged; whatever polish_step keeps (POLISH_FLIPS) meets every sign:
+    N >= 0, |T| <= μN, a sliding node's slip against its T."""
+    fs, sol = first_step(ActuatorScene(theta=150, height=3.0, links=20, friction=0.3,
+                                       left_end="pinned", right_end="slider", pull=0.05))
+    z = sol.z.copy()
+    mn, mt = fs.normal_node.size, fs.friction_node.size
+    N = z[:mn]
+    pressed = [c for c in range(mt) if np.any((fs.pair == c) & (N > 0))]
+    assert pressed
+    c = pressed[0]
+    r = int(np.flatnonzero(fs.pair == c)[0])
+    limit = fs.mu[r] * N[r]
+    # the index set: pair c slides backward (β⁺ = μN, λ > 0), the rest as answered
+    z[mn + c], z[mn + mt + c], z[mn + 2 * mt + c] = limit, 0.0, 1e-3
+    w = fs.M @ z + fs.q
+    P = fs.parts
+    Nf, T, dy, tau = fs.forces(z)
+    args = (P["bands"], P["f"], P["tan"], float(P["k_tau"]), int(P["first"]),
+            bool(P["right_datum"]), P["gap"], P["slip"], P["compliance"], fs.normal_node,
+            fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu, fs.pair, z, w, dy,
+            float(tau), Nf, T, float(fs.force), float(fs.length),
+            float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS)
+    k = polish_kernels()
+    code, z_new, _, _ = k.polish(*args, 0)
+    assert code == k.SIGNS
+    np.testing.assert_array_equal(z_new, z)
+    bad = LCPSolution(z, w, Status.SOLVED, extra={})
+    out = polish_step(fs, bad)
+    assert out.status is Status.SOLVED  # never changed by the polish
+    if out.extra["polish"] == "kept":  # its flipped set: every sign holds
+        N2, T2, _, _ = fs.forces(out.z)
+        assert np.all(N2 >= -1e-12 * np.max(N2))
+        cone = np.zeros(mt)
+        np.add.at(cone, fs.pair[fs.pair >= 0], (fs.mu * N2)[fs.pair >= 0])
+        assert np.all(np.abs(T2) <= cone + 1e-12 * np.max(N2))
+        s = (out.w[mn:mn + mt] - out.w[mn + mt:mn + 2 * mt]) / 2  # the slips (β± rows)
+        sliding = np.abs(T2) >= cone - 1e-12 * np.max(N2)
+        assert np.all(s[sliding & (T2 > 0)] <= 1e-12) and np.all(s[sliding & (T2 < 0)] >= -1e-12)
+    else:
+        np.testing.assert_array_equal(out.z, z)
+
+
+def test_polish_never_raises_a_status():
+    """An answer that is not SOLVED is not polished and keeps its status and z."""
+    fs, sol = first_step(ActuatorScene(theta=150, height=3.0, links=12, friction=0.3,
+                                       left_end="pinned", right_end="slider"))
+    bad = LCPSolution(sol.z.copy(), sol.w.copy(), Status.INACCURATE, extra={})
+    out = polish_step(fs, bad)
+    assert out.status is Status.INACCURATE and out.extra["polish"] == "not SOLVED"
+    np.testing.assert_array_equal(out.z, sol.z)
+
+
+class Recording(StepLemke):
+    def __init__(self):
+        super().__init__()
+        self.verdicts = []
+
+    def __call__(self, fs, q=None):
+        sol = super().__call__(fs, q)
+        self.verdicts.append(sol.extra.get("polish"))
+        return sol
+
+
+@pytest.mark.parametrize("kw", [dict(theta=150, height=3.0),
+                                dict(theta=170, height=2.5, channel=True)],
+                         ids=["flat", "channel"])
+def test_mu_zero_polished_step_is_the_frictionless_answer(kw):
+    """μ = 0 (pin and slider), every step through the polish, against today's solve:
+    1e-10 relative per node, and the polish kept at least one step's answer."""
+    base = ActuatorScene(links=30, **kw)
+    ref = lcpbench.solve(base, tol=1e-12)
+    scene = replace(base, right_end="slider")
+    chain = scene.chain()
+    rest = FrictionState(chain.rest_alpha.copy())
+    lcp = Recording()
+    ans = solve_state(scene, rest, rest.positions(chain)[0], tol=1e-12, lcp=lcp)
+    assert ans.converged, ans.reason
+    assert "kept" in lcp.verdicts
+    res = build_result(scene, {}, ans, rest.positions(chain)[0], 1e-12)
+    scale = np.max(ref.forces)
+    np.testing.assert_allclose(res.forces, ref.forces, rtol=0, atol=1e-10 * scale)
+    if base.channel:
+        np.testing.assert_allclose(res.forces_lower, ref.forces_lower, rtol=0,
+                                   atol=1e-10 * scale)
+    np.testing.assert_allclose(res.alpha, ref.alpha, rtol=0, atol=1e-10)
+    assert np.all(res.tangential_forces == 0.0)
