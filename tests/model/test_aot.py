@@ -7,6 +7,10 @@ compiles the same functions from the same sources, so the answers must be the
 JIT's to round-off, outer iteration by outer iteration; what the AOT module
 cannot serve (another kernel file, another argument type, a broken file) must
 go to the JIT, never to a wrong or stale answer.
+
+The tests that need the built module are marked ``slow`` (``pytest -m slow``): the
+build alone takes 75-90 s on two cores, which would take the default suite past its
+ten minutes on a fresh install; the tests of the loader's refusals run by default.
 """
 
 import json
@@ -67,6 +71,7 @@ SCENES = [lcpbench.ActuatorScene(theta=150, height=3.0),
           lcpbench.CantileverScene(load=0.002, height=1.0, links=80)]
 
 
+@pytest.mark.slow  # the build: 75-90 s on 2 cores
 def test_the_build_exports_the_solve_and_judge_kernels(aot_build):
     where, info = aot_build
     assert set(info["modules"]) >= {SOLVE, JUDGE}
@@ -81,6 +86,7 @@ def _no_jit(*args):
     raise AssertionError("the JIT was asked for")
 
 
+@pytest.mark.slow  # the build: 75-90 s on 2 cores
 def test_the_aot_kernels_give_the_jits_answers(aot_build, served_from, monkeypatch):
     """Scene by scene (the actuator, a wide and low one, the channel, the cantilever)
     and along a continuation line (warm starts): the same path and the same
@@ -112,6 +118,7 @@ def test_the_aot_kernels_give_the_jits_answers(aot_build, served_from, monkeypat
         assert a[6] == pytest.approx(j[6], rel=1e-9)
 
 
+@pytest.mark.slow  # the build: 75-90 s on 2 cores
 def test_a_fresh_process_solves_without_importing_numba(aot_build):
     code = ("import sys, lcpbench; r = lcpbench.solve(lcpbench.ActuatorScene(theta=150, "
             "height=3.0, links=40)); print('numba' in sys.modules, r.engine, "
@@ -137,6 +144,7 @@ print(json.dumps([default, named, nc.kernels_dir()]))
 """
 
 
+@pytest.mark.slow  # the build: 75-90 s on 2 cores
 def test_a_module_built_for_other_kernel_files_is_never_used(aot_build, tmp_path):
     """An edit of any kernel file moves the cache directory (so the module is not
     found where it was built) and changes the hash the manifest must carry (so it is
@@ -164,6 +172,7 @@ def test_a_module_built_for_other_kernel_files_is_never_used(aot_build, tmp_path
     assert there[:2] == [False, False]
 
 
+@pytest.mark.slow  # the build: 75-90 s on 2 cores
 def test_a_broken_module_warns_once_and_the_jit_solves(aot_build, served_from, tmp_path):
     broken = tmp_path / "broken"
     shutil.copytree(aot_build[0], broken)
@@ -187,6 +196,7 @@ def test_a_missing_module_is_silent(served_from, tmp_path):
                                                      links=40)).converged
 
 
+@pytest.mark.slow  # the build: 75-90 s on 2 cores
 def test_lcpbench_aot_0_turns_it_off(aot_build, monkeypatch):
     monkeypatch.setenv("LCPBENCH_AOT_DIR", aot_build[0])
     numba_cache.use_aot(None)
