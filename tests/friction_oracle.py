@@ -26,3 +26,30 @@ def coulomb_on(T, s, limit, F, slip_length, rtol):
     inside = np.abs(T) < limit - rtol * F
     assert np.all(np.abs(s[inside]) <= slip_length)
     return sliding
+
+
+def frictionless_by_the_frictional_path(base, lcp, tol):
+    """``base`` with μ = 0, a pin and a slider, solved from the rest arc by the frictional
+    outer loop with the step solver ``lcp``, against lcpbench's frictionless solve of
+    ``base`` (an independent route: no friction pairs, no warm start, no polish): forces
+    per node to 1e-10 of the largest and α to 1e-10. Returns the frictional result."""
+    from dataclasses import replace
+
+    import lcpbench
+    from lcpbench.model.friction_driver import FrictionState, solve_state
+    from lcpbench.model.friction_result import build_result
+
+    ref = lcpbench.solve(base, tol=tol)
+    scene = replace(base, right_end="slider")
+    chain = scene.chain()
+    rest = FrictionState(chain.rest_alpha.copy())
+    ans = solve_state(scene, rest, rest.positions(chain)[0], tol=tol, lcp=lcp)
+    assert ans.converged, ans.reason
+    res = build_result(scene, {}, ans, rest.positions(chain)[0], tol)
+    scale = np.max(ref.forces)
+    np.testing.assert_allclose(res.forces, ref.forces, rtol=0, atol=1e-10 * scale)
+    if base.channel:
+        np.testing.assert_allclose(res.forces_lower, ref.forces_lower, rtol=0,
+                                   atol=1e-10 * scale)
+    np.testing.assert_allclose(res.alpha, ref.alpha, rtol=0, atol=1e-10)
+    return res
