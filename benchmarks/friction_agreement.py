@@ -114,19 +114,27 @@ def step_forces(fs, z, n_free, first):
 
 
 class Recorder:
-    """Lemke's step solver, keeping every step it is handed."""
+    """Lemke's step solver, keeping every step it is handed (and, as the default path's,
+    polishing only the answer that would end a state: the polished one is kept)."""
 
     takes_step = True
     newton = True  # as the default path's (step_runner("lemke").newton)
+    defers_polish = True
 
     def __init__(self):
         self.run = step_runner("lemke")
         self.steps = []
 
-    def __call__(self, fs):
-        sol = self.run(fs)
+    def __call__(self, fs, polish=True):
+        sol = self.run(fs, polish=polish)
         self.steps.append((fs, sol))
         return sol
+
+    def polish(self, fs, sol):
+        out = self.run.polish(fs, sol)
+        if self.steps and self.steps[-1][1] is sol:
+            self.steps[-1] = (fs, out)
+        return out
 
 
 def main() -> int:

@@ -138,20 +138,79 @@ class Recording(StepLemke):
         super().__init__()
         self.verdicts = []
 
-    def __call__(self, fs, q=None):
-        sol = super().__call__(fs, q)
+    def __call__(self, fs, q=None, polish=True):
+        sol = super().__call__(fs, q, polish)
         self.verdicts.append(sol.extra.get("polish"))
         return sol
+
+    def polish(self, fs, sol):  # (the driver's: the answer that would end a state)
+        out = super().polish(fs, sol)
+        self.verdicts.append(out.extra.get("polish"))
+        return out
 
 
 @pytest.mark.parametrize("kw", [dict(theta=150, height=3.0),
                                 dict(theta=170, height=2.5, channel=True)],
                          ids=["flat", "channel"])
 def test_mu_zero_polished_step_is_the_frictionless_answer(kw):
-    """μ = 0 (pin and slider), every step through the polish, against today's solve:
-    1e-10 relative per node, and the polish kept at least one step's answer."""
+    """μ = 0 (pin and slider), the answer that ends each state through the polish,
+    against today's solve: 1e-10 relative per node, and the polish kept at least one
+    step's answer."""
     base = ActuatorScene(links=30, **kw)
     lcp = Recording()
     res = frictionless_by_the_frictional_path(base, lcp, 1e-12)
     assert "kept" in lcp.verdicts
     assert np.all(res.tangential_forces == 0.0)
+
+
+class Steps(StepLemke):
+    """The default step solver, keeping every step and its answer as the driver took it
+    (the answer that would end a state replaced by its polish)."""
+
+    def __init__(self):
+        super().__init__()
+        self.steps = []
+
+    def __call__(self, fs, q=None, polish=True):
+        sol = super().__call__(fs, q, polish)
+        self.steps.append((fs, sol))
+        return sol
+
+    def polish(self, fs, sol):
+        out = super().polish(fs, sol)
+        if self.steps and self.steps[-1][1] is sol:
+            self.steps[-1] = (fs, out)
+        return out
+
+
+def test_a_state_reports_its_polished_answer_and_the_judge_passes_it():
+    """Path 3 of benchmarks/friction_agreement.py's set (N = 12) by the default path: the
+    polish runs on the answers that end a state, not on the steps before them (fewer
+    polished steps than steps). Each converged state's last step went through the polish;
+    where it was kept, the state's reported normal and tangential forces are that polished
+    answer's (bit for bit), which is the exact solution of its index set (in Fractions,
+    benchmarks/exact_friction.py) to 1e-9, and the judge passes the state."""
+    scene, states = list(scenes(4, 39))[3]
+    lcp = Steps()
+    res = lcpbench.solve_path(scene, states, tol=1e-8, lcp=lcp)
+    assert all(r.converged and r.route == "frictional" for r in res)
+    assert len(lcp.steps) == sum(r.outer_iterations for r in res)
+    polished = [sol for _, sol in lcp.steps if "polish" in sol.extra]
+    assert len(res) <= len(polished) < len(lcp.steps)
+    end, kept = 0, 0
+    for r in res:
+        end += r.outer_iterations
+        fs, sol = lcp.steps[end - 1]
+        assert sol.extra["polish"] in POLISH_VERDICTS and sol.solved
+        assert r.judgement["fails"] == []  # the judge, on the state as reported
+        if sol.extra["polish"] != "kept":
+            continue
+        kept += 1
+        N, T, _, _ = fs.forces(sol.z)
+        forces = r.forces + (r.forces_lower if r.forces_lower is not None else 0.0)
+        np.testing.assert_array_equal(forces[fs.normal_node], N)
+        np.testing.assert_array_equal(
+            r.tangential_forces[fs.friction_node - fs.parts["first"]], T)
+        ex, gap = exact_gap(fs, sol.z)
+        assert ex.solution and not ex.ray and gap <= 1e-9
+    assert kept >= 1

@@ -35,10 +35,10 @@ class Recording(StepLemke):
             self.warm.append((M, q, sol))
         return sol
 
-    def __call__(self, fs, q=None):
+    def __call__(self, fs, q=None, polish=True):
         self.step = fs
         before = len(self.warm)
-        sol = super().__call__(fs, q)
+        sol = super().__call__(fs, q, polish)
         if len(self.warm) > before:
             self.warm[-1] = (fs, sol)
         return sol

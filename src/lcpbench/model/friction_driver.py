@@ -201,7 +201,7 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
                     x_prev: np.ndarray, pressed: np.ndarray | None = None,
                     rowed: np.ndarray | None = None, left_pull: float = 0.0,
                     y_prev: np.ndarray | None = None, tau_stiffening: float = 1.0,
-                    newton: bool = False) -> FrictionStep:
+                    newton: bool = False, at: tuple | None = None) -> FrictionStep:
     """The frictional contact step of ``scene`` at ``state``, slips from ``x_prev``:
     normal rows for the nodes within ROW_BAND·a of a wall or ``rowed`` before,
     friction pairs for those within NEAR·a or ``pressed`` (bool per free node: a
@@ -209,18 +209,22 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
     end (a mirrored scene's pull, :mod:`lcpbench.model.friction_mirror`); the left end
     is the datum, so it loads τ only and has no curvature. ``y_prev``: the previous
     state's node heights (the slip along a sloped wall, :func:`tangential_slip`);
-    ``tau_stiffening``: k_τ's multiple (:data:`TAU_REACH`)."""
+    ``tau_stiffening``: k_τ's multiple (:data:`TAU_REACH`); ``at``: the node positions
+    of ``state`` and :func:`walls_at_x` there (x, y, walls), where known already."""
     has_tau, right_datum = datum(scene)
     first, n = int(chain.free_nodes[0]), int(chain.free_nodes.size)
     k = step_kernels()
     f64 = np.ascontiguousarray
     # the chain's part: the banded step (model.step.assemble_step, compiled), the pull
-    bands, f, D, origin = k.step_arrays(
-        f64(state.alpha, dtype=float), float(chain.link_length),
+    # (the chain's arrays as the kernel takes them: made once per chain, not per step)
+    left, right, stiffness, rest, load = chain.derived("friction: step arrays", lambda: (
         f64(chain.joint_links[:, 0], dtype=np.int64), f64(chain.joint_links[:, 1], dtype=np.int64),
-        f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float), first + 1, n,
-        f64(chain.nodal_load, dtype=float), float(scene.pull), right_datum, newton)
-    x, y = state.positions(chain)
+        f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float),
+        f64(chain.nodal_load, dtype=float)))
+    bands, f, D, origin = k.step_arrays(
+        f64(state.alpha, dtype=float), float(chain.link_length), left, right, stiffness,
+        rest, first + 1, n, load, float(scene.pull), right_datum, newton)
+    x, y, walls = (*state.positions(chain), None) if at is None else at
     r = rotation_mode(chain, x)
     rot, rot_k = np.empty(0), 0.0
     if r is not None:  # a free end: the rotation about the pin held by ROT_STIFFNESS
@@ -229,7 +233,8 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
     if has_tau:  # τ: one more unknown, moving every node's x, held by k_τ
         D = np.hstack([D, np.ones((D.shape[0], 1))])
         f = np.append(f, float(scene.pull) + left_pull)
-    walls = walls_at_x(chain, x)  # (the profile evaluated once per step)
+    if walls is None:  # (the profile evaluated once per step)
+        walls = walls_at_x(chain, x)
     s_up, s_lo = walls[2], walls[3]
     g_up, g_lo = gaps_at(chain, x, y, walls)
     near = near_walls(chain, x, y, ROW_BAND, walls)
@@ -305,6 +310,38 @@ def damped(chain: Chain, origin: np.ndarray, dy: np.ndarray, alpha: np.ndarray):
     return None, 0.0
 
 
+def _moved(chain: Chain, fs: FrictionStep, sol, state: FrictionState, tol: float,
+           stiff: float, right_datum: bool, x_right: float):
+    """Where the step's answer ``sol`` moves the chain from ``state``, and whether that
+    ends the state: (pressed, the new state, max|Δα|, τ, done, at); None where no share
+    of the step keeps the links off the vertical (:func:`damped`); ``at``: the new
+    state's node positions and walls (:func:`frictional_step`'s). Done: a full step of a
+    SOLVED answer that turns no link by ``tol`` and moves the chain by less than
+    tol·ℓ/stiff along x, every pressed node with its friction pair and every node near
+    a wall with its row."""
+    N, _, dy, tau = fs.forces(sol.z)
+    pressed = np.zeros(chain.free_nodes.size, bool)
+    pressed[fs.normal_node[N > 0]] = True
+    # every pressed node had its friction pair: else the step is not the answer yet
+    paired = bool(np.all(fs.pair[N > 0] >= 0))
+    alpha, share = damped(chain, fs.origin, dy, state.alpha)
+    if alpha is None:
+        return None
+    dalpha = float(np.max(np.abs(alpha - state.alpha)))
+    tau *= share
+    new = FrictionState(alpha, state.x0 + tau)
+    if right_datum:
+        new.x0 = x_right - float(np.sum(chain.link_length * np.cos(alpha)))
+    # every node that is now near a wall had its row
+    x, y = new.positions(chain)
+    walls = walls_at_x(chain, x)
+    settled = not np.any(near_walls(chain, x, y, ROW_BAND, walls) & ~fs.rowed)
+    # (k_τ τ is the imbalance along x: with k_τ stiffened, τ is held to tol·ℓ/stiff)
+    done = (dalpha < tol and abs(tau) * stiff < tol * chain.length and paired
+            and share == 1.0 and settled and sol.solved)
+    return pressed, new, dalpha, tau, done, (x, y, walls)
+
+
 @dataclass
 class StateAnswer:
     """The outer loop's answer for one state (before it is judged)."""
@@ -331,6 +368,8 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
     check_frictional_ends(scene)
     lcp = StepLemke() if lcp is None else lcp
     newton = getattr(lcp, "newton", False)
+    takes_step = getattr(lcp, "takes_step", False)
+    defer = takes_step and getattr(lcp, "defers_polish", False)
     t0 = time.perf_counter()
     chain = frictional_chain(scene)
     has_tau, right_datum = datum(scene)
@@ -341,6 +380,8 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
     fs = held = None  # held: the step whose answer N, T are (a failed step is not theirs)
     pressed, away, it, gross, inexact, excess = None, False, 0, 0, 0, 0.0
     stiff = TAU_STIFFEN  # k_τ's multiple (:data:`TAU_REACH`)
+    final = False  # every step polished (a polished answer did not end the state)
+    at = None  # the state's node positions and walls (known after a step)
     for it in range(1, max_outer + 1):
         # Newton on the springs once the last step turned no link by NEWTON_SWITCH; for
         # the rest of the state not after a Newton step that did not halve (a cycle)
@@ -354,12 +395,14 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
             try:
                 fs = frictional_step(scene, chain, state, x_prev, pressed, rowed, left_pull,
                                      y_prev, stiff, newton and bool(sizes)
-                                     and sizes[-1] < NEWTON_SWITCH)
+                                     and sizes[-1] < NEWTON_SWITCH, at)
             except np.linalg.LinAlgError as exc:  # (K singular: a link at the vertical)
                 return StateAnswer(state, N, T, held, False, f"contact step {it}: {exc}", it,
                                    sizes, time.perf_counter() - t0, left_pull)
-            # a solver by name (model.friction_solvers.step_runner) takes the whole step
-            sol = lcp(fs) if getattr(lcp, "takes_step", False) else lcp(fs.M, fs.q)
+            # a solver by name (model.friction_solvers.step_runner) takes the whole step;
+            # one that defers its polish answers unpolished (polished below, once)
+            sol = (lcp(fs, polish=False) if defer else lcp(fs) if takes_step
+                   else lcp(fs.M, fs.q))
             # an inexact step only moves the iterate (the judge reads the last one, which
             # must be SOLVED): go on from it, as the frictionless driver does
             if not (sol.solved or (sol.status is Status.INACCURATE
@@ -373,27 +416,26 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
                 break
             stiff *= TAU_STIFFEN
         held = fs
-        pressed = np.zeros(chain.free_nodes.size, bool)
-        pressed[fs.normal_node[N > 0]] = True
-        # every pressed node had its friction pair: else the step is not the answer yet
-        paired = np.all(fs.pair[N > 0] >= 0)
-        alpha, share = damped(chain, fs.origin, dy, state.alpha)
-        if alpha is None:
+        moved = _moved(chain, fs, sol, state, tol, stiff, right_datum, x_right)
+        if defer and (final or (moved is not None and moved[4])):
+            # the answer that would end the state leaves through the primal polish: the
+            # state is then the polished answer's move, tested again; where that move is
+            # not below tol the loop goes on from it, every step polished from then on
+            # (the polished step's fixed point is the state's; docs/friction.md, "The
+            # polish")
+            final = True
+            polished = lcp.polish(fs, sol)
+            if polished is not sol:
+                sol = polished
+                N, T, _, _ = fs.forces(sol.z)
+                moved = _moved(chain, fs, sol, state, tol, stiff, right_datum, x_right)
+        if moved is None:
             return StateAnswer(state, N, T, fs, False, f"contact step {it}: a link would "
                                "pass the vertical (no chain has these heights)", it, sizes,
                                time.perf_counter() - t0, left_pull)
-        dalpha = float(np.max(np.abs(alpha - state.alpha)))
+        pressed, state, dalpha, tau, done, at = moved
         sizes.append(dalpha)
-        tau *= share
-        paired = paired and share == 1.0
-        state = FrictionState(alpha, state.x0 + tau)
-        if right_datum:
-            state.x0 = x_right - float(np.sum(chain.link_length * np.cos(alpha)))
-        # every node that is now near a wall had its row
-        settled = not np.any(near_walls(chain, *state.positions(chain), ROW_BAND) & ~fs.rowed)
-        # (k_τ τ is the imbalance along x: with k_τ stiffened, τ is held to tol·ℓ/stiff)
-        if (dalpha < tol and abs(tau) * stiff < tol * chain.length and paired and settled
-                and sol.solved):
+        if done:
             return StateAnswer(state, N, T, fs, True, "max|Δα| < tol", it, sizes,
                                time.perf_counter() - t0, left_pull)
         ex = gross_slip(fs, N, T, float(scene.pull) + left_pull) if has_tau else 0.0

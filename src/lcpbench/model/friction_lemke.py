@@ -177,6 +177,10 @@ class StepLemke:
     #: the driver's steps near the answer take the springs' exact curvature (Newton:
     #: :func:`frictional_step`'s ``newton``); the peers by name get Gauss–Newton steps
     newton = True
+    #: the driver asks for the step's answer unpolished (``polish=False``) and polishes,
+    #: by :meth:`polish`, only the answer that would end a state (docs/friction.md, "The
+    #: polish")
+    defers_polish = True
 
     def __init__(self) -> None:
         self.first = 0
@@ -232,11 +236,20 @@ class StepLemke:
         return LCPSolution(z, M @ z + q, Status.SOLVED, int(solves), time.perf_counter() - t0,
                            extra={"residuals": res, "start": start})
 
-    def __call__(self, M, q: np.ndarray | None = None):
-        """Solve the step ``M`` (a :class:`FrictionStep`), or the LCP (``M``, ``q``)."""
-        if q is None:  # the whole step: its answer leaves through the primal polish
-            return polish_step(M, self.solve(M.M, M.q, z_keys(M), M.pair))
+    def __call__(self, M, q: np.ndarray | None = None, polish: bool = True):
+        """Solve the step ``M`` (a :class:`FrictionStep`), or the LCP (``M``, ``q``). The
+        whole step's answer leaves through the primal polish unless ``polish`` is False
+        (the driver's intermediate steps)."""
+        if q is None:
+            sol = self.solve(M.M, M.q, z_keys(M), M.pair)
+            return polish_step(M, sol) if polish else sol
         return self.solve(M, q)
+
+    @staticmethod
+    def polish(fs, sol: LCPSolution) -> LCPSolution:
+        """``sol``, an answer of the step ``fs``, through the primal polish
+        (:func:`polish_step`)."""
+        return polish_step(fs, sol)
 
     def solve(self, M, q, keys=None, pair=None):
         """The LCP (``M``, ``q``): the warm start from the last support (``keys``, the

@@ -141,8 +141,8 @@ def step_runner(solver: str | None = None):
         if name == "lemke":
             lemke = StepLemke()  # one per runner, as a path's default (its last covering first)
 
-            def run(fs):
-                return judged(fs, lemke(fs))
+            def run(fs):  # (polished by guarded, as every back-end's answer)
+                return judged(fs, lemke(fs, polish=False))
         else:
             mod = backend.load()
 
@@ -195,18 +195,22 @@ def step_runner(solver: str | None = None):
                                      options=backend.options, warm=backend.warm_start)
             return from_fc2d(fs, peer, t0)
 
-    def guarded(fs):
+    def guarded(fs, polish: bool = True):
         """``run``, a back-end that raises answering FAILED (as the LCP runner does); a
         SOLVED answer, judged, leaves through the primal polish (:func:`polish_step`:
-        kept only where lcpbench's residual still passes; Lemke's is polished already)."""
+        kept only where lcpbench's residual still passes) unless ``polish`` is False
+        (the driver's intermediate steps: it polishes the answer that would end a state,
+        ``guarded.polish``)."""
         try:
             sol = run(fs)
         except Exception as exc:  # a back-end failure is a status, never an exception
             nan = np.full(fs.q.size, np.nan)
             return LCPSolution(nan, nan.copy(), Status.FAILED,
                                message=f"{name} raised {type(exc).__name__}: {exc}")
-        return polish_step(fs, sol)
+        return polish_step(fs, sol) if polish else sol
     guarded.takes_step = True  # type: ignore[attr-defined]  # friction_driver.solve_state
+    guarded.defers_polish = True  # type: ignore[attr-defined]
+    guarded.polish = polish_step  # type: ignore[attr-defined]
     # Newton's steps near the answer for Lemke, the default (StepLemke.newton); the peers
     # get the paper's Gauss–Newton steps, as they were measured
     guarded.newton = name == "lemke"  # type: ignore[attr-defined]
