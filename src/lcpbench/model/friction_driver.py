@@ -237,8 +237,9 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
         walls = walls_at_x(chain, x)
     s_up, s_lo = walls[2], walls[3]
     g_up, g_lo = gaps_at(chain, x, y, walls)
-    near = near_walls(chain, x, y, ROW_BAND, walls)
-    touching = near_walls(chain, x, y, NEAR, walls)
+    closest = np.minimum(g_up, g_lo)  # (near_walls, from the gaps at hand)
+    near = closest <= ROW_BAND * chain.link_length
+    touching = closest <= NEAR * chain.link_length
     if pressed is not None:
         touching |= pressed
     if rowed is not None:
@@ -311,15 +312,16 @@ def damped(chain: Chain, origin: np.ndarray, dy: np.ndarray, alpha: np.ndarray):
 
 
 def _moved(chain: Chain, fs: FrictionStep, sol, state: FrictionState, tol: float,
-           stiff: float, right_datum: bool, x_right: float):
+           stiff: float, right_datum: bool, x_right: float, forces=None):
     """Where the step's answer ``sol`` moves the chain from ``state``, and whether that
     ends the state: (pressed, the new state, max|Δα|, τ, done, at); None where no share
     of the step keeps the links off the vertical (:func:`damped`); ``at``: the new
-    state's node positions and walls (:func:`frictional_step`'s). Done: a full step of a
+    state's node positions and walls (:func:`frictional_step`'s); ``forces``:
+    ``fs.forces(sol.z)`` where known. Done: a full step of a
     SOLVED answer that turns no link by ``tol`` and moves the chain by less than
     tol·ℓ/stiff along x, every pressed node with its friction pair and every node near
     a wall with its row."""
-    N, _, dy, tau = fs.forces(sol.z)
+    N, _, dy, tau = fs.forces(sol.z) if forces is None else forces
     pressed = np.zeros(chain.free_nodes.size, bool)
     pressed[fs.normal_node[N > 0]] = True
     # every pressed node had its friction pair: else the step is not the answer yet
@@ -364,7 +366,9 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
     """The outer loop of one state from ``start``, slips from ``x_prev`` (and ``y_prev``,
     the previous node heights, against a wall of any profile; docs/friction.md);
     ``lcp``: the step's solver (default a :class:`StepLemke`); ``left_pull`` as
-    :func:`frictional_step`'s."""
+    :func:`frictional_step`'s. A solver that defers its polish (``defers_polish``) has
+    the answer that would end the state polished, not the steps before it
+    (docs/friction.md, "The polish")."""
     check_frictional_ends(scene)
     lcp = StepLemke() if lcp is None else lcp
     newton = getattr(lcp, "newton", False)
@@ -416,7 +420,8 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
                 break
             stiff *= TAU_STIFFEN
         held = fs
-        moved = _moved(chain, fs, sol, state, tol, stiff, right_datum, x_right)
+        moved = _moved(chain, fs, sol, state, tol, stiff, right_datum, x_right,
+                       (N, T, dy, tau))
         if defer and (final or (moved is not None and moved[4])):
             # the answer that would end the state leaves through the primal polish: the
             # state is then the polished answer's move, tested again; where that move is

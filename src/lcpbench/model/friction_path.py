@@ -34,8 +34,21 @@ STATE_FIELDS = ("theta", "height", "pull", "friction", "weight", "EI")
 PATH_SCENES = (ActuatorScene, SectionedScene)
 
 
+def with_pull(scene, pull: float):
+    """``scene`` with another axial pull (N), its chain kept: a scene's chain (links,
+    walls, loads) does not depend on the pull, so the states of a pull share one chain
+    and what is derived from it (the step's arrays, the compliances), not one each."""
+    new = replace(scene, pull=pull)  # (the scene checks the value)
+    kept = scene.__dict__.get("_chain")  # (scene.chain()'s, where built)
+    if kept is not None:
+        new.__dict__["_chain"] = kept  # (a frozen dataclass: not via setattr)
+    return new
+
+
 def apply_state(scene, state: dict):
     """``scene`` with the fields of ``state`` changed (see the module's note)."""
+    if set(state) <= {"pull"}:  # (a pull, or nothing: the chain kept)
+        return with_pull(scene, state.get("pull", scene.pull))
     if not isinstance(scene, SectionedScene):
         return replace(scene, **state)
     state = dict(state)

@@ -22,13 +22,13 @@ An extrapolation from states far below P* is never called converged.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..errors import ProblemError
 from ..model.friction_driver import FrictionState, StepLemke
-from ..model.friction_path import PATH_SCENES, advance, place
+from ..model.friction_path import PATH_SCENES, advance, place, with_pull
 from ..model.friction_result import FrictionResult
 from ..problems.checks import check_number
 from ..problems.scenes import ActuatorScene
@@ -138,7 +138,7 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
     lcp = StepLemke()  # one for the path: the covering that solves a step carries over
     P, fail, trouble, before = float(scene.pull), None, "", np.inf
     while solves < max_solves:
-        res, end = advance(replace(scene, pull=P), {"pull": P}, predicted(ends, P, current),
+        res, end = advance(with_pull(scene, P), {"pull": P}, predicted(ends, P, current),
                            x_prev, tol=tol, max_outer=max_outer, lcp=lcp, y_prev=y_prev)
         solves += 1
         if res.converged:
