@@ -130,8 +130,8 @@ class Recorder:
         self.steps.append((fs, sol))
         return sol
 
-    def polish(self, fs, sol):
-        out = self.run.polish(fs, sol)
+    def polish(self, fs, sol, *flips):
+        out = self.run.polish(fs, sol, *flips)
         if self.steps and self.steps[-1][1] is sol:
             self.steps[-1] = (fs, out)
         return out

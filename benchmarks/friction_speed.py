@@ -101,7 +101,7 @@ def unpolished(fn):
     """``fn`` run with the frictional step's primal polish off (its cost, measured)."""
     def run():
         polish = driver.polish_step
-        driver.polish_step = lambda fs, sol: sol
+        driver.polish_step = lambda fs, sol, *flips: sol
         try:
             return fn()
         finally:

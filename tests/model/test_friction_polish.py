@@ -143,8 +143,8 @@ class Recording(StepLemke):
         self.verdicts.append(sol.extra.get("polish"))
         return sol
 
-    def polish(self, fs, sol):  # (the driver's: the answer that would end a state)
-        out = super().polish(fs, sol)
+    def polish(self, fs, sol, *flips):  # (the driver's: the answer that would end a state)
+        out = super().polish(fs, sol, *flips)
         self.verdicts.append(out.extra.get("polish"))
         return out
 
@@ -176,8 +176,8 @@ class Steps(StepLemke):
         self.steps.append((fs, sol))
         return sol
 
-    def polish(self, fs, sol):
-        out = super().polish(fs, sol)
+    def polish(self, fs, sol, *flips):
+        out = super().polish(fs, sol, *flips)
         if self.steps and self.steps[-1][1] is sol:
             self.steps[-1] = (fs, out)
         return out

@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import ProblemError
 from ..problems.scenes import ActuatorScene, Chain, node_stiffness, reachable, wall_share
 from ..solvers.base import Status
-from ..thresholds import NEWTON_SWITCH
+from ..thresholds import FINAL_FLIPS, NEWTON_SWITCH
 from .chain import alpha_from_heights, node_positions
 from .elastic import compliances
 
@@ -427,9 +427,11 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
             # state is then the polished answer's move, tested again; where that move is
             # not below tol the loop goes on from it, every step polished from then on
             # (the polished step's fixed point is the state's; docs/friction.md, "The
-            # polish")
+            # polish"). The first polish of a state may flip a failing index set
+            # (FINAL_FLIPS), kept as the state's answer only where its move passes; the
+            # later ones do not flip (no alternating between two sets)
+            polished = lcp.polish(fs, sol, 0 if final else FINAL_FLIPS)
             final = True
-            polished = lcp.polish(fs, sol)
             if polished is not sol:
                 sol = polished
                 N, T, _, _ = fs.forces(sol.z)

@@ -97,7 +97,7 @@ def polish_kernels():
     return _POLISH[0]
 
 
-def polish_step(fs, sol: LCPSolution) -> LCPSolution:
+def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
     """A SOLVED answer of the step ``fs`` polished on its index set in the step's primal
     form (:func:`lcpbench.model.friction_polish.polish`, compiled, O(N); docs/friction.md,
     "The polish"). The polished answer replaces ``sol`` only where every sign of the index
@@ -124,7 +124,7 @@ def polish_step(fs, sol: LCPSolution) -> LCPSolution:
             fs.normal_node, fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu, fs.pair,
             sol.z, w, dy, float(tau), N, T, float(fs.force), float(fs.length),
             float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS,
-            POLISH_FLIPS)
+            flips)
     extra = dict(sol.extra, polish_residuals=(r0, r1))
     if code == 0:
         res = lcp_residuals(fs.M, fs.q, z)
@@ -246,10 +246,10 @@ class StepLemke:
         return self.solve(M, q)
 
     @staticmethod
-    def polish(fs, sol: LCPSolution) -> LCPSolution:
+    def polish(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
         """``sol``, an answer of the step ``fs``, through the primal polish
-        (:func:`polish_step`)."""
-        return polish_step(fs, sol)
+        (:func:`polish_step`; ``flips``: its flips of a failing index set)."""
+        return polish_step(fs, sol, flips)
 
     def solve(self, M, q, keys=None, pair=None):
         """The LCP (``M``, ``q``): the warm start from the last support (``keys``, the
