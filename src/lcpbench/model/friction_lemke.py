@@ -193,9 +193,12 @@ class StepLemke:
         last answer's support S (read by node from ``keys``, :func:`z_keys`), SOLVED where
         its natural residual meets RESIDUAL_TOL; None otherwise (no support, a singular
         M_SS, the budget, or a residual above the bound)."""
-        if keys is None or not self.support.size:
+        if keys is None or not keys.size or not self.support.size:
             return None
-        S = np.isin(keys, self.support)
+        # (np.isin by a table of the names: ~10× cheaper at these sizes, the same S)
+        named = np.zeros(max(int(keys.max()), int(self.support.max())) + 1, bool)
+        named[self.support] = True
+        S = named[keys]
         if not S.any():
             return None
         t0 = time.perf_counter()
