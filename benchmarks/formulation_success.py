@@ -78,12 +78,6 @@ def _run(task) -> dict:
     key, backend, form, settings, tol, ref, level = task
     scene = scene_from_key(key)
     row = {"key": key, "backend": backend, "formulation": form}
-    if "@" in form:  # F@E: form F with the back-end handed E (a recipe's ε)
-        from lcpbench.model.formulations import Formulation, parse_formulation
-
-        name, eps = form.split("@", 1)
-        f = parse_formulation(name)
-        form = Formulation(f.name, f.equilibrated, float(eps))
     t0 = time.perf_counter()
     if level == "step":
         from lcpbench.model.step import assemble_step

@@ -14,6 +14,7 @@ import pytest
 
 import lcpbench
 from lcpbench import ActuatorScene
+from lcpbench.errors import ProblemError
 from lcpbench.model.energy_reference import minimise_energy
 from lcpbench.model.formulations import (
     Formulation,
@@ -57,14 +58,23 @@ def test_the_recipe_gives_eps_at_default_only():
         assert 0.0 < eps[name] < 1e-4  # tighter than their own (OSQP 1e-3, SCS 1e-4)
         form = resolve_formulation(get_backend(name), "best", "default")
         assert form is not None and form.eps == eps[name]
-        assert str(form) == best_formulations("default")[name]  # the name: the form only
+        # written NAME@E: the store's method and the result's "formulation" say the ε
+        assert str(form) == f"{best_formulations('default')[name]}@{eps[name]:g}"
+        assert parse_formulation(str(form)) == form
         high = resolve_formulation(get_backend(name), "best", "high")
         assert high is None or high.eps is None
         own = resolve_formulation(get_backend(name), "best", Settings("default", 1e-8))
         assert own is None or own.eps is None
     assert best_eps("high") == {}
-    # a named form is that form, with the profile's ε
-    assert resolve_formulation(get_backend("osqp"), "angles", "default") == Formulation("angles")
+    # a named form is that form, with the profile's ε, or the one written after '@'
+    osqp = get_backend("osqp")
+    assert resolve_formulation(osqp, "angles", "default") == Formulation("angles")
+    assert resolve_formulation(osqp, "F5r@1e-5", "high") == Formulation("angles", True, 1e-5)
+    assert resolve_formulation(osqp, "heights@1e-6", "default") == Formulation("heights",
+                                                                               False, 1e-6)
+    for bad in ("angles@", "angles@2", "angles@x", "angles@-1e-6"):
+        with pytest.raises(ProblemError, match="formulation"):
+            parse_formulation(bad)
 
 
 @pytest.mark.parametrize("backend", RECIPE)
@@ -75,7 +85,9 @@ def test_a_step_is_handed_the_recipe_eps_and_judged_at_default(backend):
     step = assemble_step(scene.chain(), ref.alpha)
     sol = solve_step(step, backend, "default", formulation="best")
     assert sol.eps == best_eps("default")[backend] and sol.settings == "default"
-    assert sol.formulation == str(parse_formulation(best_formulations("default")[backend]))
+    want = parse_formulation(best_formulations("default")[backend])
+    assert parse_formulation(sol.formulation) == Formulation(want.name, want.equilibrated,
+                                                             sol.eps)
     assert sol.solved, sol.message
     # the judge's own test, at `default`'s accuracy (not loosened by the recipe's ε)
     bound = accept_tol(get_settings("default"), sol.residuals["term_size"])
@@ -93,6 +105,7 @@ def test_best_at_default_agrees_with_the_energy_minimum(backend, theta, height, 
                          formulation="best")
     assert res.eps == best_eps("default")[backend]  # the typed field: what it was handed
     assert res.to_dict()["eps"] == res.eps
+    assert parse_formulation(res.extra["formulation"]).eps == res.eps
     assert res.converged, res.reason
     ref = oracle[theta, height]
     err = abs(res.total_force - ref.total_force) / ref.total_force

@@ -71,23 +71,39 @@ class Formulation:
         return FORMS[self.name][1]
 
     def __str__(self) -> str:
-        return self.name + (RUIZ if self.equilibrated else "")
+        form = self.name + (RUIZ if self.equilibrated else "")
+        return form if self.eps is None else f"{form}{AT}{self.eps:g}"
+
+
+#: ``NAME@E``: the form NAME with the back-end handed the tolerance E (a recipe's ε)
+AT = "@"
 
 
 def parse_formulation(value: str | Formulation | None) -> Formulation | None:
     """A :class:`Formulation` from its name (``"lifted"``, ``"lifted+ruiz"``) or label
-    (``"F3"``, ``"F3r"``), None for None; one ProblemError naming the choices."""
+    (``"F3"``, ``"F3r"``), with ``"@E"`` the ε handed to the back-end
+    (``"angles+ruiz@1e-06"``, what ``str`` writes for a recipe with an ε); None for
+    None; one ProblemError naming the choices."""
     if value is None or isinstance(value, Formulation):
         return value
     if isinstance(value, str):
-        v = value.strip()
+        v, at, e = value.strip().partition(AT)
+        eps = None
+        if at:
+            try:
+                eps = float(e)
+            except ValueError:
+                eps = float("nan")
+            if not 0.0 < eps < 1.0:
+                raise ProblemError(f"formulation: the tolerance after '@' must be a number "
+                                   f"in (0, 1), got {value!r}")
         for name, (label, _) in FORMS.items():
             if v.lower() in (name, label.lower()):
-                return Formulation(name)
+                return Formulation(name, False, eps)
             if v.lower() in (name + RUIZ, label.lower() + "r"):
-                return Formulation(name, True)
+                return Formulation(name, True, eps)
     raise ProblemError(f"formulation must be one of {', '.join(NAMES)} (or F1..F5, F1r..F5r)"
-                       f" or 'best', got {value!r}")
+                       f", each with an optional @EPS, or 'best', got {value!r}")
 
 
 #: the committed evidence behind ``formulation="best"`` (package data, written by
