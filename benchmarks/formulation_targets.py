@@ -181,7 +181,7 @@ def main(argv=None) -> None:
               + (": the bound, not the answer, stops them" if np.mean(bound <= 1e-7) > 0.5
                  else "") + ". \"The last step "
               "inaccurate\": the back-end's answer to the last contact step failed lcpbench's "
-              "residual check at its own tolerance.", "", "## 2. The N = 140 step at `high` (θ = 150°, h = 3 mm)", "",
+              "residual check at the tolerance it was handed (its own, or the recipe's ε).", "", "## 2. The N = 140 step at `high` (θ = 150°, h = 3 mm)", "",
               "Max |R − R_ref| / max |R_ref| of the reactions mapped back from each form; "
               "R_ref the step's exact answer on the built-in active set's contact set, "
               "computed in rational arithmetic from the step's doubles and its contact set "
