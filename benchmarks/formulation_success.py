@@ -23,6 +23,10 @@ the solve time over every scene with failures charged at 60 s, shift 1 ms) and
 ``--settings``): the library call of issue 37's target 1; a row "best" is never a
 candidate for ``--best``.
 
+A pair ``B:F@E`` (``osqp:angles+ruiz@1e-5``) hands B the tolerance E in form F while
+lcpbench's judge keeps ``--settings``' own: what a ``best`` recipe with ε = E does
+(``best_formulations.json``'s ``eps``); such rows are never candidates for ``--best``.
+
 ``--eps E`` is an experiment, not a profile: every back-end is handed the tolerance E
 (``Settings(name=--settings, eps=E)``, so lcpbench's step judge also asks 10·E of each
 step) at the driver tol ``--tol``. With ``--settings default --eps 1e-6`` it is the
@@ -130,7 +134,7 @@ def table(rows: list[dict], tol: float, backends, forms) -> tuple[str, dict]:
             lines.append(f"| `{b}` | {f} | {len(rs)} | {100 * rate:.0f} % | {wrong} | "
                          f"{sgm:.3g} | {med:.1e} |")
             score = (rate, -wrong, -sgm)
-            if f != "best" and (b not in best or score > best[b][0]):
+            if f != "best" and "@" not in f and (b not in best or score > best[b][0]):
                 best[b] = (score, f, rate, wrong)
     if best:  # none when every row ran formulation="best"
         lines += ["", "Best per back-end (highest success, then fewest wrong, then time):", "",
@@ -203,8 +207,10 @@ def main(argv=None) -> None:
                 done.append(row)
     rows = [r for r in done if r["key"] in refs]  # every back-end and form run so far
     order = list(dict.fromkeys([r["backend"] for r in rows]))
-    text, best = table(rows, a.tol, order, [f for f in (*NAMES, "best")  # --pairs B:best
-                                             if any(r["formulation"] == f for r in rows)])
+    forms_run = list(dict.fromkeys(r["formulation"] for r in rows))
+    text, best = table(rows, a.tol, order,  # NAMES' order, then B:best and B:F@E
+                       [f for f in (*NAMES, "best") if f in forms_run]
+                       + [f for f in forms_run if "@" in f])
     head = (f"# Back-end x formulation on the paper grid ({a.level} level)\n\n"
             f"{len(keys)} scenes (θ {a.theta}°, h {a.height} mm, N = {a.links}), settings "
             f"`{a.settings}`" + ("" if a.eps is None else f" with every back-end handed eps "
@@ -218,6 +224,9 @@ def main(argv=None) -> None:
     if a.best:  # this profile's row of the table, the others kept
         table_ = json.loads(BEST.read_text()) if BEST.exists() else {"best": {}}
         table_.setdefault("source", {})[a.settings] = f"{md} (driver tol {a.tol:g})"
+        old = table_["best"].get(a.settings, {})  # a recipe with an ε keeps its form:
+        best.update({b: old[b] for b in table_.get("eps", {}).get(a.settings, {})
+                     if b in old})  # it was chosen at that ε, not the profile's own
         table_["best"][a.settings] = best
         BEST.write_text(json.dumps(table_, indent=1) + "\n")
 

@@ -23,7 +23,7 @@ from .escalations import Context, escalate
 from .model.compiled import check_engine, drive, profile_reference, reference, run_kernel
 from .model.driver import METHODS
 from .model.finish import fast_judge, finish
-from .model.formulations import resolve_formulation
+from .model.formulations import handed, resolve_formulation
 from .model.judge_compiled import chain_args
 from .model.kernel_call import (
     BAIL_REASONS,
@@ -242,6 +242,7 @@ def solve_internal(
     ctx = Context(chain, make_step, name, settings, engine, tol, int(max_outer), method, why,
                   pressure_limit)
     res = run_plan(plan, scene, ctx, begin, t0)
+    res.eps = handed(get_settings(settings), form).eps  # the recipe's where it gives one
     if form is not None:
         res.extra["formulation"] = str(form)
     if accuracy is None:

@@ -54,10 +54,13 @@ NAMES = tuple(name + v for name in FORMS for v in ("", RUIZ))
 @dataclass(frozen=True)
 class Formulation:
     """One formulation of the contact step: ``name`` (a key of :data:`FORMS`), and
-    whether it is Ruiz-equilibrated."""
+    whether it is Ruiz-equilibrated; ``eps``, where the ``best`` recipe gives one
+    (:func:`best_eps`), is the tolerance ε the back-end is handed in it in place of the
+    profile's (lcpbench's judge keeps the profile's); None: the profile's."""
 
     name: str
     equilibrated: bool = False
+    eps: float | None = None
 
     @property
     def label(self) -> str:
@@ -68,23 +71,39 @@ class Formulation:
         return FORMS[self.name][1]
 
     def __str__(self) -> str:
-        return self.name + (RUIZ if self.equilibrated else "")
+        form = self.name + (RUIZ if self.equilibrated else "")
+        return form if self.eps is None else f"{form}{AT}{self.eps:g}"
+
+
+#: ``NAME@E``: the form NAME with the back-end handed the tolerance E (a recipe's ε)
+AT = "@"
 
 
 def parse_formulation(value: str | Formulation | None) -> Formulation | None:
     """A :class:`Formulation` from its name (``"lifted"``, ``"lifted+ruiz"``) or label
-    (``"F3"``, ``"F3r"``), None for None; one ProblemError naming the choices."""
+    (``"F3"``, ``"F3r"``), with ``"@E"`` the ε handed to the back-end
+    (``"angles+ruiz@1e-06"``, what ``str`` writes for a recipe with an ε); None for
+    None; one ProblemError naming the choices."""
     if value is None or isinstance(value, Formulation):
         return value
     if isinstance(value, str):
-        v = value.strip()
+        v, at, e = value.strip().partition(AT)
+        eps = None
+        if at:
+            try:
+                eps = float(e)
+            except ValueError:
+                eps = float("nan")
+            if not 0.0 < eps < 1.0:
+                raise ProblemError(f"formulation: the tolerance after '@' must be a number "
+                                   f"in (0, 1), got {value!r}")
         for name, (label, _) in FORMS.items():
             if v.lower() in (name, label.lower()):
-                return Formulation(name)
+                return Formulation(name, False, eps)
             if v.lower() in (name + RUIZ, label.lower() + "r"):
-                return Formulation(name, True)
+                return Formulation(name, True, eps)
     raise ProblemError(f"formulation must be one of {', '.join(NAMES)} (or F1..F5, F1r..F5r)"
-                       f" or 'best', got {value!r}")
+                       f", each with an optional @EPS, or 'best', got {value!r}")
 
 
 #: the committed evidence behind ``formulation="best"`` (package data, written by
@@ -106,6 +125,31 @@ def best_formulations(settings: str = "high") -> dict[str, str]:
     return dict(json.loads(path.read_text(encoding="utf-8"))["best"].get(settings, {}))
 
 
+def best_eps(settings: str = "default") -> dict[str, float]:
+    """Back-end name -> the tolerance ε its ``best`` recipe hands it at ``settings``
+    (the committed table's ``eps``, with its reason beside it): the loosest ε measured
+    to meet issue 37's target there. A back-end or a profile not in it is handed the
+    profile's own (at ``default``: none, the back-end's own tolerance)."""
+    import json
+    from importlib.resources import files
+
+    path = files("lcpbench.model").joinpath(BEST_FILE)
+    if not path.is_file():
+        return {}
+    table = json.loads(path.read_text(encoding="utf-8")).get("eps", {})
+    return {k: float(v) for k, v in table.get(settings, {}).items()}
+
+
+def handed(settings: Settings, form: Formulation | None) -> Settings:
+    """The settings the back-end is handed in ``form``: ``settings`` with the recipe's
+    ε where ``form`` carries one (:attr:`Formulation.eps`), else ``settings`` itself."""
+    if form is None or form.eps is None:
+        return settings
+    from dataclasses import replace
+
+    return replace(settings, eps=form.eps)
+
+
 def native(backend) -> Formulation:
     """The form a back-end always had: F2 for a QP back-end, F1 for an LCP one."""
     return Formulation("heights" if backend.form == "qp" else "gaps")
@@ -114,17 +158,30 @@ def native(backend) -> Formulation:
 def resolve_formulation(backend, value, settings="high") -> Formulation | None:
     """The formulation ``backend`` is handed for ``value`` (a name, "best" or None) at
     ``settings`` (a profile's name or Settings: "best" is per profile); None where that
-    is its own form (today's path, unchanged). A form the back-end does not take is one
+    is its own form (today's path, unchanged). "best" is the measured recipe: the form,
+    its equilibration and, where the table gives one for a profile that hands no ε
+    (``default``), the ε the back-end is handed (:attr:`Formulation.eps`; then not
+    None even in the back-end's own form). A form the back-end does not take is one
     ProblemError naming those it takes."""
     if value is None:
         return None
     if isinstance(value, str) and value.strip().lower() == "best":
-        best = best_formulations(getattr(settings, "name", settings)).get(backend.name)
+        from ..solvers.registry import get_settings
+
+        profile = getattr(settings, "name", settings)
+        best = best_formulations(profile).get(backend.name)
         form = native(backend) if best is None else parse_formulation(best)
+        eps = best_eps(profile).get(backend.name)
+        if eps is not None and get_settings(settings).eps is None:
+            return _accepted(backend, Formulation(form.name, form.equilibrated, eps))
     else:
         form = parse_formulation(value)
     if form == native(backend):
         return None
+    return _accepted(backend, form)
+
+
+def _accepted(backend, form: Formulation) -> Formulation:
     if not accepts(backend, form):
         takes = [str(Formulation(n, e)) for n in FORMS for e in (False, True)
                  if accepts(backend, Formulation(n, e))]

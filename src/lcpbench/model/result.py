@@ -158,6 +158,11 @@ class ContactResult:
     pressure_limit, pressure_exceeded : the safety threshold asked for (N/mm, None:
         none) and whether ``max_pressure`` passes it.
     solver, method, tol, time_s : how it was computed; wall time of the solve (s).
+    eps : the tolerance ε lcpbench handed the back-end in every step: the profile's,
+        or the ``formulation="best"`` recipe's where it gives one (at ``default``:
+        OSQP's and SCS's, docs/formulations.md); None: the back-end's own defaults
+        (``default``), or a bare :func:`~lcpbench.model.finish.finish`. Each back-end
+        translates ε into its own parameters (docs/solvers.md, settings profiles).
     route : the plan's route, the first solve (:data:`lcpbench.plan.ROUTES`; a batch's
         "line kernel" or "batch scene"); "" where no plan was made (a bare
         :func:`lcpbench.model.finish.finish`).
@@ -208,6 +213,7 @@ class ContactResult:
     judge: str = ""
     retries: tuple[Retry, ...] = ()
     states: tuple[ReachedState, ...] = ()
+    eps: float | None = None
 
     def __getstate__(self) -> dict:
         """Pickled (and copied) with every derived field computed (``DERIVED``)."""
@@ -336,6 +342,7 @@ class ContactResult:
             "judge": self.judge,
             "retries": [{"name": r.name, "why": r.why} for r in self.retries],
             "states": [{**s._asdict(), "alpha": s.alpha.tolist()} for s in self.states],
+            "eps": self.eps,
         }
         if "formulation" in self.extra:  # the step's form, when one was asked for
             out["formulation"] = self.extra["formulation"]

@@ -35,6 +35,7 @@ from .elastic_step import run_elastic_step
 from .formulations import (
     Formulation,
     gaps_answer,
+    handed,
     resolve_formulation,
     run_formulation,
     step_scales,
@@ -194,20 +195,24 @@ def solve_step(step, solver: str | Backend = "auto", settings: str | Settings = 
     ``formulation`` (:mod:`lcpbench.model.formulations`: a name, ``"best"`` or None)
     is the form the back-end is handed; None or the back-end's own form (F2, the box
     QP, for a QP back-end; F1, the LCP in gaps, for an LCP back-end) is today's path.
+    A form with a recipe's ε (``"best"`` at ``default`` for some back-ends) hands the
+    back-end that ε; the step is judged at ``settings`` all the same. ``sol.eps`` is
+    the ε the back-end was handed (None: its own defaults).
     """
     backend = solver if isinstance(solver, Backend) else get_backend(solver)
     s = get_settings(settings)
     form = resolve_formulation(backend, formulation, s)
     t0 = time.perf_counter()
     if form is not None:
-        out = _formulated(backend, step, s, scaled, form)
-        out.backend, out.settings, out.scaled = backend.name, s.name, scaled
-        out.formulation = "" if step.elastic else str(form)  # elastic walls: their own
-        _judge_safely(step, out, s)
+        sb = s if step.elastic else handed(s, form)  # elastic walls: their own forms
+        out = _formulated(backend, step, sb, scaled, form)
+        out.backend, out.settings, out.scaled, out.eps = backend.name, s.name, scaled, sb.eps
+        out.formulation = "" if step.elastic else str(form)
+        _judge_safely(step, out, s)  # the profile's judge, whatever ε the back-end had
         out.wall_time = time.perf_counter() - t0
         return out
     if backend.name == DEFAULT and (sol := _compiled_step(step, s, warm)) is not None:
-        sol.backend, sol.settings, sol.scaled = backend.name, s.name, scaled
+        sol.backend, sol.settings, sol.scaled, sol.eps = backend.name, s.name, scaled, s.eps
         sol.status, sol.message = verdict(sol.status, sol.residuals["natural"],
                                           accept_tol(s, sol.residuals["term_size"]))
         sol.wall_time = time.perf_counter() - t0
@@ -218,7 +223,7 @@ def solve_step(step, solver: str | Backend = "auto", settings: str | Settings = 
         n = step.size
         sol = StepSolution(np.full(n, np.nan), np.zeros(n), np.zeros(n), Status.FAILED,
                            message=f"{backend.name} raised {type(exc).__name__}: {exc}")
-    sol.backend, sol.settings, sol.scaled = backend.name, s.name, scaled
+    sol.backend, sol.settings, sol.scaled, sol.eps = backend.name, s.name, scaled, s.eps
     _judge_safely(step, sol, s)
     if sol.status is not Status.SOLVED and backend.fallback:
         if refused := dense_fallback_refused(backend.fallback, step.size):

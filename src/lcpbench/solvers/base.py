@@ -124,6 +124,7 @@ class StepSolution:
     forces_net: np.ndarray | None = None  # net R = K g + z (eq. 30) from the gaps (N)
     wall_time: float = 0.0
     formulation: str = ""  # the form handed over (model.formulations); "": its own
+    eps: float | None = None  # the tolerance ε handed to the back-end; None: its own
 
     @property
     def solved(self) -> bool:
