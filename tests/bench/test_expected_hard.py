@@ -107,6 +107,19 @@ def test_n2000_timeouts_but_not_the_active_set():
     assert not _expected({**timeout, "backend": "active-set"})  # banded, 0.2 s at N = 2000
 
 
+def test_pgs_sm_refusal_of_a_nonsymmetric_step_is_expected():
+    # the reason is the one PGS-SM writes on the channel's step (produced here): its
+    # subspace step minimises ½zᵀMz + qᵀz, so it takes a symmetric M only
+    res = solve(ActuatorScene(theta=150, height=3, links=140, channel=True),
+                solver="pgs-sm", settings="high", tol=TOL)
+    assert not res.converged and "needs symmetric M" in res.reason
+    run = _run("pgs-sm", reason=res.reason, theta=150.0)
+    assert _expected(run)
+    assert not _expected({**run, "reason": "200 outer iterations"})  # another failure
+    assert _expected(_run("pgs-sm", status="timeout", links=2000,
+                          reason="killed after the time limit of 60 s"))
+
+
 def test_report_counts_the_bound_refusal_by_error():
     reason = _judge_reason()
     within = Evaluated(_run(reason=reason), 0.04 * TAU, False)
