@@ -139,9 +139,14 @@ def solve(
     formulation : the form each contact step is handed to the back-end in
         (:mod:`lcpbench.model.formulations`, docs/formulations.md): "gaps" (F1, the
         LCP), "heights" (F2, the box QP), "lifted" (F3), "reactions" (F4), "angles"
-        (F5), each also "+ruiz" (equilibrated); "best": the back-end's best on the
-        committed evidence (results/formulations); None (default): the back-end's own
-        form, as before. ``result.extra["formulation"]`` says what ran.
+        (F5), each also "+ruiz" (equilibrated), each with an optional "@EPS", the
+        tolerance handed to the back-end in place of the profile's ("angles@1e-6");
+        "best": the back-end's measured recipe on the committed evidence
+        (results/formulations): its form and, where the table gives one (OSQP and SCS
+        at "default"), its ε; None (default): the back-end's own form, as before.
+        ``result.extra["formulation"]`` and ``result.eps`` say what ran; the judge
+        keeps ``settings``' accuracy whatever ε the back-end was handed. Elastic walls
+        keep their own forms (no formulation, no recipe ε).
 
     Returns
     -------
@@ -242,9 +247,10 @@ def solve_internal(
     ctx = Context(chain, make_step, name, settings, engine, tol, int(max_outer), method, why,
                   pressure_limit)
     res = run_plan(plan, scene, ctx, begin, t0)
-    res.eps = handed(get_settings(settings), form).eps  # the recipe's where it gives one
-    if form is not None:
-        res.extra["formulation"] = str(form)
+    ran = None if chain.elastic_walls else form  # elastic walls: each step its own forms
+    res.eps = handed(get_settings(settings), ran).eps  # the recipe's where it gives one
+    if ran is not None:
+        res.extra["formulation"] = str(ran)
     if accuracy is None:
         return res
     return held_to(res, check_accuracy(accuracy), lambda t, r: solve_internal(

@@ -122,8 +122,10 @@ POLISH_SWEEPS = 2
 #: with the polish on every step (the back-ends by name; the default's steps: FINAL_FLIPS)
 POLISH_FLIPS = 0
 #: the flips of the polish of the answer that would end a frictional state (its first
-#: polish; later ones in the state: none); kept only where its move passes the state's
-#: convergence test and the judge (docs/friction.md, "Once per state"). On the 100 paths
+#: polish; later ones in the state: none). The flipped answer, one whose signs all hold,
+#: ends the state only where its move passes the state's convergence test, and the judge
+#: then checks it; otherwise the loop goes on from it (docs/friction.md, "Once per
+#: state"). On the 100 paths
 #: of benchmarks/friction_agreement.py: Lemke's answers confirmed exactly 338 -> 342 of
 #: 375, the same states converged, 1175 -> 1183 outer steps
 FINAL_FLIPS = 1

@@ -127,3 +127,42 @@ def test_without_best_default_hands_no_eps():
     b = lcpbench.solve(scene, formulation="best")
     assert a.eps is None and b.eps is None
     assert np.array_equal(a.forces, b.forces)
+
+
+def test_elastic_walls_report_no_recipe_eps():
+    # elastic walls keep their own forms (step_solver), so the result names neither
+    # the recipe's form nor its ε: every step was handed the profile's (none at default)
+    _needs("osqp")
+    res = lcpbench.solve(ActuatorScene(theta=150, height=3, links=30, wall_stiffness=50.0),
+                         solver="osqp", settings="default", formulation="best")
+    assert res.eps is None and "formulation" not in res.extra
+
+
+def test_the_built_in_active_set_takes_no_eps():
+    # it solves each contact step exactly: an ε would be reported and never used
+    with pytest.raises(ProblemError, match="takes no tolerance"):
+        resolve_formulation(get_backend("active-set"), "heights@1e-6", "default")
+
+
+def test_an_lcp_file_form_hands_its_eps(monkeypatch):
+    # the LCP path (lcpbench lcp --formulation NAME@E) hands the back-end the form's ε,
+    # and judges at the profile's accuracy
+    _needs("osqp")
+    from lcpbench.model.formulations import solve_lcp_in
+    from lcpbench.solvers import runner
+
+    handed_eps = []
+    real = runner.solve_lcp
+
+    def spy(M, q, solver, settings, *a, **k):
+        handed_eps.append(get_settings(settings).eps)
+        return real(M, q, solver, settings, *a, **k)
+
+    monkeypatch.setattr(runner, "solve_lcp", spy)
+    M = np.array([[2.0, 1.0], [1.0, 2.0]])
+    q = np.array([-1.0, -1.0])
+    sol = solve_lcp_in(M, q, "osqp", "default", "gaps+ruiz@1e-9")
+    assert handed_eps == [1e-9]
+    # the LCP's answer by hand: both rows active, M z = -q gives z = (1/3, 1/3)
+    assert np.allclose(sol.z, [1 / 3, 1 / 3], atol=1e-6)
+    assert sol.extra["formulation"] == "gaps+ruiz@1e-09"

@@ -79,9 +79,11 @@ def register(subparsers) -> None:
                    help=f"outer iteration (default {DEFAULT_METHOD})")
     s.add_argument("--formulation", default=None, metavar="NAME|best",
                    help="the form each contact step is handed to the back-end in: gaps, "
-                        "heights, lifted, reactions or angles (F1-F5), each also +ruiz; "
-                        "best: the back-end's best on the committed evidence "
-                        "(docs/formulations.md); default: the back-end's own form")
+                        "heights, lifted, reactions or angles (F1-F5), each also +ruiz "
+                        "and @EPS (the tolerance handed to the back-end); best: the "
+                        "back-end's measured recipe, its form and, for OSQP and SCS at "
+                        "default, its EPS (docs/formulations.md); default: the back-end's "
+                        "own form")
     s.add_argument("--start", choices=("cold", "ramp"), default="cold",
                    help="cold: from the free arc (default; a refused answer is ramped "
                         "anyway); ramp: follow the load from zero first, the state the "
@@ -126,7 +128,8 @@ def register(subparsers) -> None:
     lp.add_argument("--formulation", default=None, metavar="NAME|best",
                     help="the form the LCP is handed in: gaps (as given), gaps+ruiz (D M D), "
                          "reactions (the dual in w, M symmetric positive definite), "
-                         "reactions+ruiz; best: the back-end's best of these on the committed "
+                         "reactions+ruiz, each also @EPS (the tolerance handed to the "
+                         "back-end); best: the back-end's best of these on the committed "
                          "evidence, else as given (docs/formulations.md)")
     add_json_option(lp)
     lp.set_defaults(func=cmd_lcp)

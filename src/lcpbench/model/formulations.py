@@ -72,7 +72,7 @@ class Formulation:
 
     def __str__(self) -> str:
         form = self.name + (RUIZ if self.equilibrated else "")
-        return form if self.eps is None else f"{form}{AT}{self.eps:g}"
+        return form if self.eps is None else f"{form}{AT}{self.eps!r}"
 
 
 #: ``NAME@E``: the form NAME with the back-end handed the tolerance E (a recipe's ε)
@@ -176,6 +176,9 @@ def resolve_formulation(backend, value, settings="high") -> Formulation | None:
             return _accepted(backend, Formulation(form.name, form.equilibrated, eps))
     else:
         form = parse_formulation(value)
+    if form.eps is not None and backend.storage == "banded":
+        raise ProblemError(f"formulation: {backend.name} takes no tolerance ε (it solves "
+                           f"each contact step exactly), got {value!r}")
     if form == native(backend):
         return None
     return _accepted(backend, form)
@@ -525,7 +528,7 @@ def solve_lcp_in(M, q, solver: str, settings="default",
     D = None
     if form.equilibrated:
         Mt, qt, D = equilibrate_lcp(Mt, qt)
-    sol = solve_lcp(Mt, qt, solver, s)
+    sol = solve_lcp(Mt, qt, solver, handed(s, form))  # the form's ε, where it has one
     zt = sol.z if D is None else D * sol.z
     # in F4 the unknown is w and z is its slack: z = M⁻¹ (w − q)
     z = sla.cho_solve(cho, zt - q, check_finite=False) if form.name == "reactions" else zt
