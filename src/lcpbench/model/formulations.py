@@ -116,13 +116,7 @@ def best_formulations(settings: str = "high") -> dict[str, str]:
     committed table, per profile: at ``default`` a solver's own tolerance means
     something else in an equilibrated form, so the forms best at ``high`` are not
     best there). A back-end or a profile not in it keeps its own form."""
-    import json
-    from importlib.resources import files
-
-    path = files("lcpbench.model").joinpath(BEST_FILE)
-    if not path.is_file():
-        return {}
-    return dict(json.loads(path.read_text(encoding="utf-8"))["best"].get(settings, {}))
+    return dict(_best_table().get("best", {}).get(settings, {}))
 
 
 def best_eps(settings: str = "default") -> dict[str, float]:
@@ -130,14 +124,17 @@ def best_eps(settings: str = "default") -> dict[str, float]:
     (the committed table's ``eps``, with its reason beside it): the loosest ε measured
     to meet issue 37's target there. A back-end or a profile not in it is handed the
     profile's own (at ``default``: none, the back-end's own tolerance)."""
+    table = _best_table().get("eps", {})
+    return {k: float(v) for k, v in table.get(settings, {}).items()}
+
+
+def _best_table() -> dict:
+    """The committed table :data:`BEST_FILE` (package data), {} where it is missing."""
     import json
     from importlib.resources import files
 
     path = files("lcpbench.model").joinpath(BEST_FILE)
-    if not path.is_file():
-        return {}
-    table = json.loads(path.read_text(encoding="utf-8")).get("eps", {})
-    return {k: float(v) for k, v in table.get(settings, {}).items()}
+    return json.loads(path.read_text(encoding="utf-8")) if path.is_file() else {}
 
 
 def handed(settings: Settings, form: Formulation | None) -> Settings:
