@@ -67,7 +67,7 @@ _USE_AOT: list = [None]  # use_aot's setting; None: the environment decides
 _HOLDERS: list = []  # callers' one-element caches of a kernel module (see held)
 #: every file of lcpbench with numba kernels, relative to the package
 #: (tests/model/test_kernel_cache.py checks that no file with ``@njit`` is missing)
-KERNEL_FILES = ("model/compiled_kernel.py", "model/compiled_dual.py", "model/judge_kernel.py",
+KERNEL_FILES = ("model/chain_kernel.py", "model/compiled_kernel.py", "model/compiled_dual.py", "model/judge_kernel.py",
                 "model/judge_bound.py",
                 "model/driver_kernel.py", "model/large_kernel.py", "linalg/givens_kernel.py",
                 "linalg/face_kernel.py", "linalg/twisted_kernel.py",

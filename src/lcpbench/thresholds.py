@@ -60,6 +60,17 @@ NEWTON_SWITCH = 0.05
 #: time: a scene it sends to the contact solve still gets the right answer.
 SAG_BOUND = 10.0
 
+# --- the line search on the exact energy (model.chain_kernel.armijo) -------------------
+
+#: Armijo's sufficient decrease: E(t) ≤ E + ARMIJO_DECREASE · t · min(slope, 0) + noise
+ARMIJO_DECREASE = 1e-4
+#: the shortest step length the outer loops try (halving from 1) before "no decrease"
+ARMIJO_SHORTEST = 1e-12
+#: the SQP in the link angles halves its merit's step down to this length, then takes it
+SQP_SHORTEST = 1e-10
+#: the energy's round-off the decrease test allows: ENERGY_NOISE · (|E| + 1e-6 Σ|k|)
+ENERGY_NOISE = 1e-12
+
 # --- walls of any profile (the lagged-slope driver) --------------------------------
 
 #: the driver's own criterion on the exact walls: penetration at most this × ℓ

@@ -47,8 +47,8 @@ import numpy as np
 from numba import njit
 
 from ..linalg.band_lu_kernel import band_solve
-from ..thresholds import ANGLE_SHIFT_GROWTH, ANGLE_SHIFT_START, ANGLE_SHIFT_TRIES
-from .compiled_kernel import energy_into
+from ..thresholds import ANGLE_SHIFT_GROWTH, ANGLE_SHIFT_START, ANGLE_SHIFT_TRIES, SQP_SHORTEST
+from .chain_kernel import armijo, energy  # once (numba_cache)
 
 #: the step's outcome codes
 OK, SINGULAR, INFEASIBLE, NO_END = range(4)
@@ -350,7 +350,7 @@ def _state(alpha, a, jl, jr, k, rest, link_load, pinned, node, side, limit):
     y[0] = 0.0
     for i in range(n):
         y[i + 1] = y[i] + a * sines[i]
-    E = energy_into(alpha, a, jl, jr, k, rest, link_load, sines)
+    E = energy(alpha, a, jl, jr, k, rest, link_load, sines)
     c = 0.0
     if pinned:
         for i in range(n):
@@ -389,7 +389,7 @@ def solve_sqp(alpha, a, jl, jr, k, rest, link_load, W, pinned, node, side, limit
     Each step: the QP of :func:`qp_step` at α (its step d capped at :data:`STEP_CAP`
     per link), then an Armijo search on the ℓ₁ merit E + ρ(|c| + Σ max(−g, 0)),
     ρ = 2 max|(λ', μ')| + 1e-8 ``scale``/``length`` (``scale`` = EI/ℓ), halving t
-    from 1 to 1e-10; a step below ``tol`` is taken whole (the merit is round-off
+    from 1 to SQP_SHORTEST; a step below ``tol`` is taken whole (the merit is round-off
     there). :data:`CONVERGED` after the second full step in a row below ``tol`` with
     the constraints met to ``feasible`` × ``length`` (the active walls' gaps then sit
     at round-off); :data:`QP_FAILED` where a QP failed; :data:`MAX_STEPS` after
@@ -431,11 +431,10 @@ def solve_sqp(alpha, a, jl, jr, k, rest, link_load, W, pinned, node, side, limit
                                                    pinned, node, side, limit)
             if size < tol:
                 break
-            if E_t + rho * (c_t + short_t) <= m0 + 1e-4 * t * min(slope, 0.0) + noise:
+            step = armijo(t, E_t + rho * (c_t + short_t), m0, slope, noise, SQP_SHORTEST)
+            if step == t or step == 0.0:  # (below SQP_SHORTEST: the last trial is taken)
                 break
-            t *= 0.5
-            if t < 1e-10:
-                break
+            t = step
         alpha, E, c, short, worst = trial, E_t, c_t, short_t, worst_t
         if pinned:
             lam = lam_new

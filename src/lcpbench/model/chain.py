@@ -49,19 +49,39 @@ def joint_angles(chain: Chain, alpha: np.ndarray) -> np.ndarray:
     return alpha[right] - np.where(left >= 0, alpha[np.maximum(left, 0)], 0.0)
 
 
-def energy(chain: Chain, alpha: np.ndarray) -> float:
-    """Total potential energy (N·mm): springs ½Σk(φ−φ*)² minus the work of the loads.
+def _kernel():
+    from ..numba_cache import kernel_module  # numba: loads or compiles at first use
+
+    return kernel_module("lcpbench.model.chain_kernel", "energy")
+
+
+def joint_arrays(chain: Chain) -> tuple:
+    """``(jl, jr, k, φ*, P)``: the joints' links, stiffness and rest angle and the link
+    loads as the kernels read them (contiguous, kept with the chain)."""
+    def make():
+        f64 = np.ascontiguousarray
+        return (f64(chain.joint_links[:, 0], dtype=np.int64),
+                f64(chain.joint_links[:, 1], dtype=np.int64),
+                f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float),
+                f64(chain.link_load, dtype=float))
+
+    return chain.derived("_joint_arrays", make)
+
+
+def energy(chain: Chain, alpha: np.ndarray, walls: bool = True) -> float:
+    """Total potential energy E (N·mm): springs ½Σk(φ−φ*)² minus the work of the loads
+    (:func:`lcpbench.model.chain_kernel.energy`, its sums compensated).
 
     Each link load acts at the link centre, whose height is the mean of its
     end-node heights. Elastic walls add their springs' energy Σ ½ k_i δ_i²
-    (:func:`lcpbench.model.elastic.penalty`; 0 for rigid walls).
+    (:func:`lcpbench.model.elastic.penalty`; 0 for rigid walls) unless ``walls`` is
+    False (the chain's own energy).
     """
-    dphi = joint_angles(chain, alpha) - chain.rest_joint
-    _, y = node_positions(chain, alpha)
-    centre = 0.5 * (y[:-1] + y[1:])
-    E = 0.5 * float(np.sum(chain.joint_stiffness * dphi**2)) - float(chain.link_load @ centre)
-    if chain.elastic_walls:
-        E += penalty(chain, y[chain.free_nodes])
+    alpha = np.ascontiguousarray(alpha, dtype=float)
+    E = float(_kernel().energy(alpha, float(chain.link_length), *joint_arrays(chain),
+                               np.sin(alpha)))
+    if walls and chain.elastic_walls:
+        E += penalty(chain, heights(chain, alpha))
     return E
 
 

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..problems.scenes import Chain
 from ..solvers.base import Status
+from .chain import energy
 from .kernel_call import applies
 from .outer import (
     DriverOutput,
@@ -46,7 +47,7 @@ from .step import ContactStep, LCPForm
 ENGINE = "compiled driver"
 
 
-ENTRIES = ("assemble", "qp_form", "lcp_form", "from_lcp", "judge", "advance", "energy")
+ENTRIES = ("assemble", "qp_form", "lcp_form", "from_lcp", "judge", "advance")
 
 
 def _kernel():
@@ -152,8 +153,8 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
     if alpha is None:
         return failed_output(chain.rest_alpha, n, steps, "cannot fit the chain between the walls")
     u, alpha = np.ascontiguousarray(u, dtype=float), np.ascontiguousarray(alpha, dtype=float)
-    E = kd.energy(alpha, a, jl, jr, k, rest, link_load)
-    noise_k = float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6
+    E = energy(chain, alpha)
+    stiffness_sum = float(np.sum(np.abs(chain.joint_stiffness)))
     for _ in range(max_outer):
         t0 = time.perf_counter()
         step = _assemble(kd, chain, c, alpha)
@@ -163,7 +164,7 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
             return step_failed(alpha, n, steps, sol, t_asm, E)
         dalpha, t, trial, E_t = kd.advance(
             np.ascontiguousarray(sol.u, dtype=float), u, alpha, E,
-            1e-12 * (abs(E) + noise_k), step.inv_a_cos, step.alpha0, step.origin,
+            stiffness_sum, step.inv_a_cos, step.alpha0, step.origin,
             step.phi_origin, step.coef, fs, k, rest, load, a, jl, jr, link_load)
         if t == 0.0:
             return line_search_failed(alpha, n, steps, sol, t_asm, dalpha, E)

@@ -39,17 +39,6 @@ M1, M2, M3 = np.uint64(0x9E3779B97F4A7C15), np.uint64(0xBF58476D1CE4E5B9), np.ui
 
 
 @njit(cache=True)
-def add_compensated(y, lost, term):
-    """``(y + term, lost + its rounding error)``: one step of Neumaier's compensated
-    sum, the larger operand first (model.chain.compensated_heights; the step's heights
-    and closure, in this kernel and the large-N one)."""
-    y1 = y + term
-    if abs(y) >= abs(term):
-        return y1, lost + ((y - y1) + term)
-    return y1, lost + ((term - y1) + y)
-
-
-@njit(cache=True)
 def grad_into(out, m, u, gp, T):
     """ContactStep.gradient, Jᵀ k (φ̂(u) − φ*) − f + T (u − u₀) about the
     linearisation point u₀, into ``out``; ``gp`` = (coef, b0, fs, links, origin,

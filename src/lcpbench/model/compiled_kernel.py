@@ -5,8 +5,8 @@ numba (``@njit(cache=True)``) versions of the numpy reference, line for line:
 :func:`lcpbench.solvers.banded.solve_banded_qp` with ``method="dual"`` (the walk, its
 refinement, :func:`~lcpbench.solvers.banded.step_certificate`), the judge's natural
 residual (:func:`lcpbench.model.step_solver.step_residuals`) and the globalised driver
-of :mod:`lcpbench.model.driver` (Armijo search on the exact energy of
-:mod:`lcpbench.model.chain`). The numpy modules are the readable reference and document
+of :mod:`lcpbench.model.driver` (the Armijo rule on the exact energy, both
+:mod:`.chain_kernel`'s). The numpy modules are the readable reference and document
 the algorithm; this file repeats their arithmetic in the same order where that is cheap
 (sums, the band products), so both take the same path and agree to round-off
 (``tests/model/test_compiled.py``).
@@ -30,7 +30,8 @@ import numpy as np
 from numba import njit
 
 from ..linalg.ldl_kernel import refactor
-from ..thresholds import FLOOR_ULPS, NEWTON_SWITCH, WALK_RTOL
+from ..thresholds import ARMIJO_SHORTEST, FLOOR_ULPS, NEWTON_SWITCH, WALK_RTOL
+from .chain_kernel import add_compensated, armijo, energy, energy_noise  # once (numba_cache)
 from .compiled_dual import (
     ALPHA,
     ALPHA0,
@@ -69,7 +70,6 @@ from .compiled_dual import (
     WUP,
     G,
     U,
-    add_compensated,
     certify,
     dual_active_set,
     grad_into,
@@ -98,23 +98,6 @@ def workspace(n, links, nj, max_iter):
 
 
 # -- the chain (model.chain) ----------------------------------------------------
-@njit(cache=True)
-def energy_into(alpha, a, jl, jr, k, rest, link_load, sines):
-    """chain.energy: ½Σk(φ−φ*)² − Σ P·(centre height), ``sines``: sin α (given: the
-    fit's Δy / a, :func:`fit_heights`)."""
-    s = 0.0
-    for j in range(jr.size):
-        left = alpha[jl[j]] if jl[j] >= 0 else 0.0
-        d = (alpha[jr[j]] - left) - rest[j]
-        s += k[j] * (d * d)
-    w, y = 0.0, 0.0
-    for i in range(alpha.size):  # the node heights y_i, y_(i+1) summed as they go
-        y1 = y + a * sines[i]
-        w += link_load[i] * (0.5 * (y + y1))
-        y = y1
-    return 0.5 * s - w
-
-
 @njit(cache=True)
 def wall_penalty(u, lo, hi, cu, cl, grad):
     """The elastic walls' energy Σ ½ δ_i² / c_i at the free nodes' heights u
@@ -444,8 +427,8 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
     if not ok:
         return NO_FIT, rest_alpha.copy(), zero, zero, zero, zero, rec, count, none, zero
     sin_a, sin_t, cos_a, cos_t = wa[SIN_A], wa[SIN_T], wa[COS_A], wa[COS_T]
-    E = energy_into(alpha, a, jl, jr, k, rest, link_load, sin_a) + wall_penalty(u, lo, hi, cu, cl,
-                                                                            none[:0])
+    E = energy(alpha, a, jl, jr, k, rest, link_load, sin_a) + wall_penalty(u, lo, hi, cu, cl,
+                                                                       none[:0])
     noise_k = 0.0
     for j in range(k.size):
         noise_k += abs(k[j])
@@ -472,21 +455,23 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
         for i in range(n):  # the dot product, a loop (see _max_abs)
             d[i] = su[i] - u[i]
             slope += g_u[i] * d[i]
-        noise = 1e-12 * (abs(E) + noise_k * 1e-6)
+        noise = energy_noise(E, noise_k)
         t = 1.0
         while True:
             for i in range(n):
                 ut[i] = u[i] + t * d[i]
+            E_t = np.nan
             if fit_heights(trial, ut, alpha, a, fs, links, inv, sin_t, cos_t):
-                E_t = energy_into(trial, a, jl, jr, k, rest, link_load, sin_t) + wall_penalty(
+                E_t = energy(trial, a, jl, jr, k, rest, link_load, sin_t) + wall_penalty(
                     ut, lo, hi, cu, cl, none[:0])
-                if E_t <= E + 1e-4 * t * min(slope, 0.0) + noise:
-                    break
-            t *= 0.5
-            if t < 1e-12:
+            step = armijo(t, E_t, E, slope, noise, ARMIJO_SHORTEST)
+            if step == t:
+                break
+            if step == 0.0:
                 rec, count = record_step(rec, count, it, 0.0, dalpha, E)
                 return (LINE_SEARCH, alpha.copy(), zero, zero, u.copy(), sigma.copy(), rec, count,
                         none, zero)
+            t = step
         u[:] = ut
         alpha, trial, sin_a, sin_t, E = trial, alpha, sin_t, sin_a, E_t
         cos_a, cos_t = cos_t, cos_a

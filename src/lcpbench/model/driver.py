@@ -41,7 +41,9 @@ from .outer import (
     DriverOutput,
     DriverStart,
     StepRecord,
+    armijo,
     converged_output,
+    energy_noise,
     failed_output,
     feasible_start,
     line_search_failed,
@@ -127,9 +129,8 @@ def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int,
         if step.elastic:  # the walls' springs are part of the energy searched on
             grad += penalty_gradient(step, u)
         slope = float(grad @ d)
-        noise = 1e-12 * (abs(E) + float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6)
-        t, trial, E_t = armijo(chain, lambda t, u=u, d=d, a=alpha: alpha_from_heights(chain, u + t * d, a),
-                               E, slope, noise)
+        t, trial, E_t = armijo(lambda t, u=u, d=d, a=alpha: _trial(chain, u + t * d, a),
+                               E, slope, energy_noise(chain, E))
         if trial is None:
             return line_search_failed(alpha, n, steps, sol, t_asm, dalpha, E)
         u, alpha, E = u + t * d, trial, E_t
@@ -143,20 +144,10 @@ def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int,
     return out_of_iterations(alpha, n, steps, max_outer, tol)
 
 
-def armijo(chain: Chain, trial_of, E: float, slope: float, noise: float):
-    """Backtracking on the exact energy: the first t in 1, ½, ¼, … with
-    E(trial_of(t)) ≤ E + 1e-4 t min(slope, 0) + noise, as (t, α, E(α));
-    (0, None, E) below t = 1e-12. ``trial_of(t)`` is the chain at t (None where
-    none fits)."""
-    t = 1.0
-    while t >= 1e-12:
-        trial = trial_of(t)
-        if trial is not None:
-            E_t = energy(chain, trial)
-            if E_t <= E + 1e-4 * t * min(slope, 0.0) + noise:
-                return t, trial, E_t
-        t *= 0.5
-    return 0.0, None, E
+def _trial(chain: Chain, u: np.ndarray, reference: np.ndarray):
+    """(α, E(α)) of the chain at heights ``u``; (None, nan) where none fits."""
+    alpha = alpha_from_heights(chain, u, reference)
+    return (None, np.nan) if alpha is None else (alpha, energy(chain, alpha))
 
 
 def _undamped(chain: Chain, solver: StepSolver, tol: float, max_outer: int) -> DriverOutput:

@@ -13,13 +13,13 @@ same small compiled overhead for every back-end:
 - :func:`judge`: :func:`lcpbench.model.step_solver.step_residuals`, lcpbench's
   residuals of the back-end's answer and R = K g + z;
 - :func:`advance`: max|α̂ − α| (eq. 21) and the Armijo search on the exact energy
-  (:func:`lcpbench.model.driver.armijo`).
+  (:func:`lcpbench.model.chain_kernel.armijo`, :func:`~lcpbench.model.chain_kernel.energy`).
 
 The numpy modules are the reference; this file repeats their arithmetic in the same
 order where that is cheap, so the driver of :mod:`lcpbench.model.compiled_driver`
 takes the numpy driver's path to round-off (``tests/model/test_compiled_driver.py``).
-The chain's energy, its inverse kinematics and the banded step are
-:mod:`.compiled_kernel`'s (one copy each; :mod:`lcpbench.numba_cache` recompiles every
+The chain's energy and the Armijo rule are :mod:`.chain_kernel`'s, its inverse
+kinematics and the banded step :mod:`.compiled_kernel`'s (one copy each; :mod:`lcpbench.numba_cache` recompiles every
 kernel when any kernel file changes, so a call across files never runs stale code).
 """
 
@@ -28,17 +28,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..thresholds import ARMIJO_SHORTEST
+from .chain_kernel import armijo, energy, energy_noise  # the energy, the rule (once)
 from .compiled_dual import wall_residuals  # one copy of the judge's rows (numba_cache)
-from .compiled_kernel import banded_step, energy_into, fit_heights  # the chain, the step
+from .compiled_kernel import banded_step, fit_heights  # the chain's fit, the step
 
 TINY = np.finfo(np.float64).tiny
-
-
-# -- the chain (model.chain) ----------------------------------------------------
-@njit(cache=True)
-def energy(alpha, a, jl, jr, k, rest, link_load):
-    """chain.energy (rigid walls): ½Σk(φ−φ*)² − Σ P·(centre height)."""
-    return energy_into(alpha, a, jl, jr, k, rest, link_load, np.sin(alpha))
 
 
 # -- the step (model.step) ----------------------------------------------------------
@@ -232,11 +227,11 @@ def judge(u, bands, linear, lo, hi, coef, b0, fs, links, origin, phi_origin, k, 
 
 # -- the outer step (model.driver._globalised) --------------------------------------
 @njit(cache=True)
-def advance(su, u, alpha, E, noise, inv, alpha0, origin, phi_origin, coef, fs, k, rest,
-            nodal_load, a, jl, jr, link_load):
+def advance(su, u, alpha, E, stiffness_sum, inv, alpha0, origin, phi_origin, coef, fs, k,
+            rest, nodal_load, a, jl, jr, link_load):
     """max|α̂ − α| of the step answer ``su`` (eq. 21, about u₀) and the Armijo search
     on the exact energy along u + t(su − u): (max|Δα|, t, α(t), E(t)); t = 0 where
-    no t >= 1e-12 decreases the energy."""
+    no t >= ARMIJO_SHORTEST decreases the energy. ``stiffness_sum``: Σ|k| (the noise)."""
     links, n = alpha.size, u.size
     dalpha, prev = 0.0, 0.0
     for i in range(links):
@@ -251,14 +246,17 @@ def advance(su, u, alpha, E, noise, inv, alpha0, origin, phi_origin, coef, fs, k
     slope = 0.0
     for i in range(n):
         slope += g[i] * d[i]
+    noise = energy_noise(E, stiffness_sum)
     t = 1.0
-    while t >= 1e-12:
+    while True:
         trial = np.empty(links)
-        ok = fit_heights(trial, u + t * d, alpha, a, fs, links, np.empty(0), np.empty(links),
-                         np.empty(links))
-        if ok:
-            E_t = energy(trial, a, jl, jr, k, rest, link_load)
-            if E_t <= E + 1e-4 * t * min(slope, 0.0) + noise:
-                return dalpha, t, trial, E_t
-        t *= 0.5
-    return dalpha, 0.0, alpha, E
+        E_t = np.nan
+        if fit_heights(trial, u + t * d, alpha, a, fs, links, np.empty(0), np.empty(links),
+                       np.empty(links)):
+            E_t = energy(trial, a, jl, jr, k, rest, link_load, np.sin(trial))
+        step = armijo(t, E_t, E, slope, noise, ARMIJO_SHORTEST)
+        if step == t:
+            return dalpha, t, trial, E_t
+        if step == 0.0:
+            return dalpha, 0.0, alpha, E
+        t = step

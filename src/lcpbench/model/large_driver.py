@@ -31,17 +31,19 @@ import numpy as np
 
 from ..problems.scenes import Chain
 from ..solvers.base import Status
-from ..thresholds import GEOMETRY_SLACK, LOCAL_CUT, NEWTON_SWITCH, NODE_GROSS, PENALTY
-from .chain import heights
+from ..thresholds import GEOMETRY_SLACK, NEWTON_SWITCH, NODE_GROSS, PENALTY
+from .chain import energy, heights
 from .driver import StepSolver
 from .elastic import penalty, penalty_gradient
 from .judge import contraction_estimate, split_reactions
-from .large_n import StepWork, energy_of, increments_at, trial_of
+from .large_n import StepWork, increments_at, trial_of
 from .outer import (
     DriverOutput,
     DriverStart,
     StepRecord,
+    armijo,
     converged_output,
+    energy_noise,
     failed_output,
     feasible_start,
     line_search_failed,
@@ -90,8 +92,7 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
     if alpha is None:
         return failed_output(chain.rest_alpha.copy(), n, steps, "cannot fit the chain between the walls")
     walls = WallTerms(chain)
-    noise = 1e-12 * (abs(energy_of(chain, alpha))
-                     + float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6)
+    noise = energy_noise(chain, energy(chain, alpha, walls=False))
     last_net, extra = None, 0
     last_contacts = None
     # one set of step arrays for every outer step: the next step's assembly writes them
@@ -105,12 +106,12 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
         t_asm = time.perf_counter() - t0
         sol = solver(step, warm)
         if sol.status not in (Status.SOLVED, Status.INACCURATE):
-            return step_failed(alpha, n, steps, sol, t_asm, energy_of(chain, alpha))
+            return step_failed(alpha, n, steps, sol, t_asm, energy(chain, alpha, walls=False))
         d = sol.u  # the increment to the step's answer
         dalpha = float(np.max(np.abs(step.predict_alpha(d) - alpha), initial=0.0))
         E, slope = walls.merit_at(alpha, step, sol, d)
         local = dalpha < NEWTON_SWITCH and chain.profiled_walls
-        t, trial, E_t = _armijo(walls.trial(alpha, d, step), E, slope, noise, local)
+        t, trial, E_t = armijo(walls.trial(alpha, d, step), E, slope, noise, local)
         if trial is None:
             return line_search_failed(alpha, n, steps, sol, t_asm, dalpha, E)
         steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
@@ -133,7 +134,7 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
 
 class WallTerms:
     """What the walls add to the increment driver: the step's walls and load, and the
-    merit's terms beyond the chain's energy (:func:`~.large_n.energy_of`).
+    merit's terms beyond the chain's energy (:func:`.chain.energy` without walls).
 
     - rigid flat walls: nothing (the merit is the energy);
     - elastic walls: the springs' energy Σ ½ k (y − h)₊² (:func:`.elastic.penalty`)
@@ -192,7 +193,7 @@ class WallTerms:
             violation = merit(chain, alpha, self.mu_up, self.mu_lo, 1.0, energy=0.0) - \
                 merit(chain, alpha, self.mu_up, self.mu_lo, 0.0, energy=0.0)
             slope -= self.sigma * violation
-        return energy_of(chain, alpha) + self.extra(alpha), slope
+        return energy(chain, alpha, walls=False) + self.extra(alpha), slope
 
     def trial(self, alpha, d, step):
         """``t -> (α', merit(α'))`` (:func:`~.large_n.trial_of` plus :meth:`extra`)."""
@@ -217,26 +218,6 @@ class WallTerms:
         if not self.chain.profiled_walls:
             return True
         return penetration(self.chain, alpha) <= GEOMETRY_SLACK * self.chain.length
-
-
-def _armijo(at, E: float, slope: float, noise: float, local: bool = False):
-    """:func:`lcpbench.model.driver.armijo` with the compiled move and energy ``at(t)``
-    (:func:`~.large_n.trial_of`): the first t in 1, ½, ¼, … with
-    E(t) ≤ E + 1e-4 t min(slope, 0) + noise, as (t, α, E(α)); (0, None, E) below 1e-12.
-    ``local`` (a wall profile near the answer): a step cut below LOCAL_CUT is taken in
-    full (the undamped fixed point, :mod:`.profile_driver`)."""
-    t = 1.0
-    while t >= 1e-12:
-        trial, E_t = at(t)
-        if trial is not None and E_t <= E + 1e-4 * t * min(slope, 0.0) + noise:
-            return t, trial, E_t
-        t *= 0.5
-        if local and t < LOCAL_CUT:
-            trial, E_t = at(1.0)
-            if trial is not None:
-                return 1.0, trial, E_t
-            local = False
-    return 0.0, None, E
 
 
 def _node_change(chain: Chain, net, last_net, steps: list[StepRecord]):

@@ -1,4 +1,4 @@
-"""The O(N) parts of a large-N outer step, compiled: assembly, factored gradient, energy.
+"""The O(N) parts of a large-N outer step, compiled: assembly, factored gradient, trial.
 
 At N = 10⁵ each of these was a dozen or more full-length numpy passes
 (temporaries of 0.8 MB each) and together about half of a solve outside the
@@ -14,9 +14,8 @@ where a sum is involved, as the numpy reference it replaces:
 - :func:`gradient` / :func:`gradient_scale` — :meth:`ContactStep.gradient`
   Jᵀ k (φ̂(u) − φ*) − f and the size of its terms;
 - :func:`trial_energy` — :func:`lcpbench.model.large_n.alpha_from_increments`
-  and :func:`lcpbench.model.chain.energy` (rigid walls) in one pass, its two
-  sums compensated (Neumaier), since the Armijo test compares energies of
-  ~10⁵ terms to 1e-12 of their size.
+  and the chain's energy (:func:`lcpbench.model.chain_kernel.energy`, rigid walls,
+  its sums compensated) in one pass.
 
 Loaded only through :func:`lcpbench.numba_cache.kernel_module`.
 """
@@ -31,7 +30,8 @@ from numba import njit
 from ..linalg.twisted_kernel import face_solve as _face_solve
 from ..linalg.twisted_kernel import resolve as _resolve
 from ..thresholds import ROUNDOFF_ULPS  # a residual below it stays where the heights are
-from .compiled_dual import EPS, add_compensated, wall_residuals  # one copy (numba_cache)
+from .chain_kernel import add_compensated, energy  # one copy each (numba_cache)
+from .compiled_dual import EPS, wall_residuals
 
 
 @njit(cache=True)
@@ -169,50 +169,24 @@ def gradient_scale(coef, k, phi_origin, rest, load, origin, u, g, m):
 
 
 @njit(cache=True)
-def _add(total, comp, x):
-    """Neumaier's compensated sum: (total, compensation) after adding x."""
-    t = total + x
-    if abs(total) >= abs(x):
-        comp += (total - t) + x
-    else:
-        comp += (x - t) + total
-    return t, comp
-
-
-@njit(cache=True)
-def energy(alpha, a, k, rest, link_load):
-    """½ Σ k (φ − φ*)² − Σ w_i ȳ_i of the chain at α (rigid walls), compensated sums."""
-    nl = alpha.size
-    s, cs = 0.0, 0.0
-    for j in range(nl - 1):
-        dphi = (alpha[j + 1] - alpha[j]) - rest[j]
-        s, cs = _add(s, cs, k[j] * dphi * dphi)
-    w, cw = 0.0, 0.0
-    y = 0.0
-    for i in range(nl):
-        y1 = y + a * math.sin(alpha[i])
-        w, cw = _add(w, cw, link_load[i] * (0.5 * (y + y1)))
-        y = y1
-    return 0.5 * (s + cs) - (w + cw)
-
-
-@njit(cache=True)
-def trial_energy(alpha, du, t, a, k, rest, link_load, out):
+def trial_energy(alpha, du, t, a, jl, jr, k, rest, link_load, out):
     """Writes α moved by the increments t·du (exact inverse kinematics, each link keeping
     its branch and winding) into ``out`` and returns its energy; NaN where some link
     would need |sin α'| ≥ 1 (:func:`trial_energy_at` with sin α and cos α of ``alpha``)."""
-    return trial_energy_at(alpha, np.sin(alpha), np.cos(alpha), du, t, a, k, rest, link_load,
-                           out)
+    return trial_energy_at(alpha, np.sin(alpha), np.cos(alpha), du, t, a, jl, jr, k, rest,
+                           link_load, out)
 
 
 @njit(cache=True)
-def trial_energy_at(alpha, sin_alpha, inv_a_cos, du, t, a, k, rest, link_load, out):
+def trial_energy_at(alpha, sin_alpha, inv_a_cos, du, t, a, jl, jr, k, rest, link_load, out):
     """:func:`trial_energy` given sin α and an array with the sign of cos α: a step's
     from :func:`assemble_into` (1/(a cos α), a > 0), so the assembly's numbers are
-    reused."""
+    reused. The energy is :func:`lcpbench.model.chain_kernel.energy` (joints ``jl``,
+    ``jr``), at sin α' of the moved angles."""
     nl = alpha.size
     n = nl - 1
     prev = 0.0
+    sines = np.empty(nl)
     for i in range(nl):
         nxt = t * du[i] if i < n else 0.0
         s = sin_alpha[i] + (nxt - prev) / a
@@ -223,7 +197,8 @@ def trial_energy_at(alpha, sin_alpha, inv_a_cos, du, t, a, k, rest, link_load, o
         if inv_a_cos[i] < 0.0:
             base = math.pi - base
         out[i] = base + 2 * math.pi * round((alpha[i] - base) / (2 * math.pi))
-    return energy(out, a, k, rest, link_load)
+        sines[i] = math.sin(out[i])
+    return energy(out, a, jl, jr, k, rest, link_load, sines)
 
 
 @njit(cache=True)

@@ -34,6 +34,7 @@ import numpy as np
 from ..linalg.saddle import TridiagonalFactor
 from ..linalg.twisted import TwistedFactor
 from ..problems.scenes import Chain
+from .chain import joint_arrays
 from .step import ContactStep
 
 
@@ -308,20 +309,12 @@ def increments_at(chain: Chain, alpha: np.ndarray, work: StepWork | None = None,
     return step
 
 
-def energy_of(chain: Chain, alpha: np.ndarray) -> float:
-    """:func:`lcpbench.model.chain.energy` of a chain of :func:`applies` (rigid walls),
-    compiled, its sums compensated: the energies the large-N Armijo search compares."""
-    k, rest, _, _, _, link_load, _, _ = _chain_arrays(chain)
-    return float(_kernel().energy(np.ascontiguousarray(alpha, dtype=float),
-                                  float(chain.link_length), k, rest, link_load))
-
-
 def trial_of(chain: Chain, alpha: np.ndarray, du: np.ndarray, step: IncrementStep | None = None):
-    """``t -> (α', E(α'))`` moved by t·du (:func:`alpha_from_increments` and
-    :func:`energy_of` in one compiled pass); ``(None, nan)`` where no chain fits.
-    ``step``: the step assembled at this α (:func:`increments_at`), whose sin α and
-    sign of cos α it reuses (the same numbers)."""
-    k, rest, _, _, _, link_load, _, _ = _chain_arrays(chain)
+    """``t -> (α', E(α'))`` moved by t·du (:func:`alpha_from_increments` and the chain's
+    energy without walls, :func:`lcpbench.model.chain.energy`, in one compiled pass);
+    ``(None, nan)`` where no chain fits. ``step``: the step assembled at this α
+    (:func:`increments_at`), whose sin α and sign of cos α it reuses (the same numbers)."""
+    jl, jr, k, rest, link_load = joint_arrays(chain)
     kern = _kernel()
     a = float(chain.link_length)
     alpha = np.ascontiguousarray(alpha, dtype=float)
@@ -333,10 +326,10 @@ def trial_of(chain: Chain, alpha: np.ndarray, du: np.ndarray, step: IncrementSte
     def at(t: float):
         out = np.empty(alpha.size)
         if sin_alpha is not None:
-            E = kern.trial_energy_at(alpha, sin_alpha, step.inv_a_cos, du, float(t), a, k,
-                                     rest, link_load, out)
+            E = kern.trial_energy_at(alpha, sin_alpha, step.inv_a_cos, du, float(t), a, jl, jr,
+                                     k, rest, link_load, out)
         else:
-            E = kern.trial_energy(alpha, du, float(t), a, k, rest, link_load, out)
+            E = kern.trial_energy(alpha, du, float(t), a, jl, jr, k, rest, link_load, out)
         return (None, E) if np.isnan(E) else (out, E)
 
     return at

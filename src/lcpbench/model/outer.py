@@ -5,7 +5,8 @@ One step's record (:class:`StepRecord`), the answer a driver hands to the result
 run ends (:func:`converged_output`, :func:`failed_output`, :func:`step_failed`,
 :func:`line_search_failed`, :func:`out_of_iterations` with its stall test) and the
 start from the unconstrained arc clipped to the walls (:func:`feasible_start`,
-:func:`starting_point`). The numpy driver (:mod:`.driver`), the profile, large-N
+:func:`starting_point`), and the Armijo search on the exact energy around the one
+compiled rule (:func:`armijo`, :func:`energy_noise`). The numpy driver (:mod:`.driver`), the profile, large-N
 and compiled drivers and the solve kernel's Python side all build their answers
 here, so one answer reads the same whichever loop ran.
 """
@@ -20,10 +21,48 @@ import numpy as np
 
 from ..problems.scenes import Chain
 from ..solvers.base import StepSolution
+from ..thresholds import ARMIJO_SHORTEST, LOCAL_CUT
 from .chain import alpha_from_heights, heights
 from .judge import split_reactions
 from .step import ContactStep
 from .step_solver import step_residuals
+
+
+def _rule():
+    from ..numba_cache import kernel_module  # numba: loads or compiles at first use
+
+    return kernel_module("lcpbench.model.chain_kernel", "armijo")
+
+
+def energy_noise(chain: Chain, E: float) -> float:
+    """The round-off an energy comparison at ``E`` allows
+    (:func:`lcpbench.model.chain_kernel.energy_noise`)."""
+    return float(_rule().energy_noise(E, float(np.sum(np.abs(chain.joint_stiffness)))))
+
+
+def armijo(at: Callable, E: float, slope: float, noise: float, local: bool = False):
+    """Backtracking on the exact energy (or a merit): the first t in 1, ½, ¼, … whose
+    trial ``at(t)`` = (α, E(α)) (α None where no chain fits) passes
+    :func:`lcpbench.model.chain_kernel.armijo`, as (t, α, E(α)); (0, None, E) where
+    none down to ARMIJO_SHORTEST does. ``local`` (a wall profile near the answer): a
+    step cut below LOCAL_CUT is taken in full (the undamped fixed point,
+    :mod:`.profile_driver`)."""
+    rule = _rule().armijo
+    t = 1.0
+    while True:
+        trial, E_t = at(t)
+        step = rule(t, math.nan if trial is None else float(E_t), E, slope, noise,
+                    ARMIJO_SHORTEST)
+        if step == t:
+            return t, trial, E_t
+        if step == 0.0:
+            return 0.0, None, E
+        t = step
+        if local and t < LOCAL_CUT:
+            trial, E_t = at(1.0)
+            if trial is not None:
+                return 1.0, trial, E_t
+            local = False
 
 
 @dataclass

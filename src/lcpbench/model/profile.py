@@ -108,12 +108,6 @@ def x_jacobian_t(chain: Chain, alpha: np.ndarray, w: np.ndarray) -> np.ndarray:
     return g[chain.free_nodes]
 
 
-def x_jacobian(chain: Chain, alpha: np.ndarray) -> np.ndarray:
-    """J_x dense (free nodes × free nodes), for tests and the dense form (O(N²))."""
-    m = chain.free_nodes.size
-    return np.column_stack([x_jacobian_t(chain, alpha, e) for e in np.eye(m)]).T
-
-
 def slope_load(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
                forces_lower: np.ndarray) -> np.ndarray:
     """s = J_xᵀ(μ̄ ⊙ h'(x) − ν̄ ⊙ l'(x)) (N): the generalised force, on the node

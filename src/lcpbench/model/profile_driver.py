@@ -31,7 +31,7 @@ import numpy as np
 
 from ..problems.scenes import Chain
 from ..solvers.base import Status
-from ..thresholds import GEOMETRY_SLACK, LOCAL_CUT, NEWTON_SWITCH, PENALTY, START_PASSES
+from ..thresholds import GEOMETRY_SLACK, NEWTON_SWITCH, PENALTY, START_PASSES
 from .chain import alpha_from_heights, heights, node_positions
 from .chain import energy as chain_energy
 from .judge import split_reactions
@@ -40,7 +40,9 @@ from .outer import (
     DriverOutput,
     DriverStart,
     StepRecord,
+    armijo,
     converged_output,
+    energy_noise,
     failed_output,
     out_of_iterations,
     starting_point,
@@ -153,25 +155,21 @@ def run_profile_driver(chain: Chain, solver, *, tol: float, max_outer: int, meth
             phi = merit(chain, alpha, mu_up, mu_lo, sigma)
             violation = (phi - merit(chain, alpha, mu_up, mu_lo, 0.0)) / sigma
             slope = float(step.gradient(u) @ d) - sigma * violation
-            noise = 1e-12 * (abs(phi) + float(np.sum(np.abs(chain.joint_stiffness))) * 1e-6)
-            while True:
-                trial = alpha_from_heights(chain, u + t * d, alpha)
-                if trial is not None:
-                    phi_t = merit(chain, trial, mu_up, mu_lo, sigma)
-                    if phi_t <= phi + 1e-4 * t * min(slope, 0.0) + noise:
-                        break
-                t *= 0.5
-                if t < LOCAL_CUT and dalpha < NEWTON_SWITCH:  # near the answer: the full
-                    trial = alpha_from_heights(chain, sol.u, alpha)  # (undamped) step
-                    if trial is not None:
-                        t = 1.0
-                        break
-                if t < 1e-12:
-                    steps.append(StepRecord(sol.iterations, sol.status.value,
-                                            sol.solve_time, t_asm, 0.0, dalpha, E,
-                                            step_setup_time(sol)))
-                    return failed_output(alpha, n, steps, "line search failed: no decrease of the "
-                                                  "merit along the step")
+
+            def moved(t, u=u, d=d, a=alpha, up=mu_up, lo=mu_lo, sigma=sigma):
+                trial = alpha_from_heights(chain, u + t * d, a)
+                return (None, np.nan) if trial is None else (
+                    trial, merit(chain, trial, up, lo, sigma))
+
+            # near the answer a step cut below LOCAL_CUT is taken in full (undamped)
+            t, trial, _ = armijo(moved, phi, slope, energy_noise(chain, phi),
+                                 dalpha < NEWTON_SWITCH)
+            if trial is None:
+                steps.append(StepRecord(sol.iterations, sol.status.value,
+                                        sol.solve_time, t_asm, 0.0, dalpha, E,
+                                        step_setup_time(sol)))
+                return failed_output(alpha, n, steps, "line search failed: no decrease of the "
+                                              "merit along the step")
             new_u = u + t * d
         u, alpha = new_u, trial
         steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,

@@ -31,7 +31,15 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..thresholds import GEOMETRY_SLACK, LOCAL_CUT, NEWTON_SWITCH, PENALTY, START_PASSES
+from ..thresholds import (
+    ARMIJO_SHORTEST,
+    GEOMETRY_SLACK,
+    LOCAL_CUT,
+    NEWTON_SWITCH,
+    PENALTY,
+    START_PASSES,
+)
+from .chain_kernel import armijo, energy, energy_noise  # once (numba_cache)
 from .compiled_dual import (
     ALPHA,
     ALPHA0,
@@ -59,7 +67,6 @@ from .compiled_kernel import (
     MAX_OUTER,
     NO_FIT,
     assemble_into,
-    energy_into,
     fit_heights,
     record_step,
     solve_assembled,
@@ -78,7 +85,7 @@ def merit_parts(alpha, sines, cosines, chain, walls, mu_up, mu_lo, at):
     cu_, kl, cl_); ``at``: the scratch rows of :func:`walls_at` (written)."""
     a, jl, jr, k, rest, link_load, fs = chain
     walls_at(sines, cosines, a, fs, *walls, *at)
-    E = energy_into(alpha, a, jl, jr, k, rest, link_load, sines)
+    E = energy(alpha, a, jl, jr, k, rest, link_load, sines)
     return merit_at(E, walls, mu_up, mu_lo, at[1], at[2], at[3])
 
 
@@ -169,7 +176,7 @@ def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, f
     gp = (ws[7], jr[0], fs, links, origin, ws[2][0], k, rest, nl)
     flags, no_c = 0, np.empty(0)
     for _ in range(max_outer):
-        E = energy_into(alpha, a, jl, jr, k, rest, link_load, sin_a)
+        E = energy(alpha, a, jl, jr, k, rest, link_load, sin_a)
         walls_at(sin_a, cos_a, a, fs, *walls, *step_at)
         for i in range(n):  # the lagged reactions' slope load, into the nodal load
             w[i] = max(mu_up[i], 0.0) * h1[i] - max(mu_lo[i], 0.0) * l1[i]
@@ -202,30 +209,33 @@ def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, f
         part, pen = merit_at(E, walls, mu_up, mu_lo, yf, hs, ls)  # (the step's walls: at α)
         phi = part + pen_weight * pen
         slope -= pen_weight * pen
-        noise = 1e-12 * (abs(phi) + noise_k * 1e-6)
+        noise = energy_noise(phi, noise_k)
         t, full = 1.0, False
         while True:
             for i in range(n):
                 ut[i] = u[i] + t * d[i]
+            phi_t = np.nan
             if fit_heights(trial, ut, alpha, a, fs, links, inv, sin_t, cos_t):
                 part, pen = merit_parts(trial, sin_t, cos_t, chain, walls, mu_up, mu_lo, at)
-                if part + pen_weight * pen <= phi + 1e-4 * t * min(slope, 0.0) + noise:
-                    break
-            t *= 0.5
+                phi_t = part + pen_weight * pen
+            step = armijo(t, phi_t, phi, slope, noise, ARMIJO_SHORTEST)
+            if step == t:
+                break
+            if step == 0.0:
+                rec, count = record_step(rec, count, it, 0.0, dalpha, E)
+                return (LINE_SEARCH, alpha.copy(), zero, zero, u.copy(), sigma.copy(), rec,
+                        count, none, zero, zero, zero)
+            t = step
             if t < LOCAL_CUT and dalpha < NEWTON_SWITCH:  # near the answer: the full step
                 if fit_heights(trial, su, alpha, a, fs, links, inv, sin_t, cos_t):
                     t, full = 1.0, True
                     break
-            if t < 1e-12:
-                rec, count = record_step(rec, count, it, 0.0, dalpha, E)
-                return (LINE_SEARCH, alpha.copy(), zero, zero, u.copy(), sigma.copy(), rec,
-                        count, none, zero, zero, zero)
         for i in range(n):
             u[i] = su[i] if full else ut[i]
         alpha, trial, sin_a, sin_t = trial, alpha, sin_t, sin_a
         cos_a, cos_t = cos_t, cos_a
         rec, count = record_step(rec, count, it, t, dalpha,
-                                 energy_into(alpha, a, jl, jr, k, rest, link_load, sin_a))
+                                 energy(alpha, a, jl, jr, k, rest, link_load, sin_a))
         for i in range(n):  # the warm sets, and the lagged reactions (judge.split_reactions)
             w_u[i], w_up[i], w_lo[i] = su[i], sigma[i] > 0, sigma[i] < 0
             near_up = True
