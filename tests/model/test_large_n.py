@@ -18,7 +18,7 @@ from lcpbench.model import step_solver
 from lcpbench.model.chain import heights
 from lcpbench.model.driver import run_driver
 from lcpbench.model.large_driver import run_large
-from lcpbench.model.large_n import alpha_from_increments, increment_step, layout_fits
+from lcpbench.model.large_n import increment_step, layout_fits, trial_of
 from lcpbench.model.outer import feasible_start
 from lcpbench.model.step import assemble_step
 from lcpbench.model.step_solver import make_step_solver, solve_step
@@ -72,10 +72,10 @@ def test_increments_give_the_same_step_answer_as_heights():
     assert_step_kkt(step, b.u + step.origin, rtol=1e-8)  # the step's KKT conditions
 
 
-def test_alpha_from_increments_moves_the_heights_by_the_increments():
+def test_the_trial_moves_the_heights_by_the_increments():
     chain, step = _step(links=50)
     du = 1e-3 * np.sin(np.linspace(0, np.pi, step.size))
-    alpha = alpha_from_increments(chain, step.alpha, du)
+    alpha, _ = trial_of(chain, step.alpha, du)(1.0)
     assert alpha is not None
     assert np.allclose(heights(chain, alpha), heights(chain, step.alpha) + du, atol=1e-12)
 

@@ -27,20 +27,17 @@ def node_positions(chain: Chain, alpha: np.ndarray) -> tuple[np.ndarray, np.ndar
 
 def compensated_heights(dy: np.ndarray) -> np.ndarray:
     """Prefix sums y_i = Σ_{k<=i} Δy_k with Neumaier's compensation (the heights of a
-    step's linearisation point and its closure y_N).
+    step's linearisation point and its closure y_N;
+    :func:`lcpbench.model.chain_kernel.prefix_heights`, the sums the kernels run).
 
     A plain running sum carries ~√N ε max|y| (at N = 10⁵, 10⁻¹³ mm): a height error δ
     moves a node's force by ~16 EI δ / a³, and the closure error, put on the last
     link, bends it by δ / (a cos α) — a torque 10 % off at the last joint at 10⁵.
-    Compensated, y_i is exact to a few ulps of itself. The kernels sum the same way
-    (:mod:`.compiled_kernel`, :mod:`.large_kernel`, :mod:`.judge_kernel`): np.cumsum
-    adds in order, and each addition's error (Fast2Sum, the larger operand first) is
-    exact, so both give the same bits.
+    Compensated, y_i is exact to a few ulps of itself.
     """
-    s = np.cumsum(dy)
-    prev = np.concatenate(([0.0], s[:-1]))
-    lost = np.where(np.abs(prev) >= np.abs(dy), (prev - s) + dy, (dy - s) + prev)
-    return s + np.cumsum(lost)
+    out = np.empty(len(dy))
+    _kernel().prefix_heights(np.ascontiguousarray(dy, dtype=float), out)
+    return out
 
 
 def joint_angles(chain: Chain, alpha: np.ndarray) -> np.ndarray:
@@ -100,7 +97,10 @@ def alpha_from_heights(
     Each link keeps the branch (sign of cos α) and the 2π-winding of the
     ``reference`` angles, so a link cannot jump across the vertical. Returns
     None when some link would need to be longer than a (|Δy| > a): no chain
-    of these links has these heights.
+    of these links has these heights. numpy's arcsin, not the kernels'
+    (:func:`lcpbench.model.chain_kernel.fit_heights`): on AVX-512 machines numpy's
+    SIMD arcsin and libm's differ by an ulp on ~8 % of arguments, and the numpy
+    path's answers for borderline back-ends (SCS) follow those ulps.
     """
     y = np.zeros(chain.links + 1)
     y[chain.free_nodes] = u

@@ -1,4 +1,4 @@
-"""The chain's exact energy and the Armijo rule on it, compiled once for every loop.
+"""The chain's kinematics, exact energy and the Armijo rule, compiled once for every loop.
 
 Every outer loop of lcpbench searches along its step on the exact (nonlinear) energy
 of the chain; this module is the one copy of that energy and of the rule that
@@ -7,11 +7,15 @@ accepts or shortens a step:
 - :func:`add_compensated` — one step of Neumaier's compensated sum (the energy's
   sums, the node heights of a step's linearisation point and its closure,
   :func:`lcpbench.model.chain.compensated_heights`);
+- :func:`fit_heights`, :func:`link_angle`, :func:`prefix_heights` — the inverse
+  kinematics (the link angles of given node heights, each link on its branch) and
+  the node heights summed with compensation;
 - :func:`energy` — E(α) = ½ Σ k (φ − φ*)² − Σ P ȳ of the chain (eq. 18's joint
   angles, the link loads P at the link centres ȳ), its two sums compensated, since a
   line search compares energies of up to ~10⁵ terms to 1e-12 of their size;
 - :func:`armijo` — one test of the sufficient decrease
   E(t) ≤ E + c₁ t min(slope, 0) + noise at step length t, and the next length;
+- :func:`wall_penalty` — the elastic walls' springs' energy and its gradient;
 - :func:`energy_noise` — the round-off the test allows.
 
 The kernels (the solve kernel, the compiled driver, large N, the angles' SQP, wall
@@ -22,6 +26,7 @@ profiles) call these inside their loops; plain Python calls them through
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 from ..thresholds import ARMIJO_DECREASE, ENERGY_NOISE
@@ -35,6 +40,55 @@ def add_compensated(y, lost, term):
     if abs(y) >= abs(term):
         return y1, lost + ((y - y1) + term)
     return y1, lost + ((term - y1) + y)
+
+
+@njit(cache=True)
+def link_angle(s, reference, back):
+    """The angle α with sin α = ``s`` on the branch of ``reference`` (``back``: cos α < 0,
+    α = π − arcsin s, else arcsin s) and its 2π-winding (the nearest to it)."""
+    base = np.arcsin(s)
+    if back:
+        base = np.pi - base
+    return base + 2 * np.pi * np.rint((reference - base) / (2 * np.pi))
+
+
+@njit(cache=True)
+def prefix_heights(dy, out):
+    """out_i = Σ_{k<=i} dy_k, each sum compensated (:func:`add_compensated`): the node
+    heights of a step's linearisation point (:func:`lcpbench.model.chain.compensated_heights`)."""
+    y, lost = 0.0, 0.0
+    for i in range(dy.size):
+        y, lost = add_compensated(y, lost, dy[i])
+        out[i] = y + lost
+
+
+@njit(cache=True)
+def fit_heights(out, u, reference, a, fs, links, inv, sines, cosines):
+    """The link angles whose free nodes (``fs`` − 1 on, contiguous) have heights ``u``
+    (inverse kinematics, :func:`lcpbench.model.chain.alpha_from_heights`) into ``out``;
+    False when some |Δy| >= a. ``inv``:
+    1 / (a cos α) of ``reference`` if known (its sign is the branch), else empty.
+
+    ``sines``, ``cosines``: sin α and cos α of the fitted α, without a transcendental
+    call: sin α = s = Δy / a exactly (α = arcsin s, or π − arcsin s, plus 2πk), and
+    cos α = ±√((1 − s)(1 + s)), the sign that of the branch. They equal numpy's
+    sin and cos of the rounded α to round-off (closer to the exact values: α
+    carries the rounding of arcsin, s does not), and save the energy's sine and the
+    assembly's cosine of every link (the reference computes both from α)."""
+    off, n = fs - 1, u.size
+    y0 = u[0] if off == 0 else 0.0
+    for i in range(links):
+        y1 = u[i + 1 - off] if off <= i + 1 < off + n else 0.0
+        s = (y1 - y0) / a
+        y0 = y1
+        if not np.isfinite(s) or abs(s) >= 1.0:
+            return False
+        back = (inv[i] if inv.size == links else np.cos(reference[i])) < 0.0
+        out[i] = link_angle(s, reference[i], back)
+        c = np.sqrt((1.0 - s) * (1.0 + s))
+        sines[i] = s
+        cosines[i] = -c if back else c
+    return True
 
 
 @njit(cache=True)
@@ -57,6 +111,29 @@ def energy(alpha, a, jl, jr, k, rest, link_load, sines):
         w, lw = add_compensated(w, lw, link_load[i] * (0.5 * (y + y1)))
         y = y1
     return 0.5 * (s + ls) - (w + lw)
+
+
+@njit(cache=True)
+def wall_penalty(u, lo, hi, cu, cl, grad):
+    """The elastic walls' energy Σ ½ δ_i² / c_i at the free nodes' heights u
+    (:func:`lcpbench.model.elastic.penalty`, δ the indentation, c = 1/k the compliance; 0 at a rigid
+    wall, c = 0, which u never passes); ``grad``: its gradient added into it, unless
+    empty. 0 where no wall yields (``cu`` empty)."""
+    if cu.size != u.size:
+        return 0.0
+    e = 0.0
+    for i in range(u.size):
+        if cu[i] > 0.0 and u[i] > hi[i]:
+            p = (u[i] - hi[i]) / cu[i]
+            e += 0.5 * p * (u[i] - hi[i])
+            if grad.size:
+                grad[i] += p
+        if cl[i] > 0.0 and u[i] < lo[i]:
+            p = (lo[i] - u[i]) / cl[i]
+            e += 0.5 * p * (lo[i] - u[i])
+            if grad.size:
+                grad[i] -= p
+    return e
 
 
 @njit(cache=True)

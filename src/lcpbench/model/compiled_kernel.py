@@ -31,7 +31,14 @@ from numba import njit
 
 from ..linalg.ldl_kernel import refactor
 from ..thresholds import ARMIJO_SHORTEST, FLOOR_ULPS, NEWTON_SWITCH, WALK_RTOL
-from .chain_kernel import add_compensated, armijo, energy, energy_noise  # once (numba_cache)
+from .chain_kernel import (  # once (numba_cache)
+    add_compensated,
+    armijo,
+    energy,
+    energy_noise,
+    fit_heights,
+    wall_penalty,
+)
 from .compiled_dual import (
     ALPHA,
     ALPHA0,
@@ -95,60 +102,6 @@ def workspace(n, links, nj, max_iter):
             np.empty((3, n)), np.empty((nj, 3)),
             np.empty(min(max_iter, 20 * n + 50) + 2, np.uint64), np.empty(5), np.empty((2, n)),
             np.empty((3, n), np.int64))
-
-
-# -- the chain (model.chain) ----------------------------------------------------
-@njit(cache=True)
-def wall_penalty(u, lo, hi, cu, cl, grad):
-    """The elastic walls' energy Σ ½ δ_i² / c_i at the free nodes' heights u
-    (model.elastic.penalty, δ the indentation, c = 1/k the compliance; 0 at a rigid
-    wall, c = 0, which u never passes); ``grad``: its gradient added into it, unless
-    empty. 0 where no wall yields (``cu`` empty)."""
-    if cu.size != u.size:
-        return 0.0
-    e = 0.0
-    for i in range(u.size):
-        if cu[i] > 0.0 and u[i] > hi[i]:
-            p = (u[i] - hi[i]) / cu[i]
-            e += 0.5 * p * (u[i] - hi[i])
-            if grad.size:
-                grad[i] += p
-        if cl[i] > 0.0 and u[i] < lo[i]:
-            p = (lo[i] - u[i]) / cl[i]
-            e += 0.5 * p * (lo[i] - u[i])
-            if grad.size:
-                grad[i] -= p
-    return e
-
-
-@njit(cache=True)
-def fit_heights(out, u, reference, a, fs, links, inv, sines, cosines):
-    """chain.alpha_from_heights into ``out``; False when some |Δy| >= a. ``inv``:
-    1 / (a cos α) of ``reference`` if known (its sign is the branch), else empty.
-
-    ``sines``, ``cosines``: sin α and cos α of the fitted α, without a transcendental
-    call: sin α = s = Δy / a exactly (α = arcsin s, or π − arcsin s, plus 2πk), and
-    cos α = ±√((1 − s)(1 + s)), the sign that of the branch. They equal numpy's
-    sin and cos of the rounded α to round-off (closer to the exact values: α
-    carries the rounding of arcsin, s does not), and save the energy's sine and the
-    assembly's cosine of every link (the reference computes both from α)."""
-    off, n = fs - 1, u.size
-    y0 = u[0] if off == 0 else 0.0
-    for i in range(links):
-        y1 = u[i + 1 - off] if off <= i + 1 < off + n else 0.0
-        s = (y1 - y0) / a
-        y0 = y1
-        if not np.isfinite(s) or abs(s) >= 1.0:
-            return False
-        base = np.arcsin(s)
-        c = np.sqrt((1.0 - s) * (1.0 + s))
-        if (inv[i] if inv.size == links else np.cos(reference[i])) < 0.0:
-            base = np.pi - base
-            c = -c
-        out[i] = base + 2 * np.pi * np.rint((reference[i] - base) / (2 * np.pi))
-        sines[i] = s
-        cosines[i] = c
-    return True
 
 
 # -- the banded step (model.step) -------------------------------------------------

@@ -29,9 +29,9 @@ import numpy as np
 from numba import njit
 
 from ..thresholds import ARMIJO_SHORTEST
-from .chain_kernel import armijo, energy, energy_noise  # the energy, the rule (once)
+from .chain_kernel import armijo, energy, energy_noise, fit_heights  # once each
 from .compiled_dual import wall_residuals  # one copy of the judge's rows (numba_cache)
-from .compiled_kernel import banded_step, fit_heights  # the chain's fit, the step
+from .compiled_kernel import banded_step  # the step
 
 TINY = np.finfo(np.float64).tiny
 

@@ -98,18 +98,26 @@ def indentation(obj, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return up, lo
 
 
+def _penalty(obj, u: np.ndarray, grad: np.ndarray) -> float:
+    from ..numba_cache import kernel_module  # numba: loads or compiles at first use
+
+    cu, cl = compliances(obj)
+    return float(kernel_module("lcpbench.model.chain_kernel").wall_penalty(
+        np.ascontiguousarray(u, dtype=float), np.ascontiguousarray(obj.lower, dtype=float),
+        np.ascontiguousarray(obj.upper, dtype=float), cu, cl, grad))
+
+
 def penalty(obj, u: np.ndarray) -> float:
-    """The walls' elastic energy Σ ½ k_i δ_i² (N·mm) at free-node heights ``u``."""
-    ku, kl = _soft(obj)
-    du, dl = indentation(obj, u)
-    return 0.5 * float(ku @ du**2 + kl @ dl**2)
+    """The walls' elastic energy Σ ½ k_i δ_i² (N·mm) at free-node heights ``u``
+    (:func:`lcpbench.model.chain_kernel.wall_penalty`)."""
+    return _penalty(obj, u, np.empty(0))
 
 
 def penalty_gradient(obj, u: np.ndarray) -> np.ndarray:
     """∂/∂u of :func:`penalty` (N): k (u − h)₊ − k (lower − u)₊."""
-    ku, kl = _soft(obj)
-    du, dl = indentation(obj, u)
-    return ku * du - kl * dl
+    grad = np.zeros(np.asarray(u).size)
+    _penalty(obj, u, grad)
+    return grad
 
 
 def wall_pressure(chain, y_free: np.ndarray, forces_upper: np.ndarray,

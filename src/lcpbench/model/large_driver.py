@@ -8,7 +8,7 @@ per-node force bound holds (:data:`NODE_SETTLED`). The differences, both for
 round-off at large N:
 the step is :func:`~.large_n.increment_step` (unknowns d = u − u₀, face solves
 on the tridiagonal factor of H) and the iterate moves by
-:func:`~.large_n.alpha_from_increments`, so the state is α, never heights
+:func:`~.large_n.trial_of`, so the state is α, never heights
 rounded to doubles. The step is solved by the caller's step solver (the
 default back-end's active set, judged by lcpbench's step residuals; with elastic
 walls Newton on the springs, :mod:`lcpbench.solvers.spring_newton`); the

@@ -13,7 +13,7 @@ where a sum is involved, as the numpy reference it replaces:
   nodes j − 1, j, j + 1 with the coefficients ``coef[j]``);
 - :func:`gradient` / :func:`gradient_scale` — :meth:`ContactStep.gradient`
   Jᵀ k (φ̂(u) − φ*) − f and the size of its terms;
-- :func:`trial_energy` — :func:`lcpbench.model.large_n.alpha_from_increments`
+- :func:`trial_energy` — :func:`lcpbench.model.large_n.trial_of`
   and the chain's energy (:func:`lcpbench.model.chain_kernel.energy`, rigid walls,
   its sums compensated) in one pass.
 
@@ -30,7 +30,7 @@ from numba import njit
 from ..linalg.twisted_kernel import face_solve as _face_solve
 from ..linalg.twisted_kernel import resolve as _resolve
 from ..thresholds import ROUNDOFF_ULPS  # a residual below it stays where the heights are
-from .chain_kernel import add_compensated, energy  # one copy each (numba_cache)
+from .chain_kernel import add_compensated, energy, link_angle  # once (numba_cache)
 from .compiled_dual import EPS, wall_residuals
 
 
@@ -193,10 +193,7 @@ def trial_energy_at(alpha, sin_alpha, inv_a_cos, du, t, a, jl, jr, k, rest, link
         prev = nxt
         if not (abs(s) < 1.0):  # also NaN
             return math.nan
-        base = math.asin(s)
-        if inv_a_cos[i] < 0.0:
-            base = math.pi - base
-        out[i] = base + 2 * math.pi * round((alpha[i] - base) / (2 * math.pi))
+        out[i] = link_angle(s, alpha[i], inv_a_cos[i] < 0.0)
         sines[i] = math.sin(out[i])
     return energy(out, a, jl, jr, k, rest, link_load, sines)
 

@@ -15,7 +15,7 @@ Two things limit the height formulation of the step (:mod:`.step`) at large N:
    at N = 10⁵. So the step here is written in *increments* d = u − u₀ about
    the linearisation point (whose joint angles come from α, not from
    heights), and the driver moves α by exact inverse kinematics of the
-   increments, sin α'_i = sin α_i + (d_{i+1} − d_i)/a (:func:`alpha_from_increments`):
+   increments, sin α'_i = sin α_i + (d_{i+1} − d_i)/a (:func:`trial_of`):
    round-off then scales with the increment and with ε·k/a² per node, not with
    the heights.
 
@@ -120,25 +120,6 @@ def increment_step(step: ContactStep, *, restart: bool = True) -> ContactStep:
               else TridiagonalFactor(step.coef, step.stiffness, restart=False))
     return replace(step, linear=step.gradient(step.origin), lower=step.lower - step.origin,
                    upper=step.upper - step.origin, origin=np.zeros(n), factor=factor)
-
-
-def alpha_from_increments(chain: Chain, alpha: np.ndarray, du: np.ndarray
-                          ) -> np.ndarray | None:
-    """Link angles whose free node heights are those of α moved by ``du`` (exact).
-
-    The pins do not move, so sin α'_i = sin α_i + (du_{i+1} − du_i)/a; each
-    link keeps the branch (sign of cos α) and the 2π-winding of α
-    (:func:`lcpbench.model.chain.alpha_from_heights` from heights). None when
-    some |sin α'| >= 1.
-    """
-    dy = np.zeros(chain.links + 1)
-    dy[chain.free_nodes] = du
-    s = np.sin(alpha) + np.diff(dy) / chain.link_length
-    if not np.all(np.isfinite(s)) or np.any(np.abs(s) >= 1.0):
-        return None
-    base = np.arcsin(s)
-    base = np.where(np.cos(alpha) >= 0.0, base, np.pi - base)
-    return base + 2 * np.pi * np.round((alpha - base) / (2 * np.pi))
 
 
 @dataclass
@@ -310,7 +291,8 @@ def increments_at(chain: Chain, alpha: np.ndarray, work: StepWork | None = None,
 
 
 def trial_of(chain: Chain, alpha: np.ndarray, du: np.ndarray, step: IncrementStep | None = None):
-    """``t -> (α', E(α'))`` moved by t·du (:func:`alpha_from_increments` and the chain's
+    """``t -> (α', E(α'))`` moved by t·du (sin α'_i = sin α_i + t(du_(i+1) − du_i)/a, each link
+    on its branch and winding, and the chain's
     energy without walls, :func:`lcpbench.model.chain.energy`, in one compiled pass);
     ``(None, nan)`` where no chain fits. ``step``: the step assembled at this α
     (:func:`increments_at`), whose sin α and sign of cos α it reuses (the same numbers)."""

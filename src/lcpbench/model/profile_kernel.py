@@ -39,7 +39,7 @@ from ..thresholds import (
     PENALTY,
     START_PASSES,
 )
-from .chain_kernel import armijo, energy, energy_noise  # once (numba_cache)
+from .chain_kernel import armijo, energy, energy_noise, fit_heights  # once (numba_cache)
 from .compiled_dual import (
     ALPHA,
     ALPHA0,
@@ -67,7 +67,6 @@ from .compiled_kernel import (
     MAX_OUTER,
     NO_FIT,
     assemble_into,
-    fit_heights,
     record_step,
     solve_assembled,
     workspace,
