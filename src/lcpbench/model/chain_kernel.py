@@ -34,12 +34,12 @@ from ..thresholds import ARMIJO_DECREASE, ENERGY_NOISE
 
 @njit(cache=True)
 def add_compensated(y, lost, term):
-    """``(y + term, lost + its rounding error)``: one step of Neumaier's compensated
-    sum, the larger operand first (model.chain.compensated_heights)."""
+    """``(y + term, lost + its rounding error)``: one step of a compensated sum
+    (Neumaier's; the error by Knuth's TwoSum, exact and without a branch: the same
+    bits as Fast2Sum with the larger operand first)."""
     y1 = y + term
-    if abs(y) >= abs(term):
-        return y1, lost + ((y - y1) + term)
-    return y1, lost + ((term - y1) + y)
+    back = y1 - y
+    return y1, lost + ((y - (y1 - back)) + (term - back))
 
 
 @njit(cache=True)
