@@ -1,25 +1,17 @@
-"""The chain's kinematics, exact energy and the Armijo rule, compiled once for every loop.
+"""The chain's kinematics, exact energy and Armijo rule, compiled once for every loop.
 
-Every outer loop of lcpbench searches along its step on the exact (nonlinear) energy
-of the chain; this module is the one copy of that energy and of the rule that
-accepts or shortens a step:
+- :func:`add_compensated`, :func:`prefix_heights` — the compensated sum and the node
+  heights summed with it (:func:`lcpbench.model.chain.compensated_heights`);
+- :func:`fit_heights`, :func:`link_angle` — the inverse kinematics: the link angles of
+  given node heights, each link on its branch and winding;
+- :func:`energy`, :func:`wall_penalty` — the exact energy E(α) = ½ Σ k (φ − φ*)² −
+  Σ P ȳ (eq. 18's joint angles, the link loads P at the link centres ȳ), its sums
+  compensated (a line search compares energies of ~10⁵ terms to 1e-12 of their size),
+  and the elastic walls' springs;
+- :func:`armijo`, :func:`energy_noise` — the sufficient-decrease test at one step
+  length, and the round-off it allows.
 
-- :func:`add_compensated` — one step of Neumaier's compensated sum (the energy's
-  sums, the node heights of a step's linearisation point and its closure,
-  :func:`lcpbench.model.chain.compensated_heights`);
-- :func:`fit_heights`, :func:`link_angle`, :func:`prefix_heights` — the inverse
-  kinematics (the link angles of given node heights, each link on its branch) and
-  the node heights summed with compensation;
-- :func:`energy` — E(α) = ½ Σ k (φ − φ*)² − Σ P ȳ of the chain (eq. 18's joint
-  angles, the link loads P at the link centres ȳ), its two sums compensated, since a
-  line search compares energies of up to ~10⁵ terms to 1e-12 of their size;
-- :func:`armijo` — one test of the sufficient decrease
-  E(t) ≤ E + c₁ t min(slope, 0) + noise at step length t, and the next length;
-- :func:`wall_penalty` — the elastic walls' springs' energy and its gradient;
-- :func:`energy_noise` — the round-off the test allows.
-
-The kernels (the solve kernel, the compiled driver, large N, the angles' SQP, wall
-profiles) call these inside their loops; plain Python calls them through
+The kernels call these in their loops; plain Python through
 :func:`lcpbench.numba_cache.kernel_module` (:func:`lcpbench.model.chain.energy`,
 :func:`lcpbench.model.outer.armijo`). ``NUMBA_DISABLE_JIT=1`` runs them as Python.
 """

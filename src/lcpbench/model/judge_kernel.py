@@ -46,6 +46,7 @@ from ..thresholds import (  # the rule's numbers, as model.judge reads them
     ROUNDOFF_ULPS,
     STALL,
 )
+from .chain_kernel import add_compensated  # once (numba_cache)
 from .judge_bound import contraction, force_error_bound, judge_contraction, profile_rows
 from .stability_kernel import CHECKED, unstable_directions
 
@@ -85,10 +86,7 @@ def _positions(alpha, a, w):
         cs[i] = c
         v[i] = s / c - alpha[i]  # tan α − α, on the cos and sin at hand
         sx += a * c
-        term = a * s
-        y1 = sy + term
-        lost += (sy - y1) + term if abs(sy) >= abs(term) else (term - y1) + sy
-        sy = y1
+        sy, lost = add_compensated(sy, lost, a * s)
         x[i + 1], y[i + 1], yc[i + 1] = sx, sy, sy + lost
 
 
