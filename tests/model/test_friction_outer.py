@@ -10,15 +10,19 @@ import numpy as np
 import pytest
 
 import lcpbench
-from lcpbench import ActuatorScene
 import lcpbench.model.friction_driver as fd
+from lcpbench import ActuatorScene
 from lcpbench.model.chain import node_positions
-from lcpbench.model.friction_driver import (MAX_TURN, ROW_BAND, FrictionState,
-                                            frictional_chain, frictional_chain_args)
+from lcpbench.model.friction_driver import (
+    MAX_TURN,
+    ROW_BAND,
+    FrictionState,
+    frictional_chain,
+    frictional_chain_args,
+)
 from lcpbench.model.friction_solvers import step_runner
 from lcpbench.model.friction_walls import outer_kernels
 from lcpbench.problems.walls import WallProfile
-
 
 RAMP = WallProfile.from_table([-40.0, 0.0, 15.0, 30.0, 70.0], [3.2, 3.0, 2.8, 2.9, 3.1],
                               kind="linear")
@@ -85,7 +89,7 @@ def test_each_compiled_step_is_the_delassus_form_of_its_kinematics(scene, monkey
     chain = frictional_chain(scene)
     profile = scene.profiles[0]
     first = int(chain.free_nodes[0])
-    for state, fs, sol in steps:
+    for state, fs, _ in steps:
         x, y = state.positions(chain)
         nodes = chain.free_nodes[fs.normal_node]
         upper = fs.normal_sign < 0
