@@ -154,13 +154,10 @@ def frictional_chain(scene: ActuatorScene) -> Chain:
 
 
 def frictional_chain_args(chain: Chain) -> tuple:
-    """The chain's arrays as :func:`lcpbench.model.friction_outer.assemble` and
-    :func:`~lcpbench.model.friction_outer.move` take them, made once per chain: the
-    joints (left, right links), springs, rest angles, nodal loads, the walls' rows and
-    tables of cubic pieces (:meth:`lcpbench.problems.walls.WallProfile.pieces` over the
-    x a chain that runs away reaches, :data:`RUNAWAY`; empty: flat) and compliances.
-    ProblemError for a profile without a table (more pieces than
-    :data:`lcpbench.problems.profile_table.MAX_PIECES`)."""
+    """The chain's arrays as :mod:`lcpbench.model.friction_outer` takes them, once per
+    chain: joints, springs, rest angles, loads, the walls' rows and tables of cubic
+    pieces (:meth:`~lcpbench.problems.walls.WallProfile.pieces` over the x a chain that
+    runs away reaches; empty: flat; a profile without one refused) and compliances."""
     def make():
         f64 = np.ascontiguousarray
         L = float(chain.length)
@@ -200,18 +197,13 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
                     y_prev: np.ndarray | None = None, tau_stiffening: float = 1.0,
                     newton: bool = False) -> FrictionStep:
     """The frictional contact step of ``scene`` at ``state``, slips from ``x_prev``
-    (compiled: :func:`lcpbench.model.friction_outer.assemble`): normal rows for the
-    nodes within ROW_BAND·a of a wall or ``rowed`` before, friction pairs for those
-    within NEAR·a or ``pressed`` (bool per free node: a normal force in the last step).
-    The rows are for the nodes near a wall only (the others' rows would make W
-    singular, more columns than unknowns; the outer loop adds the row of a node that
-    comes near, and converges only when none does); in a channel for the nearer wall
-    only (the two rows of a node are each other's negatives; re-picked at every step).
-    ``left_pull``: a force along x (N) on the left end (a mirrored scene's pull,
-    :mod:`lcpbench.model.friction_mirror`); the left end is the datum, so it loads τ
-    only and has no curvature. ``y_prev``: the previous state's node heights (the slip
-    along a sloped wall); ``tau_stiffening``: k_τ's multiple (:data:`TAU_REACH`). A free
-    right end's rotation about the pin is held by ROT_STIFFNESS."""
+    (:func:`lcpbench.model.friction_outer.assemble`): normal rows for the nodes within
+    ROW_BAND·a of a wall or ``rowed`` before (the others' rows would make W singular;
+    in a channel the nearer wall's only), friction pairs for those within NEAR·a or
+    ``pressed`` (bool per free node). ``left_pull``: a force along x (N) on the left end
+    (a mirrored scene's pull: it loads τ only); ``y_prev``: the previous node heights
+    (the slip along a sloped wall); ``tau_stiffening``: k_τ's multiple
+    (:data:`TAU_REACH`). A free right end's rotation is held by ROT_STIFFNESS."""
     has_tau, right_datum = datum(scene)
     first, n = int(chain.free_nodes[0]), int(chain.free_nodes.size)
     free_end = chain.free_nodes[-1] >= chain.links
@@ -244,10 +236,9 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
 def _moved(scene: ActuatorScene, chain: Chain, fs: FrictionStep, z: np.ndarray,
            state: FrictionState, tol: float, stiff: float, solved: bool, x_right: float,
            pull: float):
-    """Where the step's answer ``z`` moves the chain from ``state``
-    (:func:`lcpbench.model.friction_outer.move`, compiled): (N, T, τ as the step gives
-    it, and None where no share of the step keeps the links off the vertical, else
-    (pressed, the new state, max|Δα|, τ as taken, done, the gross-slip excess))."""
+    """(N, T, τ of the step, and None where no share of it keeps the links off the
+    vertical, else (pressed, the new state, max|Δα|, τ taken, done, gross-slip excess)):
+    :func:`lcpbench.model.friction_outer.move` of ``z`` from ``state``."""
     arrays = frictional_chain_args(chain)
     has_tau, right_datum = datum(scene)
     k = outer_kernels()
@@ -287,7 +278,11 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
     ``lcp``: the step's solver (default a :class:`StepLemke`); ``left_pull`` as
     :func:`frictional_step`'s. A solver that defers its polish (``defers_polish``) has
     the answer that would end the state polished, not the steps before it
-    (docs/friction.md, "The polish")."""
+    (docs/friction.md, "The polish"). Each step moves the chain by
+    :func:`lcpbench.model.friction_outer.move`; the state ends on a full step of a SOLVED
+    answer that turns no link by ``tol``, moves the chain by less than tol·ℓ along x,
+    leaves every pressed node with its friction pair and every node near a wall with its
+    row."""
     check_frictional_ends(scene)
     lcp = StepLemke() if lcp is None else lcp
     newton = getattr(lcp, "newton", False)

@@ -1,21 +1,12 @@
-"""The frictional outer step, compiled (issue 39, docs/friction.md, "The outer step").
+"""The frictional outer step, compiled (issue 39, docs/friction.md).
 
-One outer step of a frictional state is two calls here with the step's LCP between
-them: :func:`assemble` builds the step at the state (the walls at the nodes' x from
-their tables of cubic pieces, the gaps, which nodes get a wall row and a friction pair,
-the walls' frames, the slips, the Delassus form and the LCP), and :func:`move` maps the
-LCP's answer back (N, T, δy, τ), moves the chain (exact inverse kinematics, halved where
-a link would turn by more than ``max_turn``), tests whether the state is done and
-measures its gross slip. The LCP between them is the compiled block principal pivoting
-from the last support (Lemke where it does not answer:
-:mod:`lcpbench.model.friction_lemke`). The driver (:mod:`lcpbench.model.friction_driver`)
-calls these; the walls' functions (:func:`node_walls`, :func:`wall_frames`,
-:func:`tangential_slip`) are also what :mod:`lcpbench.model.friction_walls` calls.
-
-A wall is a table of cubic pieces (:mod:`lcpbench.problems.profile_table`,
-:func:`lcpbench.model.wall_kernel.wall_height`; empty: flat, its rows the chain's
-heights). Each function is ``@njit(cache=True)``; with NUMBA_DISABLE_JIT=1 they run
-as plain Python.
+One outer step of a state is :func:`assemble` (the step at the state: the walls at the
+nodes' x from their tables of cubic pieces, the rows and pairs, the walls' frames, the
+slips, the Delassus form and the LCP), the step's LCP (:mod:`lcpbench.model.
+friction_lemke`), and :func:`move` (the answer mapped back, the chain moved by exact
+inverse kinematics, the convergence test, the gross-slip excess). A wall is a table of
+cubic pieces (:func:`lcpbench.model.wall_kernel.wall_height`; empty: flat). Each
+function is ``@njit(cache=True)``; with NUMBA_DISABLE_JIT=1 they run as plain Python.
 """
 
 from __future__ import annotations
@@ -97,19 +88,12 @@ def assemble(alpha, x0, a, jl, jr, k, rest, fsh, n, load, pull, left_pull, right
              newton, has_tau, k_tau, rot_scale, hi_rows, lo_rows, ku, cu, kl, cl, c_up, c_lo,
              mu_up, mu_lo, x_prev, y_prev, pressed, rowed, row_band, near_band, force,
              length):
-    """The frictional step at α (link angles) and x0 (node 1's x), as
-    :func:`lcpbench.model.friction_driver.frictional_step` documents: the chain's part
-    (:func:`~lcpbench.model.friction_step.step_arrays`; ``fsh``: the first free node + 1,
-    ``n`` free heights), τ's column where ``has_tau`` (held by ``k_tau``; ``pull`` +
-    ``left_pull`` on it), a free right end's rotation held by ``rot_scale`` / (r·r)²
-    (``rot_scale`` 0: both ends held in y), the walls at the nodes' x, the rows (within
-    ``row_band`` · a or ``rowed``) and pairs (within ``near_band`` · a or ``pressed``;
-    empty masks: none), the frames, the slips from ``x_prev`` (``y_prev``: empty on
-    flat walls), the Delassus form with the walls' compliances and the LCP in units of
-    ``length`` and ``force``. Returns (code, M, q, W, g_f, s_f, X, rows, signs,
+    """The frictional step at α and x0 (node 1's x), as
+    :func:`lcpbench.model.friction_driver.frictional_step` documents it (``fsh``: the
+    first free node + 1; ``rot_scale`` 0: both ends held in y; empty ``pressed``,
+    ``rowed``, ``y_prev``: none). Returns (code, M, q, W, g_f, s_f, X, rows, signs,
     pair_nodes, pairs, mus, near, normal_xy, tangent_xy, origin, bands, f, gap, slip,
-    compliance, rot, rot_k); code :data:`OK`, :data:`NOT_DEFINITE` or
-    :data:`NO_Y_PREV`."""
+    compliance, rot, rot_k); code :data:`OK`, :data:`NOT_DEFINITE` or :data:`NO_Y_PREV`."""
     first = fsh - 1
     bands, f0, D0, origin = step_arrays(alpha, a, jl, jr, k, rest, fsh, n, load, pull,
                                         right_datum, newton)
@@ -219,17 +203,13 @@ def gross_excess(N, T, pair, mu, normal_xy, tangent_xy, pull):
 def move(z, X, mn, mt, force, length, has_tau, normal_node, pair, mu, normal_xy, tangent_xy,
          rowed, origin, alpha, x0, a, fsh, right_datum, x_right, max_turn, tol, stiff, solved,
          hi_rows, lo_rows, ku, cu, kl, cl, row_band, pull):
-    """Where the step's LCP answer z (dimensionless) moves the chain from (α, x0), and
-    whether that ends the state (docs/friction.md, "The outer step"): (code, N, T, τ as
-    the step gives it, pressed (bool per free node), α', x0', max|Δα|, τ as taken,
-    done, gross-slip excess). The heights origin + share·δy, share = 1 unless that turns
-    a link by more than ``max_turn`` or past the vertical, then halved (code
-    :data:`VERTICAL` where no share of 2⁻³⁰ helps). Done: a full step of a ``solved``
-    answer that turns no link by ``tol`` and moves the chain by less than
-    tol·ℓ/``stiff`` along x, every pressed node with its friction pair and every node now
-    within ``row_band`` · a of a wall with its row (``rowed``). ``x_right``: a pinned
-    right end's x (``right_datum``); ``pull``: the pull on the chain along x (the
-    gross-slip excess is computed where ``has_tau``)."""
+    """Where the LCP answer z moves the chain from (α, x0), and whether that ends the
+    state (as :func:`lcpbench.model.friction_driver.solve_state` documents it): (code, N,
+    T, τ of the step, pressed, α', x0', max|Δα|, τ taken, done, gross-slip excess). δy
+    is halved while a link would turn by more than ``max_turn`` (:data:`VERTICAL` where
+    no share of 2⁻³⁰ helps); done: a full step of a ``solved`` answer, max|Δα| < ``tol``,
+    |τ| < tol·ℓ/``stiff``, every pressed node paired, every node within ``row_band`` · a
+    of a wall ``rowed``."""
     zz = z.copy()
     zz[:mn + 2 * mt] *= force
     zz[mn + 2 * mt:] *= length

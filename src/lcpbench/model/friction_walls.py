@@ -1,14 +1,8 @@
-"""The walls of a frictional step in their own frame (issue 39, docs/friction.md).
-
-Against a wall y = h(x) (a profile, :mod:`lcpbench.problems.walls`) the normal
-reaction N acts along the wall's normal n = (h', −1)/√(1 + h'²) (upper wall; the
-direction in which the gap grows) or (−l', 1)/√(1 + l'²) (lower), and the tangential
-force T along its tangent t = (1, h')/√(1 + h'²); the slip is the tangential part of a
-node's displacement since the previous state. Flat walls are the case h' = 0:
-n = (0, ∓1), t = (1, 0), the slip x − x_prev. Used by the frictional step
-(:mod:`lcpbench.model.friction_driver`) and its judge
-(:mod:`lcpbench.model.friction_result`), at the nodes' x (with the chain's
-translation): the slopes are lagged, fixed within a step.
+"""The walls of a frictional step in their own frame (issue 39, docs/friction.md), for
+the judge (:mod:`lcpbench.model.friction_result`): the normal n = (h', −1)/√(1 + h'²)
+(upper wall; (−l', 1)/√(1 + l'²) lower), the tangent t = (1, h')/√(1 + h'²) and the
+slip t · (p − p_prev) at the nodes' x, read from the walls' tables as the step reads
+them: the compiled functions of :mod:`lcpbench.model.friction_outer`, called here.
 """
 
 from __future__ import annotations
@@ -33,11 +27,8 @@ def outer_kernels():
 
 
 def walls_at_x(chain: Chain, x: np.ndarray):
-    """(h, l, h', l') per free node: the upper and lower walls' heights (mm; ±inf: no
-    row) and slopes at the nodes' x (``x``: every node's, mm, with the chain's
-    translation). Flat walls: the chain's rows and slopes 0; a wall of any profile
-    read from its table of cubic pieces at x, as the step reads it
-    (:func:`lcpbench.model.friction_outer.node_walls`; the rows stay the chain's)."""
+    """(h, l, h', l') per free node at every node's x ``x`` (mm; ±inf: no row):
+    :func:`lcpbench.model.friction_outer.node_walls`."""
     from .friction_driver import frictional_chain_args
 
     arrays = frictional_chain_args(chain)
@@ -62,10 +53,8 @@ def wall_frames(signs: np.ndarray, slope: np.ndarray) -> np.ndarray:
 
 
 def tangential_slip(x, y, x_prev, y_prev, nodes, slope) -> np.ndarray:
-    """s = t · (p − p_prev) at ``nodes``, t = (1, slope)/√(1 + slope²): the tangential
-    increment of each node's displacement since the previous state (mm; x − x_prev on a
-    flat wall, where ``y_prev`` may be None;
-    :func:`lcpbench.model.friction_outer.tangential_slip`)."""
+    """s = t · (p − p_prev) at ``nodes`` (mm; ``y_prev`` None on flat walls only):
+    :func:`lcpbench.model.friction_outer.tangential_slip`."""
     f64 = np.ascontiguousarray
     s, ok = outer_kernels().tangential_slip(
         f64(x, dtype=float), f64(y, dtype=float), f64(x_prev, dtype=float),
