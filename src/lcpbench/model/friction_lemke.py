@@ -232,11 +232,11 @@ class StepLemke:
         self.warm_solves += int(solves)
         if end != pivoting_kernels().DONE or not np.all(np.isfinite(z)):
             return None
-        res = lcp_residuals(M, q, z)
+        res, w = lcp_residuals(M, q, z, with_w=True)
         if not res["natural"] <= RESIDUAL_TOL:
             return None
         self.support = keys[S]
-        return LCPSolution(z, M @ z + q, Status.SOLVED, int(solves), time.perf_counter() - t0,
+        return LCPSolution(z, w, Status.SOLVED, int(solves), time.perf_counter() - t0,
                            extra={"residuals": res, "start": start})
 
     def __call__(self, M, q: np.ndarray | None = None, polish: bool = True):
