@@ -389,16 +389,41 @@ def first_support(M, q, pair, slide, normal_changes, max_changes, feas_rtol, piv
     of the LCPs in N alone (their solves are of the contacts' size), ``max_changes`` the
     whole LCP's supports. Returns
     (z, w, support, end, solves) as ``support_pivots`` does, every solve counted; the
-    end of a normal LCP that did not end DONE."""
+    end of a normal LCP that did not end DONE. It is :func:`frictionless_contacts` then
+    :func:`first_support_from` (a caller trying both guesses finds the contacts once)."""
+    N, end, solves = frictionless_contacts(M, q, pair.size, normal_changes, feas_rtol,
+                                           pivot_rtol)
+    if end != DONE:
+        return np.zeros(q.size), q.copy(), np.zeros(q.size, np.bool_), end, solves
+    z, w, S, end, more = first_support_from(M, q, pair, N, slide, normal_changes, max_changes,
+                                            feas_rtol, pivot_rtol, lstsq_rcond)
+    return z, w, S, end, solves + more
+
+
+@njit(cache=True)
+def frictionless_contacts(M, q, mn, normal_changes, feas_rtol, pivot_rtol):
+    """The frictionless contacts of the step: 0 <= N ⟂ W_nn N + g_f >= 0, M's first
+    ``mn`` rows and columns (:func:`lcpbench.solvers.pivoting_kernel.symmetric_active_set`,
+    at most ``normal_changes`` solves). Returns (N, end, solves)."""
+    Mn = np.ascontiguousarray(M[:mn, :mn])
+    N, _, end, solves = symmetric_active_set(Mn, q[:mn].copy(), normal_changes, feas_rtol,
+                                             pivot_rtol)
+    return N, end, solves
+
+
+@njit(cache=True)
+def first_support_from(M, q, pair, N, slide, normal_changes, max_changes, feas_rtol,
+                       pivot_rtol, lstsq_rcond):
+    """:func:`first_support` from the frictionless contacts ``N``
+    (:func:`frictionless_contacts`, ended DONE): the guess and the pivoting; the solves
+    counted are this call's."""
     mn = pair.size
     mt = (q.size - mn) // 3
     lam = mn + 2 * mt
     Mn = np.ascontiguousarray(M[:mn, :mn])
     qn = q[:mn].copy()
-    N, _, end, solves = symmetric_active_set(Mn, qn, normal_changes, feas_rtol, pivot_rtol)
     S = np.zeros(q.size, np.bool_)
-    if end != DONE:
-        return np.zeros(q.size), q.copy(), S, end, solves
+    solves = 0
     sigma = np.zeros(mt)
     for i in range(mt):
         s0 = q[mn + i]
