@@ -79,10 +79,13 @@ def first_step(scene):
 
 
 def test_polish_refuses_an_index_set_whose_signs_fail():
-    """A pressed node's answer made to slide the wrong way (T = +μN while its slip, on the
-    exact solution of that set, is forward): without a flip the polish refuses it and
-    returns z unchanged; whatever polish_step keeps (POLISH_FLIPS) meets every sign:
-    N >= 0, |T| <= μN, a sliding node's slip against its T."""
+    """Every pressed node's answer made to slide the wrong way (T = +μN: then Σ T has the
+    pull's sign, so the exact solution of that set cannot hold the chain without a
+    forward slip). One node alone would not do: a run of sticking nodes shares its T in
+    any way (statically indeterminate), and one of them sliding backward at zero slip is
+    an answer too. Without a flip the polish refuses it and returns z unchanged;
+    whatever polish_step keeps (POLISH_FLIPS) meets every sign: N >= 0, |T| <= μN, a
+    sliding node's slip against its T."""
     fs, sol = first_step(ActuatorScene(theta=150, height=3.0, links=20, friction=0.3,
                                        left_end="pinned", right_end="slider", pull=0.05))
     z = sol.z.copy()
@@ -90,11 +93,9 @@ def test_polish_refuses_an_index_set_whose_signs_fail():
     N = z[:mn]
     pressed = [c for c in range(mt) if np.any((fs.pair == c) & (N > 0))]
     assert pressed
-    c = pressed[0]
-    r = int(np.flatnonzero(fs.pair == c)[0])
-    limit = fs.mu[r] * N[r]
-    # the index set: pair c slides backward (β⁺ = μN, λ > 0), the rest as answered
-    z[mn + c], z[mn + mt + c], z[mn + 2 * mt + c] = limit, 0.0, 1e-3
+    for c in pressed:  # the index set: each pressed pair slides backward (β⁺ = μN, λ > 0)
+        r = int(np.flatnonzero(fs.pair == c)[0])
+        z[mn + c], z[mn + mt + c], z[mn + 2 * mt + c] = fs.mu[r] * N[r], 0.0, 1e-3
     w = fs.M @ z + fs.q
     P = fs.parts
     Nf, T, dy, tau = fs.forces(z)

@@ -112,7 +112,7 @@ def test_never_done_with_a_wrong_answer(seed):
     n = 6
     M, q = rng.normal(size=(n, n)), rng.normal(size=n)
     z, w, S, end, _ = pk.support_pivots(M, q, rng.random(n) < 0.5, 30, FEAS, PIV, RCOND)
-    assert end in (pk.DONE, pk.MAX_ITER, pk.SINGULAR)
+    assert end in (pk.DONE, pk.MAX_ITER, pk.SINGULAR, pk.CYCLE)
     if end == pk.DONE:
         w_true = M @ z + q
         scale = max(1.0, np.abs(q).max(), np.abs(z).max())
@@ -143,3 +143,92 @@ def test_lu_solve_against_numpy():
     assert ok and np.allclose(x, np.linalg.solve(A, b), rtol=1e-12, atol=1e-12)
     A[:, 4] = A[:, 2]
     assert not pk.lu_solve(A.copy(), b.copy(), 1e-13)[1]
+
+
+def reference_walk(M, q, S, changes, feas=FEAS, block_tries=3):
+    """Júdice & Pires' walk as the module's note states it, written from that note with
+    numpy's dense solve and no cycle test: (end, solves, z), end "done" or "budget";
+    None where some M_SS is singular (the kernel's least squares is not this one's)."""
+    n = q.size
+    S = S.copy()
+    best, stalled = n + 1, 0
+    for it in range(1, changes + 1):
+        z = np.zeros(n)
+        if S.any():
+            A = M[np.ix_(S, S)]
+            if np.linalg.cond(A) > 1e10:
+                return None
+            z[S] = np.linalg.solve(A, -q[S])
+        w = M @ z + q
+        eps = feas * max(1.0, np.abs(q).max(), np.abs(z).max())
+        bad = (S & (z < -eps)) | (~S & (w < -eps))
+        if not bad.any():
+            return "done", it, z
+        if bad.sum() < best:
+            best, stalled = bad.sum(), 0
+        else:
+            stalled += 1
+        if stalled < block_tries:
+            S = S ^ bad
+        else:
+            S[np.flatnonzero(bad)[0]] = not S[np.flatnonzero(bad)[0]]
+    return "budget", changes, None
+
+
+def test_a_cycle_ends_the_walk_where_the_budget_would_have_been_spent_for_nothing():
+    """Arbitrary matrices (not P-matrices: the walk may go round): against the walk
+    without a cycle test (:func:`reference_walk`, 200 changes), the kernel ends DONE
+    exactly where it does (the same solves, the same z), and CYCLE only where it never
+    gets there; some of these walks do go round."""
+    rng = np.random.default_rng(7)
+    cycles = 0
+    for _ in range(300):
+        n = 6
+        M, q = rng.normal(size=(n, n)), rng.normal(size=n)
+        start = rng.random(n) < 0.5
+        ref = reference_walk(M, q, start, 200)
+        if ref is None:
+            continue
+        z, w, S, end, solves = pk.support_pivots(M, q, start, 200, FEAS, PIV, 0.0)
+        if ref[0] == "done":
+            assert end == pk.DONE and solves == ref[1]
+            assert np.allclose(z, np.maximum(ref[2], 0.0), rtol=0, atol=1e-9)
+        else:
+            assert end in (pk.CYCLE, pk.MAX_ITER)
+            cycles += end == pk.CYCLE
+            if end == pk.CYCLE:
+                assert solves < 200
+    assert cycles > 0
+
+
+def numpy_residuals(M, q, z):
+    """lcpbench's residuals from their definition, in numpy (the oracle)."""
+    w = M @ z + q
+    scale = max(1.0, float(np.max(np.abs(q), initial=0.0)))
+    return {"natural": float(np.max(np.abs(np.minimum(z, w)), initial=0.0)) / scale,
+            "min_z": float(np.min(z, initial=0.0)),
+            "min_w": float(np.min(w, initial=0.0)) / scale,
+            "complementarity": abs(float(z @ w)) / scale}
+
+
+@pytest.mark.parametrize("n", [0, 1, 5, 40])
+def test_lcp_residuals_are_their_definition(n):
+    """solvers.base.lcp_residuals (the compiled pass) against the definition: the same
+    values to round-off, NaN where z or w has one, w = M z + q returned on request."""
+    from lcpbench.solvers.base import lcp_residuals
+
+    rng = np.random.default_rng(n)
+    for trial in range(6):
+        M, q = rng.normal(size=(n, n)), 3.0 * rng.normal(size=n)
+        z = np.maximum(rng.normal(size=n), 0.0)
+        if trial == 1 and n:
+            z[n // 2] = np.nan
+        got, w = lcp_residuals(M, q, z, with_w=True)
+        want = numpy_residuals(M, q, z)
+        assert set(got) == set(want)
+        for key, value in want.items():
+            if np.isnan(value):
+                assert np.isnan(got[key]), key
+            else:
+                assert got[key] == pytest.approx(value, rel=1e-12, abs=1e-300), key
+        assert np.allclose(w, M @ z + q, rtol=1e-13, atol=1e-13, equal_nan=True)

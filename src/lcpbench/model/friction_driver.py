@@ -21,12 +21,12 @@ from ..errors import ProblemError
 from ..problems.scenes import ActuatorScene, Chain, node_stiffness, reachable, wall_share
 from ..solvers.base import Status
 from ..thresholds import FINAL_FLIPS, NEWTON_SWITCH
-from .chain import alpha_from_heights, node_positions
+from .chain import node_positions
 from .elastic import compliances
 
 # (step_lemke and z_keys re-exported: the step's default solver lives in friction_lemke)
 from .friction_lemke import StepLemke, step_kernels, step_lemke, z_keys  # noqa: F401
-from .friction_walls import gaps_at, near_walls, tangential_slip, wall_frames, walls_at_x
+from .friction_walls import outer_kernels
 
 #: a node within NEAR · a of a wall gets a friction pair in the step (docs/friction.md)
 NEAR = 1e-3
@@ -153,12 +153,32 @@ def frictional_chain(scene: ActuatorScene) -> Chain:
     return chain.derived("friction: free right end", make)
 
 
-def rotation_mode(chain: Chain, x: np.ndarray) -> np.ndarray | None:
-    """r, the free heights' increments of a rigid rotation about node 1 by 1 rad
-    (r_i = x_i − x_1), when the right end is free (None: both ends held in y)."""
-    if chain.free_nodes[-1] < chain.links:
-        return None
-    return x[chain.free_nodes] - x[0]
+def frictional_chain_args(chain: Chain) -> tuple:
+    """The chain's arrays as :mod:`lcpbench.model.friction_outer` takes them, once per
+    chain: joints, springs, rest angles, loads, the walls' rows and tables of cubic
+    pieces (:meth:`~lcpbench.problems.walls.WallProfile.pieces` over the x a chain that
+    runs away reaches; empty: flat; a profile without one refused) and compliances."""
+    def make():
+        f64 = np.ascontiguousarray
+        L = float(chain.length)
+        reach = (-(RUNAWAY + 1.0) * L, (RUNAWAY + 2.0) * L)
+        tables = []
+        for side, profile in (("upper", chain.upper_profile), ("lower", chain.lower_profile)):
+            table = None if profile is None else profile.pieces(*reach)
+            if profile is not None and table is None:
+                raise ProblemError(f"wall_profile ({side} wall): the frictional step reads a "
+                                   "wall as a table of cubic pieces, and this profile needs "
+                                   "more of them than MAX_PIECES")
+            tables += ([np.zeros(0), np.zeros((4, 0))] if table is None else
+                       [f64(table[0], dtype=float), f64(table[1], dtype=float)])
+        c_up, c_lo = compliances(chain)
+        return (f64(chain.joint_links[:, 0], dtype=np.int64),
+                f64(chain.joint_links[:, 1], dtype=np.int64),
+                f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float),
+                f64(chain.nodal_load, dtype=float), f64(chain.upper, dtype=float),
+                f64(chain.lower, dtype=float), *tables, f64(c_up, dtype=float),
+                f64(c_lo, dtype=float))
+    return chain.derived("friction: kernel arrays", make)
 
 
 def datum(scene: ActuatorScene) -> tuple[bool, bool]:
@@ -168,106 +188,44 @@ def datum(scene: ActuatorScene) -> tuple[bool, bool]:
     return (not left and not right), (right and not left)
 
 
-def contact_rows(scene: ActuatorScene, chain: Chain, rowed: np.ndarray,
-                 touching: np.ndarray, g_up: np.ndarray, g_lo: np.ndarray):
-    """The wall rows (free node, ∂g/∂y, μ, pair) and the friction pairs' nodes.
-
-    The nodes ``rowed`` (near a wall: bool per free node) have a normal row; the
-    others are left out of the step (their rows would make W singular, more columns
-    than unknowns; the outer loop adds the row of a node that comes near, and
-    converges only when none does). In a channel the row is for the nearer wall only
-    (gaps ``g_up``, ``g_lo``: the two rows of a node are each other's negatives, and
-    both would make W singular; the outer loop re-picks the wall at every step).
-    Only the free nodes ``touching`` (at a wall, or pressed in the last step) get a
-    friction pair (pair −1: none): a node away from the walls carries no friction,
-    and its pair would only make the LCP degenerate.
-    """
-    mu_up, mu_lo = scene.wall_friction
-    up, lo = np.isfinite(chain.upper) & rowed, np.isfinite(chain.lower) & rowed
-    both = up & lo  # a channel node: the nearer wall only
-    up, lo = np.where(both, g_up <= g_lo, up), np.where(both, g_lo < g_up, lo)
-    rows = up | lo
-    paired = rows & touching
-    pair_of = np.full(rows.size, -1, np.int64)
-    pair_of[paired] = np.arange(int(np.count_nonzero(paired)))
-    nodes = np.flatnonzero(rows)  # (one wall per node: up and lo exclude each other)
-    upper = up[nodes]
-    return (nodes.astype(np.int64), np.where(upper, -1.0, 1.0),
-            np.where(upper, mu_up, mu_lo), pair_of[nodes],
-            chain.free_nodes[paired].astype(np.int64))
+_NONE = np.zeros(0, bool)  # no mask, no previous heights
 
 
 def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
                     x_prev: np.ndarray, pressed: np.ndarray | None = None,
                     rowed: np.ndarray | None = None, left_pull: float = 0.0,
                     y_prev: np.ndarray | None = None, tau_stiffening: float = 1.0,
-                    newton: bool = False, at: tuple | None = None) -> FrictionStep:
-    """The frictional contact step of ``scene`` at ``state``, slips from ``x_prev``:
-    normal rows for the nodes within ROW_BAND·a of a wall or ``rowed`` before,
-    friction pairs for those within NEAR·a or ``pressed`` (bool per free node: a
-    normal force in the last step). ``left_pull``: a force along x (N) on the left
-    end (a mirrored scene's pull, :mod:`lcpbench.model.friction_mirror`); the left end
-    is the datum, so it loads τ only and has no curvature. ``y_prev``: the previous
-    state's node heights (the slip along a sloped wall, :func:`tangential_slip`);
-    ``tau_stiffening``: k_τ's multiple (:data:`TAU_REACH`); ``at``: the node positions
-    of ``state`` and :func:`walls_at_x` there (x, y, walls), where known already."""
+                    newton: bool = False) -> FrictionStep:
+    """The frictional contact step of ``scene`` at ``state``, slips from ``x_prev``
+    (:func:`lcpbench.model.friction_outer.assemble`): normal rows for the nodes within
+    ROW_BAND·a of a wall or ``rowed`` before (the others' rows would make W singular;
+    in a channel the nearer wall's only), friction pairs for those within NEAR·a or
+    ``pressed`` (bool per free node). ``left_pull``: a force along x (N) on the left end
+    (a mirrored scene's pull: it loads τ only); ``y_prev``: the previous node heights
+    (the slip along a sloped wall); ``tau_stiffening``: k_τ's multiple
+    (:data:`TAU_REACH`). A free right end's rotation is held by ROT_STIFFNESS."""
     has_tau, right_datum = datum(scene)
     first, n = int(chain.free_nodes[0]), int(chain.free_nodes.size)
-    k = step_kernels()
-    f64 = np.ascontiguousarray
-    # the chain's part: the banded step (model.step.assemble_step, compiled), the pull
-    # (the chain's arrays as the kernel takes them: made once per chain, not per step)
-    left, right, stiffness, rest, load = chain.derived("friction: step arrays", lambda: (
-        f64(chain.joint_links[:, 0], dtype=np.int64), f64(chain.joint_links[:, 1], dtype=np.int64),
-        f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float),
-        f64(chain.nodal_load, dtype=float)))
-    bands, f, D, origin = k.step_arrays(
-        f64(state.alpha, dtype=float), float(chain.link_length), left, right, stiffness,
-        rest, first + 1, n, load, float(scene.pull), right_datum, newton)
-    x, y, walls = (*state.positions(chain), None) if at is None else at
-    r = rotation_mode(chain, x)
-    rot, rot_k = np.empty(0), 0.0
-    if r is not None:  # a free end: the rotation about the pin held by ROT_STIFFNESS
-        rot, rot_k = r, ROT_STIFFNESS * scene.EI / chain.length / float(r @ r) ** 2
+    free_end = chain.free_nodes[-1] >= chain.links
     k_tau = TAU_STIFFNESS * tau_stiffening * chain.force_scale / chain.length
-    if has_tau:  # τ: one more unknown, moving every node's x, held by k_τ
-        D = np.hstack([D, np.ones((D.shape[0], 1))])
-        f = np.append(f, float(scene.pull) + left_pull)
-    if walls is None:  # (the profile evaluated once per step)
-        walls = walls_at_x(chain, x)
-    s_up, s_lo = walls[2], walls[3]
-    g_up, g_lo = gaps_at(chain, x, y, walls)
-    closest = np.minimum(g_up, g_lo)  # (near_walls, from the gaps at hand)
-    near = closest <= ROW_BAND * chain.link_length
-    touching = closest <= NEAR * chain.link_length
-    if pressed is not None:
-        touching |= pressed
-    if rowed is not None:
-        near |= rowed
-    touching &= near
-    rows, signs, mus, pairs, pair_nodes = contact_rows(scene, chain, near, touching,
-                                                       g_up, g_lo)
-    # a wall y = h(x): N along its normal, T along its tangent, at the nodes' x (lagged)
-    slope = np.where(signs < 0, s_up[rows], s_lo[rows])
-    normal_xy = wall_frames(signs, slope)
-    gap = np.where(signs < 0, g_up[rows], g_lo[rows]) * np.abs(normal_xy[:, 1])
-    pslope = np.zeros(pair_nodes.size)
-    pslope[pairs[pairs >= 0]] = slope[pairs >= 0]
-    pc = np.sqrt(1.0 + pslope * pslope)
-    tangent_xy = np.column_stack([1.0 / pc, pslope / pc])
-    slip = tangential_slip(x, y, x_prev, y_prev, pair_nodes, pslope)
-    W, g_f, s_f, X, ok = k.delassus_form(bands, rot, rot_k, k_tau, f, rows, normal_xy, gap,
-                                         np.ascontiguousarray(D), pair_nodes, tangent_xy,
-                                         slip, first)
-    if not ok:
-        raise np.linalg.LinAlgError("the step's matrix is not positive definite")
-    # an elastic wall's row: 0 <= N ⟂ g + N/k >= 0, its compliance 1/k (mm/N) on W_nn's
-    # diagonal (docs/friction.md, elastic walls); 0 for a rigid wall: W unchanged
-    c_up, c_lo = chain.derived("friction: compliances", lambda: compliances(chain))
-    compliance = np.where(signs < 0, c_up[rows], c_lo[rows])
-    W[np.arange(rows.size), np.arange(rows.size)] += compliance
+    arrays = frictional_chain_args(chain)
+    mu_up, mu_lo = scene.wall_friction
     L, F = chain.length, chain.force_scale
-    M, q = k.frictional_lcp(W * (F / L), g_f / L, s_f / L, mus, pairs)
+    (code, M, q, W, g_f, s_f, X, rows, signs, pair_nodes, pairs, mus, near, normal_xy,
+     tangent_xy, origin, bands, f, gap, slip, compliance, rot, rot_k) = outer_kernels().assemble(
+        np.ascontiguousarray(state.alpha, dtype=float), float(state.x0),
+        float(chain.link_length), *arrays[:4], first + 1, n, arrays[4], float(scene.pull),
+        float(left_pull), right_datum, newton, has_tau, k_tau,
+        ROT_STIFFNESS * scene.EI / chain.length if free_end else 0.0, *arrays[5:],
+        float(mu_up), float(mu_lo), np.ascontiguousarray(x_prev, dtype=float),
+        _NONE.astype(float) if y_prev is None else np.ascontiguousarray(y_prev, dtype=float),
+        _NONE if pressed is None else pressed, _NONE if rowed is None else rowed,
+        ROW_BAND, NEAR, float(F), float(L))
+    if code == outer_kernels().NO_Y_PREV:
+        raise ProblemError("the slip along a sloped wall needs the previous state's "
+                           "node heights (y_prev)")
+    if code == outer_kernels().NOT_DEFINITE:
+        raise np.linalg.LinAlgError("the step's matrix is not positive definite")
     parts = dict(bands=bands, f=f, tan=np.tan(state.alpha), rot=rot, rot_k=rot_k, k_tau=k_tau,
                  gap=gap, slip=slip, compliance=compliance, first=first,
                  right_datum=right_datum)
@@ -275,73 +233,25 @@ def frictional_step(scene: ActuatorScene, chain: Chain, state: FrictionState,
                         origin, L, F, near, normal_xy, tangent_xy, parts)
 
 
-def gross_slip(fs: FrictionStep, N: np.ndarray, T: np.ndarray, pull: float) -> float:
-    """Whether a step of a chain that no end holds in x slides as a whole: every pair
-    at its cone (|T| = μN) and the pull beyond what they hold, |P| > Σ μN (so ΣT + P ≠ 0
-    whatever the directions of T); returned as the excess |P| − Σ μN (N), 0.0 when not.
-    On flat walls the next step is the same one moved along x, so there is no
-    equilibrium (docs/friction.md). Every pair at its cone with |P| <= Σ μN is not that:
-    the tangential forces then oppose each other in part (a chain turning or rolling in
-    a channel), and the step is an iterate on the way to an equilibrium that friction
-    can hold. Against a wall of any profile, P is P + Σ N n_x and Σ μN is Σ μN t_x."""
-    limit = np.zeros(T.size)
-    paired = fs.pair >= 0
-    np.add.at(limit, fs.pair[paired], (fs.mu * N)[paired])
-    # against sloped walls the normal reactions' x parts load the chain along x too, and
-    # friction holds along x only its tangent's x part of μN
-    load = pull + float(fs.normal_xy[:, 0] @ N)
-    capacity = float(limit @ fs.tangent_xy[:, 0])
-    scale = max(abs(load), capacity, 1e-300)
-    at_cone = np.all(np.abs(T) >= limit - 1e-9 * scale)
-    excess = abs(load) - capacity
-    return float(excess) if at_cone and excess > 1e-9 * scale else 0.0
-
-
-def damped(chain: Chain, origin: np.ndarray, dy: np.ndarray, alpha: np.ndarray):
-    """(α, share): the step's heights origin + share·δy, share = 1 unless that turns a
-    link by more than MAX_TURN or past the vertical, then halved until it does not (an
-    iterate, not the answer: a state converges on full steps only). (None, 0) when no
-    share of 2⁻³⁰ helps."""
-    share = 1.0
-    for _ in range(30):
-        new = alpha_from_heights(chain, origin + share * dy, alpha)
-        if new is not None and np.max(np.abs(new - alpha)) <= MAX_TURN:
-            return new, share
-        share *= 0.5
-    return None, 0.0
-
-
-def _moved(chain: Chain, fs: FrictionStep, sol, state: FrictionState, tol: float,
-           stiff: float, right_datum: bool, x_right: float, forces=None):
-    """Where the step's answer ``sol`` moves the chain from ``state``, and whether that
-    ends the state: (pressed, the new state, max|Δα|, τ, done, at); None where no share
-    of the step keeps the links off the vertical (:func:`damped`); ``at``: the new
-    state's node positions and walls (:func:`frictional_step`'s); ``forces``:
-    ``fs.forces(sol.z)`` where known. Done: a full step of a
-    SOLVED answer that turns no link by ``tol`` and moves the chain by less than
-    tol·ℓ/stiff along x, every pressed node with its friction pair and every node near
-    a wall with its row."""
-    N, _, dy, tau = fs.forces(sol.z) if forces is None else forces
-    pressed = np.zeros(chain.free_nodes.size, bool)
-    pressed[fs.normal_node[N > 0]] = True
-    # every pressed node had its friction pair: else the step is not the answer yet
-    paired = bool(np.all(fs.pair[N > 0] >= 0))
-    alpha, share = damped(chain, fs.origin, dy, state.alpha)
-    if alpha is None:
-        return None
-    dalpha = float(np.max(np.abs(alpha - state.alpha)))
-    tau *= share
-    new = FrictionState(alpha, state.x0 + tau)
-    if right_datum:
-        new.x0 = x_right - float(np.sum(chain.link_length * np.cos(alpha)))
-    # every node that is now near a wall had its row
-    x, y = new.positions(chain)
-    walls = walls_at_x(chain, x)
-    settled = not np.any(near_walls(chain, x, y, ROW_BAND, walls) & ~fs.rowed)
-    # (k_τ τ is the imbalance along x: with k_τ stiffened, τ is held to tol·ℓ/stiff)
-    done = (dalpha < tol and abs(tau) * stiff < tol * chain.length and paired
-            and share == 1.0 and settled and sol.solved)
-    return pressed, new, dalpha, tau, done, (x, y, walls)
+def _moved(scene: ActuatorScene, chain: Chain, fs: FrictionStep, z: np.ndarray,
+           state: FrictionState, tol: float, stiff: float, solved: bool, x_right: float,
+           pull: float):
+    """(N, T, τ of the step, and None where no share of it keeps the links off the
+    vertical, else (pressed, the new state, max|Δα|, τ taken, done, gross-slip excess)):
+    :func:`lcpbench.model.friction_outer.move` of ``z`` from ``state``."""
+    arrays = frictional_chain_args(chain)
+    has_tau, right_datum = datum(scene)
+    k = outer_kernels()
+    code, N, T, tau_step, pressed, alpha, x0, dalpha, tau, done, excess = k.move(
+        z, fs.X, fs.normal_node.size, fs.friction_node.size, float(fs.force),
+        float(fs.length), has_tau, fs.normal_node, fs.pair, fs.mu, fs.normal_xy,
+        fs.tangent_xy, fs.rowed, fs.origin, state.alpha, float(state.x0),
+        float(chain.link_length), int(chain.free_nodes[0]) + 1, right_datum, float(x_right),
+        MAX_TURN, float(tol), float(stiff), bool(solved), *arrays[5:11], ROW_BAND,
+        float(pull))
+    if code == k.VERTICAL:
+        return N, T, tau_step, None
+    return N, T, tau_step, (pressed, FrictionState(alpha, x0), dalpha, tau, done, excess)
 
 
 @dataclass
@@ -368,7 +278,11 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
     ``lcp``: the step's solver (default a :class:`StepLemke`); ``left_pull`` as
     :func:`frictional_step`'s. A solver that defers its polish (``defers_polish``) has
     the answer that would end the state polished, not the steps before it
-    (docs/friction.md, "The polish")."""
+    (docs/friction.md, "The polish"). Each step moves the chain by
+    :func:`lcpbench.model.friction_outer.move`; the state ends on a full step of a SOLVED
+    answer that turns no link by ``tol``, moves the chain by less than tol·ℓ along x,
+    leaves every pressed node with its friction pair and every node near a wall with its
+    row."""
     check_frictional_ends(scene)
     lcp = StepLemke() if lcp is None else lcp
     newton = getattr(lcp, "newton", False)
@@ -385,7 +299,7 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
     pressed, away, it, gross, inexact, excess = None, False, 0, 0, 0, 0.0
     stiff = TAU_STIFFEN  # k_τ's multiple (:data:`TAU_REACH`)
     final = False  # every step polished (a polished answer did not end the state)
-    at = None  # the state's node positions and walls (known after a step)
+    pull = float(scene.pull) + left_pull
     for it in range(1, max_outer + 1):
         # Newton on the springs once the last step turned no link by NEWTON_SWITCH; for
         # the rest of the state not after a Newton step that did not halve (a cycle)
@@ -399,7 +313,7 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
             try:
                 fs = frictional_step(scene, chain, state, x_prev, pressed, rowed, left_pull,
                                      y_prev, stiff, newton and bool(sizes)
-                                     and sizes[-1] < NEWTON_SWITCH, at)
+                                     and sizes[-1] < NEWTON_SWITCH)
             except np.linalg.LinAlgError as exc:  # (K singular: a link at the vertical)
                 return StateAnswer(state, N, T, held, False, f"contact step {it}: {exc}", it,
                                    sizes, time.perf_counter() - t0, left_pull)
@@ -414,14 +328,13 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
                 return StateAnswer(state, N, T, held, False, f"contact step {it}: "
                                    f"{sol.status.name} ({sol.message})", it, sizes,
                                    time.perf_counter() - t0, left_pull)
-            N, T, dy, tau = fs.forces(sol.z)
+            N, T, tau, moved = _moved(scene, chain, fs, sol.z, state, tol, stiff,
+                                      sol.solved, x_right, pull)
             if not (chain.profiled_walls and abs(tau) > TAU_REACH * chain.link_length
                     and stiff < TAU_STIFFEN_MAX):
                 break
             stiff *= TAU_STIFFEN
         held = fs
-        moved = _moved(chain, fs, sol, state, tol, stiff, right_datum, x_right,
-                       (N, T, dy, tau))
         if defer and (final or (moved is not None and moved[4])):
             # the answer that would end the state leaves through the primal polish: the
             # state is then the polished answer's move, tested again; where that move is
@@ -434,18 +347,17 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
             final = True
             if polished is not sol:
                 sol = polished
-                N, T, _, _ = fs.forces(sol.z)
-                moved = _moved(chain, fs, sol, state, tol, stiff, right_datum, x_right)
+                N, T, _, moved = _moved(scene, chain, fs, sol.z, state, tol, stiff,
+                                        sol.solved, x_right, pull)
         if moved is None:
             return StateAnswer(state, N, T, fs, False, f"contact step {it}: a link would "
                                "pass the vertical (no chain has these heights)", it, sizes,
                                time.perf_counter() - t0, left_pull)
-        pressed, state, dalpha, tau, done, at = moved
+        pressed, state, dalpha, tau, done, ex = moved
         sizes.append(dalpha)
         if done:
             return StateAnswer(state, N, T, fs, True, "max|Δα| < tol", it, sizes,
                                time.perf_counter() - t0, left_pull)
-        ex = gross_slip(fs, N, T, float(scene.pull) + left_pull) if has_tau else 0.0
         # on a profile the capacity changes as the chain moves: a run of steps at gross
         # slip counts only while the excess does not shrink (a chain sliding towards
         # where friction holds it is on its way to an equilibrium; docs/friction.md)

@@ -208,20 +208,32 @@ class StepLemke:
         return self.taken(M, q, keys, z, S, end, solves, t0, "the last answer's support")
 
     def first_guess(self, M: np.ndarray, q: np.ndarray, keys: np.ndarray | None,
-                    pair: np.ndarray | None, slide: bool, changes: int):
+                    pair: np.ndarray | None, slide: bool, changes: int, contacts: dict):
         """The answer of a step whose last answer's support does not hold (or that has
         none: a path's first) by block principal pivoting from the frictionless
         contacts, the pressed nodes sticking (``slide`` False) or every pair sliding
         against its free slip (True; :func:`lcpbench.model.friction_step.first_support`,
         compiled; at most ``changes`` supports of the whole LCP), SOLVED where its natural
-        residual meets RESIDUAL_TOL; None otherwise (Lemke then)."""
+        residual meets RESIDUAL_TOL; None otherwise (Lemke then). ``contacts``: the
+        step's frictionless contacts, found at its first guess and kept there for the
+        others (:func:`~lcpbench.model.friction_step.frictionless_contacts`)."""
         if keys is None:
             return None
         t0 = time.perf_counter()
-        z, w, S, end, solves = step_kernels().first_support(
-            np.ascontiguousarray(M), q, np.ascontiguousarray(pair, dtype=np.int64), slide,
-            max(WARM_CHANGES, WARM_NORMAL_CHANGES * pair.size), changes, WARM_FEAS_RTOL,
-            WARM_PIVOT_RTOL, WARM_RCOND)
+        k = step_kernels()
+        budget = max(WARM_CHANGES, WARM_NORMAL_CHANGES * pair.size)
+        if not contacts:
+            contacts["M"] = np.ascontiguousarray(M)
+            contacts["pair"] = np.ascontiguousarray(pair, dtype=np.int64)
+            N, end, solves = k.frictionless_contacts(contacts["M"], q, pair.size, budget,
+                                                     WARM_FEAS_RTOL, WARM_PIVOT_RTOL)
+            contacts.update(N=N, done=end == pivoting_kernels().DONE)
+            self.warm_solves += int(solves)
+        if not contacts["done"]:
+            return None
+        z, w, S, end, solves = k.first_support_from(
+            contacts["M"], q, contacts["pair"], contacts["N"], slide, budget, changes,
+            WARM_FEAS_RTOL, WARM_PIVOT_RTOL, WARM_RCOND)
         how = "every pair sliding" if slide else "the pressed nodes sticking"
         return self.taken(M, q, keys, z, S, end, solves, t0, f"the frictionless contacts, {how}")
 
@@ -232,11 +244,11 @@ class StepLemke:
         self.warm_solves += int(solves)
         if end != pivoting_kernels().DONE or not np.all(np.isfinite(z)):
             return None
-        res = lcp_residuals(M, q, z)
+        res, w = lcp_residuals(M, q, z, with_w=True)
         if not res["natural"] <= RESIDUAL_TOL:
             return None
         self.support = keys[S]
-        return LCPSolution(z, M @ z + q, Status.SOLVED, int(solves), time.perf_counter() - t0,
+        return LCPSolution(z, w, Status.SOLVED, int(solves), time.perf_counter() - t0,
                            extra={"residuals": res, "start": start})
 
     def __call__(self, M, q: np.ndarray | None = None, polish: bool = True):
@@ -260,10 +272,11 @@ class StepLemke:
         Lemke's pivots."""
         n = q.size
         sol = self.last_support(M, q, keys)
+        contacts: dict = {}  # the step's frictionless contacts, once
         for budget in (WARM_GUESS_CHANGES, WARM_CHANGES):  # a short try of each guess first
             for slide in (False, True):
                 if sol is None:
-                    sol = self.first_guess(M, q, keys, pair, slide, budget)
+                    sol = self.first_guess(M, q, keys, pair, slide, budget, contacts)
         if sol is not None:
             return sol
         coverings = step_coverings(n)

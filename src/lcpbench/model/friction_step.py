@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..linalg.ldl_kernel import refactor, resolve
+from ..linalg.ldl_kernel import refactor
 from ..solvers.pivoting_kernel import DONE, support_pivots, symmetric_active_set
 from .compiled_kernel import banded_step, geometric_bands
 
@@ -159,7 +159,7 @@ def _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, D, frict
             BT[mn + c, friction_node[c] - first] += tangent_xy[c, 1]
     for j in range(n):
         BT[mn + mt, j] = f[j]
-    XT = BT.copy()
+    X = np.ascontiguousarray(BT.T)
     if rot.size:
         K = np.zeros((ny, ny))
         for i in range(ny):
@@ -169,20 +169,40 @@ def _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, D, frict
                     K[i + p, i] = K[i, i + p] = bands[p, i]
             for j in range(ny):
                 K[i, j] += rot_k * rot[i] * rot[j]
-        XT[:, :ny] = np.linalg.solve(K, np.ascontiguousarray(BT[:, :ny].T)).T
+        X[:ny, :] = np.linalg.solve(K, X[:ny, :])
         ok = True
     else:
         fac = np.empty((4, ny))
         ok = refactor(fac, bands, np.zeros(ny, np.bool_), np.empty(0), 0, ny)
         if ok:
-            for c in range(cols):
-                x = BT[c, :ny].copy()
-                resolve(fac, x)
-                XT[c, :ny] = x
+            resolve_columns(fac, X, ny)
     if n > ny:  # τ, held by k_τ alone
         for c in range(cols):
-            XT[c, ny] = BT[c, ny] / k_tau
-    return np.ascontiguousarray(BT.T), np.ascontiguousarray(XT.T), ok
+            X[ny, c] = BT[c, ny] / k_tau
+    return np.ascontiguousarray(BT.T), X, ok
+
+
+@njit(cache=True)
+def resolve_columns(fac, X, ny):
+    """Overwrites the first ``ny`` rows of X (ny × cols, row-major) with L D Lᵀ's
+    solution, each column by the operations of
+    :func:`lcpbench.linalg.ldl_kernel.resolve` in its order (the same bits), the columns
+    side by side (the inner loop runs along a row: contiguous, vectorised)."""
+    cols = X.shape[1]
+    for j in range(1, ny):  # forward: x_j −= L_(j,j−2) x_(j−2), then L_(j,j−1) x_(j−1)
+        for c in range(cols):
+            t = X[j, c]
+            if j >= 2:
+                t -= fac[2, j - 2] * X[j - 2, c]
+            X[j, c] = t - fac[1, j - 1] * X[j - 1, c]
+    for j in range(ny - 1, -1, -1):  # backward: x_j = x_j / D_j − L_(j+2,j) x_(j+2) − …
+        for c in range(cols):
+            t = X[j, c] * fac[0, j]
+            if j + 2 < ny:
+                t -= fac[2, j] * X[j + 2, c]
+            if j + 1 < ny:
+                t -= fac[1, j] * X[j + 1, c]
+            X[j, c] = t
 
 
 @njit(cache=True)
@@ -369,16 +389,41 @@ def first_support(M, q, pair, slide, normal_changes, max_changes, feas_rtol, piv
     of the LCPs in N alone (their solves are of the contacts' size), ``max_changes`` the
     whole LCP's supports. Returns
     (z, w, support, end, solves) as ``support_pivots`` does, every solve counted; the
-    end of a normal LCP that did not end DONE."""
+    end of a normal LCP that did not end DONE. It is :func:`frictionless_contacts` then
+    :func:`first_support_from` (a caller trying both guesses finds the contacts once)."""
+    N, end, solves = frictionless_contacts(M, q, pair.size, normal_changes, feas_rtol,
+                                           pivot_rtol)
+    if end != DONE:
+        return np.zeros(q.size), q.copy(), np.zeros(q.size, np.bool_), end, solves
+    z, w, S, end, more = first_support_from(M, q, pair, N, slide, normal_changes, max_changes,
+                                            feas_rtol, pivot_rtol, lstsq_rcond)
+    return z, w, S, end, solves + more
+
+
+@njit(cache=True)
+def frictionless_contacts(M, q, mn, normal_changes, feas_rtol, pivot_rtol):
+    """The frictionless contacts of the step: 0 <= N ⟂ W_nn N + g_f >= 0, M's first
+    ``mn`` rows and columns (:func:`lcpbench.solvers.pivoting_kernel.symmetric_active_set`,
+    at most ``normal_changes`` solves). Returns (N, end, solves)."""
+    Mn = np.ascontiguousarray(M[:mn, :mn])
+    N, _, end, solves = symmetric_active_set(Mn, q[:mn].copy(), normal_changes, feas_rtol,
+                                             pivot_rtol)
+    return N, end, solves
+
+
+@njit(cache=True)
+def first_support_from(M, q, pair, N, slide, normal_changes, max_changes, feas_rtol,
+                       pivot_rtol, lstsq_rcond):
+    """:func:`first_support` from the frictionless contacts ``N``
+    (:func:`frictionless_contacts`, ended DONE): the guess and the pivoting; the solves
+    counted are this call's."""
     mn = pair.size
     mt = (q.size - mn) // 3
     lam = mn + 2 * mt
     Mn = np.ascontiguousarray(M[:mn, :mn])
     qn = q[:mn].copy()
-    N, _, end, solves = symmetric_active_set(Mn, qn, normal_changes, feas_rtol, pivot_rtol)
     S = np.zeros(q.size, np.bool_)
-    if end != DONE:
-        return np.zeros(q.size), q.copy(), S, end, solves
+    solves = 0
     sigma = np.zeros(mt)
     for i in range(mt):
         s0 = q[mn + i]

@@ -67,21 +67,29 @@ class LCPSolution:
         return self.status is Status.SOLVED
 
 
-def lcp_residuals(M, q: np.ndarray, z: np.ndarray) -> dict[str, float]:
+def lcp_residuals(M, q: np.ndarray, z: np.ndarray, with_w: bool = False):
     """Residuals of a candidate LCP solution, the same for every back-end.
 
     ``w`` is recomputed as ``M z + q`` (not taken from the solver). Values are
-    scaled by ``max(1, |q|_inf)`` so they compare across problems.
+    scaled by ``max(1, |q|_inf)`` so they compare across problems. Computed in one
+    compiled pass (:func:`lcpbench.solvers.pivoting_kernel.natural_residuals`; M dense,
+    a sparse M made dense first). ``with_w``: return ``(residuals, w)``.
     """
-    z = np.asarray(z, dtype=float)
-    w = M @ z + q
-    scale = max(1.0, float(np.max(np.abs(q), initial=0.0)))
-    return {
-        "natural": float(np.max(np.abs(np.minimum(z, w)), initial=0.0)) / scale,
-        "min_z": float(np.min(z, initial=0.0)),
-        "min_w": float(np.min(w, initial=0.0)) / scale,
-        "complementarity": abs(float(z @ w)) / scale,
-    }
+    if not _RESIDUALS:
+        from ..numba_cache import held, kernel_module
+
+        held(_RESIDUALS).append(kernel_module("lcpbench.solvers.pivoting_kernel",
+                                              "natural_residuals"))
+    M = M.toarray() if hasattr(M, "toarray") else M
+    natural, min_z, min_w, comp, w = _RESIDUALS[0].natural_residuals(
+        np.ascontiguousarray(M, dtype=float), np.ascontiguousarray(q, dtype=float).ravel(),
+        np.ascontiguousarray(z, dtype=float).ravel())
+    res = {"natural": float(natural), "min_z": float(min_z), "min_w": float(min_w),
+           "complementarity": float(comp)}
+    return (res, w) if with_w else res
+
+
+_RESIDUALS: list = []  # the compiled residuals (solvers/pivoting_kernel.py), once loaded
 
 
 @dataclass

@@ -9,8 +9,10 @@ a time, the lowest index first: Murty's rule). Started from the support of a nea
 problem's answer (the last step of a frictional path, whose stick/slide/separate
 pattern mostly holds), it takes a few linear solves of the support's size. No
 finiteness result holds for a matrix that is not a P-matrix (the frictional step's M
-is not): it stops at a budget, or at a singular M_SS, and says so; the caller falls
-back to a method that is finite (Lemke) and judges any answer by its own residual.
+is not): it stops at a budget, at a singular M_SS, or where it comes back to a support
+it has left in the same state (a cycle: the rule is deterministic, so it would go round
+to the budget), and says so; the caller falls back to a method that is finite (Lemke)
+and judges any answer by its own residual.
 
 Each function is ``@njit(cache=True)``; with NUMBA_DISABLE_JIT=1 they run as plain
 Python. :func:`lcpbench.model.friction_driver.StepLemke` calls it.
@@ -23,8 +25,9 @@ from numba import njit
 
 #: block changes without fewer infeasible unknowns before one change at a time
 BLOCK_TRIES = 3
-#: the ends of :func:`support_pivots`: a feasible support, the budget, a singular M_SS
-DONE, MAX_ITER, SINGULAR = 0, 1, 2
+#: the ends of :func:`support_pivots`: a feasible support, the budget, a singular M_SS, a
+#: cycle (a support and state seen before: the budget would be spent going round)
+DONE, MAX_ITER, SINGULAR, CYCLE = 0, 1, 2, 3
 
 
 @njit(cache=True)
@@ -158,8 +161,11 @@ def support_pivots(M, q, support, max_changes, feas_rtol, pivot_rtol, lstsq_rcon
     """Block principal pivoting from ``support`` (bool per unknown). Returns (z, w,
     support, end, solves): the last candidate, its support, DONE (no unknown infeasible
     beyond ``feas_rtol`` · max(1, |q|, |z|); the few within it clipped to 0),
-    MAX_ITER (``max_changes`` supports tried) or SINGULAR (M_SS singular to
-    ``pivot_rtol`` and ``lstsq_rcond`` <= 0), and the linear solves made. Where M_SS
+    MAX_ITER (``max_changes`` supports tried), SINGULAR (M_SS singular to
+    ``pivot_rtol`` and ``lstsq_rcond`` <= 0) or CYCLE (the walk is back at a support
+    it started from before with the same fewest infeasibles and the same rule: every
+    support after it repeats, none DONE, so the budget's end is known; the walk ends
+    there, where it would have ended MAX_ITER), and the linear solves made. Where M_SS
     is singular to ``pivot_rtol`` the candidate is its least-squares solution of the
     least norm (singular values below ``lstsq_rcond`` of the largest cut): a
     consistent singular system has many answers, any of them the LCP's if feasible."""
@@ -171,7 +177,24 @@ def support_pivots(M, q, support, max_changes, feas_rtol, pivot_rtol, lstsq_rcon
     qmax = 0.0
     for i in range(n):
         qmax = max(qmax, abs(q[i]))
+    # the state each solve starts from: its support, the fewest infeasibles so far and
+    # the number of changes without fewer (only whether it is below BLOCK_TRIES counts)
+    seen = np.empty((max(max_changes, 0), n), np.bool_)
+    seen_best = np.empty(max(max_changes, 0), np.int64)
+    seen_rule = np.empty(max(max_changes, 0), np.int64)
     for it in range(1, max_changes + 1):
+        rule = min(stalled, BLOCK_TRIES)
+        for j in range(it - 1):
+            if seen_best[j] == best and seen_rule[j] == rule:
+                same = True
+                for i in range(n):
+                    if seen[j, i] != S[i]:
+                        same = False
+                        break
+                if same:
+                    return z, w, S, CYCLE, it - 1
+        seen[it - 1, :] = S
+        seen_best[it - 1], seen_rule[it - 1] = best, rule
         idx = np.flatnonzero(S)
         k = idx.size
         A = np.empty((k, k))
@@ -282,3 +305,31 @@ def symmetric_active_set(M, q, max_changes, feas_rtol, pivot_rtol):
                 if z[i] <= 0.0:
                     z[i] = 0.0
                     F[i] = False
+
+
+@njit(cache=True)
+def natural_residuals(M, q, z):
+    """lcpbench's residuals of a candidate z of the LCP (M, q), in one pass after
+    w = M z + q (:func:`lcpbench.solvers.base.lcp_residuals` documents them; no matrix
+    temporaries). Returns (natural, min_z, min_w, complementarity, w): max|min(z, w)|,
+    min(z, 0), min(w, 0) and |zᵀw|, each but min_z divided by max(1, |q|_∞); a NaN in
+    z or w makes each one it enters NaN (as numpy's minimum and max do)."""
+    n = q.size
+    w = M @ z
+    scale = 1.0
+    for i in range(n):
+        w[i] += q[i]
+        if abs(q[i]) > scale:
+            scale = abs(q[i])
+    natural, min_z, min_w = 0.0, 0.0, 0.0
+    for i in range(n):
+        m = min(z[i], w[i]) if z[i] == z[i] and w[i] == w[i] else np.nan
+        if abs(m) > natural or m != m:
+            natural = abs(m)
+        if z[i] < min_z or z[i] != z[i]:
+            min_z = z[i]
+        if w[i] < min_w or w[i] != w[i]:
+            min_w = w[i]
+        if natural != natural and min_z != min_z and min_w != min_w:
+            break
+    return natural / scale, min_z, min_w / scale, abs(np.dot(z, w)) / scale, w
