@@ -22,11 +22,10 @@ from ..problems.scenes import ActuatorScene, Chain, node_stiffness, reachable, w
 from ..solvers.base import Status
 from ..thresholds import FINAL_FLIPS, NEWTON_SWITCH
 from .chain import node_positions
-from .elastic import compliances
 
 # (step_lemke and z_keys re-exported: the step's default solver lives in friction_lemke)
 from .friction_lemke import StepLemke, step_kernels, step_lemke, z_keys  # noqa: F401
-from .friction_walls import outer_kernels
+from .friction_walls import RUNAWAY, frictional_chain_args, outer_kernels
 
 #: a node within NEAR · a of a wall gets a friction pair in the step (docs/friction.md)
 NEAR = 1e-3
@@ -50,8 +49,6 @@ TAU_STIFFEN_MAX = 1e6
 ROT_STIFFNESS = 1.0
 #: the largest turn of a link in one outer step (rad); a longer step is shortened
 MAX_TURN = 0.25
-#: a state whose chain moves along x by more than RUNAWAY · ℓ has no equilibrium
-RUNAWAY = 10.0
 #: this many steps in a row at gross slip (:func:`gross_slip`) end a state: no equilibrium
 GROSS_STEPS = 3
 #: this many steps in a row that Lemke solves only INACCURATE end a state (not converged:
@@ -151,34 +148,6 @@ def frictional_chain(scene: ActuatorScene) -> Chain:
                        lower_stiffness=k if scene.channel else None)
 
     return chain.derived("friction: free right end", make)
-
-
-def frictional_chain_args(chain: Chain) -> tuple:
-    """The chain's arrays as :mod:`lcpbench.model.friction_outer` takes them, once per
-    chain: joints, springs, rest angles, loads, the walls' rows and tables of cubic
-    pieces (:meth:`~lcpbench.problems.walls.WallProfile.pieces` over the x a chain that
-    runs away reaches; empty: flat; a profile without one refused) and compliances."""
-    def make():
-        f64 = np.ascontiguousarray
-        L = float(chain.length)
-        reach = (-(RUNAWAY + 1.0) * L, (RUNAWAY + 2.0) * L)
-        tables = []
-        for side, profile in (("upper", chain.upper_profile), ("lower", chain.lower_profile)):
-            table = None if profile is None else profile.pieces(*reach)
-            if profile is not None and table is None:
-                raise ProblemError(f"wall_profile ({side} wall): the frictional step reads a "
-                                   "wall as a table of cubic pieces, and this profile needs "
-                                   "more of them than MAX_PIECES")
-            tables += ([np.zeros(0), np.zeros((4, 0))] if table is None else
-                       [f64(table[0], dtype=float), f64(table[1], dtype=float)])
-        c_up, c_lo = compliances(chain)
-        return (f64(chain.joint_links[:, 0], dtype=np.int64),
-                f64(chain.joint_links[:, 1], dtype=np.int64),
-                f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float),
-                f64(chain.nodal_load, dtype=float), f64(chain.upper, dtype=float),
-                f64(chain.lower, dtype=float), *tables, f64(c_up, dtype=float),
-                f64(c_lo, dtype=float))
-    return chain.derived("friction: kernel arrays", make)
 
 
 def datum(scene: ActuatorScene) -> tuple[bool, bool]:

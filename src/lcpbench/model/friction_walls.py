@@ -2,7 +2,8 @@
 the judge (:mod:`lcpbench.model.friction_result`): the normal n = (h', −1)/√(1 + h'²)
 (upper wall; (−l', 1)/√(1 + l'²) lower), the tangent t = (1, h')/√(1 + h'²) and the
 slip t · (p − p_prev) at the nodes' x, read from the walls' tables as the step reads
-them: the compiled functions of :mod:`lcpbench.model.friction_outer`, called here.
+them: the compiled functions of :mod:`lcpbench.model.friction_outer`, called here, on
+the chain's arrays as those kernels take them (:func:`frictional_chain_args`).
 """
 
 from __future__ import annotations
@@ -11,6 +12,10 @@ import numpy as np
 
 from ..errors import ProblemError
 from ..problems.scenes import Chain
+from .elastic import compliances
+
+#: a state whose chain moves along x by more than RUNAWAY · ℓ has no equilibrium
+RUNAWAY = 10.0
 
 _OUTER: list = []  # the compiled outer step (model/friction_outer.py), once loaded
 
@@ -26,11 +31,37 @@ def outer_kernels():
     return _OUTER[0]
 
 
+def frictional_chain_args(chain: Chain) -> tuple:
+    """The chain's arrays as :mod:`lcpbench.model.friction_outer` takes them, once per
+    chain: joints, springs, rest angles, loads, the walls' rows and tables of cubic
+    pieces (:meth:`~lcpbench.problems.walls.WallProfile.pieces` over the x a chain that
+    runs away reaches; empty: flat; a profile without one refused) and compliances."""
+    def make():
+        f64 = np.ascontiguousarray
+        L = float(chain.length)
+        reach = (-(RUNAWAY + 1.0) * L, (RUNAWAY + 2.0) * L)
+        tables = []
+        for side, profile in (("upper", chain.upper_profile), ("lower", chain.lower_profile)):
+            table = None if profile is None else profile.pieces(*reach)
+            if profile is not None and table is None:
+                raise ProblemError(f"wall_profile ({side} wall): the frictional step reads a "
+                                   "wall as a table of cubic pieces, and this profile needs "
+                                   "more of them than MAX_PIECES")
+            tables += ([np.zeros(0), np.zeros((4, 0))] if table is None else
+                       [f64(table[0], dtype=float), f64(table[1], dtype=float)])
+        c_up, c_lo = compliances(chain)
+        return (f64(chain.joint_links[:, 0], dtype=np.int64),
+                f64(chain.joint_links[:, 1], dtype=np.int64),
+                f64(chain.joint_stiffness, dtype=float), f64(chain.rest_joint, dtype=float),
+                f64(chain.nodal_load, dtype=float), f64(chain.upper, dtype=float),
+                f64(chain.lower, dtype=float), *tables, f64(c_up, dtype=float),
+                f64(c_lo, dtype=float))
+    return chain.derived("friction: kernel arrays", make)
+
+
 def walls_at_x(chain: Chain, x: np.ndarray):
     """(h, l, h', l') per free node at every node's x ``x`` (mm; ±inf: no row):
     :func:`lcpbench.model.friction_outer.node_walls`."""
-    from .friction_driver import frictional_chain_args
-
     arrays = frictional_chain_args(chain)
     xf = np.ascontiguousarray(np.asarray(x, dtype=float)[chain.free_nodes])
     return outer_kernels().node_walls(xf, *arrays[5:11])
