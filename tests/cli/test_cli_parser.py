@@ -45,7 +45,7 @@ def test_help_exits_0(capsys, argv):
     assert out.out.startswith("usage: lcpbench") and out.err == ""
 
 
-@pytest.mark.parametrize("argv", map(list, COMMANDS), ids=" ".join)
+@pytest.mark.parametrize("argv", [list(c) for c in COMMANDS], ids=" ".join)
 def test_unknown_option_exit_2_one_line(capsys, argv):
     assert main([*argv, "--no-such-option"]) == 2
     out = capsys.readouterr()
