@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..linalg.ldl_kernel import refactor
+from ..linalg.ldl_kernel import refactor, resolve_columns
 from ..solvers.pivoting_kernel import DONE, support_pivots, symmetric_active_set
 from .compiled_kernel import banded_step, geometric_bands
 
@@ -180,29 +180,6 @@ def _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, D, frict
         for c in range(cols):
             X[ny, c] = BT[c, ny] / k_tau
     return np.ascontiguousarray(BT.T), X, ok
-
-
-@njit(cache=True)
-def resolve_columns(fac, X, ny):
-    """Overwrites the first ``ny`` rows of X (ny × cols, row-major) with L D Lᵀ's
-    solution, each column by the operations of
-    :func:`lcpbench.linalg.ldl_kernel.resolve` in its order (the same bits), the columns
-    side by side (the inner loop runs along a row: contiguous, vectorised)."""
-    cols = X.shape[1]
-    for j in range(1, ny):  # forward: x_j −= L_(j,j−2) x_(j−2), then L_(j,j−1) x_(j−1)
-        for c in range(cols):
-            t = X[j, c]
-            if j >= 2:
-                t -= fac[2, j - 2] * X[j - 2, c]
-            X[j, c] = t - fac[1, j - 1] * X[j - 1, c]
-    for j in range(ny - 1, -1, -1):  # backward: x_j = x_j / D_j − L_(j+2,j) x_(j+2) − …
-        for c in range(cols):
-            t = X[j, c] * fac[0, j]
-            if j + 2 < ny:
-                t -= fac[2, j] * X[j + 2, c]
-            if j + 1 < ny:
-                t -= fac[1, j] * X[j + 1, c]
-            X[j, c] = t
 
 
 @njit(cache=True)
