@@ -160,8 +160,8 @@ def kernel_parts(scene, small, repeat: int) -> dict:
     """The solve kernel and the judge kernel alone, and whole solves at N = 12 and 140:
     after a 100 ms busy loop, then right after themselves."""
     from lcpbench.model.compiled import DEFAULT_TOL
-    from lcpbench.model.judge_compiled import _kernel as judge_kernel
-    from lcpbench.model.judge_compiled import chain_args
+    from lcpbench.model.judge import _kernel as judge_kernel
+    from lcpbench.model.judge import chain_args
     from lcpbench.model.kernel_call import cold_start, kernel_args, solve_kernel
 
     chain = scene.chain()

@@ -7,7 +7,7 @@ by the kernels' sources, so it serves at most one of the two), interleaved:
    h = 3 mm, tol 1e-3): called from Python, and ``--loop`` calls in a row inside
    one compiled loop (no dispatch, warm caches);
 2. ``lcpbench.solve`` of that scene, the judge kernel swapped in
-   :mod:`lcpbench.model.judge_compiled` (both behind the same adapter);
+   :mod:`lcpbench.model.judge` (both behind the same adapter);
 3. ``lcpbench.solve_many`` over the paper's 108 scenes (θ 10-180 by 10, h 2-7),
    CPU time, with the line kernel (:mod:`lcpbench.model.batch_kernel`) compiled
    against each judge: this tree's ``batch_kernel.py`` with its judge import and
@@ -97,7 +97,7 @@ def line_kernel(where: Path, judge: str | None, nine: bool, twice: bool):
 
 
 class Adapter:
-    """A judge kernel module as judge_compiled uses it: judge_answer returning
+    """A judge kernel module as model.judge uses it: judge_answer returning
     (code, stats, fu, fl, torque residual), whatever the kernel returns."""
 
     def __init__(self, module, nine: bool):
@@ -138,7 +138,7 @@ def main(argv=None) -> int:
 
     import lcpbench
     from lcpbench import ActuatorScene, numba_cache
-    from lcpbench.model import judge_compiled
+    from lcpbench.model import judge as judge_module
     from lcpbench.model.kernel_call import kernel_args, run_compiled
 
     numba_cache.use_aot(False)
@@ -153,7 +153,7 @@ def main(argv=None) -> int:
     scene = ActuatorScene(theta=150.0, height=3.0, links=140)
     chain = scene.chain()
     args = kernel_args(chain)
-    jargs = judge_compiled.chain_args(chain, args)
+    jargs = judge_module.chain_args(chain, args)
     out, _ = run_compiled(chain, tol=TOL, args=args)
     sizes = np.array([s.max_dalpha for s in out.steps])
     call = (out.alpha, *jargs, out.forces_upper, out.forces_lower, TOL, sizes)
@@ -163,7 +163,7 @@ def main(argv=None) -> int:
     np.testing.assert_array_equal(ro[2], rn[2])
 
     def use_judge(which, twice=False):
-        judge_compiled._KERNEL[:] = [adapters[which]]
+        judge_module._KERNEL[:] = [adapters[which]]
         numba_cache._LOADED["lcpbench.model.batch_kernel"] = lines[which, twice]
 
     scenes = paper_scenes()
@@ -209,7 +209,7 @@ def main(argv=None) -> int:
                                 time.process_time)
                     row.setdefault(BATCH[twice], []).append(1e6 * cpu / len(scenes))
                 row.setdefault(JUDGED, []).append(row[BATCH[True]][-1] - row[BATCH[False]][-1])
-    judge_compiled._KERNEL.clear()
+    judge_module._KERNEL.clear()
     numba_cache._LOADED.pop("lcpbench.model.batch_kernel", None)
     load1 = os.getloadavg()
     print(f"judge kernel: {opts.before} (before) against this tree (after); N = 140, tol 1e-3; "

@@ -63,6 +63,13 @@ def _solve_kernel(package: str):
         return importlib.import_module(f"{package}.model.compiled")._kernel()
 
 
+def _judge_kernel(package: str):
+    try:
+        return importlib.import_module(f"{package}.model.judge")._kernel()
+    except AttributeError:  # a tree before the judge's numpy twin was removed
+        return importlib.import_module(f"{package}.model.judge_compiled")._kernel()
+
+
 class Tree:
     """One tree's solve, scene class and kernel modules."""
 
@@ -72,8 +79,7 @@ class Tree:
         self.solve = api.solve
         self.Scene = importlib.import_module(f"{package}.problems.scenes").ActuatorScene
         self.first = self.solve(self.Scene(**SCENE), tol=TOL)  # loads the kernels
-        self.kernels = (_solve_kernel(package),
-                        importlib.import_module(f"{package}.model.judge_compiled")._kernel())
+        self.kernels = (_solve_kernel(package), _judge_kernel(package))
         self.served = "AOT" if type(self.kernels[0]).__name__ == "AotKernels" else "JIT"
 
     def block(self, n: int, same: bool) -> tuple[float, float]:

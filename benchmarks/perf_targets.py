@@ -106,8 +106,8 @@ def parts(med, repeat: int) -> dict:
     """Each part of one default solve timed alone (medians, µs): where the time goes."""
     from lcpbench.model.compiled import step_request
     from lcpbench.model.finish import finish
-    from lcpbench.model.judge_compiled import _kernel as judge_kernel
-    from lcpbench.model.judge_compiled import chain_args
+    from lcpbench.model.judge import _kernel as judge_kernel
+    from lcpbench.model.judge import chain_args
     from lcpbench.model.kernel_call import kernel_args, run_compiled, solve_kernel
     from lcpbench.model.wall_free import solve_without_contact
 
@@ -126,7 +126,7 @@ def parts(med, repeat: int) -> dict:
         o = type(out)(**vars(out))
         return finish(scene, chain, o, solver="active-set", method="globalised", tol=TOL,
                       elapsed=0.0, settings="default", engine="compiled",
-                      compiled_judge=True, why=None, judge_args=jargs)
+                      why=None, judge_args=jargs)
 
     fns = {
         "lcpbench.solve, whole call": lambda: lcpbench.solve(scene, tol=TOL),

@@ -60,7 +60,7 @@ class _Replay:
 
 
 def _kernels():
-    from lcpbench.model.judge_compiled import _kernel as judge_kernel
+    from lcpbench.model.judge import _kernel as judge_kernel
     from lcpbench.model.kernel_call import solve_kernel
     from lcpbench.studies.batch_line import _kernel as line_kernel
 

@@ -22,9 +22,9 @@ from .errors import ProblemError
 from .escalations import Context, escalate
 from .model.compiled import check_engine, drive, profile_reference, reference, run_kernel
 from .model.driver import METHODS
-from .model.finish import fast_judge, finish
+from .model.finish import finish
 from .model.formulations import handed, resolve_formulation
-from .model.judge_compiled import chain_args
+from .model.judge import chain_args, judge
 from .model.kernel_call import (
     BAIL_REASONS,
     call_kernel,
@@ -292,8 +292,7 @@ def run_plan(plan: Plan, scene, ctx: Context, begin: DriverStart | None,
                                   args=args)
         res = finish(scene, chain, out, solver=ctx.backend, method=ctx.method, tol=ctx.tol,
                      elapsed=time.perf_counter() - t0, settings=ctx.settings, engine=used,
-                     compiled_judge=plan.judge == "compiled", why=ctx.why,
-                     judge_args=None if args is None else chain_args(chain, args),
+                     why=ctx.why, judge_args=None if args is None else chain_args(chain, args),
                      pressure_limit=ctx.pressure_limit, route=plan.route)
     return res if res.converged else escalate(res, ctx, plan.escalations)
 
@@ -308,7 +307,7 @@ def _load_path(plan: Plan, scene, ctx: Context, t0: float) -> ContactResult:
     if out is not None:
         res = finish(scene, ctx.chain, out, solver=ctx.backend, method=ctx.method,
                      tol=ctx.tol, elapsed=time.perf_counter() - t0, settings=ctx.settings,
-                     engine=used, compiled_judge=plan.judge == "compiled", why=ctx.why,
+                     engine=used, why=ctx.why,
                      pressure_limit=ctx.pressure_limit, route=plan.route)
         if res.converged:
             return res
@@ -348,7 +347,7 @@ def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_ou
             settings=settings)
         return finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol,
                       elapsed=time.perf_counter() - t0, settings=settings, engine=used,
-                      compiled_judge=True, why=why, judge_args=chain_args(chain, args),
+                      why=why, judge_args=chain_args(chain, args),
                       pressure_limit=pressure_limit, route=route)
     elapsed = time.perf_counter() - t0
     judge_args = chain_args(chain, args)
@@ -357,13 +356,13 @@ def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_ou
                     pressure_limit=pressure_limit, route=route)
     jk = _JUDGE[0] if _JUDGE else _judge_kernels()
     if code != jk[0].CONVERGED:  # the driver's failure: judged at once, as always
-        return build(judged=partial(fast_judge(), args=judge_args))
+        return build(judged=partial(judge, args=judge_args))
     alpha, rec, count, R = got[1], got[6], got[7], got[9]
-    judge, f64 = jk[1], _contiguous  # (numpy's own float64: the AOT kernels' quick check)
-    settled_code, st, fu, fl, tres = (judge.judge_walls if profile else judge.judge_answer)(
+    kern, f64 = jk[1], _contiguous  # (numpy's own float64: the AOT kernels' quick check)
+    settled_code, st, fu, fl, tres = (kern.judge_walls if profile else kern.judge_answer)(
         f64(alpha, dtype=float), *judge_args, f64(R, dtype=float).copy(), np.zeros(R.size), tol,
         f64(rec[2, :count], dtype=float).copy())
-    settled = bool(settled_code == judge.SETTLED)
+    settled = bool(settled_code == kern.SETTLED)
     forces = fu if settled else R.copy()  # build_result's: the judge's R, else the driver's
     return lazy_result(LazyResult, {
         "scene": scene, "links": chain.links, "alpha": alpha, "forces": forces,
@@ -373,7 +372,7 @@ def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_ou
         "solver": DEFAULT, "method": method, "tol": tol, "time_s": elapsed,
         "pressure_limit": pressure_limit, "route": route, "engine": "compiled",
         "judge": "compiled", "retries": ()},
-        partial(build, judged=stats_judge(settled, judge.STATS, st, fu, fl, tres)))
+        partial(build, judged=stats_judge(settled, kern.STATS, st, fu, fl, tres)))
 
 
 def _built(scene, chain, got: tuple, kernel_s: float, name: str, *, method: str, tol: float,
@@ -383,7 +382,7 @@ def _built(scene, chain, got: tuple, kernel_s: float, name: str, *, method: str,
     out = kernel_output(chain, *got, elapsed=kernel_s, settings=name, max_outer=max_outer,
                         tol=tol)
     return finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol, elapsed=elapsed,
-                  settings=settings, engine="compiled", compiled_judge=True, why=why,
+                  settings=settings, engine="compiled", why=why,
                   judged_by=judged, pressure_limit=pressure_limit, route=route)
 
 
@@ -395,10 +394,11 @@ _contiguous = np.ascontiguousarray
 
 
 def _judge_kernels() -> tuple:
-    from .model import judge_compiled, kernel_call
+    from .model import judge as judge_module
+    from .model import kernel_call
     from .numba_cache import held, kernel_module
 
-    found = (kernel_call.solve_kernel(), judge_compiled._kernel(),
+    found = (kernel_call.solve_kernel(), judge_module._kernel(),
              kernel_module("lcpbench.model.batch_verdict", "accepted"))
     held(_JUDGE).append(found)
     return found

@@ -39,7 +39,6 @@ from .model.chain import energy
 from .model.compiled import drive, heavy
 from .model.finish import finish
 from .model.judge import Judgement, force_tol
-from .model.kernel_call import applies as kernel_applies
 from .model.outer import DriverOutput, DriverStart
 from .model.ramp import follow_load
 from .model.result import ContactResult, ReachedState, Retry
@@ -126,15 +125,11 @@ def _keep_extra(res: ContactResult, again: ContactResult) -> None:
 
 
 def _judged(res: ContactResult, ctx: Context, chain: Chain, out: DriverOutput, used: str,
-            t0: float, *, compiled_judge: bool) -> ContactResult:
+            t0: float) -> ContactResult:
     return finish(res.scene, chain, out, solver=res.solver, method=ctx.method, tol=ctx.tol,
                   elapsed=res.time_s + time.perf_counter() - t0, settings=ctx.settings,
-                  engine=used, compiled_judge=compiled_judge, why=ctx.why,
+                  engine=used, why=ctx.why,
                   pressure_limit=ctx.pressure_limit, route=res.route)
-
-
-def _kernel_judge(ctx: Context) -> bool:
-    return ctx.engine != "numpy" and kernel_applies(DEFAULT, "globalised", ctx.chain)
 
 
 # -- in increments ------------------------------------------------------------------
@@ -172,7 +167,7 @@ def in_increments(res: ContactResult, ctx: Context) -> tuple[ContactResult, str]
     out, used = drive(chain, ctx.make_step(), backend=ctx.backend, settings=ctx.settings,
                       engine=ctx.engine, tol=ctx.tol, max_outer=_left(res, ctx),
                       method=ctx.method, start=DriverStart(np.asarray(res.alpha, dtype=float)))
-    again = _judged(res, ctx, chain, out, used, t0, compiled_judge=False)
+    again = _judged(res, ctx, chain, out, used, t0)
     told = (f"the judge in node heights did not certify the answer ({judgement.reason}); at "
             f"N = {chain.links} their round-off (cond H · ε = "
             f"{large_n.heights_condition(chain.links) * np.finfo(float).eps:.1e}) may reach "
@@ -214,7 +209,7 @@ def tightened(res: ContactResult, ctx: Context) -> tuple[ContactResult, str]:
                       start=DriverStart(np.asarray(res.alpha, dtype=float),
                                         res.extra.get("last_step")))
     out.steps = [*res.steps, *out.steps]  # judged, and reported, as one run
-    again = _judged(res, ctx, ctx.chain, out, used, t0, compiled_judge=_kernel_judge(ctx))
+    again = _judged(res, ctx, ctx.chain, out, used, t0)
     told = (f"refused on the force error bound alone ({judgement.reason}); continued from "
             f"its angles at driver tolerance {TIGHTER * ctx.tol:.1e} rad")
     if not again.converged:
@@ -230,7 +225,7 @@ def _restart_judged(res: ContactResult, ctx: Context, out: DriverOutput, used: s
     continued as :func:`tightened` continues a refusal on the force bound alone."""
     again = finish(res.scene, ctx.chain, out, solver=res.solver, method=ctx.method,
                    tol=ctx.tol, elapsed=elapsed, settings=ctx.settings, engine=used,
-                   compiled_judge=_kernel_judge(ctx), why=ctx.why,
+                   why=ctx.why,
                    pressure_limit=ctx.pressure_limit, route=res.route)
     planned = ESCALATIONS["tightened"].planned(ctx.chain, ctx.backend, ctx.method, ctx.tol)
     return escalate(again, ctx, ("tightened",) if planned else ())

@@ -61,6 +61,7 @@ from dataclasses import dataclass
 from .escalations import ESCALATIONS
 from .model import angle_step, heavy_driver, large_n
 from .model.compiled import direct
+from .model.judge import judged_in
 from .model.kernel_call import applies, profile_applies
 from .problems.scenes import Chain
 from .solvers.registry import DEFAULT, get_backend
@@ -92,10 +93,12 @@ class Plan:
     engine : the engine the route plans for ("compiled", "compiled driver", "numpy";
         the load path's and "heights, then SQP"'s are their steps' engine).
     kernel_takes : whether the compiled kernels take the chain (engine not "numpy", a
-        layout the solve kernel takes, whichever back-end): the wall-free search and
-        the result judge then run compiled.
-    judge : the result judge planned: "compiled" (the judge kernel: ``kernel_takes``
-        and N < ``LARGE_N``) or "numpy" (the reference; in increments from ``LARGE_N``).
+        layout the solve kernel takes, whichever back-end): the wall-free search then
+        runs compiled.
+    judge : where the result judge takes its exact steps
+        (:func:`lcpbench.model.judge.judged_in`): "compiled" (the judge kernel, in node
+        heights, whatever back-end and engine) or "numpy" (in increments, from
+        ``LARGE_N`` links).
     fallback : the load path's cold plan (None for every other route).
     """
 
@@ -116,8 +119,7 @@ def make_plan(chain: Chain, backend: str, method: str, engine: str, tol: float,
     ``tol`` (rad), ``start`` (one of :data:`STARTS`) and the step ``scaled`` or not.
     The arguments are :func:`lcpbench.solve`'s, checked."""
     takes = _kernel(chain, DEFAULT, "globalised", engine)
-    judged = takes or (engine != "numpy" and profile_applies(DEFAULT, "globalised", chain))
-    judge = "compiled" if judged and not large_n.applies(chain) else "numpy"
+    judge = judged_in(chain)
     if start == "ramp":
         cold = make_plan(chain, backend, method, engine, tol, "cold", scaled=scaled)
         return Plan("load path", "ramp", (), cold.engine, takes, judge, fallback=cold)

@@ -179,7 +179,7 @@ def test_a_back_end_off_by_just_under_the_floor_is_not_certified_wrong():
 
     out = run_large(chain, adversary, tol=1e-9)
     res = finish(scene, chain, out, solver="active-set", method="globalised", tol=1e-9,
-                 elapsed=0.0, settings="default", engine="adversary", compiled_judge=False,
+                 elapsed=0.0, settings="default", engine="adversary",
                  why=None)
     F0 = honest.judgement.force_unit
     assert moved and max(moved) > force_tol(1e-9) * F0  # the adversary moved the forces

@@ -96,10 +96,10 @@ def test_restarted_and_reference_walks_take_the_same_path(links, shrink):
 
 
 def test_large_n_answers_are_judged_by_the_judge_in_increments(monkeypatch):
-    # the compiled judge's exact step is in heights on the Cholesky of H (round-off ~ N⁴);
-    # from LARGE_N the numpy judge takes its step in increments on the tridiagonal factor
+    # the judge kernel's exact step is in heights on the Cholesky of H (round-off ~ N⁴);
+    # from LARGE_N the judge takes its step in increments on the tridiagonal factor
     import lcpbench
-    from lcpbench.model import judge_exact as judge_module  # the numpy judge's steps
+    from lcpbench.model import judge_exact as judge_module  # the judge's steps in increments
     from lcpbench.model.large_n import LARGE_N
 
     calls = []
@@ -120,9 +120,9 @@ def test_large_n_answers_are_judged_by_the_judge_in_increments(monkeypatch):
 @pytest.mark.parametrize("links,shrink,start", [(60, 1.0, "none"), (60, 0.9, "all"),
                                                  (4200, 1.0, "none")])
 def test_the_judges_primal_step_reaches_the_steps_solution(links, shrink, start):
-    # the judge's own step at large N (model/judge_large.py) against the dual walk
+    # the judge's own step in increments (model/judge_exact.py) against the dual walk
     # (solvers/banded.py), an independent method, on the same step in increments
-    from lcpbench.model.judge_large import primal_step
+    from lcpbench.model.judge_exact import primal_step
 
     chain = ActuatorScene(150, 3.0, links=links).chain()
     _, alpha = feasible_start(chain, chain.rest_alpha * shrink)

@@ -26,7 +26,7 @@ from lcpbench.api import solve_internal
 from lcpbench.escalations import Context, escalate
 from lcpbench.model import compiled, kernel_call
 from lcpbench.model.finish import finish
-from lcpbench.model.judge_compiled import chain_args
+from lcpbench.model.judge import chain_args
 from lcpbench.model.lazy_result import LAZY, LazyResult
 from lcpbench.model.result import ContactResult
 from lcpbench.model.step_solver import make_step_solver
@@ -50,7 +50,7 @@ def _full(scene, **kw):
         tol=tol, max_outer=max_outer, method=method, args=args)
     why = "auto: the built-in active set (exact)"
     res = finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol, elapsed=0.0,
-                 settings="default", engine=used, compiled_judge=True, why=why,
+                 settings="default", engine=used, why=why,
                  judge_args=chain_args(chain, args), route="one-wall kernel")
     # then, as solve() does, a refusal solved further (its plan's escalations)
     ctx = Context(chain, partial(make_step_solver, DEFAULT, "default", True), DEFAULT,
@@ -179,7 +179,7 @@ def test_channels_and_the_numpy_engine_keep_the_full_build():
     channel = lcpbench.solve(ActuatorScene(theta=170, height=2.5, links=30, channel=True))
     assert type(channel) is ContactResult and channel.converged
     ref = solve_internal(ActuatorScene(theta=150, height=3.0, links=30), engine="numpy")
-    assert type(ref) is ContactResult and ref.judge == "numpy"
+    assert type(ref) is ContactResult and ref.judge == "compiled"  # the one judge
 
 
 def test_a_verdict_set_by_hand_stays_and_a_verdict_unlike_the_judges_is_caught(
@@ -211,7 +211,7 @@ def test_a_verdict_set_by_hand_stays_and_a_verdict_unlike_the_judges_is_caught(
 def test_the_compiled_verdict_is_the_judges_on_any_stats():
     """``batch_verdict.accepted`` (the one-wall route's and a batch line's verdict, set
     before the reasons are built) against the judge's own checks on the same numbers
-    (:func:`~lcpbench.model.judge_compiled.verdict_from_stats`, the reasons of
+    (:func:`~lcpbench.model.judge.verdict_from_stats`, the reasons of
     :func:`lcpbench.model.judge.judge`): the same verdict on random stats of every sign
     and scale, NaN and ±inf among them, settled or not, at any tol. A difference would
     let a converged flag stand that the judge's reasons refuse.
@@ -219,7 +219,7 @@ def test_the_compiled_verdict_is_the_judges_on_any_stats():
     Route against route: the compiled verdict must mirror the judge's checks exactly,
     on any numbers; an oracle of the verdicts (answers with known defects) is
     tests/model/test_judge.py's."""
-    from lcpbench.model.judge_compiled import verdict_from_stats
+    from lcpbench.model.judge import verdict_from_stats
     from lcpbench.numba_cache import kernel_module
 
     names = kernel_module("lcpbench.model.judge_kernel", "judge_answer").STATS

@@ -6,23 +6,21 @@ from __future__ import annotations
 from collections.abc import Callable
 from functools import partial
 
-from . import large_n
-from .judge import judge
+from .judge import judge, judged_in
 from .result import ContactResult, build_result
 
 
 def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: float,
-           settings, engine: str, compiled_judge: bool, why: str | None,
+           settings, engine: str, why: str | None,
            judge_args: tuple | None = None,
            pressure_limit: float | None = None,
            judged_by: Callable | None = None, route: str = "") -> ContactResult:
     """The judged result of a driver run.
 
-    Judged by the compiled judge (the same checks and verdicts as the numpy judge,
-    independent of the solve kernel) where ``compiled_judge`` (it takes the chain,
-    whichever back-end solved the steps); engine="numpy" keeps the numpy judge, the
-    reference. ``judge_args``: the chain's arrays for the judge kernel, when the
-    caller has them (:func:`lcpbench.model.judge_compiled.chain_args`). ``judged_by``:
+    Judged by :func:`lcpbench.model.judge.judge` whichever back-end and engine solved
+    the steps (the judge kernel, independent of the solve kernel; in increments from
+    ``LARGE_N`` links). ``judge_args``: the chain's arrays for the judge kernel, when the
+    caller has them (:func:`lcpbench.model.judge.chain_args`). ``judged_by``:
     the judgement already made (a batch line's, from the judge kernel's numbers), in
     place of the judge call. ``engine`` (what produced ``out``), the judge that ran and
     ``route`` are the result's typed fields of the same names."""
@@ -30,16 +28,14 @@ def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: 
         out.reason = ("theta > 180 deg: the end links start beyond the vertical, where the "
                       "linearisation of eq. (20) is singular for a cold start; start='ramp' "
                       f"follows the load from zero instead ({out.reason})")
-    compiled_judge = compiled_judge and not large_n.applies(chain)  # large N: increments
+    where = judged_in(chain)
     if judged_by is None:
         judged_by = judge
-        if compiled_judge:
-            judged_by = fast_judge()
-            if judge_args is not None:
-                judged_by = partial(judged_by, args=judge_args)
+        if judge_args is not None and where == "compiled":
+            judged_by = partial(judge, args=judge_args)
     res = build_result(scene, chain, out, solver=solver, method=method, tol=tol,
                        time_s=elapsed, judged_by=judged_by, route=route, engine=engine,
-                       judge="compiled" if compiled_judge else "numpy")
+                       judge=where)
     res.extra["last_step"] = out.last_step  # what a continuation hands the next scene
     res.extra["settings"] = settings if isinstance(settings, str) else "custom"
     res.pressure_limit = pressure_limit
@@ -48,17 +44,4 @@ def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: 
     return res
 
 
-_FAST: list = []  # judge_fast, once imported
-
-
-def fast_judge() -> Callable:
-    """:func:`lcpbench.model.judge_compiled.judge_fast`, imported at its first use."""
-    if _FAST:
-        return _FAST[0]
-    from .judge_compiled import judge_fast
-
-    _FAST.append(judge_fast)
-    return judge_fast
-
-
-__all__ = ["fast_judge", "finish"]
+__all__ = ["finish"]

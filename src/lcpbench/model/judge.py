@@ -40,7 +40,7 @@ judge step holds a node in contact by the wall's spring instead of on it.
    the joint torques in balance to max(10 tol, 1e-6) of the spring torques.
 7. **force error bound**: lcpbench takes contact steps itself, solved exactly by
    block principal pivoting, independent of every back-end
-   (:mod:`lcpbench.model.judge_exact`, compiled in :mod:`lcpbench.model.judge_kernel`):
+   (:mod:`lcpbench.model.judge_kernel`; in increments :mod:`lcpbench.model.judge_exact`):
    the *judge step* at the final α from the answer's contact set (forces F_{k+1}),
    and a second one at α₁, where the first moves the chain, from the first's contact
    set (F_{k+2}). If the answer's forces are F_k and the outer iteration contracts
@@ -82,7 +82,21 @@ lagged multipliers.
 
 The contact set reported with a result counts nodes whose reaction exceeds
 ε_R (so no 5e-10 N "contacts"). Every threshold is in :data:`THRESHOLDS` and
-docs/solvers.md.
+docs/solvers.md; their values in :mod:`lcpbench.thresholds`.
+
+**Where the numbers come from.** This module is the rules' Python face: the
+:class:`Judgement`, its reasons (:func:`failed_checks`) and the thresholds. Every
+number it judges by comes from compiled functions, called from Python through
+:func:`lcpbench.numba_cache.kernel_module` (``NUMBA_DISABLE_JIT=1`` runs the same
+functions as plain Python, the debugging path): the judge kernel
+(:func:`lcpbench.model.judge_kernel.judge_walls`: its own assembly, its exact steps,
+the certificate and checks 3-8), the force error bound
+(:mod:`lcpbench.model.judge_bound`) and the stability check
+(:mod:`lcpbench.model.stability_kernel`). The kernel takes its exact steps in node
+heights; where the solve is in increments (from ``LARGE_N`` links, or a chain marked
+``increments``) the judge's steps are too (:mod:`lcpbench.model.judge_exact`), and
+checks 3-5 are taken here on them. The judge shares no code with the solve kernel: it
+checks the answer, it does not repeat the solve.
 """
 
 from __future__ import annotations
@@ -103,6 +117,7 @@ from ..thresholds import (  # the rule's numbers, read by the judge kernel too
     NODE_GROSS,
     NODE_SHARE,
 )
+from . import large_n
 from .chain import heights
 from .elastic import compliances
 from .judge_exact import JudgeStep, judge_step, split_reactions  # noqa: F401 (public names)
@@ -137,6 +152,41 @@ def force_tol(tol: float) -> float:
     min(1e-3, 100·tol). 1e-3 is the paper's agreement criterion (Fig. 26); 100·tol
     is what an exact step solver reaches at driver tolerance tol."""
     return min(FORCE_TOL_CAP, FORCE_TOL_PER_RAD * float(tol))
+
+
+@dataclass
+class Certificate:
+    """How well a configuration and its reactions satisfy the exact problem.
+
+    Computed from the final link angles by exact forward kinematics and
+    statics — not from the linearised step — so it says the same thing
+    whichever back-end or scheme produced the answer.
+
+    Attributes
+    ----------
+    min_gap : smallest distance of any node to a wall (mm); < 0 is penetration.
+        At an elastic wall the compliant gap g + R/k (0 for a node in contact).
+    min_force : smallest reaction (N); < 0 would be a wall pulling.
+    complementarity : largest |g_i R_i| over the nodes (N·mm).
+    closure : |y| of the right pin, which must lie on y = 0 (mm); 0 for a free end.
+    torque_residual : per joint, spring torque k(φ − φ*) minus the moment the
+        forces demand (N·mm).
+    max_torque_residual : its largest magnitude (N·mm).
+    relative_torque_residual : that, over the largest spring torque (at least EI/ℓ).
+    """
+
+    min_gap: float
+    min_force: float
+    complementarity: float
+    closure: float
+    torque_residual: np.ndarray
+    max_torque_residual: float
+    relative_torque_residual: float
+
+    def to_dict(self) -> dict:
+        d = asdict(self)
+        d["torque_residual"] = self.torque_residual.tolist()
+        return d
 
 
 @dataclass
@@ -178,6 +228,21 @@ class Judgement:
         return d
 
 
+def _kernel():
+    """The judge kernel's module (numba imported, the kernel loaded, at the first call)."""
+    return _KERNEL[0] if _KERNEL else _load_kernel()
+
+
+_KERNEL: list = []  # the kernel module, once loaded (emptied by numba_cache.use_aot)
+
+
+def _load_kernel():
+    from ..numba_cache import held, kernel_module  # numba at the first judgement, not at import
+
+    held(_KERNEL).append(kernel_module("lcpbench.model.judge_kernel", "judge_answer"))
+    return _KERNEL[0]
+
+
 def _bound_kernel():
     """The compiled force error bound (:mod:`lcpbench.model.judge_bound`), numba at the
     first call."""
@@ -194,25 +259,129 @@ def contraction_estimate(step_sizes: list[float], judge_dalpha: float) -> float:
                                              float(judge_dalpha)))
 
 
+def takes(chain: Chain) -> bool:
+    """Whether the judge kernel takes this chain: consecutive joints, contiguous free
+    nodes (the solve kernel's layouts, :func:`lcpbench.model.kernel_call.applies`), flat
+    walls or walls of a profile with a table of cubic pieces."""
+    from .kernel_call import applies, profile_applies
+
+    return applies("auto", "globalised", chain) or profile_applies("auto", "globalised", chain)
+
+
+def judged_in(chain: Chain) -> str:
+    """Where :func:`judge` takes its exact steps: "numpy" in increments
+    (:mod:`lcpbench.model.judge_exact`, from ``LARGE_N`` links or a chain marked
+    ``increments``), else "compiled" (the judge kernel, in node heights); the
+    result's ``judge`` field."""
+    return "numpy" if large_n.applies(chain) else "compiled"
+
+
+def chain_args(chain: Chain, kernel_args: tuple | None = None) -> tuple:
+    """The chain's arrays in the order :func:`judge_kernel.judge_answer` takes them
+    (``kernel_args``: the solve kernel's, :func:`lcpbench.model.kernel_call.kernel_args`,
+    when the caller has them: the same arrays, so none is copied twice)."""
+    if kernel_args is None:
+        from .kernel_call import kernel_args as solve_args
+
+        kernel_args = solve_args(chain)
+    args = (*kernel_args[1:], float(chain.wall), bool(chain.channel))
+    if chain.profiled_walls:  # (judge_walls: the walls' tables after these)
+        from .kernel_call import profile_args
+
+        return (*args, *profile_args(chain)[4:8])
+    return args
+
+
+_contiguous = np.ascontiguousarray
+
+
 def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
           forces_lower: np.ndarray, *, tol: float, driver_converged: bool,
           driver_reason: str, step_statuses: list[str], step_sizes: list[float],
-          certificate) -> Judgement:
+          certificate, args: tuple | None = None) -> Judgement:
     """Judge an answer: link angles ``alpha`` and reactions R (N) on the free nodes.
 
     ``step_statuses`` are lcpbench's verdicts of the contact steps taken,
     ``step_sizes`` their max|Δα|; ``certificate`` the exact-geometry
     :class:`~lcpbench.model.result.Certificate` of the answer, or a callable
     ``(upper, lower) -> Certificate`` that the judge calls on the reactions it
-    reports (round-off set to zero); the one it used is ``judgement.certificate``.
+    reports (round-off set to zero), used where the judge kernel does not make its
+    own (a driver that did not converge, a judge in increments); the one it used is
+    ``judgement.certificate``. ``args``: the chain's :func:`chain_args`, when the
+    caller has them already.
     """
+    if not driver_converged or large_n.applies(chain) or (args is None and not takes(chain)):
+        return _judge_in_python(chain, alpha, forces_upper, forces_lower, tol=tol,
+                                driver_converged=driver_converged,
+                                driver_reason=driver_reason, step_statuses=step_statuses,
+                                step_sizes=step_sizes, certificate=certificate)
+    k = _KERNEL[0] if _KERNEL else _load_kernel()
+    if args is None:
+        args = chain_args(chain)
+    entry = k.judge_walls if len(args) > 16 else k.judge_answer
+    code, st, fu, fl, res = entry(
+        _contiguous(alpha, dtype=float), *args, _contiguous(forces_upper, dtype=float),
+        _contiguous(forces_lower, dtype=float), float(tol), np.array(step_sizes, dtype=float))
+    return verdict_from_stats(code == k.SETTLED, dict(zip(k.STATS, st.tolist(), strict=True)),
+                              fu, fl, res, tol=tol, driver_reason=driver_reason,
+                              step_statuses=step_statuses)
+
+
+def verdict_from_stats(settled: bool, s: dict, fu: np.ndarray, fl: np.ndarray,
+                       torque_residual: np.ndarray, *, tol: float, driver_reason: str,
+                       step_statuses: list[str]) -> Judgement:
+    """The Judgement (and its Certificate) from the judge kernel's numbers (``s``: its
+    ``stats`` by name, :data:`lcpbench.model.judge_kernel.STATS`), check by check."""
+    tau, F0 = s["tau"], s["F0"]
+    verdict = Judgement(False, driver_reason, tau, F0, contact_threshold=s["eps_R"])
+    if settled:
+        verdict.forces_upper, verdict.forces_lower = fu, fl
+    cert = Certificate(min_gap=s["min_gap"], min_force=s["min_force"],
+                       complementarity=s["complementarity"], closure=s["closure"],
+                       torque_residual=torque_residual,
+                       max_torque_residual=s["max_torque_residual"],
+                       relative_torque_residual=s["relative_torque_residual"])
+    verdict.certificate = cert
+    verdict.inexact_steps = sum(st != "solved" for st in step_statuses)
+    unstable = s["unstable"]
+    verdict.unstable_directions = int(unstable) if np.isfinite(unstable) else None
+    bound = None
+    if settled:
+        total, node = s["total"], s["node"]
+        verdict.force_error_bound, verdict.node_error_bound = total, node
+        verdict.contraction, verdict.judge_contraction = s["rho"], s["judge_rho"]
+        verdict.judge_total_force = s["judge_total_force"]
+        verdict.judge_rounds = int(s["rounds"])
+        bound = (total, node, s["node_allowed"])
+    fails = failed_checks(cert, step_statuses, tol=tol, tau=tau, comp=s["comp"],
+                          comp_allowed=s["comp_allowed"], pen=s["pen"],
+                          closure_allowed=s["closure_allowed"], R_min=s["R_min"],
+                          allowed_R=max(s["eps_R"], s["floor_R"]), bound=bound,
+                          judge_total_force=verdict.judge_total_force,
+                          unstable=unstable)
+    return settle_verdict(verdict, fails, driver_reason)
+
+
+def _judge_in_python(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
+                     forces_lower: np.ndarray, *, tol: float, driver_converged: bool,
+                     driver_reason: str, step_statuses: list[str], step_sizes: list[float],
+                     certificate) -> Judgement:
+    """:func:`judge` where the judge kernel does not run: a driver that did not converge
+    (check 1 fails, nothing else is computed), a chain it does not take (refused), and
+    the judge in increments (its exact steps :func:`~.judge_exact.judge_step`, the
+    bound and the stability check compiled)."""
     tau = force_tol(tol)
     F_up, F_lo = float(np.sum(forces_upper)), float(np.sum(forces_lower))
     F0 = max(abs(F_up), abs(F_lo), chain.force_scale)
     eps_R = NODE_SHARE * tau * F0
     verdict = Judgement(False, driver_reason, tau, F0, contact_threshold=eps_R)
-    if not driver_converged:
-        verdict.failed.append("driver")
+    if not driver_converged or not large_n.applies(chain):
+        verdict.failed.append("driver" if not driver_converged else "layout")
+        if driver_converged:
+            verdict.reason = ("not accepted by lcpbench's judge: layout: the judge kernel "
+                              "does not take this chain (joints or free nodes not "
+                              "consecutive, or a wall profile without a table of cubic "
+                              "pieces) and the judge in increments does not either")
         verdict.certificate = (certificate(forces_upper, forces_lower) if callable(certificate)
                                else certificate)
         return verdict
@@ -336,8 +505,8 @@ def failed_checks(cert, step_statuses: list[str], *, tol: float, tau: float, com
                   judge_total_force: float, unstable: float = 0) -> list[str]:
     """The checks of :func:`judge` that fail, each as "check: why", in one order.
 
-    Shared by the numpy judge and the compiled one (:mod:`lcpbench.model.judge_compiled`),
-    which compute the same numbers: ``bound`` is (total, per-node, per-node allowed) of
+    On the judge kernel's numbers (:func:`verdict_from_stats`) or the judge's in
+    increments: ``bound`` is (total, per-node, per-node allowed) of
     the force error bound, None when the judge step did not settle.
     """
     fails: list[str] = []

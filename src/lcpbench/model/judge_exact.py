@@ -1,15 +1,27 @@
-"""The result judge's exact contact step, numpy (the reference; check 7 of
-:mod:`lcpbench.model.judge`).
+"""The result judge's exact contact step in increments (check 7 of
+:mod:`lcpbench.model.judge`, from ``LARGE_N`` links or on a chain marked ``increments``).
 
-:func:`judge_step` takes one contact step at given link angles α, solved exactly
-by block principal pivoting from a contact set (the answer's, or the previous
-judge step's), independent of every back-end; at large N in increments on the
-tridiagonal factor (rigid walls by the primal active set of
-:mod:`lcpbench.model.judge_large`). The judge takes it twice: at the answer's α,
+The judge kernel (:mod:`lcpbench.model.judge_kernel`) takes its exact steps in node
+heights, on the Cholesky of H, whose round-off grows as N⁴. Where the solve is in
+increments on the tridiagonal factor (:mod:`lcpbench.model.large_n`), so is the
+judge's step, here: :func:`judge_step` takes one contact step at given link angles α,
+solved exactly from a contact set (the answer's, or the previous judge step's),
+independent of every back-end: with rigid walls by the primal active set
+(:func:`primal_step`), with elastic walls by block principal pivoting, their springs
+in the twisted factor's face solves. The judge takes it twice: at the answer's α,
 then at α₁, where the first step moves the chain (the force error bound,
-:mod:`lcpbench.model.judge_bound`). The judge kernel
-(:mod:`lcpbench.model.judge_kernel`) takes the same steps compiled for the
-layouts it takes; this module is the path for every other chain.
+:mod:`lcpbench.model.judge_bound`).
+
+The primal active set (Nocedal & Wright, Alg. 16.3) is used with rigid walls
+because block principal pivoting does not settle there: the answer's contacts are
+pairs of neighbouring nodes, and at the final α a pair has moved by one node.
+Releasing the outer node of a pair frees the chain's slope there, the span between
+the contacts passes through the wall (3,640 nodes at N = 10⁵) and the exchanges that
+follow cycle until the round cap. One change at a time from the answer's contact set,
+every iterate is feasible, a wall that pulls by more than the slack releases its node
+(the most negative, scaled by its slack), and a move towards the face minimiser stops
+at the first wall it meets, which joins the set. It is the judge's own code,
+independent of the solver's dual walk (:mod:`lcpbench.solvers.banded`).
 """
 
 from __future__ import annotations
@@ -19,16 +31,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.linalg import LinAlgError  # scipy.linalg's LinAlgError is this class
 
-from ..linalg import banded_matvec, solveh_banded, sub_bands
+from ..linalg import banded_matvec
 from ..problems.scenes import Chain
 from ..thresholds import EPS, PIVOT_ROUNDS, ROUNDOFF_ULPS, STALL
 from . import large_n
-from .judge_large import primal_step
-from .profile import has_profile, profile_step, slope_load, walls_at
-from .step import ContactStep, assemble_step
+from .profile import has_profile, slope_load, walls_at
 
-#: in increments (large N) the single pivots are capped at 2 × this many, not 2 per node:
-#: each round is an O(N) face solve, and a judge that cannot settle says so
+#: the single pivots are capped at 2 × this many, not 2 per node: each round is an O(N)
+#: face solve, and a judge that cannot settle says so
 LARGE_ROUNDS = 100
 
 
@@ -53,7 +63,6 @@ class JudgeStep:
     contacts: tuple  # (upper, lower): the nodes it holds on (or by) each wall
 
 
-
 def split_reactions(chain: Chain, net: np.ndarray, u: np.ndarray):
     """Upper and lower wall reactions from the net reaction ``net`` (N, + pushes down).
 
@@ -70,7 +79,7 @@ def split_reactions(chain: Chain, net: np.ndarray, u: np.ndarray):
     return np.where(near_upper, net, 0.0), np.where(near_upper, 0.0, -net)
 
 
-def _springs(step: ContactStep) -> tuple[np.ndarray, np.ndarray]:
+def _springs(step) -> tuple[np.ndarray, np.ndarray]:
     """The elastic walls' k_i (N/mm) per free node, 0 where a wall is rigid or absent."""
     out = []
     for k, wall in ((step.upper_stiffness, step.upper), (step.lower_stiffness, step.lower)):
@@ -79,34 +88,59 @@ def _springs(step: ContactStep) -> tuple[np.ndarray, np.ndarray]:
     return out[0], out[1]
 
 
-def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
-    """The step's exact solution by block principal pivoting from contact sets up/lo.
+def _sizes(step, u):
+    """Per node, the round-off of R' (the factored gradient's) and S_i, the size of
+    the terms of R = K g + z (in increments, at least the gradient's)."""
+    scale = step.gradient_scale(u)
+    size = np.maximum(banded_matvec(np.abs(step.bands), np.abs(u)) + np.abs(step.linear),
+                      scale)
+    return ROUNDOFF_ULPS * EPS * scale, size
+
+
+def _pivot_step(step, up: np.ndarray, lo: np.ndarray, pull: float):
+    """The step's exact solution from contact sets up/lo.
 
     Returns ``(u, net reaction, rounds, round-off of each wall reaction, the
     largest round-off of any node, S = max_i (|H||u| + |c|)_i, (up, lo) the settled
     contact set)`` or None if it did not settle.
     Nodes in ``up`` sit on the upper wall, in ``lo`` on the lower; the others
-    are solved for (a banded solve, refined once in factored form). A wall
+    are solved for (a face solve, refined once in factored form). A wall
     that pulls by more than ``pull`` (N) releases its node; a node more than
-    pull / H_ii (mm) through a wall joins its set (on an elastic wall the node is
-    not held on the wall but by its spring, and released when the spring pulls) (the height error that costs
-    ``pull`` of force), or more than the round-off where that is larger, so
-    that at large N rounding cannot make it cycle. The step's Hessian is positive definite,
-    so the LCP has one solution; the round cap only guards against cycling.
+    pull / H_ii (mm) through a wall (the height error that costs ``pull`` of force)
+    joins its set (on an elastic wall the node is not held on the wall but by its
+    spring, and released when the spring pulls), or more than the round-off of its
+    height where that is larger, so that rounding cannot make it cycle (a height error
+    δ costs ~16 EI δ / a³ of force: 1e-13 mm is 2 N at N = 1e5). Rigid walls: the
+    primal active set (:func:`primal_step`), one change at a time; elastic walls:
+    block principal pivoting (Júdice–Pires, then Murty's least index). The step's
+    Hessian is positive definite, so the LCP has one solution; the round cap only
+    guards against cycling.
     """
     up, lo = up.copy(), lo.copy()
+    height_size = _wall_size(step)  # the round-off of a height: of its wall distance
+
+    def slack_of(u):
+        roundoff, size = _sizes(step, u)
+        return np.maximum(np.maximum(roundoff, pull), ROUNDOFF_ULPS * EPS * size)
+
+    def reach_of(u):
+        return np.maximum(ROUNDOFF_ULPS * EPS * (np.abs(u) + height_size), pull / step.bands[0])
+
+    cap = PIVOT_ROUNDS + 2 * LARGE_ROUNDS
+    if not step.elastic:  # rigid walls: one change at a time
+        found = primal_step(step, up, lo, slack_of=slack_of, reach_of=reach_of, cap=cap)
+        if found is None:
+            return None
+        u, up, lo, rounds = found
+        roundoff, size = _sizes(step, u)
+        return (u, -step.gradient(u), rounds, np.where(up | lo, roundoff, 0.0),
+                float(np.max(roundoff)), float(np.max(size, initial=0.0)), (up, lo))
     best, stall = step.size + 1, 0
     k_up, k_lo = _springs(step)
-    # the round-off of a height: of ℓ; in increments (large N), of the node's own wall
-    # distance (there a height error δ costs ~16 EI δ / a³ of force: 1e-13 mm is 2 N at
-    # N = 1e5)
-    height_size = step.length_scale if step.factor is None else _wall_size(step)
-    cap = PIVOT_ROUNDS + 2 * (step.size if step.factor is None else LARGE_ROUNDS)
-    if step.factor is not None and not step.elastic:  # increments (large N), rigid walls:
-        return _large_step(step, up, lo, pull, height_size, cap)  # one change at a time
     for rounds in range(1, cap + 1):
         # a node on a rigid wall is held on it; on an elastic wall it stays free, held
-        # by the wall's spring k (u − h) (model.elastic): a banded solve all the same
+        # by the wall's spring k (u − h) (model.elastic), as rows of the twisted factor
+        # (nothing grows with k)
         soft_up, soft_lo = up & (k_up > 0), lo & (k_lo > 0)
         spring = np.where(soft_up, k_up, 0.0) + np.where(soft_lo, k_lo, 0.0)
         rest = np.where(soft_up, step.upper, np.where(soft_lo, step.lower, 0.0))
@@ -114,25 +148,16 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
         hard_up, hard_lo = up & ~soft_up, lo & ~soft_lo
         u[hard_up] = step.upper[hard_up]
         u[hard_lo] = step.lower[hard_lo]
-        free = np.flatnonzero(~(hard_up | hard_lo))
+        fixed = hard_up | hard_lo
+        free = np.flatnonzero(~fixed)
         if free.size:
             try:
-                if np.any(spring[free] > 0) and step.factor is not None:  # large N: the
-                    # springs as rows of the twisted factor (nothing grows with k)
-                    fixed = hard_up | hard_lo
-                    for _ in range(2):  # solve, then refine with the factored gradient
+                for _ in range(2):  # solve, then refine with the factored gradient
+                    if np.any(spring[free] > 0):
                         grad = step.gradient(u) + spring * (u - rest)
                         grad[fixed] = 0.0
                         u -= step.factor.face_solve(fixed, grad, spring)
-                elif np.any(spring[free] > 0):  # elastic walls: banded
-                    bands = sub_bands(step.bands, free)
-                    bands[0] += spring[free]
-                    for _ in range(2):  # solve, then refine with the factored gradient
-                        grad = step.gradient(u) + spring * (u - rest)
-                        u[free] -= solveh_banded(bands, grad[free], lower=True,
-                                                 check_finite=False)
-                else:  # on H's banded Cholesky, or its tridiagonal factor (large N)
-                    for _ in range(2):  # solve, then refine with the factored gradient
+                    else:
                         u[free] -= step.solve_on(free, step.gradient(u)[free])
             except (LinAlgError, ValueError):
                 return None
@@ -140,13 +165,9 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
         # R' is the factored gradient (round-off ~ ε × its terms), not K g + z; but the
         # free heights carry the solve's error, which K turns into force (a few ulps
         # of S_i): a sign within that is undecided, not a reason to pivot
-        roundoff = ROUNDOFF_ULPS * EPS * step.gradient_scale(u)
-        size = banded_matvec(np.abs(step.bands), np.abs(u)) + np.abs(step.linear)
-        if step.factor is not None:  # increments (large N): R's terms are the gradient's
-            size = np.maximum(size, step.gradient_scale(u))
+        roundoff, size = _sizes(step, u)
         slack = np.maximum(np.maximum(roundoff, pull), ROUNDOFF_ULPS * EPS * size)
-        # a height error δ costs H_ii δ of force: ``pull`` in force is pull / H_ii in height
-        reach = np.maximum(ROUNDOFF_ULPS * EPS * (np.abs(u) + height_size), pull / step.bands[0])
+        reach = reach_of(u)
         release_up = up & (net < -slack)
         release_lo = lo & (net > slack)
         join_up = ~up & ~lo & (u > step.upper + reach)
@@ -170,34 +191,90 @@ def _pivot_step(step: ContactStep, up: np.ndarray, lo: np.ndarray, pull: float):
     return None
 
 
-def _large_step(step: ContactStep, up, lo, pull: float, height_size, cap: int):
-    """:func:`_pivot_step` in increments (large N), by the primal active set of
-    :mod:`.judge_large`, with the same slack, reach and settle test."""
+def primal_step(step, up: np.ndarray, lo: np.ndarray, *, slack_of, reach_of, cap: int):
+    """``(u, up, lo, rounds)`` at the settled face, or None within ``cap`` face solves.
 
-    def sizes(u):
-        roundoff = ROUNDOFF_ULPS * EPS * step.gradient_scale(u)
-        size = np.maximum(banded_matvec(np.abs(step.bands), np.abs(u)) + np.abs(step.linear),
-                          step.gradient_scale(u))
-        return roundoff, size
-
-    def slack_of(u):
-        roundoff, size = sizes(u)
-        return np.maximum(np.maximum(roundoff, pull), ROUNDOFF_ULPS * EPS * size)
-
-    def reach_of(u):
-        return np.maximum(ROUNDOFF_ULPS * EPS * (np.abs(u) + height_size), pull / step.bands[0])
-
-    found = primal_step(step, up, lo, slack_of=slack_of, reach_of=reach_of, cap=cap)
-    if found is None:
+    ``slack_of(u)``: per node, the pull that releases a wall; ``reach_of(u)``: per
+    node, the depth through a wall that joins it (both as the block pivoting uses).
+    Rigid walls only (elastic walls take the block pivoting of :func:`_pivot_step`,
+    their springs in the twisted factor).
+    """
+    up, lo = up.copy(), lo.copy()
+    hi_w, lo_w = step.upper, step.lower
+    u = _face_minimiser(step, up, lo)
+    if u is None:
         return None
-    u, up, lo, rounds = found
-    net = -step.gradient(u)
-    roundoff, size = sizes(u)
-    return (u, net, rounds, np.where(up | lo, roundoff, 0.0), float(np.max(roundoff)),
-            float(np.max(size, initial=0.0)), (up, lo))
+    # a feasible start: nodes through a wall join it (then the face's minimiser again)
+    for _ in range(cap):
+        reach = reach_of(u)
+        join_up = ~up & ~lo & (u > hi_w + reach)
+        join_lo = ~up & ~lo & (u < lo_w - reach)
+        if not (join_up.any() or join_lo.any()):
+            break
+        up |= join_up
+        lo |= join_lo
+        u = _face_minimiser(step, up, lo)
+        if u is None:
+            return None
+    else:
+        return None
+    at_minimiser = True
+    for rounds in range(1, cap + 1):
+        if at_minimiser:
+            net = -step.gradient(u)
+            slack = slack_of(u)
+            # net = −gradient: the upper wall's reaction (it pushes down), minus the lower's
+            pull_up = np.where(up, net / slack, np.inf)  # < −1: it pulls
+            pull_lo = np.where(lo, -net / slack, np.inf)
+            i_up, i_lo = int(np.argmin(pull_up)), int(np.argmin(pull_lo))
+            if min(pull_up[i_up], pull_lo[i_lo]) >= -1.0:
+                return u, up, lo, rounds
+            if pull_up[i_up] <= pull_lo[i_lo]:
+                up[i_up] = False
+            else:
+                lo[i_lo] = False
+        v = _face_minimiser(step, up, lo)
+        if v is None:
+            return None
+        d = v - u
+        free = ~(up | lo)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t_up = np.where(free & (d > 0) & np.isfinite(hi_w), (hi_w - u) / d, np.inf)
+            t_lo = np.where(free & (d < 0) & np.isfinite(lo_w), (lo_w - u) / d, np.inf)
+        j_up, j_lo = int(np.argmin(t_up)), int(np.argmin(t_lo))
+        t = min(t_up[j_up], t_lo[j_lo])
+        if t < 1.0:
+            u = u + max(t, 0.0) * d
+            if t_up[j_up] <= t_lo[j_lo]:
+                up[j_up] = True
+                u[j_up] = hi_w[j_up]
+            else:
+                lo[j_lo] = True
+                u[j_lo] = lo_w[j_lo]
+            at_minimiser = False
+        else:
+            u = v
+            at_minimiser = True
+    return None
 
 
-def _wall_size(step: ContactStep) -> np.ndarray:
+def _face_minimiser(step, up, lo):
+    """The step's minimiser with ``up`` / ``lo`` on their walls: a face solve, refined once
+    with the factored gradient (as the block pivoting does)."""
+    u = step.origin.copy()
+    u[up] = step.upper[up]
+    u[lo] = step.lower[lo]
+    free = np.flatnonzero(~(up | lo))
+    if free.size:
+        try:
+            for _ in range(2):
+                u[free] -= step.solve_on(free, step.gradient(u)[free])
+        except (np.linalg.LinAlgError, ValueError):
+            return None
+    return u
+
+
+def _wall_size(step) -> np.ndarray:
     """|wall height| per node (0 where there is none): what a node's height rounds at."""
     lo, hi = step.lower + step.origin, step.upper + step.origin
     return np.maximum(np.where(np.isfinite(hi), np.abs(hi), 0.0),
@@ -207,44 +284,32 @@ def _wall_size(step: ContactStep) -> np.ndarray:
 def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0,
                forces: tuple[np.ndarray, np.ndarray] | None = None,
                contacts: tuple[np.ndarray, np.ndarray] | None = None) -> JudgeStep | None:
-    """One more contact step at ``alpha``, solved by the judge (None if it cannot).
+    """One more contact step at ``alpha`` in increments, solved by the judge (None if
+    it cannot; the chain must be one :func:`lcpbench.model.large_n.takes`).
 
     It starts from the answer's contact set: the nodes whose gap costs less
     than ``pull`` of force to close. With a wall profile the step is the
-    profile step (:func:`lcpbench.model.profile.profile_step`) with the
-    answer's reactions ``forces`` (upper, lower) as its lagged multipliers.
+    profile step in increments, with the answer's reactions ``forces`` (upper,
+    lower), clipped at 0, as its lagged multipliers (their slope load).
     ``contacts`` (upper, lower): the contact set to start from instead (the judge's
     second step starts from its first's).
     """
     if has_profile(chain):
         n = chain.free_nodes.size
         up_lo = forces if forces is not None else (np.zeros(n), np.zeros(n))
-        if large_n.applies(chain):  # the profile step in increments; its slope load from
-            # the reactions clipped at 0, as profile.profile_step's (the driver's are not)
-            at = walls_at(chain, alpha)
-            s = slope_load(chain, alpha, *(np.maximum(f, 0.0) for f in up_lo))
-            step = large_n.increments_at(chain, alpha, walls=(at.lower, at.upper),
-                                         load=chain.nodal_load + s)
-            chain = at
-        else:
-            step, chain = profile_step(chain, alpha, *up_lo)
-    elif large_n.applies(chain):  # in increments, on the tridiagonal factor
+        at = walls_at(chain, alpha)
+        s = slope_load(chain, alpha, *(np.maximum(f, 0.0) for f in up_lo))
+        step = large_n.increments_at(chain, alpha, walls=(at.lower, at.upper),
+                                     load=chain.nodal_load + s)
+        chain = at
+    else:  # on the tridiagonal factor
         step = large_n.increments_at(chain, alpha)
-    else:
-        step = assemble_step(chain, alpha)
-    absolute = step.origin if step.factor is None else step.heights  # node heights at α
-    floor = 1e3 * EPS * chain.length
-    if step.factor is not None:  # increments (large N)
-        floor = ROUNDOFF_ULPS * EPS * (np.abs(absolute) + _wall_size(step))
+    absolute = step.heights  # node heights at α
+    floor = ROUNDOFF_ULPS * EPS * (np.abs(absolute) + _wall_size(step))
     touch = np.maximum(pull / step.bands[0], floor)
     on_upper, on_lower = step.upper - step.origin <= touch, step.origin - step.lower <= touch
-    # R = K g + z of an answer is exact to the factored gradient's round-off on a wall
-    # (g = 0), to that of rounded heights, a few ulps of S_i = (|K||g| + |z|)_i, off it
-    size = np.where(on_upper | on_lower | (step.factor is not None),
-                    step.gradient_scale(step.origin),
-                    banded_matvec(np.abs(step.bands), np.abs(step.origin))
-                    + np.abs(step.linear))
-    noise = ROUNDOFF_ULPS * EPS * size
+    # R = K g + z of an answer is exact to a few ulps of the gradient's terms
+    noise = ROUNDOFF_ULPS * EPS * step.gradient_scale(step.origin)
     up, lo = on_upper.copy(), on_lower.copy()  # a reaction off the wall is not contact
     if contacts is not None:
         up, lo = (np.asarray(c, bool) & np.isfinite(w) for c, w in zip(contacts,

@@ -143,7 +143,7 @@ def call_profile_kernel(chain: Chain, *, tol: float, max_outer: int,
         start_alpha = np.ascontiguousarray(start.alpha, dtype=float)
         net = None if start.warm is None else start.warm.forces_net
         if net is not None and np.size(net) == n and np.all(np.isfinite(net)):
-            from .judge import split_reactions
+            from .judge_exact import split_reactions
             from .profile import walls_at
 
             up, lo = split_reactions(walls_at(chain, start_alpha), net,

@@ -7,7 +7,7 @@ fields (the scene, α, the reactions R, F, the outer iterations, the verdict
 ``extra``, the node positions...) are built at the first access of any of them, by
 the callable kept in its ``_build``: the complete result, made by the same functions
 as before (the DriverOutput by :func:`lcpbench.model.kernel_call.kernel_output`, the
-Judgement by :func:`lcpbench.model.judge_compiled.verdict_from_stats` from the judge
+Judgement by :func:`lcpbench.model.judge.verdict_from_stats` from the judge
 kernel's numbers, the result by :func:`lcpbench.model.finish.finish`). Its fields fill those
 not set (a field set by hand keeps its value); the verdict set at once must be the
 one built (else RuntimeError: the compiled verdict and the judge's reasons disagree).
@@ -98,18 +98,18 @@ def stats_judge(settled: bool, names: tuple, stats: np.ndarray, forces_upper: np
     """The ``judged_by`` of :func:`lcpbench.model.result.build_result` whose judgement is
     already made by the judge kernel (``settled``, its ``stats`` array with their
     ``names``, its reactions and torque residual):
-    :func:`~lcpbench.model.judge_compiled.verdict_from_stats`;
-    an answer whose driver did not converge goes to the numpy judge, as
-    :func:`~lcpbench.model.judge_compiled.judge_fast` hands it on."""
+    :func:`~lcpbench.model.judge.verdict_from_stats`;
+    an answer whose driver did not converge goes to :func:`~lcpbench.model.judge.judge`
+    (check 1 fails, nothing is computed)."""
 
     def judged(chain, alpha, fu, fl, *, tol, driver_converged, driver_reason,
                step_statuses, step_sizes, certificate) -> Judgement:
-        from .judge_compiled import judge_fast, verdict_from_stats
+        from .judge import judge, verdict_from_stats
 
         if not driver_converged:
-            return judge_fast(chain, alpha, fu, fl, tol=tol, driver_converged=False,
-                              driver_reason=driver_reason, step_statuses=step_statuses,
-                              step_sizes=step_sizes, certificate=certificate)
+            return judge(chain, alpha, fu, fl, tol=tol, driver_converged=False,
+                         driver_reason=driver_reason, step_statuses=step_statuses,
+                         step_sizes=step_sizes, certificate=certificate)
         return verdict_from_stats(settled, dict(zip(names, stats.tolist(), strict=True)),
                                   forces_upper, forces_lower, torque_residual, tol=tol,
                                   driver_reason=driver_reason, step_statuses=step_statuses)

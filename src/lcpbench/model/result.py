@@ -10,44 +10,9 @@ import numpy as np
 from ..problems.scenes import Chain
 from .chain import joint_angles, node_positions, torque_residual
 from .elastic import compliances, wall_pressure
-from .judge import Judgement, judge
+from .judge import Certificate, Judgement, judge  # noqa: F401 (Certificate: public here)
 from .outer import DriverOutput, StepRecord
 from .profile import has_profile, joint_moments_xy, profile_gaps, wall_forces_xy
-
-
-@dataclass
-class Certificate:
-    """How well a configuration and its reactions satisfy the exact problem.
-
-    Computed from the final link angles by exact forward kinematics and
-    statics — not from the linearised step — so it says the same thing
-    whichever back-end or scheme produced the answer.
-
-    Attributes
-    ----------
-    min_gap : smallest distance of any node to a wall (mm); < 0 is penetration.
-        At an elastic wall the compliant gap g + R/k (0 for a node in contact).
-    min_force : smallest reaction (N); < 0 would be a wall pulling.
-    complementarity : largest |g_i R_i| over the nodes (N·mm).
-    closure : |y| of the right pin, which must lie on y = 0 (mm); 0 for a free end.
-    torque_residual : per joint, spring torque k(φ − φ*) minus the moment the
-        forces demand (N·mm).
-    max_torque_residual : its largest magnitude (N·mm).
-    relative_torque_residual : that, over the largest spring torque (at least EI/ℓ).
-    """
-
-    min_gap: float
-    min_force: float
-    complementarity: float
-    closure: float
-    torque_residual: np.ndarray
-    max_torque_residual: float
-    relative_torque_residual: float
-
-    def to_dict(self) -> dict:
-        d = asdict(self)
-        d["torque_residual"] = self.torque_residual.tolist()
-        return d
 
 
 def certify(chain: Chain, alpha: np.ndarray, upper: np.ndarray, lower: np.ndarray) -> Certificate:

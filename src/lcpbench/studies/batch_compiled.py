@@ -5,7 +5,7 @@ use the default back-end (the dual active set) with the globalised driver and
 the compiled engine: per scene, the chain, the wall-free search
 (:func:`lcpbench.model.wall_free.solve_without_contact` in the kernel), one
 call of the solve kernel (:func:`lcpbench.model.compiled.run_compiled`) and one
-of the judge kernel (:func:`lcpbench.model.judge_compiled.judge_fast`); the
+of the judge kernel (:func:`lcpbench.model.judge.judge`); the
 checks of :func:`lcpbench.solve` are done once per batch, not per scene.
 
 It is :func:`lcpbench.studies.continuation.solve_sequence` with the same
@@ -23,7 +23,7 @@ import time
 from ..model import large_n
 from ..model.compiled import drive, heavy, reference
 from ..model.finish import finish
-from ..model.judge_compiled import chain_args
+from ..model.judge import chain_args
 from ..model.kernel_call import applies, kernel_args, profile_applies, run_compiled
 from ..model.outer import DriverStart
 from ..model.result import ContactResult
@@ -89,7 +89,7 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
                                   start=start, settings=settings)
     return finish(scene, chain, out, solver=DEFAULT, method="globalised", tol=tol,
                   elapsed=time.perf_counter() - t0, settings=settings, engine=used,
-                  compiled_judge=kernel or profiled, why=AUTO_WHY,
+                  why=AUTO_WHY,
                   judge_args=chain_args(chain, args) if kernel else None, route=BATCH_SCENE)
 
 

@@ -8,7 +8,7 @@ fields (the step records, the reason, the certificate, the judgement, ``extra``,
 the node positions) are built at the first access of any of them: from the same
 arrays, by the same functions as a single solve (the DriverOutput by
 :func:`lcpbench.model.kernel_call.kernel_output`, the Judgement by
-:func:`lcpbench.model.judge_compiled.verdict_from_stats` from the judge kernel's
+:func:`lcpbench.model.judge.verdict_from_stats` from the judge kernel's
 numbers, the result by :func:`lcpbench.model.finish.finish`). So a batch that is only
 read for its forces builds no Python object per scene but the result itself.
 """
@@ -115,7 +115,7 @@ def _attempt(line: LineOutput, s: int, row: int) -> ContactResult:
     out = driver_output(line, row, chain)
     return finish(scene, chain, out, solver=DEFAULT, method="globalised", tol=line.tol,
                   elapsed=line.time_s, settings=line.settings, engine="compiled",
-                  compiled_judge=True, why=AUTO_WHY,
+                  why=AUTO_WHY,
                   judged_by=_judged(line, row), route=LINE_KERNEL)
 
 
