@@ -68,7 +68,7 @@ _HOLDERS: list = []  # callers' one-element caches of a kernel module (see held)
 #: every file of lcpbench with numba kernels, relative to the package
 #: (tests/model/test_kernel_cache.py checks that no file with ``@njit`` is missing)
 KERNEL_FILES = ("model/chain_kernel.py", "model/compiled_kernel.py", "model/compiled_dual.py", "model/judge_kernel.py",
-                "model/judge_bound.py",
+                "model/judge_bound.py", "model/judge_checks.py",
                 "model/driver_kernel.py", "model/large_kernel.py", "linalg/givens_kernel.py",
                 "linalg/face_kernel.py", "linalg/twisted_kernel.py",
                 "linalg/ldl_kernel.py", "model/batch_kernel.py", "model/batch_verdict.py",

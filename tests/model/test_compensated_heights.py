@@ -79,7 +79,7 @@ def test_every_kernel_sums_the_heights_as_the_reference(scene):
     assert _bits(got[4], ref.origin) and _bits(got[5], ref.alpha0) and _bits(got[6], ref.phi_origin)
     jk = jit_module("lcpbench.model.judge_kernel")
     w = np.zeros((jk.ROWS, alpha.size + 2))
-    jk._positions(alpha, a, w)
+    jk.positions(alpha, a, w)  # (judge_checks.positions, as the judge kernel has it)
     jk._step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, w, np.empty((3, n)))
     assert _bits(w[jk.ORIGIN][:n], ref.origin) and _bits(w[jk.ALPHA0][:alpha.size], ref.alpha0)
     if large_n.takes(chain):

@@ -36,8 +36,9 @@ At an elastic wall (:mod:`lcpbench.model.elastic`) g is the compliant gap
 g + R/k in checks 4 and 5 (a node indents the wall by exactly R/k), and the
 judge step holds a node in contact by the wall's spring instead of on it.
 6. **closure, torque**: the exact-geometry certificate
-   (:func:`lcpbench.model.result.certify`): the right pin on y = 0 to 1e-6 ℓ,
-   the joint torques in balance to max(10 tol, 1e-6) of the spring torques.
+   (:class:`Certificate`, computed by :mod:`lcpbench.model.judge_checks`): the right
+   pin on y = 0 to 1e-6 ℓ, the joint torques in balance to max(10 tol, 1e-6) of the
+   spring torques.
 7. **force error bound**: lcpbench takes contact steps itself, solved exactly by
    block principal pivoting, independent of every back-end
    (:mod:`lcpbench.model.judge_kernel`; in increments :mod:`lcpbench.model.judge_exact`):
@@ -89,14 +90,15 @@ docs/solvers.md; their values in :mod:`lcpbench.thresholds`.
 number it judges by comes from compiled functions, called from Python through
 :func:`lcpbench.numba_cache.kernel_module` (``NUMBA_DISABLE_JIT=1`` runs the same
 functions as plain Python, the debugging path): the judge kernel
-(:func:`lcpbench.model.judge_kernel.judge_walls`: its own assembly, its exact steps,
-the certificate and checks 3-8), the force error bound
-(:mod:`lcpbench.model.judge_bound`) and the stability check
+(:func:`lcpbench.model.judge_kernel.judge_walls`: its own assembly and exact steps),
+the certificate and checks 3-6 and 8 (:mod:`lcpbench.model.judge_checks`), the force
+error bound (:mod:`lcpbench.model.judge_bound`) and the stability check
 (:mod:`lcpbench.model.stability_kernel`). The kernel takes its exact steps in node
 heights; where the solve is in increments (from ``LARGE_N`` links, or a chain marked
-``increments``) the judge's steps are too (:mod:`lcpbench.model.judge_exact`), and
-checks 3-5 are taken here on them. The judge shares no code with the solve kernel: it
-checks the answer, it does not repeat the solve.
+``increments``) the judge's steps are too (:mod:`lcpbench.model.judge_exact`, numpy on
+the increments' tridiagonal factor), and the same certificate, checks and bound are
+computed on them. The judge shares no code with the solve kernel: it checks the answer,
+it does not repeat the solve.
 """
 
 from __future__ import annotations
@@ -108,18 +110,12 @@ import numpy as np
 
 from ..problems.scenes import Chain
 from ..thresholds import (  # the rule's numbers, read by the judge kernel too
-    EPS,
-    FLOOR_ULPS,
     FORCE_TOL_CAP,
     FORCE_TOL_PER_RAD,
     GEOMETRY_TOL,
-    NODE_FACTOR,
-    NODE_GROSS,
     NODE_SHARE,
 )
 from . import large_n
-from .chain import heights
-from .elastic import compliances
 from .judge_exact import JudgeStep, judge_step, split_reactions  # noqa: F401 (public names)
 from .profile import node_x, walls_at
 
@@ -310,11 +306,19 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
     ``judgement.certificate``. ``args``: the chain's :func:`chain_args`, when the
     caller has them already.
     """
-    if not driver_converged or large_n.applies(chain) or (args is None and not takes(chain)):
-        return _judge_in_python(chain, alpha, forces_upper, forces_lower, tol=tol,
-                                driver_converged=driver_converged,
-                                driver_reason=driver_reason, step_statuses=step_statuses,
-                                step_sizes=step_sizes, certificate=certificate)
+    increments = large_n.applies(chain)
+    if increments and chain.profiled_walls:
+        from .kernel_call import profile_args
+
+        increments = profile_args(chain) is not None  # (the walls' tables: the checks')
+    if not driver_converged or not (increments or args is not None or takes(chain)):
+        return _unjudged(chain, forces_upper, forces_lower, tol=tol,
+                         driver_converged=driver_converged, driver_reason=driver_reason,
+                         certificate=certificate)
+    if large_n.applies(chain):
+        return _judge_in_increments(chain, alpha, forces_upper, forces_lower, tol=tol,
+                                    driver_reason=driver_reason,
+                                    step_statuses=step_statuses, step_sizes=step_sizes)
     k = _KERNEL[0] if _KERNEL else _load_kernel()
     if args is None:
         args = chain_args(chain)
@@ -362,89 +366,80 @@ def verdict_from_stats(settled: bool, s: dict, fu: np.ndarray, fl: np.ndarray,
     return settle_verdict(verdict, fails, driver_reason)
 
 
-def _judge_in_python(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
-                     forces_lower: np.ndarray, *, tol: float, driver_converged: bool,
-                     driver_reason: str, step_statuses: list[str], step_sizes: list[float],
-                     certificate) -> Judgement:
-    """:func:`judge` where the judge kernel does not run: a driver that did not converge
-    (check 1 fails, nothing else is computed), a chain it does not take (refused), and
-    the judge in increments (its exact steps :func:`~.judge_exact.judge_step`, the
-    bound and the stability check compiled)."""
+def _unjudged(chain: Chain, forces_upper: np.ndarray, forces_lower: np.ndarray, *,
+              tol: float, driver_converged: bool, driver_reason: str,
+              certificate) -> Judgement:
+    """:func:`judge` where no judge step is taken: a driver that did not converge (check 1
+    fails, the reason is the driver's) or a chain neither the judge kernel nor the judge
+    in increments takes (refused); ``certificate`` (or its callable) is the one kept."""
     tau = force_tol(tol)
-    F_up, F_lo = float(np.sum(forces_upper)), float(np.sum(forces_lower))
-    F0 = max(abs(F_up), abs(F_lo), chain.force_scale)
-    eps_R = NODE_SHARE * tau * F0
-    verdict = Judgement(False, driver_reason, tau, F0, contact_threshold=eps_R)
-    if not driver_converged or not large_n.applies(chain):
-        verdict.failed.append("driver" if not driver_converged else "layout")
-        if driver_converged:
-            verdict.reason = ("not accepted by lcpbench's judge: layout: the judge kernel "
-                              "does not take this chain (joints or free nodes not "
-                              "consecutive, or a wall profile without a table of cubic "
-                              "pieces) and the judge in increments does not either")
-        verdict.certificate = (certificate(forces_upper, forces_lower) if callable(certificate)
-                               else certificate)
-        return verdict
-    L = chain.length
-    chain0, chain = chain, walls_at(chain, alpha)  # a wall profile: its rows at the nodes' x (exact gaps)
-    js = judge_step(chain, alpha, pull=eps_R, forces=(forces_upper, forces_lower))
-    if js is not None:  # values within round-off are zero, not reactions
-        forces_upper = np.where(np.abs(forces_upper) <= js.noise, 0.0, forces_upper)
-        forces_lower = np.where(np.abs(forces_lower) <= js.noise, 0.0, forces_lower)
-        verdict.forces_upper, verdict.forces_lower = forces_upper, forces_lower
-    if callable(certificate):
-        certificate = certificate(forces_upper, forces_lower)
-    verdict.certificate = certificate
-    verdict.inexact_steps = sum(s != "solved" for s in step_statuses)
-    u = heights(chain, alpha)
-    c_up, c_lo = compliances(chain)  # elastic walls: the compliant gap g + R/k
-    g_up = chain.upper - u + c_up * np.maximum(forces_upper, 0.0)
-    g_lo = u - chain.lower + c_lo * np.maximum(forces_lower, 0.0)
-    with np.errstate(invalid="ignore"):
-        comp = max(float(np.max(np.minimum(forces_upper / F0, g_up / L), initial=0.0)),
-                   float(np.max(np.minimum(forces_lower / F0, g_lo / L), initial=0.0)))
-    comp_allowed = max(NODE_SHARE * tau, FLOOR_ULPS * EPS * js.term_size / F0
-                       if js is not None else 0.0)
-    floor_R = FLOOR_ULPS * EPS * js.term_size if js is not None else 0.0
-    R_min = float(min(np.min(forces_upper, initial=0.0), np.min(forces_lower, initial=0.0)))
-    bound = None
-    if js is not None:
+    F0 = max(abs(float(np.sum(forces_upper))), abs(float(np.sum(forces_lower))),
+             chain.force_scale)
+    verdict = Judgement(False, driver_reason, tau, F0, contact_threshold=NODE_SHARE * tau * F0)
+    verdict.failed.append("driver" if not driver_converged else "layout")
+    if driver_converged:
+        verdict.reason = ("not accepted by lcpbench's judge: layout: the judge kernel does not "
+                          "take this chain (joints or free nodes not consecutive, or a wall "
+                          "profile without a table of cubic pieces)")
+    verdict.certificate = (certificate(forces_upper, forces_lower) if callable(certificate)
+                           else certificate)
+    return verdict
+
+
+_NO_TABLES = (np.zeros(0), np.zeros((4, 0)), np.zeros(0), np.zeros((4, 0)))  # flat walls
+
+
+def _checks_kernel():
+    """The judge's certificate and checks (:mod:`lcpbench.model.judge_checks`)."""
+    from ..numba_cache import kernel_module
+
+    return kernel_module("lcpbench.model.judge_checks", "answer_checks")
+
+
+def _judge_in_increments(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
+                         forces_lower: np.ndarray, *, tol: float, driver_reason: str,
+                         step_statuses: list[str], step_sizes: list[float]) -> Judgement:
+    """:func:`judge` with its exact steps in increments (:func:`~.judge_exact.judge_step`),
+    its certificate and checks from the judge kernel's
+    (:func:`lcpbench.model.judge_checks.answer_checks`), its force error bound from
+    :mod:`lcpbench.model.judge_bound`: the same numbers as the judge kernel's."""
+    ck, f64 = _checks_kernel(), _contiguous
+    args = chain_args(chain)
+    if len(args) == 16:  # flat walls
+        args = (*args, *_NO_TABLES)
+    up, lo = f64(forces_upper, dtype=float), f64(forces_lower, dtype=float)
+    _, F0, eps_R = ck.units(up, lo, float(chain.force_scale), float(tol))
+    js = judge_step(walls_at(chain, alpha), alpha, pull=eps_R, forces=(forces_upper,
+                                                                        forces_lower))
+    settled = js is not None
+    noise, S = (js.noise, js.term_size) if settled else (np.zeros(up.size), 0.0)
+    st, fu, fl, res = ck.answer_checks(f64(alpha, dtype=float), *args, up, lo, float(tol),
+                                       f64(noise, dtype=float), float(S), settled)
+    s = dict(zip(ck.STATS, st.tolist(), strict=True))
+    if settled:
         rho = contraction_estimate(step_sizes, js.dalpha)
         kern = _bound_kernel()
-        d_up, d_lo = (np.ascontiguousarray(x, dtype=float) for x in (
-            forces_upper - js.forces_upper, forces_lower - js.forces_lower))
+        d_up, d_lo = (f64(x, dtype=float) for x in (fu - js.forces_upper,
+                                                    fl - js.forces_lower))
         zero = np.zeros_like(d_up)
         total, node = kern.force_error_bound(d_up, d_lo, zero, zero, rho, np.nan,
                                              _floor(js, F0), np.nan, F0, False)
         js2, rho2 = None, np.nan
-        if not total <= tau:  # the second judge step, at α₁ where the first moves the
-            # chain, from its contacts (where the one-step estimate passes, it can only
+        if not total <= s["tau"]:  # the second judge step, at α₁ where the first moves
+            # the chain, from its contacts (where the one-step estimate passes, it can only
             # lower the bound)
-            js2 = judge_step(walls_at(chain0, js.alpha_next), js.alpha_next, pull=eps_R,
+            js2 = judge_step(walls_at(chain, js.alpha_next), js.alpha_next, pull=eps_R,
                              forces=(js.forces_upper, js.forces_lower), contacts=js.contacts)
         if js2 is not None:
             rho2 = float(kern.judge_contraction(js.dalpha, js2.dalpha))
             total, node = kern.force_error_bound(
-                d_up, d_lo, *(np.ascontiguousarray(x, dtype=float) for x in (
+                d_up, d_lo, *(f64(x, dtype=float) for x in (
                     js.forces_upper - js2.forces_upper, js.forces_lower - js2.forces_lower)),
                 rho, rho2, _floor(js, F0), _floor(js2, F0), F0, True)
-        # per node, certified down to the round-off of R = K g + z only
-        node_allowed = max(NODE_FACTOR * tau, NODE_GROSS, NODE_FACTOR * floor_R / F0)
-        verdict.force_error_bound, verdict.node_error_bound = float(total), float(node)
-        verdict.contraction, verdict.judge_contraction = rho, rho2
-        verdict.judge_total_force = float(np.sum(js.forces_upper))
-        verdict.judge_rounds = js.rounds
-        bound = (verdict.force_error_bound, verdict.node_error_bound, node_allowed)
-    verdict.unstable_directions = unstable_directions(chain, alpha, forces_upper,
-                                                      forces_lower, eps_R)
-    fails = failed_checks(certificate, step_statuses, tol=tol, tau=tau, comp=comp,
-                          comp_allowed=comp_allowed,
-                          pen=penetration_allowed(tau, L, eps_R, c_up, c_lo),
-                          closure_allowed=GEOMETRY_TOL * L, R_min=R_min,
-                          allowed_R=max(eps_R, floor_R), bound=bound,
-                          judge_total_force=verdict.judge_total_force,
-                          unstable=verdict.unstable_directions or 0)
-    return settle_verdict(verdict, fails, driver_reason)
+        s.update(total=float(total), node=float(node), rho=rho, judge_rho=rho2,
+                 judge_total_force=float(np.sum(js.forces_upper)), rounds=js.rounds)
+    return verdict_from_stats(settled, s, fu, fl, res, tol=tol, driver_reason=driver_reason,
+                              step_statuses=step_statuses)
 
 
 def _floor(js: JudgeStep, F0: float) -> float:

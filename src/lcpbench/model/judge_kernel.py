@@ -1,31 +1,26 @@
-"""The result judge compiled: the judge step and the residual checks in numba.
+"""The result judge's exact steps, compiled: the judge's own contact steps and the force
+error bound (check 7 of :mod:`lcpbench.model.judge`).
 
-numba (``@njit(cache=True)``) versions of :func:`lcpbench.model.judge.judge`'s
-arithmetic for a converged driver answer: the judge's own contact step at the
-final α (assembled from the energy of the chain, solved exactly by block
-principal pivoting from the answer's contact set, :func:`~lcpbench.model.judge._pivot_step`),
-the round-off of the reactions, the exact-geometry certificate
-(:func:`lcpbench.model.result.certify`: forward kinematics, closure, the
-torque residual of :func:`lcpbench.model.chain.torque_residual`), the sign,
-complementarity and penetration checks, and, where the one-step estimate of the
-force error exceeds τ, the judge's second exact step at α₁, where its first moves
-the chain, from the first's contact set; the force error bound from the two (:mod:`lcpbench.model.judge_bound`, compiled once for every
-judge path). The numpy judge is the reference; the Python side
-(:mod:`lcpbench.model.judge_compiled`) turns the numbers returned here into
-the same :class:`~lcpbench.model.judge.Judgement` with the same reasons
-(tests compare both on the hard suite, random scenes and adversarial answers).
+:func:`judge_walls` (:func:`judge_answer` on flat walls) takes every number of
+:func:`lcpbench.model.judge.judge` for a converged driver answer, in node heights:
+the judge's own contact step at the final α (assembled from the energy of the
+chain, solved exactly by block principal pivoting from the answer's contact set:
+Júdice–Pires, then Murty's least index), the round-off of the reactions, the
+certificate and checks 3-6 and 8 (:mod:`lcpbench.model.judge_checks`), and, where the
+one-step estimate of the force error exceeds τ, the judge's second exact step at α₁,
+where its first moves the chain, from the first's contact set; the force error bound
+from the two (:mod:`lcpbench.model.judge_bound`). :mod:`lcpbench.model.judge` turns
+the numbers returned here into the :class:`~lcpbench.model.judge.Judgement` and its
+reasons; ``NUMBA_DISABLE_JIT=1`` runs the same functions as plain Python.
 
-Independent of the solve kernel (:mod:`lcpbench.model.compiled_kernel`): the
-judge step is block principal pivoting (Júdice–Pires, then Murty's least
-index), not the dual active set; nothing here is imported from that file and
-nothing there from here. The banded factorisation below is textbook
-arithmetic (LDLᵀ for bandwidth 2, no square roots; the numpy judge solves with
-LAPACK's Cholesky, the same solution to round-off), written again in this file
-because numba's on-disk cache of a function is invalidated only when *its own*
-file changes. Its work arrays are one allocation per call (rows :data:`ROWS`).
+Independent of the solve kernel (:mod:`lcpbench.model.compiled_kernel`): the judge
+step is block principal pivoting, not the dual active set, on its own assembly;
+nothing here is imported from that file and nothing there from here. The banded
+factorisation below is textbook arithmetic (LDLᵀ for bandwidth 2, no square roots).
+Its work arrays are one allocation per call (rows :data:`~.judge_checks.ROWS`).
 
 The chain must have consecutive joints and contiguous free nodes (the
-layouts the solve kernel takes, :func:`lcpbench.model.compiled.applies`).
+layouts the solve kernel takes, :func:`lcpbench.model.kernel_call.applies`).
 """
 
 from __future__ import annotations
@@ -36,110 +31,52 @@ from numba import njit
 from ..thresholds import (  # the rule's numbers, as model.judge reads them
     EPS,
     FLOOR_ULPS,
-    FORCE_TOL_CAP,
-    FORCE_TOL_PER_RAD,
-    GEOMETRY_TOL,
-    NODE_FACTOR,
-    NODE_GROSS,
-    NODE_SHARE,
     PIVOT_ROUNDS,
     ROUNDOFF_ULPS,
     STALL,
 )
-from .chain_kernel import add_compensated  # once (numba_cache)
 from .judge_bound import contraction, force_error_bound, judge_contraction, profile_rows
-from .stability_kernel import CHECKED, unstable_directions
+from .judge_checks import (
+    ALPHA0,
+    C0,
+    C1,
+    C2,
+    COS,
+    DIAG,
+    FREE,
+    HG,
+    HGA,
+    HY,
+    INV,
+    JLO,
+    JU,
+    LIN,
+    LINEAR,
+    LO,
+    NET,
+    NOISE,
+    NOT_SETTLED,
+    OFF1,
+    OFF2,
+    ORIGIN,
+    PHI0,
+    RHS,
+    ROUNDOFF,
+    ROWS,
+    SCALE,
+    SETTLED,
+    SIZE,
+    STATS,
+    UP,
+    YC,
+    U,
+    V,
+    certify_checks,
+    positions,
+    units,
+)
 
 TINY = np.finfo(np.float64).tiny
-
-#: names of the entries of the ``stats`` array that :func:`judge_answer` returns
-STATS = ("tau", "F0", "eps_R", "comp", "comp_allowed", "min_gap", "min_force",
-         "complementarity", "closure", "max_torque_residual", "relative_torque_residual",
-         "floor_R", "R_min", "total", "node", "node_allowed", "rho", "judge_total_force",
-         "rounds", "pen", "closure_allowed", "unstable", "judge_rho")
-SETTLED, NOT_SETTLED = 0, 1
-
-
-# rows of the judge's work array: one allocation per call, each row links + 2 long
-# (a node's or link's entries from column 0; the step's accumulators in shifted
-# node index, node + 1). The certificate's suffix sums reuse the step's rows, which
-# are spent by then.
-(X, Y, COS, INV, V, ALPHA0, DIAG, OFF1, OFF2, LIN, C0, C1, C2, PHI0, ORIGIN, LINEAR, U, NET,
- SCALE, ROUNDOFF, NOISE, RHS, HY, HG, HGA, JU, JLO, SIZE, YC, HX) = range(30)
-ROWS = 30
-FORCE, F_SUM, FX_SUM, P_SUM, PX_SUM, H_SUM, HY_SUM = DIAG, OFF1, OFF2, LIN, HY, C0, C1
-# a node's place in the judge step's contact set
-FREE, UP, LO = 0, 1, 2
-
-
-# -- the chain's exact geometry (model.chain) ------------------------------------------
-@njit(cache=True)
-def _positions(alpha, a, w):
-    """Node positions x, y (rows X, Y, as model.chain.node_positions), cos α (row COS),
-    tan α − α (row V), and the heights summed with compensation (row YC, the judge
-    step's linearisation point and closure, as model.step)."""
-    x, y, cs, v, yc = w[X], w[Y], w[COS], w[V], w[YC]
-    x[0] = y[0] = yc[0] = 0.0
-    sx = sy = lost = 0.0
-    for i in range(alpha.size):
-        c, s = np.cos(alpha[i]), np.sin(alpha[i])
-        cs[i] = c
-        v[i] = s / c - alpha[i]  # tan α − α, on the cos and sin at hand
-        sx += a * c
-        sy, lost = add_compensated(sy, lost, a * s)
-        x[i + 1], y[i + 1], yc[i + 1] = sx, sy, sy + lost
-
-
-@njit(cache=True)
-def _torque_residual(alpha, w, jl, jr, k, rest, link_load, fs, fu, fl, h1, l1, pinned_right,
-                     res):
-    """chain.torque_residual of the net reactions fl − fu into ``res``: k(φ − φ*) minus
-    the moment statics demands at each joint; returns the largest spring torque. On a
-    wall of slope h', l' (empty: flat) the reactions are normal to it, with horizontal
-    parts fu h' − fl l' (model.profile.joint_moments_xy)."""
-    links, x, y = alpha.size, w[X], w[Y]
-    force, hx = w[FORCE], w[HX]
-    for i in range(links + 1):
-        force[i] = hx[i] = 0.0
-    for i in range(fu.size):
-        force[fs - 1 + i] = fl[i] - fu[i]
-        if h1.size:
-            hx[fs - 1 + i] = fu[i] * h1[i] - fl[i] * l1[i]
-    if pinned_right:
-        m = 0.0
-        for i in range(links):
-            m += link_load[i] * (0.5 * (x[i] + x[i + 1]))
-        fx = 0.0
-        for i in range(links + 1):
-            fx += force[i] * x[i] - hx[i] * y[i]
-        force[links] = -(m + fx) / x[links]
-    f_sum, fx_sum, p_sum, px_sum = w[F_SUM], w[FX_SUM], w[P_SUM], w[PX_SUM]  # Σ_{q>=p}
-    f_sum[links + 1] = fx_sum[links + 1] = 0.0
-    p_sum[links] = px_sum[links] = 0.0
-    for p in range(links, -1, -1):
-        f_sum[p] = f_sum[p + 1] + force[p]
-        fx_sum[p] = fx_sum[p + 1] + force[p] * x[p]
-    for p in range(links - 1, -1, -1):
-        p_sum[p] = p_sum[p + 1] + link_load[p]
-        px_sum[p] = px_sum[p + 1] + link_load[p] * (0.5 * (x[p] + x[p + 1]))
-    h_sum, hy_sum = w[H_SUM], w[HY_SUM]  # the horizontal parts: −Σ_{q>=p} F_x,q (y_q − y_p)
-    if h1.size:
-        h_sum[links + 1] = hy_sum[links + 1] = 0.0
-        for p in range(links, -1, -1):
-            h_sum[p] = h_sum[p + 1] + hx[p]
-            hy_sum[p] = hy_sum[p + 1] + hx[p] * y[p]
-    spring_max = 0.0
-    for j in range(jr.size):
-        at = jr[j]
-        xp = x[at]
-        moment = (fx_sum[at] - xp * f_sum[at]) + (px_sum[at] - xp * p_sum[at])
-        if h1.size:
-            moment += y[at] * h_sum[at] - hy_sum[at]
-        phi = alpha[jr[j]] - (alpha[jl[j]] if jl[j] >= 0 else 0.0)
-        spring = k[j] * (phi - rest[j])
-        res[j] = spring - moment
-        spring_max = max(spring_max, k[j] * abs(phi - rest[j]))
-    return spring_max
 
 
 # -- the judge's contact step (model.step.assemble_step, written for the judge) ----------
@@ -415,18 +352,12 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
     links = alpha.size
     nj = jr.size
     b0 = jr[0]
-    tau = min(FORCE_TOL_CAP, FORCE_TOL_PER_RAD * tol)
-    F_up = F_lo = 0.0
-    for i in range(n):
-        F_up += forces_upper[i]
-        F_lo += forces_lower[i]
-    F0 = max(max(abs(F_up), abs(F_lo)), F)
-    eps_R = NODE_SHARE * tau * F0
+    tau, F0, eps_R = units(forces_upper, forces_lower, F, tol)
     stats = np.full(len(STATS), np.nan)
     w = np.empty((ROWS, links + 2))
     bands, fac = np.empty((3, n)), np.empty((4, n))
     iw = np.empty((3, n), np.int64)
-    _positions(alpha, a, w)
+    positions(alpha, a, w)
     profiled = ku.size > 0 or kl.size > 0
     hi0, lo0, nodal0 = hi, lo, nodal_load  # the flat rows: the second step's walls from them
     h1 = l1 = h2 = l2 = g_up = g_lo = np.empty(0)
@@ -462,62 +393,11 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
             if abs(fl[i]) <= noise[i]:
                 fl[i] = 0.0
         _split(u, net[:n], hi, lo, channel, ju, jlo)
-    # the certificate of the cleaned reactions (model.result.certify)
-    y = w[Y]
-    min_gap, min_force, cmp = np.inf, 0.0, 0.0
-    has_gap = np.isfinite(wall) or ku.size > 0
-    comp = 0.0  # complementarity and sign on the answer's heights
-    R_min = 0.0
-    soft = cu.size == n
-    for i in range(n):
-        yf = y[fs - 1 + i]
-        # an elastic wall's gap is the compliant one, g + R/k (the node indents by R/k)
-        iu = cu[i] * max(fu[i], 0.0) if soft else 0.0
-        il = cl[i] * max(fl[i], 0.0) if soft else 0.0
-        min_force = min(min_force, fu[i])
-        gap_up = g_up[i] if profiled else wall - yf
-        gap_lo = g_lo[i] if profiled else yf + wall
-        if has_gap:
-            min_gap = min(min_gap, gap_up + iu)
-            cmp = max(cmp, abs((gap_up + iu) * fu[i]))
-        if channel:
-            min_force = min(min_force, fl[i])
-            min_gap = min(min_gap, gap_lo + il)
-            cmp = max(cmp, abs((gap_lo + il) * fl[i]))
-        comp = max(comp, min(fu[i] / F0, (hi[i] - yf + iu) / L))
-        comp = max(comp, min(fl[i] / F0, (yf - lo[i] + il) / L))
-        R_min = min(R_min, min(fu[i], fl[i]))
-    pinned_right = fs - 1 + n - 1 < links
-    closure = abs(y[links]) if pinned_right else 0.0
-    res = np.empty(nj)
-    spring_max = _torque_residual(alpha, w, jl, jr, k, rest, link_load, fs, fu, fl, h1, l1,
-                                  pinned_right, res)
-    worst_t = 0.0
-    for j in range(nj):
-        worst_t = max(worst_t, abs(res[j]))
-    rel_t = worst_t / max(spring_max, F * L)
     floor_R = FLOOR_ULPS * EPS * S if settled else 0.0
-    stats[0], stats[1], stats[2], stats[3] = tau, F0, eps_R, comp
-    stats[4] = max(NODE_SHARE * tau, floor_R / F0) if settled else NODE_SHARE * tau
-    stats[5], stats[6], stats[7], stats[8] = min_gap, min_force, cmp, closure
-    stats[9], stats[10], stats[11], stats[12] = worst_t, rel_t, floor_R, R_min
-    c_max = 0.0  # model.judge.penetration_allowed: + ε_R / k at an elastic wall
-    for i in range(cu.size):
-        c_max = max(c_max, max(cu[i], cl[i]))
-    stats[19] = min(GEOMETRY_TOL, NODE_SHARE * tau) * L + eps_R * c_max
-    stats[20] = GEOMETRY_TOL * L
-    # the second-order check (model.stability_kernel): the walls' springs (rigid: inf), and
-    # their slopes and curvatures at the nodes' x (flat: 0)
-    k_up, k_lo, flat = np.full(n, np.inf), np.full(n, np.inf), np.zeros(n)
-    if soft:
-        for i in range(n):
-            k_up[i] = 1.0 / cu[i] if cu[i] > 0.0 else np.inf
-            k_lo[i] = 1.0 / cl[i] if cl[i] > 0.0 else np.inf
-    if not profiled:
-        h1 = l1 = h2 = l2 = flat
-    code, unstable, _ = unstable_directions(alpha, a, jl, jr, k, rest, link_load, fs - 1, fu,
-                                            fl, k_up, k_lo, h1, l1, h2, l2, eps_R, pinned_right)
-    stats[21] = unstable if code == CHECKED else 0.0
+    has_gap = np.isfinite(wall) or ku.size > 0  # (an upper wall: a gap to measure)
+    res = certify_checks(alpha, a, jl, jr, k, rest, link_load, fs, lo, hi, L, F, cu, cl, wall,
+                         channel, has_gap, profiled, g_up, g_lo, h1, l1, h2, l2, fu, fl, w,
+                         floor_R, tau, F0, eps_R, stats)
     if not settled:
         return NOT_SETTLED, stats, fu, fl, res
     alpha1 = np.empty(links)
@@ -534,11 +414,10 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
     e_up, e_lo = np.zeros(n), np.zeros(n)
     stats[13], stats[14] = force_error_bound(d_up, d_lo, e_up, e_lo, rho, np.nan, floor1,
                                              np.nan, F0, False)
-    stats[15] = max(max(NODE_FACTOR * tau, NODE_GROSS), NODE_FACTOR * floor_R / F0)
     stats[16], stats[17], stats[18] = rho, J, rounds
     if stats[13] <= tau:  # the one-step estimate passes: the second step can only lower it
         return SETTLED, stats, fu, fl, res
-    _positions(alpha1, a, w)
+    positions(alpha1, a, w)
     if profiled:  # its walls at the nodes' new x, the first step's reactions lagged
         hi, lo, nodal_load = profile_rows(alpha1, w[COS], a, fs, hi0, lo0, wall, ku, cu_,
                                           kl, cl_, j1u, j1l, nodal0)[:3]
