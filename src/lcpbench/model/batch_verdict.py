@@ -4,7 +4,7 @@ one-wall route of a single solve, :func:`lcpbench.api.solve`, which calls it fro
 :func:`accepted` is whether :func:`lcpbench.model.judge.failed_checks` finds no
 failed check, given the numbers the judge kernel
 (:func:`lcpbench.model.judge_kernel.judge_answer`) returns, as
-:func:`lcpbench.model.judge_compiled.verdict_from_stats` hands them to it; every
+:func:`lcpbench.model.judge.verdict_from_stats` hands them to it; every
 contact step of the compiled solve is "solved" (the solve kernel stops on any
 other). The same comparisons, written so that a NaN fails as it does there.
 Judge side only: nothing here comes from the solve kernel. The reasons (the

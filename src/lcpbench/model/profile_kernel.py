@@ -21,7 +21,7 @@ layout), continued flat outside; an empty table is a flat wall whose rows
 an elastic wall do not combine, :class:`lcpbench.problems.scenes.ActuatorScene`).
 
 Nothing here decides "converged": the caller judges the answer
-(:mod:`lcpbench.model.judge_compiled`). A step the kernel cannot take as the
+(:mod:`lcpbench.model.judge`). A step the kernel cannot take as the
 reference does ends the solve with its bail code, and the caller runs the
 reference driver.
 """

@@ -376,8 +376,8 @@ for _name in DERIVED:
 def build_result(scene, chain: Chain, out: DriverOutput, *, judged_by=judge,
                  **how) -> ContactResult:
     """The result of a driver run, judged by :func:`lcpbench.model.judge.judge`
-    (``judged_by``: or by its compiled twin with the same arguments and verdicts,
-    :func:`lcpbench.model.judge_compiled.judge_fast`). The fields in
+    (``judged_by``: a judgement made already, with the same arguments, e.g.
+    :func:`lcpbench.model.lazy_result.stats_judge`). The fields in
     :data:`DERIVED` are computed at their first access."""
     verdict = judged_by(chain, out.alpha, out.forces_upper, out.forces_lower, tol=how["tol"],
                         driver_converged=out.converged, driver_reason=out.reason,
