@@ -36,6 +36,10 @@ NODE_GROSS = 0.05
 FLOOR_ULPS = 256.0
 #: penetration and closure of the exact geometry, in units of ℓ, at most
 GEOMETRY_TOL = 1e-6
+#: the joint torques' balance: the relative torque residual at most
+#: max(TORQUE_PER_RAD · tol, TORQUE_FLOOR)
+TORQUE_PER_RAD = 10.0
+TORQUE_FLOOR = 1e-6
 #: round-off of a reaction, in units of ε × the size of the terms summed for it
 ROUNDOFF_ULPS = 64.0
 #: the contraction estimate ρ is kept in [RHO_MIN, RHO_MAX]

@@ -9,7 +9,6 @@ rule, and the scenes from what README and results/hard-cases.md document.
 import csv
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from lcpbench import solve
@@ -17,7 +16,6 @@ from lcpbench.bench.expected import HARD_EXPECTED, expectation, is_expected
 from lcpbench.bench.metrics import Evaluated
 from lcpbench.bench.report import failures
 from lcpbench.model.judge import Judgement, failed_checks, settle_verdict
-from lcpbench.model.result import Certificate
 from lcpbench.problems.scenes import ActuatorScene
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -28,13 +26,14 @@ TAU = 100 * TOL  # the success rule at tol 1e-9 rad: min(1e-3, 100·tol)
 def _judge_reason(*, last_step_ok: bool = True, bound: float = 4e-7) -> str:
     """The reason the judge writes (model.judge.settle_verdict) for an answer whose only
     faults are its force error bound ``bound`` and, optionally, an inexact last step."""
-    cert = Certificate(min_gap=0.0, min_force=0.0, complementarity=0.0, closure=0.0,
-                       torque_residual=np.zeros(3), max_torque_residual=0.0,
-                       relative_torque_residual=0.0)
-    fails = failed_checks(cert, ["solved", "solved" if last_step_ok else "inaccurate"],
-                          tol=TOL, tau=TAU, comp=0.0, comp_allowed=1.0, pen=1.0,
-                          closure_allowed=1.0, R_min=0.0, allowed_R=1.0,
-                          bound=(bound, 0.0, 1.0), judge_total_force=0.5)
+    from lcpbench.numba_cache import kernel_module
+
+    names = kernel_module("lcpbench.model.judge_checks", "answer_checks").STATS
+    numbers = {name: 0.0 for name in names}  # every other check passes
+    numbers.update(tau=TAU, F0=1.0, eps_R=1.0, comp_allowed=1.0, pen=1.0, closure_allowed=1.0,
+                   total=bound, node_allowed=1.0, judge_total_force=0.5)
+    fails = failed_checks(True, numbers, ["solved", "solved" if last_step_ok else "inaccurate"],
+                          tol=TOL)
     verdict = settle_verdict(Judgement(False, "converged", TAU, 1.0), fails, "converged")
     assert not verdict.converged
     return verdict.reason

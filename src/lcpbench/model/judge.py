@@ -38,7 +38,7 @@ judge step holds a node in contact by the wall's spring instead of on it.
 6. **closure, torque**: the exact-geometry certificate
    (:class:`Certificate`, computed by :mod:`lcpbench.model.judge_checks`): the right
    pin on y = 0 to 1e-6 ℓ, the joint torques in balance to max(10 tol, 1e-6) of the
-   spring torques.
+   spring torques (TORQUE_PER_RAD, TORQUE_FLOOR).
 7. **force error bound**: lcpbench takes contact steps itself, solved exactly by
    block principal pivoting, independent of every back-end
    (:mod:`lcpbench.model.judge_kernel`; in increments :mod:`lcpbench.model.judge_exact`):
@@ -131,7 +131,7 @@ THRESHOLDS = {
     "complementarity": "max_i min(R_i/F₀, g_i/ℓ) <= NODE_SHARE·τ",
     "penetration": "min g >= -min(GEOMETRY_TOL, NODE_SHARE·τ)·ℓ",
     "closure": "|y_right| <= GEOMETRY_TOL·ℓ",
-    "torque": "relative torque residual <= max(10·tol, 1e-6)",
+    "torque": "relative torque residual <= max(TORQUE_PER_RAD·tol, TORQUE_FLOOR)",
     "force_error_bound": "<= τ for F; per node <= max(NODE_FACTOR·τ, NODE_GROSS, "
                          "NODE_FACTOR·FLOOR_ULPS·ε·S/F₀)",
     "contact": "R_i > NODE_SHARE·τ·F₀",
@@ -349,20 +349,12 @@ def verdict_from_stats(settled: bool, s: dict, fu: np.ndarray, fl: np.ndarray,
     verdict.inexact_steps = sum(st != "solved" for st in step_statuses)
     unstable = s["unstable"]
     verdict.unstable_directions = int(unstable) if np.isfinite(unstable) else None
-    bound = None
     if settled:
-        total, node = s["total"], s["node"]
-        verdict.force_error_bound, verdict.node_error_bound = total, node
+        verdict.force_error_bound, verdict.node_error_bound = s["total"], s["node"]
         verdict.contraction, verdict.judge_contraction = s["rho"], s["judge_rho"]
         verdict.judge_total_force = s["judge_total_force"]
         verdict.judge_rounds = int(s["rounds"])
-        bound = (total, node, s["node_allowed"])
-    fails = failed_checks(cert, step_statuses, tol=tol, tau=tau, comp=s["comp"],
-                          comp_allowed=s["comp_allowed"], pen=s["pen"],
-                          closure_allowed=s["closure_allowed"], R_min=s["R_min"],
-                          allowed_R=max(s["eps_R"], s["floor_R"]), bound=bound,
-                          judge_total_force=verdict.judge_total_force,
-                          unstable=unstable)
+    fails = failed_checks(settled, s, step_statuses, tol=tol)
     return settle_verdict(verdict, fails, driver_reason)
 
 
@@ -494,47 +486,59 @@ def penetration_allowed(tau: float, L: float, eps_R: float, c_up: np.ndarray,
     return min(GEOMETRY_TOL, NODE_SHARE * tau) * L + eps_R * c
 
 
-def failed_checks(cert, step_statuses: list[str], *, tol: float, tau: float, comp: float,
-                  comp_allowed: float, pen: float, closure_allowed: float, R_min: float,
-                  allowed_R: float, bound: tuple[float, float, float] | None,
-                  judge_total_force: float, unstable: float = 0) -> list[str]:
+def _rule_kernel():
+    """The judge's rule, compiled (:mod:`lcpbench.model.batch_verdict`)."""
+    from ..numba_cache import kernel_module
+
+    return kernel_module("lcpbench.model.batch_verdict", "accepted")
+
+
+def failed_checks(settled: bool, s: dict, step_statuses: list[str], *,
+                  tol: float) -> list[str]:
     """The checks of :func:`judge` that fail, each as "check: why", in one order.
 
-    On the judge kernel's numbers (:func:`verdict_from_stats`) or the judge's in
-    increments: ``bound`` is (total, per-node, per-node allowed) of
-    the force error bound, None when the judge step did not settle.
+    Which checks fail the compiled rule decides
+    (:func:`lcpbench.model.batch_verdict.failed`, as a batch line and the one-wall route
+    do) on the judge's numbers ``s`` (by the names of
+    :data:`lcpbench.model.judge_checks.STATS`; ``settled``: the judge step settled);
+    check 2 is the last of ``step_statuses``. The text of each is written here.
     """
+    rule = _rule_kernel()
+    numbers = np.array([float(s[name]) for name in _checks_kernel().STATS])
+    mask = int(rule.failed(bool(settled), numbers, float(tol)))
     fails: list[str] = []
     if step_statuses and step_statuses[-1] != "solved":
         fails.append(f"last step: the contact step whose reactions are reported was "
                      f"{step_statuses[-1]} by lcpbench's residuals")
-    if comp > comp_allowed:
+    comp, R_min, unstable = s["comp"], s["R_min"], s["unstable"]
+    if mask & rule.FAILS_COMPLEMENTARITY:
         fails.append(f"complementarity: a node carries a reaction {comp:.1e} F₀ while "
-                     f"{comp:.1e} ℓ from its wall (allowed {comp_allowed:.1e})")
-    if cert.min_gap < -pen:
-        fails.append(f"penetration: {-cert.min_gap:.1e} mm through a wall "
-                     f"(allowed {pen:.1e} mm)")
-    if cert.closure > closure_allowed:
-        fails.append(f"closure: the right pin is {cert.closure:.1e} mm off y = 0")
-    if cert.relative_torque_residual > max(10 * tol, 1e-6):
-        fails.append(f"torque: relative torque residual {cert.relative_torque_residual:.1e}")
-    if R_min < -allowed_R:
+                     f"{comp:.1e} ℓ from its wall (allowed {s['comp_allowed']:.1e})")
+    if mask & rule.FAILS_PENETRATION:
+        fails.append(f"penetration: {-s['min_gap']:.1e} mm through a wall "
+                     f"(allowed {s['pen']:.1e} mm)")
+    if mask & rule.FAILS_CLOSURE:
+        fails.append(f"closure: the right pin is {s['closure']:.1e} mm off y = 0")
+    if mask & rule.FAILS_TORQUE:
+        fails.append(f"torque: relative torque residual {s['relative_torque_residual']:.1e}")
+    if mask & rule.FAILS_SIGN:
+        allowed_R = max(s["eps_R"], s["floor_R"])
         fails.append(f"sign: a wall pulls with {R_min:.2e} N (allowed down to "
                      f"{-allowed_R:.1e} N)")
-    if not unstable <= 0:  # (a NaN fails, as in batch_verdict.accepted)
+    if mask & rule.FAILS_STABILITY:
         many = not unstable <= 1
         fails.append(f"stability: the answer is an unstable equilibrium (a saddle): "
                      f"{unstable:g} direction{'s' if many else ''} on its contact set "
                      f"lower{'' if many else 's'} the energy")
-    if bound is None:
+    if mask & rule.FAILS_UNSETTLED:
         fails.append("force error bound: the judge step did not settle")
-    elif not bound[0] <= tau:
-        fails.append(f"force error bound: the total force may be {bound[0]:.1e} F₀ off "
-                     f"(allowed {tau:.1e}; one more exact step moves it to "
-                     f"{judge_total_force:.6g} N)")
-    elif not bound[1] <= bound[2]:
-        fails.append(f"force error bound: a node's force may be {bound[1]:.1e} F₀ off "
-                     f"(allowed {bound[2]:.1e})")
+    elif mask & rule.FAILS_TOTAL:
+        fails.append(f"force error bound: the total force may be {s['total']:.1e} F₀ off "
+                     f"(allowed {s['tau']:.1e}; one more exact step moves it to "
+                     f"{s['judge_total_force']:.6g} N)")
+    elif mask & rule.FAILS_NODE:
+        fails.append(f"force error bound: a node's force may be {s['node']:.1e} F₀ off "
+                     f"(allowed {s['node_allowed']:.1e})")
     return fails
 
 
