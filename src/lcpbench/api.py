@@ -20,7 +20,7 @@ import numpy as np
 from .accuracy import accuracy_settings, check_accuracy, held_to
 from .errors import ProblemError
 from .escalations import Context, escalate
-from .model.compiled import check_engine, drive, profile_reference, reference, run_kernel
+from .model.compiled import check_engine, drive, profile_stopped, reference, run_kernel
 from .model.driver import METHODS
 from .model.finish import fast_judge, finish
 from .model.formulations import handed, resolve_formulation
@@ -330,8 +330,8 @@ def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_ou
     (:func:`lcpbench.model.batch_verdict.accepted`, the checks of the judge, as a
     batch line decides it); the result's other fields are built when read
     (:class:`~lcpbench.model.lazy_result.LazyResult`), by the same functions as
-    :func:`run_kernel` and :func:`finish`. Where the kernel stops, the numpy reference,
-    as :func:`run_kernel`; where the driver did not converge, :func:`finish` at once."""
+    :func:`run_kernel` and :func:`finish`. Where the kernel stops, its compiled
+    fall-back, as :func:`run_kernel`; where the driver did not converge, :func:`finish` at once."""
     profile = route == PROFILE
     if profile:  # (the walls at the answer's x, its last two outputs: one wall, unused)
         got, kernel_s, name = call_profile_kernel(chain, tol=tol, max_outer=max_outer,
@@ -343,9 +343,12 @@ def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_ou
                                           newton=method == "newton")
     code = got[0]
     if code in BAIL_REASONS:
-        out, used = (profile_reference if profile else reference)(
-            chain, make_step, BAIL_REASONS[code], tol=tol, max_outer=max_outer, method=method,
-            settings=settings)
+        if profile:  # no compiled route in heights takes a profile over: escalations may
+            out, used = profile_stopped(chain, BAIL_REASONS[code]), \
+                f"compiled (stopped: {BAIL_REASONS[code]})"
+        else:
+            out, used = reference(chain, make_step, BAIL_REASONS[code], tol=tol,
+                                  max_outer=max_outer, method=method, settings=settings)
         return finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol,
                       elapsed=time.perf_counter() - t0, settings=settings, engine=used,
                       compiled_judge=True, why=why, judge_args=chain_args(chain, args),

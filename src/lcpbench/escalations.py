@@ -134,7 +134,7 @@ def _judged(res: ContactResult, ctx: Context, chain: Chain, out: DriverOutput, u
 
 
 def _kernel_judge(ctx: Context) -> bool:
-    return ctx.engine != "numpy" and kernel_applies(DEFAULT, "globalised", ctx.chain)
+    return kernel_applies(DEFAULT, "globalised", ctx.chain)
 
 
 # -- in increments ------------------------------------------------------------------

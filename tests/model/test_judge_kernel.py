@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 
 from lcpbench import ActuatorScene, CantileverScene, solve
-from lcpbench.api import solve_internal
 from lcpbench.bench.grid import hard_scenes
 from lcpbench.model.judge import judge
 from lcpbench.model.judge_compiled import judge_fast
@@ -188,12 +187,10 @@ def test_cantilever_same_verdict():
     assert_same(*_judge_result(res))
 
 
-def test_the_default_solve_is_judged_by_the_compiled_judge_and_numpy_by_numpy():
-    """Route against route: which judge ran is a label, and its bound the other judge's to
-    round-off; the bound itself has no oracle."""
+def test_the_default_solve_is_judged_by_the_compiled_judge():
+    """Which judge ran is recorded (the two judges' numbers against each other:
+    ``assert_same`` above)."""
     scene = ActuatorScene(theta=150, height=3.0)
-    fast, ref = solve(scene), solve_internal(scene, engine="numpy")
+    fast = solve(scene)
     assert (fast.engine, fast.judge) == ("compiled", "compiled")
-    assert (ref.engine, ref.judge) == ("numpy", "numpy")
-    assert fast.converged and ref.converged
-    assert fast.force_error_bound == pytest.approx(ref.force_error_bound, rel=1e-5)
+    assert fast.converged

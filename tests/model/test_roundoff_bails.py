@@ -113,7 +113,7 @@ def test_past_the_vertical_at_n_3000_the_cold_start_fails_without_a_dense_step(d
     # θ > 180°: the linearisation is singular at the end links and the cold start fails
     # (documented; the answer then comes by the loading path); before, each uncertified
     # step fell back to dense Lemke, minutes
-    for engine in ("auto", "numpy"):
+    for engine in ("auto",):
         res = solve_internal(ActuatorScene(200, 3.0, links=3000), tol=1e-3, engine=engine)
         assert "theta > 180 deg" in res.retried("ramped")
     assert all(n <= step_solver.MAX_DENSE_FALLBACK for _, n in dense_steps)

@@ -14,9 +14,12 @@ are the kernels of :mod:`.driver_kernel`; per outer iteration:
    back-end's call in Python, and lcpbench's residuals (:func:`~.driver_kernel.judge`);
 3. :func:`~.driver_kernel.advance`: max|α̂ − α| and the Armijo search on the exact energy.
 
-It takes the numpy driver's path and gives its answer to round-off
-(``tests/model/test_compiled_driver.py``). Where it does not apply (see :func:`takes`)
-the numpy driver runs.
+Its answers are checked against the energy minimisation
+(``tests/model/test_compiled_driver.py``). Where it does not apply (see :func:`takes`:
+the undamped scheme, elastic walls, wall profiles) the Python driver
+(:func:`lcpbench.model.driver.run_driver`) runs. Where the solve kernel stops
+(:func:`lcpbench.model.compiled.reference`) this driver takes over with the default
+back-end's step solver.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from ..solvers.base import Status
 from .chain import energy
 from .kernel_call import applies
 from .outer import (
+    STALL_STEPS,
     DriverOutput,
     DriverStart,
     StepRecord,
@@ -38,6 +42,7 @@ from .outer import (
     feasible_start,
     line_search_failed,
     out_of_iterations,
+    stall,
     starting_point,
     step_failed,
     step_setup_time,
@@ -141,9 +146,13 @@ def _assemble(kd, chain: Chain, c: tuple, alpha: np.ndarray) -> KernelStep:
 
 
 def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
-        start: DriverStart | None = None) -> DriverOutput:
+        start: DriverStart | None = None, stop_on_stall: bool = False) -> DriverOutput:
     """:func:`lcpbench.model.driver.run_driver` (``method="globalised"``) with the
-    parts around the back-end compiled; for a chain and step solver it :func:`takes`."""
+    parts around the back-end compiled; for a chain and step solver it :func:`takes`
+    (and after a stop of the solve kernel, :func:`lcpbench.model.compiled.reference`,
+    with the default back-end's step solver). ``stop_on_stall``: end as soon as
+    max|Δα| has stalled (:func:`~.outer.stall`) instead of at ``max_outer`` (after a
+    kernel stop, where the escalations take a refusal over)."""
     kd = _kernel()
     c = _arrays(chain)
     a, jl, jr, k, rest, fs, load, link_load, _, _ = c
@@ -174,6 +183,8 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
         warm = sol
         if dalpha < tol:
             return converged_output(chain, alpha, sol, steps, step)
+        if stop_on_stall and len(steps) >= 2 * STALL_STEPS and stall(steps) is not None:
+            return out_of_iterations(alpha, n, steps, len(steps), tol)
     return out_of_iterations(alpha, n, steps, max_outer, tol)
 
 

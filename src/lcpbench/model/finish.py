@@ -20,8 +20,7 @@ def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: 
 
     Judged by the compiled judge (the same checks and verdicts as the numpy judge,
     independent of the solve kernel) where ``compiled_judge`` (it takes the chain,
-    whichever back-end solved the steps); engine="numpy" keeps the numpy judge, the
-    reference. ``judge_args``: the chain's arrays for the judge kernel, when the
+    whichever back-end solved the steps); elsewhere the numpy judge, the reference. ``judge_args``: the chain's arrays for the judge kernel, when the
     caller has them (:func:`lcpbench.model.judge_compiled.chain_args`). ``judged_by``:
     the judgement already made (a batch line's, from the judge kernel's numbers), in
     place of the judge call. ``engine`` (what produced ``out``), the judge that ran and
