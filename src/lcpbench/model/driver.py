@@ -37,7 +37,6 @@ from .chain import alpha_from_heights, energy
 from .elastic import penalty_gradient
 from .newton import newton_step
 from .outer import (
-    STALL_STEPS,
     DriverOutput,
     DriverStart,
     StepRecord,
@@ -48,7 +47,6 @@ from .outer import (
     feasible_start,
     line_search_failed,
     out_of_iterations,
-    stall,
     starting_point,
     step_failed,
     step_setup_time,
@@ -68,7 +66,6 @@ def run_driver(
     max_outer: int = 200,
     method: str = "globalised",
     start: DriverStart | None = None,
-    stop_on_stall: bool = False,
 ) -> DriverOutput:
     """Iterate contact steps to the equilibrium of ``chain``.
 
@@ -76,10 +73,7 @@ def run_driver(
     ``converged`` and a reason; never raises on non-convergence. A chain with
     a wall profile runs :mod:`lcpbench.model.profile_driver`. ``start``
     (globalised and Newton schemes) begins from a neighbouring scene's answer instead
-    of the clipped unconstrained arc. ``stop_on_stall`` (globalised and Newton schemes,
-    no profile): end as soon as max|Δα| has stalled (:func:`~.outer.stall`) instead of
-    at ``max_outer`` (the reference run after a kernel stop, whose step solver may fall
-    back to dense Lemke steps, and whose refusal the escalations take over).
+    of the clipped unconstrained arc.
     """
     if chain.profiled_walls:
         if method not in METHODS:
@@ -94,8 +88,7 @@ def run_driver(
         return _undamped(chain, solver, tol, max_outer)
     if method not in ("globalised", "newton"):
         raise ProblemError(f"method must be one of {METHODS}, got {method!r}")
-    return _globalised(chain, solver, tol, max_outer, start, newton=method == "newton",
-                       stop_on_stall=stop_on_stall)
+    return _globalised(chain, solver, tol, max_outer, start, newton=method == "newton")
 
 
 def _solve_step(chain, alpha, solver, warm, newton=False):
@@ -109,8 +102,7 @@ def _solve_step(chain, alpha, solver, warm, newton=False):
 
 
 def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int,
-                start: DriverStart | None = None, newton: bool = False,
-                stop_on_stall: bool = False) -> DriverOutput:
+                start: DriverStart | None = None, newton: bool = False) -> DriverOutput:
     n = chain.free_nodes.size
     steps: list[StepRecord] = []
     u, alpha, warm = starting_point(chain, start, feasible_start)
@@ -139,8 +131,6 @@ def _globalised(chain: Chain, solver: StepSolver, tol: float, max_outer: int,
         warm = sol
         if dalpha < tol:
             return converged_output(chain, alpha, sol, steps, step)
-        if stop_on_stall and len(steps) >= 2 * STALL_STEPS and stall(steps) is not None:
-            return out_of_iterations(alpha, n, steps, len(steps), tol)
     return out_of_iterations(alpha, n, steps, max_outer, tol)
 
 
