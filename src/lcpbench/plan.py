@@ -35,10 +35,10 @@ large N        the globalised scheme and N ≥ ``large_n.LARGE_N`` (or a chain i
 kernel         the default back-end, globalised or Newton, a chain
                the kernel takes (a warm start, or an arc near the wall): the solve kernel.
 compiled       another back-end that takes a QP or an LCP, the globalised scheme, a
-driver         scaled step, flat rigid walls the kernel's layout takes: its calls in
-               Python, the driver around them compiled.
-numpy          everything else (the undamped scheme; another back-end on elastic walls, a
-               wall profile or an unscaled step; chains no compiled route takes): the
+driver         scaled step, flat walls (rigid or elastic) the kernel's layout takes: its
+               calls in Python, the driver around them compiled.
+numpy          everything else (the undamped scheme; another back-end on a wall profile
+               or with an unscaled step; chains no compiled route takes): the
                Python driver, :func:`lcpbench.model.driver.run_driver`.
 ============== ==========================================================================
 

@@ -69,7 +69,8 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
 
     The one place where the compiled kernel is chosen: a back-end other than the
     default runs the compiled driver (:mod:`.compiled_driver`) where it takes the
-    chain; the undamped scheme, elastic walls or wall profiles with another back-end,
+    chain (flat walls, rigid or elastic); the undamped scheme, wall profiles with another
+    back-end,
     and chains no compiled route takes run :func:`~lcpbench.model.driver.run_driver`
     with ``step_solver``. ``args``: the
     chain's :func:`~.kernel_call.kernel_args`, given by a caller that has checked that the kernel
@@ -224,8 +225,9 @@ def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol:
     same globalised loop, its assembly and line search compiled) around the default
     back-end's step solver ``make_step()``, which has what the kernel lacks (the primal
     active set, the dense Lemke fall-back), stopping where max|Δα| stalls; on elastic
-    walls, which the compiled driver does not assemble, the answer is reported not
-    converged as for a refused step."""
+    walls the answer is reported not converged as for a refused step (the compiled
+    driver assembles elastic walls for the other back-ends; around the default
+    back-end's step solver there it has not been measured)."""
     if beyond_heights(chain, why):
         return out_of_reach(chain, why), "compiled (stopped: see the reason)"
     if why in ROUNDOFF_BAILS and large_n.roundoff_may_limit(chain, step_request(settings),

@@ -15,8 +15,10 @@ are the kernels of :mod:`.driver_kernel`; per outer iteration:
 3. :func:`~.driver_kernel.advance`: max|α̂ − α| and the Armijo search on the exact energy.
 
 Its answers are checked against the energy minimisation
-(``tests/model/test_compiled_driver.py``). Where it does not apply (see :func:`takes`:
-the undamped scheme, elastic walls, wall profiles) the Python driver
+(``tests/model/test_compiled_driver.py``). Elastic walls are a parameter of the same
+loop: the back-end gets the step's elastic forms (:mod:`.elastic_step`), the judge the
+compliant gaps, the line search the springs' energy. Where it does not apply (see
+:func:`takes`: the undamped scheme, wall profiles) the Python driver
 (:func:`lcpbench.model.driver.run_driver`) runs. Where the solve kernel stops
 (:func:`lcpbench.model.compiled.reference`) this driver takes over with the default
 back-end's step solver.
@@ -69,8 +71,9 @@ def _kernel():
 def takes(chain: Chain, step_solver, method: str) -> bool:
     """Whether this driver runs the solve: the globalised scheme, a scaled step solver
     of a back-end that takes a QP or an LCP (not a contact step itself, as the banded
-    active set does), a chain of consecutive joints and contiguous free nodes with flat,
-    rigid walls."""
+    active set does), a chain of consecutive joints and contiguous free nodes with flat
+    walls, rigid or elastic (the back-end gets :mod:`.elastic`'s forms, the springs'
+    energy is in the line search's)."""
     backend = getattr(step_solver, "backend", None)
     return backend is not None and takes_backend(chain, backend,
                                                  getattr(step_solver, "scaled", False), method)
@@ -83,7 +86,7 @@ def takes_backend(chain: Chain, backend, scaled: bool, method: str) -> bool:
     if (method != "globalised" or backend.form not in ("qp", "lcp") or not scaled
             or hasattr(backend.load(), "solve_step")):
         return False
-    return not chain.elastic_walls and applies("auto", method, chain)
+    return applies("auto", method, chain)
 
 
 class KernelStep(ContactStep):
@@ -91,6 +94,7 @@ class KernelStep(ContactStep):
     residuals the kernels compute (the hooks of :mod:`.step_solver`)."""
 
     kernel = None  # the driver_kernel module
+    cu = cl = np.empty(0)  # the elastic walls' compliances 1/k (empty: rigid walls)
 
     def compiled_qp(self):
         """(P data, indices, indptr, c̃, lower/ℓ, upper/ℓ, scaled bands)."""
@@ -115,13 +119,24 @@ class KernelStep(ContactStep):
         """step_residuals' ``(residuals, R)``, or None (the numpy reference decides)."""
         ok, res, R = self.kernel.judge(
             np.ascontiguousarray(u, dtype=float), self.bands, self.linear, self.lower,
-            self.upper, self.coef, int(self.base[0]), int(self.free_nodes[0]) + 1,
+            self.upper, self.cu, self.cl, self.coef, int(self.base[0]), int(self.free_nodes[0]) + 1,
             self.links, self.origin, self.phi_origin, self.stiffness, self.rest_joint,
             self.nodal_load, float(self.length_scale), float(self.force_scale))
         if not ok:
             return None
         return dict(zip(("natural", "min_gap", "min_reaction", "complementarity",
                          "term_size"), map(float, res), strict=True)), R
+
+
+def _compliances(chain: Chain) -> tuple[np.ndarray, np.ndarray]:
+    """The walls' compliances 1/k per free node (:func:`.elastic.compliances`; empty
+    arrays for rigid walls, the kernels' form)."""
+    if not chain.elastic_walls:
+        return np.empty(0), np.empty(0)
+    from .elastic import compliances
+
+    cu, cl = compliances(chain)
+    return np.ascontiguousarray(cu, dtype=float), np.ascontiguousarray(cl, dtype=float)
 
 
 def _arrays(chain: Chain) -> tuple:
@@ -140,8 +155,12 @@ def _assemble(kd, chain: Chain, c: tuple, alpha: np.ndarray) -> KernelStep:
         alpha, a, jl, jr, k, rest, fs, lo.size, load)
     step = KernelStep(bands, linear, lo, hi, alpha, inv, v, chain.free_nodes, chain.links,
                       jr, coef, phi0, origin, alpha0, phi_origin, k, rest, load,
-                      length_scale=chain.length, force_scale=chain.force_scale)
+                      length_scale=chain.length, force_scale=chain.force_scale,
+                      upper_stiffness=chain.upper_stiffness,
+                      lower_stiffness=chain.lower_stiffness)
     step.kernel = kd
+    if chain.elastic_walls:
+        step.cu, step.cl = _compliances(chain)
     return step
 
 
@@ -155,7 +174,8 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
     kernel stop, where the escalations take a refusal over)."""
     kd = _kernel()
     c = _arrays(chain)
-    a, jl, jr, k, rest, fs, load, link_load, _, _ = c
+    a, jl, jr, k, rest, fs, load, link_load, lo, hi = c
+    cu, cl = _compliances(chain)
     n = chain.free_nodes.size
     steps: list[StepRecord] = []
     u, alpha, warm = starting_point(chain, start, feasible_start)
@@ -174,7 +194,8 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
         dalpha, t, trial, E_t = kd.advance(
             np.ascontiguousarray(sol.u, dtype=float), u, alpha, E,
             stiffness_sum, step.inv_a_cos, step.alpha0, step.origin,
-            step.phi_origin, step.coef, fs, k, rest, load, a, jl, jr, link_load)
+            step.phi_origin, step.coef, fs, k, rest, load, a, jl, jr, link_load, lo, hi, cu,
+            cl)
         if t == 0.0:
             return line_search_failed(alpha, n, steps, sol, t_asm, dalpha, E)
         u, alpha, E = u + t * (sol.u - u), trial, E_t

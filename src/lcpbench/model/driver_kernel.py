@@ -29,7 +29,13 @@ import numpy as np
 from numba import njit
 
 from ..thresholds import ARMIJO_SHORTEST
-from .chain_kernel import armijo, energy, energy_noise, fit_heights  # once each
+from .chain_kernel import (  # once each
+    armijo,
+    energy,
+    energy_noise,
+    fit_heights,
+    wall_penalty,
+)
 from .compiled_dual import wall_residuals  # one copy of the judge's rows (numba_cache)
 from .compiled_kernel import banded_step  # the step
 
@@ -203,10 +209,10 @@ def _solve_on(bands, idx, rhs):
 
 
 @njit(cache=True)
-def judge(u, bands, linear, lo, hi, coef, b0, fs, links, origin, phi_origin, k, rest,
-          nodal_load, L, F):
-    """step_residuals (rigid walls): (ok, [natural, min_gap, min_reaction,
-    complementarity, term_size], R); not ok for heights that are not finite or where
+def judge(u, bands, linear, lo, hi, cu, cl, coef, b0, fs, links, origin, phi_origin, k,
+          rest, nodal_load, L, F):
+    """step_residuals: (ok, [natural, min_gap, min_reaction, complementarity, term_size],
+    R); ``cu``, ``cl``: the elastic walls' compliances 1/k (empty: rigid walls); not ok for heights that are not finite or where
     the nodes with no wall row cannot be re-solved (the caller runs the numpy reference)."""
     n = u.size
     for i in range(n):
@@ -222,16 +228,18 @@ def judge(u, bands, linear, lo, hi, coef, b0, fs, links, origin, phi_origin, k, 
             return False, np.zeros(5), grad
         u2[free] -= x
     R = -_gradient(u2, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load)
-    return True, wall_residuals(u2, R, bands, linear, lo, hi, L, F), R
+    return True, wall_residuals(u2, R, bands, linear, lo, hi, cu, cl, L, F), R
 
 
 # -- the outer step (model.driver._globalised) --------------------------------------
 @njit(cache=True)
 def advance(su, u, alpha, E, stiffness_sum, inv, alpha0, origin, phi_origin, coef, fs, k,
-            rest, nodal_load, a, jl, jr, link_load):
+            rest, nodal_load, a, jl, jr, link_load, lo, hi, cu, cl):
     """max|α̂ − α| of the step answer ``su`` (eq. 21, about u₀) and the Armijo search
     on the exact energy along u + t(su − u): (max|Δα|, t, α(t), E(t)); t = 0 where
-    no t >= ARMIJO_SHORTEST decreases the energy. ``stiffness_sum``: Σ|k| (the noise)."""
+    no t >= ARMIJO_SHORTEST decreases the energy. ``stiffness_sum``: Σ|k| (the noise);
+    ``cu``, ``cl``: the elastic walls' compliances (empty: rigid), whose springs'
+    energy (:func:`~.chain_kernel.wall_penalty`) is part of the energy searched on."""
     links, n = alpha.size, u.size
     dalpha, prev = 0.0, 0.0
     for i in range(links):
@@ -243,6 +251,7 @@ def advance(su, u, alpha, E, stiffness_sum, inv, alpha0, origin, phi_origin, coe
     if not np.all(np.isfinite(d)):
         return np.nan, 0.0, alpha, E
     g = _gradient(u, coef, jr[0], fs, links, origin, phi_origin, k, rest, nodal_load)
+    wall_penalty(u, lo, hi, cu, cl, g)  # (nothing where no wall yields)
     slope = 0.0
     for i in range(n):
         slope += g[i] * d[i]
@@ -251,9 +260,11 @@ def advance(su, u, alpha, E, stiffness_sum, inv, alpha0, origin, phi_origin, coe
     while True:
         trial = np.empty(links)
         E_t = np.nan
-        if fit_heights(trial, u + t * d, alpha, a, fs, links, np.empty(0), np.empty(links),
+        ut = u + t * d
+        if fit_heights(trial, ut, alpha, a, fs, links, np.empty(0), np.empty(links),
                        np.empty(links)):
-            E_t = energy(trial, a, jl, jr, k, rest, link_load, np.sin(trial))
+            E_t = energy(trial, a, jl, jr, k, rest, link_load, np.sin(trial)) + wall_penalty(
+                ut, lo, hi, cu, cl, np.empty(0))
         step = armijo(t, E_t, E, slope, noise, ARMIJO_SHORTEST)
         if step == t:
             return dalpha, t, trial, E_t
