@@ -88,15 +88,16 @@ def test_another_back_end():
         ("compiled driver", "compiled driver", ("escaped",))
     assert plan.judge == "compiled"  # the judge kernel takes the chain, whoever solved
     assert make_plan(chain, "lemke", "globalised", "auto", 1e-3, scaled=False).route == \
-        "numpy"
+        "compiled driver"  # the step's forms in the problem's units, the loop compiled
     assert make_plan(chain, "lemke", "newton", "auto", 1e-3).route == "numpy"
 
 
-def test_the_undamped_scheme_runs_numpy_and_never_escalates():
+def test_the_undamped_scheme_runs_the_compiled_driver_and_never_escalates():
     chain = ActuatorScene(**PAPER, links=140).chain()
     for backend in (DEFAULT, "lemke"):
         plan = make_plan(chain, backend, "undamped", "auto", 1e-3)
-        assert (plan.route, plan.engine, plan.escalations) == ("numpy", "numpy", ())
+        assert (plan.route, plan.engine, plan.escalations) == \
+            ("compiled driver", "compiled driver", ())
 
 
 def test_a_warm_start():
@@ -191,7 +192,9 @@ def test_the_result_says_what_ran():
     res = lcpbench.solve(scene)
     assert (res.route, res.engine, res.judge, res.retries) == \
         ("one-wall kernel", "compiled", "compiled", ())
-    ref = lcpbench.solve(scene, method="undamped")  # no compiled route: the Python driver
+    ref = lcpbench.solve(scene, method="undamped")  # an option of the compiled driver
+    assert (ref.route, ref.engine) == ("compiled driver", "compiled driver")
+    ref = lcpbench.solve(scene, solver="lemke", method="newton")  # the Python driver
     assert (ref.route, ref.engine) == ("numpy", "numpy")
     assert "engine" not in res.extra and "judge" not in res.extra
 
@@ -207,7 +210,7 @@ def _bump():
     (dict(links=40, channel=True), dict(), "compiled"),
     (dict(links=30, weight=0.3), dict(), "numpy (SQP steps in the link angles"),
     (dict(links=40), dict(solver="lemke"), "compiled driver"),
-    (dict(links=40), dict(method="undamped"), "numpy"),
+    (dict(links=40), dict(method="undamped"), "compiled driver"),
     (dict(links=40, wall_profile=_bump()), dict(), "compiled"),
     (dict(links=40, wall_profile=_bump()), dict(method="newton"), "numpy"),
 ])

@@ -34,11 +34,12 @@ large N        the globalised scheme and N ≥ ``large_n.LARGE_N`` (or a chain i
                step (:class:`lcpbench.model.large_driver.WallTerms`).
 kernel         the default back-end, globalised or Newton, a chain
                the kernel takes (a warm start, or an arc near the wall): the solve kernel.
-compiled       another back-end that takes a QP or an LCP, the globalised scheme, a
-driver         scaled step, flat walls (rigid or elastic) the kernel's layout takes: its
-               calls in Python, the driver around them compiled.
-numpy          everything else (the undamped scheme; another back-end on a wall profile
-               or with an unscaled step; chains no compiled route takes): the
+compiled       another back-end that takes a QP or an LCP and the globalised scheme, or
+driver         any back-end and the undamped scheme, on flat walls (rigid or elastic) the
+               kernel's layout takes: its calls in Python, the driver around them
+               compiled.
+numpy          everything else (another back-end on a wall profile; the Newton scheme
+               with another back-end; chains no compiled route takes): the
                Python driver, :func:`lcpbench.model.driver.run_driver`.
 ============== ==========================================================================
 

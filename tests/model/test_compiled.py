@@ -159,7 +159,9 @@ def test_engine_argument():
     with pytest.raises(ProblemError, match="engine must be one of"):
         solve_internal(scene, engine="fast")
     with pytest.raises(ProblemError, match="engine='compiled' runs method='globalised'"):
-        solve_internal(scene, method="undamped", engine="compiled")
+        solve_internal(scene, solver="lemke", method="newton", engine="compiled")
+    assert solve_internal(scene, method="undamped", engine="compiled").engine == \
+        "compiled driver"  # the undamped scheme: an option of the compiled driver
     assert solve_internal(scene, engine="compiled").engine == "compiled"
     # another back-end: the driver around it compiled (model.compiled_driver)
     assert solve_internal(scene, solver="lemke", engine="compiled").engine == "compiled driver"

@@ -95,16 +95,38 @@ def test_an_iterative_lcp_back_end_with_a_warm_start():
     assert_solved(fast, sign_tol=1e-6)  # (an iterative back-end: signs to 1e-6 F₀)
 
 
-def test_where_it_does_not_apply_the_numpy_driver_runs():
+def test_where_it_applies():
     chain = SCENES["actuator"].chain()
     lemke = make_step_solver("lemke")
     assert compiled_driver.takes(chain, lemke, "globalised")
     assert not compiled_driver.takes(chain, lemke, "newton")
-    assert not compiled_driver.takes(chain, make_step_solver("lemke", scaled=False),
-                                     "globalised")
+    assert compiled_driver.takes(chain, make_step_solver("lemke", scaled=False),
+                                 "globalised")  # the forms in the problem's units
     assert not compiled_driver.takes(chain, make_step_solver("active-set"), "globalised")
     soft = ActuatorScene(theta=150.0, height=3.0, links=30, wall_stiffness=10.0).chain()
     assert compiled_driver.takes(soft, lemke, "globalised")  # elastic walls: a parameter
-    res = solve(SCENES["actuator"], solver="lemke", method="undamped")
-    assert res.engine == "numpy"
+    assert compiled_driver.takes(chain, lemke, "undamped")  # any back-end, the default's too
+    assert compiled_driver.takes(chain, make_step_solver("active-set"), "undamped")
+    assert solve(SCENES["actuator"], solver="lemke", method="newton").engine == "numpy"
+
+
+@pytest.mark.parametrize("solver", ["lemke", "active-set"])
+@pytest.mark.parametrize("name", ["actuator", "channel"])
+def test_the_undamped_scheme_reaches_the_equilibrium(name, solver):
+    """The paper's undamped scheme (α ← α̂ after every step) as an option of the compiled
+    driver: where it converges its answer is the scene's equilibrium by the energy
+    oracle, in full steps."""
+    res = solve(SCENES[name], solver=solver, method="undamped", tol=1e-9)
+    assert res.engine == compiled_driver.ENGINE and res.converged, res.reason
+    assert all(s.step_length == 1.0 for s in res.steps)
+    assert_solved(res)
+
+
+def test_the_undamped_scheme_stops_where_a_link_passes_the_vertical():
+    """θ = 180° against a wall 0.6 mm away: full Gauss–Newton steps push a link past the
+    vertical, where eq. (20)'s 1/cos α is singular; the answer is refused, not wrong."""
+    res = solve(ActuatorScene(theta=180, height=0.6, links=140), solver="lemke",
+                method="undamped")
+    assert res.engine == compiled_driver.ENGINE
+    assert not res.converged and "vertical" in res.reason
 

@@ -210,6 +210,7 @@ def test_large_N_flat_contact_region_is_not_mistaken_for_contact():
 
 def test_bad_driver_input_is_a_problem_error():
     from lcpbench.errors import ProblemError
+    from lcpbench.model import compiled_driver
     from lcpbench.model.driver import run_driver
     from lcpbench.model.outer import DriverStart
 
@@ -217,4 +218,6 @@ def test_bad_driver_input_is_a_problem_error():
     with pytest.raises(ProblemError, match="method must be one of"):
         run_driver(chain, None, method="newtonian")
     with pytest.raises(ProblemError, match="continuation start"):
-        run_driver(chain, None, method="undamped", start=DriverStart(np.zeros(20)))
+        compiled_driver.run(chain, None, method="undamped", start=DriverStart(np.zeros(20)))
+    with pytest.raises(ProblemError, match="compiled driver"):  # the undamped scheme's home
+        run_driver(chain, None, method="undamped")

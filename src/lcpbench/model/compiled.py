@@ -143,11 +143,11 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
     elif compiled_driver.takes(chain, step_solver, method):
         # another back-end: its calls in Python, lcpbench's parts around them compiled
         return (compiled_driver.run(chain, step_solver, tol=tol, max_outer=max_outer,
-                                    start=start), compiled_driver.ENGINE)
+                                    start=start, method=method), compiled_driver.ENGINE)
     elif engine == "compiled":
-        raise ProblemError(f"engine='compiled' runs method='globalised' (or 'newton' with the "
-                           f"default back-end, {DEFAULT}) with a back-end that takes a QP or an "
-                           f"LCP, on flat rigid walls; got solver {backend!r}, method {method!r}")
+        raise ProblemError(f"engine='compiled' runs method='globalised' or 'undamped' (or "
+                           f"'newton' with the default back-end, {DEFAULT}) on flat walls; got "
+                           f"solver {backend!r}, method {method!r}")
     else:
         used = "numpy"
     out = run_driver(chain, step_solver, tol=tol, max_outer=max_outer, method=method,

@@ -17,8 +17,9 @@ are the kernels of :mod:`.driver_kernel`; per outer iteration:
 Its answers are checked against the energy minimisation
 (``tests/model/test_compiled_driver.py``). Elastic walls are a parameter of the same
 loop: the back-end gets the step's elastic forms (:mod:`.elastic_step`), the judge the
-compliant gaps, the line search the springs' energy. Where it does not apply (see
-:func:`takes`: the undamped scheme, wall profiles) the Python driver
+compliant gaps, the line search the springs' energy. The paper's undamped scheme is an
+option of the same loop (:func:`undamped`, any back-end). Where it does not apply (see
+:func:`takes`: wall profiles, the Newton scheme with another back-end) the Python driver
 (:func:`lcpbench.model.driver.run_driver`) runs. Where the solve kernel stops
 (:func:`lcpbench.model.compiled.reference`) this driver takes over with the default
 back-end's step solver.
@@ -30,6 +31,7 @@ import time
 
 import numpy as np
 
+from ..errors import ProblemError
 from ..problems.scenes import Chain
 from ..solvers.base import Status
 from .chain import energy
@@ -54,7 +56,7 @@ from .step import ContactStep, LCPForm
 ENGINE = "compiled driver"
 
 
-ENTRIES = ("assemble", "qp_form", "lcp_form", "from_lcp", "judge", "advance")
+ENTRIES = ("assemble", "qp_form", "lcp_form", "from_lcp", "judge", "advance", "predict")
 
 
 def _kernel():
@@ -69,11 +71,13 @@ def _kernel():
 
 
 def takes(chain: Chain, step_solver, method: str) -> bool:
-    """Whether this driver runs the solve: the globalised scheme, a scaled step solver
-    of a back-end that takes a QP or an LCP (not a contact step itself, as the banded
-    active set does), a chain of consecutive joints and contiguous free nodes with flat
-    walls, rigid or elastic (the back-end gets :mod:`.elastic`'s forms, the springs'
-    energy is in the line search's)."""
+    """Whether this driver runs the solve: the globalised scheme with a step solver of a
+    back-end that takes a QP or an LCP (not a contact step itself, as the banded active
+    set does: the solve kernel runs it), or the undamped scheme with any back-end; a
+    chain of consecutive joints and contiguous free nodes with flat walls, rigid or
+    elastic (the back-end gets :mod:`.elastic`'s forms, the springs' energy is in the
+    line search's). A step solver that is not ``scaled`` gets the step's forms in the
+    problem's units (:func:`~.step_solver.step_qp`, :func:`~.step_solver.step_lcp`)."""
     backend = getattr(step_solver, "backend", None)
     return backend is not None and takes_backend(chain, backend,
                                                  getattr(step_solver, "scaled", False), method)
@@ -83,10 +87,12 @@ def takes_backend(chain: Chain, backend, scaled: bool, method: str) -> bool:
     """:func:`takes` from the registry's data on the back-end (a
     :class:`~lcpbench.solvers.registry.Backend`) and whether its step is ``scaled``
     (what :func:`lcpbench.plan.make_plan` knows before the step solver is made)."""
-    if (method != "globalised" or backend.form not in ("qp", "lcp") or not scaled
-            or hasattr(backend.load(), "solve_step")):
+    if method == "globalised":
+        if backend.form not in ("qp", "lcp") or hasattr(backend.load(), "solve_step"):
+            return False
+    elif method != "undamped":
         return False
-    return applies("auto", method, chain)
+    return applies("auto", "globalised", chain)
 
 
 class KernelStep(ContactStep):
@@ -165,15 +171,22 @@ def _assemble(kd, chain: Chain, c: tuple, alpha: np.ndarray) -> KernelStep:
 
 
 def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
-        start: DriverStart | None = None, stop_on_stall: bool = False) -> DriverOutput:
-    """:func:`lcpbench.model.driver.run_driver` (``method="globalised"``) with the
-    parts around the back-end compiled; for a chain and step solver it :func:`takes`
-    (and after a stop of the solve kernel, :func:`lcpbench.model.compiled.reference`,
-    with the default back-end's step solver). ``stop_on_stall``: end as soon as
-    max|Δα| has stalled (:func:`~.outer.stall`) instead of at ``max_outer`` (after a
-    kernel stop, where the escalations take a refusal over)."""
+        start: DriverStart | None = None, stop_on_stall: bool = False,
+        method: str = "globalised") -> DriverOutput:
+    """Iterate contact steps to the equilibrium of ``chain`` with the parts around the
+    back-end compiled, for a chain and step solver it :func:`takes` (and after a stop of
+    the solve kernel, :func:`lcpbench.model.compiled.reference`, with the default
+    back-end's step solver); never raises on non-convergence. ``method``: "globalised"
+    (the Armijo search on the exact energy from the clipped arc or ``start``) or
+    "undamped" (:func:`undamped`). ``stop_on_stall``: end as soon as max|Δα| has
+    stalled (:func:`~.outer.stall`) instead of at ``max_outer`` (after a kernel stop,
+    where the escalations take a refusal over)."""
     kd = _kernel()
     c = _arrays(chain)
+    if method == "undamped":
+        if start is not None:
+            raise ProblemError("a continuation start needs method='globalised'")
+        return undamped(kd, chain, c, solver, tol, max_outer)
     a, jl, jr, k, rest, fs, load, link_load, lo, hi = c
     cu, cl = _compliances(chain)
     n = chain.free_nodes.size
@@ -208,6 +221,40 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
             return out_of_iterations(alpha, n, steps, len(steps), tol)
     return out_of_iterations(alpha, n, steps, max_outer, tol)
 
+
+def undamped(kd, chain: Chain, c: tuple, solver, tol: float, max_outer: int) -> DriverOutput:
+    """The paper's scheme (Fig. 3): α ← α̂ of eq. (21) after every step, from the
+    unconstrained arc, until max|α̂ − α| < ``tol``; each step a Gauss–Newton step taken
+    in full, which can leave the region where the linearisation is valid (kept so that
+    benchmarks show where it breaks): a link that passes the vertical, where eq. (20) is
+    singular, or a non-finite α̂ ends it, not converged."""
+    n = chain.free_nodes.size
+    steps: list[StepRecord] = []
+    alpha = np.ascontiguousarray(chain.rest_alpha, dtype=float).copy()
+    branch = np.sign(np.cos(alpha))
+    fs = c[5]
+    warm = None
+    for _ in range(max_outer):
+        t0 = time.perf_counter()
+        step = _assemble(kd, chain, c, alpha)
+        t_asm = time.perf_counter() - t0
+        sol = solver(step, warm)
+        if sol.status not in (Status.SOLVED, Status.INACCURATE):
+            return step_failed(alpha, n, steps, sol, t_asm, np.nan)
+        new = kd.predict(np.ascontiguousarray(sol.u, dtype=float), step.alpha0, step.origin,
+                         step.inv_a_cos, fs)
+        dalpha = float(np.max(np.abs(new - alpha), initial=0.0))
+        steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm, 1.0,
+                                dalpha, np.nan, step_setup_time(sol)))
+        if not np.all(np.isfinite(new)):
+            return failed_output(alpha, n, steps, "diverged: non-finite link angles")
+        if np.any(np.sign(np.cos(new)) != branch):
+            return failed_output(new, n, steps, "diverged: a link passed the vertical, where "
+                                                "the linearisation of eq. (20) is singular")
+        alpha, warm = new, sol
+        if dalpha < tol:
+            return converged_output(chain, alpha, sol, steps, step)
+    return out_of_iterations(alpha, n, steps, max_outer, tol)
 
 
 def warm_up() -> None:

@@ -1,12 +1,8 @@
 """The nonlinear driver: re-linearise and solve contact steps until α stops moving.
 
-Three schemes (the first two are Fig. 3 of the paper):
-
-``method="undamped"`` — the paper's: α ← α̂ of eq. (21) after every step,
-until max|α̂ − α| < tol. Each step is a Gauss–Newton step on the energy; taken
-in full it can leave the region where the linearisation is valid (links
-passing vertical, 1/cos α blowing up), which is why it is kept: benchmarks
-show where it breaks.
+Two schemes here; the paper's undamped one (α ← α̂ of eq. (21) after every step, Fig. 3)
+runs in the compiled driver (:func:`lcpbench.model.compiled_driver.undamped`), and for
+walls of any profile in :mod:`lcpbench.model.profile_driver`:
 
 ``method="globalised"`` (default) — the same steps, made safe. The iterate is
 kept exactly feasible: a chain given by its node heights u (inverse kinematics
@@ -82,10 +78,10 @@ def run_driver(
 
         return run_profile_driver(chain, solver, tol=tol, max_outer=max_outer,
                                   method=method, start=start)
-    if method == "undamped":
-        if start is not None:
-            raise ProblemError("a continuation start needs method='globalised'")
-        return _undamped(chain, solver, tol, max_outer)
+    if method == "undamped":  # (flat walls: model.compiled.drive runs it compiled)
+        raise ProblemError("method='undamped' on flat walls runs in the compiled driver "
+                           "(lcpbench.model.compiled_driver.run), which takes a chain of "
+                           "consecutive joints and contiguous free nodes from node 1")
     if method not in ("globalised", "newton"):
         raise ProblemError(f"method must be one of {METHODS}, got {method!r}")
     return _globalised(chain, solver, tol, max_outer, start, newton=method == "newton")
@@ -139,28 +135,3 @@ def _trial(chain: Chain, u: np.ndarray, reference: np.ndarray):
     alpha = alpha_from_heights(chain, u, reference)
     return (None, np.nan) if alpha is None else (alpha, energy(chain, alpha))
 
-
-def _undamped(chain: Chain, solver: StepSolver, tol: float, max_outer: int) -> DriverOutput:
-    n = chain.free_nodes.size
-    steps: list[StepRecord] = []
-    alpha = chain.rest_alpha.copy()
-    branch = np.sign(np.cos(alpha))
-    warm: StepSolution | None = None
-    for _ in range(max_outer):
-        step, sol, t_asm = _solve_step(chain, alpha, solver, warm)
-        if sol.status not in (Status.SOLVED, Status.INACCURATE):
-            return step_failed(alpha, n, steps, sol, t_asm, np.nan)
-        new = step.predict_alpha(sol.u)
-        dalpha = float(np.max(np.abs(new - alpha), initial=0.0))
-        steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm, 1.0,
-                                dalpha, np.nan, step_setup_time(sol)))
-        if not np.all(np.isfinite(new)):
-            return failed_output(alpha, n, steps, "diverged: non-finite link angles")
-        if np.any(np.sign(np.cos(new)) != branch):
-            return failed_output(new, n, steps, "diverged: a link passed the vertical, where the "
-                                        "linearisation of eq. (20) is singular")
-        alpha = new
-        warm = sol
-        if dalpha < tol:
-            return converged_output(chain, alpha, sol, steps, step)
-    return out_of_iterations(alpha, n, steps, max_outer, tol)

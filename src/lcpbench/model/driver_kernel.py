@@ -233,6 +233,23 @@ def judge(u, bands, linear, lo, hi, cu, cl, coef, b0, fs, links, origin, phi_ori
 
 # -- the outer step (model.driver._globalised) --------------------------------------
 @njit(cache=True)
+def predict(su, alpha0, origin, inv, fs):
+    """α̂ of the step answer ``su`` from the linearised kinematics, eq. (21), written
+    about u₀ (``ContactStep.predict_alpha``): α̂_i = α̂_i(u₀) + (y_(i+1) − y_i) / (a cos α_i),
+    y the free nodes' heights less u₀ (0 at the pinned nodes); ``fs`` the shifted index
+    (node + 1) of the first free node."""
+    links, n = alpha0.size, su.size
+    out = np.empty(links)
+    prev = 0.0
+    for i in range(links):
+        node = i + 1 - (fs - 1)
+        cur = su[node] - origin[node] if 0 <= node < n else 0.0
+        out[i] = alpha0[i] + (cur - prev) * inv[i]
+        prev = cur
+    return out
+
+
+@njit(cache=True)
 def advance(su, u, alpha, E, stiffness_sum, inv, alpha0, origin, phi_origin, coef, fs, k,
             rest, nodal_load, a, jl, jr, link_load, lo, hi, cu, cl):
     """max|α̂ − α| of the step answer ``su`` (eq. 21, about u₀) and the Armijo search
@@ -241,12 +258,9 @@ def advance(su, u, alpha, E, stiffness_sum, inv, alpha0, origin, phi_origin, coe
     ``cu``, ``cl``: the elastic walls' compliances (empty: rigid), whose springs'
     energy (:func:`~.chain_kernel.wall_penalty`) is part of the energy searched on."""
     links, n = alpha.size, u.size
-    dalpha, prev = 0.0, 0.0
+    dalpha, predicted = 0.0, predict(su, alpha0, origin, inv, fs)
     for i in range(links):
-        node = i + 1 - (fs - 1)
-        cur = su[node] - origin[node] if 0 <= node < n else 0.0
-        dalpha = max(dalpha, abs((alpha0[i] + (cur - prev) * inv[i]) - alpha[i]))
-        prev = cur
+        dalpha = max(dalpha, abs(predicted[i] - alpha[i]))
     d = su - u
     if not np.all(np.isfinite(d)):
         return np.nan, 0.0, alpha, E
