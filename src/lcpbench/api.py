@@ -21,7 +21,6 @@ from .accuracy import accuracy_settings, check_accuracy, held_to
 from .errors import ProblemError
 from .escalations import Context, escalate
 from .model.compiled import check_engine, drive, profile_stopped, reference, run_kernel
-from .model.driver import METHODS
 from .model.finish import fast_judge, finish
 from .model.formulations import handed, resolve_formulation
 from .model.judge_compiled import chain_args
@@ -33,7 +32,7 @@ from .model.kernel_call import (
     kernel_output,
 )
 from .model.lazy_result import LazyResult, lazy_result, stats_judge
-from .model.outer import DriverOutput, DriverStart
+from .model.outer import METHODS, DriverOutput, DriverStart
 from .model.ramp import follow_load
 from .model.result import ContactResult, Retry
 from .model.step_solver import make_step_solver
@@ -284,7 +283,7 @@ def run_plan(plan: Plan, scene, ctx: Context, begin: DriverStart | None,
         else:
             out = solve_without_contact(chain, ctx.tol, ctx.max_outer, begin,
                                         engine="compiled" if kernel else "numpy", args=args)
-            used = "compiled" if kernel else "numpy"
+            used = "compiled" if kernel else "compiled driver"
             if out is None:
                 out, used = drive(chain, ctx.make_step(), backend=ctx.backend,
                                   settings=ctx.settings, engine=ctx.engine, tol=ctx.tol,

@@ -34,13 +34,12 @@ large N        the globalised scheme and N ≥ ``large_n.LARGE_N`` (or a chain i
                step (:class:`lcpbench.model.large_driver.WallTerms`).
 kernel         the default back-end, globalised or Newton, a chain
                the kernel takes (a warm start, or an arc near the wall): the solve kernel.
-compiled       another back-end that takes a QP or an LCP and the globalised scheme, or
-driver         any back-end and the undamped scheme, on flat walls (rigid or elastic) the
-               kernel's layout takes: its calls in Python, the driver around them
-               compiled.
-numpy          everything else (another back-end on a wall profile; the Newton scheme
-               with another back-end; chains no compiled route takes): the
-               Python driver, :func:`lcpbench.model.driver.run_driver`.
+compiled       another back-end that takes a QP or an LCP and the globalised or Newton
+driver         scheme, or any back-end and the undamped scheme, on flat walls (rigid or
+               elastic) the kernel's layout takes: its calls in Python, the driver
+               around them compiled.
+numpy          another back-end (or the undamped scheme, or Newton steps) on a wall
+               profile: the profile driver, :func:`lcpbench.model.profile_driver.run_profile_driver`.
 ============== ==========================================================================
 
 Every route but the first two and the load path begins with the wall-free search

@@ -158,8 +158,14 @@ def test_engine_argument():
     scene = ActuatorScene(theta=150, height=3.0, links=40)
     with pytest.raises(ProblemError, match="engine must be one of"):
         solve_internal(scene, engine="fast")
-    with pytest.raises(ProblemError, match="engine='compiled' runs method='globalised'"):
-        solve_internal(scene, solver="lemke", method="newton", engine="compiled")
+    from lcpbench.problems.walls import WallProfile
+
+    bump = WallProfile.from_table([0, 10, 14, 18, 30], [3.0, 3.0, 2.4, 3.0, 3.0])
+    with pytest.raises(ProblemError, match="engine='compiled' runs walls of any profile"):
+        solve_internal(ActuatorScene(theta=150, links=40, wall_profile=bump), solver="lemke",
+                       engine="compiled")  # another back-end there: the profile driver
+    assert solve_internal(scene, solver="lemke", method="newton",
+                          engine="compiled").engine == "compiled driver"
     assert solve_internal(scene, method="undamped", engine="compiled").engine == \
         "compiled driver"  # the undamped scheme: an option of the compiled driver
     assert solve_internal(scene, engine="compiled").engine == "compiled"

@@ -16,6 +16,7 @@ from lcpbench import ActuatorScene, CantileverScene, solve
 from lcpbench.model import compiled_driver
 from lcpbench.model.step import assemble_step
 from lcpbench.model.step_solver import make_step_solver, step_lcp, step_qp, step_residuals
+from lcpbench.problems.walls import WallProfile
 from lcpbench.solvers.registry import get_backend
 
 SCENES = {
@@ -99,7 +100,7 @@ def test_where_it_applies():
     chain = SCENES["actuator"].chain()
     lemke = make_step_solver("lemke")
     assert compiled_driver.takes(chain, lemke, "globalised")
-    assert not compiled_driver.takes(chain, lemke, "newton")
+    assert compiled_driver.takes(chain, lemke, "newton")
     assert compiled_driver.takes(chain, make_step_solver("lemke", scaled=False),
                                  "globalised")  # the forms in the problem's units
     assert not compiled_driver.takes(chain, make_step_solver("active-set"), "globalised")
@@ -107,7 +108,20 @@ def test_where_it_applies():
     assert compiled_driver.takes(soft, lemke, "globalised")  # elastic walls: a parameter
     assert compiled_driver.takes(chain, lemke, "undamped")  # any back-end, the default's too
     assert compiled_driver.takes(chain, make_step_solver("active-set"), "undamped")
-    assert solve(SCENES["actuator"], solver="lemke", method="newton").engine == "numpy"
+    bump = WallProfile.from_table([0, 10, 14, 18, 30], [3.0, 3.0, 2.4, 3.0, 3.0])
+    profiled = ActuatorScene(theta=150.0, links=30, wall_profile=bump).chain()
+    assert not compiled_driver.takes(profiled, lemke, "globalised")  # the profile driver
+
+
+@pytest.mark.parametrize("name", ["actuator", "channel"])
+def test_newton_steps_with_another_back_end_reach_the_equilibrium(name):
+    """method="newton" with another back-end: the exact Hessian H + T near the answer
+    (model/newton.py) in the compiled driver; the answer is the scene's equilibrium by
+    the energy oracle, and the last steps are full."""
+    res = solve(SCENES[name], solver="lemke", method="newton", tol=1e-10)
+    assert res.engine == compiled_driver.ENGINE and res.converged, res.reason
+    assert res.steps[-1].step_length == 1.0
+    assert_solved(res)
 
 
 @pytest.mark.parametrize("solver", ["lemke", "active-set"])

@@ -1,5 +1,5 @@
 """A run out of outer iterations says when max|Δα| had stalled, and whether the
-requested tol is below the accuracy of the contact steps (lcpbench.model.driver.stall,
+requested tol is below the accuracy of the contact steps (lcpbench.model.outer.stall,
 out_of_iterations).
 
 The synthetic sequences are built to the definition: a contraction that halves the

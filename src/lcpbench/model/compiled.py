@@ -34,7 +34,6 @@ from ..problems.scenes import Chain
 from ..solvers.judge import requested
 from ..solvers.registry import DEFAULT, get_settings
 from . import angle_step, compiled_driver, heavy_driver, large_n, wall_free
-from .driver import run_driver
 from .kernel_call import (
     BAIL_REASONS,
     applies,
@@ -46,7 +45,7 @@ from .outer import DriverOutput, DriverStart
 from .profile import has_profile
 
 #: ``engine`` of :func:`lcpbench.api.solve_internal`: "auto" (the kernel where it
-#: applies, the Python driver elsewhere), "compiled" (the kernel or the compiled driver,
+#: applies, the compiled driver or the profile driver elsewhere), "compiled" (the kernel or the compiled driver,
 #: or ProblemError where neither applies). The numpy reference engine ("numpy") was
 #: removed: a kernel that stops falls back to compiled code (:func:`reference`).
 ENGINES = ("auto", "compiled")
@@ -69,10 +68,10 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
 
     The one place where the compiled kernel is chosen: a back-end other than the
     default runs the compiled driver (:mod:`.compiled_driver`) where it takes the
-    chain (flat walls, rigid or elastic); the undamped scheme, wall profiles with another
-    back-end,
-    and chains no compiled route takes run :func:`~lcpbench.model.driver.run_driver`
-    with ``step_solver``. ``args``: the
+    chain (flat walls, rigid or elastic; the globalised, Newton or undamped scheme, and
+    the undamped scheme with the default back-end too); walls of any profile with
+    another back-end or scheme run :func:`~lcpbench.model.profile_driver.run_profile_driver`
+    with ``step_solver``; a chain no driver takes is a ProblemError. ``args``: the
     chain's :func:`~.kernel_call.kernel_args`, given by a caller that has checked that the kernel
     takes the chain's layout.
 
@@ -139,7 +138,7 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
     elif engine == "compiled" and chain is not None and has_profile(chain):
         raise ProblemError("engine='compiled' runs walls of any profile (wall_profile) with the "
                            f"default back-end ({DEFAULT}) and method='globalised' only; "
-                           "engine='auto' runs the others in the Python driver")
+                           "engine='auto' runs the others in the profile driver")
     elif compiled_driver.takes(chain, step_solver, method):
         # another back-end: its calls in Python, lcpbench's parts around them compiled
         return (compiled_driver.run(chain, step_solver, tol=tol, max_outer=max_outer,
@@ -148,11 +147,15 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
         raise ProblemError(f"engine='compiled' runs method='globalised' or 'undamped' (or "
                            f"'newton' with the default back-end, {DEFAULT}) on flat walls; got "
                            f"solver {backend!r}, method {method!r}")
-    else:
-        used = "numpy"
-    out = run_driver(chain, step_solver, tol=tol, max_outer=max_outer, method=method,
-                     start=start)
-    return out, used
+    elif chain.profiled_walls:  # another back-end (or scheme) on a wall profile
+        from .profile_driver import run_profile_driver
+
+        return run_profile_driver(chain, step_solver, tol=tol, max_outer=max_outer,
+                                  method=method, start=start), "numpy"
+    raise ProblemError("no driver takes this chain: the compiled driver runs a chain of "
+                       "consecutive joints and contiguous free nodes from node 1 with flat "
+                       "walls (method 'globalised', 'newton' or 'undamped'); got method "
+                       f"{method!r}")
 
 
 def _coarse_solve(coarse: Chain, *, tol: float) -> DriverOutput | None:

@@ -2,7 +2,7 @@
 
 The default back-end runs its whole solve in one kernel (:mod:`.compiled`); every
 other back-end is a Python call per contact step. Around that call the numpy driver
-(:func:`lcpbench.model.driver.run_driver`) spends several milliseconds per solve of
+(``model/driver.py``, removed) spent several milliseconds per solve of
 lcpbench's own Python (assembly, the back-end's form, the judge, the line search), so a
 table of full-solve times would compare that more than the back-ends. Here those parts
 are the kernels of :mod:`.driver_kernel`; per outer iteration:
@@ -19,8 +19,8 @@ Its answers are checked against the energy minimisation
 loop: the back-end gets the step's elastic forms (:mod:`.elastic_step`), the judge the
 compliant gaps, the line search the springs' energy. The paper's undamped scheme is an
 option of the same loop (:func:`undamped`, any back-end). Where it does not apply (see
-:func:`takes`: wall profiles, the Newton scheme with another back-end) the Python driver
-(:func:`lcpbench.model.driver.run_driver`) runs. Where the solve kernel stops
+:func:`takes`: walls of any profile with another back-end) the profile driver
+(:func:`lcpbench.model.profile_driver.run_profile_driver`) runs. Where the solve kernel stops
 (:func:`lcpbench.model.compiled.reference`) this driver takes over with the default
 back-end's step solver.
 """
@@ -34,8 +34,11 @@ import numpy as np
 from ..errors import ProblemError
 from ..problems.scenes import Chain
 from ..solvers.base import Status
+from ..solvers.registry import DEFAULT
+from ..thresholds import NEWTON_SWITCH
 from .chain import energy
 from .kernel_call import applies
+from .newton import newton_step
 from .outer import (
     STALL_STEPS,
     DriverOutput,
@@ -71,9 +74,10 @@ def _kernel():
 
 
 def takes(chain: Chain, step_solver, method: str) -> bool:
-    """Whether this driver runs the solve: the globalised scheme with a step solver of a
-    back-end that takes a QP or an LCP (not a contact step itself, as the banded active
-    set does: the solve kernel runs it), or the undamped scheme with any back-end; a
+    """Whether this driver runs the solve: the globalised scheme or its Newton steps with
+    a step solver of a back-end that takes a QP or an LCP or a contact step itself (a
+    plug-in's ``solve_step``; not the default back-end, whose solve the kernel runs), or
+    the undamped scheme with any back-end; a
     chain of consecutive joints and contiguous free nodes with flat walls, rigid or
     elastic (the back-end gets :mod:`.elastic`'s forms, the springs' energy is in the
     line search's). A step solver that is not ``scaled`` gets the step's forms in the
@@ -87,8 +91,8 @@ def takes_backend(chain: Chain, backend, scaled: bool, method: str) -> bool:
     """:func:`takes` from the registry's data on the back-end (a
     :class:`~lcpbench.solvers.registry.Backend`) and whether its step is ``scaled``
     (what :func:`lcpbench.plan.make_plan` knows before the step solver is made)."""
-    if method == "globalised":
-        if backend.form not in ("qp", "lcp") or hasattr(backend.load(), "solve_step"):
+    if method in ("globalised", "newton"):
+        if backend.form not in ("qp", "lcp") or backend.name == DEFAULT:  # (the kernel's)
             return False
     elif method != "undamped":
         return False
@@ -122,7 +126,10 @@ class KernelStep(ContactStep):
                                     form.condense, np.ascontiguousarray(zeta, dtype=float))
 
     def compiled_residuals(self, u: np.ndarray):
-        """step_residuals' ``(residuals, R)``, or None (the numpy reference decides)."""
+        """step_residuals' ``(residuals, R)``, or None (the numpy reference decides: a
+        Newton step, whose gradient holds T (u − u₀))."""
+        if self.geometric is not None:
+            return None
         ok, res, R = self.kernel.judge(
             np.ascontiguousarray(u, dtype=float), self.bands, self.linear, self.lower,
             self.upper, self.cu, self.cl, self.coef, int(self.base[0]), int(self.free_nodes[0]) + 1,
@@ -177,8 +184,10 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
     back-end compiled, for a chain and step solver it :func:`takes` (and after a stop of
     the solve kernel, :func:`lcpbench.model.compiled.reference`, with the default
     back-end's step solver); never raises on non-convergence. ``method``: "globalised"
-    (the Armijo search on the exact energy from the clipped arc or ``start``) or
-    "undamped" (:func:`undamped`). ``stop_on_stall``: end as soon as max|Δα| has
+    (the Armijo search on the exact energy from the clipped arc or ``start``), "newton"
+    (the same with the exact Hessian H + T, :func:`~.newton.newton_step`, once max|Δα|
+    is below ``NEWTON_SWITCH``, or from a neighbour's answer) or "undamped"
+    (:func:`undamped`). ``stop_on_stall``: end as soon as max|Δα| has
     stalled (:func:`~.outer.stall`) instead of at ``max_outer`` (after a kernel stop,
     where the escalations take a refusal over)."""
     kd = _kernel()
@@ -197,9 +206,14 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
     u, alpha = np.ascontiguousarray(u, dtype=float), np.ascontiguousarray(alpha, dtype=float)
     E = energy(chain, alpha)
     stiffness_sum = float(np.sum(np.abs(chain.joint_stiffness)))
+    newton = method == "newton"
+    warm_start = start is not None and warm is not None  # a neighbour's answer: near already
     for _ in range(max_outer):
+        near = newton and (steps[-1].max_dalpha < NEWTON_SWITCH if steps else warm_start)
         t0 = time.perf_counter()
         step = _assemble(kd, chain, c, alpha)
+        if near:
+            step = _newton(step, chain)
         t_asm = time.perf_counter() - t0
         sol = solver(step, warm)
         if sol.status not in (Status.SOLVED, Status.INACCURATE):
@@ -220,6 +234,15 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
         if stop_on_stall and len(steps) >= 2 * STALL_STEPS and stall(steps) is not None:
             return out_of_iterations(alpha, n, steps, len(steps), tol)
     return out_of_iterations(alpha, n, steps, max_outer, tol)
+
+
+def _newton(step: KernelStep, chain: Chain) -> KernelStep:
+    """The kernel's step with the exact Hessian H + T where it is positive definite
+    (:func:`~.newton.newton_step`), keeping the kernels' hooks."""
+    new, used = newton_step(step, chain)
+    if used:
+        new.kernel, new.cu, new.cl = step.kernel, step.cu, step.cl
+    return new
 
 
 def undamped(kd, chain: Chain, c: tuple, solver, tol: float, max_outer: int) -> DriverOutput:

@@ -21,7 +21,7 @@ from ..thresholds import TIE
 
 EPS = np.finfo(np.float64).eps
 TINY = np.finfo(np.float64).tiny
-# the step left the path of the reference: the caller runs the numpy driver
+# the step left the path of the reference: the caller falls back (model.compiled.reference)
 BAIL_PRIMAL, BAIL_NOT_PD, BAIL_REPEAT, BAIL_LIMIT, BAIL_CERT, BAIL_JUDGE = 10, 11, 12, 13, 14, 15
 
 # Work arrays, allocated once per solve (compiled_kernel.workspace); no loop

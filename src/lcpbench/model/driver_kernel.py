@@ -1,7 +1,7 @@
 """The compiled parts of the driver around any back-end (fair timing, issue 19 item 6).
 
-numba (``@njit(cache=True)``) versions of what :func:`lcpbench.model.driver.run_driver`
-does around a back-end's call, so that a full solve costs the back-end's time plus the
+numba (``@njit(cache=True)``): what the outer loop of
+:func:`lcpbench.model.compiled_driver.run` does around a back-end's call, so that a full solve costs the back-end's time plus the
 same small compiled overhead for every back-end:
 
 - :func:`assemble`: :func:`lcpbench.model.step.assemble_step` (the banded step of
@@ -17,7 +17,7 @@ same small compiled overhead for every back-end:
 
 The numpy modules are the reference; this file repeats their arithmetic in the same
 order where that is cheap, so the driver of :mod:`lcpbench.model.compiled_driver`
-takes the numpy driver's path to round-off (``tests/model/test_compiled_driver.py``).
+takes the numpy functions' path to round-off (``tests/model/test_compiled_driver.py``).
 The chain's energy and the Armijo rule are :mod:`.chain_kernel`'s, its inverse
 kinematics and the banded step :mod:`.compiled_kernel`'s (one copy each; :mod:`lcpbench.numba_cache` recompiles every
 kernel when any kernel file changes, so a call across files never runs stale code).
@@ -231,7 +231,7 @@ def judge(u, bands, linear, lo, hi, cu, cl, coef, b0, fs, links, origin, phi_ori
     return True, wall_residuals(u2, R, bands, linear, lo, hi, cu, cl, L, F), R
 
 
-# -- the outer step (model.driver._globalised) --------------------------------------
+# -- the outer step (model.compiled_driver.run) --------------------------------------
 @njit(cache=True)
 def predict(su, alpha0, origin, inv, fs):
     """α̂ of the step answer ``su`` from the linearised kinematics, eq. (21), written

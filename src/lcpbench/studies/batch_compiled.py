@@ -70,7 +70,7 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
     args = kernel_args(chain, const["arrays"]) if kernel else None
     out = solve_without_contact(chain, tol, max_outer, start,
                                 engine="compiled" if kernel else "numpy", args=args)
-    used = "compiled" if kernel else "numpy"
+    used = "compiled" if kernel else "compiled driver"
     if out is None and (not kernel or heavy(chain)):
         # large N, a layout the kernel does not take, or a heavy chain (SQP steps in the
         # angles, first or as the rescue): solve()'s choice, in model.compiled.drive
