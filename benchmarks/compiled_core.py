@@ -1,11 +1,10 @@
-"""Issue 19, items 1 and 5: the compiled solve core against the numpy reference.
+"""Issue 19, items 1 and 5: the compiled solve core against the dense paper path.
 
 Measured in one run, with one BLAS thread, the load average recorded at the
 start and the end:
 
 1. Full solve at N = 140, θ = 150°, h = 3 mm, tol 1e-3 (interleaved medians):
-   ``lcpbench.solve(scene)`` (the compiled kernel), the same call with
-   ``engine="numpy"`` (the reference), the paper-faithful dense path with
+   ``lcpbench.solve(scene)`` (the compiled kernel), the paper-faithful dense path with
    Lemke (``solve_paper_dense``), and the kernel alone (``run_compiled``, no
    result, certificate or audit around it).
 2. One cold contact step at the converged configuration: the kernel's step
@@ -39,7 +38,6 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from perf import interleaved, machine, med, wall  # noqa: E402
 
 import lcpbench  # noqa: E402
-from lcpbench.api import solve_internal  # noqa: E402
 from lcpbench.model.dense import solve_paper_dense  # noqa: E402
 from lcpbench.model.kernel_call import run_compiled, solve_kernel  # noqa: E402
 from lcpbench.model.step import assemble_step  # noqa: E402
@@ -54,8 +52,6 @@ def full_solve(scene, repeat: int) -> dict:
     chain = scene.chain()
     runs = interleaved({
         "compiled (lcpbench.solve)": wall(lambda: lcpbench.solve(scene, tol=TOL)),
-        "numpy reference (engine='numpy')": wall(
-            lambda: solve_internal(scene, tol=TOL, engine="numpy")),
         "dense paper path (Lemke)": wall(lambda: solve_paper_dense(scene, tol=TOL)),
         "kernel alone (run_compiled)": wall(lambda: run_compiled(chain, tol=TOL)),
     }, repeat)
@@ -74,7 +70,6 @@ def full_solve(scene, repeat: int) -> dict:
                       "outer": int(outer), "converged": bool(ok), "force_N": force}
     c = rows["compiled (lcpbench.solve)"]["median_s"]
     return {"rows": rows, "repeat": repeat,
-            "vs_numpy": rows["numpy reference (engine='numpy')"]["median_s"] / c,
             "vs_dense": rows["dense paper path (Lemke)"]["median_s"] / c}
 
 
@@ -159,8 +154,7 @@ def markdown(res: dict, cmd: str) -> str:
     for name, r in f["rows"].items():
         lines.append(f"| {name} | {ms(r['median_s'])} | {ms(r['min_s'])} | {r['outer']} | "
                      f"{r['converged']} | {r['force_N']:.10g} |")
-    lines += ["", f"- compiled against the numpy reference: **{f['vs_numpy']:.1f}×**",
-              f"- compiled against the dense paper path (Lemke): **{f['vs_dense']:.0f}×** "
+    lines += ["", f"- compiled against the dense paper path (Lemke): **{f['vs_dense']:.0f}×** "
               "(target ≥ 150×)", "",
               f"## One cold contact step at the converged configuration ({c['repeat']} "
               "repetitions)", "", "| contender | median (µs) | min (µs) |", "|---|---|---|"]

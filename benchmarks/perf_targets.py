@@ -34,7 +34,6 @@ from start_up import start_up, steady_state
 
 import lcpbench
 from lcpbench import ActuatorScene
-from lcpbench.api import solve_internal
 from lcpbench.baseline import solve_baseline
 from lcpbench.bench.grid import PAPER_GRID
 from lcpbench.model.dense import solve_paper_dense
@@ -65,8 +64,6 @@ def _full_contenders(wall) -> dict:
         "dense paper path (Lemke)": wall(lambda: solve_paper_dense(scene, tol=TOL)),
         "baseline analytic (hybr)": wall(lambda: solve_baseline(scene, jacobian="analytic")),
         "baseline fd (lm)": wall(lambda: solve_baseline(scene, jacobian="fd", method="lm")),
-        "numpy reference (engine='numpy')": wall(
-            lambda: solve_internal(scene, tol=TOL, engine="numpy")),
     }
 
 

@@ -23,7 +23,7 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import argparse
 
 from lcpbench import ActuatorScene
-from lcpbench.model.driver import run_driver
+from lcpbench.model.compiled_driver import run as run_driver
 from lcpbench.model.large_n import LARGE_N
 from lcpbench.model.step_solver import make_step_solver
 

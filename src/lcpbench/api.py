@@ -20,8 +20,7 @@ import numpy as np
 from .accuracy import accuracy_settings, check_accuracy, held_to
 from .errors import ProblemError
 from .escalations import Context, escalate
-from .model.compiled import check_engine, drive, profile_reference, reference, run_kernel
-from .model.driver import METHODS
+from .model.compiled import check_engine, drive, profile_stopped, reference, run_kernel
 from .model.finish import finish
 from .model.formulations import handed, resolve_formulation
 from .model.judge import chain_args, judge
@@ -33,7 +32,7 @@ from .model.kernel_call import (
     kernel_output,
 )
 from .model.lazy_result import LazyResult, lazy_result, stats_judge
-from .model.outer import DriverOutput, DriverStart
+from .model.outer import METHODS, DriverOutput, DriverStart
 from .model.ramp import follow_load
 from .model.result import ContactResult, Retry
 from .model.step_solver import make_step_solver
@@ -284,7 +283,7 @@ def run_plan(plan: Plan, scene, ctx: Context, begin: DriverStart | None,
         else:
             out = solve_without_contact(chain, ctx.tol, ctx.max_outer, begin,
                                         engine="compiled" if kernel else "numpy", args=args)
-            used = "compiled" if kernel else "numpy"
+            used = "compiled" if kernel else "compiled driver"
             if out is None:
                 out, used = drive(chain, ctx.make_step(), backend=ctx.backend,
                                   settings=ctx.settings, engine=ctx.engine, tol=ctx.tol,
@@ -329,8 +328,8 @@ def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_ou
     (:func:`lcpbench.model.batch_verdict.accepted`, the checks of the judge, as a
     batch line decides it); the result's other fields are built when read
     (:class:`~lcpbench.model.lazy_result.LazyResult`), by the same functions as
-    :func:`run_kernel` and :func:`finish`. Where the kernel stops, the numpy reference,
-    as :func:`run_kernel`; where the driver did not converge, :func:`finish` at once."""
+    :func:`run_kernel` and :func:`finish`. Where the kernel stops, its compiled
+    fall-back, as :func:`run_kernel`; where the driver did not converge, :func:`finish` at once."""
     profile = route == PROFILE
     if profile:  # (the walls at the answer's x, its last two outputs: one wall, unused)
         got, kernel_s, name = call_profile_kernel(chain, tol=tol, max_outer=max_outer,
@@ -342,9 +341,12 @@ def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_ou
                                           newton=method == "newton")
     code = got[0]
     if code in BAIL_REASONS:
-        out, used = (profile_reference if profile else reference)(
-            chain, make_step, BAIL_REASONS[code], tol=tol, max_outer=max_outer, method=method,
-            settings=settings)
+        if profile:  # no compiled route in heights takes a profile over: escalations may
+            out, used = profile_stopped(chain, BAIL_REASONS[code]), \
+                f"compiled (stopped: {BAIL_REASONS[code]})"
+        else:
+            out, used = reference(chain, make_step, BAIL_REASONS[code], tol=tol,
+                                  max_outer=max_outer, method=method, settings=settings)
         return finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol,
                       elapsed=time.perf_counter() - t0, settings=settings, engine=used,
                       why=why, judge_args=chain_args(chain, args),

@@ -23,7 +23,7 @@ heavy SQP      the default back-end, not undamped, a chain in reach of the SQP i
 heights, then  the same with ``heavy_driver.MODERATE`` ≤ wℓ³/EI < ``HEAVY``: height
 SQP            steps (the kernel where it takes the chain), finished by SQP steps where
                they do not converge within ``heavy_driver.FIRST_TRY``.
-profile kernel the default back-end, the globalised scheme, engine not "numpy", a wall of
+profile kernel the default back-end, the globalised scheme, a wall of
                any profile with a table of cubic pieces, a chain the kernel's layout takes
                (:func:`lcpbench.model.kernel_call.profile_applies`, below ``LARGE_N``):
                the profile kernel;
@@ -32,21 +32,24 @@ large N        the globalised scheme and N ≥ ``large_n.LARGE_N`` (or a chain i
                increments) on a layout it takes: increments on the tridiagonal factor,
                every wall model (rigid or elastic, flat or profiled) a parameter of the
                step (:class:`lcpbench.model.large_driver.WallTerms`).
-kernel         the default back-end, globalised or Newton, engine not "numpy", a chain
+kernel         the default back-end, globalised or Newton, a chain
                the kernel takes (a warm start, or an arc near the wall): the solve kernel.
-compiled       another back-end that takes a QP or an LCP, the globalised scheme, a
-driver         scaled step, flat rigid walls the kernel's layout takes, engine not
-               "numpy": its calls in Python, the driver around them compiled.
-numpy          everything else (engine="numpy", the undamped scheme, back-ends and chains
-               no compiled route takes): the numpy reference.
+compiled       another back-end that takes a QP or an LCP and the globalised or Newton
+driver         scheme, or any back-end and the undamped scheme, on flat walls (rigid or
+               elastic) the kernel's layout takes: its calls in Python, the driver
+               around them compiled.
+numpy          another back-end (or the undamped scheme, or Newton steps) on a wall
+               profile: the profile driver, :func:`lcpbench.model.profile_driver.run_profile_driver`.
 ============== ==========================================================================
 
 Every route but the first two and the load path begins with the wall-free search
 (:func:`lcpbench.model.wall_free.solve_without_contact`), which answers a scene that
 touches no wall without any LCP, and then runs :func:`lcpbench.model.compiled.drive`,
 which makes the same choices at run time (the rules here follow it). Decided at run
-time only, and seen in the result's ``engine``: a kernel that stops (a bail: the numpy
-reference, or increments where round-off of node heights is the likely cause), and a
+time only, and seen in the result's ``engine``: a kernel that stops (a bail: the compiled
+driver around the default back-end's step solver, increments where round-off of node
+heights is the likely cause, or a not-converged answer for a refused step that the
+escalations take over: :func:`lcpbench.model.compiled.reference`), and a
 heavy chain's SQP answer that another back-end cannot use (it touches a wall).
 
 The escalations that may follow a refusal are the rows of
@@ -92,9 +95,8 @@ class Plan:
         may run on a refused answer.
     engine : the engine the route plans for ("compiled", "compiled driver", "numpy";
         the load path's and "heights, then SQP"'s are their steps' engine).
-    kernel_takes : whether the compiled kernels take the chain (engine not "numpy", a
-        layout the solve kernel takes, whichever back-end): the wall-free search then
-        runs compiled.
+    kernel_takes : whether the compiled kernels take the chain (a layout the solve
+        kernel takes, whichever back-end): the wall-free search then runs compiled.
     judge : where the result judge takes its exact steps
         (:func:`lcpbench.model.judge.judged_in`): "compiled" (the judge kernel, in node
         heights, whatever back-end and engine) or "numpy" (in increments, from
@@ -115,7 +117,7 @@ def make_plan(chain: Chain, backend: str, method: str, engine: str, tol: float,
               start: str = "cold", *, scaled: bool = True) -> Plan:
     """The plan of a solve of ``chain`` (its scene's features: walls, N, load) with the
     back-end ``backend`` (a registry name), ``method`` ("globalised", "newton" or
-    "undamped"), ``engine`` ("auto", "compiled" or "numpy"), the driver tolerance
+    "undamped"), ``engine`` ("auto" or "compiled"), the driver tolerance
     ``tol`` (rad), ``start`` (one of :data:`STARTS`) and the step ``scaled`` or not.
     The arguments are :func:`lcpbench.solve`'s, checked."""
     takes = _kernel(chain, DEFAULT, "globalised", engine)
@@ -132,14 +134,13 @@ def make_plan(chain: Chain, backend: str, method: str, engine: str, tol: float,
 
 
 def _kernel(chain: Chain, backend: str, method: str, engine: str) -> bool:
-    return engine != "numpy" and applies(backend, method, chain)
+    return applies(backend, method, chain)
 
 
 def _route(chain: Chain, backend: str, method: str, engine: str, start: str,
            scaled: bool) -> str:
     own = backend == DEFAULT
-    if (own and start == "cold" and method != "undamped" and engine != "numpy"
-            and direct(chain)):
+    if own and start == "cold" and method != "undamped" and direct(chain):
         return "channel kernel" if chain.channel else "one-wall kernel"
     if own and method != "undamped" and angle_step.in_reach(chain):
         q = angle_step.load_parameter(chain)
@@ -147,13 +148,13 @@ def _route(chain: Chain, backend: str, method: str, engine: str, start: str,
             return "heavy SQP"
         if q >= heavy_driver.MODERATE:
             return "heights, then SQP"
-    if engine != "numpy" and profile_applies(backend, method, chain):
+    if profile_applies(backend, method, chain):
         return "profile kernel"
     if method == "globalised" and large_n.applies(chain):
         return "large N"
     if _kernel(chain, backend, method, engine):
         return "kernel"
-    if engine != "numpy" and _compiled_driver(chain, backend, method, scaled):
+    if _compiled_driver(chain, backend, method, scaled):
         return "compiled driver"
     return "numpy"
 

@@ -1,19 +1,11 @@
-"""The compiled kernel (model/compiled_kernel.py) against the numpy reference.
+"""The compiled kernel (model/compiled_kernel.py) against independent oracles.
 
-Both engines run the same algorithm; the kernel sums in the same order where
-that is cheap but factors with its own banded Cholesky, not LAPACK's, so they
-agree to round-off, not bit for bit. "The same path" is checked where it does
-not depend on round-off: the same outer iterations with the same Armijo step
-lengths and the same contact set. The number of face solves of a step is
-not compared: every actuator scene is symmetric, and which of a mirror pair
-of violations the dual walk takes first, or whether two reactions reach
-zero within TIE of each other, is decided by round-off (9 against 7 face
-solves seen on a weightless chain at N = 45, 26 against 24 at N = 2000). The answers are
-also checked against quantities the kernel does not compute: the equilibrium from first
-principles (forward kinematics, walls, signs, complementarity, and stationarity by
-central differences of the exact energy: tests/energy_oracle.py), the exact-geometry
-certificate (statics), beam theory for the cantilever, and the symmetry of a symmetric
-scene.
+The answers are checked against quantities the kernel does not compute: the
+equilibrium from first principles (forward kinematics, walls, signs, complementarity,
+and stationarity by central differences of the exact energy: tests/energy_oracle.py),
+the exact-geometry certificate (statics), beam theory for the cantilever, and the
+symmetry of a symmetric scene. (The numpy reference engine these tests once compared
+the kernel with, route against route, was removed.)
 """
 
 import os
@@ -31,39 +23,14 @@ from lcpbench import ActuatorScene, CantileverScene, ProblemError, solve
 from lcpbench.api import solve_internal
 from lcpbench.bench.grid import hard_scenes
 from lcpbench.model.angle_step import heavy
-from lcpbench.solvers.base import Settings
 
 
-def both(scene, **kw):
-    return solve_internal(scene, engine="numpy", **kw), solve_internal(scene, engine="auto", **kw)
-
-
-def assert_same(ref, fast, *, compiled=True):
-    """Same path, same answer to round-off; the kernel really ran when ``compiled``."""
-    if compiled:
-        assert fast.engine == "compiled"
-    assert ref.engine == "numpy"
-    assert ref.converged == fast.converged and ref.reason == fast.reason
-    assert ref.outer_iterations == fast.outer_iterations
-    assert [s.step_length for s in ref.steps] == [s.step_length for s in fast.steps]
-    assert np.array_equal(ref.contact_nodes, fast.contact_nodes)
-    # round-off: the link angles to 1e-11 rad (the largest difference seen, at
-    # N = 2000 where cond(K) ~ 1e13, is 3e-13); the forces to twice the step
-    # certificate's tolerance (rtol = 1e-9 of the size of the terms, each answer
-    # passes it), taken relative to F or EI/ℓ²
-    assert np.max(np.abs(ref.alpha - fast.alpha)) <= 1e-11
-    # (or, where the judge bounds each answer's error more loosely, as at N = 2000
-    # where R = K g + z from the heights carries cond(K) ~ 1e13, the sum of the bounds)
-    scene = ref.scene
-    scale = max(ref.total_force, scene.EI / scene.length**2)
-    bounds = ref.force_error_bound + fast.force_error_bound
-    total_tol = max(2e-9, bounds if np.isfinite(bounds) else 0.0)
-    nodes = ref.judgement.node_error_bound + fast.judgement.node_error_bound
-    node_tol = max(2e-9, nodes if np.isfinite(nodes) else 0.0)
-    assert abs(ref.total_force - fast.total_force) <= total_tol * scale
-    assert np.max(np.abs(ref.forces - fast.forces), initial=0.0) <= node_tol * scale
-    if ref.forces_lower is not None:
-        assert np.max(np.abs(ref.forces_lower - fast.forces_lower)) <= node_tol * scale
+def compiled(scene, **kw):
+    """The solve, and whether the kernel must have run it (contact, not heavy)."""
+    res = solve_internal(scene, engine="auto", **kw)
+    ran = res.outer_iterations > 0 and "no contact" not in res.reason \
+        and not heavy(scene.chain())
+    return res, ran
 
 
 def assert_certified(res, tol, *, oracle_links=500):
@@ -81,22 +48,20 @@ def assert_certified(res, tol, *, oracle_links=500):
 @pytest.mark.parametrize("scene", hard_scenes(), ids=lambda s: f"{s.theta:g}-{s.height:.3g}-"
                          f"{s.links}-{s.weight:g}-{s.EI:g}-{'ch' if s.channel else ''}")
 @pytest.mark.parametrize("tol", [1e-3, 1e-8])
-def test_hard_suite_same_path_and_answer(scene, tol):
-    ref, fast = both(scene, tol=tol)
+def test_hard_suite_is_certified(scene, tol):
+    fast, ran = compiled(scene, tol=tol)
     # a heavy chain (wℓ³/EI >= 40) is solved by steps in the link angles, in numpy
-    assert_same(ref, fast, compiled=fast.outer_iterations > 0 and "no contact" not in ref.reason
-                and not heavy(scene.chain()))
+    assert fast.engine == "compiled" or not ran
     # (N = 2000 by the energy oracle at the tight tol only: ~6 s a scene)
     assert_certified(fast, tol, oracle_links=10**4 if tol < 1e-6 else 500)
 
 
 @pytest.mark.parametrize("scene", hard_scenes(), ids=lambda s: f"{s.theta:g}-{s.height:.3g}-"
                          f"{s.links}-{s.weight:g}-{s.EI:g}-{'ch' if s.channel else ''}")
-def test_newton_takes_the_reference_path_in_the_kernel(scene):
+def test_newton_in_the_kernel_is_certified(scene):
     """method="newton": H + T where positive definite from max|Δα| < NEWTON_SWITCH."""
-    ref, fast = both(scene, tol=1e-8, method="newton")
-    assert_same(ref, fast, compiled=fast.outer_iterations > 0 and "no contact" not in ref.reason
-                and not heavy(scene.chain()))
+    fast, ran = compiled(scene, tol=1e-8, method="newton")
+    assert fast.engine == "compiled" or not ran
     assert_certified(fast, 1e-8)
 
 
@@ -105,8 +70,8 @@ def test_paper_scene_channel_and_cantilever_run_compiled():
     heavy_channel = ActuatorScene(theta=60, height=0.3, channel=True, weight=0.04)
     for scene in (ActuatorScene(**PAPER_SCENE), ActuatorScene(theta=180, height=1.0, channel=True),
                   heavy_channel, CantileverScene()):
-        ref, fast = both(scene, tol=1e-8)
-        assert_same(ref, fast)
+        fast, _ = compiled(scene, tol=1e-8)
+        assert fast.engine == "compiled"
         assert_certified(fast, 1e-8)
     # the heavy chain lies on the lower wall of the channel, not on the upper one
     assert fast.forces_lower is None  # (the cantilever has no lower wall)
@@ -155,55 +120,60 @@ cantilevers = st.builds(
 
 @settings(max_examples=40, deadline=None)
 @given(scene=st.one_of(actuators(), cantilevers), tol=st.sampled_from([1e-3, 1e-8]))
-def test_random_scenes_same_path_and_answer(scene, tol):
-    ref, fast = both(scene, tol=tol)
-    assert_same(ref, fast, compiled=ref.outer_iterations > 0 and "no contact" not in ref.reason
-                and not heavy(scene.chain()))
-    if ref.converged:
+def test_random_scenes_are_certified(scene, tol):
+    fast, ran = compiled(scene, tol=tol)
+    assert fast.engine == "compiled" or not ran
+    if fast.converged:
         assert_certified(fast, tol)
+    else:  # never silently: a reason, and no force error bound that claims accuracy
+        assert fast.reason and fast.reason != "converged"
 
 
-def test_continuation_start_takes_the_same_path():
+def test_continuation_start_is_certified_and_helps():
     a = ActuatorScene(theta=150, height=3.0, links=140)
     b = ActuatorScene(theta=152, height=3.0, links=140)
-    ref = solve_internal(b, start=solve_internal(a, engine="numpy"), engine="numpy", tol=1e-8)
     fast = solve(b, start=solve(a), tol=1e-8)
-    assert_same(ref, fast)
+    assert fast.engine == "compiled"
     assert_certified(fast, 1e-8)
     assert fast.outer_iterations < solve(b, tol=1e-8).outer_iterations  # the start helped
     # Newton: a warm start's first step is a Newton step
-    ref = solve_internal(b, start=solve_internal(a, engine="numpy"), engine="numpy", tol=1e-8,
-                         method="newton")
     fast = solve(b, start=solve(a), tol=1e-8, method="newton")
-    assert_same(ref, fast)
+    assert fast.engine == "compiled"
     assert_certified(fast, 1e-8)
 
 
-def test_kernel_hands_over_to_the_reference_when_it_leaves_its_path():
-    """A face-solve limit of 1: the reference's primal safeguard takes over, so the
-    kernel stops and the whole solve is the reference's, bit for bit.
-
-    Route against route: what is promised is the hand-over itself (the answer is the
-    numpy run's, bit for bit); no oracle tells which route produced an answer."""
-    tight = Settings("tight", None, max_iter=1)
-    scene = ActuatorScene(**PAPER_SCENE)
-    fast = solve(scene, settings=tight)
-    ref = solve_internal(scene, settings=tight, engine="numpy")
-    assert fast.engine.startswith("numpy (the compiled kernel stopped")
-    assert np.array_equal(fast.alpha, ref.alpha) and fast.reason == ref.reason
+def test_a_kernel_stop_falls_back_to_the_compiled_driver():
+    """A weightless chain pressed flat (h = 1 mm, N = 100, tol 1e-9): the kernel's dual
+    walk meets a repeated working set (round-off) and stops; the compiled driver takes
+    the solve over with the default back-end's step solver (the primal safeguard, then
+    the dense Lemke step), and its answer is the equilibrium."""
+    scene = ActuatorScene(theta=150, height=1.0, links=100, weight=0.0)
+    fast = solve(scene, tol=1e-9)
+    assert fast.engine == ("compiled driver (the compiled kernel stopped: a working set "
+                           "repeated (round-off))")
+    assert_certified(fast, 1e-9)
 
 
 def test_engine_argument():
     scene = ActuatorScene(theta=150, height=3.0, links=40)
     with pytest.raises(ProblemError, match="engine must be one of"):
         solve_internal(scene, engine="fast")
-    with pytest.raises(ProblemError, match="engine='compiled' runs method='globalised'"):
-        solve_internal(scene, method="undamped", engine="compiled")
+    from lcpbench.problems.walls import WallProfile
+
+    bump = WallProfile.from_table([0, 10, 14, 18, 30], [3.0, 3.0, 2.4, 3.0, 3.0])
+    with pytest.raises(ProblemError, match="engine='compiled' runs walls of any profile"):
+        solve_internal(ActuatorScene(theta=150, links=40, wall_profile=bump), solver="lemke",
+                       engine="compiled")  # another back-end there: the profile driver
+    assert solve_internal(scene, solver="lemke", method="newton",
+                          engine="compiled").engine == "compiled driver"
+    assert solve_internal(scene, method="undamped", engine="compiled").engine == \
+        "compiled driver"  # the undamped scheme: an option of the compiled driver
     assert solve_internal(scene, engine="compiled").engine == "compiled"
     # another back-end: the driver around it compiled (model.compiled_driver)
     assert solve_internal(scene, solver="lemke", engine="compiled").engine == "compiled driver"
     assert solve(scene, solver="lemke").engine == "compiled driver"
-    assert solve_internal(scene, solver="lemke", engine="numpy").engine == "numpy"
+    with pytest.raises(ProblemError, match="engine='numpy' was removed"):
+        solve_internal(scene, solver="lemke", engine="numpy")
     assert solve_internal(scene, engine="compiled", method="newton").engine == "compiled"
 
 

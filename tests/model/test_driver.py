@@ -210,11 +210,11 @@ def test_large_N_flat_contact_region_is_not_mistaken_for_contact():
 
 def test_bad_driver_input_is_a_problem_error():
     from lcpbench.errors import ProblemError
-    from lcpbench.model.driver import run_driver
+    from lcpbench.model import compiled_driver
     from lcpbench.model.outer import DriverStart
 
     chain = ActuatorScene(theta=150, height=3, links=20).chain()
     with pytest.raises(ProblemError, match="method must be one of"):
-        run_driver(chain, None, method="newtonian")
+        solve(ActuatorScene(theta=150, height=3, links=20), method="newtonian")
     with pytest.raises(ProblemError, match="continuation start"):
-        run_driver(chain, None, method="undamped", start=DriverStart(np.zeros(20)))
+        compiled_driver.run(chain, None, method="undamped", start=DriverStart(np.zeros(20)))

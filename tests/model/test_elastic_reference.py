@@ -158,3 +158,26 @@ def test_elastic_walls_match_direct_energy_minimisation(theta, h, k, channel, gr
     assert np.max(res.indentation) == pytest.approx(
         max(float(np.max(u_ref - h)), float(np.max(-h - u_ref)) if channel else 0.0),
         rel=1e-5, abs=1e-9)
+
+
+@pytest.mark.parametrize("backend", ["lemke", "qpsolvers-highs"])  # an LCP and a QP
+@pytest.mark.parametrize("theta,h,k,channel,gravity", [SCENES[0], SCENES[-1]])
+def test_another_back_end_on_elastic_walls_matches_the_minimisation(theta, h, k, channel,
+                                                                    gravity, backend):
+    """Elastic walls with a back-end other than the default run the compiled driver (the
+    springs a parameter of its assembly, judge and line search; the back-end given the
+    step's elastic forms): its force is the direct minimisation's."""
+    from lcpbench.model.compiled_driver import ENGINE
+    from lcpbench.solvers.registry import available_backends
+
+    if backend not in available_backends():
+        pytest.skip(f"{backend} is not installed")
+    scene = _scene(theta, h, k, channel, gravity)
+    _, F_ref, F_lo_ref = reference_minimiser(scene)
+    res = lcpbench.solve(scene, solver=backend, tol=1e-8, max_outer=400)
+    assert res.converged, res.reason
+    assert res.engine == ENGINE
+    F0 = max(F_ref, scene.EI / scene.length**2)
+    assert abs(res.total_force - F_ref) <= 1e-6 * F0
+    if channel:
+        assert abs(float(np.sum(res.forces_lower)) - F_lo_ref) <= 1e-6 * F0

@@ -16,7 +16,7 @@ from energy_oracle import assert_equilibrium, assert_step_kkt
 from lcpbench.linalg.saddle import TridiagonalFactor
 from lcpbench.model import step_solver
 from lcpbench.model.chain import heights
-from lcpbench.model.driver import run_driver
+from lcpbench.model.compiled_driver import run as run_driver
 from lcpbench.model.large_driver import run_large
 from lcpbench.model.large_n import increment_step, layout_fits, trial_of
 from lcpbench.model.outer import feasible_start

@@ -128,7 +128,7 @@ def test_flat_profile_reproduces_the_flat_wall(theta, height, channel):
     flat = ActuatorScene(theta=theta, height=height, links=60, channel=channel)
     as_profile = ActuatorScene(theta=theta, height=height, links=60, channel=channel,
                                wall_profile=WallProfile.flat(height))
-    a = solve_internal(flat, engine="numpy")
+    a = solve_internal(flat)
     b = lcpbench.solve(as_profile)
     assert b.engine == "compiled"  # the profile kernel, its table the flat wall exactly
     assert a.converged and b.converged
@@ -150,7 +150,7 @@ def test_the_slope_term_is_what_makes_the_answer_exact(monkeypatch):
     ref = minimise_energy(scene)
     monkeypatch.setattr(prof, "slope_load",
                         lambda chain, alpha, up, lo: np.zeros(chain.free_nodes.size))
-    res = solve_internal(scene, tol=1e-10, engine="numpy")
+    res = solve_internal(scene, tol=1e-10, solver="lemke")  # the Python profile driver
     assert abs(res.total_force - ref.total_force) > 1e-3 * ref.total_force  # it is off
     assert not res.converged
     assert "torque" in res.judgement.failed or "force error bound" in res.judgement.failed

@@ -1,5 +1,5 @@
 """A run out of outer iterations says when max|Δα| had stalled, and whether the
-requested tol is below the accuracy of the contact steps (lcpbench.model.driver.stall,
+requested tol is below the accuracy of the contact steps (lcpbench.model.outer.stall,
 out_of_iterations).
 
 The synthetic sequences are built to the definition: a contraction that halves the
@@ -14,7 +14,6 @@ from __future__ import annotations
 import re
 
 import numpy as np
-import pytest
 
 import lcpbench
 from lcpbench import ActuatorScene
@@ -74,10 +73,9 @@ def test_a_short_run_out_of_iterations_says_nothing_more():
     assert "stalled" not in r.reason
 
 
-@pytest.mark.parametrize("engine", ["compiled", "numpy"])
-def test_tol_below_the_step_accuracy_is_named_out_of_reach(engine):
+def test_tol_below_the_step_accuracy_is_named_out_of_reach():
     r = solve_internal(ActuatorScene(theta=150.0, height=3.0, links=2000), tol=1e-14,
-                       engine=engine)
+                       engine="compiled")
     assert not r.converged
     m = re.search(r"no convergence in 200 outer iterations .*no lower than ([0-9.e+-]+) rad "
                   r"over the last 10 steps and within a factor 2 of that since outer "
@@ -90,12 +88,12 @@ def test_tol_below_the_step_accuracy_is_named_out_of_reach(engine):
 
 
 def test_stop_on_stall_ends_a_stalled_run_and_leaves_a_converging_one_alone():
-    """run_driver(stop_on_stall=True), the reference run after a kernel stop: a row of
+    """compiled_driver.run(stop_on_stall=True), the run after a kernel stop: a row of
     two sections whose height steps crawl (a link near the vertical, the steps cut to
     ~1e-4) ends at the first stall (2 STALL_STEPS steps, the stall named in the reason)
     instead of running all of max_outer; a run that converges is the same run."""
     from lcpbench import SectionedScene
-    from lcpbench.model.driver import run_driver
+    from lcpbench.model.compiled_driver import run as run_driver
     from lcpbench.model.step_solver import make_step_solver
 
     chain = SectionedScene(sections=[(179.6, 15.0), (-179.6, 15.0)], height=4.38,

@@ -40,12 +40,12 @@ def test_one_section_builds_the_actuator_scenes_chain_exactly(kw):
 
 
 @pytest.mark.parametrize("kw", ONE_SECTION[:4])
-@pytest.mark.parametrize("engine", ["compiled", "numpy"])
-def test_one_section_solves_exactly_as_the_actuator_scene(kw, engine):
+@pytest.mark.parametrize("solver", ["auto", "lemke"])  # the kernel; the compiled driver
+def test_one_section_solves_exactly_as_the_actuator_scene(kw, solver):
     """One section builds the actuator's chain (above), so it is solved bit for bit as
     the actuator (kept: a promise of the construction) and to the scene's equilibrium."""
-    a = solve_internal(ActuatorScene(**kw), engine=engine)
-    b = solve_internal(_one_section(kw), engine=engine)
+    a = solve_internal(ActuatorScene(**kw), solver=solver)
+    b = solve_internal(_one_section(kw), solver=solver)
     assert a.converged and b.converged
     assert a.total_force == b.total_force
     for name in ("alpha", "x", "y", "forces", "gaps"):

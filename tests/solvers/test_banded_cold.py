@@ -20,7 +20,7 @@ from known_answers import CONTACT_QP_KNOWN, PAPER_SCENE
 
 from lcpbench import ActuatorScene, solve
 from lcpbench.errors import ProblemError
-from lcpbench.model.driver import run_driver
+from lcpbench.model.compiled_driver import run as run_driver
 from lcpbench.model.step import assemble_step
 from lcpbench.model.step_solver import solve_step
 from lcpbench.problems.scenes import CantileverScene

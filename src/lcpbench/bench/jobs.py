@@ -195,7 +195,7 @@ class RunJob(Job):
 
     kind: ClassVar[str] = "run"
 
-    driver: str = "globalised"  # the driver's scheme (model.driver.METHODS)
+    driver: str = "globalised"  # the driver's scheme (model.outer.METHODS)
     #: the contact step's form (model.formulations), None: the back-end's own
     formulation: str | None = None
 

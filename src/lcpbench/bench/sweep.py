@@ -106,8 +106,8 @@ def plan_sweep(grid: Grid | Iterable, backends: list[str], settings: list[str], 
     (:mod:`lcpbench.model.formulations`; "best": each back-end's, resolved here), stored
     in the method as ``driver@formulation``; a back-end's own form is the plain run.
     """
-    from ..model.driver import METHODS
     from ..model.formulations import resolve_formulation
+    from ..model.outer import METHODS
     from ..solvers.registry import get_backend
 
     forms = {(name, p): resolve_formulation(get_backend(name), formulation, p)

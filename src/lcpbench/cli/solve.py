@@ -22,7 +22,7 @@ import numpy as np
 
 from ..api import solve, solve_internal
 from ..errors import ProblemError
-from ..model.driver import METHODS
+from ..model.outer import METHODS
 from ..model.result_view import pressure_rows, states_line
 from ..problems.scenes import DEFAULT_LINKS
 from ._common import (

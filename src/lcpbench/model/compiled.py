@@ -5,20 +5,21 @@
 :func:`lcpbench.model.compiled_kernel.solve_chain`: assembly of the banded
 step, the dual active set with its refinement and certificate, the judge's
 natural residual, the Armijo search on the exact energy and the outer loop,
-in one call. ``engine="numpy"`` runs the numpy reference
-(:func:`lcpbench.model.driver.run_driver` with the step solver), which
-documents the algorithm; both take the same path to round-off (tests).
+in one call. Its answers are checked against independent oracles (the energy
+minimisation, beam theory, the exact-geometry certificate: tests/model/test_compiled.py).
 
 numba is imported, and the kernel loaded from numba's on-disk cache (or
 compiled, the first time), at the first solve that uses it, never at
 ``import lcpbench``.
 
-Where the kernel cannot follow the reference (the primal safeguard of the
-active set, a step the certificate or the judge rejects, so the reference
-would hand it to Lemke) it stops and the whole solve is run by the numpy
-reference, so the answer is always the reference's. The DriverOutput is
-built by the driver's own helpers and judged afterwards by the same Python
-certificate and judge (:mod:`lcpbench.model.judge`) as every other back-end.
+Where the kernel stops (:data:`~.kernel_call.BAIL_REASONS`: the primal safeguard of
+the active set, a face not positive definite, a repeated working set, a step the
+certificate or the judge rejects) the solve falls back to compiled code
+(:func:`reference`): the compiled driver around the default back-end's step solver,
+the increments on the tridiagonal factor, or, for a refused step, a not-converged
+answer that the plan's escalations take over. The DriverOutput is built by the
+driver's own helpers and judged afterwards by the same certificate and judge
+(:mod:`lcpbench.model.judge`) as every other back-end.
 """
 
 from __future__ import annotations
@@ -33,7 +34,6 @@ from ..problems.scenes import Chain
 from ..solvers.judge import requested
 from ..solvers.registry import DEFAULT, get_settings
 from . import angle_step, compiled_driver, heavy_driver, large_n, wall_free
-from .driver import run_driver
 from .kernel_call import (
     BAIL_REASONS,
     applies,
@@ -44,13 +44,18 @@ from .kernel_call import (
 from .outer import DriverOutput, DriverStart
 from .profile import has_profile
 
-#: ``engine`` of :func:`lcpbench.solve`: "auto" (the kernel where it applies, numpy
-#: elsewhere), "compiled" (the kernel, or ProblemError where it does not apply),
-#: "numpy" (the reference).
-ENGINES = ("auto", "compiled", "numpy")
+#: ``engine`` of :func:`lcpbench.api.solve_internal`: "auto" (the kernel where it
+#: applies, the compiled driver or the profile driver elsewhere), "compiled" (the kernel or the compiled driver,
+#: or ProblemError where neither applies). The numpy reference engine ("numpy") was
+#: removed: a kernel that stops falls back to compiled code (:func:`reference`).
+ENGINES = ("auto", "compiled")
 
 
 def check_engine(engine) -> str:
+    if isinstance(engine, str) and engine == "numpy":
+        raise ProblemError("engine='numpy' was removed (the numpy reference solve is gone: "
+                           "a kernel that stops falls back to compiled code); engine must "
+                           f"be one of {', '.join(ENGINES)}")
     if not isinstance(engine, str) or engine not in ENGINES:
         raise ProblemError(f"engine must be one of {', '.join(ENGINES)}, got {engine!r}")
     return engine
@@ -61,9 +66,12 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
           args: tuple | None = None) -> tuple[DriverOutput, str]:
     """The driver's answer and the engine that produced it ("compiled" or "numpy").
 
-    The one place where the compiled kernel is chosen: ``engine="numpy"``, a
-    back-end other than the default or another ``method`` run
-    :func:`~lcpbench.model.driver.run_driver` with ``step_solver``. ``args``: the
+    The one place where the compiled kernel is chosen: a back-end other than the
+    default runs the compiled driver (:mod:`.compiled_driver`) where it takes the
+    chain (flat walls, rigid or elastic; the globalised, Newton or undamped scheme, and
+    the undamped scheme with the default back-end too); walls of any profile with
+    another back-end or scheme run :func:`~lcpbench.model.profile_driver.run_profile_driver`
+    with ``step_solver``; a chain no driver takes is a ProblemError. ``args``: the
     chain's :func:`~.kernel_call.kernel_args`, given by a caller that has checked that the kernel
     takes the chain's layout.
 
@@ -86,8 +94,7 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
         if q >= angle_step.HEAVY:
             out = heavy_driver.run_heavy(chain, start, tol, max_outer)
             if out is not None and (own or heavy_driver.no_contact(out)):  # (its reason)
-                return out, ("numpy" if engine == "numpy"
-                             else "numpy (SQP steps in the link angles: a heavy chain)")
+                return out, "numpy (SQP steps in the link angles: a heavy chain)"
         first = (min(max_outer, heavy_driver.FIRST_TRY) if own and q >= heavy_driver.MODERATE
                  else max_outer)
         out, used = _drive(chain, step_solver, backend=backend, settings=settings,
@@ -116,40 +123,42 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
 
         if start is None:  # the same solve at fewer links, interpolated (nested iteration;
             # its outer steps are not the answer's, its time is in the solve's)
-            start = nested_start(chain, functools.partial(_coarse_solve, tol=tol,
-                                                          engine=engine))
+            start = nested_start(chain, functools.partial(_coarse_solve, tol=tol))
         return (run_large(chain, step_solver, tol=tol, max_outer=max_outer, start=start),
                 "numpy (large N: increments on the tridiagonal factor)")
-    if engine != "numpy" and applies(backend, method, None if args is not None else chain):
+    if applies(backend, method, None if args is not None else chain):
         return run_kernel(chain, lambda: step_solver, settings=settings, tol=tol,
                           max_outer=max_outer, method=method, start=start, args=args)
-    elif engine != "numpy" and profile_applies(backend, method, chain):
+    elif profile_applies(backend, method, chain):
         out, why = run_profile_compiled(chain, tol=tol, max_outer=max_outer, start=start,
                                         settings=settings)
         if out is not None:
             return out, "compiled"
-        return profile_reference(chain, lambda: step_solver, why, tol=tol, max_outer=max_outer,
-                                 method=method, start=start)
+        return profile_stopped(chain, why), f"compiled (stopped: {why})"
     elif engine == "compiled" and chain is not None and has_profile(chain):
         raise ProblemError("engine='compiled' runs walls of any profile (wall_profile) with the "
                            f"default back-end ({DEFAULT}) and method='globalised' only; "
-                           "engine='auto' or 'numpy' runs the others in the numpy reference")
-    elif engine != "numpy" and compiled_driver.takes(chain, step_solver, method):
+                           "engine='auto' runs the others in the profile driver")
+    elif compiled_driver.takes(chain, step_solver, method):
         # another back-end: its calls in Python, lcpbench's parts around them compiled
         return (compiled_driver.run(chain, step_solver, tol=tol, max_outer=max_outer,
-                                    start=start), compiled_driver.ENGINE)
+                                    start=start, method=method), compiled_driver.ENGINE)
     elif engine == "compiled":
-        raise ProblemError(f"engine='compiled' runs method='globalised' (or 'newton' with the "
-                           f"default back-end, {DEFAULT}) with a back-end that takes a QP or an "
-                           f"LCP, on flat rigid walls; got solver {backend!r}, method {method!r}")
-    else:
-        used = "numpy"
-    out = run_driver(chain, step_solver, tol=tol, max_outer=max_outer, method=method,
-                     start=start)
-    return out, used
+        raise ProblemError(f"engine='compiled' runs method='globalised' or 'undamped' (or "
+                           f"'newton' with the default back-end, {DEFAULT}) on flat walls; got "
+                           f"solver {backend!r}, method {method!r}")
+    elif chain.profiled_walls:  # another back-end (or scheme) on a wall profile
+        from .profile_driver import run_profile_driver
+
+        return run_profile_driver(chain, step_solver, tol=tol, max_outer=max_outer,
+                                  method=method, start=start), "numpy"
+    raise ProblemError("no driver takes this chain: the compiled driver runs a chain of "
+                       "consecutive joints and contiguous free nodes from node 1 with flat "
+                       "walls (method 'globalised', 'newton' or 'undamped'); got method "
+                       f"{method!r}")
 
 
-def _coarse_solve(coarse: Chain, *, tol: float, engine: str) -> DriverOutput | None:
+def _coarse_solve(coarse: Chain, *, tol: float) -> DriverOutput | None:
     """The nested start's solve of the coarse chain (:mod:`.nested_start`): the built-in
     active set whatever the fine solve's back-end (a start needs no particular one, and a
     dense back-end at 1000 links can take minutes), Gauss–Newton height steps (no SQP
@@ -160,7 +169,7 @@ def _coarse_solve(coarse: Chain, *, tol: float, engine: str) -> DriverOutput | N
 
     try:
         return _drive(coarse, make_step_solver(DEFAULT), backend=DEFAULT, settings="default",
-                      engine="numpy" if engine == "numpy" else "auto", tol=tol,
+                      engine="auto", tol=tol,
                       max_outer=COARSE_OUTER, method="globalised", start=None)[0]
     except np.linalg.LinAlgError:
         return None
@@ -169,9 +178,10 @@ def _coarse_solve(coarse: Chain, *, tol: float, engine: str) -> DriverOutput | N
 def run_kernel(chain: Chain, make_step: Callable[[], Callable], *, settings, tol: float,
                max_outer: int, method: str, start: DriverStart | None = None,
                args: tuple | None = None) -> tuple[DriverOutput, str]:
-    """The default back-end's solve in the kernel (:func:`~.kernel_call.run_compiled`), or, where the
-    kernel stops, in the numpy reference with the step solver ``make_step()`` (called
-    then only): the answer and the engine that produced it."""
+    """The default back-end's solve in the kernel (:func:`~.kernel_call.run_compiled`), or,
+    where the kernel stops, its compiled fall-back (:func:`reference`, with the step
+    solver ``make_step()``, called then only): the answer and the engine that produced
+    it."""
     out, why = run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
                             settings=settings, args=args, newton=method == "newton")
     if out is not None:
@@ -195,29 +205,34 @@ REFUSED_STEPS = frozenset((BAIL_REASONS[14], BAIL_REASONS[15]))
 def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol: float,
               max_outer: int, method: str, start: DriverStart | None = None,
               settings="default") -> tuple[DriverOutput, str]:
-    """Where the kernel stopped (``why``, one of its bail reasons): the answer and the
-    engine that produced it.
+    """Where the kernel stopped (``why``, one of its bail reasons): the compiled code
+    that takes over, its answer and the engine that produced it.
 
     Where the reason is one that round-off of node heights can cause
     (:data:`ROUNDOFF_BAILS`) and cond H · ε reaches the step's own accuracy
     (:func:`step_request` of ``settings``, the kernel's: 1e-6 by default, N ≳ 400;
     :func:`lcpbench.model.large_n.roundoff_may_limit`), the
     solve runs in increments on the tridiagonal factor instead, as from ``LARGE_N``
-    links: the numpy reference in heights would meet the same round-off, and its step
-    solver then falls back to a dense Lemke step, O(N³) (97 s at N = 3999).
+    links: a solve in heights would meet the same round-off, and its step solver then
+    falls back to a dense Lemke step, O(N³) (97 s at N = 3999).
 
     Where the kernel's own step was refused (:data:`REFUSED_STEPS`: its certificate or
-    lcpbench's step judge) the solve is not run again in the numpy reference in node
-    heights, the kernel's own scheme: on 41 such stops (rows of sections past 150°,
-    elastic walls and the paper grid at tol 1e-3 and 1e-9, the hard cases) it never
-    converged where the kernel had stopped, at up to 50 ms a scene. The answer is
-    reported not converged with the kernel's reason, and the plan's escalations (the
-    loading path) take over, as they did after the reference's failure. The other
-    stops (crossed walls, the face-solve limit, a face not positive definite, a
-    repeated working set) run the reference, whose step solver has what the kernel
-    lacks (the primal active set, dense fall-backs)."""
+    lcpbench's step judge) the solve is not run again in node heights, the kernel's own
+    scheme: on 41 such stops (rows of sections past 150°, elastic walls and the paper
+    grid at tol 1e-3 and 1e-9, the hard cases) a rerun never converged where the kernel
+    had stopped, at up to 50 ms a scene. The answer is reported not converged with the
+    kernel's reason, and the plan's escalations (the loading path) take over.
+
+    The other stops (crossed walls, the face-solve limit, a face not positive definite,
+    a repeated working set) run the compiled driver (:func:`.compiled_driver.run`: the
+    same globalised loop, its assembly and line search compiled) around the default
+    back-end's step solver ``make_step()``, which has what the kernel lacks (the primal
+    active set, the dense Lemke fall-back), stopping where max|Δα| stalls; on elastic
+    walls the answer is reported not converged as for a refused step (the compiled
+    driver assembles elastic walls for the other back-ends; around the default
+    back-end's step solver there it has not been measured)."""
     if beyond_heights(chain, why):
-        return out_of_reach(chain, why), "numpy (not run: see the reason)"
+        return out_of_reach(chain, why), "compiled (stopped: see the reason)"
     if why in ROUNDOFF_BAILS and large_n.roundoff_may_limit(chain, step_request(settings),
                                                             method):
         from dataclasses import replace
@@ -228,36 +243,36 @@ def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol:
                           max_outer=max_outer, start=start),
                 f"numpy (increments on the tridiagonal factor; the compiled kernel "
                 f"stopped: {why})")
-    if why not in REFUSED_STEPS:
-        return (run_driver(chain, make_step(), tol=tol, max_outer=max_outer, method=method,
-                           start=start, stop_on_stall=True),
-                f"numpy (the compiled kernel stopped: {why})")
+    if why not in REFUSED_STEPS and not chain.elastic_walls:
+        return (compiled_driver.run(chain, make_step(), tol=tol, max_outer=max_outer,
+                                    start=start, stop_on_stall=True),
+                f"{compiled_driver.ENGINE} (the compiled kernel stopped: {why})")
+    return stopped(chain, why), f"compiled (stopped: {why})"
+
+
+def stopped(chain: Chain, why: str) -> DriverOutput:
+    """The not-converged answer of a kernel stop that no compiled route takes over
+    (the plan's escalations may): the unconstrained arc, the reason naming the stop."""
     from .outer import failed_output
 
-    return (failed_output(chain.rest_alpha.copy(), chain.free_nodes.size, [],
-                          f"the compiled kernel stopped: {why} (no answer: the shape "
-                          f"given is the unconstrained arc)"),
-            f"compiled (stopped: {why})")
+    return failed_output(chain.rest_alpha.copy(), chain.free_nodes.size, [],
+                         f"the compiled kernel stopped: {why} (no answer: the shape "
+                         f"given is the unconstrained arc)")
 
 
-def profile_reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol: float,
-                      max_outer: int, method: str, start: DriverStart | None = None,
-                      settings="default") -> tuple[DriverOutput, str]:
-    """The whole profile solve in the numpy reference (:mod:`.profile_driver`), where the
-    profile kernel stopped (``why``): the answer and the engine that produced it.
-    (``settings``: as :func:`reference`'s, for the same call; the step solver has them.)"""
-    if beyond_heights(chain, why):
-        return out_of_reach(chain, why), "numpy (not run: see the reason)"
-    return (run_driver(chain, make_step(), tol=tol, max_outer=max_outer, method=method,
-                       start=start), f"numpy (the compiled kernel stopped: {why})")
+def profile_stopped(chain: Chain, why: str) -> DriverOutput:
+    """Where the profile kernel stopped (``why``): :func:`out_of_reach` from
+    ``LARGE_N`` links, else :func:`stopped` (no compiled route in heights takes a wall
+    profile over; the plan's escalations, the loading path, may)."""
+    return out_of_reach(chain, why) if beyond_heights(chain, why) else stopped(chain, why)
 
 
 def beyond_heights(chain: Chain, why: str) -> bool:
     """Whether a kernel stop ``why`` at this N is the round-off of the height formulation
     with nothing to take over: from ``LARGE_N`` links, a face not positive definite or
     a round-off stop (:data:`ROUNDOFF_BAILS`), on a chain the increment formulation does
-    not take (a joint layout other than :func:`lcpbench.model.large_n.layout_fits`). The
-    numpy reference in heights meets the same round-off there, and its step solver's
+    not take (a joint layout other than :func:`lcpbench.model.large_n.layout_fits`). A
+    driver in heights meets the same round-off there, and its step solver's
     dense Lemke fallback is O(N³) (a solve of elastic walls at N = 10⁵ failed after
     42 s before elastic walls ran in increments)."""
     return (chain.links >= large_n.LARGE_N and not large_n.takes(chain)

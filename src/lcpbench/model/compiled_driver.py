@@ -2,7 +2,7 @@
 
 The default back-end runs its whole solve in one kernel (:mod:`.compiled`); every
 other back-end is a Python call per contact step. Around that call the numpy driver
-(:func:`lcpbench.model.driver.run_driver`) spends several milliseconds per solve of
+(``model/driver.py``, removed) spent several milliseconds per solve of
 lcpbench's own Python (assembly, the back-end's form, the judge, the line search), so a
 table of full-solve times would compare that more than the back-ends. Here those parts
 are the kernels of :mod:`.driver_kernel`; per outer iteration:
@@ -14,9 +14,15 @@ are the kernels of :mod:`.driver_kernel`; per outer iteration:
    back-end's call in Python, and lcpbench's residuals (:func:`~.driver_kernel.judge`);
 3. :func:`~.driver_kernel.advance`: max|α̂ − α| and the Armijo search on the exact energy.
 
-It takes the numpy driver's path and gives its answer to round-off
-(``tests/model/test_compiled_driver.py``). Where it does not apply (see :func:`takes`)
-the numpy driver runs.
+Its answers are checked against the energy minimisation
+(``tests/model/test_compiled_driver.py``). Elastic walls are a parameter of the same
+loop: the back-end gets the step's elastic forms (:mod:`.elastic_step`), the judge the
+compliant gaps, the line search the springs' energy. The paper's undamped scheme is an
+option of the same loop (:func:`undamped`, any back-end). Where it does not apply (see
+:func:`takes`: walls of any profile with another back-end) the profile driver
+(:func:`lcpbench.model.profile_driver.run_profile_driver`) runs. Where the solve kernel stops
+(:func:`lcpbench.model.compiled.reference`) this driver takes over with the default
+back-end's step solver.
 """
 
 from __future__ import annotations
@@ -25,11 +31,16 @@ import time
 
 import numpy as np
 
+from ..errors import ProblemError
 from ..problems.scenes import Chain
 from ..solvers.base import Status
+from ..solvers.registry import DEFAULT
+from ..thresholds import NEWTON_SWITCH
 from .chain import energy
 from .kernel_call import applies
+from .newton import newton_step
 from .outer import (
+    STALL_STEPS,
     DriverOutput,
     DriverStart,
     StepRecord,
@@ -38,6 +49,7 @@ from .outer import (
     feasible_start,
     line_search_failed,
     out_of_iterations,
+    stall,
     starting_point,
     step_failed,
     step_setup_time,
@@ -47,7 +59,7 @@ from .step import ContactStep, LCPForm
 ENGINE = "compiled driver"
 
 
-ENTRIES = ("assemble", "qp_form", "lcp_form", "from_lcp", "judge", "advance")
+ENTRIES = ("assemble", "qp_form", "lcp_form", "from_lcp", "judge", "advance", "predict")
 
 
 def _kernel():
@@ -62,10 +74,14 @@ def _kernel():
 
 
 def takes(chain: Chain, step_solver, method: str) -> bool:
-    """Whether this driver runs the solve: the globalised scheme, a scaled step solver
-    of a back-end that takes a QP or an LCP (not a contact step itself, as the banded
-    active set does), a chain of consecutive joints and contiguous free nodes with flat,
-    rigid walls."""
+    """Whether this driver runs the solve: the globalised scheme or its Newton steps with
+    a step solver of a back-end that takes a QP or an LCP or a contact step itself (a
+    plug-in's ``solve_step``; not the default back-end, whose solve the kernel runs), or
+    the undamped scheme with any back-end; a
+    chain of consecutive joints and contiguous free nodes with flat walls, rigid or
+    elastic (the back-end gets :mod:`.elastic`'s forms, the springs' energy is in the
+    line search's). A step solver that is not ``scaled`` gets the step's forms in the
+    problem's units (:func:`~.step_solver.step_qp`, :func:`~.step_solver.step_lcp`)."""
     backend = getattr(step_solver, "backend", None)
     return backend is not None and takes_backend(chain, backend,
                                                  getattr(step_solver, "scaled", False), method)
@@ -75,10 +91,12 @@ def takes_backend(chain: Chain, backend, scaled: bool, method: str) -> bool:
     """:func:`takes` from the registry's data on the back-end (a
     :class:`~lcpbench.solvers.registry.Backend`) and whether its step is ``scaled``
     (what :func:`lcpbench.plan.make_plan` knows before the step solver is made)."""
-    if (method != "globalised" or backend.form not in ("qp", "lcp") or not scaled
-            or hasattr(backend.load(), "solve_step")):
+    if method in ("globalised", "newton"):
+        if backend.form not in ("qp", "lcp") or backend.name == DEFAULT:  # (the kernel's)
+            return False
+    elif method != "undamped":
         return False
-    return not chain.elastic_walls and applies("auto", method, chain)
+    return applies("auto", "globalised", chain)
 
 
 class KernelStep(ContactStep):
@@ -86,6 +104,7 @@ class KernelStep(ContactStep):
     residuals the kernels compute (the hooks of :mod:`.step_solver`)."""
 
     kernel = None  # the driver_kernel module
+    cu = cl = np.empty(0)  # the elastic walls' compliances 1/k (empty: rigid walls)
 
     def compiled_qp(self):
         """(P data, indices, indptr, c̃, lower/ℓ, upper/ℓ, scaled bands)."""
@@ -107,16 +126,30 @@ class KernelStep(ContactStep):
                                     form.condense, np.ascontiguousarray(zeta, dtype=float))
 
     def compiled_residuals(self, u: np.ndarray):
-        """step_residuals' ``(residuals, R)``, or None (the numpy reference decides)."""
+        """step_residuals' ``(residuals, R)``, or None (the numpy reference decides: a
+        Newton step, whose gradient holds T (u − u₀))."""
+        if self.geometric is not None:
+            return None
         ok, res, R = self.kernel.judge(
             np.ascontiguousarray(u, dtype=float), self.bands, self.linear, self.lower,
-            self.upper, self.coef, int(self.base[0]), int(self.free_nodes[0]) + 1,
+            self.upper, self.cu, self.cl, self.coef, int(self.base[0]), int(self.free_nodes[0]) + 1,
             self.links, self.origin, self.phi_origin, self.stiffness, self.rest_joint,
             self.nodal_load, float(self.length_scale), float(self.force_scale))
         if not ok:
             return None
         return dict(zip(("natural", "min_gap", "min_reaction", "complementarity",
                          "term_size"), map(float, res), strict=True)), R
+
+
+def _compliances(chain: Chain) -> tuple[np.ndarray, np.ndarray]:
+    """The walls' compliances 1/k per free node (:func:`.elastic.compliances`; empty
+    arrays for rigid walls, the kernels' form)."""
+    if not chain.elastic_walls:
+        return np.empty(0), np.empty(0)
+    from .elastic import compliances
+
+    cu, cl = compliances(chain)
+    return np.ascontiguousarray(cu, dtype=float), np.ascontiguousarray(cl, dtype=float)
 
 
 def _arrays(chain: Chain) -> tuple:
@@ -135,18 +168,36 @@ def _assemble(kd, chain: Chain, c: tuple, alpha: np.ndarray) -> KernelStep:
         alpha, a, jl, jr, k, rest, fs, lo.size, load)
     step = KernelStep(bands, linear, lo, hi, alpha, inv, v, chain.free_nodes, chain.links,
                       jr, coef, phi0, origin, alpha0, phi_origin, k, rest, load,
-                      length_scale=chain.length, force_scale=chain.force_scale)
+                      length_scale=chain.length, force_scale=chain.force_scale,
+                      upper_stiffness=chain.upper_stiffness,
+                      lower_stiffness=chain.lower_stiffness)
     step.kernel = kd
+    if chain.elastic_walls:
+        step.cu, step.cl = _compliances(chain)
     return step
 
 
 def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
-        start: DriverStart | None = None) -> DriverOutput:
-    """:func:`lcpbench.model.driver.run_driver` (``method="globalised"``) with the
-    parts around the back-end compiled; for a chain and step solver it :func:`takes`."""
+        start: DriverStart | None = None, stop_on_stall: bool = False,
+        method: str = "globalised") -> DriverOutput:
+    """Iterate contact steps to the equilibrium of ``chain`` with the parts around the
+    back-end compiled, for a chain and step solver it :func:`takes` (and after a stop of
+    the solve kernel, :func:`lcpbench.model.compiled.reference`, with the default
+    back-end's step solver); never raises on non-convergence. ``method``: "globalised"
+    (the Armijo search on the exact energy from the clipped arc or ``start``), "newton"
+    (the same with the exact Hessian H + T, :func:`~.newton.newton_step`, once max|Δα|
+    is below ``NEWTON_SWITCH``, or from a neighbour's answer) or "undamped"
+    (:func:`undamped`). ``stop_on_stall``: end as soon as max|Δα| has
+    stalled (:func:`~.outer.stall`) instead of at ``max_outer`` (after a kernel stop,
+    where the escalations take a refusal over)."""
     kd = _kernel()
     c = _arrays(chain)
-    a, jl, jr, k, rest, fs, load, link_load, _, _ = c
+    if method == "undamped":
+        if start is not None:
+            raise ProblemError("a continuation start needs method='globalised'")
+        return undamped(kd, chain, c, solver, tol, max_outer)
+    a, jl, jr, k, rest, fs, load, link_load, lo, hi = c
+    cu, cl = _compliances(chain)
     n = chain.free_nodes.size
     steps: list[StepRecord] = []
     u, alpha, warm = starting_point(chain, start, feasible_start)
@@ -155,9 +206,14 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
     u, alpha = np.ascontiguousarray(u, dtype=float), np.ascontiguousarray(alpha, dtype=float)
     E = energy(chain, alpha)
     stiffness_sum = float(np.sum(np.abs(chain.joint_stiffness)))
+    newton = method == "newton"
+    warm_start = start is not None and warm is not None  # a neighbour's answer: near already
     for _ in range(max_outer):
+        near = newton and (steps[-1].max_dalpha < NEWTON_SWITCH if steps else warm_start)
         t0 = time.perf_counter()
         step = _assemble(kd, chain, c, alpha)
+        if near:
+            step = _newton(step, chain)
         t_asm = time.perf_counter() - t0
         sol = solver(step, warm)
         if sol.status not in (Status.SOLVED, Status.INACCURATE):
@@ -165,7 +221,8 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
         dalpha, t, trial, E_t = kd.advance(
             np.ascontiguousarray(sol.u, dtype=float), u, alpha, E,
             stiffness_sum, step.inv_a_cos, step.alpha0, step.origin,
-            step.phi_origin, step.coef, fs, k, rest, load, a, jl, jr, link_load)
+            step.phi_origin, step.coef, fs, k, rest, load, a, jl, jr, link_load, lo, hi, cu,
+            cl)
         if t == 0.0:
             return line_search_failed(alpha, n, steps, sol, t_asm, dalpha, E)
         u, alpha, E = u + t * (sol.u - u), trial, E_t
@@ -174,8 +231,53 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
         warm = sol
         if dalpha < tol:
             return converged_output(chain, alpha, sol, steps, step)
+        if stop_on_stall and len(steps) >= 2 * STALL_STEPS and stall(steps) is not None:
+            return out_of_iterations(alpha, n, steps, len(steps), tol)
     return out_of_iterations(alpha, n, steps, max_outer, tol)
 
+
+def _newton(step: KernelStep, chain: Chain) -> KernelStep:
+    """The kernel's step with the exact Hessian H + T where it is positive definite
+    (:func:`~.newton.newton_step`), keeping the kernels' hooks."""
+    new, used = newton_step(step, chain)
+    if used:
+        new.kernel, new.cu, new.cl = step.kernel, step.cu, step.cl
+    return new
+
+
+def undamped(kd, chain: Chain, c: tuple, solver, tol: float, max_outer: int) -> DriverOutput:
+    """The paper's scheme (Fig. 3): α ← α̂ of eq. (21) after every step, from the
+    unconstrained arc, until max|α̂ − α| < ``tol``; each step a Gauss–Newton step taken
+    in full, which can leave the region where the linearisation is valid (kept so that
+    benchmarks show where it breaks): a link that passes the vertical, where eq. (20) is
+    singular, or a non-finite α̂ ends it, not converged."""
+    n = chain.free_nodes.size
+    steps: list[StepRecord] = []
+    alpha = np.ascontiguousarray(chain.rest_alpha, dtype=float).copy()
+    branch = np.sign(np.cos(alpha))
+    fs = c[5]
+    warm = None
+    for _ in range(max_outer):
+        t0 = time.perf_counter()
+        step = _assemble(kd, chain, c, alpha)
+        t_asm = time.perf_counter() - t0
+        sol = solver(step, warm)
+        if sol.status not in (Status.SOLVED, Status.INACCURATE):
+            return step_failed(alpha, n, steps, sol, t_asm, np.nan)
+        new = kd.predict(np.ascontiguousarray(sol.u, dtype=float), step.alpha0, step.origin,
+                         step.inv_a_cos, fs)
+        dalpha = float(np.max(np.abs(new - alpha), initial=0.0))
+        steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm, 1.0,
+                                dalpha, np.nan, step_setup_time(sol)))
+        if not np.all(np.isfinite(new)):
+            return failed_output(alpha, n, steps, "diverged: non-finite link angles")
+        if np.any(np.sign(np.cos(new)) != branch):
+            return failed_output(new, n, steps, "diverged: a link passed the vertical, where "
+                                                "the linearisation of eq. (20) is singular")
+        alpha, warm = new, sol
+        if dalpha < tol:
+            return converged_output(chain, alpha, sol, steps, step)
+    return out_of_iterations(alpha, n, steps, max_outer, tol)
 
 
 def warm_up() -> None:

@@ -21,7 +21,7 @@ from ..thresholds import TIE
 
 EPS = np.finfo(np.float64).eps
 TINY = np.finfo(np.float64).tiny
-# the step left the path of the reference: the caller runs the numpy driver
+# the step left the path of the reference: the caller falls back (model.compiled.reference)
 BAIL_PRIMAL, BAIL_NOT_PD, BAIL_REPEAT, BAIL_LIMIT, BAIL_CERT, BAIL_JUDGE = 10, 11, 12, 13, 14, 15
 
 # Work arrays, allocated once per solve (compiled_kernel.workspace); no loop
@@ -438,16 +438,19 @@ def _wall_terms(hi, lo, u, R, cu, cl, L, F, nat, min_gap, min_r, comp_up, comp_l
 
 
 @njit(cache=True)
-def wall_residuals(u2, R, bands, linear, lo, hi, L, F):
-    """The verdict terms of step_residuals over the nodes (rigid walls, heights ``u2``
-    and reactions ``R`` given): [natural residual, least gap, least reaction,
-    |Σ g·r| of both walls, term size / F], the term size max(|H| |u| + |c|) over the
-    wall rows in banded_matvec's order. Shared by driver_kernel and large_kernel."""
+def wall_residuals(u2, R, bands, linear, lo, hi, cu, cl, L, F):
+    """The verdict terms of step_residuals over the nodes (heights ``u2`` and reactions
+    ``R`` given; ``cu``, ``cl``: the walls' compliances 1/k, empty for rigid walls):
+    [natural residual, least gap, least reaction, |Σ g·r| of both walls, term size / F],
+    the term size max(|H| |u| + |c|) over the wall rows in banded_matvec's order. Shared
+    by driver_kernel and large_kernel."""
     n = u2.size
+    soft = cu.size == n
     nat, min_gap, min_r, comp_up, comp_lo, term = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0
     for i in range(n):
         nat, min_gap, min_r, comp_up, comp_lo = _wall_terms(
-            hi[i], lo[i], u2[i], R[i], 0.0, 0.0, L, F, nat, min_gap, min_r, comp_up, comp_lo)
+            hi[i], lo[i], u2[i], R[i], cu[i] if soft else 0.0, cl[i] if soft else 0.0, L,
+            F, nat, min_gap, min_r, comp_up, comp_lo)
         if np.isfinite(hi[i]) or np.isfinite(lo[i]):  # banded_matvec(|H|, |u|) + |c|
             s = abs(bands[0, i]) * abs(u2[i])
             for kk in (1, 2):

@@ -5,7 +5,7 @@ numba (``@njit(cache=True)``) versions of the numpy reference, line for line:
 :func:`lcpbench.solvers.banded.solve_banded_qp` with ``method="dual"`` (the walk, its
 refinement, :func:`~lcpbench.solvers.banded.step_certificate`), the judge's natural
 residual (:func:`lcpbench.model.step_solver.step_residuals`) and the globalised driver
-of :mod:`lcpbench.model.driver` (the Armijo rule on the exact energy, both
+of :mod:`lcpbench.model.compiled_driver` (the Armijo rule on the exact energy, both
 :mod:`.chain_kernel`'s). The numpy modules are the readable reference and document
 the algorithm; this file repeats their arithmetic in the same order where that is cheap
 (sums, the band products), so both take the same path and agree to round-off
@@ -19,9 +19,9 @@ cache of both under a hash of both files' sources (a split kernel never runs sta
 code); import this module through it.
 
 Nothing here decides "converged": the Python side builds the DriverOutput and judges it
-(:mod:`lcpbench.model.judge_compiled`). What the kernel cannot do as the reference does
-(the primal safeguard, a face not positive definite, a step rejected) it reports with a
-code, and the caller runs the numpy reference.
+(:mod:`lcpbench.model.judge`). What the kernel cannot do (the primal safeguard, a face
+not positive definite, a step rejected) it reports with a code, and the caller falls
+back to compiled code (:func:`lcpbench.model.compiled.reference`).
 """
 
 from __future__ import annotations
@@ -348,7 +348,7 @@ def _clipped_heights(u, alpha, a, fs, lo, hi):
 def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl,
                 tol, max_outer, start_alpha, warm_u, warm_up, warm_lo, warm_flags,
                 max_iter, request, newton=False):
-    """The globalised driver (model.driver._globalised) around the compiled step;
+    """The globalised driver (model.compiled_driver.run) around the compiled step;
     ``newton``: its Newton scheme (``method="newton"``), the exact Hessian H + T
     where positive definite once the last step moved α by less than
     NEWTON_SWITCH, or from a warm start's first step.

@@ -1,7 +1,7 @@
 """The compiled parts of the driver around any back-end (fair timing, issue 19 item 6).
 
-numba (``@njit(cache=True)``) versions of what :func:`lcpbench.model.driver.run_driver`
-does around a back-end's call, so that a full solve costs the back-end's time plus the
+numba (``@njit(cache=True)``): what the outer loop of
+:func:`lcpbench.model.compiled_driver.run` does around a back-end's call, so that a full solve costs the back-end's time plus the
 same small compiled overhead for every back-end:
 
 - :func:`assemble`: :func:`lcpbench.model.step.assemble_step` (the banded step of
@@ -17,7 +17,7 @@ same small compiled overhead for every back-end:
 
 The numpy modules are the reference; this file repeats their arithmetic in the same
 order where that is cheap, so the driver of :mod:`lcpbench.model.compiled_driver`
-takes the numpy driver's path to round-off (``tests/model/test_compiled_driver.py``).
+takes the numpy functions' path to round-off (``tests/model/test_compiled_driver.py``).
 The chain's energy and the Armijo rule are :mod:`.chain_kernel`'s, its inverse
 kinematics and the banded step :mod:`.compiled_kernel`'s (one copy each; :mod:`lcpbench.numba_cache` recompiles every
 kernel when any kernel file changes, so a call across files never runs stale code).
@@ -29,7 +29,13 @@ import numpy as np
 from numba import njit
 
 from ..thresholds import ARMIJO_SHORTEST
-from .chain_kernel import armijo, energy, energy_noise, fit_heights  # once each
+from .chain_kernel import (  # once each
+    armijo,
+    energy,
+    energy_noise,
+    fit_heights,
+    wall_penalty,
+)
 from .compiled_dual import wall_residuals  # one copy of the judge's rows (numba_cache)
 from .compiled_kernel import banded_step  # the step
 
@@ -203,10 +209,10 @@ def _solve_on(bands, idx, rhs):
 
 
 @njit(cache=True)
-def judge(u, bands, linear, lo, hi, coef, b0, fs, links, origin, phi_origin, k, rest,
-          nodal_load, L, F):
-    """step_residuals (rigid walls): (ok, [natural, min_gap, min_reaction,
-    complementarity, term_size], R); not ok for heights that are not finite or where
+def judge(u, bands, linear, lo, hi, cu, cl, coef, b0, fs, links, origin, phi_origin, k,
+          rest, nodal_load, L, F):
+    """step_residuals: (ok, [natural, min_gap, min_reaction, complementarity, term_size],
+    R); ``cu``, ``cl``: the elastic walls' compliances 1/k (empty: rigid walls); not ok for heights that are not finite or where
     the nodes with no wall row cannot be re-solved (the caller runs the numpy reference)."""
     n = u.size
     for i in range(n):
@@ -222,27 +228,44 @@ def judge(u, bands, linear, lo, hi, coef, b0, fs, links, origin, phi_origin, k, 
             return False, np.zeros(5), grad
         u2[free] -= x
     R = -_gradient(u2, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load)
-    return True, wall_residuals(u2, R, bands, linear, lo, hi, L, F), R
+    return True, wall_residuals(u2, R, bands, linear, lo, hi, cu, cl, L, F), R
 
 
-# -- the outer step (model.driver._globalised) --------------------------------------
+# -- the outer step (model.compiled_driver.run) --------------------------------------
 @njit(cache=True)
-def advance(su, u, alpha, E, stiffness_sum, inv, alpha0, origin, phi_origin, coef, fs, k,
-            rest, nodal_load, a, jl, jr, link_load):
-    """max|α̂ − α| of the step answer ``su`` (eq. 21, about u₀) and the Armijo search
-    on the exact energy along u + t(su − u): (max|Δα|, t, α(t), E(t)); t = 0 where
-    no t >= ARMIJO_SHORTEST decreases the energy. ``stiffness_sum``: Σ|k| (the noise)."""
-    links, n = alpha.size, u.size
-    dalpha, prev = 0.0, 0.0
+def predict(su, alpha0, origin, inv, fs):
+    """α̂ of the step answer ``su`` from the linearised kinematics, eq. (21), written
+    about u₀ (``ContactStep.predict_alpha``): α̂_i = α̂_i(u₀) + (y_(i+1) − y_i) / (a cos α_i),
+    y the free nodes' heights less u₀ (0 at the pinned nodes); ``fs`` the shifted index
+    (node + 1) of the first free node."""
+    links, n = alpha0.size, su.size
+    out = np.empty(links)
+    prev = 0.0
     for i in range(links):
         node = i + 1 - (fs - 1)
         cur = su[node] - origin[node] if 0 <= node < n else 0.0
-        dalpha = max(dalpha, abs((alpha0[i] + (cur - prev) * inv[i]) - alpha[i]))
+        out[i] = alpha0[i] + (cur - prev) * inv[i]
         prev = cur
+    return out
+
+
+@njit(cache=True)
+def advance(su, u, alpha, E, stiffness_sum, inv, alpha0, origin, phi_origin, coef, fs, k,
+            rest, nodal_load, a, jl, jr, link_load, lo, hi, cu, cl):
+    """max|α̂ − α| of the step answer ``su`` (eq. 21, about u₀) and the Armijo search
+    on the exact energy along u + t(su − u): (max|Δα|, t, α(t), E(t)); t = 0 where
+    no t >= ARMIJO_SHORTEST decreases the energy. ``stiffness_sum``: Σ|k| (the noise);
+    ``cu``, ``cl``: the elastic walls' compliances (empty: rigid), whose springs'
+    energy (:func:`~.chain_kernel.wall_penalty`) is part of the energy searched on."""
+    links, n = alpha.size, u.size
+    dalpha, predicted = 0.0, predict(su, alpha0, origin, inv, fs)
+    for i in range(links):
+        dalpha = max(dalpha, abs(predicted[i] - alpha[i]))
     d = su - u
     if not np.all(np.isfinite(d)):
         return np.nan, 0.0, alpha, E
     g = _gradient(u, coef, jr[0], fs, links, origin, phi_origin, k, rest, nodal_load)
+    wall_penalty(u, lo, hi, cu, cl, g)  # (nothing where no wall yields)
     slope = 0.0
     for i in range(n):
         slope += g[i] * d[i]
@@ -251,9 +274,11 @@ def advance(su, u, alpha, E, stiffness_sum, inv, alpha0, origin, phi_origin, coe
     while True:
         trial = np.empty(links)
         E_t = np.nan
-        if fit_heights(trial, u + t * d, alpha, a, fs, links, np.empty(0), np.empty(links),
+        ut = u + t * d
+        if fit_heights(trial, ut, alpha, a, fs, links, np.empty(0), np.empty(links),
                        np.empty(links)):
-            E_t = energy(trial, a, jl, jr, k, rest, link_load, np.sin(trial))
+            E_t = energy(trial, a, jl, jr, k, rest, link_load, np.sin(trial)) + wall_penalty(
+                ut, lo, hi, cu, cl, np.empty(0))
         step = armijo(t, E_t, E, slope, noise, ARMIJO_SHORTEST)
         if step == t:
             return dalpha, t, trial, E_t

@@ -114,8 +114,8 @@ def run_profile_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
                          start: DriverStart | None = None,
                          settings="default") -> tuple[DriverOutput | None, str]:
     """The globalised profile driver in the profile kernel: ``(output, "")``, or
-    ``(None, why)`` where a step left the reference's path (the caller then runs the
-    numpy reference, :mod:`lcpbench.model.profile_driver`)."""
+    ``(None, why)`` where the kernel stopped (the caller then reports it not converged
+    for the escalations: :func:`lcpbench.model.compiled.profile_stopped`)."""
     got, elapsed, name = call_profile_kernel(chain, tol=tol, max_outer=max_outer, start=start,
                                              settings=settings)
     code, *rest, upper, lower = got
@@ -250,8 +250,8 @@ def run_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
     """The globalised driver (``newton``: its Newton scheme) with the dual active
     set, in the compiled kernel.
 
-    Returns ``(output, "")``, or ``(None, why)`` when the kernel left the
-    reference's path (the caller then runs the numpy reference). Each step
+    Returns ``(output, "")``, or ``(None, why)`` when the kernel stopped (the caller
+    then runs its compiled fall-back, :func:`lcpbench.model.compiled.reference`). Each step
     record's ``solve_time`` is the kernel's wall time shared evenly over the
     steps (assembly included; ``assemble_time`` is 0): the kernel does not
     time its parts. ``args``: the chain's :func:`kernel_args`, when the caller

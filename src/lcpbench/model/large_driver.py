@@ -1,6 +1,6 @@
 """The globalised driver in increments, for large N (:mod:`.large_n`).
 
-The same scheme as :func:`lcpbench.model.driver.run_driver` with
+The same scheme as :func:`lcpbench.model.compiled_driver.run` with
 ``method="globalised"``: start from the unconstrained arc clipped to the walls,
 solve the contact step, search along it with Armijo on the exact energy,
 stop when max|α̂ − α| < tol and the driver's prediction of the judge's
@@ -33,7 +33,6 @@ from ..problems.scenes import Chain
 from ..solvers.base import Status
 from ..thresholds import GEOMETRY_SLACK, NEWTON_SWITCH, NODE_GROSS, PENALTY
 from .chain import energy, heights
-from .driver import StepSolver
 from .elastic import penalty, penalty_gradient
 from .judge import contraction_estimate, split_reactions
 from .large_n import StepWork, increments_at, trial_of
@@ -41,6 +40,7 @@ from .outer import (
     DriverOutput,
     DriverStart,
     StepRecord,
+    StepSolver,
     armijo,
     converged_output,
     energy_noise,

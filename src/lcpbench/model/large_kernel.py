@@ -277,7 +277,8 @@ def residuals(u, coef, k, phi_origin, rest, load, origin, rows, bands, linear, l
     gradient(coef, k, phi_origin, rest, load, origin, u2, R, m)
     for i in range(n):
         R[i] = -R[i]
-    return True, wall_residuals(u2, R, bands, linear, lo, hi, L, F), R
+    rigid = np.empty(0)
+    return True, wall_residuals(u2, R, bands, linear, lo, hi, rigid, rigid, L, F), R
 
 
 @njit(cache=True)

@@ -6,7 +6,7 @@ run ends (:func:`converged_output`, :func:`failed_output`, :func:`step_failed`,
 :func:`line_search_failed`, :func:`out_of_iterations` with its stall test) and the
 start from the unconstrained arc clipped to the walls (:func:`feasible_start`,
 :func:`starting_point`), and the Armijo search on the exact energy around the one
-compiled rule (:func:`armijo`, :func:`energy_noise`). The numpy driver (:mod:`.driver`), the profile, large-N
+compiled rule (:func:`armijo`, :func:`energy_noise`). The profile, large-N
 and compiled drivers and the solve kernel's Python side all build their answers
 here, so one answer reads the same whichever loop ran.
 """
@@ -26,6 +26,14 @@ from .chain import alpha_from_heights, heights
 from .judge_exact import split_reactions
 from .step import ContactStep
 from .step_solver import step_residuals
+
+#: the outer loop's schemes (``method``): "globalised" (the Armijo search on the exact
+#: energy), "undamped" (the paper's Fig. 3: α ← α̂ after every step), "newton" (the
+#: globalised scheme with the exact Hessian H + T near the answer)
+METHODS = ("globalised", "undamped", "newton")
+
+#: a step solver: ``(step, warm) -> StepSolution`` (:func:`.step_solver.make_step_solver`)
+StepSolver = Callable[[ContactStep, "StepSolution | None"], StepSolution]
 
 
 def _rule():

@@ -112,7 +112,7 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
                 sqp = _in_angles(chain, start, tol, max_outer)
         if sqp is not None:
             out, in_angles = sqp, in_angles + 1
-            used = "numpy" if engine == "numpy" else f"numpy (SQP steps in the link angles: {_WHY})"
+            used = f"numpy (SQP steps in the link angles: {_WHY})"
         if not out.converged and start is not None:
             out, used = drive(chain, make_step(), start=None, **kw)
         if not out.converged:

@@ -21,10 +21,10 @@ from ..linalg import solveh_banded
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from ..thresholds import SAG_BOUND  # the arc will not sag off a wall it crosses by more
-from . import large_n
+from . import compiled_driver, large_n
 from .angle_step import heavy, total_load
 from .chain import heights
-from .driver import run_driver
+from .kernel_call import applies
 from .outer import DriverOutput, DriverStart
 from .profile import walls_at
 from .step import assemble_step
@@ -99,7 +99,7 @@ def _first_free_heights(chain: Chain, args: tuple | None) -> np.ndarray | None:
     """:func:`free_step` of the step at the arc, in the solve kernel (its contact step
     with no walls: the dual active set with no bounds is the banded solve, refined);
     None where the kernel does not take the chain or its step stops."""
-    from .kernel_call import applies, cold_start, kernel_args, solve_kernel
+    from .kernel_call import cold_start, kernel_args, solve_kernel
 
     if args is None:
         if not applies("auto", "globalised", chain):
@@ -134,7 +134,8 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
     ``engine="compiled"``: the search without walls runs in the compiled
     kernel (:func:`lcpbench.model.kernel_call.run_compiled` on the chain with its
     walls removed: the dual active set with no bounds is the banded solve of
-    the free step, refined once); the numpy driver where the kernel stops.
+    the free step, refined once); elsewhere, and where the kernel stops, the compiled
+    driver around :func:`free_step` (:func:`lcpbench.model.compiled_driver.run`).
     ``args``: the chain's :func:`lcpbench.model.kernel_call.kernel_args`, when the
     caller has them.
     """
@@ -173,8 +174,10 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
         if args is not None:  # the same arrays, the walls removed
             args = (*args[:9], free.lower, free.upper, *args[11:])
         out = run_compiled(free, tol=tol, max_outer=max_outer, start=start, args=args)[0]
-    if out is None:
-        out = run_driver(free, free_step, tol=tol, max_outer=max_outer, start=start)
+    if out is None:  # the compiled driver around the free step (no kernel, or it stopped)
+        if not applies("auto", "globalised", free):
+            return None  # (a layout no compiled route takes: drive answers the scene)
+        out = compiled_driver.run(free, free_step, tol=tol, max_outer=max_outer, start=start)
     if not (out.converged and wall_overlap(walls_at(chain, out.alpha),
                                            free_heights(chain, out.alpha)) < 0):
         return None

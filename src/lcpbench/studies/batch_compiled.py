@@ -11,8 +11,8 @@ checks of :func:`lcpbench.solve` are done once per batch, not per scene.
 It is :func:`lcpbench.studies.continuation.solve_sequence` with the same
 predictor (the polynomial through the line's last answers, the last answer's
 contact set as the warm start, a failed warm start redone cold), so the
-results are the ones ``solve_many(..., engine="numpy")`` gives, to round-off
-(tests). Every result is judged by lcpbench's judge, as every result of
+results are the ones :func:`lcpbench.studies.continuation.solve_sequence` gives
+with :func:`lcpbench.solve`, to round-off (tests). Every result is judged by lcpbench's judge, as every result of
 :func:`lcpbench.solve` is.
 """
 
@@ -70,20 +70,19 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
     args = kernel_args(chain, const["arrays"]) if kernel else None
     out = solve_without_contact(chain, tol, max_outer, start,
                                 engine="compiled" if kernel else "numpy", args=args)
-    used = "compiled" if kernel else "numpy"
+    used = "compiled" if kernel else "compiled driver"
     if out is None and (not kernel or heavy(chain)):
         # large N, a layout the kernel does not take, or a heavy chain (SQP steps in the
         # angles, first or as the rescue): solve()'s choice, in model.compiled.drive
         out, used = drive(chain, make_step_solver(DEFAULT, settings, True), backend=DEFAULT,
-                          settings=settings, engine="auto" if kernel or profiled else "numpy",
-                          tol=tol,
+                          settings=settings, engine="auto", tol=tol,
                           max_outer=max_outer, method="globalised", start=start,
                           args=args)
     if out is None:
         used = "compiled"
         out, why = run_compiled(chain, tol=tol, max_outer=max_outer, start=start,
                                 settings=settings, args=args)
-        if out is None:  # the kernel left the reference's path: the numpy reference
+        if out is None:  # the kernel stopped: its compiled fall-back
             out, used = reference(chain, lambda: make_step_solver(DEFAULT, settings, True),
                                   why, tol=tol, max_outer=max_outer, method="globalised",
                                   start=start, settings=settings)
