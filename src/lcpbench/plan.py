@@ -61,11 +61,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .errors import ProblemError
 from .escalations import ESCALATIONS
 from .model import angle_step, heavy_driver, large_n
 from .model.compiled import direct
 from .model.judge import judged_in
-from .model.kernel_call import applies, profile_applies
+from .model.kernel_call import applies, profile_applies, profile_args
+from .problems import profile_table
 from .problems.scenes import Chain
 from .solvers.registry import DEFAULT, get_backend
 
@@ -120,6 +122,11 @@ def make_plan(chain: Chain, backend: str, method: str, engine: str, tol: float,
     "undamped"), ``engine`` ("auto" or "compiled"), the driver tolerance
     ``tol`` (rad), ``start`` (one of :data:`STARTS`) and the step ``scaled`` or not.
     The arguments are :func:`lcpbench.solve`'s, checked."""
+    if chain.profiled_walls and profile_args(chain) is None:
+        raise ProblemError("wall_profile: the result judge reads a wall as a table of cubic "
+                           f"pieces, and this profile needs more than {profile_table.MAX_PIECES} of them "
+                           "over the chain's reach (a function that oscillates too fast); "
+                           "give it as a table (WallProfile.from_table) or with its slope")
     takes = _kernel(chain, DEFAULT, "globalised", engine)
     judge = judged_in(chain)
     if start == "ramp":

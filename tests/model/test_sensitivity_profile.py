@@ -19,6 +19,7 @@ import pytest
 
 import lcpbench
 from lcpbench import ActuatorScene
+from lcpbench.errors import ProblemError
 from lcpbench.model.sensitivity import sensitivities
 from lcpbench.problems.walls import WallProfile
 
@@ -71,16 +72,17 @@ def test_profile_derivatives_are_the_central_differences(scene):
     _against_central_differences(scene)
 
 
-def test_a_wall_without_a_table_is_read_from_its_function(monkeypatch):
-    """A function profile that would need more cubic pieces than MAX_PIECES has no table:
-    the solve evaluates the function itself (the numpy reference driver), and so do the
-    sensitivities (their kernel is given h, h', h'' at the nodes)."""
+def test_a_wall_without_a_table_is_refused_with_one_clear_error(monkeypatch):
+    """A function profile that would need more cubic pieces than MAX_PIECES has no table,
+    which the result judge reads the walls from: the solve refuses it up front, naming
+    the parameter and what to give instead."""
     from lcpbench.problems import profile_table
 
     monkeypatch.setattr(profile_table, "MAX_PIECES", 8)
     scene = ActuatorScene(theta=150, links=60, wall_profile=bump(3.0, 0.8, 14.0, 3.0))
     assert scene.wall_profile.pieces(-scene.length, scene.length) is None
-    _against_central_differences(scene)
+    with pytest.raises(ProblemError, match=r"wall_profile: .*more than 8 .*from_table"):
+        lcpbench.solve(scene)
 
 
 def _against_central_differences(scene):

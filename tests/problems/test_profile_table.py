@@ -53,6 +53,20 @@ def test_a_functions_pieces_meet_the_documented_tolerances():
     assert knots.size - 1 <= pt.MAX_PIECES
 
 
+def test_a_function_given_without_its_slope_has_a_table_as_tight():
+    """The slope by Richardson-extrapolated central differences is close enough to the
+    calculus slope (theory: _gauss_slope) for the table to meet the same tolerances;
+    with plain central differences (error ~4e-9 > SLOPE_TOL) no table could."""
+    prof = WallProfile.from_function(_gauss)
+    x = np.linspace(-30.0, 30.0, 2001)
+    assert np.max(np.abs(prof.slope(x) - _gauss_slope(x))) <= 1e-11
+    knots, coef = prof.pieces(-30.0, 30.0)
+    h, h1 = pt.evaluate(knots, coef, np.random.default_rng(4).uniform(-30, 30, 20000))
+    xs = np.random.default_rng(4).uniform(-30, 30, 20000)
+    assert np.max(np.abs(h - _gauss(xs))) <= 2 * pt.HEIGHT_TOL * (1 + 3.0)
+    assert np.max(np.abs(h1 - _gauss_slope(xs))) <= 2 * pt.SLOPE_TOL * (1 + 0.33)
+
+
 def test_the_mirror_negates_the_pieces_and_the_table_is_made_once():
     prof = WallProfile.from_function(_gauss, _gauss_slope)
     a = prof.pieces(-30.0, 30.0)
