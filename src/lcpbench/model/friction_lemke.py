@@ -9,13 +9,21 @@ lcpbench's natural residual meets Lemke's own bound.
 
 from __future__ import annotations
 
+import itertools
 import time
 
 import numpy as np
 
 from ..solvers.base import LCPSolution, Status, lcp_residuals
 from ..solvers.lemke import RESIDUAL_TOL, lemke
-from ..thresholds import POLISH_FLIPS, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS
+from ..thresholds import (
+    POLISH_EDGE_NODES,
+    POLISH_EDGE_RTOL,
+    POLISH_EDGE_SETS,
+    POLISH_FLIPS,
+    POLISH_STICK_COMPLIANCE,
+    POLISH_SWEEPS,
+)
 
 #: Lemke's pivot tolerance on the frictional LCP (solvers.lemke's default: 1e-12). Its
 #: W is singular where many nodes have rows (the chain is inextensible: a node's x
@@ -123,13 +131,16 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
     if not P["rot"].size:
         N, T, dy, tau = fs.forces(sol.z)
         w = fs.M @ sol.z + fs.q
-        code, z, r0, r1 = polish_kernels().polish(
-            P["bands"], P["f"], P["tan"], float(P["k_tau"]), int(P["first"]),
-            bool(P["right_datum"]), P["gap"], P["slip"], P["compliance"],
-            fs.normal_node, fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu, fs.pair,
-            sol.z, w, dy, float(tau), N, T, float(fs.force), float(fs.length),
-            float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS,
-            flips)
+        k = polish_kernels()
+        head = (P["bands"], P["f"], P["tan"], float(P["k_tau"]), int(P["first"]),
+                bool(P["right_datum"]), P["gap"], P["slip"], P["compliance"],
+                fs.normal_node, fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu,
+                fs.pair)
+        answer = (sol.z, dy, float(tau), N, T, float(fs.force), float(fs.length),
+                  float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS)
+        code, z, r0, r1 = k.polish(*head, *answer[:1], w, *answer[1:], flips)
+        if code == k.SIGNS and flips:
+            code, z, r0, r1 = edge_polish(k, head, answer, w, fs, (code, z, r0, r1))
     extra = dict(sol.extra, polish_residuals=(r0, r1))
     if code == 0:
         res = lcp_residuals(fs.M, fs.q, z)
@@ -151,6 +162,54 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
     return LCPSolution(z, fs.M @ z + fs.q, sol.status, sol.iterations,
                        sol.solve_time + extra["polish_time"], sol.setup_time, sol.message,
                        extra)
+
+
+def edge_polish(k, head, answer, w, fs, refused):
+    """Where the polish's flips find no index set whose signs hold: every state of the
+    answer's edge nodes (``k.polish_on`` on each set, no flips; the failing nodes of its
+    own set first, then those whose LCP pairs have both sides within
+    :data:`POLISH_EDGE_RTOL` of the answer's largest z; :data:`POLISH_EDGE_NODES` of
+    them), the sets with the fewest changes first, at most :data:`POLISH_EDGE_SETS`: the
+    first kept, as :func:`polish_step`'s (verdict, z, r0, r1); else ``refused``."""
+    z, pair, mu = answer[0], fs.pair, fs.mu
+    mn, mt = fs.normal_node.size, fs.friction_node.size
+    contact, state = k.index_set(z, w, mn, mt, pair, mu)
+    first = k.polish_on(*head, *answer, 0, contact, state)
+    tol = POLISH_EDGE_RTOL * max(float(np.max(np.abs(z), initial=0.0)), 1e-300)
+    lam = mn + 2 * mt
+    rim = np.concatenate([np.maximum(np.abs(z[:mn]), np.abs(w[:mn])),
+                          np.maximum(np.abs(z[lam:]), np.abs(w[lam:]))])
+    failing = np.concatenate([first[4] != contact, first[5] != state])
+    live = np.concatenate([np.ones(mn, bool), state != k.OFF])
+    order = np.lexsort((rim, ~failing))
+    nodes = [int(i) for i in order if failing[i] or (live[i] and rim[i] <= tol)]
+    nodes = nodes[:POLISH_EDGE_NODES]
+    if not nodes:
+        return refused
+    now = [bool(contact[i]) if i < mn else int(state[i - mn]) for i in nodes]
+    choices = [(True, False) if i < mn else (k.STICK, k.FORWARD, k.BACKWARD) for i in nodes]
+    picks = sorted(itertools.product(*choices),
+                   key=lambda p: sum(a != b for a, b in zip(p, now)))
+    seen = 0
+    for pick in picks[1:]:
+        c2, s2 = contact.copy(), state.copy()
+        for i, v in zip(nodes, pick):
+            if i < mn:
+                c2[i] = v
+            else:
+                s2[i - mn] = v
+        pressed = np.zeros(mt, bool)
+        on = c2 & (pair >= 0) & (mu > 0.0)
+        pressed[pair[on]] = True
+        s2[~pressed] = k.OFF
+        s2[pressed & (s2 == k.OFF)] = k.STICK
+        seen += 1
+        if seen > POLISH_EDGE_SETS:
+            break
+        out = k.polish_on(*head, *answer, 0, c2, s2)
+        if out[0] == k.KEPT:
+            return out[:4]
+    return refused
 
 
 def step_coverings(n: int) -> list[np.ndarray]:
