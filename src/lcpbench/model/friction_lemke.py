@@ -140,7 +140,7 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
                   float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS)
         code, z, r0, r1 = k.polish(*head, *answer[:1], w, *answer[1:], flips)
         if code == k.SIGNS and flips:
-            code, z, r0, r1 = edge_polish(k, head, answer, w, fs, (code, z, r0, r1))
+            code, z, r0, r1 = edge_polish(k, head, answer, w, fs, (code, z, r0, r1), flips)
     extra = dict(sol.extra, polish_residuals=(r0, r1))
     if code == 0:
         res = lcp_residuals(fs.M, fs.q, z)
@@ -164,8 +164,9 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
                        extra)
 
 
-def edge_polish(k, head, answer, w, fs, refused):
-    """Where the polish's flips find no index set whose signs hold: every state of the
+def edge_polish(k, head, answer, w, fs, refused, flips):
+    """Where the polish's flips find no index set whose signs hold: the set with every
+    sliding pair at its edge sticking (with ``flips``), then every state of the
     answer's edge nodes (``k.polish_on`` on each set, no flips; the failing nodes of its
     own set first, then those whose LCP pairs have both sides within
     :data:`POLISH_EDGE_RTOL` of the answer's largest z; :data:`POLISH_EDGE_NODES` of
@@ -181,9 +182,19 @@ def edge_polish(k, head, answer, w, fs, refused):
                           np.maximum(np.abs(z[lam:]), np.abs(w[lam:]))])
     failing = np.concatenate([first[4] != contact, first[5] != state])
     live = np.concatenate([np.ones(mn, bool), state != k.OFF])
+    # first every sliding pair at its edge (slip ~ 0) made to stick, with the flips: the
+    # answer of a chain that does not move (a state that starts where friction holds it)
+    # slides at its cone by slips of 1e-11 at nodes where sticking, T inside the cone, is
+    # as exact
+    edge = live & (rim <= tol)
+    slide = edge[mn:] & (state != k.STICK)
+    if slide.any():
+        out = k.polish_on(*head, *answer, flips, contact,
+                          np.where(slide, k.STICK, state).astype(state.dtype))
+        if out[0] == k.KEPT:
+            return out[:4]
     order = np.lexsort((rim, ~failing))
-    nodes = [int(i) for i in order if failing[i] or (live[i] and rim[i] <= tol)]
-    nodes = nodes[:POLISH_EDGE_NODES]
+    nodes = [int(i) for i in order if failing[i] or edge[i]][:POLISH_EDGE_NODES]
     if not nodes:
         return refused
     now = [bool(contact[i]) if i < mn else int(state[i - mn]) for i in nodes]
@@ -318,17 +329,32 @@ class StepLemke:
             return polish_step(M, sol) if polish else sol
         return self.solve(M, q)
 
-    @staticmethod
-    def polish(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
+    def polish(self, fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
         """``sol``, an answer of the step ``fs``, through the primal polish
-        (:func:`polish_step`; ``flips``: its flips of a failing index set)."""
-        return polish_step(fs, sol, flips)
+        (:func:`polish_step`; ``flips``: its flips of a failing index set). Where the
+        polish refuses it on a sign (INACCURATE: not within reach of an exact answer), the
+        step is solved again from the other starts — the frictionless contacts sticking,
+        sliding, then Lemke's pivots — and the first answer the polish keeps is taken
+        (the support it leaves for the next step is that answer's)."""
+        out = polish_step(fs, sol, flips)
+        if out.status is not Status.INACCURATE or out.extra.get("polish") != \
+                POLISH_VERDICTS[3]:
+            return out
+        support, keys = self.support, z_keys(fs)
+        for start in (False, True, None):
+            again = (self.pivots(fs.M, fs.q, keys) if start is None else
+                     self.first_guess(fs.M, fs.q, keys, fs.pair, start, WARM_CHANGES))
+            if again is not None and again.solved:
+                again = polish_step(fs, again, flips)
+                if again.extra.get("polish") == POLISH_VERDICTS[0]:
+                    return again
+        self.support = support
+        return out
 
     def solve(self, M, q, keys=None, pair=None):
         """The LCP (``M``, ``q``): the warm start from the last support (``keys``, the
         unknowns' names, :func:`z_keys`) or the frictionless contacts (``pair``), else
         Lemke's pivots."""
-        n = q.size
         sol = self.last_support(M, q, keys)
         for budget in (WARM_GUESS_CHANGES, WARM_CHANGES):  # a short try of each guess first
             for slide in (False, True):
@@ -336,6 +362,13 @@ class StepLemke:
                     sol = self.first_guess(M, q, keys, pair, slide, budget)
         if sol is not None:
             return sol
+        return self.pivots(M, q, keys)
+
+    def pivots(self, M, q, keys=None):
+        """The LCP (``M``, ``q``) by Lemke's pivots, each covering vector in turn
+        (:func:`step_coverings`, the last that solved first), then again at ties of
+        :data:`STRICT_TIES`; its basic z is the next warm start's support."""
+        n = q.size
         coverings = step_coverings(n)
         order = [self.first] + [i for i in range(len(coverings)) if i != self.first]
         sol = None
