@@ -275,7 +275,8 @@ def main() -> int:
         "## On the same step", "",
         "The last contact step of each state Lemke's path converges, handed to each "
         "back-end. Answers: its status SOLVED (lcpbench's natural residual of the "
-        "step's LCP <= 1e-8).", "",
+        "step's LCP <= 1e-8, and the primal polish does not refuse it on a sign: an "
+        "answer it refuses is INACCURATE).", "",
         "| back-end | form | steps | answered | agree to 1e-6 | max ΔN | max ΔT per run "
         "| max ΔT per node | max Δ move (a) | time (s) |",
         "|---|---|---|---|---|---|---|---|---|---|"]
@@ -294,7 +295,8 @@ def main() -> int:
               "doubles, in `fractions.Fraction`) on the index set read from each answer "
               "(per wall row contact or separate, per friction pair stick, slide forward "
               "or backward; nodes that the answer leaves at the edge of two states, to "
-              "its round-off, flipped where the first reading breaks a sign condition), "
+              "its round-off, flipped where the first reading breaks a sign condition, "
+              "then every state of up to 6 such nodes tried, `edge_search`), "
               "and every complementarity and sign condition is checked exactly. An answer "
               "is confirmed when that exact solution exists and is within 1e-6 of it in "
               "N and in the move (T per node is ill-conditioned along a nearly straight "

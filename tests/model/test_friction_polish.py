@@ -124,6 +124,10 @@ def test_polish_refuses_an_index_set_whose_signs_fail():
         s = (out.w[mn:mn + mt] - out.w[mn + mt:mn + 2 * mt]) / 2  # the slips (β± rows)
         sliding = np.abs(T2) >= cone - 1e-12 * np.max(N2)
         assert np.all(s[sliding & (T2 > 0)] <= 1e-12) and np.all(s[sliding & (T2 < 0)] >= -1e-12)
+        # and it is an exact answer of the step: the Fraction solution of its index set
+        step = ef.chain_step(fs)
+        ex, dist, _ = ef.nearest_exact(step, ef.answer_values(fs, step, out.z), search=False)
+        assert ef.confirmed(ex, dist), dist
     else:
         np.testing.assert_array_equal(out.z, z)
 
