@@ -118,7 +118,7 @@ POLISH_SWEEPS = 2
 #: search, benchmarks/exact_friction.py, flips up to 6 times, then tries every state of
 #: the edge nodes); an answer whose signs still fail comes back INACCURATE. On the
 #: unconfirmed last steps of benchmarks/friction_agreement.py's Lemke paths, flips of 0, 1,
-#: 2, 4, 8 brought 0, 6, 10, 12, 15 of 33 onto an exact answer (dN <= 3e-11). Once 0: a
+#: 2, 4, 8 brought 0, 5, 9, 11, 14 of 33 onto an exact answer (dN <= 3e-11). Once 0: a
 #: kept flipped answer made path 74's last state cycle with 1 flip and the polish on every
 #: Lemke step (the back-ends by name polish every step; the default's: FINAL_FLIPS)
 POLISH_FLIPS = 8
