@@ -85,7 +85,8 @@ def test_polish_refuses_an_index_set_whose_signs_fail():
     any way (statically indeterminate), and one of them sliding backward at zero slip is
     an answer too. Without a flip the polish refuses it and returns z unchanged;
     whatever polish_step keeps (POLISH_FLIPS) meets every sign: N >= 0, |T| <= μN, a
-    sliding node's slip against its T."""
+    sliding node's slip against its T; what it refuses on a sign comes back INACCURATE
+    (not an answer), z unchanged."""
     fs, sol = first_step(ActuatorScene(theta=150, height=3.0, links=20, friction=0.3,
                                        left_end="pinned", right_end="slider", pull=0.05))
     z = sol.z.copy()
@@ -109,8 +110,12 @@ def test_polish_refuses_an_index_set_whose_signs_fail():
     assert code == k.SIGNS
     np.testing.assert_array_equal(z_new, z)
     bad = LCPSolution(z, w, Status.SOLVED, extra={})
+    refused = polish_step(fs, LCPSolution(z, w, Status.SOLVED, extra={}), 0)
+    assert refused.status is Status.INACCURATE and refused.extra["polish"] == "a sign fails"
+    np.testing.assert_array_equal(refused.z, z)
     out = polish_step(fs, bad)
-    assert out.status is Status.SOLVED  # never changed by the polish
+    assert out.status is (Status.SOLVED if out.extra["polish"] == "kept" else
+                          Status.INACCURATE)
     if out.extra["polish"] == "kept":  # its flipped set: every sign holds
         N2, T2, _, _ = fs.forces(out.z)
         assert np.all(N2 >= -1e-12 * np.max(N2))
@@ -120,6 +125,10 @@ def test_polish_refuses_an_index_set_whose_signs_fail():
         s = (out.w[mn:mn + mt] - out.w[mn + mt:mn + 2 * mt]) / 2  # the slips (β± rows)
         sliding = np.abs(T2) >= cone - 1e-12 * np.max(N2)
         assert np.all(s[sliding & (T2 > 0)] <= 1e-12) and np.all(s[sliding & (T2 < 0)] >= -1e-12)
+        # and it is an exact answer of the step: the Fraction solution of its index set
+        step = ef.chain_step(fs)
+        ex, dist, _ = ef.nearest_exact(step, ef.answer_values(fs, step, out.z), search=False)
+        assert ef.confirmed(ex, dist), dist
     else:
         np.testing.assert_array_equal(out.z, z)
 

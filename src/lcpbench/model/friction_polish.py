@@ -435,7 +435,24 @@ def polish(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, norm
            length, link, stick_compliance, sweeps, flips):
     """The answer z (w = M z + q; its δy, τ, N, T in mm and N) polished on its index set
     (the module's note): (verdict, z polished (the LCP's units: forces by ``force``,
-    lengths by ``length``), the primal residual before, after).
+    lengths by ``length``), the primal residual before, after); :func:`polish_on` the
+    set :func:`index_set` reads from z, w."""
+    contact, state = index_set(z, w, N.size, T.size, pair, mu)
+    code, z_new, r0, r1, _, _ = polish_on(
+        bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, normal_node,
+        normal_xy, friction_node, tangent_xy, mu, pair, z, dy, tau, N, T, force, length,
+        link, stick_compliance, sweeps, flips, contact, state)
+    return code, z_new, r0, r1
+
+
+@njit(cache=True)
+def polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, normal_node,
+              normal_xy, friction_node, tangent_xy, mu, pair, z, dy, tau, N, T, force,
+              length, link, stick_compliance, sweeps, flips, contact, state):
+    """The answer (z; its δy, τ, N, T) polished on the index set (``contact`` per wall
+    row, ``state`` per pair): (verdict, z polished, the primal residual before, after,
+    and where a sign fails the set with the failing nodes flipped (:func:`signs`), else
+    the set solved).
 
     The set's primal system is solved with the sticking nodes' compliance
     ``stick_compliance`` (link lengths per largest force) as ``sweeps`` steps of
@@ -448,7 +465,6 @@ def polish(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, norm
     mn, mt = N.size, T.size
     z_new = z.copy()
     nan = np.nan
-    contact, state = index_set(z, w, mn, mt, pair, mu)
     has_tau = f.size > bands.shape[1]
     tl = tan.copy()
     for k in range(tl.size):
@@ -476,14 +492,14 @@ def polish(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, norm
                           normal_xy, friction_node, tangent_xy)
         fac = banded_factor(si, sj, sv, n)
         if rhs.size != n or not fac[6]:
-            return SINGULAR, z_new, nan, nan
+            return SINGULAR, z_new, nan, nan, contact, state
         for _ in range(sweeps):  # x += A_ε⁻¹ (b − A x)
             res = rhs.copy()
             for k in range(ei.size):
                 res[ei[k]] -= ev[k] * x[ej[k]]
             d, ok = banded_resolve(fac, res)
             if not ok:
-                return SINGULAR, z_new, nan, nan
+                return SINGULAR, z_new, nan, nan, contact, state
             x += d
         big = big0
         for r in range(mn):
@@ -496,7 +512,7 @@ def polish(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, norm
         if fails == 0:
             break
         if attempt == flips:
-            return SIGNS, z_new, nan, nan
+            return SIGNS, z_new, nan, nan, new_contact, new_state
         contact, state = new_contact, new_state
     tv, Y, X, L, Nv, Tv = lay
     # both answers in the set's own equations: tan α as is, every stick equation
@@ -517,7 +533,7 @@ def polish(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, norm
     r0 = primal_residual(ei, ej, ev, rhs, v0, scale)
     r1 = primal_residual(ei, ej, ev, rhs, x, scale)
     if not r1 < r0:
-        return NOT_LOWER, z_new, r0, r1
+        return NOT_LOWER, z_new, r0, r1, contact, state
     for r in range(mn):
         z_new[r] = x[Nv[r]] / force
     for c in range(mt):
@@ -525,4 +541,4 @@ def polish(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, norm
         z_new[mn + c] = max(tc, 0.0) / force
         z_new[mn + mt + c] = max(-tc, 0.0) / force
         z_new[mn + 2 * mt + c] = 0.0 if state[c] == STICK else abs(s[c]) / length
-    return KEPT, z_new, r0, r1
+    return KEPT, z_new, r0, r1, contact, state
