@@ -85,8 +85,7 @@ def test_polish_refuses_an_index_set_whose_signs_fail():
     any way (statically indeterminate), and one of them sliding backward at zero slip is
     an answer too. Without a flip the polish refuses it and returns z unchanged;
     whatever polish_step keeps (POLISH_FLIPS) meets every sign: N >= 0, |T| <= μN, a
-    sliding node's slip against its T; what it refuses on a sign comes back INACCURATE
-    (not an answer), z unchanged."""
+    sliding node's slip against its T; what it refuses keeps its status and z."""
     fs, sol = first_step(ActuatorScene(theta=150, height=3.0, links=20, friction=0.3,
                                        left_end="pinned", right_end="slider", pull=0.05))
     z = sol.z.copy()
@@ -111,11 +110,10 @@ def test_polish_refuses_an_index_set_whose_signs_fail():
     np.testing.assert_array_equal(z_new, z)
     bad = LCPSolution(z, w, Status.SOLVED, extra={})
     refused = polish_step(fs, LCPSolution(z, w, Status.SOLVED, extra={}), 0)
-    assert refused.status is Status.INACCURATE and refused.extra["polish"] == "a sign fails"
+    assert refused.status is Status.SOLVED and refused.extra["polish"] == "a sign fails"
     np.testing.assert_array_equal(refused.z, z)
     out = polish_step(fs, bad)
-    assert out.status is (Status.SOLVED if out.extra["polish"] == "kept" else
-                          Status.INACCURATE)
+    assert out.status is Status.SOLVED  # never changed by the polish
     if out.extra["polish"] == "kept":  # its flipped set: every sign holds
         N2, T2, _, _ = fs.forces(out.z)
         assert np.all(N2 >= -1e-12 * np.max(N2))

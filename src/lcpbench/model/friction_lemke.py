@@ -109,14 +109,11 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
     """A SOLVED answer of the step ``fs`` polished on its index set in the step's primal
     form (:func:`lcpbench.model.friction_polish.polish`, compiled, O(N); docs/friction.md,
     "The polish"). The polished answer replaces ``sol`` only where every sign of the index
-    set holds, its primal residual is below the answer's, and lcpbench's natural residual
-    of the LCP still meets RESIDUAL_TOL; otherwise ``sol`` is returned as it is, but where
-    a sign of its index set fails at the set's primal solution (after ``flips`` flips of
-    the failing nodes): the answer, SOLVED by the LCP's residual, is then not within
-    reach of an exact answer of the step (benchmarks/exact_friction.py found it 3e-6 to
-    2e-4 off in N on results/friction/agreement.md's steps), and is returned INACCURATE
-    (never marked converged). A status is never raised (an answer that is not SOLVED is
-    not polished). The verdict
+    set holds (after ``flips`` flips of the failing nodes, then :func:`edge_polish`), its
+    primal residual is below the answer's, and lcpbench's natural residual of the LCP
+    still meets RESIDUAL_TOL; otherwise ``sol`` is returned as it is, its status
+    unchanged (its LCP residual decides it; the state's judge decides the state). A
+    status is never raised (an answer that is not SOLVED is not polished). The verdict
     is ``extra["polish"]`` (:data:`POLISH_VERDICTS`), the unpolished z
     ``extra["unpolished"]`` where it was replaced; an answer polished already is
     returned as it is."""
@@ -148,12 +145,6 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
             code = 5
     extra["polish"] = POLISH_VERDICTS[code]
     extra["polish_time"] = time.perf_counter() - t0
-    if code == 3:  # no set within its flips holds the answer's signs: not an answer
-        return LCPSolution(sol.z, sol.w, Status.INACCURATE, sol.iterations,
-                           sol.solve_time + extra["polish_time"], sol.setup_time,
-                           f"lcpbench's residual passes but the polish refuses it: a sign of "
-                           f"its index set fails at the set's primal solution (after {flips} "
-                           "flips); not within reach of an exact answer of the step", extra)
     if code != 0:
         sol.extra = extra
         return sol
@@ -344,13 +335,12 @@ class StepLemke:
     def polish(self, fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
         """``sol``, an answer of the step ``fs``, through the primal polish
         (:func:`polish_step`; ``flips``: its flips of a failing index set). Where the
-        polish refuses it on a sign (INACCURATE: not within reach of an exact answer), the
+        polish refuses it on a sign (its verdict "a sign fails"), the
         step is solved again from the other starts — the frictionless contacts sticking,
         sliding, then Lemke's pivots — and the first answer the polish keeps is taken
         (the support it leaves for the next step is that answer's)."""
         out = polish_step(fs, sol, flips)
-        if out.status is not Status.INACCURATE or out.extra.get("polish") != \
-                POLISH_VERDICTS[3]:
+        if out.extra.get("polish") != POLISH_VERDICTS[3]:
             return out
         support, keys = self.support, z_keys(fs)
         contacts: dict = {}  # the step's frictionless contacts, once for both guesses
