@@ -311,7 +311,7 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
             # (the polished step's fixed point is the state's; docs/friction.md, "The
             # polish"). Each may flip a failing index set (FINAL_FLIPS), kept as the
             # state's answer only where its move passes; one whose signs fail after its
-            # flips comes back INACCURATE (not an answer: it only moves the iterate)
+            # flips and the edge search is returned as it was (the judge decides)
             polished = lcp.polish(fs, sol, FINAL_FLIPS)
             final = True
             if polished is not sol:
