@@ -127,7 +127,7 @@ POLISH_SWEEPS = 2
 #: where a sign of the answer's index set fails at the polished answer, the failing nodes
 #: may be flipped and the set solved again, at most this many times (the exact oracle's
 #: search, benchmarks/exact_friction.py, flips up to 6 times, then tries every state of
-#: the edge nodes); an answer whose signs still fail comes back INACCURATE. On the
+#: the edge nodes); an answer whose signs still fail is returned as it was. On the
 #: unconfirmed last steps of benchmarks/friction_agreement.py's Lemke paths, flips of 0, 1,
 #: 2, 4, 8 brought 0, 5, 9, 11, 14 of 33 onto an exact answer (dN <= 3e-11). Once 0: a
 #: kept flipped answer made path 74's last state cycle with 1 flip and the polish on every
@@ -144,9 +144,9 @@ POLISH_EDGE_RTOL = 1e-6
 #: the flips of the polish of the answers that end a frictional state (every polish of
 #: the state's last steps: docs/friction.md, "Once per state"). A flipped answer, one whose
 #: signs all hold, ends the state only where its move passes the state's convergence test,
-#: and the judge then checks it; an answer whose signs still fail after these flips is not
-#: within reach of an exact answer and comes back INACCURATE. On the 100 paths of
+#: and the judge then checks it; an answer whose signs still fail after these flips and
+#: the edge search is returned as it was (docs/friction.md). On the 100 paths of
 #: benchmarks/friction_agreement.py, 1 flip in a state's first polish only (later: none):
 #: Lemke's answers confirmed exactly 342 of 375; 8 in every one: 355 of 377 before the
-#: INACCURATE rule (no state cycled; 2 more converged)
+#: edge search (no state cycled; 2 more converged)
 FINAL_FLIPS = 8
