@@ -134,13 +134,13 @@ POLISH_SWEEPS = 2
 #: Lemke step (the back-ends by name polish every step; the default's: FINAL_FLIPS)
 POLISH_FLIPS = 8
 #: where the flips find no index set whose signs hold, every state of at most
-#: POLISH_EDGE_NODES edge nodes is tried (friction_lemke.edge_polish: the nodes whose sign
-#: fails first, then those whose LCP pairs have both sides within POLISH_EDGE_RTOL of the
-#: answer's largest z), at most POLISH_EDGE_SETS index sets, the fewest changes first (the
-#: exact oracle's edge search, benchmarks/exact_friction.py, in doubles)
+#: POLISH_EDGE_NODES of the nodes whose sign fails is tried (friction_lemke.edge_polish:
+#: those nearest the edge of two states first), at most POLISH_EDGE_SETS index sets, the
+#: fewest changes first (the exact oracle's edge search, benchmarks/exact_friction.py,
+#: in doubles, on the failing nodes only: every set it kept on the agreement's paths
+#: changed only those)
 POLISH_EDGE_NODES = 6
 POLISH_EDGE_SETS = 64
-POLISH_EDGE_RTOL = 1e-6
 #: the flips of the polish of the answers that end a frictional state (every polish of
 #: the state's last steps: docs/friction.md, "Once per state"). A flipped answer, one whose
 #: signs all hold, ends the state only where its move passes the state's convergence test,

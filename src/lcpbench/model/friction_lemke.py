@@ -18,7 +18,6 @@ from ..solvers.base import LCPSolution, Status, lcp_residuals
 from ..solvers.lemke import RESIDUAL_TOL, lemke
 from ..thresholds import (
     POLISH_EDGE_NODES,
-    POLISH_EDGE_RTOL,
     POLISH_EDGE_SETS,
     POLISH_FLIPS,
     POLISH_STICK_COMPLIANCE,
@@ -137,7 +136,7 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
                   float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS)
         code, z, r0, r1 = k.polish(*head, *answer[:1], w, *answer[1:], flips)
         if code == k.SIGNS and flips:
-            code, z, r0, r1 = edge_polish(k, head, answer, w, fs, (code, z, r0, r1), flips)
+            code, z, r0, r1 = edge_polish(k, head, answer, w, fs, (code, z, r0, r1))
     extra = dict(sol.extra, polish_residuals=(r0, r1))
     if code == 0:
         res = lcp_residuals(fs.M, fs.q, z)
@@ -155,37 +154,28 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
                        extra)
 
 
-def edge_polish(k, head, answer, w, fs, refused, flips):
-    """Where the polish's flips find no index set whose signs hold: the set with every
-    sliding pair at its edge sticking (with ``flips``), then every state of the
-    answer's edge nodes (``k.polish_on`` on each set, no flips; the failing nodes of its
-    own set first, then those whose LCP pairs have both sides within
-    :data:`POLISH_EDGE_RTOL` of the answer's largest z; :data:`POLISH_EDGE_NODES` of
-    them), the sets with the fewest changes first, at most :data:`POLISH_EDGE_SETS`: the
-    first kept, as :func:`polish_step`'s (verdict, z, r0, r1); else ``refused``."""
+def edge_polish(k, head, answer, w, fs, refused):
+    """Where the polish's flips find no index set whose signs hold: every state of the
+    nodes whose sign fails at the polished answer of the answer's own set
+    (``k.polish_on`` on each set, no flips; at most :data:`POLISH_EDGE_NODES` of them,
+    those whose LCP pairs are nearest the edge of two states first: both sides of the
+    pair smallest), the sets with the fewest changes first, at most
+    :data:`POLISH_EDGE_SETS`: the first kept, as :func:`polish_step`'s (verdict, z, r0,
+    r1); else ``refused``. The nodes whose sign holds keep their state: on the 100 paths
+    of benchmarks/friction_agreement.py each of the 18 sets this search kept differed
+    from the answer's only at failing nodes (a sticking pair made to slide, or an off
+    one to stick), none at a node whose sign held; searched too, those nodes made a
+    search that finds nothing cost 64 sets, not 8 (docs/friction.md, "The polish")."""
     z, pair, mu = answer[0], fs.pair, fs.mu
     mn, mt = fs.normal_node.size, fs.friction_node.size
     contact, state = k.index_set(z, w, mn, mt, pair, mu)
     first = k.polish_on(*head, *answer, 0, contact, state)
-    tol = POLISH_EDGE_RTOL * max(float(np.max(np.abs(z), initial=0.0)), 1e-300)
     lam = mn + 2 * mt
     rim = np.concatenate([np.maximum(np.abs(z[:mn]), np.abs(w[:mn])),
                           np.maximum(np.abs(z[lam:]), np.abs(w[lam:]))])
     failing = np.concatenate([first[4] != contact, first[5] != state])
-    live = np.concatenate([np.ones(mn, bool), state != k.OFF])
-    # first every sliding pair at its edge (slip ~ 0) made to stick, with the flips: the
-    # answer of a chain that does not move (a state that starts where friction holds it)
-    # slides at its cone by slips of 1e-11 at nodes where sticking, T inside the cone, is
-    # as exact
-    edge = live & (rim <= tol)
-    slide = edge[mn:] & (state != k.STICK)
-    if slide.any():
-        out = k.polish_on(*head, *answer, flips, contact,
-                          np.where(slide, k.STICK, state).astype(state.dtype))
-        if out[0] == k.KEPT:
-            return out[:4]
     order = np.lexsort((rim, ~failing))
-    nodes = [int(i) for i in order if failing[i] or edge[i]][:POLISH_EDGE_NODES]
+    nodes = [int(i) for i in order if failing[i]][:POLISH_EDGE_NODES]
     if not nodes:
         return refused
     now = [bool(contact[i]) if i < mn else int(state[i - mn]) for i in nodes]
@@ -332,28 +322,17 @@ class StepLemke:
             return polish_step(M, sol) if polish else sol
         return self.solve(M, q)
 
-    def polish(self, fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
+    @staticmethod
+    def polish(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
         """``sol``, an answer of the step ``fs``, through the primal polish
-        (:func:`polish_step`; ``flips``: its flips of a failing index set). Where the
-        polish refuses it on a sign (its verdict "a sign fails"), the
-        step is solved again from the other starts — the frictionless contacts sticking,
-        sliding, then Lemke's pivots — and the first answer the polish keeps is taken
-        (the support it leaves for the next step is that answer's)."""
-        out = polish_step(fs, sol, flips)
-        if out.extra.get("polish") != POLISH_VERDICTS[3]:
-            return out
-        support, keys = self.support, z_keys(fs)
-        contacts: dict = {}  # the step's frictionless contacts, once for both guesses
-        for start in (False, True, None):
-            again = (self.pivots(fs.M, fs.q, keys) if start is None else
-                     self.first_guess(fs.M, fs.q, keys, fs.pair, start, WARM_CHANGES,
-                                      contacts))
-            if again is not None and again.solved:
-                again = polish_step(fs, again, flips)
-                if again.extra.get("polish") == POLISH_VERDICTS[0]:
-                    return again
-        self.support = support
-        return out
+        (:func:`polish_step`; ``flips``: its flips of a failing index set). An answer the
+        polish refuses is returned as it was; the step is not solved again from the
+        other starts (on the 100 paths of benchmarks/friction_agreement.py no polish of
+        a state's last answer reached that re-solve — every one the flips left refused
+        the edge search kept — and on the channel of benchmarks/friction_speed.py it
+        never found an answer the polish keeps, at ~29 ms a state: docs/friction.md,
+        "The polish")."""
+        return polish_step(fs, sol, flips)
 
     def solve(self, M, q, keys=None, pair=None):
         """The LCP (``M``, ``q``): the warm start from the last support (``keys``, the
