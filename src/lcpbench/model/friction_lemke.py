@@ -157,7 +157,8 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
 def edge_polish(k, head, answer, w, fs, refused):
     """Where the polish's flips find no index set whose signs hold: every state of the
     nodes whose sign fails at the polished answer of the answer's own set
-    (``k.polish_on`` on each set, no flips; at most :data:`POLISH_EDGE_NODES` of them,
+    (``k.polish_sets``: ``polish_on`` on each set, no flips, in one compiled call; at
+    most :data:`POLISH_EDGE_NODES` of them,
     those whose LCP pairs are nearest the edge of two states first: both sides of the
     pair smallest), the sets with the fewest changes first, at most
     :data:`POLISH_EDGE_SETS`: the first kept, as :func:`polish_step`'s (verdict, z, r0,
@@ -181,27 +182,11 @@ def edge_polish(k, head, answer, w, fs, refused):
     now = [bool(contact[i]) if i < mn else int(state[i - mn]) for i in nodes]
     choices = [(True, False) if i < mn else (k.STICK, k.FORWARD, k.BACKWARD) for i in nodes]
     picks = sorted(itertools.product(*choices),
-                   key=lambda p: sum(a != b for a, b in zip(p, now)))
-    seen = 0
-    for pick in picks[1:]:
-        c2, s2 = contact.copy(), state.copy()
-        for i, v in zip(nodes, pick):
-            if i < mn:
-                c2[i] = v
-            else:
-                s2[i - mn] = v
-        pressed = np.zeros(mt, bool)
-        on = c2 & (pair >= 0) & (mu > 0.0)
-        pressed[pair[on]] = True
-        s2[~pressed] = k.OFF
-        s2[pressed & (s2 == k.OFF)] = k.STICK
-        seen += 1
-        if seen > POLISH_EDGE_SETS:
-            break
-        out = k.polish_on(*head, *answer, 0, c2, s2)
-        if out[0] == k.KEPT:
-            return out[:4]
-    return refused
+                   key=lambda p: sum(a != b for a, b in zip(p, now)))[1:]
+    out = k.polish_sets(*head, *answer, contact, state, np.array(nodes, np.int64),
+                        np.array(picks, np.int64).reshape(len(picks), len(nodes)),
+                        POLISH_EDGE_SETS)
+    return out if out[0] == k.KEPT else refused
 
 
 def step_coverings(n: int) -> list[np.ndarray]:

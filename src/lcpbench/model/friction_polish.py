@@ -124,7 +124,10 @@ def primal_system(bands, f, t, k_tau, first, right_datum, gap, slip, compliance,
     BACKWARD, OFF), ``hold`` per pair (KEEP its slip equation, HELD_ALONE: T = T⁰, or
     the pair p: T − T_p = T⁰ − T⁰_p); ``eps_t``: a sticking pair's compliance (its slip
     equation t·(δx, δy) + ε_t (T − T⁰) = −s; 0: none). The equations come node by node, as the unknowns
-    (:func:`layout`), so the system is banded; as many equations as unknowns."""
+    (:func:`layout`), so the system is banded; as many equations as unknowns. Also
+    returned: ``plain``, per entry whether it is in the system with ``eps_t`` = 0 (all
+    but the compliances), and ``rhs0``, that system's right-hand side (the same entries
+    and values, in the same order, as a call with ``eps_t`` = 0)."""
     nh, links = bands.shape[1], t.size
     has_tau = f.size > nh
     rs, ro = by_node(first + normal_node, links)
@@ -135,6 +138,8 @@ def primal_system(bands, f, t, k_tau, first, right_datum, gap, slip, compliance,
     ej = np.empty(cap, np.int64)
     ev = np.empty(cap)
     rhs = np.zeros(n + 2)
+    plain = np.ones(cap, np.bool_)
+    stick_row = np.full(n + 2, -1, np.int64)  # the pair whose slip equation row m is
     ne, m = 0, 0
     for i in range(links + 1):
         if i == 0:
@@ -200,8 +205,11 @@ def primal_system(bands, f, t, k_tau, first, right_datum, gap, slip, compliance,
             elif st == STICK and hold[c] == KEEP:  # t·(δx, δy) = −s
                 ne = _put(ei, ej, ev, ne, m, X[i], tangent_xy[c, 0])
                 ne = _put(ei, ej, ev, ne, m, Y[i], tangent_xy[c, 1])
+                if eps_t != 0.0:
+                    plain[ne] = False
                 ne = _put(ei, ej, ev, ne, m, Tv[c], eps_t)
                 rhs[m] = -slip[c] + eps_t * T0[c]
+                stick_row[m] = c
             elif st == STICK:  # T held at the answer's split
                 ne = _put(ei, ej, ev, ne, m, Tv[c], 1.0)
                 rhs[m] = T0[c]
@@ -218,7 +226,11 @@ def primal_system(bands, f, t, k_tau, first, right_datum, gap, slip, compliance,
         if i == links and right_datum:  # x_N held
             ne = _put(ei, ej, ev, ne, m, X[links], 1.0)
             m += 1
-    return ei[:ne], ej[:ne], ev[:ne], rhs[:m], n, (tau, Y, X, L, Nv, Tv)
+    rhs0 = rhs[:m].copy()
+    for r in range(m):
+        if stick_row[r] >= 0:
+            rhs0[r] = -slip[stick_row[r]] + 0.0 * T0[stick_row[r]]
+    return ei[:ne], ej[:ne], ev[:ne], rhs[:m], n, (tau, Y, X, L, Nv, Tv), plain[:ne], rhs0
 
 
 @njit(cache=True)
@@ -477,19 +489,20 @@ def polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, n
         big0 = max(big0, abs(T[c]))
     if big0 == 0.0:
         big0 = force
+    x0 = np.empty(0)
     for attempt in range(flips + 1):
         hold = stick_holds(tl, state, friction_node, tangent_xy, has_tau, right_datum)
-        # the equations (ei, …) and the system solved (si, …: sticking nodes compliant)
-        ei, ej, ev, rhs, n, lay = primal_system(bands, f, tl, k_tau, first, right_datum,
-                                                gap, slip, compliance, normal_node,
-                                                normal_xy, friction_node, tangent_xy, mu,
-                                                pair, contact, state, hold, T, 0.0)
-        si, sj, sv, _, _, _ = primal_system(bands, f, tl, k_tau, first, right_datum, gap,
-                                            slip, compliance, normal_node, normal_xy,
-                                            friction_node, tangent_xy, mu, pair, contact,
-                                            state, hold, T, stick_compliance * link / big0)
-        x = answer_values(n, lay, tl, right_datum, dy, tau, N, T, first, normal_node,
-                          normal_xy, friction_node, tangent_xy)
+        # the system solved (si, …: sticking nodes compliant) and the equations (ei, …:
+        # its entries but the compliances, the right-hand side without them)
+        si, sj, sv, _, n, lay, plain, rhs = primal_system(
+            bands, f, tl, k_tau, first, right_datum, gap, slip, compliance, normal_node,
+            normal_xy, friction_node, tangent_xy, mu, pair, contact, state, hold, T,
+            stick_compliance * link / big0)
+        ei, ej, ev = si[plain], sj[plain], sv[plain]
+        if attempt == 0:  # the layout is the set's nodes', the same for every set
+            x0 = answer_values(n, lay, tl, right_datum, dy, tau, N, T, first, normal_node,
+                               normal_xy, friction_node, tangent_xy)
+        x = x0.copy()
         fac = banded_factor(si, sj, sv, n)
         if rhs.size != n or not fac[6]:
             return SINGULAR, z_new, nan, nan, contact, state
@@ -517,10 +530,10 @@ def polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, n
     tv, Y, X, L, Nv, Tv = lay
     # both answers in the set's own equations: tan α as is, every stick equation
     keep = np.full(mt, KEEP, np.int64)
-    ei, ej, ev, rhs, n, lay = primal_system(bands, f, tan, k_tau, first, right_datum, gap,
-                                            slip, compliance, normal_node, normal_xy,
-                                            friction_node, tangent_xy, mu, pair, contact,
-                                            state, keep, T, 0.0)
+    ei, ej, ev, rhs, n, lay, _, _ = primal_system(bands, f, tan, k_tau, first, right_datum,
+                                                  gap, slip, compliance, normal_node,
+                                                  normal_xy, friction_node, tangent_xy, mu,
+                                                  pair, contact, state, keep, T, 0.0)
     scale = np.full(n, link)
     for r in range(mn):
         scale[Nv[r]] = max(big, 1e-300)
@@ -542,3 +555,41 @@ def polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, n
         z_new[mn + mt + c] = max(-tc, 0.0) / force
         z_new[mn + 2 * mt + c] = 0.0 if state[c] == STICK else abs(s[c]) / length
     return KEPT, z_new, r0, r1, contact, state
+
+
+@njit(cache=True)
+def polish_sets(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance,
+                normal_node, normal_xy, friction_node, tangent_xy, mu, pair, z, dy, tau, N,
+                T, force, length, link, stick_compliance, sweeps, contact, state, nodes,
+                picks, most):
+    """:func:`polish_on` (no flips) on the index sets that differ from (``contact``,
+    ``state``) at ``nodes`` (an index below N.size a wall row, else the pair
+    ``index − N.size``) only, each row of ``picks`` their states (a row 1 contact, 0
+    separate; a pair STICK, FORWARD or BACKWARD), in order, at most ``most`` of them;
+    a pair none of whose rows with μ > 0 is in contact is off, one that comes into
+    contact sticks: (verdict, z, r0, r1) of the first KEPT, else SIGNS."""
+    mn, mt = N.size, T.size
+    for p in range(picks.shape[0]):
+        if p >= most:
+            break
+        c2, s2 = contact.copy(), state.copy()
+        for j in range(nodes.size):
+            if nodes[j] < mn:
+                c2[nodes[j]] = picks[p, j] != 0
+            else:
+                s2[nodes[j] - mn] = picks[p, j]
+        pressed = np.zeros(mt, np.bool_)
+        for r in range(mn):
+            if c2[r] and pair[r] >= 0 and mu[r] > 0.0:
+                pressed[pair[r]] = True
+        for c in range(mt):
+            if not pressed[c]:
+                s2[c] = OFF
+            elif s2[c] == OFF:
+                s2[c] = STICK
+        out = polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance,
+                        normal_node, normal_xy, friction_node, tangent_xy, mu, pair, z, dy,
+                        tau, N, T, force, length, link, stick_compliance, sweeps, 0, c2, s2)
+        if out[0] == KEPT:
+            return out[0], out[1], out[2], out[3]
+    return SIGNS, z.copy(), np.nan, np.nan
