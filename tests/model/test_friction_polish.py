@@ -131,6 +131,51 @@ def test_polish_refuses_an_index_set_whose_signs_fail():
         np.testing.assert_array_equal(out.z, z)
 
 
+
+def test_the_edge_search_kernel_skips_a_failing_set_and_keeps_an_exact_one():
+    """``polish_sets`` (the edge search's sets in one compiled call) on the index sets
+    that differ at the pressed pairs only: first every pressed pair sliding backward (the
+    set of the test above: no exact answer holds its signs), then their states as the
+    answer reads them. It must pass over the first and keep the second, and what it keeps
+    is the exact (Fraction) solution of that set with every sign holding (the oracle,
+    not the polish, decides); with the first set alone it keeps nothing and returns z."""
+    fs, sol = first_step(ActuatorScene(theta=150, height=3.0, links=20, friction=0.3,
+                                       left_end="pinned", right_end="slider", pull=0.05))
+    k = polish_kernels()
+    z = sol.z
+    mn, mt = fs.normal_node.size, fs.friction_node.size
+    w = fs.M @ z + fs.q
+    contact, state = k.index_set(z, w, mn, mt, fs.pair, fs.mu)
+    pressed = [c for c in range(mt) if state[c] != k.OFF]
+    assert pressed
+    P = fs.parts
+    N, T, dy, tau = fs.forces(z)
+    args = (P["bands"], P["f"], P["tan"], float(P["k_tau"]), int(P["first"]),
+            bool(P["right_datum"]), P["gap"], P["slip"], P["compliance"], fs.normal_node,
+            fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu, fs.pair, z, dy,
+            float(tau), N, T, float(fs.force), float(fs.length),
+            float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS)
+    nodes = np.array([mn + c for c in pressed], np.int64)
+    wrong = [k.BACKWARD] * len(pressed)
+    own = [int(state[c]) for c in pressed]
+    assert own != wrong
+    code, z_new, _, _ = k.polish_sets(*args, contact, state, nodes,
+                                      np.array([wrong], np.int64), 64)
+    assert code == k.SIGNS
+    np.testing.assert_array_equal(z_new, z)
+    code, z_new, r0, r1 = k.polish_sets(*args, contact, state, nodes,
+                                        np.array([wrong, own], np.int64), 64)
+    assert code == k.KEPT and r1 < r0
+    N2, T2, _, _ = fs.forces(z_new)
+    assert np.all(N2 >= -1e-12 * np.max(N2))
+    cone = np.zeros(mt)
+    np.add.at(cone, fs.pair[fs.pair >= 0], (fs.mu * N2)[fs.pair >= 0])
+    assert np.all(np.abs(T2) <= cone + 1e-12 * np.max(N2))
+    step = ef.chain_step(fs)
+    ex, dist, _ = ef.nearest_exact(step, ef.answer_values(fs, step, z_new), search=False)
+    assert ef.confirmed(ex, dist), dist
+    assert [ex.pairs[c] for c in pressed] == own  # the set it kept is the second
+
 def test_polish_never_raises_a_status():
     """An answer that is not SOLVED is not polished and keeps its status and z."""
     fs, sol = first_step(ActuatorScene(theta=150, height=3.0, links=12, friction=0.3,
