@@ -134,9 +134,11 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
                 fs.pair)
         answer = (sol.z, dy, float(tau), N, T, float(fs.force), float(fs.length),
                   float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS)
-        code, z, r0, r1 = k.polish(*head, *answer[:1], w, *answer[1:], flips)
+        contact, state = k.index_set(sol.z, w, N.size, T.size, fs.pair, fs.mu)
+        out = k.polish_on(*head, *answer, flips, contact, state)  # (polish, its sets)
+        code, z, r0, r1 = out[:4]
         if code == k.SIGNS and flips:
-            code, z, r0, r1 = edge_polish(k, head, answer, w, fs, (code, z, r0, r1))
+            code, z, r0, r1 = edge_polish(k, head, answer, w, fs, out)
     extra = dict(sol.extra, polish_residuals=(r0, r1))
     if code == 0:
         res = lcp_residuals(fs.M, fs.q, z)
@@ -154,27 +156,31 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
                        extra)
 
 
-def edge_polish(k, head, answer, w, fs, refused):
-    """Where the polish's flips find no index set whose signs hold: every state of the
-    nodes whose sign fails at the polished answer of the answer's own set
-    (``k.polish_sets``: ``polish_on`` on each set, no flips, in one compiled call; at
-    most :data:`POLISH_EDGE_NODES` of them,
+def edge_polish(k, head, answer, w, fs, flipped):
+    """Where the polish's flips find no index set whose signs hold (``flipped``:
+    ``k.polish_on``'s answer, SIGNS, with the sets it solved, the answer's own first): every
+    state of the nodes whose sign fails at the polished answer of the answer's own set
+    (``k.polish_sets``: ``polish_on`` on each set, no flips, in one compiled call, the
+    sets the flips solved passed over; at most :data:`POLISH_EDGE_NODES` of them,
     those whose LCP pairs are nearest the edge of two states first: both sides of the
     pair smallest), the sets with the fewest changes first, at most
     :data:`POLISH_EDGE_SETS`: the first kept, as :func:`polish_step`'s (verdict, z, r0,
-    r1); else ``refused``. The nodes whose sign holds keep their state: on the 100 paths
+    r1); else ``flipped``'s. The nodes whose sign holds keep their state: on the 100 paths
     of benchmarks/friction_agreement.py each of the 18 sets this search kept differed
     from the answer's only at failing nodes (a sticking pair made to slide, or an off
     one to stick), none at a node whose sign held; searched too, those nodes made a
     search that finds nothing cost 64 sets, not 8 (docs/friction.md, "The polish")."""
-    z, pair, mu = answer[0], fs.pair, fs.mu
+    z = answer[0]
     mn, mt = fs.normal_node.size, fs.friction_node.size
-    contact, state = k.index_set(z, w, mn, mt, pair, mu)
-    first = k.polish_on(*head, *answer, 0, contact, state)
+    refused, seen_c, seen_s = flipped[:4], flipped[6], flipped[7]
+    contact, state = seen_c[0], seen_s[0]
+    # the first flip's set (the answer's own set's failing nodes flipped), as polish_on
+    # with no flips returns it
+    first = (seen_c[1], seen_s[1]) if len(seen_c) > 1 else flipped[4:6]
     lam = mn + 2 * mt
     rim = np.concatenate([np.maximum(np.abs(z[:mn]), np.abs(w[:mn])),
                           np.maximum(np.abs(z[lam:]), np.abs(w[lam:]))])
-    failing = np.concatenate([first[4] != contact, first[5] != state])
+    failing = np.concatenate([first[0] != contact, first[1] != state])
     order = np.lexsort((rim, ~failing))
     nodes = [int(i) for i in order if failing[i]][:POLISH_EDGE_NODES]
     if not nodes:
@@ -185,7 +191,7 @@ def edge_polish(k, head, answer, w, fs, refused):
                    key=lambda p: sum(a != b for a, b in zip(p, now)))[1:]
     out = k.polish_sets(*head, *answer, contact, state, np.array(nodes, np.int64),
                         np.array(picks, np.int64).reshape(len(picks), len(nodes)),
-                        POLISH_EDGE_SETS)
+                        POLISH_EDGE_SETS, seen_c, seen_s)
     return out if out[0] == k.KEPT else refused
 
 
