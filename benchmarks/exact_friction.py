@@ -27,13 +27,14 @@ slip). A null direction is a free unknown (T per node in a stick run), set where
 exact solution is nearest the answer (least squares over the exact null directions:
 any choice is an exact solution). Links level to round-off (|tan α| <= :data:`LEVEL`)
 are level. A null direction that moves the chain (δy, δx, τ) and not only the forces
-is a ray of answers (``ray``).
-
+is a ray of answers (``ray``). An answer at the edge of two index sets is searched
+for on its neighbours (:func:`nearest_exact`: flips, then :func:`edge_search`).
 Not library code: the tests and benchmarks/friction_agreement.py use it.
 """
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field
 from fractions import Fraction
 
@@ -50,8 +51,11 @@ CONSISTENT_RTOL = 1e-12
 #: its tan α is taken as 0, so that T per node along a run at a wall is exactly
 #: indeterminate, as it is in fact, not decided by the round-off of the nodes' heights
 LEVEL = 1e-12
-#: index sets tried per answer: the one read from it, then with failing nodes flipped
-FLIP_ROUNDS = 6
+#: index sets tried per answer: the one read from it, then with failing nodes flipped;
+#: then :func:`edge_search`: a node is at the edge of two states when both sides of one
+#: of its LCP pairs are within EDGE_RTOL of 0 (target 2's 1e-6); every state of at most
+#: EDGE_NODES of them, at most EDGE_SETS index sets, the fewest changes first
+FLIP_ROUNDS, EDGE_RTOL, EDGE_NODES, EDGE_SETS = 6, 1e-6, 6, 160
 
 
 def _q(x) -> Fraction:
@@ -463,14 +467,76 @@ def _flip(rows, pairs, ex, step, tried):
     return rows, pairs
 
 
-def nearest_exact(step: PrimalStep, v: np.ndarray) -> tuple[Exact, float, int]:
+def edge_nodes(step: PrimalStep, v: np.ndarray, rows: list, pairs: list,
+               failed: list) -> tuple[list, list]:
+    """The wall rows and friction pairs of the answer v (on its set ``rows``, ``pairs``)
+    at the edge of two states: both sides of their LCP pair within :data:`EDGE_RTOL` of 0
+    (a row: N/F and g/ℓ; a pair: (μN − |T|)/F and |s|/ℓ), or broken by the set's exact
+    solution (``failed``); those first, then the nearest the edge, :data:`EDGE_NODES`."""
+    hit_rows = {i for kind, i in failed if kind in ("row", "gap")}
+    hit_pairs = {i for kind, i in failed if kind in ("pair", "slip")}
+    cand = []  # (rank, kind, index)
+    for r in range(len(rows)):
+        edge = max(abs(v[step.normal[r]]) / step.force,
+                   abs(_affine(step.gap[r], v)) / step.length)
+        if r in hit_rows or edge <= EDGE_RTOL:
+            cand.append((-1.0 if r in hit_rows else edge, "row", r))
+    for c in range(len(pairs)):
+        mine = [r for r in range(len(rows)) if step.pair[r] == c]
+        if c not in hit_pairs and not any(rows[r] for r in mine):
+            continue
+        limit = sum(float(step.mu[r]) * v[step.normal[r]] for r in mine)
+        edge = max((limit - abs(v[step.tangential[c]])) / step.force,
+                   abs(_affine(step.slip[c], v)) / step.length)
+        if c in hit_pairs or edge <= EDGE_RTOL:
+            cand.append((-1.0 if c in hit_pairs else edge, "pair", c))
+    cand = sorted(cand, key=lambda e: e[0])[:EDGE_NODES]
+    return [i for _, k, i in cand if k == "row"], [i for _, k, i in cand if k == "pair"]
+
+
+def edge_search(step: PrimalStep, v: np.ndarray, rows: list, pairs: list,
+                failed: list) -> tuple[Exact | None, int]:
+    """(the exact solution nearest the answer v in N and the move, or None; the sets
+    solved) over the index sets that differ from (``rows``, ``pairs``) at its edge nodes
+    only (:func:`edge_nodes`), every state of each (a row contact or separate, a pair
+    stick, slide forward or backward; off where its rows separate), the fewest changes
+    first, at most :data:`EDGE_SETS`; it stops at the first within :data:`NEAR_RTOL`."""
+    er, ep = edge_nodes(step, v, rows, pairs, failed)
+    now = [rows[r] for r in er] + [STICK if pairs[c] is OFF else pairs[c] for c in ep]
+    picks = sorted(itertools.product(*([(True, False)] * len(er)
+                                       + [(STICK, FORWARD, BACKWARD)] * len(ep))),
+                   key=lambda pick: sum(a != b for a, b in zip(pick, now)))
+    best, best_d, seen = None, np.inf, set()
+    for pick in picks[1:] if (er or ep) else []:  # (the first is the set as read)
+        r2, p2 = list(rows), list(pairs)
+        for r, val in zip(er, pick):
+            r2[r] = val
+        for c, val in zip(ep, pick[len(er):]):
+            p2[c] = val
+        for c in range(len(p2)):  # a pair whose rows all separate is off, and back
+            on = any(r2[r] for r in range(len(r2)) if step.pair[r] == c)
+            p2[c] = OFF if not on else STICK if p2[c] is OFF else p2[c]
+        if (tuple(r2), tuple(p2)) in seen or len(seen) >= EDGE_SETS:
+            continue
+        seen.add((tuple(r2), tuple(p2)))
+        ex = solve(step, r2, p2, v)
+        d = distance(step, ex, v) if ex.solution else (np.inf,) * 3
+        if max(d[0], d[2]) < best_d:
+            best, best_d = ex, max(d[0], d[2])
+        if best_d <= NEAR_RTOL:
+            break
+    return best, len(seen)
+
+
+def nearest_exact(step: PrimalStep, v: np.ndarray, search: bool = True
+                  ) -> tuple[Exact, float, int]:
     """(the exact solution on the index set read from the answer v, its distance, the
-    rounds of flips it took): where the exact solution on the read set breaks a sign
-    condition (a node the answer leaves at the edge of two states, or whose T per node
-    is ill-determined), or makes a dependent equation inconsistent (a sticking node its
-    neighbours make slip), those nodes are flipped (:func:`_flip`),
-    up to :data:`FLIP_ROUNDS` times. When none is a solution, the first (the set as read)."""
-    rows, pairs = read_states(step, v)
+    rounds of flips it took): where the read set's exact solution breaks a sign
+    condition or a dependent equation, those nodes are flipped (:func:`_flip`), up to
+    :data:`FLIP_ROUNDS` times; where that confirms nothing and ``search``, every state of
+    the answer's edge nodes is tried (:func:`edge_search`) and the nearest solution kept.
+    When none is a solution, the first (the set as read)."""
+    rows, pairs = read = read_states(step, v)
     ex = first = solve(step, rows, pairs, v)
     rounds, tried = 0, {}
     while ex.failed and rounds < FLIP_ROUNDS:
@@ -482,7 +548,13 @@ def nearest_exact(step: PrimalStep, v: np.ndarray) -> tuple[Exact, float, int]:
         ex = solve(step, rows, pairs, v)
     if ex.failed:  # none found: the answer's own index set, as read
         ex = first
-    return ex, distance(step, ex, v), rounds
+    dist = distance(step, ex, v)
+    found = edge_search(step, v, *read, first.failed)[0] if search and not \
+        confirmed(ex, dist) else None
+    d = distance(step, found, v) if found is not None else dist
+    if found is not None and (not ex.solution or max(d[0], d[2]) < max(dist[0], dist[2])):
+        ex, dist = found, d
+    return ex, dist, rounds
 
 
 #: the classes of a disagreement

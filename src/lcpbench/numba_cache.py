@@ -78,7 +78,8 @@ KERNEL_FILES = ("model/chain_kernel.py", "model/compiled_kernel.py", "model/comp
                 "linalg/twisted_walk_kernel.py", "model/stability_kernel.py",
                 "model/wall_kernel.py", "model/profile_kernel.py",
                 "model/friction_step.py", "model/friction_outer.py",
-                "model/friction_polish.py", "model/judge_friction.py",
+                "model/friction_primal.py", "model/friction_polish.py",
+                "model/judge_friction.py",
                 "solvers/pgs_sm_kernel.py", "solvers/lemke_kernel.py",
                 "solvers/pivoting_kernel.py")
 #: files without kernels whose numbers the kernels freeze in (hashed with KERNEL_FILES)

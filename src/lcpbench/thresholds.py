@@ -130,17 +130,27 @@ POLISH_STICK_COMPLIANCE = 1e-13
 POLISH_SWEEPS = 2
 #: where a sign of the answer's index set fails at the polished answer, the failing nodes
 #: may be flipped and the set solved again, at most this many times (the exact oracle's
-#: search, benchmarks/exact_friction.py, flips up to 6 times). 0: the polish stays on the
-#: answer's own index set. On the 375 steps of benchmarks/friction_agreement.py one flip
-#: cured 5 more of the 10 unconfirmed answers with an exact solution, but a kept flipped
-#: answer made path 74's last state cycle (kept and refused in turn, 100 outer steps),
-#: with the polish on every step (the back-ends by name; the default's steps: FINAL_FLIPS)
-POLISH_FLIPS = 0
-#: the flips of the polish of the answer that would end a frictional state (its first
-#: polish; later ones in the state: none). The flipped answer, one whose signs all hold,
-#: ends the state only where its move passes the state's convergence test, and the judge
-#: then checks it; otherwise the loop goes on from it (docs/friction.md, "Once per
-#: state"). On the 100 paths
-#: of benchmarks/friction_agreement.py: Lemke's answers confirmed exactly 338 -> 342 of
-#: 375, the same states converged, 1175 -> 1183 outer steps
-FINAL_FLIPS = 1
+#: search, benchmarks/exact_friction.py, flips up to 6 times, then tries every state of
+#: the edge nodes); an answer whose signs still fail is returned as it was. On the
+#: unconfirmed last steps of benchmarks/friction_agreement.py's Lemke paths, flips of 0, 1,
+#: 2, 4, 8 brought 0, 5, 9, 11, 14 of 33 onto an exact answer (dN <= 3e-11). Once 0: a
+#: kept flipped answer made path 74's last state cycle with 1 flip and the polish on every
+#: Lemke step (the back-ends by name polish every step; the default's: FINAL_FLIPS)
+POLISH_FLIPS = 8
+#: where the flips find no index set whose signs hold, every state of at most
+#: POLISH_EDGE_NODES of the nodes whose sign fails is tried (friction_lemke.edge_polish:
+#: those nearest the edge of two states first), at most POLISH_EDGE_SETS index sets, the
+#: fewest changes first (the exact oracle's edge search, benchmarks/exact_friction.py,
+#: in doubles, on the failing nodes only: every set it kept on the agreement's paths
+#: changed only those)
+POLISH_EDGE_NODES = 6
+POLISH_EDGE_SETS = 64
+#: the flips of the polish of the answers that end a frictional state (every polish of
+#: the state's last steps: docs/friction.md, "Once per state"). A flipped answer, one whose
+#: signs all hold, ends the state only where its move passes the state's convergence test,
+#: and the judge then checks it; an answer whose signs still fail after these flips and
+#: the edge search is returned as it was (docs/friction.md). On the 100 paths of
+#: benchmarks/friction_agreement.py, 1 flip in a state's first polish only (later: none):
+#: Lemke's answers confirmed exactly 342 of 375; 8 in every one: 355 of 377 before the
+#: edge search (no state cycled; 2 more converged)
+FINAL_FLIPS = 8

@@ -100,3 +100,53 @@ def test_lemke_answer_of_a_chain_step_is_exact_on_its_index_set():
     ex, dist, _ = ef.nearest_exact(step, v)
     assert ex.solution and not ex.ray and ef.confirmed(ex, dist)
     assert sum(v[step.normal]) > 0  # it presses on the wall
+
+
+def two_edge_contacts():
+    """Two copies of one contact (unknowns δ1, δ2, N, T each; K = I, G_n = (1, 0),
+    G_t = (9/10, 3/10), μ = 1/2), each built to sit at the edge of stick and slide:
+    g = −11/20 + N + (9/10) T and s = −9/20 + ε + (9/10)(N + T), ε = 1e-9. Sliding
+    forward (T = −N/2, g = 0): N = (11/20)/(1 − 9/20) = 1, T = −1/2, s = ε >= 0, the
+    answer. Sticking (g = s = 0): N = 1 + 10ε, T = −1/2 − 100ε/9, outside its cone
+    (|T| − μN = 50ε/9 > 0); sliding backward: N = 11/29, s = −9/20 + ε + (27/20)(11/29)
+    > 0, the wrong way; separate: g = −11/20 < 0. So each contact's only answer slides
+    forward, ε from sticking."""
+    eps = Q(1, 10**9)
+    mech, gap, slip, normal, tang = [], [], [], [], []
+    for o in (0, 4):
+        mech += [({o: Q(1), o + 2: Q(-1), o + 3: Q(-9, 10)}, Q(0)),
+                 ({o + 1: Q(1), o + 3: Q(-3, 10)}, Q(0))]
+        gap.append((Q(-11, 20), {o: Q(1)}))
+        slip.append((Q(-9, 20) + eps, {o: Q(9, 10), o + 1: Q(3, 10)}))
+        normal.append(o + 2)
+        tang.append(o + 3)
+    return ef.PrimalStep(8, mech, normal, gap, tang, slip, [Q(1, 2)] * 2, [0, 1],
+                         [0, 1, 4, 5])
+
+
+def test_the_edge_search_finds_the_exact_answer_on_a_neighbouring_index_set(monkeypatch):
+    """An answer 1e-7 inside the cone at both contacts of :func:`two_edge_contacts` reads
+    as sticking at both (its cone's margin 1e-7 above its slip 9.1e-8); that set's
+    exact solution breaks both cones, and without flips the answer is not confirmed. The
+    edge search, alone (no flips), tries every state of the two edge nodes and finds the
+    set where both slide forward, whose exact solution is the one derived by hand."""
+    step = two_edge_contacts()
+    T = -0.5 + 1e-7
+    one = [1.0 + 0.9 * T, 0.3 * T, 1.0, T]
+    v = np.array(one + one)
+    rows, pairs = ef.read_states(step, v)
+    assert rows == [True, True] and pairs == [ef.STICK, ef.STICK]
+    first = ef.solve(step, rows, pairs, v)
+    assert sorted(first.failed) == [("pair", 0), ("pair", 1)]
+    er, ep = ef.edge_nodes(step, v, rows, pairs, first.failed)
+    assert er == [] and sorted(ep) == [0, 1]
+    monkeypatch.setattr(ef, "FLIP_ROUNDS", 0)
+    ex, dist, _ = ef.nearest_exact(step, v, search=False)
+    assert not ef.confirmed(ex, dist)
+    found, tried = ef.edge_search(step, v, rows, pairs, first.failed)
+    assert found.pairs == [ef.FORWARD, ef.FORWARD] and found.solution
+    assert 2 < tried <= 9  # the sets changing one node alone fail
+    assert [found.x[k] for k in (2, 3, 6, 7)] == [Q(1), Q(-1, 2), Q(1), Q(-1, 2)]
+    ex, dist, _ = ef.nearest_exact(step, v)
+    assert ef.confirmed(ex, dist) and ex.pairs == [ef.FORWARD, ef.FORWARD]
+    assert dist[1] == pytest.approx(1e-7 / (1.0), rel=1e-6)

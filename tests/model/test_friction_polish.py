@@ -85,7 +85,7 @@ def test_polish_refuses_an_index_set_whose_signs_fail():
     any way (statically indeterminate), and one of them sliding backward at zero slip is
     an answer too. Without a flip the polish refuses it and returns z unchanged;
     whatever polish_step keeps (POLISH_FLIPS) meets every sign: N >= 0, |T| <= μN, a
-    sliding node's slip against its T."""
+    sliding node's slip against its T; what it refuses keeps its status and z."""
     fs, sol = first_step(ActuatorScene(theta=150, height=3.0, links=20, friction=0.3,
                                        left_end="pinned", right_end="slider", pull=0.05))
     z = sol.z.copy()
@@ -109,6 +109,9 @@ def test_polish_refuses_an_index_set_whose_signs_fail():
     assert code == k.SIGNS
     np.testing.assert_array_equal(z_new, z)
     bad = LCPSolution(z, w, Status.SOLVED, extra={})
+    refused = polish_step(fs, LCPSolution(z, w, Status.SOLVED, extra={}), 0)
+    assert refused.status is Status.SOLVED and refused.extra["polish"] == "a sign fails"
+    np.testing.assert_array_equal(refused.z, z)
     out = polish_step(fs, bad)
     assert out.status is Status.SOLVED  # never changed by the polish
     if out.extra["polish"] == "kept":  # its flipped set: every sign holds
@@ -120,9 +123,67 @@ def test_polish_refuses_an_index_set_whose_signs_fail():
         s = (out.w[mn:mn + mt] - out.w[mn + mt:mn + 2 * mt]) / 2  # the slips (β± rows)
         sliding = np.abs(T2) >= cone - 1e-12 * np.max(N2)
         assert np.all(s[sliding & (T2 > 0)] <= 1e-12) and np.all(s[sliding & (T2 < 0)] >= -1e-12)
+        # and it is an exact answer of the step: the Fraction solution of its index set
+        step = ef.chain_step(fs)
+        ex, dist, _ = ef.nearest_exact(step, ef.answer_values(fs, step, out.z), search=False)
+        assert ef.confirmed(ex, dist), dist
     else:
         np.testing.assert_array_equal(out.z, z)
 
+
+
+def test_the_edge_search_kernel_skips_a_failing_set_and_keeps_an_exact_one():
+    """``polish_sets`` (the edge search's sets in one compiled call) on the index sets
+    that differ at the pressed pairs only: first every pressed pair sliding backward (the
+    set of the test above: no exact answer holds its signs), then their states as the
+    answer reads them. It must pass over the first and keep the second, and what it keeps
+    is the exact (Fraction) solution of that set with every sign holding (the oracle,
+    not the polish, decides); with the first set alone it keeps nothing and returns z."""
+    fs, sol = first_step(ActuatorScene(theta=150, height=3.0, links=20, friction=0.3,
+                                       left_end="pinned", right_end="slider", pull=0.05))
+    k = polish_kernels()
+    z = sol.z
+    mn, mt = fs.normal_node.size, fs.friction_node.size
+    w = fs.M @ z + fs.q
+    contact, state = k.index_set(z, w, mn, mt, fs.pair, fs.mu)
+    pressed = [c for c in range(mt) if state[c] != k.OFF]
+    assert pressed
+    P = fs.parts
+    N, T, dy, tau = fs.forces(z)
+    args = (P["bands"], P["f"], P["tan"], float(P["k_tau"]), int(P["first"]),
+            bool(P["right_datum"]), P["gap"], P["slip"], P["compliance"], fs.normal_node,
+            fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu, fs.pair, z, dy,
+            float(tau), N, T, float(fs.force), float(fs.length),
+            float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS)
+    nodes = np.array([mn + c for c in pressed], np.int64)
+    wrong = [k.BACKWARD] * len(pressed)
+    own = [int(state[c]) for c in pressed]
+    assert own != wrong
+    none_c, none_s = np.zeros((0, mn), bool), np.zeros((0, mt), np.int64)
+    code, z_new, _, _ = k.polish_sets(*args, contact, state, nodes,
+                                      np.array([wrong], np.int64), 64, none_c, none_s)
+    assert code == k.SIGNS
+    np.testing.assert_array_equal(z_new, z)
+    code, z_new, r0, r1 = k.polish_sets(*args, contact, state, nodes,
+                                        np.array([wrong, own], np.int64), 64, none_c, none_s)
+    assert code == k.KEPT and r1 < r0
+    N2, T2, _, _ = fs.forces(z_new)
+    assert np.all(N2 >= -1e-12 * np.max(N2))
+    cone = np.zeros(mt)
+    np.add.at(cone, fs.pair[fs.pair >= 0], (fs.mu * N2)[fs.pair >= 0])
+    assert np.all(np.abs(T2) <= cone + 1e-12 * np.max(N2))
+    step = ef.chain_step(fs)
+    ex, dist, _ = ef.nearest_exact(step, ef.answer_values(fs, step, z_new), search=False)
+    assert ef.confirmed(ex, dist), dist
+    assert [ex.pairs[c] for c in pressed] == own  # the set it kept is the second
+    # a set listed as solved (its signs failed) is passed over, here the one it kept
+    c2, s2 = contact.copy(), state.copy()
+    s2[pressed] = own
+    code, z_new, _, _ = k.polish_sets(*args, contact, state, nodes,
+                                      np.array([wrong, own], np.int64), 64, c2[None],
+                                      s2[None])
+    assert code == k.SIGNS
+    np.testing.assert_array_equal(z_new, z)
 
 def test_polish_never_raises_a_status():
     """An answer that is not SOLVED is not polished and keeps its status and z."""
@@ -215,3 +276,56 @@ def test_a_state_reports_its_polished_answer_and_the_judge_passes_it():
         ex, gap = exact_gap(fs, sol.z)
         assert ex.solution and not ex.ray and gap <= 1e-9
     assert kept >= 1
+
+
+@pytest.mark.parametrize("kw", [dict(theta=150, height=3.0, links=20, friction=0.3),
+                                dict(theta=180, height=2.0, links=40, channel=True,
+                                     friction=(0.3, 0.1))], ids=["flat", "channel"])
+def test_the_flips_end_where_they_would_go_round(kw):
+    """``polish_on`` with flips against its own steps replayed one by one (``polish_on``
+    without flips on the set the step before flipped to), from an index set made to
+    slide the wrong way: the sets it reports solved are the replay's, in order, each a
+    set whose signs fail, none twice; it stops early only where the replay's next set is
+    one of them (from there the replay goes round: each step is a function of its set),
+    and its verdict and z are the replay's after the whole budget."""
+    scene = ActuatorScene(left_end="slider", right_end="slider", pull=0.05, **kw)
+    fs, sol = first_step(scene)
+    k = polish_kernels()
+    z = sol.z.copy()
+    mn, mt = fs.normal_node.size, fs.friction_node.size
+    pressed = [c for c in range(mt) if np.any((fs.pair == c) & (z[:mn] > 0))]
+    for c in pressed:
+        r = int(np.flatnonzero(fs.pair == c)[0])
+        z[mn + c], z[mn + mt + c], z[mn + 2 * mt + c] = fs.mu[r] * z[r], 0.0, 1e-3
+    w = fs.M @ z + fs.q
+    P = fs.parts
+    N, T, dy, tau = fs.forces(z)
+    args = (P["bands"], P["f"], P["tan"], float(P["k_tau"]), int(P["first"]),
+            bool(P["right_datum"]), P["gap"], P["slip"], P["compliance"], fs.normal_node,
+            fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu, fs.pair, z, dy,
+            float(tau), N, T, float(fs.force), float(fs.length),
+            float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS)
+    contact, state = k.index_set(z, w, mn, mt, fs.pair, fs.mu)
+    flips = 8
+    out = k.polish_on(*args, flips, contact, state)
+    replay, c, s = [], contact, state
+    for _ in range(flips + 1):
+        step = k.polish_on(*args, 0, c, s)
+        replay.append((c, s, step))
+        if step[0] != k.SIGNS:
+            break
+        c, s = step[4], step[5]
+    assert out[0] == replay[-1][2][0]
+    np.testing.assert_array_equal(out[1], replay[-1][2][1])
+    if out[0] != k.SIGNS:
+        return
+    seen_c, seen_s = out[6], out[7]
+    assert 1 <= len(seen_c) <= flips + 1
+    keys = [(a.tobytes(), b.tobytes()) for a, b in zip(seen_c, seen_s)]
+    assert len(set(keys)) == len(keys)
+    for i in range(len(seen_c)):
+        np.testing.assert_array_equal(seen_c[i], replay[i][0])
+        np.testing.assert_array_equal(seen_s[i], replay[i][1])
+    if len(seen_c) < flips + 1:  # stopped early: its next set is one solved already
+        nxt = replay[len(seen_c) - 1][2]
+        assert (nxt[4].tobytes(), nxt[5].tobytes()) in keys

@@ -309,10 +309,10 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
             # state is then the polished answer's move, tested again; where that move is
             # not below tol the loop goes on from it, every step polished from then on
             # (the polished step's fixed point is the state's; docs/friction.md, "The
-            # polish"). The first polish of a state may flip a failing index set
-            # (FINAL_FLIPS), kept as the state's answer only where its move passes; the
-            # later ones do not flip (no alternating between two sets)
-            polished = lcp.polish(fs, sol, 0 if final else FINAL_FLIPS)
+            # polish"). Each may flip a failing index set (FINAL_FLIPS), kept as the
+            # state's answer only where its move passes; one whose signs fail after its
+            # flips and the edge search is returned as it was (the judge decides)
+            polished = lcp.polish(fs, sol, FINAL_FLIPS)
             final = True
             if polished is not sol:
                 sol = polished

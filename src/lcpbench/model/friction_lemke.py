@@ -9,13 +9,20 @@ lcpbench's natural residual meets Lemke's own bound.
 
 from __future__ import annotations
 
+import itertools
 import time
 
 import numpy as np
 
 from ..solvers.base import LCPSolution, Status, lcp_residuals
 from ..solvers.lemke import RESIDUAL_TOL, lemke
-from ..thresholds import POLISH_FLIPS, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS
+from ..thresholds import (
+    POLISH_EDGE_NODES,
+    POLISH_EDGE_SETS,
+    POLISH_FLIPS,
+    POLISH_STICK_COMPLIANCE,
+    POLISH_SWEEPS,
+)
 
 #: Lemke's pivot tolerance on the frictional LCP (solvers.lemke's default: 1e-12). Its
 #: W is singular where many nodes have rows (the chain is inextensible: a node's x
@@ -101,9 +108,11 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
     """A SOLVED answer of the step ``fs`` polished on its index set in the step's primal
     form (:func:`lcpbench.model.friction_polish.polish`, compiled, O(N); docs/friction.md,
     "The polish"). The polished answer replaces ``sol`` only where every sign of the index
-    set holds, its primal residual is below the answer's, and lcpbench's natural residual
-    of the LCP still meets RESIDUAL_TOL; otherwise ``sol`` is returned as it is. The
-    status is never changed (an answer that is not SOLVED is not polished). The verdict
+    set holds (after ``flips`` flips of the failing nodes, then :func:`edge_polish`), its
+    primal residual is below the answer's, and lcpbench's natural residual of the LCP
+    still meets RESIDUAL_TOL; otherwise ``sol`` is returned as it is, its status
+    unchanged (its LCP residual decides it; the state's judge decides the state). A
+    status is never raised (an answer that is not SOLVED is not polished). The verdict
     is ``extra["polish"]`` (:data:`POLISH_VERDICTS`), the unpolished z
     ``extra["unpolished"]`` where it was replaced; an answer polished already is
     returned as it is."""
@@ -118,13 +127,18 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
     if not P["rot"].size:
         N, T, dy, tau = fs.forces(sol.z)
         w = fs.M @ sol.z + fs.q
-        code, z, r0, r1 = polish_kernels().polish(
-            P["bands"], P["f"], P["tan"], float(P["k_tau"]), int(P["first"]),
-            bool(P["right_datum"]), P["gap"], P["slip"], P["compliance"],
-            fs.normal_node, fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu, fs.pair,
-            sol.z, w, dy, float(tau), N, T, float(fs.force), float(fs.length),
-            float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS,
-            flips)
+        k = polish_kernels()
+        head = (P["bands"], P["f"], P["tan"], float(P["k_tau"]), int(P["first"]),
+                bool(P["right_datum"]), P["gap"], P["slip"], P["compliance"],
+                fs.normal_node, fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu,
+                fs.pair)
+        answer = (sol.z, dy, float(tau), N, T, float(fs.force), float(fs.length),
+                  float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS)
+        contact, state = k.index_set(sol.z, w, N.size, T.size, fs.pair, fs.mu)
+        out = k.polish_on(*head, *answer, flips, contact, state)  # (polish, its sets)
+        code, z, r0, r1 = out[:4]
+        if code == k.SIGNS and flips:
+            code, z, r0, r1 = edge_polish(k, head, answer, w, fs, out)
     extra = dict(sol.extra, polish_residuals=(r0, r1))
     if code == 0:
         res = lcp_residuals(fs.M, fs.q, z)
@@ -140,6 +154,45 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
     return LCPSolution(z, fs.M @ z + fs.q, sol.status, sol.iterations,
                        sol.solve_time + extra["polish_time"], sol.setup_time, sol.message,
                        extra)
+
+
+def edge_polish(k, head, answer, w, fs, flipped):
+    """Where the polish's flips find no index set whose signs hold (``flipped``:
+    ``k.polish_on``'s answer, SIGNS, with the sets it solved, the answer's own first): every
+    state of the nodes whose sign fails at the polished answer of the answer's own set
+    (``k.polish_sets``: ``polish_on`` on each set, no flips, in one compiled call, the
+    sets the flips solved passed over; at most :data:`POLISH_EDGE_NODES` of them,
+    those whose LCP pairs are nearest the edge of two states first: both sides of the
+    pair smallest), the sets with the fewest changes first, at most
+    :data:`POLISH_EDGE_SETS`: the first kept, as :func:`polish_step`'s (verdict, z, r0,
+    r1); else ``flipped``'s. The nodes whose sign holds keep their state: on the 100 paths
+    of benchmarks/friction_agreement.py each of the 18 sets this search kept differed
+    from the answer's only at failing nodes (a sticking pair made to slide, or an off
+    one to stick), none at a node whose sign held; searched too, those nodes made a
+    search that finds nothing cost 64 sets, not 8 (docs/friction.md, "The polish")."""
+    z = answer[0]
+    mn, mt = fs.normal_node.size, fs.friction_node.size
+    refused, seen_c, seen_s = flipped[:4], flipped[6], flipped[7]
+    contact, state = seen_c[0], seen_s[0]
+    # the first flip's set (the answer's own set's failing nodes flipped), as polish_on
+    # with no flips returns it
+    first = (seen_c[1], seen_s[1]) if len(seen_c) > 1 else flipped[4:6]
+    lam = mn + 2 * mt
+    rim = np.concatenate([np.maximum(np.abs(z[:mn]), np.abs(w[:mn])),
+                          np.maximum(np.abs(z[lam:]), np.abs(w[lam:]))])
+    failing = np.concatenate([first[0] != contact, first[1] != state])
+    order = np.lexsort((rim, ~failing))
+    nodes = [int(i) for i in order if failing[i]][:POLISH_EDGE_NODES]
+    if not nodes:
+        return refused
+    now = [bool(contact[i]) if i < mn else int(state[i - mn]) for i in nodes]
+    choices = [(True, False) if i < mn else (k.STICK, k.FORWARD, k.BACKWARD) for i in nodes]
+    picks = sorted(itertools.product(*choices),
+                   key=lambda p: sum(a != b for a, b in zip(p, now)))[1:]
+    out = k.polish_sets(*head, *answer, contact, state, np.array(nodes, np.int64),
+                        np.array(picks, np.int64).reshape(len(picks), len(nodes)),
+                        POLISH_EDGE_SETS, seen_c, seen_s)
+    return out if out[0] == k.KEPT else refused
 
 
 def step_coverings(n: int) -> list[np.ndarray]:
@@ -263,14 +316,19 @@ class StepLemke:
     @staticmethod
     def polish(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
         """``sol``, an answer of the step ``fs``, through the primal polish
-        (:func:`polish_step`; ``flips``: its flips of a failing index set)."""
+        (:func:`polish_step`; ``flips``: its flips of a failing index set). An answer the
+        polish refuses is returned as it was; the step is not solved again from the
+        other starts (on the 100 paths of benchmarks/friction_agreement.py no polish of
+        a state's last answer reached that re-solve — every one the flips left refused
+        the edge search kept — and on the channel of benchmarks/friction_speed.py it
+        never found an answer the polish keeps, at ~29 ms a state: docs/friction.md,
+        "The polish")."""
         return polish_step(fs, sol, flips)
 
     def solve(self, M, q, keys=None, pair=None):
         """The LCP (``M``, ``q``): the warm start from the last support (``keys``, the
         unknowns' names, :func:`z_keys`) or the frictionless contacts (``pair``), else
         Lemke's pivots."""
-        n = q.size
         sol = self.last_support(M, q, keys)
         contacts: dict = {}  # the step's frictionless contacts, once
         for budget in (WARM_GUESS_CHANGES, WARM_CHANGES):  # a short try of each guess first
@@ -279,6 +337,13 @@ class StepLemke:
                     sol = self.first_guess(M, q, keys, pair, slide, budget, contacts)
         if sol is not None:
             return sol
+        return self.pivots(M, q, keys)
+
+    def pivots(self, M, q, keys=None):
+        """The LCP (``M``, ``q``) by Lemke's pivots, each covering vector in turn
+        (:func:`step_coverings`, the last that solved first), then again at ties of
+        :data:`STRICT_TIES`; its basic z is the next warm start's support."""
+        n = q.size
         coverings = step_coverings(n)
         order = [self.first] + [i for i in range(len(coverings)) if i != self.first]
         sol = None

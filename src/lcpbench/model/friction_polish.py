@@ -39,186 +39,20 @@ from numba import njit
 
 from ..linalg.band_lu_kernel import band_factor, band_resolve
 from ..thresholds import POLISH_LEVEL, POLISH_SIGN_RTOL
+from .friction_primal import (  # noqa: F401  (by_node, layout: the kernels' names too)
+    BACKWARD,
+    FORWARD,
+    HELD_ALONE,
+    KEEP,
+    OFF,
+    STICK,
+    by_node,
+    layout,
+    primal_system,
+)
 
-#: a friction pair's state in the index set
-STICK, FORWARD, BACKWARD, OFF = 0, 1, -1, 2
-#: a sticking pair's slip equation kept (else: the pair p whose T it is held against,
-#: or HELD_ALONE: T held at the answer's, a run that a pinned end holds)
-KEEP, HELD_ALONE = -2, -1
 #: :func:`polish`'s verdicts
 KEPT, NO_PRIMAL, SINGULAR, SIGNS, NOT_LOWER = 0, 1, 2, 3, 4
-
-
-@njit(cache=True)
-def by_node(node, links):
-    """(start, order): the items of each node 0..links, ``order[start[i]:start[i + 1]]``
-    (a counting sort, O(N + m))."""
-    start = np.zeros(links + 2, np.int64)
-    for k in range(node.size):
-        start[node[k] + 1] += 1
-    for i in range(links + 1):
-        start[i + 1] += start[i]
-    pos = start[:-1].copy()
-    order = np.empty(node.size, np.int64)
-    for k in range(node.size):
-        order[pos[node[k]]] = k
-        pos[node[k]] += 1
-    return start, order
-
-
-@njit(cache=True)
-def layout(links, first, nh, has_tau, rs, ro, ps, po):
-    """The unknowns' indices, node by node: (count, τ, Y, X, L, N, T); −1 where none
-    (τ when an end holds x, Y at the pins)."""
-    idx = 1 if has_tau else 0
-    Y = np.full(links + 1, -1, np.int64)
-    X = np.empty(links + 1, np.int64)
-    L = np.empty(max(links, 1), np.int64)
-    Nv = np.empty(ro.size, np.int64)
-    Tv = np.empty(po.size, np.int64)
-    for i in range(links + 1):
-        if first <= i < first + nh:
-            Y[i] = idx
-            idx += 1
-        X[i] = idx
-        idx += 1
-        if i < links:
-            L[i] = idx
-            idx += 1
-        for k in range(rs[i], rs[i + 1]):
-            Nv[ro[k]] = idx
-            idx += 1
-        for k in range(ps[i], ps[i + 1]):
-            Tv[po[k]] = idx
-            idx += 1
-    return idx, (0 if has_tau else -1), Y, X, L, Nv, Tv
-
-
-@njit(cache=True)
-def _put(ei, ej, ev, ne, m, j, v):
-    if v != 0.0 and j >= 0:
-        ei[ne], ej[ne], ev[ne] = m, j, v
-        return ne + 1
-    return ne
-
-
-@njit(cache=True)
-def _fx(ei, ej, ev, ne, m, i, sign, rs, ro, ps, po, Nv, Tv, normal_xy, tangent_xy):
-    """sign · F^x_i, the force along x at node i (its rows' n_x N, its pairs' t_x T)."""
-    for k in range(rs[i], rs[i + 1]):
-        r = ro[k]
-        ne = _put(ei, ej, ev, ne, m, Nv[r], sign * normal_xy[r, 0])
-    for k in range(ps[i], ps[i + 1]):
-        c = po[k]
-        ne = _put(ei, ej, ev, ne, m, Tv[c], sign * tangent_xy[c, 0])
-    return ne
-
-
-@njit(cache=True)
-def primal_system(bands, f, t, k_tau, first, right_datum, gap, slip, compliance,
-                  normal_node, normal_xy, friction_node, tangent_xy, mu, pair, contact,
-                  state, hold, T0, eps_t):
-    """The step's primal equations on an index set, in sparse rows: (ei, ej, ev, rhs,
-    count, the unknowns' layout (τ, Y, X, L, N, T)). ``t``: tan α per link (as given:
-    the caller levels it); ``contact`` per wall row, ``state`` per pair (STICK, FORWARD,
-    BACKWARD, OFF), ``hold`` per pair (KEEP its slip equation, HELD_ALONE: T = T⁰, or
-    the pair p: T − T_p = T⁰ − T⁰_p); ``eps_t``: a sticking pair's compliance (its slip
-    equation t·(δx, δy) + ε_t (T − T⁰) = −s; 0: none). The equations come node by node, as the unknowns
-    (:func:`layout`), so the system is banded; as many equations as unknowns."""
-    nh, links = bands.shape[1], t.size
-    has_tau = f.size > nh
-    rs, ro = by_node(first + normal_node, links)
-    ps, po = by_node(friction_node, links)
-    n, tau, Y, X, L, Nv, Tv = layout(links, first, nh, has_tau, rs, ro, ps, po)
-    cap = 16 * n + 4 * (ro.size + po.size) + 16
-    ei = np.empty(cap, np.int64)
-    ej = np.empty(cap, np.int64)
-    ev = np.empty(cap)
-    rhs = np.zeros(n + 2)
-    ne, m = 0, 0
-    for i in range(links + 1):
-        if i == 0:
-            if has_tau:  # k_τ τ − L_0 − F^x_0 = f_τ
-                ne = _put(ei, ej, ev, ne, m, tau, k_tau)
-                ne = _put(ei, ej, ev, ne, m, L[0], -1.0)
-                ne = _fx(ei, ej, ev, ne, m, 0, -1.0, rs, ro, ps, po, Nv, Tv, normal_xy,
-                         tangent_xy)
-                rhs[m] = f[nh]
-                m += 1
-            if not right_datum:  # x_0 = τ (or 0)
-                ne = _put(ei, ej, ev, ne, m, X[0], 1.0)
-                ne = _put(ei, ej, ev, ne, m, tau, -1.0)
-                m += 1
-        else:  # δx_i − δx_{i−1} + tan α_{i−1} (δy_i − δy_{i−1}) = 0
-            ne = _put(ei, ej, ev, ne, m, X[i], 1.0)
-            ne = _put(ei, ej, ev, ne, m, X[i - 1], -1.0)
-            ne = _put(ei, ej, ev, ne, m, Y[i], t[i - 1])
-            ne = _put(ei, ej, ev, ne, m, Y[i - 1], -t[i - 1])
-            m += 1
-        if Y[i] >= 0:  # the heights' equilibrium at node i
-            j = i - first
-            for jj in range(max(0, j - 2), min(nh, j + 3)):
-                ne = _put(ei, ej, ev, ne, m, Y[first + jj], bands[abs(j - jj), min(j, jj)])
-            for k in range(rs[i], rs[i + 1]):
-                ne = _put(ei, ej, ev, ne, m, Nv[ro[k]], -normal_xy[ro[k], 1])
-            for k in range(ps[i], ps[i + 1]):
-                ne = _put(ei, ej, ev, ne, m, Tv[po[k]], -tangent_xy[po[k], 1])
-            if i >= 1:
-                ne = _put(ei, ej, ev, ne, m, L[i - 1], t[i - 1])
-            if i < links:
-                ne = _put(ei, ej, ev, ne, m, L[i], -t[i])
-            rhs[m] = f[j]
-            m += 1
-        if i < links:  # the link's horizontal force
-            ne = _put(ei, ej, ev, ne, m, L[i], 1.0)
-            if right_datum:  # L_i = L_{i−1} − F^x_i
-                if i >= 1:
-                    ne = _put(ei, ej, ev, ne, m, L[i - 1], -1.0)
-                ne = _fx(ei, ej, ev, ne, m, i, 1.0, rs, ro, ps, po, Nv, Tv, normal_xy,
-                         tangent_xy)
-            else:  # L_i = L_{i+1} + F^x_{i+1}
-                if i + 1 < links:
-                    ne = _put(ei, ej, ev, ne, m, L[i + 1], -1.0)
-                ne = _fx(ei, ej, ev, ne, m, i + 1, -1.0, rs, ro, ps, po, Nv, Tv, normal_xy,
-                         tangent_xy)
-            m += 1
-        for k in range(rs[i], rs[i + 1]):
-            r = ro[k]
-            if contact[r]:  # n·(δx, δy) + N/k = −g
-                ne = _put(ei, ej, ev, ne, m, X[i], normal_xy[r, 0])
-                ne = _put(ei, ej, ev, ne, m, Y[i], normal_xy[r, 1])
-                ne = _put(ei, ej, ev, ne, m, Nv[r], compliance[r])
-                rhs[m] = -gap[r]
-            else:
-                ne = _put(ei, ej, ev, ne, m, Nv[r], 1.0)
-            m += 1
-        for k in range(ps[i], ps[i + 1]):
-            c = po[k]
-            st = state[c]
-            if st == OFF:
-                ne = _put(ei, ej, ev, ne, m, Tv[c], 1.0)
-            elif st == STICK and hold[c] == KEEP:  # t·(δx, δy) = −s
-                ne = _put(ei, ej, ev, ne, m, X[i], tangent_xy[c, 0])
-                ne = _put(ei, ej, ev, ne, m, Y[i], tangent_xy[c, 1])
-                ne = _put(ei, ej, ev, ne, m, Tv[c], eps_t)
-                rhs[m] = -slip[c] + eps_t * T0[c]
-            elif st == STICK:  # T held at the answer's split
-                ne = _put(ei, ej, ev, ne, m, Tv[c], 1.0)
-                rhs[m] = T0[c]
-                if hold[c] >= 0:
-                    ne = _put(ei, ej, ev, ne, m, Tv[hold[c]], -1.0)
-                    rhs[m] -= T0[hold[c]]
-            else:  # T + σ Σ μ N = 0 (the pair's rows are at its node)
-                ne = _put(ei, ej, ev, ne, m, Tv[c], 1.0)
-                for kk in range(rs[i], rs[i + 1]):
-                    r = ro[kk]
-                    if pair[r] == c:
-                        ne = _put(ei, ej, ev, ne, m, Nv[r], st * mu[r])
-            m += 1
-        if i == links and right_datum:  # x_N held
-            ne = _put(ei, ej, ev, ne, m, X[links], 1.0)
-            m += 1
-    return ei[:ne], ej[:ne], ev[:ne], rhs[:m], n, (tau, Y, X, L, Nv, Tv)
 
 
 @njit(cache=True)
@@ -435,20 +269,37 @@ def polish(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, norm
            length, link, stick_compliance, sweeps, flips):
     """The answer z (w = M z + q; its δy, τ, N, T in mm and N) polished on its index set
     (the module's note): (verdict, z polished (the LCP's units: forces by ``force``,
-    lengths by ``length``), the primal residual before, after).
+    lengths by ``length``), the primal residual before, after); :func:`polish_on` the
+    set :func:`index_set` reads from z, w."""
+    contact, state = index_set(z, w, N.size, T.size, pair, mu)
+    code, z_new, r0, r1, _, _, _, _ = polish_on(
+        bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, normal_node,
+        normal_xy, friction_node, tangent_xy, mu, pair, z, dy, tau, N, T, force, length,
+        link, stick_compliance, sweeps, flips, contact, state)
+    return code, z_new, r0, r1
+
+
+@njit(cache=True)
+def polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, normal_node,
+              normal_xy, friction_node, tangent_xy, mu, pair, z, dy, tau, N, T, force,
+              length, link, stick_compliance, sweeps, flips, contact, state):
+    """The answer (z; its δy, τ, N, T) polished on the index set (``contact`` per wall
+    row, ``state`` per pair): (verdict, z polished, the primal residual before, after,
+    and where a sign fails the set with the failing nodes flipped (:func:`signs`), else
+    the set solved; and where a sign fails the sets solved, in order, as two arrays).
 
     The set's primal system is solved with the sticking nodes' compliance
     ``stick_compliance`` (link lengths per largest force) as ``sweeps`` steps of
     refinement from the answer against the equations without it. Where a sign of the set
     fails at the solution, those nodes are flipped (:func:`signs`) and the set solved
-    again, at most ``flips`` times. KEPT where every sign of the (last) set holds (to
+    again, at most ``flips`` times; a flip onto a set solved before ends it (the flips
+    are a function of the set: they would go round). KEPT where every sign of the (last) set holds (to
     POLISH_SIGN_RTOL of the largest force and of the link length ``link``) and the
     residual of its primal equations (tan α as is, every stick equation) is below the
     answer's."""
     mn, mt = N.size, T.size
     z_new = z.copy()
     nan = np.nan
-    contact, state = index_set(z, w, mn, mt, pair, mu)
     has_tau = f.size > bands.shape[1]
     tl = tan.copy()
     for k in range(tl.size):
@@ -461,29 +312,33 @@ def polish(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, norm
         big0 = max(big0, abs(T[c]))
     if big0 == 0.0:
         big0 = force
+    x0 = np.empty(0)
+    seen_c = np.empty((flips + 1, mn), np.bool_)  # the sets solved, in order
+    seen_s = np.empty((flips + 1, mt), np.int64)
     for attempt in range(flips + 1):
+        seen_c[attempt], seen_s[attempt] = contact, state
         hold = stick_holds(tl, state, friction_node, tangent_xy, has_tau, right_datum)
-        # the equations (ei, …) and the system solved (si, …: sticking nodes compliant)
-        ei, ej, ev, rhs, n, lay = primal_system(bands, f, tl, k_tau, first, right_datum,
-                                                gap, slip, compliance, normal_node,
-                                                normal_xy, friction_node, tangent_xy, mu,
-                                                pair, contact, state, hold, T, 0.0)
-        si, sj, sv, _, _, _ = primal_system(bands, f, tl, k_tau, first, right_datum, gap,
-                                            slip, compliance, normal_node, normal_xy,
-                                            friction_node, tangent_xy, mu, pair, contact,
-                                            state, hold, T, stick_compliance * link / big0)
-        x = answer_values(n, lay, tl, right_datum, dy, tau, N, T, first, normal_node,
-                          normal_xy, friction_node, tangent_xy)
+        # the system solved (si, …: sticking nodes compliant) and the equations (ei, …:
+        # its entries but the compliances, the right-hand side without them)
+        si, sj, sv, _, n, lay, plain, rhs = primal_system(
+            bands, f, tl, k_tau, first, right_datum, gap, slip, compliance, normal_node,
+            normal_xy, friction_node, tangent_xy, mu, pair, contact, state, hold, T,
+            stick_compliance * link / big0)
+        ei, ej, ev = si[plain], sj[plain], sv[plain]
+        if attempt == 0:  # the layout is the set's nodes', the same for every set
+            x0 = answer_values(n, lay, tl, right_datum, dy, tau, N, T, first, normal_node,
+                               normal_xy, friction_node, tangent_xy)
+        x = x0.copy()
         fac = banded_factor(si, sj, sv, n)
         if rhs.size != n or not fac[6]:
-            return SINGULAR, z_new, nan, nan
+            return SINGULAR, z_new, nan, nan, contact, state, seen_c[:0], seen_s[:0]
         for _ in range(sweeps):  # x += A_ε⁻¹ (b − A x)
             res = rhs.copy()
             for k in range(ei.size):
                 res[ei[k]] -= ev[k] * x[ej[k]]
             d, ok = banded_resolve(fac, res)
             if not ok:
-                return SINGULAR, z_new, nan, nan
+                return SINGULAR, z_new, nan, nan, contact, state, seen_c[:0], seen_s[:0]
             x += d
         big = big0
         for r in range(mn):
@@ -495,16 +350,18 @@ def polish(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, norm
             pair, contact, state, POLISH_SIGN_RTOL * big, POLISH_SIGN_RTOL * link)
         if fails == 0:
             break
-        if attempt == flips:
-            return SIGNS, z_new, nan, nan
+        if attempt == flips or tried(seen_c[:attempt + 1], seen_s[:attempt + 1],
+                                     new_contact, new_state):  # (a cycle: exact)
+            return (SIGNS, z_new, nan, nan, new_contact, new_state, seen_c[:attempt + 1],
+                    seen_s[:attempt + 1])
         contact, state = new_contact, new_state
     tv, Y, X, L, Nv, Tv = lay
     # both answers in the set's own equations: tan α as is, every stick equation
     keep = np.full(mt, KEEP, np.int64)
-    ei, ej, ev, rhs, n, lay = primal_system(bands, f, tan, k_tau, first, right_datum, gap,
-                                            slip, compliance, normal_node, normal_xy,
-                                            friction_node, tangent_xy, mu, pair, contact,
-                                            state, keep, T, 0.0)
+    ei, ej, ev, rhs, n, lay, _, _ = primal_system(bands, f, tan, k_tau, first, right_datum,
+                                                  gap, slip, compliance, normal_node,
+                                                  normal_xy, friction_node, tangent_xy, mu,
+                                                  pair, contact, state, keep, T, 0.0)
     scale = np.full(n, link)
     for r in range(mn):
         scale[Nv[r]] = max(big, 1e-300)
@@ -517,7 +374,7 @@ def polish(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, norm
     r0 = primal_residual(ei, ej, ev, rhs, v0, scale)
     r1 = primal_residual(ei, ej, ev, rhs, x, scale)
     if not r1 < r0:
-        return NOT_LOWER, z_new, r0, r1
+        return NOT_LOWER, z_new, r0, r1, contact, state, seen_c[:0], seen_s[:0]
     for r in range(mn):
         z_new[r] = x[Nv[r]] / force
     for c in range(mt):
@@ -525,4 +382,70 @@ def polish(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, norm
         z_new[mn + c] = max(tc, 0.0) / force
         z_new[mn + mt + c] = max(-tc, 0.0) / force
         z_new[mn + 2 * mt + c] = 0.0 if state[c] == STICK else abs(s[c]) / length
-    return KEPT, z_new, r0, r1
+    return KEPT, z_new, r0, r1, contact, state, seen_c[:0], seen_s[:0]
+
+
+@njit(cache=True)
+def tried(seen_c, seen_s, contact, state):
+    """Whether the set (``contact``, ``state``) is a row of (``seen_c``, ``seen_s``)."""
+    for a in range(seen_c.shape[0]):
+        same = True
+        for r in range(contact.size):
+            if seen_c[a, r] != contact[r]:
+                same = False
+                break
+        for c in range(state.size if same else 0):
+            if seen_s[a, c] != state[c]:
+                same = False
+                break
+        if same:
+            return True
+    return False
+
+
+@njit(cache=True)
+def polish_sets(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance,
+                normal_node, normal_xy, friction_node, tangent_xy, mu, pair, z, dy, tau, N,
+                T, force, length, link, stick_compliance, sweeps, contact, state, nodes,
+                picks, most, seen_c, seen_s):
+    """:func:`polish_on` (no flips) on the index sets that differ from (``contact``,
+    ``state``) at ``nodes`` (an index below N.size a wall row, else the pair
+    ``index − N.size``) only, each row of ``picks`` their states (a row 1 contact, 0
+    separate; a pair STICK, FORWARD or BACKWARD), in order, at most ``most`` of them;
+    a pair none of whose rows with μ > 0 is in contact is off, one that comes into
+    contact sticks: (verdict, z, r0, r1) of the first KEPT, else SIGNS. A set solved
+    before, here or in (``seen_c``, ``seen_s``: sets whose signs failed), is passed over:
+    its verdict is known."""
+    mn, mt = N.size, T.size
+    done_c = np.empty((seen_c.shape[0] + picks.shape[0], mn), np.bool_)
+    done_s = np.empty((done_c.shape[0], mt), np.int64)
+    done_c[:seen_c.shape[0]], done_s[:seen_c.shape[0]] = seen_c, seen_s
+    done = seen_c.shape[0]
+    for p in range(picks.shape[0]):
+        if p >= most:
+            break
+        c2, s2 = contact.copy(), state.copy()
+        for j in range(nodes.size):
+            if nodes[j] < mn:
+                c2[nodes[j]] = picks[p, j] != 0
+            else:
+                s2[nodes[j] - mn] = picks[p, j]
+        pressed = np.zeros(mt, np.bool_)
+        for r in range(mn):
+            if c2[r] and pair[r] >= 0 and mu[r] > 0.0:
+                pressed[pair[r]] = True
+        for c in range(mt):
+            if not pressed[c]:
+                s2[c] = OFF
+            elif s2[c] == OFF:
+                s2[c] = STICK
+        if tried(done_c[:done], done_s[:done], c2, s2):
+            continue
+        done_c[done], done_s[done] = c2, s2
+        done += 1
+        out = polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance,
+                        normal_node, normal_xy, friction_node, tangent_xy, mu, pair, z, dy,
+                        tau, N, T, force, length, link, stick_compliance, sweeps, 0, c2, s2)
+        if out[0] == KEPT:
+            return out[0], out[1], out[2], out[3]
+    return SIGNS, z.copy(), np.nan, np.nan

@@ -215,7 +215,9 @@ def step_runner(solver: str | None = None):
     # fell from 193 to 179 and PIQP's from 163 to 121 (a residual of 1e-9 leaves the
     # unpolished iterates too rough to settle to tol)
     guarded.defers_polish = name == "lemke"  # type: ignore[attr-defined]
-    guarded.polish = polish_step  # type: ignore[attr-defined]
+    # (Lemke's: StepLemke.polish, the same polish; a refused answer is returned as it was)
+    guarded.polish = lemke.polish if form == "lcp" and name == "lemke" \
+        else polish_step  # type: ignore[attr-defined]
     # Newton's steps near the answer for Lemke, the default (StepLemke.newton); the peers
     # get the paper's Gauss–Newton steps, as they were measured
     guarded.newton = name == "lemke"  # type: ignore[attr-defined]
