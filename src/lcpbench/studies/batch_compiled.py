@@ -24,7 +24,7 @@ from ..model import large_n
 from ..model.compiled import drive, heavy, reference
 from ..model.finish import finish
 from ..model.judge import chain_args
-from ..model.kernel_call import applies, kernel_args, profile_applies, run_compiled
+from ..model.kernel_call import applies, kernel_args, run_compiled
 from ..model.outer import DriverStart
 from ..model.result import ContactResult
 from ..model.step_solver import make_step_solver
@@ -63,7 +63,6 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
     chain = scene.chain()
     # not from LARGE_N links: those run in increments (model.large_driver, via drive)
     kernel = applies(DEFAULT, "globalised", chain) and not large_n.applies(chain)
-    profiled = not kernel and profile_applies(DEFAULT, "globalised", chain)  # (its kernel)
     if kernel and not const:
         full = kernel_args(chain)
         const["arrays"] = full[2:4] + (full[7],)
