@@ -56,6 +56,21 @@ FREE, UP, LO = 0, 1, 2
 
 # -- the chain's exact geometry (model.chain) ------------------------------------------
 @njit(cache=True)
+def without_noise(forces_upper, forces_lower, noise, settled):
+    """Copies of the reactions R on the upper and lower walls (N) with the values within
+    their round-off ``noise`` set to zero (not reactions), where the judge step
+    ``settled``; else the reactions as given."""
+    fu, fl = forces_upper.copy(), forces_lower.copy()
+    if settled:
+        for i in range(fu.size):
+            if abs(fu[i]) <= noise[i]:
+                fu[i] = 0.0
+            if abs(fl[i]) <= noise[i]:
+                fl[i] = 0.0
+    return fu, fl
+
+
+@njit(cache=True)
 def positions(alpha, a, w):
     """Node positions x, y (rows X, Y, as model.chain.node_positions), cos α (row COS),
     tan α − α (row V), and the heights summed with compensation (row YC, the judge
@@ -220,7 +235,7 @@ def answer_checks(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, 
 
     Returns ``(stats, forces_upper, forces_lower, torque_residual)``, ``stats`` named
     by :data:`STATS`, NaN from "total" on (the force error bound's) but "node_allowed"."""
-    n, links = lo.size, alpha.size
+    links = alpha.size
     tau, F0, eps_R = units(forces_upper, forces_lower, F, tol)
     stats = np.full(len(STATS), np.nan)
     w = np.empty((ROWS, links + 2))
@@ -231,13 +246,7 @@ def answer_checks(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, 
         hi, lo, _, g_up, g_lo, h1, l1, h2, l2 = profile_rows(
             alpha, w[COS], a, fs, hi, lo, wall, ku, cu_, kl, cl_, forces_upper, forces_lower,
             nodal_load)
-    fu, fl = forces_upper.copy(), forces_lower.copy()
-    if settled:
-        for i in range(n):  # values within round-off are zero, not reactions
-            if abs(fu[i]) <= noise[i]:
-                fu[i] = 0.0
-            if abs(fl[i]) <= noise[i]:
-                fl[i] = 0.0
+    fu, fl = without_noise(forces_upper, forces_lower, noise, settled)
     floor_R = FLOOR_ULPS * EPS * S if settled else 0.0
     has_gap = np.isfinite(wall) or ku.size > 0  # (an upper wall: a gap to measure)
     res = certify_checks(alpha, a, jl, jr, k, rest, link_load, fs, lo, hi, L, F, cu, cl, wall,

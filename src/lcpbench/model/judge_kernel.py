@@ -74,6 +74,7 @@ from .judge_checks import (
     certify_checks,
     positions,
     units,
+    without_noise,
 )
 
 TINY = np.finfo(np.float64).tiny
@@ -385,13 +386,8 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
                               nodal_load)
     settled = rounds > 0
     u, net, roundoff, ju, jlo = w[U], w[NET], w[ROUNDOFF], w[JU], w[JLO]
-    fu, fl = forces_upper.copy(), forces_lower.copy()
+    fu, fl = without_noise(forces_upper, forces_lower, noise, settled)
     if settled:
-        for i in range(n):  # values within round-off are zero, not reactions
-            if abs(fu[i]) <= noise[i]:
-                fu[i] = 0.0
-            if abs(fl[i]) <= noise[i]:
-                fl[i] = 0.0
         _split(u, net[:n], hi, lo, channel, ju, jlo)
     floor_R = FLOOR_ULPS * EPS * S if settled else 0.0
     has_gap = np.isfinite(wall) or ku.size > 0  # (an upper wall: a gap to measure)
