@@ -185,12 +185,11 @@ def solve_internal(
     engine : "auto" (default: the default back-end with the globalised driver
         runs in one compiled kernel, :mod:`lcpbench.model.compiled`; another
         back-end that takes a QP or an LCP has the driver's own parts around
-        its calls compiled, :mod:`lcpbench.model.compiled_driver`; every other
-        solve in numpy), "compiled" (the kernel or the compiled driver, or
-        ProblemError where neither applies) or "numpy" (the readable
-        reference). Both engines
-        take the same path and give the same answer to round-off;
-        ``result.engine`` says which one ran.
+        its calls compiled, :mod:`lcpbench.model.compiled_driver`; walls of a
+        profile with another back-end or scheme run the Python profile driver)
+        or "compiled" (the kernel or the compiled driver, or ProblemError where
+        neither applies); ``result.engine`` says which one ran. (The numpy
+        reference engine, "numpy", was removed: passing it is a ProblemError.)
     """
     check_scene(scene)
     scaled = check_flag("scaled", scaled)

@@ -123,10 +123,7 @@ def make_plan(chain: Chain, backend: str, method: str, engine: str, tol: float,
     ``tol`` (rad), ``start`` (one of :data:`STARTS`) and the step ``scaled`` or not.
     The arguments are :func:`lcpbench.solve`'s, checked."""
     if chain.profiled_walls and profile_args(chain) is None:
-        raise ProblemError("wall_profile: the result judge reads a wall as a table of cubic "
-                           f"pieces, and this profile needs more than {profile_table.MAX_PIECES} of them "
-                           "over the chain's reach (a function that oscillates too fast); "
-                           "give it as a table (WallProfile.from_table) or with its slope")
+        _refuse_untabled(chain)
     takes = _kernel(chain, DEFAULT, "globalised", engine)
     judge = judged_in(chain)
     if start == "ramp":
@@ -138,6 +135,20 @@ def make_plan(chain: Chain, backend: str, method: str, engine: str, tol: float,
     used = ENGINE[route] or ("compiled" if _kernel(chain, backend, method, engine)
                              else "numpy")
     return Plan(route, start, escalations, used, takes, judge)
+
+
+def _refuse_untabled(chain: Chain) -> None:
+    """The one ProblemError for a wall profile with no table of cubic pieces over the
+    chain's reach (x in [−ℓ, ℓ]), naming the parameter of the wall that has none."""
+    reach = (-float(chain.length), float(chain.length))
+    for name, profile in (("wall_profile", chain.upper_profile),
+                          ("lower_profile", chain.lower_profile)):
+        if profile is not None and profile.pieces(*reach) is None:
+            raise ProblemError(f"{name}: the result judge reads a wall as a table of cubic "
+                               f"pieces, and this profile needs more than "
+                               f"{profile_table.MAX_PIECES} of them over the chain's reach "
+                               "(a function that oscillates too fast, or with jumps); give it "
+                               "as a table (WallProfile.from_table)")
 
 
 def _kernel(chain: Chain, backend: str, method: str, engine: str) -> bool:

@@ -119,6 +119,20 @@ def test_an_inaccurate_last_step_is_refused_whatever_the_numbers(energy_answer):
     assert not v.converged and v.failed == ["last step"], (name, v.reason)
 
 
+@pytest.mark.parametrize("wall", ["upper", "lower"])
+@pytest.mark.parametrize("node", ["loaded", "free"])
+def test_a_nan_reaction_is_refused(energy_answer, wall, node):
+    """Property: a reaction that is not a number is no answer, on either wall, at a node
+    the wall presses or not (max and min drop a NaN that is not their first argument,
+    so a check built on them alone would pass it)."""
+    name, chain, alpha, upper, lower = energy_answer
+    forces = {"upper": upper.copy(), "lower": lower.copy()}
+    f = forces[wall]
+    f[int(np.argmax(f)) if node == "loaded" else int(np.argmin(np.abs(f)))] = np.nan
+    v = _judge(chain, alpha, forces["upper"], forces["lower"])
+    assert not v.converged and v.failed, (name, wall, node)
+
+
 def test_a_driver_that_did_not_converge_fails_that_check_alone(energy_answer):
     name, chain, alpha, upper, lower = energy_answer
     v = _judge(chain, alpha, upper, lower, converged=False)

@@ -3,9 +3,9 @@ judge kernel and its verdict, the rest of the result built when read.
 
 Checked against the route it replaces, the full build of every field
 (:func:`lcpbench.model.compiled.run_kernel`, then :func:`lcpbench.model.finish.finish` with the
-compiled judge), and against the numpy reference: the same answer, the same verdict,
-the same reason, every field; a kernel that stops still falls back to the numpy
-reference; an answer the driver did not reach is judged as before. Converged answers
+compiled judge): the same answer, the same verdict, the same reason, every field; a
+kernel that stops falls back to compiled code or the loading path; an answer the driver
+did not reach is judged as before. Converged answers
 are also checked against the equilibrium oracle (tests/energy_oracle.py: kinematics,
 walls, signs, and stationarity by central differences of the exact energy), which
 shares no code with either route.

@@ -83,6 +83,12 @@ def test_a_wall_without_a_table_is_refused_with_one_clear_error(monkeypatch):
     assert scene.wall_profile.pieces(-scene.length, scene.length) is None
     with pytest.raises(ProblemError, match=r"wall_profile: .*more than 8 .*from_table"):
         lcpbench.solve(scene)
+    # the lower wall's profile is the one without a table: that parameter is named
+    lower = bump(3.0, 0.8, 14.0, 3.0).mirrored()
+    channel = ActuatorScene(theta=150, links=60, channel=True, wall_profile=PCHIP,
+                            lower_profile=lower)
+    with pytest.raises(ProblemError, match=r"^lower_profile: .*more than 8"):
+        lcpbench.solve(channel)
 
 
 def _against_central_differences(scene):

@@ -64,7 +64,9 @@ def check_engine(engine) -> str:
 def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "auto",
           tol: float, max_outer: int, method: str, start: DriverStart | None,
           args: tuple | None = None) -> tuple[DriverOutput, str]:
-    """The driver's answer and the engine that produced it ("compiled" or "numpy").
+    """The driver's answer and the engine that produced it ("compiled", "compiled
+    driver", or "numpy" for the Python drivers that remain: profiles with another
+    back-end, large N in increments, heavy chains' SQP steps).
 
     The one place where the compiled kernel is chosen: a back-end other than the
     default runs the compiled driver (:mod:`.compiled_driver`) where it takes the
@@ -245,7 +247,7 @@ def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol:
                 f"stopped: {why})")
     if why not in REFUSED_STEPS and not chain.elastic_walls:
         return (compiled_driver.run(chain, make_step(), tol=tol, max_outer=max_outer,
-                                    start=start, stop_on_stall=True),
+                                    start=start, stop_on_stall=True, method=method),
                 f"{compiled_driver.ENGINE} (the compiled kernel stopped: {why})")
     return stopped(chain, why), f"compiled (stopped: {why})"
 

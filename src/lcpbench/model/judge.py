@@ -456,7 +456,7 @@ def stability_args(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
     """The stability kernel's module and the arguments of its ``unstable_directions``
     up to the threshold: the chain's arrays, the reactions, the walls' springs (inf:
     rigid) and their slopes and curvatures at the nodes' x (0: flat)."""
-    from ..numba_cache import kernel_module  # numba at the first numpy judgement
+    from ..numba_cache import kernel_module  # numba at the first judgement
 
     kern = kernel_module("lcpbench.model.stability_kernel", "unstable_directions")
     n = len(forces_upper)

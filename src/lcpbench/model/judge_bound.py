@@ -2,8 +2,9 @@
 
 Written once in numba and called by every judge path: the judge kernel
 (:mod:`lcpbench.model.judge_kernel`, the small-N answers, the batch) calls these
-functions from compiled code, the numpy judge (large N, the layouts the kernel does
-not take) from Python through :func:`lcpbench.numba_cache.kernel_module`.
+functions from compiled code, the judge in increments (large N,
+:mod:`lcpbench.model.judge_exact`) from Python through
+:func:`lcpbench.numba_cache.kernel_module`.
 
 The judge takes two exact contact steps of its own: the first at the answer's
 final α (reactions R_{k+1}), the second at α₁, where the first step moves the

@@ -142,13 +142,16 @@ def _torque_residual(alpha, w, jl, jr, k, rest, link_load, fs, fu, fl, h1, l1, p
 @njit(cache=True)
 def units(forces_upper, forces_lower, F, tol):
     """(τ, F₀, ε_R) of an answer: τ = min(FORCE_TOL_CAP, FORCE_TOL_PER_RAD tol)
-    (model.judge.force_tol), F₀ = max(|F_upper|, |F_lower|, EI/ℓ²), ε_R = NODE_SHARE τ F₀."""
+    (model.judge.force_tol), F₀ = max(|F_upper|, |F_lower|, EI/ℓ²), ε_R = NODE_SHARE τ F₀;
+    F₀ is NaN where a reaction is not finite, so the force error bounds fail."""
     tau = min(FORCE_TOL_CAP, FORCE_TOL_PER_RAD * tol)
     F_up = F_lo = 0.0
     for i in range(forces_upper.size):
         F_up += forces_upper[i]
         F_lo += forces_lower[i]
     F0 = max(max(abs(F_up), abs(F_lo)), F)
+    if not (np.isfinite(F_up) and np.isfinite(F_lo)):
+        F0 = np.nan  # (max drops a NaN that is not first: a NaN reaction fails the bounds)
     return tau, F0, NODE_SHARE * tau * F0
 
 

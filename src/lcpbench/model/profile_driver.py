@@ -1,6 +1,6 @@
 """The driver for walls of any profile: contact steps with lagged wall slopes.
 
-The scheme of :mod:`lcpbench.model.driver`, with the step of
+The globalised scheme of :mod:`lcpbench.model.compiled_driver`, in Python, with the step of
 :func:`lcpbench.model.profile.profile_step`: at each outer iteration the box
 is the profile at the nodes' current x and the slope of the wall enters the
 linear term through the last step's reactions (lagged multipliers). The
