@@ -16,7 +16,12 @@ from friction_oracle import frictionless_by_the_frictional_path
 import lcpbench
 from lcpbench import ActuatorScene
 from lcpbench.model.friction_driver import StepLemke
-from lcpbench.model.friction_lemke import POLISH_VERDICTS, polish_kernels, polish_step
+from lcpbench.model.friction_lemke import (
+    POLISH_VERDICTS,
+    polish_args,
+    polish_kernels,
+    polish_step,
+)
 from lcpbench.model.friction_solvers import step_runner
 from lcpbench.solvers.base import LCPSolution, Status
 from lcpbench.thresholds import POLISH_STICK_COMPLIANCE, POLISH_SWEEPS
@@ -148,13 +153,8 @@ def test_the_edge_search_kernel_skips_a_failing_set_and_keeps_an_exact_one():
     contact, state = k.index_set(z, w, mn, mt, fs.pair, fs.mu)
     pressed = [c for c in range(mt) if state[c] != k.OFF]
     assert pressed
-    P = fs.parts
-    N, T, dy, tau = fs.forces(z)
-    args = (P["bands"], P["f"], P["tan"], float(P["k_tau"]), int(P["first"]),
-            bool(P["right_datum"]), P["gap"], P["slip"], P["compliance"], fs.normal_node,
-            fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu, fs.pair, z, dy,
-            float(tau), N, T, float(fs.force), float(fs.length),
-            float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS)
+    head, answer = polish_args(fs, z)
+    args = (*head, *answer)
     nodes = np.array([mn + c for c in pressed], np.int64)
     wrong = [k.BACKWARD] * len(pressed)
     own = [int(state[c]) for c in pressed]
@@ -298,13 +298,8 @@ def test_the_flips_end_where_they_would_go_round(kw):
         r = int(np.flatnonzero(fs.pair == c)[0])
         z[mn + c], z[mn + mt + c], z[mn + 2 * mt + c] = fs.mu[r] * z[r], 0.0, 1e-3
     w = fs.M @ z + fs.q
-    P = fs.parts
-    N, T, dy, tau = fs.forces(z)
-    args = (P["bands"], P["f"], P["tan"], float(P["k_tau"]), int(P["first"]),
-            bool(P["right_datum"]), P["gap"], P["slip"], P["compliance"], fs.normal_node,
-            fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu, fs.pair, z, dy,
-            float(tau), N, T, float(fs.force), float(fs.length),
-            float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS)
+    head, answer = polish_args(fs, z)
+    args = (*head, *answer)
     contact, state = k.index_set(z, w, mn, mt, fs.pair, fs.mu)
     flips = 8
     out = k.polish_on(*args, flips, contact, state)

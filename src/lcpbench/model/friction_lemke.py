@@ -104,6 +104,21 @@ def polish_kernels():
     return _POLISH[0]
 
 
+def polish_args(fs, z: np.ndarray) -> tuple[tuple, tuple]:
+    """The polish kernels' arguments for the answer ``z`` of the frictional step ``fs``
+    (:func:`lcpbench.model.friction_polish.polish_on`, ``polish_sets``): the step's
+    parts (``head``) and the answer's (``answer``: z, the moves, the forces N and T, the
+    scales and the polish's settings)."""
+    P = fs.parts
+    N, T, dy, tau = fs.forces(z)
+    head = (P["bands"], P["f"], P["tan"], float(P["k_tau"]), int(P["first"]),
+            bool(P["right_datum"]), P["gap"], P["slip"], P["compliance"],
+            fs.normal_node, fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu, fs.pair)
+    answer = (z, dy, float(tau), N, T, float(fs.force), float(fs.length),
+              float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS)
+    return head, answer
+
+
 def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
     """A SOLVED answer of the step ``fs`` polished on its index set in the step's primal
     form (:func:`lcpbench.model.friction_polish.polish`, compiled, O(N); docs/friction.md,
@@ -125,16 +140,11 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
     P = fs.parts
     code, z, r0, r1 = 1, sol.z, np.nan, np.nan
     if not P["rot"].size:
-        N, T, dy, tau = fs.forces(sol.z)
         w = fs.M @ sol.z + fs.q
         k = polish_kernels()
-        head = (P["bands"], P["f"], P["tan"], float(P["k_tau"]), int(P["first"]),
-                bool(P["right_datum"]), P["gap"], P["slip"], P["compliance"],
-                fs.normal_node, fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu,
-                fs.pair)
-        answer = (sol.z, dy, float(tau), N, T, float(fs.force), float(fs.length),
-                  float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS)
-        contact, state = k.index_set(sol.z, w, N.size, T.size, fs.pair, fs.mu)
+        head, answer = polish_args(fs, sol.z)
+        contact, state = k.index_set(sol.z, w, fs.normal_node.size, fs.friction_node.size,
+                                     fs.pair, fs.mu)
         out = k.polish_on(*head, *answer, flips, contact, state)  # (polish, its sets)
         code, z, r0, r1 = out[:4]
         if code == k.SIGNS and flips:
