@@ -147,7 +147,7 @@ def _refuse_untabled(chain: Chain) -> None:
             raise ProblemError(f"{name}: the result judge reads a wall as a table of cubic "
                                f"pieces, and this profile needs more than "
                                f"{profile_table.MAX_PIECES} of them over the chain's reach "
-                               "(a function that oscillates too fast, or with jumps); give it "
+                               "(a function that oscillates too fast); give it "
                                "as a table (WallProfile.from_table)")
 
 
