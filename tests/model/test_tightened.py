@@ -1,15 +1,15 @@
 """A refusal on the force error bound alone is solved further (lcpbench.escalations.tightened).
 
-Expected values come from the same scene solved independently at a tight tolerance
-(the reference of the sweep: the built-in active set at settings "high", tol 1e-11,
-certified by the result judge) and from the success rule min(1e-3, 100 tol) -- never
-from the retried answer itself.
+Expected values come from the scene's energy minimum (the direct minimisation of the
+exact energy, tests/energy_oracle.py: no contact step, driver or judge; ~1e-11 of F₀
+from the equilibrium at N = 140) and from the success rule min(1e-3, 100 tol) -- never
+from the retried answer itself nor from another route of lcpbench.
 """
 
 from __future__ import annotations
 
 import pytest
-from energy_oracle import assert_solved
+from energy_oracle import assert_solved, energy_minimum
 
 from lcpbench import ActuatorScene, escalations, solve, solve_many
 from lcpbench.escalations import TIGHTER
@@ -26,10 +26,7 @@ TOL = 1e-2
 
 @pytest.fixture(scope="module")
 def reference():
-    ref = solve(SCENE, tol=1e-11, settings="high")
-    assert ref.converged, ref.reason
-    assert_solved(ref)  # the reference is the scene's equilibrium (tests/energy_oracle.py)
-    return ref
+    return energy_minimum(SCENE)  # (tests/energy_oracle.py)
 
 
 def _error(res, ref, scene=SCENE) -> float:
@@ -67,7 +64,7 @@ def test_a_loose_driver_tolerance_is_continued_to_a_certified_answer(theta, heig
     # the bound refuses by a wide margin, and the continuation at 0.01 rad, judged at
     # tau, must land within tau of the reference
     scene = ActuatorScene(theta=theta, height=height, links=60)
-    ref = solve(scene, tol=1e-11, settings="high")
+    ref = energy_minimum(scene)
     res = solve(scene, tol=0.1)
     assert res.converged, res.reason
     assert "force error bound alone" in res.retried("tightened")
@@ -90,7 +87,7 @@ def test_solve_many_treats_it_as_solve_does(reference):
     assert all(r.converged for r in got), [r.reason for r in got]
     assert got[0].retried("tightened") is not None
     assert _error(got[0], reference) <= 1e-3
-    assert _error(got[1], solve(other, tol=1e-11, settings="high"), other) <= 1e-3
+    assert _error(got[1], energy_minimum(other), other) <= 1e-3
     assert_solved(got[0])  # (tests/energy_oracle.py)
     assert_solved(got[1])
 
