@@ -198,3 +198,32 @@ def assert_step_kkt(step, u, *, rtol=1e-9, gap_tol=1e-12):
     assert np.all(np.abs(g[free]) <= rtol * size[free]), "not stationary on a free row"
     assert np.all(g[up & ~lo] <= rtol * size[up & ~lo]), "the upper wall pulls"
     assert np.all(g[lo & ~up] >= -rtol * size[lo & ~up]), "the lower wall pulls"
+
+
+def assert_elastic_step_kkt(step, u, *, rtol=1e-9):
+    """Heights ``u`` solve a contact step with elastic walls (Winkler springs): they
+    minimise ½ uᵀHu + fᵀu + Σ ½ k (u − upper)₊² + Σ ½ k' (lower − u)₊², strictly convex,
+    so its stationarity decides the answer: H u + f + k (u − upper)₊ − k' (lower − u)₊ = 0
+    on every row, relative to the size of its terms (H and f from ``step.bands`` and
+    ``step.linear``, k and k' from ``step.upper_stiffness`` and ``step.lower_stiffness``;
+    a wall of infinite k is not elastic and is left to :func:`assert_step_kkt`)."""
+    b, f = step.bands, step.linear
+    n = f.size
+    H = np.diag(b[0, :n])
+    for k in range(1, b.shape[0]):
+        H += np.diag(b[k, : n - k], k) + np.diag(b[k, : n - k], -k)
+    u = np.asarray(u, dtype=float)
+
+    def springs(k, pressed):
+        k = np.full(n, np.inf) if k is None else np.asarray(k, dtype=float)
+        soft = np.isfinite(k)
+        assert soft.any() or not np.any(pressed > 0), "a rigid wall crossed"
+        return np.where(soft, np.where(soft, k, 0.0) * pressed, 0.0)
+
+    with np.errstate(invalid="ignore"):
+        up = springs(step.upper_stiffness, np.nan_to_num(np.maximum(u - step.upper, 0.0)))
+        lo = springs(step.lower_stiffness, np.nan_to_num(np.maximum(step.lower - u, 0.0)))
+    g = H @ u + f + up - lo
+    size = np.abs(H) @ np.abs(u) + np.abs(f) + up + lo
+    assert np.all(np.abs(g) <= rtol * size), ("not stationary", float(np.max(np.abs(g) / size)))
+    return up, lo
