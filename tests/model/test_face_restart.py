@@ -136,8 +136,18 @@ def test_the_judges_primal_step_reaches_the_steps_solution(links, shrink, start)
                         reach_of=lambda u: 1e-12 + 0 * u, cap=4 * n + 30)
     assert found is not None
     u, held_up, held_lo, rounds = found
-    assert np.array_equal(held_up, ref.active_upper) and not held_lo.any()
+    # the step's KKT conditions from its exact gradient (independent of both walks):
+    # stationary off the wall, the wall pushing on its rows, feasible; to 1e-9 of the
+    # gradient's terms (the walk's slack) and of the walls' span
+    g = step.gradient(u)
+    size = float(np.max(step.gradient_scale(u)))
     span = np.max(np.abs(step.upper[np.isfinite(step.upper)]))
+    assert np.max(np.abs(g[~held_up]), initial=0.0) <= 1e-9 * size
+    assert np.max(g[held_up], initial=0.0) <= 1e-9 * size
+    assert np.max(u - step.upper) <= 1e-12 * span
+    assert np.max(np.abs(u[held_up] - step.upper[held_up])) <= 1e-12 * span
+    # and the dual walk's answer (a strictly convex QP has one minimiser)
+    assert np.array_equal(held_up, ref.active_upper) and not held_lo.any()
     assert np.max(np.abs(u - ref.u)) <= 1e-8 * span
-    net = -step.gradient(u)
+    net = -g
     assert abs(np.sum(net[held_up]) - np.sum(ref.forces_upper)) <= 1e-7 * np.sum(ref.forces_upper)
