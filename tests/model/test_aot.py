@@ -120,6 +120,8 @@ def test_the_aot_kernels_give_the_jits_answers(aot_build, served_from, monkeypat
 
 @pytest.mark.slow  # the build: 75-90 s on 2 cores
 def test_a_fresh_process_solves_without_importing_numba(aot_build):
+    """Route against route: the AOT module and the JIT compile one source; the force is
+    promised equal to 1e-12 (the two compilers may order a sum differently)."""
     code = ("import sys, lcpbench; r = lcpbench.solve(lcpbench.ActuatorScene(theta=150, "
             "height=3.0, links=40)); print('numba' in sys.modules, r.engine, "
             "r.converged, r.total_force.hex())")

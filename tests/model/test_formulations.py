@@ -293,7 +293,11 @@ def test_solve_with_a_formulation_is_judged_and_reported():
 
 
 def test_the_default_answer_does_not_move():
-    """formulation=None, "heights" and "best" on the built-in back-end run its own path."""
+    """formulation=None, "heights" and "best" on the built-in back-end run its own path.
+
+    Route against route: the promise is that the argument changes nothing there, bit
+    for bit (the answer itself is checked against the energy minimum in
+    test_small_scene_matches_the_energy_minimum)."""
     scene = ActuatorScene(theta=120, height=4, links=60)
     a = lcpbench.solve(scene)
     for form in ("heights", "best"):
@@ -340,7 +344,11 @@ def test_best_through_the_library_call():
 
 def test_elastic_walls_keep_their_own_forms():
     """A step with elastic walls is handed over in its own forms whatever the
-    formulation asked for, and says so (an empty ``formulation``)."""
+    formulation asked for, and says so (an empty ``formulation``).
+
+    Route against route: the promise is the same computation with or without the
+    argument (the elastic step's answer is checked by its KKT conditions in
+    test_elastic.py)."""
     if "osqp" not in available_backends():
         pytest.skip("osqp not installed")
     scene = ActuatorScene(theta=150, height=3, links=30, wall_stiffness=1.0)

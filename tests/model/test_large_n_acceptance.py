@@ -47,6 +47,9 @@ def test_a_large_n_answer_at_tol_1e3_is_accepted_by_the_per_node_rule(answer):
 
 
 def test_the_accepted_nodes_are_within_their_bound_of_a_tight_solve(answer):
+    """Route against route: at N = 10⁴ central differences of the energy cost ~20 s per
+    answer and SLSQP is out of reach; the tight solve is the same equilibrium to ~1e-6
+    F₀, far inside the tol-1e-3 bound checked."""
     # an independent reference: the same scene solved to tol 1e-8 (nodes ~1e-6 F₀ apart)
     tight = solve(ActuatorScene(150, 3.0, links=N), tol=1e-8)
     assert tight.converged, tight.reason
@@ -74,6 +77,7 @@ def test_without_the_extra_steps_the_same_judge_rejects_the_unsettled_split(monk
 
 
 def test_without_the_extra_steps_solve_continues_to_the_same_answer(monkeypatch, answer):
+    """Route against route: N = 10⁴, where no oracle is in reach (see above)."""
     # the same unsettled answer, continued by lcpbench.solve at a tenth of the driver's
     # tolerance: certified, and within tau of the answer with the extra steps (another
     # route to the same equilibrium)

@@ -82,6 +82,11 @@ def profiled():
 
 @pytest.mark.parametrize("kind", ["elastic", "profiled"])
 def test_large_n_walls_converge_to_the_n_2000_answer_in_heights(kind, elastic, profiled):
+    """Route against route: at N = 10⁴ central differences of the energy cost ~20 s
+    per answer and SLSQP is out of reach, so the expectation is the N = 2000 answer
+    in node heights (another formulation, step and driver), O(N⁻²) apart. (At N = 2000
+    the elastic answer's Winkler law holds by forward kinematics only to ~1e-6 F₀, no
+    sharper than this comparison; the oracles at small N are the tests above.)"""
     res = {"elastic": elastic, "profiled": profiled}[kind]
     assert res.converged, res.reason
     assert res.route == "large N" and res.judge == "numpy"  # increments, judged there
@@ -102,6 +107,8 @@ def test_large_n_walls_converge_to_the_n_2000_answer_in_heights(kind, elastic, p
         "judge at tol 1e-8. N = 2000 in heights is in the first family"))),
 ])
 def test_large_n_walls_at_3e4_are_the_n_2000_answer_in_heights(kind):
+    """Route against route, as above: at N = 3·10⁴ no oracle is in reach; the N = 2000
+    answer in heights is the expectation."""
     # tol 1e-7 (τ = 1e-5): at 1e-8 the judge's round-off floor, a sum over the elastic
     # contact's ~17,000 nodes, is 7e-6 F₀ at N = 3·10⁴, above τ = 1e-6
     kw = ({"wall_stiffness": 0.1} if kind == "elastic" else {"wall_profile": stenosis()})
@@ -115,6 +122,9 @@ def test_large_n_walls_at_3e4_are_the_n_2000_answer_in_heights(kind):
 
 
 def test_stiff_elastic_walls_give_the_rigid_wall_at_large_n():
+    """Route against route: the rigid limit at N = 10⁴, where central differences of the
+    energy cost ~20 s per answer; at N = 140 the same limit is checked against the
+    rigid wall's energy minimum (test_elastic.py::test_the_rigid_limit_is_continuous)."""
     # the rigid limit: springs of 1e9 N/mm² indent by R/k ~ 1e-11 mm; issue 35's bound
     stiff = solve(ActuatorScene(150, 3.0, links=N, wall_stiffness=1e9), tol=1e-8)
     rigid = solve(ActuatorScene(150, 3.0, links=N), tol=1e-8)

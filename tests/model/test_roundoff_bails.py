@@ -13,6 +13,7 @@ route with the bail reason given, and check the property that holds everywhere
 from __future__ import annotations
 
 import pytest
+from energy_oracle import assert_solved
 
 from lcpbench import ActuatorScene, solve
 from lcpbench.api import solve_internal
@@ -38,6 +39,7 @@ def test_a_round_off_bail_at_n_3999_is_solved_in_increments(monkeypatch):
     monkeypatch.setattr(large_n, "LARGE_N", 10)
     cold = solve(scene, tol=1e-9)
     assert cold.converged and "increments" in cold.engine
+    assert_solved(cold)  # the equilibrium by first principles (tests/energy_oracle.py), ~6 s
     F = float(out.forces_upper.sum())
     assert abs(F - cold.total_force) / cold.judgement.force_unit <= force_tol(1e-9)
 

@@ -106,7 +106,10 @@ def test_batch_bad_settings_and_limits_name_the_parameter():
 
 def test_large_n_scenes_take_solves_large_n_path_in_a_batch():
     """From LARGE_N links solve() drives in increments (model.large_driver); solve_many's
-    compiled loop must not run such a chain through the heights kernel instead."""
+    compiled loop must not run such a chain through the heights kernel instead.
+
+    Route against route: a cold batch is promised to be the single solve, bit for bit
+    (the same computation), at N = LARGE_N where the energy oracle costs ~25 s."""
     from lcpbench.model.large_n import LARGE_N
 
     scenes = [lcpbench.ActuatorScene(theta=t, height=3.0, links=LARGE_N) for t in (160.0, 165.0)]

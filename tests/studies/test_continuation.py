@@ -87,6 +87,9 @@ def test_quadratic_predictor_reproduces_a_parabola_exactly(tight):
 
 
 def test_a_failed_warm_start_is_redone_cold_and_its_cost_counted(monkeypatch):
+    """Route against route: a warm start made to fail is redone as the cold solve, the
+    same computation, so the same answer bit for bit is promised (the cold answers are
+    checked against the equilibrium in test_same_equilibrium_to_1e_8)."""
     import lcpbench.studies.continuation as cont
 
     real = cont.solve_internal
