@@ -182,7 +182,8 @@ def assert_step_kkt(step, u, *, rtol=1e-9, gap_tol=1e-12):
     H from ``step.bands``, f = ``step.linear``), checked by its KKT conditions written
     out here: feasible, the gradient g = H u + f zero on free rows, g <= 0 where the
     upper wall holds the node and g >= 0 where the lower one does; g relative to the
-    size of its terms |H| |u| + |f|, lengths relative to 1 + max|u|."""
+    size of its terms |H| |u| + |f|, lengths relative to 1 + max|u|. Returns −g, the
+    net reactions at u (N)."""
     b, f = step.bands, step.linear
     n = f.size
     H = np.diag(b[0, :n])
@@ -198,6 +199,7 @@ def assert_step_kkt(step, u, *, rtol=1e-9, gap_tol=1e-12):
     assert np.all(np.abs(g[free]) <= rtol * size[free]), "not stationary on a free row"
     assert np.all(g[up & ~lo] <= rtol * size[up & ~lo]), "the upper wall pulls"
     assert np.all(g[lo & ~up] >= -rtol * size[lo & ~up]), "the lower wall pulls"
+    return -g  # the net reactions R_upper − R_lower the walls exert at u
 
 
 def assert_elastic_step_kkt(step, u, *, rtol=1e-9):

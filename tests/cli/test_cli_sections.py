@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 
 import pytest
+from energy_oracle import energy_minimum
 
 import lcpbench
 from lcpbench.bench.grid import anchoring_scenes, scene_from_key, scene_key, scene_params
@@ -141,11 +142,14 @@ def test_anchoring_grid_default_is_sections_by_height_by_pressure():
 
 
 def test_one_section_of_the_anchoring_grid_is_the_single_section_model_in_the_channel():
+    # the single-section model's equilibrium by direct minimisation of its energy
+    # (tests/energy_oracle.py); the grid's one-section scene solved at tol 1e-9 must be
+    # it to the success rule, 100 tol = 1e-7
     one = anchoring_actuator(120.0, 4.5, sections=1, links=60)
-    single = ActuatorScene(theta=120.0, height=4.5, links=60, channel=True)
-    a, b = lcpbench.solve(one), lcpbench.solve(single)
-    assert a.converged and b.converged and b.total_force > 0
-    assert a.total_force == pytest.approx(b.total_force, rel=1e-9)
+    single = energy_minimum(ActuatorScene(theta=120.0, height=4.5, links=60, channel=True))
+    a = lcpbench.solve(one, tol=1e-9)
+    assert a.converged and single.total_force > 0
+    assert a.total_force == pytest.approx(single.total_force, rel=1e-7)
 
 
 @pytest.mark.parametrize("args,needle", [
