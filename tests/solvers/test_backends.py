@@ -13,9 +13,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from energy_oracle import assert_step_kkt
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from energy_oracle import assert_step_kkt
 from known_answers import CYCLING_PRONE as ALL_CYCLING_PRONE
 from known_answers import LCP_KNOWN, PAPER_SCENE, SICONOS_EXPECTED, SICONOS_LCP_DIR
 
