@@ -22,6 +22,9 @@ def _rows(path):
 
 
 def test_local_cluster_gives_the_serial_rows(tmp_path):
+    """Route against route: the rows must not depend on the executor or on a
+    restart (determinism); the serial rows are checked against the sweep's
+    reference, itself against the energy minimum, in tests/bench/test_sweep.py."""
     grid = Grid(theta=(90.0, 150.0, 180.0), height=(3.0,), links=(20,))
     jobs = plan_sweep(grid, ["active-set", "lemke", "pgs"], ["default"])
     with Store(tmp_path / "serial.sqlite") as st:

@@ -53,6 +53,9 @@ def _table(store_path, out):
 
 
 def test_sigkill_then_restart_gives_the_same_table(tmp_path):
+    """Route against route: the rows must not depend on the executor or on a
+    restart (determinism); the serial rows are checked against the sweep's
+    reference, itself against the energy minimum, in tests/bench/test_sweep.py."""
     killed, clean = tmp_path / "killed.sqlite", tmp_path / "clean.sqlite"
     proc = subprocess.Popen(_cmd(killed), start_new_session=True,
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)

@@ -87,6 +87,9 @@ def test_baseline_rows(swept):
 
 
 def test_restart_skips_what_is_stored_and_rerun_recomputes(swept):
+    """Route against route: the rows must not depend on the executor or on a
+    restart (determinism); the serial rows are checked against the sweep's
+    reference, itself against the energy minimum, above."""
     path, jobs, *_ = swept
     with Store(path) as st:
         n = st.count()
@@ -98,6 +101,9 @@ def test_restart_skips_what_is_stored_and_rerun_recomputes(swept):
 
 
 def test_parallel_sweep_gives_the_serial_numbers(tmp_path):
+    """Route against route: the rows must not depend on the executor or on a
+    restart (determinism); the serial rows are checked against the sweep's
+    reference, itself against the energy minimum, above."""
     jobs = plan_sweep(SCENES[:1], ["active-set", "qpsolvers-piqp"
                                    if _installed("qpsolvers-piqp") else "lemke"],
                       ["default"], baselines=())

@@ -20,6 +20,9 @@ def test_solve_elastic_wall_reports_pressure_and_the_limit(capsys):
 
 
 def test_solve_elastic_json_matches_library(capsys):
+    """Route against route: the CLI is a front end to the same call, so the
+    library's answer is the expectation; what is tested is that the options pass
+    through and the answer is printed."""
     code = main(["solve", "--links", "40", "--wall-stiffness", "0.3", "--json"])
     d = json.loads(capsys.readouterr().out)
     ref = lcpbench.solve(lcpbench.ActuatorScene(links=40, wall_stiffness=0.3))

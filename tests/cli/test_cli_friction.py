@@ -15,6 +15,9 @@ ARGS = ["solve", "--theta", "150", "--height", "3", "--links", "30", "--friction
 
 
 def test_solve_friction_json_is_the_library_path(capsys):
+    """Route against route: the CLI is a front end to the same call, so the
+    library's answer is the expectation; what is tested is that the options pass
+    through and the answer is printed."""
     code = main([*ARGS, "--pull", "0.05", "--json"])
     d = json.loads(capsys.readouterr().out)
     scene = lcpbench.ActuatorScene(theta=150, height=3, links=30, friction=0.3,

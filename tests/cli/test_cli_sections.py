@@ -22,6 +22,9 @@ from lcpbench.problems.sections import (
 
 
 def test_solve_sections_json_is_the_library_answer(capsys):
+    """Route against route: the CLI is a front end to the same call, so the
+    library's answer is the expectation; what is tested is that the options pass
+    through and the answer is printed."""
     code = main(["solve", "--sections", "150:30,-90:20:40", "--height", "3", "--links", "50",
                  "--json"])
     data = json.loads(capsys.readouterr().out)

@@ -67,7 +67,11 @@ def test_solve_json_channel(capsys):
 
 
 def test_solve_json_matches_library(capsys):
-    """The CLI passes its options through to the scene and solve() unchanged."""
+    """The CLI passes its options through to the scene and solve() unchanged.
+
+    Route against route: the CLI is a front end to the same call, so the library's
+    answer is the expectation; what is tested is that the options pass through and
+    the answer is printed."""
     args = ["--theta", "120", "--height", "2.5", "--length", "25", "--EI", "40",
             "--weight", "1e-4", "--tol", "1e-6", "--solver", "lemke"]
     code, d, _ = run_json(capsys, ["solve", "--links", "30", *args, "--json"])
@@ -140,6 +144,9 @@ def test_solve_method_undamped(capsys):
 
 
 def test_solve_human_output(capsys):
+    """Route against route: the CLI is a front end to the same call, so the
+    library's answer is the expectation; what is tested is that the options pass
+    through and the answer is printed."""
     code = main(["solve", "--links", str(N)])
     out = capsys.readouterr().out
     ref = lcpbench.solve(lcpbench.ActuatorScene(links=N))
