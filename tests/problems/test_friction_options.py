@@ -80,3 +80,52 @@ def test_friction_takes_elastic_walls():
                     right_end="slider", pull=0.01)):
         scene = ActuatorScene(wall_stiffness=0.1, **kw)
         assert scene.frictional and scene.chain().elastic_walls
+
+
+@pytest.mark.parametrize("make", [
+    lambda: ActuatorScene(theta=150, height=3.0, links=40, friction=0.3, left_end="slider",
+                          right_end="slider"),
+    lambda: ActuatorScene(theta=180, height=2.0, links=40, channel=True, friction=(0.3, 0.1),
+                          left_end="slider", right_end="slider", pull=0.02),
+    lambda: lcpbench.anchoring_actuator(friction=0.2, left_end="slider", right_end="slider"),
+])
+def test_with_pull_is_replace_checking_the_pull_only(make):
+    from dataclasses import replace
+
+    scene = make()
+    # the oracle: dataclasses.replace, which runs every check of the scene again
+    for pull in (0.0, 0.05, 1.5):
+        assert scene.with_pull(pull) == replace(scene, pull=pull)
+        assert scene.with_pull(pull).frictional == replace(scene, pull=pull).frictional
+    for bad in (math.nan, math.inf, "0.1"):
+        with pytest.raises(ProblemError, match="pull") as want:
+            replace(scene, pull=bad)
+        with pytest.raises(ProblemError, match="pull") as got:
+            scene.with_pull(bad)
+        assert str(got.value) == str(want.value)
+    assert scene.pull == make().pull  # the scene itself is not changed
+
+
+def test_with_pull_on_a_pinned_end_is_the_same_error():
+    from dataclasses import replace
+
+    scene = ActuatorScene(friction=0.3)  # both ends pinned
+    with pytest.raises(ProblemError) as want:
+        replace(scene, pull=0.1)
+    with pytest.raises(ProblemError) as got:
+        scene.with_pull(0.1)
+    assert str(got.value) == str(want.value)
+
+
+def test_a_pulls_states_share_the_chain_of_their_scene():
+    from lcpbench.model.friction_path import with_pull
+
+    scene = ActuatorScene(theta=150, height=3.0, links=30, friction=0.3, left_end="slider",
+                          right_end="slider")
+    states = [with_pull(scene, p) for p in (0.01, 0.02, 0.03)]
+    assert all(s.chain() is scene.chain() for s in states)
+    # the chain a scene with that pull builds on its own has the same arrays
+    fresh = ActuatorScene(theta=150, height=3.0, links=30, friction=0.3, left_end="slider",
+                          right_end="slider", pull=0.02).chain()
+    for name in ("free_nodes", "upper", "lower"):
+        np.testing.assert_array_equal(getattr(fresh, name), getattr(states[1].chain(), name))

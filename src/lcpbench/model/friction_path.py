@@ -37,11 +37,11 @@ PATH_SCENES = (ActuatorScene, SectionedScene)
 def with_pull(scene, pull: float):
     """``scene`` with another axial pull (N), its chain kept: a scene's chain (links,
     walls, loads) does not depend on the pull, so the states of a pull share one chain
-    and what is derived from it (the step's arrays, the compliances), not one each."""
-    new = replace(scene, pull=pull)  # (the scene checks the value)
-    kept = scene.__dict__.get("_chain")  # (scene.chain()'s, where built)
-    if kept is not None:
-        new.__dict__["_chain"] = kept  # (a frozen dataclass: not via setattr)
+    and what is derived from it (the step's arrays, the compliances), not one each. The
+    chain is built on ``scene`` where it was not yet (a pull-out's states are each
+    ``scene`` with another pull: they share the chain of ``scene``)."""
+    new = scene.with_pull(pull)  # (the scene checks the value)
+    new.__dict__["_chain"] = scene.chain()  # (a frozen dataclass: not via setattr)
     return new
 
 

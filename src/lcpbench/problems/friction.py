@@ -15,6 +15,8 @@ only stores them. What they mean is in docs/friction.md:
 
 from __future__ import annotations
 
+import copy
+
 from ..errors import ProblemError
 from .checks import check_choice, check_number, describe
 
@@ -98,6 +100,17 @@ class FrictionOptions:
         put(self, "pull", check_pull(self.pull))
         check_support(self.left_end, self.right_end, self.pull, self.wall_friction,
                       self.channel)
+
+    def with_pull(self, pull: float):
+        """This scene with another axial pull (N): a copy whose frictional options are
+        checked again (the pull: a number, on an end that is not pinned), not its other
+        fields, which a pull does not change (``dataclasses.replace`` would check them all
+        again, a wall profile sampled over its reach among them). What the scene keeps
+        for pickling (:meth:`__getstate__`) is kept; its chain is not."""
+        new = copy.copy(self)
+        object.__setattr__(new, "pull", pull)
+        new._check_friction_options()
+        return new
 
     @property
     def wall_friction(self) -> tuple[float, float]:
