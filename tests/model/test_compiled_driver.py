@@ -110,7 +110,9 @@ def test_where_it_applies():
     assert compiled_driver.takes(chain, make_step_solver("active-set"), "undamped")
     bump = WallProfile.from_table([0, 10, 14, 18, 30], [3.0, 3.0, 2.4, 3.0, 3.0])
     profiled = ActuatorScene(theta=150.0, links=30, wall_profile=bump).chain()
-    assert not compiled_driver.takes(profiled, lemke, "globalised")  # the profile driver
+    assert compiled_driver.takes(profiled, lemke, "globalised")  # profiles: a parameter
+    assert compiled_driver.takes(profiled, make_step_solver("active-set"), "newton")
+    assert not compiled_driver.takes(profiled, make_step_solver("active-set"), "globalised")
 
 
 @pytest.mark.parametrize("name", ["actuator", "channel"])

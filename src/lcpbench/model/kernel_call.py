@@ -84,6 +84,13 @@ def profile_applies(backend: str, method: str, chain: Chain) -> bool:
         return False
     if large_n.applies(chain):
         return False
+    return profile_layout(chain)
+
+
+def profile_layout(chain: Chain) -> bool:
+    """Whether the compiled routes take this chain with its wall of any profile: joints
+    and free nodes consecutive (the solve kernel's layout), and every profiled wall a
+    table of cubic pieces over the chain's reach (:func:`profile_args`)."""
     return chain.derived("_profile_layout",
                          lambda: _consecutive(chain) and profile_args(chain) is not None)
 
@@ -114,8 +121,8 @@ def run_profile_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
                          start: DriverStart | None = None,
                          settings="default") -> tuple[DriverOutput | None, str]:
     """The globalised profile driver in the profile kernel: ``(output, "")``, or
-    ``(None, why)`` where the kernel stopped (the caller then reports it not converged
-    for the escalations: :func:`lcpbench.model.compiled.profile_stopped`)."""
+    ``(None, why)`` where the kernel stopped (the caller then runs its compiled
+    fall-back, :func:`lcpbench.model.compiled.reference`)."""
     got, elapsed, name = call_profile_kernel(chain, tol=tol, max_outer=max_outer, start=start,
                                              settings=settings)
     code, *rest, upper, lower = got
