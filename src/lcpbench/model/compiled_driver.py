@@ -43,7 +43,7 @@ from ..solvers.registry import DEFAULT
 from ..thresholds import GEOMETRY_SLACK, NEWTON_SWITCH
 from .chain import energy
 from .judge_exact import split_reactions
-from .kernel_call import applies, profile_args, profile_layout
+from .kernel_call import applies, consecutive, profile_args, profile_layout
 from .newton import newton_step
 from .outer import (
     STALL_STEPS,
@@ -114,17 +114,32 @@ class KernelStep(ContactStep):
     """A contact step assembled by :mod:`.driver_kernel`, whose forms, LCP heights and
     residuals the kernels compute (the hooks of :mod:`.step_solver`)."""
 
-    kernel = None  # the driver_kernel module
+    kernel = None  # the driver_kernel module (None: loaded at the first use)
     cu = cl = np.empty(0)  # the elastic walls' compliances 1/k (empty: rigid walls)
+
+    def kernels(self):
+        """The driver_kernel module (a step made by :func:`dataclasses.replace`, e.g. a
+        Newton step, keeps no instance attribute: loaded again)."""
+        return self.kernel if self.kernel is not None else _kernel()
+
+    def springs(self) -> tuple[np.ndarray, np.ndarray]:
+        """(cu, cl), the elastic walls' compliances (computed again where a copy of the
+        step lost them)."""
+        if self.cu.size or not self.elastic:
+            return self.cu, self.cl
+        from .elastic import compliances
+
+        cu, cl = compliances(self)
+        return np.ascontiguousarray(cu, dtype=float), np.ascontiguousarray(cl, dtype=float)
 
     def compiled_qp(self):
         """(P data, indices, indptr, c̃, lower/ℓ, upper/ℓ, scaled bands)."""
-        return self.kernel.qp_form(self.bands, self.linear, self.lower, self.upper,
+        return self.kernels().qp_form(self.bands, self.linear, self.lower, self.upper,
                                    float(self.length_scale), float(self.force_scale))
 
     def compiled_lcp(self):
         """step_lcp's ``(form, M̃, q̃, dz, dw)``."""
-        code, M, q, Ms, qs, dz, dw, rows, top, cond = self.kernel.lcp_form(
+        code, M, q, Ms, qs, dz, dw, rows, top, cond = self.kernels().lcp_form(
             self.bands, self.linear, self.lower, self.upper, float(self.length_scale),
             float(self.force_scale))
         if code:
@@ -133,7 +148,7 @@ class KernelStep(ContactStep):
                        n_gap=rows.size), Ms, qs, dz, dw
 
     def from_lcp(self, form: LCPForm, zeta: np.ndarray) -> np.ndarray:
-        return self.kernel.from_lcp(self.bands, self.linear, form.rows, form.heights,
+        return self.kernels().from_lcp(self.bands, self.linear, form.rows, form.heights,
                                     form.condense, np.ascontiguousarray(zeta, dtype=float))
 
     def compiled_residuals(self, u: np.ndarray):
@@ -141,9 +156,10 @@ class KernelStep(ContactStep):
         Newton step, whose gradient holds T (u − u₀))."""
         if self.geometric is not None:
             return None
-        ok, res, R = self.kernel.judge(
+        cu, cl = self.springs()
+        ok, res, R = self.kernels().judge(
             np.ascontiguousarray(u, dtype=float), self.bands, self.linear, self.lower,
-            self.upper, self.cu, self.cl, self.coef, int(self.base[0]), int(self.free_nodes[0]) + 1,
+            self.upper, cu, cl, self.coef, int(self.base[0]), int(self.free_nodes[0]) + 1,
             self.links, self.origin, self.phi_origin, self.stiffness, self.rest_joint,
             self.nodal_load, float(self.length_scale), float(self.force_scale))
         if not ok:
@@ -194,12 +210,20 @@ def _assemble(kd, chain: Chain, c: tuple, alpha: np.ndarray,
     return step
 
 
-def assemble(chain: Chain, alpha: np.ndarray) -> KernelStep:
-    """The contact step of ``chain`` at α (eqs. 20-31; its rows the chain's walls), by the
-    driver's compiled assembly (:func:`~.driver_kernel.assemble`): a chain of consecutive
-    joints and contiguous free nodes (the layout every compiled route takes)."""
-    return _assemble(_kernel(), chain, _arrays(chain),
-                     np.ascontiguousarray(alpha, dtype=float))
+def assemble_step(chain: Chain, alpha: np.ndarray) -> KernelStep:
+    """The contact step of ``chain`` at configuration α, from the energy of the chain, in
+    O(N) (eqs. 20-31; :mod:`.step`): the compiled assembly every driver around a back-end
+    runs (:func:`~.driver_kernel.assemble`), its bounds the chain's wall rows (copies).
+    A chain of consecutive joints and contiguous free nodes (the layout every compiled
+    route takes); any other is a ProblemError."""
+    if not consecutive(chain):
+        raise ProblemError("the contact step is assembled for joints that join consecutive "
+                           "links, in order, and contiguous free nodes from node 1")
+    step = _assemble(_kernel(), chain, _arrays(chain),
+                     np.array(alpha, dtype=float))  # (a copy: the step keeps its α)
+    step.kernel = None  # (a module is no instance attribute of a step that may be pickled)
+    step.lower, step.upper = step.lower.copy(), step.upper.copy()
+    return step
 
 
 class Profile:

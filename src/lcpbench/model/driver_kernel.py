@@ -4,8 +4,8 @@ numba (``@njit(cache=True)``): what the outer loop of
 :func:`lcpbench.model.compiled_driver.run` does around a back-end's call, so that a full solve costs the back-end's time plus the
 same small compiled overhead for every back-end:
 
-- :func:`assemble`: :func:`lcpbench.model.step.assemble_step` (the banded step of
-  eqs. 20-31, its stencils and linearisation point);
+- :func:`assemble`: the banded step of eqs. 20-31, its stencils and linearisation
+  point (:func:`lcpbench.model.compiled_driver.assemble_step`, the public one);
 - :func:`qp_form` / :func:`lcp_form`: the forms the back-ends take
   (:func:`lcpbench.model.step_solver.step_qp`, the banded QP as CSC arrays;
   :meth:`ContactStep.lcp` with the scaling of ``step_lcp``, the condensed dense LCP);

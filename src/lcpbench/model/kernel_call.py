@@ -61,10 +61,12 @@ def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
 def _layout(chain: Chain) -> bool:
     if chain.profiled_walls:
         return False  # walls of any profile: the profile kernel (profile_applies)
-    return _consecutive(chain)
+    return consecutive(chain)
 
 
-def _consecutive(chain: Chain) -> bool:
+def consecutive(chain: Chain) -> bool:
+    """Whether the chain's joints join consecutive links in order and its free nodes are
+    contiguous from node 1 (the layout of every compiled assembly)."""
     if chain.consecutive is not None:  # the scene says (the test below, done at building)
         return chain.consecutive
     left, right = chain.joint_links[:, 0], chain.joint_links[:, 1]
@@ -92,7 +94,7 @@ def profile_layout(chain: Chain) -> bool:
     and free nodes consecutive (the solve kernel's layout), and every profiled wall a
     table of cubic pieces over the chain's reach (:func:`profile_args`)."""
     return chain.derived("_profile_layout",
-                         lambda: _consecutive(chain) and profile_args(chain) is not None)
+                         lambda: consecutive(chain) and profile_args(chain) is not None)
 
 
 def profile_args(chain: Chain) -> tuple | None:

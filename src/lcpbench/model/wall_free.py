@@ -158,7 +158,7 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
         if first is None:
             if not applies("auto", "globalised", free_layout(chain)):
                 return None  # (a layout no compiled route takes: drive answers the scene)
-            first = free_step(compiled_driver.assemble(chain, chain.rest_alpha), None).u
+            first = free_step(compiled_driver.assemble_step(chain, chain.rest_alpha), None).u
         if not wall_overlap(chain, first) < 0:  # NaN (no minimiser) included
             return None
     elif not loaded:
