@@ -261,6 +261,28 @@ def test_other_outer_schemes_reach_the_same_answer(method):
     assert res.total_force == pytest.approx(ref.total_force, rel=REL)
 
 
+def test_a_stop_of_the_profile_kernel_runs_the_compiled_driver(monkeypatch):
+    """Where the profile kernel stops on a bail that is not a refusal of its own step
+    (forced here: crossed walls), the compiled driver around the default back-end's step
+    solver takes over (model.compiled.reference, as on flat walls); its answer, judged as
+    every answer, is the energy minimisation's."""
+    from lcpbench.model import compiled
+    from lcpbench.model.kernel_call import BAIL_REASONS
+
+    scene = _scene(150, bump(3, .8, 14, 3), True, None, None, links=30)  # (a channel:
+    # the route through model.compiled.drive)
+    monkeypatch.setattr(compiled, "run_profile_compiled",
+                        lambda chain, **kw: (None, BAIL_REASONS[10]))
+    res = solve_internal(scene, tol=1e-9)
+    assert res.route == "profile kernel"
+    assert res.engine.startswith("compiled driver (the compiled kernel stopped: crossed")
+    assert res.converged, res.reason
+    ref = minimise_energy(scene)
+    F0 = max(abs(ref.total_force), scene.EI / scene.length**2)
+    assert abs(res.total_force - ref.total_force) <= REL * F0
+    assert abs(res.forces_lower.sum() - ref.forces_lower.sum()) <= REL * F0
+
+
 def test_profile_result_is_json_ready():
     res = lcpbench.solve(_scene(150, ramp(2.5, 3.5), False, None, None, links=20))
     text = json.dumps(sanitise(res.to_dict()))
