@@ -31,7 +31,7 @@ import numpy as np
 
 from lcpbench import ActuatorScene, solve
 from lcpbench.bench.machine import timing_note, timing_start
-from lcpbench.model.step import assemble_step
+from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.step_solver import solve_step
 from lcpbench.solvers import available_backends
 

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 import lcpbench
-from lcpbench.model.step import assemble_step
+from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.step_solver import solve_step, step_lcp
 from lcpbench.solvers.registry import available_backends
 

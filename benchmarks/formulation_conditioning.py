@@ -153,7 +153,7 @@ def main(argv=None) -> None:
     import lcpbench
     from lcpbench import ActuatorScene
     from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
-    from lcpbench.model.step import assemble_step
+    from lcpbench.model.compiled_driver import assemble_step
 
     out = Path(a.out)
     md, js = out.with_suffix(".md"), out.with_suffix(".json")

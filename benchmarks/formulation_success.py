@@ -80,7 +80,7 @@ def _run(task) -> dict:
     row = {"key": key, "backend": backend, "formulation": form}
     t0 = time.perf_counter()
     if level == "step":
-        from lcpbench.model.step import assemble_step
+        from lcpbench.model.compiled_driver import assemble_step
         from lcpbench.model.step_solver import solve_step
 
         step = assemble_step(scene.chain(), np.asarray(ref["alpha"]))

@@ -97,8 +97,8 @@ def step_errors() -> list[tuple]:
 
     import lcpbench
     from lcpbench import ActuatorScene
+    from lcpbench.model.compiled_driver import assemble_step
     from lcpbench.model.formulations import NAMES, accepts, parse_formulation
-    from lcpbench.model.step import assemble_step
     from lcpbench.model.step_solver import solve_step
     from lcpbench.solvers.registry import available_backends, get_backend
 

@@ -52,9 +52,9 @@ import lcpbench
 from lcpbench import ActuatorScene
 from lcpbench.baseline import solve_baseline
 from lcpbench.bench.machine import refuse_overwrite
+from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.compiled_driver import run as run_driver
 from lcpbench.model.dense import solve_paper_dense
-from lcpbench.model.step import assemble_step
 from lcpbench.model.step_solver import solve_step, step_lcp, step_residuals
 from lcpbench.solvers import available_backends, get_backend, solve_lcp
 from lcpbench.solvers.banded import solve_banded_qp

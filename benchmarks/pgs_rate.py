@@ -69,7 +69,7 @@ def main(argv=None) -> None:
     import lcpbench
     from lcpbench import ActuatorScene
     from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
-    from lcpbench.model.step import assemble_step
+    from lcpbench.model.compiled_driver import assemble_step
     from lcpbench.solvers.base import PROFILES
     from lcpbench.solvers.pgs import pgs
     from lcpbench.solvers.pgs_sm import pgs_sm

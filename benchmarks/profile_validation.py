@@ -10,9 +10,10 @@ ramps, bends, smoothed steps; upper wall, channel, lower wall):
 - outer iterations at tol 1e-3 (the paper's) and 1e-10, beside those of the
   flat wall at the profile's lowest height (same θ, N, tol);
 - every installed back-end on two scenes (a stenosis, a channel whose lower
-  wall is a ramp): converged and within the judge's rule of the reference,
+  wall is a ramp; another back-end runs the compiled driver, its walls a profile):
+  converged and within the judge's rule of the reference,
   not converged, or converged and wrong (must be 0);
-- the cost per outer iteration at N = 140 (the numpy engine for both): a
+- the cost per outer iteration at N = 140 (the default compiled solve for both): a
   stenosis against the flat wall, median of interleaved repeats, one BLAS
   thread, the load recorded.
 

@@ -36,7 +36,7 @@ from perf import interleaved, wall  # (benchmarks/ is the script's directory)
 import lcpbench
 from lcpbench import ActuatorScene
 from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
-from lcpbench.model.step import assemble_step
+from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.step_solver import solve_step, step_lcp
 from lcpbench.solvers.registry import available_backends
 from lcpbench.solvers.runner import solve_lcp

@@ -83,7 +83,7 @@ def test_a_dense_backend_refuses_a_huge_step_before_allocating():
     with the size in the message, without forming M."""
     import tracemalloc
 
-    from lcpbench.model.step import assemble_step
+    from lcpbench.model.compiled_driver import assemble_step
     from lcpbench.model.step_solver import solve_step
 
     chain = lcpbench.ActuatorScene(theta=150, height=3.0, links=20000).chain()

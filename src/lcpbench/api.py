@@ -20,7 +20,7 @@ import numpy as np
 from .accuracy import accuracy_settings, check_accuracy, held_to
 from .errors import ProblemError
 from .escalations import Context, escalate
-from .model.compiled import check_engine, drive, profile_stopped, reference, run_kernel
+from .model.compiled import check_engine, drive, reference, run_kernel
 from .model.finish import finish
 from .model.formulations import handed, resolve_formulation
 from .model.judge import chain_args, judge
@@ -185,8 +185,8 @@ def solve_internal(
     engine : "auto" (default: the default back-end with the globalised driver
         runs in one compiled kernel, :mod:`lcpbench.model.compiled`; another
         back-end that takes a QP or an LCP has the driver's own parts around
-        its calls compiled, :mod:`lcpbench.model.compiled_driver`; walls of a
-        profile with another back-end or scheme run the Python profile driver)
+        its calls compiled, :mod:`lcpbench.model.compiled_driver`, also against
+        walls of any profile and for the other schemes)
         or "compiled" (the kernel or the compiled driver, or ProblemError where
         neither applies); ``result.engine`` says which one ran. (The numpy
         reference engine, "numpy", was removed: passing it is a ProblemError.)
@@ -340,12 +340,8 @@ def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_ou
                                           newton=method == "newton")
     code = got[0]
     if code in BAIL_REASONS:
-        if profile:  # no compiled route in heights takes a profile over: escalations may
-            out, used = profile_stopped(chain, BAIL_REASONS[code]), \
-                f"compiled (stopped: {BAIL_REASONS[code]})"
-        else:
-            out, used = reference(chain, make_step, BAIL_REASONS[code], tol=tol,
-                                  max_outer=max_outer, method=method, settings=settings)
+        out, used = reference(chain, make_step, BAIL_REASONS[code], tol=tol,
+                              max_outer=max_outer, method=method, settings=settings)
         return finish(scene, chain, out, solver=DEFAULT, method=method, tol=tol,
                       elapsed=time.perf_counter() - t0, settings=settings, engine=used,
                       why=why, judge_args=chain_args(chain, args),

@@ -34,12 +34,13 @@ large N        the globalised scheme and N ≥ ``large_n.LARGE_N`` (or a chain i
                step (:class:`lcpbench.model.large_driver.WallTerms`).
 kernel         the default back-end, globalised or Newton, a chain
                the kernel takes (a warm start, or an arc near the wall): the solve kernel.
-compiled       another back-end that takes a QP or an LCP and the globalised or Newton
-driver         scheme, or any back-end and the undamped scheme, on flat walls (rigid or
-               elastic) the kernel's layout takes: its calls in Python, the driver
-               around them compiled.
-numpy          another back-end (or the undamped scheme, or Newton steps) on a wall
-               profile: the profile driver, :func:`lcpbench.model.profile_driver.run_profile_driver`.
+compiled       another back-end and the globalised or Newton scheme, any back-end and
+driver         the undamped scheme, or the default back-end's Newton scheme on a wall
+               profile, on a chain the kernel's layout takes (flat walls, rigid or
+               elastic, or walls of any profile with a table): its calls in Python, the
+               driver around them compiled
+               (:func:`lcpbench.model.compiled_driver.run`). A chain no driver takes is
+               a ProblemError of :func:`lcpbench.model.compiled.drive`.
 ============== ==========================================================================
 
 Every route but the first two and the load path begins with the wall-free search
@@ -69,11 +70,11 @@ from .model.judge import judged_in
 from .model.kernel_call import applies, profile_applies, profile_args
 from .problems import profile_table
 from .problems.scenes import Chain
-from .solvers.registry import DEFAULT, get_backend
+from .solvers.registry import DEFAULT
 
 #: The routes of a plan, by name (see the module).
 ROUTES = ("load path", "one-wall kernel", "channel kernel", "heavy SQP", "heights, then SQP",
-          "profile kernel", "large N", "kernel", "compiled driver", "numpy")
+          "profile kernel", "large N", "kernel", "compiled driver")
 #: The starts: from the free arc (cold), from a neighbour's answer (warm), along the
 #: loading path (ramp).
 STARTS = ("cold", "warm", "ramp")
@@ -82,7 +83,7 @@ STARTS = ("cold", "warm", "ramp")
 ENGINE = {"load path": "", "one-wall kernel": "compiled", "channel kernel": "compiled",
           "heavy SQP": "numpy", "heights, then SQP": "", "profile kernel": "compiled",
           "large N": "numpy",
-          "kernel": "compiled", "compiled driver": "compiled driver", "numpy": "numpy"}
+          "kernel": "compiled", "compiled driver": "compiled driver"}
 
 
 @dataclass(frozen=True)
@@ -172,17 +173,7 @@ def _route(chain: Chain, backend: str, method: str, engine: str, start: str,
         return "large N"
     if _kernel(chain, backend, method, engine):
         return "kernel"
-    if _compiled_driver(chain, backend, method, scaled):
-        return "compiled driver"
-    return "numpy"
-
-
-def _compiled_driver(chain: Chain, backend: str, method: str, scaled: bool) -> bool:
-    """:func:`lcpbench.model.compiled_driver.takes`, from the registry's data on the
-    back-end (the step solver is not made yet)."""
-    from .model.compiled_driver import takes_backend
-
-    return takes_backend(chain, get_backend(backend), scaled, method)
+    return "compiled driver"  # (or, where it does not take the chain, drive's ProblemError)
 
 
 __all__ = ["ENGINE", "ROUTES", "STARTS", "Plan", "make_plan"]

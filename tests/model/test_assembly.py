@@ -13,8 +13,8 @@ from hypothesis import strategies as st
 
 from lcpbench import ActuatorScene, CantileverScene
 from lcpbench.model.chain import alpha_from_heights, energy, heights
+from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.dense import paper_step
-from lcpbench.model.step import assemble_step
 from lcpbench.solvers.banded import solve_banded_qp
 from lcpbench.solvers.lemke import lemke
 

@@ -15,6 +15,7 @@ import pytest
 import lcpbench
 from lcpbench import ActuatorScene
 from lcpbench.errors import ProblemError
+from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.energy_reference import minimise_energy
 from lcpbench.model.formulations import (
     Formulation,
@@ -23,7 +24,6 @@ from lcpbench.model.formulations import (
     parse_formulation,
     resolve_formulation,
 )
-from lcpbench.model.step import assemble_step
 from lcpbench.model.step_solver import solve_step
 from lcpbench.solvers.base import Settings
 from lcpbench.solvers.judge import accept_tol

@@ -24,12 +24,12 @@ import pytest
 from lcpbench import ActuatorScene, CantileverScene, solve
 from lcpbench.model import compiled, large_n
 from lcpbench.model.chain import compensated_heights
+from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.finish import finish
 from lcpbench.model.judge import force_tol
 from lcpbench.model.kernel_call import kernel_args
 from lcpbench.model.large_driver import run_large
 from lcpbench.model.result import certify
-from lcpbench.model.step import assemble_step
 from lcpbench.model.step_solver import _judge, make_step_solver, solve_step
 from lcpbench.numba_cache import jit_module
 from lcpbench.solvers.base import Status
@@ -67,7 +67,8 @@ def test_every_kernel_sums_the_heights_as_the_reference(scene):
     """Route against route: the promise is the same bits in every kernel's prefix sums (the
     correctly rounded sums are the oracle in
     test_compensated_heights_are_the_correctly_rounded_prefix_sums)."""
-    # the numpy reference (model.step) and the three kernels' loops: the same bits
+    # the step's assembly (compiled_driver.assemble_step, the solve kernel's banded_step)
+    # and the judge kernel's and the increments' loops: the same bits
     chain = scene.chain()
     rng = np.random.default_rng(7)
     alpha = chain.rest_alpha * 0.97 + 1e-3 * rng.standard_normal(chain.links)

@@ -8,13 +8,16 @@ channel and the cantilever: every converged answer is the scene's equilibrium by
 oracle that shares no code with the driver (tests/energy_oracle.py).
 """
 
+from dataclasses import fields
+
 import numpy as np
 import pytest
 from energy_oracle import assert_solved
 
 from lcpbench import ActuatorScene, CantileverScene, solve
 from lcpbench.model import compiled_driver
-from lcpbench.model.step import assemble_step
+from lcpbench.model.compiled_driver import assemble_step
+from lcpbench.model.step import ContactStep
 from lcpbench.model.step_solver import make_step_solver, step_lcp, step_qp, step_residuals
 from lcpbench.problems.walls import WallProfile
 from lcpbench.solvers.registry import get_backend
@@ -27,25 +30,23 @@ SCENES = {
 
 
 def _steps(scene):
-    """The numpy step and the kernel's step at a bent, not-at-rest configuration."""
+    """The kernel's step at a bent, not-at-rest configuration, and the same step as a
+    plain ContactStep (its forms and residuals by the numpy methods, no kernel hooks)."""
     chain = scene.chain()
     alpha = chain.rest_alpha * 0.9 + 0.01 * np.sin(np.arange(chain.links))
-    kd = compiled_driver._kernel()
-    return chain, assemble_step(chain, alpha), compiled_driver._assemble(
-        kd, chain, compiled_driver._arrays(chain), alpha)
+    step = assemble_step(chain, alpha)
+    ref = ContactStep(**{f.name: getattr(step, f.name) for f in fields(ContactStep)})
+    return chain, ref, step
 
 
 @pytest.mark.parametrize("name", SCENES)
 def test_kernel_pieces_match_the_numpy_functions(name):
-    """Route against route: the kernel's intermediate arrays (bands, LCP and QP forms,
-    residuals) have no oracle of their own; the numpy step they must equal is checked
-    against the paper's equations and finite differences of the exact energy in
-    tests/model/test_assembly.py, and the whole solves below against the energy oracle."""
+    """Route against route: the kernel's forms and residuals (LCP and QP forms, the
+    heights of an LCP answer, lcpbench's residuals) against ContactStep's numpy methods on
+    the same step; they have no oracle of their own (the step itself is checked against
+    the paper's equations and finite differences of the exact energy in
+    tests/model/test_assembly.py, and the whole solves below against the energy oracle)."""
     chain, ref, step = _steps(SCENES[name])
-    for field in ("bands", "linear", "inv_a_cos", "v", "phi0", "coef", "origin", "alpha0",
-                  "phi_origin"):
-        a, b = getattr(ref, field), getattr(step, field)
-        assert np.allclose(a, b, rtol=1e-14, atol=1e-14 * np.max(np.abs(a))), field
     qa, qb = step_qp(ref), step_qp(step)
     assert qb.P.has_sorted_indices and qb.P.nnz == qa.P.nnz
     assert np.array_equal(qa.P.toarray(), qb.P.toarray())
@@ -110,7 +111,9 @@ def test_where_it_applies():
     assert compiled_driver.takes(chain, make_step_solver("active-set"), "undamped")
     bump = WallProfile.from_table([0, 10, 14, 18, 30], [3.0, 3.0, 2.4, 3.0, 3.0])
     profiled = ActuatorScene(theta=150.0, links=30, wall_profile=bump).chain()
-    assert not compiled_driver.takes(profiled, lemke, "globalised")  # the profile driver
+    assert compiled_driver.takes(profiled, lemke, "globalised")  # profiles: a parameter
+    assert compiled_driver.takes(profiled, make_step_solver("active-set"), "newton")
+    assert not compiled_driver.takes(profiled, make_step_solver("active-set"), "globalised")
 
 
 @pytest.mark.parametrize("name", ["actuator", "channel"])

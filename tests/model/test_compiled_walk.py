@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 from energy_oracle import assert_step_kkt
 
+from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.kernel_call import kernel_args
-from lcpbench.model.step import assemble_step
 from lcpbench.numba_cache import kernel_module
 from lcpbench.problems.scenes import ActuatorScene
 from lcpbench.solvers.banded import solve_banded_qp

@@ -17,10 +17,10 @@ import lcpbench
 from lcpbench import ActuatorScene, CantileverScene
 from lcpbench.api import solve_internal
 from lcpbench.errors import ProblemError
+from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.elastic import elastic_qp, force_lcp, heights_from_forces
 from lcpbench.model.judge import force_tol, judge
 from lcpbench.model.result import certify
-from lcpbench.model.step import assemble_step
 from lcpbench.model.step_solver import solve_step
 from lcpbench.solvers import available_backends
 from lcpbench.solvers.banded import _BandedBoxQP as _Banded

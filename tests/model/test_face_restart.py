@@ -16,9 +16,9 @@ import pytest
 from energy_oracle import assert_step_kkt
 
 from lcpbench.linalg.saddle import TridiagonalFactor
+from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.large_n import increment_step
 from lcpbench.model.outer import feasible_start
-from lcpbench.model.step import assemble_step
 from lcpbench.numba_cache import kernel_module
 from lcpbench.problems.scenes import ActuatorScene
 from lcpbench.solvers.banded import solve_banded_qp

@@ -14,6 +14,7 @@ from scipy.optimize import minimize
 import lcpbench
 from lcpbench import ActuatorScene, CantileverScene
 from lcpbench.errors import ProblemError
+from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.formulations import (
     NAMES,
     Formulation,
@@ -28,7 +29,6 @@ from lcpbench.model.formulations import (
     resolve_formulation,
     wall_rows,
 )
-from lcpbench.model.step import assemble_step
 from lcpbench.model.step_solver import solve_step, step_lcp, step_qp
 from lcpbench.solvers.registry import available_backends, get_backend
 

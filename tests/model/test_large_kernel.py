@@ -14,7 +14,7 @@ import pytest
 
 from lcpbench.model import large_n
 from lcpbench.model.chain import energy, heights
-from lcpbench.model.step import assemble_step
+from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.problems.scenes import ActuatorScene
 
 FIELDS = ("bands", "linear", "lower", "upper", "inv_a_cos", "coef", "origin", "alpha0",

@@ -16,11 +16,11 @@ from energy_oracle import assert_equilibrium, assert_step_kkt
 from lcpbench.linalg.saddle import TridiagonalFactor
 from lcpbench.model import step_solver
 from lcpbench.model.chain import heights
+from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.compiled_driver import run as run_driver
 from lcpbench.model.large_driver import run_large
 from lcpbench.model.large_n import increment_step, layout_fits, trial_of
 from lcpbench.model.outer import feasible_start
-from lcpbench.model.step import assemble_step
 from lcpbench.model.step_solver import make_step_solver, solve_step
 from lcpbench.problems.scenes import ActuatorScene
 from lcpbench.solvers.base import Status

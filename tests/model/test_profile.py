@@ -14,7 +14,6 @@ import pytest
 
 import lcpbench
 from lcpbench.api import solve_internal
-from lcpbench.errors import ProblemError
 from lcpbench.jsonsafe import sanitise
 from lcpbench.model import profile as prof
 from lcpbench.model.chain import alpha_from_heights, heights, joint_moments, node_positions
@@ -145,12 +144,15 @@ def test_the_slope_term_is_what_makes_the_answer_exact(monkeypatch):
     """Without the wall slope (vertical gaps at the nodes' x only) the fixed point is
     another one (2 % off the reference on this ramp); the judge, which checks the
     exact KKT with normal reactions (the judge kernel on the walls' tables), must not
-    call it converged."""
+    call it converged. The compiled driver's lagged reactions kept at zero: no slope
+    load in any step."""
+    from lcpbench.model import compiled_driver
+
     scene = _scene(150, ramp(2.0, 4.0), False, None, None)
     ref = minimise_energy(scene)
-    monkeypatch.setattr(prof, "slope_load",
-                        lambda chain, alpha, up, lo: np.zeros(chain.free_nodes.size))
-    res = solve_internal(scene, tol=1e-10, solver="lemke")  # the Python profile driver
+    monkeypatch.setattr(compiled_driver.Profile, "lag", lambda self, step, sol: None)
+    res = solve_internal(scene, tol=1e-10, solver="lemke")  # the compiled driver
+    assert res.engine == "compiled driver"
     assert abs(res.total_force - ref.total_force) > 1e-3 * ref.total_force  # it is off
     assert not res.converged
     assert "torque" in res.judgement.failed or "force error bound" in res.judgement.failed
@@ -233,13 +235,21 @@ def test_every_backend_runs_the_profile_step_and_is_never_wrong(solver, case):
         assert res.reason
 
 
-def test_the_compiled_engine_runs_a_profile_with_the_default_backend_only():
+@pytest.mark.parametrize("how", [dict(), dict(method="newton"), dict(method="undamped"),
+                                 dict(solver="lemke"), dict(solver="lemke", method="newton")],
+                         ids=["kernel", "newton", "undamped", "lemke", "lemke-newton"])
+def test_every_scheme_on_a_profile_runs_compiled_code_to_the_reference(how):
+    """The default back-end's globalised solve runs the profile kernel; every other
+    back-end and scheme the compiled driver with the same step (its walls at the nodes'
+    x, the lagged slope load) and merit: engine='compiled' takes all of them, and the
+    answer is the energy minimisation's."""
     scene = _scene(150, bump(3, .8, 14, 3), False, None, None, links=30)
-    with pytest.raises(ProblemError, match="profile"):
-        solve_internal(scene, engine="compiled", method="newton")
-    res = solve_internal(scene, engine="compiled")
-    assert res.engine == "compiled" and res.converged
-    assert lcpbench.solve(scene, method="newton").engine == "numpy"
+    res = solve_internal(scene, engine="compiled", tol=1e-9, **how)
+    assert res.engine == ("compiled" if not how else "compiled driver"), res.engine
+    assert res.converged, res.reason
+    ref = minimise_energy(scene)
+    assert res.total_force == pytest.approx(ref.total_force, rel=REL)
+    np.testing.assert_allclose(res.y, ref.y, rtol=0, atol=REL * scene.length)
 
 
 @pytest.mark.parametrize("method", ["newton", "undamped"])
@@ -249,6 +259,28 @@ def test_other_outer_schemes_reach_the_same_answer(method):
     res = lcpbench.solve(scene, tol=1e-10, method=method)
     assert res.converged, res.reason
     assert res.total_force == pytest.approx(ref.total_force, rel=REL)
+
+
+def test_a_stop_of_the_profile_kernel_runs_the_compiled_driver(monkeypatch):
+    """Where the profile kernel stops on a bail that is not a refusal of its own step
+    (forced here: crossed walls), the compiled driver around the default back-end's step
+    solver takes over (model.compiled.reference, as on flat walls); its answer, judged as
+    every answer, is the energy minimisation's."""
+    from lcpbench.model import compiled
+    from lcpbench.model.kernel_call import BAIL_REASONS
+
+    scene = _scene(150, bump(3, .8, 14, 3), True, None, None, links=30)  # (a channel:
+    # the route through model.compiled.drive)
+    monkeypatch.setattr(compiled, "run_profile_compiled",
+                        lambda chain, **kw: (None, BAIL_REASONS[10]))
+    res = solve_internal(scene, tol=1e-9)
+    assert res.route == "profile kernel"
+    assert res.engine.startswith("compiled driver (the compiled kernel stopped: crossed")
+    assert res.converged, res.reason
+    ref = minimise_energy(scene)
+    F0 = max(abs(ref.total_force), scene.EI / scene.length**2)
+    assert abs(res.total_force - ref.total_force) <= REL * F0
+    assert abs(res.forces_lower.sum() - ref.forces_lower.sum()) <= REL * F0
 
 
 def test_profile_result_is_json_ready():

@@ -19,8 +19,8 @@ import pytest
 from lcpbench import ActuatorScene, solve, solve_many
 from lcpbench.escalations import Context, escalate
 from lcpbench.model import large_n
+from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.judge import force_tol
-from lcpbench.model.step import assemble_step
 from lcpbench.plan import make_plan
 from lcpbench.solvers.registry import DEFAULT
 

@@ -20,7 +20,7 @@ from known_answers import CYCLING_PRONE as ALL_CYCLING_PRONE
 from known_answers import LCP_KNOWN, PAPER_SCENE, SICONOS_EXPECTED, SICONOS_LCP_DIR
 
 from lcpbench import ActuatorScene, solve
-from lcpbench.model.step import assemble_step
+from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.step_solver import solve_step
 from lcpbench.problems.lcpfile import read_lcp
 from lcpbench.solvers import available_backends, get_backend, solve_lcp

@@ -20,8 +20,8 @@ from known_answers import CONTACT_QP_KNOWN, PAPER_SCENE
 
 from lcpbench import ActuatorScene, solve
 from lcpbench.errors import ProblemError
+from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.compiled_driver import run as run_driver
-from lcpbench.model.step import assemble_step
 from lcpbench.model.step_solver import solve_step
 from lcpbench.problems.scenes import CantileverScene
 from lcpbench.solvers import banded

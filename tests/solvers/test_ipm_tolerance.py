@@ -19,7 +19,7 @@ from lcpbench.solvers.registry import available_backends
 @pytest.fixture(scope="module")
 def paper_step():
     import lcpbench
-    from lcpbench.model.step import assemble_step
+    from lcpbench.model.compiled_driver import assemble_step
 
     scene = lcpbench.ActuatorScene(theta=150, height=3.0, links=140)
     res = lcpbench.solve(scene, settings="high", tol=1e-10)

@@ -84,7 +84,7 @@ def test_bad_options_are_one_problem_error_naming_them():
 @pytest.fixture(scope="module")
 def contact_step():
     import lcpbench
-    from lcpbench.model.step import assemble_step
+    from lcpbench.model.compiled_driver import assemble_step
 
     scene = lcpbench.ActuatorScene(theta=150, height=3.0, links=40)
     res = lcpbench.solve(scene, settings="high", tol=1e-11)

@@ -362,7 +362,7 @@ def warm_up(backend: str, settings: str) -> None:
 def reference_row(scene) -> dict:
     """The reference of ``scene``: its solution row plus ``tol`` and ``check_error``."""
     from ..api import solve
-    from ..model.step import assemble_step
+    from ..model.compiled_driver import assemble_step
     from ..model.step_solver import solve_step
 
     res = solve(scene, solver="active-set", tol=REFERENCE_TOL, settings="high")

@@ -112,7 +112,7 @@ def scene_problems(scene) -> list[ExportedProblem]:
     """The first and the converged contact step of ``scene`` as exported QPs."""
     from ..api import solve
     from ..model.chain import alpha_from_heights, heights
-    from ..model.step import assemble_step
+    from ..model.compiled_driver import assemble_step
     from ..model.step_solver import solve_step, step_qp
     from .jobs import REFERENCE_TOL
 

@@ -321,7 +321,7 @@ def cmd_solve(args) -> int:
 
 def cmd_export(args) -> int:
     """``lcpbench export``: write the converged contact step as a .dat or .npz LCP."""
-    from ..model.step import assemble_step
+    from ..model.compiled_driver import assemble_step
     from ..model.step_solver import step_lcp
     from ..problems.lcpfile import write_lcp
 

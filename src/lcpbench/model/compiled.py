@@ -42,10 +42,9 @@ from .kernel_call import (
     run_profile_compiled,
 )
 from .outer import DriverOutput, DriverStart
-from .profile import has_profile
 
 #: ``engine`` of :func:`lcpbench.api.solve_internal`: "auto" (the kernel where it
-#: applies, the compiled driver or the profile driver elsewhere), "compiled" (the kernel or the compiled driver,
+#: applies, the compiled driver elsewhere), "compiled" (the kernel or the compiled driver,
 #: or ProblemError where neither applies). The numpy reference engine ("numpy") was
 #: removed: a kernel that stops falls back to compiled code (:func:`reference`).
 ENGINES = ("auto", "compiled")
@@ -65,15 +64,15 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
           tol: float, max_outer: int, method: str, start: DriverStart | None,
           args: tuple | None = None) -> tuple[DriverOutput, str]:
     """The driver's answer and the engine that produced it ("compiled", "compiled
-    driver", or "numpy" for the Python drivers that remain: profiles with another
-    back-end, large N in increments, heavy chains' SQP steps).
+    driver", or "numpy" for the Python drivers that remain: large N in increments,
+    heavy chains' SQP steps).
 
     The one place where the compiled kernel is chosen: a back-end other than the
     default runs the compiled driver (:mod:`.compiled_driver`) where it takes the
-    chain (flat walls, rigid or elastic; the globalised, Newton or undamped scheme, and
-    the undamped scheme with the default back-end too); walls of any profile with
-    another back-end or scheme run :func:`~lcpbench.model.profile_driver.run_profile_driver`
-    with ``step_solver``; a chain no driver takes is a ProblemError. ``args``: the
+    chain (flat walls, rigid or elastic, or walls of any profile; the globalised, Newton
+    or undamped scheme, and the undamped scheme with the default back-end too, and its
+    Newton scheme on a wall profile); a kernel that stops runs its compiled fall-back
+    (:func:`reference`); a chain no driver takes is a ProblemError. ``args``: the
     chain's :func:`~.kernel_call.kernel_args`, given by a caller that has checked that the kernel
     takes the chain's layout.
 
@@ -118,7 +117,8 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
 def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
            tol: float, max_outer: int, method: str, start: DriverStart | None,
            args: tuple | None = None) -> tuple[DriverOutput, str]:
-    """:func:`drive` in the node heights: the kernel, the large-N increments or numpy."""
+    """:func:`drive` in the node heights: the kernel, the large-N increments or the
+    compiled driver."""
     if method == "globalised" and large_n.applies(chain):  # N >= LARGE_N: increments
         from .large_driver import run_large
         from .nested_start import nested_start
@@ -136,28 +136,17 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
                                         settings=settings)
         if out is not None:
             return out, "compiled"
-        return profile_stopped(chain, why), f"compiled (stopped: {why})"
-    elif engine == "compiled" and chain is not None and has_profile(chain):
-        raise ProblemError("engine='compiled' runs walls of any profile (wall_profile) with the "
-                           f"default back-end ({DEFAULT}) and method='globalised' only; "
-                           "engine='auto' runs the others in the profile driver")
+        return reference(chain, lambda: step_solver, why, tol=tol, max_outer=max_outer,
+                         method=method, start=start, settings=settings)
     elif compiled_driver.takes(chain, step_solver, method):
-        # another back-end: its calls in Python, lcpbench's parts around them compiled
+        # another back-end (or scheme): its calls in Python, lcpbench's parts around them
+        # compiled; walls of any profile a parameter of its step and merit
         return (compiled_driver.run(chain, step_solver, tol=tol, max_outer=max_outer,
                                     start=start, method=method), compiled_driver.ENGINE)
-    elif engine == "compiled":
-        raise ProblemError(f"engine='compiled' runs method='globalised' or 'undamped' (or "
-                           f"'newton' with the default back-end, {DEFAULT}) on flat walls; got "
-                           f"solver {backend!r}, method {method!r}")
-    elif chain.profiled_walls:  # another back-end (or scheme) on a wall profile
-        from .profile_driver import run_profile_driver
-
-        return run_profile_driver(chain, step_solver, tol=tol, max_outer=max_outer,
-                                  method=method, start=start), "numpy"
     raise ProblemError("no driver takes this chain: the compiled driver runs a chain of "
-                       "consecutive joints and contiguous free nodes from node 1 with flat "
-                       "walls (method 'globalised', 'newton' or 'undamped'); got method "
-                       f"{method!r}")
+                       "consecutive joints and contiguous free nodes from node 1, with flat "
+                       "walls or walls of any profile (method 'globalised', 'newton' or "
+                       f"'undamped'); got method {method!r}")
 
 
 def _coarse_solve(coarse: Chain, *, tol: float) -> DriverOutput | None:
@@ -207,8 +196,9 @@ REFUSED_STEPS = frozenset((BAIL_REASONS[14], BAIL_REASONS[15]))
 def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol: float,
               max_outer: int, method: str, start: DriverStart | None = None,
               settings="default") -> tuple[DriverOutput, str]:
-    """Where the kernel stopped (``why``, one of its bail reasons): the compiled code
-    that takes over, its answer and the engine that produced it.
+    """Where the solve kernel or the profile kernel stopped (``why``, one of its bail
+    reasons): the compiled code that takes over, its answer and the engine that
+    produced it.
 
     Where the reason is one that round-off of node heights can cause
     (:data:`ROUNDOFF_BAILS`) and cond H · ε reaches the step's own accuracy
@@ -229,7 +219,8 @@ def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol:
     a repeated working set) run the compiled driver (:func:`.compiled_driver.run`: the
     same globalised loop, its assembly and line search compiled) around the default
     back-end's step solver ``make_step()``, which has what the kernel lacks (the primal
-    active set, the dense Lemke fall-back), stopping where max|Δα| stalls; on elastic
+    active set, the dense Lemke fall-back), stopping where max|Δα| stalls (against walls
+    of any profile, the profile kernel's step and merit, :class:`.compiled_driver.Profile`); on elastic
     walls the answer is reported not converged as for a refused step (the compiled
     driver assembles elastic walls for the other back-ends; around the default
     back-end's step solver there it has not been measured)."""
@@ -260,13 +251,6 @@ def stopped(chain: Chain, why: str) -> DriverOutput:
     return failed_output(chain.rest_alpha.copy(), chain.free_nodes.size, [],
                          f"the compiled kernel stopped: {why} (no answer: the shape "
                          f"given is the unconstrained arc)")
-
-
-def profile_stopped(chain: Chain, why: str) -> DriverOutput:
-    """Where the profile kernel stopped (``why``): :func:`out_of_reach` from
-    ``LARGE_N`` links, else :func:`stopped` (no compiled route in heights takes a wall
-    profile over; the plan's escalations, the loading path, may)."""
-    return out_of_reach(chain, why) if beyond_heights(chain, why) else stopped(chain, why)
 
 
 def beyond_heights(chain: Chain, why: str) -> bool:

@@ -17,17 +17,22 @@ are the kernels of :mod:`.driver_kernel`; per outer iteration:
 Its answers are checked against the energy minimisation
 (``tests/model/test_compiled_driver.py``). Elastic walls are a parameter of the same
 loop: the back-end gets the step's elastic forms (:mod:`.elastic_step`), the judge the
-compliant gaps, the line search the springs' energy. The paper's undamped scheme is an
-option of the same loop (:func:`undamped`, any back-end). Where it does not apply (see
-:func:`takes`: walls of any profile with another back-end) the profile driver
-(:func:`lcpbench.model.profile_driver.run_profile_driver`) runs. Where the solve kernel stops
-(:func:`lcpbench.model.compiled.reference`) this driver takes over with the default
-back-end's step solver.
+compliant gaps, the line search the springs' energy. Walls of any profile are a
+parameter too (:class:`Profile`): the step is the profile kernel's
+(:func:`~.driver_kernel.profile_assemble`: the walls at the nodes' x, the lagged
+reactions' slope load), the search on its merit and its stop
+(:func:`~.driver_kernel.profile_advance`, :func:`~.driver_kernel.profile_on_walls`,
+calling :mod:`.profile_kernel`'s functions), checked against the energy minimisation
+(``tests/model/test_profile.py``). The paper's undamped scheme is an option of the same
+loop (:func:`undamped`, any back-end). Where the solve kernel or the profile kernel
+stops (:func:`lcpbench.model.compiled.reference`) this driver takes over with the
+default back-end's step solver.
 """
 
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -35,9 +40,10 @@ from ..errors import ProblemError
 from ..problems.scenes import Chain
 from ..solvers.base import Status
 from ..solvers.registry import DEFAULT
-from ..thresholds import NEWTON_SWITCH
+from ..thresholds import GEOMETRY_SLACK, NEWTON_SWITCH
 from .chain import energy
-from .kernel_call import applies
+from .judge_exact import split_reactions
+from .kernel_call import applies, consecutive, profile_args, profile_layout
 from .newton import newton_step
 from .outer import (
     STALL_STEPS,
@@ -59,7 +65,8 @@ from .step import ContactStep, LCPForm
 ENGINE = "compiled driver"
 
 
-ENTRIES = ("assemble", "qp_form", "lcp_form", "from_lcp", "judge", "advance", "predict")
+ENTRIES = ("assemble", "qp_form", "lcp_form", "from_lcp", "judge", "advance", "predict",
+           "profile_start", "profile_assemble", "profile_advance", "profile_on_walls")
 
 
 def _kernel():
@@ -92,10 +99,14 @@ def takes_backend(chain: Chain, backend, scaled: bool, method: str) -> bool:
     :class:`~lcpbench.solvers.registry.Backend`) and whether its step is ``scaled``
     (what :func:`lcpbench.plan.make_plan` knows before the step solver is made)."""
     if method in ("globalised", "newton"):
-        if backend.form not in ("qp", "lcp") or backend.name == DEFAULT:  # (the kernel's)
+        if backend.form not in ("qp", "lcp"):
             return False
+        if backend.name == DEFAULT and (method == "globalised" or not chain.profiled_walls):
+            return False  # the kernels' (the solve kernel, the profile kernel)
     elif method != "undamped":
         return False
+    if chain.profiled_walls:
+        return profile_layout(chain)
     return applies("auto", "globalised", chain)
 
 
@@ -103,17 +114,32 @@ class KernelStep(ContactStep):
     """A contact step assembled by :mod:`.driver_kernel`, whose forms, LCP heights and
     residuals the kernels compute (the hooks of :mod:`.step_solver`)."""
 
-    kernel = None  # the driver_kernel module
+    kernel = None  # the driver_kernel module (None: loaded at the first use)
     cu = cl = np.empty(0)  # the elastic walls' compliances 1/k (empty: rigid walls)
+
+    def kernels(self):
+        """The driver_kernel module (a step made by :func:`dataclasses.replace`, e.g. a
+        Newton step, keeps no instance attribute: loaded again)."""
+        return self.kernel if self.kernel is not None else _kernel()
+
+    def springs(self) -> tuple[np.ndarray, np.ndarray]:
+        """(cu, cl), the elastic walls' compliances (computed again where a copy of the
+        step lost them)."""
+        if self.cu.size or not self.elastic:
+            return self.cu, self.cl
+        from .elastic import compliances
+
+        cu, cl = compliances(self)
+        return np.ascontiguousarray(cu, dtype=float), np.ascontiguousarray(cl, dtype=float)
 
     def compiled_qp(self):
         """(P data, indices, indptr, c̃, lower/ℓ, upper/ℓ, scaled bands)."""
-        return self.kernel.qp_form(self.bands, self.linear, self.lower, self.upper,
+        return self.kernels().qp_form(self.bands, self.linear, self.lower, self.upper,
                                    float(self.length_scale), float(self.force_scale))
 
     def compiled_lcp(self):
         """step_lcp's ``(form, M̃, q̃, dz, dw)``."""
-        code, M, q, Ms, qs, dz, dw, rows, top, cond = self.kernel.lcp_form(
+        code, M, q, Ms, qs, dz, dw, rows, top, cond = self.kernels().lcp_form(
             self.bands, self.linear, self.lower, self.upper, float(self.length_scale),
             float(self.force_scale))
         if code:
@@ -122,7 +148,7 @@ class KernelStep(ContactStep):
                        n_gap=rows.size), Ms, qs, dz, dw
 
     def from_lcp(self, form: LCPForm, zeta: np.ndarray) -> np.ndarray:
-        return self.kernel.from_lcp(self.bands, self.linear, form.rows, form.heights,
+        return self.kernels().from_lcp(self.bands, self.linear, form.rows, form.heights,
                                     form.condense, np.ascontiguousarray(zeta, dtype=float))
 
     def compiled_residuals(self, u: np.ndarray):
@@ -130,9 +156,10 @@ class KernelStep(ContactStep):
         Newton step, whose gradient holds T (u − u₀))."""
         if self.geometric is not None:
             return None
-        ok, res, R = self.kernel.judge(
+        cu, cl = self.springs()
+        ok, res, R = self.kernels().judge(
             np.ascontiguousarray(u, dtype=float), self.bands, self.linear, self.lower,
-            self.upper, self.cu, self.cl, self.coef, int(self.base[0]), int(self.free_nodes[0]) + 1,
+            self.upper, cu, cl, self.coef, int(self.base[0]), int(self.free_nodes[0]) + 1,
             self.links, self.origin, self.phi_origin, self.stiffness, self.rest_joint,
             self.nodal_load, float(self.length_scale), float(self.force_scale))
         if not ok:
@@ -162,10 +189,16 @@ def _arrays(chain: Chain) -> tuple:
             f64(chain.upper, dtype=float))
 
 
-def _assemble(kd, chain: Chain, c: tuple, alpha: np.ndarray) -> KernelStep:
+def _assemble(kd, chain: Chain, c: tuple, alpha: np.ndarray,
+              wall: Profile | None = None) -> KernelStep:
     a, jl, jr, k, rest, fs, load, _, lo, hi = c
-    bands, linear, inv, v, phi0, coef, origin, alpha0, phi_origin = kd.assemble(
-        alpha, a, jl, jr, k, rest, fs, lo.size, load)
+    if wall is None:
+        bands, linear, inv, v, phi0, coef, origin, alpha0, phi_origin = kd.assemble(
+            alpha, a, jl, jr, k, rest, fs, lo.size, load)
+    else:  # the walls at the nodes' x, the lagged reactions' slope load in the load
+        (bands, linear, inv, v, phi0, coef, origin, alpha0, phi_origin, lo, hi,
+         load) = kd.profile_assemble(alpha, a, jl, jr, k, rest, fs, load, wall.walls,
+                                     wall.mu_up, wall.mu_lo)
     step = KernelStep(bands, linear, lo, hi, alpha, inv, v, chain.free_nodes, chain.links,
                       jr, coef, phi0, origin, alpha0, phi_origin, k, rest, load,
                       length_scale=chain.length, force_scale=chain.force_scale,
@@ -177,30 +210,132 @@ def _assemble(kd, chain: Chain, c: tuple, alpha: np.ndarray) -> KernelStep:
     return step
 
 
+def assemble_step(chain: Chain, alpha: np.ndarray) -> KernelStep:
+    """The contact step of ``chain`` at configuration α, from the energy of the chain, in
+    O(N) (eqs. 20-31; :mod:`.step`): the compiled assembly every driver around a back-end
+    runs (:func:`~.driver_kernel.assemble`), its bounds the chain's wall rows (copies).
+    A chain of consecutive joints and contiguous free nodes (the layout every compiled
+    route takes); any other is a ProblemError."""
+    if not consecutive(chain):
+        raise ProblemError("the contact step is assembled for joints that join consecutive "
+                           "links, in order, and contiguous free nodes from node 1")
+    step = _assemble(_kernel(), chain, _arrays(chain),
+                     np.array(alpha, dtype=float))  # (a copy: the step keeps its α)
+    step.kernel = None  # (a module is no instance attribute of a step that may be pickled)
+    step.lower, step.upper = step.lower.copy(), step.upper.copy()
+    return step
+
+
+class Profile:
+    """What walls of any profile add to this driver (the profile kernel's scheme,
+    :mod:`.profile_kernel`, around any back-end): each step's bounds are the walls at
+    the nodes' x and its load has the slope load of the lagged reactions μ̄, ν̄
+    (:func:`~.driver_kernel.profile_assemble`); the line search is on the merit
+    P = E − Σ μ̄ h(x) + Σ ν̄ l(x) + σ Σ(penetration of the exact walls)
+    (:func:`~.driver_kernel.profile_advance`); the driver stops where, besides
+    max|Δα| < tol, the chain is on the right side of the exact walls to
+    GEOMETRY_SLACK·ℓ (:func:`~.driver_kernel.profile_on_walls`). The walls are the
+    tables of cubic pieces the kernels and the judge read
+    (:func:`~.kernel_call.profile_args`)."""
+
+    def __init__(self, kd, chain: Chain):
+        lo, hi, _, _, ku, cu_, kl, cl_, _ = profile_args(chain)
+        self.kd, self.chain = kd, chain
+        self.walls = (hi, lo, ku, cu_, kl, cl_)
+        n = chain.free_nodes.size
+        self.mu_up, self.mu_lo = np.zeros(n), np.zeros(n)
+
+    def start(self, start: DriverStart | None):
+        """(u, α, warm) as :func:`~.outer.starting_point`: ``start``'s shape clipped to
+        the walls at the nodes' x, else the arc, flattened by halves until it fits
+        (:func:`~.profile_kernel.clipped_start`); α None where nothing fits. A warm
+        start's net reactions are the first lagged ones."""
+        chain = self.chain
+        s_alpha = (np.zeros(0) if start is None
+                   else np.ascontiguousarray(start.alpha, dtype=float))
+        ok, cold, alpha, u = self.kd.profile_start(
+            s_alpha, np.ascontiguousarray(chain.rest_alpha, dtype=float),
+            float(chain.link_length), int(chain.free_nodes[0]) + 1, self.walls)
+        if not ok:
+            return u, None, None
+        warm = None if cold or start is None else start.warm
+        net = None if warm is None else warm.forces_net
+        if net is not None and np.size(net) == u.size and np.all(np.isfinite(net)):
+            _, hi, lo = self.on_walls(alpha)
+            self.mu_up, self.mu_lo = self.split(hi, lo, net, np.asarray(warm.u, float))
+        return u, alpha, warm
+
+    def split(self, upper, lower, net, u):
+        """The upper and lower reactions of ``net`` with the walls ``upper``, ``lower``
+        at the nodes' x (:func:`~.judge_exact.split_reactions`)."""
+        chain = self.chain
+        if chain.channel:
+            chain = replace(chain, upper=upper, lower=lower)
+        up, lo = split_reactions(chain, net, u)
+        return np.ascontiguousarray(up, dtype=float), np.ascontiguousarray(lo, dtype=float)
+
+    def lag(self, step: KernelStep, sol) -> None:
+        """The step's net reactions as the next step's lagged ones."""
+        net = sol.forces_net
+        if net is not None and np.all(np.isfinite(net)):
+            self.mu_up, self.mu_lo = self.split(step.upper, step.lower, net, sol.u)
+
+    def on_walls(self, alpha: np.ndarray):
+        """(how far α crosses the exact walls, the walls at its nodes' x: upper, lower)."""
+        chain = self.chain
+        return self.kd.profile_on_walls(alpha, float(chain.link_length),
+                                        int(chain.free_nodes[0]) + 1, self.walls)
+
+    def answer(self, alpha: np.ndarray) -> Chain | None:
+        """The chain with its walls at the nodes' x of α (the answer's reactions split
+        between them), or None where α crosses the exact walls by more than
+        GEOMETRY_SLACK·ℓ (one more step is taken)."""
+        worst, hi, lo = self.on_walls(alpha)
+        if not worst <= GEOMETRY_SLACK * self.chain.length:
+            return None
+        return replace(self.chain, upper=hi, lower=lo) if self.chain.channel else self.chain
+
+    def advance(self, step: KernelStep, sol, u, alpha, c):
+        """:func:`~.driver_kernel.profile_advance`: (max|Δα|, t, α(t), E(α(t)), u(t))."""
+        a, jl, jr, k, rest, fs, _, link_load, _, _ = c
+        net = sol.forces_net
+        net = (np.zeros(u.size) if net is None or np.size(net) != u.size
+               else np.ascontiguousarray(net, dtype=float))
+        return self.kd.profile_advance(
+            np.ascontiguousarray(sol.u, dtype=float), u, alpha, step.inv_a_cos, step.alpha0,
+            step.origin, step.phi_origin, step.coef, fs, k, rest, step.nodal_load, a, jl, jr,
+            link_load, self.walls, self.mu_up, self.mu_lo, net, float(self.chain.force_scale))
+
+
 def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
         start: DriverStart | None = None, stop_on_stall: bool = False,
         method: str = "globalised") -> DriverOutput:
     """Iterate contact steps to the equilibrium of ``chain`` with the parts around the
     back-end compiled, for a chain and step solver it :func:`takes` (and after a stop of
-    the solve kernel, :func:`lcpbench.model.compiled.reference`, with the default
-    back-end's step solver); never raises on non-convergence. ``method``: "globalised"
-    (the Armijo search on the exact energy from the clipped arc or ``start``), "newton"
-    (the same with the exact Hessian H + T, :func:`~.newton.newton_step`, once max|Δα|
-    is below ``NEWTON_SWITCH``, or from a neighbour's answer) or "undamped"
+    the solve kernel or the profile kernel, :func:`lcpbench.model.compiled.reference`,
+    with the default back-end's step solver); never raises on non-convergence.
+    ``method``: "globalised" (the Armijo search on the exact energy from the clipped arc
+    or ``start``; against walls of any profile on the merit of :class:`Profile`),
+    "newton" (the same with the exact Hessian H + T, :func:`~.newton.newton_step`, once
+    max|Δα| is below ``NEWTON_SWITCH``, or from a neighbour's answer) or "undamped"
     (:func:`undamped`). ``stop_on_stall``: end as soon as max|Δα| has
     stalled (:func:`~.outer.stall`) instead of at ``max_outer`` (after a kernel stop,
     where the escalations take a refusal over)."""
     kd = _kernel()
     c = _arrays(chain)
+    wall = Profile(kd, chain) if chain.profiled_walls else None
     if method == "undamped":
         if start is not None:
             raise ProblemError("a continuation start needs method='globalised'")
-        return undamped(kd, chain, c, solver, tol, max_outer)
+        return undamped(kd, chain, c, solver, tol, max_outer, wall)
     a, jl, jr, k, rest, fs, load, link_load, lo, hi = c
     cu, cl = _compliances(chain)
     n = chain.free_nodes.size
     steps: list[StepRecord] = []
-    u, alpha, warm = starting_point(chain, start, feasible_start)
+    if wall is None:
+        u, alpha, warm = starting_point(chain, start, feasible_start)
+    else:
+        u, alpha, warm = wall.start(start)
     if alpha is None:
         return failed_output(chain.rest_alpha, n, steps, "cannot fit the chain between the walls")
     u, alpha = np.ascontiguousarray(u, dtype=float), np.ascontiguousarray(alpha, dtype=float)
@@ -211,26 +346,34 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
     for _ in range(max_outer):
         near = newton and (steps[-1].max_dalpha < NEWTON_SWITCH if steps else warm_start)
         t0 = time.perf_counter()
-        step = _assemble(kd, chain, c, alpha)
+        step = _assemble(kd, chain, c, alpha, wall)
         if near:
             step = _newton(step, chain)
         t_asm = time.perf_counter() - t0
         sol = solver(step, warm)
         if sol.status not in (Status.SOLVED, Status.INACCURATE):
             return step_failed(alpha, n, steps, sol, t_asm, E)
-        dalpha, t, trial, E_t = kd.advance(
-            np.ascontiguousarray(sol.u, dtype=float), u, alpha, E,
-            stiffness_sum, step.inv_a_cos, step.alpha0, step.origin,
-            step.phi_origin, step.coef, fs, k, rest, load, a, jl, jr, link_load, lo, hi, cu,
-            cl)
+        if wall is None:
+            dalpha, t, trial, E_t = kd.advance(
+                np.ascontiguousarray(sol.u, dtype=float), u, alpha, E,
+                stiffness_sum, step.inv_a_cos, step.alpha0, step.origin,
+                step.phi_origin, step.coef, fs, k, rest, load, a, jl, jr, link_load, lo, hi,
+                cu, cl)
+            u_t = u + t * (sol.u - u)
+        else:
+            dalpha, t, trial, E_t, u_t = wall.advance(step, sol, u, alpha, c)
         if t == 0.0:
             return line_search_failed(alpha, n, steps, sol, t_asm, dalpha, E)
-        u, alpha, E = u + t * (sol.u - u), trial, E_t
+        u, alpha, E = u_t, trial, E_t
         steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
                                 t, dalpha, E, step_setup_time(sol)))
         warm = sol
+        if wall is not None:
+            wall.lag(step, sol)
         if dalpha < tol:
-            return converged_output(chain, alpha, sol, steps, step)
+            at = chain if wall is None else wall.answer(alpha)
+            if at is not None:
+                return converged_output(at, alpha, sol, steps, step)
         if stop_on_stall and len(steps) >= 2 * STALL_STEPS and stall(steps) is not None:
             return out_of_iterations(alpha, n, steps, len(steps), tol)
     return out_of_iterations(alpha, n, steps, max_outer, tol)
@@ -245,21 +388,30 @@ def _newton(step: KernelStep, chain: Chain) -> KernelStep:
     return new
 
 
-def undamped(kd, chain: Chain, c: tuple, solver, tol: float, max_outer: int) -> DriverOutput:
+def undamped(kd, chain: Chain, c: tuple, solver, tol: float, max_outer: int,
+             wall: Profile | None = None) -> DriverOutput:
     """The paper's scheme (Fig. 3): α ← α̂ of eq. (21) after every step, from the
-    unconstrained arc, until max|α̂ − α| < ``tol``; each step a Gauss–Newton step taken
+    unconstrained arc (against walls of any profile, ``wall``: from the arc clipped to
+    them, each step with the last step's reactions lagged, :class:`Profile`), until
+    max|α̂ − α| < ``tol`` (and, with a profile, the chain on the right side of the exact
+    walls); each step a Gauss–Newton step taken
     in full, which can leave the region where the linearisation is valid (kept so that
     benchmarks show where it breaks): a link that passes the vertical, where eq. (20) is
     singular, or a non-finite α̂ ends it, not converged."""
     n = chain.free_nodes.size
     steps: list[StepRecord] = []
     alpha = np.ascontiguousarray(chain.rest_alpha, dtype=float).copy()
+    if wall is not None:
+        alpha = wall.start(None)[1]
+        if alpha is None:
+            return failed_output(chain.rest_alpha, n, steps,
+                                 "cannot fit the chain between the walls")
     branch = np.sign(np.cos(alpha))
     fs = c[5]
     warm = None
     for _ in range(max_outer):
         t0 = time.perf_counter()
-        step = _assemble(kd, chain, c, alpha)
+        step = _assemble(kd, chain, c, alpha, wall)
         t_asm = time.perf_counter() - t0
         sol = solver(step, warm)
         if sol.status not in (Status.SOLVED, Status.INACCURATE):
@@ -275,15 +427,21 @@ def undamped(kd, chain: Chain, c: tuple, solver, tol: float, max_outer: int) -> 
             return failed_output(new, n, steps, "diverged: a link passed the vertical, where "
                                                 "the linearisation of eq. (20) is singular")
         alpha, warm = new, sol
+        if wall is not None:
+            wall.lag(step, sol)
         if dalpha < tol:
-            return converged_output(chain, alpha, sol, steps, step)
+            at = chain if wall is None else wall.answer(alpha)
+            if at is not None:
+                return converged_output(at, alpha, sol, steps, step)
     return out_of_iterations(alpha, n, steps, max_outer, tol)
 
 
 def warm_up() -> None:
     """Load (or compile, the first time) every kernel of this driver: both forms and
-    one tiny solve with lcpbench's Lemke (no optional back-end needed)."""
+    one tiny solve with lcpbench's Lemke (no optional back-end needed), against a flat
+    wall and a wall profile."""
     from ..problems.scenes import ActuatorScene
+    from ..problems.walls import WallProfile
     from .step_solver import make_step_solver
 
     chain = ActuatorScene(theta=150, height=3.0, links=8).chain()
@@ -291,3 +449,6 @@ def warm_up() -> None:
     step.compiled_qp()
     step.compiled_lcp()
     run(chain, make_step_solver("lemke"), tol=1e-3)
+    bump = WallProfile.from_table([0.0, 15.0, 30.0], [3.0, 2.5, 3.0])
+    run(ActuatorScene(theta=150, links=8, wall_profile=bump).chain(),
+        make_step_solver("lemke"), tol=1e-3)

@@ -1,7 +1,8 @@
 """The default solve compiled: assembly, dual active set, line search, outer loop.
 
 numba (``@njit(cache=True)``) versions of the numpy reference, line for line:
-:func:`lcpbench.model.step.assemble_step` (the banded step of eqs. 20-31),
+:func:`banded_step` (the banded step of eqs. 20-31, the one assembly: every driver's,
+:func:`lcpbench.model.compiled_driver.assemble_step`),
 :func:`lcpbench.solvers.banded.solve_banded_qp` with ``method="dual"`` (the walk, its
 refinement, :func:`~lcpbench.solvers.banded.step_certificate`), the judge's natural
 residual (:func:`lcpbench.model.step_solver.step_residuals`) and the globalised driver
@@ -160,7 +161,8 @@ def assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, i
 
 @njit(cache=True)
 def banded_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load):
-    """model.step.assemble_step: bands, c, the stencils of J and the linearisation point."""
+    """The contact step at α (eqs. 20-31; model.step.ContactStep's arrays): bands, c, the
+    stencils of J and the linearisation point."""
     links, nj = alpha.size, jr.size
     bands, linear, inv, coef = np.zeros((3, n)), np.empty(n), np.empty(links), np.empty((nj, 3))
     origin, alpha0, phi_origin = np.empty(n), np.empty(links), np.empty(nj)

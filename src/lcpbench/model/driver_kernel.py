@@ -4,8 +4,8 @@ numba (``@njit(cache=True)``): what the outer loop of
 :func:`lcpbench.model.compiled_driver.run` does around a back-end's call, so that a full solve costs the back-end's time plus the
 same small compiled overhead for every back-end:
 
-- :func:`assemble`: :func:`lcpbench.model.step.assemble_step` (the banded step of
-  eqs. 20-31, its stencils and linearisation point);
+- :func:`assemble`: the banded step of eqs. 20-31, its stencils and linearisation
+  point (:func:`lcpbench.model.compiled_driver.assemble_step`, the public one);
 - :func:`qp_form` / :func:`lcp_form`: the forms the back-ends take
   (:func:`lcpbench.model.step_solver.step_qp`, the banded QP as CSC arrays;
   :meth:`ContactStep.lcp` with the scaling of ``step_lcp``, the condensed dense LCP);
@@ -13,7 +13,11 @@ same small compiled overhead for every back-end:
 - :func:`judge`: :func:`lcpbench.model.step_solver.step_residuals`, lcpbench's
   residuals of the back-end's answer and R = K g + z;
 - :func:`advance`: max|α̂ − α| (eq. 21) and the Armijo search on the exact energy
-  (:func:`lcpbench.model.chain_kernel.armijo`, :func:`~lcpbench.model.chain_kernel.energy`).
+  (:func:`lcpbench.model.chain_kernel.armijo`, :func:`~lcpbench.model.chain_kernel.energy`);
+- against walls of any profile, :func:`profile_start`, :func:`profile_assemble`,
+  :func:`profile_advance` and :func:`profile_on_walls`: the profile kernel's start, step
+  (the walls at the nodes' x, the lagged reactions' slope load), merit search and stop
+  (:mod:`lcpbench.model.profile_kernel`, :mod:`lcpbench.model.wall_kernel`: one copy).
 
 The numpy modules are the reference; this file repeats their arithmetic in the same
 order where that is cheap, so the driver of :mod:`lcpbench.model.compiled_driver`
@@ -38,6 +42,8 @@ from .chain_kernel import (  # once each
 )
 from .compiled_dual import wall_residuals  # one copy of the judge's rows (numba_cache)
 from .compiled_kernel import banded_step  # the step
+from .profile_kernel import clipped_start, merit_search, penetration  # a profile's, once
+from .wall_kernel import slope_load, walls_at
 
 TINY = np.finfo(np.float64).tiny
 
@@ -285,3 +291,90 @@ def advance(su, u, alpha, E, stiffness_sum, inv, alpha0, origin, phi_origin, coe
         if step == 0.0:
             return dalpha, 0.0, alpha, E
         t = step
+
+
+# -- walls of any profile (model.profile_kernel's step, for any back-end) -----------
+@njit(cache=True)
+def _at(n):
+    """The scratch rows of :func:`~.wall_kernel.walls_at`: x, y, upper, lower, h', l',
+    h'', l'' at the free nodes."""
+    return (np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n), np.empty(n),
+            np.empty(n), np.empty(n))
+
+
+@njit(cache=True)
+def profile_start(start_alpha, rest_alpha, a, fs, walls):
+    """:func:`~.profile_kernel.clipped_start`: (fits, cold, α, u) of a solve against
+    walls of any profile (``walls`` = (upper rows, lower rows, the upper wall's table,
+    the lower's); ``start_alpha`` empty: from the arc)."""
+    n, links = walls[0].size, rest_alpha.size
+    alpha, u = np.empty(links), np.empty(n)
+    ok, cold = clipped_start(start_alpha, rest_alpha, a, fs, walls, alpha, u,
+                             np.empty(links), np.empty(links), _at(n))
+    return ok, cold, alpha, u
+
+
+@njit(cache=True)
+def profile_assemble(alpha, a, jl, jr, k, rest, fs, nodal_load, walls, mu_up, mu_lo):
+    """The contact step against walls of any profile at α, as the profile kernel builds
+    it: :func:`assemble`'s arrays with the slope load s = J_xᵀ(μ̄ h'(x) − ν̄ l'(x)) of the
+    lagged reactions ``mu_up``, ``mu_lo`` in the nodal load, then (lower, upper, nodal
+    load + s): the bounds the walls at the nodes' x where a node has a row."""
+    n = nodal_load.size
+    sin_a, cos_a = np.sin(alpha), np.cos(alpha)
+    at = _at(n)
+    walls_at(sin_a, cos_a, a, fs, *walls, *at)
+    w, s, nl = np.empty(n), np.empty(n), np.empty(n)
+    for i in range(n):  # the lagged reactions' slope load, into the nodal load
+        w[i] = max(mu_up[i], 0.0) * at[4][i] - max(mu_lo[i], 0.0) * at[5][i]
+    slope_load(alpha, cos_a, sin_a, fs, w, s)
+    for i in range(n):
+        nl[i] = nodal_load[i] + s[i]
+    return assemble(alpha, a, jl, jr, k, rest, fs, n, nl) + (at[3], at[2], nl)
+
+
+@njit(cache=True)
+def profile_advance(su, u, alpha, inv, alpha0, origin, phi_origin, coef, fs, k, rest,
+                    nodal_load, a, jl, jr, link_load, walls, mu_up, mu_lo, net, F):
+    """:func:`advance` against walls of any profile: max|α̂ − α| and the profile kernel's
+    search on its merit (:func:`~.profile_kernel.merit_search`, the step's nodal load
+    ``nodal_load`` with its slope load; σ from the step's net reactions ``net``, the
+    lagged ones and F = EI/ℓ²): (max|Δα|, t, α(t), E(α(t)), the heights there); t = 0
+    where the search found no decrease."""
+    links, n = alpha.size, u.size
+    dalpha, predicted = 0.0, predict(su, alpha0, origin, inv, fs)
+    for i in range(links):
+        dalpha = max(dalpha, abs(predicted[i] - alpha[i]))
+    if not np.all(np.isfinite(su)):
+        return np.nan, 0.0, alpha, np.nan, u
+    sin_a = np.sin(alpha)
+    E = energy(alpha, a, jl, jr, k, rest, link_load, sin_a)
+    at = _at(n)
+    walls_at(sin_a, np.cos(alpha), a, fs, *walls, *at)
+    hs, ls = at[2].copy(), at[3].copy()
+    big = F
+    for i in range(n):
+        big = max(big, max(abs(net[i]), max(mu_up[i], mu_lo[i])))
+    noise_k = 0.0
+    for j in range(k.size):
+        noise_k += abs(k[j])
+    g = _gradient(u, coef, jr[0], fs, links, origin, phi_origin, k, rest, nodal_load)
+    d, ut, trial = np.empty(n), np.empty(n), np.empty(links)
+    sin_t, cos_t = np.empty(links), np.empty(links)
+    chain = (a, jl, jr, k, rest, link_load, fs)
+    t, full = merit_search(E, u, su, g, d, ut, alpha, trial, sin_t, cos_t, inv, dalpha, big,
+                           noise_k, chain, walls, mu_up, mu_lo, at, at[1].copy(), hs, ls)
+    if t == 0.0:
+        return dalpha, 0.0, alpha, E, u
+    return (dalpha, t, trial, energy(trial, a, jl, jr, k, rest, link_load, sin_t),
+            su.copy() if full else ut)
+
+
+@njit(cache=True)
+def profile_on_walls(alpha, a, fs, walls):
+    """(how far α crosses the exact walls (mm), the walls at its nodes' x: upper, lower)
+    (:func:`~.profile_kernel.penetration`)."""
+    n = walls[0].size
+    at = _at(n)
+    worst = penetration(np.sin(alpha), np.cos(alpha), a, fs, walls, at)
+    return worst, at[2], at[3]

@@ -121,7 +121,7 @@ def profile_rows(alpha, cosines, a, fs, hi, lo, wall, ku, cu_, kl, cl_, forces_u
 
     ``(hi, lo, nodal_load, g_up, g_lo, h1, l1, h2, l2)``: the flat rows ``hi``, ``lo``
     with the profile's heights where a node has a row, the nodal load plus the slope
-    load of the lagged reactions (clipped at 0, as model.profile.profile_step), the
+    load of the lagged reactions (clipped at 0, as the profile kernel's step), the
     exact gaps at the nodes (``wall`` where a wall has no table), the walls' slopes
     and curvatures at the nodes' x."""
     n = hi.size

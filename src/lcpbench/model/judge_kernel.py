@@ -80,7 +80,7 @@ from .judge_checks import (
 TINY = np.finfo(np.float64).tiny
 
 
-# -- the judge's contact step (model.step.assemble_step, written for the judge) ----------
+# -- the judge's contact step (compiled_kernel.banded_step, written for the judge) -------
 @njit(cache=True)
 def _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, w, bands):
     """The step at α: its bands, and (rows) linear, coef, inv, origin, alpha0, phi_origin."""

@@ -61,10 +61,12 @@ def applies(backend: str, method: str, chain: Chain | None = None) -> bool:
 def _layout(chain: Chain) -> bool:
     if chain.profiled_walls:
         return False  # walls of any profile: the profile kernel (profile_applies)
-    return _consecutive(chain)
+    return consecutive(chain)
 
 
-def _consecutive(chain: Chain) -> bool:
+def consecutive(chain: Chain) -> bool:
+    """Whether the chain's joints join consecutive links in order and its free nodes are
+    contiguous from node 1 (the layout of every compiled assembly)."""
     if chain.consecutive is not None:  # the scene says (the test below, done at building)
         return chain.consecutive
     left, right = chain.joint_links[:, 0], chain.joint_links[:, 1]
@@ -84,8 +86,15 @@ def profile_applies(backend: str, method: str, chain: Chain) -> bool:
         return False
     if large_n.applies(chain):
         return False
+    return profile_layout(chain)
+
+
+def profile_layout(chain: Chain) -> bool:
+    """Whether the compiled routes take this chain with its wall of any profile: joints
+    and free nodes consecutive (the solve kernel's layout), and every profiled wall a
+    table of cubic pieces over the chain's reach (:func:`profile_args`)."""
     return chain.derived("_profile_layout",
-                         lambda: _consecutive(chain) and profile_args(chain) is not None)
+                         lambda: consecutive(chain) and profile_args(chain) is not None)
 
 
 def profile_args(chain: Chain) -> tuple | None:
@@ -114,8 +123,8 @@ def run_profile_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
                          start: DriverStart | None = None,
                          settings="default") -> tuple[DriverOutput | None, str]:
     """The globalised profile driver in the profile kernel: ``(output, "")``, or
-    ``(None, why)`` where the kernel stopped (the caller then reports it not converged
-    for the escalations: :func:`lcpbench.model.compiled.profile_stopped`)."""
+    ``(None, why)`` where the kernel stopped (the caller then runs its compiled
+    fall-back, :func:`lcpbench.model.compiled.reference`)."""
     got, elapsed, name = call_profile_kernel(chain, tol=tol, max_outer=max_outer, start=start,
                                              settings=settings)
     code, *rest, upper, lower = got

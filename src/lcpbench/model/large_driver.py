@@ -18,7 +18,7 @@ The walls are parameters of the same loop (:class:`WallTerms`), not a second
 driver: elastic walls add their springs' energy to the merit and start from a
 nested start unclipped (a node may indent the wall); a wall profile gives each
 step the walls at the nodes' x and the slope load of the lagged reactions, and
-the merit and the stop of :mod:`.profile_driver` (the l1 penalty on the exact
+the merit and the stop of the profile kernel (:mod:`.profile_kernel`: the l1 penalty on the exact
 walls, a full step near the answer, the chain on the exact walls).
 """
 
@@ -31,8 +31,8 @@ import numpy as np
 
 from ..problems.scenes import Chain
 from ..solvers.base import Status
-from ..thresholds import GEOMETRY_SLACK, NEWTON_SWITCH, NODE_GROSS, PENALTY
-from .chain import energy, heights
+from ..thresholds import GEOMETRY_SLACK, NEWTON_SWITCH, NODE_GROSS, PENALTY, START_PASSES
+from .chain import alpha_from_heights, energy, heights, node_positions
 from .elastic import penalty, penalty_gradient
 from .judge import contraction_estimate, split_reactions
 from .large_n import StepWork, increments_at, trial_of
@@ -51,8 +51,7 @@ from .outer import (
     step_failed,
     step_setup_time,
 )
-from .profile import slope_load, walls_at
-from .profile_driver import merit, penetration, profile_start
+from .profile import profile_gaps, slope_load, walls_at
 
 #: past max|Δα| < tol the driver goes on while its prediction of the judge's per-node
 #: force error bound (:func:`_node_change`) exceeds this share of NODE_GROSS, for at
@@ -75,7 +74,7 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
     other drivers do, for a continuation of the next scene. The walls are parameters
     of the step and the merit (:class:`WallTerms`): elastic walls add their springs'
     energy, a wall profile its walls at the nodes' x, the lagged slope load and the
-    l1 penalty on the exact walls (:mod:`.profile_driver`'s scheme)."""
+    l1 penalty on the exact walls (the profile kernel's scheme)."""
     n = chain.free_nodes.size
     steps: list[StepRecord] = []
     warm = None
@@ -132,6 +131,65 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
     return out_of_iterations(alpha, n, steps, max_outer, tol)
 
 
+# -- walls of any profile in increments: the merit, the stop and the start ----------
+# (the profile kernel's scheme, :mod:`.profile_kernel`, on this driver's Python loop)
+def penetration(chain: Chain, alpha: np.ndarray) -> float:
+    """How far α crosses the exact walls at its nodes' x (mm, 0 where it does not)."""
+    up, lo = profile_gaps(chain, alpha)
+    rows_up = np.isfinite(chain.upper)
+    worst = max(0.0, -float(np.min(up[rows_up], initial=np.inf)))
+    if lo is not None:
+        rows_lo = np.isfinite(chain.lower)
+        worst = max(worst, -float(np.min(lo[rows_lo], initial=np.inf)))
+    return worst
+
+
+def merit(chain: Chain, alpha: np.ndarray, mu_up: np.ndarray, mu_lo: np.ndarray,
+          sigma: float, energy: float) -> float:
+    """P = E − Σ μ̄ h(x_k) + Σ ν̄ l(x_k) + σ·Σ(penetration of the exact walls) (N·mm),
+    ``energy`` E given (this driver adds its compensated E itself: 0): one forward
+    kinematics and one evaluation of each profile (its function, as the step's walls)."""
+    x, y = node_positions(chain, alpha)
+    xf, yf = x[chain.free_nodes], y[chain.free_nodes]
+    total = energy
+    for prof, mu, limit, sign in ((chain.upper_profile, mu_up, chain.upper, 1.0),
+                                  (chain.lower_profile, mu_lo, chain.lower, -1.0)):
+        rows = np.isfinite(limit)
+        wall = prof(xf) if prof is not None else limit
+        if prof is not None:
+            total -= sign * float(np.sum(np.where(mu > 0, mu, 0.0) * wall))
+        if sigma:
+            total += sigma * float(np.sum(np.maximum(sign * (yf - wall), 0.0)[rows]))
+    return total
+
+
+def _clipped(chain: Chain, alpha0: np.ndarray):
+    """Heights clipped to the walls at the nodes' x, a few times (x moves with them)."""
+    alpha = alpha0
+    u = heights(chain, alpha0)
+    for _ in range(START_PASSES):
+        at = walls_at(chain, alpha)
+        u = np.clip(heights(chain, alpha), at.lower, at.upper)
+        trial = alpha_from_heights(chain, u, alpha)
+        if trial is None:
+            return u, None
+        alpha = trial
+    return u, alpha
+
+
+def profile_start(chain: Chain, alpha0: np.ndarray):
+    """The clipped shape of ``alpha0``; where a steep wall makes clipping tear the
+    chain (neighbours more than a apart), the unconstrained arc flattened by
+    halves until its clipped shape is a chain (the arc's angles scaled by 2^-k: a
+    symmetric arc stays closed on the right pin)."""
+    u, alpha = _clipped(chain, alpha0)
+    scale = 0.5
+    while alpha is None and scale > 1e-6:
+        u, alpha = _clipped(chain, scale * chain.rest_alpha)
+        scale *= 0.5
+    return u, alpha
+
+
 class WallTerms:
     """What the walls add to the increment driver: the step's walls and load, and the
     merit's terms beyond the chain's energy (:func:`.chain.energy` without walls).
@@ -142,7 +200,7 @@ class WallTerms:
     - a wall profile: the walls at the nodes' x, the slope load of the lagged
       reactions μ̄, ν̄ (:func:`.profile.slope_load`) in the step's load, and the merit
       Φ = E − Σ μ̄ h(x) + Σ ν̄ l(x) + σ·Σ(penetration of the exact walls)
-      (:func:`.profile_driver.merit`)."""
+      (:func:`merit`)."""
 
     def __init__(self, chain: Chain):
         self.chain = chain
@@ -162,7 +220,7 @@ class WallTerms:
             return increments_at(chain, alpha, work)
         self.at = walls_at(chain, alpha)
         # the lagged reactions as the last step gave them, round-off of either sign kept
-        # (clipped at 0, as profile.profile_step does, the stenosis at θ 150°, tol 1e-3
+        # (clipped at 0, as the profile kernel does, the stenosis at θ 150°, tol 1e-3
         # needed the escalations at N = 8·10⁴ and 10⁵, 9–10 s; kept: none of 12 solves,
         # N = 10⁴…10⁵, θ 120° and 150°)
         s = slope_load(chain, alpha, self.mu_up, self.mu_lo)
@@ -184,7 +242,7 @@ class WallTerms:
         slope = float(step.linear @ d)  # the gradient at u₀ along d
         if chain.elastic_walls:
             slope += float(penalty_gradient(chain, step.heights) @ d)
-        elif chain.profiled_walls:  # σ above every reaction (profile_driver)
+        elif chain.profiled_walls:  # σ above every reaction (the profile kernel's)
             net = sol.forces_net
             self.sigma = PENALTY * max(
                 float(np.max(np.abs(net), initial=0.0)) if net is not None else 0.0,

@@ -54,7 +54,7 @@ def armijo(at: Callable, E: float, slope: float, noise: float, local: bool = Fal
     :func:`lcpbench.model.chain_kernel.armijo`, as (t, α, E(α)); (0, None, E) where
     none down to ARMIJO_SHORTEST does. ``local`` (a wall profile near the answer): a
     step cut below LOCAL_CUT is taken in full (the undamped fixed point,
-    :mod:`.profile_driver`)."""
+    the large-N driver's wall profiles, :mod:`.large_driver`)."""
     rule = _rule().armijo
     t = 1.0
     while True:

@@ -34,9 +34,15 @@ suffix sum (:func:`slope_load`). At a fixed point (α and the multipliers
 unchanged) the box QP's KKT conditions are exactly (P). The iteration is a
 fixed point in (u, μ): it contracts like the flat-wall Gauss–Newton step
 when |h' tan α| is small (the coupling the lag drops), more slowly on steep
-walls; the driver (:mod:`lcpbench.model.profile_driver`) line-searches Φ,
-and the judge checks (P) on the exact geometry, so a slow or stalled
-iteration is a status, never a wrong answer.
+walls; the drivers line-search Φ, and the judge checks (P) on the exact
+geometry, so a slow or stalled iteration is a status, never a wrong answer.
+
+The step is assembled once, compiled: :func:`lcpbench.model.driver_kernel.profile_assemble`
+(any back-end, :mod:`lcpbench.model.compiled_driver`) and the profile kernel
+(:mod:`lcpbench.model.profile_kernel`, the default back-end), both on the walls' tables
+(:mod:`lcpbench.model.wall_kernel`). This module keeps the geometry in numpy that the
+result, the judge and the large-N driver read: the walls at the nodes' x, the exact
+gaps, J_xᵀ and the moments with horizontal forces.
 
 Option (a), the exact linearised row h_k + h'_k J_x du − du_k ≥ 0, would
 make the constraint matrix I − diag(h') J_x dense: an O(N²) LCP
@@ -52,7 +58,6 @@ import numpy as np
 
 from ..problems.scenes import Chain
 from .chain import node_positions
-from .step import ContactStep, assemble_step
 
 
 def has_profile(chain: Chain) -> bool:
@@ -114,22 +119,6 @@ def slope_load(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
     heights, of the horizontal parts of the wall reactions μ̄ (upper), ν̄ (lower)."""
     h1, l1 = slopes(chain, alpha)
     return x_jacobian_t(chain, alpha, forces_upper * h1 - forces_lower * l1)
-
-
-def profile_step(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
-                 forces_lower: np.ndarray) -> tuple[ContactStep, Chain]:
-    """The contact step at α with lagged reactions μ̄, ν̄ (N), and the chain at α.
-
-    The step's bounds are the profile at the nodes' x; the slope load s
-    shifts its nodal load (so its linear term and its factored gradient,
-    which is ∇Φ of the module docstring).
-    """
-    at = walls_at(chain, alpha)
-    step = assemble_step(at, alpha)
-    s = slope_load(chain, alpha, np.maximum(forces_upper, 0.0), np.maximum(forces_lower, 0.0))
-    if not np.any(s):
-        return step, at
-    return replace(step, linear=step.linear - s, nodal_load=step.nodal_load + s), at
 
 
 def profile_gaps(chain: Chain, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:

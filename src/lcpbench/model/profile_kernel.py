@@ -3,8 +3,8 @@
 The scheme of :mod:`lcpbench.model.profile` (each contact step the paper's
 banded box QP, its bounds the wall heights h(x_k) at the nodes' current x, the
 slope of the wall entering the linear term through the last step's reactions
-μ̄, ν̄ as the nodal load s = J_xᵀ(μ̄ h'(x) − ν̄ l'(x))), and the driver of
-:mod:`lcpbench.model.profile_driver`: an Armijo search on the merit
+μ̄, ν̄ as the nodal load s = J_xᵀ(μ̄ h'(x) − ν̄ l'(x))), and its outer loop: an
+Armijo search on the merit (:func:`merit_search`)
 
     P(u) = E(u) − Σ μ̄_k h(x_k(u)) + Σ ν̄_k l(x_k(u)) + σ Σ (penetration of the walls)
 
@@ -12,7 +12,10 @@ slope of the wall entering the linear term through the last step's reactions
 merit would cut it below LOCAL_CUT, and the stop at max|Δα| < tol with every
 node on its side of the exact walls to GEOMETRY_SLACK ℓ. Each step is the
 solve kernel's (:func:`lcpbench.model.compiled_kernel.solve_assembled`: the
-dual active set, its certificate and the step judge).
+dual active set, its certificate and the step judge). The compiled driver around
+any other back-end and scheme (:mod:`lcpbench.model.compiled_driver`) calls the same
+start (:func:`clipped_start`), search (:func:`merit_search`) and stop
+(:func:`penetration`) through :mod:`lcpbench.model.driver_kernel`.
 
 A wall is a table of cubic pieces (:mod:`lcpbench.problems.profile_table`):
 breakpoints ``knots`` and coefficients ``coef`` (4 × pieces, scipy's PPoly
@@ -22,8 +25,8 @@ an elastic wall do not combine, :class:`lcpbench.problems.scenes.ActuatorScene`)
 
 Nothing here decides "converged": the caller judges the answer
 (:mod:`lcpbench.model.judge`). A step the kernel cannot take as the
-reference does ends the solve with its bail code, and the caller runs the
-reference driver.
+reference does ends the solve with its bail code, and the caller runs its
+compiled fall-back (:func:`lcpbench.model.compiled.reference`).
 """
 
 from __future__ import annotations
@@ -79,7 +82,7 @@ __all__ = ["CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "solve_profile_cha
 @njit(cache=True)
 def merit_parts(alpha, sines, cosines, chain, walls, mu_up, mu_lo, at):
     """(E − Σ μ̄ h(x) + Σ ν̄ l(x), the penetration of the exact walls summed) at α: the
-    merit P's two parts (model.profile_driver.merit: P = first + σ second).
+    merit P's two parts (P = first + σ second).
     ``chain`` = (a, jl, jr, k, rest, link_load, fs); ``walls`` = (hi_rows, lo_rows, ku,
     cu_, kl, cl_); ``at``: the scratch rows of :func:`walls_at` (written)."""
     a, jl, jr, k, rest, link_load, fs = chain
@@ -108,7 +111,7 @@ def merit_at(E, walls, mu_up, mu_lo, yf, hi, lo):
 
 @njit(cache=True)
 def _clipped(alpha0, a, fs, walls, alpha, u, sin_a, cos_a, at):
-    """model.profile_driver._clipped into ``alpha``, ``u``: the heights clipped to the
+    """Into ``alpha``, ``u``: the heights clipped to the
     walls at the nodes' x, START_PASSES times; False where the chain tears."""
     links = alpha.size
     alpha[:] = alpha0
@@ -125,11 +128,86 @@ def _clipped(alpha0, a, fs, walls, alpha, u, sin_a, cos_a, at):
 
 
 @njit(cache=True)
+def clipped_start(start_alpha, rest_alpha, a, fs, walls, alpha, u, sin_a, cos_a, at):
+    """The start of a solve against walls of any profile into ``alpha``, ``u``: the shape
+    ``start_alpha`` (empty: none) clipped to the walls (:func:`_clipped`), else the
+    unconstrained arc flattened by halves until its clipped shape is a chain (the arc's
+    angles scaled by 2^-k: a symmetric arc stays closed on the right pin). (fits, cold):
+    cold where the start was not used (its lagged reactions are then zero)."""
+    ok = start_alpha.size == alpha.size and _clipped(start_alpha, a, fs, walls, alpha, u,
+                                                      sin_a, cos_a, at)
+    if ok:
+        return True, False
+    scale = 1.0
+    while not ok and scale > 1e-6:
+        ok = _clipped(scale * rest_alpha, a, fs, walls, alpha, u, sin_a, cos_a, at)
+        scale *= 0.5
+    return ok, True
+
+
+@njit(cache=True)
+def merit_search(E, u, su, g_u, d, ut, alpha, trial, sin_t, cos_t, inv, dalpha, big, noise_k,
+                 chain, walls, mu_up, mu_lo, at, yf, hs, ls):
+    """The Armijo search on the merit P = E − Σ μ̄ h(x) + Σ ν̄ l(x) + σ Σ(penetration),
+    σ = PENALTY · ``big`` (the largest reaction, at least EI/ℓ²), along u + t(su − u)
+    from the heights ``u`` at α (energy E, the model's gradient ``g_u`` there, the
+    walls ``hs``, ``ls`` at the nodes' heights ``yf``); near the answer (max|Δα| =
+    ``dalpha`` < NEWTON_SWITCH) a step the merit would cut below LOCAL_CUT is taken in
+    full. Writes ``d`` = su − u, ``ut`` (the last heights tried), ``trial`` (α there),
+    ``sin_t``, ``cos_t`` and the scratch ``at``. (t, full): t = 0 where no t >=
+    ARMIJO_SHORTEST decreases P; full: the step ``su`` taken in full."""
+    a, fs, links, n = chain[0], chain[6], alpha.size, u.size
+    pen_weight = PENALTY * big
+    slope = 0.0
+    for i in range(n):
+        d[i] = su[i] - u[i]
+        slope += g_u[i] * d[i]
+    part, pen = merit_at(E, walls, mu_up, mu_lo, yf, hs, ls)  # (the step's walls: at α)
+    phi = part + pen_weight * pen
+    slope -= pen_weight * pen
+    noise = energy_noise(phi, noise_k)
+    t = 1.0
+    while True:
+        for i in range(n):
+            ut[i] = u[i] + t * d[i]
+        phi_t = np.nan
+        if fit_heights(trial, ut, alpha, a, fs, links, inv, sin_t, cos_t):
+            part, pen = merit_parts(trial, sin_t, cos_t, chain, walls, mu_up, mu_lo, at)
+            phi_t = part + pen_weight * pen
+        step = armijo(t, phi_t, phi, slope, noise, ARMIJO_SHORTEST)
+        if step == t:
+            return t, False
+        if step == 0.0:
+            return 0.0, False
+        t = step
+        if t < LOCAL_CUT and dalpha < NEWTON_SWITCH:  # near the answer: the full step
+            if fit_heights(trial, su, alpha, a, fs, links, inv, sin_t, cos_t):
+                return 1.0, True
+
+
+@njit(cache=True)
+def penetration(sines, cosines, a, fs, walls, at):
+    """How far the chain at α (its ``sines``, ``cosines``) crosses the exact walls (mm,
+    the largest over the rows, 0 where it crosses none); the walls at the nodes' x left
+    in ``at`` (:func:`walls_at`'s rows)."""
+    walls_at(sines, cosines, a, fs, *walls, *at)
+    hi_rows, lo_rows = walls[0], walls[1]
+    yf, hi, lo = at[1], at[2], at[3]
+    worst = 0.0
+    for i in range(hi_rows.size):
+        if np.isfinite(hi_rows[i]):
+            worst = max(worst, yf[i] - hi[i])
+        if np.isfinite(lo_rows[i]):
+            worst = max(worst, lo[i] - yf[i])
+    return worst
+
+
+@njit(cache=True)
 def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo_rows,
                         hi_rows, L, F, ku, cu_, kl, cl_, channel, tol, max_outer, start_alpha,
                         mu_up, mu_lo, max_iter, request):
-    """The globalised profile driver (model.profile_driver.run_profile_driver) around
-    the solve kernel's step. ``ku``, ``cu_`` (``kl``, ``cl_``): the upper (lower)
+    """The globalised outer loop against walls of any profile around the solve
+    kernel's step. ``ku``, ``cu_`` (``kl``, ``cl_``): the upper (lower)
     wall's table, empty for a flat wall; ``hi_rows``, ``lo_rows``: the chain's rows
     (±inf: no wall at that node); ``channel``: reactions split between two walls;
     ``start_alpha`` empty for a cold start; ``mu_up``, ``mu_lo``: the starting lagged
@@ -154,15 +232,10 @@ def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, f
     w_up, w_lo = np.zeros(n, np.bool_), np.zeros(n, np.bool_)
     alpha, trial, u = wa[ALPHA], wa[TRIAL], np.empty(n)
     sin_a, sin_t, cos_a, cos_t = wa[SIN_A], wa[SIN_T], wa[COS_A], wa[COS_T]
-    ok = start_alpha.size == links and _clipped(start_alpha, a, fs, walls, alpha, u, sin_a,
-                                                cos_a, at)
-    if not ok:
+    ok, cold = clipped_start(start_alpha, rest_alpha, a, fs, walls, alpha, u, sin_a, cos_a, at)
+    if cold:
         mu_up[:] = 0.0
         mu_lo[:] = 0.0
-        scale = 1.0
-        while not ok and scale > 1e-6:  # the arc flattened by halves (profile_driver.profile_start)
-            ok = _clipped(scale * rest_alpha, a, fs, walls, alpha, u, sin_a, cos_a, at)
-            scale *= 0.5
     if not ok:
         return (NO_FIT, rest_alpha.copy(), zero, zero, zero, zero, rec, count, none, zero,
                 zero, zero)
@@ -199,36 +272,13 @@ def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, f
         big = F
         for i in range(n):
             big = max(big, max(abs(net[i]), max(mu_up[i], mu_lo[i])))
-        pen_weight = PENALTY * big
         grad_into(g_u, m, u, gp, T)
-        slope = 0.0
-        for i in range(n):
-            d[i] = su[i] - u[i]
-            slope += g_u[i] * d[i]
-        part, pen = merit_at(E, walls, mu_up, mu_lo, yf, hs, ls)  # (the step's walls: at α)
-        phi = part + pen_weight * pen
-        slope -= pen_weight * pen
-        noise = energy_noise(phi, noise_k)
-        t, full = 1.0, False
-        while True:
-            for i in range(n):
-                ut[i] = u[i] + t * d[i]
-            phi_t = np.nan
-            if fit_heights(trial, ut, alpha, a, fs, links, inv, sin_t, cos_t):
-                part, pen = merit_parts(trial, sin_t, cos_t, chain, walls, mu_up, mu_lo, at)
-                phi_t = part + pen_weight * pen
-            step = armijo(t, phi_t, phi, slope, noise, ARMIJO_SHORTEST)
-            if step == t:
-                break
-            if step == 0.0:
-                rec, count = record_step(rec, count, it, 0.0, dalpha, E)
-                return (LINE_SEARCH, alpha.copy(), zero, zero, u.copy(), sigma.copy(), rec,
-                        count, none, zero, zero, zero)
-            t = step
-            if t < LOCAL_CUT and dalpha < NEWTON_SWITCH:  # near the answer: the full step
-                if fit_heights(trial, su, alpha, a, fs, links, inv, sin_t, cos_t):
-                    t, full = 1.0, True
-                    break
+        t, full = merit_search(E, u, su, g_u, d, ut, alpha, trial, sin_t, cos_t, inv, dalpha,
+                               big, noise_k, chain, walls, mu_up, mu_lo, at, yf, hs, ls)
+        if t == 0.0:
+            rec, count = record_step(rec, count, it, 0.0, dalpha, E)
+            return (LINE_SEARCH, alpha.copy(), zero, zero, u.copy(), sigma.copy(), rec,
+                    count, none, zero, zero, zero)
         for i in range(n):
             u[i] = su[i] if full else ut[i]
         alpha, trial, sin_a, sin_t = trial, alpha, sin_t, sin_a
@@ -244,14 +294,7 @@ def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, f
             mu_up[i], mu_lo[i] = (net[i], 0.0) if near_up else (0.0, -net[i])
         flags = 7
         if dalpha < tol:
-            walls_at(sin_a, cos_a, a, fs, *walls, *at)  # the exact walls at the new α
-            worst = 0.0
-            for i in range(n):
-                if np.isfinite(hi_rows[i]):
-                    worst = max(worst, yf[i] - hi[i])
-                if np.isfinite(lo_rows[i]):
-                    worst = max(worst, lo[i] - yf[i])
-            if worst <= GEOMETRY_SLACK * L:
+            if penetration(sin_a, cos_a, a, fs, walls, at) <= GEOMETRY_SLACK * L:
                 return (CONVERGED, alpha.copy(), wn[RUP].copy(), wn[RLO].copy(), su.copy(),
                         sigma.copy(), rec, count, ws[9].copy(), net.copy(), hi.copy(),
                         lo.copy())

@@ -14,6 +14,10 @@ coordinates g = h̄ − û this is the paper's LCP: K = H and z = −K h̄ − c
 (eqs. 29–31). :mod:`lcpbench.model.dense` assembles the same K and z
 literally from eqs. (3)–(31); a test checks they agree.
 
+The step is assembled once, compiled (:func:`lcpbench.model.compiled_driver.assemble_step`,
+the kernel of :mod:`lcpbench.model.driver_kernel` that the solve kernel's assembly
+is); this module holds the :class:`ContactStep` it fills and its numpy methods.
+
 A :class:`ContactStep` is the bound-constrained QP
 
     minimise ½ uᵀ H u + cᵀ u   subject to   lower <= u <= upper,
@@ -31,8 +35,6 @@ import numpy as np
 
 from ..errors import ProblemError
 from ..linalg import banded_matvec, solveh_banded, sub_bands
-from ..problems.scenes import Chain
-from .chain import compensated_heights
 
 
 @dataclass
@@ -264,89 +266,3 @@ class LCPForm:
     heights: np.ndarray  # upper wall height of each gap row (mm)
     condense: np.ndarray  # free-node indices eliminated from the LCP
     n_gap: int
-
-
-
-def _joint_stencils(chain: Chain, inv_a_cos: np.ndarray):
-    """For each joint: the first of its three nodes and the coefficients on them.
-
-    φ̂_j = α̂_r − α̂_l; link i contributes −1/(a cos α_i) at node i and
-    +1/(a cos α_i) at node i+1. Node indices are shifted by +1 so that a
-    clamp (l = −1) can use a dummy node 0.
-    """
-    left, right = chain.joint_links[:, 0], chain.joint_links[:, 1]
-    wl = np.where(left >= 0, inv_a_cos[np.maximum(left, 0)], 0.0)
-    wr = inv_a_cos[right]
-    if np.any((left >= 0) & (right != left + 1)) or np.any(np.diff(right) != 1):
-        raise ProblemError("joints must join consecutive links, in order")
-    base = right  # shifted index of node (right − 1)
-    coef = np.column_stack([wl, -wl - wr, wr])
-    return base, coef
-
-
-def assemble_step(chain: Chain, alpha: np.ndarray) -> ContactStep:
-    """The contact step at configuration α, from the energy of the chain, in O(N)."""
-    cos = np.cos(alpha)
-    inv_a_cos = 1.0 / (chain.link_length * cos)
-    v = np.tan(alpha) - alpha
-    base, coef = _joint_stencils(chain, inv_a_cos)
-    left = chain.joint_links[:, 0]
-    right = chain.joint_links[:, 1]
-    phi0 = -v[right] + np.where(left >= 0, v[np.maximum(left, 0)], 0.0)
-    k = chain.joint_stiffness
-    size = chain.links + 2  # shifted node indices: dummy, nodes 0..N
-    diag = np.zeros(size)
-    off1 = np.zeros(size)
-    off2 = np.zeros(size)
-    lin = np.zeros(size)
-    t = k * (phi0 - chain.rest_joint)
-    b0, nj = int(base[0]), base.size
-    for m in range(3):
-        diag[b0 + m : b0 + m + nj] += k * coef[:, m] ** 2
-        lin[b0 + m : b0 + m + nj] += coef[:, m] * t
-    for m in range(2):
-        off1[b0 + m : b0 + m + nj] += k * coef[:, m] * coef[:, m + 1]
-    off2[b0 : b0 + nj] += k * coef[:, 0] * coef[:, 2]
-    # The linearisation point: u₀ = heights by forward kinematics, summed with
-    # compensation (chain.compensated_heights). If the chain is not closed on a pinned
-    # right end (the undamped iteration), the last link's linearised angle at u₀
-    # differs from α_N by the closure error y_N.
-    y = np.concatenate(([0.0], compensated_heights(chain.link_length * np.sin(alpha))))
-    origin = y[chain.free_nodes]
-    alpha0 = np.asarray(alpha, dtype=float).copy()
-    if chain.free_nodes[-1] < chain.links:
-        alpha0[-1] += -y[-1] * inv_a_cos[-1]
-    phi_origin = alpha0[right] - np.where(left >= 0, alpha0[np.maximum(left, 0)], 0.0)
-    free = chain.free_nodes + 1
-    if np.any(np.diff(free) != 1):
-        raise ProblemError("free nodes must be contiguous")
-    sl = slice(free[0], free[-1] + 1)
-    n = free.size
-    bands = np.zeros((3, n))
-    bands[0] = diag[sl]
-    bands[1, : n - 1] = off1[sl][: n - 1]
-    bands[2, : n - 2] = off2[sl][: n - 2]
-    return ContactStep(
-        bands=bands,
-        linear=lin[sl] - chain.nodal_load,
-        lower=chain.lower.copy(),
-        upper=chain.upper.copy(),
-        alpha=np.asarray(alpha, dtype=float).copy(),
-        inv_a_cos=inv_a_cos,
-        v=v,
-        free_nodes=chain.free_nodes,
-        links=chain.links,
-        base=base,
-        coef=coef,
-        phi0=phi0,
-        origin=origin,
-        alpha0=alpha0,
-        phi_origin=phi_origin,
-        stiffness=k,
-        rest_joint=chain.rest_joint,
-        nodal_load=chain.nodal_load,
-        length_scale=chain.length,
-        force_scale=chain.force_scale,
-        upper_stiffness=chain.upper_stiffness,
-        lower_stiffness=chain.lower_stiffness,
-    )
