@@ -6,7 +6,7 @@ along x when no end holds x, held in the step by a spring k_τ):
 
     K δ = f + G_n N + G_t T,
 
-K the banded step's Hessian (:func:`lcpbench.model.step.assemble_step`, compiled:
+K the banded step's Hessian (:func:`lcpbench.model.compiled_driver.assemble_step`, compiled:
 :func:`step_arrays`; near the answer with the springs' curvature T, Newton) plus the
 pull's curvature (and k_τ, and a free end's rotation spring), f = −g₀ + P ∂x_N/∂δ, G_n the gaps' and G_t the
 slips' Jacobians. Eliminating δ leaves the contact quantities affine in the forces,
@@ -89,7 +89,7 @@ def add_pull_curvature(bands, alpha, a, pull, first):
 def step_arrays(alpha, a, jl, jr, k, rest, fs, n, nodal_load, pull, right_datum, newton):
     """The chain's part of the step at α, compiled: (bands, f, D, u₀). H (lower band
     storage) is the banded step's (:func:`lcpbench.model.compiled_kernel.banded_step`,
-    i.e. :func:`lcpbench.model.step.assemble_step`) plus the pull's curvature
+    i.e. :func:`lcpbench.model.compiled_driver.assemble_step`) plus the pull's curvature
     (:func:`add_pull_curvature`); f = −(H u₀ + c) at the linearisation point u₀
     (``ContactStep.gradient(origin)``: Jᵀ k (φ̂(u₀) − φ*) − f_load, in its order) plus
     P ∂x_N/∂δ; D the slips' Jacobian (:func:`slip_jacobian`). ``fs``: the shifted

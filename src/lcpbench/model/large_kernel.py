@@ -5,7 +5,7 @@ At N = 10⁵ each of these was a dozen or more full-length numpy passes
 dual walk. Here each is one loop with the same arithmetic, in the same order
 where a sum is involved, as the numpy reference it replaces:
 
-- :func:`assemble` — :func:`lcpbench.model.step.assemble_step` followed by
+- :func:`assemble` — :func:`lcpbench.model.compiled_driver.assemble_step` followed by
   :func:`lcpbench.model.large_n.increment_step` (the step in increments
   d = u − u₀, its linear term the factored gradient at u₀) for a chain of the
   large-N layout (:func:`lcpbench.model.large_n.layout_fits`: joint j joins

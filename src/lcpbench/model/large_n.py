@@ -124,7 +124,7 @@ def increment_step(step: ContactStep, *, restart: bool = True) -> ContactStep:
 
 @dataclass
 class IncrementStep(ContactStep):
-    """:func:`increment_step` of :func:`~lcpbench.model.step.assemble_step`, assembled
+    """:func:`increment_step` of :func:`~lcpbench.model.compiled_driver.assemble_step`, assembled
     by one compiled pass (:func:`increments_at`), with the factored gradient and
     its term sizes compiled (:mod:`.large_kernel`: the same arithmetic as the
     reference's numpy). ``heights``: u₀, the free nodes' heights at α (mm)."""
@@ -256,7 +256,7 @@ def increments_at(chain: Chain, alpha: np.ndarray, work: StepWork | None = None,
     """``increment_step(assemble_step(chain, alpha))`` in one compiled pass (a chain of
     :func:`applies`), its face solves on the twisted factor; the same numbers. ``work``:
     the arrays to write (:class:`StepWork`; default: new ones). A wall profile's step
-    (:func:`lcpbench.model.profile.profile_step`) gives ``walls`` = (lower, upper), the
+    (the large-N driver's, :mod:`lcpbench.model.large_driver`) gives ``walls`` = (lower, upper), the
     profile at the nodes' x, and ``load``, the nodal load f plus the slope load s of
     the lagged reactions; elastic walls' springs ride on the chain."""
     k, rest, load0, lower, upper, _, base, sk = _chain_arrays(chain)
