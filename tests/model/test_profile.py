@@ -158,27 +158,53 @@ def test_the_slope_term_is_what_makes_the_answer_exact(monkeypatch):
     assert "torque" in res.judgement.failed or "force error bound" in res.judgement.failed
 
 
-def test_x_jacobian_product_matches_finite_differences():
+def test_slope_load_matches_finite_differences():
+    """s = J_xᵀ w (the compiled suffix sum, :func:`lcpbench.model.wall_kernel.slope_load`)
+    against J_x by central differences of the nodes' x (numpy kinematics); the slope load
+    of reactions μ, ν (:func:`lcpbench.model.profile.slope_load`) against J_xᵀ(μ h' − ν l')
+    with h' the profile function's own derivative (not its table)."""
     scene = _scene(150, bump(3, .8, 14, 3), False, None, None, links=12)
     chain = scene.chain()
     alpha = chain.rest_alpha * 0.7 + 0.01 * np.sin(np.arange(chain.links))  # any shape
     u = heights(chain, alpha)
     w = np.linspace(-1.0, 2.0, u.size)
     J = np.zeros((u.size, u.size))
+
+    def node_x(a):
+        return node_positions(chain, a)[0][chain.free_nodes]
+
     for m in range(u.size):
         e = np.zeros(u.size)
         e[m] = 1e-6
-        xp = prof.node_x(chain, alpha_from_heights(chain, u + e, alpha))
-        xm = prof.node_x(chain, alpha_from_heights(chain, u - e, alpha))
+        xp = node_x(alpha_from_heights(chain, u + e, alpha))
+        xm = node_x(alpha_from_heights(chain, u - e, alpha))
         J[:, m] = (xp - xm) / 2e-6
-    np.testing.assert_allclose(prof.x_jacobian_t(chain, alpha, w), J.T @ w, rtol=1e-7,
-                               atol=1e-9)
     from lcpbench.numba_cache import kernel_module  # the kernels' slope load
 
     s = np.empty(u.size)
     kernel_module("lcpbench.model.wall_kernel", "slope_load").slope_load(
         alpha, np.cos(alpha), np.sin(alpha), int(chain.free_nodes[0]) + 1, w, s)
     np.testing.assert_allclose(s, J.T @ w, rtol=1e-7, atol=1e-9)
+    mu = np.abs(w)
+    h1 = chain.upper_profile.slope(node_x(alpha))
+    np.testing.assert_allclose(prof.slope_load(chain, alpha, mu, np.zeros_like(mu)),
+                               J.T @ (mu * h1), rtol=1e-7, atol=1e-9)
+
+
+def test_walls_and_gaps_at_the_nodes_x_are_the_profile_there():
+    """walls_at and profile_gaps (the compiled walls on the profile's table) against the
+    profile function at the nodes' x of numpy's kinematics, to the table's accuracy."""
+    chain = _scene(150, bump(3, .8, 14, 3), False, None, None, links=40).chain()
+    alpha = chain.rest_alpha * 0.8
+    x, y = (v[chain.free_nodes] for v in node_positions(chain, alpha))
+    rows = np.isfinite(chain.upper)
+    at = prof.walls_at(chain, alpha)
+    np.testing.assert_allclose(at.upper[rows], chain.upper_profile(x[rows]), rtol=0,
+                               atol=1e-11)
+    assert np.all(np.isinf(at.upper[~rows]))
+    up, lo = prof.profile_gaps(chain, alpha)
+    np.testing.assert_allclose(up, chain.upper_profile(x) - y, rtol=0, atol=1e-11)
+    assert lo is None
 
 
 def test_moments_with_horizontal_forces_reduce_to_the_vertical_ones():

@@ -41,7 +41,7 @@ from scipy.optimize import minimize
 from ..problems.scenes import Chain
 from .chain import alpha_from_heights, energy, heights, joint_angles, node_positions
 from .energy_profile import profile_wall_hessian, profile_walls
-from .profile import has_profile, walls_at
+from .profile import walls_at
 
 
 @dataclass
@@ -197,7 +197,7 @@ def walls(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The wall gaps g(α) ≥ 0 (mm) and their Jacobian (mm/rad), one row per reachable wall."""
     rows = WallRows.of(chain) if rows is None else rows
-    if has_profile(chain):  # h(x_k(α)): model/energy_profile.py
+    if chain.profiled_walls:  # h(x_k(α)): model/energy_profile.py
         return profile_walls(chain, alpha, rows)
     _, y = node_positions(chain, alpha)
     g = rows.side * (rows.limit - y[rows.node])
@@ -222,7 +222,7 @@ def lagrangian_hessian(
     diag = np.zeros(chain.links)
     if eq_multiplier.size:
         diag += float(eq_multiplier[0]) * a_sin
-    if has_profile(chain):  # the walls' Hessians are not diagonal: model/energy_profile.py
+    if chain.profiled_walls:  # the walls' Hessians are not diagonal: model/energy_profile.py
         return energy_hessian(chain, alpha) + np.diag(diag) \
             - profile_wall_hessian(chain, alpha, wall_multiplier, rows)
     diag -= ((wall_multiplier * rows.side) @ rows.mask(chain)) * a_sin
@@ -236,7 +236,7 @@ def _start(chain: Chain) -> np.ndarray:
     """The unconstrained arc clipped to the walls, or the arc scaled down until it fits."""
     u = np.clip(heights(chain, chain.rest_alpha), chain.lower, chain.upper)
     alpha = alpha_from_heights(chain, u, chain.rest_alpha)
-    for _ in range(5 if has_profile(chain) and alpha is not None else 0):
+    for _ in range(5 if chain.profiled_walls and alpha is not None else 0):
         at = walls_at(chain, alpha)  # a profile: clip again at the nodes' new x
         u = np.clip(heights(chain, alpha), at.lower, at.upper)
         alpha = alpha_from_heights(chain, u, alpha)

@@ -117,7 +117,7 @@ from ..thresholds import (  # the rule's numbers, read by the judge kernel too
 )
 from . import large_n
 from .judge_exact import JudgeStep, judge_step, split_reactions  # noqa: F401 (public names)
-from .profile import node_x, walls_at
+from .profile import wall_rows, walls_at
 
 #: friction (issue 39): a node slides when its slip |s| > max(SLIP_FACTOR · tol · a,
 #: SLIP_FLOOR · ℓ) (a = ℓ/N; the floor: ten times Lemke's accepted residual on the
@@ -461,13 +461,12 @@ def stability_args(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
     kern = kernel_module("lcpbench.model.stability_kernel", "unstable_directions")
     n = len(forces_upper)
     rigid, flat = np.full(n, np.inf), np.zeros(n)
-    walls = []
-    for stiffness, profile in ((chain.upper_stiffness, chain.upper_profile),
-                               (chain.lower_stiffness, chain.lower_profile)):
-        x = node_x(chain, alpha) if profile is not None else None
-        walls.append((rigid if stiffness is None else np.asarray(stiffness, float),
-                      flat if x is None else np.asarray(profile.slope(x), float),
-                      flat if x is None else np.asarray(profile.curvature(x), float)))
+    # the walls' slopes and curvatures at the nodes' x (0 where a wall has no profile)
+    _, _, _, _, h1, l1, h2, l2 = (wall_rows(chain, alpha) if chain.profiled_walls
+                                  else (flat,) * 8)
+    walls = [(rigid if stiffness is None else np.asarray(stiffness, float), slope, curve)
+             for stiffness, slope, curve in ((chain.upper_stiffness, h1, h2),
+                                             (chain.lower_stiffness, l1, l2))]
     (ku, su, cu), (kl, sl, cl) = walls
     f64 = np.ascontiguousarray
     return kern, (f64(alpha, dtype=float), float(chain.link_length),

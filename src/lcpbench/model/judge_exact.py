@@ -35,7 +35,7 @@ from ..linalg import banded_matvec
 from ..problems.scenes import Chain
 from ..thresholds import EPS, PIVOT_ROUNDS, ROUNDOFF_ULPS, STALL
 from . import large_n
-from .profile import has_profile, slope_load, walls_at
+from .profile import slope_load, walls_at
 
 #: the single pivots are capped at 2 × this many, not 2 per node: each round is an O(N)
 #: face solve, and a judge that cannot settle says so
@@ -294,7 +294,7 @@ def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0,
     ``contacts`` (upper, lower): the contact set to start from instead (the judge's
     second step starts from its first's).
     """
-    if has_profile(chain):
+    if chain.profiled_walls:
         n = chain.free_nodes.size
         up_lo = forces if forces is not None else (np.zeros(n), np.zeros(n))
         at = walls_at(chain, alpha)
@@ -314,7 +314,7 @@ def judge_step(chain: Chain, alpha: np.ndarray, *, pull: float = 0.0,
     if contacts is not None:
         up, lo = (np.asarray(c, bool) & np.isfinite(w) for c, w in zip(contacts,
                                                                         (step.upper, step.lower)))
-    elif has_profile(chain) and forces is not None:
+    elif chain.profiled_walls and forces is not None:
         # the answer sits on the walls at the x of its last step, h'·Δx from the exact
         # wall: its nodes that carry force start on the wall too (else dozens of rounds)
         up |= (forces[0] > pull) & np.isfinite(step.upper)

@@ -35,6 +35,7 @@ from .outer import (
     failed_output,
     out_of_iterations,
 )
+from .profile import wall_tables, walls_at
 
 #: the solve kernel's bail codes (it left the reference's path) and their reasons
 BAIL_REASONS = {
@@ -104,17 +105,10 @@ def profile_args(chain: Chain) -> tuple | None:
     return chain.derived("_profile_args", lambda: _profile_args(chain))
 
 
-_EMPTY_TABLE = (np.zeros(0), np.zeros((4, 0)))
-
-
 def _profile_args(chain: Chain) -> tuple | None:
-    reach = (-float(chain.length), float(chain.length))  # no node is further from the pin
-    tables = []
-    for profile in (chain.upper_profile, chain.lower_profile):
-        table = _EMPTY_TABLE if profile is None else profile.pieces(*reach)
-        if table is None:
-            return None
-        tables.extend(table)
+    tables = wall_tables(chain)
+    if tables is None:
+        return None
     base = kernel_args(chain)
     return (*base[9:13], *tables, bool(chain.channel))
 
@@ -153,7 +147,6 @@ def call_profile_kernel(chain: Chain, *, tol: float, max_outer: int,
         net = None if start.warm is None else start.warm.forces_net
         if net is not None and np.size(net) == n and np.all(np.isfinite(net)):
             from .judge_exact import split_reactions
-            from .profile import walls_at
 
             up, lo = split_reactions(walls_at(chain, start_alpha), net,
                                      np.asarray(start.warm.u, dtype=float))

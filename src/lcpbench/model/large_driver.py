@@ -31,8 +31,8 @@ import numpy as np
 
 from ..problems.scenes import Chain
 from ..solvers.base import Status
-from ..thresholds import GEOMETRY_SLACK, NEWTON_SWITCH, NODE_GROSS, PENALTY, START_PASSES
-from .chain import alpha_from_heights, energy, heights, node_positions
+from ..thresholds import GEOMETRY_SLACK, NEWTON_SWITCH, NODE_GROSS, PENALTY
+from .chain import energy, heights
 from .elastic import penalty, penalty_gradient
 from .judge import contraction_estimate, split_reactions
 from .large_n import StepWork, increments_at, trial_of
@@ -51,7 +51,7 @@ from .outer import (
     step_failed,
     step_setup_time,
 )
-from .profile import profile_gaps, slope_load, walls_at
+from .profile import slope_load, wall_rows, wall_tables
 
 #: past max|Δα| < tol the driver goes on while its prediction of the judge's per-node
 #: force error bound (:func:`_node_change`) exceeds this share of NODE_GROSS, for at
@@ -79,7 +79,8 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
     steps: list[StepRecord] = []
     warm = None
     alpha = None
-    fit = profile_start if chain.profiled_walls else feasible_start
+    walls = WallTerms(chain)
+    fit = walls.start if chain.profiled_walls else feasible_start
     if start is not None and chain.elastic_walls:  # its nodes may indent the walls
         alpha = np.array(start.alpha, dtype=float)
     elif start is not None:
@@ -90,7 +91,6 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
         warm = replace(start.warm, u=np.full(n, np.nan))
     if alpha is None:
         return failed_output(chain.rest_alpha.copy(), n, steps, "cannot fit the chain between the walls")
-    walls = WallTerms(chain)
     noise = energy_noise(chain, energy(chain, alpha, walls=False))
     last_net, extra = None, 0
     last_contacts = None
@@ -131,63 +131,18 @@ def run_large(chain: Chain, solver: StepSolver, *, tol: float = 1e-3, max_outer:
     return out_of_iterations(alpha, n, steps, max_outer, tol)
 
 
-# -- walls of any profile in increments: the merit, the stop and the start ----------
-# (the profile kernel's scheme, :mod:`.profile_kernel`, on this driver's Python loop)
-def penetration(chain: Chain, alpha: np.ndarray) -> float:
-    """How far α crosses the exact walls at its nodes' x (mm, 0 where it does not)."""
-    up, lo = profile_gaps(chain, alpha)
-    rows_up = np.isfinite(chain.upper)
-    worst = max(0.0, -float(np.min(up[rows_up], initial=np.inf)))
-    if lo is not None:
-        rows_lo = np.isfinite(chain.lower)
-        worst = max(worst, -float(np.min(lo[rows_lo], initial=np.inf)))
-    return worst
+# -- walls of any profile in increments: the start, merit and stop of the profile kernel
+# (:mod:`.profile_kernel`: compiled, once) on this driver's Python loop
+def _driver_kernel():
+    from ..numba_cache import kernel_module  # numba: loads or compiles at first use
+
+    return kernel_module("lcpbench.model.driver_kernel", "assemble")
 
 
-def merit(chain: Chain, alpha: np.ndarray, mu_up: np.ndarray, mu_lo: np.ndarray,
-          sigma: float, energy: float) -> float:
-    """P = E − Σ μ̄ h(x_k) + Σ ν̄ l(x_k) + σ·Σ(penetration of the exact walls) (N·mm),
-    ``energy`` E given (this driver adds its compensated E itself: 0): one forward
-    kinematics and one evaluation of each profile (its function, as the step's walls)."""
-    x, y = node_positions(chain, alpha)
-    xf, yf = x[chain.free_nodes], y[chain.free_nodes]
-    total = energy
-    for prof, mu, limit, sign in ((chain.upper_profile, mu_up, chain.upper, 1.0),
-                                  (chain.lower_profile, mu_lo, chain.lower, -1.0)):
-        rows = np.isfinite(limit)
-        wall = prof(xf) if prof is not None else limit
-        if prof is not None:
-            total -= sign * float(np.sum(np.where(mu > 0, mu, 0.0) * wall))
-        if sigma:
-            total += sigma * float(np.sum(np.maximum(sign * (yf - wall), 0.0)[rows]))
-    return total
+def _profile_kernel():
+    from ..numba_cache import kernel_module
 
-
-def _clipped(chain: Chain, alpha0: np.ndarray):
-    """Heights clipped to the walls at the nodes' x, a few times (x moves with them)."""
-    alpha = alpha0
-    u = heights(chain, alpha0)
-    for _ in range(START_PASSES):
-        at = walls_at(chain, alpha)
-        u = np.clip(heights(chain, alpha), at.lower, at.upper)
-        trial = alpha_from_heights(chain, u, alpha)
-        if trial is None:
-            return u, None
-        alpha = trial
-    return u, alpha
-
-
-def profile_start(chain: Chain, alpha0: np.ndarray):
-    """The clipped shape of ``alpha0``; where a steep wall makes clipping tear the
-    chain (neighbours more than a apart), the unconstrained arc flattened by
-    halves until its clipped shape is a chain (the arc's angles scaled by 2^-k: a
-    symmetric arc stays closed on the right pin)."""
-    u, alpha = _clipped(chain, alpha0)
-    scale = 0.5
-    while alpha is None and scale > 1e-6:
-        u, alpha = _clipped(chain, scale * chain.rest_alpha)
-        scale *= 0.5
-    return u, alpha
+    return kernel_module("lcpbench.model.profile_kernel", "solve_profile_chain")
 
 
 class WallTerms:
@@ -197,10 +152,12 @@ class WallTerms:
     - rigid flat walls: nothing (the merit is the energy);
     - elastic walls: the springs' energy Σ ½ k (y − h)₊² (:func:`.elastic.penalty`)
       at the nodes' heights, its gradient in the slope;
-    - a wall profile: the walls at the nodes' x, the slope load of the lagged
-      reactions μ̄, ν̄ (:func:`.profile.slope_load`) in the step's load, and the merit
-      Φ = E − Σ μ̄ h(x) + Σ ν̄ l(x) + σ·Σ(penetration of the exact walls)
-      (:func:`merit`)."""
+    - a wall profile: the walls at the nodes' x (:func:`.profile.wall_rows`), the slope
+      load of the lagged reactions μ̄, ν̄ (:func:`.profile.slope_load`) in the step's
+      load, and the merit Φ = E − Σ μ̄ h(x) + Σ ν̄ l(x) + σ·Σ(penetration of the exact
+      walls) (:func:`~.profile_kernel.merit_at`); the start and the stop of the profile
+      kernel (:func:`~.driver_kernel.profile_start`,
+      :func:`~.driver_kernel.profile_on_walls`). All compiled, on the walls' tables."""
 
     def __init__(self, chain: Chain):
         self.chain = chain
@@ -213,19 +170,43 @@ class WallTerms:
         #: the judge's step after the first such step, the stenosis at N = 3·10⁴), so its
         #: per-node prediction compares two steps below tol
         self.first_extra = 1 if chain.profiled_walls else 0
+        if chain.profiled_walls:  # the kernels' walls: (upper rows, lower rows, tables)
+            f64 = np.ascontiguousarray
+            self.walls = (f64(chain.upper, dtype=float), f64(chain.lower, dtype=float),
+                          *wall_tables(chain))
+            self.a, self.fs = float(chain.link_length), int(chain.free_nodes[0]) + 1
+
+    def start(self, chain: Chain, alpha0: np.ndarray):
+        """``(u, α)``: the clipped shape of ``alpha0``, else the arc flattened by halves
+        until its clipped shape is a chain (:func:`~.profile_kernel.clipped_start`); α
+        None where nothing fits."""
+        ok, _, alpha, u = _driver_kernel().profile_start(
+            np.ascontiguousarray(alpha0, dtype=float),
+            np.ascontiguousarray(chain.rest_alpha, dtype=float), self.a, self.fs, self.walls)
+        return u, (alpha if ok else None)
 
     def step(self, alpha: np.ndarray, work: StepWork):
         chain = self.chain
         if not chain.profiled_walls:
             return increments_at(chain, alpha, work)
-        self.at = walls_at(chain, alpha)
+        rows = wall_rows(chain, alpha)
+        self.at = replace(chain, upper=rows[2], lower=rows[3])
         # the lagged reactions as the last step gave them, round-off of either sign kept
         # (clipped at 0, as the profile kernel does, the stenosis at θ 150°, tol 1e-3
         # needed the escalations at N = 8·10⁴ and 10⁵, 9–10 s; kept: none of 12 solves,
         # N = 10⁴…10⁵, θ 120° and 150°)
-        s = slope_load(chain, alpha, self.mu_up, self.mu_lo)
-        return increments_at(chain, alpha, work, walls=(self.at.lower, self.at.upper),
+        s = slope_load(chain, alpha, self.mu_up, self.mu_lo, rows)
+        return increments_at(chain, alpha, work, walls=(rows[3], rows[2]),
                              load=chain.nodal_load + s)
+
+    def merit_parts(self, alpha: np.ndarray) -> tuple[float, float]:
+        """A profile's (−Σ μ̄ h(x) + Σ ν̄ l(x), the penetration of the exact walls summed)
+        at α (:func:`~.profile_kernel.merit_at` with E = 0: this driver adds its
+        compensated E itself)."""
+        _, y, hi, lo, *_ = wall_rows(self.chain, alpha)
+        part, pen = _profile_kernel().merit_at(0.0, self.walls, self.mu_up, self.mu_lo, y,
+                                               hi, lo)
+        return float(part), float(pen)
 
     def extra(self, alpha: np.ndarray) -> float:
         """The merit's terms beyond the energy at α."""
@@ -233,7 +214,8 @@ class WallTerms:
         if chain.elastic_walls:
             return penalty(chain, heights(chain, alpha))
         if chain.profiled_walls:
-            return merit(chain, alpha, self.mu_up, self.mu_lo, self.sigma, energy=0.0)
+            part, pen = self.merit_parts(alpha)
+            return part + self.sigma * pen
         return 0.0
 
     def merit_at(self, alpha, step, sol, d) -> tuple[float, float]:
@@ -248,9 +230,7 @@ class WallTerms:
                 float(np.max(np.abs(net), initial=0.0)) if net is not None else 0.0,
                 float(np.max(self.mu_up, initial=0.0)), float(np.max(self.mu_lo, initial=0.0)),
                 chain.force_scale)
-            violation = merit(chain, alpha, self.mu_up, self.mu_lo, 1.0, energy=0.0) - \
-                merit(chain, alpha, self.mu_up, self.mu_lo, 0.0, energy=0.0)
-            slope -= self.sigma * violation
+            slope -= self.sigma * self.merit_parts(alpha)[1]
         return energy(chain, alpha, walls=False) + self.extra(alpha), slope
 
     def trial(self, alpha, d, step):
@@ -268,14 +248,18 @@ class WallTerms:
     def lag(self, net, u: np.ndarray) -> None:
         """The step's reactions as the next step's lagged multipliers (a profile)."""
         if self.chain.profiled_walls and net is not None and np.all(np.isfinite(net)):
-            self.mu_up, self.mu_lo = split_reactions(self.at, net, u)
+            self.mu_up, self.mu_lo = (np.ascontiguousarray(m, dtype=float) for m in
+                                      split_reactions(self.at, net, u))
 
     def on_walls(self, alpha: np.ndarray) -> bool:
         """A profile: the chain on the right side of the exact walls at α to
-        GEOMETRY_SLACK·ℓ (the walls move under the nodes with x); else True."""
+        GEOMETRY_SLACK·ℓ (the walls move under the nodes with x,
+        :func:`~.profile_kernel.penetration`); else True."""
         if not self.chain.profiled_walls:
             return True
-        return penetration(self.chain, alpha) <= GEOMETRY_SLACK * self.chain.length
+        worst, _, _ = _driver_kernel().profile_on_walls(
+            np.ascontiguousarray(alpha, dtype=float), self.a, self.fs, self.walls)
+        return worst <= GEOMETRY_SLACK * self.chain.length
 
 
 def _node_change(chain: Chain, net, last_net, steps: list[StepRecord]):

@@ -38,11 +38,15 @@ walls; the drivers line-search Φ, and the judge checks (P) on the exact
 geometry, so a slow or stalled iteration is a status, never a wrong answer.
 
 The step is assembled once, compiled: :func:`lcpbench.model.driver_kernel.profile_assemble`
-(any back-end, :mod:`lcpbench.model.compiled_driver`) and the profile kernel
-(:mod:`lcpbench.model.profile_kernel`, the default back-end), both on the walls' tables
-(:mod:`lcpbench.model.wall_kernel`). This module keeps the geometry in numpy that the
-result, the judge and the large-N driver read: the walls at the nodes' x, the exact
-gaps, J_xᵀ and the moments with horizontal forces.
+(any back-end, :mod:`lcpbench.model.compiled_driver`), the profile kernel
+(:mod:`lcpbench.model.profile_kernel`, the default back-end) and the large-N driver
+(:mod:`lcpbench.model.large_driver`), all on the walls' tables
+(:mod:`lcpbench.model.wall_kernel`). This module hands a chain's walls to those
+compiled functions for the Python callers (the result, the judge, the large-N driver):
+the walls at the nodes' x (:func:`walls_at`, :func:`wall_rows`), the slope load
+(:func:`slope_load`), the exact gaps (:func:`profile_gaps`) and the horizontal parts
+of the reactions; only the joint moments with horizontal forces
+(:func:`joint_moments_xy`, for the report) are numpy, having no compiled twin.
 
 Option (a), the exact linearised row h_k + h'_k J_x du − du_k ≥ 0, would
 make the constraint matrix I − diag(h') J_x dense: an O(N²) LCP
@@ -59,66 +63,76 @@ import numpy as np
 from ..problems.scenes import Chain
 from .chain import node_positions
 
-
-def has_profile(chain: Chain) -> bool:
-    """Whether a wall of ``chain`` has a profile h(x) (not the flat rows)."""
-    return chain.profiled_walls
+_FLAT = (np.zeros(0), np.zeros((4, 0)))  # a wall with no table (never written)
 
 
-def node_x(chain: Chain, alpha: np.ndarray) -> np.ndarray:
-    """x of the free nodes (mm)."""
-    return node_positions(chain, alpha)[0][chain.free_nodes]
+def wall_tables(chain: Chain) -> tuple | None:
+    """The walls as the compiled kernels read them: (upper breakpoints, upper
+    coefficients, lower breakpoints, lower coefficients), a table of cubic pieces over
+    the chain's reach x in [−ℓ, ℓ] (:meth:`lcpbench.problems.walls.WallProfile.pieces`;
+    empty: a flat wall); None where a profile has no table. Kept with the chain."""
+    return chain.derived("_wall_tables", lambda: _wall_tables(chain))
+
+
+def _wall_tables(chain: Chain) -> tuple | None:
+    reach = (-float(chain.length), float(chain.length))  # no node is further from the pin
+    tables = []
+    for profile in (chain.upper_profile, chain.lower_profile):
+        table = _FLAT if profile is None else profile.pieces(*reach)
+        if table is None:
+            return None
+        tables.extend(table)
+    return tuple(tables)
+
+
+def _kernel():
+    from ..numba_cache import kernel_module  # numba: loads or compiles at first use
+
+    return kernel_module("lcpbench.model.wall_kernel", "walls_at")
+
+
+def wall_rows(chain: Chain, alpha: np.ndarray, *, every_node: bool = False) -> tuple:
+    """:func:`lcpbench.model.wall_kernel.walls_at` of ``chain`` at α: the free nodes'
+    (x, y, upper, lower, h', l', h'', l''), the walls at the nodes' x where a node has
+    a row (±inf elsewhere; the chain's flat row where a wall has no table), their
+    slopes and curvatures (0: flat). ``every_node``: the profiles at every free node."""
+    tables = wall_tables(chain)
+    if tables is None:
+        raise ValueError("a wall profile with no table of cubic pieces over the chain's reach")
+    alpha = np.ascontiguousarray(alpha, dtype=float)
+    n = chain.free_nodes.size
+    f64 = np.ascontiguousarray
+    rows = ((np.zeros(n), np.zeros(n)) if every_node else
+            (f64(chain.upper, dtype=float), f64(chain.lower, dtype=float)))
+    out = tuple(np.empty(n) for _ in range(8))
+    _kernel().walls_at(np.sin(alpha), np.cos(alpha), float(chain.link_length),
+                       int(chain.free_nodes[0]) + 1, *rows, *tables, *out)
+    return out
 
 
 def walls_at(chain: Chain, alpha: np.ndarray) -> Chain:
-    """``chain`` with its wall rows at the profile heights of the nodes' x at α.
-
-    Rows stay where they are (a node with no row keeps ±inf); a chain
-    without a profile is returned as it is.
-    """
-    if not has_profile(chain):
+    """``chain`` with its wall rows at the profile heights of the nodes' x at α
+    (:func:`wall_rows`). Rows stay where they are (a node with no row keeps ±inf); a
+    chain without a profile is returned as it is."""
+    if not chain.profiled_walls:
         return chain
-    x = node_x(chain, alpha)
-    upper, lower = chain.upper, chain.lower
-    if chain.upper_profile is not None:
-        upper = np.where(np.isfinite(chain.upper), chain.upper_profile(x), np.inf)
-    if chain.lower_profile is not None:
-        lower = np.where(np.isfinite(chain.lower), chain.lower_profile(x), -np.inf)
-    return replace(chain, upper=upper, lower=lower)
-
-
-def slopes(chain: Chain, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """h'(x_k) and l'(x_k) at the free nodes (0 where a wall has no profile)."""
-    x = node_x(chain, alpha)
-    up = chain.upper_profile.slope(x) if chain.upper_profile is not None else np.zeros_like(x)
-    lo = chain.lower_profile.slope(x) if chain.lower_profile is not None else np.zeros_like(x)
-    return up, lo
-
-
-def x_jacobian_t(chain: Chain, alpha: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """J_xᵀ w in O(N): Σ_k w_k ∂x_k/∂u on the free nodes (w per free node).
-
-    With W_j = Σ_{k>j} w_k (a suffix sum) and p_j = −tan α_j W_j per link j,
-    the entry of node m is p_{m−1} − p_m.
-    """
-    n = chain.links
-    wn = np.zeros(n + 1)
-    wn[chain.free_nodes] = w
-    suffix = np.cumsum(wn[::-1])[::-1]  # Σ_{k>=j}
-    W = suffix[1:]  # link j: Σ_{k>=j+1}
-    p = -np.tan(alpha) * W
-    g = np.zeros(n + 1)
-    g[1:] += p
-    g[:-1] -= p
-    return g[chain.free_nodes]
+    rows = wall_rows(chain, alpha)
+    return replace(chain, upper=rows[2], lower=rows[3])
 
 
 def slope_load(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
-               forces_lower: np.ndarray) -> np.ndarray:
+               forces_lower: np.ndarray, rows: tuple | None = None) -> np.ndarray:
     """s = J_xᵀ(μ̄ ⊙ h'(x) − ν̄ ⊙ l'(x)) (N): the generalised force, on the node
-    heights, of the horizontal parts of the wall reactions μ̄ (upper), ν̄ (lower)."""
-    h1, l1 = slopes(chain, alpha)
-    return x_jacobian_t(chain, alpha, forces_upper * h1 - forces_lower * l1)
+    heights, of the horizontal parts of the wall reactions μ̄ (upper), ν̄ (lower), as
+    given (not clipped); :func:`lcpbench.model.wall_kernel.slope_load`. ``rows``: the
+    chain's :func:`wall_rows` at α, where the caller has them."""
+    x, y, _, _, h1, l1, _, _ = wall_rows(chain, alpha) if rows is None else rows
+    alpha = np.ascontiguousarray(alpha, dtype=float)
+    w = np.asarray(forces_upper, float) * h1 - np.asarray(forces_lower, float) * l1
+    out = np.empty(w.size)
+    _kernel().slope_load(alpha, np.cos(alpha), np.sin(alpha), int(chain.free_nodes[0]) + 1,
+                         np.ascontiguousarray(w), out)
+    return out
 
 
 def profile_gaps(chain: Chain, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
@@ -127,14 +141,11 @@ def profile_gaps(chain: Chain, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarra
     Every free node gets a gap (the profile is continued flat outside its
     table), as the flat model's ``wall − y``.
     """
-    x, y = node_positions(chain, alpha)
-    xf, yf = x[chain.free_nodes], y[chain.free_nodes]
-    up = chain.upper_profile(xf) - yf if chain.upper_profile is not None else \
-        chain.wall - yf
+    _, y, h, low, _, _, _, _ = wall_rows(chain, alpha, every_node=True)
+    up = (h if chain.upper_profile is not None else chain.wall) - y
     lo = None
     if chain.channel:
-        lo = yf - chain.lower_profile(xf) if chain.lower_profile is not None else \
-            yf + chain.wall
+        lo = y - (low if chain.lower_profile is not None else -chain.wall)
     return up, lo
 
 
@@ -172,5 +183,5 @@ def wall_forces_xy(chain: Chain, alpha: np.ndarray, upper: np.ndarray,
                    lower: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(F_x, F_y) on the free nodes of the normal wall reactions: μ (h', −1) from the
     upper wall and ν (−l', 1) from the lower (μ, ν: their vertical parts, N)."""
-    h1, l1 = slopes(chain, alpha)
+    _, _, _, _, h1, l1, _, _ = wall_rows(chain, alpha)
     return upper * h1 - lower * l1, lower - upper

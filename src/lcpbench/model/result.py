@@ -12,14 +12,14 @@ from .chain import joint_angles, node_positions, torque_residual
 from .elastic import compliances, wall_pressure
 from .judge import Certificate, Judgement, judge  # noqa: F401 (Certificate: public here)
 from .outer import DriverOutput, StepRecord
-from .profile import has_profile, joint_moments_xy, profile_gaps, wall_forces_xy
+from .profile import joint_moments_xy, profile_gaps, wall_forces_xy
 
 
 def certify(chain: Chain, alpha: np.ndarray, upper: np.ndarray, lower: np.ndarray) -> Certificate:
     """The certificate of link angles ``alpha`` with wall reactions ``upper``, ``lower`` (N)."""
     x, y = node_positions(chain, alpha)
     yf = y[chain.free_nodes]
-    profile = has_profile(chain)
+    profile = chain.profiled_walls
     gaps = [chain.wall - yf] if np.isfinite(chain.wall) else []
     if profile:  # exact gaps h(x_k) − y_k at the nodes' x
         g_up, g_lo = profile_gaps(chain, alpha)
@@ -358,7 +358,7 @@ def _derive(res: ContactResult) -> None:
     x, y = node_positions(chain, alpha)
     yf = y[chain.free_nodes]
     gaps, gaps_lower = chain.wall - yf, (yf + chain.wall if chain.channel else None)
-    if has_profile(chain):
+    if chain.profiled_walls:
         gaps, gaps_lower = profile_gaps(chain, alpha)
     depth, pressure = wall_pressure(chain, yf, upper, lower if chain.channel else None)
     values = dict(x=x, y=y, gaps=gaps, gaps_lower=gaps_lower, indentation=depth,
