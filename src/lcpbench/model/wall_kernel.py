@@ -47,9 +47,8 @@ def walls_at(sines, cosines, a, fs, hi_rows, lo_rows, ku, cu_, kl, cl_, xf, yf, 
     """The free nodes' x, y (``xf``, ``yf``; plain running sums, as
     model.chain.node_positions) and the walls at their x: ``hi``, ``lo`` the profile
     heights where a node has a row (its flat row where that wall has no table), ``h1``,
-    ``l1`` the slopes, ``h2``, ``l2`` the curvatures (model.profile.walls_at, slopes;
-    0 where a wall has no table). ``sines``, ``cosines``: of the
-    link angles α."""
+    ``l1`` the slopes, ``h2``, ``l2`` the curvatures (0 where a wall has no table; from
+    Python: model.profile.wall_rows). ``sines``, ``cosines``: of the link angles α."""
     n = hi_rows.size
     x = y = 0.0
     first = fs - 1
@@ -75,8 +74,9 @@ def walls_at(sines, cosines, a, fs, hi_rows, lo_rows, ku, cu_, kl, cl_, xf, yf, 
 
 @njit(cache=True)
 def slope_load(alpha, cosines, sines, fs, w, out):
-    """s = J_xᵀ w on the free nodes (model.profile.x_jacobian_t): with W_j the sum of
-    w over the nodes past link j and p_j = −tan α_j W_j, node m gets p_(m−1) − p_m."""
+    """s = J_xᵀ w on the free nodes (from Python: model.profile.slope_load): with W_j the
+    sum of w over the nodes past link j and p_j = −tan α_j W_j, node m gets
+    p_(m−1) − p_m."""
     n, first, links = w.size, fs - 1, alpha.size
     W, p_next = 0.0, 0.0
     for i in range(n):
