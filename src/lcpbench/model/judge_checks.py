@@ -32,7 +32,7 @@ from ..thresholds import (  # the rule's numbers, as model.judge reads them
 )
 from .chain_kernel import add_compensated  # once (numba_cache)
 from .judge_bound import profile_rows
-from .stability_kernel import CHECKED, unstable_directions
+from .stability_kernel import CHECKED, unstable_directions_at
 
 #: names of the entries of the ``stats`` array that :func:`judge_answer` returns
 STATS = ("tau", "F0", "eps_R", "comp", "comp_allowed", "min_gap", "min_force",
@@ -47,8 +47,8 @@ SETTLED, NOT_SETTLED = 0, 1
 # node index, node + 1). The certificate's suffix sums reuse the step's rows, which
 # are spent by then.
 (X, Y, COS, INV, V, ALPHA0, DIAG, OFF1, OFF2, LIN, C0, C1, C2, PHI0, ORIGIN, LINEAR, U, NET,
- SCALE, ROUNDOFF, NOISE, RHS, HY, HG, HGA, JU, JLO, SIZE, YC, HX) = range(30)
-ROWS = 30
+ SCALE, ROUNDOFF, NOISE, RHS, HY, HG, HGA, JU, JLO, SIZE, YC, HX, AC, AS) = range(32)
+ROWS = 32
 FORCE, F_SUM, FX_SUM, P_SUM, PX_SUM, H_SUM, HY_SUM = DIAG, OFF1, OFF2, LIN, HY, C0, C1
 # a node's place in the judge step's contact set
 FREE, UP, LO = 0, 1, 2
@@ -73,17 +73,19 @@ def without_noise(forces_upper, forces_lower, noise, settled):
 @njit(cache=True)
 def positions(alpha, a, w):
     """Node positions x, y (rows X, Y, as model.chain.node_positions), cos α (row COS),
-    tan α − α (row V), and the heights summed with compensation (row YC, the judge
-    step's linearisation point and closure, as model.step)."""
-    x, y, cs, v, yc = w[X], w[Y], w[COS], w[V], w[YC]
+    tan α − α (row V), the heights summed with compensation (row YC, the judge
+    step's linearisation point and closure, as model.step) and the links' a cos α,
+    a sin α (rows AC, AS: the second-order check's)."""
+    x, y, cs, v, yc, ac, as_ = w[X], w[Y], w[COS], w[V], w[YC], w[AC], w[AS]
     x[0] = y[0] = yc[0] = 0.0
     sx = sy = lost = 0.0
     for i in range(alpha.size):
         c, s = np.cos(alpha[i]), np.sin(alpha[i])
         cs[i] = c
         v[i] = s / c - alpha[i]  # tan α − α, on the cos and sin at hand
-        sx += a * c
-        sy, lost = add_compensated(sy, lost, a * s)
+        ac[i], as_[i] = a * c, a * s
+        sx += ac[i]
+        sy, lost = add_compensated(sy, lost, as_[i])
         x[i + 1], y[i + 1], yc[i + 1] = sx, sy, sy + lost
 
 
@@ -220,8 +222,9 @@ def certify_checks(alpha, a, jl, jr, k, rest, link_load, fs, lo, hi, L, F, cu, c
             k_lo[i] = 1.0 / cl[i] if cl[i] > 0.0 else np.inf
     if not profiled:
         h1 = l1 = h2 = l2 = flat
-    code, unstable, _ = unstable_directions(alpha, a, jl, jr, k, rest, link_load, fs - 1, fu,
-                                            fl, k_up, k_lo, h1, l1, h2, l2, eps_R, pinned_right)
+    code, unstable, _ = unstable_directions_at(alpha, w[AC, :links], w[AS, :links], jl, jr,
+                                               k, rest, link_load, fs - 1, fu, fl, k_up,
+                                               k_lo, h1, l1, h2, l2, eps_R, pinned_right)
     stats[21] = unstable if code == CHECKED else 0.0
     return res
 

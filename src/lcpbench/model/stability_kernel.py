@@ -57,13 +57,11 @@ FREE, HELD, ELASTIC = 0, 1, 2
 
 @njit(cache=True)
 def _alloc(F, used):
-    """A free slot of the front, its row and column zero."""
+    """A free slot of the front. Its row and column are zero already: the front starts
+    at zero and an elimination zeroes the row and column of each slot it frees."""
     for s in range(FRONT):
         if not used[s]:
             used[s] = True
-            for t in range(FRONT):
-                F[s, t] = 0.0
-                F[t, s] = 0.0
             return s
     raise RuntimeError("the stability check's front is full (FRONT too small)")
 
@@ -329,6 +327,20 @@ def unstable_directions(alpha, a, jl, jr, k, rest, link_load, first, forces_uppe
     for i in range(links):
         c[i] = a * np.cos(alpha[i])
         s[i] = a * np.sin(alpha[i])
+    return unstable_directions_at(alpha, c, s, jl, jr, k, rest, link_load, first,
+                                  forces_upper, forces_lower, stiffness_upper,
+                                  stiffness_lower, slope_upper, slope_lower, curvature_upper,
+                                  curvature_lower, threshold, pinned_right)
+
+
+@njit(cache=True)
+def unstable_directions_at(alpha, c, s, jl, jr, k, rest, link_load, first, forces_upper,
+                           forces_lower, stiffness_upper, stiffness_lower, slope_upper,
+                           slope_lower, curvature_upper, curvature_lower, threshold,
+                           pinned_right):
+    """:func:`unstable_directions` given ``c``, ``s``: a cos α_i and a sin α_i (the caller
+    has them: the judge's exact geometry, model.judge_checks.positions)."""
+    links = alpha.size
     diag, off, ok = lagrangian_hessian(alpha, c, s, jl, jr, k, rest, link_load, first,
                                        forces_upper, forces_lower, slope_upper,
                                        slope_lower, pinned_right)
