@@ -137,6 +137,19 @@ POLISH_SWEEPS = 2
 #: kept flipped answer made path 74's last state cycle with 1 flip and the polish on every
 #: Lemke step (the back-ends by name polish every step; the default's: FINAL_FLIPS)
 POLISH_FLIPS = 8
+#: the polish gives up where the signs of more than this many rows and pairs fail at a
+#: set it solves: the flips end there (the edge search still runs, from the first flip's
+#: set, which the later flips do not change), and at the answer's own set nothing more
+#: is tried (the answer is returned as it was, as any refusal). A polish repairs
+#: round-off at a few nodes. Measured (benchmarks/friction_polish_failing.py on the 100
+#: paths of benchmarks/friction_agreement.py and the three pull-outs of
+#: benchmarks/friction_speed.py, 373 polishes that solved a set; and ProxSuite's 1460,
+#: which polish every step): at the answer's own set at most 6 fail (the channel's four
+#: refused answers: 2); the flips that ended on a kept set passed at most 14 (Lemke's
+#: 59; one went 3, 4, 5, 9, 14, 1, 1, 0) and 17 (ProxSuite's), those that passed 20 went
+#: on to 21-60 (the channel's 2, 4, 3, 4, 7, 41, 60, 28, 21) and none ended kept by its
+#: flips. Here about twice the largest kept
+POLISH_MOST_FAILING = 30
 #: where the flips find no index set whose signs hold, every state of at most
 #: POLISH_EDGE_NODES of the nodes whose sign fails is tried (friction_lemke.edge_polish:
 #: those nearest the edge of two states first), at most POLISH_EDGE_SETS index sets, the

@@ -15,6 +15,7 @@ from friction_oracle import frictionless_by_the_frictional_path
 
 import lcpbench
 from lcpbench import ActuatorScene
+from lcpbench.model import friction_lemke
 from lcpbench.model.friction_driver import StepLemke
 from lcpbench.model.friction_lemke import (
     POLISH_VERDICTS,
@@ -24,7 +25,7 @@ from lcpbench.model.friction_lemke import (
 )
 from lcpbench.model.friction_solvers import step_runner
 from lcpbench.solvers.base import LCPSolution, Status
-from lcpbench.thresholds import POLISH_STICK_COMPLIANCE, POLISH_SWEEPS
+from lcpbench.thresholds import POLISH_MOST_FAILING, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 import exact_friction as ef  # noqa: E402
@@ -324,3 +325,60 @@ def test_the_flips_end_where_they_would_go_round(kw):
     if len(seen_c) < flips + 1:  # stopped early: its next set is one solved already
         nxt = replay[len(seen_c) - 1][2]
         assert (nxt[4].tobytes(), nxt[5].tobytes()) in keys
+
+
+def test_the_polish_gives_up_on_an_answer_far_from_its_index_set(monkeypatch):
+    """An answer that reads every wall row in contact (its N raised above its gaps, N = 80
+    against a flat wall, 41 rows): the exact solution of that index set (Fractions,
+    benchmarks/exact_friction.py) breaks far more sign conditions than round-off at a few
+    nodes could (more than POLISH_MOST_FAILING: most rows would pull on the wall). The
+    polish then solves that one set and gives up: no flip, no edge search; the answer is
+    returned bit for bit with the status it came with (its LCP residual's)."""
+    fs, sol = first_step(ActuatorScene(theta=150, height=3.0, links=80, friction=0.3,
+                                       left_end="pinned", right_end="slider", pull=0.05))
+    z = sol.z.copy()
+    mn = fs.normal_node.size
+    for _ in range(50):  # every row's N at least its gap: the index set reads contact
+        w = fs.M @ z + fs.q
+        if np.all(z[:mn] >= w[:mn]):
+            break
+        z[:mn] = np.maximum(z[:mn], 1.01 * w[:mn] + 1e-12)
+    w = fs.M @ z + fs.q
+    step = ef.chain_step(fs)
+    v = ef.answer_values(fs, step, z)
+    rows, pairs = ef.read_states(step, v)
+    assert all(rows)
+    ex = ef.solve(step, rows, pairs, v)
+    assert len(ex.failed) > POLISH_MOST_FAILING  # the oracle's count, not the polish's
+
+    def no_search(*args):
+        raise AssertionError("the edge search ran")
+
+    monkeypatch.setattr(friction_lemke, "edge_polish", no_search)
+    out = polish_step(fs, LCPSolution(z.copy(), w.copy(), Status.SOLVED, extra={}))
+    assert out.status is Status.SOLVED
+    np.testing.assert_array_equal(out.z, z)
+    assert out.extra["polish"] == "a sign fails"
+    assert len(out.extra["polish_failing"]) == 1  # the answer's own set only: no flip
+
+
+def test_the_polish_still_repairs_one_failing_node():
+    """Path 3 of benchmarks/friction_agreement.py's set (N = 12): the answers whose own
+    index set breaks exactly one sign condition in exact arithmetic (Fractions, the
+    oracle's count) are still polished (one flip) onto the exact solution of a set whose
+    signs all hold, to 1e-9."""
+    scene, states = list(scenes(4, 39))[3]
+    res, steps = recorded(scene, states)
+    one = 0
+    for fs, sol in steps:
+        if "polish" not in sol.extra:
+            continue
+        step = ef.chain_step(fs)
+        v = ef.answer_values(fs, step, sol.extra.get("unpolished", sol.z))
+        if len(ef.solve(step, *ef.read_states(step, v), v).failed) != 1:
+            continue
+        one += 1
+        assert sol.extra["polish"] == "kept"
+        ex, gap = exact_gap(fs, sol.z)
+        assert ex.solution and not ex.ray and not ex.failed and gap <= 1e-9
+    assert one >= 1

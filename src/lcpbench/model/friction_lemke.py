@@ -20,6 +20,7 @@ from ..thresholds import (
     POLISH_EDGE_NODES,
     POLISH_EDGE_SETS,
     POLISH_FLIPS,
+    POLISH_MOST_FAILING,
     POLISH_STICK_COMPLIANCE,
     POLISH_SWEEPS,
 )
@@ -123,12 +124,14 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
     """A SOLVED answer of the step ``fs`` polished on its index set in the step's primal
     form (:func:`lcpbench.model.friction_polish.polish`, compiled, O(N); docs/friction.md,
     "The polish"). The polished answer replaces ``sol`` only where every sign of the index
-    set holds (after ``flips`` flips of the failing nodes, then :func:`edge_polish`), its
+    set holds (after ``flips`` flips of the failing nodes, then :func:`edge_polish`;
+    neither where more than POLISH_MOST_FAILING signs fail at the answer's own set), its
     primal residual is below the answer's, and lcpbench's natural residual of the LCP
     still meets RESIDUAL_TOL; otherwise ``sol`` is returned as it is, its status
     unchanged (its LCP residual decides it; the state's judge decides the state). A
     status is never raised (an answer that is not SOLVED is not polished). The verdict
-    is ``extra["polish"]`` (:data:`POLISH_VERDICTS`), the unpolished z
+    is ``extra["polish"]`` (:data:`POLISH_VERDICTS`), the signs that failed at each set
+    the flips solved ``extra["polish_failing"]``, the unpolished z
     ``extra["unpolished"]`` where it was replaced; an answer polished already is
     returned as it is."""
     if "polish" in sol.extra:
@@ -138,7 +141,7 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
         return sol
     t0 = time.perf_counter()
     P = fs.parts
-    code, z, r0, r1 = 1, sol.z, np.nan, np.nan
+    code, z, r0, r1, failing = 1, sol.z, np.nan, np.nan, ()
     if not P["rot"].size:
         w = fs.M @ sol.z + fs.q
         k = polish_kernels()
@@ -147,9 +150,11 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
                                      fs.pair, fs.mu)
         out = k.polish_on(*head, *answer, flips, contact, state)  # (polish, its sets)
         code, z, r0, r1 = out[:4]
-        if code == k.SIGNS and flips:
+        failing = tuple(int(f) for f in out[8])
+        # an answer at whose own set more signs fail than round-off explains: no search
+        if code == k.SIGNS and flips and out[8][0] <= POLISH_MOST_FAILING:
             code, z, r0, r1 = edge_polish(k, head, answer, w, fs, out)
-    extra = dict(sol.extra, polish_residuals=(r0, r1))
+    extra = dict(sol.extra, polish_residuals=(r0, r1), polish_failing=failing)
     if code == 0:
         res = lcp_residuals(fs.M, fs.q, z)
         if not res["natural"] <= RESIDUAL_TOL:

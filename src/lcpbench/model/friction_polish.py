@@ -38,7 +38,7 @@ import numpy as np
 from numba import njit
 
 from ..linalg.band_lu_kernel import band_factor, band_resolve
-from ..thresholds import POLISH_LEVEL, POLISH_SIGN_RTOL
+from ..thresholds import POLISH_LEVEL, POLISH_MOST_FAILING, POLISH_SIGN_RTOL
 from .friction_primal import (  # noqa: F401  (by_node, layout: the kernels' names too)
     BACKWARD,
     FORWARD,
@@ -272,7 +272,7 @@ def polish(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, norm
     lengths by ``length``), the primal residual before, after); :func:`polish_on` the
     set :func:`index_set` reads from z, w."""
     contact, state = index_set(z, w, N.size, T.size, pair, mu)
-    code, z_new, r0, r1, _, _, _, _ = polish_on(
+    code, z_new, r0, r1, _, _, _, _, _ = polish_on(
         bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, normal_node,
         normal_xy, friction_node, tangent_xy, mu, pair, z, dy, tau, N, T, force, length,
         link, stick_compliance, sweeps, flips, contact, state)
@@ -286,14 +286,17 @@ def polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, n
     """The answer (z; its δy, τ, N, T) polished on the index set (``contact`` per wall
     row, ``state`` per pair): (verdict, z polished, the primal residual before, after,
     and where a sign fails the set with the failing nodes flipped (:func:`signs`), else
-    the set solved; and where a sign fails the sets solved, in order, as two arrays).
+    the set solved; and where a sign fails the sets solved, in order, as two arrays;
+    and at each set solved how many signs failed, rows and pairs).
 
     The set's primal system is solved with the sticking nodes' compliance
     ``stick_compliance`` (link lengths per largest force) as ``sweeps`` steps of
     refinement from the answer against the equations without it. Where a sign of the set
     fails at the solution, those nodes are flipped (:func:`signs`) and the set solved
     again, at most ``flips`` times; a flip onto a set solved before ends it (the flips
-    are a function of the set: they would go round). KEPT where every sign of the (last) set holds (to
+    are a function of the set: they would go round), and so does a set at which the
+    signs of more than POLISH_MOST_FAILING rows and pairs fail (a polish repairs
+    round-off at a few nodes). KEPT where every sign of the (last) set holds (to
     POLISH_SIGN_RTOL of the largest force and of the link length ``link``) and the
     residual of its primal equations (tan α as is, every stick equation) is below the
     answer's."""
@@ -313,9 +316,12 @@ def polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, n
     if big0 == 0.0:
         big0 = force
     x0 = np.empty(0)
+    failing = np.zeros(flips + 1, np.int64)  # how many signs fail at each set solved
     seen_c = np.empty((flips + 1, mn), np.bool_)  # the sets solved, in order
     seen_s = np.empty((flips + 1, mt), np.int64)
+    solved = 0  # the sets solved
     for attempt in range(flips + 1):
+        solved = attempt + 1
         seen_c[attempt], seen_s[attempt] = contact, state
         hold = stick_holds(tl, state, friction_node, tangent_xy, has_tau, right_datum)
         # the system solved (si, …: sticking nodes compliant) and the equations (ei, …:
@@ -331,14 +337,16 @@ def polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, n
         x = x0.copy()
         fac = banded_factor(si, sj, sv, n)
         if rhs.size != n or not fac[6]:
-            return SINGULAR, z_new, nan, nan, contact, state, seen_c[:0], seen_s[:0]
+            return (SINGULAR, z_new, nan, nan, contact, state, seen_c[:0], seen_s[:0],
+                    failing[:attempt])
         for _ in range(sweeps):  # x += A_ε⁻¹ (b − A x)
             res = rhs.copy()
             for k in range(ei.size):
                 res[ei[k]] -= ev[k] * x[ej[k]]
             d, ok = banded_resolve(fac, res)
             if not ok:
-                return SINGULAR, z_new, nan, nan, contact, state, seen_c[:0], seen_s[:0]
+                return (SINGULAR, z_new, nan, nan, contact, state, seen_c[:0], seen_s[:0],
+                        failing[:attempt])
             x += d
         big = big0
         for r in range(mn):
@@ -348,12 +356,15 @@ def polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, n
         fails, new_contact, new_state, s = signs(
             x, lay, first, gap, slip, normal_node, normal_xy, friction_node, tangent_xy, mu,
             pair, contact, state, POLISH_SIGN_RTOL * big, POLISH_SIGN_RTOL * link)
+        failing[attempt] = fails
         if fails == 0:
             break
-        if attempt == flips or tried(seen_c[:attempt + 1], seen_s[:attempt + 1],
-                                     new_contact, new_state):  # (a cycle: exact)
+        # the budget, a set with more failing nodes than a polish repairs (the flips
+        # have left the answer), or a set solved before (a cycle: exact)
+        if attempt == flips or fails > POLISH_MOST_FAILING or tried(
+                seen_c[:attempt + 1], seen_s[:attempt + 1], new_contact, new_state):
             return (SIGNS, z_new, nan, nan, new_contact, new_state, seen_c[:attempt + 1],
-                    seen_s[:attempt + 1])
+                    seen_s[:attempt + 1], failing[:attempt + 1])
         contact, state = new_contact, new_state
     tv, Y, X, L, Nv, Tv = lay
     # both answers in the set's own equations: tan α as is, every stick equation
@@ -374,7 +385,8 @@ def polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, n
     r0 = primal_residual(ei, ej, ev, rhs, v0, scale)
     r1 = primal_residual(ei, ej, ev, rhs, x, scale)
     if not r1 < r0:
-        return NOT_LOWER, z_new, r0, r1, contact, state, seen_c[:0], seen_s[:0]
+        return (NOT_LOWER, z_new, r0, r1, contact, state, seen_c[:0], seen_s[:0],
+                failing[:solved])
     for r in range(mn):
         z_new[r] = x[Nv[r]] / force
     for c in range(mt):
@@ -382,7 +394,7 @@ def polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, n
         z_new[mn + c] = max(tc, 0.0) / force
         z_new[mn + mt + c] = max(-tc, 0.0) / force
         z_new[mn + 2 * mt + c] = 0.0 if state[c] == STICK else abs(s[c]) / length
-    return KEPT, z_new, r0, r1, contact, state, seen_c[:0], seen_s[:0]
+    return KEPT, z_new, r0, r1, contact, state, seen_c[:0], seen_s[:0], failing[:solved]
 
 
 @njit(cache=True)
