@@ -177,6 +177,17 @@ def assert_solved(res, *, stationarity=None, wall_tol=1e-9, sign_tol=1e-12):
                        stationarity=stationarity, wall_tol=wall_tol, sign_tol=sign_tol)
 
 
+def _dense_hessian(step):
+    """The step's symmetric banded H (``step.bands``: diagonal, then each band below) as
+    a dense matrix."""
+    b = step.bands
+    n = step.linear.size
+    H = np.diag(b[0, :n])
+    for k in range(1, b.shape[0]):
+        H += np.diag(b[k, : n - k], k) + np.diag(b[k, : n - k], -k)
+    return H
+
+
 def assert_step_kkt(step, u, *, rtol=1e-9, gap_tol=1e-12):
     """Heights ``u`` solve a contact step (minimise ½ uᵀHu + fᵀu, lower <= u <= upper,
     H from ``step.bands``, f = ``step.linear``), checked by its KKT conditions written
@@ -184,11 +195,7 @@ def assert_step_kkt(step, u, *, rtol=1e-9, gap_tol=1e-12):
     upper wall holds the node and g >= 0 where the lower one does; g relative to the
     size of its terms |H| |u| + |f|, lengths relative to 1 + max|u|. Returns −g, the
     net reactions at u (N)."""
-    b, f = step.bands, step.linear
-    n = f.size
-    H = np.diag(b[0, :n])
-    for k in range(1, b.shape[0]):
-        H += np.diag(b[k, : n - k], k) + np.diag(b[k, : n - k], -k)
+    H, f = _dense_hessian(step), step.linear
     u = np.asarray(u, dtype=float)
     g = H @ u + f
     size = np.abs(H) @ np.abs(u) + np.abs(f)
@@ -209,11 +216,8 @@ def assert_elastic_step_kkt(step, u, *, rtol=1e-9):
     on every row, relative to the size of its terms (H and f from ``step.bands`` and
     ``step.linear``, k and k' from ``step.upper_stiffness`` and ``step.lower_stiffness``;
     a wall of infinite k is not elastic and is left to :func:`assert_step_kkt`)."""
-    b, f = step.bands, step.linear
+    H, f = _dense_hessian(step), step.linear
     n = f.size
-    H = np.diag(b[0, :n])
-    for k in range(1, b.shape[0]):
-        H += np.diag(b[k, : n - k], k) + np.diag(b[k, : n - k], -k)
     u = np.asarray(u, dtype=float)
 
     def springs(k, pressed):

@@ -368,15 +368,26 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
         steps.append(StepRecord(sol.iterations, sol.status.value, sol.solve_time, t_asm,
                                 t, dalpha, E, step_setup_time(sol)))
         warm = sol
-        if wall is not None:
-            wall.lag(step, sol)
-        if dalpha < tol:
-            at = chain if wall is None else wall.answer(alpha)
-            if at is not None:
-                return converged_output(at, alpha, sol, steps, step)
+        done = _converged(chain, wall, step, sol, alpha, dalpha, steps, tol)
+        if done is not None:
+            return done
         if stop_on_stall and len(steps) >= 2 * STALL_STEPS and stall(steps) is not None:
             return out_of_iterations(alpha, n, steps, len(steps), tol)
     return out_of_iterations(alpha, n, steps, max_outer, tol)
+
+
+def _converged(chain: Chain, wall: Profile | None, step: KernelStep, sol, alpha, dalpha,
+               steps, tol: float):
+    """After a step taken: against walls of any profile its net reactions become the
+    next step's lagged ones; the converged output where max|Δα| < ``tol`` and α lies on
+    the exact walls (:meth:`Profile.answer`), else None (one more step)."""
+    if wall is not None:
+        wall.lag(step, sol)
+    if dalpha < tol:
+        at = chain if wall is None else wall.answer(alpha)
+        if at is not None:
+            return converged_output(at, alpha, sol, steps, step)
+    return None
 
 
 def _newton(step: KernelStep, chain: Chain) -> KernelStep:
@@ -427,12 +438,9 @@ def undamped(kd, chain: Chain, c: tuple, solver, tol: float, max_outer: int,
             return failed_output(new, n, steps, "diverged: a link passed the vertical, where "
                                                 "the linearisation of eq. (20) is singular")
         alpha, warm = new, sol
-        if wall is not None:
-            wall.lag(step, sol)
-        if dalpha < tol:
-            at = chain if wall is None else wall.answer(alpha)
-            if at is not None:
-                return converged_output(at, alpha, sol, steps, step)
+        done = _converged(chain, wall, step, sol, alpha, dalpha, steps, tol)
+        if done is not None:
+            return done
     return out_of_iterations(alpha, n, steps, max_outer, tol)
 
 
