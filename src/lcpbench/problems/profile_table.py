@@ -20,7 +20,8 @@ coefficients of
   h'. A kink or a jump stops the refinement at pieces of
   :data:`MIN_WIDTH` ℓ: the table then differs from the function only
   inside those pieces. Where more than :data:`MAX_PIECES` would be needed,
-  there is no table (None) and the solve runs the profile in Python.
+  there is no table (None), and the plan refuses the scene with a ProblemError
+  naming ``wall_profile`` or ``lower_profile`` (every route reads the table).
 """
 
 from __future__ import annotations
