@@ -43,32 +43,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import ProblemError
-from .chain import node_positions
 from .kernel_call import kernel_args
+from .profile import wall_tables
 
 #: the parameters covered on a profiled wall
 OF_PROFILE = ("theta_deg", "height_mm", "EI", "weight", "length_mm")
 #: the kernel's output row of each parameter (``scale``: the walls scaled about the pin)
 _ROW = {"theta_deg": 0, "height_mm": 1, "EI": 2, "weight": 3, "scale": 4}
-_NONE = np.zeros((3, 0))  # no values given (never written)
-
-
-def _tables(chain) -> tuple:
-    """(ku, cu, kl, cl, upper given, lower given): the walls' tables of cubic pieces as the
-    solve reads them (:meth:`WallProfile.pieces`; empty where a wall is flat or has no
-    table), and whether a wall has a profile without a table (its values then given from
-    its function). Kept with the chain."""
-    def make():
-        reach = (-float(chain.length), float(chain.length))  # as kernel_call.profile_args
-        out, given = [], []
-        for prof in (chain.upper_profile, chain.lower_profile):
-            table = None if prof is None else prof.pieces(*reach)
-            out.extend((np.zeros(0), np.zeros((4, 0))) if table is None else
-                       (np.ascontiguousarray(table[0], dtype=float),
-                        np.ascontiguousarray(table[1], dtype=float)))
-            given.append(prof is not None and table is None)
-        return (*out, *given)
-    return chain.derived("_sensitivity_tables", make)
 
 
 def profile_derivatives(result, scene, names, eps_R: float, rows) -> dict:
@@ -80,23 +61,18 @@ def profile_derivatives(result, scene, names, eps_R: float, rows) -> dict:
     kern = kernel_module("lcpbench.model.sensitivity_profile_kernel", "derivatives")
     chain = scene.chain()
     _, a, jl, jr, k, rest, _, nodal_load, fs, lo, hi, L, _, _, _ = kernel_args(chain)
-    ku, cu, kl, cl, given_u, given_l = _tables(chain)
+    ku, cu, kl, cl = wall_tables(chain)  # the plan refused a profile without a table
     alpha = np.ascontiguousarray(result.alpha, dtype=float)
     n = lo.size
     fu = np.ascontiguousarray(result.forces, dtype=float)
     fl = np.zeros(n) if result.forces_lower is None else \
         np.ascontiguousarray(result.forces_lower, dtype=float)
-    gu = gl = _NONE
-    if given_u or given_l:  # a wall without a table: its function at the nodes' x
-        x = node_positions(chain, alpha)[0][chain.free_nodes]
-        gu, gl = (np.array([p(x), p.slope(x), p.curvature(x)]) if g else _NONE
-                  for p, g in ((chain.upper_profile, given_u), (chain.lower_profile, given_l)))
     need = _needed(names)
     want = np.zeros(len(_ROW), bool)
     want[[_ROW[p] for p in need]] = True
     drest, dk, unit_load = rows
     code, du, dfu, dfl, u, one_sided = kern.derivatives(
-        alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, ku, cu, kl, cl, gu, gl, fu, fl,
+        alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, ku, cu, kl, cl, fu, fl,
         float(eps_R), drest, dk, unit_load, float(L), want)
     if code != kern.OK:
         raise ProblemError("sensitivities: the KKT matrix at the answer's contact set is "

@@ -22,7 +22,7 @@ off the active rows, du_i = 0 at a pinned node, dx_0 = 0, W_N = 0) are left out:
 banded LU with partial pivoting (:func:`lcpbench.linalg.band_lu_kernel.band_solve`) for
 the parameters wanted at once: O(N) whatever the number of contact nodes. The walls are read as the
 solve reads them (:func:`lcpbench.model.wall_kernel.walls_at`, their tables of cubic
-pieces), or from ``given_u``/``given_l`` where a wall has no table. Loaded through
+pieces; the plan refuses a profile without one). Loaded through
 :func:`lcpbench.numba_cache.kernel_module`.
 """
 
@@ -46,15 +46,13 @@ DU, DX, W, DL = range(4)
 
 @njit(cache=True)
 def derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo_rows, hi_rows, ku, cu_, kl, cl_,
-                given_u, given_l, fu, fl, eps_R, drest, dk, unit_load, L, want):
+                fu, fl, eps_R, drest, dk, unit_load, L, want):
     """(code, du, dfu, dfl, u, one_sided): the derivatives of the free nodes' heights and
     the upper and lower reactions, one row per parameter (THETA … SCALE), those of
     ``want`` written, the rest zero; code SINGULAR where the KKT matrix at the answer's
     contact set is singular. ``drest``, ``dk``, ``unit_load``: ∂φ*/∂θ per joint, ∂k/∂EI
     per joint, the nodal load at unit weight; ``ku``, ``cu_`` (``kl``, ``cl_``): the
-    upper (lower) wall's table, empty where it is flat or has none; ``given_u``
-    (``given_l``): 3 × n, h, h', h'' at the free nodes where the wall has no table
-    (else empty); ``u``: the free nodes' heights; ``one_sided``: the nodes touching a
+    upper (lower) wall's table, empty where it is flat; ``u``: the free nodes' heights; ``one_sided``: the nodes touching a
     wall (gap ≤ 1e-9 ``L``) without force."""
     n, links, nj = lo_rows.size, alpha.size, jr.size
     first = fs - 1  # the node of free index 0
@@ -67,15 +65,6 @@ def derivatives(alpha, a, jl, jr, k, rest, fs, nodal_load, lo_rows, hi_rows, ku,
     h1, l1, h2, l2 = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     walls_at(sines, cosines, a, fs, hi_rows, lo_rows, ku, cu_, kl, cl_, xf, yf, hi, lo, h1, l1,
              h2, l2)
-    for i in range(n):  # a wall without a table: its own values
-        if given_u.shape[1] == n:
-            h1[i], h2[i] = given_u[1, i], given_u[2, i]
-            if np.isfinite(hi_rows[i]):
-                hi[i] = given_u[0, i]
-        if given_l.shape[1] == n:
-            l1[i], l2[i] = given_l[1, i], given_l[2, i]
-            if np.isfinite(lo_rows[i]):
-                lo[i] = given_l[0, i]
     # the active rows: side s (+1 upper, −1 lower), λ, the wall's height, slope, curvature
     side, lam, hgt, slope, curv = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
     one_sided = np.zeros(n, np.bool_)
