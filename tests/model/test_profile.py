@@ -301,7 +301,7 @@ def test_a_stop_of_the_profile_kernel_runs_the_compiled_driver(monkeypatch):
                         lambda chain, **kw: (None, BAIL_REASONS[10]))
     res = solve_internal(scene, tol=1e-9)
     assert res.route == "profile kernel"
-    assert res.engine.startswith("compiled driver (the compiled kernel stopped: crossed")
+    assert res.engine.startswith("compiled driver (the profile kernel stopped: crossed")
     assert res.converged, res.reason
     ref = minimise_energy(scene)
     F0 = max(abs(ref.total_force), scene.EI / scene.length**2)

@@ -224,6 +224,7 @@ def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol:
     walls the answer is reported not converged as for a refused step (the compiled
     driver assembles elastic walls for the other back-ends; around the default
     back-end's step solver there it has not been measured)."""
+    kernel = kernel_name(chain)
     if beyond_heights(chain, why):
         return out_of_reach(chain, why), "compiled (stopped: see the reason)"
     if why in ROUNDOFF_BAILS and large_n.roundoff_may_limit(chain, step_request(settings),
@@ -234,12 +235,12 @@ def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol:
 
         return (run_large(replace(chain, increments=True), make_step(), tol=tol,
                           max_outer=max_outer, start=start),
-                f"numpy (increments on the tridiagonal factor; the compiled kernel "
+                f"numpy (increments on the tridiagonal factor; {kernel} "
                 f"stopped: {why})")
     if why not in REFUSED_STEPS and not chain.elastic_walls:
         return (compiled_driver.run(chain, make_step(), tol=tol, max_outer=max_outer,
                                     start=start, stop_on_stall=True, method=method),
-                f"{compiled_driver.ENGINE} (the compiled kernel stopped: {why})")
+                f"{compiled_driver.ENGINE} ({kernel} stopped: {why})")
     return stopped(chain, why), f"compiled (stopped: {why})"
 
 
@@ -249,8 +250,14 @@ def stopped(chain: Chain, why: str) -> DriverOutput:
     from .outer import failed_output
 
     return failed_output(chain.rest_alpha.copy(), chain.free_nodes.size, [],
-                         f"the compiled kernel stopped: {why} (no answer: the shape "
+                         f"{kernel_name(chain)} stopped: {why} (no answer: the shape "
                          f"given is the unconstrained arc)")
+
+
+def kernel_name(chain: Chain) -> str:
+    """The kernel whose stop a reason names: the profile kernel against walls of any
+    profile (:mod:`.profile_kernel`), else the compiled solve kernel."""
+    return "the profile kernel" if chain.profiled_walls else "the compiled kernel"
 
 
 def beyond_heights(chain: Chain, why: str) -> bool:
@@ -271,7 +278,7 @@ def out_of_reach(chain: Chain, why: str) -> DriverOutput:
 
     cond = large_n.heights_condition(chain.links) * np.finfo(float).eps
     return failed_output(chain.rest_alpha.copy(), chain.free_nodes.size, [],
-                         f"the compiled kernel stopped ({why}) at N = {chain.links}: the "
+                         f"{kernel_name(chain)} stopped ({why}) at N = {chain.links}: the "
                          f"round-off of the node heights (cond H · ε ≈ {cond:.1e}) is out of "
                          f"reach there, and the increment formulation does not take this "
                          f"joint layout; N < {large_n.LARGE_N} solves it")
