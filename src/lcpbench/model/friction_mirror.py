@@ -20,7 +20,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..problems.sections import SectionedScene
-from .friction_driver import FrictionState, StateAnswer
+from .friction_driver import FrictionState
 from .friction_result import FrictionResult
 
 
@@ -43,11 +43,6 @@ def mirror_state(state: FrictionState, link_length: float) -> FrictionState:
     −x of the old node N+1)."""
     right = state.x0 + float(np.sum(link_length * np.cos(state.alpha)))
     return FrictionState(-state.alpha[::-1].copy(), -right)
-
-
-def mirror_answer(ans: StateAnswer, link_length: float) -> StateAnswer:
-    """The outer loop's end state in the other frame (the rest is the mirror's own)."""
-    return replace(ans, state=mirror_state(ans.state, link_length))
 
 
 def mirror_result(res: FrictionResult, scene, state: dict) -> FrictionResult:
