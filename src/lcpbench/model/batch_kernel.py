@@ -2,7 +2,8 @@
 
 :func:`solve_line` is :func:`lcpbench.studies.batch_compiled.solve_line` in one
 compiled call, for a line of actuator scenes of one plane (the same chain but for θ
-and h; flat walls, rigid or elastic, one wall, no heavy load), or of several planes that
+and h; flat walls, rigid or elastic, one wall or a channel, no heavy load), or of several
+planes that
 share the chain's layout (each scene predicted from its own plane). For each scene, in order:
 
 1. the start, as :class:`lcpbench.studies.continuation.Solved` chooses it (its
@@ -34,7 +35,7 @@ from numba import njit
 from ..thresholds import SAG_BOUND
 from .batch_verdict import accepted
 from .compiled_kernel import CONVERGED, LINE_SEARCH, MAX_OUTER, NO_FIT, contact_step, solve_chain
-from .judge_kernel import SETTLED, STATS, judge_answer
+from .judge_kernel import SETTLED, STATS, judge_answer, split_net
 
 __all__ = ["ARC", "CONTACT", "CONVERGED", "FREE", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "SETTLED",
            "STATS", "solve_line"]
@@ -124,12 +125,14 @@ def _records(recs, used, rec, count):
 
 @njit(cache=True)
 def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_load,
-             nodal_load, fs, lo, hi, L, F, cu, cl, wall, tol, max_outer, max_iter, request,
-             free_lo, free_hi, o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res,
+             nodal_load, fs, lo, hi, L, F, cu, cl, wall, channel, tol, max_outer, max_iter,
+             request, free_lo, free_hi, o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res,
              o_off, o_count, j_code, j_stats, j_fu, j_fl, j_tres, conv, recs, used):
     """One solve of a scene into ``row`` of the outputs, its step records appended to
     ``recs``: (done, recs, used); not done: the solve kernel stopped. ``cu``, ``cl``:
-    the walls' compliances (empty: rigid walls)."""
+    the walls' compliances (empty: rigid walls); ``channel``: a lower wall too, each
+    node's net reaction the nearer wall's (as the single solve's driver output splits it,
+    :func:`lcpbench.model.judge_exact.split_reactions`)."""
     n = lo.size
     kind = _wall_free_kind(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
                            max_iter, request, free_lo, free_hi)
@@ -171,10 +174,12 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
     o_R[row] = R
     ok = False
     if code == CONVERGED:  # the judge, on the answer and the real walls
+        up, down = R.copy(), np.zeros(n)
+        if channel and kind != ARC:
+            split_net(o_u[row], R, hi, lo, True, up, down)
         jc, st, fu, fl, tres = judge_answer(
             alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl, wall,
-            False,
-            R.copy(), np.zeros(n), tol, recs[2, used - count:used].copy())
+            channel, up, down, tol, recs[2, used - count:used].copy())
         j_code[row] = jc
         j_stats[row] = st
         j_fu[row], j_fl[row], j_tres[row] = fu, fl, tres
@@ -322,7 +327,7 @@ def _predict(s, theta, height, plane, ok, touch, alphas, most, adaptive):
 
 @njit(cache=True)
 def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, cu, cl, L, F,
-               wall,
+               wall, channel,
                theta, height, plane, tol, max_outer, max_iter, request, most, adaptive,
                o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res, o_off, o_count,
                j_code, j_stats, j_fu, j_fl, j_tres, conv, kept, failed, base):
@@ -361,7 +366,8 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
             sig = o_sig[kept[b]]
             w_u, w_up, w_lo, flags = o_u[kept[b]], sig > 0, sig < 0, 7
         args = (rest_alpha[s], a, jl, jr, k[s], rest[s], link_load[s], nodal_load, fs, lo[s],
-                hi[s], L, F, cu[s], cl[s], wall[s], tol, max_outer, max_iter, request, free_lo, free_hi)
+                hi[s], L, F, cu[s], cl[s], wall[s], channel, tol, max_outer, max_iter, request,
+                free_lo, free_hi)
         done, recs, used = _attempt(s, start, w_u, w_up, w_lo, flags, *args, *outs, recs,
                                     used)
         if not done:
@@ -384,7 +390,7 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
         alphas[s] = o_alpha[row]
         if ok[s]:
             for i in range(n):
-                if j_fu[row, i] > 0:
+                if j_fu[row, i] > 0 or j_fl[row, i] > 0:  # (continuation.touches)
                     touch[s] = True
                     break
     return -1, recs

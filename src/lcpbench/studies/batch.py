@@ -212,13 +212,14 @@ def _retried(res: ContactResult, scene, *, tol: float, max_outer: int,
 def _kernel_groups(scenes: list, planes: list[list[int]]) -> list[list[list[int]]]:
     """``planes`` (of ``scenes``) in groups the line kernel may take in one call: those
     it takes (:func:`lcpbench.studies.batch_line.takes_line`) by whether their walls
-    yield; each plane it does not take a group of its own."""
+    yield and whether they are a channel; each plane it does not take a group of its
+    own."""
     groups: dict = {}
     alone = []
     for plane in planes:
         chain = scenes[plane[0]].chain()
         if takes_line(chain):
-            groups.setdefault(chain.elastic_walls, []).append(plane)
+            groups.setdefault((chain.elastic_walls, chain.channel), []).append(plane)
         else:
             alone.append([plane])
     return [*groups.values(), *alone]

@@ -21,6 +21,7 @@ from functools import partial
 import numpy as np
 
 from ..model.finish import finish
+from ..model.judge_exact import split_reactions
 from ..model.kernel_call import kernel_output
 from ..model.lazy_result import LAZY, LazyResult, lazy_result, materialize, stats_judge
 from ..model.outer import DriverOutput
@@ -45,6 +46,7 @@ class LineOutput:
     predictor: str
     time_s: float  # the kernel's wall time per scene (the line's, shared evenly)
     kernel: object  # the batch kernel module (its constants)
+    channel: bool = False  # the line's scenes are in a channel (a lower wall too)
 
 
 class LineResult(LazyResult):
@@ -64,6 +66,14 @@ def results(line: LineOutput) -> list[ContactResult | None]:
     # (zero where the driver failed, as outer.failed_output)
     forces = np.where(settled[:, None], A["j_fu"][kept],
                       np.where(judged[:, None], A["o_R"][kept], 0.0))
+    lower = [None] * len(line.scenes)
+    if line.channel:  # the lower wall's too; a driver's answer the judge did not settle:
+        # its net R split as the single solve's driver output splits it
+        lower = np.where(settled[:, None], A["j_fl"][kept], 0.0)
+        for s in np.flatnonzero(judged & ~settled & ~left):
+            row = kept[s]
+            forces[s], lower[s] = split_reactions(line.scenes[s].chain(), A["o_R"][row],
+                                                  A["o_u"][row])
     totals = forces.sum(axis=1).tolist()
     alphas = A["o_alpha"][kept]
     conv = A["conv"][kept].tolist()
@@ -71,7 +81,7 @@ def results(line: LineOutput) -> list[ContactResult | None]:
     links, tol, t = alphas.shape[1], line.tol, line.time_s
     return [lazy_result(LineResult, {
         "scene": scene, "links": links, "alpha": alphas[s], "forces": forces[s],
-        "forces_lower": None, "total_force": totals[s], "outer_iterations": counts[s],
+        "forces_lower": lower[s], "total_force": totals[s], "outer_iterations": counts[s],
         "converged": conv[s], "solver": DEFAULT, "method": "globalised", "tol": tol,
         "time_s": t, "pressure_limit": None, "route": LINE_KERNEL, "engine": "compiled",
         "judge": "compiled", "retries": ()}, partial(_built, line, s))
