@@ -21,18 +21,12 @@ kernel per scene, the checks once per batch); otherwise each scene is one
 
 from __future__ import annotations
 
-import time
 from collections.abc import Iterable
 from operator import attrgetter
 
 from ..api import check_tol, solve_internal
 from ..errors import ProblemError
 from ..escalations import Context, escalate
-from ..model.angle_step import in_reach
-from ..model.finish import finish
-from ..model.heavy_driver import run_heavy
-from ..model.judge import chain_args
-from ..model.kernel_call import kernel_args
 from ..model.result import ContactResult
 from ..model.step_solver import make_step_solver
 from ..plan import make_plan
@@ -40,7 +34,7 @@ from ..problems.checks import describe
 from ..problems.scenes import ActuatorScene
 from ..problems.sections import SectionedScene, check_scene
 from ..solvers.registry import DEFAULT, get_settings
-from .batch_compiled import AUTO_WHY, BATCH_SCENE, solve_line, takes
+from .batch_compiled import AUTO_WHY, solve_line, takes
 from .batch_line import run_line, takes_line
 from .continuation import PLANE_FIELDS, PREDICTORS, solve_sequence
 
@@ -135,12 +129,10 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
 def _rows_of_sections(scenes: list, out: list, kw: dict, fast_kw: dict) -> set[int]:
     """The rows of sections of the batch (each a line of its own, cold) in one call of the
     line kernel, each row a plane of its own (:func:`run_line`), where it takes them
-    all: their results put in ``out``; a row the kernel stopped on is solved from the
-    same cold start by SQP steps in the link angles (:func:`_cold_in_angles`), or where
-    that is not certified, one :func:`lcpbench.solve` (``kw``); a refused answer goes on
-    to its plan's escalations (:func:`_retried`), as :func:`lcpbench.solve` does. The
-    indices solved; empty where the kernel does not take the rows (they are solved one
-    by one)."""
+    all: their results put in ``out``; a row the kernel stopped on is one
+    :func:`lcpbench.solve` (``kw``), a refused answer goes on to its plan's escalations
+    (:func:`_retried`), as :func:`lcpbench.solve` does. The indices solved; empty where
+    the kernel does not take the rows (they are solved one by one)."""
     rows = [i for i, s in enumerate(scenes) if type(s) is SectionedScene]
     if len(rows) < 2:
         return set()
@@ -148,43 +140,9 @@ def _rows_of_sections(scenes: list, out: list, kw: dict, fast_kw: dict) -> set[i
     if got is None:
         return set()
     for i, res in zip(rows, got, strict=True):
-        if res is None:
-            res = _cold_in_angles(scenes[i], **fast_kw) or solve_internal(scenes[i], **kw)
-        out[i] = res if res.converged else _retried(res, scenes[i], **fast_kw)
+        out[i] = (solve_internal(scenes[i], **kw) if res is None else
+                  res if res.converged else _retried(res, scenes[i], **fast_kw))
     return set(rows)
-
-
-#: the ``engine`` of :func:`_cold_in_angles`'s results
-IN_ANGLES = ("compiled (SQP steps in the link angles: the cold start of a row the line "
-             "kernel stopped on)")
-
-
-def _cold_in_angles(scene, *, tol: float, max_outer: int,
-                    settings: str) -> ContactResult | None:
-    """A row of sections the line kernel stopped on, solved from the same cold start (the
-    free arc clipped to the walls) by SQP steps in the link angles
-    (:func:`lcpbench.model.heavy_driver.run_heavy`, compiled: every angle regular, where
-    the height step's linearisation divides by cos α_i ≈ 0 at the links near the
-    vertical of a row past ~157°), judged by lcpbench's judge as every answer (its
-    stability check included: a saddle is refused). None where the chain is out of the
-    SQP's reach (elastic or profiled walls), the SQP did not converge or the judge
-    refused its answer: the row is then one :func:`lcpbench.solve`, whose plan follows
-    the loading path. The answer is the cold start's equilibrium, as for every row the
-    line kernel solves; where a scene has several stable states, :func:`lcpbench.solve`
-    may return the loading path's instead (docs/performance.md)."""
-    t0 = time.perf_counter()
-    chain = scene.chain()
-    if not in_reach(chain):
-        return None
-    got = run_heavy(chain, None, tol, max_outer,
-                    why="the cold start of a row the line kernel stopped on")
-    if got is None:
-        return None
-    res = finish(scene, chain, got, solver=DEFAULT, method="globalised", tol=tol,
-                 elapsed=time.perf_counter() - t0, settings=settings, engine=IN_ANGLES,
-                 why=AUTO_WHY, judge_args=chain_args(chain, kernel_args(chain)),
-                 route=BATCH_SCENE)
-    return res if res.converged else None
 
 
 def _kept(res: ContactResult | None, scene: ActuatorScene, predictor: str,
