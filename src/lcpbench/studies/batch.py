@@ -11,8 +11,8 @@ fails is solved again cold). Other scenes (the cantilever) are solved cold.
 The results come back in the caller's order, one per scene.
 
 With the default back-end and the globalised driver, each line runs in the
-compiled kernels: a line of one plane (flat rigid walls, one wall, no heavy load)
-in one call of :func:`lcpbench.model.batch_kernel.solve_line` (prediction, solve
+compiled kernels: a line of one plane (flat walls, rigid or elastic, one wall or a
+channel, no heavy load) in one call of :func:`lcpbench.model.batch_kernel.solve_line` (prediction, solve
 and judge of every scene; :mod:`lcpbench.studies.batch_line`), another one scene
 by scene (:mod:`lcpbench.studies.batch_compiled`: the solve kernel and the judge
 kernel per scene, the checks once per batch); otherwise each scene is one
