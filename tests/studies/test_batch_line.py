@@ -265,9 +265,10 @@ def test_planes_of_elastic_walls_run_in_one_call_each_from_its_own_answers(monke
 def test_rows_of_sections_run_in_one_call_and_a_row_it_stops_on_as_solve_runs_it():
     """Rows of two sections (θ, −θ), each cold and alone in its plane: one call of the line
     kernel for all; the rows past ~157° on which the solve kernel stops (its own step
-    refused at the free arc) are solved as lcpbench.solve solves them, along the loading
-    path. Every answer is an equilibrium (tests/energy_oracle.py: stationary,
-    feasible, complementary)."""
+    refused at the free arc) go on from that stop as lcpbench.solve goes on from it,
+    along the loading path, without a second cold solve: the same answer, bit for bit.
+    Every answer is an equilibrium (tests/energy_oracle.py: stationary, feasible,
+    complementary)."""
     from lcpbench import SectionedScene
 
     rows = [SectionedScene(sections=[(t, 15.0), (-t, 15.0)], height=h, links=40)
@@ -280,3 +281,8 @@ def test_rows_of_sections_run_in_one_call_and_a_row_it_stops_on_as_solve_runs_it
         assert_solved(res)
     for res in got[2:4]:  # the kernel stopped cold: the plan's escalation, as in solve()
         assert "followed the load from zero" in res.retried("ramped")
+        assert res.route == "line kernel"
+        one = lcpbench.solve(res.scene, tol=1e-3)
+        assert [r.name for r in res.retries] == [r.name for r in one.retries]
+        assert res.total_force == one.total_force
+        np.testing.assert_array_equal(res.alpha, one.alpha)

@@ -38,10 +38,13 @@ from .compiled_kernel import CONVERGED, LINE_SEARCH, MAX_OUTER, NO_FIT, contact_
 from .judge_kernel import SETTLED, STATS, judge_answer, split_net
 
 __all__ = ["ARC", "CONTACT", "CONVERGED", "FREE", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "SETTLED",
-           "STATS", "solve_line"]
+           "STATS", "STOPPED_FREE", "solve_line"]
 BAIL_NOT_PD = 11  # compiled_dual.BAIL_NOT_PD: the free step has no minimiser
 # what an attempt is (o_kind): a contact solve, the wall-free search's answer, the arc
 CONTACT, FREE, ARC = 0, 1, 2
+#: o_code of an attempt the wall-free search stopped on (its compiled step where the
+#: numpy one would go on, or the search's solve kernel): no bail code of a contact solve
+STOPPED_FREE = -1
 
 
 @njit(cache=True)
@@ -129,7 +132,8 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
              request, free_lo, free_hi, o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res,
              o_off, o_count, j_code, j_stats, j_fu, j_fl, j_tres, conv, recs, used):
     """One solve of a scene into ``row`` of the outputs, its step records appended to
-    ``recs``: (done, recs, used); not done: the solve kernel stopped. ``cu``, ``cl``:
+    ``recs``: (done, recs, used); not done: the solve kernel stopped, ``o_code[row]`` its
+    bail code on the contact solve, or STOPPED_FREE on the wall-free search. ``cu``, ``cl``:
     the walls' compliances (empty: rigid walls); ``channel``: a lower wall too, each
     node's net reaction the nearer wall's (as the single solve's driver output splits it,
     :func:`lcpbench.model.judge_exact.split_reactions`)."""
@@ -137,6 +141,7 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
     kind = _wall_free_kind(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
                            max_iter, request, free_lo, free_hi)
     if kind < 0:
+        o_code[row] = STOPPED_FREE
         return False, recs, used
     o_off[row] = used
     if kind == ARC:
@@ -150,6 +155,7 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
                               free_hi, L, F, cu[:0], cl[:0], tol, max_outer, start,
                               np.zeros(n), zb, zb, 0, max_iter, request, False)
             if got[0] >= 10:
+                o_code[row] = STOPPED_FREE
                 return False, recs, used
             u = np.empty(n)
             _free_heights(u, got[1], a, fs)
@@ -162,6 +168,7 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
                               cu, cl, tol, max_outer, start, w_u, w_up, w_lo, flags, max_iter,
                               request, False)
             if got[0] >= 10:
+                o_code[row] = got[0]  # the bail code (kernel_call.BAIL_REASONS)
                 return False, recs, used
             code = got[0]
         alpha, R, count = got[1], got[9], got[7]
@@ -343,8 +350,9 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
     wall yields). ``plane``: each scene's plane (an index, 0 to the number of planes − 1):
     a scene is predicted from the answers of its own plane only, so several planes in
     one call give the answers of a call per plane. Where the solve kernel stops on a
-    scene alone in its plane (no other scene's start depends on it), ``kept[s]`` is −1
-    and the call goes on: the caller solves that scene by itself."""
+    scene alone in its plane (no other scene's start depends on it), ``kept[s]`` is −1,
+    ``o_code[s]`` says where it stopped (:func:`_attempt`), and the call goes on: the
+    caller solves that scene by itself."""
     m, n = lo.shape
     members = np.zeros(np.max(plane) + 1 if m else 0, np.int64)
     for s in range(m):

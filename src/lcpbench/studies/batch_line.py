@@ -24,7 +24,7 @@ from ..model.kernel_call import applies, kernel_args
 from ..model.result import ContactResult
 from ..solvers.judge import requested
 from ..solvers.registry import DEFAULT, get_settings
-from .batch_result import LineOutput, results
+from .batch_result import LineOutput, Stopped, results
 from .continuation import POINTS
 
 #: (name, dtype, shape after the rows) of the kernel's outputs per attempt;
@@ -69,15 +69,16 @@ def _shares(chain, c0, args0: tuple) -> bool:
 
 def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = "default",
              predictor: str = "adaptive", plane: list[int] | None = None
-             ) -> list[ContactResult | None] | None:
+             ) -> list[ContactResult | Stopped] | None:
     """The results of the line (actuator scenes of one plane, checked, in
     continuation order), or None: the kernel does not take it (the caller solves it
     scene by scene). ``plane``: each scene's plane (an index from 0), where the line
     holds several (:func:`lcpbench.studies.batch._planes`; rows of sections, each a
     plane of its own): one call for all of them, each scene predicted from its own
     plane, where every chain shares the first one's layout (:func:`_shares`); None:
-    one plane. A scene alone in its plane on which the solve kernel stops is None in
-    the list (the caller solves it by itself)."""
+    one plane. A scene alone in its plane on which the solve kernel stops is a
+    :class:`~lcpbench.studies.batch_result.Stopped` in the list (the caller solves it by
+    itself)."""
     if not scenes:
         return []
     chains = [s.chain() for s in scenes]

@@ -53,9 +53,20 @@ class LineResult(LazyResult):
     """A :class:`ContactResult` of a batch line (see the module)."""
 
 
-def results(line: LineOutput) -> list[ContactResult | None]:
-    """One :class:`LineResult` per scene of the line, in its order; None for a scene the
-    kernel left to the caller (``kept`` −1: it stopped on a scene alone in its plane)."""
+@dataclass(frozen=True)
+class Stopped:
+    """A scene the line kernel left to the caller: it stopped on it, the scene alone in
+    its plane. ``bail``: the solve kernel's bail code of its cold contact solve
+    (:data:`lcpbench.model.kernel_call.BAIL_REASONS`), where the kernel stopped there;
+    None where the wall-free search stopped."""
+
+    bail: int | None
+
+
+def results(line: LineOutput) -> list[ContactResult | Stopped]:
+    """One :class:`LineResult` per scene of the line, in its order; :class:`Stopped` for a
+    scene the kernel left to the caller (``kept`` −1: it stopped on a scene alone in its
+    plane)."""
     A = line.arrays
     left = A["kept"] < 0
     kept = np.where(left, 0, A["kept"])  # (the rows of the left scenes are not read)
@@ -85,7 +96,12 @@ def results(line: LineOutput) -> list[ContactResult | None]:
         "converged": conv[s], "solver": DEFAULT, "method": "globalised", "tol": tol,
         "time_s": t, "pressure_limit": None, "route": LINE_KERNEL, "engine": "compiled",
         "judge": "compiled", "retries": ()}, partial(_built, line, s))
-        if not left[s] else None for s, scene in enumerate(line.scenes)]
+        if not left[s] else _stopped(line, s) for s, scene in enumerate(line.scenes)]
+
+
+def _stopped(line: LineOutput, s: int) -> Stopped:
+    code = int(line.arrays["o_code"][s])  # (row s: the scene's cold attempt)
+    return Stopped(None if code == line.kernel.STOPPED_FREE else code)
 
 
 def driver_output(line: LineOutput, row: int, chain) -> DriverOutput:
@@ -145,4 +161,4 @@ def _built(line: LineOutput, s: int) -> ContactResult:
     return full
 
 
-__all__ = ["LAZY", "LineOutput", "LineResult", "materialize", "results"]
+__all__ = ["LAZY", "LineOutput", "LineResult", "Stopped", "materialize", "results"]
