@@ -4,7 +4,8 @@ loading path, solved instead from their cold start by the SQP in the link angles
 For rows of sections that share one layout (the mixed batch's rows of two sections
 (θ, −θ), and seeded rows of two and three sections with independent signed θ in
 100°–180°, h in 1–5 mm, against one wall or in a channel), the rows on which the line
-kernel stops cold (:func:`lcpbench.studies.batch_line.run_line` gives None) are solved
+kernel stops cold (:func:`lcpbench.studies.batch_line.run_line` gives a
+:class:`~lcpbench.studies.batch_result.Stopped`) are solved
 twice: by :func:`lcpbench.solve` (its plan: the cold start refused, the loading path,
 escalation "ramped") and by the compiled SQP in the link angles from the same cold
 start as the line kernel's (:func:`lcpbench.model.heavy_driver.run_heavy`, no start),
@@ -40,6 +41,7 @@ from lcpbench.escalations import same_state
 from lcpbench.model.finish import finish
 from lcpbench.model.heavy_driver import run_heavy
 from lcpbench.studies.batch_line import run_line
+from lcpbench.studies.batch_result import Stopped
 
 ROOT = Path(__file__).resolve().parents[1]
 TOL = 1e-3
@@ -73,7 +75,7 @@ def compare(name: str, rows: list) -> str:
     got = run_line(rows, tol=TOL, plane=list(range(len(rows))))
     if got is None:
         return f"| {name} | {len(rows)} | the line kernel does not take them | | | | | |"
-    stopped = [s for s, r in zip(rows, got, strict=True) if r is None]
+    stopped = [s for s, r in zip(rows, got, strict=True) if isinstance(r, Stopped)]
     path_ok = sqp_ok = same = 0
     t_path, t_sqp = [], []
     for scene in stopped:
