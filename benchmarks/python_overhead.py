@@ -67,8 +67,8 @@ def _kernels():
     return solve_kernel(), judge_kernel(), line_kernel()
 
 
-#: the line kernel's first output argument (batch_kernel.solve_line: 25 inputs)
-LINE_OUTPUTS = 25
+#: the line kernel's first output argument (batch_kernel.solve_line: 26 inputs)
+LINE_OUTPUTS = 26
 
 
 def replayed(fn, repeat: int, fresh) -> tuple[float, int]:

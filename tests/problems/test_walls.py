@@ -70,6 +70,31 @@ def test_a_profile_crossing_the_pin_line_is_refused():
                       lower_profile=WallProfile.from_table([0, 30], [-1, 0.5], "linear"))
 
 
+def test_scenes_sharing_a_profile_sample_it_once_and_a_bad_one_is_refused_each_time():
+    """The pin-line check of a profile samples it once per chain range and side; scenes
+    that share the profile do not sample it again, and a profile that fails is refused
+    by every scene that uses it."""
+    calls = []
+
+    def h(x):
+        calls.append(np.size(x))
+        return 3.0 + 0.0 * np.asarray(x, float)
+
+    good = WallProfile.from_function(h, lambda x: 0.0 * np.asarray(x, float))
+    first = ActuatorScene(theta=120, wall_profile=good)
+    sampled = len(calls)
+    assert sampled >= 1
+    for theta in (130, 140, 150):
+        ActuatorScene(theta=theta, wall_profile=good)
+    assert len(calls) == sampled
+    ActuatorScene(theta=120, length=first.length / 2, wall_profile=good)  # another range
+    assert len(calls) > sampled
+    bad = WallProfile.from_table([0, 15, 30], [3, 0, 3], "linear")
+    for theta in (120, 130):
+        with pytest.raises(ProblemError, match="wall_profile.*pin line"):
+            ActuatorScene(theta=theta, wall_profile=bad)
+
+
 def test_a_profile_must_cover_the_chain():
     with pytest.raises(ProblemError, match="cover the chain's x range"):
         ActuatorScene(wall_profile=WallProfile.from_table([0, 20], [3, 3]))

@@ -137,8 +137,8 @@ def test_the_kernels_predictor_chooses_as_solved(seed, predictor):
 
 def test_mixed_batches_fall_back_per_plane_in_the_callers_order():
     """Rigid and elastic walls in one group (two planes), a channel, a heavy chain and a
-    cantilever: the rigid and the elastic plane run in the line kernel, the others as
-    before, and every answer is the scene's equilibrium."""
+    cantilever: the rigid and the elastic plane and the channel run in the line kernel,
+    the others as before, and every answer is the scene's equilibrium."""
     rigid = [ActuatorScene(theta=t, height=3.0, links=40) for t in (110, 130, 150, 170)]
     soft = [ActuatorScene(theta=t, height=3.0, links=40, wall_stiffness=50.0)
             for t in (120, 150)]
@@ -149,7 +149,7 @@ def test_mixed_batches_fall_back_per_plane_in_the_callers_order():
     fast = lcpbench.solve_many(scenes, tol=1e-8)
     assert [r.scene for r in fast] == scenes
     for f in fast:
-        assert _from_line(f) == (f.scene in rigid or f.scene in soft)
+        assert _from_line(f) == (f.scene in rigid or f.scene in soft or f.scene in channel)
         assert f.converged, f.reason
         assert_solved(f)  # the equilibrium, rigid or Winkler (tests/energy_oracle.py)
 
@@ -157,9 +157,36 @@ def test_mixed_batches_fall_back_per_plane_in_the_callers_order():
 def test_which_lines_the_kernel_takes():
     assert takes_line(ActuatorScene(theta=150, height=3.0, links=40).chain())
     assert takes_line(ActuatorScene(theta=150, height=3.0, links=40, wall_stiffness=50.0).chain())
-    for scene in (ActuatorScene(theta=150, height=1.0, links=40, channel=True),
-                  ActuatorScene(theta=150, height=3.0, links=30, weight=0.05)):
-        assert not takes_line(scene.chain())
+    assert takes_line(ActuatorScene(theta=150, height=1.0, links=40, channel=True).chain())
+    assert not takes_line(ActuatorScene(theta=150, height=3.0, links=30, weight=0.05).chain())
+
+
+@pytest.mark.parametrize("tol", [1e-3, 1e-8])
+def test_a_channel_line_is_one_solve_per_scene_from_the_same_start(tol):
+    """A line in a channel, sagging onto the lower wall at the small heights: one call of
+    the line kernel, each scene what lcpbench.solve gives from the start Solved predicts
+    (replayed in Python), both walls' reactions to round-off; every answer the
+    equilibrium by the energy oracle (both walls)."""
+    scenes = [ActuatorScene(theta=t, height=h, links=60, channel=True, weight=0.009)
+              for h in (0.3, 1.0) for t in (20.0, 50.0, 80.0, 110.0)]
+    batch = lcpbench.solve_many(scenes, tol=tol)
+    assert all(_from_line(r) for r in batch)
+    assert any(np.sum(r.forces_lower) > 0 for r in batch)  # the lower wall is pressed
+    solved = new_solved("adaptive")
+    for i in continuation_order(scenes)[0]:
+        scene, got = scenes[i], batch[i]
+        p = solved.predict(scene)
+        start = None if p is None else dataclasses.replace(p[1], alpha=p[0])
+        one = warm_or_cold(lambda s, sc=scene: lcpbench.solve(sc, tol=tol, start=s), start,
+                           "adaptive")
+        assert got.converged and one.converged, (got.reason, one.reason)
+        assert got.extra["continuation"] == one.extra["continuation"]
+        F0 = max(one.total_force, scene.EI / scene.length**2)
+        np.testing.assert_allclose(got.forces, one.forces, rtol=0, atol=1e-9 * F0)
+        np.testing.assert_allclose(got.forces_lower, one.forces_lower, rtol=0, atol=1e-9 * F0)
+        assert got.total_force_lower == pytest.approx(one.total_force_lower, abs=1e-9 * F0)
+        assert_solved(got)
+        solved.add(scene, got)
 
 
 def test_bad_scenes_in_a_batch_name_the_problem_as_solve_does():
@@ -238,9 +265,10 @@ def test_planes_of_elastic_walls_run_in_one_call_each_from_its_own_answers(monke
 def test_rows_of_sections_run_in_one_call_and_a_row_it_stops_on_as_solve_runs_it():
     """Rows of two sections (θ, −θ), each cold and alone in its plane: one call of the line
     kernel for all; the rows past ~157° on which the solve kernel stops (its own step
-    refused at the free arc) are solved as lcpbench.solve solves them, along the loading
-    path. Every answer is an equilibrium (tests/energy_oracle.py: stationary,
-    feasible, complementary)."""
+    refused at the free arc) go on from that stop as lcpbench.solve goes on from it,
+    along the loading path, without a second cold solve: the same answer, bit for bit.
+    Every answer is an equilibrium (tests/energy_oracle.py: stationary, feasible,
+    complementary)."""
     from lcpbench import SectionedScene
 
     rows = [SectionedScene(sections=[(t, 15.0), (-t, 15.0)], height=h, links=40)
@@ -253,3 +281,8 @@ def test_rows_of_sections_run_in_one_call_and_a_row_it_stops_on_as_solve_runs_it
         assert_solved(res)
     for res in got[2:4]:  # the kernel stopped cold: the plan's escalation, as in solve()
         assert "followed the load from zero" in res.retried("ramped")
+        assert res.route == "line kernel"
+        one = lcpbench.solve(res.scene, tol=1e-3)
+        assert [r.name for r in res.retries] == [r.name for r in one.retries]
+        assert res.total_force == one.total_force
+        np.testing.assert_array_equal(res.alpha, one.alpha)

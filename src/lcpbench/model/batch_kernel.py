@@ -2,7 +2,8 @@
 
 :func:`solve_line` is :func:`lcpbench.studies.batch_compiled.solve_line` in one
 compiled call, for a line of actuator scenes of one plane (the same chain but for θ
-and h; flat walls, rigid or elastic, one wall, no heavy load), or of several planes that
+and h; flat walls, rigid or elastic, one wall or a channel, no heavy load), or of several
+planes that
 share the chain's layout (each scene predicted from its own plane). For each scene, in order:
 
 1. the start, as :class:`lcpbench.studies.continuation.Solved` chooses it (its
@@ -34,13 +35,16 @@ from numba import njit
 from ..thresholds import SAG_BOUND
 from .batch_verdict import accepted
 from .compiled_kernel import CONVERGED, LINE_SEARCH, MAX_OUTER, NO_FIT, contact_step, solve_chain
-from .judge_kernel import SETTLED, STATS, judge_answer
+from .judge_kernel import SETTLED, STATS, judge_answer, split_net
 
 __all__ = ["ARC", "CONTACT", "CONVERGED", "FREE", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "SETTLED",
-           "STATS", "solve_line"]
+           "STATS", "STOPPED_FREE", "solve_line"]
 BAIL_NOT_PD = 11  # compiled_dual.BAIL_NOT_PD: the free step has no minimiser
 # what an attempt is (o_kind): a contact solve, the wall-free search's answer, the arc
 CONTACT, FREE, ARC = 0, 1, 2
+#: o_code of an attempt the wall-free search stopped on (its compiled step where the
+#: numpy one would go on, or the search's solve kernel): no bail code of a contact solve
+STOPPED_FREE = -1
 
 
 @njit(cache=True)
@@ -124,16 +128,20 @@ def _records(recs, used, rec, count):
 
 @njit(cache=True)
 def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_load,
-             nodal_load, fs, lo, hi, L, F, cu, cl, wall, tol, max_outer, max_iter, request,
-             free_lo, free_hi, o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res,
+             nodal_load, fs, lo, hi, L, F, cu, cl, wall, channel, tol, max_outer, max_iter,
+             request, free_lo, free_hi, o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res,
              o_off, o_count, j_code, j_stats, j_fu, j_fl, j_tres, conv, recs, used):
     """One solve of a scene into ``row`` of the outputs, its step records appended to
-    ``recs``: (done, recs, used); not done: the solve kernel stopped. ``cu``, ``cl``:
-    the walls' compliances (empty: rigid walls)."""
+    ``recs``: (done, recs, used); not done: the solve kernel stopped, ``o_code[row]`` its
+    bail code on the contact solve, or STOPPED_FREE on the wall-free search. ``cu``, ``cl``:
+    the walls' compliances (empty: rigid walls); ``channel``: a lower wall too, each
+    node's net reaction the nearer wall's (as the single solve's driver output splits it,
+    :func:`lcpbench.model.judge_exact.split_reactions`)."""
     n = lo.size
     kind = _wall_free_kind(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
                            max_iter, request, free_lo, free_hi)
     if kind < 0:
+        o_code[row] = STOPPED_FREE
         return False, recs, used
     o_off[row] = used
     if kind == ARC:
@@ -147,6 +155,7 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
                               free_hi, L, F, cu[:0], cl[:0], tol, max_outer, start,
                               np.zeros(n), zb, zb, 0, max_iter, request, False)
             if got[0] >= 10:
+                o_code[row] = STOPPED_FREE
                 return False, recs, used
             u = np.empty(n)
             _free_heights(u, got[1], a, fs)
@@ -159,6 +168,7 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
                               cu, cl, tol, max_outer, start, w_u, w_up, w_lo, flags, max_iter,
                               request, False)
             if got[0] >= 10:
+                o_code[row] = got[0]  # the bail code (kernel_call.BAIL_REASONS)
                 return False, recs, used
             code = got[0]
         alpha, R, count = got[1], got[9], got[7]
@@ -171,10 +181,12 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
     o_R[row] = R
     ok = False
     if code == CONVERGED:  # the judge, on the answer and the real walls
+        up, down = R.copy(), np.zeros(n)
+        if channel and kind != ARC:
+            split_net(o_u[row], R, hi, lo, True, up, down)
         jc, st, fu, fl, tres = judge_answer(
             alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl, wall,
-            False,
-            R.copy(), np.zeros(n), tol, recs[2, used - count:used].copy())
+            channel, up, down, tol, recs[2, used - count:used].copy())
         j_code[row] = jc
         j_stats[row] = st
         j_fu[row], j_fl[row], j_tres[row] = fu, fl, tres
@@ -322,7 +334,7 @@ def _predict(s, theta, height, plane, ok, touch, alphas, most, adaptive):
 
 @njit(cache=True)
 def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, cu, cl, L, F,
-               wall,
+               wall, channel,
                theta, height, plane, tol, max_outer, max_iter, request, most, adaptive,
                o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res, o_off, o_count,
                j_code, j_stats, j_fu, j_fl, j_tres, conv, kept, failed, base):
@@ -338,8 +350,9 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
     wall yields). ``plane``: each scene's plane (an index, 0 to the number of planes − 1):
     a scene is predicted from the answers of its own plane only, so several planes in
     one call give the answers of a call per plane. Where the solve kernel stops on a
-    scene alone in its plane (no other scene's start depends on it), ``kept[s]`` is −1
-    and the call goes on: the caller solves that scene by itself."""
+    scene alone in its plane (no other scene's start depends on it), ``kept[s]`` is −1,
+    ``o_code[s]`` says where it stopped (:func:`_attempt`), and the call goes on: the
+    caller solves that scene by itself."""
     m, n = lo.shape
     members = np.zeros(np.max(plane) + 1 if m else 0, np.int64)
     for s in range(m):
@@ -361,7 +374,8 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
             sig = o_sig[kept[b]]
             w_u, w_up, w_lo, flags = o_u[kept[b]], sig > 0, sig < 0, 7
         args = (rest_alpha[s], a, jl, jr, k[s], rest[s], link_load[s], nodal_load, fs, lo[s],
-                hi[s], L, F, cu[s], cl[s], wall[s], tol, max_outer, max_iter, request, free_lo, free_hi)
+                hi[s], L, F, cu[s], cl[s], wall[s], channel, tol, max_outer, max_iter, request,
+                free_lo, free_hi)
         done, recs, used = _attempt(s, start, w_u, w_up, w_lo, flags, *args, *outs, recs,
                                     used)
         if not done:
@@ -384,7 +398,7 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
         alphas[s] = o_alpha[row]
         if ok[s]:
             for i in range(n):
-                if j_fu[row, i] > 0:
+                if j_fu[row, i] > 0 or j_fl[row, i] > 0:  # (continuation.touches)
                     touch[s] = True
                     break
     return -1, recs

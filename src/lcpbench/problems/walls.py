@@ -101,6 +101,7 @@ class WallProfile:
         self._key = key
         self._pieces = pieces  # a table's own pieces (exact); else tabulated on demand
         self._tabulated: dict = {}
+        self._passed: set = set()  # (x_low, x_high, side) that check_for has passed
 
     # -- construction ---------------------------------------------------------
     @classmethod
@@ -277,12 +278,17 @@ class WallProfile:
         """ProblemError unless the profile covers [x_low, x_high] (mm) and stays
         strictly above (``side="upper"``) or below (``"lower"``) the pin line y = 0
         there. A table is checked at its points and on a fine grid; a function on
-        SAMPLES points."""
+        SAMPLES points. A range and side that passed once are not sampled again (the
+        profile is a fixed function, as its tables assume: :meth:`pieces`), so scenes
+        that share a profile pay for one check."""
         lo, hi = self.x_range
         tol = 1e-9 * max(1.0, abs(x_high - x_low))
         if lo > x_low + tol or hi < x_high - tol:
             raise ProblemError(f"{parameter}: the profile must cover the chain's x range "
                                f"[{x_low:g}, {x_high:g}] mm, it covers [{lo:g}, {hi:g}] mm")
+        passed = (float(x_low), float(x_high), side)
+        if passed in self._passed:
+            return
         t = np.linspace(x_low, x_high, SAMPLES)
         y = self(t)
         if not np.all(np.isfinite(y)):
@@ -295,6 +301,7 @@ class WallProfile:
             raise ProblemError(f"{parameter}: the {side} wall crosses the pin line: it is "
                                f"{where} y = 0 (y = {y[i]:g} mm at x = {t[i]:g} mm); the "
                                f"pins sit on y = 0")
+        self._passed.add(passed)
 
 
 def load_profile_csv(path, kind: str = "pchip", *, parameter: str = "wall_profile"

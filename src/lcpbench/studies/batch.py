@@ -11,8 +11,8 @@ fails is solved again cold). Other scenes (the cantilever) are solved cold.
 The results come back in the caller's order, one per scene.
 
 With the default back-end and the globalised driver, each line runs in the
-compiled kernels: a line of one plane (flat rigid walls, one wall, no heavy load)
-in one call of :func:`lcpbench.model.batch_kernel.solve_line` (prediction, solve
+compiled kernels: a line of one plane (flat walls, rigid or elastic, one wall or a
+channel, no heavy load) in one call of :func:`lcpbench.model.batch_kernel.solve_line` (prediction, solve
 and judge of every scene; :mod:`lcpbench.studies.batch_line`), another one scene
 by scene (:mod:`lcpbench.studies.batch_compiled`: the solve kernel and the judge
 kernel per scene, the checks once per batch); otherwise each scene is one
@@ -21,12 +21,17 @@ kernel per scene, the checks once per batch); otherwise each scene is one
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterable
 from operator import attrgetter
 
 from ..api import check_tol, solve_internal
 from ..errors import ProblemError
 from ..escalations import Context, escalate
+from ..model.compiled import reference
+from ..model.finish import finish
+from ..model.judge import chain_args
+from ..model.kernel_call import BAIL_REASONS, kernel_args
 from ..model.result import ContactResult
 from ..model.step_solver import make_step_solver
 from ..plan import make_plan
@@ -36,6 +41,7 @@ from ..problems.sections import SectionedScene, check_scene
 from ..solvers.registry import DEFAULT, get_settings
 from .batch_compiled import AUTO_WHY, solve_line, takes
 from .batch_line import run_line, takes_line
+from .batch_result import LINE_KERNEL, Stopped
 from .continuation import PLANE_FIELDS, PREDICTORS, solve_sequence
 
 
@@ -129,10 +135,13 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
 def _rows_of_sections(scenes: list, out: list, kw: dict, fast_kw: dict) -> set[int]:
     """The rows of sections of the batch (each a line of its own, cold) in one call of the
     line kernel, each row a plane of its own (:func:`run_line`), where it takes them
-    all: their results put in ``out``; a row the kernel stopped on is one
-    :func:`lcpbench.solve` (``kw``), a refused answer goes on to its plan's escalations
-    (:func:`_retried`), as :func:`lcpbench.solve` does. The indices solved; empty where
-    the kernel does not take the rows (they are solved one by one)."""
+    all: their results put in ``out``; a row the kernel stopped on in its cold contact
+    solve goes on from that stop as :func:`lcpbench.solve` goes on from the same stop of
+    the same kernel (:func:`_after_stop`: the compiled fall-back, then the plan's
+    escalations, the loading path; the cold solve is not run twice), another stopped
+    row is one :func:`lcpbench.solve` (``kw``); a refused answer goes on to its plan's
+    escalations (:func:`_retried`), as :func:`lcpbench.solve` does. The indices solved;
+    empty where the kernel does not take the rows (they are solved one by one)."""
     rows = [i for i, s in enumerate(scenes) if type(s) is SectionedScene]
     if len(rows) < 2:
         return set()
@@ -140,17 +149,39 @@ def _rows_of_sections(scenes: list, out: list, kw: dict, fast_kw: dict) -> set[i
     if got is None:
         return set()
     for i, res in zip(rows, got, strict=True):
-        out[i] = (solve_internal(scenes[i], **kw) if res is None else
-                  res if res.converged else _retried(res, scenes[i], **fast_kw))
+        if isinstance(res, Stopped):
+            res = (solve_internal(scenes[i], **kw) if res.bail is None else
+                   _after_stop(scenes[i], res.bail, **fast_kw))
+        out[i] = res if res.converged else _retried(res, scenes[i], **fast_kw)
     return set(rows)
 
 
-def _kept(res: ContactResult | None, scene: ActuatorScene, predictor: str,
+def _after_stop(scene, bail: int, *, tol: float, max_outer: int,
+                settings: str) -> ContactResult:
+    """The result of a row whose cold contact solve the line kernel stopped on (``bail``,
+    the solve kernel's code), as :func:`lcpbench.solve` has it after the same stop of
+    the same kernel from the same cold start (:func:`lcpbench.model.compiled.run_kernel`):
+    the kernel's compiled fall-back (:func:`lcpbench.model.compiled.reference`; for a
+    refused step, the not-converged arc), judged; the caller escalates a refusal as
+    ``solve`` does (:func:`_retried`: the loading path)."""
+    t0 = time.perf_counter()
+    chain = scene.chain()
+    got, used = reference(chain, lambda: make_step_solver(DEFAULT, settings, True),
+                          BAIL_REASONS[bail], tol=tol, max_outer=max_outer,
+                          method="globalised", start=None, settings=settings)
+    return finish(scene, chain, got, solver=DEFAULT, method="globalised", tol=tol,
+                  elapsed=time.perf_counter() - t0, settings=settings, engine=used,
+                  why=AUTO_WHY, judge_args=chain_args(chain, kernel_args(chain)),
+                  route=LINE_KERNEL)
+
+
+def _kept(res: ContactResult | Stopped, scene: ActuatorScene, predictor: str,
           fast_kw: dict) -> ContactResult:
     """A line kernel's result of an actuator scene, as the batch keeps it: a refused
-    answer escalated (:func:`_retried`); None (the kernel stopped on the scene, alone
-    in its plane): the scene solved by the per-scene loop, as its plane would be."""
-    if res is None:
+    answer escalated (:func:`_retried`); :class:`Stopped` (the kernel stopped on the
+    scene, alone in its plane): the scene solved by the per-scene loop, as its plane
+    would be."""
+    if isinstance(res, Stopped):
         res = solve_line([scene], predictor=predictor, **fast_kw)[0]
     return res if res.converged else _retried(res, scene, **fast_kw)
 
@@ -170,13 +201,14 @@ def _retried(res: ContactResult, scene, *, tol: float, max_outer: int,
 def _kernel_groups(scenes: list, planes: list[list[int]]) -> list[list[list[int]]]:
     """``planes`` (of ``scenes``) in groups the line kernel may take in one call: those
     it takes (:func:`lcpbench.studies.batch_line.takes_line`) by whether their walls
-    yield; each plane it does not take a group of its own."""
+    yield and whether they are a channel; each plane it does not take a group of its
+    own."""
     groups: dict = {}
     alone = []
     for plane in planes:
         chain = scenes[plane[0]].chain()
         if takes_line(chain):
-            groups.setdefault(chain.elastic_walls, []).append(plane)
+            groups.setdefault((chain.elastic_walls, chain.channel), []).append(plane)
         else:
             alone.append([plane])
     return [*groups.values(), *alone]

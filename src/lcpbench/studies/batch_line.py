@@ -3,8 +3,8 @@
 :func:`lcpbench.solve_many` hands a line here first; :func:`run_line` takes it
 when every scene is an actuator scene of one plane (the same scene but for θ and
 h, so :class:`~lcpbench.studies.continuation.Solved` sees one plane), with a chain
-the solve kernel takes (consecutive joints, flat rigid walls), one wall (no
-channel), below the large-N formulation and below the moderately heavy load
+the solve kernel takes (consecutive joints, flat walls, rigid or elastic), one wall or
+a channel, below the large-N formulation and below the moderately heavy load
 (those go through :func:`lcpbench.model.compiled.drive`'s SQP steps). Otherwise,
 or where the solve kernel stops on a scene, it returns None and the line is
 solved scene by scene (:func:`lcpbench.studies.batch_compiled.solve_line`), as
@@ -24,7 +24,7 @@ from ..model.kernel_call import applies, kernel_args
 from ..model.result import ContactResult
 from ..solvers.judge import requested
 from ..solvers.registry import DEFAULT, get_settings
-from .batch_result import LineOutput, results
+from .batch_result import LineOutput, Stopped, results
 from .continuation import POINTS
 
 #: (name, dtype, shape after the rows) of the kernel's outputs per attempt;
@@ -48,7 +48,7 @@ def _kernel():
 def takes_line(chain) -> bool:
     """Whether the line kernel takes a line of one plane whose chains are like ``chain``."""
     return (applies(DEFAULT, "globalised", chain) and not large_n.applies(chain)
-            and not chain.channel and not heavy(chain))
+            and not heavy(chain))
 
 
 #: the solve kernel's arguments that a line's chains share (kernel_args: ℓ/N, the joint
@@ -59,8 +59,9 @@ SHARED_ARGS = (1, 2, 3, 7, 8, 11, 12)
 def _shares(chain, c0, args0: tuple) -> bool:
     """Whether the line kernel takes ``chain`` in a call whose shared arrays are those of
     ``c0`` (``args0``: its kernel_args): it takes the chain, its walls yield as c0's do
-    (rigid or elastic), and the shared arguments are equal."""
-    if not takes_line(chain) or chain.elastic_walls != c0.elastic_walls:
+    (rigid or elastic), in a channel or not as c0, and the shared arguments are equal."""
+    if not takes_line(chain) or (chain.elastic_walls, chain.channel) != (c0.elastic_walls,
+                                                                           c0.channel):
         return False
     args = kernel_args(chain)
     return all(np.array_equal(args[i], args0[i]) for i in SHARED_ARGS)
@@ -68,15 +69,16 @@ def _shares(chain, c0, args0: tuple) -> bool:
 
 def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = "default",
              predictor: str = "adaptive", plane: list[int] | None = None
-             ) -> list[ContactResult | None] | None:
+             ) -> list[ContactResult | Stopped] | None:
     """The results of the line (actuator scenes of one plane, checked, in
     continuation order), or None: the kernel does not take it (the caller solves it
     scene by scene). ``plane``: each scene's plane (an index from 0), where the line
     holds several (:func:`lcpbench.studies.batch._planes`; rows of sections, each a
     plane of its own): one call for all of them, each scene predicted from its own
     plane, where every chain shares the first one's layout (:func:`_shares`); None:
-    one plane. A scene alone in its plane on which the solve kernel stops is None in
-    the list (the caller solves it by itself)."""
+    one plane. A scene alone in its plane on which the solve kernel stops is a
+    :class:`~lcpbench.studies.batch_result.Stopped` in the list (the caller solves it by
+    itself)."""
     if not scenes:
         return []
     chains = [s.chain() for s in scenes]
@@ -118,7 +120,7 @@ def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = 
         t0 = time.perf_counter()
         bad, A["records"] = kern.solve_line(
             ra, args0[1], args0[2], args0[3], k, rest, load, args0[7], args0[8], lo, hi, cu, cl,
-            args0[11], args0[12], wall, theta, height,
+            args0[11], args0[12], wall, bool(c0.channel), theta, height,
             np.zeros(m, np.int64) if plane is None else np.asarray(plane, np.int64),
             float(tol), int(max_outer),
             int(max_iter), float(request), most, predictor == "adaptive",
@@ -130,7 +132,7 @@ def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = 
     if bad >= 0:
         return None
     return results(LineOutput(scenes, A, float(tol), int(max_outer), settings, predictor,
-                              elapsed / m, kern))
+                              elapsed / m, kern, bool(c0.channel)))
 
 
 __all__ = ["run_line", "takes_line"]

@@ -21,6 +21,7 @@ from functools import partial
 import numpy as np
 
 from ..model.finish import finish
+from ..model.judge_exact import split_reactions
 from ..model.kernel_call import kernel_output
 from ..model.lazy_result import LAZY, LazyResult, lazy_result, materialize, stats_judge
 from ..model.outer import DriverOutput
@@ -45,15 +46,27 @@ class LineOutput:
     predictor: str
     time_s: float  # the kernel's wall time per scene (the line's, shared evenly)
     kernel: object  # the batch kernel module (its constants)
+    channel: bool = False  # the line's scenes are in a channel (a lower wall too)
 
 
 class LineResult(LazyResult):
     """A :class:`ContactResult` of a batch line (see the module)."""
 
 
-def results(line: LineOutput) -> list[ContactResult | None]:
-    """One :class:`LineResult` per scene of the line, in its order; None for a scene the
-    kernel left to the caller (``kept`` −1: it stopped on a scene alone in its plane)."""
+@dataclass(frozen=True)
+class Stopped:
+    """A scene the line kernel left to the caller: it stopped on it, the scene alone in
+    its plane. ``bail``: the solve kernel's bail code of its cold contact solve
+    (:data:`lcpbench.model.kernel_call.BAIL_REASONS`), where the kernel stopped there;
+    None where the wall-free search stopped."""
+
+    bail: int | None
+
+
+def results(line: LineOutput) -> list[ContactResult | Stopped]:
+    """One :class:`LineResult` per scene of the line, in its order; :class:`Stopped` for a
+    scene the kernel left to the caller (``kept`` −1: it stopped on a scene alone in its
+    plane)."""
     A = line.arrays
     left = A["kept"] < 0
     kept = np.where(left, 0, A["kept"])  # (the rows of the left scenes are not read)
@@ -64,6 +77,14 @@ def results(line: LineOutput) -> list[ContactResult | None]:
     # (zero where the driver failed, as outer.failed_output)
     forces = np.where(settled[:, None], A["j_fu"][kept],
                       np.where(judged[:, None], A["o_R"][kept], 0.0))
+    lower = [None] * len(line.scenes)
+    if line.channel:  # the lower wall's too; a driver's answer the judge did not settle:
+        # its net R split as the single solve's driver output splits it
+        lower = np.where(settled[:, None], A["j_fl"][kept], 0.0)
+        for s in np.flatnonzero(judged & ~settled & ~left):
+            row = kept[s]
+            forces[s], lower[s] = split_reactions(line.scenes[s].chain(), A["o_R"][row],
+                                                  A["o_u"][row])
     totals = forces.sum(axis=1).tolist()
     alphas = A["o_alpha"][kept]
     conv = A["conv"][kept].tolist()
@@ -71,11 +92,16 @@ def results(line: LineOutput) -> list[ContactResult | None]:
     links, tol, t = alphas.shape[1], line.tol, line.time_s
     return [lazy_result(LineResult, {
         "scene": scene, "links": links, "alpha": alphas[s], "forces": forces[s],
-        "forces_lower": None, "total_force": totals[s], "outer_iterations": counts[s],
+        "forces_lower": lower[s], "total_force": totals[s], "outer_iterations": counts[s],
         "converged": conv[s], "solver": DEFAULT, "method": "globalised", "tol": tol,
         "time_s": t, "pressure_limit": None, "route": LINE_KERNEL, "engine": "compiled",
         "judge": "compiled", "retries": ()}, partial(_built, line, s))
-        if not left[s] else None for s, scene in enumerate(line.scenes)]
+        if not left[s] else _stopped(line, s) for s, scene in enumerate(line.scenes)]
+
+
+def _stopped(line: LineOutput, s: int) -> Stopped:
+    code = int(line.arrays["o_code"][s])  # (row s: the scene's cold attempt)
+    return Stopped(None if code == line.kernel.STOPPED_FREE else code)
 
 
 def driver_output(line: LineOutput, row: int, chain) -> DriverOutput:
@@ -135,4 +161,4 @@ def _built(line: LineOutput, s: int) -> ContactResult:
     return full
 
 
-__all__ = ["LAZY", "LineOutput", "LineResult", "materialize", "results"]
+__all__ = ["LAZY", "LineOutput", "LineResult", "Stopped", "materialize", "results"]
