@@ -120,7 +120,8 @@ def polish_args(fs, z: np.ndarray) -> tuple[tuple, tuple]:
     return head, answer
 
 
-def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
+def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS,
+                refused: dict | None = None) -> LCPSolution:
     """A SOLVED answer of the step ``fs`` polished on its index set in the step's primal
     form (:func:`lcpbench.model.friction_polish.polish`, compiled, O(N); docs/friction.md,
     "The polish"). The polished answer replaces ``sol`` only where every sign of the index
@@ -133,7 +134,10 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
     is ``extra["polish"]`` (:data:`POLISH_VERDICTS`), the signs that failed at each set
     the flips solved ``extra["polish_failing"]``, the unpolished z
     ``extra["unpolished"]`` where it was replaced; an answer polished already is
-    returned as it is."""
+    returned as it is. ``refused``: a memo the polishes of one state share (the driver's,
+    :func:`lcpbench.model.friction_driver.solve_state`): an answer whose own set and its
+    failing nodes are those of the last polish, refused, is refused after its own set
+    (:func:`flipped_polish`; ``extra["polish_repeat"]``)."""
     if "polish" in sol.extra:
         return sol
     if not sol.solved or fs.parts is None or not np.all(np.isfinite(sol.z)):
@@ -141,20 +145,25 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
         return sol
     t0 = time.perf_counter()
     P = fs.parts
-    code, z, r0, r1, failing = 1, sol.z, np.nan, np.nan, ()
+    code, z, r0, r1, failing, repeat = 1, sol.z, np.nan, np.nan, (), False
     if not P["rot"].size:
         w = fs.M @ sol.z + fs.q
         k = polish_kernels()
         head, answer = polish_args(fs, sol.z)
         contact, state = k.index_set(sol.z, w, fs.normal_node.size, fs.friction_node.size,
                                      fs.pair, fs.mu)
-        out = k.polish_on(*head, *answer, flips, contact, state)  # (polish, its sets)
+        # (polish, its sets); a repeat of the last refusal in ``refused`` is not searched
+        out, repeat = flipped_polish(k, head, answer, flips, contact, state, refused)
         code, z, r0, r1 = out[:4]
         failing = tuple(int(f) for f in out[8])
         # an answer at whose own set more signs fail than round-off explains: no search
-        if code == k.SIGNS and flips and out[8][0] <= POLISH_MOST_FAILING:
+        if code == k.SIGNS and flips and out[8][0] <= POLISH_MOST_FAILING and not repeat:
             code, z, r0, r1 = edge_polish(k, head, answer, w, fs, out)
+        if refused is not None:  # the refusal this polish ends on, or none
+            refused["last"] = refusal(contact, state, out) if code == k.SIGNS else None
     extra = dict(sol.extra, polish_residuals=(r0, r1), polish_failing=failing)
+    if code != 1 and repeat:
+        extra["polish_repeat"] = True
     if code == 0:
         res = lcp_residuals(fs.M, fs.q, z)
         if not res["natural"] <= RESIDUAL_TOL:
@@ -169,6 +178,44 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
     return LCPSolution(z, fs.M @ z + fs.q, sol.status, sol.iterations,
                        sol.solve_time + extra["polish_time"], sol.setup_time, sol.message,
                        extra)
+
+
+def flipped_polish(k, head, answer, flips, contact, state, refused):
+    """``k.polish_on`` of the answer on its own set (``contact``, ``state``) with
+    ``flips`` flips, and whether it stopped at a repeat: (its answer, repeat). With
+    ``refused`` (a state's memo, :func:`polish_step`) the own set is solved first, alone,
+    and where its signs fail at the same nodes, flipped the same way, as at the last
+    polish's own set and that polish was refused (``refused["last"]``,
+    :func:`refusal`), nothing more is solved: the search would start where the last one
+    started, from an answer of the same step's outer loop (a guess, not a proof: the
+    answer is returned as it was, as any refusal, and the state's judge decides it).
+    Else the flips go on from the own set's first flip: the same sets, verdicts and
+    answers as the one call (the sets solved, and the signs that failed at each, are the
+    two calls' in order)."""
+    if refused is None or not flips:
+        return k.polish_on(*head, *answer, flips, contact, state), False
+    own = k.polish_on(*head, *answer, 0, contact, state)
+    if own[0] != k.SIGNS or own[8][0] > POLISH_MOST_FAILING:
+        return own, False
+    last = refused.get("last")
+    if last is not None and all(np.array_equal(a, b)
+                                for a, b in zip(refusal(contact, state, own), last)):
+        return own, True
+    more = k.polish_on(*head, *answer, flips - 1, own[4], own[5])
+    failing = np.concatenate((own[8], more[8]))
+    if more[0] != k.SIGNS:
+        return more[:8] + (failing,), False
+    return more[:6] + (np.concatenate((own[6], more[6])), np.concatenate((own[7], more[7])),
+                       failing), False
+
+
+def refusal(contact, state, out):
+    """What names a refused polish (:func:`flipped_polish`): the answer's own set and
+    the set its failing nodes flip it to (``out``: ``k.polish_on``'s answer with the own
+    set first among its sets)."""
+    seen_c, seen_s = out[6], out[7]
+    first = (seen_c[1], seen_s[1]) if len(seen_c) > 1 else out[4:6]
+    return contact.copy(), state.copy(), first[0].copy(), first[1].copy()
 
 
 def edge_polish(k, head, answer, w, fs, flipped):
@@ -202,12 +249,41 @@ def edge_polish(k, head, answer, w, fs, flipped):
         return refused
     now = [bool(contact[i]) if i < mn else int(state[i - mn]) for i in nodes]
     choices = [(True, False) if i < mn else (k.STICK, k.FORWARD, k.BACKWARD) for i in nodes]
-    picks = sorted(itertools.product(*choices),
-                   key=lambda p: sum(a != b for a, b in zip(p, now)))[1:]
+    picks = edge_order(itertools.product(*choices), now, likely_states(k, nodes, now, mn,
+                                                                         answer[4]))[1:]
     out = k.polish_sets(*head, *answer, contact, state, np.array(nodes, np.int64),
                         np.array(picks, np.int64).reshape(len(picks), len(nodes)),
                         POLISH_EDGE_SETS, seen_c, seen_s)
     return out if out[0] == k.KEPT else refused
+
+
+def likely_states(k, nodes, now, mn, T) -> list[tuple]:
+    """Per edge node (``nodes``, as :func:`edge_polish`'s; ``now`` their states, ``T``
+    the answer's T per pair) the states its exact answer most likely has: a wall row
+    either; a sticking pair its own or sliding against the answer's T (FORWARD where
+    T < 0: T = −μN), a sliding pair its own or sticking. Where the answer's T per node is
+    ill-determined (a nearly straight run of sticking nodes) the polished T that the
+    flips read a slide's direction from can point either way; the answer's T (the LCP's,
+    its sum over the run right) does not: the channel's kept sets of
+    benchmarks/friction_speed.py slide each of their changed pairs against it."""
+    likely = []
+    for i, s in zip(nodes, now):
+        if i < mn:
+            likely.append((True, False))
+        elif s == k.STICK:
+            likely.append((k.STICK, k.FORWARD if T[i - mn] < 0.0 else k.BACKWARD))
+        else:
+            likely.append((s, k.STICK))
+    return likely
+
+
+def edge_order(picks, now, likely) -> list[tuple]:
+    """The edge search's picks (each a state per edge node), in the order tried: those
+    whose every state is one of its node's ``likely`` states (:func:`likely_states`)
+    first, then by how many states change from ``now`` (fewer first), the product's
+    order within a tie. The same picks: their order only."""
+    return sorted(picks, key=lambda p: (sum(a not in ok for a, ok in zip(p, likely)),
+                                        sum(a != b for a, b in zip(p, now))))
 
 
 def step_coverings(n: int) -> list[np.ndarray]:
@@ -329,7 +405,8 @@ class StepLemke:
         return self.solve(M, q)
 
     @staticmethod
-    def polish(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
+    def polish(fs, sol: LCPSolution, flips: int = POLISH_FLIPS,
+               refused: dict | None = None) -> LCPSolution:
         """``sol``, an answer of the step ``fs``, through the primal polish
         (:func:`polish_step`; ``flips``: its flips of a failing index set). An answer the
         polish refuses is returned as it was; the step is not solved again from the
@@ -337,8 +414,9 @@ class StepLemke:
         a state's last answer reached that re-solve — every one the flips left refused
         the edge search kept — and on the channel of benchmarks/friction_speed.py it
         never found an answer the polish keeps, at ~29 ms a state: docs/friction.md,
-        "The polish")."""
-        return polish_step(fs, sol, flips)
+        "The polish"); ``refused``: the state's memo of its last refusal,
+        :func:`polish_step`)."""
+        return polish_step(fs, sol, flips, refused)
 
     def solve(self, M, q, keys=None, pair=None):
         """The LCP (``M``, ``q``): the warm start from the last support (``keys``, the
