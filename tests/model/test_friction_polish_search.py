@@ -109,7 +109,7 @@ def test_a_repeated_refusal_is_not_searched_and_returns_the_answer(monkeypatch):
     assert res.converged
     repeats = [(fs, z, out) for fs, z, out in calls if out.extra.get("polish_repeat")]
     assert repeats
-    for fs, z, out in repeats:
+    for _, z, out in repeats:
         assert out.extra["polish"] == "a sign fails"
         assert len(out.extra["polish_failing"]) == 1
         np.testing.assert_array_equal(out.z, z)
