@@ -19,6 +19,7 @@ from ..thresholds import (
     POLISH_EDGE_NODES,
     POLISH_EDGE_SETS,
     POLISH_FLIPS,
+    POLISH_LEVEL,
     POLISH_LIKELY_LEVEL,
     POLISH_MOST_FAILING,
     POLISH_STICK_COMPLIANCE,
@@ -191,14 +192,15 @@ def searched_polish(k, head, answer, w, fs, flips, contact, state, refused):
        more: the search would start where the last one started, from an answer of the
        same outer loop (a guess, not a proof: the answer is returned as it was, as any
        refusal, and the state's judge decides it);
-    3. where a failing node is a sticking pair of a level run (:func:`level_run_fails`:
-       joined to a sticking neighbour by a link level to POLISH_LIKELY_LEVEL, where T
-       per node is all but indeterminate), the edge search's picks of likely states
-       (:func:`edge_picks`): such a pair sliding at its cone against the answer's T, or
-       sticking;
+    3. where a failing node is a sticking pair of a nearly level run
+       (:func:`level_run_fails`: joined to a sticking neighbour by a link with POLISH_LEVEL
+       < |tan α| <= POLISH_LIKELY_LEVEL, where T per node is all but indeterminate), the
+       edge search's picks (:func:`edge_picks`) made of likely states only
+       (:func:`likely_states`: such a pair sliding at its cone against the answer's T,
+       or sticking), in their order;
     4. the flips (``k.polish_on``: the own set's first flip, before step 3, then
        ``flips`` − 1 more);
-    5. :func:`edge_polish`, the rest of the edge search's picks.
+    5. :func:`edge_polish`, the rest of the edge search's picks, in their order.
 
     Step 3 runs after the first flip (most polishes the flips keep, they keep there: 33
     of 59 on benchmarks/friction_agreement.py's Lemke paths). Without it the sets,
@@ -219,12 +221,12 @@ def searched_polish(k, head, answer, w, fs, flips, contact, state, refused):
         return once[:4], failing, False, name
     seen_c, seen_s = np.concatenate((own[6], once[6])), np.concatenate((own[7], once[7]))
     nodes, picks, likely = edge_picks(k, answer, w, fs, contact, state, own[4], own[5])
-    first = likely if level_run_fails(k, head, state, own[5]) else 0
-    if first:
-        out = k.polish_sets(*head, *answer, contact, state, nodes, picks[:first], first,
-                            seen_c, seen_s)
+    if likely.any() and level_run_fails(k, head, state, own[5]):
+        out = k.polish_sets(*head, *answer, contact, state, nodes, picks[likely],
+                            POLISH_EDGE_SETS, seen_c, seen_s)
         if out[0] == k.KEPT:
             return out, failing, False, name
+        picks = picks[~likely]  # (the rest, in their order)
     more = once
     if flips > 1 and once[8][0] <= POLISH_MOST_FAILING:
         more = k.polish_on(*head, *answer, flips - 2, once[4], once[5])
@@ -232,8 +234,8 @@ def searched_polish(k, head, answer, w, fs, flips, contact, state, refused):
         if more[0] != k.SIGNS:
             return more[:4], failing, False, name
         seen_c, seen_s = np.concatenate((seen_c, more[6])), np.concatenate((seen_s, more[7]))
-    out = edge_polish(k, head, answer, contact, state, nodes, picks[first:],
-                      POLISH_EDGE_SETS - first, seen_c, seen_s)
+    out = edge_polish(k, head, answer, contact, state, nodes, picks, POLISH_EDGE_SETS,
+                      seen_c, seen_s)
     return (out if out[0] == k.KEPT else more[:4]), failing, False, name
 
 
@@ -245,30 +247,37 @@ def refusal(contact, state, flip_c, flip_s):
 
 def level_run_fails(k, head, state, flip_s) -> bool:
     """Whether a sticking pair whose sign fails (its state changed in ``flip_s``, the own
-    set's first flip) is joined to a sticking neighbour by a link level to
-    POLISH_LIKELY_LEVEL (|tan α|): along such a run T per node is all but
-    indeterminate, and the flips read a slide's direction from a polished T that can
-    point either way."""
+    set's first flip) is joined to a sticking neighbour by a link nearly level: |tan α|
+    at most POLISH_LIKELY_LEVEL, but above POLISH_LEVEL. Along such a run T per node is
+    all but indeterminate, and the flips read a slide's direction from a polished T that
+    can point either way; and every sticking pair keeps its slip equation (no T is held
+    at the answer's split, as on a level link), so a set kept there has each slip
+    checked. On level links the likely picks kept, on one of the active set's steps of
+    benchmarks/friction_agreement.py (path 52), a set whose held pair's slip the exact
+    solution breaks (its dependent equation off by 1e-3 of its terms): not tried first
+    there."""
     tan, friction_node = head[2], head[11]
     sticks = state == k.STICK
     stick_at = np.zeros(tan.size + 1, np.bool_)
     stick_at[friction_node[sticks]] = True
+    near = (np.abs(tan) <= POLISH_LIKELY_LEVEL) & (np.abs(tan) > POLISH_LEVEL)
     for c in np.flatnonzero(sticks & (flip_s != state)):
         i = int(friction_node[c])
-        if (i >= 1 and stick_at[i - 1] and abs(tan[i - 1]) <= POLISH_LIKELY_LEVEL) or \
-                (i < tan.size and stick_at[i + 1] and abs(tan[i]) <= POLISH_LIKELY_LEVEL):
+        if (i >= 1 and stick_at[i - 1] and near[i - 1]) or \
+                (i < tan.size and stick_at[i + 1] and near[i]):
             return True
     return False
 
 
 def edge_picks(k, answer, w, fs, contact, state, flip_c, flip_s):
-    """The edge search's nodes and picks: (nodes, picks, how many of the picks are made
-    of likely states only). The nodes: those whose sign fails at the own set's polished
+    """The edge search's nodes and picks: (nodes, picks, whether each pick is made of
+    likely states only). The nodes: those whose sign fails at the own set's polished
     answer (their state changed in its first flip, ``flip_c``, ``flip_s``), at most
     :data:`POLISH_EDGE_NODES`, those whose LCP pairs are nearest the edge of two states
     first (both sides of the pair smallest). The picks: every state of those nodes (a
-    row in contact or separate, a pair STICK, FORWARD or BACKWARD), in
-    :func:`edge_order`, the own set's left out."""
+    row in contact or separate, a pair STICK, FORWARD or BACKWARD), the
+    POLISH_EDGE_SETS with the fewest changes in :func:`edge_order`, the own set's left
+    out."""
     z = answer[0]
     mn, mt = fs.normal_node.size, fs.friction_node.size
     lam = mn + 2 * mt
@@ -320,25 +329,22 @@ def likely_states(k, nodes, now, mn, T) -> list[tuple]:
     return likely
 
 
-def edge_order(choices, now, likely, most) -> tuple[np.ndarray, int]:
-    """The picks of one state per edge node (``choices``: each node's states) as rows, in
-    the order tried, and how many come first made of ``likely`` states only
-    (:func:`likely_states`): the ``most`` with the fewest changes from ``now`` after the
-    first (``now`` itself; in the order of ``itertools.product(*choices)`` within a tie:
-    the picks the edge search tried before, whatever their order), then in that order
-    by how many of a pick's states are not likely (fewer first), then by changes."""
+def edge_order(choices, now, likely, most) -> tuple[np.ndarray, np.ndarray]:
+    """The edge search's picks of one state per edge node (``choices``: each node's
+    states) as rows, in the order tried: the ``most`` with the fewest changes from
+    ``now`` after the first (``now`` itself), in the order of
+    ``itertools.product(*choices)`` within a tie; and per pick whether each of its states
+    is one of its node's ``likely`` states (:func:`likely_states`)."""
     if not choices:
-        return np.zeros((0, 0), np.int64), 0
+        return np.zeros((0, 0), np.int64), np.zeros(0, np.bool_)
     grids = np.meshgrid(*[np.array(c, np.int64) for c in choices], indexing="ij")
     picks = np.stack([g.ravel() for g in grids], axis=1)  # itertools.product's order
     changes = (picks != np.array(now, np.int64)).sum(axis=1)
-    keep = np.argsort(changes, kind="stable")[1:most + 1]  # (the first: the own set)
-    picks, changes = picks[keep], changes[keep]
-    unlikely = np.zeros(len(picks), np.int64)
-    for j, ok in enumerate(likely):
-        unlikely += ~np.isin(picks[:, j], np.array(ok, np.int64))
-    order = np.lexsort((changes, unlikely))  # stable
-    return picks[order], int(np.count_nonzero(unlikely == 0))
+    picks = picks[np.argsort(changes, kind="stable")[1:most + 1]]  # (the first: now)
+    ok = np.ones(len(picks), np.bool_)
+    for j, states in enumerate(likely):
+        ok &= np.isin(picks[:, j], np.array(states, np.int64))
+    return picks, ok
 
 
 def step_coverings(n: int) -> list[np.ndarray]:
