@@ -46,9 +46,9 @@ class Watched:
     def __getattr__(self, name):
         return getattr(self.k, name)
 
-    def polish_on(self, *args):
+    def polish_on(self, *args):  # (the own set, the first flip, then the other flips)
         out = self.k.polish_on(*args)
-        LOG[-1]["failing"] = [int(f) for f in out[8]]
+        LOG[-1]["failing"] += [int(f) for f in out[8]]
         LOG[-1]["flips_code"] = int(out[0])
         return out
 

@@ -268,6 +268,7 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
     pressed, away, it, gross, inexact, excess = None, False, 0, 0, 0, 0.0
     stiff = TAU_STIFFEN  # k_τ's multiple (:data:`TAU_REACH`)
     final = False  # every step polished (a polished answer did not end the state)
+    refused: dict = {}  # the state's last refused polish (friction_lemke.polish_step)
     pull = float(scene.pull) + left_pull
     for it in range(1, max_outer + 1):
         # Newton on the springs once the last step turned no link by NEWTON_SWITCH; for
@@ -311,8 +312,9 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
             # (the polished step's fixed point is the state's; docs/friction.md, "The
             # polish"). Each may flip a failing index set (FINAL_FLIPS), kept as the
             # state's answer only where its move passes; one whose signs fail after its
-            # flips and the edge search is returned as it was (the judge decides)
-            polished = lcp.polish(fs, sol, FINAL_FLIPS)
+            # flips and the edge search is returned as it was (the judge decides), and
+            # the next step's answer with the same failing set is not searched again
+            polished = lcp.polish(fs, sol, FINAL_FLIPS, refused)
             final = True
             if polished is not sol:
                 sol = polished

@@ -9,7 +9,6 @@ lcpbench's natural residual meets Lemke's own bound.
 
 from __future__ import annotations
 
-import itertools
 import time
 
 import numpy as np
@@ -20,6 +19,8 @@ from ..thresholds import (
     POLISH_EDGE_NODES,
     POLISH_EDGE_SETS,
     POLISH_FLIPS,
+    POLISH_LEVEL,
+    POLISH_LIKELY_LEVEL,
     POLISH_MOST_FAILING,
     POLISH_STICK_COMPLIANCE,
     POLISH_SWEEPS,
@@ -120,7 +121,8 @@ def polish_args(fs, z: np.ndarray) -> tuple[tuple, tuple]:
     return head, answer
 
 
-def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
+def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS,
+                refused: dict | None = None) -> LCPSolution:
     """A SOLVED answer of the step ``fs`` polished on its index set in the step's primal
     form (:func:`lcpbench.model.friction_polish.polish`, compiled, O(N); docs/friction.md,
     "The polish"). The polished answer replaces ``sol`` only where every sign of the index
@@ -133,7 +135,10 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
     is ``extra["polish"]`` (:data:`POLISH_VERDICTS`), the signs that failed at each set
     the flips solved ``extra["polish_failing"]``, the unpolished z
     ``extra["unpolished"]`` where it was replaced; an answer polished already is
-    returned as it is."""
+    returned as it is. ``refused``: a memo the polishes of one state share (the driver's,
+    :func:`lcpbench.model.friction_driver.solve_state`): an answer whose own set and its
+    failing nodes are those of the last polish, refused, is refused after its own set
+    (:func:`searched_polish`; ``extra["polish_repeat"]``)."""
     if "polish" in sol.extra:
         return sol
     if not sol.solved or fs.parts is None or not np.all(np.isfinite(sol.z)):
@@ -141,20 +146,22 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
         return sol
     t0 = time.perf_counter()
     P = fs.parts
-    code, z, r0, r1, failing = 1, sol.z, np.nan, np.nan, ()
+    code, z, r0, r1, failing, repeat = 1, sol.z, np.nan, np.nan, (), False
     if not P["rot"].size:
         w = fs.M @ sol.z + fs.q
         k = polish_kernels()
         head, answer = polish_args(fs, sol.z)
         contact, state = k.index_set(sol.z, w, fs.normal_node.size, fs.friction_node.size,
                                      fs.pair, fs.mu)
-        out = k.polish_on(*head, *answer, flips, contact, state)  # (polish, its sets)
+        out, failing, repeat, name = searched_polish(k, head, answer, w, fs, flips, contact,
+                                                     state, refused)
         code, z, r0, r1 = out[:4]
-        failing = tuple(int(f) for f in out[8])
-        # an answer at whose own set more signs fail than round-off explains: no search
-        if code == k.SIGNS and flips and out[8][0] <= POLISH_MOST_FAILING:
-            code, z, r0, r1 = edge_polish(k, head, answer, w, fs, out)
+        failing = tuple(failing)
+        if refused is not None:  # the refusal this polish ends on, or none
+            refused["last"] = name if code == k.SIGNS else None
     extra = dict(sol.extra, polish_residuals=(r0, r1), polish_failing=failing)
+    if code != 1 and repeat:
+        extra["polish_repeat"] = True
     if code == 0:
         res = lcp_residuals(fs.M, fs.q, z)
         if not res["natural"] <= RESIDUAL_TOL:
@@ -171,43 +178,173 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
                        extra)
 
 
-def edge_polish(k, head, answer, w, fs, flipped):
-    """Where the polish's flips find no index set whose signs hold (``flipped``:
-    ``k.polish_on``'s answer, SIGNS, with the sets it solved, the answer's own first): every
-    state of the nodes whose sign fails at the polished answer of the answer's own set
-    (``k.polish_sets``: ``polish_on`` on each set, no flips, in one compiled call, the
-    sets the flips solved passed over; at most :data:`POLISH_EDGE_NODES` of them,
-    those whose LCP pairs are nearest the edge of two states first: both sides of the
-    pair smallest), the sets with the fewest changes first, at most
-    :data:`POLISH_EDGE_SETS`: the first kept, as :func:`polish_step`'s (verdict, z, r0,
-    r1); else ``flipped``'s. The nodes whose sign holds keep their state: on the 100 paths
-    of benchmarks/friction_agreement.py each of the 18 sets this search kept differed
-    from the answer's only at failing nodes (a sticking pair made to slide, or an off
-    one to stick), none at a node whose sign held; searched too, those nodes made a
-    search that finds nothing cost 64 sets, not 8 (docs/friction.md, "The polish")."""
+def searched_polish(k, head, answer, w, fs, flips, contact, state, refused):
+    """The search of the polish of the answer (``answer``: :func:`polish_args`; w = M z +
+    q) from its own set (``contact``, ``state``): ((verdict, z, r0, r1), the signs that
+    failed at each set the flips solved, whether it stopped at a repeat, the name of the
+    refusal it may end on (:func:`refusal`, or None)). In order, each only where the
+    one before found no set whose signs hold:
+
+    1. the own set (``k.polish_on`` without flips); where more than
+       POLISH_MOST_FAILING signs fail there, or ``flips`` is 0, nothing more;
+    2. where its signs fail at the nodes, flipped the same way, of the last polish of the
+       state, refused (``refused["last"]``, a memo the state's polishes share), nothing
+       more: the search would start where the last one started, from an answer of the
+       same outer loop (a guess, not a proof: the answer is returned as it was, as any
+       refusal, and the state's judge decides it);
+    3. where a failing node is a sticking pair of a nearly level run
+       (:func:`level_run_fails`: joined to a sticking neighbour by a link with POLISH_LEVEL
+       < |tan α| <= POLISH_LIKELY_LEVEL, where T per node is all but indeterminate), the
+       edge search's picks (:func:`edge_picks`) made of likely states only
+       (:func:`likely_states`: such a pair sliding at its cone against the answer's T,
+       or sticking), in their order;
+    4. the flips (``k.polish_on``: the own set's first flip, before step 3, then
+       ``flips`` − 1 more);
+    5. :func:`edge_polish`, the rest of the edge search's picks, in their order.
+
+    Step 3 runs after the first flip (most polishes the flips keep, they keep there: 33
+    of 59 on benchmarks/friction_agreement.py's Lemke paths). Without it the sets,
+    verdicts and answers are those of one ``polish_on`` with ``flips`` flips and then
+    the edge search (a flip onto the own set or the first flip's solves that set again
+    where the one call stopped: the same verdict, each a function of its set)."""
+    own = k.polish_on(*head, *answer, 0, contact, state)
+    failing = [int(f) for f in own[8]]
+    if own[0] != k.SIGNS or not flips or own[8][0] > POLISH_MOST_FAILING:
+        return own[:4], failing, False, None
+    name = refusal(contact, state, own[4], own[5])
+    last = None if refused is None else refused.get("last")
+    if last is not None and all(np.array_equal(a, b) for a, b in zip(name, last)):
+        return own[:4], failing, True, name
+    once = k.polish_on(*head, *answer, 0, own[4], own[5])  # the first flip
+    failing += [int(f) for f in once[8]]
+    if once[0] != k.SIGNS:
+        return once[:4], failing, False, name
+    seen_c, seen_s = np.concatenate((own[6], once[6])), np.concatenate((own[7], once[7]))
+    nodes, picks, likely = edge_picks(k, answer, w, fs, contact, state, own[4], own[5])
+    if likely.any() and level_run_fails(k, head, state, own[5]):
+        out = k.polish_sets(*head, *answer, contact, state, nodes, picks[likely],
+                            POLISH_EDGE_SETS, seen_c, seen_s)
+        if out[0] == k.KEPT:
+            return out, failing, False, name
+        picks = picks[~likely]  # (the rest, in their order)
+    more = once
+    if flips > 1 and once[8][0] <= POLISH_MOST_FAILING:
+        more = k.polish_on(*head, *answer, flips - 2, once[4], once[5])
+        failing += [int(f) for f in more[8]]
+        if more[0] != k.SIGNS:
+            return more[:4], failing, False, name
+        seen_c, seen_s = np.concatenate((seen_c, more[6])), np.concatenate((seen_s, more[7]))
+    out = edge_polish(k, head, answer, contact, state, nodes, picks, POLISH_EDGE_SETS,
+                      seen_c, seen_s)
+    return (out if out[0] == k.KEPT else more[:4]), failing, False, name
+
+
+def refusal(contact, state, flip_c, flip_s):
+    """What names a refused polish (:func:`searched_polish`): the answer's own set and
+    the set its failing nodes flip it to (``flip_c``, ``flip_s``)."""
+    return contact.copy(), state.copy(), flip_c.copy(), flip_s.copy()
+
+
+def level_run_fails(k, head, state, flip_s) -> bool:
+    """Whether a sticking pair whose sign fails (its state changed in ``flip_s``, the own
+    set's first flip) is joined to a sticking neighbour by a link nearly level: |tan α|
+    at most POLISH_LIKELY_LEVEL, but above POLISH_LEVEL. Along such a run T per node is
+    all but indeterminate, and the flips read a slide's direction from a polished T that
+    can point either way; and every sticking pair keeps its slip equation (no T is held
+    at the answer's split, as on a level link), so a set kept there has each slip
+    checked. On level links the likely picks kept, on one of the active set's steps of
+    benchmarks/friction_agreement.py (path 52), a set whose held pair's slip the exact
+    solution breaks (its dependent equation off by 1e-3 of its terms): not tried first
+    there."""
+    tan, friction_node = head[2], head[11]
+    sticks = state == k.STICK
+    stick_at = np.zeros(tan.size + 1, np.bool_)
+    stick_at[friction_node[sticks]] = True
+    near = (np.abs(tan) <= POLISH_LIKELY_LEVEL) & (np.abs(tan) > POLISH_LEVEL)
+    for c in np.flatnonzero(sticks & (flip_s != state)):
+        i = int(friction_node[c])
+        if (i >= 1 and stick_at[i - 1] and near[i - 1]) or \
+                (i < tan.size and stick_at[i + 1] and near[i]):
+            return True
+    return False
+
+
+def edge_picks(k, answer, w, fs, contact, state, flip_c, flip_s):
+    """The edge search's nodes and picks: (nodes, picks, whether each pick is made of
+    likely states only). The nodes: those whose sign fails at the own set's polished
+    answer (their state changed in its first flip, ``flip_c``, ``flip_s``), at most
+    :data:`POLISH_EDGE_NODES`, those whose LCP pairs are nearest the edge of two states
+    first (both sides of the pair smallest). The picks: every state of those nodes (a
+    row in contact or separate, a pair STICK, FORWARD or BACKWARD), the
+    POLISH_EDGE_SETS with the fewest changes in :func:`edge_order`, the own set's left
+    out."""
     z = answer[0]
     mn, mt = fs.normal_node.size, fs.friction_node.size
-    refused, seen_c, seen_s = flipped[:4], flipped[6], flipped[7]
-    contact, state = seen_c[0], seen_s[0]
-    # the first flip's set (the answer's own set's failing nodes flipped), as polish_on
-    # with no flips returns it
-    first = (seen_c[1], seen_s[1]) if len(seen_c) > 1 else flipped[4:6]
     lam = mn + 2 * mt
     rim = np.concatenate([np.maximum(np.abs(z[:mn]), np.abs(w[:mn])),
                           np.maximum(np.abs(z[lam:]), np.abs(w[lam:]))])
-    failing = np.concatenate([first[0] != contact, first[1] != state])
+    failing = np.concatenate([flip_c != contact, flip_s != state])
     order = np.lexsort((rim, ~failing))
-    nodes = [int(i) for i in order if failing[i]][:POLISH_EDGE_NODES]
-    if not nodes:
-        return refused
-    now = [bool(contact[i]) if i < mn else int(state[i - mn]) for i in nodes]
-    choices = [(True, False) if i < mn else (k.STICK, k.FORWARD, k.BACKWARD) for i in nodes]
-    picks = sorted(itertools.product(*choices),
-                   key=lambda p: sum(a != b for a, b in zip(p, now)))[1:]
-    out = k.polish_sets(*head, *answer, contact, state, np.array(nodes, np.int64),
-                        np.array(picks, np.int64).reshape(len(picks), len(nodes)),
-                        POLISH_EDGE_SETS, seen_c, seen_s)
-    return out if out[0] == k.KEPT else refused
+    nodes = np.array([int(i) for i in order if failing[i]][:POLISH_EDGE_NODES], np.int64)
+    now = [int(contact[i]) if i < mn else int(state[i - mn]) for i in nodes]
+    choices = [(1, 0) if i < mn else (k.STICK, k.FORWARD, k.BACKWARD) for i in nodes]
+    picks, likely = edge_order(choices, now, likely_states(k, nodes, now, mn, answer[4]),
+                               POLISH_EDGE_SETS)
+    return nodes, picks, likely
+
+
+def edge_polish(k, head, answer, contact, state, nodes, picks, most, seen_c, seen_s):
+    """The edge search (``k.polish_sets``: ``polish_on`` without flips on each set, in
+    one compiled call): the sets that differ from the own set (``contact``, ``state``)
+    at ``nodes`` only, each row of ``picks`` their states, in order, at most ``most``,
+    the sets solved before (``seen_c``, ``seen_s``: the own set and the flips') passed
+    over: the first kept, as :func:`polish_step`'s (verdict, z, r0, r1), else SIGNS. The
+    nodes whose sign holds keep their state: on the 100 paths of
+    benchmarks/friction_agreement.py each of the 18 sets this search kept differed from
+    the answer's only at failing nodes (a sticking pair made to slide, or an off one to
+    stick), none at a node whose sign held; searched too, those nodes made a search that
+    finds nothing cost 64 sets, not 8 (docs/friction.md, "The polish")."""
+    if not nodes.size or most <= 0:
+        return k.SIGNS, answer[0], np.nan, np.nan
+    return k.polish_sets(*head, *answer, contact, state, nodes, picks, most, seen_c, seen_s)
+
+
+def likely_states(k, nodes, now, mn, T) -> list[tuple]:
+    """Per edge node (``nodes``, as :func:`edge_picks`'s; ``now`` their states, ``T``
+    the answer's T per pair) the states its exact answer most likely has: a wall row
+    either; a sticking pair its own or sliding against the answer's T (FORWARD where
+    T < 0: T = −μN), a sliding pair its own or sticking. Where the answer's T per node is
+    ill-determined (a nearly straight run of sticking nodes) the polished T that the
+    flips read a slide's direction from can point either way; the answer's T (the LCP's,
+    its sum over the run right) does not: the channel's kept sets of
+    benchmarks/friction_speed.py slide each of their changed pairs against it."""
+    likely = []
+    for i, s in zip(nodes, now):
+        if i < mn:
+            likely.append((1, 0))
+        elif s == k.STICK:
+            likely.append((k.STICK, k.FORWARD if T[i - mn] < 0.0 else k.BACKWARD))
+        else:
+            likely.append((s, k.STICK))
+    return likely
+
+
+def edge_order(choices, now, likely, most) -> tuple[np.ndarray, np.ndarray]:
+    """The edge search's picks of one state per edge node (``choices``: each node's
+    states) as rows, in the order tried: the ``most`` with the fewest changes from
+    ``now`` after the first (``now`` itself), in the order of
+    ``itertools.product(*choices)`` within a tie; and per pick whether each of its states
+    is one of its node's ``likely`` states (:func:`likely_states`)."""
+    if not choices:
+        return np.zeros((0, 0), np.int64), np.zeros(0, np.bool_)
+    grids = np.meshgrid(*[np.array(c, np.int64) for c in choices], indexing="ij")
+    picks = np.stack([g.ravel() for g in grids], axis=1)  # itertools.product's order
+    changes = (picks != np.array(now, np.int64)).sum(axis=1)
+    picks = picks[np.argsort(changes, kind="stable")[1:most + 1]]  # (the first: now)
+    ok = np.ones(len(picks), np.bool_)
+    for j, states in enumerate(likely):
+        ok &= np.isin(picks[:, j], np.array(states, np.int64))
+    return picks, ok
 
 
 def step_coverings(n: int) -> list[np.ndarray]:
@@ -329,7 +466,8 @@ class StepLemke:
         return self.solve(M, q)
 
     @staticmethod
-    def polish(fs, sol: LCPSolution, flips: int = POLISH_FLIPS) -> LCPSolution:
+    def polish(fs, sol: LCPSolution, flips: int = POLISH_FLIPS,
+               refused: dict | None = None) -> LCPSolution:
         """``sol``, an answer of the step ``fs``, through the primal polish
         (:func:`polish_step`; ``flips``: its flips of a failing index set). An answer the
         polish refuses is returned as it was; the step is not solved again from the
@@ -337,8 +475,9 @@ class StepLemke:
         a state's last answer reached that re-solve — every one the flips left refused
         the edge search kept — and on the channel of benchmarks/friction_speed.py it
         never found an answer the polish keeps, at ~29 ms a state: docs/friction.md,
-        "The polish")."""
-        return polish_step(fs, sol, flips)
+        "The polish"); ``refused``: the state's memo of its last refusal,
+        :func:`polish_step`)."""
+        return polish_step(fs, sol, flips, refused)
 
     def solve(self, M, q, keys=None, pair=None):
         """The LCP (``M``, ``q``): the warm start from the last support (``keys``, the
