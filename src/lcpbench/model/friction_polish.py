@@ -23,12 +23,12 @@ banded (a few nodes wide) and is solved by Gaussian elimination with partial piv
 O(N). A free right end's rotation (K = H + k_r r rᵀ: every height coupled) borders the
 band with two unknowns (:mod:`lcpbench.model.friction_primal`), solved by block
 elimination on the band's factor (:func:`bordered_factor`: two more banded solves and a
-2 × 2 Schur complement). Links level to round-off (|tan α| <= POLISH_LEVEL) are level; then two sticking
-nodes joined by level links have dependent slip equations (the link fixes the second
-slip), and the second's is replaced by its T held at the answer's split (T_c − T_p =
-T⁰_c − T⁰_p, p the run's previous sticking pair; T_c = T⁰_c in a run held by a pinned
-end): the null direction of T per node is fixed where the answer put it, N is not
-touched by it.
+2 × 2 Schur complement). Links level to round-off (|tan α| <= POLISH_LEVEL) are level;
+then two sticking nodes joined by level links have dependent slip equations (the link
+fixes the second slip), and the second's is replaced by its T held at the answer's split
+(T_c − T_p = T⁰_c − T⁰_p, p the run's previous sticking pair; T_c = T⁰_c in a run held
+by a pinned end): the null direction of T per node is fixed where the answer put it, N
+is not touched by it.
 
 Every function is ``@njit(cache=True)``; with NUMBA_DISABLE_JIT=1 they run as plain
 Python. :func:`lcpbench.model.friction_lemke.polish_step` calls :func:`polish` and keeps
