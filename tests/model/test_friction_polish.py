@@ -107,7 +107,8 @@ def test_polish_refuses_an_index_set_whose_signs_fail():
     Nf, T, dy, tau = fs.forces(z)
     args = (P["bands"], P["f"], P["tan"], float(P["k_tau"]), int(P["first"]),
             bool(P["right_datum"]), P["gap"], P["slip"], P["compliance"], fs.normal_node,
-            fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu, fs.pair, z, w, dy,
+            fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu, fs.pair, P["rot"],
+            float(P["rot_k"]), z, w, dy,
             float(tau), Nf, T, float(fs.force), float(fs.length),
             float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS)
     k = polish_kernels()

@@ -70,7 +70,7 @@ _KERNELS: list = []  # the compiled step (model/friction_step.py), once loaded
 _PIVOTING: list = []  # the warm start's pivots (solvers/pivoting_kernel.py), once loaded
 _POLISH: list = []  # the primal polish (model/friction_polish.py), once loaded
 #: :func:`polish_step`'s verdicts (``sol.extra["polish"]``), by the kernel's code
-POLISH_VERDICTS = ("kept", "no primal form (a free end)", "singular", "a sign fails",
+POLISH_VERDICTS = ("kept", "no primal form (the step has no parts)", "singular", "a sign fails",
                    "primal residual not lower", "LCP residual above the bound", "not SOLVED")
 
 
@@ -115,7 +115,8 @@ def polish_args(fs, z: np.ndarray) -> tuple[tuple, tuple]:
     N, T, dy, tau = fs.forces(z)
     head = (P["bands"], P["f"], P["tan"], float(P["k_tau"]), int(P["first"]),
             bool(P["right_datum"]), P["gap"], P["slip"], P["compliance"],
-            fs.normal_node, fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu, fs.pair)
+            fs.normal_node, fs.normal_xy, fs.friction_node, fs.tangent_xy, fs.mu, fs.pair,
+            P["rot"], float(P["rot_k"]))
     answer = (z, dy, float(tau), N, T, float(fs.force), float(fs.length),
               float(fs.length) / P["tan"].size, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS)
     return head, answer
@@ -142,23 +143,21 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS,
     if "polish" in sol.extra:
         return sol
     if not sol.solved or fs.parts is None or not np.all(np.isfinite(sol.z)):
-        sol.extra["polish"] = POLISH_VERDICTS[6]
+        sol.extra["polish"] = POLISH_VERDICTS[6 if fs.parts is not None or not sol.solved
+                                              else 1]
         return sol
     t0 = time.perf_counter()
-    P = fs.parts
-    code, z, r0, r1, failing, repeat = 1, sol.z, np.nan, np.nan, (), False
-    if not P["rot"].size:
-        w = fs.M @ sol.z + fs.q
-        k = polish_kernels()
-        head, answer = polish_args(fs, sol.z)
-        contact, state = k.index_set(sol.z, w, fs.normal_node.size, fs.friction_node.size,
-                                     fs.pair, fs.mu)
-        out, failing, repeat, name = searched_polish(k, head, answer, w, fs, flips, contact,
-                                                     state, refused)
-        code, z, r0, r1 = out[:4]
-        failing = tuple(failing)
-        if refused is not None:  # the refusal this polish ends on, or none
-            refused["last"] = name if code == k.SIGNS else None
+    w = fs.M @ sol.z + fs.q
+    k = polish_kernels()
+    head, answer = polish_args(fs, sol.z)  # (a free end's rotation borders the band)
+    contact, state = k.index_set(sol.z, w, fs.normal_node.size, fs.friction_node.size,
+                                 fs.pair, fs.mu)
+    out, failing, repeat, name = searched_polish(k, head, answer, w, fs, flips, contact,
+                                                 state, refused)
+    code, z, r0, r1 = out[:4]
+    failing = tuple(failing)
+    if refused is not None:  # the refusal this polish ends on, or none
+        refused["last"] = name if code == k.SIGNS else None
     extra = dict(sol.extra, polish_residuals=(r0, r1), polish_failing=failing)
     if code != 1 and repeat:
         extra["polish_repeat"] = True

@@ -20,12 +20,15 @@ benchmarks/exact_friction.py's oracle, node by node, in doubles:
 with the unknowns ordered node by node (δy_i, δx_i, L_i, its N, its T), so the system is
 banded (a few nodes wide) and is solved by Gaussian elimination with partial pivoting
 (:func:`lcpbench.linalg.band_lu_kernel.band_factor`), rows and columns equilibrated, in
-O(N). Links level to round-off (|tan α| <= POLISH_LEVEL) are level; then two sticking
-nodes joined by level links have dependent slip equations (the link fixes the second
-slip), and the second's is replaced by its T held at the answer's split (T_c − T_p =
-T⁰_c − T⁰_p, p the run's previous sticking pair; T_c = T⁰_c in a run held by a pinned
-end): the null direction of T per node is fixed where the answer put it, N is not
-touched by it.
+O(N). A free right end's rotation (K = H + k_r r rᵀ: every height coupled) borders the
+band with two unknowns (:mod:`lcpbench.model.friction_primal`), solved by block
+elimination on the band's factor (:func:`bordered_factor`: two more banded solves and a
+2 × 2 Schur complement). Links level to round-off (|tan α| <= POLISH_LEVEL) are level;
+then two sticking nodes joined by level links have dependent slip equations (the link
+fixes the second slip), and the second's is replaced by its T held at the answer's split
+(T_c − T_p = T⁰_c − T⁰_p, p the run's previous sticking pair; T_c = T⁰_c in a run held
+by a pinned end): the null direction of T per node is fixed where the answer put it, N
+is not touched by it.
 
 Every function is ``@njit(cache=True)``; with NUMBA_DISABLE_JIT=1 they run as plain
 Python. :func:`lcpbench.model.friction_lemke.polish_step` calls :func:`polish` and keeps
@@ -46,6 +49,8 @@ from .friction_primal import (  # noqa: F401  (by_node, layout: the kernels' nam
     KEEP,
     OFF,
     STICK,
+    border_size,
+    border_values,
     by_node,
     layout,
     primal_system,
@@ -95,6 +100,58 @@ def banded_resolve(fac, rhs):
     x = np.empty(n)
     for j in range(n):
         x[j] = b[j, 0] / cmax[j]
+    return x, ok
+
+
+@njit(cache=True)
+def bordered_factor(ei, ej, ev, n, nb):
+    """A (square, in sparse rows) whose last ``nb`` rows and columns border a banded core
+    A₀ (:func:`lcpbench.model.friction_primal.primal_system` at a free end), factored for
+    :func:`bordered_resolve` by block elimination: A₀ by :func:`banded_factor`, Z = A₀⁻¹ B
+    (``nb`` banded solves, B the border's columns in the core's rows) and the Schur
+    complement S = D − C Z (C the border's rows in the core's columns, D their corner);
+    (A₀'s factor, Z, C, S, ok). ``nb`` 0: A₀ is A."""
+    nc = n - nb
+    core = np.ones(ei.size, np.bool_)
+    B = np.zeros((nc, nb))
+    C = np.zeros((nb, nc))
+    S = np.zeros((nb, nb))
+    for k in range(ei.size):
+        i, j = ei[k], ej[k]
+        if i >= nc or j >= nc:
+            core[k] = False
+            if i < nc:
+                B[i, j - nc] += ev[k]
+            elif j < nc:
+                C[i - nc, j] += ev[k]
+            else:
+                S[i - nc, j - nc] += ev[k]
+    fac = banded_factor(ei[core], ej[core], ev[core], nc)
+    Z = np.zeros((nc, nb))
+    ok = fac[6]
+    for c in range(nb if ok else 0):
+        Z[:, c], good = banded_resolve(fac, B[:, c].copy())
+        ok = ok and good
+    if ok and nb:
+        S -= C @ Z
+        ok = np.all(np.isfinite(S)) and abs(np.linalg.det(S)) > 0.0
+    return fac, Z, C, S, ok
+
+
+@njit(cache=True)
+def bordered_resolve(bfac, rhs):
+    """x with A x = rhs from :func:`bordered_factor`'s ``bfac``: x₀ = A₀⁻¹ b, the border
+    y = S⁻¹ (b_border − C x₀), the core x₀ − Z y; (x, ok)."""
+    fac, Z, C, S, _ = bfac
+    nb = S.shape[0]
+    nc = rhs.size - nb
+    x0, ok = banded_resolve(fac, rhs[:nc].copy())
+    x = np.empty(rhs.size)
+    if nb:
+        y = np.linalg.solve(S, rhs[nc:] - C @ x0)
+        x0 = x0 - Z @ y
+        x[nc:] = y
+    x[:nc] = x0
     return x, ok
 
 
@@ -265,8 +322,8 @@ def signs(x, lay, first, gap, slip, normal_node, normal_xy, friction_node, tange
 
 @njit(cache=True)
 def polish(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, normal_node,
-           normal_xy, friction_node, tangent_xy, mu, pair, z, w, dy, tau, N, T, force,
-           length, link, stick_compliance, sweeps, flips):
+           normal_xy, friction_node, tangent_xy, mu, pair, rot, rot_k, z, w, dy, tau, N, T,
+           force, length, link, stick_compliance, sweeps, flips):
     """The answer z (w = M z + q; its δy, τ, N, T in mm and N) polished on its index set
     (the module's note): (verdict, z polished (the LCP's units: forces by ``force``,
     lengths by ``length``), the primal residual before, after); :func:`polish_on` the
@@ -274,15 +331,15 @@ def polish(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, norm
     contact, state = index_set(z, w, N.size, T.size, pair, mu)
     code, z_new, r0, r1, _, _, _, _, _ = polish_on(
         bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, normal_node,
-        normal_xy, friction_node, tangent_xy, mu, pair, z, dy, tau, N, T, force, length,
-        link, stick_compliance, sweeps, flips, contact, state)
+        normal_xy, friction_node, tangent_xy, mu, pair, rot, rot_k, z, dy, tau, N, T, force,
+        length, link, stick_compliance, sweeps, flips, contact, state)
     return code, z_new, r0, r1
 
 
 @njit(cache=True)
 def polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, normal_node,
-              normal_xy, friction_node, tangent_xy, mu, pair, z, dy, tau, N, T, force,
-              length, link, stick_compliance, sweeps, flips, contact, state):
+              normal_xy, friction_node, tangent_xy, mu, pair, rot, rot_k, z, dy, tau, N, T,
+              force, length, link, stick_compliance, sweeps, flips, contact, state):
     """The answer (z; its δy, τ, N, T) polished on the index set (``contact`` per wall
     row, ``state`` per pair): (verdict, z polished, the primal residual before, after,
     and where a sign fails the set with the failing nodes flipped (:func:`signs`), else
@@ -299,8 +356,10 @@ def polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, n
     round-off at a few nodes). KEPT where every sign of the (last) set holds (to
     POLISH_SIGN_RTOL of the largest force and of the link length ``link``) and the
     residual of its primal equations (tan α as is, every stick equation) is below the
-    answer's."""
+    answer's. A free right end (``rot``, ``rot_k``: its rotation about the pin) is
+    solved bordered (:func:`bordered_factor`)."""
     mn, mt = N.size, T.size
+    nb = border_size(rot)
     z_new = z.copy()
     nan = np.nan
     has_tau = f.size > bands.shape[1]
@@ -328,22 +387,23 @@ def polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, n
         # its entries but the compliances, the right-hand side without them)
         si, sj, sv, _, n, lay, plain, rhs = primal_system(
             bands, f, tl, k_tau, first, right_datum, gap, slip, compliance, normal_node,
-            normal_xy, friction_node, tangent_xy, mu, pair, contact, state, hold, T,
-            stick_compliance * link / big0)
+            normal_xy, friction_node, tangent_xy, mu, pair, rot, rot_k, contact, state, hold,
+            T, stick_compliance * link / big0)
         ei, ej, ev = si[plain], sj[plain], sv[plain]
         if attempt == 0:  # the layout is the set's nodes', the same for every set
-            x0 = answer_values(n, lay, tl, right_datum, dy, tau, N, T, first, normal_node,
-                               normal_xy, friction_node, tangent_xy)
+            x0 = border_values(answer_values(n, lay, tl, right_datum, dy, tau, N, T, first,
+                                             normal_node, normal_xy, friction_node,
+                                             tangent_xy), rot, dy)
         x = x0.copy()
-        fac = banded_factor(si, sj, sv, n)
-        if rhs.size != n or not fac[6]:
+        fac = bordered_factor(si, sj, sv, n, nb)
+        if rhs.size != n or not fac[4]:
             return (SINGULAR, z_new, nan, nan, contact, state, seen_c[:0], seen_s[:0],
                     failing[:attempt])
         for _ in range(sweeps):  # x += A_ε⁻¹ (b − A x)
             res = rhs.copy()
             for k in range(ei.size):
                 res[ei[k]] -= ev[k] * x[ej[k]]
-            d, ok = banded_resolve(fac, res)
+            d, ok = bordered_resolve(fac, res)
             if not ok:
                 return (SINGULAR, z_new, nan, nan, contact, state, seen_c[:0], seen_s[:0],
                         failing[:attempt])
@@ -372,7 +432,8 @@ def polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, n
     ei, ej, ev, rhs, n, lay, _, _ = primal_system(bands, f, tan, k_tau, first, right_datum,
                                                   gap, slip, compliance, normal_node,
                                                   normal_xy, friction_node, tangent_xy, mu,
-                                                  pair, contact, state, keep, T, 0.0)
+                                                  pair, rot, rot_k, contact, state, keep, T,
+                                                  0.0)
     scale = np.full(n, link)
     for r in range(mn):
         scale[Nv[r]] = max(big, 1e-300)
@@ -380,8 +441,11 @@ def polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, n
         scale[Tv[c]] = max(big, 1e-300)
     for k in range(L.size if tan.size else 0):
         scale[L[k]] = max(big, 1e-300)
-    v0 = answer_values(n, lay, tan, right_datum, dy, tau, N, T, first, normal_node,
-                       normal_xy, friction_node, tangent_xy)
+    if nb:  # ρ = rᵀ δy at moves of a link length (ς: the tip's height, a length)
+        scale[n - 2] = np.sum(np.abs(rot)) * link
+    v0 = border_values(answer_values(n, lay, tan, right_datum, dy, tau, N, T, first,
+                                     normal_node, normal_xy, friction_node, tangent_xy),
+                       rot, dy)
     r0 = primal_residual(ei, ej, ev, rhs, v0, scale)
     r1 = primal_residual(ei, ej, ev, rhs, x, scale)
     if not r1 < r0:
@@ -417,9 +481,9 @@ def tried(seen_c, seen_s, contact, state):
 
 @njit(cache=True)
 def polish_sets(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance,
-                normal_node, normal_xy, friction_node, tangent_xy, mu, pair, z, dy, tau, N,
-                T, force, length, link, stick_compliance, sweeps, contact, state, nodes,
-                picks, most, seen_c, seen_s):
+                normal_node, normal_xy, friction_node, tangent_xy, mu, pair, rot, rot_k, z,
+                dy, tau, N, T, force, length, link, stick_compliance, sweeps, contact, state,
+                nodes, picks, most, seen_c, seen_s):
     """:func:`polish_on` (no flips) on the index sets that differ from (``contact``,
     ``state``) at ``nodes`` (an index below N.size a wall row, else the pair
     ``index − N.size``) only, each row of ``picks`` their states (a row 1 contact, 0
@@ -456,8 +520,9 @@ def polish_sets(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance,
         done_c[done], done_s[done] = c2, s2
         done += 1
         out = polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance,
-                        normal_node, normal_xy, friction_node, tangent_xy, mu, pair, z, dy,
-                        tau, N, T, force, length, link, stick_compliance, sweeps, 0, c2, s2)
+                        normal_node, normal_xy, friction_node, tangent_xy, mu, pair, rot,
+                        rot_k, z, dy, tau, N, T, force, length, link, stick_compliance,
+                        sweeps, 0, c2, s2)
         if out[0] == KEPT:
             return out[0], out[1], out[2], out[3]
     return SIGNS, z.copy(), np.nan, np.nan

@@ -1,6 +1,10 @@
 """The frictional step's primal equations on an index set, in sparse rows, node by node
 (banded): the system :mod:`lcpbench.model.friction_polish` solves (its note gives the
-equations). Compiled (``@njit(cache=True)``), loaded with the polish.
+equations). A free right end borders the band: its rotation about the pin couples every
+height (K = H + k_r r rᵀ, :func:`lcpbench.model.friction_step._solve_columns`), so the
+rotation term ρ = rᵀ δy and a copy ς of the tip's height are two more unknowns, after
+every node's, with two more equations (:func:`primal_system`). Compiled
+(``@njit(cache=True)``), loaded with the polish.
 """
 
 from __future__ import annotations
@@ -81,16 +85,54 @@ def _fx(ei, ej, ev, ne, m, i, sign, rs, ro, ps, po, Nv, Tv, normal_xy, tangent_x
 
 
 @njit(cache=True)
+def border_size(rot):
+    """The unknowns after the nodes' (the border): 2 (ρ, ς) at a free end (``rot`` = r,
+    the free heights' arms about the pin), else 0."""
+    return 2 if rot.size else 0
+
+
+@njit(cache=True)
+def tip_spring(bands):
+    """s, the tip's spring of a free end's banded core (:func:`primal_system`): H's
+    diagonal at the tip (the largest diagonal where that is not positive)."""
+    s = bands[0, bands.shape[1] - 1]
+    if not s > 0.0:
+        s = np.max(np.abs(bands[0]))
+    return s if s > 0.0 else 1.0
+
+
+@njit(cache=True)
+def border_values(v, rot, dy):
+    """The border's unknowns of an answer (its heights ``dy``) put in ``v`` (the primal
+    system's unknowns, :func:`primal_system`): ρ = rᵀ δy, ς = δy at the tip."""
+    if rot.size:
+        n = v.size
+        acc = 0.0
+        for j in range(rot.size):
+            acc += rot[j] * dy[j]
+        v[n - 2] = acc
+        v[n - 1] = dy[rot.size - 1]
+    return v
+
+
+@njit(cache=True)
 def primal_system(bands, f, t, k_tau, first, right_datum, gap, slip, compliance,
-                  normal_node, normal_xy, friction_node, tangent_xy, mu, pair, contact,
-                  state, hold, T0, eps_t):
+                  normal_node, normal_xy, friction_node, tangent_xy, mu, pair, rot, rot_k,
+                  contact, state, hold, T0, eps_t):
     """The step's primal equations on an index set, in sparse rows: (ei, ej, ev, rhs,
     count, the unknowns' layout (τ, Y, X, L, N, T)). ``t``: tan α per link (as given:
     the caller levels it); ``contact`` per wall row, ``state`` per pair (STICK, FORWARD,
     BACKWARD, OFF), ``hold`` per pair (KEEP its slip equation, HELD_ALONE: T = T⁰, or
     the pair p: T − T_p = T⁰ − T⁰_p); ``eps_t``: a sticking pair's compliance (its slip
     equation t·(δx, δy) + ε_t (T − T⁰) = −s; 0: none). The equations come node by node, as the unknowns
-    (:func:`layout`), so the system is banded; as many equations as unknowns. Also
+    (:func:`layout`), so the system is banded; as many equations as unknowns. A free
+    right end (``rot`` = r, the free heights' arms about the pin, and ``rot_k``: K = H +
+    k_r r rᵀ) borders it (the module's note): the heights' rows get k_r r_j ρ, and the
+    tip's row s δy_tip − s ς (s, :func:`tip_spring`: 0 where ς = δy_tip, and it makes
+    the band's heights H + s e eᵀ, definite: the band alone is not singular on the
+    rotation), and two rows come last, ρ − rᵀ δy = 0 and ς − δy_tip = 0 (the exact
+    oracle's ρ, benchmarks/exact_friction.py); the count then includes ρ, ς (the last
+    two, :func:`border_size`). Also
     returned: ``plain``, per entry whether it is in the system with ``eps_t`` = 0 (all
     but the compliances), and ``rhs0``, that system's right-hand side (the same entries
     and values, in the same order, as a call with ``eps_t`` = 0)."""
@@ -99,7 +141,10 @@ def primal_system(bands, f, t, k_tau, first, right_datum, gap, slip, compliance,
     rs, ro = by_node(first + normal_node, links)
     ps, po = by_node(friction_node, links)
     n, tau, Y, X, L, Nv, Tv = layout(links, first, nh, has_tau, rs, ro, ps, po)
-    cap = 16 * n + 4 * (ro.size + po.size) + 16
+    nb = border_size(rot)
+    rho, sig, tip, spring = n, n + 1, first + nh - 1, tip_spring(bands) if nb else 0.0
+    n += nb
+    cap = 16 * n + 4 * (ro.size + po.size) + 4 * nh + 16
     ei = np.empty(cap, np.int64)
     ej = np.empty(cap, np.int64)
     ev = np.empty(cap)
@@ -138,6 +183,11 @@ def primal_system(bands, f, t, k_tau, first, right_datum, gap, slip, compliance,
                 ne = _put(ei, ej, ev, ne, m, L[i - 1], t[i - 1])
             if i < links:
                 ne = _put(ei, ej, ev, ne, m, L[i], -t[i])
+            if nb:  # a free end: k_r r_j ρ, and at the tip s (δy_tip − ς)
+                ne = _put(ei, ej, ev, ne, m, rho, rot_k * rot[j])
+                if i == tip:
+                    ne = _put(ei, ej, ev, ne, m, Y[i], spring)
+                    ne = _put(ei, ej, ev, ne, m, sig, -spring)
             rhs[m] = f[j]
             m += 1
         if i < links:  # the link's horizontal force
@@ -192,6 +242,14 @@ def primal_system(bands, f, t, k_tau, first, right_datum, gap, slip, compliance,
         if i == links and right_datum:  # x_N held
             ne = _put(ei, ej, ev, ne, m, X[links], 1.0)
             m += 1
+    if nb:  # the border's rows: ρ − rᵀ δy = 0, ς − δy_tip = 0
+        ne = _put(ei, ej, ev, ne, m, rho, 1.0)
+        for j in range(nh):
+            ne = _put(ei, ej, ev, ne, m, Y[first + j], -rot[j])
+        m += 1
+        ne = _put(ei, ej, ev, ne, m, sig, 1.0)
+        ne = _put(ei, ej, ev, ne, m, Y[tip], -1.0)
+        m += 1
     rhs0 = rhs[:m].copy()
     for r in range(m):
         if stick_row[r] >= 0:
