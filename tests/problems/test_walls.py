@@ -23,6 +23,20 @@ def test_linear_table_interpolates_and_has_its_segment_slopes():
     assert p(40.0) == pytest.approx(4.0) and p.slope(40.0) == 0.0  # continued flat
 
 
+def test_a_table_is_fixed_once_built_and_a_wall_moved_under_the_pin_is_refused():
+    # the profile copies the caller's points: editing them afterwards moves no wall, and
+    # a profile built from the edited points (through the pin line) is refused, although
+    # a scene with the first one passed its check before
+    x, y = np.array([-40.0, 0.0, 40.0]), np.full(3, 3.0)
+    p = WallProfile.from_table(x, y, "linear")
+    ActuatorScene(150, 3.0, wall_profile=p).chain()
+    y[:] = -1.0
+    assert p(0.0) == pytest.approx(3.0) and p(20.0) == pytest.approx(3.0)
+    ActuatorScene(150, 3.0, wall_profile=p).chain()
+    with pytest.raises(ProblemError, match="pin"):
+        ActuatorScene(150, 3.0, wall_profile=WallProfile.from_table(x, y, "linear")).chain()
+
+
 @pytest.mark.parametrize("kind", ["pchip", "cubic"])
 def test_smooth_tables_reproduce_a_straight_line(kind):
     x = np.linspace(0, 30, 7)

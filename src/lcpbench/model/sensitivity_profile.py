@@ -61,7 +61,12 @@ def profile_derivatives(result, scene, names, eps_R: float, rows) -> dict:
     kern = kernel_module("lcpbench.model.sensitivity_profile_kernel", "derivatives")
     chain = scene.chain()
     _, a, jl, jr, k, rest, _, nodal_load, fs, lo, hi, L, _, _, _ = kernel_args(chain)
-    ku, cu, kl, cl = wall_tables(chain)  # the plan refused a profile without a table
+    tables = wall_tables(chain)
+    if tables is None:  # (the plan refuses such a scene before it is solved)
+        raise ProblemError("sensitivities: a wall profile without a table of cubic pieces "
+                           "over the chain's reach; give it as a table "
+                           "(WallProfile.from_table)")
+    ku, cu, kl, cl = tables
     alpha = np.ascontiguousarray(result.alpha, dtype=float)
     n = lo.size
     fu = np.ascontiguousarray(result.forces, dtype=float)

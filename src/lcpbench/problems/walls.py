@@ -115,8 +115,9 @@ class WallProfile:
             raise ProblemError(f"{parameter}: kind must be one of {', '.join(KINDS)}, "
                                f"got {kind!r}")
         try:
-            xs = np.asarray(x, dtype=float).ravel()
-            ys = np.asarray(y, dtype=float).ravel()
+            # copies: the profile, its tables and its checks are fixed once built
+            xs = np.array(x, dtype=float).ravel()
+            ys = np.array(y, dtype=float).ravel()
         except (TypeError, ValueError):
             raise ProblemError(f"{parameter}: x and y must be numbers (mm)") from None
         if xs.size != ys.size:

@@ -8,8 +8,11 @@ a channel, below the large-N formulation and below the moderately heavy load
 (those go through :func:`lcpbench.model.compiled.drive`'s SQP steps). Otherwise,
 or where the solve kernel stops on a scene, it returns None and the line is
 solved scene by scene (:func:`lcpbench.studies.batch_compiled.solve_line`), as
-before. The results are :class:`~lcpbench.studies.batch_result.LineResult`,
-built from the kernel's arrays when read.
+before; a scene alone in its plane on which it stops comes back as a
+:class:`~lcpbench.studies.batch_result.Stopped`, which the caller goes on from as
+:func:`lcpbench.solve` goes on from the same stop. The results are
+:class:`~lcpbench.studies.batch_result.LineResult`, built from the kernel's arrays
+when read.
 """
 
 from __future__ import annotations
