@@ -253,8 +253,8 @@ def level_run_fails(k, head, state, flip_s) -> bool:
     at the answer's split, as on a level link), so a set kept there has each slip
     checked. On level links the likely picks kept, on one of the active set's steps of
     benchmarks/friction_agreement.py (path 52), a set whose held pair's slip the exact
-    solution breaks (its dependent equation off by 1e-3 of its terms): not tried first
-    there."""
+    solution breaks (its dependent equation off by 1e-3 of its terms; that slip is a
+    sign of the set now, ``friction_polish.signs``): not tried first there."""
     tan, friction_node = head[2], head[11]
     sticks = state == k.STICK
     stick_at = np.zeros(tan.size + 1, np.bool_)

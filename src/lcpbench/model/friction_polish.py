@@ -28,7 +28,8 @@ then two sticking nodes joined by level links have dependent slip equations (the
 fixes the second slip), and the second's is replaced by its T held at the answer's split
 (T_c − T_p = T⁰_c − T⁰_p, p the run's previous sticking pair; T_c = T⁰_c in a run held
 by a pinned end): the null direction of T per node is fixed where the answer put it, N
-is not touched by it.
+is not touched by it. The replaced slip equation is checked as a sign (:func:`signs`):
+where the two slips from the last state differ, both cannot stick.
 
 Every function is ``@njit(cache=True)``; with NUMBA_DISABLE_JIT=1 they run as plain
 Python. :func:`lcpbench.model.friction_lemke.polish_step` calls :func:`polish` and keeps
@@ -270,11 +271,13 @@ def stick_holds(t, state, friction_node, tangent_xy, has_tau, right_datum):
 
 @njit(cache=True)
 def signs(x, lay, first, gap, slip, normal_node, normal_xy, friction_node, tangent_xy, mu,
-          pair, contact, state, ftol, ltol):
+          pair, contact, state, hold, ftol, ltol):
     """The sign conditions of the index set at the primal solution x: (how many fail, the
     set with those nodes flipped, the slips s). A contact row with N < 0 separates, a
     separate row with a gap < 0 comes into contact, a sticking pair outside its cone
-    slides against its T, a sliding pair whose slip has the wrong sign sticks (and a pair
+    slides against its T, a sticking pair whose T is held (``hold``, :func:`stick_holds`:
+    its slip equation, dependent on a level link, not solved) with a slip slides that
+    way, a sliding pair whose slip has the wrong sign sticks (and a pair
     none of whose rows with μ > 0 is in contact is off; one that comes into contact
     sticks). To
     ``ftol`` (forces) and ``ltol`` (lengths)."""
@@ -309,6 +312,9 @@ def signs(x, lay, first, gap, slip, normal_node, normal_xy, friction_node, tange
                     limit += mu[r] * x[Nv[r]]
             if abs(x[Tv[c]]) > limit + ftol:
                 new_state[c] = FORWARD if x[Tv[c]] < 0.0 else BACKWARD
+                fails += 1
+            elif hold[c] != KEEP and abs(s[c]) > ltol:
+                new_state[c] = FORWARD if s[c] > 0.0 else BACKWARD
                 fails += 1
         elif state[c] != OFF and state[c] * s[c] < -ltol:
             new_state[c] = STICK
@@ -415,7 +421,7 @@ def polish_on(bands, f, tan, k_tau, first, right_datum, gap, slip, compliance, n
             big = max(big, abs(x[lay[5][c]]))
         fails, new_contact, new_state, s = signs(
             x, lay, first, gap, slip, normal_node, normal_xy, friction_node, tangent_xy, mu,
-            pair, contact, state, POLISH_SIGN_RTOL * big, POLISH_SIGN_RTOL * link)
+            pair, contact, state, hold, POLISH_SIGN_RTOL * big, POLISH_SIGN_RTOL * link)
         failing[attempt] = fails
         if fails == 0:
             break
