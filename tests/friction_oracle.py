@@ -3,6 +3,9 @@ lcpbench's judge, from the answer's normal and tangential forces and slips only.
 
 import numpy as np
 
+import lcpbench
+from lcpbench.model.friction_solvers import step_runner
+
 
 def coulomb_holds(res, rtol=1e-9, slip=1e-6):
     """Coulomb's law read off each node (independent of the judge): a node slides when
@@ -53,3 +56,18 @@ def frictionless_by_the_frictional_path(base, lcp, tol):
                                    atol=1e-10 * scale)
     np.testing.assert_allclose(res.alpha, ref.alpha, rtol=0, atol=1e-10)
     return res
+
+
+def recorded(scene, states, tol=1e-8):
+    """Every step of a path solved by Lemke's runner (the default's), with its answer:
+    the steps a test hands to the exact oracle. ``tol`` None: ``solve_path``'s default."""
+    steps, run = [], step_runner("lemke")
+
+    def keep(fs):
+        sol = run(fs)
+        steps.append((fs, sol))
+        return sol
+
+    keep.takes_step, keep.newton = True, True
+    res = lcpbench.solve_path(scene, states, tol=tol, lcp=keep)
+    return res, steps

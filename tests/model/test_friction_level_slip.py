@@ -12,11 +12,10 @@ import sys
 from pathlib import Path
 
 import numpy as np
+from friction_oracle import recorded
 
-import lcpbench
 from lcpbench import ActuatorScene
 from lcpbench.model.friction_lemke import polish_args, polish_kernels
-from lcpbench.model.friction_solvers import step_runner
 from lcpbench.thresholds import POLISH_FLIPS, POLISH_LEVEL
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
@@ -26,17 +25,10 @@ import exact_friction as ef  # noqa: E402
 def channel_step():
     """The frictional step of a channel (θ 180°: the chain lies on the upper wall, its
     two end links of each contact run exactly level), and Lemke's answer."""
-    steps, run = [], step_runner("lemke")
-
-    def keep(fs):
-        sol = run(fs)
-        steps.append((fs, sol))
-        return sol
-
-    keep.takes_step, keep.newton = True, True
     scene = ActuatorScene(theta=180, height=2.0, links=40, channel=True, friction=0.3,
                           left_end="slider", right_end="slider", pull=0.0)
-    assert lcpbench.solve_path(scene, [{}], lcp=keep)[0].converged
+    res, steps = recorded(scene, [{}], tol=None)
+    assert res[0].converged
     return steps[-1]
 
 

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from friction_oracle import frictionless_by_the_frictional_path
+from friction_oracle import frictionless_by_the_frictional_path, recorded
 
 import lcpbench
 from lcpbench import ActuatorScene
@@ -23,27 +23,12 @@ from lcpbench.model.friction_lemke import (
     polish_kernels,
     polish_step,
 )
-from lcpbench.model.friction_solvers import step_runner
 from lcpbench.solvers.base import LCPSolution, Status
 from lcpbench.thresholds import POLISH_MOST_FAILING, POLISH_STICK_COMPLIANCE, POLISH_SWEEPS
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 import exact_friction as ef  # noqa: E402
 from friction_agreement import scenes  # noqa: E402
-
-
-def recorded(scene, states, tol=1e-8):
-    """Every step of a path solved by the default's runner, with its answer."""
-    steps, run = [], step_runner("lemke")
-
-    def keep(fs):
-        sol = run(fs)
-        steps.append((fs, sol))
-        return sol
-
-    keep.takes_step, keep.newton = True, True
-    res = lcpbench.solve_path(scene, states, tol=tol, lcp=keep)
-    return res, steps
 
 
 def exact_gap(fs, z):
