@@ -111,8 +111,11 @@ def bordered_factor(ei, ej, ev, n, nb):
     :func:`bordered_resolve` by block elimination: A₀ by :func:`banded_factor`, Z = A₀⁻¹ B
     (``nb`` banded solves, B the border's columns in the core's rows) and the Schur
     complement S = D − C Z (C the border's rows in the core's columns, D their corner);
-    (A₀'s factor, Z, C, S, ok). ``nb`` 0: A₀ is A."""
+    (A₀'s factor, Z, C, S, ok). ``nb`` 0: A₀ is A (factored as it is, no copy)."""
     nc = n - nb
+    if nb == 0:
+        fac = banded_factor(ei, ej, ev, n)
+        return fac, np.zeros((n, 0)), np.zeros((0, n)), np.zeros((0, 0)), fac[6]
     core = np.ones(ei.size, np.bool_)
     B = np.zeros((nc, nb))
     C = np.zeros((nb, nc))

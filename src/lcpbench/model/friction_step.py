@@ -179,7 +179,7 @@ def _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, D, frict
     if n > ny:  # τ, held by k_τ alone
         for c in range(cols):
             X[ny, c] = BT[c, ny] / k_tau
-    return np.ascontiguousarray(BT.T), X, ok
+    return BT.T, X, ok  # (B as a view: delassus_form reads X only)
 
 
 @njit(cache=True)
