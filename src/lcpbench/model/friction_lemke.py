@@ -19,7 +19,6 @@ from ..thresholds import (
     POLISH_EDGE_NODES,
     POLISH_EDGE_SETS,
     POLISH_FLIPS,
-    POLISH_LEVEL,
     POLISH_LIKELY_LEVEL,
     POLISH_MOST_FAILING,
     POLISH_STICK_COMPLIANCE,
@@ -344,7 +343,7 @@ def run_sums(k, tan, friction_node, state, T) -> np.ndarray:
     out = np.asarray(T, np.float64).copy()
     order = np.argsort(friction_node, kind="stable")
     run: list[int] = []
-    for j, c in enumerate(order):
+    for c in order:
         joined = bool(run) and state[c] == k.STICK and \
             friction_node[c] == friction_node[run[-1]] + 1 and \
             abs(tan[friction_node[run[-1]]]) <= POLISH_LIKELY_LEVEL
