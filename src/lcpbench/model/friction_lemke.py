@@ -222,12 +222,13 @@ def searched_polish(k, head, answer, w, fs, flips, contact, state, refused):
     seen_c, seen_s = np.concatenate((own[6], once[6])), np.concatenate((own[7], once[7]))
     nodes, picks, likely = edge_picks(k, answer, w, fs, contact, state, own[4], own[5])
     if likely.any() and level_run_fails(k, head, state, own[5]):
-        out = k.polish_sets(*head, *answer, contact, state, nodes, picks[likely],
-                            POLISH_EDGE_SETS, seen_c, seen_s)
+        out = k.polish_sets(*head, *answer, contact, state, nodes,
+                            picks[likely][:POLISH_EDGE_SETS], POLISH_EDGE_SETS, seen_c, seen_s)
         if out[0] == k.KEPT:
             return out, failing, False, name
-        near = picks[:POLISH_EDGE_SETS]  # the rest of the fewest-change picks, in order
-        picks = near[~likely[:POLISH_EDGE_SETS]]
+        picks = picks[:POLISH_EDGE_SETS][~likely[:POLISH_EDGE_SETS]]  # (the rest, in order)
+    else:
+        picks = picks[:POLISH_EDGE_SETS]
     more = once
     if flips > 1 and once[8][0] <= POLISH_MOST_FAILING:
         more = k.polish_on(*head, *answer, flips - 2, once[4], once[5])
