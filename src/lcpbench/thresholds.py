@@ -163,13 +163,15 @@ POLISH_MOST_FAILING = 30
 POLISH_EDGE_NODES = 6
 POLISH_EDGE_SETS = 64
 #: where a sticking pair whose sign fails is joined to a sticking neighbour by a link
-#: with |tan α| at most this (and above POLISH_LEVEL: not level, every slip equation
-#: kept), the edge search's picks of likely states (that pair sliding against the
-#: answer's T, or sticking) are tried after the first flip, before the others
-#: (friction_lemke.searched_polish): the channel of benchmarks/friction_speed.py sticks
-#: across links of 1.2e-12 and 1.4e-12 (POLISH_LEVEL's 1e-12 just missed) between
-#: stretches sloped 1e-5, and the flips there went 4, 4, 4, 5, 41 before the edge search
-#: kept a set with three of its pairs sliding against the answer's T
+#: with |tan α| at most this (level to POLISH_LEVEL included), the edge search's picks of
+#: likely states (that pair sliding against its sticking run's summed T, or sticking) are
+#: tried after the first flip, before the others (friction_lemke.searched_polish): the
+#: channel of benchmarks/friction_speed.py sticks across links of 1.2e-12 and 1.4e-12
+#: between stretches sloped 1e-5, and the flips there went 4, 4, 4, 5, 41 before the
+#: edge search kept a set with three of its pairs sliding against the answer's T; the
+#: agreement's state 12.1 sticks across links of 1e-15 and 7e-15, and its exact set (three
+#: pairs sliding against their runs' T) is the 106th pick of the fewest changes, the 40th
+#: likely one
 POLISH_LIKELY_LEVEL = 1e-9
 #: the flips of the polish of the answers that end a frictional state (every polish of
 #: the state's last steps: docs/friction.md, "Once per state"). A flipped answer, one whose

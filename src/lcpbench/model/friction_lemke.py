@@ -19,7 +19,6 @@ from ..thresholds import (
     POLISH_EDGE_NODES,
     POLISH_EDGE_SETS,
     POLISH_FLIPS,
-    POLISH_LEVEL,
     POLISH_LIKELY_LEVEL,
     POLISH_MOST_FAILING,
     POLISH_STICK_COMPLIANCE,
@@ -191,15 +190,17 @@ def searched_polish(k, head, answer, w, fs, flips, contact, state, refused):
        more: the search would start where the last one started, from an answer of the
        same outer loop (a guess, not a proof: the answer is returned as it was, as any
        refusal, and the state's judge decides it);
-    3. where a failing node is a sticking pair of a nearly level run
-       (:func:`level_run_fails`: joined to a sticking neighbour by a link with POLISH_LEVEL
-       < |tan α| <= POLISH_LIKELY_LEVEL, where T per node is all but indeterminate), the
-       edge search's picks (:func:`edge_picks`) made of likely states only
-       (:func:`likely_states`: such a pair sliding at its cone against the answer's T,
-       or sticking), in their order;
+    3. where a failing node is a sticking pair of a level or nearly level run
+       (:func:`level_run_fails`: joined to a sticking neighbour by a link with |tan α|
+       <= POLISH_LIKELY_LEVEL, where T per node is indeterminate or all but), the
+       edge search's picks (:func:`edge_picks`, every one, not only the
+       POLISH_EDGE_SETS of the fewest changes) made of likely states only
+       (:func:`likely_states`: such a pair sliding at its cone against its run's T, or
+       sticking), in their order, at most POLISH_EDGE_SETS;
     4. the flips (``k.polish_on``: the own set's first flip, before step 3, then
        ``flips`` − 1 more);
-    5. :func:`edge_polish`, the rest of the edge search's picks, in their order.
+    5. :func:`edge_polish`: the POLISH_EDGE_SETS picks of the fewest changes, in their
+       order (where step 3 ran, those of them it did not try).
 
     Step 3 runs after the first flip (most polishes the flips keep, they keep there: 33
     of 59 on benchmarks/friction_agreement.py's Lemke paths). Without it the sets,
@@ -221,11 +222,13 @@ def searched_polish(k, head, answer, w, fs, flips, contact, state, refused):
     seen_c, seen_s = np.concatenate((own[6], once[6])), np.concatenate((own[7], once[7]))
     nodes, picks, likely = edge_picks(k, answer, w, fs, contact, state, own[4], own[5])
     if likely.any() and level_run_fails(k, head, state, own[5]):
-        out = k.polish_sets(*head, *answer, contact, state, nodes, picks[likely],
-                            POLISH_EDGE_SETS, seen_c, seen_s)
+        out = k.polish_sets(*head, *answer, contact, state, nodes,
+                            picks[likely][:POLISH_EDGE_SETS], POLISH_EDGE_SETS, seen_c, seen_s)
         if out[0] == k.KEPT:
             return out, failing, False, name
-        picks = picks[~likely]  # (the rest, in their order)
+        picks = picks[:POLISH_EDGE_SETS][~likely[:POLISH_EDGE_SETS]]  # (the rest, in order)
+    else:
+        picks = picks[:POLISH_EDGE_SETS]
     more = once
     if flips > 1 and once[8][0] <= POLISH_MOST_FAILING:
         more = k.polish_on(*head, *answer, flips - 2, once[4], once[5])
@@ -246,20 +249,20 @@ def refusal(contact, state, flip_c, flip_s):
 
 def level_run_fails(k, head, state, flip_s) -> bool:
     """Whether a sticking pair whose sign fails (its state changed in ``flip_s``, the own
-    set's first flip) is joined to a sticking neighbour by a link nearly level: |tan α|
-    at most POLISH_LIKELY_LEVEL, but above POLISH_LEVEL. Along such a run T per node is
-    all but indeterminate, and the flips read a slide's direction from a polished T that
-    can point either way; and every sticking pair keeps its slip equation (no T is held
-    at the answer's split, as on a level link), so a set kept there has each slip
-    checked. On level links the likely picks kept, on one of the active set's steps of
-    benchmarks/friction_agreement.py (path 52), a set whose held pair's slip the exact
-    solution breaks (its dependent equation off by 1e-3 of its terms; that slip is a
-    sign of the set now, ``friction_polish.signs``): not tried first there."""
+    set's first flip) is joined to a sticking neighbour by a link level or nearly: |tan
+    α| at most POLISH_LIKELY_LEVEL. Along such a run T per node is indeterminate (level:
+    the polish holds it at the answer's split) or all but, and the flips read a slide's
+    direction from a polished T that can point either way. Level links were left out
+    until the held pair's slip became a sign of its set (``friction_polish.signs``):
+    before, on one of the active set's steps of benchmarks/friction_agreement.py (path
+    52), the likely picks kept a set whose held slip the exact solution breaks; now such
+    a set is refused like any whose sign fails (docs/friction.md, "What limits target
+    2": state 12.1)."""
     tan, friction_node = head[2], head[11]
     sticks = state == k.STICK
     stick_at = np.zeros(tan.size + 1, np.bool_)
     stick_at[friction_node[sticks]] = True
-    near = (np.abs(tan) <= POLISH_LIKELY_LEVEL) & (np.abs(tan) > POLISH_LEVEL)
+    near = np.abs(tan) <= POLISH_LIKELY_LEVEL
     for c in np.flatnonzero(sticks & (flip_s != state)):
         i = int(friction_node[c])
         if (i >= 1 and stick_at[i - 1] and near[i - 1]) or \
@@ -270,13 +273,14 @@ def level_run_fails(k, head, state, flip_s) -> bool:
 
 def edge_picks(k, answer, w, fs, contact, state, flip_c, flip_s):
     """The edge search's nodes and picks: (nodes, picks, whether each pick is made of
-    likely states only). The nodes: those whose sign fails at the own set's polished
-    answer (their state changed in its first flip, ``flip_c``, ``flip_s``), at most
-    :data:`POLISH_EDGE_NODES`, those whose LCP pairs are nearest the edge of two states
-    first (both sides of the pair smallest). The picks: every state of those nodes (a
-    row in contact or separate, a pair STICK, FORWARD or BACKWARD), the
-    POLISH_EDGE_SETS with the fewest changes in :func:`edge_order`, the own set's left
-    out."""
+    likely states only, :func:`likely_states` of the runs' T, :func:`run_sums`). The
+    nodes: those whose sign fails at the own set's polished answer (their state changed
+    in its first flip, ``flip_c``, ``flip_s``), at most :data:`POLISH_EDGE_NODES`, those
+    whose LCP pairs are nearest the edge of two states first (both sides of the pair
+    smallest). The picks: every state of those nodes (a row in contact or separate, a
+    pair STICK, FORWARD or BACKWARD), all of them, the fewest changes first
+    (:func:`edge_order`), the own set's left out (at most 3⁶ = 729; the searches try at
+    most POLISH_EDGE_SETS of them: :func:`searched_polish`)."""
     z = answer[0]
     mn, mt = fs.normal_node.size, fs.friction_node.size
     lam = mn + 2 * mt
@@ -287,8 +291,9 @@ def edge_picks(k, answer, w, fs, contact, state, flip_c, flip_s):
     nodes = np.array([int(i) for i in order if failing[i]][:POLISH_EDGE_NODES], np.int64)
     now = [int(contact[i]) if i < mn else int(state[i - mn]) for i in nodes]
     choices = [(1, 0) if i < mn else (k.STICK, k.FORWARD, k.BACKWARD) for i in nodes]
-    picks, likely = edge_order(choices, now, likely_states(k, nodes, now, mn, answer[4]),
-                               POLISH_EDGE_SETS)
+    runs = run_sums(k, fs.parts["tan"], fs.friction_node, state, answer[4])
+    every = int(np.prod([len(c) for c in choices]))
+    picks, likely = edge_order(choices, now, likely_states(k, nodes, now, mn, runs), every)
     return nodes, picks, likely
 
 
@@ -310,13 +315,16 @@ def edge_polish(k, head, answer, contact, state, nodes, picks, most, seen_c, see
 
 def likely_states(k, nodes, now, mn, T) -> list[tuple]:
     """Per edge node (``nodes``, as :func:`edge_picks`'s; ``now`` their states, ``T``
-    the answer's T per pair) the states its exact answer most likely has: a wall row
-    either; a sticking pair its own or sliding against the answer's T (FORWARD where
-    T < 0: T = −μN), a sliding pair its own or sticking. Where the answer's T per node is
-    ill-determined (a nearly straight run of sticking nodes) the polished T that the
-    flips read a slide's direction from can point either way; the answer's T (the LCP's,
-    its sum over the run right) does not: the channel's kept sets of
-    benchmarks/friction_speed.py slide each of their changed pairs against it."""
+    per pair the answer's T summed over its sticking run, :func:`run_sums`) the states its
+    exact answer most likely has: a wall row either; a sticking pair its own or sliding
+    against its run's T (FORWARD where T < 0: T = −μN), a sliding pair its own or
+    sticking. Where the answer's T per node is ill-determined (a level or nearly straight
+    run of sticking nodes) the polished T that the flips read a slide's direction from
+    can point either way, and so can the answer's T per node (agreement state 12.1: a
+    run's whole T on one of its two nodes, 0 on the other, which slides with it); the
+    answer's T summed over the run (the LCP's) does not: the channel's kept sets of
+    benchmarks/friction_speed.py slide each of their changed pairs against it, and
+    12.1's its three (docs/friction.md, "What limits target 2")."""
     likely = []
     for i, s in zip(nodes, now):
         if i < mn:
@@ -328,18 +336,44 @@ def likely_states(k, nodes, now, mn, T) -> list[tuple]:
     return likely
 
 
+def run_sums(k, tan, friction_node, state, T) -> np.ndarray:
+    """Per pair the answer's T summed over its sticking run: the sticking pairs joined to
+    it, neighbour by neighbour, by links with |tan α| <= POLISH_LIKELY_LEVEL (level or
+    nearly: T per node along such a run is indeterminate or all but, its sum is not); a
+    pair not sticking, its own T."""
+    out = np.asarray(T, np.float64).copy()
+    order = np.argsort(friction_node, kind="stable")
+    run: list[int] = []
+    for c in order:
+        joined = bool(run) and state[c] == k.STICK and \
+            friction_node[c] == friction_node[run[-1]] + 1 and \
+            abs(tan[friction_node[run[-1]]]) <= POLISH_LIKELY_LEVEL
+        if not joined:
+            if len(run) > 1:
+                out[run] = np.sum(np.asarray(T)[run])
+            run = []
+        if state[c] == k.STICK:
+            run.append(int(c))
+    if len(run) > 1:
+        out[run] = np.sum(np.asarray(T)[run])
+    return out
+
+
 def edge_order(choices, now, likely, most) -> tuple[np.ndarray, np.ndarray]:
     """The edge search's picks of one state per edge node (``choices``: each node's
     states) as rows, in the order tried: the ``most`` with the fewest changes from
-    ``now`` after the first (``now`` itself), in the order of
-    ``itertools.product(*choices)`` within a tie; and per pick whether each of its states
-    is one of its node's ``likely`` states (:func:`likely_states`)."""
+    ``now``, at least one (``now`` itself is the own set; a node's state in ``now`` need
+    not be one of its choices: an off pair whose row comes into contact, so that no pick
+    is ``now``), in the order of ``itertools.product(*choices)`` within a tie; and per
+    pick whether each of its states is one of its node's ``likely`` states
+    (:func:`likely_states`)."""
     if not choices:
         return np.zeros((0, 0), np.int64), np.zeros(0, np.bool_)
     grids = np.meshgrid(*[np.array(c, np.int64) for c in choices], indexing="ij")
     picks = np.stack([g.ravel() for g in grids], axis=1)  # itertools.product's order
     changes = (picks != np.array(now, np.int64)).sum(axis=1)
-    picks = picks[np.argsort(changes, kind="stable")[1:most + 1]]  # (the first: now)
+    order = np.argsort(changes, kind="stable")
+    picks = picks[order[changes[order] > 0][:most]]  # (``now`` itself, where a pick, not)
     ok = np.ones(len(picks), np.bool_)
     for j, states in enumerate(likely):
         ok &= np.isin(picks[:, j], np.array(states, np.int64))
