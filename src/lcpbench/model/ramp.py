@@ -41,10 +41,12 @@ import numpy as np
 
 from ..solvers.registry import DEFAULT
 from ..thresholds import NODE_SHARE
-from .angle_step import in_reach
+from . import large_n
+from .angle_step import in_reach, load_parameter
 from .compiled import drive
 from .heavy_driver import run_heavy
 from .judge import force_tol
+from .kernel_call import applies, kernel_args
 from .outer import DriverOutput, DriverStart
 
 #: the largest change of a section's bend angle between two steps (degrees)
@@ -97,26 +99,31 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
     path = fractions(scene)
     if not path:
         return None, engine, "the scene has no bend angle to follow from zero"
+    whole = scene.chain()
     # the SQP's reactions stand in for the built-in back-end's steps only; its reach
     # (walls, layout, N) is the same at every s
-    angles_ok = backend == DEFAULT and method != "undamped" and in_reach(scene.chain())
+    angles_ok = backend == DEFAULT and method != "undamped" and in_reach(whole)
+    kernel = _layout_derived(whole, backend, method)
+    step_solver = make_step()  # (a step solver keeps no state between steps)
+    kw = dict(backend=backend, settings=settings, engine=engine, tol=tol,
+              max_outer=max_outer, method=method)
     start, used, out, in_angles = None, engine, None, 0
-    for k, s in enumerate(path):
-        chain = scene.chain_at(s)  # every bend angle θ scaled to s·θ; s = 1: the scene's
-        kw = dict(backend=backend, settings=settings, engine=engine, tol=tol,
-                  max_outer=max_outer, method=method)
+    last = None  # the DriverOutput the start was taken from
+    for k, (s, chain) in enumerate(zip(path, _chains(scene, path), strict=True)):
+        if kernel is not None:  # the kernel's arrays of the chain at s·θ, from the scene's
+            kernel_args(chain, kernel)
         angles = angles_ok and start is not None
-        sqp = _in_angles(chain, start, tol, max_outer) \
+        sqp = _in_angles(chain, start, last, tol, max_outer) \
             if angles and start is not None and near_vertical(start.alpha) else None
         if sqp is None:
-            out, used = drive(chain, make_step(), start=start, **kw)
+            out, used = drive(chain, step_solver, start=start, **kw)
             if not out.converged and angles and near_vertical(out.alpha):
-                sqp = _in_angles(chain, start, tol, max_outer)
+                sqp = _in_angles(chain, start, last, tol, max_outer)
         if sqp is not None:
             out, in_angles = sqp, in_angles + 1
             used = f"numpy (SQP steps in the link angles: {_WHY})"
         if not out.converged and start is not None:
-            out, used = drive(chain, make_step(), start=None, **kw)
+            out, used = drive(chain, step_solver, start=None, **kw)
         if not out.converged:
             if k == len(path) - 1:
                 return out, used, (f"followed the load from zero in {len(path)} steps"
@@ -124,7 +131,7 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
             return None, used, (f"the loading path stopped at {s:.3g} of the bend angles "
                                 f"(step {k + 1} of {len(path)}{_told(in_angles)}): "
                                 f"{out.reason}")
-        start = DriverStart(out.alpha, out.last_step, _multipliers(out, tol, chain.force_scale))
+        start, last = DriverStart(out.alpha, out.last_step), out
     return out, used, f"followed the load from zero in {len(path)} steps{_told(in_angles)}"
 
 
@@ -149,11 +156,33 @@ def _multipliers(out: DriverOutput, tol: float, force_scale: float) -> tuple:
     return 0.0, np.where(up > line, up, 0.0), np.where(lo > line, lo, 0.0)
 
 
-def _in_angles(chain, start: DriverStart | None, tol: float,
+def _in_angles(chain, start: DriverStart, last: DriverOutput, tol: float,
                max_outer: int) -> DriverOutput | None:
-    """The SQP's answer from ``start`` (:func:`lcpbench.model.heavy_driver.run_heavy`), or
-    None where it did not converge."""
-    return run_heavy(chain, start, tol, min(max_outer, PATH_ANGLE_STEPS), why=_WHY)
+    """The SQP's answer from ``start`` (:func:`lcpbench.model.heavy_driver.run_heavy`), the
+    first multipliers those of ``last``, the answer ``start`` was taken from
+    (:func:`_multipliers`), or None where it did not converge."""
+    first = DriverStart(start.alpha, start.warm, _multipliers(last, tol, chain.force_scale))
+    return run_heavy(chain, first, tol, min(max_outer, PATH_ANGLE_STEPS), why=_WHY)
+
+
+def _chains(scene, path: list[float]):
+    """The chains of ``scene`` at the load fractions ``path`` (the scene's ``chains_at``,
+    one pass for a row of sections; else ``chain_at`` step by step)."""
+    at_once = getattr(scene, "chains_at", None)
+    return at_once(path) if at_once is not None else (scene.chain_at(s) for s in path)
+
+
+def _layout_derived(whole, backend: str, method: str) -> tuple | None:
+    """What the chains of the path share with the scene's ``whole`` chain, derived on it
+    first so that each chain at s·θ inherits it (:data:`lcpbench.problems.scenes.
+    LAYOUT_DERIVED`: the load, the layout): the solve kernel's arrays that do not
+    depend on the rest shape (``kernel_args``' ``const``), where the kernel takes the
+    chain, else None."""
+    load_parameter(whole)
+    if not (applies(backend, method, whole) and not large_n.applies(whole)):
+        return None
+    args = kernel_args(whole)
+    return args[2], args[3], args[7]  # left links, right links, nodal load
 
 
 def _told(in_angles: int) -> str:
