@@ -28,9 +28,17 @@ one there, takes outer steps in α instead (:func:`lcpbench.model.heavy_driver.r
 SQP as a heavy chain's), where every angle is regular; its answer is judged as every
 answer. The SQP starts from the last step's angles and, where the SQP found that
 answer, its multipliers (wall reactions and closure λ), so its first QP starts from the
-last active set (the ±174° row: 0–1 active-set changes). The height steps' reactions
-are not handed on: tol-accurate, they are small but positive on many walls (71 where
-the SQP's answer presses on 1: 69 changes).
+last active set (the ±174° row: 0–1 active-set changes); where height steps found it,
+their reactions on the walls in contact in the judge's sense (:func:`_multipliers`;
+the others, tol-accurate, are small but positive on many walls: 71 where the SQP's
+answer presses on 1, 69 changes), which cuts the first SQP of the mixed batch's rows
+from 34 active-set changes (1.6–1.8 ms) to none (0.55 ms). The SQP converges to
+10⁻⁹ rad whatever its first active set, so the answer is the same to round-off
+(345 rows of sections, benchmarks/cold_sqp_states.py's and the mixed batch's).
+
+The chains of the path are built in one pass (the scene's ``chains_at``: the rest
+shapes of every s at once, the other arrays and what the kernels derive from the
+layout shared with the scene's chain), and one step solver serves every step.
 """
 
 from __future__ import annotations
@@ -39,6 +47,7 @@ import math
 
 import numpy as np
 
+from ..errors import ProblemError
 from ..solvers.registry import DEFAULT
 from ..thresholds import NODE_SHARE
 from . import large_n
@@ -84,8 +93,12 @@ def fractions(scene) -> list[float]:
 def near_vertical(alpha) -> bool:
     """Whether a link of ``alpha`` (rad) is within :data:`NEAR_VERTICAL_DEG` of the
     vertical, where the height step's linearisation divides by a cos α_i ≈ 0."""
-    return bool(np.min(np.abs(np.cos(np.asarray(alpha, float))), initial=1.0)
-                <= math.sin(math.radians(NEAR_VERTICAL_DEG)))
+    return bool(_min_reduce(np.abs(np.cos(np.asarray(alpha, float))), initial=1.0)
+                <= _NEAR)
+
+
+_min_reduce = np.minimum.reduce  # (np.min without its Python wrapper, the same minimum)
+_NEAR = math.sin(math.radians(NEAR_VERTICAL_DEG))
 
 
 def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: float,
@@ -169,7 +182,12 @@ def _chains(scene, path: list[float]):
     """The chains of ``scene`` at the load fractions ``path`` (the scene's ``chains_at``,
     one pass for a row of sections; else ``chain_at`` step by step)."""
     at_once = getattr(scene, "chains_at", None)
-    return at_once(path) if at_once is not None else (scene.chain_at(s) for s in path)
+    if at_once is not None:
+        try:
+            return at_once(path)
+        except ProblemError:  # a rest shape that closes on itself at some s: raised at
+            pass  # that step, as step by step (where the path gets there)
+    return (scene.chain_at(s) for s in path)
 
 
 def _layout_derived(whole, backend: str, method: str) -> tuple | None:
