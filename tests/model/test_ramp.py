@@ -173,3 +173,34 @@ def test_the_chains_of_a_path_are_the_rows_built_at_the_scaled_bend_angles():
         np.testing.assert_allclose(got.rest_alpha, built.rest_alpha, rtol=0, atol=1e-15)
         np.testing.assert_allclose(got.rest_joint, built.rest_joint, rtol=0, atol=1e-15)
     assert row.chains_at(path)[-1] is row.chain()
+
+
+@pytest.mark.parametrize("scene", [
+    # in a channel, the path all in height steps (one kernel call)
+    SectionedScene(sections=[(137.0, 15.0), (125.0, 15.0)], height=3.17, links=40,
+                   channel=True),
+    # one wall, height steps then SQP steps near the vertical
+    SectionedScene(sections=[(156.0, 15.0), (-154.5, 15.0)], height=2.27, links=40),
+])
+def test_the_height_steps_of_the_path_run_in_one_kernel_call(scene, monkeypatch):
+    walked = []
+    real = ramp._walked
+
+    def spy(*args, **kw):
+        got = real(*args, **kw)
+        walked.append(got[0])
+        return got
+
+    monkeypatch.setattr(ramp, "_walked", spy)
+    res = lcpbench.solve(scene)
+    assert res.converged and "followed the load from zero" in res.retried("ramped")
+    assert walked and walked[0] >= 10  # the steps far from the vertical, in one call
+    _assert_stable_kkt_point(scene, res)
+    # A route comparison, kept because the oracle checks the answer to the driver's
+    # tolerance only: the walk is the same solve kernel step after step, so the path
+    # step by step (lcpbench.model.compiled.drive each step) gives its answer to
+    # round-off.
+    monkeypatch.setattr(ramp, "_walk_args", lambda *a: None)
+    one_by_one = lcpbench.solve(scene)
+    assert one_by_one.total_force == pytest.approx(res.total_force, rel=1e-12)
+    np.testing.assert_allclose(one_by_one.alpha, res.alpha, rtol=0, atol=1e-12)

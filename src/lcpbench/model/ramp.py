@@ -44,6 +44,7 @@ layout shared with the scene's chain), and one step solver serves every step.
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 
@@ -51,11 +52,11 @@ from ..errors import ProblemError
 from ..solvers.registry import DEFAULT
 from ..thresholds import NODE_SHARE
 from . import large_n
-from .angle_step import in_reach, load_parameter
-from .compiled import drive
+from .angle_step import in_reach
+from .compiled import drive, heavy
 from .heavy_driver import run_heavy
 from .judge import force_tol
-from .kernel_call import applies, kernel_args
+from .kernel_call import applies, kernel_args, kernel_output, kernel_settings, warm_args
 from .outer import DriverOutput, DriverStart
 
 #: the largest change of a section's bend angle between two steps (degrees)
@@ -92,13 +93,19 @@ def fractions(scene) -> list[float]:
 
 def near_vertical(alpha) -> bool:
     """Whether a link of ``alpha`` (rad) is within :data:`NEAR_VERTICAL_DEG` of the
-    vertical, where the height step's linearisation divides by a cos α_i ≈ 0."""
-    return bool(_min_reduce(np.abs(np.cos(np.asarray(alpha, float))), initial=1.0)
-                <= _NEAR)
+    vertical, where the height step's linearisation divides by a cos α_i ≈ 0 (compiled:
+    :func:`lcpbench.model.path_kernel.near_vertical`, which the walk of height steps
+    stops on)."""
+    return bool(_kernel().near_vertical(np.ascontiguousarray(alpha, dtype=float), _NEAR))
 
 
-_min_reduce = np.minimum.reduce  # (np.min without its Python wrapper, the same minimum)
 _NEAR = math.sin(math.radians(NEAR_VERTICAL_DEG))
+
+
+def _kernel():
+    from ..numba_cache import kernel_module  # numba at the first path, not at import
+
+    return kernel_module("lcpbench.model.path_kernel", "walk_heights")
 
 
 def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: float,
@@ -116,18 +123,29 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
     # the SQP's reactions stand in for the built-in back-end's steps only; its reach
     # (walls, layout, N) is the same at every s
     angles_ok = backend == DEFAULT and method != "undamped" and in_reach(whole)
-    kernel = _layout_derived(whole, backend, method)
+    shapes = _rest_shapes(scene, path)
+    walk = _walk_args(whole, backend, method, shapes)
     step_solver = make_step()  # (a step solver keeps no state between steps)
     kw = dict(backend=backend, settings=settings, engine=engine, tol=tol,
               max_outer=max_outer, method=method)
     start, used, out, in_angles = None, engine, None, 0
     last = None  # the DriverOutput the start was taken from
-    for k, (s, chain) in enumerate(zip(path, _chains(scene, path), strict=True)):
-        if kernel is not None:  # the kernel's arrays of the chain at s·θ, from the scene's
-            kernel_args(chain, kernel)
+    k = 0
+    while k < len(path):
+        s = path[k]
         angles = angles_ok and start is not None
-        sqp = _in_angles(chain, start, last, tol, max_outer) \
-            if angles and start is not None and near_vertical(start.alpha) else None
+        to_sqp = angles and start is not None and near_vertical(start.alpha)
+        if walk is not None and not to_sqp:  # a run of height steps in one kernel call
+            done, walked = _walked(whole, shapes, walk, k, start, settings=settings,
+                                   tol=tol, max_outer=max_outer, newton=method == "newton",
+                                   limit=_NEAR if angles_ok else -1.0)
+            if done:
+                k += done
+                out, used, start, last = walked, "compiled", DriverStart(
+                    walked.alpha, walked.last_step), walked
+                continue  # (a step that did not converge: run below, as for any back-end)
+        chain = _chain_at(scene, whole, shapes, k)
+        sqp = _in_angles(chain, start, last, tol, max_outer) if to_sqp else None
         if sqp is None:
             out, used = drive(chain, step_solver, start=start, **kw)
             if not out.converged and angles and near_vertical(out.alpha):
@@ -145,6 +163,7 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
                                 f"(step {k + 1} of {len(path)}{_told(in_angles)}): "
                                 f"{out.reason}")
         start, last = DriverStart(out.alpha, out.last_step), out
+        k += 1
     return out, used, f"followed the load from zero in {len(path)} steps{_told(in_angles)}"
 
 
@@ -178,29 +197,63 @@ def _in_angles(chain, start: DriverStart, last: DriverOutput, tol: float,
     return run_heavy(chain, first, tol, min(max_outer, PATH_ANGLE_STEPS), why=_WHY)
 
 
-def _chains(scene, path: list[float]):
-    """The chains of ``scene`` at the load fractions ``path`` (the scene's ``chains_at``,
-    one pass for a row of sections; else ``chain_at`` step by step)."""
-    at_once = getattr(scene, "chains_at", None)
-    if at_once is not None:
-        try:
-            return at_once(path)
-        except ProblemError:  # a rest shape that closes on itself at some s: raised at
-            pass  # that step, as step by step (where the path gets there)
-    return (scene.chain_at(s) for s in path)
+def _rest_shapes(scene, path: list[float]) -> tuple | None:
+    """The rest shapes (α*, φ*) of ``scene`` at the load fractions ``path`` in one pass,
+    a row per step (a row of sections' ``rest_shapes``), or None: the scene builds its
+    chain at s·θ whole (an actuator scene: a wall profile's rows follow the arc), or a
+    rest shape closes on itself at some s (raised by ``chain_at`` at that step, where
+    the path gets there)."""
+    at_once = getattr(scene, "rest_shapes", None)
+    if at_once is None:
+        return None
+    try:
+        return at_once(path)
+    except ProblemError:
+        return None
 
 
-def _layout_derived(whole, backend: str, method: str) -> tuple | None:
-    """What the chains of the path share with the scene's ``whole`` chain, derived on it
-    first so that each chain at s·θ inherits it (:data:`lcpbench.problems.scenes.
-    LAYOUT_DERIVED`: the load, the layout): the solve kernel's arrays that do not
-    depend on the rest shape (``kernel_args``' ``const``), where the kernel takes the
-    chain, else None."""
-    load_parameter(whole)
-    if not (applies(backend, method, whole) and not large_n.applies(whole)):
+def _chain_at(scene, whole, shapes: tuple | None, k: int):
+    """The chain of step ``k`` of the path: ``whole`` with the k-th rest shape of
+    ``shapes`` (``whole`` itself at s = 1), else the scene's ``chain_at``."""
+    if shapes is None:
+        return scene.chain_at(fractions(scene)[k])
+    alpha, joint = shapes
+    return whole if k == len(alpha) - 1 else whole.with_rest_shape(alpha[k], joint[k])
+
+
+def _walk_args(whole, backend: str, method: str, shapes: tuple | None) -> tuple | None:
+    """The solve kernel's arguments for :func:`lcpbench.model.path_kernel.walk_heights`
+    (the rest shapes a row per step, the rest the scene's chain's), where the solve kernel
+    runs each step of the path as :func:`lcpbench.model.compiled.drive` would: the
+    default back-end, the globalised or Newton scheme, a chain of its layout, neither
+    large nor loaded enough for SQP steps (:func:`lcpbench.model.compiled.heavy`); else
+    None (each step by ``drive``)."""
+    if shapes is None or not (applies(backend, method, whole) and not large_n.applies(whole)
+                              and not heavy(whole)):
         return None
     args = kernel_args(whole)
-    return args[2], args[3], args[7]  # left links, right links, nodal load
+    return (shapes[0], *args[1:5], shapes[1], *args[6:])
+
+
+def _walked(whole, shapes: tuple, args: tuple, begin: int, start: DriverStart | None, *,
+            settings, tol: float, max_outer: int, newton: bool,
+            limit: float) -> tuple[int, DriverOutput | None]:
+    """(steps, output): the run of height steps from step ``begin`` in one kernel call
+    (:func:`lcpbench.model.path_kernel.walk_heights`), from ``start``, and the
+    DriverOutput of its last step (:func:`lcpbench.model.kernel_call.kernel_output`, as
+    the solve kernel's answer of that step by ``drive``); (0, None) where the first step
+    did not converge."""
+    n = whole.free_nodes.size
+    max_iter, request, name = kernel_settings(settings, n)
+    t0 = time.perf_counter()
+    done, got = _kernel().walk_heights(*args, float(tol), int(max_outer), int(begin),
+                                       *warm_args(start, n), int(max_iter), float(request),
+                                       bool(newton), float(limit))
+    if not done:
+        return 0, None
+    chain = _chain_at(None, whole, shapes, begin + done - 1)
+    return done, kernel_output(chain, *got, elapsed=(time.perf_counter() - t0) / done,
+                               settings=name, max_outer=max_outer, tol=tol)
 
 
 def _told(in_angles: int) -> str:
