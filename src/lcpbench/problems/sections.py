@@ -218,7 +218,8 @@ class SectionedScene(FrictionOptions):
             links = check_number("links", links, low=MIN_LINKS, high=MAX_LINKS, integer=True)
         put(self, "links", int(links))
         self.section_links()  # boundaries on nodes, or ProblemError
-        self.rest_alpha()  # a chord, or ProblemError
+        self.__dict__["_rest"] = self.rest_shapes([1.0])  # a chord, or ProblemError (kept
+        # for the chain)
         self._check_friction_options()
 
     # -- what the user reads --------------------------------------------------
@@ -302,13 +303,13 @@ class SectionedScene(FrictionOptions):
         cx = a * _add_reduce(np.cos(alpha), axis=1)
         cy = a * _add_reduce(np.sin(alpha), axis=1)
         chord = np.hypot(cx, cy)
-        if not np.all(chord > 1e-6 * total):
+        if not (chord > 1e-6 * total).all():
             raise ProblemError(f"sections: the rest shape closes on itself (its ends are "
                                f"{chord[~(chord > 1e-6 * total)][0]:.3g} mm apart), so it "
                                "cannot be pinned at both ends; change the bend angles")
         tilt = np.array([math.atan2(y, x) for y, x in zip(cy, cx, strict=True)])  # (libm's)
         alpha -= np.where(np.abs(tilt) > LEVEL_TOL, tilt, 0.0)[:, None]
-        per_link = np.repeat(th / counts, counts, axis=1)  # θ_k/n_k per link
+        per_link = (th / counts).repeat(counts, axis=1)  # θ_k/n_k per link
         return alpha, -(0.5 * (per_link[:, :-1] + per_link[:, 1:]))
 
     # -- the model's view -------------------------------------------------------
@@ -324,10 +325,10 @@ class SectionedScene(FrictionOptions):
         return cached
 
     def __getstate__(self) -> dict:
-        """Pickled without the kept Chain, section links and link middles (rebuilt on
-        demand)."""
+        """Pickled without the kept Chain, section links, link middles and rest shape
+        (rebuilt on demand)."""
         return {k: v for k, v in self.__dict__.items()
-                if k not in ("_chain", "_section_links", "_middles")}
+                if k not in ("_chain", "_section_links", "_middles", "_rest")}
 
     def chain_at(self, fraction: float) -> Chain:
         """The chain of the row with every bend angle θ_k scaled to s·θ_k (``fraction`` s):
@@ -369,7 +370,7 @@ class SectionedScene(FrictionOptions):
         stiffness = np.where(same, left / a, 2 * left * right / (a * (left + right)))
         interior = np.arange(1, n)
         can = reachable(interior * a, total, self.height, "pinned-pinned")
-        (rest_alpha,), (rest_joint,) = self.rest_shapes([1.0])
+        (rest_alpha,), (rest_joint,) = self.__dict__.get("_rest") or self.rest_shapes([1.0])
         return Chain(
             links=n,
             link_length=a,
