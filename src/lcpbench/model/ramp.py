@@ -36,9 +36,15 @@ from 34 active-set changes (1.6–1.8 ms) to none (0.55 ms). The SQP converges t
 10⁻⁹ rad whatever its first active set, so the answer is the same to round-off
 (345 rows of sections, benchmarks/cold_sqp_states.py's and the mixed batch's).
 
-The chains of the path are built in one pass (the scene's ``chains_at``: the rest
-shapes of every s at once, the other arrays and what the kernels derive from the
-layout shared with the scene's chain), and one step solver serves every step.
+The rest shapes of a row of sections at every s come in one pass (the scene's
+``rest_shapes``; nothing else of its chain depends on s). Where the solve kernel takes
+the chain (the built-in back-end, the globalised or Newton scheme, the kernel's layout,
+neither large nor heavy), a run of height steps is one kernel call
+(:func:`lcpbench.model.path_kernel.walk_heights`: the solve kernel step after step, each
+warm-started from the last answer as :func:`lcpbench.model.compiled.drive` would), up to
+an answer with a link near the vertical or a step that does not converge; the loop below
+runs those steps, as it runs every step of another back-end, one :func:`drive` (or SQP)
+a step, the chain at s·θ built only there. One step solver serves every step.
 """
 
 from __future__ import annotations
