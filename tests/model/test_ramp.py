@@ -132,3 +132,75 @@ def test_near_vertical_is_measured_from_the_vertical():
     assert not near_vertical([0.0, limit - 1e-3, -limit + 1e-3])
     assert near_vertical([0.0, limit + 1e-3])
     assert near_vertical([np.pi - limit - 1e-3])  # past it, folded back
+
+
+def test_the_first_sqp_of_the_path_starts_from_the_height_steps_walls_in_contact(
+        monkeypatch):
+    # a row of two sections (the mixed batch's kind, results/mixed-batch.md) whose path
+    # turns from height steps to SQP steps near the vertical: the first SQP is handed the
+    # height answer's walls in contact (lambda unknown: 0), and the path's answer is a
+    # stable KKT point by the oracle
+    scene = SectionedScene(sections=[(156.0, 15.0), (-154.5, 15.0)], height=2.27, links=40)
+    handed = []
+    real = ramp.run_heavy
+
+    def spy(chain, start, tol, max_outer, why=""):
+        handed.append(start.multipliers)
+        return real(chain, start, tol, max_outer, why=why)
+
+    monkeypatch.setattr(ramp, "run_heavy", spy)
+    res = lcpbench.solve(scene)
+    assert res.converged and "in the link angles" in res.retried("ramped")
+    lam, up, lo = handed[0]
+    assert lam == 0.0 and 1 <= np.count_nonzero(up) + np.count_nonzero(lo) < up.size
+    _assert_stable_kkt_point(scene, res)
+    # A route comparison, kept because the oracle checks the answer to the driver's
+    # tolerance only: the SQP converges to 1e-9 rad whatever its first active set, so
+    # the answer is the one of a first QP built from an empty set to round-off.
+    monkeypatch.setattr(ramp, "_multipliers", lambda out, tol, force_scale: None)
+    empty = lcpbench.solve(scene)
+    assert empty.total_force == pytest.approx(res.total_force, rel=1e-9)
+
+
+def test_the_chains_of_a_path_are_the_rows_built_at_the_scaled_bend_angles():
+    # property: chains_at (one pass for the whole path) gives, at each fraction s, the
+    # chain of the row built with s·theta
+    row = SectionedScene(sections=[(-80, 30.0), (154, 30.0), (81, 30.0)])
+    path = [0.25, 0.5, 1.0]
+    for s, got in zip(path, row.chains_at(path), strict=True):
+        built = SectionedScene(sections=[(s * -80, 30.0), (s * 154, 30.0),
+                                         (s * 81, 30.0)]).chain()
+        np.testing.assert_allclose(got.rest_alpha, built.rest_alpha, rtol=0, atol=1e-15)
+        np.testing.assert_allclose(got.rest_joint, built.rest_joint, rtol=0, atol=1e-15)
+    assert row.chains_at(path)[-1] is row.chain()
+
+
+@pytest.mark.parametrize("scene", [
+    # in a channel, the path all in height steps (one kernel call)
+    SectionedScene(sections=[(137.0, 15.0), (125.0, 15.0)], height=3.17, links=40,
+                   channel=True),
+    # one wall, height steps then SQP steps near the vertical
+    SectionedScene(sections=[(156.0, 15.0), (-154.5, 15.0)], height=2.27, links=40),
+])
+def test_the_height_steps_of_the_path_run_in_one_kernel_call(scene, monkeypatch):
+    walked = []
+    real = ramp._walked
+
+    def spy(*args, **kw):
+        got = real(*args, **kw)
+        walked.append(got[0])
+        return got
+
+    monkeypatch.setattr(ramp, "_walked", spy)
+    res = lcpbench.solve(scene)
+    assert res.converged and "followed the load from zero" in res.retried("ramped")
+    assert walked and walked[0] >= 10  # the steps far from the vertical, in one call
+    _assert_stable_kkt_point(scene, res)
+    # A route comparison, kept because the oracle checks the answer to the driver's
+    # tolerance only: the walk is the same solve kernel step after step, so the path
+    # step by step (lcpbench.model.compiled.drive each step) gives its answer to
+    # round-off.
+    monkeypatch.setattr(ramp, "_walk_args", lambda *a: None)
+    one_by_one = lcpbench.solve(scene)
+    assert one_by_one.total_force == pytest.approx(res.total_force, rel=1e-12)
+    np.testing.assert_allclose(one_by_one.alpha, res.alpha, rtol=0, atol=1e-12)

@@ -273,3 +273,20 @@ def test_a_user_slope_that_raises_is_one_error_from_solve():
     scene = ActuatorScene(theta=150, wall_profile=profile, links=20)  # h itself is fine
     with pytest.raises(ProblemError, match="wall_profile 'bump': the slope function raised"):
         lcpbench.solve(scene)
+
+
+def test_extremes_are_the_walls_lowest_and_highest_point_on_the_grid_kept_per_range():
+    # theory: h = 3 - 0.5 sin(pi x / 30) on [0, 30] is lowest (2.5 mm) at x = 15, a point
+    # of the 2001-point grid, and highest (3 mm) at the ends
+    calls = []
+
+    def h(x):
+        calls.append(1)
+        return 3.0 - 0.5 * np.sin(np.pi * np.asarray(x, float) / 30.0)
+
+    p = WallProfile.from_function(h)
+    low, high = p.extremes(0.0, 30.0)
+    assert low == pytest.approx(2.5, abs=1e-15) and high == pytest.approx(3.0, abs=1e-15)
+    seen = len(calls)
+    assert p.extremes(0.0, 30.0) == (low, high) and len(calls) == seen  # kept
+    assert p.extremes(0.0, 15.0)[1] == pytest.approx(3.0) and len(calls) > seen  # per range

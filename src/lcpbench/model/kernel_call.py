@@ -138,9 +138,8 @@ def call_profile_kernel(chain: Chain, *, tol: float, max_outer: int,
     ``start`` gives the starting shape and, from its last step's net reactions, the
     lagged reactions."""
     k = _PROFILE[0] if _PROFILE else _load_profile_kernel()
-    s = get_settings(settings)
     n = chain.free_nodes.size
-    max_iter = s.max_iter if s.max_iter else 20 * n + 50
+    max_iter, request, name = kernel_settings(settings, n)
     start_alpha, mu_up, mu_lo = _NO_START, np.zeros(n), np.zeros(n)
     if start is not None:
         start_alpha = np.ascontiguousarray(start.alpha, dtype=float)
@@ -154,8 +153,8 @@ def call_profile_kernel(chain: Chain, *, tol: float, max_outer: int,
     base = kernel_args(chain)
     t0 = time.perf_counter()
     got = k.solve_profile_chain(*base[:9], *profile_args(chain), float(tol), int(max_outer),
-                                start_alpha, mu_up, mu_lo, int(max_iter), float(requested(s)))
-    return got, time.perf_counter() - t0, s.name
+                                start_alpha, mu_up, mu_lo, int(max_iter), request)
+    return got, time.perf_counter() - t0, name
 
 
 _PROFILE: list = []  # the profile kernel's module, once loaded
@@ -193,7 +192,7 @@ def cold_start(n: int) -> tuple:
     return np.zeros(0), np.zeros(n), np.zeros(n, bool), np.zeros(n, bool), 0
 
 
-def _warm(start: DriverStart | None, n: int):
+def warm_args(start: DriverStart | None, n: int):
     """(start α, warm heights, upper mask, lower mask, flags) for the kernel."""
     if start is None:
         return cold_start(n)
@@ -273,17 +272,23 @@ def call_kernel(chain: Chain, *, tol: float, max_outer: int, start: DriverStart 
     """One call of :func:`compiled_kernel.solve_chain` on the chain: (its outputs, its
     wall time in s, the name of the back-end's settings)."""
     k = _KERNEL[0] if _KERNEL else _load_kernel()
-    s = get_settings(settings)
     n = chain.free_nodes.size
-    request = requested(s)
-    max_iter = s.max_iter if s.max_iter else 20 * n + 50
-    s_alpha, w_u, w_up, w_lo, flags = _warm(start, n)
+    max_iter, request, name = kernel_settings(settings, n)
+    s_alpha, w_u, w_up, w_lo, flags = warm_args(start, n)
     if args is None:
         args = kernel_args(chain)
     t0 = time.perf_counter()
     got = k.solve_chain(*args, float(tol), int(max_outer), s_alpha, w_u, w_up, w_lo, flags,
                         int(max_iter), float(request), bool(newton))
-    return got, time.perf_counter() - t0, s.name
+    return got, time.perf_counter() - t0, name
+
+
+def kernel_settings(settings, n: int) -> tuple[int, float, str]:
+    """(max_iter, request, name): the solve kernel's arguments from the back-end's
+    ``settings`` for ``n`` free nodes (the active set's iteration limit, 20 n + 50 where
+    the settings give none; the step's accuracy request), and the settings' name."""
+    s = get_settings(settings)
+    return (s.max_iter if s.max_iter else 20 * n + 50), float(requested(s)), s.name
 
 
 def kernel_output(chain: Chain, code: int, alpha, r_up, r_lo, u, sigma, rec, count: int, res,

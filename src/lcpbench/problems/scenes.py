@@ -418,10 +418,9 @@ class ActuatorScene(FrictionOptions):
         else:  # rows for the nodes that can reach the wall's lowest point; h at the arc's x
             x = np.concatenate(([0.0], np.cumsum(a * np.cos(rest_alpha))))[interior]
             # (in a channel, the same rows for both walls: the LCP form pairs them)
-            grid = np.linspace(*self.x_reach, 2001)
-            near = float(np.min(prof_up(grid)))
+            near = prof_up.extremes(*self.x_reach)[0]  # (on a grid, kept with the profile)
             if prof_lo is not None:
-                near = min(near, float(np.min(-prof_lo(grid))))
+                near = min(near, -prof_lo.extremes(*self.x_reach)[1])
             can = reachable(interior * a, self.length, near, "pinned-pinned")
             upper = np.where(can, prof_up(x), np.inf)
             lower = np.where(can, prof_lo(x), -np.inf) if prof_lo is not None else \

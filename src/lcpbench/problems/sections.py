@@ -218,7 +218,8 @@ class SectionedScene(FrictionOptions):
             links = check_number("links", links, low=MIN_LINKS, high=MAX_LINKS, integer=True)
         put(self, "links", int(links))
         self.section_links()  # boundaries on nodes, or ProblemError
-        self.rest_alpha()  # a chord, or ProblemError
+        self.__dict__["_rest"] = self.rest_shapes([1.0])  # a chord, or ProblemError (kept
+        # for the chain)
         self._check_friction_options()
 
     # -- what the user reads --------------------------------------------------
@@ -279,25 +280,37 @@ class SectionedScene(FrictionOptions):
     def rest_alpha(self, fraction: float = 1.0) -> np.ndarray:
         """Link angles α* of the unconstrained row, chord levelled (rad), or ProblemError;
         with every bend angle θ_k scaled to s·θ_k (``fraction`` s) where given."""
-        th = [math.radians(fraction * s.theta) for s in self.sections]
+        return self.rest_shapes([fraction])[0][0]
+
+    def rest_shapes(self, fractions) -> tuple[np.ndarray, np.ndarray]:
+        """(α*, φ*), one row per load fraction s of ``fractions``: the rest shape of the row
+        with every bend angle θ_k scaled to s·θ_k, in one pass for a whole loading path
+        (:meth:`chains_at`). α*: the link angles, chord levelled (rad), ProblemError where
+        the rest shape closes on itself; φ*: the rest joint angles, minus the mean of the
+        two links' turns θ_k/n_k."""
+        frac = np.asarray(fractions, dtype=float)[:, None]
+        th = np.radians(frac * np.array([s.theta for s in self.sections]))  # (path, k)
         counts = self.section_links()
-        turn = th[0] if len(th) == 1 else math.fsum(th)  # θ > 0 turns clockwise
-        before, parts = 0.0, []
-        for t, m, mid in zip(th, counts, self._link_middles(), strict=True):
-            parts.append(turn / 2 - before - mid * t / m)
-            before += t
-        alpha = np.concatenate(parts)
+        turn = th[:, 0] if th.shape[1] == 1 else np.array([math.fsum(r) for r in th])
+        before, parts = np.zeros(th.shape[0]), []  # θ > 0 turns clockwise
+        for k, (m, mid) in enumerate(zip(counts, self._link_middles(), strict=True)):
+            parts.append(turn[:, None] / 2 - before[:, None] - mid * th[:, k:k + 1] / m)
+            before = before + th[:, k]
+        alpha = np.concatenate(parts, axis=1)
         n, total = self._size()
         a = total / n
         # (np.add.reduce: np.sum without its Python wrapper, the same sum)
-        cx, cy = a * _add_reduce(np.cos(alpha)), a * _add_reduce(np.sin(alpha))
-        chord = math.hypot(cx, cy)
-        if not chord > 1e-6 * total:
+        cx = a * _add_reduce(np.cos(alpha), axis=1)
+        cy = a * _add_reduce(np.sin(alpha), axis=1)
+        chord = np.hypot(cx, cy)
+        if not (chord > 1e-6 * total).all():
             raise ProblemError(f"sections: the rest shape closes on itself (its ends are "
-                               f"{chord:.3g} mm apart), so it cannot be pinned at both ends; "
-                               "change the bend angles")
-        tilt = math.atan2(cy, cx)
-        return alpha - tilt if abs(tilt) > LEVEL_TOL else alpha
+                               f"{chord[~(chord > 1e-6 * total)][0]:.3g} mm apart), so it "
+                               "cannot be pinned at both ends; change the bend angles")
+        tilt = np.array([math.atan2(y, x) for y, x in zip(cy, cx, strict=True)])  # (libm's)
+        alpha -= np.where(np.abs(tilt) > LEVEL_TOL, tilt, 0.0)[:, None]
+        per_link = (th / counts).repeat(counts, axis=1)  # θ_k/n_k per link
+        return alpha, -(0.5 * (per_link[:, :-1] + per_link[:, 1:]))
 
     # -- the model's view -------------------------------------------------------
     def chain(self) -> Chain:
@@ -312,20 +325,27 @@ class SectionedScene(FrictionOptions):
         return cached
 
     def __getstate__(self) -> dict:
-        """Pickled without the kept Chain, section links and link middles (rebuilt on
-        demand)."""
+        """Pickled without the kept Chain, section links, link middles and rest shape
+        (rebuilt on demand)."""
         return {k: v for k, v in self.__dict__.items()
-                if k not in ("_chain", "_section_links", "_middles")}
+                if k not in ("_chain", "_section_links", "_middles", "_rest")}
 
     def chain_at(self, fraction: float) -> Chain:
         """The chain of the row with every bend angle θ_k scaled to s·θ_k (``fraction`` s):
         a step of the loading path (:mod:`lcpbench.model.ramp`). Only the rest shape
         (α*, φ*) depends on θ: the other arrays are the whole row's (:meth:`chain`,
         read only), and s = 1 gives that chain itself."""
-        whole = self.chain()
         if fraction == 1.0:
-            return whole
-        return whole.with_rest_shape(self.rest_alpha(fraction), self._rest_joint(fraction))
+            return self.chain()
+        return self.chains_at([fraction])[0]
+
+    def chains_at(self, fractions) -> list[Chain]:
+        """:meth:`chain_at` of each load fraction of ``fractions``, their rest shapes in one
+        pass (:meth:`rest_shapes`)."""
+        whole = self.chain()
+        alpha, joint = self.rest_shapes(fractions)
+        return [whole if s == 1.0 else whole.with_rest_shape(alpha[k], joint[k])
+                for k, s in enumerate(fractions)]
 
     def _link_middles(self) -> list[np.ndarray]:
         """Per section, its links' middles in links from its start (0.5, 1.5, …), kept
@@ -337,15 +357,6 @@ class SectionedScene(FrictionOptions):
             for mid in kept:
                 mid.setflags(write=False)
         return kept
-
-    def _rest_joint(self, fraction: float = 1.0) -> np.ndarray:
-        """Rest joint angles φ* (rad), minus the mean of the two links' turns θ_k/n_k, with
-        every θ_k scaled to s·θ_k (``fraction`` s)."""
-        counts = self.section_links()
-        turn = np.repeat([math.radians(fraction * s.theta) / m
-                          for s, m in zip(self.sections, counts, strict=True)],
-                         counts)  # θ_k/n_k per link
-        return -(0.5 * (turn[:-1] + turn[1:]))
 
     def _build_chain(self) -> Chain:
         n, total = self._size()
@@ -359,13 +370,14 @@ class SectionedScene(FrictionOptions):
         stiffness = np.where(same, left / a, 2 * left * right / (a * (left + right)))
         interior = np.arange(1, n)
         can = reachable(interior * a, total, self.height, "pinned-pinned")
+        (rest_alpha,), (rest_joint,) = self.__dict__.get("_rest") or self.rest_shapes([1.0])
         return Chain(
             links=n,
             link_length=a,
-            rest_alpha=self.rest_alpha(),
+            rest_alpha=rest_alpha,
             joint_stiffness=stiffness,
             joint_links=np.column_stack([np.arange(n - 1), np.arange(1, n)]),
-            rest_joint=self._rest_joint(),
+            rest_joint=rest_joint,
             link_load=(-w if self.gravity == "-y" else w) * a,  # μ = w a (eq. 5)
             free_nodes=interior,
             upper=np.where(can, self.height, np.inf),

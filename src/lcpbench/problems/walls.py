@@ -84,6 +84,10 @@ def _richardson_slope(height: Callable, x: np.ndarray, d: float) -> np.ndarray:
     return (4.0 * np.asarray(narrow, float) - np.asarray(wide, float)) / 3.0
 
 
+#: the points of :meth:`WallProfile.extremes` (a scene's nearest reach of its wall)
+REACH_GRID = 2001
+
+
 class WallProfile:
     """A wall y = h(x) (mm): from a function or an (x, y) table.
 
@@ -102,6 +106,7 @@ class WallProfile:
         self._pieces = pieces  # a table's own pieces (exact); else tabulated on demand
         self._tabulated: dict = {}
         self._passed: set = set()  # (x_low, x_high, side) that check_for has passed
+        self._extremes: dict = {}  # (x_low, x_high) -> (min h, max h) on REACH_GRID points
 
     # -- construction ---------------------------------------------------------
     @classmethod
@@ -248,6 +253,16 @@ class WallProfile:
         return self._tabulated[key]
 
     # -- evaluation -----------------------------------------------------------
+    def extremes(self, x_low: float, x_high: float) -> tuple[float, float]:
+        """(min h, max h) (mm) over :data:`REACH_GRID` equally spaced x in
+        [``x_low``, ``x_high``], kept per range (the scenes of a batch share a profile)."""
+        key = (float(x_low), float(x_high))
+        got = self._extremes.get(key)
+        if got is None:
+            h = self(np.linspace(key[0], key[1], REACH_GRID))
+            got = self._extremes[key] = (float(np.min(h)), float(np.max(h)))
+        return got
+
     def __call__(self, x):
         """h(x) (mm)."""
         return self._h(np.asarray(x, dtype=float))
