@@ -168,7 +168,10 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
             return None, used, (f"the loading path stopped at {s:.3g} of the bend angles "
                                 f"(step {k + 1} of {len(path)}{_told(in_angles)}): "
                                 f"{out.reason}")
-        start, last = DriverStart(out.alpha, out.last_step), out
+        # the SQP's own multipliers start the next SQP's QP (a heavy chain's, in drive)
+        sqp_made = out.closure_multiplier is not None
+        start, last = DriverStart(out.alpha, out.last_step, (
+            out.closure_multiplier, out.forces_upper, out.forces_lower) if sqp_made else None), out
         k += 1
     return out, used, f"followed the load from zero in {len(path)} steps{_told(in_angles)}"
 
