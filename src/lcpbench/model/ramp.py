@@ -136,17 +136,18 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
               max_outer=max_outer, method=method)
     start, used, out, in_angles = None, engine, None, 0
     last = None  # the DriverOutput the start was taken from
-    k = 0
+    k, walked_to = 0, -1  # walked_to: where the last walk stopped (its next step failed)
     while k < len(path):
         s = path[k]
         angles = angles_ok and start is not None
         to_sqp = angles and start is not None and near_vertical(start.alpha)
-        if walk is not None and not to_sqp:  # a run of height steps in one kernel call
+        if walk is not None and not to_sqp and k != walked_to:  # height steps in one call
             done, walked = _walked(whole, shapes, walk, k, start, settings=settings,
                                    tol=tol, max_outer=max_outer, newton=method == "newton",
                                    limit=_NEAR if angles_ok else -1.0)
             if done:
                 k += done
+                walked_to = k  # (that step, from the same start, would fail again)
                 out, used, start, last = walked, "compiled", DriverStart(
                     walked.alpha, walked.last_step), walked
                 continue  # (a step that did not converge: run below, as for any back-end)
