@@ -179,7 +179,12 @@ def test_path_12_state_1_is_polished_onto_its_exact_answer(monkeypatch):
     is 6.8e-6 of the largest force from it in N. The polish keeps that answer (after the
     first flip, by the likely picks: the search's 6 failing nodes put it at the 106th
     pick of the fewest changes, past the 64 sets): it is the oracle's exact solution of
-    its set, every sign holding exactly, within 1e-12 in N and in the move."""
+    its set, every sign holding exactly, within 1e-12 in N and in the move.
+
+    Which of the three pairs Lemke's answer already slides is its round-off's: on one
+    host it slides 36 forward already and sticks 42–43 (two changes). So the test holds
+    what the oracle fixes — the exact set slides 36, 42, 43 forward — and that Lemke's
+    answer differs from it at sticking pairs among those three only."""
     calls = spied(monkeypatch)
     res = lcpbench.solve_path(PATH_12, [{}, {"theta": 150.1888023115021}])
     assert all(r.converged for r in res)
@@ -196,5 +201,9 @@ def test_path_12_state_1_is_polished_onto_its_exact_answer(monkeypatch):
     exact = [k.OFF if p is None else p for p in first.pairs]
     assert list(contact) == [bool(r) for r in first.rows]
     changed = {int(fs.friction_node[c]): exact[c] for c in range(mt) if exact[c] != state[c]}
-    assert changed == {36: k.FORWARD, 42: k.FORWARD, 43: k.FORWARD}
+    slides = {int(fs.friction_node[c]): exact[c] for c in range(mt)
+              if fs.friction_node[c] in (36, 42, 43)}
+    assert slides == {36: k.FORWARD, 42: k.FORWARD, 43: k.FORWARD}
+    assert changed and set(changed) <= set(slides)
+    assert all(v == k.FORWARD for v in changed.values())
     assert all(state[c] == k.STICK for c in range(mt) if fs.friction_node[c] in changed)

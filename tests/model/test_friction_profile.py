@@ -106,11 +106,15 @@ def test_a_flat_profile_reproduces_the_flat_wall(kw, states):
     warm start): two routes may end at two answers that split the same ΣT differently.
     There the test compares what is determinate — the stick pattern, the slips, ΣT, N and
     α (to 1e-5 of the largest N and 1e-7 rad: the run is flat only to the linearisation)
-    — and checks Coulomb's law on each route node by node."""
+    — and checks Coulomb's law on each route node by node. There the steps' round-off
+    moves the answer by up to ~3e-10 rad a step (T shifting along the run), so the outer
+    loop cannot be asked for 1e-11 (on one host it wandered 1e-11–2.5e-10 for 100 steps):
+    the channel runs at tol 3e-10 and compares ΣT to 1e-8 of the largest N."""
     flat = ActuatorScene(**{**dict(theta=150, height=3.0, links=30, friction=MU), **kw})
     prof = replace(flat, height=20.0, wall_profile=WallProfile.flat(3.0))
-    for a, b in zip(lcpbench.solve_path(flat, states, tol=1e-11),
-                    lcpbench.solve_path(prof, states, tol=1e-11), strict=True):
+    tol = 3e-10 if flat.channel else 1e-11
+    for a, b in zip(lcpbench.solve_path(flat, states, tol=tol),
+                    lcpbench.solve_path(prof, states, tol=tol), strict=True):
         assert a.converged and b.converged, (a.reason, b.reason)
         scale = np.max(a.forces)
         if flat.channel:
@@ -121,7 +125,7 @@ def test_a_flat_profile_reproduces_the_flat_wall(kw, states):
                            float(np.sum(r.forces + r.forces_lower)), 1e-9 * flat.length, 1e-9)
             np.testing.assert_array_equal(b.stick, a.stick)
             np.testing.assert_allclose(b.slip, a.slip, rtol=0, atol=1e-10 * flat.length)
-            assert abs(np.sum(b.tangential_forces) - np.sum(a.tangential_forces)) <= 1e-10 * scale
+            assert abs(np.sum(b.tangential_forces) - np.sum(a.tangential_forces)) <= 1e-8 * scale
             np.testing.assert_allclose(b.forces, a.forces, rtol=0, atol=1e-5 * scale)
             np.testing.assert_allclose(b.forces_lower, a.forces_lower, rtol=0,
                                        atol=1e-5 * scale)
