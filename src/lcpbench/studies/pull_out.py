@@ -9,9 +9,10 @@ force P* is the root of g(P) = C(P) − P: at P* every contact node slides (gros
 :mod:`lcpbench.model.friction_path`), stepping towards P* by the secant of g through the
 states held so far, from below, each state's outer loop started on the line through
 the last two held states (:func:`predicted`): a step past P* (gross slip: no
-equilibrium) is not kept, and the next one goes at most half way to it; a state that
-fails for another reason (a step Lemke cannot solve) says nothing of P*, and the next
-step goes half as far. The nodes that pass from stick to slip between two held
+equilibrium) is not kept, and the next one goes at most half way to it (with the start
+held only, the pull 0.999 of the way to its capacity is taken as such a gross slip
+without being solved: :data:`ASSUME_SLIP`); a state that fails for another reason (a
+step Lemke cannot solve) says nothing of P*, and the next step goes half as far. The nodes that pass from stick to slip between two held
 states are its events. P* is the secant's root once it is within ``rtol`` of the
 last pull held (g(P) ≈ 0 there: the state is at gross slip), or of the root before
 it while within :data:`SECANT_REACH` of the last pull held (within ~1e-7 of P* Lemke
