@@ -84,3 +84,48 @@ def test_a_cycling_outer_loop_is_not_a_gross_slip():
     po = lcpbench.pull_out(scene)
     assert po.converged, po.reason
     assert po.force == pytest.approx(0.5 * po.normal_force_total, rel=1e-5)
+
+
+@pytest.mark.parametrize("slope", [-1.0 / 12.0, 1.0 / 6.0], ids=["falls", "rises"])
+def test_the_assumed_slip_against_a_capacity_of_known_root(monkeypatch, slope):
+    """pull_out's stepping on a model of known root: a state at pull P holds iff
+    P <= P*, where the capacity C(P) = 1 + slope · P (N) meets P: P* = 1 / (1 − slope)
+    (12/13 N where C falls, 1.2 N where it rises). Where C falls, the pull 0.999 C(0) is
+    past P* and ASSUME_SLIP takes it as a gross slip unsolved: no state is solved there,
+    one solve fewer than without it. Where C rises, P* lies beyond 0.999 C(0) and the
+    secant's root passes the assumed slip, which is then dropped: P* is still found.
+    Either way P* to rtol."""
+    import types
+
+    import lcpbench.studies.pull_out as study
+
+    star = 1.0 / (1.0 - slope)
+    solved = []
+
+    def advance(scene, state, current, *args, **kw):
+        P = scene.pull
+        solved.append(P)
+        held = P <= star
+        z = np.zeros(3)
+        res = types.SimpleNamespace(
+            converged=held, reason="held" if held else "gross slip: (a model)",
+            stick=np.zeros(3, bool), x=z, y=z, forces=z, forces_lower=None,
+            tangential_forces=z, total_force=0.0, pull=P)
+        return res, current
+
+    monkeypatch.setattr(study, "advance", advance)
+    monkeypatch.setattr(study, "capacity", lambda res: 1.0 + slope * res.pull)
+    counts = {}
+    for assume in (True, False):
+        monkeypatch.setattr(study, "ASSUME_SLIP", assume)
+        solved.clear()
+        po = lcpbench.pull_out(SCENE)
+        assert po.converged, po.reason
+        assert abs(po.force - star) <= 1e-6 * star
+        counts[assume] = (po.solves, list(solved))
+    if slope < 0:
+        assert all(P < star for P in counts[True][1])  # no gross slip solved
+        assert any(P > star for P in counts[False][1])
+        assert counts[True][0] == counts[False][0] - 1
+    else:
+        assert any(P > 0.999 for P in counts[True][1])  # past the assumed slip

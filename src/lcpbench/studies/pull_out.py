@@ -9,9 +9,10 @@ force P* is the root of g(P) = C(P) − P: at P* every contact node slides (gros
 :mod:`lcpbench.model.friction_path`), stepping towards P* by the secant of g through the
 states held so far, from below, each state's outer loop started on the line through
 the last two held states (:func:`predicted`): a step past P* (gross slip: no
-equilibrium) is not kept, and the next one goes at most half way to it; a state that
-fails for another reason (a step Lemke cannot solve) says nothing of P*, and the next
-step goes half as far. The nodes that pass from stick to slip between two held
+equilibrium) is not kept, and the next one goes at most half way to it (with the start
+held only, the pull 0.999 of the way to its capacity is taken as such a gross slip
+without being solved: :data:`ASSUME_SLIP`); a state that fails for another reason (a
+step Lemke cannot solve) says nothing of P*, and the next step goes half as far. The nodes that pass from stick to slip between two held
 states are its events. P* is the secant's root once it is within ``rtol`` of the
 last pull held (g(P) ≈ 0 there: the state is at gross slip), or of the root before
 it while within :data:`SECANT_REACH` of the last pull held (within ~1e-7 of P* Lemke
@@ -40,6 +41,13 @@ APPROACH = 0.999
 #: P* from the last pull held (the error of a secant root is second order in the
 #: distance it reaches; an extrapolation from far below P* is never called converged)
 SECANT_REACH = 1e-5
+#: with the start held only, the secant's root is the start's capacity C(P₀) (slope −1:
+#: C unchanged); C falls as the pull straightens the chain, so P* < C(P₀) and the state
+#: APPROACH of the way there is a gross slip (flat wall, channel and stenosis of
+#: benchmarks/friction_speed.py: P* is 0.92–0.94 C(P₀)). It is taken as one without
+#: being solved (the steps go at most half way to it, as to a gross slip seen) until a
+#: secant root passes it (a capacity that does not fall); never as a bracket of P*
+ASSUME_SLIP = True
 
 
 @dataclass
@@ -137,6 +145,7 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
     path, held, events, solves, ends = [], [], [], 0, []
     lcp = StepLemke()  # one for the path: the covering that solves a step carries over
     P, fail, trouble, before = float(scene.pull), None, "", np.inf
+    assumed, slip = not ASSUME_SLIP, None  # the gross slip taken, not solved (ASSUME_SLIP)
     while solves < max_solves:
         res, end = advance(with_pull(scene, P), {"pull": P}, predicted(ends, P, current),
                            x_prev, tol=tol, max_outer=max_outer, lcp=lcp, y_prev=y_prev)
@@ -166,8 +175,12 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
                            "bracketed within rtol: the last pull held and a gross slip")
         before = root
         step = APPROACH * (root - last)
-        if fail is not None:
-            step = min(step, 0.5 * (fail - last))
+        if slip is not None and root > slip:  # the capacity does not fall: no such slip
+            slip = None
+        if len(held) == 1 and not assumed and step > 0.0:
+            assumed, slip = True, last + step
+        if fail is not None or slip is not None:
+            step = min(step, 0.5 * ((slip if fail is None else fail) - last))
         if not res.converged and P != fail:  # go half as far as the step that failed
             step = min(step, 0.5 * (P - last))
         P = last + step
