@@ -150,3 +150,84 @@ def test_the_edge_search_finds_the_exact_answer_on_a_neighbouring_index_set(monk
     ex, dist, _ = ef.nearest_exact(step, v)
     assert ef.confirmed(ex, dist) and ex.pairs == [ef.FORWARD, ef.FORWARD]
     assert dist[1] == pytest.approx(1e-7 / (1.0), rel=1e-6)
+
+
+def _last_lemke_step(scene, states):
+    """The last contact step of a path solved by Lemke, and Lemke's answer of it."""
+    import lcpbench
+    from lcpbench.model.friction_solvers import step_runner
+
+    steps, run = [], step_runner("lemke")
+
+    def keep(fs):
+        sol = run(fs)
+        steps.append((fs, sol))
+        return sol
+
+    keep.takes_step, keep.newton = True, True
+    assert all(r.converged for r in lcpbench.solve_path(scene, states, lcp=keep))
+    return steps[-1]
+
+
+def test_t_per_node_along_a_sticking_run_on_level_links_is_indeterminate():
+    """Theory: two nodes pressed on a rigid wall and sticking are held in x and y; when
+    the link between them is level, a horizontal force moved from one to the other
+    changes that link's axial force only (no moment arm, no move): T per node along
+    such a run is statically indeterminate, and only its sum is an answer. Across a
+    stretch of chain off the wall it is not: there the links' slopes carry the axial
+    force into the heights, and the exact step fixes each run's sum.
+
+    A pulled chain (θ = 170°, h = 2.5 mm, N = 30, pin and slider, μ = 0.3) sticks on
+    the wall at two runs, nodes 12–13 and 17–18, each on a link level to round-off,
+    the stretch between sloped ~1e-5. The exact solution nearest Lemke's answer, and the
+    one nearest the same answer with T moved between the nodes of either run (half the
+    room their cones leave), are exact solutions of the step on one index set (every
+    condition checked in fractions), the second taking the moved split exactly, with N
+    and the move the same Fractions and each run's ΣT the same: two different splits,
+    both exact. Moved from run to run, the exact solution nearest it keeps each run's
+    ΣT: that split is not an answer (the step's near-null direction of state 41.2 of
+    benchmarks/friction_agreement.py, docs/friction.md)."""
+    from lcpbench import ActuatorScene
+
+    scene = ActuatorScene(theta=170, height=2.5, links=30, left_end="pinned",
+                          right_end="slider", friction=0.3)
+    fs, sol = _last_lemke_step(scene, [{}, {"pull": 0.05}])
+    step = ef.chain_step(fs)
+    v = ef.answer_values(fs, step, sol.z)
+    ex, dist, _ = ef.nearest_exact(step, v)
+    assert ef.confirmed(ex, dist) and not ex.ray
+    pair = {int(fs.friction_node[c]): c for c, p in enumerate(ex.pairs) if p == ef.STICK}
+    runs = ((12, 13), (17, 18))
+    assert sorted(pair) == [12, 13, 17, 18]
+    assert all(fs.parts["tan"][i] == pytest.approx(0, abs=ef.LEVEL) for i, _ in runs)
+    assert ex.free == len(runs)  # one free split per run, nothing else
+    T = [step.tangential[pair[i]] for i in sorted(pair)]
+
+    def limit(c):
+        return sum(ex.x[step.normal[r]] * step.mu[r] for r in range(len(ex.rows))
+                   if step.pair[r] == c)
+
+    def moved(i, j):  # T moved from node j to node i, within both cones
+        ci, cj = pair[i], pair[j]
+        Ti, Tj = step.tangential[ci], step.tangential[cj]
+        d = 0.5 * min(float(limit(ci)) - v[Ti], v[Tj] + float(limit(cj)))
+        assert d > 1e-3 * step.force
+        v2 = v.copy()
+        v2[Ti] += d
+        v2[Tj] -= d
+        return d, ef.solve(step, ex.rows, ex.pairs, v2)
+
+    def run_sums(x):
+        return [x[T[0]] + x[T[1]], x[T[2]] + x[T[3]]]
+
+    for i, j in runs:
+        d, other = moved(i, j)
+        assert other.solution and not other.ray
+        assert all(other.x[k] == ex.x[k] for k in step.normal + step.moves)
+        assert run_sums(other.x) == run_sums(ex.x)
+        shift = float(other.x[step.tangential[pair[i]]] - ex.x[step.tangential[pair[i]]])
+        assert shift == pytest.approx(d, rel=1e-9)  # the exact solution takes the split
+    d, other = moved(12, 18)
+    assert other.solution and run_sums(other.x) == run_sums(ex.x)
+    shift = float(other.x[step.tangential[pair[12]]] - ex.x[step.tangential[pair[12]]])
+    assert abs(shift - d) >= 0.4 * d  # the fit spreads d within each run: not this split
