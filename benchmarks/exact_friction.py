@@ -579,7 +579,10 @@ def classify(step: PrimalStep, va: np.ndarray, vb: np.ndarray, a=None) -> tuple[
     has a null direction that moves the chain; INACCURATE when either is not
     :func:`confirmed`; MULTIPLE when both are and their exact solutions differ by more
     than :data:`NEAR_RTOL` in N or the move; SAME when both are the same exact answer in
-    N and the move (the answers then differ in T only)."""
+    N and the move: each answer is within NEAR_RTOL of it, and they differ by the sum of
+    their two roundings (up to 2·NEAR_RTOL in N), or in T per run where a near-null
+    direction moves T between runs at almost no cost (state 41.2 of
+    friction_agreement.py, docs/friction.md: "State 41.2 taken apart")."""
     ea, da, _ = a if a is not None else nearest_exact(step, va)
     eb, db, _ = nearest_exact(step, vb)
     info = dict(a=(ea, da), b=(eb, db))
