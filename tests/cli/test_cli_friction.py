@@ -50,6 +50,7 @@ def test_solve_friction_gross_slip_is_exit_1(capsys):
     (["--friction", "0.3", "--left-end", "free", "--right-end", "free", "--channel"],
      "cannot both be 'free'"),
     (["--friction", "0.3", "--right-end", "free"], "needs channel=True"),
+    (["--friction", "0.3", "--right-end", "slider", "--links", "auto"], "--links auto"),
     (["--friction", "nan"], "friction must be"),
     (["--friction", "inf"], "friction must be"),
     (["--friction", "0.3", "--left-end", "slider", "--right-end", "slider", "--pull", "nan"],

@@ -71,6 +71,15 @@ def wants_friction(args, scene) -> bool:
         bool(friction_kw(args)) and not hasattr(scene, "frictional"))
 
 
+def refuse_auto_links(args, always: bool = False) -> None:
+    """ProblemError for ``--links auto`` on a frictional scene (``always``: the command's
+    scenes are all frictional; else when a frictional option is given), before the
+    discretisation study would run: it solves the frictionless model."""
+    if getattr(args, "links", None) == "auto" and (always or friction_kw(args)):
+        raise ProblemError("--links auto is not for a frictional scene (its discretisation "
+                           "study solves the frictionless model); give an integer N")
+
+
 def refuse_options(args, default_solver: str) -> None:
     """ProblemError for the options of ``solve`` that the frictional route does not take."""
     taken = [("--sensitivities", getattr(args, "sensitivities", False)),
