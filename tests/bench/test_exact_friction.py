@@ -231,3 +231,29 @@ def test_t_per_node_along_a_sticking_run_on_level_links_is_indeterminate():
     assert other.solution and run_sums(other.x) == run_sums(ex.x)
     shift = float(other.x[step.tangential[pair[12]]] - ex.x[step.tangential[pair[12]]])
     assert abs(shift - d) >= 0.4 * d  # the fit spreads d within each run: not this split
+
+
+def _level_pair(mismatch):
+    """Two nodes joined by a rigid level link (δx2 = δx1), held along x by a unit spring
+    under a unit load (δx1 = 1 + T1 + T2), each pressed (g = −1 + N: N = 1) with μ = 1,
+    ℓ = 30 mm. Both sticking: s1 + δx1 = 0 and s2 + δx2 = 0 are one equation when
+    s2 = s1 (T1 + T2 = −1 − s1, split free); s2 = s1 + ``mismatch`` leaves the second
+    a dependent equation off by ``mismatch`` mm. s1 = −2.13e-14 mm: a slip that is
+    round-off of the positions (state 37.2 of friction_agreement.py has this one)."""
+    s1 = -2.1316282072803006e-14
+    mech = [({1: Q(1), 0: Q(-1)}, Q(0)), ({0: Q(1), 4: Q(-1), 5: Q(-1)}, Q(1))]
+    return ef.PrimalStep(6, mech, [2, 3], [(Q(-1), {2: Q(1)}), (Q(-1), {3: Q(1)})],
+                         [4, 5], [(Q(s1), {0: Q(1)}), (Q(s1 + mismatch), {1: Q(1)})],
+                         [Q(1), Q(1)], [0, 1], [0, 1], 1.0, 30.0, 0.75)
+
+
+def test_a_dependent_slip_met_to_the_positions_round_off_is_consistent():
+    """A dependent slip equation whose terms are themselves round-off (2e-14 mm) and
+    which the data meet to 1.8e-15 mm — 4 % of its terms, far beyond CONSISTENT_RTOL —
+    is consistent: the positions it is differenced from carry ~ε ℓ = 7e-15 mm. Off by
+    1e-11 mm (a real mismatch: one of the two must slide) it is not."""
+    ok = ef.solve(_level_pair(1.8e-15), [True, True], [ef.STICK, ef.STICK])
+    assert ok.inconsistency > 1e-3 and ok.solution and ok.free == 1 and not ok.ray
+    assert ok.x[4] + ok.x[5] == -1 - Q(-2.1316282072803006e-14)
+    off = ef.solve(_level_pair(1e-11), [True, True], [ef.STICK, ef.STICK])
+    assert [kind for kind, _ in off.failed] == ["slip"]
