@@ -575,7 +575,7 @@ def nearest_exact(step: PrimalStep, v: np.ndarray, search: bool = True
 MULTIPLE = "(i) two exact answers"
 INACCURATE = "(ii) not near an exact answer"
 RAY = "(iii) a ray"
-SAME = "(iv) one exact answer, T apart"
+SAME = "(iv) one exact answer, both near it"
 
 
 def confirmed(ex: Exact, dist: tuple) -> bool:
