@@ -118,6 +118,7 @@ def test_readme_cli_examples_run_as_written(tmp_path):
     assert any(ln.startswith("lcpbench solve ") for ln in fast)
     _in_the_readme_shell(tmp_path, fast)
     assert (tmp_path / "shape.png").exists() and (tmp_path / "fit.png").exists()
+    assert (tmp_path / "cycle.png").exists()
 
 
 @pytest.mark.slow
@@ -138,5 +139,5 @@ def test_readme_vision_examples_run_as_written(tmp_path):
 
 def test_every_use_command_is_run_by_a_test():
     names = {a[1] for a in _use_commands()}
-    assert names <= {"solve", "anchor", "solvers", "design", "fit", "vision", *_SLOW,
+    assert names <= {"solve", "anchor", "cycle", "solvers", "design", "fit", "vision", *_SLOW,
                      *_ELSEWHERE}, names

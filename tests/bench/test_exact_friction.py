@@ -150,3 +150,110 @@ def test_the_edge_search_finds_the_exact_answer_on_a_neighbouring_index_set(monk
     ex, dist, _ = ef.nearest_exact(step, v)
     assert ef.confirmed(ex, dist) and ex.pairs == [ef.FORWARD, ef.FORWARD]
     assert dist[1] == pytest.approx(1e-7 / (1.0), rel=1e-6)
+
+
+def _last_lemke_step(scene, states):
+    """The last contact step of a path solved by Lemke, and Lemke's answer of it."""
+    import lcpbench
+    from lcpbench.model.friction_solvers import step_runner
+
+    steps, run = [], step_runner("lemke")
+
+    def keep(fs):
+        sol = run(fs)
+        steps.append((fs, sol))
+        return sol
+
+    keep.takes_step, keep.newton = True, True
+    assert all(r.converged for r in lcpbench.solve_path(scene, states, lcp=keep))
+    return steps[-1]
+
+
+def test_t_per_node_along_a_sticking_run_on_level_links_is_indeterminate():
+    """Theory: two nodes pressed on a rigid wall and sticking are held in x and y; when
+    the link between them is level, a horizontal force moved from one to the other
+    changes that link's axial force only (no moment arm, no move): T per node along
+    such a run is statically indeterminate, and only its sum is an answer. Across a
+    stretch of chain off the wall it is not: there the links' slopes carry the axial
+    force into the heights, and the exact step fixes each run's sum.
+
+    A pulled chain (θ = 170°, h = 2.5 mm, N = 30, pin and slider, μ = 0.3) sticks on
+    the wall at two runs, nodes 12–13 and 17–18, each on a link level to round-off,
+    the stretch between sloped ~1e-5. The exact solution nearest Lemke's answer, and the
+    one nearest the same answer with T moved between the nodes of either run (half the
+    room their cones leave), are exact solutions of the step on one index set (every
+    condition checked in fractions), the second taking the moved split exactly, with N
+    and the move the same Fractions and each run's ΣT the same: two different splits,
+    both exact. Moved from run to run, the exact solution nearest it keeps each run's
+    ΣT: that split is not an answer (the step's near-null direction of state 41.2 of
+    benchmarks/friction_agreement.py, docs/friction.md)."""
+    from lcpbench import ActuatorScene
+
+    scene = ActuatorScene(theta=170, height=2.5, links=30, left_end="pinned",
+                          right_end="slider", friction=0.3)
+    fs, sol = _last_lemke_step(scene, [{}, {"pull": 0.05}])
+    step = ef.chain_step(fs)
+    v = ef.answer_values(fs, step, sol.z)
+    ex, dist, _ = ef.nearest_exact(step, v)
+    assert ef.confirmed(ex, dist) and not ex.ray
+    pair = {int(fs.friction_node[c]): c for c, p in enumerate(ex.pairs) if p == ef.STICK}
+    runs = ((12, 13), (17, 18))
+    assert sorted(pair) == [12, 13, 17, 18]
+    assert all(fs.parts["tan"][i] == pytest.approx(0, abs=ef.LEVEL) for i, _ in runs)
+    assert ex.free == len(runs)  # one free split per run, nothing else
+    T = [step.tangential[pair[i]] for i in sorted(pair)]
+
+    def limit(c):
+        return sum(ex.x[step.normal[r]] * step.mu[r] for r in range(len(ex.rows))
+                   if step.pair[r] == c)
+
+    def moved(i, j):  # T moved from node j to node i, within both cones
+        ci, cj = pair[i], pair[j]
+        Ti, Tj = step.tangential[ci], step.tangential[cj]
+        d = 0.5 * min(float(limit(ci)) - v[Ti], v[Tj] + float(limit(cj)))
+        assert d > 1e-3 * step.force
+        v2 = v.copy()
+        v2[Ti] += d
+        v2[Tj] -= d
+        return d, ef.solve(step, ex.rows, ex.pairs, v2)
+
+    def run_sums(x):
+        return [x[T[0]] + x[T[1]], x[T[2]] + x[T[3]]]
+
+    for i, j in runs:
+        d, other = moved(i, j)
+        assert other.solution and not other.ray
+        assert all(other.x[k] == ex.x[k] for k in step.normal + step.moves)
+        assert run_sums(other.x) == run_sums(ex.x)
+        shift = float(other.x[step.tangential[pair[i]]] - ex.x[step.tangential[pair[i]]])
+        assert shift == pytest.approx(d, rel=1e-9)  # the exact solution takes the split
+    d, other = moved(12, 18)
+    assert other.solution and run_sums(other.x) == run_sums(ex.x)
+    shift = float(other.x[step.tangential[pair[12]]] - ex.x[step.tangential[pair[12]]])
+    assert abs(shift - d) >= 0.4 * d  # the fit spreads d within each run: not this split
+
+
+def _level_pair(mismatch):
+    """Two nodes joined by a rigid level link (δx2 = δx1), held along x by a unit spring
+    under a unit load (δx1 = 1 + T1 + T2), each pressed (g = −1 + N: N = 1) with μ = 1,
+    ℓ = 30 mm. Both sticking: s1 + δx1 = 0 and s2 + δx2 = 0 are one equation when
+    s2 = s1 (T1 + T2 = −1 − s1, split free); s2 = s1 + ``mismatch`` leaves the second
+    a dependent equation off by ``mismatch`` mm. s1 = −2.13e-14 mm: a slip that is
+    round-off of the positions (state 37.2 of friction_agreement.py has this one)."""
+    s1 = -2.1316282072803006e-14
+    mech = [({1: Q(1), 0: Q(-1)}, Q(0)), ({0: Q(1), 4: Q(-1), 5: Q(-1)}, Q(1))]
+    return ef.PrimalStep(6, mech, [2, 3], [(Q(-1), {2: Q(1)}), (Q(-1), {3: Q(1)})],
+                         [4, 5], [(Q(s1), {0: Q(1)}), (Q(s1 + mismatch), {1: Q(1)})],
+                         [Q(1), Q(1)], [0, 1], [0, 1], 1.0, 30.0, 0.75)
+
+
+def test_a_dependent_slip_met_to_the_positions_round_off_is_consistent():
+    """A dependent slip equation whose terms are themselves round-off (2e-14 mm) and
+    which the data meet to 1.8e-15 mm — 4 % of its terms, far beyond CONSISTENT_RTOL —
+    is consistent: the positions it is differenced from carry ~ε ℓ = 7e-15 mm. Off by
+    1e-11 mm (a real mismatch: one of the two must slide) it is not."""
+    ok = ef.solve(_level_pair(1.8e-15), [True, True], [ef.STICK, ef.STICK])
+    assert ok.inconsistency > 1e-3 and ok.solution and ok.free == 1 and not ok.ray
+    assert ok.x[4] + ok.x[5] == -1 - Q(-2.1316282072803006e-14)
+    off = ef.solve(_level_pair(1e-11), [True, True], [ef.STICK, ef.STICK])
+    assert [kind for kind, _ in off.failed] == ["slip"]

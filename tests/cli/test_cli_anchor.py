@@ -69,6 +69,8 @@ def test_anchor_plot_writes_the_figure(tmp_path, capsys):
     (["--theta", "150", "--friction", "x"], "--friction"),
     (["--theta", "150", "--pressure", "100", "--friction", "0.3"], "not both"),
     (["--theta", "150", "--friction", "0.3", "--wall-stiffness", "-1"], "wall_stiffness"),
+    (["--theta", "150", "--friction", "0.3", "--links", "auto"], "--links auto"),
+    (["--theta", "150", "--friction", "nan"], "friction must be"),
 ])
 def test_anchor_bad_input_is_one_line_exit_2(argv, words, capsys):
     code = main([*BASE, *argv])

@@ -30,6 +30,9 @@ def test_solve_friction_json_is_the_library_path(capsys):
                                atol=1e-15)
     assert d["stick"] == ref.stick.tolist()
     assert sum(d["tangential_forces"]) == pytest.approx(-0.05, rel=1e-6)  # ΣT + P = 0
+    assert {k: d["units"][k] for k in ("tangential_forces", "slip", "forces", "pull")} == {
+        "tangential_forces": "N", "slip": "mm", "forces": "N", "pull": "N"}
+    assert set(d["units"]) <= set(d)  # every unit names a field
 
 
 def test_solve_friction_gross_slip_is_exit_1(capsys):
@@ -47,6 +50,11 @@ def test_solve_friction_gross_slip_is_exit_1(capsys):
     (["--friction", "0.3", "--left-end", "free", "--right-end", "free", "--channel"],
      "cannot both be 'free'"),
     (["--friction", "0.3", "--right-end", "free"], "needs channel=True"),
+    (["--friction", "0.3", "--right-end", "slider", "--links", "auto"], "--links auto"),
+    (["--friction", "nan"], "friction must be"),
+    (["--friction", "inf"], "friction must be"),
+    (["--friction", "0.3", "--left-end", "slider", "--right-end", "slider", "--pull", "nan"],
+     "pull must be"),
 ])
 def test_solve_bad_friction_input_is_one_line_exit_2(argv, words, capsys):
     code = main(["solve", "--links", "20", *argv])

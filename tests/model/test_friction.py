@@ -214,6 +214,62 @@ def test_the_shape_is_the_energy_minimiser_under_its_tangential_loads(pull):
     np.testing.assert_allclose(alpha, res.alpha, rtol=0, atol=1e-6)
 
 
+def test_mu_to_infinity_the_contact_nodes_clamp_the_chain():
+    """The μ → ∞ limit (μ = 20 and 1000, the largest accepted), a pin and a slider, the
+    paper's scene at N = 20 pulled by 0.2 N (at μ = 0.3 its contact nodes slide 0.016
+    mm and the pin takes half the pull). Theory: nothing slides, so every node still
+    pressed is where the first state put it and sticks, and the answer no longer depends
+    on μ. The run of stuck nodes (on level links) is a clamp: the chain left of it does
+    not see the pull (its angles are those of the first state), and the run alone holds
+    the pull (Σ T + P = 0 though the left end is a pin). Independent: the shape is the
+    minimiser of the exact energy minus P x_N+1 (SLSQP) with the run's first node held
+    where the first state put it and the run's links level."""
+    from scipy.optimize import minimize
+
+    from lcpbench.model.chain import energy, node_positions
+
+    pull = 0.2
+    paths = {mu: lcpbench.solve_path(ActuatorScene(theta=150, height=3.0, links=20,
+                                                   friction=mu, right_end="slider"),
+                                     [{}, {"pull": pull}], tol=TIGHT)
+             for mu in (20.0, 1000.0)}
+    first, res = paths[1000.0]
+    assert first.converged and res.converged, res.reason
+    run = np.flatnonzero(res.forces > 0)  # still pressed (the pull lifts one node)
+    assert run.size >= 2 and np.all(np.diff(run) == 1) and np.all(first.forces[run] > 0)
+    assert np.all(res.stick[run])
+    a = res.scene.length / res.links
+    np.testing.assert_allclose(res.x[run + 1], first.x[run + 1], rtol=0, atol=1e-12 * a)
+    other = paths[20.0][1]
+    for key in ("forces", "tangential_forces", "alpha"):
+        np.testing.assert_allclose(getattr(other, key), getattr(res, key), rtol=0,
+                                   atol=1e-12 * max(1.0, np.max(np.abs(res.forces))))
+    j0, j1 = run[0] + 1, run[-1] + 1  # the run's first and last node (0: the left pin)
+    np.testing.assert_allclose(res.alpha[:j0], first.alpha[:j0], rtol=0, atol=1e-12)
+    assert abs(np.sum(res.tangential_forces) + pull) <= 1e-10 * pull
+    scene = res.scene
+    chain = frictional_chain(scene)
+    free = chain.free_nodes
+    up = np.isfinite(chain.upper)
+
+    def total(al):  # in units of EI/ℓ
+        return (energy(chain, al) - pull * node_positions(chain, al)[0][-1]) * (
+            scene.length / scene.EI)
+
+    cons = [{"type": "eq", "fun": lambda al: np.array([node_positions(chain, al)[1][-1]])},
+            {"type": "eq", "fun": lambda al: np.array([
+                node_positions(chain, al)[0][j0] - first.x[j0],
+                node_positions(chain, al)[1][j0] - scene.height])},
+            {"type": "eq", "fun": lambda al: al[j0:j1]},
+            {"type": "ineq", "fun": lambda al: chain.upper[up]
+             - node_positions(chain, al)[1][free][up]}]
+    alpha = first.alpha.copy()
+    for _ in range(4):  # SLSQP stops short; started again from where it stopped
+        alpha = minimize(total, alpha, method="SLSQP", constraints=cons,
+                         options={"ftol": 1e-15, "maxiter": 2000}).x
+    np.testing.assert_allclose(alpha, res.alpha, rtol=0, atol=1e-6)
+
+
 def test_random_paths_converged_answers_obey_coulomb():
     """Random scenes and paths (a bend ramp, a pull, a release; free right ends in
     channels): every state the judge calls converged obeys Coulomb's law node by node

@@ -5,6 +5,7 @@
     lcpbench solve --theta 150 --height 3 [--links N|auto] [--channel] [--solver NAME]
                    [--settings default|low|mid|high] [--raw] [--json] [--plot F.png]
     lcpbench anchor --pressure KPA | --theta DEG --height MM --friction MU [--channel] [--json]
+    lcpbench cycle --friction 0.1,0.3 [--height MM] [--channel] [--pressure A:B:STEP] [--plot F.png]
     lcpbench solvers [--json]
     lcpbench export --theta 150 --height 3 [scene options] --format dat|npz --out FILE
     lcpbench lcp FILE [--solver NAME] [--settings PROFILE] [--formulation NAME|best] [--json]
@@ -21,7 +22,7 @@ interrupted.
 One module per command group, each with ``register(subparsers)`` whose
 parsers set ``func(args) -> int``: :mod:`.solve` (solve, export, lcp,
 validate), :mod:`.solvers` (solvers), :mod:`.sweep` (sweep, report, select),
-:mod:`.anchor` (anchor), :mod:`.paper` (reproduce, anchoring), :mod:`.compile` (compile), and ``lcpbench.vision.commands`` when it is
+:mod:`.anchor` (anchor), :mod:`.cycle` (cycle), :mod:`.paper` (reproduce, anchoring), :mod:`.compile` (compile), and ``lcpbench.vision.commands`` when it is
 installed. The shared scene options are in :mod:`._scene_args`. The command
 modules are imported when the parser is built, not by ``import lcpbench.cli``.
 """
@@ -37,7 +38,8 @@ from ._common import PROG, ArgumentParser, ParserExit, error_line
 __all__ = ["PROG", "build_parser", "main"]
 
 # The command groups, in the order of `lcpbench --help`.
-GROUPS = ("solve", "solvers", "sweep", "anchor", "export", "paper", "compile", "design", "fit")
+GROUPS = ("solve", "solvers", "sweep", "anchor", "cycle", "export", "paper", "compile", "design",
+          "fit")
 
 
 def _optional_groups() -> list:

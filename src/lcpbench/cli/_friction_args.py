@@ -3,7 +3,7 @@
 The options make the scene frictional (docs/friction.md); such a scene is solved as a
 path of one state (:func:`lcpbench.solve_path`) and printed here: the summary, or with
 ``--json`` the result's fields (``tangential_forces`` in N, ``stick``, ``slip`` in mm,
-per node); ``--plot`` draws the normal and tangential forces along the chain with stick
+per node; ``units`` names them); ``--plot`` draws the normal and tangential forces along the chain with stick
 and slip marked (:func:`lcpbench.bench.friction_plot.plot_friction_forces`).
 """
 
@@ -16,6 +16,9 @@ from ..problems.friction import END_CONDITIONS
 from ._common import error_line, print_json
 
 _OPTIONS = ("friction", "left_end", "right_end", "pull")
+#: the units of the fields of ``--json`` (as ``anchor --json`` gives its own)
+UNITS = {"forces": "N", "forces_lower": "N", "tangential_forces": "N", "total_force": "N",
+         "pull": "N", "slip": "mm", "x": "mm", "y": "mm", "tol": "rad", "time_s": "s"}
 
 
 def add_friction_options(parser) -> None:
@@ -30,7 +33,7 @@ def add_friction_options(parser) -> None:
       help="pinned (default; with a pinned left end it rolls along x, as in the paper), "
            "slider or free")
     a("--pull", type=float, default=None, metavar="N",
-      help="axial force on the right end along +x, N (needs --right-end slider)")
+      help="axial force on the right end along +x, N (needs --right-end slider or free)")
 
 
 def mu_arg(text: str):
@@ -68,6 +71,15 @@ def wants_friction(args, scene) -> bool:
         bool(friction_kw(args)) and not hasattr(scene, "frictional"))
 
 
+def refuse_auto_links(args, always: bool = False) -> None:
+    """ProblemError for ``--links auto`` on a frictional scene (``always``: the command's
+    scenes are all frictional; else when a frictional option is given), before the
+    discretisation study would run: it solves the frictionless model."""
+    if getattr(args, "links", None) == "auto" and (always or friction_kw(args)):
+        raise ProblemError("--links auto is not for a frictional scene (its discretisation "
+                           "study solves the frictionless model); give an integer N")
+
+
 def refuse_options(args, default_solver: str) -> None:
     """ProblemError for the options of ``solve`` that the frictional route does not take."""
     taken = [("--sensitivities", getattr(args, "sensitivities", False)),
@@ -97,7 +109,7 @@ def solve_frictional(args, scene, default_solver: str) -> int:
         except (OSError, ValueError) as exc:
             plot_error = f"--plot {args.plot}: {exc}"
     if args.json:
-        print_json(res.to_dict())
+        print_json({**res.to_dict(), "units": UNITS})
     else:
         print(summary(res) + (f"\nplot                {args.plot}"
                               if args.plot is not None and plot_error is None else ""))

@@ -21,7 +21,7 @@ import numpy as np
 
 from ..model.friction_result import scene_fields
 from ._common import add_json_option, error_line, format_rows, has_matplotlib, print_json
-from ._friction_args import mu_arg
+from ._friction_args import mu_arg, refuse_auto_links
 from ._scene_args import (
     add_profile_options,
     add_scene_options,
@@ -63,10 +63,7 @@ def cmd_anchor(args) -> int:
     if args.plot is not None and not has_matplotlib():
         error_line("--plot needs matplotlib: pip install 'lcpbench[plot]'")
         return 2
-    if getattr(args, "links", None) == "auto":
-        error_line("--links auto is not for a frictional scene (its discretisation study "
-                   "solves the frictionless model); give an integer N")
-        return 2
+    refuse_auto_links(args, always=True)
     args.left_end, args.right_end, args.pull = "slider", "slider", None
     scene = scene_from(args)
     po = pull_out(scene, tol=args.tol)  # (refuses what it cannot take, in one line)

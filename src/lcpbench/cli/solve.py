@@ -35,7 +35,12 @@ from ._common import (
     node_ranges,
     print_json,
 )
-from ._friction_args import add_friction_options, solve_frictional, wants_friction
+from ._friction_args import (
+    add_friction_options,
+    refuse_auto_links,
+    solve_frictional,
+    wants_friction,
+)
 from ._scene_args import (
     DEFAULT_METHOD,
     DEFAULT_SOLVER,
@@ -278,6 +283,7 @@ def cmd_solve(args) -> int:
         return 2
     if args.plot is not None:
         _not_a_directory("--plot", args.plot, "shape.png")
+    refuse_auto_links(args)  # (before scene_from runs the frictionless study)
     scene = scene_from(args)
     if wants_friction(args, scene):  # issue 39: a path of one state
         return solve_frictional(args, scene, DEFAULT_SOLVER)

@@ -130,7 +130,7 @@ def step_arrays(alpha, a, jl, jr, k, rest, fs, n, nodal_load, pull, right_datum,
 @njit(cache=True)
 def _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, D, friction_node,
                    tangent_xy, first):
-    """(B, X = K⁻¹ B) with B = [G_n | G_t | f] (n × (m_n + m_t + 1)) and K the step's
+    """(X = K⁻¹ B, ok) with B = [G_n | G_t | f] (n × (m_n + m_t + 1)) and K the step's
     matrix: H in lower band storage (``bands``), plus ``rot_k`` r rᵀ when ``rot`` = r
     is not empty (a free end's rotation about the pin), plus k_τ on τ when ``f`` has
     one more entry than H has rows. With both ends held in y, H is positive definite
@@ -179,7 +179,7 @@ def _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, D, frict
     if n > ny:  # τ, held by k_τ alone
         for c in range(cols):
             X[ny, c] = BT[c, ny] / k_tau
-    return BT.T, X, ok  # (B as a view: delassus_form reads X only)
+    return X, ok
 
 
 @njit(cache=True)
@@ -271,8 +271,8 @@ def delassus_form(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, gap, D,
     each friction pair (:func:`_solve_columns`; ``first``: the first free node).
     """
     mn, mt = normal_node.size, friction_node.size
-    B, X, ok = _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, D,
-                              friction_node, tangent_xy, first)
+    X, ok = _solve_columns(bands, rot, rot_k, k_tau, f, normal_node, normal_xy, D,
+                           friction_node, tangent_xy, first)
     m = mn + mt
     BX = contact_gram(X, D, f, normal_node, normal_xy, friction_node, tangent_xy, first,
                       bands.shape[1])
