@@ -16,10 +16,11 @@ import lcpbench
 from lcpbench.errors import ProblemError
 from lcpbench.model import ramp
 from lcpbench.model.compiled import drive
-from lcpbench.model.ramp import NEAR_VERTICAL_DEG, STEP_DEG, fractions, near_vertical
+from lcpbench.model.ramp import STEP_DEG, fractions, near_vertical
 from lcpbench.model.step_solver import make_step_solver
 from lcpbench.problems.sections import SectionedScene
 from lcpbench.solvers.registry import DEFAULT
+from lcpbench.thresholds import NEAR_VERTICAL_DEG
 
 
 def _cold_driver_converges(scene) -> bool:

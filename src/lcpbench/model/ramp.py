@@ -22,8 +22,8 @@ there are inaccurate or rejected, and the height driver stalls (max|Δα| stuck 
 0.03–1.3 rad for 200 outer steps; every refusal of ``benchmarks/saddle_audit.py``'s
 rows of sections). Where the chain is in reach of the SQP in the link angles
 (:func:`lcpbench.model.angle_step.in_reach`: rigid flat walls) and the built-in
-back-end solves, a step that starts with a link within :data:`NEAR_VERTICAL_DEG` of
-the vertical (|cos α_i| ≤ sin 10°), or whose height steps did not converge and left
+back-end solves, a step that starts with a link within
+:data:`~lcpbench.thresholds.NEAR_VERTICAL_DEG` of the vertical (|cos α_i| ≤ sin 10°), or whose height steps did not converge and left
 one there, takes outer steps in α instead (:func:`lcpbench.model.heavy_driver.run_heavy`, the same
 SQP as a heavy chain's), where every angle is regular; its answer is judged as every
 answer. The SQP starts from the last step's angles and, where the SQP found that
@@ -56,7 +56,7 @@ import numpy as np
 
 from ..errors import ProblemError
 from ..solvers.registry import DEFAULT
-from ..thresholds import NODE_SHARE
+from ..thresholds import NEAR_VERTICAL_DEG, NODE_SHARE
 from . import large_n
 from .angle_step import in_reach
 from .compiled import drive, heavy
@@ -69,9 +69,6 @@ from .outer import DriverOutput, DriverStart
 STEP_DEG = 10.0
 #: the longest path
 MAX_STEPS = 72
-#: a step of the path starting with a link this close to the vertical (degrees) takes
-#: its outer steps in the link angles (where they are in reach)
-NEAR_VERTICAL_DEG = 10.0
 #: the SQP steps a step of the path may take: a step of 10° from the last answer takes
 #: 5-8 (rows of 3-4 sections, N = 420); one that does not converge in 12 gives way to
 #: the height steps
@@ -98,8 +95,8 @@ def fractions(scene) -> list[float]:
 
 
 def near_vertical(alpha) -> bool:
-    """Whether a link of ``alpha`` (rad) is within :data:`NEAR_VERTICAL_DEG` of the
-    vertical, where the height step's linearisation divides by a cos α_i ≈ 0 (compiled:
+    """Whether a link of ``alpha`` (rad) is within
+    :data:`~lcpbench.thresholds.NEAR_VERTICAL_DEG` of the vertical, where the height step's linearisation divides by a cos α_i ≈ 0 (compiled:
     :func:`lcpbench.model.path_kernel.near_vertical`, which the walk of height steps
     stops on)."""
     return bool(_kernel().near_vertical(np.ascontiguousarray(alpha, dtype=float), _NEAR))
