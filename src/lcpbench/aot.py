@@ -9,8 +9,10 @@ with their dispatchers' signatures, into one extension module beside the cache
 solve without importing numba (see :mod:`lcpbench.numba_cache`).
 
 The solves: the paper's actuator (cold, and a continuation of three scenes,
-which passes the warm-start arrays), its channel and a cantilever, so the
-entries see the types of each kind of call the kernels take.
+which passes the warm-start arrays), its channel, a cantilever, and a row of two
+sections along its loading path (``start="ramp"``: the walk of height steps and the
+SQP in the link angles), so the entries see the types of each kind of call the
+kernels take.
 
     python -m lcpbench.aot [--dir DIR]     # or: lcpbench compile
 """
@@ -28,6 +30,7 @@ def representative_solves() -> None:
     """The solves whose kernel calls give the signatures (see the module's docstring)."""
     from .api import solve
     from .problems.scenes import ActuatorScene, CantileverScene
+    from .problems.sections import SectionedScene
     from .studies.batch import solve_many
 
     scene = ActuatorScene(theta=150, height=3.0)
@@ -35,6 +38,10 @@ def representative_solves() -> None:
     solve(ActuatorScene(theta=150, height=3.0, channel=True))
     solve(CantileverScene())
     solve_many([ActuatorScene(theta=t, height=3.0) for t in (140, 150, 160)])
+    # the loading path: its height steps in one call (path_kernel.walk_heights), its
+    # steps near the vertical by the SQP in the link angles (angle_kernel)
+    solve(SectionedScene(sections=[(170.0, 15.0), (-170.0, 15.0)], height=2.0, links=140),
+          start="ramp")
 
 
 def build(out_dir: str | None = None) -> dict:

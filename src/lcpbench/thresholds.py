@@ -108,6 +108,15 @@ ANGLE_SHIFT_GROWTH = 10.0
 #: ... at most this many times
 ANGLE_SHIFT_TRIES = 20
 
+# --- the loading path (model/ramp.py, model/path_kernel.py) -------------------------
+
+#: a step of the loading path starting with a link this close to the vertical (degrees)
+#: takes its outer steps in the link angles (where they are in reach); the walk of
+#: height steps in one kernel call (path_kernel.walk_heights) stops on an answer with a
+#: link this close (|cos α_i| ≤ sin of it): the height step's linearisation divides by
+#: a cos α_i
+NEAR_VERTICAL_DEG = 10.0
+
 # --- the frictional step's primal polish (model/friction_polish.py) ----------------------
 
 #: a link whose |tan α| is at most this is level in the polish (its nodes at one wall to

@@ -30,6 +30,7 @@ from lcpbench.numba_cache import AotKernels
 
 SRC = Path(lcpbench.__file__).resolve().parent
 SOLVE, JUDGE = "lcpbench.model.compiled_kernel", "lcpbench.model.judge_kernel"
+PATH = "lcpbench.model.path_kernel"
 
 
 @pytest.fixture(scope="session")
@@ -77,6 +78,8 @@ def test_the_build_exports_the_solve_and_judge_kernels(aot_build):
     assert set(info["modules"]) >= {SOLVE, JUDGE}
     assert "solve_chain" in info["modules"][SOLVE]["functions"]
     assert "judge_answer" in info["modules"][JUDGE]["functions"]
+    # the loading path's walk (aot.representative_solves' row of sections, start="ramp")
+    assert "walk_heights" in info["modules"][PATH]["functions"]
     assert json.loads((Path(where) / "manifest.json").read_text()) == json.loads(
         json.dumps(info))
     assert (Path(where) / info["file"]).exists()

@@ -503,7 +503,10 @@ def failed_checks(settled: bool, s: dict, step_statuses: list[str], *,
     check 2 is the last of ``step_statuses``. The text of each is written here.
     """
     rule = _rule_kernel()
-    numbers = np.array([float(s[name]) for name in _checks_kernel().STATS])
+    # (the judge kernel's STATS, judge_checks' own: its module is loaded for every
+    # judge, where judge_checks' may never be called from Python, nor be ahead of time)
+    stats = (_KERNEL[0] if _KERNEL else _load_kernel()).STATS
+    numbers = np.array([float(s[name]) for name in stats])
     mask = int(rule.failed(bool(settled), numbers, float(tol)))
     fails: list[str] = []
     if step_statuses and step_statuses[-1] != "solved":

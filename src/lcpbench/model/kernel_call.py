@@ -147,8 +147,10 @@ def call_profile_kernel(chain: Chain, *, tol: float, max_outer: int,
         if net is not None and np.size(net) == n and np.all(np.isfinite(net)):
             from .judge_exact import split_reactions
 
-            up, lo = split_reactions(walls_at(chain, start_alpha), net,
-                                     np.asarray(start.warm.u, dtype=float))
+            # (one wall: every reaction is its own, wherever the walls are at the start;
+            # a channel: each node's, the nearer wall's at the start's x)
+            at = walls_at(chain, start_alpha) if chain.channel else chain
+            up, lo = split_reactions(at, net, np.asarray(start.warm.u, dtype=float))
             mu_up, mu_lo = np.array(up, dtype=float), np.array(lo, dtype=float)
     base = kernel_args(chain)
     t0 = time.perf_counter()

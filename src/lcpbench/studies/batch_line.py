@@ -54,20 +54,27 @@ def takes_line(chain) -> bool:
             and not heavy(chain))
 
 
-#: the solve kernel's arguments that a line's chains share (kernel_args: ℓ/N, the joint
-#: links, the nodal load, the first free node, L, EI/L²); the others are per scene
-SHARED_ARGS = (1, 2, 3, 7, 8, 11, 12)
-
-
-def _shares(chain, c0, args0: tuple) -> bool:
+def _shares(chain, c0) -> bool:
     """Whether the line kernel takes ``chain`` in a call whose shared arrays are those of
-    ``c0`` (``args0``: its kernel_args): it takes the chain, its walls yield as c0's do
-    (rigid or elastic), in a channel or not as c0, and the shared arguments are equal."""
+    ``c0``: it takes the chain, its walls yield as c0's do (rigid or elastic), in a
+    channel or not as c0, and the solve kernel's arguments that a line's chains share
+    (:func:`~lcpbench.model.kernel_call.kernel_args`' ℓ/N, joint links, nodal load, first
+    free node, L and EI/L²) are equal, compared on the chain's own fields (its
+    kernel_args not built for the comparison)."""
     if not takes_line(chain) or (chain.elastic_walls, chain.channel) != (c0.elastic_walls,
                                                                            c0.channel):
         return False
-    args = kernel_args(chain)
-    return all(np.array_equal(args[i], args0[i]) for i in SHARED_ARGS)
+    return (float(chain.link_length) == float(c0.link_length)
+            and int(chain.free_nodes[0]) == int(c0.free_nodes[0])
+            and float(chain.length) == float(c0.length)
+            and float(chain.force_scale) == float(c0.force_scale)
+            and np.array_equal(chain.joint_links, c0.joint_links)
+            and np.array_equal(_nodal_load(chain), _nodal_load(c0)))
+
+
+def _nodal_load(chain) -> np.ndarray:
+    """The chain's nodal load, kept with it (as kernel_args reads it)."""
+    return chain.derived("_nodal_load", lambda: chain.nodal_load)
 
 
 def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = "default",
@@ -89,7 +96,7 @@ def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = 
     if not takes_line(c0):
         return None
     args0 = kernel_args(c0)
-    if plane is not None and not all(_shares(c, c0, args0) for c in chains[1:]):
+    if plane is not None and not all(_shares(c, c0) for c in chains[1:]):
         return None
     m, n, nj = len(chains), c0.free_nodes.size, args0[2].size
     stacked = []
