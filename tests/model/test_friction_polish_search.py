@@ -1,6 +1,6 @@
 """The polish's search (issue 39, target 5; model/friction_lemke.py): the edge search's
-order (:func:`edge_order`, the likely states first), a state's repeated refusal
-(:func:`polish_step`'s ``refused``) and a path's capped searches after a refusal.
+order (:func:`edge_order`, the likely states first) and a state's repeated refusal
+(:func:`polish_step`'s ``refused``).
 
 Expectations are independent of the polish: the exact solution of an index set in
 rational arithmetic (benchmarks/exact_friction.py, from the step's doubles), the
@@ -152,40 +152,6 @@ def test_a_repeated_refusal_is_not_searched_and_returns_the_answer(monkeypatch):
     step = ef.chain_step(fs)
     ex, dist, _ = ef.nearest_exact(step, ef.answer_values(fs, step, z))
     assert not ef.confirmed(ex, dist)
-
-
-def test_a_refusal_caps_the_later_searches_of_its_path(monkeypatch):
-    """The channel's pull-out: its first refused polish (after its flips and the edge
-    search) caps the searches of the path's later polishes at the own set, the first
-    flip and the likely picks. Its second refusal is capped: bit for bit the answer it
-    was given, SOLVED; the exact oracle (Fractions: flips, then every state of its edge
-    nodes) finds no exact answer within 1e-6 of it, so the flips and edge sets it was
-    spared had nothing to keep; and the pull-out is the same bits with the cap out of
-    reach (no path memo)."""
-    calls = spied(monkeypatch)
-    res = lcpbench.pull_out(CHANNEL)
-    assert res.converged
-    refused = [(fs, z, out) for fs, z, out in calls if out.extra["polish"] == "a sign fails"]
-    assert len(refused) >= 2 and not refused[0][2].extra.get("polish_capped")
-    capped = [(fs, z, out) for fs, z, out in refused if out.extra.get("polish_capped")]
-    assert capped
-    for _, z, out in capped:
-        np.testing.assert_array_equal(out.z, z)
-        assert out.solved
-    fs, z, _ = capped[0]
-    step = ef.chain_step(fs)
-    ex, dist, _ = ef.nearest_exact(step, ef.answer_values(fs, step, z))
-    assert not ef.confirmed(ex, dist)
-
-    def uncapped(self, fs, sol, flips=friction_lemke.POLISH_FLIPS, refused=None):
-        return friction_lemke.polish_step(fs, sol, flips, refused)
-
-    monkeypatch.setattr(friction_lemke.StepLemke, "polish", uncapped)
-    full = lcpbench.pull_out(CHANNEL)
-    assert full.force == res.force and full.solves == res.solves
-    for a, b in zip(res.path, full.path, strict=True):
-        for f in ("x", "y", "forces", "tangential_forces"):
-            np.testing.assert_array_equal(getattr(a, f), getattr(b, f))
 
 
 #: benchmarks/friction_agreement.py's path 12 (seed 39): N = 80, μ 0.99, slider–pinned

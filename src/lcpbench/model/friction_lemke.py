@@ -138,10 +138,7 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS,
     returned as it is. ``refused``: a memo the polishes of one state share (the driver's,
     :func:`lcpbench.model.friction_driver.solve_state`): an answer whose own set and its
     failing nodes are those of the last polish, refused, is refused after its own set
-    (:func:`searched_polish`; ``extra["polish_repeat"]``); its list ``refused["path"]``,
-    where given (the path's: :meth:`StepLemke.polish`), collects the path's refusals
-    after a search, and once one is there a polish's search ends after the likely picks
-    (``extra["polish_capped"]``)."""
+    (:func:`searched_polish`; ``extra["polish_repeat"]``)."""
     if "polish" in sol.extra:
         return sol
     if not sol.solved or fs.parts is None or not np.all(np.isfinite(sol.z)):
@@ -154,19 +151,15 @@ def polish_step(fs, sol: LCPSolution, flips: int = POLISH_FLIPS,
     head, answer = polish_args(fs, sol.z)  # (a free end's rotation borders the band)
     contact, state = k.index_set(sol.z, w, fs.normal_node.size, fs.friction_node.size,
                                  fs.pair, fs.mu)
-    out, failing, repeat, name, capped = searched_polish(k, head, answer, w, fs, flips,
-                                                         contact, state, refused)
+    out, failing, repeat, name = searched_polish(k, head, answer, w, fs, flips, contact,
+                                                 state, refused)
     code, z, r0, r1 = out[:4]
     failing = tuple(failing)
     if refused is not None:  # the refusal this polish ends on, or none
         refused["last"] = name if code == k.SIGNS else None
-        if code == k.SIGNS and name is not None and "path" in refused:
-            refused["path"].append(name)  # (the path's later searches: capped)
     extra = dict(sol.extra, polish_residuals=(r0, r1), polish_failing=failing)
     if code != 1 and repeat:
         extra["polish_repeat"] = True
-    if code != 1 and capped:
-        extra["polish_capped"] = True
     if code == 0:
         res = lcp_residuals(fs.M, fs.q, z)
         if not res["natural"] <= RESIDUAL_TOL:
@@ -213,50 +206,39 @@ def searched_polish(k, head, answer, w, fs, flips, contact, state, refused):
     of 59 on benchmarks/friction_agreement.py's Lemke paths). Without it the sets,
     verdicts and answers are those of one ``polish_on`` with ``flips`` flips and then
     the edge search (a flip onto the own set or the first flip's solves that set again
-    where the one call stopped: the same verdict, each a function of its set).
-
-    Where the path's memo (``refused["path"]``, :meth:`StepLemke.polish`) holds a
-    refusal after a search, steps 4 and 5 are left out (the search is *capped*): on the
-    channel of benchmarks/friction_speed.py the pull-out's second refused search (the
-    same sticking runs: 5 more flips and 19 edge sets) kept nothing, as the first had,
-    and no Lemke path of benchmarks/friction_agreement.py refuses a polish (a guess, as
-    step 2: a capped refusal is returned as it was and the state's judge decides it).
-    Returns (the verdict, z, r0, r1; the signs failed at each set of the flips; whether
-    it stopped at a repeat; the refusal's name or None; whether it was capped)."""
+    where the one call stopped: the same verdict, each a function of its set)."""
     own = k.polish_on(*head, *answer, 0, contact, state)
     failing = [int(f) for f in own[8]]
     if own[0] != k.SIGNS or not flips or own[8][0] > POLISH_MOST_FAILING:
-        return own[:4], failing, False, None, False
+        return own[:4], failing, False, None
     name = refusal(contact, state, own[4], own[5])
     last = None if refused is None else refused.get("last")
     if last is not None and all(np.array_equal(a, b) for a, b in zip(name, last)):
-        return own[:4], failing, True, name, False
+        return own[:4], failing, True, name
     once = k.polish_on(*head, *answer, 0, own[4], own[5])  # the first flip
     failing += [int(f) for f in once[8]]
     if once[0] != k.SIGNS:
-        return once[:4], failing, False, name, False
+        return once[:4], failing, False, name
     seen_c, seen_s = np.concatenate((own[6], once[6])), np.concatenate((own[7], once[7]))
     nodes, picks, likely = edge_picks(k, answer, w, fs, contact, state, own[4], own[5])
     if likely.any() and level_run_fails(k, head, state, own[5]):
         out = k.polish_sets(*head, *answer, contact, state, nodes,
                             picks[likely][:POLISH_EDGE_SETS], POLISH_EDGE_SETS, seen_c, seen_s)
         if out[0] == k.KEPT:
-            return out, failing, False, name, False
+            return out, failing, False, name
         picks = picks[:POLISH_EDGE_SETS][~likely[:POLISH_EDGE_SETS]]  # (the rest, in order)
     else:
         picks = picks[:POLISH_EDGE_SETS]
-    if refused is not None and refused.get("path"):  # a refusal after a search: capped
-        return once[:4], failing, False, name, True
     more = once
     if flips > 1 and once[8][0] <= POLISH_MOST_FAILING:
         more = k.polish_on(*head, *answer, flips - 2, once[4], once[5])
         failing += [int(f) for f in more[8]]
         if more[0] != k.SIGNS:
-            return more[:4], failing, False, name, False
+            return more[:4], failing, False, name
         seen_c, seen_s = np.concatenate((seen_c, more[6])), np.concatenate((seen_s, more[7]))
     out = edge_polish(k, head, answer, contact, state, nodes, picks, POLISH_EDGE_SETS,
                       seen_c, seen_s)
-    return (out if out[0] == k.KEPT else more[:4]), failing, False, name, False
+    return (out if out[0] == k.KEPT else more[:4]), failing, False, name
 
 
 def refusal(contact, state, flip_c, flip_s):
@@ -442,7 +424,6 @@ class StepLemke:
         self.first = 0
         self.support = np.empty(0, np.int64)  # the last answer's support (basic z), by z_keys
         self.warm_solves = 0  # the linear solves of the warm start (counted, for benchmarks)
-        self.refusals: list = []  # the path's polishes refused after a search (polish)
 
     def last_support(self, M: np.ndarray, q: np.ndarray, keys: np.ndarray | None):
         """The LCP's answer by block principal pivoting (:func:`lcpbench.solvers.
@@ -517,7 +498,8 @@ class StepLemke:
             return polish_step(M, sol) if polish else sol
         return self.solve(M, q)
 
-    def polish(self, fs, sol: LCPSolution, flips: int = POLISH_FLIPS,
+    @staticmethod
+    def polish(fs, sol: LCPSolution, flips: int = POLISH_FLIPS,
                refused: dict | None = None) -> LCPSolution:
         """``sol``, an answer of the step ``fs``, through the primal polish
         (:func:`polish_step`; ``flips``: its flips of a failing index set). An answer the
@@ -527,11 +509,8 @@ class StepLemke:
         the edge search kept — and on the channel of benchmarks/friction_speed.py it
         never found an answer the polish keeps, at ~29 ms a state: docs/friction.md,
         "The polish"); ``refused``: the state's memo of its last refusal,
-        :func:`polish_step`, given the path's refusals, ``self.refusals``: one instance
-        serves a path, and after a refusal there its searches are capped)."""
-        memo = {} if refused is None else refused
-        memo["path"] = self.refusals
-        return polish_step(fs, sol, flips, memo)
+        :func:`polish_step`)."""
+        return polish_step(fs, sol, flips, refused)
 
     def solve(self, M, q, keys=None, pair=None):
         """The LCP (``M``, ``q``): the warm start from the last support (``keys``, the
