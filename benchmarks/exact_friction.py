@@ -37,10 +37,17 @@ Not library code: the tests and benchmarks/friction_agreement.py use it.
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from fractions import Fraction
 
 import numpy as np
+from exact_friction_step import (  # noqa: F401 (re-exported: the oracle's callers read them here)
+    LEVEL,
+    PrimalStep,
+    answer_values,
+    chain_step,
+)
+from exact_friction_step import to_fraction as _q
 
 #: a pair's states: stick, slide forward (s >= 0, T = −μN), backward, off (row separate)
 STICK, FORWARD, BACKWARD, OFF = 0, 1, -1, None
@@ -55,196 +62,11 @@ NEAR_RTOL = 1e-6
 #: real mismatch (9e-12 mm between two sticking neighbours, docs/friction.md)
 CONSISTENT_RTOL = 1e-12
 POSITION_ROUNDOFF = 16 * float(np.finfo(float).eps)
-#: a link whose |tan α| is at most this is level (both its nodes at a wall to round-off):
-#: its tan α is taken as 0, so that T per node along a run at a wall is exactly
-#: indeterminate, as it is in fact, not decided by the round-off of the nodes' heights
-LEVEL = 1e-12
 #: index sets tried per answer: the one read from it, then with failing nodes flipped;
 #: then :func:`edge_search`: a node is at the edge of two states when both sides of one
 #: of its LCP pairs are within EDGE_RTOL of 0 (target 2's 1e-6); every state of at most
 #: EDGE_NODES of them, at most EDGE_SETS index sets, the fewest changes first
 FLIP_ROUNDS, EDGE_RTOL, EDGE_NODES, EDGE_SETS = 6, 1e-6, 6, 160
-
-
-def _q(x) -> Fraction:
-    return Fraction(float(x))
-
-
-@dataclass
-class PrimalStep:
-    """A frictional step as sparse exact equations. Unknowns 0..n−1; ``mechanics``: the
-    equalities every index set shares [(coefficients by unknown, right-hand side)];
-    ``normal[r]``/``gap[r]``: wall row r's N unknown and its gap (constant,
-    coefficients), ``tangential[c]``/``slip[c]`` the same for pair c; ``mu``, ``pair``
-    per row; ``moves``: the unknowns that move the chain; ``force``/``length``: the
-    scales of N and of g, s (the LCP's units); ``link``: the link length (the move's
-    scale); ``names``: the unknowns by kind and node (:func:`chain_step`)."""
-
-    n: int
-    mechanics: list
-    normal: list
-    gap: list
-    tangential: list
-    slip: list
-    mu: list
-    pair: list
-    moves: list
-    force: float = 1.0
-    length: float = 1.0
-    link: float = 1.0
-    names: dict = field(default_factory=dict)
-
-
-def chain_step(fs) -> PrimalStep:
-    """The :class:`PrimalStep` of a ``FrictionStep`` (see the module's note)."""
-    P = fs.parts
-    bands, f, t = P["bands"], P["f"], P["tan"]
-    first, right_datum = int(P["first"]), bool(P["right_datum"])
-    nh, links = bands.shape[1], t.size
-    rot = P["rot"]
-    nxy, txy = fs.normal_xy, fs.tangent_xy
-    rows_at = {}
-    for r, j in enumerate(fs.normal_node):
-        rows_at.setdefault(first + int(j), []).append(r)
-    pairs_at = {}
-    for c, node in enumerate(fs.friction_node):
-        pairs_at.setdefault(int(node), []).append(c)
-    count = [0]
-
-    def new():
-        count[0] += 1
-        return count[0] - 1
-
-    tau = new() if fs.has_tau else None
-    Y, X, L = {}, {}, {}
-    Nv, Tv = [None] * fs.normal_node.size, [None] * fs.friction_node.size
-    for i in range(links + 1):  # node by node: a narrow band
-        if first <= i < first + nh:
-            Y[i] = new()
-        X[i] = new()
-        if i < links:
-            L[i] = new()
-        for r in rows_at.get(i, []):
-            Nv[r] = new()
-        for c in pairs_at.get(i, []):
-            Tv[c] = new()
-    rho = new() if rot.size else None
-    T = [Fraction(0) if abs(v) <= LEVEL else _q(v) for v in t]
-
-    def Fx(i):  # the force along x at node i
-        d = {Nv[r]: _q(nxy[r, 0]) for r in rows_at.get(i, []) if nxy[r, 0] != 0.0}
-        d.update({Tv[c]: _q(txy[c, 0]) for c in pairs_at.get(i, []) if txy[c, 0] != 0.0})
-        return d
-
-    def add(d, k, v):
-        if v != 0:
-            d[k] = d.get(k, 0) + v
-
-    eqs = []
-    for j in range(nh):  # the heights' equilibrium (H symmetric, lower band storage)
-        J, row = first + j, {}
-        for jj in range(max(0, j - 2), min(nh, j + 3)):
-            add(row, Y[first + jj], _q(bands[abs(j - jj), min(j, jj)]))
-        if rho is not None:
-            add(row, rho, _q(P["rot_k"]) * _q(rot[j]))
-        for r in rows_at.get(J, []):
-            add(row, Nv[r], -_q(nxy[r, 1]))
-        for c in pairs_at.get(J, []):
-            add(row, Tv[c], -_q(txy[c, 1]))
-        if J >= 1:
-            add(row, L[J - 1], T[J - 1])
-        if J < links:
-            add(row, L[J], -T[J])
-        eqs.append((row, _q(f[j])))
-    if tau is not None:  # k_τ τ = f_τ + Σ F^x (= L_0 + F^x_0, the left datum)
-        row = {tau: _q(P["k_tau"]), L[0]: Fraction(-1)}
-        for k, v in Fx(0).items():
-            add(row, k, -v)
-        eqs.append((row, _q(f[nh])))
-    if rho is not None:
-        row = {rho: Fraction(1)}
-        for j in range(nh):
-            add(row, Y[first + j], -_q(rot[j]))
-        eqs.append((row, Fraction(0)))
-    for i in range(1, links + 1):  # δx_i − δx_{i−1} = −tan α_{i−1} (δy_i − δy_{i−1})
-        row = {X[i]: Fraction(1), X[i - 1]: Fraction(-1)}
-        if i in Y:
-            add(row, Y[i], T[i - 1])
-        if i - 1 in Y:
-            add(row, Y[i - 1], -T[i - 1])
-        eqs.append((row, Fraction(0)))
-    if right_datum:
-        eqs.append(({X[links]: Fraction(1)}, Fraction(0)))
-    elif tau is not None:
-        eqs.append(({X[0]: Fraction(1), tau: Fraction(-1)}, Fraction(0)))
-    else:
-        eqs.append(({X[0]: Fraction(1)}, Fraction(0)))
-    for k in range(links):  # the links' horizontal forces: Dᵀ F^x = Σ_k e_k L_k
-        row = {L[k]: Fraction(1)}
-        if right_datum:  # L_k = −Σ_{i<=k} F^x_i
-            if k >= 1:
-                row[L[k - 1]] = Fraction(-1)
-            for key, v in Fx(k).items():
-                add(row, key, v)
-        else:  # L_k = Σ_{i>k} F^x_i
-            if k + 1 < links:
-                row[L[k + 1]] = Fraction(-1)
-            for key, v in Fx(k + 1).items():
-                add(row, key, -v)
-        eqs.append((row, Fraction(0)))
-    gap, slip = [], []
-    for r, j in enumerate(fs.normal_node):
-        J, d = first + int(j), {}
-        add(d, X[J], _q(nxy[r, 0]))
-        add(d, Y[J], _q(nxy[r, 1]))
-        add(d, Nv[r], _q(P["compliance"][r]))
-        gap.append((_q(P["gap"][r]), d))
-    for c, node in enumerate(fs.friction_node):
-        node, d = int(node), {}
-        add(d, X[node], _q(txy[c, 0]))
-        if node in Y:
-            add(d, Y[node], _q(txy[c, 1]))
-        slip.append((_q(P["slip"][c]), d))
-    moves = list(Y.values()) + list(X.values()) + ([tau] if tau is not None else [])
-    return PrimalStep(count[0], eqs, Nv, gap, Tv, slip, [_q(m) for m in fs.mu],
-                      [int(p) for p in fs.pair], moves, fs.force, fs.length,
-                      fs.length / links, dict(Y=Y, X=X, L=L, tau=tau, rho=rho))
-
-
-def answer_values(fs, step: PrimalStep, z: np.ndarray) -> np.ndarray:
-    """Every unknown of ``step`` (a :func:`chain_step`) from the LCP answer z, in floats."""
-    N, T, dy, tau = fs.forces(z)
-    nm = step.names
-    v = np.zeros(step.n)
-    first = int(fs.parts["first"])
-    t = fs.parts["tan"]
-    links = t.size
-    Yd = np.zeros(links + 1)
-    for i, k in nm["Y"].items():
-        Yd[i] = dy[i - first]
-        v[k] = dy[i - first]
-    if nm["tau"] is not None:
-        v[nm["tau"]] = tau
-    if nm["rho"] is not None:
-        v[nm["rho"]] = float(fs.parts["rot"] @ dy)
-    x = np.zeros(links + 1)
-    x[0] = tau
-    for i in range(1, links + 1):
-        x[i] = x[i - 1] - t[i - 1] * (Yd[i] - Yd[i - 1])
-    if fs.parts["right_datum"]:
-        x -= x[links]
-    Fx = np.zeros(links + 1)
-    first_node = first + np.asarray(fs.normal_node)
-    np.add.at(Fx, first_node, fs.normal_xy[:, 0] * N)
-    np.add.at(Fx, np.asarray(fs.friction_node), fs.tangent_xy[:, 0] * T)
-    Lk = -np.cumsum(Fx)[:links] if fs.parts["right_datum"] else np.cumsum(Fx[::-1])[::-1][1:]
-    for i, k in nm["X"].items():
-        v[k] = x[i]
-    for i, k in nm["L"].items():
-        v[k] = Lk[i]
-    v[step.normal] = N
-    v[step.tangential] = T
-    return v
 
 
 def _affine(expr, v):
@@ -403,9 +225,10 @@ def solve(step: PrimalStep, rows: list, pairs: list, v: np.ndarray | None = None
     m, mr = len(step.mechanics), len(rows)
     floor = Fraction(POSITION_ROUNDOFF) * _q(step.length)
 
-    def roundoff(i):  # a gap or slip equation met to the round-off of its positions
-        d, r = eqs[i]
-        return i >= m and abs(sum(c * x[k] for k, c in d.items()) - r) <= floor
+    def roundoff(i):  # a gap (contact row) or slip (sticking pair) equation, in mm, met
+        d, r = eqs[i]  # to the round-off of its positions; never a force equation
+        kin = (m <= i < m + mr and rows[i - m]) or (i >= m + mr and pairs[i - m - mr] == STICK)
+        return kin and abs(sum(c * x[k] for k, c in d.items()) - r) <= floor
 
     failed = []
     for i in left:  # a dependent equation the answer's own round-off cannot explain

@@ -257,3 +257,18 @@ def test_a_dependent_slip_met_to_the_positions_round_off_is_consistent():
     assert ok.x[4] + ok.x[5] == -1 - Q(-2.1316282072803006e-14)
     off = ef.solve(_level_pair(1e-11), [True, True], [ef.STICK, ef.STICK])
     assert [kind for kind, _ in off.failed] == ["slip"]
+
+
+def test_a_dependent_force_equation_gets_no_position_round_off():
+    """The round-off floor is for equations in mm (a contact row's gap, a sticking pair's
+    slip), never for a force equation: a pressed node sliding forward (T + μN = 0, μ = 1)
+    whose mechanics fix N = 1e-3 N and T = -1e-3 N - δ leaves that slide equation off by
+    δ; at δ = 5e-14 N (2.5e-11 of its terms, below 16 ε ℓ in mm at ℓ = 30 mm) the set
+    has no exact solution."""
+    for delta in (5e-14, 1e-13):
+        mech = [({0: Q(1)}, Q(0.001)), ({1: Q(1)}, Q(-0.001) - Q(delta))]
+        step = ef.PrimalStep(3, mech, [0], [(Q(-1), {2: Q(1)})], [1], [(Q(0), {2: Q(0)})],
+                             [Q(1)], [0], [2], 1.0, 30.0, 0.75)
+        ex = ef.solve(step, [True], [ef.FORWARD])
+        assert ex.x[1] + ex.x[0] == -Q(delta)  # the slide equation's own residual
+        assert not ex.solution and len(ex.failed) == 1

@@ -57,6 +57,8 @@ def test_cycle_text_and_plot(tmp_path, capsys):
     (["--friction", "-0.1"], "friction must be"),
     (["--friction", "abc"], "friction must be"),
     (["--friction", "0.3", "--pressure", "150,100"], "increasing"),
+    (["--friction", "0.3", "--pressure", "0,0,10"], "each value once"),
+    (["--friction", "0.3", "--pressure", "100,110,110,120"], "each value once"),
     (["--friction", "0.3", "--actuator", "7"], "actuator must be"),
     (["--friction", "0.3", "--tol", "nan"], "tol must be"),
 ])

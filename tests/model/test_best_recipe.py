@@ -33,6 +33,11 @@ RECIPE = ("osqp", "qpsolvers-scs")  # the back-ends whose `default` recipe carri
 #: paper scenes (θ °, h mm; N = 140) that touch the wall, where `default` without the
 #: recipe's ε was refused (results/formulations/targets-best-default.md before it)
 SCENES = [(150, 3), (120, 2), (180, 5)]
+#: scenes whose answer at the recipe is accepted on one host and refused by the judge on
+#: another: whether a first-order back-end's iterations reach the judge's residual is its
+#: build's (BLAS kernels, SIMD width). SCS on (150°, 3 mm): accepted on the hosts of the
+#: committed runs, refused ("inaccurate by lcpbench's residuals") on an AMD Zen 5 host
+HOST_REFUSALS = {("qpsolvers-scs", 150, 3)}
 
 
 def _needs(backend):
@@ -99,11 +104,10 @@ def test_a_step_is_handed_the_recipe_eps_and_judged_at_default(backend):
 @pytest.mark.parametrize("backend", RECIPE)
 @pytest.mark.parametrize("theta,height", SCENES)
 def test_best_at_default_agrees_with_the_energy_minimum(backend, theta, height, oracle):
-    """An answer the judge accepts agrees with the energy minimum. Whether a first-order
-    back-end's iterations reach the judge's residual on one scene is its build's (BLAS,
-    SIMD width): the recipe promises >= 95 % of the grid (SCS 96 %), measured in
-    results/formulations/, not every scene; SCS's answer on (150°, 3 mm) is accepted on
-    one host and refused on another. A refusal must be the judge's, never an answer."""
+    """An answer the judge accepts agrees with the energy minimum, and every scene here is
+    accepted but those listed in :data:`HOST_REFUSALS` (the recipe promises >= 95 % of
+    the grid, SCS 96 %, measured in results/formulations/, not every scene), where a
+    refusal must be the judge's, never an answer."""
     _needs(backend)
     scene = ActuatorScene(theta=theta, height=height, links=140)
     res = lcpbench.solve(scene, solver=backend, settings="default", tol=1e-3,
@@ -111,10 +115,10 @@ def test_best_at_default_agrees_with_the_energy_minimum(backend, theta, height, 
     assert res.eps == best_eps("default")[backend]  # the typed field: what it was handed
     assert res.to_dict()["eps"] == res.eps
     assert parse_formulation(res.extra["formulation"]).eps == res.eps
-    if not res.converged:
-        assert res.reason.startswith(("not accepted by lcpbench's judge",
-                                      "contact step not solved")), res.reason
+    if not res.converged and (backend, theta, height) in HOST_REFUSALS:
+        assert res.reason.startswith("not accepted by lcpbench's judge"), res.reason
         return
+    assert res.converged, res.reason
     ref = oracle[theta, height]
     err = abs(res.total_force - ref.total_force) / ref.total_force
     assert err <= 1e-3  # target 1's rule at tol 1e-3: min(1e-3, 100·tol)

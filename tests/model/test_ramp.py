@@ -205,35 +205,3 @@ def test_the_height_steps_of_the_path_run_in_one_kernel_call(scene, monkeypatch)
     one_by_one = lcpbench.solve(scene)
     assert one_by_one.total_force == pytest.approx(res.total_force, rel=1e-12)
     np.testing.assert_allclose(one_by_one.alpha, res.alpha, rtol=0, atol=1e-12)
-
-
-@pytest.mark.parametrize("scene", [
-    # rows of two sections of the mixed batch's kind (benchmarks/mixed_batch.py, seed 7,
-    # at N = 40: the oracle's finite-difference Hessian)
-    SectionedScene(sections=[(168.62, 15.0), (-168.62, 15.0)], height=2.02, links=40),
-    SectionedScene(sections=[(177.1, 15.0), (-177.1, 15.0)], height=2.65, links=40),
-    *PAST_THE_VERTICAL,
-])
-def test_the_rest_of_the_path_in_one_sqp_solve_reaches_the_state_of_its_steps(
-        scene, monkeypatch):
-    jumps = []
-    real = ramp._rest_in_one
-
-    def spy(*args):
-        jumps.append(real(*args))
-        return jumps[-1]
-
-    monkeypatch.setattr(ramp, "_rest_in_one", spy)
-    res = lcpbench.solve(scene, start="ramp")
-    assert res.converged and "in the link angles" in res.reason
-    assert len(jumps) == 1 and jumps[0] is not None  # the rest of the path in one solve
-    _assert_stable_kkt_point(scene, res)
-    # A route comparison, kept because the oracle checks the answer to the driver's
-    # tolerance only and a row may have several stable states: the path step by step
-    # (one SQP solve a step near the vertical) reaches the same state, and the SQP
-    # converges to 1e-9 rad, so the same answer to round-off.
-    monkeypatch.setattr(ramp, "_rest_in_one", lambda *a: None)
-    step_by_step = lcpbench.solve(scene, start="ramp")
-    assert step_by_step.converged
-    assert step_by_step.total_force == pytest.approx(res.total_force, rel=1e-12)
-    np.testing.assert_allclose(step_by_step.alpha, res.alpha, rtol=0, atol=1e-12)

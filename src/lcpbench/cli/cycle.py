@@ -70,7 +70,13 @@ def pressures_from(text) -> np.ndarray:
     if text is None:
         lo, hi, step = PAPER_PSI_STEPS
         return np.arange(lo, hi + step / 2, step) * KPA_PER_PSI
-    return np.asarray(parse_range(text, "pressure"), float)
+    values = np.asarray(parse_range(text, "pressure"), float)
+    typed = [v for v in str(text).split(",") if v.strip()]
+    if ":" not in str(text) and (len(typed) != values.size  # (parse_range drops repeats)
+                                 or np.any(np.diff([float(v) for v in typed]) <= 0)):
+        raise ProblemError(f"--pressure must be increasing, each value once (kPa), got "
+                           f"{text!r}")
+    return values
 
 
 def cmd_cycle(args) -> int:

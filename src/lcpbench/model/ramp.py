@@ -36,19 +36,6 @@ from 34 active-set changes (1.6–1.8 ms) to none (0.55 ms). The SQP converges t
 10⁻⁹ rad whatever its first active set, so the answer is the same to round-off
 (345 rows of sections, benchmarks/cold_sqp_states.py's and the mixed batch's).
 
-At the first step that goes to the SQP, the rest of the path is tried in one SQP solve at
-s = 1, from that step's start and multipliers: the SQP's steps are regular at every angle,
-and the remaining 10°–40° take it 5–6 steps, where the steps one by one take 2–4 SQP
-solves of 5–8. Where it does not converge in :data:`PATH_ANGLE_STEPS`, the path goes on
-step by step from there, as before. On 270 rows along their loading path
-(``start="ramp"``: the mixed batch's rows of two sections of seeds 7 and 11–15, and 120
-seeded rows of 2–3 sections with independent signed θ in 100°–180°, h in 1–5 mm, one
-wall or a channel) every row certified both ways is one state
-(:func:`lcpbench.escalations.same_state`), its total force the same to 6e-15 relative;
-2 rows whose steps one by one stopped are certified now (feasible, complementary, the
-finite-difference KKT residual of tests/energy_oracle.py ≤ 1e-8); the paths take a
-third of the time.
-
 The rest shapes of a row of sections at every s come in one pass (the scene's
 ``rest_shapes``; nothing else of its chain depends on s). Where the solve kernel takes
 the chain (the built-in back-end, the globalised or Newton scheme, the kernel's layout,
@@ -84,7 +71,7 @@ STEP_DEG = 10.0
 MAX_STEPS = 72
 #: the SQP steps a step of the path may take: a step of 10° from the last answer takes
 #: 5-8 (rows of 3-4 sections, N = 420); one that does not converge in 12 gives way to
-#: the height steps (the rest of the path in one SQP solve, to the steps one by one)
+#: the height steps
 PATH_ANGLE_STEPS = 12
 
 
@@ -147,7 +134,6 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
     start, used, out, in_angles = None, engine, None, 0
     last = None  # the DriverOutput the start was taken from
     k, walked_to = 0, -1  # walked_to: where the last walk stopped (its next step failed)
-    jumped = False  # whether the rest of the path was tried in one SQP solve
     while k < len(path):
         s = path[k]
         angles = angles_ok and start is not None
@@ -162,16 +148,6 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
                 out, used, start, last = walked, "compiled", DriverStart(
                     walked.alpha, walked.last_step), walked
                 continue  # (a step that did not converge: run below, as for any back-end)
-        if to_sqp and not jumped and k < len(path) - 1:
-            # the rest of the path in one SQP solve, at s = 1 (its steps are regular at
-            # every angle); where it does not converge, the path's steps one by one
-            jumped = True
-            sqp = _rest_in_one(whole, start, last, tol, max_outer)
-            if sqp is not None:
-                in_angles += 1
-                return sqp, f"numpy (SQP steps in the link angles: {_WHY})", (
-                    f"followed the load from zero in {len(path)} steps{_told(in_angles)}"
-                    f"; from step {k + 1} to the last in one")
         chain = _chain_at(scene, whole, shapes, k)
         sqp = _in_angles(chain, start, last, tol, max_outer) if to_sqp else None
         if sqp is None:
@@ -226,14 +202,6 @@ def _in_angles(chain, start: DriverStart, last: DriverOutput, tol: float,
     (:func:`_multipliers`), or None where it did not converge."""
     first = DriverStart(start.alpha, start.warm, _multipliers(last, tol, chain.force_scale))
     return run_heavy(chain, first, tol, min(max_outer, PATH_ANGLE_STEPS), why=_WHY)
-
-
-def _rest_in_one(whole, start: DriverStart, last: DriverOutput, tol: float,
-                 max_outer: int) -> DriverOutput | None:
-    """The rest of the path in one SQP solve: the answer at s = 1 (``whole``: the scene's
-    chain) from the start of the path's first step near the vertical (:func:`_in_angles`),
-    or None where it does not converge (the path then goes on step by step)."""
-    return _in_angles(whole, start, last, tol, max_outer)
 
 
 def _rest_shapes(scene, path: list[float]) -> tuple | None:

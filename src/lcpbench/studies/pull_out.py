@@ -12,8 +12,9 @@ the last two held states (:func:`predicted`): a step past P* (gross slip: no
 equilibrium) is not kept, and the next one goes at most half way to it (with the start
 held only, the pull 0.999 of the way to its capacity is taken as such a gross slip
 without being solved: :data:`ASSUME_SLIP`); a state that fails for another reason (a
-step Lemke cannot solve) says nothing of P*, and the next step goes half as far. The nodes that pass from stick to slip between two held
-states are its events. P* is the secant's root once it is within ``rtol`` of the
+step Lemke cannot solve) says nothing of P*, and the next step goes half as far. The
+nodes that pass from stick to slip between two held states are its events. P* is the
+secant's root once it is within ``rtol`` of the
 last pull held (g(P) ≈ 0 there: the state is at gross slip), or of the root before
 it while within :data:`SECANT_REACH` of the last pull held (within ~1e-7 of P* Lemke
 is inexact on the degenerate step, docs/friction.md, so the states stop short of
