@@ -139,20 +139,24 @@ def _held_on_a_ramp(scene, pull, step=0.01):
     return all(r.converged for r in lcpbench.solve_path(scene, states, tol=1e-10))
 
 
-@pytest.mark.parametrize("links", [330, 420])
-def test_the_anchoring_actuator_pulls_out_where_its_first_steps_have_two_answers(links):
-    """The anchoring actuator (150°, 5.5 mm, μ 0.3, sliders; 420 links is its default).
-    After a held state the first outer step of the next has two answers, one with every
-    contact node sliding; lead-1204's pull_out warm-started every attempt after a real
-    gross slip from that sliding answer, read "gross slip" off its first step 17 times
-    and ran out of solves claiming P* between 119.515 and 119.516 mN (N = 420; at 330,
-    126.33 mN) while P* is ~153.9 mN. The pull-out must agree with an independent
+@pytest.mark.parametrize("theta,height,links", [(150, 5.5, 330), (150, 5.5, 420),
+                                                (180, 6.5, 420)])
+def test_the_anchoring_actuator_pulls_out_where_its_first_steps_have_two_answers(
+        theta, height, links):
+    """The anchoring actuator (μ 0.3, sliders; 420 links is its default). After a held
+    state the first outer step of the next has two answers, one with every contact node
+    sliding; lead-1204's pull_out warm-started every attempt after a real gross slip
+    from that sliding answer, read "gross slip" off its first step 17 times and ran out
+    of solves claiming P* between 119.515 and 119.516 mN (150°, 5.5 mm, N = 420; at 330,
+    126.33 mN) while P* is ~153.9 mN; at 180°, 6.5 mm it claimed P* below 151.977 mN
+    (P* ~176.2 mN; there the retry from the last held state's own end state is needed,
+    not from the predicted start). The pull-out must agree with an independent
     bisection on whether the pull held, each pull reached by solve_path on a ramp of
     0.01 N steps (at gross slip every node slides, T = −μN: the state there does not
     depend on the path that reached it). The channel's walls are flat: at gross slip
     the pull is μΣN (the flat-wall identity; here to 1e-5, the last held state being
     within rtol of P*)."""
-    scene = lcpbench.anchoring_actuator(150, 5.5, links=links, friction=0.3,
+    scene = lcpbench.anchoring_actuator(theta, height, links=links, friction=0.3,
                                         left_end="slider", right_end="slider")
     po = lcpbench.pull_out(scene)
     assert po.converged, po.reason

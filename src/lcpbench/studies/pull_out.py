@@ -16,7 +16,8 @@ step Lemke cannot solve) says nothing of P*, and the next step goes half as far.
 attempt starts its steps from the last held state's support (:meth:`StepLemke.rewind`),
 not from a gross slip's: the first step after a held state can have two answers, one
 sliding everywhere. A gross slip read off fewer than ``GROSS_STEPS`` outer steps is
-retried once with Lemke's pivots after that support (not the frictionless-contact
+retried once from the last held state itself (its end state, not the predicted start),
+with Lemke's pivots where its support does not hold a step (not the frictionless-contact
 guesses), and if it slips so again it is still no bound on P* (it says nothing of P*,
 as a failure). The nodes that pass from stick to slip between two held
 states are its events. P* is the secant's root once it is within ``rtol`` of the
@@ -157,9 +158,10 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
         res, end = _attempt(scene, P, predicted(ends, P, current), x_prev, y_prev, lcp, kept,
                             tol=tol, max_outer=max_outer)
         solves += 1
-        if path and _unproven(res) and solves < max_solves:  # once more, Lemke after S
-            res, end = _attempt(scene, P, predicted(ends, P, current), x_prev, y_prev, lcp,
-                                kept, tol=tol, max_outer=max_outer, guesses=False)
+        if path and _unproven(res) and solves < max_solves:  # once more: from the last
+            # held state itself (its end, not the predicted start), Lemke after its support
+            res, end = _attempt(scene, P, current, x_prev, y_prev, lcp, kept, tol=tol,
+                                max_outer=max_outer, guesses=False)
             solves += 1
         if res.converged:
             if path:
