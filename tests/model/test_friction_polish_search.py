@@ -134,10 +134,13 @@ def test_a_repeated_refusal_is_not_searched_and_returns_the_answer(monkeypatch):
     status SOLVED; and the exact oracle (Fractions: flips, then every state of its edge
     nodes) finds no exact answer within 1e-6 of it either, so the search it was spared
     had nothing to keep. (The pull-out as it was before ASSUME_SLIP, a gross slip solved
-    at its second state: its third then takes the outer steps that repeat a refusal.)"""
+    at its second state, and before an attempt after a gross slip was warm-started from
+    the last held state's support (StepLemke.rewind): its third state then starts from
+    the sliding answer's support and takes the outer steps that repeat a refusal.)"""
     import lcpbench.studies.pull_out as study
 
     monkeypatch.setattr(study, "ASSUME_SLIP", False)
+    monkeypatch.setattr(friction_lemke.StepLemke, "rewind", lambda self, warm: None)
     calls = spied(monkeypatch)
     res = lcpbench.pull_out(CHANNEL)
     assert res.converged

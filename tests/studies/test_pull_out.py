@@ -109,8 +109,8 @@ def test_the_assumed_slip_against_a_capacity_of_known_root(monkeypatch, slope):
         z = np.zeros(3)
         res = types.SimpleNamespace(
             converged=held, reason="held" if held else "gross slip: (a model)",
-            stick=np.zeros(3, bool), x=z, y=z, forces=z, forces_lower=None,
-            tangential_forces=z, total_force=0.0, pull=P)
+            outer_iterations=3, stick=np.zeros(3, bool), x=z, y=z, forces=z,
+            forces_lower=None, tangential_forces=z, total_force=0.0, pull=P)
         return res, current
 
     monkeypatch.setattr(study, "advance", advance)
@@ -129,3 +129,101 @@ def test_the_assumed_slip_against_a_capacity_of_known_root(monkeypatch, slope):
         assert counts[True][0] == counts[False][0] - 1
     else:
         assert any(P > 0.999 for P in counts[True][1])  # past the assumed slip
+
+
+def _held_on_a_ramp(scene, pull, step=0.01):
+    """Whether ``scene`` holds ``pull`` reached by solve_path on a ramp from 0 in steps of
+    at most ``step`` N (every state of the ramp held)."""
+    k = max(1, int(np.ceil(pull / step)))
+    states = [{"pull": float(p)} for p in np.linspace(0.0, pull, k + 1)]
+    return all(r.converged for r in lcpbench.solve_path(scene, states, tol=1e-10))
+
+
+@pytest.mark.parametrize("theta,height,links", [(150, 5.5, 330), (150, 5.5, 420),
+                                                (180, 6.5, 420)])
+def test_the_anchoring_actuator_pulls_out_where_its_first_steps_have_two_answers(
+        theta, height, links):
+    """The anchoring actuator (μ 0.3, sliders; 420 links is its default). After a held
+    state the first outer step of the next has two answers, one with every contact node
+    sliding; lead-1204's pull_out warm-started every attempt after a real gross slip
+    from that sliding answer, read "gross slip" off its first step 17 times and ran out
+    of solves claiming P* between 119.515 and 119.516 mN (150°, 5.5 mm, N = 420; at 330,
+    126.33 mN) while P* is ~153.9 mN; at 180°, 6.5 mm it claimed P* below 151.977 mN
+    (P* ~176.2 mN; there the retry from the last held state's own end state is needed,
+    not from the predicted start). The pull-out must agree with an independent
+    bisection on whether the pull held, each pull reached by solve_path on a ramp of
+    0.01 N steps (at gross slip every node slides, T = −μN: the state there does not
+    depend on the path that reached it). The channel's walls are flat: at gross slip
+    the pull is μΣN (the flat-wall identity; here to 1e-5, the last held state being
+    within rtol of P*)."""
+    scene = lcpbench.anchoring_actuator(theta, height, links=links, friction=0.3,
+                                        left_end="slider", right_end="slider")
+    po = lcpbench.pull_out(scene)
+    assert po.converged, po.reason
+    assert po.solves <= 20
+    lo, hi = 0.0, 2.0 * po.force
+    assert not _held_on_a_ramp(scene, hi)
+    for _ in range(30):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if _held_on_a_ramp(scene, mid) else (lo, mid)
+    assert abs(po.force - lo) <= 1e-6 * lo
+    assert abs(po.capacity - po.force) <= 1e-5 * po.force
+    assert abs(0.3 * po.normal_force_total - po.force) <= 1e-5 * po.force
+    assert all(r.converged for r in po.path)
+
+
+def _stepping_model(monkeypatch, star, jump, unproven_above):
+    """pull_out on a model of known root P* = ``star`` (capacity C(P) = 1 − P / 12): a
+    state held iff P <= P*, except that one attempted more than ``jump`` N past the last
+    held pull with the step's guesses on ends "gross slip" on its first outer step (the
+    anchoring actuator's step that slides everywhere; its retry, Lemke after the held
+    support, holds); a state past P* ends in gross slip after 3 outer steps, or after 1
+    where ``unproven_above``. Returns the pulls solved."""
+    import types
+
+    import lcpbench.studies.pull_out as study
+
+    solved, last = [], [0.0]
+
+    def advance(scene, state, current, *args, lcp, **kw):
+        P = scene.pull
+        solved.append(P)
+        spurious = lcp.guesses and P - last[0] > jump and len(solved) > 1
+        held = P <= star and not spurious
+        steps = 1 if spurious or unproven_above else 3
+        if held:
+            last[0] = P
+        z = np.zeros(3)
+        res = types.SimpleNamespace(
+            converged=held, reason="held" if held else "gross slip: (a model)",
+            outer_iterations=steps, stick=np.zeros(3, bool), x=z, y=z, forces=z,
+            forces_lower=None, tangential_forces=z, total_force=0.0, pull=P)
+        return res, current
+
+    monkeypatch.setattr(study, "advance", advance)
+    monkeypatch.setattr(study, "capacity", lambda res: 1.0 - res.pull / 12.0)
+    return solved
+
+
+def test_a_gross_slip_on_a_first_step_is_retried_before_it_bounds_p_star(monkeypatch):
+    """A gross slip read off one outer step, where the step has a sliding answer beside
+    the held one, is retried (Lemke after the last held state's support) and holds: P*
+    is found to rtol, and no pull below it is ever claimed as a gross slip."""
+    star = 12.0 / 13.0
+    solved = _stepping_model(monkeypatch, star, jump=0.05, unproven_above=False)
+    po = lcpbench.pull_out(SCENE)
+    assert po.converged, po.reason
+    assert abs(po.force - star) <= 1e-6 * star
+    assert po.solves == len(solved) <= 20
+
+
+def test_a_gross_slip_on_a_first_step_never_brackets_p_star(monkeypatch):
+    """Where every state past P* ends its gross slip on its first outer step (retried
+    too), none of them is a bound on P*: the reason never claims a bracket; P* is the
+    secant's root (the model's capacity is linear) and is right."""
+    star = 12.0 / 13.0
+    _stepping_model(monkeypatch, star, jump=np.inf, unproven_above=True)
+    po = lcpbench.pull_out(SCENE)
+    assert "lies between" not in po.reason and "bracketed" not in po.reason
+    if po.converged:
+        assert abs(po.force - star) <= 1e-6 * star

@@ -424,6 +424,18 @@ class StepLemke:
         self.first = 0
         self.support = np.empty(0, np.int64)  # the last answer's support (basic z), by z_keys
         self.warm_solves = 0  # the linear solves of the warm start (counted, for benchmarks)
+        self.guesses = True  # False: no frictionless-contact guesses, Lemke after S
+
+    def warm_start(self) -> tuple[int, np.ndarray]:
+        """What it carries from one step to the next (the covering that solved last, the
+        last answer's support): kept at a held state of a path, given back by
+        :meth:`rewind` (a pull-out's attempt after a gross slip starts from the last held
+        state's, not from the sliding answer's: docs/friction.md, "Pull-out")."""
+        return self.first, self.support.copy()
+
+    def rewind(self, warm: tuple[int, np.ndarray]) -> None:
+        """Start the next step from ``warm`` (:meth:`warm_start`)."""
+        self.first, self.support = warm[0], warm[1].copy()
 
     def last_support(self, M: np.ndarray, q: np.ndarray, keys: np.ndarray | None):
         """The LCP's answer by block principal pivoting (:func:`lcpbench.solvers.
@@ -518,8 +530,8 @@ class StepLemke:
         Lemke's pivots."""
         sol = self.last_support(M, q, keys)
         contacts: dict = {}  # the step's frictionless contacts, once
-        for budget in (WARM_GUESS_CHANGES, WARM_CHANGES):  # a short try of each guess first
-            for slide in (False, True):
+        for budget in (WARM_GUESS_CHANGES, WARM_CHANGES) if self.guesses else ():
+            for slide in (False, True):  # (a short try of each guess first)
                 if sol is None:
                     sol = self.first_guess(M, q, keys, pair, slide, budget, contacts)
         if sol is not None:

@@ -12,9 +12,15 @@ the last two held states (:func:`predicted`): a step past P* (gross slip: no
 equilibrium) is not kept, and the next one goes at most half way to it (with the start
 held only, the pull 0.999 of the way to its capacity is taken as such a gross slip
 without being solved: :data:`ASSUME_SLIP`); a state that fails for another reason (a
-step Lemke cannot solve) says nothing of P*, and the next step goes half as far. The
-nodes that pass from stick to slip between two held states are its events. P* is the
-secant's root once it is within ``rtol`` of the
+step Lemke cannot solve) says nothing of P*, and the next step goes half as far. Every
+attempt starts its steps from the last held state's support (:meth:`StepLemke.rewind`),
+not from a gross slip's: the first step after a held state can have two answers, one
+sliding everywhere. A gross slip read off fewer than ``GROSS_STEPS`` outer steps is
+retried once from the last held state itself (its end state, not the predicted start),
+with Lemke's pivots where its support does not hold a step (not the frictionless-contact
+guesses), and if it slips so again it is still no bound on P* (it says nothing of P*,
+as a failure). The nodes that pass from stick to slip between two held
+states are its events. P* is the secant's root once it is within ``rtol`` of the
 last pull held (g(P) ≈ 0 there: the state is at gross slip), or of the root before
 it while within :data:`SECANT_REACH` of the last pull held (within ~1e-7 of P* Lemke
 is inexact on the degenerate step, docs/friction.md, so the states stop short of
@@ -29,7 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ProblemError
-from ..model.friction_driver import FrictionState, StepLemke
+from ..model.friction_driver import GROSS_STEPS, FrictionState, StepLemke
 from ..model.friction_path import PATH_SCENES, advance, place, with_pull
 from ..model.friction_result import FrictionResult
 from ..problems.checks import check_number
@@ -145,12 +151,18 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
         return PullOut(np.nan, np.nan, np.zeros(0), np.zeros(0), np.nan, False, why, 0)
     path, held, events, solves, ends = [], [], [], 0, []
     lcp = StepLemke()  # one for the path: the covering that solves a step carries over
+    kept = lcp.warm_start()  # ... from the last held state: every attempt starts there
     P, fail, trouble, before = float(scene.pull), None, "", np.inf
     assumed, slip = not ASSUME_SLIP, None  # the gross slip taken, not solved (ASSUME_SLIP)
     while solves < max_solves:
-        res, end = advance(with_pull(scene, P), {"pull": P}, predicted(ends, P, current),
-                           x_prev, tol=tol, max_outer=max_outer, lcp=lcp, y_prev=y_prev)
+        res, end = _attempt(scene, P, predicted(ends, P, current), x_prev, y_prev, lcp, kept,
+                            tol=tol, max_outer=max_outer)
         solves += 1
+        if path and _unproven(res) and solves < max_solves:  # once more: from the last
+            # held state itself (its end, not the predicted start), Lemke after its support
+            res, end = _attempt(scene, P, current, x_prev, y_prev, lcp, kept, tol=tol,
+                                max_outer=max_outer, guesses=False)
+            solves += 1
         if res.converged:
             if path:
                 slid = path[-1].stick & ~res.stick
@@ -159,11 +171,15 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
             held.append((P, capacity(res) - P))
             current, x_prev, y_prev = end, res.x.copy(), res.y.copy()
             ends.append((P, end))
+            kept = lcp.warm_start()
         elif not path:
             return PullOut(np.nan, np.nan, np.zeros(0), np.zeros(0), np.nan, False,
                            f"the start (pull {P:g} N) does not hold: {res.reason}", solves)
-        elif res.reason.startswith("gross slip"):  # no equilibrium: P* < P
-            fail = P if fail is None else min(fail, P)
+        elif res.reason.startswith("gross slip") and not _unproven(res):
+            fail = P if fail is None else min(fail, P)  # no equilibrium: P* < P
+        elif res.reason.startswith("gross slip"):  # read off fewer steps: not a proof
+            trouble = (f"; the state at pull {P:g} N ended in gross slip after "
+                       f"{res.outer_iterations} outer step(s), not taken as a bound on P*")
         else:  # a state that failed for another reason says nothing of P*
             trouble = f"; the state at pull {P:g} N did not converge ({res.reason})"
         root, last = _secant_root(held), held[-1][0]
@@ -193,6 +209,26 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
                    + ("" if fail is None else
                       f"; P* lies between {held[-1][0]:.6g} N (held) and {fail:.6g} N "
                       f"(gross slip)"))
+
+
+def _attempt(scene, P, start, x_prev, y_prev, lcp, kept, *, tol, max_outer, guesses=True):
+    """The state at pull ``P`` from ``start``, its steps warm-started from the last held
+    state's (``kept``, :meth:`StepLemke.warm_start`); ``guesses`` False: where that
+    support does not hold a step, Lemke's pivots solve it, not the guesses."""
+    lcp.rewind(kept)
+    lcp.guesses = guesses
+    try:
+        return advance(with_pull(scene, P), {"pull": P}, start, x_prev, tol=tol,
+                       max_outer=max_outer, lcp=lcp, y_prev=y_prev)
+    finally:
+        lcp.guesses = True
+
+
+def _unproven(res) -> bool:
+    """A gross slip read off fewer than GROSS_STEPS outer steps: where the step has
+    several answers (one sliding everywhere), not a proof that there is no equilibrium."""
+    return (not res.converged and res.reason.startswith("gross slip")
+            and res.outer_iterations < GROSS_STEPS)
 
 
 def predicted(ends: list, P: float, current: FrictionState) -> FrictionState:
