@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from friction_oracle import recorded
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 import exact_friction as ef  # noqa: E402
@@ -152,23 +153,6 @@ def test_the_edge_search_finds_the_exact_answer_on_a_neighbouring_index_set(monk
     assert dist[1] == pytest.approx(1e-7 / (1.0), rel=1e-6)
 
 
-def _last_lemke_step(scene, states):
-    """The last contact step of a path solved by Lemke, and Lemke's answer of it."""
-    import lcpbench
-    from lcpbench.model.friction_solvers import step_runner
-
-    steps, run = [], step_runner("lemke")
-
-    def keep(fs):
-        sol = run(fs)
-        steps.append((fs, sol))
-        return sol
-
-    keep.takes_step, keep.newton = True, True
-    assert all(r.converged for r in lcpbench.solve_path(scene, states, lcp=keep))
-    return steps[-1]
-
-
 def test_t_per_node_along_a_sticking_run_on_level_links_is_indeterminate():
     """Theory: two nodes pressed on a rigid wall and sticking are held in x and y; when
     the link between them is level, a horizontal force moved from one to the other
@@ -191,7 +175,9 @@ def test_t_per_node_along_a_sticking_run_on_level_links_is_indeterminate():
 
     scene = ActuatorScene(theta=170, height=2.5, links=30, left_end="pinned",
                           right_end="slider", friction=0.3)
-    fs, sol = _last_lemke_step(scene, [{}, {"pull": 0.05}])
+    res, steps = recorded(scene, [{}, {"pull": 0.05}], tol=None)
+    assert all(r.converged for r in res)
+    fs, sol = steps[-1]
     step = ef.chain_step(fs)
     v = ef.answer_values(fs, step, sol.z)
     ex, dist, _ = ef.nearest_exact(step, v)
