@@ -172,6 +172,48 @@ def test_the_anchoring_actuator_pulls_out_where_its_first_steps_have_two_answers
     assert all(r.converged for r in po.path)
 
 
+def test_the_anchoring_actuator_at_friction_half_pulls_out():
+    """The anchoring actuator at μ 0.5 (N = 420, sliders): lead-1204 ran out of its 20
+    solves, most spent on pulls whose first outer step slid everywhere (the secant's
+    root overshoots P* again and again where the capacity falls steeply before it).
+    The pull-out must agree with an independent bisection on whether the pull held,
+    each pull reached by solve_path on a ramp of 0.002 N steps from 0 (a coarser ramp
+    can itself slide on a first step), within the bisection's width; and the channel's
+    walls are flat: at gross slip the pull is μΣN (to 1e-5, the last held state being
+    within rtol of P*)."""
+    scene = lcpbench.anchoring_actuator(150, 5.5, friction=0.5, left_end="slider",
+                                        right_end="slider")
+    po = lcpbench.pull_out(scene)
+    assert po.converged, po.reason
+    assert po.solves <= 20
+    assert all(r.converged for r in po.path)
+    assert abs(po.capacity - po.force) <= 1e-5 * po.force
+    assert abs(0.5 * po.normal_force_total - po.force) <= 1e-5 * po.force
+    lo, hi = 0.95 * po.force, 1.05 * po.force
+    assert _held_on_a_ramp(scene, lo, step=0.002)
+    assert not _held_on_a_ramp(scene, hi, step=0.002)
+    for _ in range(14):  # to ~1e-5 of P*
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if _held_on_a_ramp(scene, mid, step=0.002) else (lo, mid)
+    assert lo - 1e-5 * po.force <= po.force <= hi + 1e-5 * po.force
+
+
+def test_the_quadratic_root_of_a_capacity_that_bends_down():
+    """After a first-step slide pull_out steps no further than the root of the quadratic
+    through the last three held (P, g): on g(P) = 1 − P − P² (concave; root (√5 − 1)/2)
+    that root is exact, below the secant's; a g that does not bend down keeps the
+    secant's root."""
+    from lcpbench.studies.pull_out import _quadratic_root, _secant_root
+
+    held = [(P, 1.0 - P - P * P) for P in (0.1, 0.2, 0.3)]
+    secant = _secant_root(held)
+    assert _quadratic_root(held, secant) == pytest.approx((np.sqrt(5.0) - 1.0) / 2.0,
+                                                          rel=1e-12)
+    assert _quadratic_root(held, secant) < secant
+    straight = [(P, 1.0 - P) for P in (0.1, 0.2, 0.3)]
+    assert _quadratic_root(straight, 1.0) == 1.0
+
+
 def _stepping_model(monkeypatch, star, jump, unproven_above):
     """pull_out on a model of known root P* = ``star`` (capacity C(P) = 1 − P / 12): a
     state held iff P <= P*, except that one attempted more than ``jump`` N past the last
