@@ -179,17 +179,18 @@ def test_the_anchoring_actuator_at_friction_half_pulls_out():
     The pull-out must agree with an independent bisection on whether the pull held,
     each pull reached by solve_path on a ramp of 0.002 N steps from 0 (a coarser ramp
     can itself slide on a first step), within the bisection's width; and the channel's
-    walls are flat: at gross slip the pull is μΣN (to 1e-5, the last held state being
-    within rtol of P*)."""
+    walls are flat: at gross slip the pull is μΣN (to 5e-5: the last held pull is
+    within SECANT_REACH = 1e-5 of P*, and g = μΣN − P falls ~4× as fast as P rises
+    there)."""
     scene = lcpbench.anchoring_actuator(150, 5.5, friction=0.5, left_end="slider",
                                         right_end="slider")
     po = lcpbench.pull_out(scene)
     assert po.converged, po.reason
     assert po.solves <= 20
     assert all(r.converged for r in po.path)
-    assert abs(po.capacity - po.force) <= 1e-5 * po.force
-    assert abs(0.5 * po.normal_force_total - po.force) <= 1e-5 * po.force
-    lo, hi = 0.95 * po.force, 1.05 * po.force
+    assert abs(po.capacity - po.force) <= 5e-5 * po.force
+    assert abs(0.5 * po.normal_force_total - po.force) <= 5e-5 * po.force
+    lo, hi = 0.9 * po.force, 1.05 * po.force
     assert _held_on_a_ramp(scene, lo, step=0.002)
     assert not _held_on_a_ramp(scene, hi, step=0.002)
     for _ in range(14):  # to ~1e-5 of P*
