@@ -199,6 +199,29 @@ def test_the_anchoring_actuator_at_friction_half_pulls_out():
     assert lo - 1e-5 * po.force <= po.force <= hi + 1e-5 * po.force
 
 
+def test_a_step_that_slides_as_a_whole_is_solved_again_by_lemkes_pivots(monkeypatch):
+    """The anchoring actuator at 150°, 4.5 mm, μ 0.5 (N = 420) on the path of pulls
+    pull_out took (0, 122.036, 189.255, 252.871 mN): the first outer step of the last
+    state has two answers; the warm start's guess "every pair sliding" carries the chain
+    ~4 m along x, Lemke's pivots on the same step slide 4 of 6 pairs and move it 3 µm.
+    The state's outer loop solves such a step again and holds; without the re-solve the
+    state ends in a gross slip after one outer step. Independent checks: friction holds
+    the pull (μΣN > P), and a solve_path ramp of 0.002 N steps holds it too."""
+    import lcpbench.model.friction_driver as driver
+
+    scene = lcpbench.anchoring_actuator(150, 4.5, friction=0.5, left_end="slider",
+                                        right_end="slider")
+    states = [{}] + [{"pull": p} for p in (0.122036, 0.189255, 0.252871)]
+    res = lcpbench.solve_path(scene, states, tol=1e-10)
+    assert all(r.converged for r in res), res[-1].reason
+    assert 0.5 * res[-1].total_force > 0.252871
+    assert _held_on_a_ramp(scene, 0.252871, step=0.002)
+    monkeypatch.setattr(driver, "_stick_preferred", lambda lcp, sol, out, *a: (sol, out))
+    last = lcpbench.solve_path(scene, states, tol=1e-10)[-1]
+    assert not last.converged and last.reason.startswith("gross slip")
+    assert last.outer_iterations == 1
+
+
 def test_the_quadratic_root_of_a_capacity_that_bends_down():
     """After a first-step slide pull_out steps no further than the root of the quadratic
     through the last three held (P, g): on g(P) = 1 − P − P² (concave; root (√5 − 1)/2)
