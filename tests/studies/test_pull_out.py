@@ -172,6 +172,72 @@ def test_the_anchoring_actuator_pulls_out_where_its_first_steps_have_two_answers
     assert all(r.converged for r in po.path)
 
 
+def test_the_anchoring_actuator_at_friction_half_pulls_out():
+    """The anchoring actuator at μ 0.5 (N = 420, sliders): lead-1204 ran out of its 20
+    solves, most spent on pulls whose first outer step slid everywhere (the secant's
+    root overshoots P* again and again where the capacity falls steeply before it).
+    The pull-out must agree with an independent bisection on whether the pull held,
+    each pull reached by solve_path on a ramp of 0.002 N steps from 0 (a coarser ramp
+    can itself slide on a first step), within the bisection's width; and the channel's
+    walls are flat: at gross slip the pull is μΣN (to 5e-5: the last held pull is
+    within SECANT_REACH = 1e-5 of P*, and g = μΣN − P falls ~4× as fast as P rises
+    there)."""
+    scene = lcpbench.anchoring_actuator(150, 5.5, friction=0.5, left_end="slider",
+                                        right_end="slider")
+    po = lcpbench.pull_out(scene)
+    assert po.converged, po.reason
+    assert po.solves <= 20
+    assert all(r.converged for r in po.path)
+    assert abs(po.capacity - po.force) <= 5e-5 * po.force
+    assert abs(0.5 * po.normal_force_total - po.force) <= 5e-5 * po.force
+    lo, hi = 0.9 * po.force, 1.05 * po.force
+    assert _held_on_a_ramp(scene, lo, step=0.002)
+    assert not _held_on_a_ramp(scene, hi, step=0.002)
+    for _ in range(14):  # to ~1e-5 of P*
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if _held_on_a_ramp(scene, mid, step=0.002) else (lo, mid)
+    assert lo - 1e-5 * po.force <= po.force <= hi + 1e-5 * po.force
+
+
+def test_a_step_that_slides_as_a_whole_is_solved_again_by_lemkes_pivots(monkeypatch):
+    """The anchoring actuator at 150°, 4.5 mm, μ 0.5 (N = 420) on the path of pulls
+    pull_out took (0, 122.036, 189.255, 252.871 mN): the first outer step of the last
+    state has two answers; the warm start's guess "every pair sliding" carries the chain
+    ~4 m along x, Lemke's pivots on the same step slide 4 of 6 pairs and move it 3 µm.
+    The state's outer loop solves such a step again and holds; without the re-solve the
+    state ends in a gross slip after one outer step. Independent checks: friction holds
+    the pull (μΣN > P), and a solve_path ramp of 0.002 N steps holds it too."""
+    import lcpbench.model.friction_driver as driver
+
+    scene = lcpbench.anchoring_actuator(150, 4.5, friction=0.5, left_end="slider",
+                                        right_end="slider")
+    states = [{}] + [{"pull": p} for p in (0.122036, 0.189255, 0.252871)]
+    res = lcpbench.solve_path(scene, states, tol=1e-10)
+    assert all(r.converged for r in res), res[-1].reason
+    assert 0.5 * res[-1].total_force > 0.252871
+    assert _held_on_a_ramp(scene, 0.252871, step=0.002)
+    monkeypatch.setattr(driver, "_stick_preferred", lambda lcp, sol, out, *a: (sol, out))
+    last = lcpbench.solve_path(scene, states, tol=1e-10)[-1]
+    assert not last.converged and last.reason.startswith("gross slip")
+    assert last.outer_iterations == 1
+
+
+def test_the_quadratic_root_of_a_capacity_that_bends_down():
+    """After a first-step slide pull_out steps no further than the root of the quadratic
+    through the last three held (P, g): on g(P) = 1 − P − P² (concave; root (√5 − 1)/2)
+    that root is exact, below the secant's; a g that does not bend down keeps the
+    secant's root."""
+    from lcpbench.studies.pull_out import _quadratic_root, _secant_root
+
+    held = [(P, 1.0 - P - P * P) for P in (0.1, 0.2, 0.3)]
+    secant = _secant_root(held)
+    assert _quadratic_root(held, secant) == pytest.approx((np.sqrt(5.0) - 1.0) / 2.0,
+                                                          rel=1e-12)
+    assert _quadratic_root(held, secant) < secant
+    straight = [(P, 1.0 - P) for P in (0.1, 0.2, 0.3)]
+    assert _quadratic_root(straight, 1.0) == 1.0
+
+
 def _stepping_model(monkeypatch, star, jump, unproven_above):
     """pull_out on a model of known root P* = ``star`` (capacity C(P) = 1 − P / 12): a
     state held iff P <= P*, except that one attempted more than ``jump`` N past the last

@@ -223,6 +223,26 @@ def _moved(scene: ActuatorScene, chain: Chain, fs: FrictionStep, z: np.ndarray,
     return N, T, tau_step, (pressed, FrictionState(alpha, x0), dalpha, tau, done, excess)
 
 
+def _stick_preferred(lcp, sol, out, start: FrictionState, args: tuple):
+    """The step solved again by Lemke's pivots (``lcp.pivots``) where the warm start's
+    answer ``sol`` (its move ``out``, :func:`_moved`) slides as a whole and runs the
+    chain away: Lemke's answer and its move where it is SOLVED and does not run away
+    (the step's answer that holds; docs/friction.md, "Pull-out"), else ``sol`` and
+    ``out`` as they were, the solver's warm start as it was after ``sol``. ``args``:
+    (scene, chain, the step, the state, tol, k_τ's multiple, x_right, pull)."""
+    scene, chain, fs, state, tol, stiff, x_right, pull = args
+    warm = lcp.warm_start()
+    again = lcp.pivots(fs.M, fs.q, z_keys(fs))
+    if again.solved:
+        out2 = _moved(scene, chain, fs, again.z, state, tol, stiff, True, x_right, pull)
+        moved = out2[3]
+        if moved is not None and abs(moved[1].x0 - start.x0) <= RUNAWAY * chain.length:
+            again.extra["start"] = "Lemke, after a warm start that slid as a whole"
+            return again, out2
+    lcp.rewind(warm)
+    return sol, out
+
+
 @dataclass
 class StateAnswer:
     """The outer loop's answer for one state (before it is judged)."""
@@ -304,6 +324,14 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
                     and stiff < TAU_STIFFEN_MAX):
                 break
             stiff *= TAU_STIFFEN
+        if moved is not None and moved[5] and abs(moved[1].x0 - start.x0) > \
+                RUNAWAY * chain.length and "start" in sol.extra and hasattr(lcp, "pivots"):
+            # a warm start's answer that slides as a whole and carries the chain away
+            # (the state would end on it): the step can have two answers, and Lemke's
+            # pivots may find the one that holds (docs/friction.md, "Pull-out")
+            sol, (N, T, tau, moved) = _stick_preferred(
+                lcp, sol, (N, T, tau, moved), start,
+                (scene, chain, fs, state, tol, stiff, x_right, pull))
         held = fs
         if defer and (final or (moved is not None and moved[4])):
             # the answer that would end the state leaves through the primal polish: the

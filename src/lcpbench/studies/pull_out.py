@@ -19,7 +19,10 @@ sliding everywhere. A gross slip read off fewer than ``GROSS_STEPS`` outer steps
 retried once from the last held state itself (its end state, not the predicted start),
 with Lemke's pivots where its support does not hold a step (not the frictionless-contact
 guesses), and if it slips so again it is still no bound on P* (it says nothing of P*,
-as a failure). The nodes that pass from stick to slip between two held
+as a failure); after such a slide the step after the next held state goes at most
+``SHAKY_SHARE`` of the way to it, and no step goes past the root of the quadratic of g
+through the last three held states where g bends down. The nodes that pass from stick
+to slip between two held
 states are its events. P* is the secant's root once it is within ``rtol`` of the
 last pull held (g(P) ≈ 0 there: the state is at gross slip), or of the root before
 it while within :data:`SECANT_REACH` of the last pull held (within ~1e-7 of P* Lemke
@@ -55,6 +58,14 @@ SECANT_REACH = 1e-5
 #: being solved (the steps go at most half way to it, as to a gross slip seen) until a
 #: secant root passes it (a capacity that does not fall); never as a bracket of P*
 ASSUME_SLIP = True
+#: after a gross slip read off fewer than GROSS_STEPS outer steps (retried too), the
+#: step that follows the next held state goes at most this share of the way to it (once:
+#: it is no bound on P*, the first step after a held state can slide everywhere where the
+#: state holds), and from then on no step goes past the root of the quadratic of g
+#: through the last three held states where g bends down. Where the capacity falls
+#: steeply near P* (the anchoring actuator at μ 0.5) the secant's root overshoots again
+#: and again, each overshoot costing two solves (docs/friction.md, "Pull-out")
+SHAKY_SHARE = 0.7
 
 
 @dataclass
@@ -154,6 +165,8 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
     kept = lcp.warm_start()  # ... from the last held state: every attempt starts there
     P, fail, trouble, before = float(scene.pull), None, "", np.inf
     assumed, slip = not ASSUME_SLIP, None  # the gross slip taken, not solved (ASSUME_SLIP)
+    shaky = None  # the lowest pull above the last held one that slid on a first step
+    bent = False  # a first-step slide seen: no step past the quadratic's root of g
     while solves < max_solves:
         res, end = _attempt(scene, P, predicted(ends, P, current), x_prev, y_prev, lcp, kept,
                             tol=tol, max_outer=max_outer)
@@ -172,12 +185,15 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
             current, x_prev, y_prev = end, res.x.copy(), res.y.copy()
             ends.append((P, end))
             kept = lcp.warm_start()
+            if shaky is not None and P >= shaky:  # it held: that slide was not a bound
+                shaky = None
         elif not path:
             return PullOut(np.nan, np.nan, np.zeros(0), np.zeros(0), np.nan, False,
                            f"the start (pull {P:g} N) does not hold: {res.reason}", solves)
         elif res.reason.startswith("gross slip") and not _unproven(res):
             fail = P if fail is None else min(fail, P)  # no equilibrium: P* < P
         elif res.reason.startswith("gross slip"):  # read off fewer steps: not a proof
+            shaky, bent = (P if shaky is None else min(shaky, P)), True
             trouble = (f"; the state at pull {P:g} N ended in gross slip after "
                        f"{res.outer_iterations} outer step(s), not taken as a bound on P*")
         else:  # a state that failed for another reason says nothing of P*
@@ -192,14 +208,22 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
                            "bracketed within rtol: the last pull held and a gross slip")
         before = root
         step = APPROACH * (root - last)
+        if bent and len(held) >= 3:  # g bends down: its quadratic's root, if nearer
+            step = min(step, APPROACH * (_quadratic_root(held, root) - last))
         if slip is not None and root > slip:  # the capacity does not fall: no such slip
             slip = None
         if len(held) == 1 and not assumed and step > 0.0:
             assumed, slip = True, last + step
-        if fail is not None or slip is not None:
+        if bent and fail is not None and last < root < fail and len(held) >= 2:
+            pass  # (after a first-step slide) the secant's root inside the bracket:
+            # APPROACH of the way there, not half way to the gross slip
+        elif fail is not None or slip is not None:
             step = min(step, 0.5 * ((slip if fail is None else fail) - last))
         if not res.converged and P != fail:  # go half as far as the step that failed
             step = min(step, 0.5 * (P - last))
+        elif res.converged and shaky is not None:  # after a hold, at most SHAKY_SHARE of
+            step = min(step, SHAKY_SHARE * (shaky - last))  # the way to a one-step slide
+            shaky = None  # (once: it is no bound on P*, and a later step may pass it)
         P = last + step
     root = _secant_root(held)
     if fail is not None:  # never past a pull seen to slip: P* lies in [last held, fail]
@@ -252,6 +276,24 @@ def _secant_root(held: list[tuple[float, float]]) -> float:
     P0, g0 = held[-2]
     slope = (g1 - g0) / (P1 - P0) if P1 != P0 else -1.0
     return P1 - g1 / slope if slope < 0 else P1 + g1
+
+
+def _quadratic_root(held: list[tuple[float, float]], root: float) -> float:
+    """The root above the last held pull of the quadratic of g through the last three
+    held states, where it bends down (concave) and has one; else ``root`` (the
+    secant's)."""
+    (P0, g0), (P1, g1), (P2, g2) = held[-3:]
+    if not (P0 < P1 < P2):
+        return root
+    d12 = (g2 - g1) / (P2 - P1)
+    c = (d12 - (g1 - g0) / (P1 - P0)) / (P2 - P0)
+    if not c < 0.0:
+        return root
+    b = d12 + c * (P2 - P1)  # g(P) = g2 + b (P − P2) + c (P − P2)², c < 0
+    disc = b * b - 4.0 * c * g2
+    if g2 <= 0.0 or disc < 0.0:
+        return root
+    return P2 + (-b - np.sqrt(disc)) / (2.0 * c)
 
 
 def _answer(force, path, events, solves, converged, reason) -> PullOut:
