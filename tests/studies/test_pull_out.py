@@ -293,3 +293,15 @@ def test_a_gross_slip_on_a_first_step_never_brackets_p_star(monkeypatch):
     assert "lies between" not in po.reason and "bracketed" not in po.reason
     if po.converged:
         assert abs(po.force - star) <= 1e-6 * star
+
+
+def test_an_actuator_clear_of_the_walls_holds_no_pull():
+    """θ = 60° at h = 4.5 mm clears the wall: with no normal force friction holds
+    nothing, so P* = 0 (theory), said so in one solve; and a small pull is not held
+    (independently, by one state of solve_path)."""
+    scene = replace(SCENE, theta=60.0, height=4.5)
+    po = lcpbench.pull_out(scene)
+    assert po.converged and po.force == 0.0 and po.solves == 1
+    assert "no wall contact" in po.reason
+    assert po.normal_force_total == 0.0 and po.capacity == 0.0
+    assert not _held(scene, 1e-3)

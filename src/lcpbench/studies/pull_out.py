@@ -187,6 +187,9 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
             kept = lcp.warm_start()
             if shaky is not None and P >= shaky:  # it held: that slide was not a bound
                 shaky = None
+            if len(path) == 1 and capacity(res) <= 0.0:  # no node presses a wall
+                return _answer(P, path, events, solves, True, "no wall contact at the "
+                               "start: friction holds no pull beyond the start's")
         elif not path:
             return PullOut(np.nan, np.nan, np.zeros(0), np.zeros(0), np.nan, False,
                            f"the start (pull {P:g} N) does not hold: {res.reason}", solves)
