@@ -217,10 +217,10 @@ def pull_out(scene, *, tol: float = 1e-10, rtol: float = 1e-6, max_solves: int =
             slip = None
         if len(held) == 1 and not assumed and step > 0.0:
             assumed, slip = True, last + step
-        if bent and fail is not None and last < root < fail and len(held) >= 2:
-            pass  # (after a first-step slide) the secant's root inside the bracket:
-            # APPROACH of the way there, not half way to the gross slip
-        elif fail is not None or slip is not None:
+        # after a first-step slide, a secant root inside the bracket is stepped to
+        # (APPROACH of the way), not half way to the gross slip
+        inside = bent and fail is not None and last < root < fail and len(held) >= 2
+        if (fail is not None or slip is not None) and not inside:
             step = min(step, 0.5 * ((slip if fail is None else fail) - last))
         if not res.converged and P != fail:  # go half as far as the step that failed
             step = min(step, 0.5 * (P - last))
