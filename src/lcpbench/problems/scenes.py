@@ -50,6 +50,7 @@ HEIGHT_RANGE = (1e-6, 1e6)  # mm: h > 0 (the pins sit on y = 0), at least 1 nm
 EI_RANGE = (1e-6, 1e9)  # N·mm²
 WEIGHT_RANGE = (0.0, 1e3)  # N/mm; 0 turns gravity off
 LOAD_RANGE = (0.0, 1e6)  # N/mm (the cantilever's distributed load)
+_NOT_YET = object()  # a value :meth:`Chain.derived` has not kept yet
 
 
 def _links(value, *, auto: bool = True) -> int | str:
@@ -152,11 +153,10 @@ class Chain:
         kernels' argument arrays, its layout, its load parameter) is computed at
         the first solve and reused by the next ones."""
         d = self.__dict__
-        try:
-            return d[key]
-        except KeyError:
+        value = d.get(key, _NOT_YET)  # (a miss raises no KeyError: most are misses)
+        if value is _NOT_YET:
             value = d[key] = make()  # (a frozen dataclass: not via setattr)
-            return value
+        return value
 
     def with_rest_shape(self, rest_alpha: np.ndarray, rest_joint: np.ndarray) -> Chain:
         """The same chain with another rest shape α*, φ* (a step of the loading path,
@@ -199,6 +199,36 @@ def wall_stiffness(value, name: str = "wall_stiffness") -> float:
         return math.inf
     return check_number(name, value, low=STIFFNESS_RANGE[0], high=STIFFNESS_RANGE[1],
                         unit="N/mm per mm of wall", alternative="inf (rigid)")
+
+
+def _plain_fields(d: dict) -> bool:
+    """Whether an actuator scene's numbers and flag (``d``: its fields) are already what
+    :meth:`ActuatorScene._check_fields` returns for them: Python floats inside their
+    ranges (θ, h, ℓ, EI, w; k in its range or +inf), an int N in range, a bool
+    ``channel``. Then the checks would change nothing and raise nothing; otherwise
+    (an int height, a numpy number, NaN, a value out of range, 'auto'...) they run."""
+    theta, height, links, length = d["theta"], d["height"], d["links"], d["length"]
+    ei, weight, k = d["EI"], d["weight"], d["wall_stiffness"]
+    return (type(theta) is float and 0.0 < theta < 360.0
+            and type(height) is float and HEIGHT_RANGE[0] <= height <= HEIGHT_RANGE[1]
+            and type(links) is int and MIN_LINKS <= links <= MAX_LINKS
+            and type(length) is float and LENGTH_RANGE[0] <= length <= LENGTH_RANGE[1]
+            and type(ei) is float and EI_RANGE[0] <= ei <= EI_RANGE[1]
+            and type(weight) is float and WEIGHT_RANGE[0] <= weight <= WEIGHT_RANGE[1]
+            and type(k) is float and (k == math.inf
+                                      or STIFFNESS_RANGE[0] <= k <= STIFFNESS_RANGE[1])
+            and type(d["channel"]) is bool)
+
+
+def paper_options(d: dict) -> bool:
+    """Whether a scene's frictional options (``d``: its fields) are the paper's as the
+    defaults write them: ``friction`` the float 0.0, both ends the str 'pinned', ``pull``
+    the float 0.0. Their checks (:meth:`~.friction.FrictionOptions._check_friction_options`)
+    would change nothing and raise nothing; any other value is checked."""
+    mu, pull, left, right = d["friction"], d["pull"], d["left_end"], d["right_end"]
+    return (type(mu) is float and mu == 0.0 and type(pull) is float and pull == 0.0
+            and type(left) is str and left == "pinned"
+            and type(right) is str and right == "pinned")
 
 
 def wall_share(links: int, link_length: float, free_nodes: np.ndarray) -> np.ndarray:
@@ -306,6 +336,17 @@ class ActuatorScene(FrictionOptions):
     pull: float = 0.0
 
     def __post_init__(self):
+        d = self.__dict__
+        if not _plain_fields(d):  # (the common case: every field already what the checks
+            self._check_fields()  # return, checked in a few comparisons)
+        if d["wall_profile"] is not None or d["lower_profile"] is not None:
+            self._check_profiles()
+        if not paper_options(d):
+            self._check_friction()
+
+    def _check_fields(self) -> None:
+        """Check and normalise the numbers and the flag, in the order of the fields'
+        errors: the first bad one raises."""
         object.__setattr__(self, "wall_stiffness", wall_stiffness(self.wall_stiffness))
         theta = check_number("theta", self.theta, low=0.0, high=360.0, low_open=True,
                              high_open=True, unit="degrees")
@@ -316,8 +357,6 @@ class ActuatorScene(FrictionOptions):
         object.__setattr__(self, "EI", _in("EI", self.EI, EI_RANGE, "N·mm²"))
         object.__setattr__(self, "weight", _in("weight", self.weight, WEIGHT_RANGE, "N/mm"))
         object.__setattr__(self, "channel", check_flag("channel", self.channel))
-        self._check_profiles()
-        self._check_friction()
 
     def _check_friction(self) -> None:
         self._check_friction_options()
@@ -404,7 +443,8 @@ class ActuatorScene(FrictionOptions):
             raise ProblemError("links='auto' must be resolved first "
                                "(lcpbench.studies.discretisation.auto_links gives N)")
         n = int(self.links)
-        fr = _frame(n, float(self.length))
+        length = float(self.length)
+        fr = pinned_frame(n, length)
         a = fr.a
         th = math.radians(self.theta)
         rest_alpha = fr.half_index * th  # th / 2 − half_index · th / n, in place
@@ -413,46 +453,50 @@ class ActuatorScene(FrictionOptions):
         interior = fr.interior  # nodes 2..N
         prof_up, prof_lo = self.profiles
         if prof_up is None:
-            up, lo = _flat_walls(n, float(self.length), self.height, self.channel)
+            up, lo = flat_walls(n, length, self.height, self.channel)
             upper, lower, can = up.copy(), lo.copy(), None
         else:  # rows for the nodes that can reach the wall's lowest point; h at the arc's x
-            x = np.concatenate(([0.0], np.cumsum(a * np.cos(rest_alpha))))[interior]
+            # x of nodes 2..N: the first N − 1 partial sums of a cos α (np.add.accumulate
+            # is sequential: the sums of [0, cumsum][1:N], without the copies)
+            x = np.cumsum(a * np.cos(rest_alpha))[:-1]
             # (in a channel, the same rows for both walls: the LCP form pairs them)
             near = prof_up.extremes(*self.x_reach)[0]  # (on a grid, kept with the profile)
             if prof_lo is not None:
                 near = min(near, -prof_lo.extremes(*self.x_reach)[1])
-            can = reachable(interior * a, self.length, near, "pinned-pinned")
+            can = fr.reach >= near * (1.0 - 1e-12)  # (:func:`reachable`, "pinned-pinned")
             upper = np.where(can, prof_up(x), np.inf)
             lower = np.where(can, prof_lo(x), -np.inf) if prof_lo is not None else \
-                np.full(n - 1, -np.inf)
-        elastic = not math.isinf(self.wall_stiffness)
-        if elastic and can is None:
-            can = fr.reach >= self.height * (1.0 - 1e-12)  # (the rows of _flat_walls)
+                filled(n - 1, -np.inf).copy()
+        k = self.wall_stiffness
+        upper_k = lower_k = None
+        if k != math.inf:  # elastic walls: k_i = k × share_i on the wall rows
+            if can is None:
+                can = fr.reach >= self.height * (1.0 - 1e-12)  # (the rows of flat_walls)
+            upper_k = np.where(can, k * fr.share, np.inf)  # (:func:`node_stiffness`)
+            lower_k = upper_k.copy() if self.channel else None
         load = -self.weight * a  # μ = wℓ/N (eq. 5), away from the wall
-        return new_chain(dict(
-            links=n,
-            link_length=a,
-            rest_alpha=rest_alpha,
-            joint_stiffness=filled(n - 1, self.EI / a).copy(),
-            joint_links=fr.joints.copy(),
-            rest_joint=full(n - 1, -th / n),
-            link_load=filled(n, load).copy(),
-            free_nodes=interior.copy(),
-            upper=upper,
-            lower=lower,
-            force_scale=self.EI / self.length**2,
-            length=self.length,
-            wall=self.height,
-            channel=bool(self.channel),
-            upper_stiffness=(node_stiffness(self.wall_stiffness, can, wall_share(
-                n, a, interior)) if elastic else None),
-            lower_stiffness=(node_stiffness(self.wall_stiffness, can, wall_share(
-                n, a, interior)) if elastic and self.channel else None),
-            upper_profile=prof_up,
-            lower_profile=prof_lo,
-            consecutive=True,
-            increments=False,
-        ), uniform_load(n, load))
+        return new_chain({
+            "links": n,
+            "link_length": a,
+            "rest_alpha": rest_alpha,
+            "joint_stiffness": filled(n - 1, self.EI / a).copy(),
+            "joint_links": fr.joints.copy(),
+            "rest_joint": full(n - 1, -th / n),
+            "link_load": filled(n, load).copy(),
+            "free_nodes": interior.copy(),
+            "upper": upper,
+            "lower": lower,
+            "force_scale": self.EI / self.length**2,
+            "length": self.length,
+            "wall": self.height,
+            "channel": bool(self.channel),
+            "upper_stiffness": upper_k,
+            "lower_stiffness": lower_k,
+            "upper_profile": prof_up,
+            "lower_profile": prof_lo,
+            "consecutive": True,
+            "increments": False,
+        }, uniform_load(n, load))
 
 
 @dataclass(frozen=True)
@@ -465,15 +509,16 @@ class _Frame:
     joints: np.ndarray
     interior: np.ndarray
     reach: np.ndarray  # min(s, ℓ − s) of the interior nodes (:func:`reachable`)
+    share: np.ndarray  # the interior nodes' share of wall length (:func:`wall_share`)
 
 
 @functools.lru_cache(maxsize=64)
-def _flat_walls(n: int, length: float, height: float, channel: bool):
+def flat_walls(n: int, length: float, height: float, channel: bool):
     """(upper, lower) wall heights of an actuator's free nodes, read only (chains copy
     them): ±h on the rows of the nodes that can reach the walls
     (:func:`reachable`, "pinned-pinned", its reach min(s, ℓ − s) kept per frame),
     ±inf elsewhere; −inf below when not a channel."""
-    can = _frame(n, length).reach >= height * (1.0 - 1e-12)
+    can = pinned_frame(n, length).reach >= height * (1.0 - 1e-12)
     upper = np.where(can, height, np.inf)
     lower = np.where(can, -height, -np.inf) if channel else np.full(n - 1, -np.inf)
     for arr in (upper, lower):
@@ -499,14 +544,14 @@ def new_chain(values: dict, kept: dict | None = None) -> Chain:
 
 
 @functools.lru_cache(maxsize=32)
-def _frame(n: int, length: float) -> _Frame:
+def pinned_frame(n: int, length: float) -> _Frame:
     a = length / n
     interior = np.arange(1, n)
     s = interior * a
     frame = _Frame(a, np.arange(n) + 0.5,
                    np.column_stack([np.arange(n - 1), np.arange(1, n)]), interior,
-                   np.minimum(s, length - s))
-    for arr in (frame.half_index, frame.joints, frame.interior, frame.reach):
+                   np.minimum(s, length - s), wall_share(n, a, interior))
+    for arr in (frame.half_index, frame.joints, frame.interior, frame.reach, frame.share):
         arr.setflags(write=False)
     return frame
 

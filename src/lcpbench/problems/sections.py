@@ -62,8 +62,12 @@ from .scenes import (
     ActuatorScene,
     CantileverScene,
     Chain,
-    reachable,
+    flat_walls,
+    new_chain,
+    paper_options,
+    pinned_frame,
 )
+from .templates import filled, uniform_load
 
 #: Rest shapes turned by less than this (rad) to level their chord are left as they are.
 LEVEL_TOL = 1e-13
@@ -99,6 +103,9 @@ class Section:
         self._check("section")
 
     def _check(self, where: str) -> None:
+        d = self.__dict__
+        if _plain_section(d["theta"], d["length"], d["EI"], d["weight"]):
+            return  # (every field a float in range: the checks would change nothing)
         put = object.__setattr__
         put(self, "theta", check_number(f"{where}.theta", self.theta, low=-360.0, high=360.0,
                                         low_open=True, high_open=True, unit="degrees"))
@@ -108,6 +115,16 @@ class Section:
                                      unit="N·mm²"))
         put(self, "weight", check_number(f"{where}.weight", self.weight, low=WEIGHT_RANGE[0],
                                          high=WEIGHT_RANGE[1], unit="N/mm"))
+
+
+def _plain_section(theta, length, ei, weight) -> bool:
+    """Whether a section's fields are Python floats inside their ranges (what
+    :meth:`Section._check` returns for them, without an error); otherwise they are
+    checked."""
+    return (type(theta) is float and -360.0 < theta < 360.0
+            and type(length) is float and LENGTH_RANGE[0] <= length <= LENGTH_RANGE[1]
+            and type(ei) is float and EI_RANGE[0] <= ei <= EI_RANGE[1]
+            and type(weight) is float and WEIGHT_RANGE[0] <= weight <= WEIGHT_RANGE[1])
 
 
 def _section(k: int, item) -> Section:
@@ -220,7 +237,8 @@ class SectionedScene(FrictionOptions):
         self.section_links()  # boundaries on nodes, or ProblemError
         self.__dict__["_rest"] = self.rest_shapes([1.0])  # a chord, or ProblemError (kept
         # for the chain)
-        self._check_friction_options()
+        if not paper_options(self.__dict__):  # (the defaults as written need no check)
+            self._check_friction_options()
 
     # -- what the user reads --------------------------------------------------
     @property
@@ -263,11 +281,11 @@ class SectionedScene(FrictionOptions):
 
     def _fit_links(self) -> np.ndarray:
         n, total = self._size()
-        share = np.array([n * s.length / total for s in self.sections])
-        counts = np.rint(share)
-        if np.all(np.abs(share - counts) <= FIT_TOL * np.maximum(share, 1.0)) and \
-                np.all(counts >= 1):
-            return counts.astype(int)
+        share = [n * s.length / total for s in self.sections]
+        counts = [round(x) for x in share]  # (half to even, as np.rint)
+        if all(abs(x - c) <= FIT_TOL * max(x, 1.0) and c >= 1
+               for x, c in zip(share, counts, strict=True)):
+            return np.array(counts, dtype=int)
         raise ProblemError(f"links: N = {n} does not put every section boundary on a node "
                            f"(the sections would span {', '.join(f'{x:.4g}' for x in share)} "
                            f"links); {_nearest(self.sections, total, n)}")
@@ -360,35 +378,52 @@ class SectionedScene(FrictionOptions):
 
     def _build_chain(self) -> Chain:
         n, total = self._size()
-        a = total / n
-        counts = self.section_links()
+        fr = pinned_frame(n, total)  # (a = L/N, the joints, the interior nodes and their reach)
+        a = fr.a
         secs = self.sections
-        ei = np.repeat([s.EI for s in secs], counts)
-        w = np.repeat([s.weight for s in secs], counts)
-        left, right = ei[:-1], ei[1:]
-        same = left == right
-        stiffness = np.where(same, left / a, 2 * left * right / (a * (left + right)))
-        interior = np.arange(1, n)
-        can = reachable(interior * a, total, self.height, "pinned-pinned")
+        ei0, w0 = secs[0].EI, secs[0].weight
+        sign = -1.0 if self.gravity == "-y" else 1.0
+        kept = None
+        if all(s.EI == ei0 and s.weight == w0
+               and math.copysign(1.0, s.weight) == math.copysign(1.0, w0) for s in secs):
+            # one EI and one w (the same numbers, elementwise, as the arrays below)
+            stiffness = filled(n - 1, ei0 / a).copy()
+            load = (sign * w0) * a  # μ = w a (eq. 5)
+            link_load = filled(n, load).copy()
+            kept = uniform_load(n, load)
+        else:
+            counts = self.section_links()
+            ei = np.repeat([s.EI for s in secs], counts)
+            w = np.repeat([s.weight for s in secs], counts)
+            left, right = ei[:-1], ei[1:]
+            same = left == right
+            stiffness = np.where(same, left / a, 2 * left * right / (a * (left + right)))
+            link_load = (-w if self.gravity == "-y" else w) * a  # μ = w a (eq. 5)
+        # the walls: ±h on the rows of the nodes that can reach them (:func:`reachable`)
+        upper, lower = flat_walls(n, total, self.height, self.channel)
         (rest_alpha,), (rest_joint,) = self.__dict__.get("_rest") or self.rest_shapes([1.0])
-        return Chain(
-            links=n,
-            link_length=a,
-            rest_alpha=rest_alpha,
-            joint_stiffness=stiffness,
-            joint_links=np.column_stack([np.arange(n - 1), np.arange(1, n)]),
-            rest_joint=rest_joint,
-            link_load=(-w if self.gravity == "-y" else w) * a,  # μ = w a (eq. 5)
-            free_nodes=interior,
-            upper=np.where(can, self.height, np.inf),
-            lower=np.where(can, -self.height, -np.inf) if self.channel
-            else np.full(n - 1, -np.inf),
-            force_scale=self.EI / total**2,
-            length=total,
-            wall=self.height,
-            channel=bool(self.channel),
-            consecutive=True,
-        )
+        return new_chain({
+            "links": n,
+            "link_length": a,
+            "rest_alpha": rest_alpha,
+            "joint_stiffness": stiffness,
+            "joint_links": fr.joints.copy(),
+            "rest_joint": rest_joint,
+            "link_load": link_load,
+            "free_nodes": fr.interior.copy(),
+            "upper": upper.copy(),
+            "lower": lower.copy(),
+            "force_scale": self.EI / total**2,
+            "length": total,
+            "wall": self.height,
+            "channel": bool(self.channel),
+            "upper_stiffness": None,
+            "lower_stiffness": None,
+            "upper_profile": None,
+            "lower_profile": None,
+            "consecutive": True,
+            "increments": False,
+        }, kept)
 
 
 def _fitting(sections, total: float) -> np.ndarray:
