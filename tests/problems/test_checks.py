@@ -172,3 +172,47 @@ def test_calibration_refuses_bools_and_strings():
     for bad in (True, "100", 1j, None):
         with pytest.raises(ProblemError, match="pressure must be a finite number"):
             cal.theta(bad)
+
+
+# Plain floats (the values most scenes are built from) just outside each range, and
+# every other form a field may take: refused with the message of the field, as any
+# other bad value (a scene of plain floats in range is checked in a few comparisons).
+PLAIN_OUT_OF_RANGE = [
+    ("theta", 0.0), ("theta", 360.0), ("theta", -1e-300), ("theta", math.nan),
+    ("height", 0.0), ("height", 1.0000001e6), ("height", math.inf),
+    ("length", 9.99e-4), ("length", 1.0000001e5), ("EI", 9.99e-7), ("EI", 1.0000001e9),
+    ("weight", -5e-324), ("weight", 1000.0001), ("weight", -math.inf),
+    ("wall_stiffness", 0.0), ("wall_stiffness", -1.0), ("wall_stiffness", math.nan),
+    ("wall_stiffness", -math.inf), ("wall_stiffness", 1.0000001e12),
+    ("links", 3), ("links", 100_001), ("friction", -1e-9), ("friction", math.nan),
+    ("pull", math.nan), ("left_end", "Pinned"), ("right_end", "pinned ")]
+
+
+@pytest.mark.parametrize("field,value", PLAIN_OUT_OF_RANGE)
+def test_plain_floats_out_of_range_are_refused(field, value):
+    with pytest.raises(ProblemError, match=f"^{field} must be"):
+        ActuatorScene(**{field: value})
+
+
+@pytest.mark.parametrize("field,value", [
+    ("theta", -360.0), ("theta", 360.0), ("length", 0.0), ("EI", 2e9), ("weight", -1e-9),
+    ("theta", math.nan), ("length", math.inf)])
+def test_plain_section_floats_out_of_range_are_refused(field, value):
+    from lcpbench.problems.sections import Section, SectionedScene
+
+    with pytest.raises(ProblemError, match=rf"^section\.{field} must be"):
+        Section(**{"theta": 30.0, field: value})
+    with pytest.raises(ProblemError, match=rf"^sections\[1\]\.{field} must be"):
+        SectionedScene(sections=[(30.0, 15.0), {"theta": 30.0, field: value}])
+
+
+def test_the_frictional_defaults_in_any_form_are_the_papers():
+    """0 (an int), a numpy zero, a one-element tuple per wall: checked and normalised to
+    the paper's options, as the defaults themselves."""
+    for kw in (dict(friction=0), dict(friction=np.float64(0.0), pull=0),
+               dict(friction=(0.0,)), dict(friction=-0.0, pull=-0.0)):
+        s = ActuatorScene(**kw)
+        assert not s.frictional and s.wall_friction == (0.0, 0.0), kw
+        assert type(s.pull) is float and type(s.friction) in (float, tuple)
+    with pytest.raises(ProblemError, match="pull acts on the right end"):
+        ActuatorScene(pull=1.0)
