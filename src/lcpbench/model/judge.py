@@ -103,6 +103,7 @@ it does not repeat the solve.
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass, field, fields
 from typing import Any
 
@@ -347,7 +348,7 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
     ``judgement.certificate``. ``args``: the chain's :func:`chain_args`, when the
     caller has them already.
     """
-    increments = large_n.applies(chain)
+    increments = large = large_n.applies(chain)
     if increments and chain.profiled_walls:
         from .kernel_call import profile_args
 
@@ -356,7 +357,7 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
         return _unjudged(chain, forces_upper, forces_lower, tol=tol,
                          driver_converged=driver_converged, driver_reason=driver_reason,
                          certificate=certificate)
-    if large_n.applies(chain):
+    if large:
         return _judge_in_increments(chain, alpha, forces_upper, forces_lower, tol=tol,
                                     driver_reason=driver_reason,
                                     step_statuses=step_statuses, step_sizes=step_sizes)
@@ -389,7 +390,7 @@ def verdict_from_stats(settled: bool, s: dict, fu: np.ndarray, fl: np.ndarray,
     verdict.certificate = cert
     verdict.inexact_steps = sum(st != "solved" for st in step_statuses)
     unstable = s["unstable"]
-    verdict.unstable_directions = int(unstable) if np.isfinite(unstable) else None
+    verdict.unstable_directions = int(unstable) if math.isfinite(unstable) else None
     if settled:
         verdict.force_error_bound, verdict.node_error_bound = s["total"], s["node"]
         verdict.contraction, verdict.judge_contraction = s["rho"], s["judge_rho"]

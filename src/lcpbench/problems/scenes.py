@@ -18,7 +18,6 @@ Two scenes:
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, fields, replace
 
@@ -27,7 +26,7 @@ import numpy as np
 from ..errors import ProblemError
 from .checks import check_flag, check_number, describe
 from .friction import FrictionOptions
-from .templates import filled, full, uniform_load
+from .templates import filled, flat_walls, full, pinned_frame, uniform_load, wall_share
 from .walls import WallProfile
 
 MIN_LINKS = 4
@@ -229,18 +228,6 @@ def paper_options(d: dict) -> bool:
     return (type(mu) is float and mu == 0.0 and type(pull) is float and pull == 0.0
             and type(left) is str and left == "pinned"
             and type(right) is str and right == "pinned")
-
-
-def wall_share(links: int, link_length: float, free_nodes: np.ndarray) -> np.ndarray:
-    """Each free node's share of wall length (mm): half of each link it ends.
-
-    A node between two links stands for a, a free tip for a/2: the lengths
-    over which a Winkler wall's pressure p (N/mm) adds up to the node's
-    reaction R_i = p_i · share_i.
-    """
-    f = np.asarray(free_nodes)
-    ends = (f > 0).astype(float) + (f < links).astype(float)
-    return 0.5 * link_length * ends
 
 
 def node_stiffness(k: float, rows: np.ndarray, share: np.ndarray) -> np.ndarray | None:
@@ -499,33 +486,6 @@ class ActuatorScene(FrictionOptions):
         }, uniform_load(n, load))
 
 
-@dataclass(frozen=True)
-class _Frame:
-    """What the chains of actuator scenes with one N and ℓ share, whatever θ and h
-    (read only: a Chain gets copies of the integer arrays)."""
-
-    a: float
-    half_index: np.ndarray  # k + 1/2, k = 0..N−1 (the link centres, in links)
-    joints: np.ndarray
-    interior: np.ndarray
-    reach: np.ndarray  # min(s, ℓ − s) of the interior nodes (:func:`reachable`)
-    share: np.ndarray  # the interior nodes' share of wall length (:func:`wall_share`)
-
-
-@functools.lru_cache(maxsize=64)
-def flat_walls(n: int, length: float, height: float, channel: bool):
-    """(upper, lower) wall heights of an actuator's free nodes, read only (chains copy
-    them): ±h on the rows of the nodes that can reach the walls
-    (:func:`reachable`, "pinned-pinned", its reach min(s, ℓ − s) kept per frame),
-    ±inf elsewhere; −inf below when not a channel."""
-    can = pinned_frame(n, length).reach >= height * (1.0 - 1e-12)
-    upper = np.where(can, height, np.inf)
-    lower = np.where(can, -height, -np.inf) if channel else np.full(n - 1, -np.inf)
-    for arr in (upper, lower):
-        arr.setflags(write=False)
-    return upper, lower
-
-
 _CHAIN_FIELDS = frozenset(f.name for f in fields(Chain))
 
 
@@ -541,19 +501,6 @@ def new_chain(values: dict, kept: dict | None = None) -> Chain:
     if kept:
         chain.__dict__.update(kept)
     return chain
-
-
-@functools.lru_cache(maxsize=32)
-def pinned_frame(n: int, length: float) -> _Frame:
-    a = length / n
-    interior = np.arange(1, n)
-    s = interior * a
-    frame = _Frame(a, np.arange(n) + 0.5,
-                   np.column_stack([np.arange(n - 1), np.arange(1, n)]), interior,
-                   np.minimum(s, length - s), wall_share(n, a, interior))
-    for arr in (frame.half_index, frame.joints, frame.interior, frame.reach, frame.share):
-        arr.setflags(write=False)
-    return frame
 
 
 @dataclass(frozen=True)

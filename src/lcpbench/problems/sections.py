@@ -62,12 +62,10 @@ from .scenes import (
     ActuatorScene,
     CantileverScene,
     Chain,
-    flat_walls,
     new_chain,
     paper_options,
-    pinned_frame,
 )
-from .templates import filled, uniform_load
+from .templates import filled, flat_walls, pinned_frame, uniform_load
 
 #: Rest shapes turned by less than this (rad) to level their chord are left as they are.
 LEVEL_TOL = 1e-13
@@ -133,6 +131,8 @@ def _section(k: int, item) -> Section:
     try:
         if isinstance(item, Section):
             return item
+        if type(item) is tuple and 1 <= len(item) <= 4:  # (before the Mapping check, a
+            return _from_values(item, where)  # slow one: a tuple is none)
         if isinstance(item, Mapping):
             unknown = set(item) - {"theta", "length", "EI", "weight"}
             if unknown or "theta" not in item:
@@ -145,16 +145,20 @@ def _section(k: int, item) -> Section:
             sec._check(where)
             return sec
         if isinstance(item, (tuple, list)) and 1 <= len(item) <= 4:
-            sec = Section.__new__(Section)
-            values = list(item) + [DEFAULT_LENGTH, DEFAULT_EI, DEFAULT_WEIGHT][len(item) - 1:]
-            for name, v in zip(("theta", "length", "EI", "weight"), values, strict=True):
-                object.__setattr__(sec, name, v)
-            sec._check(where)
-            return sec
+            return _from_values(item, where)
     except ProblemError as exc:
         raise ProblemError(str(exc).replace("section.", f"{where}.")) from None
     raise ProblemError(f"{where} must be a Section, a dict or a tuple (theta, length[, EI"
                        f"[, weight]]), got {describe(item)}")
+
+
+def _from_values(item, where: str) -> Section:
+    """The Section of (θ, ℓ[, EI[, w]]), its fields checked (``where``: its name)."""
+    sec = Section.__new__(Section)
+    values = list(item) + [DEFAULT_LENGTH, DEFAULT_EI, DEFAULT_WEIGHT][len(item) - 1:]
+    sec.__dict__.update(zip(("theta", "length", "EI", "weight"), values, strict=True))
+    sec._check(where)
+    return sec
 
 
 @dataclass(frozen=True)
@@ -207,7 +211,9 @@ class SectionedScene(FrictionOptions):
     def __post_init__(self):
         put = object.__setattr__
         items = self.sections
-        if isinstance(items, (str, bytes, Section, Mapping)) or not isinstance(items, Sequence):
+        if type(items) is not list and type(items) is not tuple and (  # (ABC checks: slow)
+                isinstance(items, (str, bytes, Section, Mapping))
+                or not isinstance(items, Sequence)):
             raise ProblemError(f"sections must be a list of sections, got {describe(items)}")
         if len(items) == 0:
             raise ProblemError("sections must list at least one section, got none")
@@ -378,7 +384,7 @@ class SectionedScene(FrictionOptions):
 
     def _build_chain(self) -> Chain:
         n, total = self._size()
-        fr = pinned_frame(n, total)  # (a = L/N, the joints, the interior nodes and their reach)
+        fr = pinned_frame(n, total)  # (a = L/N, the joints, the interior nodes)
         a = fr.a
         secs = self.sections
         ei0, w0 = secs[0].EI, secs[0].weight
