@@ -24,7 +24,13 @@ from ..model import large_n
 from ..model.compiled import drive, heavy, reference
 from ..model.finish import finish
 from ..model.judge import chain_args
-from ..model.kernel_call import applies, kernel_args, run_compiled
+from ..model.kernel_call import (
+    applies,
+    kernel_args,
+    profile_applies,
+    run_compiled,
+    run_profile_compiled,
+)
 from ..model.outer import DriverStart
 from ..model.result import ContactResult
 from ..model.step_solver import make_step_solver
@@ -70,7 +76,19 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
     out = solve_without_contact(chain, tol, max_outer, start,
                                 engine="compiled" if kernel else "numpy", args=args)
     used = "compiled" if kernel else "compiled driver"
-    if out is None and (not kernel or heavy(chain)):
+    if out is None and not kernel and profile_applies(DEFAULT, "globalised", chain):
+        # a wall of any profile: the profile kernel, as model.compiled.drive runs it for
+        # this chain (no SQP steps: they take flat walls only), the step solver made only
+        # for its fall-back
+        args = kernel_args(chain)
+        out, why = run_profile_compiled(chain, tol=tol, max_outer=max_outer, start=start,
+                                        settings=settings)
+        used = "compiled"
+        if out is None:  # the kernel stopped: its compiled fall-back
+            out, used = reference(chain, lambda: make_step_solver(DEFAULT, settings, True),
+                                  why, tol=tol, max_outer=max_outer, method="globalised",
+                                  start=start, settings=settings)
+    elif out is None and (not kernel or heavy(chain)):
         # large N, a layout the kernel does not take, or a heavy chain (SQP steps in the
         # angles, first or as the rescue): solve()'s choice, in model.compiled.drive
         out, used = drive(chain, make_step_solver(DEFAULT, settings, True), backend=DEFAULT,
@@ -88,7 +106,8 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
     return finish(scene, chain, out, solver=DEFAULT, method="globalised", tol=tol,
                   elapsed=time.perf_counter() - t0, settings=settings, engine=used,
                   why=AUTO_WHY,
-                  judge_args=chain_args(chain, args) if kernel else None, route=BATCH_SCENE)
+                  judge_args=None if args is None else chain_args(chain, args),
+                  route=BATCH_SCENE)
 
 
 def solve_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = "default",
