@@ -160,7 +160,7 @@ def _takes_profile(chain, c0) -> bool:
             and chain.joint_links.shape == c0.joint_links.shape)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class _Answer:
     """What :class:`~lcpbench.studies.continuation.Solved` reads of an answer of
     :func:`profile_line` (its result is built after the line): the verdict, α, the
