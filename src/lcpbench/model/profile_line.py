@@ -26,7 +26,16 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .batch_kernel import ARC, CONTACT, CONVERGED, FREE, SETTLED, STATS, STOPPED_FREE, _records
+from .batch_kernel import (
+    ARC,
+    CONTACT,
+    CONVERGED,
+    FREE,
+    SETTLED,
+    STATS,
+    STOPPED_FREE,
+    append_records,
+)
 from .batch_verdict import accepted
 from .judge_kernel import judge_walls
 from .profile_kernel import lagged_reactions, solve_profile_chain
@@ -63,7 +72,7 @@ def profile_attempt(row, start, net, u0, ra, a, jl, jr, k, rest, link_load, noda
     o_off[row] = used
     alpha, R, count = got[1], got[9], got[7]
     o_rup[row], o_rlo[row], o_u[row], o_sig[row] = got[2], got[3], got[4], got[5]
-    recs, used = _records(recs, used, got[6], count)
+    recs, used = append_records(recs, used, got[6], count)
     if code == CONVERGED:
         o_res[row] = got[8]
     o_code[row], o_kind[row], o_count[row] = code, CONTACT, count

@@ -48,7 +48,7 @@ from ..model.step_solver import make_step_solver
 from ..model.wall_free import arc_far, solve_without_contact
 from ..problems.scenes import ActuatorScene
 from ..solvers.registry import DEFAULT
-from .batch_line import _OUTPUTS as LINE_OUTPUTS
+from .batch_line import LINE_OUTPUTS
 from .batch_result import LineOutput, results
 from .continuation import Solved, new_solved, warm_or_cold
 
