@@ -115,7 +115,7 @@ def _wall_free_kind(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
 
 
 @njit(cache=True)
-def _records(recs, used, rec, count):
+def append_records(recs, used, rec, count):
     """Append the ``count`` step records ``rec`` to the flat buffer ``recs`` (grown by
     doubling): (buffer, its new length)."""
     if used + count > recs.shape[1]:
@@ -173,7 +173,7 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
             code = got[0]
         alpha, R, count = got[1], got[9], got[7]
         o_rup[row], o_rlo[row], o_u[row], o_sig[row] = got[2], got[3], got[4], got[5]
-        recs, used = _records(recs, used, got[6], count)
+        recs, used = append_records(recs, used, got[6], count)
         if code == CONVERGED:
             o_res[row] = got[8]
     o_code[row], o_kind[row], o_count[row] = code, kind, count

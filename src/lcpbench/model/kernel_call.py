@@ -35,7 +35,7 @@ from .outer import (
     failed_output,
     out_of_iterations,
 )
-from .profile import wall_tables, walls_at
+from .profile import wall_rows, wall_tables
 
 #: the solve kernel's bail codes (it left the reference's path) and their reasons
 BAIL_REASONS = {
@@ -145,13 +145,15 @@ def call_profile_kernel(chain: Chain, *, tol: float, max_outer: int,
         start_alpha = np.ascontiguousarray(start.alpha, dtype=float)
         net = None if start.warm is None else start.warm.forces_net
         if net is not None and np.size(net) == n and np.all(np.isfinite(net)):
-            from .judge_exact import split_reactions
-
             # (one wall: every reaction is its own, wherever the walls are at the start;
             # a channel: each node's, the nearer wall's at the start's x)
-            at = walls_at(chain, start_alpha) if chain.channel else chain
-            up, lo = split_reactions(at, net, np.asarray(start.warm.u, dtype=float))
-            mu_up, mu_lo = np.array(up, dtype=float), np.array(lo, dtype=float)
+            net = np.ascontiguousarray(net, dtype=float)
+            if chain.channel:
+                u = np.ascontiguousarray(start.warm.u, dtype=float)
+                k.lagged_reactions(net, u, *wall_rows(chain, start_alpha)[2:4], True, mu_up,
+                                   mu_lo)
+            else:
+                k.lagged_reactions(net, net, net, net, False, mu_up, mu_lo)
     base = kernel_args(chain)
     t0 = time.perf_counter()
     got = k.solve_profile_chain(*base[:9], *profile_args(chain), float(tol), int(max_outer),

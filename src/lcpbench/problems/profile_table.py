@@ -62,13 +62,14 @@ def linear_pieces(xs: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return exact_pieces(xs, np.vstack([steps, ys[:-1]]))
 
 
-def _hermite_coef(x: np.ndarray, h: np.ndarray, m: np.ndarray) -> np.ndarray:
-    """PPoly coefficients of the cubic Hermite pieces through (x, h, h' = m)."""
-    dx = np.diff(x)
-    secant = np.diff(h) / dx
-    c1 = (3.0 * secant - 2.0 * m[:-1] - m[1:]) / dx
-    c0 = (m[:-1] + m[1:] - 2.0 * secant) / dx**2
-    return np.vstack([c0, c1, m[:-1], h[:-1]])
+def _piece_coef(a, b, ha, hb, ma, mb) -> np.ndarray:
+    """PPoly coefficients of the cubic Hermite pieces on [a, b] through (a, ha, ma) and
+    (b, hb, mb), one piece per entry (each piece's from its two ends alone)."""
+    dx = b - a
+    secant = (hb - ha) / dx
+    c1 = (3.0 * secant - 2.0 * ma - mb) / dx
+    c0 = (ma + mb - 2.0 * secant) / dx**2
+    return np.vstack([c0, c1, ma, ha])
 
 
 def evaluate(knots: np.ndarray, coef: np.ndarray, x) -> tuple[np.ndarray, np.ndarray]:
@@ -86,29 +87,59 @@ def hermite_pieces(height, slope, x_low: float, x_high: float
     """Cubic Hermite pieces of ``height`` (h, vectorised) and ``slope`` (h') over
     [x_low, x_high], refined until each piece meets :data:`HEIGHT_TOL` and
     :data:`SLOPE_TOL` at its midpoint or is :data:`MIN_WIDTH` narrow; None where that
-    takes more than :data:`MAX_PIECES` pieces."""
+    takes more than :data:`MAX_PIECES` pieces.
+
+    Refined in rounds: each round checks the pieces made in the round before (at first
+    the START_PIECES uniform ones) at their midpoints, against the scales 1 + max|h| and
+    1 + max|h'| over every breakpoint so far, and splits the ones that fail at their
+    midpoint (h and h' there become the new breakpoint's). A piece that passed stays as
+    it is: its coefficients and midpoint depend on its two ends alone, and the scales
+    only grow, so it passes every later round's check too; h and h' are asked only at
+    the new midpoints."""
     if not x_low < x_high:
         return None
     knots = np.linspace(x_low, x_high, START_PIECES + 1)
     narrowest = MIN_WIDTH * (x_high - x_low)
     h, m = height(knots), slope(knots)
+    scale_h = 1.0 + float(np.max(np.abs(h)))
+    scale_m = 1.0 + float(np.max(np.abs(m)))
+    # the pieces to check: ends a, b, and h, h' at both
+    a, b, ha, hb, ma, mb = knots[:-1], knots[1:], h[:-1], h[1:], m[:-1], m[1:]
+    done_a: list[np.ndarray] = []  # the pieces that passed: left ends, coefficients
+    done_c: list[np.ndarray] = []
+    total = START_PIECES  # pieces in the table
     while True:
-        coef = _hermite_coef(knots, h, m)
-        mids = 0.5 * (knots[:-1] + knots[1:])
+        coef = _piece_coef(a, b, ha, hb, ma, mb)
+        mids = 0.5 * (a + b)
         h_mid, m_mid = height(mids), slope(mids)
-        t_h, t_m = evaluate(knots, coef, mids)
-        scale_h = 1.0 + float(np.max(np.abs(h)))
-        scale_m = 1.0 + float(np.max(np.abs(m)))
         if not (np.all(np.isfinite(h_mid)) and np.all(np.isfinite(m_mid))):
             return None
+        d = mids - a  # (the table at the midpoint: its own piece's cubic)
+        c0, c1, c2, c3 = coef
+        t_h = ((c0 * d + c1) * d + c2) * d + c3
+        t_m = (3.0 * c0 * d + 2.0 * c1) * d + c2
         bad = ((np.abs(t_h - h_mid) > HEIGHT_TOL * scale_h)
                | (np.abs(t_m - m_mid) > SLOPE_TOL * scale_m))
-        bad &= np.diff(knots) > narrowest
-        if not bad.any():
-            return np.ascontiguousarray(knots), np.ascontiguousarray(coef)
-        if knots.size - 1 + int(bad.sum()) > MAX_PIECES:
+        bad &= (b - a) > narrowest
+        nbad = int(np.count_nonzero(bad))
+        if nbad == 0:
+            done_a.append(a)
+            done_c.append(coef)
+            lefts = np.concatenate(done_a)
+            order = np.argsort(lefts)
+            knots = np.append(lefts[order], x_high)
+            return (np.ascontiguousarray(knots),
+                    np.ascontiguousarray(np.concatenate(done_c, axis=1)[:, order]))
+        if total + nbad > MAX_PIECES:
             return None
-        at = np.flatnonzero(bad) + 1  # each bad piece split at its midpoint
-        knots = np.insert(knots, at, mids[bad])
-        h = np.insert(h, at, h_mid[bad])
-        m = np.insert(m, at, m_mid[bad])
+        total += nbad
+        good = ~bad
+        done_a.append(a[good])
+        done_c.append(coef[:, good])
+        # each bad piece split at its midpoint c: [a, c] and [c, b]
+        c, hc, mc = mids[bad], h_mid[bad], m_mid[bad]
+        scale_h = max(scale_h, 1.0 + float(np.max(np.abs(hc))))
+        scale_m = max(scale_m, 1.0 + float(np.max(np.abs(mc))))
+        a, b = np.concatenate([a[bad], c]), np.concatenate([c, b[bad]])
+        ha, hb = np.concatenate([ha[bad], hc]), np.concatenate([hc, hb[bad]])
+        ma, mb = np.concatenate([ma[bad], mc]), np.concatenate([mc, mb[bad]])

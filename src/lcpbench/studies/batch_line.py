@@ -38,6 +38,9 @@ _OUTPUTS = (("o_code", np.int64, ()), ("o_kind", np.int64, ()), ("o_alpha", floa
             ("o_off", np.int64, ()), ("o_count", np.int64, ()),
             ("j_code", np.int64, ()), ("j_stats", float, ("stats",)), ("j_fu", float, ("n",)),
             ("j_fl", float, ("n",)), ("j_tres", float, ("nj",)), ("conv", np.bool_, ()))
+#: the outputs' layout, for the callers that fill a line's arrays themselves
+#: (studies.batch_compiled.profile_line: the profile kernel's attempts)
+LINE_OUTPUTS = _OUTPUTS
 #: rows for cold retries of failed warm starts: a share of the line (more if needed)
 SPARE = 8
 
