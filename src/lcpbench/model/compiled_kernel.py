@@ -82,15 +82,12 @@ from .compiled_dual import (
     dual_active_set,
     grad_into,
     judge_step,
-    step_certificate,
-    step_residuals,
 )
 
 # outcome codes of solve_chain (the Python side turns them into reasons)
 CONVERGED, MAX_OUTER, LINE_SEARCH, NO_FIT = 0, 1, 2, 3
 __all__ = ["BAIL_CERT", "BAIL_JUDGE", "BAIL_LIMIT", "BAIL_NOT_PD", "BAIL_PRIMAL", "BAIL_REPEAT",
-           "CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "step_certificate", "step_residuals",
-           "solve_chain", "solve_step"]
+           "CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "solve_chain", "solve_step"]
 
 
 @njit(cache=True)
