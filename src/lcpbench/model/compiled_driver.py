@@ -60,24 +60,9 @@ from .outer import (
     step_failed,
     step_setup_time,
 )
-from .step import ContactStep, LCPForm
+from .step import ContactStep, step_kernels
 
 ENGINE = "compiled driver"
-
-
-ENTRIES = ("assemble", "qp_form", "lcp_form", "from_lcp", "judge", "advance", "predict",
-           "profile_start", "profile_assemble", "profile_advance", "profile_on_walls")
-
-
-def _kernel():
-    from ..numba_cache import kernel_module, light_cache_load  # numba at the first solve
-
-    kd = kernel_module("lcpbench.model.driver_kernel", "assemble")
-    if not getattr(kd, "_all_light", False):  # every entry loads from the cache lightly
-        for name in ENTRIES[1:]:
-            light_cache_load(getattr(kd, name))
-        kd._all_light = True
-    return kd
 
 
 def takes(chain: Chain, step_solver, method: str) -> bool:
@@ -111,16 +96,11 @@ def takes_backend(chain: Chain, backend, scaled: bool, method: str) -> bool:
 
 
 class KernelStep(ContactStep):
-    """A contact step assembled by :mod:`.driver_kernel`, whose forms, LCP heights and
-    residuals the kernels compute (the hooks of :mod:`.step_solver`)."""
+    """A contact step assembled by :mod:`.driver_kernel`, whose residuals the kernels
+    compute (the hook of :mod:`.step_solver`; its forms are every step's,
+    :meth:`ContactStep.lcp_form`, :meth:`ContactStep.qp_form`)."""
 
-    kernel = None  # the driver_kernel module (None: loaded at the first use)
     cu = cl = np.empty(0)  # the elastic walls' compliances 1/k (empty: rigid walls)
-
-    def kernels(self):
-        """The driver_kernel module (a step made by :func:`dataclasses.replace`, e.g. a
-        Newton step, keeps no instance attribute: loaded again)."""
-        return self.kernel if self.kernel is not None else _kernel()
 
     def springs(self) -> tuple[np.ndarray, np.ndarray]:
         """(cu, cl), the elastic walls' compliances (computed again where a copy of the
@@ -131,25 +111,6 @@ class KernelStep(ContactStep):
 
         cu, cl = compliances(self)
         return np.ascontiguousarray(cu, dtype=float), np.ascontiguousarray(cl, dtype=float)
-
-    def compiled_qp(self):
-        """(P data, indices, indptr, c̃, lower/ℓ, upper/ℓ, scaled bands)."""
-        return self.kernels().qp_form(self.bands, self.linear, self.lower, self.upper,
-                                   float(self.length_scale), float(self.force_scale))
-
-    def compiled_lcp(self):
-        """step_lcp's ``(form, M̃, q̃, dz, dw)``."""
-        code, M, q, Ms, qs, dz, dw, rows, top, cond = self.kernels().lcp_form(
-            self.bands, self.linear, self.lower, self.upper, float(self.length_scale),
-            float(self.force_scale))
-        if code:
-            raise NotImplementedError("a lower wall on only some contact rows")
-        return LCPForm(M=M, q=q, rows=rows, heights=top, condense=cond,
-                       n_gap=rows.size), Ms, qs, dz, dw
-
-    def from_lcp(self, form: LCPForm, zeta: np.ndarray) -> np.ndarray:
-        return self.kernels().from_lcp(self.bands, self.linear, form.rows, form.heights,
-                                    form.condense, np.ascontiguousarray(zeta, dtype=float))
 
     def compiled_residuals(self, u: np.ndarray):
         """step_residuals' ``(residuals, R)``, or None (the numpy reference decides: a
@@ -219,7 +180,7 @@ def assemble_step(chain: Chain, alpha: np.ndarray) -> KernelStep:
     if not consecutive(chain):
         raise ProblemError("the contact step is assembled for joints that join consecutive "
                            "links, in order, and contiguous free nodes from node 1")
-    step = _assemble(_kernel(), chain, _arrays(chain),
+    step = _assemble(step_kernels(), chain, _arrays(chain),
                      np.array(alpha, dtype=float))  # (a copy: the step keeps its α)
     step.kernel = None  # (a module is no instance attribute of a step that may be pickled)
     step.lower, step.upper = step.lower.copy(), step.upper.copy()
@@ -321,7 +282,7 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
     (:func:`undamped`). ``stop_on_stall``: end as soon as max|Δα| has
     stalled (:func:`~.outer.stall`) instead of at ``max_outer`` (after a kernel stop,
     where the escalations take a refusal over)."""
-    kd = _kernel()
+    kd = step_kernels()
     c = _arrays(chain)
     wall = Profile(kd, chain) if chain.profiled_walls else None
     if method == "undamped":
@@ -453,9 +414,9 @@ def warm_up() -> None:
     from .step_solver import make_step_solver
 
     chain = ActuatorScene(theta=150, height=3.0, links=8).chain()
-    step = _assemble(_kernel(), chain, _arrays(chain), chain.rest_alpha)
-    step.compiled_qp()
-    step.compiled_lcp()
+    step = _assemble(step_kernels(), chain, _arrays(chain), chain.rest_alpha)
+    step.qp_form(step.length_scale, step.force_scale)
+    step.lcp_form(step.length_scale, step.force_scale)
     run(chain, make_step_solver("lemke"), tol=1e-3)
     bump = WallProfile.from_table([0.0, 15.0, 30.0], [3.0, 2.5, 3.0])
     run(ActuatorScene(theta=150, links=8, wall_profile=bump).chain(),

@@ -110,7 +110,7 @@ def _take(H, rows, cols):
 
 @njit(cache=True)
 def lcp_form(bands, linear, lo, hi, L, F):
-    """ContactStep.lcp("contact") and step_lcp's scaling: (code, M, q, M̃, q̃, dz, dw,
+    """ContactStep.lcp_form, the condensed LCP and its scaling: (code, M, q, M̃, q̃, dz, dw,
     rows, heights, condensed); code 1: a lower wall on only some contact rows."""
     H = _dense(bands)
     C = np.flatnonzero(np.isfinite(hi))

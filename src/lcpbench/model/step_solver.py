@@ -52,16 +52,8 @@ def step_qp(step, scaled: bool = True) -> BoxQP:
     import scipy.sparse as sp  # at the first QP back-end's step, not at start-up
 
     n = step.size
-    if scaled and (own := getattr(step, "compiled_qp", None)) is not None:
-        data, indices, indptr, c, lo, hi, b = own()  # model.compiled_driver
-        return BoxQP(sp.csc_matrix((data, indices, indptr), shape=(n, n)), c, lo, hi, bands=b)
-    L, F = step_scales(step, scaled)
-    b = step.bands * (L / F)
-    diags = [b[0], b[1, : n - 1], b[2, : n - 2]]
-
-    P = sp.diags([diags[2], diags[1], diags[0], diags[1], diags[2]], [-2, -1, 0, 1, 2],
-                 shape=(n, n), format="csc")
-    return BoxQP(P, step.linear / F, step.lower / L, step.upper / L, bands=b)
+    data, indices, indptr, c, lo, hi, b = step.qp_form(*step_scales(step, scaled))
+    return BoxQP(sp.csc_matrix((data, indices, indptr), shape=(n, n)), c, lo, hi, bands=b)
 
 
 def step_lcp(step, scaled: bool = True):
@@ -72,16 +64,7 @@ def step_lcp(step, scaled: bool = True):
     block swaps the two).
     """
     _rigid_only(step, "step_lcp")
-    if scaled and (own := getattr(step, "compiled_lcp", None)) is not None:
-        return own()  # model.compiled_driver
-    form = step.lcp("contact")
-    L, F = step_scales(step, scaled)
-    m, k = form.n_gap, form.q.size
-    dz = np.concatenate([np.full(m, L), np.full(k - m, F)])
-    dw = np.concatenate([np.full(m, F), np.full(k - m, L)])
-    M = form.M * dz[None, :] / dw[:, None]
-    q = form.q / dw
-    return form, M, q, dz, dw
+    return step.lcp_form(*step_scales(step, scaled))
 
 
 def _rigid_only(step, what: str) -> None:
