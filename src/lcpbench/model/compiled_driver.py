@@ -104,13 +104,8 @@ class KernelStep(ContactStep):
 
     def springs(self) -> tuple[np.ndarray, np.ndarray]:
         """(cu, cl), the elastic walls' compliances (computed again where a copy of the
-        step lost them)."""
-        if self.cu.size or not self.elastic:
-            return self.cu, self.cl
-        from .elastic import compliances
-
-        cu, cl = compliances(self)
-        return np.ascontiguousarray(cu, dtype=float), np.ascontiguousarray(cl, dtype=float)
+        step lost them, :func:`_compliances`)."""
+        return (self.cu, self.cl) if self.cu.size else _compliances(self, self.elastic)
 
     def compiled_residuals(self, u: np.ndarray):
         """step_residuals' ``(residuals, R)``, or None (the numpy reference decides: a
@@ -129,15 +124,15 @@ class KernelStep(ContactStep):
                          "term_size"), map(float, res), strict=True)), R
 
 
-def _compliances(chain: Chain) -> tuple[np.ndarray, np.ndarray]:
-    """The walls' compliances 1/k per free node (:func:`.elastic.compliances`; empty
-    arrays for rigid walls, the kernels' form)."""
-    if not chain.elastic_walls:
+def _compliances(obj, elastic: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The walls' compliances 1/k per free node of a chain or a step
+    (:func:`.elastic.compliances`; empty arrays where no wall yields, ``elastic`` False:
+    the kernels' form)."""
+    if not elastic:
         return np.empty(0), np.empty(0)
     from .elastic import compliances
 
-    cu, cl = compliances(chain)
-    return np.ascontiguousarray(cu, dtype=float), np.ascontiguousarray(cl, dtype=float)
+    return compliances(obj)
 
 
 def _arrays(chain: Chain) -> tuple:
@@ -167,7 +162,7 @@ def _assemble(kd, chain: Chain, c: tuple, alpha: np.ndarray,
                       lower_stiffness=chain.lower_stiffness)
     step.kernel = kd
     if chain.elastic_walls:
-        step.cu, step.cl = _compliances(chain)
+        step.cu, step.cl = _compliances(chain, True)
     return step
 
 
@@ -290,7 +285,7 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
             raise ProblemError("a continuation start needs method='globalised'")
         return undamped(kd, chain, c, solver, tol, max_outer, wall)
     a, jl, jr, k, rest, fs, load, link_load, lo, hi = c
-    cu, cl = _compliances(chain)
+    cu, cl = _compliances(chain, chain.elastic_walls)
     n = chain.free_nodes.size
     steps: list[StepRecord] = []
     if wall is None:
