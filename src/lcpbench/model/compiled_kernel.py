@@ -142,7 +142,7 @@ def assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, i
         bands[1, i] = o1 if i < n - 1 else 0.0
         bands[2, i] = o2 if i < n - 2 else 0.0
         linear[i] = ln - nodal_load[i]
-    y = lost = 0.0  # the node heights, compensated (model.chain.compensated_heights);
+    y = lost = 0.0  # the node heights, compensated (chain_kernel.add_compensated);
     if fs == 1:  # the free ones are the origin
         origin[0] = 0.0
     for i in range(links):

@@ -63,7 +63,7 @@ def assemble_into(alpha, a, k, sk, rest, load, lower, upper, inv_a_cos, coef, or
         alpha0[i] = alpha[i]
         sa = math.sin(alpha[i])
         sin_alpha[i] = sa
-        y, lost = add_compensated(y, lost, a * sa)  # model.chain.compensated_heights
+        y, lost = add_compensated(y, lost, a * sa)  # the node heights, compensated
         if i < n:
             origin[i] = y + lost  # the height of free node i + 1
     alpha0[nl - 1] += -(y + lost) * inv_a_cos[nl - 1]  # the closure error of the pinned end
