@@ -73,7 +73,7 @@ def takes(chain: Chain, step_solver, method: str) -> bool:
     chain of consecutive joints and contiguous free nodes with flat walls, rigid or
     elastic (the back-end gets :mod:`.elastic`'s forms, the springs' energy is in the
     line search's). A step solver that is not ``scaled`` gets the step's forms in the
-    problem's units (:func:`~.step_solver.step_qp`, :func:`~.step_solver.step_lcp`)."""
+    problem's units (:func:`~.formulations.step_qp`, :func:`~.formulations.step_lcp`)."""
     backend = getattr(step_solver, "backend", None)
     return backend is not None and takes_backend(chain, backend,
                                                  getattr(step_solver, "scaled", False), method)
