@@ -331,16 +331,25 @@ def record_step(rec, count, it, t, dalpha, E):
 
 
 @njit(cache=True)
-def _clipped_heights(u, alpha, a, fs, lo, hi):
-    """The free nodes' heights of the chain at α, clipped to the walls, into u."""
+def free_heights(u, alpha, a, fs):
+    """The free nodes' heights of the chain at α into u: the running sums of a sin α
+    (model.wall_free.free_heights)."""
     y, n = 0.0, u.size
     if fs == 1:
-        u[0] = min(max(0.0, lo[0]), hi[0])
+        u[0] = 0.0
     for i in range(alpha.size):
         y += a * np.sin(alpha[i])
         node = i + 1 - (fs - 1)
         if 0 <= node < n:
-            u[node] = min(max(y, lo[node]), hi[node])
+            u[node] = y
+
+
+@njit(cache=True)
+def _clipped_heights(u, alpha, a, fs, lo, hi):
+    """The free nodes' heights of the chain at α, clipped to the walls, into u."""
+    free_heights(u, alpha, a, fs)
+    for i in range(u.size):
+        u[i] = min(max(u[i], lo[i]), hi[i])
 
 
 @njit(cache=True)
