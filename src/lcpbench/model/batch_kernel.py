@@ -34,16 +34,9 @@ from numba import njit
 
 from ..thresholds import SAG_BOUND
 from .batch_verdict import accepted
-from .compiled_kernel import (
-    BAIL_NOT_PD,
-    CONVERGED,
-    LINE_SEARCH,
-    MAX_OUTER,
-    NO_FIT,
-    contact_step,
-    free_heights,
-    solve_chain,
-)
+from .chain_kernel import free_heights
+from .compiled_dual import BAIL_NOT_PD  # the free step has no minimiser
+from .compiled_kernel import CONVERGED, LINE_SEARCH, MAX_OUTER, NO_FIT, contact_step, solve_chain
 from .judge_kernel import SETTLED, STATS, judge_answer, split_net
 
 __all__ = ["ARC", "CONTACT", "CONVERGED", "FREE", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "SETTLED",

@@ -3,7 +3,8 @@
 - :func:`add_compensated` — the compensated sum, with which every kernel sums the node
   heights of a step's linearisation point and its closure y_N;
 - :func:`fit_heights`, :func:`link_angle` — the inverse kinematics: the link angles of
-  given node heights, each link on its branch and winding;
+  given node heights, each link on its branch and winding; :func:`free_heights`, the
+  forward one (the free nodes' heights at α);
 - :func:`energy`, :func:`wall_penalty` — the exact energy E(α) = ½ Σ k (φ − φ*)² −
   Σ P ȳ (eq. 18's joint angles, the link loads P at the link centres ȳ), its sums
   compensated (a line search compares energies of ~10⁵ terms to 1e-12 of their size),
@@ -77,6 +78,20 @@ def fit_heights(out, u, reference, a, fs, links, inv, sines, cosines):
         sines[i] = s
         cosines[i] = -c if back else c
     return True
+
+
+@njit(cache=True)
+def free_heights(u, alpha, a, fs):
+    """The free nodes' heights of the chain at α into u: the running sums of a sin α
+    (model.wall_free.free_heights)."""
+    y, n = 0.0, u.size
+    if fs == 1:
+        u[0] = 0.0
+    for i in range(alpha.size):
+        y += a * np.sin(alpha[i])
+        node = i + 1 - (fs - 1)
+        if 0 <= node < n:
+            u[node] = y
 
 
 @njit(cache=True)

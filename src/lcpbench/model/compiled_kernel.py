@@ -38,6 +38,7 @@ from .chain_kernel import (  # once (numba_cache)
     energy,
     energy_noise,
     fit_heights,
+    free_heights,
     wall_penalty,
 )
 from .compiled_dual import (
@@ -328,20 +329,6 @@ def record_step(rec, count, it, t, dalpha, E):
         rec = bigger
     rec[0, count], rec[1, count], rec[2, count], rec[3, count] = it, t, dalpha, E
     return rec, count + 1
-
-
-@njit(cache=True)
-def free_heights(u, alpha, a, fs):
-    """The free nodes' heights of the chain at α into u: the running sums of a sin α
-    (model.wall_free.free_heights)."""
-    y, n = 0.0, u.size
-    if fs == 1:
-        u[0] = 0.0
-    for i in range(alpha.size):
-        y += a * np.sin(alpha[i])
-        node = i + 1 - (fs - 1)
-        if 0 <= node < n:
-            u[node] = y
 
 
 @njit(cache=True)
