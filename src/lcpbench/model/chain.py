@@ -69,10 +69,12 @@ def energy(chain: Chain, alpha: np.ndarray, walls: bool = True) -> float:
 
 def heights(chain: Chain, alpha: np.ndarray) -> np.ndarray:
     """Heights of the free nodes (the unknowns u of the contact step), a plain running
-    sum as :func:`node_positions`; a step's linearisation point sums them with
-    compensation (:func:`lcpbench.model.chain_kernel.add_compensated`), equal to a few
-    ulps of |y| more."""
-    return node_positions(chain, alpha)[1][chain.free_nodes]
+    sum as :func:`node_positions` (the same bits, without the x coordinates); a step's
+    linearisation point sums them with compensation
+    (:func:`lcpbench.model.chain_kernel.add_compensated`), equal to a few ulps of |y|
+    more."""
+    y = np.concatenate(([0.0], np.cumsum(chain.link_length * np.sin(alpha))))
+    return y[chain.free_nodes]
 
 
 def alpha_from_heights(

@@ -83,7 +83,7 @@ def fit_heights(out, u, reference, a, fs, links, inv, sines, cosines):
 @njit(cache=True)
 def free_heights(u, alpha, a, fs):
     """The free nodes' heights of the chain at α into u: the running sums of a sin α
-    (model.wall_free.free_heights)."""
+    (model.chain.heights)."""
     y, n = 0.0, u.size
     if fs == 1:
         u[0] = 0.0
