@@ -150,7 +150,7 @@ def test_lcp_form_and_qp_form_have_the_same_solution(channel):
     chain = scene.chain()
     step = assemble_step(chain, chain.rest_alpha)
     qp = solve_banded_qp(step)
-    form = step.lcp("contact")
+    form = step.lcp()
     sol = lemke(form.M, form.q)
     assert qp.solved and sol.solved
     u = step.from_lcp(form, sol.z)

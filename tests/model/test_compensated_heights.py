@@ -23,7 +23,6 @@ import pytest
 
 from lcpbench import ActuatorScene, CantileverScene, solve
 from lcpbench.model import compiled, large_n
-from lcpbench.model.chain import compensated_heights
 from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.finish import finish
 from lcpbench.model.judge import force_tol
@@ -40,14 +39,18 @@ N = 100_000
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_compensated_heights_are_the_correctly_rounded_prefix_sums(seed):
+def test_the_steps_heights_are_the_correctly_rounded_prefix_sums(seed):
+    """The heights u₀ of a step's linearisation point, summed with compensation
+    (chain_kernel.add_compensated), against the correctly rounded sums of a sin α."""
     rng = np.random.default_rng(seed)
     n = 3000
+    chain = ActuatorScene(150.0, 3.0, links=n).chain()
     # a chain's Δy: slowly varying, both signs, a few orders of magnitude
-    dy = 3e-4 * np.sin(np.linspace(1.3, -1.3, n)) * (1 + 1e-3 * rng.standard_normal(n))
-    got = compensated_heights(dy)
-    exact = np.array([math.fsum(dy[: i + 1]) for i in range(n)])  # correctly rounded
-    plain = np.cumsum(dy)
+    alpha = chain.rest_alpha * (1 + 1e-3 * rng.standard_normal(n))
+    got = assemble_step(chain, alpha).origin  # the heights of free nodes 1 … N − 1
+    dy = chain.link_length * np.sin(alpha)
+    exact = np.array([math.fsum(dy[: i + 1]) for i in range(n - 1)])  # correctly rounded
+    plain = np.cumsum(dy)[: n - 1]
     # Neumaier: |y − s| <= ε|s| + O(n ε²) Σ|Δy|; the plain sum carries ~√n ε max|y|
     allowed = EPS * np.abs(exact) + 4 * n * EPS**2 * np.sum(np.abs(dy))
     assert np.all(np.abs(got - exact) <= allowed)
@@ -66,7 +69,7 @@ def _bits(a, b):
 def test_every_kernel_sums_the_heights_as_the_reference(scene):
     """Route against route: the promise is the same bits in every kernel's prefix sums (the
     correctly rounded sums are the oracle in
-    test_compensated_heights_are_the_correctly_rounded_prefix_sums)."""
+    test_the_steps_heights_are_the_correctly_rounded_prefix_sums)."""
     # the step's assembly (compiled_driver.assemble_step, the solve kernel's banded_step)
     # and the judge kernel's and the increments' loops: the same bits
     chain = scene.chain()

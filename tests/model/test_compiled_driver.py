@@ -1,8 +1,7 @@
 """The driver around any back-end with lcpbench's parts compiled (model/compiled_driver.py).
 
-The kernels of model/driver_kernel.py are checked piece by piece against the numpy
-functions they stand for (assembly, the back-ends' forms, the judge's residuals, the
-heights of an LCP answer), then whole solves, for an LCP and QP back-ends, on the
+The kernel of the judge's residuals (model/driver_kernel.py) is checked against the numpy
+reference it stands for, then whole solves, for an LCP and QP back-ends, on the
 actuator with nodes that cannot reach the wall (condensed out of the LCP), the two-wall
 channel and the cantilever: every converged answer is the scene's equilibrium by an
 oracle that shares no code with the driver (tests/energy_oracle.py).
@@ -18,7 +17,7 @@ from lcpbench import ActuatorScene, CantileverScene, solve
 from lcpbench.model import compiled_driver
 from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.step import ContactStep
-from lcpbench.model.step_solver import make_step_solver, step_lcp, step_qp, step_residuals
+from lcpbench.model.step_solver import make_step_solver, step_lcp, step_residuals
 from lcpbench.problems.walls import WallProfile
 from lcpbench.solvers.registry import get_backend
 
@@ -40,29 +39,18 @@ def _steps(scene):
 
 
 @pytest.mark.parametrize("name", SCENES)
-def test_kernel_pieces_match_the_numpy_functions(name):
-    """Route against route: the kernel's forms and residuals (LCP and QP forms, the
-    heights of an LCP answer, lcpbench's residuals) against ContactStep's numpy methods on
-    the same step; they have no oracle of their own (the step itself is checked against
-    the paper's equations and finite differences of the exact energy in
-    tests/model/test_assembly.py, and the whole solves below against the energy oracle)."""
+def test_kernel_residuals_match_the_numpy_reference(name):
+    """Route against route: the kernel's residuals of a step answer (lcpbench's
+    residuals of the heights of an LCP answer) against step_residuals' numpy reference on
+    the same step (which Newton steps use); they have no oracle of their own (the step
+    itself is checked against the paper's equations and finite differences of the exact
+    energy in tests/model/test_assembly.py, and the whole solves below against the
+    energy oracle)."""
     chain, ref, step = _steps(SCENES[name])
-    qa, qb = step_qp(ref), step_qp(step)
-    assert qb.P.has_sorted_indices and qb.P.nnz == qa.P.nnz
-    assert np.array_equal(qa.P.toarray(), qb.P.toarray())
-    for field in ("c", "lower", "upper", "bands"):
-        assert np.allclose(getattr(qa, field), getattr(qb, field), rtol=1e-14, atol=0), field
-    fa, Ma, qa_, dza, dwa = step_lcp(ref)
-    fb, Mb, qb_, dzb, dwb = step_lcp(step)
-    assert fa.condense.size == fb.condense.size  # (the actuator condenses nodes out)
-    assert np.array_equal(fa.rows, fb.rows) and np.array_equal(fa.condense, fb.condense)
-    assert np.array_equal(dza, dzb) and np.array_equal(dwa, dwb)
-    assert np.allclose(Ma, Mb, rtol=1e-12, atol=1e-12 * np.max(np.abs(Ma)))
-    assert np.allclose(qa_, qb_, rtol=1e-10, atol=1e-10 * np.max(np.abs(qa_)))
-    # an answer ζ of the LCP back to heights, and lcpbench's residuals of those heights
-    zeta = np.abs(np.random.default_rng(1).normal(size=fa.q.size)) * 0.1
-    ua, ub = ref.from_lcp(fa, zeta), step.from_lcp(fb, zeta)
-    assert np.allclose(ua, ub, rtol=1e-12, atol=1e-12 * np.max(np.abs(ua)))
+    fb, *_ = step_lcp(step)
+    assert name == "cantilever" or fb.condense.size  # (the actuator condenses nodes out)
+    zeta = np.abs(np.random.default_rng(1).normal(size=fb.q.size)) * 0.1
+    ua = step.from_lcp(fb, zeta)
     (ra, Ra), (rb, Rb) = step_residuals(ref, ua), step_residuals(step, ua)
     assert ra.keys() <= rb.keys()
     for key, value in ra.items():

@@ -29,7 +29,6 @@ from lcpbench.model.result import DERIVED
 from lcpbench.model.wall_free import (
     arc_far_past_wall,
     beam_sag,
-    free_heights,
     wall_overlap,
 )
 from lcpbench.problems.sections import Section, SectionedScene
@@ -156,13 +155,6 @@ def test_the_cheap_wall_free_test_is_sufficient(weight):
                 bound = SAG_BOUND * beam_sag(chain) if loaded else 0.0
                 assert overlap > bound and overlap >= 0, (theta, h, links)
     assert said > 20  # the test does say something on this grid
-
-
-def test_free_heights_are_the_heights():
-    for scene in (ActuatorScene(theta=170, links=31), CantileverScene(links=9)):
-        chain = scene.chain()
-        alpha = chain.rest_alpha + 0.01 * np.sin(np.arange(chain.links))
-        assert np.array_equal(free_heights(chain, alpha), heights(chain, alpha))
 
 
 def test_a_batch_line_with_rigid_and_elastic_walls_gives_each_scenes_solve():

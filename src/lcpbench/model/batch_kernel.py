@@ -34,30 +34,18 @@ from numba import njit
 
 from ..thresholds import SAG_BOUND
 from .batch_verdict import accepted
+from .chain_kernel import free_heights
+from .compiled_dual import BAIL_NOT_PD  # the free step has no minimiser
 from .compiled_kernel import CONVERGED, LINE_SEARCH, MAX_OUTER, NO_FIT, contact_step, solve_chain
 from .judge_kernel import SETTLED, STATS, judge_answer, split_net
 
 __all__ = ["ARC", "CONTACT", "CONVERGED", "FREE", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "SETTLED",
            "STATS", "STOPPED_FREE", "solve_line"]
-BAIL_NOT_PD = 11  # compiled_dual.BAIL_NOT_PD: the free step has no minimiser
 # what an attempt is (o_kind): a contact solve, the wall-free search's answer, the arc
 CONTACT, FREE, ARC = 0, 1, 2
 #: o_code of an attempt the wall-free search stopped on (its compiled step where the
 #: numpy one would go on, or the search's solve kernel): no bail code of a contact solve
 STOPPED_FREE = -1
-
-
-@njit(cache=True)
-def _free_heights(u, alpha, a, fs):
-    """model.wall_free.free_heights: the cumulative sums of a sin α at the free nodes."""
-    y, n = 0.0, u.size
-    if fs == 1:
-        u[0] = 0.0
-    for i in range(alpha.size):
-        y += a * np.sin(alpha[i])
-        node = i + 1 - (fs - 1)
-        if 0 <= node < n:
-            u[node] = y
 
 
 @njit(cache=True)
@@ -93,7 +81,7 @@ def _wall_free_kind(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
         if y - wall > bound + 1e-9 * (L + abs(wall)):
             return CONTACT
     u = np.empty(n)
-    _free_heights(u, ra, a, fs)
+    free_heights(u, ra, a, fs)
     over = _overlap(u, lo, hi)
     if over >= 0:
         if not loaded or over > SAG_BOUND * sag:
@@ -158,7 +146,7 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
                 o_code[row] = STOPPED_FREE
                 return False, recs, used
             u = np.empty(n)
-            _free_heights(u, got[1], a, fs)
+            free_heights(u, got[1], a, fs)
             if got[0] == CONVERGED and _overlap(u, lo, hi) < 0:
                 code = CONVERGED
             else:

@@ -25,21 +25,6 @@ def node_positions(chain: Chain, alpha: np.ndarray) -> tuple[np.ndarray, np.ndar
     return x, y
 
 
-def compensated_heights(dy: np.ndarray) -> np.ndarray:
-    """Prefix sums y_i = Σ_{k<=i} Δy_k with Neumaier's compensation (the heights of a
-    step's linearisation point and its closure y_N;
-    :func:`lcpbench.model.chain_kernel.prefix_heights`, the sums the kernels run).
-
-    A plain running sum carries ~√N ε max|y| (at N = 10⁵, 10⁻¹³ mm): a height error δ
-    moves a node's force by ~16 EI δ / a³, and the closure error, put on the last
-    link, bends it by δ / (a cos α) — a torque 10 % off at the last joint at 10⁵.
-    Compensated, y_i is exact to a few ulps of itself.
-    """
-    out = np.empty(len(dy))
-    _kernel().prefix_heights(np.ascontiguousarray(dy, dtype=float), out)
-    return out
-
-
 def joint_angles(chain: Chain, alpha: np.ndarray) -> np.ndarray:
     """Joint angles φ (rad): α_r − α_l, with α_l = 0 at a clamp (eq. 18)."""
     left, right = chain.joint_links[:, 0], chain.joint_links[:, 1]
@@ -84,9 +69,12 @@ def energy(chain: Chain, alpha: np.ndarray, walls: bool = True) -> float:
 
 def heights(chain: Chain, alpha: np.ndarray) -> np.ndarray:
     """Heights of the free nodes (the unknowns u of the contact step), a plain running
-    sum as :func:`node_positions`; a step's linearisation point sums them with
-    compensation (:func:`compensated_heights`), equal to a few ulps of |y| more."""
-    return node_positions(chain, alpha)[1][chain.free_nodes]
+    sum as :func:`node_positions` (the same bits, without the x coordinates); a step's
+    linearisation point sums them with compensation
+    (:func:`lcpbench.model.chain_kernel.add_compensated`), equal to a few ulps of |y|
+    more."""
+    y = np.concatenate(([0.0], np.cumsum(chain.link_length * np.sin(alpha))))
+    return y[chain.free_nodes]
 
 
 def alpha_from_heights(

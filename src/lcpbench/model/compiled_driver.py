@@ -60,24 +60,9 @@ from .outer import (
     step_failed,
     step_setup_time,
 )
-from .step import ContactStep, LCPForm
+from .step import ContactStep, step_kernels
 
 ENGINE = "compiled driver"
-
-
-ENTRIES = ("assemble", "qp_form", "lcp_form", "from_lcp", "judge", "advance", "predict",
-           "profile_start", "profile_assemble", "profile_advance", "profile_on_walls")
-
-
-def _kernel():
-    from ..numba_cache import kernel_module, light_cache_load  # numba at the first solve
-
-    kd = kernel_module("lcpbench.model.driver_kernel", "assemble")
-    if not getattr(kd, "_all_light", False):  # every entry loads from the cache lightly
-        for name in ENTRIES[1:]:
-            light_cache_load(getattr(kd, name))
-        kd._all_light = True
-    return kd
 
 
 def takes(chain: Chain, step_solver, method: str) -> bool:
@@ -88,7 +73,7 @@ def takes(chain: Chain, step_solver, method: str) -> bool:
     chain of consecutive joints and contiguous free nodes with flat walls, rigid or
     elastic (the back-end gets :mod:`.elastic`'s forms, the springs' energy is in the
     line search's). A step solver that is not ``scaled`` gets the step's forms in the
-    problem's units (:func:`~.step_solver.step_qp`, :func:`~.step_solver.step_lcp`)."""
+    problem's units (:func:`~.formulations.step_qp`, :func:`~.formulations.step_lcp`)."""
     backend = getattr(step_solver, "backend", None)
     return backend is not None and takes_backend(chain, backend,
                                                  getattr(step_solver, "scaled", False), method)
@@ -111,45 +96,16 @@ def takes_backend(chain: Chain, backend, scaled: bool, method: str) -> bool:
 
 
 class KernelStep(ContactStep):
-    """A contact step assembled by :mod:`.driver_kernel`, whose forms, LCP heights and
-    residuals the kernels compute (the hooks of :mod:`.step_solver`)."""
+    """A contact step assembled by :mod:`.driver_kernel`, whose residuals the kernels
+    compute (the hook of :mod:`.step_solver`; its forms are every step's,
+    :meth:`ContactStep.lcp_form`, :meth:`ContactStep.qp_form`)."""
 
-    kernel = None  # the driver_kernel module (None: loaded at the first use)
     cu = cl = np.empty(0)  # the elastic walls' compliances 1/k (empty: rigid walls)
-
-    def kernels(self):
-        """The driver_kernel module (a step made by :func:`dataclasses.replace`, e.g. a
-        Newton step, keeps no instance attribute: loaded again)."""
-        return self.kernel if self.kernel is not None else _kernel()
 
     def springs(self) -> tuple[np.ndarray, np.ndarray]:
         """(cu, cl), the elastic walls' compliances (computed again where a copy of the
-        step lost them)."""
-        if self.cu.size or not self.elastic:
-            return self.cu, self.cl
-        from .elastic import compliances
-
-        cu, cl = compliances(self)
-        return np.ascontiguousarray(cu, dtype=float), np.ascontiguousarray(cl, dtype=float)
-
-    def compiled_qp(self):
-        """(P data, indices, indptr, c̃, lower/ℓ, upper/ℓ, scaled bands)."""
-        return self.kernels().qp_form(self.bands, self.linear, self.lower, self.upper,
-                                   float(self.length_scale), float(self.force_scale))
-
-    def compiled_lcp(self):
-        """step_lcp's ``(form, M̃, q̃, dz, dw)``."""
-        code, M, q, Ms, qs, dz, dw, rows, top, cond = self.kernels().lcp_form(
-            self.bands, self.linear, self.lower, self.upper, float(self.length_scale),
-            float(self.force_scale))
-        if code:
-            raise NotImplementedError("a lower wall on only some contact rows")
-        return LCPForm(M=M, q=q, rows=rows, heights=top, condense=cond,
-                       n_gap=rows.size), Ms, qs, dz, dw
-
-    def from_lcp(self, form: LCPForm, zeta: np.ndarray) -> np.ndarray:
-        return self.kernels().from_lcp(self.bands, self.linear, form.rows, form.heights,
-                                    form.condense, np.ascontiguousarray(zeta, dtype=float))
+        step lost them, :func:`_compliances`)."""
+        return (self.cu, self.cl) if self.cu.size else _compliances(self, self.elastic)
 
     def compiled_residuals(self, u: np.ndarray):
         """step_residuals' ``(residuals, R)``, or None (the numpy reference decides: a
@@ -168,15 +124,15 @@ class KernelStep(ContactStep):
                          "term_size"), map(float, res), strict=True)), R
 
 
-def _compliances(chain: Chain) -> tuple[np.ndarray, np.ndarray]:
-    """The walls' compliances 1/k per free node (:func:`.elastic.compliances`; empty
-    arrays for rigid walls, the kernels' form)."""
-    if not chain.elastic_walls:
+def _compliances(obj, elastic: bool) -> tuple[np.ndarray, np.ndarray]:
+    """The walls' compliances 1/k per free node of a chain or a step
+    (:func:`.elastic.compliances`; empty arrays where no wall yields, ``elastic`` False:
+    the kernels' form)."""
+    if not elastic:
         return np.empty(0), np.empty(0)
     from .elastic import compliances
 
-    cu, cl = compliances(chain)
-    return np.ascontiguousarray(cu, dtype=float), np.ascontiguousarray(cl, dtype=float)
+    return compliances(obj)
 
 
 def _arrays(chain: Chain) -> tuple:
@@ -206,7 +162,7 @@ def _assemble(kd, chain: Chain, c: tuple, alpha: np.ndarray,
                       lower_stiffness=chain.lower_stiffness)
     step.kernel = kd
     if chain.elastic_walls:
-        step.cu, step.cl = _compliances(chain)
+        step.cu, step.cl = _compliances(chain, True)
     return step
 
 
@@ -219,7 +175,7 @@ def assemble_step(chain: Chain, alpha: np.ndarray) -> KernelStep:
     if not consecutive(chain):
         raise ProblemError("the contact step is assembled for joints that join consecutive "
                            "links, in order, and contiguous free nodes from node 1")
-    step = _assemble(_kernel(), chain, _arrays(chain),
+    step = _assemble(step_kernels(), chain, _arrays(chain),
                      np.array(alpha, dtype=float))  # (a copy: the step keeps its α)
     step.kernel = None  # (a module is no instance attribute of a step that may be pickled)
     step.lower, step.upper = step.lower.copy(), step.upper.copy()
@@ -321,7 +277,7 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
     (:func:`undamped`). ``stop_on_stall``: end as soon as max|Δα| has
     stalled (:func:`~.outer.stall`) instead of at ``max_outer`` (after a kernel stop,
     where the escalations take a refusal over)."""
-    kd = _kernel()
+    kd = step_kernels()
     c = _arrays(chain)
     wall = Profile(kd, chain) if chain.profiled_walls else None
     if method == "undamped":
@@ -329,7 +285,7 @@ def run(chain: Chain, solver, *, tol: float = 1e-3, max_outer: int = 200,
             raise ProblemError("a continuation start needs method='globalised'")
         return undamped(kd, chain, c, solver, tol, max_outer, wall)
     a, jl, jr, k, rest, fs, load, link_load, lo, hi = c
-    cu, cl = _compliances(chain)
+    cu, cl = _compliances(chain, chain.elastic_walls)
     n = chain.free_nodes.size
     steps: list[StepRecord] = []
     if wall is None:
@@ -453,9 +409,9 @@ def warm_up() -> None:
     from .step_solver import make_step_solver
 
     chain = ActuatorScene(theta=150, height=3.0, links=8).chain()
-    step = _assemble(_kernel(), chain, _arrays(chain), chain.rest_alpha)
-    step.compiled_qp()
-    step.compiled_lcp()
+    step = _assemble(step_kernels(), chain, _arrays(chain), chain.rest_alpha)
+    step.qp_form(step.length_scale, step.force_scale)
+    step.lcp_form(step.length_scale, step.force_scale)
     run(chain, make_step_solver("lemke"), tol=1e-3)
     bump = WallProfile.from_table([0.0, 15.0, 30.0], [3.0, 2.5, 3.0])
     run(ActuatorScene(theta=150, links=8, wall_profile=bump).chain(),

@@ -405,16 +405,6 @@ def certify(u, ru, rl, lo, hi, cu, cl, gp, grad, size, m, ms, T):
 
 
 @njit(cache=True)
-def step_certificate(u, ru, rl, lo, hi, gp):
-    """solvers.banded.step_certificate: the scaled KKT residual of a step answer."""
-    n = u.size
-    nj = gp[0].shape[0]
-    return certify(u, ru, rl, lo, hi, np.empty(0), np.empty(0), gp, np.empty(n), np.empty(n),
-                    np.empty(nj), np.empty(nj),
-                    np.zeros((2, n)))
-
-
-@njit(cache=True)
 def _wall_terms(hi, lo, u, R, cu, cl, L, F, nat, min_gap, min_r, comp_up, comp_lo):
     """One node's terms of step_residuals (gap g and reaction r of each wall row,
     scaled by L and F): the accumulators (natural residual max|min(g, r)|, least
@@ -502,15 +492,3 @@ def judge_step(u, bands, linear, lo, hi, cu, cl, gp, L, F, out, R, u2, rows, fac
     out[0], out[1], out[2], out[3], out[4] = nat, min_gap, min_r, abs(comp_up) + abs(comp_lo), \
         term / F
     return True
-
-
-@njit(cache=True)
-def step_residuals(u, bands, linear, lo, hi, gp, L, F):
-    """model.step_solver.step_residuals: (ok, [natural, min_gap, min_reaction,
-    complementarity, term_size], R) with R = −gradient on the completed heights."""
-    n = u.size
-    out, R = np.zeros(5), np.empty(n)
-    ok = judge_step(u, bands, linear, lo, hi, np.empty(0), np.empty(0), gp, L, F, out, R,
-                np.empty(n), np.empty(n, np.bool_),
-                np.empty((4, n)), np.empty(gp[0].shape[0]), np.zeros((2, n)), np.empty(0))
-    return ok, out, R

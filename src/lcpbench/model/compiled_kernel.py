@@ -38,6 +38,7 @@ from .chain_kernel import (  # once (numba_cache)
     energy,
     energy_noise,
     fit_heights,
+    free_heights,
     wall_penalty,
 )
 from .compiled_dual import (
@@ -82,15 +83,12 @@ from .compiled_dual import (
     dual_active_set,
     grad_into,
     judge_step,
-    step_certificate,
-    step_residuals,
 )
 
 # outcome codes of solve_chain (the Python side turns them into reasons)
 CONVERGED, MAX_OUTER, LINE_SEARCH, NO_FIT = 0, 1, 2, 3
 __all__ = ["BAIL_CERT", "BAIL_JUDGE", "BAIL_LIMIT", "BAIL_NOT_PD", "BAIL_PRIMAL", "BAIL_REPEAT",
-           "CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "step_certificate", "step_residuals",
-           "solve_chain", "solve_step"]
+           "CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "solve_chain", "solve_step"]
 
 
 @njit(cache=True)
@@ -145,7 +143,7 @@ def assemble_into(alpha, a, jl, jr, k, rest, fs, n, nodal_load, bands, linear, i
         bands[1, i] = o1 if i < n - 1 else 0.0
         bands[2, i] = o2 if i < n - 2 else 0.0
         linear[i] = ln - nodal_load[i]
-    y = lost = 0.0  # the node heights, compensated (model.chain.compensated_heights);
+    y = lost = 0.0  # the node heights, compensated (chain_kernel.add_compensated);
     if fs == 1:  # the free ones are the origin
         origin[0] = 0.0
     for i in range(links):
@@ -336,14 +334,9 @@ def record_step(rec, count, it, t, dalpha, E):
 @njit(cache=True)
 def _clipped_heights(u, alpha, a, fs, lo, hi):
     """The free nodes' heights of the chain at α, clipped to the walls, into u."""
-    y, n = 0.0, u.size
-    if fs == 1:
-        u[0] = min(max(0.0, lo[0]), hi[0])
-    for i in range(alpha.size):
-        y += a * np.sin(alpha[i])
-        node = i + 1 - (fs - 1)
-        if 0 <= node < n:
-            u[node] = min(max(y, lo[node]), hi[node])
+    free_heights(u, alpha, a, fs)
+    for i in range(u.size):
+        u[i] = min(max(u[i], lo[i]), hi[i])
 
 
 @njit(cache=True)

@@ -7,7 +7,7 @@ same small compiled overhead for every back-end:
 - :func:`assemble`: the banded step of eqs. 20-31, its stencils and linearisation
   point (:func:`lcpbench.model.compiled_driver.assemble_step`, the public one);
 - :func:`qp_form` / :func:`lcp_form`: the forms the back-ends take
-  (:func:`lcpbench.model.step_solver.step_qp`, the banded QP as CSC arrays;
+  (:func:`lcpbench.model.formulations.step_qp`, the banded QP as CSC arrays;
   :meth:`ContactStep.lcp` with the scaling of ``step_lcp``, the condensed dense LCP);
   :func:`from_lcp`, the heights of an LCP answer;
 - :func:`judge`: :func:`lcpbench.model.step_solver.step_residuals`, lcpbench's
@@ -110,7 +110,7 @@ def _take(H, rows, cols):
 
 @njit(cache=True)
 def lcp_form(bands, linear, lo, hi, L, F):
-    """ContactStep.lcp("contact") and step_lcp's scaling: (code, M, q, M̃, q̃, dz, dw,
+    """ContactStep.lcp_form, the condensed LCP and its scaling: (code, M, q, M̃, q̃, dz, dw,
     rows, heights, condensed); code 1: a lower wall on only some contact rows."""
     H = _dense(bands)
     C = np.flatnonzero(np.isfinite(hi))

@@ -76,8 +76,9 @@ def compliances(obj) -> tuple[np.ndarray, np.ndarray]:
     return out[0], out[1]
 
 
-def _soft(obj) -> tuple[np.ndarray, np.ndarray]:
-    """Finite stiffness of the upper / lower wall per node (0 where rigid or no wall)."""
+def wall_springs(obj) -> tuple[np.ndarray, np.ndarray]:
+    """Finite stiffness k_i (N/mm) of the upper / lower wall per free node (0 where rigid
+    or no wall) of a Chain or a ContactStep."""
     n = np.asarray(obj.upper).size
     out = []
     for k, wall in ((obj.upper_stiffness, obj.upper), (obj.lower_stiffness, obj.lower)):
@@ -134,7 +135,7 @@ def wall_pressure(chain, y_free: np.ndarray, forces_upper: np.ndarray,
     if not chain.elastic_walls:
         depth = np.zeros(y_free.size)  # rigid walls do not yield
     else:
-        ku, kl = _soft(chain)
+        ku, kl = wall_springs(chain)
         up, lo = indentation(chain, y_free)
         depth = np.maximum(np.where(ku > 0, up, 0.0), np.where(kl > 0, lo, 0.0))
     share = wall_share(chain.links, chain.link_length, chain.free_nodes)
@@ -225,7 +226,7 @@ def elastic_qp(step, form: str = "spring") -> ElasticQP:
     if form not in ("spring", "split"):
         raise ValueError(f"form must be 'spring' or 'split', got {form!r}")
     n = step.size
-    ku, kl = _soft(step)
+    ku, kl = wall_springs(step)
     per = 1 + (ku > 0) + (kl > 0)  # rows per node
     first = np.concatenate(([0], np.cumsum(per)[:-1]))
     m = int(per.sum())

@@ -22,9 +22,10 @@ Every form is nondimensionalised (lengths by ℓ, forces by EI/ℓ², as
 reactions R, which lcpbench's one judge then checks (:mod:`.step_solver`). In every
 form the reactions are the multipliers of the wall constraints.
 
-F1 and F2 are the forms the back-ends always had (:func:`.step_solver.step_lcp`,
-``step_qp``); this module builds F3-F5 (:func:`lifted_qp`, :func:`reaction_lcp`,
-:func:`angle_qp`), maps their answers back and runs any of the five on a back-end
+F1 and F2 are the forms the back-ends always had (:func:`step_lcp`, :func:`step_qp`,
+the step's compiled ones, :meth:`lcpbench.model.step.ContactStep.lcp_form`); this module
+also builds F3-F5 (:func:`lifted_qp`, :func:`reaction_lcp`, :func:`angle_qp`), maps their
+answers back and runs any of the five on a back-end
 (:func:`run_formulation`). Which back-end accepts which form follows from its
 registry data (:func:`accepts`).
 """
@@ -39,7 +40,7 @@ import numpy as np
 from ..errors import ProblemError
 from ..linalg import solveh_banded
 from ..linalg import sparse as sp
-from ..solvers.base import LinearQP, Settings, Status, StepSolution
+from ..solvers.base import BoxQP, LinearQP, Settings, Status, StepSolution
 from ..solvers.equilibrate import equilibrate_lcp, equilibrate_qp, scale_qp, unscale_qp
 from ..solvers.runner import run_lcp
 
@@ -208,6 +209,35 @@ def step_scales(step, scaled: bool) -> tuple[float, float]:
     if not scaled:
         return 1.0, 1.0
     return float(step.length_scale), float(step.force_scale)
+
+
+def step_qp(step, scaled: bool = True) -> BoxQP:
+    """The step as a bound-constrained QP, in the units of ``step_scales``.
+
+    A step with elastic walls has its own forms (:mod:`lcpbench.model.elastic`):
+    handing its rigid QP over would drop the walls' springs, so it is refused.
+    """
+    _rigid_only(step, "step_qp")
+    n = step.size
+    data, indices, indptr, c, lo, hi, b = step.qp_form(*step_scales(step, scaled))
+    return BoxQP(sp.csc_matrix((data, indices, indptr), shape=(n, n)), c, lo, hi, bands=b)
+
+
+def step_lcp(step, scaled: bool = True):
+    """The step as an LCP (the condensed contact form) and its unit vectors.
+
+    Returns ``(form, M̃, q̃, dz, dw)`` with ``z = dz ⊙ z̃`` and ``w = dw ⊙ w̃``:
+    gaps in units of ℓ and reactions in units of EI/ℓ² (the channel's second
+    block swaps the two).
+    """
+    _rigid_only(step, "step_lcp")
+    return step.lcp_form(*step_scales(step, scaled))
+
+
+def _rigid_only(step, what: str) -> None:
+    if getattr(step, "elastic", False):
+        raise ProblemError(f"{what}: this step has elastic walls; its forms are "
+                           "lcpbench.model.elastic.elastic_qp / force_lcp")
 
 
 def _free_shift(step) -> int:
@@ -393,14 +423,10 @@ def gaps_answer(step, form, z: np.ndarray, w: np.ndarray):
     return step.from_lcp(form, z), r_up, r_lo
 
 
-def run_formulation(backend, step, s: Settings, formulation: Formulation, scaled: bool,
-                    given=None) -> StepSolution:
+def run_formulation(backend, step, s: Settings, formulation: Formulation,
+                    scaled: bool) -> StepSolution:
     """``backend``'s answer to ``step`` in ``formulation``, mapped back to heights and
-    reactions (not yet judged: :func:`lcpbench.model.step_solver.solve_step` does).
-
-    ``given`` builds F1's or F2's data (``step_lcp`` or ``step_qp`` of
-    :mod:`.step_solver`, which owns them): called as ``given(step, scaled)``.
-    """
+    reactions (not yet judged: :func:`lcpbench.model.step_solver.solve_step` does)."""
     n = step.size
     if not accepts(backend, formulation):
         return _failed(n, f"{backend.name} does not take formulation {formulation} "
@@ -410,7 +436,7 @@ def run_formulation(backend, step, s: Settings, formulation: Formulation, scaled
     t0 = time.perf_counter()
     try:
         if formulation.name == "gaps":
-            form, M, q, dz, dw = given(step, scaled)
+            form, M, q, dz, dw = step_lcp(step, scaled)
             build = time.perf_counter() - t0
             z, w, res = _solve_lcp(backend, M, q, s, formulation.equilibrated)
             if not np.all(np.isfinite(z)):
@@ -428,7 +454,7 @@ def run_formulation(backend, step, s: Settings, formulation: Formulation, scaled
             r_up[lcp.nodes[up]] = lam[up] * F
             r_lo[lcp.nodes[~up]] = lam[~up] * F
         else:
-            qp = given(step, scaled) if formulation.name == "heights" \
+            qp = step_qp(step, scaled) if formulation.name == "heights" \
                 else _problem(step, formulation.name, scaled)
             build = time.perf_counter() - t0
             x, y, yr, res = _solve_qp(mod, backend, qp, s, formulation.equilibrated)

@@ -35,6 +35,7 @@ from ..linalg import banded_matvec
 from ..problems.scenes import Chain
 from ..thresholds import EPS, PIVOT_ROUNDS, ROUNDOFF_ULPS, STALL
 from . import large_n
+from .elastic import wall_springs
 from .profile import slope_load, walls_at
 
 #: the single pivots are capped at 2 × this many, not 2 per node: each round is an O(N)
@@ -77,15 +78,6 @@ def split_reactions(chain: Chain, net: np.ndarray, u: np.ndarray):
         mid = 0.5 * (chain.upper + chain.lower)
     near_upper = np.where(np.isfinite(mid), u >= mid, np.isfinite(chain.upper))
     return np.where(near_upper, net, 0.0), np.where(near_upper, 0.0, -net)
-
-
-def _springs(step) -> tuple[np.ndarray, np.ndarray]:
-    """The elastic walls' k_i (N/mm) per free node, 0 where a wall is rigid or absent."""
-    out = []
-    for k, wall in ((step.upper_stiffness, step.upper), (step.lower_stiffness, step.lower)):
-        k = np.full(step.size, np.inf) if k is None else np.asarray(k, float)
-        out.append(np.where(np.isfinite(k) & np.isfinite(wall), k, 0.0))
-    return out[0], out[1]
 
 
 def _sizes(step, u):
@@ -136,7 +128,7 @@ def _pivot_step(step, up: np.ndarray, lo: np.ndarray, pull: float):
         return (u, -step.gradient(u), rounds, np.where(up | lo, roundoff, 0.0),
                 float(np.max(roundoff)), float(np.max(size, initial=0.0)), (up, lo))
     best, stall = step.size + 1, 0
-    k_up, k_lo = _springs(step)
+    k_up, k_lo = wall_springs(step)
     for rounds in range(1, cap + 1):
         # a node on a rigid wall is held on it; on an elastic wall it stays free, held
         # by the wall's spring k (u − h) (model.elastic), as rows of the twisted factor

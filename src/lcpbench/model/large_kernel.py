@@ -5,7 +5,7 @@ At N = 10⁵ each of these was a dozen or more full-length numpy passes
 dual walk. Here each is one loop with the same arithmetic, in the same order
 where a sum is involved, as the numpy reference it replaces:
 
-- :func:`assemble` — :func:`lcpbench.model.compiled_driver.assemble_step` followed by
+- :func:`assemble_into` — :func:`lcpbench.model.compiled_driver.assemble_step` followed by
   :func:`lcpbench.model.large_n.increment_step` (the step in increments
   d = u − u₀, its linear term the factored gradient at u₀) for a chain of the
   large-N layout (:func:`lcpbench.model.large_n.layout_fits`: joint j joins
@@ -35,21 +35,6 @@ from .compiled_dual import EPS, wall_residuals
 
 
 @njit(cache=True)
-def assemble(alpha, a, k, rest, load, lower, upper, inv_a_cos, v, coef, phi0, origin,
-             alpha0, phi_origin, bands, linear, lo, hi, rows, rrows):
-    """Writes the step at α in increments (all arrays preallocated; n = alpha.size − 1
-    free nodes, n joints): the fields of the ContactStep, its walls ``lo``/``hi`` about
-    u₀, the rows of A = diag(√k) J and their mirror ``rrows`` (the twisted factor's)."""
-    sk = np.empty(k.size)
-    for j in range(k.size):
-        sk[j] = math.sqrt(k[j])
-    assemble_into(alpha, a, k, sk, rest, load, lower, upper, inv_a_cos, coef, origin,
-                  alpha0, phi_origin, bands, linear, lo, hi, rows, rrows,
-                  np.empty(alpha.size), np.empty(k.size))
-    tangent_terms(alpha, v, phi0)
-
-
-@njit(cache=True)
 def tangent_terms(alpha, v, phi0):
     """The fields ``v`` = tan α − α and ``phi0`` of the step at α (the height form's
     φ̂(0); the steps in increments never read them, so :func:`assemble_into` leaves
@@ -63,8 +48,11 @@ def tangent_terms(alpha, v, phi0):
 @njit(cache=True)
 def assemble_into(alpha, a, k, sk, rest, load, lower, upper, inv_a_cos, coef, origin,
                   alpha0, phi_origin, bands, linear, lo, hi, rows, rrows, sin_alpha, work):
-    """:func:`assemble` with √k given (``sk``, the chain's), sin α kept (``sin_alpha``,
-    for :func:`trial_energy_at`) and ``v``, ``phi0`` left to :func:`tangent_terms`;
+    """Writes the step at α in increments (all arrays preallocated; n = alpha.size − 1
+    free nodes, n joints): the fields of the ContactStep, its walls ``lo``/``hi`` about
+    u₀, the rows of A = diag(√k) J and their mirror ``rrows`` (the twisted factor's);
+    √k given (``sk``, the chain's), sin α kept (``sin_alpha``, for
+    :func:`trial_energy_at`) and ``v``, ``phi0`` left to :func:`tangent_terms`;
     ``work``: (n,)."""
     nl = alpha.size
     n = nl - 1
@@ -75,7 +63,7 @@ def assemble_into(alpha, a, k, sk, rest, load, lower, upper, inv_a_cos, coef, or
         alpha0[i] = alpha[i]
         sa = math.sin(alpha[i])
         sin_alpha[i] = sa
-        y, lost = add_compensated(y, lost, a * sa)  # model.chain.compensated_heights
+        y, lost = add_compensated(y, lost, a * sa)  # the node heights, compensated
         if i < n:
             origin[i] = y + lost  # the height of free node i + 1
     alpha0[nl - 1] += -(y + lost) * inv_a_cos[nl - 1]  # the closure error of the pinned end

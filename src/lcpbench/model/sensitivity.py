@@ -59,7 +59,6 @@ PARAMETERS = {"theta_deg": "deg", "height_mm": "mm", "EI": "N mm²", "weight": "
 OF_SCENE = {ActuatorScene: ("theta_deg", "height_mm", "EI", "weight", "length_mm",
                             "wall_stiffness"),
             CantileverScene: ("height_mm", "EI", "load", "length_mm", "wall_stiffness")}
-PER_SECTION = ("theta_deg", "EI", "weight")
 
 
 def unit(name: str) -> str:

@@ -16,7 +16,8 @@ literally from eqs. (3)–(31); a test checks they agree.
 
 The step is assembled once, compiled (:func:`lcpbench.model.compiled_driver.assemble_step`,
 the kernel of :mod:`lcpbench.model.driver_kernel` that the solve kernel's assembly
-is); this module holds the :class:`ContactStep` it fills and its numpy methods.
+is); this module holds the :class:`ContactStep` it fills, its numpy methods and its
+forms for the back-ends (the compiled ones of :mod:`lcpbench.model.driver_kernel`).
 
 A :class:`ContactStep` is the bound-constrained QP
 
@@ -33,7 +34,6 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ProblemError
 from ..linalg import banded_matvec, solveh_banded, sub_bands
 
 
@@ -85,6 +85,8 @@ class ContactStep:
     # walls' penalty, handed over in its own forms (:mod:`lcpbench.model.elastic`).
     upper_stiffness: np.ndarray | None = None
     lower_stiffness: np.ndarray | None = None
+
+    kernel = None  # the compiled step's module (None: :func:`step_kernels` at the first use)
 
     @property
     def elastic(self) -> bool:
@@ -203,57 +205,43 @@ class ContactStep:
         y[self.free_nodes] = u - self.origin
         return self.alpha0 + np.diff(y) * self.inv_a_cos
 
-    # -- the LCP forms --------------------------------------------------------
-    def lcp(self, rows: str = "contact") -> LCPForm:
-        """The step as a standard LCP ``w = M ζ + q``, ``0 <= ζ ⟂ w >= 0``.
+    # -- the back-ends' forms, compiled (:mod:`.driver_kernel`) ----------------
+    def kernels(self):
+        """The compiled step's module (:func:`step_kernels`; kept by a step the driver
+        assembled, else looked up)."""
+        return self.kernel if self.kernel is not None else step_kernels()
 
-        ``rows="contact"`` keeps only the nodes that can reach a wall and
-        condenses the others out (M stays pentadiagonal); ``rows="all"`` puts
-        every free node against the upper wall height, as the paper does
-        (eqs. 28–31; needs a finite upper wall at every node, so it is for
-        comparisons only). With a lower wall (the channel) the unknowns are
+    def qp_form(self, L: float, F: float) -> tuple:
+        """The step as a box QP in units of length ``L`` and force ``F``
+        (:func:`~.driver_kernel.qp_form`): (P̃ = H·(L/F) as CSC data, indices, indptr,
+        c̃ = c/F, lower/L, upper/L, the scaled bands)."""
+        return self.kernels().qp_form(self.bands, self.linear, self.lower, self.upper,
+                                      float(L), float(F))
+
+    def lcp_form(self, L: float = 1.0, F: float = 1.0) -> tuple:
+        """The step as a standard LCP ``w = M ζ + q``, ``0 <= ζ ⟂ w >= 0``, and the same
+        LCP in units of length ``L`` and force ``F``: ``(form, M̃, q̃, dz, dw)`` with
+        ``z = dz ⊙ z̃`` and ``w = dw ⊙ w̃`` (:func:`~.driver_kernel.lcp_form`).
+
+        Only the nodes that can reach a wall are rows; the others are condensed out (M
+        stays pentadiagonal). With a lower wall (the channel) the unknowns are
         ζ = [g; R_lower] and w = [R_upper; g_lower], M = [[K, I], [−I, 0]].
         """
-        H, c = self.dense_hessian(), self.linear
-        if rows == "all":
-            top = np.full(self.size, np.nanmin(np.where(np.isfinite(self.upper), self.upper, np.nan)))
-            C = np.arange(self.size)
-        elif rows == "contact":
-            C = np.flatnonzero(np.isfinite(self.upper))
-            top = self.upper[C]
-        else:
-            raise ProblemError(f"rows must be 'contact' or 'all', got {rows!r}")
-        F = np.setdiff1d(np.arange(self.size), C)
-        S = H[np.ix_(C, C)]
-        ct = c[C]
-        if F.size:
-            HFF = H[np.ix_(F, F)]
-            X = np.linalg.solve(HFF, np.column_stack([H[np.ix_(F, C)], c[F]]))
-            S = S - H[np.ix_(C, F)] @ X[:, :-1]
-            ct = ct - H[np.ix_(C, F)] @ X[:, -1]
-        K = 0.5 * (S + S.T)
-        z = -K @ top - ct
-        has_lower = np.isfinite(self.lower[C])
-        if not has_lower.any():
-            return LCPForm(M=K, q=z, rows=C, heights=top, condense=F, n_gap=C.size)
-        if not has_lower.all():
+        code, M, q, Ms, qs, dz, dw, rows, top, cond = self.kernels().lcp_form(
+            self.bands, self.linear, self.lower, self.upper, float(L), float(F))
+        if code:
             raise NotImplementedError("a lower wall on only some contact rows")
-        m = C.size
-        bottom = self.lower[C]
-        M = np.block([[K, np.eye(m)], [-np.eye(m), np.zeros((m, m))]])
-        q = np.concatenate([z, top - bottom])
-        return LCPForm(M=M, q=q, rows=C, heights=top, condense=F, n_gap=m)
+        return (LCPForm(M=M, q=q, rows=rows, heights=top, condense=cond, n_gap=rows.size),
+                Ms, qs, dz, dw)
+
+    def lcp(self) -> LCPForm:
+        """The step as a standard LCP (:meth:`lcp_form` in the step's units)."""
+        return self.lcp_form()[0]
 
     def from_lcp(self, form: LCPForm, zeta: np.ndarray) -> np.ndarray:
         """Free node heights u from an LCP solution (recovers condensed nodes)."""
-        u = np.empty(self.size)
-        u[form.rows] = form.heights - zeta[: form.n_gap]
-        F = form.condense
-        if F.size:
-            H = self.dense_hessian()
-            rhs = -self.linear[F] - H[np.ix_(F, form.rows)] @ u[form.rows]
-            u[F] = np.linalg.solve(H[np.ix_(F, F)], rhs)
-        return u
+        return self.kernels().from_lcp(self.bands, self.linear, form.rows, form.heights,
+                                       form.condense, np.ascontiguousarray(zeta, dtype=float))
 
 
 @dataclass
@@ -266,3 +254,21 @@ class LCPForm:
     heights: np.ndarray  # upper wall height of each gap row (mm)
     condense: np.ndarray  # free-node indices eliminated from the LCP
     n_gap: int
+
+
+#: the entries of :mod:`.driver_kernel` the driver around a back-end calls from Python
+ENTRIES = ("assemble", "qp_form", "lcp_form", "from_lcp", "judge", "advance", "predict",
+           "profile_start", "profile_assemble", "profile_advance", "profile_on_walls")
+
+
+def step_kernels():
+    """The compiled step's module, :mod:`.driver_kernel` (numba imported, its entries
+    loaded from the cache lightly, at the first call)."""
+    from ..numba_cache import kernel_module, light_cache_load  # numba at the first use
+
+    kd = kernel_module("lcpbench.model.driver_kernel", "assemble")
+    if not getattr(kd, "_all_light", False):  # every entry loads from the cache lightly
+        for name in ENTRIES[1:]:
+            light_cache_load(getattr(kd, name))
+        kd._all_light = True
+    return kd

@@ -21,10 +21,9 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ..errors import ProblemError
 from ..linalg import banded_matvec
 from ..solvers import spring_newton
-from ..solvers.base import BoxQP, QPWarm, Settings, Status, StepSolution
+from ..solvers.base import QPWarm, Settings, Status, StepSolution
 from ..solvers.judge import EPS, accept_tol, requested, verdict
 from ..solvers.lemke import too_large
 from ..solvers.registry import DEFAULT, Backend, get_backend, get_settings
@@ -32,63 +31,16 @@ from ..solvers.runner import fallback_message
 from ..thresholds import ROUNDOFF_ULPS
 from .elastic import compliances
 from .elastic_step import run_elastic_step
-from .formulations import (
+from .formulations import (  # F1 and F2, the forms the back-ends always had
     Formulation,
     gaps_answer,
     handed,
     resolve_formulation,
     run_formulation,
+    step_lcp,
+    step_qp,
     step_scales,
 )
-
-
-def step_qp(step, scaled: bool = True) -> BoxQP:
-    """The step as a bound-constrained QP, in the units of ``step_scales``.
-
-    A step with elastic walls has its own forms (:mod:`lcpbench.model.elastic`):
-    handing its rigid QP over would drop the walls' springs, so it is refused.
-    """
-    _rigid_only(step, "step_qp")
-    import scipy.sparse as sp  # at the first QP back-end's step, not at start-up
-
-    n = step.size
-    if scaled and (own := getattr(step, "compiled_qp", None)) is not None:
-        data, indices, indptr, c, lo, hi, b = own()  # model.compiled_driver
-        return BoxQP(sp.csc_matrix((data, indices, indptr), shape=(n, n)), c, lo, hi, bands=b)
-    L, F = step_scales(step, scaled)
-    b = step.bands * (L / F)
-    diags = [b[0], b[1, : n - 1], b[2, : n - 2]]
-
-    P = sp.diags([diags[2], diags[1], diags[0], diags[1], diags[2]], [-2, -1, 0, 1, 2],
-                 shape=(n, n), format="csc")
-    return BoxQP(P, step.linear / F, step.lower / L, step.upper / L, bands=b)
-
-
-def step_lcp(step, scaled: bool = True):
-    """The step as an LCP (the condensed contact form) and its unit vectors.
-
-    Returns ``(form, M̃, q̃, dz, dw)`` with ``z = dz ⊙ z̃`` and ``w = dw ⊙ w̃``:
-    gaps in units of ℓ and reactions in units of EI/ℓ² (the channel's second
-    block swaps the two).
-    """
-    _rigid_only(step, "step_lcp")
-    if scaled and (own := getattr(step, "compiled_lcp", None)) is not None:
-        return own()  # model.compiled_driver
-    form = step.lcp("contact")
-    L, F = step_scales(step, scaled)
-    m, k = form.n_gap, form.q.size
-    dz = np.concatenate([np.full(m, L), np.full(k - m, F)])
-    dw = np.concatenate([np.full(m, F), np.full(k - m, L)])
-    M = form.M * dz[None, :] / dw[:, None]
-    q = form.q / dw
-    return form, M, q, dz, dw
-
-
-def _rigid_only(step, what: str) -> None:
-    if getattr(step, "elastic", False):
-        raise ProblemError(f"{what}: this step has elastic walls; its forms are "
-                           "lcpbench.model.elastic.elastic_qp / force_lcp")
-
 
 #: the LCP form is dense (:meth:`ContactStep.lcp`: H, its condensed Schur complement
 #: and M, ~DENSE_COPIES n × n doubles at once); a larger step is FAILED before any
@@ -316,8 +268,7 @@ def _formulated(backend: Backend, step, s: Settings, scaled: bool,
         if form.name in ("gaps", "reactions", "angles") and (why := dense_form_too_large(n)):
             return StepSolution(np.full(n, np.nan), np.zeros(n), np.zeros(n), Status.FAILED,
                                 message=why)
-        return run_formulation(backend, step, s, form, scaled,
-                               step_lcp if form.name == "gaps" else step_qp)
+        return run_formulation(backend, step, s, form, scaled)
     except Exception as exc:
         return StepSolution(np.full(n, np.nan), np.zeros(n), np.zeros(n), Status.FAILED,
                             message=f"{backend.name} ({form}) raised "

@@ -35,15 +35,6 @@ def wall_overlap(chain: Chain, u: np.ndarray) -> float:
     return float(max(np.max(u - chain.upper), np.max(chain.lower - u)))
 
 
-def free_heights(chain: Chain, alpha: np.ndarray) -> np.ndarray:
-    """:func:`lcpbench.model.chain.heights` (the same sums), without the x coordinates."""
-    f = chain.free_nodes
-    if not f.size or f[0] < 1:
-        return heights(chain, alpha)
-    below = chain.derived("_free_nodes_below", lambda: f - 1)  # y[k] = Σ_{j<k} a sin α_j
-    return np.cumsum(chain.link_length * np.sin(alpha))[below]
-
-
 def beam_sag(chain: Chain) -> float:
     """5 w ℓ⁴ / (384 EI) for the chain's total load (EI = force_scale · ℓ²), mm."""
     load = total_load(chain)
@@ -150,7 +141,7 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
     if arc_far(chain):
         return None  # what the test below finds, from one node
     overlap = chain.derived("_arc_overlap",
-                            lambda: wall_overlap(chain, free_heights(chain, chain.rest_alpha)))
+                            lambda: wall_overlap(chain, heights(chain, chain.rest_alpha)))
     if overlap >= 0:  # the arc touches or crosses a wall
         if not loaded or overlap > SAG_BOUND * beam_sag(chain):
             return None
@@ -185,7 +176,7 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
             return None  # (a layout no compiled route takes: drive answers the scene)
         out = compiled_driver.run(free, free_step, tol=tol, max_outer=max_outer, start=start)
     if not (out.converged and wall_overlap(walls_at(chain, out.alpha),
-                                           free_heights(chain, out.alpha)) < 0):
+                                           heights(chain, out.alpha)) < 0):
         return None
     out.reason = ("no contact: the equilibrium without walls clears every wall (found by "
                   "banded solves, no LCP)")
