@@ -138,30 +138,3 @@ def test_a_driver_that_did_not_converge_fails_that_check_alone(energy_answer):
     v = _judge(chain, alpha, upper, lower, converged=False)
     assert not v.converged and v.failed == ["driver"] and v.reason == "converged"
     assert v.certificate is not None and np.isnan(v.force_error_bound)
-
-
-def test_a_refused_answers_certificate_is_made_when_read_and_is_the_minimisers(
-        energy_answer):
-    """A driver that did not converge: the judgement's certificate is computed at its
-    first read, once, and kept through pickling; at the energy minimiser it shows an
-    equilibrium (the right pin on its line, the joint torques in balance, no pulling
-    wall), as the minimiser is one."""
-    import pickle
-
-    name, chain, alpha, upper, lower = energy_answer
-    made = []
-
-    def certificate(up, lo):
-        made.append(1)
-        return certify(chain, alpha, up, lo)
-
-    v = judge(chain, alpha, upper, lower, tol=TOL, driver_converged=False,
-              driver_reason="stopped", step_statuses=["solved"], step_sizes=[],
-              certificate=certificate)
-    assert not v.converged and v.failed == ["driver"] and not made
-    c = v.certificate
-    assert made == [1] and v.certificate is c
-    assert c.closure <= 1e-9 * chain.length and c.relative_torque_residual <= 1e-6, name
-    assert c.min_force >= -1e-9 * max(float(np.max(upper)), 1e-12), name
-    again = pickle.loads(pickle.dumps(v)).certificate
-    assert again.max_torque_residual == c.max_torque_residual and made == [1]

@@ -104,7 +104,7 @@ it does not repeat the solve.
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
@@ -219,51 +219,10 @@ class Judgement:
     certificate: Any = field(default=None, repr=False)  # the Certificate it judged
 
     def to_dict(self) -> dict:
-        # (its fields but the arrays and the certificate, which is not computed for this)
-        d = {f.name: getattr(self, f.name) for f in fields(self)
-             if f.name not in ("forces_upper", "forces_lower", "certificate")}
-        d["failed"] = list(self.failed)
+        d = asdict(self)
+        for key in ("forces_upper", "forces_lower", "certificate"):
+            d.pop(key)
         return d
-
-    def __getstate__(self) -> dict:
-        """Pickled (and copied) with its certificate computed (:class:`_Later`)."""
-        self.certificate  # noqa: B018 (computes a deferred one)
-        return dict(self.__dict__)
-
-
-class _Later:
-    """A certificate not computed yet: ``make()`` computes it, at the first read of
-    :attr:`Judgement.certificate` (a refused answer's is often never read: a batch
-    escalates it and returns the escalation's answer)."""
-
-    __slots__ = ("make",)
-
-    def __init__(self, make):
-        self.make = make
-
-
-class _Certificate:
-    """:attr:`Judgement.certificate`: a :class:`_Later` kept there is computed at the
-    first read, once (another thread reading it meanwhile computes the same one)."""
-
-    def __get__(self, obj, owner=None):
-        if obj is None:
-            return None  # (the dataclass field's default)
-        value = obj.__dict__.get("certificate")
-        if type(value) is _Later:
-            value = obj.__dict__["certificate"] = value.make()
-        return value
-
-    def __set__(self, obj, value) -> None:
-        obj.__dict__["certificate"] = value
-
-
-Judgement.certificate = _Certificate()  # type: ignore[assignment]  # (after the dataclass)
-
-
-def certificate_deferred(verdict: Judgement) -> bool:
-    """Whether ``verdict``'s certificate is still to be computed (at its first read)."""
-    return type(verdict.__dict__.get("certificate")) is _Later
 
 
 def _kernel():
@@ -415,10 +374,8 @@ def _unjudged(chain: Chain, forces_upper: np.ndarray, forces_lower: np.ndarray, 
         verdict.reason = ("not accepted by lcpbench's judge: layout: the judge kernel does not "
                           "take this chain (joints or free nodes not consecutive, or a wall "
                           "profile without a table of cubic pieces)")
-    # (a callable: called at the first read, :class:`_Later`, on the answer's arrays,
-    # which nothing writes into)
-    verdict.certificate = (_Later(lambda: certificate(forces_upper, forces_lower))
-                           if callable(certificate) else certificate)
+    verdict.certificate = (certificate(forces_upper, forces_lower) if callable(certificate)
+                           else certificate)
     return verdict
 
 

@@ -10,12 +10,7 @@ import numpy as np
 from ..problems.scenes import Chain
 from .chain import joint_angles, node_positions, torque_residual
 from .elastic import compliances, wall_pressure
-from .judge import (  # noqa: F401 (Certificate: public here)
-    Certificate,
-    Judgement,
-    certificate_deferred,
-    judge,
-)
+from .judge import Certificate, Judgement, judge  # noqa: F401 (Certificate: public here)
 from .outer import DriverOutput, StepRecord
 from .profile import joint_moments_xy, profile_gaps, wall_forces_xy
 
@@ -189,7 +184,6 @@ class ContactResult:
         """Pickled (and copied) with every derived field computed (``DERIVED``)."""
         if "_derive_from" in self.__dict__:
             _derive(self)
-        self.certificate  # noqa: B018 (computes a deferred one)
         return dict(self.__dict__)
 
     @property
@@ -379,42 +373,17 @@ for _name in DERIVED:
     setattr(ContactResult, _name, _Derived(_name))
 
 
-class _JudgedCertificate:
-    """:attr:`ContactResult.certificate`: where the judge deferred it (a refused answer's,
-    :func:`lcpbench.model.judge.certificate_deferred`), the judgement's, computed at the
-    first access."""
-
-    def __get__(self, obj, owner=None):
-        if obj is None:
-            return self
-        d = obj.__dict__
-        try:
-            value = d["certificate"]
-        except KeyError:
-            raise AttributeError("certificate") from None
-        if value is _PENDING:
-            value = d["certificate"] = d["judgement"].certificate
-        return value
-
-    def __set__(self, obj, value) -> None:
-        obj.__dict__["certificate"] = value
-
-
-ContactResult.certificate = _JudgedCertificate()  # type: ignore[assignment]
-
-
 def build_result(scene, chain: Chain, out: DriverOutput, *, judged_by=judge,
                  **how) -> ContactResult:
     """The result of a driver run, judged by :func:`lcpbench.model.judge.judge`
     (``judged_by``: a judgement made already, with the same arguments, e.g.
     :func:`lcpbench.model.lazy_result.stats_judge`). The fields in
     :data:`DERIVED` are computed at their first access."""
-    alpha = out.alpha  # (the certificate's, where the judge defers it: this answer's)
-    verdict = judged_by(chain, alpha, out.forces_upper, out.forces_lower, tol=how["tol"],
+    verdict = judged_by(chain, out.alpha, out.forces_upper, out.forces_lower, tol=how["tol"],
                         driver_converged=out.converged, driver_reason=out.reason,
                         step_statuses=[s.status for s in out.steps],
                         step_sizes=[s.max_dalpha for s in out.steps],
-                        certificate=lambda up, lo: certify(chain, alpha, up, lo))
+                        certificate=lambda up, lo: certify(chain, out.alpha, up, lo))
     if verdict.forces_upper is not None and verdict.forces_lower is not None:
         # R with its round-off set to zero (the certificate is of these)
         out.forces_upper, out.forces_lower = verdict.forces_upper, verdict.forces_lower
@@ -434,8 +403,7 @@ def build_result(scene, chain: Chain, out: DriverOutput, *, judged_by=judge,
         steps=out.steps,
         converged=verdict.converged,
         reason=verdict.reason,
-        # (one the judge deferred: read from the judgement at the first access)
-        certificate=_PENDING if certificate_deferred(verdict) else verdict.certificate,
+        certificate=verdict.certificate,
         multipliers=out.multipliers_upper,
         multipliers_lower=out.multipliers_lower if channel else None,
         judgement=verdict,

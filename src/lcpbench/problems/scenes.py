@@ -47,6 +47,7 @@ DEFAULT_LINKS = 140
 LENGTH_RANGE = (1e-3, 1e5)  # mm
 HEIGHT_RANGE = (1e-6, 1e6)  # mm: h > 0 (the pins sit on y = 0), at least 1 nm
 EI_RANGE = (1e-6, 1e9)  # N·mm²
+THETA_RANGE = (0.0, 360.0)  # degrees, both ends open
 WEIGHT_RANGE = (0.0, 1e3)  # N/mm; 0 turns gravity off
 LOAD_RANGE = (0.0, 1e6)  # N/mm (the cantilever's distributed load)
 _NOT_YET = object()  # a value :meth:`Chain.derived` has not kept yet
@@ -208,7 +209,7 @@ def _plain_fields(d: dict) -> bool:
     (an int height, a numpy number, NaN, a value out of range, 'auto'...) they run."""
     theta, height, links, length = d["theta"], d["height"], d["links"], d["length"]
     ei, weight, k = d["EI"], d["weight"], d["wall_stiffness"]
-    return (type(theta) is float and 0.0 < theta < 360.0
+    return (type(theta) is float and THETA_RANGE[0] < theta < THETA_RANGE[1]
             and type(height) is float and HEIGHT_RANGE[0] <= height <= HEIGHT_RANGE[1]
             and type(links) is int and MIN_LINKS <= links <= MAX_LINKS
             and type(length) is float and LENGTH_RANGE[0] <= length <= LENGTH_RANGE[1]
@@ -335,8 +336,8 @@ class ActuatorScene(FrictionOptions):
         """Check and normalise the numbers and the flag, in the order of the fields'
         errors: the first bad one raises."""
         object.__setattr__(self, "wall_stiffness", wall_stiffness(self.wall_stiffness))
-        theta = check_number("theta", self.theta, low=0.0, high=360.0, low_open=True,
-                             high_open=True, unit="degrees")
+        theta = check_number("theta", self.theta, low=THETA_RANGE[0], high=THETA_RANGE[1],
+                             low_open=True, high_open=True, unit="degrees")
         object.__setattr__(self, "theta", theta)
         object.__setattr__(self, "height", _in("height", self.height, HEIGHT_RANGE, "mm"))
         object.__setattr__(self, "links", _links(self.links))

@@ -73,6 +73,7 @@ _add_reduce = np.add.reduce
 #: Relative tolerance on N ℓ_k / L being an integer, and on Σℓ_k = length.
 FIT_TOL = 1e-9
 GRAVITY = ("-y", "+y")
+SECTION_THETA_RANGE = (-360.0, 360.0)  # degrees, signed, both ends open
 
 
 @dataclass(frozen=True)
@@ -105,7 +106,8 @@ class Section:
         if _plain_section(d["theta"], d["length"], d["EI"], d["weight"]):
             return  # (every field a float in range: the checks would change nothing)
         put = object.__setattr__
-        put(self, "theta", check_number(f"{where}.theta", self.theta, low=-360.0, high=360.0,
+        put(self, "theta", check_number(f"{where}.theta", self.theta,
+                                        low=SECTION_THETA_RANGE[0], high=SECTION_THETA_RANGE[1],
                                         low_open=True, high_open=True, unit="degrees"))
         put(self, "length", check_number(f"{where}.length", self.length, low=LENGTH_RANGE[0],
                                          high=LENGTH_RANGE[1], unit="mm"))
@@ -119,7 +121,7 @@ def _plain_section(theta, length, ei, weight) -> bool:
     """Whether a section's fields are Python floats inside their ranges (what
     :meth:`Section._check` returns for them, without an error); otherwise they are
     checked."""
-    return (type(theta) is float and -360.0 < theta < 360.0
+    return (type(theta) is float and SECTION_THETA_RANGE[0] < theta < SECTION_THETA_RANGE[1]
             and type(length) is float and LENGTH_RANGE[0] <= length <= LENGTH_RANGE[1]
             and type(ei) is float and EI_RANGE[0] <= ei <= EI_RANGE[1]
             and type(weight) is float and WEIGHT_RANGE[0] <= weight <= WEIGHT_RANGE[1])

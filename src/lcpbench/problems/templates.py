@@ -4,8 +4,9 @@ A chain of N equal links has many arrays that are one number repeated (EI/a,
 the link load μ, the walls ±h). numpy's ``np.full`` costs about five times a copy,
 so each such array is copied from a read-only template kept per (size, value).
 The chain gets its own writable copy (the kernels' argument types, and a user
-writing into one chain's array changes no other); the templates are never
-handed out. Tests compare each array with its definition, bit for bit.
+writing into one chain's array changes no other); the functions below return the
+read-only templates, which only the chain builders read, to copy them. Tests compare
+each array with its definition, bit for bit.
 
 What the chains pinned at both ends with one N and ℓ share whatever θ and h (the link
 centres, the joints, the interior nodes, their reach and their share of wall length) is

@@ -3,7 +3,8 @@
 :class:`LineResult` is a :class:`~lcpbench.model.lazy_result.LazyResult` whose
 cheap fields (the scene, α, the reactions R, F, the outer iterations, the
 verdict ``converged``) are set from the kernel's arrays
-(:mod:`lcpbench.model.batch_kernel`) when the batch returns, and whose other
+(:mod:`lcpbench.model.batch_kernel`; :mod:`lcpbench.model.profile_line` for a line
+against a wall of any profile) when the batch returns, and whose other
 fields (the step records, the reason, the certificate, the judgement, ``extra``,
 the node positions) are built at the first access of any of them: from the same
 arrays, by the same functions as a single solve (the DriverOutput by
