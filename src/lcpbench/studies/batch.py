@@ -39,9 +39,9 @@ from ..problems.checks import describe
 from ..problems.scenes import ActuatorScene
 from ..problems.sections import SectionedScene, check_scene
 from ..solvers.registry import DEFAULT, get_settings
-from .batch_compiled import AUTO_WHY, solve_line, takes
+from .batch_compiled import solve_line, takes
 from .batch_line import run_line, takes_line
-from .batch_result import LINE_KERNEL, Stopped
+from .batch_result import AUTO_WHY, LINE_KERNEL, Stopped
 from .continuation import PLANE_FIELDS, PREDICTORS, solve_sequence
 
 

@@ -49,10 +49,9 @@ from ..model.wall_free import arc_far, solve_without_contact
 from ..problems.scenes import ActuatorScene
 from ..solvers.registry import DEFAULT
 from .batch_line import LINE_OUTPUTS
-from .batch_result import LineOutput, results
+from .batch_result import AUTO_WHY, LineOutput, results
 from .continuation import Solved, new_solved, warm_or_cold
 
-AUTO_WHY = "auto: the built-in active set (exact)"
 #: the ``route`` of its results (a batch's, not a plan's: lcpbench.plan.ROUTES)
 BATCH_SCENE = "batch scene"
 

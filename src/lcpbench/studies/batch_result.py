@@ -162,4 +162,4 @@ def _built(line: LineOutput, s: int) -> ContactResult:
     return full
 
 
-__all__ = ["LAZY", "LineOutput", "LineResult", "Stopped", "materialize", "results"]
+__all__ = ["AUTO_WHY", "LAZY", "LineOutput", "LineResult", "Stopped", "materialize", "results"]
