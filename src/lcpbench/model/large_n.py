@@ -34,7 +34,7 @@ import numpy as np
 from ..linalg.twisted import TwistedFactor
 from ..problems.scenes import Chain
 from .chain import joint_arrays
-from .step import ContactStep
+from .step import ContactStep, residuals_of
 
 
 def _kernel():
@@ -164,8 +164,7 @@ class IncrementStep(ContactStep):
             float(self.force_scale))
         if not ok:
             return None
-        return dict(zip(("natural", "min_gap", "min_reaction", "complementarity",
-                         "term_size"), map(float, res), strict=True)), R
+        return residuals_of(res), R
 
     def walk_refine(self, S: np.ndarray, u: np.ndarray, rounds: int = 4):
         """``(u, g)``: the dual walk's refinement at an optimum (``u`` on the walls on S)
