@@ -1,7 +1,9 @@
 """A frictional step with no last answer to start from (issue 39, target 5): the
 frictionless contacts' active set (solvers/pivoting_kernel.py: symmetric_active_set), the
 singleton presolve of the pivoting's linear solves (singleton_solve) and the stick/slide
-guesses of model/friction_step.py (first_support), against independent expectations:
+guesses of model/friction_step.py (frictionless_contacts, then first_support_from, as the
+default frictional solver calls them: model/friction_lemke.py), against independent
+expectations:
 enumeration of every support, numpy's dense solve, Coulomb's law contact by contact and
 the μ = 0 limit."""
 
@@ -16,8 +18,20 @@ from lcpbench.numba_cache import kernel_module
 
 # (through the kernels' cache, as the library loads them: tests/model/test_kernel_cache.py)
 _step = kernel_module("lcpbench.model.friction_step", "delassus_form")
-first_support, frictional_lcp = _step.first_support, _step.frictional_lcp
+frictional_lcp = _step.frictional_lcp
 pk = kernel_module("lcpbench.solvers.pivoting_kernel", "support_pivots")
+
+
+def first_support(M, q, pair, slide, normal_changes, max_changes, feas, piv, rcond):
+    """The guesses as :meth:`lcpbench.model.friction_lemke.StepLemke.first_guess` takes
+    them: the frictionless contacts, then the stick or slide guess and the pivoting from
+    it; (z, w, support, end, solves), the normal LCP's end where it did not end DONE."""
+    N, end, solves = _step.frictionless_contacts(M, q, pair.size, normal_changes, feas, piv)
+    if end != pk.DONE:
+        return np.zeros(q.size), q.copy(), np.zeros(q.size, np.bool_), end, solves
+    z, w, S, end, more = _step.first_support_from(M, q, pair, N, slide, normal_changes,
+                                                  max_changes, feas, piv, rcond)
+    return z, w, S, end, solves + more
 
 FEAS, PIV, RCOND = 1e-10, 1e-13, 1e-12
 

@@ -9,7 +9,8 @@ import pytest
 
 import lcpbench
 from lcpbench import ActuatorScene
-from lcpbench.model.friction_driver import FrictionState, fc2d_form, frictional_step, step_lemke
+from lcpbench.model.friction_driver import FrictionState, frictional_step, step_lemke
+from lcpbench.model.friction_solvers import fc2d_contacts
 from lcpbench.solvers import siconos_bridge
 from lcpbench.solvers.siconos_fc2d import coulomb_residual, solve_fc2d
 
@@ -42,7 +43,7 @@ def test_siconos_fc2d_agrees_with_lemke_on_random_frictional_steps():
     for fs in _random_steps(12):
         sol = step_lemke(fs.M, fs.q)
         assert sol.solved, sol.message
-        W, q, mu = fc2d_form(fs)
+        W, q, mu = fc2d_contacts(fs)  # the form the fc2d back-ends are handed
         mn = fs.normal_node.size
         ours = np.empty(2 * mn)
         ours[0::2] = sol.z[:mn]

@@ -1,8 +1,9 @@
 """The compiled parts of a large-N outer step (:mod:`lcpbench.model.large_kernel`).
 
-Each is checked against the numpy reference it replaces (the same arithmetic:
-bit for bit where no sum is reordered), and the block solves against a dense
-solve of the same principal block (an independent method).
+The assembly is checked against the energy's definition (its gradient and
+Gauss–Newton Hessian in heights by central differences, summed exactly), the
+trial and energy against their definitions, and the block solves against a
+dense solve of the same principal block (an independent method).
 """
 
 from __future__ import annotations
@@ -14,22 +15,9 @@ import pytest
 
 from lcpbench.model import large_n
 from lcpbench.model.chain import energy, heights
-from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.problems.scenes import ActuatorScene
 
-FIELDS = ("bands", "linear", "lower", "upper", "inv_a_cos", "coef", "origin", "alpha0",
-          "phi_origin")
-#: numpy's tan and arcsin are its own SIMD code on AVX-512 machines and libm's
-#: elsewhere, and the kernels call libm: one ulp apart on some arguments. Fields
-#: computed from them are compared to a few ulps of the terms (machine-independent).
-ULPS = 4
 EPS = np.finfo(float).eps
-
-
-def _same_to_ulps(got, ref, scale):
-    got, ref = np.asarray(got), np.asarray(ref)
-    assert got.shape == ref.shape
-    assert np.all(np.abs(got - ref) <= ULPS * EPS * scale)
 
 
 def _chain_alpha(links, seed=0, shrink=0.97):
@@ -38,32 +26,59 @@ def _chain_alpha(links, seed=0, shrink=0.97):
     return chain, chain.rest_alpha * shrink + 1e-4 * rng.standard_normal(chain.links)
 
 
-@pytest.mark.parametrize("links,seed", [(300, 0), (5000, 1)])
-def test_compiled_assembly_is_the_reference_step_in_increments(links, seed):
-    """Route against route: the compiled assembly must be the numpy one bit for bit (the
-    same arithmetic); the numpy step is checked against the paper's equations in
-    tests/model/test_assembly.py."""
-    chain, alpha = _chain_alpha(links, seed)
-    ref = large_n.increment_step(assemble_step(chain, alpha))
+def _alpha_of(chain, u):
+    """The link angles of free-node heights ``u`` (both ends at height 0), each on the
+    branch cos α > 0 (the arcs of θ <= 150° have no link past vertical)."""
+    y = np.concatenate(([0.0], u, [0.0]))
+    return np.arcsin(np.diff(y) / chain.link_length)
+
+
+@pytest.mark.parametrize("links,seed", [(120, 0), (300, 1)])
+def test_the_step_in_increments_is_the_energys_quadratic_model_about_u0(links, seed):
+    """The compiled assembly in increments d = u − u₀ against the energy's definition:
+    at heights u₀ (α from them, so the chain closes), its linear term is ∇_u E(u₀) and its
+    H is Jᵀ diag(k) J, J = ∂φ/∂u, both by central differences of the energy and of the
+    joint angles as functions of the heights (eqs. 20-31 in heights); its walls are the
+    chain's walls less u₀; its factored gradient is H d + c."""
+    chain = ActuatorScene(150.0, 3.0, links=links).chain()
+    rng = np.random.default_rng(seed)
+    n = chain.free_nodes.size
+    u0 = 0.97 * heights(chain, chain.rest_alpha) + 1e-3 * rng.standard_normal(n)
+    alpha = _alpha_of(chain, u0)
     got = large_n.increments_at(chain, alpha)
-    for f in FIELDS:
-        assert np.array_equal(getattr(got, f), getattr(ref, f)), f
-    # v = tan α − α and φ₀ = v_j − v_{j+1}: to the ulps of tan α
-    t = np.abs(np.tan(alpha)) + np.abs(alpha)
-    _same_to_ulps(got.v, ref.v, t)
-    _same_to_ulps(got.phi0, ref.phi0, t[:-1] + t[1:])
-    assert np.array_equal(got.heights, assemble_step(chain, alpha).origin)
-    assert np.array_equal(got.factor.rows, ref.factor.rows)
-    assert np.array_equal(got.factor.rrows, ref.factor.rrows)
-    rng = np.random.default_rng(seed + 10)
-    for _ in range(3):
-        u = 1e-3 * rng.standard_normal(got.size)
-        assert np.array_equal(got.gradient(u), ref.gradient(u))
-        assert np.array_equal(got.gradient_scale(u), ref.gradient_scale(u))
-    # the factored gradient is H u + c (H from the bands): a property, not the code
-    u = 1e-3 * rng.standard_normal(got.size)
-    Hu = got.factor.matvec(u)
-    assert np.max(np.abs(got.gradient(u) - (Hu + got.linear))) <= 1e-9 * np.max(np.abs(Hu))
+    assert np.max(np.abs(got.heights - u0)) <= 64 * EPS * chain.length  # u₀ (mm)
+    assert np.array_equal(got.origin, np.zeros(n))
+    for wall, mine in ((chain.upper, got.upper), (chain.lower, got.lower)):
+        held = np.isfinite(wall)
+        assert np.array_equal(np.isfinite(mine), held) and np.all(mine[~held] == wall[~held])
+        assert np.all(np.abs(mine[held] - (wall[held] - u0[held])) <= 64 * EPS * chain.length)
+    t = np.abs(np.tan(alpha)) + np.abs(alpha)  # v = tan α − α, φ₀ = v_l − v_r (eq. 24)
+    assert np.all(np.abs(got.v - (np.tan(alpha) - alpha)) <= 4 * EPS * t)
+    assert np.all(np.abs(got.phi0 - (got.v[:-1] - got.v[1:])) <= 4 * EPS * (t[:-1] + t[1:]))
+    h = 1e-6 * chain.link_length
+    grad, J = np.empty(n), np.empty((chain.joint_links.shape[0], n))
+    left, right = chain.joint_links[:, 0], chain.joint_links[:, 1]
+
+    def phi(u):
+        a = _alpha_of(chain, u)
+        return a[right] - a[left]
+
+    for i in range(n):
+        e = np.zeros(n)
+        e[i] = h
+        grad[i] = (_fsum_energy(chain, _alpha_of(chain, u0 + e))
+                   - _fsum_energy(chain, _alpha_of(chain, u0 - e))) / (2 * h)
+        J[:, i] = (phi(u0 + e) - phi(u0 - e)) / (2 * h)
+    g_scale = np.max(np.abs(grad))
+    assert np.max(np.abs(got.linear - grad)) <= 1e-7 * g_scale, np.max(np.abs(got.linear - grad))
+    H_fd = J.T @ (chain.joint_stiffness[:, None] * J)
+    H = got.dense_hessian()
+    assert np.max(np.abs(H - H_fd)) <= 1e-7 * np.max(np.abs(H_fd)), np.max(np.abs(H - H_fd))
+    # the factored gradient is H d + c (H from the bands): a property, not the code
+    d = 1e-3 * rng.standard_normal(n)
+    Hd = got.factor.matvec(d)
+    assert np.max(np.abs(got.gradient(d) - (Hd + got.linear))) <= 1e-9 * np.max(np.abs(Hd))
+    assert np.max(np.abs(H @ d - Hd)) <= 1e-12 * np.max(np.abs(Hd))
 
 
 def _fsum_energy(chain, alpha):

@@ -19,7 +19,7 @@ from lcpbench.model.chain import heights
 from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.compiled_driver import run as run_driver
 from lcpbench.model.large_driver import run_large
-from lcpbench.model.large_n import increment_step, layout_fits, trial_of
+from lcpbench.model.large_n import increments_at, layout_fits, trial_of
 from lcpbench.model.outer import feasible_start
 from lcpbench.model.step_solver import make_step_solver, solve_step
 from lcpbench.problems.scenes import ActuatorScene
@@ -57,19 +57,24 @@ def test_the_factored_product_is_H():
     assert np.allclose(got, Hx, rtol=1e-12, atol=1e-12 * np.max(np.abs(Hx)))
 
 
-def test_increments_give_the_same_step_answer_as_heights():
+def test_the_step_in_increments_solves_the_step_in_heights():
+    """The step in increments (d = u − u₀) is the step's QP moved to u₀: u₀ + d must
+    solve the step in heights. Oracle: that step's KKT conditions written out on its
+    numbers (tests/energy_oracle.py: feasible, stationary off the walls, the walls
+    pushing), and complementarity of the answer's reactions with its gaps."""
     chain = ActuatorScene(150, 3.0, links=400).chain()
     _, alpha = feasible_start(chain, chain.rest_alpha)
     step = assemble_step(chain, alpha)
-    inc = increment_step(step)
-    a = solve_step(step, "active-set")
+    inc = increments_at(chain, alpha)
+    assert np.array_equal(inc.heights, step.origin)  # u₀: the heights at α
     b = solve_step(inc, "active-set")
-    assert a.status is Status.SOLVED and b.status is Status.SOLVED
-    assert np.array_equal(a.active_upper, b.active_upper)
-    scale = np.max(np.abs(a.forces_net))
-    assert np.max(np.abs(a.forces_net - b.forces_net)) <= 1e-6 * scale
-    assert np.max(np.abs((b.u + step.origin) - a.u)) <= 1e-9 * chain.length
-    assert_step_kkt(step, b.u + step.origin, rtol=1e-8)  # the step's KKT conditions
+    assert b.status is Status.SOLVED and b.active_upper.any()
+    u = b.u + inc.heights
+    R = assert_step_kkt(step, u, rtol=1e-8)  # the step's KKT conditions
+    gap = step.upper - u
+    scale = np.max(np.abs(R))
+    assert np.all(np.abs(R[~b.active_upper]) <= 1e-8 * scale)  # no force off the wall
+    assert np.all(np.abs(gap[b.active_upper]) <= 1e-9 * chain.length)  # on it: no gap
 
 
 def test_the_trial_moves_the_heights_by_the_increments():

@@ -60,7 +60,7 @@ from .outer import (
     step_failed,
     step_setup_time,
 )
-from .step import ContactStep, step_kernels
+from .step import ContactStep, residuals_of, step_kernels
 
 ENGINE = "compiled driver"
 
@@ -120,8 +120,7 @@ class KernelStep(ContactStep):
             self.nodal_load, float(self.length_scale), float(self.force_scale))
         if not ok:
             return None
-        return dict(zip(("natural", "min_gap", "min_reaction", "complementarity",
-                         "term_size"), map(float, res), strict=True)), R
+        return residuals_of(res), R
 
 
 def _compliances(obj, elastic: bool) -> tuple[np.ndarray, np.ndarray]:

@@ -410,7 +410,7 @@ def _wall_terms(hi, lo, u, R, cu, cl, L, F, nat, min_gap, min_r, comp_up, comp_l
     scaled by L and F): the accumulators (natural residual max|min(g, r)|, least
     gap, least reaction, Σ g·r of each wall) updated; at an elastic wall of
     compliance ``cu``/``cl`` (0: rigid) the gap is the compliant one, g + c R.
-    Shared with driver_kernel."""
+    Shared by :func:`judge_step` and :func:`wall_residuals`."""
     up, low = np.isfinite(hi), np.isfinite(lo)
     if up:
         g = ((hi - u) + cu * max(R, 0.0)) / L
@@ -432,8 +432,8 @@ def wall_residuals(u2, R, bands, linear, lo, hi, cu, cl, L, F):
     """The verdict terms of step_residuals over the nodes (heights ``u2`` and reactions
     ``R`` given; ``cu``, ``cl``: the walls' compliances 1/k, empty for rigid walls):
     [natural residual, least gap, least reaction, |Σ g·r| of both walls, term size / F],
-    the term size max(|H| |u| + |c|) over the wall rows in banded_matvec's order. Shared
-    by driver_kernel and large_kernel."""
+    the term size max(|H| |u| + |c|) over the wall rows in banded_matvec's order
+    (large_kernel's judge; every other step's is :func:`judge_step`)."""
     n = u2.size
     soft = cu.size == n
     nat, min_gap, min_r, comp_up, comp_lo, term = 0.0, np.inf, np.inf, 0.0, 0.0, 0.0

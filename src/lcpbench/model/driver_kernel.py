@@ -11,7 +11,9 @@ same small compiled overhead for every back-end:
   :meth:`ContactStep.lcp` with the scaling of ``step_lcp``, the condensed dense LCP);
   :func:`from_lcp`, the heights of an LCP answer;
 - :func:`judge`: :func:`lcpbench.model.step_solver.step_residuals`, lcpbench's
-  residuals of the back-end's answer and R = K g + z;
+  residuals of the back-end's answer and R = K g + z: the solve kernel's judge and
+  gradient (:func:`~.compiled_dual.judge_step`, :func:`~.compiled_dual.grad_into`), so
+  every back-end is judged by the one copy;
 - :func:`advance`: max|α̂ − α| (eq. 21) and the Armijo search on the exact energy
   (:func:`lcpbench.model.chain_kernel.armijo`, :func:`~lcpbench.model.chain_kernel.energy`);
 - against walls of any profile, :func:`profile_start`, :func:`profile_assemble`,
@@ -19,11 +21,9 @@ same small compiled overhead for every back-end:
   (the walls at the nodes' x, the lagged reactions' slope load), merit search and stop
   (:mod:`lcpbench.model.profile_kernel`, :mod:`lcpbench.model.wall_kernel`: one copy).
 
-The numpy modules are the reference; this file repeats their arithmetic in the same
-order where that is cheap, so the driver of :mod:`lcpbench.model.compiled_driver`
-takes the numpy functions' path to round-off (``tests/model/test_compiled_driver.py``).
 The chain's energy and the Armijo rule are :mod:`.chain_kernel`'s, its inverse
-kinematics and the banded step :mod:`.compiled_kernel`'s (one copy each; :mod:`lcpbench.numba_cache` recompiles every
+kinematics and the banded step :mod:`.compiled_kernel`'s, the step's gradient and judge
+:mod:`.compiled_dual`'s (one copy each; :mod:`lcpbench.numba_cache` recompiles every
 kernel when any kernel file changes, so a call across files never runs stale code).
 """
 
@@ -40,12 +40,10 @@ from .chain_kernel import (  # once each
     fit_heights,
     wall_penalty,
 )
-from .compiled_dual import wall_residuals  # one copy of the judge's rows (numba_cache)
+from .compiled_dual import grad_into, judge_step  # the solve kernel's, once (numba_cache)
 from .compiled_kernel import banded_step  # the step
 from .profile_kernel import clipped_start, merit_search, penetration  # a profile's, once
 from .wall_kernel import slope_load, walls_at
-
-TINY = np.finfo(np.float64).tiny
 
 
 # -- the step (model.step) ----------------------------------------------------------
@@ -168,73 +166,34 @@ def from_lcp(bands, linear, rows, heights, condensed, zeta):
 
 # -- the judge (model.step_solver.step_residuals) -----------------------------------
 @njit(cache=True)
-def _gradient(u, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load):
-    """ContactStep.gradient: Jᵀ k (φ̂(u) − φ*) − f, about the linearisation point."""
-    y = np.zeros(links + 2)
-    for i in range(u.size):
-        y[fs + i] = u[i] - origin[i]
-    m = np.empty(coef.shape[0])
-    for j in range(m.size):
-        s = coef[j, 0] * y[b0 + j]
-        s += coef[j, 1] * y[b0 + 1 + j]
-        s += coef[j, 2] * y[b0 + 2 + j]
-        m[j] = ((s + phi_origin[j]) - rest[j]) * k[j]
-    g = np.zeros(links + 2)
-    for kk in range(3):  # Jᵀ m in _JT's order
-        for j in range(m.size):
-            g[b0 + kk + j] += coef[j, kk] * m[j]
-    return g[fs:fs + u.size] - nodal_load
-
-
-@njit(cache=True)
-def _solve_on(bands, idx, rhs):
-    """ContactStep.solve_on: H[idx, idx]⁻¹ rhs by the banded Cholesky factor of the
-    principal block (bandwidth 2); (False, rhs) where the block is not positive definite."""
-    f = idx.size
-    c0, c1, c2 = np.zeros(f), np.zeros(f), np.zeros(f)
-    for i in range(f):  # the block's bands (a node two apart or less keeps its entry)
-        c0[i] = bands[0, idx[i]]
-        for kk, c in ((1, c1), (2, c2)):
-            if i + kk < f and idx[i + kk] - idx[i] <= 2:
-                c[i] = bands[idx[i + kk] - idx[i], idx[i]]
-    for j in range(f):
-        d = c0[j] - (c1[j - 1] ** 2 if j >= 1 else 0.0) - (c2[j - 2] ** 2 if j >= 2 else 0.0)
-        if not d > 0.0:
-            return False, rhs
-        c0[j] = np.sqrt(d)
-        c1[j] = (c1[j] - (c2[j - 1] * c1[j - 1] if j >= 1 else 0.0)) / c0[j]
-        c2[j] = c2[j] / c0[j]
-    x = rhs.copy()
-    for j in range(f):
-        s = x[j] - (c1[j - 1] * x[j - 1] if j >= 1 else 0.0)
-        x[j] = (s - (c2[j - 2] * x[j - 2] if j >= 2 else 0.0)) / c0[j]
-    for j in range(f - 1, -1, -1):
-        s = x[j] - (c1[j] * x[j + 1] if j + 1 < f else 0.0)
-        x[j] = (s - (c2[j] * x[j + 2] if j + 2 < f else 0.0)) / c0[j]
-    return True, x
-
-
-@njit(cache=True)
 def judge(u, bands, linear, lo, hi, cu, cl, coef, b0, fs, links, origin, phi_origin, k,
           rest, nodal_load, L, F):
     """step_residuals: (ok, [natural, min_gap, min_reaction, complementarity, term_size],
-    R); ``cu``, ``cl``: the elastic walls' compliances 1/k (empty: rigid walls); not ok for heights that are not finite or where
-    the nodes with no wall row cannot be re-solved (the caller runs the numpy reference)."""
+    R), the solve kernel's judge (:func:`~.compiled_dual.judge_step`: the nodes with no
+    wall row re-solved on the LDLᵀ of their block, :mod:`lcpbench.linalg.ldl_kernel`);
+    ``cu``, ``cl``: the elastic walls' compliances 1/k (empty: rigid walls); not ok for
+    heights that are not finite or where the nodes with no wall row cannot be re-solved
+    (the caller runs the numpy reference)."""
     n = u.size
     for i in range(n):
         if not np.isfinite(u[i]):
             return False, np.zeros(5), np.full(n, np.nan)  # the reference's NaN answer
-    rows = np.isfinite(hi) | np.isfinite(lo)
-    free = np.flatnonzero(~rows)
-    u2 = u.copy()
-    if free.size:  # the nodes with no wall row, re-solved exactly
-        grad = _gradient(u2, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load)
-        ok, x = _solve_on(bands, free, grad[free])
-        if not ok:
-            return False, np.zeros(5), grad
-        u2[free] -= x
-    R = -_gradient(u2, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load)
-    return True, wall_residuals(u2, R, bands, linear, lo, hi, cu, cl, L, F), R
+    out, R = np.empty(5), np.empty(n)
+    ok = judge_step(u, bands, linear, lo, hi, cu, cl,
+                    (coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load), L, F,
+                    out, R, np.empty(n), np.empty(n, np.bool_), np.empty((4, n)),
+                    np.empty(coef.shape[0]), np.zeros((2, n)), np.empty(0))
+    return ok, out, R
+
+
+@njit(cache=True)
+def _gradient(u, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load):
+    """ContactStep.gradient about the linearisation point (:func:`~.compiled_dual.grad_into`,
+    a Gauss–Newton step: T = 0)."""
+    n = u.size
+    return grad_into(np.empty(n), np.empty(coef.shape[0]), u,
+                     (coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load),
+                     np.zeros((2, n)))
 
 
 # -- the outer step (model.compiled_driver.run) --------------------------------------

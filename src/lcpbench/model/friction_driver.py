@@ -380,20 +380,3 @@ def solve_state(scene: ActuatorScene, start: FrictionState, x_prev: np.ndarray, 
            + ("" if fs is None or sol.solved else f" (the last {sol.status.name})"))
     return StateAnswer(state, N, T, fs, False, why, it, sizes, time.perf_counter() - t0,
                        left_pull)
-
-
-def fc2d_form(fs: FrictionStep) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The step in Siconos' fc2d form (:mod:`lcpbench.solvers.siconos_fc2d`),
-    dimensionless (lengths by ℓ, forces by EI/ℓ²): wall row r is a contact with
-    u = (g_r, s_p), r = (N_r, T_p), p its friction pair. Needs one row per pair
-    (a step built with every rowed node ``pressed``); ProblemError otherwise."""
-    mn, pairs = fs.normal_node.size, fs.pair
-    if np.any(pairs < 0) or np.unique(pairs).size != mn or fs.friction_node.size != mn:
-        raise ProblemError("fc2d_form needs one friction pair per wall row (build the step "
-                           "with every rowed node pressed)")
-    idx = np.empty(2 * mn, np.int64)
-    idx[0::2] = np.arange(mn)
-    idx[1::2] = mn + pairs
-    W = fs.W[np.ix_(idx, idx)] * (fs.force / fs.length)
-    q = np.concatenate([fs.g_f, fs.s_f])[idx] / fs.length
-    return W, q, fs.mu.copy()

@@ -2,7 +2,7 @@
 step's pivot tolerance and covering vectors, warm-started by block principal pivoting
 from the last answer's support or, where that does not hold, from the frictionless
 contacts with the pressed nodes sticking or every pair sliding (compiled:
-:func:`lcpbench.model.friction_step.first_support`,
+:func:`lcpbench.model.friction_step.first_support_from`,
 :func:`lcpbench.solvers.pivoting_kernel.support_pivots`). Any answer is taken only where
 lcpbench's natural residual meets Lemke's own bound.
 """
@@ -48,7 +48,7 @@ STRICT_TIES = 1e-12
 #: the most supports the warm start (:meth:`StepLemke.last_support`) tries before Lemke
 WARM_CHANGES = 20
 #: where the last answer's support does not hold, :class:`StepLemke` tries the guesses of
-#: :func:`lcpbench.model.friction_step.first_support` (stick, then slide) with this many
+#: :func:`lcpbench.model.friction_step.first_support_from` (stick, then slide) with this many
 #: supports each, then again with WARM_CHANGES: a wrong guess costs little, and the right
 #: one takes a few (the channel's first step of benchmarks/friction_speed.py: stick, 2)
 WARM_GUESS_CHANGES = 5
@@ -462,7 +462,7 @@ class StepLemke:
         """The answer of a step whose last answer's support does not hold (or that has
         none: a path's first) by block principal pivoting from the frictionless
         contacts, the pressed nodes sticking (``slide`` False) or every pair sliding
-        against its free slip (True; :func:`lcpbench.model.friction_step.first_support`,
+        against its free slip (True; :func:`lcpbench.model.friction_step.first_support_from`,
         compiled; at most ``changes`` supports of the whole LCP), SOLVED where its natural
         residual meets RESIDUAL_TOL; None otherwise (Lemke then). ``contacts``: the
         step's frictionless contacts, found at its first guess and kept there for the

@@ -342,42 +342,6 @@ def recover(z, X, mn, mt):
 
 
 @njit(cache=True)
-def first_support(M, q, pair, slide, normal_changes, max_changes, feas_rtol, pivot_rtol,
-                  lstsq_rcond):
-    """The step's answer by block principal pivoting from a stick/slide/separate guess,
-    for a step whose last answer's support does not hold (a path's first step, a chain
-    that starts or stops sliding as a whole; docs/friction.md).
-
-    Both guesses start from the frictionless contacts: the normal block's LCP
-    0 <= N ⟂ W_nn N + g_f >= 0 (M's first m_n rows and columns, symmetric positive
-    semidefinite), solved by :func:`lcpbench.solvers.pivoting_kernel.symmetric_active_set`,
-    and each pair's free slip s⁰ = s_f + W_tn N, σ = sign s⁰ (T opposes it: β⁻ where
-    σ > 0, β⁺ where σ < 0).
-
-    * ``slide`` False (stick): the pressed nodes (N > 0) stick (N, β; λ off the
-      support), every other pair slides freely (β, λ: T = 0 on a node without N).
-    * ``slide`` True (slide): every pair slides, T = −σ μ N, which leaves an LCP in N
-      alone, 0 <= N ⟂ (W_nn − W_nt σ μ) N + g_f >= 0 (not symmetric), solved by
-      :func:`~lcpbench.solvers.pivoting_kernel.support_pivots` from the frictionless
-      contacts; its contacts with every pair sliding (N, β, λ) are the guess.
-
-    Then ``support_pivots`` on the whole LCP from the guess. ``pair``: each wall row's
-    friction pair (−1: none; M's size is m_n + 3 m_t); ``normal_changes``: the budget
-    of the LCPs in N alone (their solves are of the contacts' size), ``max_changes`` the
-    whole LCP's supports. Returns
-    (z, w, support, end, solves) as ``support_pivots`` does, every solve counted; the
-    end of a normal LCP that did not end DONE. It is :func:`frictionless_contacts` then
-    :func:`first_support_from` (a caller trying both guesses finds the contacts once)."""
-    N, end, solves = frictionless_contacts(M, q, pair.size, normal_changes, feas_rtol,
-                                           pivot_rtol)
-    if end != DONE:
-        return np.zeros(q.size), q.copy(), np.zeros(q.size, np.bool_), end, solves
-    z, w, S, end, more = first_support_from(M, q, pair, N, slide, normal_changes, max_changes,
-                                            feas_rtol, pivot_rtol, lstsq_rcond)
-    return z, w, S, end, solves + more
-
-
-@njit(cache=True)
 def frictionless_contacts(M, q, mn, normal_changes, feas_rtol, pivot_rtol):
     """The frictionless contacts of the step: 0 <= N ⟂ W_nn N + g_f >= 0, M's first
     ``mn`` rows and columns (:func:`lcpbench.solvers.pivoting_kernel.symmetric_active_set`,
@@ -391,9 +355,26 @@ def frictionless_contacts(M, q, mn, normal_changes, feas_rtol, pivot_rtol):
 @njit(cache=True)
 def first_support_from(M, q, pair, N, slide, normal_changes, max_changes, feas_rtol,
                        pivot_rtol, lstsq_rcond):
-    """:func:`first_support` from the frictionless contacts ``N``
-    (:func:`frictionless_contacts`, ended DONE): the guess and the pivoting; the solves
-    counted are this call's."""
+    """The step's answer by block principal pivoting from a stick/slide/separate guess,
+    for a step whose last answer's support does not hold (a path's first step, a chain
+    that starts or stops sliding as a whole; docs/friction.md).
+
+    Both guesses start from the frictionless contacts ``N`` (:func:`frictionless_contacts`,
+    ended DONE; a caller trying both guesses finds them once) and each pair's free slip
+    s⁰ = s_f + W_tn N, σ = sign s⁰ (T opposes it: β⁻ where σ > 0, β⁺ where σ < 0).
+
+    * ``slide`` False (stick): the pressed nodes (N > 0) stick (N, β; λ off the
+      support), every other pair slides freely (β, λ: T = 0 on a node without N).
+    * ``slide`` True (slide): every pair slides, T = −σ μ N, which leaves an LCP in N
+      alone, 0 <= N ⟂ (W_nn − W_nt σ μ) N + g_f >= 0 (not symmetric), solved by
+      :func:`~lcpbench.solvers.pivoting_kernel.support_pivots` from the frictionless
+      contacts; its contacts with every pair sliding (N, β, λ) are the guess.
+
+    Then ``support_pivots`` on the whole LCP from the guess. ``pair``: each wall row's
+    friction pair (−1: none; M's size is m_n + 3 m_t); ``normal_changes``: the budget
+    of the LCPs in N alone (their solves are of the contacts' size), ``max_changes`` the
+    whole LCP's supports. Returns (z, w, support, end, solves) as ``support_pivots``
+    does; the solves counted are this call's."""
     mn = pair.size
     mt = (q.size - mn) // 3
     lam = mn + 2 * mt

@@ -36,6 +36,7 @@ from .outer import (
     out_of_iterations,
 )
 from .profile import wall_rows, wall_tables
+from .step import residuals_of
 
 #: the solve kernel's bail codes (it left the reference's path) and their reasons
 BAIL_REASONS = {
@@ -316,12 +317,10 @@ def kernel_output(chain: Chain, code: int, alpha, r_up, r_lo, u, sigma, rec, cou
     steps = [StepRecord(int(it), solved, share, 0.0, step, dalpha, energy)
              for it, step, dalpha, energy in cols]
     if code == k.CONVERGED:
-        r0, r1, r2, r3, r4 = res.tolist()
         sol = StepSolution(u, r_up, r_lo, _SOLVED_STATUS, iterations=steps[-1].iterations,
                            solve_time=share, active_upper=sigma > 0, active_lower=sigma < 0,
                            time_source="wall", backend=DEFAULT, settings=settings,
-                           residuals={"natural": r0, "min_gap": r1, "min_reaction": r2,
-                                      "complementarity": r3, "term_size": r4},
+                           residuals=residuals_of(res),
                            forces_net=R)
         # converged_output, its one-wall case (np.add.reduce: ndarray.sum without its wrapper)
         if not chain.channel and math.isfinite(_add_reduce(R)):

@@ -6,7 +6,7 @@ solve the contact step, search along it with Armijo on the exact energy,
 stop when max|α̂ − α| < tol and the driver's prediction of the judge's
 per-node force bound holds (:data:`NODE_SETTLED`). The differences, both for
 round-off at large N:
-the step is :func:`~.large_n.increment_step` (unknowns d = u − u₀, face solves
+the step is :func:`~.large_n.increments_at` (unknowns d = u − u₀, face solves
 on the tridiagonal factor of H) and the iterate moves by
 :func:`~.large_n.trial_of`, so the state is α, never heights
 rounded to doubles. The step is solved by the caller's step solver (the

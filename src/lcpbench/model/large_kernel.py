@@ -3,10 +3,10 @@
 At N = 10⁵ each of these was a dozen or more full-length numpy passes
 (temporaries of 0.8 MB each) and together about half of a solve outside the
 dual walk. Here each is one loop with the same arithmetic, in the same order
-where a sum is involved, as the numpy reference it replaces:
+where a sum is involved, as the numpy code it replaced:
 
-- :func:`assemble_into` — :func:`lcpbench.model.compiled_driver.assemble_step` followed by
-  :func:`lcpbench.model.large_n.increment_step` (the step in increments
+- :func:`assemble_into` — :func:`lcpbench.model.compiled_driver.assemble_step` moved to
+  increments (:class:`lcpbench.model.large_n.IncrementStep`: the step in increments
   d = u − u₀, its linear term the factored gradient at u₀) for a chain of the
   large-N layout (:func:`lcpbench.model.large_n.layout_fits`: joint j joins
   links j, j + 1 and bends at free node j + 1; in free-node indices it touches

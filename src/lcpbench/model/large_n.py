@@ -27,15 +27,14 @@ the result judge (:mod:`.judge`) takes its own judge step the same way.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 
-from ..linalg.saddle import TridiagonalFactor
 from ..linalg.twisted import TwistedFactor
 from ..problems.scenes import Chain
 from .chain import joint_arrays
-from .step import ContactStep
+from .step import ContactStep, residuals_of
 
 
 def _kernel():
@@ -106,32 +105,19 @@ def roundoff_limited(chain: Chain, judgement, method: str) -> bool:
             and roundoff_may_limit(chain, judgement.force_tol, method))
 
 
-def increment_step(step: ContactStep, *, restart: bool = True) -> ContactStep:
-    """The step in increments d = u − u₀: the same QP, moved to the origin.
-
-    Its linear term is the factored gradient at u₀ (from the joint angles of α,
-    no cancellation), its walls are the gaps of u₀, and its face solves use
-    the tridiagonal factor (``restart``: twisted, each face refactored between its
-    first and last change, :class:`~lcpbench.linalg.twisted.TwistedFactor`; False:
-    the reference, a full factorisation per face, :class:`TridiagonalFactor`).
-    """
-    n = step.size
-    factor = (TwistedFactor(step.coef, step.stiffness) if restart
-              else TridiagonalFactor(step.coef, step.stiffness, restart=False))
-    return replace(step, linear=step.gradient(step.origin), lower=step.lower - step.origin,
-                   upper=step.upper - step.origin, origin=np.zeros(n), factor=factor)
-
-
 @dataclass
 class IncrementStep(ContactStep):
-    """:func:`increment_step` of :func:`~lcpbench.model.compiled_driver.assemble_step`, assembled
-    by one compiled pass (:func:`increments_at`), with the factored gradient and
-    its term sizes compiled (:mod:`.large_kernel`: the same arithmetic as the
-    reference's numpy). ``heights``: u₀, the free nodes' heights at α (mm)."""
+    """The step in increments d = u − u₀: the QP of
+    :func:`~lcpbench.model.compiled_driver.assemble_step` moved to the origin (its linear
+    term the factored gradient at u₀, from the joint angles of α, no cancellation; its
+    walls the gaps of u₀; its face solves on the twisted tridiagonal factor,
+    :class:`~lcpbench.linalg.twisted.TwistedFactor`), assembled by one compiled pass
+    (:func:`increments_at`), with the factored gradient and its term sizes compiled
+    (:mod:`.large_kernel`). ``heights``: u₀, the free nodes' heights at α (mm)."""
 
     heights: np.ndarray | None = None
 
-    def __post_init__(self):  # the reference's precomputed arrays serve its numpy only
+    def __post_init__(self):  # ContactStep's precomputed arrays serve its numpy only
         f = np.asarray(self.free_nodes)
         self._free = slice(int(f[0]) + 1, int(f[-1]) + 2)
         b0, nj = int(self.base[0]), int(self.base.size)
@@ -178,8 +164,7 @@ class IncrementStep(ContactStep):
             float(self.force_scale))
         if not ok:
             return None
-        return dict(zip(("natural", "min_gap", "min_reaction", "complementarity",
-                         "term_size"), map(float, res), strict=True)), R
+        return residuals_of(res), R
 
     def walk_refine(self, S: np.ndarray, u: np.ndarray, rounds: int = 4):
         """``(u, g)``: the dual walk's refinement at an optimum (``u`` on the walls on S)
@@ -253,8 +238,8 @@ class StepWork:
 def increments_at(chain: Chain, alpha: np.ndarray, work: StepWork | None = None, *,
                   walls: tuple[np.ndarray, np.ndarray] | None = None,
                   load: np.ndarray | None = None) -> IncrementStep:
-    """``increment_step(assemble_step(chain, alpha))`` in one compiled pass (a chain of
-    :func:`applies`), its face solves on the twisted factor; the same numbers. ``work``:
+    """The step in increments at α (:class:`IncrementStep`) in one compiled pass (a chain
+    of :func:`applies`), its face solves on the twisted factor. ``work``:
     the arrays to write (:class:`StepWork`; default: new ones). A wall profile's step
     (the large-N driver's, :mod:`lcpbench.model.large_driver`) gives ``walls`` = (lower, upper), the
     profile at the nodes' x, and ``load``, the nodal load f plus the slope load s of

@@ -256,6 +256,18 @@ class LCPForm:
     n_gap: int
 
 
+#: the step's residuals (:func:`lcpbench.model.step_solver.step_residuals`), named once in
+#: the order every kernel returns them (:func:`.compiled_dual.judge_step`'s ``out``)
+RESIDUALS = ("natural", "min_gap", "min_reaction", "complementarity", "term_size")
+
+
+def residuals_of(values) -> dict:
+    """The residuals dict of a kernel's values (an array, or floats), in
+    :data:`RESIDUALS`' order."""
+    vals = values.tolist() if isinstance(values, np.ndarray) else map(float, values)
+    return dict(zip(RESIDUALS, vals, strict=True))
+
+
 #: the entries of :mod:`.driver_kernel` the driver around a back-end calls from Python
 ENTRIES = ("assemble", "qp_form", "lcp_form", "from_lcp", "judge", "advance", "predict",
            "profile_start", "profile_assemble", "profile_advance", "profile_on_walls")

@@ -41,6 +41,7 @@ from .formulations import (  # F1 and F2, the forms the back-ends always had
     step_qp,
     step_scales,
 )
+from .step import RESIDUALS, residuals_of
 
 #: the LCP form is dense (:meth:`ContactStep.lcp`: H, its condensed Schur complement
 #: and M, ~DENSE_COPIES n × n doubles at once); a larger step is FAILED before any
@@ -101,8 +102,7 @@ def step_residuals(step, u: np.ndarray) -> tuple[dict, np.ndarray]:
     if (own := getattr(step, "compiled_residuals", None)) is not None:
         if (out := own(u)) is not None:  # model.compiled_driver
             return out
-    nan = {"natural": np.inf, "min_gap": -np.inf, "min_reaction": -np.inf,
-           "complementarity": np.inf}
+    nan = dict(zip(RESIDUALS[:4], (np.inf, -np.inf, -np.inf, np.inf), strict=True))
     if not np.all(np.isfinite(u)):
         return nan, np.full(step.size, np.nan)
     u = _complete_heights(step, np.asarray(u, dtype=float))
@@ -119,14 +119,10 @@ def step_residuals(step, u: np.ndarray) -> tuple[dict, np.ndarray]:
     nat = max(np.max(np.abs(np.minimum(g_up, r_up)), initial=0.0),
               np.max(np.abs(np.minimum(g_lo, r_lo)), initial=0.0))
     size = banded_matvec(np.abs(step.bands), np.abs(u)) + np.abs(step.linear)
-    res = {
-        "natural": float(nat),
-        "min_gap": float(min(np.min(g_up, initial=np.inf), np.min(g_lo, initial=np.inf))),
-        "min_reaction": float(min(np.min(r_up, initial=np.inf), np.min(r_lo, initial=np.inf))),
-        "complementarity": float(abs(g_up @ r_up) + abs(g_lo @ r_lo)),
-        "term_size": float(np.max(size[up | lo], initial=0.0)) / F,
-    }
-    return res, R
+    return residuals_of((
+        nat, min(np.min(g_up, initial=np.inf), np.min(g_lo, initial=np.inf)),
+        min(np.min(r_up, initial=np.inf), np.min(r_lo, initial=np.inf)),
+        abs(g_up @ r_up) + abs(g_lo @ r_lo), float(np.max(size[up | lo], initial=0.0)) / F)), R
 
 
 def dense_fallback_refused(fallback: str, n: int) -> str | None:
@@ -227,11 +223,9 @@ def _compiled_step(step, s: Settings, warm: StepSolution | None) -> StepSolution
     elapsed = time.perf_counter() - t0
     if code != 0:
         return None
-    r0, r1, r2, r3, r4 = res.tolist()
     return StepSolution(u, r_up, r_lo, Status.SOLVED, iterations=int(it), solve_time=elapsed,
                         active_upper=sigma > 0, active_lower=sigma < 0, time_source="wall",
-                        residuals={"natural": r0, "min_gap": r1, "min_reaction": r2,
-                                   "complementarity": r3, "term_size": r4},
+                        residuals=residuals_of(res),
                         forces_net=R)
 
 

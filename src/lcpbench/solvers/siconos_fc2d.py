@@ -4,7 +4,7 @@ A 2-D frictional contact problem (Siconos' FrictionContactProblem, dimension 2):
 find per contact c the local velocity u_c = (u_n, u_t) and reaction r_c = (r_n, r_t)
 with u = W r + q, 0 <= u_n ⟂ r_n >= 0, |r_t| <= μ_c r_n, and r_t = −μ_c r_n sign(u_t)
 where u_t ≠ 0 (Coulomb). lcpbench hands its frictional step over in this form
-(:func:`lcpbench.model.friction_driver.fc2d_form`: u = (gap, slip), r = (N, T)).
+(:func:`lcpbench.model.friction_solvers.fc2d_contacts`: u = (gap, slip), r = (N, T)).
 Run through the Siconos worker (:mod:`.siconos_bridge`, the system interpreter).
 
 Methods (our name -> ``SICONOS_FRICTION_2D_<name>``): ``nsgs`` (non-smooth
