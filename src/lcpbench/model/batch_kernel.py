@@ -40,7 +40,8 @@ from .compiled_kernel import CONVERGED, LINE_SEARCH, MAX_OUTER, NO_FIT, contact_
 from .judge_kernel import SETTLED, STATS, judge_answer, split_net
 
 __all__ = ["ARC", "CONTACT", "CONVERGED", "FREE", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "SETTLED",
-           "STATS", "STOPPED_FREE", "solve_line"]
+           "STATS", "STOPPED_FREE", "append_records", "solve_line", "store_solve",
+           "store_verdict"]
 # what an attempt is (o_kind): a contact solve, the wall-free search's answer, the arc
 CONTACT, FREE, ARC = 0, 1, 2
 #: o_code of an attempt the wall-free search stopped on (its compiled step where the
@@ -115,6 +116,31 @@ def append_records(recs, used, rec, count):
 
 
 @njit(cache=True)
+def store_solve(row, got, code, recs, used, o_rup, o_rlo, o_u, o_sig, o_res):
+    """A solve kernel's output ``got`` (:func:`~.compiled_kernel.solve_chain`'s or the
+    profile kernel's: the same layout) into ``row`` of the outputs, its step records
+    appended to ``recs``, its residuals kept where ``code`` says it converged: (α, R,
+    the step count, recs, used)."""
+    alpha, R, count = got[1], got[9], got[7]
+    o_rup[row], o_rlo[row], o_u[row], o_sig[row] = got[2], got[3], got[4], got[5]
+    recs, used = append_records(recs, used, got[6], count)
+    if code == CONVERGED:
+        o_res[row] = got[8]
+    return alpha, R, count, recs, used
+
+
+@njit(cache=True)
+def store_verdict(row, judged, tol, j_code, j_stats, j_fu, j_fl, j_tres):
+    """The judge kernel's output ``judged`` (code, stats, R⁺, R⁻, torque residuals) into
+    ``row``: whether the answer is accepted (:func:`~.batch_verdict.accepted`)."""
+    jc, st, fu, fl, tres = judged
+    j_code[row] = jc
+    j_stats[row] = st
+    j_fu[row], j_fl[row], j_tres[row] = fu, fl, tres
+    return accepted(jc == SETTLED, st, tol)
+
+
+@njit(cache=True)
 def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_load,
              nodal_load, fs, lo, hi, L, F, cu, cl, wall, channel, tol, max_outer, max_iter,
              request, free_lo, free_hi, o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res,
@@ -159,11 +185,8 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
                 o_code[row] = got[0]  # the bail code (kernel_call.BAIL_REASONS)
                 return False, recs, used
             code = got[0]
-        alpha, R, count = got[1], got[9], got[7]
-        o_rup[row], o_rlo[row], o_u[row], o_sig[row] = got[2], got[3], got[4], got[5]
-        recs, used = append_records(recs, used, got[6], count)
-        if code == CONVERGED:
-            o_res[row] = got[8]
+        alpha, R, count, recs, used = store_solve(row, got, code, recs, used, o_rup, o_rlo,
+                                                  o_u, o_sig, o_res)
     o_code[row], o_kind[row], o_count[row] = code, kind, count
     o_alpha[row] = alpha
     o_R[row] = R
@@ -172,13 +195,10 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
         up, down = R.copy(), np.zeros(n)
         if channel and kind != ARC:
             split_net(o_u[row], R, hi, lo, True, up, down)
-        jc, st, fu, fl, tres = judge_answer(
+        judged = judge_answer(
             alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl, wall,
             channel, up, down, tol, recs[2, used - count:used].copy())
-        j_code[row] = jc
-        j_stats[row] = st
-        j_fu[row], j_fl[row], j_tres[row] = fu, fl, tres
-        ok = accepted(jc == SETTLED, st, tol)
+        ok = store_verdict(row, judged, tol, j_code, j_stats, j_fu, j_fl, j_tres)
     conv[row] = ok
     return True, recs, used
 

@@ -34,9 +34,9 @@ from .batch_kernel import (
     SETTLED,
     STATS,
     STOPPED_FREE,
-    append_records,
+    store_solve,
+    store_verdict,
 )
-from .batch_verdict import accepted
 from .judge_kernel import judge_walls
 from .profile_kernel import lagged_reactions, solve_profile_chain
 
@@ -70,23 +70,17 @@ def profile_attempt(row, start, net, u0, ra, a, jl, jr, k, rest, link_load, noda
         o_code[row] = code  # the bail code (kernel_call.BAIL_REASONS)
         return False, recs, used
     o_off[row] = used
-    alpha, R, count = got[1], got[9], got[7]
-    o_rup[row], o_rlo[row], o_u[row], o_sig[row] = got[2], got[3], got[4], got[5]
-    recs, used = append_records(recs, used, got[6], count)
-    if code == CONVERGED:
-        o_res[row] = got[8]
+    alpha, R, count, recs, used = store_solve(row, got, code, recs, used, o_rup, o_rlo, o_u,
+                                              o_sig, o_res)
     o_code[row], o_kind[row], o_count[row] = code, CONTACT, count
     o_alpha[row] = alpha
     o_R[row] = R
     ok = False
     if code == CONVERGED:  # the judge, on the answer and the exact walls (one wall: R)
-        jc, st, fu, fl, tres = judge_walls(
+        judged = judge_walls(
             alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, no_springs,
             no_springs, wall, False, ku, cu_, kl, cl_, R.copy(), np.zeros(n), tol,
             recs[2, used - count:used].copy())
-        j_code[row] = jc
-        j_stats[row] = st
-        j_fu[row], j_fl[row], j_tres[row] = fu, fl, tres
-        ok = accepted(jc == SETTLED, st, tol)
+        ok = store_verdict(row, judged, tol, j_code, j_stats, j_fu, j_fl, j_tres)
     conv[row] = ok
     return True, recs, used
