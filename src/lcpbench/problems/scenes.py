@@ -206,7 +206,9 @@ def _plain_fields(d: dict) -> bool:
     :meth:`ActuatorScene._check_fields` returns for them: Python floats inside their
     ranges (θ, h, ℓ, EI, w; k in its range or +inf), an int N in range, a bool
     ``channel``. Then the checks would change nothing and raise nothing; otherwise
-    (an int height, a numpy number, NaN, a value out of range, 'auto'...) they run."""
+    (an int height, a numpy number, NaN, a value out of range, 'auto'...) they run.
+    It reads the same range constants as the checks; a check added to ``_check_fields``
+    must be added here too, or the common scene skips it."""
     theta, height, links, length = d["theta"], d["height"], d["links"], d["length"]
     ei, weight, k = d["EI"], d["weight"], d["wall_stiffness"]
     return (type(theta) is float and THETA_RANGE[0] < theta < THETA_RANGE[1]
