@@ -26,7 +26,15 @@ import numpy as np
 from ..errors import ProblemError
 from .checks import check_flag, check_number, describe
 from .friction import FrictionOptions
-from .templates import filled, flat_walls, full, pinned_frame, uniform_load, wall_share
+from .templates import (
+    filled,
+    flat_walls,
+    full,
+    pinned_frame,
+    uniform_load,
+    wall_share,
+    within_reach,
+)
 from .walls import WallProfile
 
 MIN_LINKS = 4
@@ -250,7 +258,7 @@ def reachable(node_arclength: np.ndarray, length: float, height: float, ends: st
     reach = node_arclength.copy()
     if ends == "pinned-pinned":
         reach = np.minimum(reach, length - node_arclength)
-    return reach >= height * (1.0 - 1e-12)
+    return within_reach(reach, height)
 
 
 @dataclass(frozen=True)
@@ -453,7 +461,7 @@ class ActuatorScene(FrictionOptions):
             near = prof_up.extremes(*self.x_reach)[0]  # (on a grid, kept with the profile)
             if prof_lo is not None:
                 near = min(near, -prof_lo.extremes(*self.x_reach)[1])
-            can = fr.reach >= near * (1.0 - 1e-12)  # (:func:`reachable`, "pinned-pinned")
+            can = within_reach(fr.reach, near)  # (:func:`reachable`, "pinned-pinned")
             upper = np.where(can, prof_up(x), np.inf)
             lower = np.where(can, prof_lo(x), -np.inf) if prof_lo is not None else \
                 filled(n - 1, -np.inf).copy()
@@ -461,8 +469,8 @@ class ActuatorScene(FrictionOptions):
         upper_k = lower_k = None
         if k != math.inf:  # elastic walls: k_i = k × share_i on the wall rows
             if can is None:
-                can = fr.reach >= self.height * (1.0 - 1e-12)  # (the rows of flat_walls)
-            upper_k = np.where(can, k * fr.share, np.inf)  # (:func:`node_stiffness`)
+                can = within_reach(fr.reach, self.height)  # (the rows of flat_walls)
+            upper_k = node_stiffness(k, can, fr.share)
             lower_k = upper_k.copy() if self.channel else None
         load = -self.weight * a  # μ = wℓ/N (eq. 5), away from the wall
         return new_chain({

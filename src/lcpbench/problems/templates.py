@@ -91,13 +91,19 @@ class Frame:
     share: np.ndarray  # the interior nodes' share of wall length (:func:`wall_share`)
 
 
+def within_reach(reach: np.ndarray, height: float) -> np.ndarray:
+    """Which nodes of maximal height ``reach`` (mm: their arc length to the nearer pin)
+    can touch a wall at ``height`` (to round-off): the nodes that get a contact row."""
+    return reach >= height * (1.0 - 1e-12)
+
+
 @functools.lru_cache(maxsize=64)
 def flat_walls(n: int, length: float, height: float, channel: bool):
     """(upper, lower) wall heights of the free nodes of a chain pinned at both ends, read
     only (chains copy them): ±h on the rows of the nodes that can reach the walls
     (:func:`lcpbench.problems.scenes.reachable`, "pinned-pinned", its reach
     min(s, ℓ − s) kept per frame), ±inf elsewhere; −inf below when not a channel."""
-    can = pinned_frame(n, length).reach >= height * (1.0 - 1e-12)
+    can = within_reach(pinned_frame(n, length).reach, height)
     upper = np.where(can, height, np.inf)
     lower = np.where(can, -height, -np.inf) if channel else np.full(n - 1, -np.inf)
     for arr in (upper, lower):
