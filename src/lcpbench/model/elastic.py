@@ -66,14 +66,17 @@ def compliances(obj) -> tuple[np.ndarray, np.ndarray]:
     ``upper_stiffness``, ``lower_stiffness``).
     """
     n = np.asarray(obj.upper).size
-    out = []
-    for k in (obj.upper_stiffness, obj.lower_stiffness):
-        if k is None:
-            out.append(np.zeros(n))
-        else:
-            with np.errstate(divide="ignore"):
-                out.append(np.where(np.isfinite(k), 1.0 / np.asarray(k, float), 0.0))
-    return out[0], out[1]
+    return compliance(obj.upper_stiffness, n), compliance(obj.lower_stiffness, n)
+
+
+def compliance(k, n: int) -> np.ndarray:
+    """1/k of one wall (mm/N; 0 where rigid): ``k`` its stiffness per free node, or the
+    rows of several chains' stacked (element by element the same numbers); None: a
+    rigid wall, ``n`` zeros."""
+    if k is None:
+        return np.zeros(n)
+    with np.errstate(divide="ignore"):
+        return np.where(np.isfinite(k), 1.0 / np.asarray(k, float), 0.0)
 
 
 def wall_springs(obj) -> tuple[np.ndarray, np.ndarray]:

@@ -53,9 +53,12 @@ CHECKED, DEGENERATE_PIVOT, NOT_TRIDIAGONAL = 0, 1, 2
 FRONT = 10  # slots of the frontal matrix (at most nine are in use at once)
 #: node events of :func:`reduced_inertia`
 FREE, HELD, ELASTIC = 0, 1, 2
+# The front's helpers below are inlined where they are called (``inline="always"``): as
+# calls, once per link each, the reference counts of the front's arrays they are handed
+# cost a fifth of the judge (25 scenes at N = 140: 30 → 24 µs a scene, the same bits)
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _alloc(F, used):
     """A free slot of the front. Its row and column are zero already: the front starts
     at zero and an elimination zeroes the row and column of each slot it frees."""
@@ -66,7 +69,7 @@ def _alloc(F, used):
     raise RuntimeError("the stability check's front is full (FRONT too small)")
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _eliminate(F, used, s):
     """Schur-eliminate slot ``s`` from the front; returns its pivot. Row FRONT of ``F``
     is scratch: the slots coupled to ``s``."""
@@ -91,7 +94,7 @@ def _eliminate(F, used, s):
     return p
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _eliminate_pair(F, used, s, t, small, counts):
     """Schur-eliminate slots ``s`` and ``t`` as one 2 × 2 block; its inertia into
     ``counts`` (negative, degenerate)."""
@@ -182,7 +185,7 @@ def lagrangian_hessian(alpha, c, s, jl, jr, k, rest, link_load, first, forces_up
     return diag, off, True
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _pivot_sign(F, used, s, small, counts):
     """Eliminate slot ``s``; count its pivot in ``counts`` (negative, degenerate)."""
     p = _eliminate(F, used, s)
@@ -190,7 +193,7 @@ def _pivot_sign(F, used, s, small, counts):
     counts[1] += abs(p) <= small
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _close_segment(F, used, mu_y, mu_x, x_end, y_start, small, counts):
     """Eliminate an ended segment: its start's elastic height, its δy row's multiplier,
     then its δx row's multiplier with the end's δx as a 2 × 2 block. Returns the rows."""
@@ -297,7 +300,7 @@ def reduced_inertia(diag, off, c, s, event, stiffness, slope, curvature, use_x,
     return max(counts[0] - rows, 0), counts[1]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _next(event, q):
     """The next node after q that a wall, a spring or the pin holds (0: none)."""
     for r in range(q + 1, event.size):
