@@ -153,6 +153,26 @@ def test_pressure_and_indentation_follow_the_winkler_law():
     assert d["pressure_exceeded"] is False and d["max_pressure"] == high.max_pressure
 
 
+def test_compliances_are_one_over_k_where_a_wall_yields():
+    """c = 1/k where a wall yields, 0 where it is rigid (k = inf) or absent (None), for one
+    wall's row and for several chains' rows stacked (the line kernel's form); an actuator
+    scene's wall springs are k × ℓ/N on the rows of a channel's two walls."""
+    from lcpbench.model.elastic import compliance, compliances
+
+    k = np.array([[2.0, np.inf, 0.5], [4.0, 8.0, np.inf]])
+    expected = np.array([[0.5, 0.0, 2.0], [0.25, 0.125, 0.0]])  # (exact in binary)
+    np.testing.assert_array_equal(compliance(k, 3), expected)
+    np.testing.assert_array_equal(compliance(k[1], 3), expected[1])
+    np.testing.assert_array_equal(compliance(None, 3), np.zeros(3))
+    chain = ActuatorScene(theta=150, height=3.0, links=20, wall_stiffness=4.0,
+                          channel=True).chain()
+    rows = np.isfinite(chain.upper)
+    assert rows.any() and not rows.all()  # (the nodes near the pins cannot reach h)
+    for c in compliances(chain):
+        np.testing.assert_allclose(c[rows], 1.0 / (4.0 * chain.link_length), rtol=1e-15)
+        assert np.all(c[~rows] == 0.0)
+
+
 def test_rigid_walls_are_unchanged_by_the_default_stiffness():
     """wall_stiffness defaults to inf: the chain has no springs and the compiled path
     still runs; inf given explicitly is the same scene."""
