@@ -168,7 +168,10 @@ class WallProfile:
             c = np.clip(t, lo, hi)
             return np.where((t < lo) | (t > hi), outside(c), fun(c))
 
-        return cls(lambda t: inside(f, t, f), lambda t: inside(f1, t, np.zeros_like),
+        def height(t):  # (continued flat: the end value, f at the clipped x, everywhere)
+            return f(np.clip(np.asarray(t, dtype=float), lo, hi))
+
+        return cls(height, lambda t: inside(f1, t, np.zeros_like),
                    lambda t: inside(f2, t, np.zeros_like), x_range=(lo, hi), name=name,
                    key=key, pieces=exact_pieces(f.x, f.c))
 
@@ -202,7 +205,9 @@ class WallProfile:
 
         def h(t):
             t = np.asarray(t, dtype=float)
-            return np.asarray(height(np.clip(t, lo, hi)), dtype=float) * np.ones_like(t)
+            v = height(np.clip(t, lo, hi))  # (a float array: _checked)
+            # (a constant, or a scalar x: times ones, as an array per x)
+            return v if t.ndim and v.shape == t.shape else v * np.ones_like(t)
 
         def dh(t):
             t = np.asarray(t, dtype=float)
