@@ -322,6 +322,10 @@ class WallProfile:
             raise ProblemError(f"{parameter}: the {side} wall crosses the pin line: it is "
                                f"{where} y = 0 (y = {y[i]:g} mm at x = {t[i]:g} mm); the "
                                f"pins sit on y = 0")
+        if SAMPLES == REACH_GRID:  # the grid of :meth:`extremes` over this range: its
+            # numbers from these heights (a chain's build asks for them next)
+            self._extremes.setdefault((float(x_low), float(x_high)),
+                                      (float(np.min(y)), float(np.max(y))))
         self._passed.add(passed)
 
 
