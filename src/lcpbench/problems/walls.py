@@ -64,7 +64,8 @@ def _checked(fun: Callable, what: str, name: str) -> Callable:
             raise ProblemError(f"wall_profile {name!r}: the {what} function must return "
                                f"numbers (mm, one per x), it returned {describe(value)}")
         try:
-            np.broadcast_shapes(arr.shape, np.shape(t))
+            if arr.shape and arr.shape != np.shape(t):  # (one per x, or one for all: fine)
+                np.broadcast_shapes(arr.shape, np.shape(t))
         except ValueError:
             raise ProblemError(f"wall_profile {name!r}: the {what} function must return one "
                                f"number per x: {np.size(t)} x values gave shape "
