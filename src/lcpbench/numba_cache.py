@@ -74,7 +74,7 @@ KERNEL_FILES = ("model/chain_kernel.py", "model/compiled_kernel.py", "model/comp
                 "linalg/ldl_kernel.py", "model/batch_kernel.py", "model/batch_verdict.py",
                 "model/sensitivity_kernel.py", "model/sensitivity_profile_kernel.py",
                 "model/angle_kernel.py", "model/path_kernel.py",
-                "linalg/band_lu_kernel.py",
+                "linalg/band_lu_kernel.py", "problems/table_kernel.py",
                 "linalg/twisted_walk_kernel.py", "model/stability_kernel.py",
                 "model/wall_kernel.py", "model/profile_kernel.py", "model/profile_line.py",
                 "model/friction_step.py", "model/friction_outer.py",

@@ -349,3 +349,33 @@ def test_a_sharp_crest_is_a_status_never_a_wrong_answer():
         assert res.total_force == pytest.approx(ref.total_force, rel=res.judgement.force_tol)
     else:
         assert res.reason
+
+
+def test_the_clipped_start_stops_at_a_pass_that_changes_nothing():
+    """The first iterate against a profile (clip the heights to the walls at the nodes' x,
+    fit the angles to them, at most START_PASSES times) stops where a pass changes
+    nothing: one more pass from its answer gives the same α, sines and cosines, bit for
+    bit, and its heights are the chain's own clipped to the walls at its nodes' x."""
+    from lcpbench.model.kernel_call import kernel_args, profile_args
+    from lcpbench.numba_cache import kernel_module
+
+    kern = kernel_module("lcpbench.model.profile_kernel", "solve_profile_chain")
+    walls_at = kernel_module("lcpbench.model.wall_kernel", "walls_at").walls_at
+    fit = kernel_module("lcpbench.model.chain_kernel", "fit_heights").fit_heights
+    scene = ActuatorScene(theta=150, height=3.0, links=LINKS, wall_profile=bump(3, .8, 14, 3))
+    chain = scene.chain()
+    start = lcpbench.solve(scene, tol=1e-9).alpha  # (pressed on the stenosis: clipped)
+    ra, a, *_, fs = kernel_args(chain)[:9]
+    lo, hi, _, _, ku, cu, kl, cl = profile_args(chain)[:8]
+    walls, n, links = (hi, lo, ku, cu, kl, cl), lo.size, ra.size
+    alpha, u, sin_a, cos_a = np.empty(links), np.empty(n), np.empty(links), np.empty(links)
+    at = tuple(np.empty(n) for _ in range(8))
+    ok, cold = kern.clipped_start(start + 1e-4, ra, a, fs, walls, alpha, u, sin_a, cos_a, at)
+    assert ok and not cold
+    again, s2, c2 = np.empty(links), sin_a.copy(), cos_a.copy()
+    walls_at(s2, c2, a, fs, *walls, *at)
+    clipped = np.minimum(np.maximum(at[1], at[3]), at[2])
+    assert np.array_equal(clipped, u)
+    assert fit(again, clipped, alpha.copy(), a, fs, links, np.empty(0), s2, c2)
+    for x, y in ((again, alpha), (s2, sin_a), (c2, cos_a)):
+        assert x.tobytes() == y.tobytes()

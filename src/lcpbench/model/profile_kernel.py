@@ -31,6 +31,8 @@ compiled fall-back (:func:`lcpbench.model.compiled.reference`).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -113,17 +115,35 @@ def merit_at(E, walls, mu_up, mu_lo, yf, hi, lo):
 @njit(cache=True)
 def _clipped(alpha0, a, fs, walls, alpha, u, sin_a, cos_a, at):
     """Into ``alpha``, ``u``: the heights clipped to the
-    walls at the nodes' x, START_PASSES times; False where the chain tears."""
+    walls at the nodes' x, START_PASSES times; False where the chain tears. A pass is a
+    function of α and its sines and cosines alone (``u`` and ``at`` it writes before it
+    reads them): once a pass leaves all three as they were, bit for bit, every later
+    pass would too, and the passes stop there (the same α, ``u`` and ``at``)."""
     links = alpha.size
     alpha[:] = alpha0
     for i in range(links):
         cos_a[i], sin_a[i] = np.cos(alpha0[i]), np.sin(alpha0[i])
     yf, hi, lo = at[1], at[2], at[3]
+    before = np.empty((3, links))  # α, sin α, cos α before the pass
     for _ in range(START_PASSES):
         walls_at(sin_a, cos_a, a, fs, *walls, *at)
         for i in range(u.size):
             u[i] = min(max(yf[i], lo[i]), hi[i])
-        if not fit_heights(alpha, u, alpha.copy(), a, fs, links, np.empty(0), sin_a, cos_a):
+        before[0], before[1], before[2] = alpha, sin_a, cos_a
+        if not fit_heights(alpha, u, before[0], a, fs, links, np.empty(0), sin_a, cos_a):
+            return False
+        if _same_bits(before[0], alpha) and _same_bits(before[1], sin_a) \
+                and _same_bits(before[2], cos_a):
+            break
+    return True
+
+
+@njit(cache=True)
+def _same_bits(x, y):
+    """Whether the arrays ``x`` and ``y`` hold the same numbers, bit for bit (a zero's sign
+    too; NaN never: a pass that gives one is not repeated the same)."""
+    for i in range(x.size):
+        if x[i] != y[i] or math.copysign(1.0, x[i]) != math.copysign(1.0, y[i]):
             return False
     return True
 

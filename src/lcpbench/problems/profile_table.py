@@ -62,16 +62,6 @@ def linear_pieces(xs: np.ndarray, ys: np.ndarray) -> tuple[np.ndarray, np.ndarra
     return exact_pieces(xs, np.vstack([steps, ys[:-1]]))
 
 
-def _piece_coef(a, b, ha, hb, ma, mb) -> np.ndarray:
-    """PPoly coefficients of the cubic Hermite pieces on [a, b] through (a, ha, ma) and
-    (b, hb, mb), one piece per entry (each piece's from its two ends alone)."""
-    dx = b - a
-    secant = (hb - ha) / dx
-    c1 = (3.0 * secant - 2.0 * ma - mb) / dx
-    c0 = (ma + mb - 2.0 * secant) / dx**2
-    return np.vstack([c0, c1, ma, ha])
-
-
 def evaluate(knots: np.ndarray, coef: np.ndarray, x) -> tuple[np.ndarray, np.ndarray]:
     """h and h' of a table at x (vectorised; the pieces' own continuation outside is
     not applied here: for checking a table inside its range)."""
@@ -98,48 +88,36 @@ def hermite_pieces(height, slope, x_low: float, x_high: float
     the new midpoints."""
     if not x_low < x_high:
         return None
+    from ..numba_cache import kernel_module  # numba at the first table, not at import
+
+    refine = kernel_module("lcpbench.problems.table_kernel", "refine").refine
     knots = np.linspace(x_low, x_high, START_PIECES + 1)
     narrowest = MIN_WIDTH * (x_high - x_low)
     h, m = height(knots), slope(knots)
     scale_h = 1.0 + float(np.max(np.abs(h)))
     scale_m = 1.0 + float(np.max(np.abs(m)))
-    # the pieces to check: ends a, b, and h, h' at both
-    a, b, ha, hb, ma, mb = knots[:-1], knots[1:], h[:-1], h[1:], m[:-1], m[1:]
-    done_a: list[np.ndarray] = []  # the pieces that passed: left ends, coefficients
-    done_c: list[np.ndarray] = []
+    # the pieces to check, a row each: their ends a, b, h at both, h' at both
+    ends = np.stack([knots[:-1], knots[1:], h[:-1], h[1:], m[:-1], m[1:]]).astype(float)
+    mids = 0.5 * (ends[0] + ends[1])
+    done: list[np.ndarray] = []  # the pieces that passed: rows a, c0, c1, c2, c3
     total = START_PIECES  # pieces in the table
     while True:
-        coef = _piece_coef(a, b, ha, hb, ma, mb)
-        mids = 0.5 * (a + b)
-        h_mid, m_mid = height(mids), slope(mids)
-        if not (np.all(np.isfinite(h_mid)) and np.all(np.isfinite(m_mid))):
+        h_mid = np.ascontiguousarray(height(mids), dtype=float)
+        m_mid = np.ascontiguousarray(slope(mids), dtype=float)
+        passed, ends, mids, top_h, top_m = refine(ends, mids, h_mid, m_mid,
+                                                  HEIGHT_TOL * scale_h, SLOPE_TOL * scale_m,
+                                                  narrowest)
+        if np.isnan(top_h):  # h or h' not finite at a midpoint
             return None
-        d = mids - a  # (the table at the midpoint: its own piece's cubic)
-        c0, c1, c2, c3 = coef
-        t_h = ((c0 * d + c1) * d + c2) * d + c3
-        t_m = (3.0 * c0 * d + 2.0 * c1) * d + c2
-        bad = ((np.abs(t_h - h_mid) > HEIGHT_TOL * scale_h)
-               | (np.abs(t_m - m_mid) > SLOPE_TOL * scale_m))
-        bad &= (b - a) > narrowest
-        nbad = int(np.count_nonzero(bad))
+        done.append(passed)
+        nbad = mids.size
         if nbad == 0:
-            done_a.append(a)
-            done_c.append(coef)
-            lefts = np.concatenate(done_a)
-            order = np.argsort(lefts)
-            knots = np.append(lefts[order], x_high)
-            return (np.ascontiguousarray(knots),
-                    np.ascontiguousarray(np.concatenate(done_c, axis=1)[:, order]))
+            table = np.concatenate(done, axis=1)
+            order = np.argsort(table[0])
+            return (np.ascontiguousarray(np.append(table[0, order], x_high)),
+                    np.ascontiguousarray(table[1:, order]))
         if total + nbad > MAX_PIECES:
             return None
         total += nbad
-        good = ~bad
-        done_a.append(a[good])
-        done_c.append(coef[:, good])
-        # each bad piece split at its midpoint c: [a, c] and [c, b]
-        c, hc, mc = mids[bad], h_mid[bad], m_mid[bad]
-        scale_h = max(scale_h, 1.0 + float(np.max(np.abs(hc))))
-        scale_m = max(scale_m, 1.0 + float(np.max(np.abs(mc))))
-        a, b = np.concatenate([a[bad], c]), np.concatenate([c, b[bad]])
-        ha, hb = np.concatenate([ha[bad], hc]), np.concatenate([hc, hb[bad]])
-        ma, mb = np.concatenate([ma[bad], mc]), np.concatenate([mc, mb[bad]])
+        scale_h = max(scale_h, 1.0 + top_h)
+        scale_m = max(scale_m, 1.0 + top_m)

@@ -64,7 +64,8 @@ def _checked(fun: Callable, what: str, name: str) -> Callable:
             raise ProblemError(f"wall_profile {name!r}: the {what} function must return "
                                f"numbers (mm, one per x), it returned {describe(value)}")
         try:
-            np.broadcast_shapes(arr.shape, np.shape(t))
+            if arr.shape and arr.shape != np.shape(t):  # (one per x, or one for all: fine)
+                np.broadcast_shapes(arr.shape, np.shape(t))
         except ValueError:
             raise ProblemError(f"wall_profile {name!r}: the {what} function must return one "
                                f"number per x: {np.size(t)} x values gave shape "
@@ -168,7 +169,10 @@ class WallProfile:
             c = np.clip(t, lo, hi)
             return np.where((t < lo) | (t > hi), outside(c), fun(c))
 
-        return cls(lambda t: inside(f, t, f), lambda t: inside(f1, t, np.zeros_like),
+        def height(t):  # (continued flat: the end value, f at the clipped x, everywhere)
+            return f(np.clip(np.asarray(t, dtype=float), lo, hi))
+
+        return cls(height, lambda t: inside(f1, t, np.zeros_like),
                    lambda t: inside(f2, t, np.zeros_like), x_range=(lo, hi), name=name,
                    key=key, pieces=exact_pieces(f.x, f.c))
 
@@ -202,7 +206,9 @@ class WallProfile:
 
         def h(t):
             t = np.asarray(t, dtype=float)
-            return np.asarray(height(np.clip(t, lo, hi)), dtype=float) * np.ones_like(t)
+            v = height(np.clip(t, lo, hi))  # (a float array: _checked)
+            # (a constant, or a scalar x: times ones, as an array per x)
+            return v if t.ndim and v.shape == t.shape else v * np.ones_like(t)
 
         def dh(t):
             t = np.asarray(t, dtype=float)
@@ -317,6 +323,10 @@ class WallProfile:
             raise ProblemError(f"{parameter}: the {side} wall crosses the pin line: it is "
                                f"{where} y = 0 (y = {y[i]:g} mm at x = {t[i]:g} mm); the "
                                f"pins sit on y = 0")
+        if SAMPLES == REACH_GRID:  # the grid of :meth:`extremes` over this range: its
+            # numbers from these heights (a chain's build asks for them next)
+            self._extremes.setdefault((float(x_low), float(x_high)),
+                                      (float(np.min(y)), float(np.max(y))))
         self._passed.add(passed)
 
 

@@ -19,6 +19,7 @@ import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import fields, replace
+from operator import attrgetter
 
 import numpy as np
 
@@ -75,7 +76,7 @@ class Solved:
     def _plane(self, scene, make: bool = False) -> tuple[dict, dict] | None:
         if not isinstance(scene, ActuatorScene):
             return None
-        key = tuple(getattr(scene, f) for f in PLANE_FIELDS)
+        key = _plane_key(scene)
         if not _hashable(key):  # a field that does not hash: the planes compared one by one
             key = next((k for k in self._planes if isinstance(k, _Unhashed) and k.key == key),
                        _Unhashed(key))
@@ -131,6 +132,8 @@ class Solved:
 
 #: what makes two actuator scenes lie in one plane of θ and h
 PLANE_FIELDS = tuple(f.name for f in fields(ActuatorScene) if f.name not in ("theta", "height"))
+_plane_key = attrgetter(*PLANE_FIELDS)  # a scene's plane: the tuple of those fields
+
 
 
 class _Unhashed:
