@@ -58,7 +58,7 @@ from ..errors import ProblemError
 from ..solvers.registry import DEFAULT
 from ..thresholds import NEAR_VERTICAL_DEG, NODE_SHARE
 from . import large_n
-from .angle_step import in_reach
+from .angle_step import in_reach, sqp_arrays
 from .compiled import drive, heavy
 from .heavy_driver import run_heavy
 from .judge import force_tol
@@ -148,6 +148,8 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
                 out, used, start, last = walked, "compiled", DriverStart(
                     walked.alpha, walked.last_step), walked
                 continue  # (a step that did not converge: run below, as for any back-end)
+        if to_sqp:  # (its arrays but φ*, kept with the chains of the path made from now on)
+            sqp_arrays(whole)
         chain = _chain_at(scene, whole, shapes, k)
         sqp = _in_angles(chain, start, last, tol, max_outer) if to_sqp else None
         if sqp is None:
