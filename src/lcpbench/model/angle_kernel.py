@@ -223,7 +223,8 @@ def qp_step(alpha, a, jl, jr, k, W, grad, y, pinned, node, side, limit, lam, mu,
             code, d, lam_out, u, more, face = _solve_qp(bd, off, c, grad, y, pinned, node,
                                                         side, limit, mu, gap_tol)
             changes += more
-            if code == OK and convex_on_face(bd, off, c, face):
+            # (the answer's face is the starting one where no wall changed: convex)
+            if code == OK and (more == 0 or convex_on_face(bd, off, c, face)):
                 return OK, d, lam_out, u, sigma, changes
         sigma = ANGLE_SHIFT_START * top if t == 0 else sigma * ANGLE_SHIFT_GROWTH
     return code if code != OK else SINGULAR, d, lam_out, u, -1.0, changes
