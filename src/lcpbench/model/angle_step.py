@@ -102,7 +102,7 @@ def heavy(chain: Chain) -> bool:
 class _Problem:
     """The arrays of the SQP kernel for a chain (:func:`angle_kernel.solve_sqp`), O(N), but
     its rest joint angles φ*: its layout, walls and load, which a step of the loading path
-    shares with the whole chain (:func:`_problem`)."""
+    shares with the whole chain (:func:`sqp_arrays`)."""
 
     def __init__(self, chain: Chain):
         self.a = float(chain.link_length)
@@ -165,9 +165,9 @@ def solve_in_angles(chain: Chain, *, tol: float = 1e-10, max_iter: int = 30,
     alpha = _start(chain) if start is None else np.array(start, float)
     lam, mu = _first_multipliers(p, multipliers)
     code, alpha, sizes, energies, lam, mu = kern.solve_sqp(
-        alpha, p.a, p.jl, p.jr, p.k, _contiguous(chain.rest_joint, dtype=float), p.load, p.W, p.pinned, p.node, p.side, p.limit,
-        lam, mu, QP_GAP * chain.length, float(tol), int(max_iter),
-        float(chain.force_scale) * chain.length, float(chain.length), FEASIBLE)
+        alpha, p.a, p.jl, p.jr, p.k, _contiguous(chain.rest_joint, dtype=float), p.load, p.W,
+        p.pinned, p.node, p.side, p.limit, lam, mu, QP_GAP * chain.length, float(tol),
+        int(max_iter), float(chain.force_scale) * chain.length, float(chain.length), FEASIBLE)
     sizes, energies = sizes.tolist(), energies.tolist()
     if code == kern.QP_FAILED:
         return AngleOutcome(alpha, False, sizes, energies, "the QP of a step failed")

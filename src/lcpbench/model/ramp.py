@@ -37,7 +37,9 @@ from 34 active-set changes (1.6–1.8 ms) to none (0.55 ms). The SQP converges t
 (345 rows of sections, benchmarks/cold_sqp_states.py's and the mixed batch's).
 
 The rest shapes of a row of sections at every s come in one pass (the scene's
-``rest_shapes``; nothing else of its chain depends on s). Where the solve kernel takes
+``rest_shapes``; nothing else of its chain depends on s), and the SQP's arrays but φ*
+once a path (:func:`lcpbench.model.angle_step.sqp_arrays`, kept with the whole chain and
+handed to the chains of the steps). Where the solve kernel takes
 the chain (the built-in back-end, the globalised or Newton scheme, the kernel's layout,
 neither large nor heavy), a run of height steps is one kernel call
 (:func:`lcpbench.model.path_kernel.walk_heights`: the solve kernel step after step, each
