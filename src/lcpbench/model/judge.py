@@ -105,7 +105,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, field
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
@@ -223,43 +223,6 @@ class Judgement:
         for key in ("forces_upper", "forces_lower", "certificate"):
             d.pop(key)
         return d
-
-    def __getstate__(self) -> dict:
-        """Pickled (and copied) with its certificate made (:class:`_Certificate`)."""
-        _ = self.certificate
-        return dict(self.__dict__)
-
-
-class _Deferred(NamedTuple):
-    """A certificate not made yet: ``make(upper, lower)``."""
-
-    make: Any
-    upper: np.ndarray
-    lower: np.ndarray
-
-
-class _Certificate:
-    """:attr:`Judgement.certificate`, made at its first read where the judge was given it
-    as a callable and took no exact step (:func:`_unjudged`: a driver that did not
-    converge; the plan's escalations then mostly replace that answer unread: the
-    loading path of a row of sections whose cold solve stopped). The same certificate,
-    of the same arrays, as the result's node positions made when read
-    (:data:`lcpbench.model.result.DERIVED`)."""
-
-    def __get__(self, obj, owner=None):
-        if obj is None:
-            return self
-        d = obj.__dict__
-        value = d["certificate"]
-        if type(value) is _Deferred:
-            value = d["certificate"] = value.make(value.upper, value.lower)
-        return value
-
-    def __set__(self, obj, value) -> None:
-        obj.__dict__["certificate"] = value
-
-
-Judgement.certificate = _Certificate()  # type: ignore[assignment]  # (after @dataclass)
 
 
 def _kernel():
@@ -411,8 +374,8 @@ def _unjudged(chain: Chain, forces_upper: np.ndarray, forces_lower: np.ndarray, 
         verdict.reason = ("not accepted by lcpbench's judge: layout: the judge kernel does not "
                           "take this chain (joints or free nodes not consecutive, or a wall "
                           "profile without a table of cubic pieces)")
-    verdict.certificate = (_Deferred(certificate, forces_upper, forces_lower)
-                           if callable(certificate) else certificate)  # (made when read)
+    verdict.certificate = (certificate(forces_upper, forces_lower) if callable(certificate)
+                           else certificate)
     return verdict
 
 

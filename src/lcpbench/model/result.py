@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from dataclasses import MISSING, asdict, dataclass, field, fields, is_dataclass
-from functools import partial
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -182,11 +181,9 @@ class ContactResult:
     eps: float | None = None
 
     def __getstate__(self) -> dict:
-        """Pickled (and copied) with every derived field computed (``DERIVED``) and its
-        certificate made (:class:`_FromJudgement`)."""
+        """Pickled (and copied) with every derived field computed (``DERIVED``)."""
         if "_derive_from" in self.__dict__:
             _derive(self)
-        _ = self.certificate
         return dict(self.__dict__)
 
     @property
@@ -375,29 +372,6 @@ def _derive(res: ContactResult) -> None:
 for _name in DERIVED:
     setattr(ContactResult, _name, _Derived(_name))
 
-_JUDGED: Any = object()  # the certificate is the judgement's (typed Any: a Certificate's place)
-
-
-class _FromJudgement:
-    """:attr:`ContactResult.certificate` of a result built by :func:`build_result`: its
-    judgement's, read from it at its first access (the judge makes the certificate of an
-    answer it took no exact step on when read: :class:`lcpbench.model.judge.Judgement`)."""
-
-    def __get__(self, obj, owner=None):
-        if obj is None:
-            return self
-        d = obj.__dict__
-        value = d["certificate"]
-        if value is _JUDGED:
-            value = d["certificate"] = obj.judgement.certificate
-        return value
-
-    def __set__(self, obj, value) -> None:
-        obj.__dict__["certificate"] = value
-
-
-ContactResult.certificate = _FromJudgement()  # type: ignore[assignment]  # (after @dataclass)
-
 
 def build_result(scene, chain: Chain, out: DriverOutput, *, judged_by=judge,
                  **how) -> ContactResult:
@@ -409,7 +383,7 @@ def build_result(scene, chain: Chain, out: DriverOutput, *, judged_by=judge,
                         driver_converged=out.converged, driver_reason=out.reason,
                         step_statuses=[s.status for s in out.steps],
                         step_sizes=[s.max_dalpha for s in out.steps],
-                        certificate=partial(certify, chain, out.alpha))
+                        certificate=lambda up, lo: certify(chain, out.alpha, up, lo))
     if verdict.forces_upper is not None and verdict.forces_lower is not None:
         # R with its round-off set to zero (the certificate is of these)
         out.forces_upper, out.forces_lower = verdict.forces_upper, verdict.forces_lower
@@ -429,7 +403,7 @@ def build_result(scene, chain: Chain, out: DriverOutput, *, judged_by=judge,
         steps=out.steps,
         converged=verdict.converged,
         reason=verdict.reason,
-        certificate=_JUDGED,  # (the judgement's, made when read: _FromJudgement)
+        certificate=verdict.certificate,
         multipliers=out.multipliers_upper,
         multipliers_lower=out.multipliers_lower if channel else None,
         judgement=verdict,
