@@ -63,11 +63,12 @@ GUESSES = 64
 
 
 @njit(cache=True)
-def hessian_bands(alpha, a, jl, jr, k, W, lam, mu, node, side):
+def hessian_bands(sines, a, jl, jr, k, W, lam, mu, node, side):
     """(diag K, off K, δ): the tridiagonal K = Dᵀ diag(k) D (``off[i]`` = K[i, i+1]) and
-    the diagonal δ_j = a sin α_j (W_j + λ − Σ_{r: k_r > j} μ_r side_r) of ∇²(E − λc − μ·g).
-    Joint i couples links ``jl[i]`` (−1: a clamp) and ``jr[i]`` = ``jl[i]`` + 1."""
-    n = alpha.size
+    the diagonal δ_j = a sin α_j (W_j + λ − Σ_{r: k_r > j} μ_r side_r) of ∇²(E − λc − μ·g),
+    ``sines``: sin α. Joint i couples links ``jl[i]`` (−1: a clamp) and ``jr[i]`` =
+    ``jl[i]`` + 1."""
+    n = sines.size
     dk, off, dg = np.zeros(n), np.zeros(max(n - 1, 0)), np.empty(n)
     for i in range(jr.size):
         r, left = jr[i], jl[i]
@@ -81,7 +82,7 @@ def hessian_bands(alpha, a, jl, jr, k, W, lam, mu, node, side):
     tail = 0.0  # Σ over nodes > j
     for j in range(n - 1, -1, -1):
         tail += push[j + 1]
-        dg[j] = a * np.sin(alpha[j]) * (W[j] + lam - tail)
+        dg[j] = a * sines[j] * (W[j] + lam - tail)
     return dk, off, dg
 
 
@@ -201,10 +202,18 @@ def qp_step(alpha, a, jl, jr, k, W, grad, y, pinned, node, side, limit, lam, mu,
     × the largest |K_jj|, |δ_j|; g = :data:`~lcpbench.thresholds.ANGLE_SHIFT_GROWTH`) at
     which B = K + diag(δ) + σ I is convex on the face of the starting active set and on
     the face of the answer's (:func:`convex_on_face`), and the QP was solved."""
-    n, nw = alpha.size, node.size
-    dk, off, dg = hessian_bands(alpha, a, jl, jr, k, W, lam[0] if pinned else 0.0, mu, node,
+    return _qp_step(np.sin(alpha), a * np.cos(alpha), a, jl, jr, k, W, grad, y, pinned, node,
+                    side, limit, lam, mu, gap_tol)
+
+
+@njit(cache=True)
+def _qp_step(sines, c, a, jl, jr, k, W, grad, y, pinned, node, side, limit, lam, mu,
+             gap_tol):
+    """:func:`qp_step` at the α of ``sines`` (sin α) and ``c`` (a cos α), which the SQP
+    has from its line search and its gradient (:func:`solve_sqp`)."""
+    n, nw = sines.size, node.size
+    dk, off, dg = hessian_bands(sines, a, jl, jr, k, W, lam[0] if pinned else 0.0, mu, node,
                                 side)
-    c = a * np.cos(alpha)
     top = 0.0
     for j in range(n):
         top = max(top, abs(dk[j]), abs(dg[j]))
@@ -223,7 +232,8 @@ def qp_step(alpha, a, jl, jr, k, W, grad, y, pinned, node, side, limit, lam, mu,
             code, d, lam_out, u, more, face = _solve_qp(bd, off, c, grad, y, pinned, node,
                                                         side, limit, mu, gap_tol)
             changes += more
-            if code == OK and convex_on_face(bd, off, c, face):
+            # (the answer's face is the starting one where no wall changed: convex)
+            if code == OK and (more == 0 or convex_on_face(bd, off, c, face)):
                 return OK, d, lam_out, u, sigma, changes
         sigma = ANGLE_SHIFT_START * top if t == 0 else sigma * ANGLE_SHIFT_GROWTH
     return code if code != OK else SINGULAR, d, lam_out, u, -1.0, changes
@@ -342,8 +352,9 @@ def _solve_qp(bd, off, c, grad, y, pinned, node, side, limit, mu, gap_tol):
 # -- the SQP's outer loop (model.angle_step.solve_in_angles) ---------------------------
 @njit(cache=True)
 def _state(alpha, a, jl, jr, k, rest, link_load, pinned, node, side, limit):
-    """(y, E, |c|, Σ max(−g, 0), max(0, max −g)) at α: the node heights (N + 1), the exact
-    energy, the closure c = a Σ sin α (pinned; else 0) and the walls' gaps g."""
+    """(y, E, |c|, Σ max(−g, 0), max(0, max −g), sin α) at α: the node heights (N + 1),
+    the exact energy, the closure c = a Σ sin α (pinned; else 0), the walls' gaps g and
+    the sines (the next step's Hessian reads them where α is taken)."""
     n = alpha.size
     sines = np.sin(alpha)
     y = np.empty(n + 1)
@@ -362,12 +373,13 @@ def _state(alpha, a, jl, jr, k, rest, link_load, pinned, node, side, limit):
         if g < 0.0:
             short -= g
         worst = max(worst, -g)
-    return y, E, c, short, worst
+    return y, E, c, short, worst, sines
 
 
 @njit(cache=True)
-def _gradient(alpha, a, jl, jr, k, rest, W):
-    """∇E at α: the springs' torques k(φ − φ*) on their two links, minus a cos α_i W_i."""
+def _gradient(alpha, ac, jl, jr, k, rest, W):
+    """∇E at α: the springs' torques k(φ − φ*) on their two links, minus a cos α_i W_i
+    (``ac``: a cos α)."""
     grad = np.zeros(alpha.size)
     for j in range(jr.size):
         left = alpha[jl[j]] if jl[j] >= 0 else 0.0
@@ -376,7 +388,7 @@ def _gradient(alpha, a, jl, jr, k, rest, W):
         if jl[j] >= 0:
             grad[jl[j]] -= t
     for i in range(alpha.size):
-        grad[i] -= a * np.cos(alpha[i]) * W[i]
+        grad[i] -= ac[i] * W[i]
     return grad
 
 
@@ -397,13 +409,14 @@ def solve_sqp(alpha, a, jl, jr, k, rest, link_load, W, pinned, node, side, limit
     ``link_load``: μ per link, ``W``: the load's weights of a cos α_i in ∇E."""
     alpha = alpha.copy()
     sizes, energies = np.empty(max_iter), np.empty(max_iter)
-    y, E, c, short, worst = _state(alpha, a, jl, jr, k, rest, link_load, pinned, node, side,
-                                   limit)
+    y, E, c, short, worst, sines = _state(alpha, a, jl, jr, k, rest, link_load, pinned, node,
+                                          side, limit)
     near = False
     for it in range(max_iter):
-        grad = _gradient(alpha, a, jl, jr, k, rest, W)
-        code, d, lam_new, mu_new, _, _ = qp_step(alpha, a, jl, jr, k, W, grad, y, pinned,
-                                                 node, side, limit, lam, mu, gap_tol)
+        ac = a * np.cos(alpha)  # (the gradient's and the QP's)
+        grad = _gradient(alpha, ac, jl, jr, k, rest, W)
+        code, d, lam_new, mu_new, _, _ = _qp_step(sines, ac, a, jl, jr, k, W, grad, y, pinned,
+                                                  node, side, limit, lam, mu, gap_tol)
         if code != OK:
             return QP_FAILED, alpha, sizes[:it], energies[:it], lam, mu
         size = 0.0
@@ -427,15 +440,16 @@ def solve_sqp(alpha, a, jl, jr, k, rest, link_load, W, pinned, node, side, limit
         t = 1.0
         while True:
             trial = alpha + t * d
-            y, E_t, c_t, short_t, worst_t = _state(trial, a, jl, jr, k, rest, link_load,
-                                                   pinned, node, side, limit)
+            y, E_t, c_t, short_t, worst_t, sines_t = _state(trial, a, jl, jr, k, rest,
+                                                            link_load, pinned, node, side,
+                                                            limit)
             if size < tol:
                 break
             step = armijo(t, E_t + rho * (c_t + short_t), m0, slope, noise, SQP_SHORTEST)
             if step == t or step == 0.0:  # (below SQP_SHORTEST: the last trial is taken)
                 break
             t = step
-        alpha, E, c, short, worst = trial, E_t, c_t, short_t, worst_t
+        alpha, E, c, short, worst, sines = trial, E_t, c_t, short_t, worst_t, sines_t
         if pinned:
             lam = lam_new
         mu = mu_new

@@ -100,14 +100,15 @@ def heavy(chain: Chain) -> bool:
 
 
 class _Problem:
-    """The arrays of the SQP kernel for a chain (:func:`angle_kernel.solve_sqp`), O(N)."""
+    """The arrays of the SQP kernel for a chain (:func:`angle_kernel.solve_sqp`), O(N), but
+    its rest joint angles φ*: its layout, walls and load, which a step of the loading path
+    shares with the whole chain (:func:`sqp_arrays`)."""
 
     def __init__(self, chain: Chain):
         self.a = float(chain.link_length)
         self.jl = np.ascontiguousarray(chain.joint_links[:, 0], dtype=np.int64)
         self.jr = np.ascontiguousarray(chain.joint_links[:, 1], dtype=np.int64)
         self.k = np.ascontiguousarray(chain.joint_stiffness, dtype=float)
-        self.rest = np.ascontiguousarray(chain.rest_joint, dtype=float)
         load = chain.link_load  # Σ μ_k y_c,k = a Σ_i W_i sin α_i
         self.load = np.ascontiguousarray(load, dtype=float)
         self.W = np.concatenate((np.cumsum(load[::-1])[::-1][1:], [0.0])) + 0.5 * load
@@ -118,6 +119,16 @@ class _Problem:
         self.node = np.ascontiguousarray(chain.free_nodes[self.free], dtype=np.int64)
         self.side = np.concatenate((np.ones(up.size), -np.ones(lo.size)))
         self.limit = np.concatenate((chain.upper[up], chain.lower[lo])).astype(float)
+        self.n_up, self.up, self.lo = up.size, up, lo  # the wall rows' free nodes, by wall
+
+
+def sqp_arrays(chain: Chain) -> _Problem:
+    """The SQP kernel's arrays of ``chain`` but its φ* (a :class:`_Problem`), kept with it
+    and handed on to the chains of its loading path made after
+    (:meth:`~lcpbench.problems.scenes.Chain.with_rest_shape`,
+    :data:`~lcpbench.problems.scenes.LAYOUT_DERIVED`: nothing in them depends on the rest
+    shape)."""
+    return chain.derived("_angle_problem", lambda: _Problem(chain))
 
 
 def _first_multipliers(p: _Problem, multipliers) -> tuple[np.ndarray, np.ndarray]:
@@ -126,9 +137,7 @@ def _first_multipliers(p: _Problem, multipliers) -> tuple[np.ndarray, np.ndarray
     if multipliers is None:
         return np.zeros(1), np.zeros(p.free.size)
     lam, upper, lower = multipliers
-    n_up = int(np.count_nonzero(p.side > 0))
-    mu = np.concatenate((np.asarray(upper, float)[p.free[:n_up]],
-                         np.asarray(lower, float)[p.free[n_up:]]))
+    mu = np.concatenate((np.asarray(upper, float)[p.up], np.asarray(lower, float)[p.lo]))
     return np.array([float(lam) if p.pinned else 0.0]), np.maximum(mu, 0.0)
 
 
@@ -151,14 +160,14 @@ def solve_in_angles(chain: Chain, *, tol: float = 1e-10, max_iter: int = 30,
     constraints met to round-off, or after ``max_iter`` steps. Never raises on
     non-convergence.
     """
-    p = _Problem(chain)
-    kern = kernel_module("lcpbench.model.angle_kernel", "solve_sqp")
+    p = sqp_arrays(chain)
+    kern = _KERNEL[0] if _KERNEL else _load_kernel()
     alpha = _start(chain) if start is None else np.array(start, float)
     lam, mu = _first_multipliers(p, multipliers)
     code, alpha, sizes, energies, lam, mu = kern.solve_sqp(
-        alpha, p.a, p.jl, p.jr, p.k, p.rest, p.load, p.W, p.pinned, p.node, p.side, p.limit,
-        lam, mu, QP_GAP * chain.length, float(tol), int(max_iter),
-        float(chain.force_scale) * chain.length, float(chain.length), FEASIBLE)
+        alpha, p.a, p.jl, p.jr, p.k, _contiguous(chain.rest_joint, dtype=float), p.load, p.W,
+        p.pinned, p.node, p.side, p.limit, lam, mu, QP_GAP * chain.length, float(tol),
+        int(max_iter), float(chain.force_scale) * chain.length, float(chain.length), FEASIBLE)
     sizes, energies = sizes.tolist(), energies.tolist()
     if code == kern.QP_FAILED:
         return AngleOutcome(alpha, False, sizes, energies, "the QP of a step failed")
@@ -167,7 +176,18 @@ def solve_in_angles(chain: Chain, *, tol: float = 1e-10, max_iter: int = 30,
                             f"no convergence in {max_iter} angle steps")
     n = chain.free_nodes.size
     upper, lower = np.zeros(n), np.zeros(n)
-    upper[p.free[p.side > 0]] = mu[p.side > 0]
-    lower[p.free[p.side < 0]] = mu[p.side < 0]
+    upper[p.up] = mu[:p.n_up]
+    lower[p.lo] = mu[p.n_up:]
     return AngleOutcome(alpha, True, sizes, energies, "converged", upper, lower,
                         float(lam[0]))
+
+
+_contiguous = np.ascontiguousarray
+_KERNEL: list = []  # the SQP kernel's module, once loaded (emptied by numba_cache.use_aot)
+
+
+def _load_kernel():
+    from ..numba_cache import held
+
+    held(_KERNEL).append(kernel_module("lcpbench.model.angle_kernel", "solve_sqp"))
+    return _KERNEL[0]

@@ -37,7 +37,9 @@ from 34 active-set changes (1.6–1.8 ms) to none (0.55 ms). The SQP converges t
 (345 rows of sections, benchmarks/cold_sqp_states.py's and the mixed batch's).
 
 The rest shapes of a row of sections at every s come in one pass (the scene's
-``rest_shapes``; nothing else of its chain depends on s). Where the solve kernel takes
+``rest_shapes``; nothing else of its chain depends on s), and the SQP's arrays but φ*
+once a path (:func:`lcpbench.model.angle_step.sqp_arrays`, kept with the whole chain and
+handed to the chains of the steps). Where the solve kernel takes
 the chain (the built-in back-end, the globalised or Newton scheme, the kernel's layout,
 neither large nor heavy), a run of height steps is one kernel call
 (:func:`lcpbench.model.path_kernel.walk_heights`: the solve kernel step after step, each
@@ -58,7 +60,7 @@ from ..errors import ProblemError
 from ..solvers.registry import DEFAULT
 from ..thresholds import NEAR_VERTICAL_DEG, NODE_SHARE
 from . import large_n
-from .angle_step import in_reach
+from .angle_step import in_reach, sqp_arrays
 from .compiled import drive, heavy
 from .heavy_driver import run_heavy
 from .judge import force_tol
@@ -148,6 +150,8 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
                 out, used, start, last = walked, "compiled", DriverStart(
                     walked.alpha, walked.last_step), walked
                 continue  # (a step that did not converge: run below, as for any back-end)
+        if to_sqp:  # (its arrays but φ*, kept with the chains of the path made from now on)
+            sqp_arrays(whole)
         chain = _chain_at(scene, whole, shapes, k)
         sqp = _in_angles(chain, start, last, tol, max_outer) if to_sqp else None
         if sqp is None:

@@ -317,7 +317,8 @@ class SectionedScene(FrictionOptions):
         frac = np.asarray(fractions, dtype=float)[:, None]
         th = np.radians(frac * np.array([s.theta for s in self.sections]))  # (path, k)
         counts = self.section_links()
-        turn = th[:, 0] if th.shape[1] == 1 else np.array([math.fsum(r) for r in th])
+        turn = th[:, 0] if th.shape[1] == 1 else np.array([math.fsum(r) for r in
+                                                           th.tolist()])  # (floats)
         before, parts = np.zeros(th.shape[0]), []  # θ > 0 turns clockwise
         for k, (m, mid) in enumerate(zip(counts, self._link_middles(), strict=True)):
             parts.append(turn[:, None] / 2 - before[:, None] - mid * th[:, k:k + 1] / m)
@@ -333,7 +334,8 @@ class SectionedScene(FrictionOptions):
             raise ProblemError(f"sections: the rest shape closes on itself (its ends are "
                                f"{chord[~(chord > 1e-6 * total)][0]:.3g} mm apart), so it "
                                "cannot be pinned at both ends; change the bend angles")
-        tilt = np.array([math.atan2(y, x) for y, x in zip(cy, cx, strict=True)])  # (libm's)
+        tilt = np.array([math.atan2(y, x) for y, x in zip(cy.tolist(), cx.tolist(),
+                                                          strict=True)])  # (libm's)
         alpha -= np.where(np.abs(tilt) > LEVEL_TOL, tilt, 0.0)[:, None]
         per_link = (th / counts).repeat(counts, axis=1)  # θ_k/n_k per link
         return alpha, -(0.5 * (per_link[:, :-1] + per_link[:, 1:]))
