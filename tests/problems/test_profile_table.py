@@ -53,6 +53,27 @@ def test_a_functions_pieces_meet_the_documented_tolerances():
     assert knots.size - 1 <= pt.MAX_PIECES
 
 
+def test_a_function_that_writes_its_answers_into_one_buffer_has_a_true_table():
+    """A profile function may hand back its own array and write it again on the next
+    call (here h and h' share one buffer): the table must still be h's, within the
+    documented tolerances against the calculus h and h' (theory: _gauss, _gauss_slope)."""
+    buf = np.empty(0)
+
+    def into(values):
+        nonlocal buf
+        if buf.shape != values.shape:
+            buf = np.empty(values.shape)
+        buf[...] = values
+        return buf
+
+    prof = WallProfile.from_function(lambda t: into(_gauss(t)), lambda t: into(_gauss_slope(t)))
+    knots, coef = prof.pieces(-30.0, 30.0)
+    xs = np.random.default_rng(5).uniform(-30, 30, 20000)
+    h, h1 = pt.evaluate(knots, coef, xs)
+    assert np.max(np.abs(h - _gauss(xs))) <= 2 * pt.HEIGHT_TOL * (1 + 3.0)
+    assert np.max(np.abs(h1 - _gauss_slope(xs))) <= 2 * pt.SLOPE_TOL * (1 + 0.33)
+
+
 def test_a_function_given_without_its_slope_has_a_table_as_tight():
     """The slope by Richardson-extrapolated central differences is close enough to the
     calculus slope (theory: _gauss_slope) for the table to meet the same tolerances;

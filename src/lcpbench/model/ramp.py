@@ -39,7 +39,8 @@ from 34 active-set changes (1.6–1.8 ms) to none (0.55 ms). The SQP converges t
 The rest shapes of a row of sections at every s come in one pass (the scene's
 ``rest_shapes``; nothing else of its chain depends on s), and the SQP's arrays but φ*
 once a path (:func:`lcpbench.model.angle_step.sqp_arrays`, kept with the whole chain and
-handed to the chains of the steps). Where the solve kernel takes
+handed to the chains of the steps; an actuator scene builds its chain at s·θ whole, so
+its SQP arrays are built a step). Where the solve kernel takes
 the chain (the built-in back-end, the globalised or Newton scheme, the kernel's layout,
 neither large nor heavy), a run of height steps is one kernel call
 (:func:`lcpbench.model.path_kernel.walk_heights`: the solve kernel step after step, each
@@ -150,8 +151,8 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
                 out, used, start, last = walked, "compiled", DriverStart(
                     walked.alpha, walked.last_step), walked
                 continue  # (a step that did not converge: run below, as for any back-end)
-        if to_sqp:  # (its arrays but φ*, kept with the chains of the path made from now on)
-            sqp_arrays(whole)
+        if to_sqp and shapes is not None:  # its arrays but φ*, once: the steps' chains
+            sqp_arrays(whole)  # are ``whole`` with another rest shape (_chain_at)
         chain = _chain_at(scene, whole, shapes, k)
         sqp = _in_angles(chain, start, last, tol, max_outer) if to_sqp else None
         if sqp is None:

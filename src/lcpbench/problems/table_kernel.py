@@ -17,7 +17,7 @@ from numba import njit
 __all__ = ["refine"]
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")  # (a piece of zero width: inf/NaN, as numpy)
 def refine(ends, mids, h_mid, m_mid, tol_h, tol_m, narrowest):
     """One round of :func:`~lcpbench.problems.profile_table.hermite_pieces` on the
     pieces ``ends`` (rows: a, b, h(a), h(b), h'(a), h'(b)), their midpoints ``mids``

@@ -207,8 +207,9 @@ class WallProfile:
         def h(t):
             t = np.asarray(t, dtype=float)
             v = height(np.clip(t, lo, hi))  # (a float array: _checked)
-            # (a constant, or a scalar x: times ones, as an array per x)
-            return v if t.ndim and v.shape == t.shape else v * np.ones_like(t)
+            # a copy (the function's own array may be a buffer it writes again, e.g. from
+            # the slope asked next); a constant, or a scalar x: times ones, an array per x
+            return v.copy() if t.ndim and v.shape == t.shape else v * np.ones_like(t)
 
         def dh(t):
             t = np.asarray(t, dtype=float)
