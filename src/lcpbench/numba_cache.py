@@ -193,6 +193,15 @@ def use_aot(enabled: bool | None) -> None:
         holder.clear()
 
 
+def kept(holder: list, name: str, entry: str):
+    """:func:`kernel_module` ``(name, entry)``, loaded once into ``holder``: a caller's
+    one-item list, registered with :func:`held` (so :func:`use_aot` empties it and the
+    next call loads again)."""
+    if not holder:
+        held(holder).append(kernel_module(name, entry))
+    return holder[0]
+
+
 def held(holder: list) -> list:
     """Register ``holder``, a caller's cache of what :func:`kernel_module` returned,
     to be emptied by :func:`use_aot` (else a caller would keep the kernels it got

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..numba_cache import kernel_module
+from ..numba_cache import kept
 from ..problems.scenes import Chain
 from .chain import alpha_from_heights, heights
 
@@ -161,7 +161,7 @@ def solve_in_angles(chain: Chain, *, tol: float = 1e-10, max_iter: int = 30,
     non-convergence.
     """
     p = sqp_arrays(chain)
-    kern = _KERNEL[0] if _KERNEL else _load_kernel()
+    kern = kept(_KERNEL, "lcpbench.model.angle_kernel", "solve_sqp")
     alpha = _start(chain) if start is None else np.array(start, float)
     lam, mu = _first_multipliers(p, multipliers)
     code, alpha, sizes, energies, lam, mu = kern.solve_sqp(
@@ -185,9 +185,3 @@ def solve_in_angles(chain: Chain, *, tol: float = 1e-10, max_iter: int = 30,
 _contiguous = np.ascontiguousarray
 _KERNEL: list = []  # the SQP kernel's module, once loaded (emptied by numba_cache.use_aot)
 
-
-def _load_kernel():
-    from ..numba_cache import held
-
-    held(_KERNEL).append(kernel_module("lcpbench.model.angle_kernel", "solve_sqp"))
-    return _KERNEL[0]

@@ -13,6 +13,7 @@ import time
 
 import numpy as np
 
+from ..numba_cache import kept
 from ..solvers.base import LCPSolution, Status, lcp_residuals
 from ..solvers.lemke import RESIDUAL_TOL, lemke
 from ..thresholds import (
@@ -76,33 +77,20 @@ POLISH_VERDICTS = ("kept", "no primal form (the step has no parts)", "singular",
 def pivoting_kernels():
     """Block principal pivoting from a support (:mod:`lcpbench.solvers.pivoting_kernel`),
     loaded once through :func:`lcpbench.numba_cache.kernel_module`."""
-    if not _PIVOTING:
-        from ..numba_cache import held, kernel_module
-
-        held(_PIVOTING).append(kernel_module("lcpbench.solvers.pivoting_kernel",
-                                             "support_pivots"))
-    return _PIVOTING[0]
+    return kept(_PIVOTING, "lcpbench.solvers.pivoting_kernel", "support_pivots")
 
 
 def step_kernels():
     """The frictional step's compiled functions (:mod:`lcpbench.model.friction_step`),
     loaded once through :func:`lcpbench.numba_cache.kernel_module` (numba's cache
     under the hash of every kernel file)."""
-    if not _KERNELS:
-        from ..numba_cache import held, kernel_module
-
-        held(_KERNELS).append(kernel_module("lcpbench.model.friction_step", "delassus_form"))
-    return _KERNELS[0]
+    return kept(_KERNELS, "lcpbench.model.friction_step", "delassus_form")
 
 
 def polish_kernels():
     """The frictional step's primal polish (:mod:`lcpbench.model.friction_polish`),
     loaded once through :func:`lcpbench.numba_cache.kernel_module`."""
-    if not _POLISH:
-        from ..numba_cache import held, kernel_module
-
-        held(_POLISH).append(kernel_module("lcpbench.model.friction_polish", "polish"))
-    return _POLISH[0]
+    return kept(_POLISH, "lcpbench.model.friction_polish", "polish")
 
 
 def polish_args(fs, z: np.ndarray) -> tuple[tuple, tuple]:

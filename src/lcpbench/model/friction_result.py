@@ -14,6 +14,7 @@ from dataclasses import asdict, dataclass, field, is_dataclass
 import numpy as np
 
 from ..jsonsafe import sanitise
+from ..numba_cache import kept
 from ..problems.scenes import ActuatorScene, Chain
 from ..thresholds import NODE_SHARE
 from .chain import node_positions
@@ -113,11 +114,7 @@ _KERNEL: list = []  # the compiled checks (model/judge_friction.py), once loaded
 
 
 def _checks():
-    if not _KERNEL:
-        from ..numba_cache import held, kernel_module
-
-        held(_KERNEL).append(kernel_module("lcpbench.model.judge_friction", "friction_checks"))
-    return _KERNEL[0]
+    return kept(_KERNEL, "lcpbench.model.judge_friction", "friction_checks")
 
 
 def friction_verdict(scene: ActuatorScene, chain: Chain, alpha: np.ndarray, x0: float,

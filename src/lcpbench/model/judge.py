@@ -109,6 +109,7 @@ from typing import Any
 
 import numpy as np
 
+from ..numba_cache import kept
 from ..problems.scenes import Chain
 from ..thresholds import (  # the rule's numbers, read by the judge kernel too
     FORCE_TOL_CAP,
@@ -227,17 +228,10 @@ class Judgement:
 
 def _kernel():
     """The judge kernel's module (numba imported, the kernel loaded, at the first call)."""
-    return _KERNEL[0] if _KERNEL else _load_kernel()
+    return kept(_KERNEL, "lcpbench.model.judge_kernel", "judge_answer")
 
 
 _KERNEL: list = []  # the kernel module, once loaded (emptied by numba_cache.use_aot)
-
-
-def _load_kernel():
-    from ..numba_cache import held, kernel_module  # numba at the first judgement, not at import
-
-    held(_KERNEL).append(kernel_module("lcpbench.model.judge_kernel", "judge_answer"))
-    return _KERNEL[0]
 
 
 def _bound_kernel():
@@ -320,7 +314,7 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
         return _judge_in_increments(chain, alpha, forces_upper, forces_lower, tol=tol,
                                     driver_reason=driver_reason,
                                     step_statuses=step_statuses, step_sizes=step_sizes)
-    k = _KERNEL[0] if _KERNEL else _load_kernel()
+    k = _kernel()
     if args is None:
         args = chain_args(chain)
     entry = k.judge_walls if len(args) > 16 else k.judge_answer
@@ -506,7 +500,7 @@ def failed_checks(settled: bool, s: dict, step_statuses: list[str], *,
     rule = _rule_kernel()
     # (the judge kernel's STATS, judge_checks' own: its module is loaded for every
     # judge, where judge_checks' may never be called from Python, nor be ahead of time)
-    stats = (_KERNEL[0] if _KERNEL else _load_kernel()).STATS
+    stats = _kernel().STATS
     numbers = np.array([float(s[name]) for name in stats])
     mask = int(rule.failed(bool(settled), numbers, float(tol)))
     fails: list[str] = []

@@ -22,6 +22,7 @@ import time
 
 import numpy as np
 
+from ..numba_cache import kept
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from ..solvers.judge import requested
@@ -138,7 +139,7 @@ def call_profile_kernel(chain: Chain, *, tol: float, max_outer: int,
     (its outputs, its wall time in s, the name of the back-end's settings). A warm
     ``start`` gives the starting shape and, from its last step's net reactions, the
     lagged reactions."""
-    k = _PROFILE[0] if _PROFILE else _load_profile_kernel()
+    k = kept(_PROFILE, "lcpbench.model.profile_kernel", "solve_profile_chain")
     n = chain.free_nodes.size
     max_iter, request, name = kernel_settings(settings, n)
     start_alpha, mu_up, mu_lo = _NO_START, np.zeros(n), np.zeros(n)
@@ -166,26 +167,12 @@ _PROFILE: list = []  # the profile kernel's module, once loaded
 _NO_START = np.zeros(0)  # (never written)
 
 
-def _load_profile_kernel():
-    from ..numba_cache import held, kernel_module
-
-    held(_PROFILE).append(kernel_module("lcpbench.model.profile_kernel", "solve_profile_chain"))
-    return _PROFILE[0]
-
-
 def solve_kernel():
     """The kernel module (numba imported, the kernel loaded, at the first call)."""
-    return _KERNEL[0] if _KERNEL else _load_kernel()
+    return kept(_KERNEL, "lcpbench.model.compiled_kernel", "solve_chain")
 
 
 _KERNEL: list = []  # the kernel module, once loaded (emptied by numba_cache.use_aot)
-
-
-def _load_kernel():
-    from ..numba_cache import held, kernel_module  # numba at the first solve, not at import
-
-    held(_KERNEL).append(kernel_module("lcpbench.model.compiled_kernel", "solve_chain"))
-    return _KERNEL[0]
 
 
 @functools.lru_cache(maxsize=16)
@@ -276,7 +263,7 @@ def call_kernel(chain: Chain, *, tol: float, max_outer: int, start: DriverStart 
                 settings, args: tuple | None, newton: bool) -> tuple[tuple, float, str]:
     """One call of :func:`compiled_kernel.solve_chain` on the chain: (its outputs, its
     wall time in s, the name of the back-end's settings)."""
-    k = _KERNEL[0] if _KERNEL else _load_kernel()
+    k = solve_kernel()
     n = chain.free_nodes.size
     max_iter, request, name = kernel_settings(settings, n)
     s_alpha, w_u, w_up, w_lo, flags = warm_args(start, n)
@@ -309,7 +296,7 @@ def kernel_output(chain: Chain, code: int, alpha, r_up, r_lo, u, sigma, rec, cou
     kernel's wall time, shared evenly over the steps; ``settings``: the settings'
     name; ``reason``: of a converged answer (the wall-free search's says so); ``tol``:
     the requested one, for the reason of a run out of iterations."""
-    k = _KERNEL[0] if _KERNEL else _load_kernel()
+    k = solve_kernel()
     n = chain.free_nodes.size
     share = elapsed / max(count, 1)
     solved = _SOLVED

@@ -22,6 +22,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..linalg import banded_matvec
+from ..numba_cache import kept
 from ..solvers import spring_newton
 from ..solvers.base import QPWarm, Settings, Status, StepSolution
 from ..solvers.judge import EPS, accept_tol, requested, verdict
@@ -201,11 +202,7 @@ def _compiled_step(step, s: Settings, warm: StepSolution | None) -> StepSolution
     if (step.factor is not None or n == 0 or base.size == 0
             or not (free[-1] - free[0] == n - 1 and base[-1] - base[0] == base.size - 1)):
         return None
-    if not _STEP_KERNEL:
-        from ..numba_cache import held, kernel_module  # numba at the first such step
-
-        held(_STEP_KERNEL).append(kernel_module("lcpbench.model.compiled_kernel", "solve_step"))
-    k = _STEP_KERNEL[0]
+    k = kept(_STEP_KERNEL, "lcpbench.model.compiled_kernel", "solve_step")
     f64 = np.ascontiguousarray
     cu, cl = (f64(c, dtype=float) for c in compliances(step)) if step.elastic else (_NONE, _NONE)
     T = _no_newton(n) if step.geometric is None else f64(step.geometric[:2], dtype=float)

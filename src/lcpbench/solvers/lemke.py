@@ -27,6 +27,8 @@ import numpy as np
 
 from lcpbench.solvers.base import LCPSolution, Status, lcp_residuals
 
+from ..numba_cache import kept
+
 #: Relative tolerance under which two ratios count as tied.
 TIE_RTOL = 1e-9
 #: Largest scaled natural residual accepted as SOLVED.
@@ -70,11 +72,7 @@ _KERNEL: list = []  # the compiled pivots (solvers/lemke_kernel.py), once loaded
 def _kernel():
     """Lemke's compiled pivots (:mod:`lcpbench.solvers.lemke_kernel`), loaded once
     through :func:`lcpbench.numba_cache.kernel_module`."""
-    if not _KERNEL:
-        from ..numba_cache import held, kernel_module
-
-        held(_KERNEL).append(kernel_module("lcpbench.solvers.lemke_kernel", "pivots"))
-    return _KERNEL[0]
+    return kept(_KERNEL, "lcpbench.solvers.lemke_kernel", "pivots")
 
 
 def _lexmin_row(tab: np.ndarray, rows: np.ndarray, a: np.ndarray, n: int,

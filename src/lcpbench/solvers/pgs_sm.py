@@ -16,6 +16,7 @@ import time
 import numpy as np
 
 from ..errors import ProblemError
+from ..numba_cache import kept
 from .base import LCPSolution, Settings, Status
 from .judge import FLOOR_ULPS
 from .pgs import DEFAULT_EPS, check_inputs
@@ -31,11 +32,7 @@ _KERNEL: list = []  # the compiled module, once loaded
 
 
 def _kernel():
-    from ..numba_cache import held, kernel_module
-
-    if not _KERNEL:
-        held(_KERNEL).append(kernel_module("lcpbench.solvers.pgs_sm_kernel", "pgs_sm"))
-    return _KERNEL[0]
+    return kept(_KERNEL, "lcpbench.solvers.pgs_sm_kernel", "pgs_sm")
 
 
 def _count(name, value) -> int:
