@@ -124,7 +124,7 @@ def make_plan(chain: Chain, backend: str, method: str, engine: str, tol: float,
     ``tol`` (rad), ``start`` (one of :data:`STARTS`) and the step ``scaled`` or not.
     The arguments are :func:`lcpbench.solve`'s, checked."""
     if chain.profiled_walls and profile_args(chain) is None:
-        _refuse_untabled(chain)
+        refuse_untabled(chain)
     takes = _kernel(chain, DEFAULT, "globalised", engine)
     judge = judged_in(chain)
     if start == "ramp":
@@ -138,9 +138,10 @@ def make_plan(chain: Chain, backend: str, method: str, engine: str, tol: float,
     return Plan(route, start, escalations, used, takes, judge)
 
 
-def _refuse_untabled(chain: Chain) -> None:
+def refuse_untabled(chain: Chain) -> None:
     """The one ProblemError for a wall profile with no table of cubic pieces over the
-    chain's reach (x in [−ℓ, ℓ]), naming the parameter of the wall that has none."""
+    chain's reach (x in [−ℓ, ℓ]), naming the parameter of the wall that has none (read
+    by every plan, and by :func:`lcpbench.solve_many`'s checks of the batch)."""
     reach = (-float(chain.length), float(chain.length))
     for name, profile in (("wall_profile", chain.upper_profile),
                           ("lower_profile", chain.lower_profile)):

@@ -90,3 +90,21 @@ def test_lines_the_profile_line_does_not_take_are_solved_scene_by_scene():
         assert res.converged, res.reason
         assert res.total_force == 0.0
         assert res.gaps.min() > 0
+
+
+def test_a_batch_with_a_wall_without_a_table_is_refused_as_solve_refuses_it(monkeypatch):
+    """A function profile with no table of cubic pieces (more than MAX_PIECES) cannot be
+    judged: solve_many refuses the batch with solve()'s one clear error, naming the
+    parameter and what to give instead (it said "no driver takes this chain")."""
+    from lcpbench.errors import ProblemError
+    from lcpbench.problems import profile_table
+
+    monkeypatch.setattr(profile_table, "MAX_PIECES", 8)
+    flat = ActuatorScene(theta=150.0, height=3.0, links=LINKS)
+    for field in ("wall_profile", "lower_profile"):  # (a lower profile needs an upper one)
+        walls = ({"wall_profile": stenosis()} if field == "wall_profile" else
+                 {"wall_profile": bump(), "lower_profile": stenosis().mirrored()})
+        walled = ActuatorScene(theta=150.0, height=3.0, links=LINKS, channel=True, **walls)
+        for batch in ([flat, walled], [walled, walled]):
+            with pytest.raises(ProblemError, match=rf"^{field}: .*more than 8 .*from_table"):
+                lcpbench.solve_many(batch, tol=1e-3)

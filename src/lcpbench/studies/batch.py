@@ -34,7 +34,7 @@ from ..model.judge import chain_args
 from ..model.kernel_call import BAIL_REASONS, kernel_args
 from ..model.result import ContactResult
 from ..model.step_solver import make_step_solver
-from ..plan import make_plan
+from ..plan import make_plan, refuse_untabled
 from ..problems.checks import describe
 from ..problems.scenes import ActuatorScene
 from ..problems.sections import SectionedScene, check_scene
@@ -89,8 +89,10 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
     fast = takes(solver, dict(solve_kw, tol=tol)) and predictor in PREDICTORS
     if fast:  # the checks of solve(), once for the batch
         for s in scenes:
-            if type(s) is not ActuatorScene:  # (an actuator scene needs no more check)
-                check_scene(s)
+            if type(s) is not ActuatorScene:  # (an actuator scene needs no more check
+                check_scene(s)  # but its walls' tables, which solve()'s plan checks)
+            elif s.wall_profile is not None or s.lower_profile is not None:
+                refuse_untabled(s.chain())
         settings = solve_kw.get("settings", "default")
         fast_kw = dict(tol=get_settings(settings).driver_tol if tol is None  # as solve()
                        else check_tol(tol), max_outer=solve_kw.get("max_outer", 200),
