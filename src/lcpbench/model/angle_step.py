@@ -51,6 +51,7 @@ QP_GAP = 1e-13
 #: for a chain hanging at wℓ³/EI = 42) and from a few hundred they stall
 #: (benchmarks/heavy_chains.py)
 HEAVY = 40.0
+_KERNEL: list = []  # the SQP kernel's module, once loaded (emptied by numba_cache.use_aot)
 
 
 @dataclass
@@ -165,7 +166,7 @@ def solve_in_angles(chain: Chain, *, tol: float = 1e-10, max_iter: int = 30,
     alpha = _start(chain) if start is None else np.array(start, float)
     lam, mu = _first_multipliers(p, multipliers)
     code, alpha, sizes, energies, lam, mu = kern.solve_sqp(
-        alpha, p.a, p.jl, p.jr, p.k, _contiguous(chain.rest_joint, dtype=float), p.load, p.W,
+        alpha, p.a, p.jl, p.jr, p.k, np.ascontiguousarray(chain.rest_joint, dtype=float), p.load, p.W,
         p.pinned, p.node, p.side, p.limit, lam, mu, QP_GAP * chain.length, float(tol),
         int(max_iter), float(chain.force_scale) * chain.length, float(chain.length), FEASIBLE)
     sizes, energies = sizes.tolist(), energies.tolist()
@@ -181,7 +182,4 @@ def solve_in_angles(chain: Chain, *, tol: float = 1e-10, max_iter: int = 30,
     return AngleOutcome(alpha, True, sizes, energies, "converged", upper, lower,
                         float(lam[0]))
 
-
-_contiguous = np.ascontiguousarray
-_KERNEL: list = []  # the SQP kernel's module, once loaded (emptied by numba_cache.use_aot)
 

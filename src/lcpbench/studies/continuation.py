@@ -135,7 +135,6 @@ PLANE_FIELDS = tuple(f.name for f in fields(ActuatorScene) if f.name not in ("th
 _plane_key = attrgetter(*PLANE_FIELDS)  # a scene's plane: the tuple of those fields
 
 
-
 class _Unhashed:
     """A plane's key with a field that does not hash (by identity in the dict)."""
 
