@@ -31,7 +31,7 @@ _EXPORTS = {
     "sensitivities": "lcpbench.model.sensitivity",
     "design": "lcpbench.studies.design",
     "ActuatorScene": "lcpbench.problems.scenes",
-    "CantileverScene": "lcpbench.problems.scenes",
+    "CantileverScene": "lcpbench.problems.cantilever",
     "Section": "lcpbench.problems.sections",
     "SectionedScene": "lcpbench.problems.sections",
     "anchoring_actuator": "lcpbench.problems.sections",

@@ -29,7 +29,8 @@ from . import numba_cache
 def representative_solves() -> None:
     """The solves whose kernel calls give the signatures (see the module's docstring)."""
     from .api import solve
-    from .problems.scenes import ActuatorScene, CantileverScene
+    from .problems.cantilever import CantileverScene
+    from .problems.scenes import ActuatorScene
     from .problems.sections import SectionedScene
     from .studies.batch import solve_many
 

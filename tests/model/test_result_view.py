@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from lcpbench import ActuatorScene, solve
-from lcpbench.problems.scenes import CantileverScene
+from lcpbench.problems.cantilever import CantileverScene
 
 
 @pytest.fixture(scope="module")

@@ -243,7 +243,7 @@ def test_the_cantilever_follows_its_closed_form(links):
     (the propped beam's slope at the tip stays toward the wall); h/L = 3e-4 keeps the
     chain's geometric nonlinearity ~1e-7 relative, and the chain (the clamp's half-link
     spring 2EI/a) is second-order accurate: a relative error below 1/N² (0.5/N² seen)."""
-    from lcpbench.problems.scenes import CantileverScene
+    from lcpbench.problems.cantilever import CantileverScene
 
     L, EI, h = 30.0, 32.01, 0.01
     q = 20.0 * EI * h / L**4

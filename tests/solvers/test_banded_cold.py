@@ -23,7 +23,7 @@ from lcpbench.errors import ProblemError
 from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.compiled_driver import run as run_driver
 from lcpbench.model.step_solver import solve_step
-from lcpbench.problems.scenes import CantileverScene
+from lcpbench.problems.cantilever import CantileverScene
 from lcpbench.solvers import banded
 from lcpbench.solvers.banded import solve_banded_qp
 from lcpbench.solvers.base import Status

@@ -53,7 +53,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..linalg import solveh_banded  # scipy.linalg at first use (a fast first solve)
-from ..problems.scenes import wall_share
+from ..problems.templates import wall_share
 
 if TYPE_CHECKING:
     import scipy.sparse as sp

@@ -341,7 +341,7 @@ def minimise_energy(
     ----------
     chain_or_scene : Chain or a scene with ``.chain()``
         What to solve (an :class:`~lcpbench.problems.scenes.ActuatorScene`,
-        a :class:`~lcpbench.problems.scenes.CantileverScene`, or their chain).
+        a :class:`~lcpbench.problems.cantilever.CantileverScene`, or their chain).
     ftol : float
         SLSQP's ``ftol`` on the dimensionless energy (energy over EI/ℓ).
     maxiter : int

@@ -18,7 +18,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import ProblemError
-from ..problems.scenes import ActuatorScene, Chain, node_stiffness, reachable, wall_share
+from ..problems.scenes import ActuatorScene, Chain, node_stiffness, reachable
+from ..problems.templates import wall_share
 from ..solvers.base import Status
 from ..thresholds import FINAL_FLIPS, NEWTON_SWITCH
 from .chain import node_positions

@@ -45,8 +45,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import ProblemError
-from ..problems.scenes import ActuatorScene, CantileverScene, wall_share
+from ..problems.cantilever import CantileverScene
+from ..problems.scenes import ActuatorScene
 from ..problems.sections import SectionedScene
+from ..problems.templates import wall_share
 from ..thresholds import NODE_SHARE
 from .judge import force_tol
 from .sensitivity_profile import OF_PROFILE, profile_derivatives

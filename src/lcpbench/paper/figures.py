@@ -258,7 +258,7 @@ def fig8_forces(plan: Plan, out: Output) -> dict:
 class PaperLikeCantilever(CantileverScene):
     """The cantilever discretised as we read Fig. 9(b): what the paper most likely ran.
 
-    Two changes from :class:`~lcpbench.problems.scenes.CantileverScene`: the
+    Two changes from :class:`~lcpbench.problems.cantilever.CantileverScene`: the
     clamp spring is EI/a (a joint like any other) instead of 2EI/a, and the
     load ω = Fℓ/N of Fig. 9(b) acts at each of the nodes 2..N+1 instead of
     at the link centres. Loads enter the chain only through the node heights,

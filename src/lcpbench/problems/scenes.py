@@ -6,14 +6,13 @@ nothing of solvers. Every scene validates its inputs and raises
 :class:`~lcpbench.errors.ProblemError` naming the parameter and the allowed
 range.
 
-Two scenes:
-
-* :class:`ActuatorScene` — the paper's bending section: pinned–pinned, the
-  right pin sliding along x, unconstrained shape a circular arc of angle θ
-  (eq. 2), pressed by a wall at ``y = +h`` (or a channel of walls at ±h),
-  self-weight acting away from the wall (the direction of the reaction).
-* :class:`CantileverScene` — Sec. III-G: clamped–free, a uniform load per
-  length pushing the beam toward a wall at ``y = +h``.
+Here :class:`ActuatorScene`, the paper's bending section: pinned–pinned, the
+right pin sliding along x, unconstrained shape a circular arc of angle θ (eq. 2),
+pressed by a wall at ``y = +h`` (or a channel of walls at ±h), self-weight acting
+away from the wall (the direction of the reaction); the :class:`Chain` every scene
+builds; and the field checks the scenes share. Sec. III-G's clamped–free beam is
+:class:`lcpbench.problems.cantilever.CantileverScene`; rows of sections are in
+:mod:`lcpbench.problems.sections`.
 """
 
 from __future__ import annotations
@@ -32,7 +31,6 @@ from .templates import (
     full,
     pinned_frame,
     uniform_load,
-    wall_share,
     within_reach,
 )
 from .walls import WallProfile
@@ -61,7 +59,7 @@ LOAD_RANGE = (0.0, 1e6)  # N/mm (the cantilever's distributed load)
 _NOT_YET = object()  # a value :meth:`Chain.derived` has not kept yet
 
 
-def _links(value, *, auto: bool = True) -> int | str:
+def links_value(value, *, auto: bool = True) -> int | str:
     """N: an integer in [MIN_LINKS, MAX_LINKS], or 'auto' when ``auto``."""
     if auto and isinstance(value, str) and value == "auto":
         return value
@@ -69,7 +67,9 @@ def _links(value, *, auto: bool = True) -> int | str:
                         alternative="'auto'" if auto else "")
 
 
-def _in(name: str, value, bounds: tuple[float, float], unit: str) -> float:
+def in_range(name: str, value, bounds: tuple[float, float], unit: str) -> float:
+    """``value`` as a float in ``bounds`` (inclusive, in ``unit``), or ProblemError naming
+    ``name``."""
     return check_number(name, value, low=bounds[0], high=bounds[1], unit=unit)
 
 
@@ -349,11 +349,11 @@ class ActuatorScene(FrictionOptions):
         theta = check_number("theta", self.theta, low=THETA_RANGE[0], high=THETA_RANGE[1],
                              low_open=True, high_open=True, unit="degrees")
         object.__setattr__(self, "theta", theta)
-        object.__setattr__(self, "height", _in("height", self.height, HEIGHT_RANGE, "mm"))
-        object.__setattr__(self, "links", _links(self.links))
-        object.__setattr__(self, "length", _in("length", self.length, LENGTH_RANGE, "mm"))
-        object.__setattr__(self, "EI", _in("EI", self.EI, EI_RANGE, "N·mm²"))
-        object.__setattr__(self, "weight", _in("weight", self.weight, WEIGHT_RANGE, "N/mm"))
+        object.__setattr__(self, "height", in_range("height", self.height, HEIGHT_RANGE, "mm"))
+        object.__setattr__(self, "links", links_value(self.links))
+        object.__setattr__(self, "length", in_range("length", self.length, LENGTH_RANGE, "mm"))
+        object.__setattr__(self, "EI", in_range("EI", self.EI, EI_RANGE, "N·mm²"))
+        object.__setattr__(self, "weight", in_range("weight", self.weight, WEIGHT_RANGE, "N/mm"))
         object.__setattr__(self, "channel", check_flag("channel", self.channel))
 
     def _check_friction(self) -> None:
@@ -512,84 +512,3 @@ def new_chain(values: dict, kept: dict | None = None) -> Chain:
     if kept:
         chain.__dict__.update(kept)
     return chain
-
-
-@dataclass(frozen=True)
-class CantileverScene:
-    """Sec. III-G: a clamped–free beam, uniform load toward a wall at distance h.
-
-    Parameters
-    ----------
-    load : float
-        Distributed load F (N/mm) pushing the beam toward the wall, in [0, 1e6].
-    height : float
-        Distance h from the undeformed beam to the wall (mm), in [1e-6, 1e6].
-    links : int
-        As for :class:`ActuatorScene`, but not "auto".
-    length, EI, wall_stiffness :
-        As for :class:`ActuatorScene`.
-
-    Notes
-    -----
-    The clamp is a torsional spring of stiffness 2EI/a holding link 1 toward
-    the horizontal: it stands for the half-link [0, a/2] between the clamp and
-    the first link's centre, which makes the chain second-order accurate (the
-    paper does not say which stiffness it used).
-    """
-
-    load: float = 0.001
-    height: float = 1.0
-    links: int = DEFAULT_LINKS
-    length: float = DEFAULT_LENGTH
-    EI: float = DEFAULT_EI
-    wall_stiffness: float = math.inf
-
-    def __post_init__(self):
-        object.__setattr__(self, "wall_stiffness", wall_stiffness(self.wall_stiffness))
-        object.__setattr__(self, "load", _in("load", self.load, LOAD_RANGE, "N/mm"))
-        object.__setattr__(self, "height", _in("height", self.height, HEIGHT_RANGE, "mm"))
-        object.__setattr__(self, "links", _links(self.links, auto=False))
-        object.__setattr__(self, "length", _in("length", self.length, LENGTH_RANGE, "mm"))
-        object.__setattr__(self, "EI", _in("EI", self.EI, EI_RANGE, "N·mm²"))
-
-    def chain(self) -> Chain:
-        n = int(self.links)
-        a = self.length / n
-        joints = np.column_stack([np.arange(-1, n - 1), np.arange(n)])
-        stiffness = np.full(n, self.EI / a)
-        stiffness[0] = 2 * self.EI / a
-        free = np.arange(1, n + 1)  # nodes 2..N+1 (the tip is free)
-        can = reachable(free * a, self.length, self.height, "clamped-free")
-        return Chain(
-            links=n,
-            link_length=a,
-            rest_alpha=np.zeros(n),
-            joint_stiffness=stiffness,
-            joint_links=joints,
-            rest_joint=np.zeros(n),
-            link_load=np.full(n, self.load * a),
-            free_nodes=free,
-            upper=np.where(can, self.height, np.inf),
-            lower=np.full(n, -np.inf),
-            force_scale=self.EI / self.length**2,
-            length=self.length,
-            wall=self.height,
-            upper_stiffness=node_stiffness(self.wall_stiffness, can, wall_share(n, a, free)),
-            consecutive=True,
-        )
-
-    # -- Euler–Bernoulli theory, eqs. (33)–(37) ------------------------------
-    def theory_force(self) -> float:
-        """Tip reaction R_t from linear beam theory (N), eqs. (34)–(37); 0 if no contact."""
-        F, h, ell, EI = self.load, self.height, self.length, self.EI
-        f_c = 8 * EI * h / ell**4  # (34)
-        f_r = F - f_c  # (35)
-        if f_r <= 0:
-            return 0.0
-        dy_r = f_r * ell**4 / (8 * EI)  # (36)
-        return 3 * EI * dy_r / ell**3  # (37)
-
-    def theory_deflection(self, x: np.ndarray) -> np.ndarray:
-        """Unconstrained deflection Δy(x) = F x²(x² − 4ℓx + 6ℓ²)/(24 EI), eq. (33)."""
-        F, ell, EI = self.load, self.length, self.EI
-        return F * x**2 * (x**2 - 4 * ell * x + 6 * ell**2) / (24 * EI)

@@ -46,6 +46,7 @@ from typing import cast
 import numpy as np
 
 from ..errors import ProblemError
+from .cantilever import CantileverScene
 from .checks import check_choice, check_flag, check_number, describe
 from .friction import FrictionOptions
 from .scenes import (
@@ -60,7 +61,6 @@ from .scenes import (
     MIN_LINKS,
     WEIGHT_RANGE,
     ActuatorScene,
-    CantileverScene,
     Chain,
     new_chain,
     paper_options,

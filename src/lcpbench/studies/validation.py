@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from ..api import solve
-from ..problems.scenes import CantileverScene
+from ..problems.cantilever import CantileverScene
 
 
 def cantilever_validation(links: int = 140, *, tol: float = 1e-10, **scene) -> dict:
