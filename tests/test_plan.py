@@ -127,7 +127,8 @@ def test_every_planned_route_and_start_is_documented():
 
 
 def test_every_escalation_has_a_predicate_and_a_function():
-    assert list(ESCALATIONS) == ["in_increments", "tightened", "escaped", "ramped"]
+    assert list(ESCALATIONS) == ["in_increments", "tightened", "escaped", "from_neighbour",
+                                 "ramped"]
     for name, row in ESCALATIONS.items():
         assert callable(row.planned) and callable(row.applies) and callable(row.run), name
 

@@ -18,6 +18,9 @@ In the table's order:
 - ``escaped``: restarted downhill where it is a saddle (the check "stability" alone),
   then, where a restart is certified, the loading path as a second start; the distinct
   stable states these starts reach are the result's ``states``;
+- ``from_neighbour``: in :func:`lcpbench.solve_many` only, a row of sections solved by
+  SQP steps in the link angles from a certified answer of a neighbouring row of the
+  same batch (:attr:`Context.neighbour`, chosen by :mod:`lcpbench.studies.batch`);
 - ``ramped``: solved again along the loading path (the bend angles from zero).
 
 The built-in back-end only, but ``escaped`` (a saddle is a fixed point of any exact
@@ -35,12 +38,14 @@ from typing import Any
 import numpy as np
 
 from .model import large_n
+from .model.angle_step import in_reach
 from .model.chain import energy
 from .model.compiled import drive, heavy
 from .model.finish import finish
+from .model.heavy_driver import run_heavy
 from .model.judge import Judgement, force_tol
 from .model.outer import DriverOutput, DriverStart
-from .model.ramp import follow_load
+from .model.ramp import first_multipliers, follow_load
 from .model.result import ContactResult, ReachedState, Retry
 from .problems.scenes import Chain
 from .solvers.registry import DEFAULT
@@ -68,6 +73,9 @@ class Context:
     method: str
     why: str | None = None
     pressure_limit: float | None = None
+    #: :func:`lcpbench.solve_many`: a certified answer of a neighbouring row of the batch
+    #: (:func:`from_neighbour`); None in :func:`lcpbench.solve`
+    neighbour: ContactResult | None = None
 
 
 @dataclass(frozen=True)
@@ -79,6 +87,9 @@ class Escalation:
     #: (result, why): ``res`` itself, or a new result whose ``retries`` are those of the
     #: solves inside the escalation (a restart's continuation)
     run: Callable[[ContactResult, Context], tuple[ContactResult, str]]
+    #: planned only where the solve has a neighbour's answer (:attr:`Context.neighbour`:
+    #: :func:`lcpbench.solve_many`'s rows of sections)
+    needs_neighbour: bool = False
 
 
 def escalate(res: ContactResult, ctx: Context, names) -> ContactResult:
@@ -359,14 +370,57 @@ def ramped(res: ContactResult, ctx: Context) -> tuple[ContactResult, str]:
     return res, told
 
 
+# -- from_neighbour -------------------------------------------------------------
+def _angles_planned(chain: Chain, backend: str, method: str, tol: float) -> bool:
+    return _own_globalised(chain, backend, method, tol) and in_reach(chain)
+
+
+def _neighbour_given(res: ContactResult, ctx: Context) -> bool:
+    return ctx.neighbour is not None and res.judgement is not None
+
+
+def from_neighbour(res: ContactResult, ctx: Context) -> tuple[ContactResult, str]:
+    """``res`` solved again by SQP steps in the link angles
+    (:func:`lcpbench.model.heavy_driver.run_heavy`, regular where a link is near the
+    vertical, where height steps stall) from the certified answer of a neighbouring row
+    of the batch (:attr:`Context.neighbour`: the same row but for its bend angles and h,
+    close to it in both) and its wall reactions as the first multipliers; judged as every
+    answer. A continuation from the neighbour's state: :func:`ramped` grows the bend
+    angles from zero instead, so the two can reach different states where the scene has
+    several; results/row-neighbours.md measures how often they do. Where the SQP does
+    not converge or its answer is refused, ``res``."""
+    t0 = time.perf_counter()
+    nb = ctx.neighbour
+    assert nb is not None  # (_neighbour_given)
+    lower = np.zeros_like(nb.forces) if nb.forces_lower is None else nb.forces_lower
+    start = DriverStart(np.asarray(nb.alpha, float), None,
+                        first_multipliers(nb.forces, lower, ctx.tol, ctx.chain.force_scale))
+    out = run_heavy(ctx.chain, start, ctx.tol, ctx.max_outer, why=_NEIGHBOUR)
+    elapsed = res.time_s + time.perf_counter() - t0
+    if out is None:
+        res.time_s = elapsed
+        return res, "SQP steps in the link angles from a neighbouring row did not converge"
+    again = _restart_judged(res, ctx, out, f"numpy (SQP steps in the link angles: "
+                            f"{_NEIGHBOUR})", elapsed)
+    if again.converged:
+        return again, f"the cold start was refused ({res.reason}); {_NEIGHBOUR}"
+    res.time_s = again.time_s
+    return res, f"{_NEIGHBOUR}: refused ({again.reason})"
+
+
+_NEIGHBOUR = "started from the answer of a neighbouring row of the batch"
+
+
 #: The escalations, in the order they run: name → (planned, applies, run).
 ESCALATIONS: dict[str, Escalation] = {
     "in_increments": Escalation(_increments_planned, _increments_apply, in_increments),
     "tightened": Escalation(_own_globalised, _failed_only("force error bound"), tightened),
     "escaped": Escalation(_not_undamped, _failed_only("stability"), escaped),
+    "from_neighbour": Escalation(_angles_planned, _neighbour_given, from_neighbour,
+                                 needs_neighbour=True),
     "ramped": Escalation(_own_globalised, _judged_at_all, ramped),
 }
 
 __all__ = ["ESCALATIONS", "TIGHTEN_STEPS", "TIGHTER", "Context", "Escalation",
-           "escalate", "escaped", "in_increments", "ramped", "reached_states", "same_state",
+           "escalate", "escaped", "from_neighbour", "in_increments", "ramped", "reached_states", "same_state",
            "tightened"]

@@ -117,12 +117,14 @@ class Plan:
 
 
 def make_plan(chain: Chain, backend: str, method: str, engine: str, tol: float,
-              start: str = "cold", *, scaled: bool = True) -> Plan:
+              start: str = "cold", *, scaled: bool = True, neighbour: bool = False) -> Plan:
     """The plan of a solve of ``chain`` (its scene's features: walls, N, load) with the
     back-end ``backend`` (a registry name), ``method`` ("globalised", "newton" or
     "undamped"), ``engine`` ("auto" or "compiled"), the driver tolerance
     ``tol`` (rad), ``start`` (one of :data:`STARTS`) and the step ``scaled`` or not.
-    The arguments are :func:`lcpbench.solve`'s, checked."""
+    The arguments are :func:`lcpbench.solve`'s, checked; ``neighbour``: the solve has a
+    neighbouring row's answer to escalate from (:func:`lcpbench.solve_many`'s rows of
+    sections), which plans the escalations that need one."""
     if chain.profiled_walls and profile_args(chain) is None:
         refuse_untabled(chain)
     takes = _kernel(chain, DEFAULT, "globalised", engine)
@@ -132,7 +134,8 @@ def make_plan(chain: Chain, backend: str, method: str, engine: str, tol: float,
         return Plan("load path", "ramp", (), cold.engine, takes, judge, fallback=cold)
     route = _route(chain, backend, method, engine, start, scaled)
     escalations = tuple(name for name, e in ESCALATIONS.items()
-                        if e.planned(chain, backend, method, tol))
+                        if (neighbour or not e.needs_neighbour)
+                        and e.planned(chain, backend, method, tol))
     used = ENGINE[route] or ("compiled" if _kernel(chain, backend, method, engine)
                              else "numpy")
     return Plan(route, start, escalations, used, takes, judge)

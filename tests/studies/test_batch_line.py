@@ -266,9 +266,10 @@ def test_rows_of_sections_run_in_one_call_and_a_row_it_stops_on_as_solve_runs_it
     """Rows of two sections (θ, −θ), each cold and alone in its plane: one call of the line
     kernel for all; the rows past ~157° on which the solve kernel stops (its own step
     refused at the free arc) go on from that stop as lcpbench.solve goes on from it,
-    along the loading path, without a second cold solve: the same answer, bit for bit.
-    Every answer is an equilibrium (tests/energy_oracle.py: stationary, feasible,
-    complementary)."""
+    without a second cold solve: the first along the loading path, the same answer bit
+    for bit; the second, which has the first as its neighbour (5° and 0.7 mm away), by SQP
+    steps from the first's answer (tests/studies/test_batch_neighbour.py). Every answer
+    is an equilibrium (tests/energy_oracle.py: stationary, feasible, complementary)."""
     from lcpbench import SectionedScene
 
     rows = [SectionedScene(sections=[(t, 15.0), (-t, 15.0)], height=h, links=40)
@@ -279,7 +280,8 @@ def test_rows_of_sections_run_in_one_call_and_a_row_it_stops_on_as_solve_runs_it
     for res in got:
         assert res.converged
         assert_solved(res)
-    for res in got[2:4]:  # the kernel stopped cold: the plan's escalation, as in solve()
+    assert [r.name for r in got[3].retries] == ["from_neighbour"]
+    for res in got[2:3]:  # the kernel stopped cold: the plan's escalation, as in solve()
         assert "followed the load from zero" in res.retried("ramped")
         assert res.route == "line kernel"
         one = lcpbench.solve(res.scene, tol=1e-3)

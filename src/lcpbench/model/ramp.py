@@ -185,16 +185,21 @@ _WHY = "a step of the loading path with a link near the vertical"
 def _multipliers(out: DriverOutput, tol: float, force_scale: float) -> tuple:
     """The first multipliers of the next step's SQP (:class:`DriverStart`'s
     ``multipliers``): the SQP's own (λ, R upper, R lower) where it found ``out``; after
-    height steps their reactions on the walls in contact in the judge's sense
+    height steps, :func:`first_multipliers` of their reactions."""
+    if out.closure_multiplier is not None:
+        return out.closure_multiplier, out.forces_upper, out.forces_lower
+    return first_multipliers(out.forces_upper, out.forces_lower, tol, force_scale)
+
+
+def first_multipliers(up: np.ndarray, lo: np.ndarray, tol: float, force_scale: float) -> tuple:
+    """An SQP's first multipliers (λ, R upper, R lower) from an answer of height steps:
+    its reactions on the walls in contact in the judge's sense
     (R_i > NODE_SHARE·τ·F₀, F₀ = max(F_upper, F_lower, EI/ℓ² = ``force_scale``): the
     threshold of its check "contact", :func:`lcpbench.model.judge_checks.units`), λ = 0. The rest of the height steps'
     reactions, tol-accurate, are small but positive on many walls (67 of 68 below
     1e-10 N on the (168.6°, −168.6°) row, where the SQP's answer presses on 1): handed
     on, they would start the QP on walls it then drops one by one; none handed on, the
     first QP builds its set from empty (34 active-set changes there, 1.6 ms a call)."""
-    if out.closure_multiplier is not None:
-        return out.closure_multiplier, out.forces_upper, out.forces_lower
-    up, lo = out.forces_upper, out.forces_lower
     F0 = max(abs(float(np.sum(up))), abs(float(np.sum(lo))), float(force_scale))
     line = NODE_SHARE * force_tol(tol) * F0
     return 0.0, np.where(up > line, up, 0.0), np.where(lo > line, lo, 0.0)
