@@ -89,7 +89,8 @@ def batches() -> list[tuple[str, object]]:
                     lambda k=k, n=n, ch=ch: random_rows(400 + k, n, ch, 100, 130, 180,
                                                         (1.5, 3.5), 30)))
     for k, ch in enumerate((False, False, True)):
-        out.append((f"(θ, −θ), θ 60–200°, h 1–6 mm, {'channel' if ch else 'one wall'}",
+        out.append((f"(θ, −θ), θ 60–200°, h 1–6 mm, {'channel' if ch else 'one wall'}, "
+                    f"seed {500 + k}",
                     lambda k=k, ch=ch: signed_pairs(500 + k, 60, ch)))
     out.append(("2–4 sections of 30 mm as saddle_audit.py's", lambda: saddle_rows(600, 150)))
     return out

@@ -17,7 +17,7 @@ from energy_oracle import assert_solved
 import lcpbench
 from lcpbench import SectionedScene
 from lcpbench.escalations import same_state
-from lcpbench.studies.batch import NEIGHBOUR_DEG, NEIGHBOUR_MM, neighbouring_row
+from lcpbench.studies.batch import NEIGHBOUR_DEG, NEIGHBOUR_MM, neighbouring_row, row_shape
 
 
 def _row(theta: float, height: float, links: int = 140) -> SectionedScene:
@@ -56,9 +56,9 @@ def test_a_row_too_far_gets_no_neighbour():
     near, far_theta, far_h = (_row(150.0, 2.0), _row(150.0 + 1.5 * NEIGHBOUR_DEG, 2.0),
                               _row(150.0, 2.0 + 1.5 * NEIGHBOUR_MM))
     solved = lcpbench.solve(near)
-    assert neighbouring_row(_row(150.0 + 0.5 * NEIGHBOUR_DEG, 2.0), [(near, solved)]) is solved
-    assert neighbouring_row(far_theta, [(near, solved)]) is None
-    assert neighbouring_row(far_h, [(near, solved)]) is None
+    assert neighbouring_row(_row(150.0 + 0.5 * NEIGHBOUR_DEG, 2.0), [(row_shape(near), near, solved)]) is solved
+    assert neighbouring_row(far_theta, [(row_shape(near), near, solved)]) is None
+    assert neighbouring_row(far_h, [(row_shape(near), near, solved)]) is None
     # another sign of a bend angle, or another section count, is another row
     flipped = SectionedScene(sections=[(-150.0, 15.0), (150.0, 15.0)], height=2.0, links=140)
-    assert neighbouring_row(flipped, [(near, solved)]) is None
+    assert neighbouring_row(flipped, [(row_shape(near), near, solved)]) is None

@@ -163,7 +163,8 @@ def _rows_of_sections(scenes: list, out: list, kw: dict, fast_kw: dict) -> set[i
     got = run_line([scenes[i] for i in rows], plane=list(range(len(rows))), **fast_kw)
     if got is None:
         return set()
-    certified = [(scenes[i], res) for i, res in zip(rows, got, strict=True)
+    certified = [(row_shape(scenes[i]), scenes[i], res)
+                 for i, res in zip(rows, got, strict=True)
                  if not isinstance(res, Stopped) and res.converged]
     for i, res in zip(rows, got, strict=True):
         if isinstance(res, Stopped):
@@ -173,31 +174,33 @@ def _rows_of_sections(scenes: list, out: list, kw: dict, fast_kw: dict) -> set[i
             res = _retried(res, scenes[i], neighbour=neighbouring_row(scenes[i], certified),
                            **fast_kw)
             if res.converged:
-                certified.append((scenes[i], res))
+                certified.append((row_shape(scenes[i]), scenes[i], res))
         out[i] = res
     return set(rows)
 
 
 def neighbouring_row(row: SectionedScene, certified: list) -> ContactResult | None:
-    """The answer of the nearest row of ``certified`` ((scene, result) pairs, in the
-    order they were certified) that is ``row`` but for its sections' bend angles and its
-    h: each section's θ within :data:`NEIGHBOUR_DEG` of ``row``'s, of the same sign, and
-    h within :data:`NEIGHBOUR_MM`; nearest by the larger of the two distances, each over
-    its limit (the first certified of equals). None where no row is that close."""
+    """The answer of the nearest row of ``certified`` ((:func:`row_shape`, scene, result)
+    triples, in the order they were certified) that is ``row`` but for its sections'
+    bend angles and its h: each section's θ within :data:`NEIGHBOUR_DEG` of ``row``'s, of
+    the same sign, and h within :data:`NEIGHBOUR_MM`; nearest by the larger of the two
+    distances, each over its limit (the first certified of equals). None where no row is
+    that close."""
     best, far = None, 1.0
-    shape = _row_shape(row)
-    for scene, res in certified:
-        if _row_shape(scene) != shape:
+    shape = row_shape(row)
+    thetas = [a.theta for a in row.sections]
+    for other, scene, res in certified:
+        if abs(row.height - scene.height) > NEIGHBOUR_MM or other != shape:
             continue
-        d = max(max(abs(a.theta - b.theta) for a, b in zip(row.sections, scene.sections,
-                                                           strict=True)) / NEIGHBOUR_DEG,
-                abs(row.height - scene.height) / NEIGHBOUR_MM)
-        if d <= far and (best is None or d < far):
+        d = abs(row.height - scene.height) / NEIGHBOUR_MM
+        for t, a in zip(thetas, scene.sections, strict=True):
+            d = max(d, abs(t - a.theta) / NEIGHBOUR_DEG)
+        if d < far or (d == far and best is None):
             best, far = res, d
     return best
 
 
-def _row_shape(row: SectionedScene) -> tuple:
+def row_shape(row: SectionedScene) -> tuple:
     """What two rows of sections must share to be neighbours: everything but the
     sections' bend angles (their signs kept) and the wall height."""
     return (row.links, row.channel, row.length, row.gravity, row.friction, row.left_end,
@@ -281,4 +284,4 @@ def _planes(scenes: list) -> list[list[int]]:
     return list(planes.values())
 
 
-__all__ = ["NEIGHBOUR_DEG", "NEIGHBOUR_MM", "continuation_order", "neighbouring_row", "solve_many"]
+__all__ = ["NEIGHBOUR_DEG", "NEIGHBOUR_MM", "continuation_order", "neighbouring_row", "row_shape", "solve_many"]
