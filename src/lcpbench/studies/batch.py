@@ -25,7 +25,6 @@ kernel per scene, the checks once per batch); otherwise each scene is one
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Iterable
 from operator import attrgetter
@@ -115,8 +114,9 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
         line_scenes = [scenes[i] for i in line]
         if fast and all(isinstance(s, ActuatorScene) for s in line_scenes):
             planes = []
-            kin, where = _kin(line_scenes)
-            for group in _kernel_groups(line_scenes, _planes(line_scenes)):
+            by_plane = _planes(line_scenes)
+            kin, where = _kin(line_scenes, by_plane)
+            for group in _kernel_groups(line_scenes, by_plane):
                 # the planes of a group in one kernel call where it takes them all
                 rows = [j for plane in group for j in plane]
                 got = None if len(group) < 2 else run_line(
@@ -237,28 +237,30 @@ KIN_SCALES = (30.0, 1.0, 2.0)
 KIN_THETA_MAX = 180.0
 
 
-def _kin(scenes: list) -> tuple[np.ndarray, np.ndarray]:
+def _kin(scenes: list, planes: list[list[int]]) -> tuple[np.ndarray, np.ndarray]:
     """Each scene's kin (an index from 0; −1: none) and its coordinates (θ, h, log10 k
     over :data:`KIN_SCALES`), for the line kernel's rule 5
     (:func:`lcpbench.model.batch_kernel._predict`): a scene none of whose plane's answers
     is on its line in θ or at its θ starts from the nearest answer of its kin (its own
-    walls solved; only the start is shared). None: a scene in a channel bent past
+    walls solved; only the start is shared). ``planes``: :func:`_planes` of ``scenes``
+    (a plane lies in one kin). None: a scene in a channel bent past
     :data:`KIN_THETA_MAX` (it may have several stable states: a neighbour's answer can
     start it into another than its cold start reaches), and every scene where a field
     does not hash."""
     kins: dict = {}
     key = attrgetter(*KIN_FIELDS)
     kin = np.full(len(scenes), -1, np.int64)
-    where = np.zeros((len(scenes), len(KIN_SCALES)))
     try:
-        for j, s in enumerate(scenes):
-            if s.channel and s.theta > KIN_THETA_MAX:
-                continue
-            kin[j] = kins.setdefault(key(s), len(kins))
-            k = min(float(s.wall_stiffness), STIFFNESS_RANGE[1])
-            where[j] = (s.theta, s.height, math.log10(k))
+        for plane in planes:
+            kin[plane] = kins.setdefault(key(scenes[plane[0]]), len(kins))
     except TypeError:
         kin[:] = -1
+    theta = np.array([s.theta for s in scenes], dtype=float)
+    height = np.array([s.height for s in scenes], dtype=float)
+    stiffness = np.array([s.wall_stiffness for s in scenes], dtype=float)
+    kin[np.array([s.channel for s in scenes], dtype=bool) & (theta > KIN_THETA_MAX)] = -1
+    where = np.column_stack((theta, height,
+                             np.log10(np.minimum(stiffness, STIFFNESS_RANGE[1]))))
     return kin, where / KIN_SCALES
 
 
