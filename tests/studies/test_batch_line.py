@@ -125,8 +125,8 @@ def test_the_kernels_predictor_chooses_as_solved(seed, predictor):
     fakes = [_fake(bool(o), bool(t), a) for o, t, a in zip(ok, touch, alphas)]
     for s in range(m):
         want = solved.predict(scenes[s])
-        start, base = k._predict(s, theta, height, plane, ok, touch, alphas, POINTS[predictor],
-                                 predictor == "adaptive")
+        start, base = k._predict(s, theta, height, plane, np.full(m, -1), np.zeros((m, 0)),
+                                 ok, touch, alphas, POINTS[predictor], predictor == "adaptive")
         if want is None:
             assert base == -1 and start.size == 0
         else:
@@ -232,12 +232,13 @@ def test_failed_warm_starts_are_redone_cold_as_scene_by_scene():
             assert_solved(g, stationarity=1e-5)  # (tests/energy_oracle.py)
 
 
-def test_planes_of_elastic_walls_run_in_one_call_each_from_its_own_answers(monkeypatch):
-    """Two lines in θ at each of two wall stiffnesses (two planes of one group): one call
-    of the line kernel for both, each answer an equilibrium on its elastic walls
-    (tests/energy_oracle.py), and each plane's answers those of a call for that plane
-    alone (route against route, kept because only it shows that no scene was predicted
-    from another plane's answers: the oracle accepts any start)."""
+def test_planes_of_elastic_walls_run_in_one_call_each_on_its_own_walls(monkeypatch):
+    """Two lines in θ at each of two wall stiffnesses (two planes of one kin): one call
+    of the line kernel for both, each answer an equilibrium on its own elastic walls
+    (tests/energy_oracle.py: the Winkler springs of its own k; only a start is shared),
+    and only the batch's first scene starts cold: the first scene of the other plane,
+    which no answer of its own plane predicts, starts from the nearest answer of its
+    kin (studies.batch._kin, the kernel's rule 5)."""
     from lcpbench.studies import batch_line
 
     planes = [[ActuatorScene(theta=t, height=h, links=40, wall_stiffness=k)
@@ -253,13 +254,7 @@ def test_planes_of_elastic_walls_run_in_one_call_each_from_its_own_answers(monke
     for res in got:
         assert _from_line(res) and res.converged
         assert_solved(res)
-    by_scene = {id(r.scene): r for r in got}
-    for k in (5.0, 500.0):
-        alone = [s for s in scenes if s.wall_stiffness == k]
-        for w in lcpbench.solve_many(alone, tol=1e-6):
-            g = by_scene[id(w.scene)]
-            assert g.extra["continuation"] == w.extra["continuation"]
-            np.testing.assert_array_equal(g.forces, w.forces)
+    assert [r.extra["continuation"] for r in got].count("cold") == 1
 
 
 def test_rows_of_sections_run_in_one_call_and_a_row_it_stops_on_as_solve_runs_it():

@@ -4,12 +4,20 @@
 compiled call, for a line of actuator scenes of one plane (the same chain but for θ
 and h; flat walls, rigid or elastic, one wall or a channel, no heavy load), or of several
 planes that
-share the chain's layout (each scene predicted from its own plane). For each scene, in order:
+share the chain's layout (each scene predicted from its own plane, and where its plane
+has no answer to predict it from, from the nearest answer of its kin). For each scene,
+in order:
 
 1. the start, as :class:`lcpbench.studies.continuation.Solved` chooses it (its
    rules 1-4 and the ``adaptive`` choice of degree, :func:`_predict`); the
    Lagrange weights are the same products in the same order, the weighted sums
    are loops (numpy's are BLAS products: the prediction agrees to round-off);
+   where those rules find no answer (none of its plane on its line in θ or at its
+   θ), rule 5: the nearest accepted answer of its kin (``kin``, ``where``: the
+   scenes the same but for θ, h and the walls' stiffness, with their coordinates;
+   :func:`lcpbench.studies.batch._kin`), as it is, its last step's contact set the
+   warm set; each scene is solved on its own walls (its own row of ``cu``, ``cl``):
+   only the start is shared;
 2. the wall-free search of :func:`lcpbench.model.wall_free.solve_without_contact`
    (its tests; the first free step is the compiled step with no walls,
    :func:`~lcpbench.model.compiled_kernel.contact_step`, the numpy one's twin);
@@ -298,9 +306,11 @@ def _best_degree(ps, m):
 
 
 @njit(cache=True)
-def _predict(s, theta, height, plane, ok, touch, alphas, most, adaptive):
-    """Solved.predict for scene ``s`` (from the answers of its plane): (start α, index of
-    the answer whose last step warm-starts it); index −1: a cold start."""
+def _predict(s, theta, height, plane, kin, where, ok, touch, alphas, most, adaptive):
+    """Solved.predict for scene ``s`` (from the answers of its plane, its rules 1-4), and
+    where they find none (no answer of its plane on its line in θ or at its θ), 5. the
+    nearest answer of its kin as it is (:func:`_nearest_kin`): (start α, index of the
+    answer whose last step warm-starts it); index −1: a cold start."""
     links = alphas.shape[1]
     none = np.empty(0)
     if most == 0:
@@ -337,13 +347,36 @@ def _predict(s, theta, height, plane, ok, touch, alphas, most, adaptive):
         return (_best_degree(ps, nl) if adaptive else ps[nl - 1]).copy(), li[0]
     if na:  # 4.
         return alphas[ai[0]].copy(), ai[0]
+    i = _nearest_kin(s, kin, where, ok)  # 5.
+    if i >= 0:
+        return alphas[i].copy(), i
     return none, -1
+
+
+@njit(cache=True)
+def _nearest_kin(s, kin, where, ok):
+    """Rule 5 of :func:`_predict`: the accepted answer before ``s`` of its kin (``kin``:
+    each row's, −1 none; scenes the same but for θ, h and the walls' stiffness) nearest
+    to it in the coordinates ``where`` (a row each, Euclidean), the first of equals; −1
+    where the scene has no kin or none is solved."""
+    if kin[s] < 0:
+        return -1
+    best, at = np.inf, -1
+    for i in range(s):
+        if not ok[i] or kin[i] != kin[s]:
+            continue
+        d = 0.0
+        for c in range(where.shape[1]):
+            d += (where[i, c] - where[s, c]) ** 2
+        if d < best:
+            best, at = d, i
+    return at
 
 
 @njit(cache=True)
 def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, cu, cl, L, F,
                wall, channel,
-               theta, height, plane, tol, max_outer, max_iter, request, most, adaptive,
+               theta, height, plane, kin, where, tol, max_outer, max_iter, request, most, adaptive,
                o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res, o_off, o_count,
                j_code, j_stats, j_fu, j_fl, j_tres, conv, kept, failed, base):
     """Every scene of the line in order; returns ``(code, records)``: code −1 all done,
@@ -357,7 +390,9 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
     each scene's walls' compliances 1/k per free node (0: rigid; no columns where no
     wall yields). ``plane``: each scene's plane (an index, 0 to the number of planes − 1):
     a scene is predicted from the answers of its own plane only, so several planes in
-    one call give the answers of a call per plane. Where the solve kernel stops on a
+    one call give the answers of a call per plane. ``kin``, ``where``: each scene's kin
+    (−1: none) and coordinates, for a scene none of its plane's answers predicts
+    (:func:`_predict`'s rule 5; ``kin`` all −1: a call per plane's answers). Where the solve kernel stops on a
     scene alone in its plane (no other scene's start depends on it), ``kept[s]`` is −1,
     ``o_code[s]`` says where it stopped (:func:`_attempt`), and the call goes on: the
     caller solves that scene by itself."""
@@ -375,7 +410,8 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
     outs = (o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res, o_off, o_count,
             j_code, j_stats, j_fu, j_fl, j_tres, conv)
     for s in range(m):
-        start, b = _predict(s, theta, height, plane, ok, touch, alphas, most, adaptive)
+        start, b = _predict(s, theta, height, plane, kin, where, ok, touch, alphas, most,
+                            adaptive)
         base[s], failed[s] = b, -1
         w_u, w_up, w_lo, flags = zf, zb, zb, 0
         if b >= 0 and o_kind[kept[b]] != ARC:  # the base's last contact step

@@ -7,7 +7,11 @@ first); each group is solved in that order by
 :func:`lcpbench.studies.continuation.solve_sequence`, every scene starting
 from the group's answers before it, on its own line and on the neighbouring
 lines (:class:`lcpbench.studies.continuation.Solved`; a scene whose warm start
-fails is solved again cold). Other scenes (the cantilever) are solved cold.
+fails is solved again cold). In the line kernel, a scene none of whose plane's
+answers is on its line or at its θ (scattered θ and h; elastic walls of another
+stiffness each a plane of its own) starts from the nearest answer of its kin, the
+scenes the same but for θ, h and the walls' stiffness (:func:`_kin`; not a
+channel past 180°). Other scenes (the cantilever) are solved cold.
 The results come back in the caller's order, one per scene.
 
 With the default back-end and the globalised driver, each line runs in the
@@ -25,6 +29,8 @@ import time
 from collections.abc import Iterable
 from operator import attrgetter
 
+import numpy as np
+
 from ..api import check_tol, solve_internal
 from ..errors import ProblemError
 from ..escalations import Context, escalate
@@ -36,7 +42,7 @@ from ..model.result import ContactResult
 from ..model.step_solver import make_step_solver
 from ..plan import make_plan, refuse_untabled
 from ..problems.checks import describe
-from ..problems.scenes import ActuatorScene
+from ..problems.scenes import STIFFNESS_RANGE, ActuatorScene
 from ..problems.sections import SectionedScene, check_scene
 from ..solvers.registry import DEFAULT, get_settings
 from .batch_compiled import solve_line, takes
@@ -108,12 +114,15 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
         line_scenes = [scenes[i] for i in line]
         if fast and all(isinstance(s, ActuatorScene) for s in line_scenes):
             planes = []
-            for group in _kernel_groups(line_scenes, _planes(line_scenes)):
+            by_plane = _planes(line_scenes)
+            kin, where = _kin(line_scenes, by_plane)
+            for group in _kernel_groups(line_scenes, by_plane):
                 # the planes of a group in one kernel call where it takes them all
                 rows = [j for plane in group for j in plane]
                 got = None if len(group) < 2 else run_line(
                     [line_scenes[j] for j in rows], predictor=predictor,
-                    plane=[p for p, plane in enumerate(group) for _ in plane], **fast_kw)
+                    plane=[p for p, plane in enumerate(group) for _ in plane],
+                    kin=kin[rows], where=where[rows], **fast_kw)
                 if got is None:
                     planes.extend(group)
                     continue
@@ -122,7 +131,8 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
             for plane in planes:
                 # a plane in one kernel call where it takes it, else scene by scene
                 ps = [line_scenes[j] for j in plane]
-                got = run_line(ps, predictor=predictor, **fast_kw)
+                got = run_line(ps, predictor=predictor, kin=kin[plane], where=where[plane],
+                               **fast_kw)
                 results = got if got is not None else solve_line(ps, predictor=predictor,
                                                                  **fast_kw)
                 for j, res in zip(plane, results, strict=True):
@@ -268,12 +278,52 @@ def _kernel_groups(scenes: list, planes: list[list[int]]) -> list[list[list[int]
     return [*groups.values(), *alone]
 
 
+#: what makes two actuator scenes kin: the same scene but for θ, h and the walls'
+#: stiffness (a scene that no answer of its own plane predicts starts from the nearest
+#: answer of its kin, :func:`_kin`)
+KIN_FIELDS = tuple(f for f in PLANE_FIELDS if f != "wall_stiffness")
+#: the length of a unit of each coordinate of :func:`_kin`'s distance: θ (degrees), h
+#: (mm), log10 of the walls' stiffness (N/mm²; rigid: 1e12, the top of its range)
+KIN_SCALES = (30.0, 1.0, 2.0)
+#: θ (degrees) past which a scene in a channel has no kin (:func:`_kin`)
+KIN_THETA_MAX = 180.0
+
+
+def _kin(scenes: list, planes: list[list[int]]) -> tuple[np.ndarray, np.ndarray]:
+    """Each scene's kin (an index from 0; −1: none) and its coordinates (θ, h, log10 k
+    over :data:`KIN_SCALES`), for the line kernel's rule 5
+    (:func:`lcpbench.model.batch_kernel._predict`): a scene none of whose plane's answers
+    is on its line in θ or at its θ starts from the nearest answer of its kin (its own
+    walls solved; only the start is shared). ``planes``: :func:`_planes` of ``scenes``
+    (a plane lies in one kin). None: a scene in a channel bent past
+    :data:`KIN_THETA_MAX` (it may have several stable states: a neighbour's answer can
+    start it into another than its cold start reaches), and every scene where a field
+    does not hash."""
+    kins: dict = {}
+    key = attrgetter(*KIN_FIELDS)
+    kin = np.full(len(scenes), -1, np.int64)
+    try:
+        for plane in planes:
+            kin[plane] = kins.setdefault(key(scenes[plane[0]]), len(kins))
+    except TypeError:
+        kin[:] = -1
+    theta = np.array([s.theta for s in scenes], dtype=float)
+    height = np.array([s.height for s in scenes], dtype=float)
+    stiffness = np.array([s.wall_stiffness for s in scenes], dtype=float)
+    kin[np.array([s.channel for s in scenes], dtype=bool) & (theta > KIN_THETA_MAX)] = -1
+    where = np.column_stack((theta, height,
+                             np.log10(np.minimum(stiffness, STIFFNESS_RANGE[1]))))
+    return kin, where / KIN_SCALES
+
+
 def _planes(scenes: list) -> list[list[int]]:
     """Indices of ``scenes`` (actuator scenes, in continuation order) by plane (the
     same scene but for θ and h), each in order. Solving them one plane after the other
-    gives the answers of solving them in the given order:
+    scene by scene gives the answers of solving them in the given order:
     :class:`~lcpbench.studies.continuation.Solved` predicts a scene from its own plane
-    only. A field that does not hash: one list, as given."""
+    only (the line kernel also from its kin, :func:`_kin`, where its plane has no
+    answer to predict it from; the planes of one call). A field that does not hash:
+    one list, as given."""
     planes: dict = {}
     key = attrgetter(*PLANE_FIELDS)
     try:

@@ -100,17 +100,21 @@ def _nodal_load(chain) -> np.ndarray:
 
 
 def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = "default",
-             predictor: str = "adaptive", plane: list[int] | None = None
+             predictor: str = "adaptive", plane: list[int] | None = None,
+             kin: list[int] | None = None, where: np.ndarray | None = None
              ) -> list[ContactResult | Stopped] | None:
     """The results of the line (actuator scenes of one plane, checked, in
     continuation order), or None: the kernel does not take it (the caller solves it
     scene by scene). ``plane``: each scene's plane (an index from 0), where the line
     holds several (:func:`lcpbench.studies.batch._planes`; rows of sections, each a
     plane of its own): one call for all of them, each scene predicted from its own
-    plane, where every chain shares the first one's layout (:func:`_shares`); None:
+    plane (or its kin, below), where every chain shares the first one's layout (:func:`_shares`); None:
     one plane. A scene alone in its plane on which the solve kernel stops is a
     :class:`~lcpbench.studies.batch_result.Stopped` in the list (the caller solves it by
-    itself)."""
+    itself). ``kin``, ``where``: each scene's kin (an index from 0; −1 none) and its
+    coordinates (a row each), from which a scene that no answer of its plane predicts
+    starts from the nearest answer of its kin (:func:`lcpbench.studies.batch._kin`;
+    None: none)."""
     if not scenes:
         return []
     chains = [s.chain() for s in scenes]
@@ -154,6 +158,8 @@ def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = 
             ra, args0[1], args0[2], args0[3], k, rest, load, args0[7], args0[8], lo, hi, cu, cl,
             args0[11], args0[12], wall, bool(c0.channel), theta, height,
             np.zeros(m, np.int64) if plane is None else np.asarray(plane, np.int64),
+            np.full(m, -1, np.int64) if kin is None else np.asarray(kin, np.int64),
+            np.zeros((m, 0)) if where is None else np.asarray(where, float).reshape(m, -1),
             float(tol), int(max_outer),
             int(max_iter), float(request), most, predictor == "adaptive",
             *(A[name] for name, _, _ in _OUTPUTS), A["kept"], A["failed"], A["base"])

@@ -57,8 +57,10 @@ class LineResult(LazyResult):
 @dataclass(frozen=True)
 class Stopped:
     """A scene the line kernel left to the caller: it stopped on it, the scene alone in
-    its plane. ``bail``: the solve kernel's bail code of its cold contact solve
-    (:data:`lcpbench.model.kernel_call.BAIL_REASONS`), where the kernel stopped there;
+    its plane. ``bail``: the solve kernel's bail code of its contact solve (the cold one,
+    but for a scene started from its kin: :func:`lcpbench.studies.batch._kin`; a row of
+    sections has none) (:data:`lcpbench.model.kernel_call.BAIL_REASONS`), where the
+    kernel stopped there;
     None where the wall-free search stopped."""
 
     bail: int | None
