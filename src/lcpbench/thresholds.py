@@ -70,6 +70,18 @@ SAG_BOUND = 10.0
 ARMIJO_DECREASE = 1e-4
 #: the shortest step length the outer loops try (halving from 1) before "no decrease"
 ARMIJO_SHORTEST = 1e-12
+#: a cold solve of the height steps stops (compiled_kernel.BAIL_STALL, the answer refused:
+#: the plan's escalations, the loading path, take over) once its line searches cut the
+#: step length t to STALL_STEP or less STALL_RUN outer steps running.
+#: benchmarks/cold_stall.py (1264 scenes: mixed batches of 6 seeds, the paper grid, 300
+#: rows of 2-4 sections, 200 elastic and 200 channel scenes, the hard cases; cold, tol
+#: 1e-3 and 1e-9, 2528 solves) before the rule: 755 stopped after 3-137 outer steps (a
+#: face not positive definite 303, a repeated set 128, refused steps 140 + 184), the
+#: rule would fire on 750 of them at step 2-30 (median 7); none of the 1773 that
+#: converged took a step shorter than 1/32 (two solves of one row of sections; all
+#: others 1/4 or longer): a margin of 3 halvings
+STALL_STEP = 2.0 ** -8
+STALL_RUN = 2
 #: the SQP in the link angles halves its merit's step down to this length, then takes it
 SQP_SHORTEST = 1e-10
 #: the energy's round-off the decrease test allows: ENERGY_NOISE · (|E| + 1e-6 Σ|k|)
