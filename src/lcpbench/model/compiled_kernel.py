@@ -21,8 +21,9 @@ code); import this module through it.
 
 Nothing here decides "converged": the Python side builds the DriverOutput and judges it
 (:mod:`lcpbench.model.judge`). What the kernel cannot do (the primal safeguard, a face
-not positive definite, a step rejected) it reports with a code, and the caller falls
-back to compiled code (:func:`lcpbench.model.compiled.reference`).
+not positive definite, a step rejected, a cold solve whose line searches stall:
+:data:`BAIL_STALL`) it reports with a code, and the caller falls back to compiled code
+(:func:`lcpbench.model.compiled.reference`).
 """
 
 from __future__ import annotations
