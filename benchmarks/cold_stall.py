@@ -12,9 +12,11 @@ the whole stall and "fires at" says where the rule would have stopped it.
 The corpus: ``mixed_batch.mixed(seed)`` for seeds 7, 8, 9, 11, 12, 13 (its elastic,
 sections and channel scenes), the paper grid, 300 random rows of 2-4 sections (signed θ
 up to 200°, one wall or a channel, N 40-140), 200 elastic and 200 channel scenes
-(θ 60-300°), the hard cases of ``hard_cases.py``.
+(θ 60-300°), the hard cases of ``hard_cases.py``. ``--wide``: 9000 other scenes instead,
+3000 rows, 2000 each elastic and channel (other seeds), 2000 on one flat wall (θ 20-300°,
+h 0.3-8 mm, N 8-400, weightless to 8x the paper's weight).
 
-    python benchmarks/cold_stall.py
+    python benchmarks/cold_stall.py [--wide]
 """
 
 # ruff: noqa: E402  (BLAS is pinned to one thread before numpy is imported)
@@ -25,6 +27,7 @@ import os
 for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_v] = "1"
 
+import argparse
 import collections
 
 import numpy as np
@@ -35,7 +38,7 @@ from lcpbench import ActuatorScene, SectionedScene, thresholds
 from lcpbench.model import kernel_call
 
 #: the rule's constants (the values the change measured, where the tree has none yet)
-STALL_STEP = getattr(thresholds, "STALL_STEP", 2.0 ** -8)
+STALL_STEP = getattr(thresholds, "STALL_STEP", 2.0 ** -10)
 STALL_RUN = getattr(thresholds, "STALL_RUN", 2)
 
 
@@ -84,6 +87,21 @@ def corpus() -> dict:
     return out
 
 
+def wide() -> dict:
+    rng = np.random.default_rng(104)
+    flat = [ActuatorScene(theta=float(rng.uniform(20, 300)), height=float(rng.uniform(0.3, 8)),
+                          links=int(rng.integers(8, 401)),
+                          weight=float(rng.choice([0, 2.45e-4, 2e-3]))) for _ in range(2000)]
+    return {"rows of sections": random_rows(3000, seed=101),
+            "elastic walls": elastic(2000, seed=102), "channel": channel(2000, seed=103),
+            "flat wall": flat}
+
+
+#: solve_chain's outcomes other than the bail codes
+OUTCOMES = {0: "converged", 1: "out of outer steps (200)", 2: "line search failed",
+            3: "no fit between the walls"}
+
+
 def fires_at(t: np.ndarray) -> int | None:
     """The outer step (1-based) after which the rule stops a cold solve with step
     lengths ``t``, or None."""
@@ -96,9 +114,11 @@ def fires_at(t: np.ndarray) -> int | None:
 
 
 def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--wide", action="store_true", help="the 9000 other scenes")
     solves = []
     scenes = 0
-    for group, members in corpus().items():
+    for group, members in (wide() if ap.parse_args().wide else corpus()).items():
         for scene in members:
             chain = scene.chain()
             if chain.profiled_walls or not kernel_call.consecutive(chain):
@@ -127,14 +147,22 @@ def main() -> None:
         fire = [f for f in (fires_at(r[1]) for r in recs) if f is not None]
         at = (f"{min(fire)} / {np.median(fire):g} / {max(fire)} ({len(fire)} of {len(recs)})"
               if fire else "never")
-        name = ("converged" if code == 0 else kernel_call.BAIL_REASONS.get(code, f"code {code}"))
+        name = OUTCOMES.get(code) or kernel_call.BAIL_REASONS.get(code, f"code {code}")
         print(f"| {name} | {len(recs)} | {min(steps)}-{max(steps)} | {sum(steps)} | {at} |")
     shortest = collections.Counter(float(r[1].min()) for r in conv if r.shape[1])
     worst = min(shortest)
     print("\nShortest step of the converged solves: "
           + ", ".join(f"{t:g} ({c})" for t, c in sorted(shortest.items())))
+    # what the rule reads: the longer of STALL_RUN steps running, at its shortest
+    runs = collections.Counter(
+        float(min(r[1, i:i + STALL_RUN].max() for i in range(r.shape[1] - STALL_RUN + 1)))
+        for r in conv if r.shape[1] >= STALL_RUN)
+    closest = min(runs)
+    print(f"The longest of {STALL_RUN} steps running, at its shortest, in the converged "
+          "solves: " + ", ".join(f"{t:g} ({c})" for t, c in sorted(runs.items())[:4]))
     print(f"Margin: the worst converged solve's shortest step is {worst / STALL_STEP:g} x "
-          f"STALL_STEP ({np.log2(worst / STALL_STEP):g} halvings)")
+          f"STALL_STEP ({np.log2(worst / STALL_STEP):g} halvings); its {STALL_RUN} steps "
+          f"running {closest / STALL_STEP:g} x ({np.log2(closest / STALL_STEP):g} halvings)")
     stalls = [r for _, r in other if r.shape[1]]
     print("Stalls: last step length "
           f"{min(r[1, -1] for r in stalls):.1e}-{max(r[1, -1] for r in stalls):.1e}, "
