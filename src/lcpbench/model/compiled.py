@@ -187,10 +187,14 @@ def step_request(settings) -> float:
     return float(requested(get_settings(settings)))
 
 
-#: the kernel's bail reasons that the round-off of node heights can cause
-ROUNDOFF_BAILS = frozenset((BAIL_REASONS[12], BAIL_REASONS[14], BAIL_REASONS[15]))
-#: the bail reasons that are a refusal of the kernel's own step (:func:`reference`)
-REFUSED_STEPS = frozenset((BAIL_REASONS[14], BAIL_REASONS[15]))
+#: the kernel's bail reasons that the round-off of node heights can cause (and a cold
+#: solve stopped for its stall, 16, taken as the refused steps 14 and 15 it stands in for)
+ROUNDOFF_BAILS = frozenset((BAIL_REASONS[12], BAIL_REASONS[14], BAIL_REASONS[15],
+                            BAIL_REASONS[16]))
+#: the bail reasons that are a refusal of the kernel's own step (:func:`reference`); 16,
+#: a cold solve stopped where its line searches stalled (thresholds.STALL_STEP), which
+#: went on to a refused step (or a face the walk could not solve) on every scene measured
+REFUSED_STEPS = frozenset((BAIL_REASONS[14], BAIL_REASONS[15], BAIL_REASONS[16]))
 
 
 def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol: float,
@@ -209,7 +213,8 @@ def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol:
     falls back to a dense Lemke step, O(N³) (97 s at N = 3999).
 
     Where the kernel's own step was refused (:data:`REFUSED_STEPS`: its certificate or
-    lcpbench's step judge) the solve is not run again in node heights, the kernel's own
+    lcpbench's step judge, or a cold solve stopped on its stalled line searches before
+    it reached such a refusal) the solve is not run again in node heights, the kernel's own
     scheme: on 41 such stops (rows of sections past 150°, elastic walls and the paper
     grid at tol 1e-3 and 1e-9, the hard cases) a rerun never converged where the kernel
     had stopped, at up to 50 ms a scene. The answer is reported not converged with the

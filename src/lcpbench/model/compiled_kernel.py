@@ -21,8 +21,9 @@ code); import this module through it.
 
 Nothing here decides "converged": the Python side builds the DriverOutput and judges it
 (:mod:`lcpbench.model.judge`). What the kernel cannot do (the primal safeguard, a face
-not positive definite, a step rejected) it reports with a code, and the caller falls
-back to compiled code (:func:`lcpbench.model.compiled.reference`).
+not positive definite, a step rejected, a cold solve whose line searches stall:
+:data:`BAIL_STALL`) it reports with a code, and the caller falls back to compiled code
+(:func:`lcpbench.model.compiled.reference`).
 """
 
 from __future__ import annotations
@@ -31,7 +32,14 @@ import numpy as np
 from numba import njit
 
 from ..linalg.ldl_kernel import refactor
-from ..thresholds import ARMIJO_SHORTEST, FLOOR_ULPS, NEWTON_SWITCH, WALK_RTOL
+from ..thresholds import (
+    ARMIJO_SHORTEST,
+    FLOOR_ULPS,
+    NEWTON_SWITCH,
+    STALL_RUN,
+    STALL_STEP,
+    WALK_RTOL,
+)
 from .chain_kernel import (  # once (numba_cache)
     add_compensated,
     armijo,
@@ -87,8 +95,13 @@ from .compiled_dual import (
 
 # outcome codes of solve_chain (the Python side turns them into reasons)
 CONVERGED, MAX_OUTER, LINE_SEARCH, NO_FIT = 0, 1, 2, 3
+#: bail code of a cold solve whose line searches cut the step to STALL_STEP or less
+#: STALL_RUN outer steps running (kernel_call.BAIL_REASONS; the Python side treats it as
+#: the step refusals it stands in for, model.compiled.REFUSED_STEPS)
+BAIL_STALL = 16
 __all__ = ["BAIL_CERT", "BAIL_JUDGE", "BAIL_LIMIT", "BAIL_NOT_PD", "BAIL_PRIMAL", "BAIL_REPEAT",
-           "CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "solve_chain", "solve_step"]
+           "BAIL_STALL", "CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "solve_chain",
+           "solve_step"]
 
 
 @njit(cache=True)
@@ -354,6 +367,14 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
     the energy searched on); ``start_alpha`` empty for a cold start; ``warm_flags``: bit 0 ``warm_u``, bit 1 ``warm_up``,
     bit 2 ``warm_lo`` are given (a continuation's last step).
 
+    A cold start (no ``start_alpha``, or one that does not fit between the walls) whose
+    line searches cut the step length to STALL_STEP or less STALL_RUN outer steps
+    running stops with BAIL_STALL, the answer not yet converged: its linearisation in
+    the heights is off by more than 1/STALL_STEP in the energy at every step (a link
+    near the vertical, where it divides by cos α); such a solve went on for 15-21 steps
+    to a refused step (BAIL_CERT, BAIL_JUDGE) or a face the walk could not solve, never
+    to an answer (thresholds.STALL_STEP). A warm start is never stopped so.
+
     Returns ``(code, alpha, forces_upper, forces_lower, u, sigma, records,
     count, residuals, forces_net)``; ``records`` rows: face solves, step
     length t, max|Δα|, energy; ``sigma`` +1/−1 on the upper/lower walls.
@@ -368,6 +389,7 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
         _clipped_heights(u, start_alpha, a, fs, lo, hi)
         ok = fit_heights(alpha, u, start_alpha, a, fs, links, none[:0], wa[SIN_A], wa[COS_A])
     near = ok and warm_flags != 0  # a neighbour's answer and its last step: near already
+    cold = not ok  # (the stall rule's: cold starts only)
     if not ok:
         warm_flags = 0
         _clipped_heights(u, rest_alpha, a, fs, lo, hi)
@@ -385,6 +407,7 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
     su, sigma, inv, alpha0, origin = wn[U], wn[SIG], wa[INV], wa[ALPHA0], wn[ORIG]
     d, ut, g_u = wn[DIR], wn[TRY], wn[GF]
     gp = (ws[7], jr[0], fs, links, origin, ws[2][0], k, rest, nodal_load)
+    short = 0  # outer steps running whose line search cut t to STALL_STEP or less
     for _ in range(max_outer):
         code, it = _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, cu, cl,
                          w_u, w_up, w_lo, warm_flags, max_iter, request, ws, gp, sin_a,
@@ -430,4 +453,7 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
         if dalpha < tol:
             return (CONVERGED, alpha.copy(), wn[RUP].copy(), wn[RLO].copy(), su.copy(),
                     sigma.copy(), rec, count, ws[9].copy(), wn[NET].copy())
+        short = short + 1 if t <= STALL_STEP else 0
+        if cold and short >= STALL_RUN:
+            return BAIL_STALL, alpha.copy(), zero, zero, u.copy(), zero, rec, count, none, zero
     return MAX_OUTER, alpha.copy(), zero, zero, u.copy(), zero, rec, count, none, zero

@@ -47,6 +47,8 @@ BAIL_REASONS = {
     13: "the face-solve limit",
     14: "the step certificate rejected the step",
     15: "lcpbench's judge rejected the step",
+    16: "the outer steps stalled from the cold start (line searches cut t to 1/1024 or "
+        "less twice running)",
 }
 
 
