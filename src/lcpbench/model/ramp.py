@@ -63,19 +63,28 @@ from ..thresholds import NEAR_VERTICAL_DEG, NODE_SHARE
 from . import large_n
 from .angle_step import in_reach, sqp_arrays
 from .compiled import drive, heavy
-from .heavy_driver import run_heavy
+from .heavy_driver import ANGLE_TOL, run_heavy
 from .judge import force_tol
 from .kernel_call import applies, kernel_args, kernel_output, kernel_settings, warm_args
 from .outer import DriverOutput, DriverStart
 
-#: the largest change of a section's bend angle between two steps (degrees)
-STEP_DEG = 10.0
+#: the largest change of a section's bend angle between two steps (degrees): 15° with
+#: the predictor and the looser steps below (10° before them; 20° loses 13 of 584 rows
+#: of sections of the audit, their steps stalling near the vertical)
+STEP_DEG = 15.0
 #: the longest path
 MAX_STEPS = 72
 #: the SQP steps a step of the path may take: a step of 10° from the last answer takes
 #: 5-8 (rows of 3-4 sections, N = 420); one that does not converge in 12 gives way to
 #: the height steps
 PATH_ANGLE_STEPS = 12
+#: the tolerance (rad) of the steps before the path's last (the larger of it and the
+#: solve's): only the answer at s = 1 is the solve's, judged at its tolerance
+PATH_TOL = 1e-2
+#: the SQP's stopping step (rad) on those steps (:data:`~.heavy_driver.ANGLE_TOL` on the last)
+PATH_ANGLE_TOL = 1e-4
+#: each step starts from the secant through the last two answers
+PREDICT = True
 
 
 def rest_angles(scene) -> list[float] | None:
@@ -132,38 +141,47 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
     shapes = _rest_shapes(scene, path)
     walk = _walk_args(whole, backend, method, shapes)
     step_solver = make_step()  # (a step solver keeps no state between steps)
-    kw = dict(backend=backend, settings=settings, engine=engine, tol=tol,
-              max_outer=max_outer, method=method)
+    kw = dict(backend=backend, settings=settings, engine=engine, max_outer=max_outer,
+              method=method)
     start, used, out, in_angles = None, engine, None, 0
     last = None  # the DriverOutput the start was taken from
+    before = None  # the answer (α) before it, for the predictor (None: none)
     k, walked_to = 0, -1  # walked_to: where the last walk stopped (its next step failed)
     while k < len(path):
         s = path[k]
+        final = k == len(path) - 1  # (only its answer is the solve's: the others looser)
+        step_tol, angle_tol = (tol, ANGLE_TOL) if final else (max(tol, PATH_TOL),
+                                                              PATH_ANGLE_TOL)
         angles = angles_ok and start is not None
         to_sqp = angles and start is not None and near_vertical(start.alpha)
         if walk is not None and not to_sqp and k != walked_to:  # height steps in one call
-            done, walked = _walked(whole, shapes, walk, k, start, settings=settings,
-                                   tol=tol, max_outer=max_outer, newton=method == "newton",
-                                   limit=_NEAR if angles_ok else -1.0)
+            done, walked, went = _walked(whole, shapes, walk, k, start, before,
+                                         settings=settings, tol=tol, max_outer=max_outer,
+                                         newton=method == "newton",
+                                         limit=_NEAR if angles_ok else -1.0)
             if done:
                 k += done
                 walked_to = k  # (that step, from the same start, would fail again)
                 out, used, start, last = walked, "compiled", DriverStart(
                     walked.alpha, walked.last_step), walked
+                before = went
                 continue  # (a step that did not converge: run below, as for any back-end)
         if to_sqp and shapes is not None:  # its arrays but φ*, once: the steps' chains
             sqp_arrays(whole)  # are ``whole`` with another rest shape (_chain_at)
         chain = _chain_at(scene, whole, shapes, k)
-        sqp = _in_angles(chain, start, last, tol, max_outer) if to_sqp else None
+        ahead = _ahead(start, before)
+        sqp = _in_angles(chain, ahead, last, tol, max_outer, angle_tol) if to_sqp else None
         if sqp is None:
-            out, used = drive(chain, step_solver, start=start, **kw)
+            out, used = drive(chain, step_solver, start=ahead, tol=step_tol, **kw)
+            if not out.converged and ahead is not start:  # without the predictor
+                out, used = drive(chain, step_solver, start=start, tol=step_tol, **kw)
             if not out.converged and angles and near_vertical(out.alpha):
-                sqp = _in_angles(chain, start, last, tol, max_outer)
+                sqp = _in_angles(chain, start, last, tol, max_outer, angle_tol)
         if sqp is not None:
             out, in_angles = sqp, in_angles + 1
             used = f"numpy (SQP steps in the link angles: {_WHY})"
         if not out.converged and start is not None:
-            out, used = drive(chain, step_solver, start=None, **kw)
+            out, used = drive(chain, step_solver, start=None, tol=step_tol, **kw)
         if not out.converged:
             if k == len(path) - 1:
                 return out, used, (f"followed the load from zero in {len(path)} steps"
@@ -173,10 +191,21 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
                                 f"{out.reason}")
         # the SQP's own multipliers start the next SQP's QP (a heavy chain's, in drive)
         sqp_made = out.closure_multiplier is not None
+        before = None if start is None else start.alpha
         start, last = DriverStart(out.alpha, out.last_step, (
             out.closure_multiplier, out.forces_upper, out.forces_lower) if sqp_made else None), out
         k += 1
     return out, used, f"followed the load from zero in {len(path)} steps{_told(in_angles)}"
+
+
+def _ahead(start: DriverStart | None, before) -> DriverStart | None:
+    """The start of the next step: ``start`` (the last answer) moved to the secant through
+    ``before`` and it (:func:`lcpbench.model.path_kernel.predicted`), its warm step and
+    multipliers kept; ``start`` itself where there is no answer before it."""
+    if start is None or before is None or not PREDICT:
+        return start
+    return DriverStart(2.0 * np.asarray(start.alpha, float) - np.asarray(before, float),
+                       start.warm, start.multipliers)
 
 
 _WHY = "a step of the loading path with a link near the vertical"
@@ -200,13 +229,14 @@ def _multipliers(out: DriverOutput, tol: float, force_scale: float) -> tuple:
     return 0.0, np.where(up > line, up, 0.0), np.where(lo > line, lo, 0.0)
 
 
-def _in_angles(chain, start: DriverStart, last: DriverOutput, tol: float,
-               max_outer: int) -> DriverOutput | None:
+def _in_angles(chain, start: DriverStart, last: DriverOutput, tol: float, max_outer: int,
+               angle_tol: float) -> DriverOutput | None:
     """The SQP's answer from ``start`` (:func:`lcpbench.model.heavy_driver.run_heavy`), the
     first multipliers those of ``last``, the answer ``start`` was taken from
     (:func:`_multipliers`), or None where it did not converge."""
     first = DriverStart(start.alpha, start.warm, _multipliers(last, tol, chain.force_scale))
-    return run_heavy(chain, first, tol, min(max_outer, PATH_ANGLE_STEPS), why=_WHY)
+    return run_heavy(chain, first, tol, min(max_outer, PATH_ANGLE_STEPS), why=_WHY,
+                     angle_tol=angle_tol)
 
 
 def _rest_shapes(scene, path: list[float]) -> tuple | None:
@@ -247,9 +277,9 @@ def _walk_args(whole, backend: str, method: str, shapes: tuple | None) -> tuple 
     return (shapes[0], *args[1:5], shapes[1], *args[6:])
 
 
-def _walked(whole, shapes: tuple, args: tuple, begin: int, start: DriverStart | None, *,
-            settings, tol: float, max_outer: int, newton: bool,
-            limit: float) -> tuple[int, DriverOutput | None]:
+def _walked(whole, shapes: tuple, args: tuple, begin: int, start: DriverStart | None,
+            before, *, settings, tol: float, max_outer: int, newton: bool,
+            limit: float) -> tuple[int, DriverOutput | None, np.ndarray | None]:
     """(steps, output): the run of height steps from step ``begin`` in one kernel call
     (:func:`lcpbench.model.path_kernel.walk_heights`), from ``start``, and the
     DriverOutput of its last step (:func:`lcpbench.model.kernel_call.kernel_output`, as
@@ -258,14 +288,19 @@ def _walked(whole, shapes: tuple, args: tuple, begin: int, start: DriverStart | 
     n = whole.free_nodes.size
     max_iter, request, name = kernel_settings(settings, n)
     t0 = time.perf_counter()
-    done, got = _kernel().walk_heights(*args, float(tol), int(max_outer), int(begin),
-                                       *warm_args(start, n), int(max_iter), float(request),
-                                       bool(newton), float(limit))
+    alpha, *warm = warm_args(start, n)
+    prior = np.ascontiguousarray(before if before is not None and PREDICT else alpha[:0],
+                                 dtype=float)
+    done, got, went = _kernel().walk_heights(
+        *args, float(tol), float(max(tol, PATH_TOL)), int(max_outer), int(begin), alpha,
+        prior, *warm, int(max_iter), float(request), bool(newton), float(limit),
+        bool(PREDICT))
     if not done:
-        return 0, None
+        return 0, None, None
     chain = _chain_at(None, whole, shapes, begin + done - 1)
     return done, kernel_output(chain, *got, elapsed=(time.perf_counter() - t0) / done,
-                               settings=name, max_outer=max_outer, tol=tol)
+                               settings=name, max_outer=max_outer, tol=tol), (
+        went if went.size else None)
 
 
 def _told(in_angles: int) -> str:
