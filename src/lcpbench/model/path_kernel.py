@@ -6,10 +6,11 @@ solve kernel takes the chain (the default back-end, the globalised or Newton sch
 chain of the kernel's layout, neither large nor heavy), a run of those steps in the node
 heights is :func:`walk_heights`: one call of :func:`~.compiled_kernel.solve_chain` per
 step, the rest shape of step j the j-th row of the path's rest shapes (the scene's
-``rest_shapes``: nothing else of the chain depends on s), each step warm-started from
-the last one's answer as a continuation's start is (its angles; its last contact step's
-heights and active sets, bits 0–2 of the kernel's flags:
-:func:`lcpbench.model.kernel_call.call_kernel`). The run stops after a step whose answer
+``rest_shapes``: nothing else of the chain depends on s), each step started from the
+secant through the last two answers (:func:`predicted`) and warm-started from the last
+one's contact step as a continuation's start is (its heights and active sets, bits 0–2
+of the kernel's flags: :func:`lcpbench.model.kernel_call.call_kernel`), the steps before
+the path's last solved to the path's looser tolerance. The run stops after a step whose answer
 has a link near the vertical (where the path takes SQP steps in the link angles) and
 before a step that does not converge; the Python loop of ``follow_load`` takes over
 there, with the same rules for every back-end. Loaded through

@@ -15,6 +15,21 @@ such that no section's θ moves by more than :data:`STEP_DEG` degrees a step (at
 answer. It is also the state the loading path reaches, where a scene has several
 stable states.
 
+Each step after the second starts from the secant through the last two answers
+(2 α_k − α_{k−1}: :func:`lcpbench.model.path_kernel.predicted`) instead of the last
+answer, with the last answer's contact step as warm start; where a step so started
+does not converge, it is run again from the last answer. The steps before s = 1 are
+solved to max(tol, :data:`PATH_TOL`) rad, their SQP to :data:`PATH_ANGLE_TOL`: only
+the answer at s = 1 is the solve's, solved to ``tol`` (its SQP to
+:data:`~lcpbench.model.heavy_driver.ANGLE_TOL`) and judged. A loose step is still the
+equilibrium of its s to 10⁻² rad, near the branch the path follows: on 584 rows of
+sections and 40 actuators past 180° (tol 1e-3 and 1e-9, ``solve`` and
+``start="ramp"``) every answer certified before is the same state, and three rows
+whose path stopped at a fold of the load (near s = 0.75, the chain clear of the wall)
+now reach the state the energy minimum along the load snaps to. With both, steps of
+15° (10° before) take the mixed batch's 8 ramped rows in 95 steps instead of 139,
+172 outer height steps instead of 351 and 56 SQP iterations instead of 100.
+
 Along the path of a row of sections with large signed angles, links pass the
 vertical: the equilibrium at the next s has links at 91°–98° while the last one had
 them at 82°–90°. The height step's linearisation divides by a cos α_i, so its steps
@@ -33,8 +48,9 @@ their reactions on the walls in contact in the judge's sense (:func:`_multiplier
 the others, tol-accurate, are small but positive on many walls: 71 where the SQP's
 answer presses on 1, 69 changes), which cuts the first SQP of the mixed batch's rows
 from 34 active-set changes (1.6–1.8 ms) to none (0.55 ms). The SQP converges to
-10⁻⁹ rad whatever its first active set, so the answer is the same to round-off
-(345 rows of sections, benchmarks/cold_sqp_states.py's and the mixed batch's).
+its stopping step whatever its first active set (10⁻⁹ rad at s = 1), so the answer is
+the same to round-off (345 rows of sections, benchmarks/cold_sqp_states.py's and the
+mixed batch's).
 
 The rest shapes of a row of sections at every s come in one pass (the scene's
 ``rest_shapes``; nothing else of its chain depends on s), and the SQP's arrays but φ*
@@ -44,7 +60,8 @@ its SQP arrays are built a step). Where the solve kernel takes
 the chain (the built-in back-end, the globalised or Newton scheme, the kernel's layout,
 neither large nor heavy), a run of height steps is one kernel call
 (:func:`lcpbench.model.path_kernel.walk_heights`: the solve kernel step after step, each
-warm-started from the last answer as :func:`lcpbench.model.compiled.drive` would), up to
+started from the predicted angles and warm-started from the last answer's contact step
+as :func:`lcpbench.model.compiled.drive` would), up to
 an answer with a link near the vertical or a step that does not converge; the loop below
 runs those steps, as it runs every step of another back-end, one :func:`drive` (or SQP)
 a step, the chain at s·θ built only there. One step solver serves every step.
@@ -69,21 +86,24 @@ from .kernel_call import applies, kernel_args, kernel_output, kernel_settings, w
 from .outer import DriverOutput, DriverStart
 
 #: the largest change of a section's bend angle between two steps (degrees): 15° with
-#: the predictor and the looser steps below (10° before them; 20° loses 13 of 584 rows
-#: of sections of the audit, their steps stalling near the vertical)
+#: the predictor and the looser steps below (10° before them; at 20° the height steps
+#: of 9 of the audit's 584 rows of sections stall before the vertical and the path stops)
 STEP_DEG = 15.0
 #: the longest path
 MAX_STEPS = 72
-#: the SQP steps a step of the path may take: a step of 10° from the last answer takes
-#: 5-8 (rows of 3-4 sections, N = 420); one that does not converge in 12 gives way to
-#: the height steps
+#: the SQP steps a step of the path may take: a step of 10° from the last answer took
+#: 5-8 (rows of 3-4 sections, N = 420), one of 15° from the predicted angles takes 3-8
+#: (the mixed batch's rows); one that does not converge in 12 gives way to the height
+#: steps
 PATH_ANGLE_STEPS = 12
 #: the tolerance (rad) of the steps before the path's last (the larger of it and the
 #: solve's): only the answer at s = 1 is the solve's, judged at its tolerance
 PATH_TOL = 1e-2
-#: the SQP's stopping step (rad) on those steps (:data:`~.heavy_driver.ANGLE_TOL` on the last)
+#: the SQP's stopping step (rad) on those steps (:data:`~.heavy_driver.ANGLE_TOL` on the
+#: last)
 PATH_ANGLE_TOL = 1e-4
-#: each step starts from the secant through the last two answers
+#: each step starts from the secant through the last two answers (False: from the last
+#: answer, as before; the tests' premise of a path in the node heights alone)
 PREDICT = True
 
 
