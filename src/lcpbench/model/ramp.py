@@ -189,7 +189,8 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
         if to_sqp and shapes is not None:  # its arrays but φ*, once: the steps' chains
             sqp_arrays(whole)  # are ``whole`` with another rest shape (_chain_at)
         chain = _chain_at(scene, whole, shapes, k)
-        ahead = _ahead(start, before)
+        # (a step the walk stopped on, not near the vertical, failed from the prediction)
+        ahead = start if k == walked_to and not to_sqp else _ahead(start, before)
         sqp = _in_angles(chain, ahead, last, tol, max_outer, angle_tol) if to_sqp else None
         if sqp is None:
             out, used = drive(chain, step_solver, start=ahead, tol=step_tol, **kw)
@@ -224,7 +225,9 @@ def _ahead(start: DriverStart | None, before) -> DriverStart | None:
     multipliers kept; ``start`` itself where there is no answer before it."""
     if start is None or before is None or not PREDICT:
         return start
-    return DriverStart(2.0 * np.asarray(start.alpha, float) - np.asarray(before, float),
+    f64 = np.ascontiguousarray
+    return DriverStart(_kernel().predicted(f64(start.alpha, dtype=float),
+                                           f64(before, dtype=float)),
                        start.warm, start.multipliers)
 
 
