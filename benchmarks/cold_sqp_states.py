@@ -125,7 +125,9 @@ def main(argv=None) -> int:
         "both are certified and disagree, the scene has several stable states and the cold "
         "SQP reaches another than the loading path, which `lcpbench.solve` returns (the "
         "state the pressurised actuator reaches). Only the mixed batch's (θ, −θ) rows "
-        "agree throughout, so `solve_many` keeps solving these rows by `lcpbench.solve`.",
+        "agree throughout, so the cold SQP does not replace the loading path; `solve_many` "
+        "starts a refused row from a certified neighbouring row's answer instead, where it "
+        "has one (results/row-neighbours.md).",
         ""])
     a.out.write_text(text)
     print(text)

@@ -95,6 +95,8 @@ PHASES = (
      "lcpbench.studies.batch", "solve_internal", None),
     ("a refused answer's escalations (as solve()'s)", 0, "lcpbench.studies.batch",
      "_retried", None),
+    ("SQP from a neighbouring row (escalation 'from_neighbour')", 1, "lcpbench.escalations",
+     "run_heavy", None),
     ("loading path (escalation 'ramped')", 1, "lcpbench.escalations", "follow_load", None),
     ("SQP in the link angles", 2, "lcpbench.model.ramp", "run_heavy", None),
     ("height steps, a run in one call (path kernel)", 2, "lcpbench.model.ramp", "_walked",
