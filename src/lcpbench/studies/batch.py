@@ -163,8 +163,8 @@ def _rows_of_sections(scenes: list, out: list, kw: dict, fast_kw: dict) -> set[i
     :func:`lcpbench.solve`'s does, but first, where a row certified before it in the
     batch is its neighbour (:func:`neighbouring_row`), SQP steps in the link angles from that
     row's answer (the escalation ``from_neighbour``): the rows the kernel refuses are
-    those with links near the vertical, which the loading path reaches in 9-18 steps,
-    a few of them by that SQP (~2 ms a row), and one SQP from a neighbour in ~0.7 ms.
+    those with links near the vertical, which the loading path reaches in 6-12 steps,
+    a few of them by that SQP (~1.3 ms a row), and one SQP from a neighbour in ~0.7 ms.
     The indices solved; empty where the kernel does not take the rows (they are solved
     one by one)."""
     rows = [i for i, s in enumerate(scenes) if type(s) is SectionedScene]
