@@ -101,7 +101,7 @@ def _nodal_load(chain) -> np.ndarray:
 
 def run_line(scenes: list, *, tol: float, max_outer: int = 200, settings: str = "default",
              predictor: str = "adaptive", plane: list[int] | None = None,
-             kin: list[int] | None = None, where: np.ndarray | None = None
+             kin: np.ndarray | None = None, where: np.ndarray | None = None
              ) -> list[ContactResult | Stopped] | None:
     """The results of the line (actuator scenes of one plane, checked, in
     continuation order), or None: the kernel does not take it (the caller solves it
