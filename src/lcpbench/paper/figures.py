@@ -32,11 +32,11 @@ from ..problems.calibrations import (
     get_calibration,
     scene_from_pressure,
 )
+from ..problems.cantilever import CantileverScene
 from ..problems.scenes import (
     DEFAULT_EI,
     DEFAULT_LENGTH,
     ActuatorScene,
-    CantileverScene,
     Chain,
 )
 from ..studies.batch import solve_many
