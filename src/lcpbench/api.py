@@ -125,7 +125,7 @@ def solve(
         take one. Globalised scheme only; the answer is the same equilibrium
         to the tolerance (tests check 1e-8 at tight tol). Or ``"ramp"``: follow
         the load from zero, the bend angles grown from a straight chain in steps
-        of at most 15° (:mod:`lcpbench.model.ramp`), the state the pressurised
+        of at most 10° (:mod:`lcpbench.model.ramp`), the state the pressurised
         actuator reaches where a scene has several; a cold solve where the path
         stops. A cold start that the judge refuses is ramped anyway (the built-in
         back-end): ``result.route`` is "load path" for the first, and

@@ -37,19 +37,16 @@ def no_contact(out: DriverOutput) -> bool:
 
 
 def run_heavy(chain: Chain, start: DriverStart | None, tol: float,
-              max_outer: int, *, why: str = "a heavy chain",
-              angle_tol: float = ANGLE_TOL) -> DriverOutput | None:
+              max_outer: int, *, why: str = "a heavy chain") -> DriverOutput | None:
     """The driver's output for a heavy chain, or None when the angle steps did not
     converge within ``max_outer`` (and :data:`ANGLE_STEPS`). The SQP starts from
     ``start``'s angles and multipliers where it has them. ``why`` the SQP ran, for
     the output's reason (also a step of the loading path with a link near the
-    vertical, :mod:`lcpbench.model.ramp`). ``angle_tol``: the SQP's stopping step, the
-    smaller of it and ``tol`` (the steps of a loading path before its last take a
-    looser one)."""
+    vertical, :mod:`lcpbench.model.ramp`)."""
     if max_outer <= 0:
         return None
     begin = None if start is None else np.asarray(start.alpha, float)
-    outcome = solve_in_angles(chain, tol=min(angle_tol, tol),
+    outcome = solve_in_angles(chain, tol=min(ANGLE_TOL, tol),
                               max_iter=min(ANGLE_STEPS, max_outer), start=begin,
                               multipliers=None if start is None else start.multipliers)
     if not outcome.converged:

@@ -15,21 +15,6 @@ such that no section's θ moves by more than :data:`STEP_DEG` degrees a step (at
 answer. It is also the state the loading path reaches, where a scene has several
 stable states.
 
-Each step after the second starts from the secant through the last two answers
-(2 α_k − α_{k−1}: :func:`lcpbench.model.path_kernel.predicted`) instead of the last
-answer, with the last answer's contact step as warm start; where a step so started
-does not converge, it is run again from the last answer. The steps before s = 1 are
-solved to max(tol, :data:`PATH_TOL`) rad, their SQP to :data:`PATH_ANGLE_TOL`: only
-the answer at s = 1 is the solve's, solved to ``tol`` (its SQP to
-:data:`~lcpbench.model.heavy_driver.ANGLE_TOL`) and judged. A loose step is still the
-equilibrium of its s to 10⁻² rad, near the branch the path follows: on 584 rows of
-sections and 40 actuators past 180° (tol 1e-3 and 1e-9, ``solve`` and
-``start="ramp"``) every answer certified before is the same state, and three rows
-whose path stopped at a fold of the load (near s = 0.75, the chain clear of the wall)
-now reach the state the energy minimum along the load snaps to. With both, steps of
-15° (10° before) take the mixed batch's 8 ramped rows in 95 steps instead of 139,
-172 outer height steps instead of 351 and 56 SQP iterations instead of 100.
-
 Along the path of a row of sections with large signed angles, links pass the
 vertical: the equilibrium at the next s has links at 91°–98° while the last one had
 them at 82°–90°. The height step's linearisation divides by a cos α_i, so its steps
@@ -48,9 +33,8 @@ their reactions on the walls in contact in the judge's sense (:func:`_multiplier
 the others, tol-accurate, are small but positive on many walls: 71 where the SQP's
 answer presses on 1, 69 changes), which cuts the first SQP of the mixed batch's rows
 from 34 active-set changes (1.6–1.8 ms) to none (0.55 ms). The SQP converges to
-its stopping step whatever its first active set (10⁻⁹ rad at s = 1), so the answer is
-the same to round-off (345 rows of sections, benchmarks/cold_sqp_states.py's and the
-mixed batch's).
+10⁻⁹ rad whatever its first active set, so the answer is the same to round-off
+(345 rows of sections, benchmarks/cold_sqp_states.py's and the mixed batch's).
 
 The rest shapes of a row of sections at every s come in one pass (the scene's
 ``rest_shapes``; nothing else of its chain depends on s), and the SQP's arrays but φ*
@@ -60,8 +44,7 @@ its SQP arrays are built a step). Where the solve kernel takes
 the chain (the built-in back-end, the globalised or Newton scheme, the kernel's layout,
 neither large nor heavy), a run of height steps is one kernel call
 (:func:`lcpbench.model.path_kernel.walk_heights`: the solve kernel step after step, each
-started from the predicted angles and warm-started from the last answer's contact step
-as :func:`lcpbench.model.compiled.drive` would), up to
+warm-started from the last answer as :func:`lcpbench.model.compiled.drive` would), up to
 an answer with a link near the vertical or a step that does not converge; the loop below
 runs those steps, as it runs every step of another back-end, one :func:`drive` (or SQP)
 a step, the chain at s·θ built only there. One step solver serves every step.
@@ -80,31 +63,19 @@ from ..thresholds import NEAR_VERTICAL_DEG, NODE_SHARE
 from . import large_n
 from .angle_step import in_reach, sqp_arrays
 from .compiled import drive, heavy
-from .heavy_driver import ANGLE_TOL, run_heavy
+from .heavy_driver import run_heavy
 from .judge import force_tol
 from .kernel_call import applies, kernel_args, kernel_output, kernel_settings, warm_args
 from .outer import DriverOutput, DriverStart
 
-#: the largest change of a section's bend angle between two steps (degrees): 15° with
-#: the predictor and the looser steps below (10° before them; at 20° the height steps
-#: of 9 of the audit's 584 rows of sections stall before the vertical and the path stops)
-STEP_DEG = 15.0
+#: the largest change of a section's bend angle between two steps (degrees)
+STEP_DEG = 10.0
 #: the longest path
 MAX_STEPS = 72
-#: the SQP steps a step of the path may take: a step of 10° from the last answer took
-#: 5-8 (rows of 3-4 sections, N = 420), one of 15° from the predicted angles takes 3-8
-#: (the mixed batch's rows); one that does not converge in 12 gives way to the height
-#: steps
+#: the SQP steps a step of the path may take: a step of 10° from the last answer takes
+#: 5-8 (rows of 3-4 sections, N = 420); one that does not converge in 12 gives way to
+#: the height steps
 PATH_ANGLE_STEPS = 12
-#: the tolerance (rad) of the steps before the path's last (the larger of it and the
-#: solve's): only the answer at s = 1 is the solve's, judged at its tolerance
-PATH_TOL = 1e-2
-#: the SQP's stopping step (rad) on those steps (:data:`~.heavy_driver.ANGLE_TOL` on the
-#: last)
-PATH_ANGLE_TOL = 1e-4
-#: each step starts from the secant through the last two answers (False: from the last
-#: answer, as before; the tests' premise of a path in the node heights alone)
-PREDICT = True
 
 
 def rest_angles(scene) -> list[float] | None:
@@ -161,48 +132,38 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
     shapes = _rest_shapes(scene, path)
     walk = _walk_args(whole, backend, method, shapes)
     step_solver = make_step()  # (a step solver keeps no state between steps)
-    kw = dict(backend=backend, settings=settings, engine=engine, max_outer=max_outer,
-              method=method)
+    kw = dict(backend=backend, settings=settings, engine=engine, tol=tol,
+              max_outer=max_outer, method=method)
     start, used, out, in_angles = None, engine, None, 0
     last = None  # the DriverOutput the start was taken from
-    before = None  # the answer (α) before it, for the predictor (None: none)
     k, walked_to = 0, -1  # walked_to: where the last walk stopped (its next step failed)
     while k < len(path):
         s = path[k]
-        final = k == len(path) - 1  # (only its answer is the solve's: the others looser)
-        step_tol, angle_tol = (tol, ANGLE_TOL) if final else (max(tol, PATH_TOL),
-                                                              PATH_ANGLE_TOL)
         angles = angles_ok and start is not None
         to_sqp = angles and start is not None and near_vertical(start.alpha)
         if walk is not None and not to_sqp and k != walked_to:  # height steps in one call
-            done, walked, went = _walked(whole, shapes, walk, k, start, before,
-                                         settings=settings, tol=tol, max_outer=max_outer,
-                                         newton=method == "newton",
-                                         limit=_NEAR if angles_ok else -1.0)
+            done, walked = _walked(whole, shapes, walk, k, start, settings=settings,
+                                   tol=tol, max_outer=max_outer, newton=method == "newton",
+                                   limit=_NEAR if angles_ok else -1.0)
             if done:
                 k += done
                 walked_to = k  # (that step, from the same start, would fail again)
                 out, used, start, last = walked, "compiled", DriverStart(
                     walked.alpha, walked.last_step), walked
-                before = went
                 continue  # (a step that did not converge: run below, as for any back-end)
         if to_sqp and shapes is not None:  # its arrays but φ*, once: the steps' chains
             sqp_arrays(whole)  # are ``whole`` with another rest shape (_chain_at)
         chain = _chain_at(scene, whole, shapes, k)
-        # (a step the walk stopped on, not near the vertical, failed from the prediction)
-        ahead = start if k == walked_to and not to_sqp else _ahead(start, before)
-        sqp = _in_angles(chain, ahead, last, tol, max_outer, angle_tol) if to_sqp else None
+        sqp = _in_angles(chain, start, last, tol, max_outer) if to_sqp else None
         if sqp is None:
-            out, used = drive(chain, step_solver, start=ahead, tol=step_tol, **kw)
-            if not out.converged and ahead is not start:  # without the predictor
-                out, used = drive(chain, step_solver, start=start, tol=step_tol, **kw)
+            out, used = drive(chain, step_solver, start=start, **kw)
             if not out.converged and angles and near_vertical(out.alpha):
-                sqp = _in_angles(chain, start, last, tol, max_outer, angle_tol)
+                sqp = _in_angles(chain, start, last, tol, max_outer)
         if sqp is not None:
             out, in_angles = sqp, in_angles + 1
             used = f"numpy (SQP steps in the link angles: {_WHY})"
         if not out.converged and start is not None:
-            out, used = drive(chain, step_solver, start=None, tol=step_tol, **kw)
+            out, used = drive(chain, step_solver, start=None, **kw)
         if not out.converged:
             if k == len(path) - 1:
                 return out, used, (f"followed the load from zero in {len(path)} steps"
@@ -212,23 +173,10 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
                                 f"{out.reason}")
         # the SQP's own multipliers start the next SQP's QP (a heavy chain's, in drive)
         sqp_made = out.closure_multiplier is not None
-        before = None if start is None else start.alpha
         start, last = DriverStart(out.alpha, out.last_step, (
             out.closure_multiplier, out.forces_upper, out.forces_lower) if sqp_made else None), out
         k += 1
     return out, used, f"followed the load from zero in {len(path)} steps{_told(in_angles)}"
-
-
-def _ahead(start: DriverStart | None, before) -> DriverStart | None:
-    """The start of the next step: ``start`` (the last answer) moved to the secant through
-    ``before`` and it (:func:`lcpbench.model.path_kernel.predicted`), its warm step and
-    multipliers kept; ``start`` itself where there is no answer before it."""
-    if start is None or before is None or not PREDICT:
-        return start
-    f64 = np.ascontiguousarray
-    return DriverStart(_kernel().predicted(f64(start.alpha, dtype=float),
-                                           f64(before, dtype=float)),
-                       start.warm, start.multipliers)
 
 
 _WHY = "a step of the loading path with a link near the vertical"
@@ -257,14 +205,13 @@ def first_multipliers(up: np.ndarray, lo: np.ndarray, tol: float, force_scale: f
     return 0.0, np.where(up > line, up, 0.0), np.where(lo > line, lo, 0.0)
 
 
-def _in_angles(chain, start: DriverStart, last: DriverOutput, tol: float, max_outer: int,
-               angle_tol: float) -> DriverOutput | None:
+def _in_angles(chain, start: DriverStart, last: DriverOutput, tol: float,
+               max_outer: int) -> DriverOutput | None:
     """The SQP's answer from ``start`` (:func:`lcpbench.model.heavy_driver.run_heavy`), the
     first multipliers those of ``last``, the answer ``start`` was taken from
     (:func:`_multipliers`), or None where it did not converge."""
     first = DriverStart(start.alpha, start.warm, _multipliers(last, tol, chain.force_scale))
-    return run_heavy(chain, first, tol, min(max_outer, PATH_ANGLE_STEPS), why=_WHY,
-                     angle_tol=angle_tol)
+    return run_heavy(chain, first, tol, min(max_outer, PATH_ANGLE_STEPS), why=_WHY)
 
 
 def _rest_shapes(scene, path: list[float]) -> tuple | None:
@@ -305,9 +252,9 @@ def _walk_args(whole, backend: str, method: str, shapes: tuple | None) -> tuple 
     return (shapes[0], *args[1:5], shapes[1], *args[6:])
 
 
-def _walked(whole, shapes: tuple, args: tuple, begin: int, start: DriverStart | None,
-            before, *, settings, tol: float, max_outer: int, newton: bool,
-            limit: float) -> tuple[int, DriverOutput | None, np.ndarray | None]:
+def _walked(whole, shapes: tuple, args: tuple, begin: int, start: DriverStart | None, *,
+            settings, tol: float, max_outer: int, newton: bool,
+            limit: float) -> tuple[int, DriverOutput | None]:
     """(steps, output): the run of height steps from step ``begin`` in one kernel call
     (:func:`lcpbench.model.path_kernel.walk_heights`), from ``start``, and the
     DriverOutput of its last step (:func:`lcpbench.model.kernel_call.kernel_output`, as
@@ -316,19 +263,14 @@ def _walked(whole, shapes: tuple, args: tuple, begin: int, start: DriverStart | 
     n = whole.free_nodes.size
     max_iter, request, name = kernel_settings(settings, n)
     t0 = time.perf_counter()
-    alpha, *warm = warm_args(start, n)
-    prior = np.ascontiguousarray(before if before is not None and PREDICT else alpha[:0],
-                                 dtype=float)
-    done, got, went = _kernel().walk_heights(
-        *args, float(tol), float(max(tol, PATH_TOL)), int(max_outer), int(begin), alpha,
-        prior, *warm, int(max_iter), float(request), bool(newton), float(limit),
-        bool(PREDICT))
+    done, got = _kernel().walk_heights(*args, float(tol), int(max_outer), int(begin),
+                                       *warm_args(start, n), int(max_iter), float(request),
+                                       bool(newton), float(limit))
     if not done:
-        return 0, None, None
+        return 0, None
     chain = _chain_at(None, whole, shapes, begin + done - 1)
     return done, kernel_output(chain, *got, elapsed=(time.perf_counter() - t0) / done,
-                               settings=name, max_outer=max_outer, tol=tol), (
-        went if went.size else None)
+                               settings=name, max_outer=max_outer, tol=tol)
 
 
 def _told(in_angles: int) -> str:

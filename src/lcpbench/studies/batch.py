@@ -145,8 +145,8 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
 
 
 #: the farthest neighbouring row :func:`neighbouring_row` hands to a refused row: every
-#: section's bend angle within this many degrees of the row's (the loading path's steps
-#: are :data:`lcpbench.model.ramp.STEP_DEG`; results/row-neighbours.md audits this limit)…
+#: section's bend angle within this many degrees of the row's (twice the loading path's
+#: step, :data:`lcpbench.model.ramp.STEP_DEG`)…
 NEIGHBOUR_DEG = 20.0
 #: …and its wall height h within this many mm
 NEIGHBOUR_MM = 1.0
