@@ -8,7 +8,10 @@ escalation ``from_neighbour``: SQP steps in the link angles). This script solves
 of rows both ways, ``solve_many`` and ``solve`` per row, and counts: the rows that took
 ``from_neighbour``, how many both certify, how many of those are the same state (each
 wall's total force within the judge's τ·F₀, ``escalations.same_state``), the verdict
-changes, and the time of each batch. Writes ``results/row-neighbours.md`` (``--out``; not
+changes, and the time of each batch. A row certified by ``solve_many`` only is checked
+independently: the direct minimisation of its exact energy
+(``model.energy_reference.minimise_energy``, SLSQP and a Newton polish on the KKT system)
+started from its answer must stay there, its total force within 1e-6 of F₀. Writes ``results/row-neighbours.md`` (``--out``; not
 overwritten unless ``--force``).
 
     python benchmarks/row_neighbours.py --force
@@ -34,6 +37,7 @@ import lcpbench
 from lcpbench import SectionedScene
 from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
 from lcpbench.escalations import same_state
+from lcpbench.model.energy_reference import minimise_energy
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -59,6 +63,16 @@ def signed_pairs(seed: int, count: int, channel: bool) -> list:
                                   height=float(rng.uniform(1.0, 6.0)), links=140,
                                   channel=channel))
     return out
+
+
+def patterned(seed: int, signs: tuple, count: int, channel: bool = False,
+              h: tuple = (1.5, 4.0)) -> list:
+    """Rows of 15 mm sections with the bend angles' signs ``signs``, each |θ| uniform in
+    100–180°, h uniform in ``h``, N = 20 a section."""
+    rng = np.random.default_rng(seed)
+    return [SectionedScene(sections=[(float(s * rng.uniform(100, 180)), 15.0) for s in signs],
+                           height=float(rng.uniform(*h)), links=20 * len(signs),
+                           channel=channel) for _ in range(count)]
 
 
 def saddle_rows(seed: int, count: int) -> list:
@@ -92,7 +106,13 @@ def batches() -> list[tuple[str, object]]:
         out.append((f"(θ, −θ), θ 60–200°, h 1–6 mm, {'channel' if ch else 'one wall'}, "
                     f"seed {500 + k}",
                     lambda k=k, ch=ch: signed_pairs(500 + k, 60, ch)))
-    out.append(("2–4 sections of 30 mm as saddle_audit.py's", lambda: saddle_rows(600, 150)))
+    for k, (signs, ch) in enumerate((((1, -1, 1, -1), False), ((1, -1, 1, -1), True),
+                                     ((1, 1, -1, -1), False), ((1, -1, 1), False),
+                                     ((-1, 1, -1), True))):
+        out.append((f"signs {''.join('+' if x > 0 else '−' for x in signs)}, "
+                    f"θ 100–180°, h 1.5–4 mm, {'channel' if ch else 'one wall'}",
+                    lambda k=k, signs=signs, ch=ch: patterned(700 + k, signs, 200, ch)))
+    out.append(("2–4 sections of 30 mm as saddle_audit.py's", lambda: saddle_rows(600, 60)))
     return out
 
 
@@ -105,8 +125,8 @@ def audit(make) -> dict:
     t0 = time.perf_counter()
     alone = [lcpbench.solve(s, tol=1e-3) for s in make()]
     t_alone = time.perf_counter() - t0
-    row = dict(rows=len(many), took=0, both=0, same=0, only_many=0, only_solve=0,
-               worst=0.0, t_many=t_many, t_alone=t_alone, other=[])
+    row = dict(rows=len(many), took=0, both=0, same=0, only_many=0, checked=0,
+               only_solve=0, worst=0.0, t_many=t_many, t_alone=t_alone, other=[])
     for a, b in zip(many, alone, strict=True):
         if not (a.retries and a.retries[-1].name == "from_neighbour"):
             continue
@@ -121,6 +141,10 @@ def audit(make) -> dict:
                 row["other"].append((a.scene, a.total_force, b.total_force))
         elif a.converged:
             row["only_many"] += 1
+            ref = minimise_energy(a.scene, start=np.asarray(a.alpha, float))
+            unit = max(abs(a.total_force), a.scene.chain().force_scale)
+            if ref.success and abs(ref.total_force - a.total_force) <= 1e-6 * unit:
+                row["checked"] += 1
         elif b.converged:
             row["only_solve"] += 1
     return row
@@ -135,10 +159,10 @@ def main(argv=None) -> int:
     lcpbench.solve_many(of_kind(7, "two sections"), tol=1e-3)  # (compiled before the clocks)
     start = timing_start()
     lines = ["| batch | rows | took from_neighbour | both certified | same state | "
-             "certified by solve_many only | by solve only | largest force difference "
-             "(of F₀) | solve_many (s) | solve per row (s) |",
+             "certified by solve_many only (of them at an energy minimum) | by solve only | "
+             "largest force difference (of F₀) | solve_many (s) | solve per row (s) |",
              "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|"]
-    total = dict(rows=0, took=0, both=0, same=0, only_many=0, only_solve=0)
+    total = dict(rows=0, took=0, both=0, same=0, only_many=0, checked=0, only_solve=0)
     others = []
     for name, make in batches():
         r = audit(make)
@@ -147,10 +171,11 @@ def main(argv=None) -> int:
             total[k] += r[k]
         others += r["other"]
         lines.append(f"| {name} | {r['rows']} | {r['took']} | {r['both']} | {r['same']} | "
-                     f"{r['only_many']} | {r['only_solve']} | {r['worst']:.1e} | "
+                     f"{r['only_many']} ({r['checked']}) | {r['only_solve']} | {r['worst']:.1e} | "
                      f"{r['t_many']:.3f} | {r['t_alone']:.3f} |")
     lines.append(f"| all | {total['rows']} | {total['took']} | {total['both']} | "
-                 f"{total['same']} | {total['only_many']} | {total['only_solve']} | | | |")
+                 f"{total['same']} | {total['only_many']} ({total['checked']}) | {total['only_solve']} "
+                 "| | | |")
     text = ["# solve_many's rows started from a neighbouring row (issue 35, target 3)", "",
             f"Measured {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; "
             f"{timing_note(start)} Command: `python benchmarks/row_neighbours.py --force`; "

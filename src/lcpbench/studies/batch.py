@@ -146,7 +146,7 @@ def solve_many(scenes: Iterable, tol: float | None = None, solver="auto", *,
 
 #: the farthest neighbouring row :func:`neighbouring_row` hands to a refused row: every
 #: section's bend angle within this many degrees of the row's (twice the loading path's
-#: step, :data:`lcpbench.model.ramp.STEP_DEG`)…
+#: step, :data:`lcpbench.model.ramp.STEP_DEG`; results/row-neighbours.md audits it)…
 NEIGHBOUR_DEG = 20.0
 #: …and its wall height h within this many mm
 NEIGHBOUR_MM = 1.0
@@ -160,38 +160,40 @@ def _rows_of_sections(scenes: list, out: list, kw: dict, fast_kw: dict) -> set[i
     the same kernel (:func:`_after_stop`: the compiled fall-back; the cold solve is not
     run twice), another stopped row is one :func:`lcpbench.solve` (``kw``). A refused
     answer goes on to its plan's escalations (:func:`_retried`) as
-    :func:`lcpbench.solve`'s does, but first, where a row certified before it in the
-    batch is its neighbour (:func:`neighbouring_row`), SQP steps in the link angles from that
-    row's answer (the escalation ``from_neighbour``): the rows the kernel refuses are
-    those with links near the vertical, which the loading path reaches in 6-12 steps,
-    a few of them by that SQP (~1.3 ms a row), and one SQP from a neighbour in ~0.7 ms.
-    The indices solved; empty where the kernel does not take the rows (they are solved
-    one by one)."""
+    :func:`lcpbench.solve`'s does, but first, where a row before it in the batch was
+    solved along the loading path and is its neighbour (:func:`neighbouring_row`), SQP
+    steps in the link angles from that row's answer (the escalation ``from_neighbour``).
+    Only the loading path's answers serve as neighbours: a row certified cold, or by
+    ``from_neighbour``, can hold another stable state than the loading path's of the rows
+    near it (a review found both: a continuation from them certified 0 N where the
+    path, and the energy minimum followed along the load, give 1.67 N). The rows the
+    kernel refuses are those with links near the vertical, which the loading path
+    reaches in 9-18 steps, a few of them by that SQP (~2 ms a row), and one SQP from a
+    neighbour in ~0.7 ms. The indices solved; empty where the kernel does not take the
+    rows (they are solved one by one)."""
     rows = [i for i, s in enumerate(scenes) if type(s) is SectionedScene]
     if len(rows) < 2:
         return set()
     got = run_line([scenes[i] for i in rows], plane=list(range(len(rows))), **fast_kw)
     if got is None:
         return set()
-    certified = [(row_shape(scenes[i]), scenes[i], res)
-                 for i, res in zip(rows, got, strict=True)
-                 if not isinstance(res, Stopped) and res.converged]
+    along_path: list = []  # (row_shape, scene, result) of the rows the loading path solved
     for i, res in zip(rows, got, strict=True):
         if isinstance(res, Stopped):
             res = (solve_internal(scenes[i], **kw) if res.bail is None else
                    _after_stop(scenes[i], res.bail, **fast_kw))
         if not res.converged:
-            res = _retried(res, scenes[i], neighbour=neighbouring_row(scenes[i], certified),
+            res = _retried(res, scenes[i], neighbour=neighbouring_row(scenes[i], along_path),
                            **fast_kw)
-            if res.converged:
-                certified.append((row_shape(scenes[i]), scenes[i], res))
+            if res.converged and res.retried("ramped") is not None:
+                along_path.append((row_shape(scenes[i]), scenes[i], res))
         out[i] = res
     return set(rows)
 
 
 def neighbouring_row(row: SectionedScene, certified: list) -> ContactResult | None:
     """The answer of the nearest row of ``certified`` ((:func:`row_shape`, scene, result)
-    triples, in the order they were certified) that is ``row`` but for its sections'
+    triples, in the order they were solved) that is ``row`` but for its sections'
     bend angles and its h: each section's θ within :data:`NEIGHBOUR_DEG` of ``row``'s, of
     the same sign, and h within :data:`NEIGHBOUR_MM`; nearest by the larger of the two
     distances, each over its limit (the first certified of equals). None where no row is
