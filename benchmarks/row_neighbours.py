@@ -75,6 +75,24 @@ def patterned(seed: int, signs: tuple, count: int, channel: bool = False,
                            channel=channel) for _ in range(count)]
 
 
+def sweeps(signs: tuple, channel: bool, h_mid: float) -> list:
+    """A batch of sweeps (a review's, 2026-12-05): rows of 15 mm sections with the signs
+    ``signs``, for |θ| 140, 170, 200 and 230° each a sweep in h from 0.8 to 6 mm by 0.45
+    then one in |θ| from 100 to 256° by 12° at ``h_mid``, up, then the same down."""
+    k = len(signs)
+    out = []
+    for th in (140, 170, 200, 230):
+        for down in (False, True):
+            hs, ths = np.arange(0.8, 6.01, 0.45), np.arange(100, 260, 12.0)
+            if down:
+                hs, ths = hs[::-1], ths[::-1]
+            out += [SectionedScene(sections=[(s * th, 15.0) for s in signs], height=float(h),
+                                   links=30 * k, channel=channel) for h in hs]
+            out += [SectionedScene(sections=[(s * float(t), 15.0) for s in signs],
+                                   height=h_mid, links=30 * k, channel=channel) for t in ths]
+    return out
+
+
 def saddle_rows(seed: int, count: int) -> list:
     """Rows as benchmarks/saddle_audit.py draws them: 2–4 sections of 30 mm, θ 10–170° of
     random sign, h 1–8 mm, one wall or a channel."""
@@ -112,6 +130,12 @@ def batches() -> list[tuple[str, object]]:
         out.append((f"signs {''.join('+' if x > 0 else '−' for x in signs)}, "
                     f"θ 100–180°, h 1.5–4 mm, {'channel' if ch else 'one wall'}",
                     lambda k=k, signs=signs, ch=ch: patterned(700 + k, signs, 200, ch)))
+    for k, signs in enumerate(((1, -1), (1, -1, 1), (1, 1, -1), (1, -1, 1, -1), (-1, 1, 1))):
+        for ch in (False, True):
+            out.append((f"sweeps in h and |θ| up to 256°, signs "
+                        f"{''.join('+' if x > 0 else '−' for x in signs)}, "
+                        f"{'channel' if ch else 'one wall'}",
+                        lambda signs=signs, ch=ch, k=k: sweeps(signs, ch, 2.0 + 0.3 * k)))
     out.append(("2–4 sections of 30 mm as saddle_audit.py's", lambda: saddle_rows(600, 60)))
     return out
 
