@@ -11,8 +11,8 @@ wall's total force within the judge's τ·F₀, ``escalations.same_state``), the
 changes, and the time of each batch. A row certified by ``solve_many`` only is checked
 independently: the direct minimisation of its exact energy
 (``model.energy_reference.minimise_energy``, SLSQP and a Newton polish on the KKT system)
-started from its answer must stay there, its total force within 1e-6 of F₀. Writes ``results/row-neighbours.md`` (``--out``; not
-overwritten unless ``--force``).
+started from its answer must stay there, its total force within 1e-6 of F₀. Writes
+``results/row-neighbours.md`` (``--out``; not overwritten unless ``--force``).
 
     python benchmarks/row_neighbours.py --force
 """
@@ -198,8 +198,8 @@ def main(argv=None) -> int:
                      f"{r['only_many']} ({r['checked']}) | {r['only_solve']} | {r['worst']:.1e} | "
                      f"{r['t_many']:.3f} | {r['t_alone']:.3f} |")
     lines.append(f"| all | {total['rows']} | {total['took']} | {total['both']} | "
-                 f"{total['same']} | {total['only_many']} ({total['checked']}) | {total['only_solve']} "
-                 "| | | |")
+                 f"{total['same']} | {total['only_many']} ({total['checked']}) | "
+                 f"{total['only_solve']} | | | |")
     text = ["# solve_many's rows started from a neighbouring row (issue 35, target 3)", "",
             f"Measured {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; "
             f"{timing_note(start)} Command: `python benchmarks/row_neighbours.py --force`; "

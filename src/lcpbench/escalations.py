@@ -19,8 +19,8 @@ In the table's order:
   then, where a restart is certified, the loading path as a second start; the distinct
   stable states these starts reach are the result's ``states``;
 - ``from_neighbour``: in :func:`lcpbench.solve_many` only, a row of sections solved by
-  SQP steps in the link angles from a certified answer of a neighbouring row of the
-  same batch (:attr:`Context.neighbour`, chosen by :mod:`lcpbench.studies.batch`);
+  SQP steps in the link angles from the loading path's answer of a neighbouring row of
+  the same batch (:attr:`Context.neighbour`, chosen by :mod:`lcpbench.studies.batch`);
 - ``ramped``: solved again along the loading path (the bend angles from zero).
 
 The built-in back-end only, but ``escaped`` (a saddle is a fixed point of any exact
@@ -73,8 +73,8 @@ class Context:
     method: str
     why: str | None = None
     pressure_limit: float | None = None
-    #: :func:`lcpbench.solve_many`: a certified answer of a neighbouring row of the batch
-    #: (:func:`from_neighbour`); None in :func:`lcpbench.solve`
+    #: :func:`lcpbench.solve_many`: the loading path's answer of a neighbouring row of the
+    #: batch (:func:`from_neighbour`); None in :func:`lcpbench.solve`
     neighbour: ContactResult | None = None
 
 
@@ -382,13 +382,14 @@ def _neighbour_given(res: ContactResult, ctx: Context) -> bool:
 def from_neighbour(res: ContactResult, ctx: Context) -> tuple[ContactResult, str]:
     """``res`` solved again by SQP steps in the link angles
     (:func:`lcpbench.model.heavy_driver.run_heavy`, regular where a link is near the
-    vertical, where height steps stall) from the certified answer of a neighbouring row
-    of the batch (:attr:`Context.neighbour`: the same row but for its bend angles and h,
-    close to it in both) and its wall reactions as the first multipliers; judged as every
-    answer. A continuation from the neighbour's state: :func:`ramped` grows the bend
+    vertical, where height steps stall) from the loading path's answer of a neighbouring
+    row of the batch (:attr:`Context.neighbour`: the same row but for its bend angles and
+    h, close to it in both) and its wall reactions as the first multipliers; judged as
+    every answer. A continuation from the neighbour's state: :func:`ramped` grows the bend
     angles from zero instead, so the two can reach different states where the scene has
-    several; results/row-neighbours.md measures how often they do. Where the SQP does
-    not converge or its answer is refused, ``res``."""
+    several; results/row-neighbours.md measures how often they do (never, where both
+    certify, on its 4,300 rows). Where the SQP does not converge or its answer is
+    refused, ``res``."""
     t0 = time.perf_counter()
     nb = ctx.neighbour
     assert nb is not None  # (_neighbour_given)
@@ -422,5 +423,5 @@ ESCALATIONS: dict[str, Escalation] = {
 }
 
 __all__ = ["ESCALATIONS", "TIGHTEN_STEPS", "TIGHTER", "Context", "Escalation",
-           "escalate", "escaped", "from_neighbour", "in_increments", "ramped", "reached_states", "same_state",
-           "tightened"]
+           "escalate", "escaped", "from_neighbour", "in_increments", "ramped",
+           "reached_states", "same_state", "tightened"]

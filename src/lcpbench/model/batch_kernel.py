@@ -392,8 +392,8 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
     a scene is predicted from the answers of its own plane only, so several planes in
     one call give the answers of a call per plane. ``kin``, ``where``: each scene's kin
     (−1: none) and coordinates, for a scene none of its plane's answers predicts
-    (:func:`_predict`'s rule 5; ``kin`` all −1: a call per plane's answers). Where the solve kernel stops on a
-    scene alone in its plane (no other scene's start depends on it), ``kept[s]`` is −1,
+    (:func:`_predict`'s rule 5; ``kin`` all −1: a call per plane's answers). Where the
+    solve kernel stops on a scene alone in its plane (no other scene's start depends on it), ``kept[s]`` is −1,
     ``o_code[s]`` says where it stopped (:func:`_attempt`), and the call goes on: the
     caller solves that scene by itself."""
     m, n = lo.shape
