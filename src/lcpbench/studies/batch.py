@@ -336,4 +336,5 @@ def _planes(scenes: list) -> list[list[int]]:
     return list(planes.values())
 
 
-__all__ = ["NEIGHBOUR_DEG", "NEIGHBOUR_MM", "continuation_order", "neighbouring_row", "row_shape", "solve_many"]
+__all__ = ["NEIGHBOUR_DEG", "NEIGHBOUR_MM", "continuation_order", "neighbouring_row", "row_shape",
+           "solve_many"]
