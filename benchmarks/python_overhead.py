@@ -20,6 +20,7 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_v, "1")
 
 import argparse
+import inspect
 import time
 
 import lcpbench
@@ -67,15 +68,17 @@ def _kernels():
     return solve_kernel(), judge_kernel(), line_kernel()
 
 
-#: the line kernel's first output argument (batch_kernel.solve_line: 26 inputs)
-LINE_OUTPUTS = 26
+def line_outputs(line_kernel) -> int:
+    """The line kernel's first output argument (``batch_kernel.solve_line``'s ``o_code``)."""
+    fn = getattr(line_kernel.solve_line, "py_func", line_kernel.solve_line)
+    return list(inspect.signature(fn).parameters).index("o_code")
 
 
 def replayed(fn, repeat: int, fresh) -> tuple[float, int]:
     """(best CPU seconds of ``fn(fresh())`` with the kernels replayed, kernel calls)."""
     solve_k, judge_k, line_k = _kernels()
     reps = [_Replay(solve_k, "solve_chain"), _Replay(judge_k, "judge_answer"),
-            _Replay(line_k, "solve_line", fills=LINE_OUTPUTS)]
+            _Replay(line_k, "solve_line", fills=line_outputs(line_k))]
     for r in reps:
         setattr(r.module, r.name, r)
     try:
