@@ -27,6 +27,7 @@ from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
 from ..solvers.judge import requested
 from ..solvers.registry import DEFAULT, get_settings
+from ..thresholds import STALL_RUN, STALL_STEP
 from . import large_n
 from .outer import (
     DriverOutput,
@@ -47,8 +48,9 @@ BAIL_REASONS = {
     13: "the face-solve limit",
     14: "the step certificate rejected the step",
     15: "lcpbench's judge rejected the step",
-    16: "the outer steps stalled from the cold start (line searches cut t to 1/1024 or "
-        "less twice running)",
+    16: ("the outer steps stalled from the cold start (line searches cut t to "
+         f"1/{round(1 / STALL_STEP)} or less "
+         f"{'twice' if STALL_RUN == 2 else f'{STALL_RUN} outer steps'} running)"),
 }
 
 
