@@ -2,8 +2,9 @@
 
 The solve kernel (``compiled_kernel.solve_chain``, without the Python around it)
 of a git revision (``--ref``, default ``main``: its ``model/compiled_kernel.py``
-and ``model/compiled_dual.py``, and the linalg kernels they import, copied into a
-package of their own with its own numba cache) against the working tree's, on
+and ``model/compiled_dual.py``, and what they import: ``model/chain_kernel.py``,
+``thresholds.py``, the linalg kernels; copied into a package of their own with its
+own numba cache) against the working tree's, on
 the same chain arguments, interleaved in one process: CPU time per solve, one
 BLAS thread, the load average recorded at the start and the end. Reported: the
 median of each, their ratio, the face solves per solve (the records' first row)
@@ -29,12 +30,12 @@ import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 from lcpbench import ActuatorScene  # noqa: E402
-from lcpbench.model.kernel_call import _warm, kernel_args, solve_kernel  # noqa: E402
+from lcpbench.model.kernel_call import kernel_args, solve_kernel, warm_args  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 PKG = "src/lcpbench"
-FILES = {"model": ["compiled_kernel.py", "compiled_dual.py"],
-         "linalg": ["ldl_kernel.py"]}  # linalg: where the ref has them
+FILES = {"model": ["compiled_kernel.py", "compiled_dual.py", "chain_kernel.py"],
+         "linalg": ["ldl_kernel.py"], "": ["thresholds.py"]}  # where the ref has them
 SCENES = {"paper N=140 θ=150° h=3": dict(theta=150.0, height=3.0, links=140),
           "channel N=140 θ=160° h=2": dict(theta=160.0, height=2.0, links=140, channel=True),
           "N=400 θ=150° h=3": dict(theta=150.0, height=3.0, links=400)}
@@ -53,7 +54,8 @@ def old_kernel(ref: str):
             (pkg / sub).mkdir(parents=True, exist_ok=True)
             (pkg / sub / "__init__.py").write_text("")
             for f in files:
-                got = subprocess.run(["git", "show", f"{sha}:{PKG}/{sub}/{f}"], cwd=ROOT,
+                where = "/".join(x for x in (PKG, sub, f) if x)
+                got = subprocess.run(["git", "show", f"{sha}:{where}"], cwd=ROOT,
                                      capture_output=True)
                 if got.returncode == 0:
                     (pkg / sub / f).write_bytes(got.stdout)
@@ -64,7 +66,7 @@ def old_kernel(ref: str):
 
 
 def call(k, args, n, tol=TOL):
-    s_alpha, w_u, w_up, w_lo, flags = _warm(None, n)
+    s_alpha, w_u, w_up, w_lo, flags = warm_args(None, n)
     return k.solve_chain(*args, tol, 200, s_alpha, w_u, w_up, w_lo, flags, 20 * n + 50, 1e-9,
                          False)
 
