@@ -159,19 +159,19 @@ def _replayed_solve(scene):
 def kernel_parts(scene, small, repeat: int) -> dict:
     """The solve kernel and the judge kernel alone, and whole solves at N = 12 and 140:
     after a 100 ms busy loop, then right after themselves."""
-    from lcpbench.model.compiled import DEFAULT_TOL
     from lcpbench.model.judge import _kernel as judge_kernel
     from lcpbench.model.judge import chain_args
-    from lcpbench.model.kernel_call import cold_start, kernel_args, solve_kernel
+    from lcpbench.model.kernel_call import cold_start, kernel_args, kernel_settings, solve_kernel
 
     chain = scene.chain()
     args = kernel_args(chain)
     jargs = chain_args(chain, args)
     n = chain.free_nodes.size
     k, jk = solve_kernel(), judge_kernel()
+    max_iter, request, _ = kernel_settings("default", n)
 
-    def solve_kernel():  # the call of lcpbench.solve (compiled.call_kernel, cold start)
-        return k.solve_chain(*args, TOL, 200, *cold_start(n), 20 * n + 50, DEFAULT_TOL, False)
+    def solve_kernel():  # the call of lcpbench.solve (kernel_call.call_kernel, cold start)
+        return k.solve_chain(*args, TOL, 200, *cold_start(n), max_iter, request, False)
 
     got = solve_kernel()
     alpha, rec, count, R = got[1], got[6], got[7], got[9]
