@@ -16,9 +16,13 @@ by the kernels' sources, so it serves at most one of the two), interleaved:
    judge costs inside the line kernel, where it runs between solves (colder
    caches than in a loop of judge calls).
 
-The earlier kernel is ``git show REF:src/lcpbench/model/judge_kernel.py``
-(default 782a192, main before this change), loaded under another module name
-from a temporary directory (its numba cache there too). Both judges must give
+The earlier kernel is REF's ``src/lcpbench/model/judge_kernel.py`` (default
+``main``), with the modules it imports, extracted from git (``git archive REF``)
+into a temporary directory and imported from there under the package name
+``lcpbench_before`` (empty package modules: only the kernels' own files run; their
+numba cache there too). REF's ``judge_answer`` must take the arguments this tree's
+takes (since cu, cl were added; the first comparison, against 782a192, took other
+arguments and returned 9 arrays, and can no longer run). Both judges must give
 the same verdicts and, to round-off, the same numbers (checked before timing).
 
     python benchmarks/judge_cost.py [--before REF] [--repeat 41] [--loop 200]
@@ -33,22 +37,26 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_v] = "1"
 
 import argparse
+import importlib
 import importlib.util
+import inspect
+import io
 import statistics
 import subprocess
 import sys
+import tarfile
 import tempfile
 import time
+import types
 from pathlib import Path
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-JUDGE = "src/lcpbench/model/judge_kernel.py"
 LINE = ROOT / "src/lcpbench/model/batch_kernel.py"
-IMPORT = "from .judge_kernel import SETTLED, STATS, judge_answer"
-CALL_NEW = "jc, st, fu, fl, tres = judge_answer("
-CALL_OLD = "jc, st, fu, fl, _, _, tres, _, _ = judge_answer("
+IMPORT = "from .judge_kernel import SETTLED, STATS, judge_answer, split_net"
+CALL = "judged = judge_answer("
+BEFORE = "lcpbench_before"
 TOL = 1e-3
 BATCH = {False: "solve_many, 108 scenes (CPU µs per scene)",
          True: "solve_many, the judge called twice per scene (CPU µs per scene)"}
@@ -63,53 +71,49 @@ def _load(name: str, path: Path):
     return module
 
 
-def before_kernels(ref: str, where: Path):
-    """(the earlier judge kernel, whether it returns 9 arrays)."""
-    src = subprocess.run(["git", "-C", str(ROOT), "show", f"{ref}:{JUDGE}"], check=True,
-                         capture_output=True, text=True).stdout
-    (where / "judge_kernel_before.py").write_text(src)
-    judge = _load("judge_kernel_before", where / "judge_kernel_before.py")
-    return judge, "fu, fl, ju, jlo, res, x, y" in src  # 9 returns before this change
+def before_kernels(ref: str, where: Path, judge_answer):
+    """REF's judge kernel module, imported as ``lcpbench_before.model.judge_kernel`` from
+    REF's ``src/lcpbench`` extracted into ``where``; its ``judge_answer`` must take the
+    arguments of this tree's (``judge_answer``)."""
+    tar = subprocess.run(["git", "-C", str(ROOT), "archive", ref, "src/lcpbench"],
+                         check=True, capture_output=True).stdout
+    with tarfile.open(fileobj=io.BytesIO(tar)) as t:
+        t.extractall(where, filter="data")
+    root = where / "src" / "lcpbench"
+    for name, path in ((BEFORE, root), (f"{BEFORE}.model", root / "model"),
+                       (f"{BEFORE}.linalg", root / "linalg")):
+        pkg = types.ModuleType(name)
+        pkg.__path__ = [str(path)]
+        sys.modules[name] = pkg
+    judge = importlib.import_module(f"{BEFORE}.model.judge_kernel")
+    theirs, ours = (inspect.signature(getattr(f, "py_func", f))
+                    for f in (judge.judge_answer, judge_answer))
+    if theirs != ours:
+        raise SystemExit(f"{ref}'s judge_answer{theirs} does not take this tree's arguments "
+                         f"{ours}: compare against a later ref")
+    return judge
 
 
-def line_kernel(where: Path, judge: str | None, nine: bool, twice: bool):
+def line_kernel(where: Path, judge: str | None, twice: bool):
     """This tree's line kernel, its judge ``judge`` (a module name; None: this tree's),
     with the judge called a second time per scene where ``twice`` (its answer unused:
     the difference of the two is what the judge costs inside the line kernel)."""
     line = LINE.read_text()
-    if IMPORT not in line or CALL_NEW not in line:
+    if IMPORT not in line or CALL not in line:
         raise SystemExit(f"{LINE} no longer has the judge's import or call line this script "
-                         f"rewrites ({IMPORT!r}, {CALL_NEW!r})")
+                         f"rewrites ({IMPORT!r}, {CALL!r})")
     if judge is not None:
-        line = line.replace(IMPORT, f"from {judge} import SETTLED, STATS, judge_answer")
-    start = line.index(CALL_NEW)
+        line = line.replace(IMPORT, "from .judge_kernel import split_net\n"
+                            f"from {judge} import SETTLED, STATS, judge_answer")
+    start = line.index(CALL)
     end = line.index(".copy())", start) + len(".copy())")
     call = line[start:end]
-    if nine:
-        call = call.replace(CALL_NEW, CALL_OLD)
     if twice:
-        call = call.replace(CALL_OLD if nine else CALL_NEW, "_extra = judge_answer(") + (
-            "\n        " + call)
-    name = f"batch_kernel_{judge or 'after'}_{'twice' if twice else 'once'}"
+        call = call.replace(CALL, "_extra = judge_answer(") + "\n        " + call
+    name = f"batch_kernel_{'before' if judge else 'after'}_{'twice' if twice else 'once'}"
     (where / f"{name}.py").write_text(line[:start] + call + line[end:])
     # relative imports (the solve kernel, the verdict) from lcpbench.model, as the original
     return _load(f"lcpbench.model.{name}", where / f"{name}.py")
-
-
-class Adapter:
-    """A judge kernel module as model.judge uses it: judge_answer returning
-    (code, stats, fu, fl, torque residual), whatever the kernel returns."""
-
-    def __init__(self, module, nine: bool):
-        self.SETTLED, self.STATS = module.SETTLED, module.STATS
-        f = module.judge_answer
-        pick = (0, 1, 2, 3, 6) if nine else (0, 1, 2, 3, 4)
-
-        def judge_answer(*args):
-            r = f(*args)
-            return r[pick[0]], r[pick[1]], r[pick[2]], r[pick[3]], r[pick[4]]
-
-        self.judge_answer = judge_answer
 
 
 def compiled_loop(judge_answer):
@@ -127,7 +131,7 @@ def compiled_loop(judge_answer):
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--before", default="782a192", help="git ref of the earlier judge kernel")
+    ap.add_argument("--before", default="main", help="git ref of the earlier judge kernel")
     ap.add_argument("--repeat", type=int, default=41)
     ap.add_argument("--loop", type=int, default=200, help="calls per compiled-loop sample")
     ap.add_argument("--batches", type=int, default=7, help="solve_many rounds (108 scenes each)")
@@ -145,10 +149,11 @@ def main(argv=None) -> int:
     new_judge = numba_cache.kernel_module("lcpbench.model.judge_kernel", "judge_answer")
     new_line = numba_cache.kernel_module("lcpbench.model.batch_kernel", "solve_line")
     tmp = Path(tempfile.mkdtemp(prefix="judge_cost_"))
-    old_judge, nine = before_kernels(opts.before, tmp)
-    lines = {("before", False): line_kernel(tmp, "judge_kernel_before", nine, False),
-             ("before", True): line_kernel(tmp, "judge_kernel_before", nine, True),
-             ("after", False): new_line, ("after", True): line_kernel(tmp, None, False, True)}
+    old_judge = before_kernels(opts.before, tmp, new_judge.judge_answer)
+    before = f"{BEFORE}.model.judge_kernel"
+    lines = {("before", False): line_kernel(tmp, before, False),
+             ("before", True): line_kernel(tmp, before, True),
+             ("after", False): new_line, ("after", True): line_kernel(tmp, None, True)}
 
     scene = ActuatorScene(theta=150.0, height=3.0, links=140)
     chain = scene.chain()
@@ -157,7 +162,7 @@ def main(argv=None) -> int:
     out, _ = run_compiled(chain, tol=TOL, args=args)
     sizes = np.array([s.max_dalpha for s in out.steps])
     call = (out.alpha, *jargs, out.forces_upper, out.forces_lower, TOL, sizes)
-    adapters = {"before": Adapter(old_judge, nine), "after": Adapter(new_judge, False)}
+    adapters = {"before": old_judge, "after": new_judge}
     ro, rn = adapters["before"].judge_answer(*call), adapters["after"].judge_answer(*call)
     assert ro[0] == rn[0] and np.allclose(ro[1], rn[1], rtol=1e-6, atol=1e-12, equal_nan=True)
     np.testing.assert_array_equal(ro[2], rn[2])
