@@ -74,6 +74,8 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
     a = p.parse_args(argv)
     refuse_overwrite([a.out], a.force)
+    cmd = ("python benchmarks/accuracy_translation.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     scenes = PAPER_GRID.scenes()
     refs = [reference_row(s)["total_force"] for s in scenes]
     head = ["| asked | tol (rad) | converged | continued at tol/100 | max error | "
@@ -89,7 +91,7 @@ def main(argv=None) -> int:
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     text = "\n".join([
         "# Driver tolerance against force error, the paper grid (issue 40, item 4)", "",
-        f"Computed {when} by `python benchmarks/accuracy_translation.py --force` "
+        f"Computed {when} by `{cmd}` "
         f"(lcpbench {lcpbench.__version__}): the paper's {len(scenes)} scenes (θ 10–180° by "
         "10, h 2–7 mm by 1, N = 140), each solved cold by `lcpbench.solve` with the "
         "default back-end. Error: |F − F_ref| / max(|F_ref|, EI/ℓ²) against the "

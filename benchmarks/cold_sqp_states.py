@@ -100,6 +100,8 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
     a = p.parse_args(argv)
     refuse_overwrite([a.out], a.force)
+    cmd = ("python benchmarks/cold_sqp_states.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     start = timing_start()
     sets = [("mixed batch (seed 7): two sections (θ, −θ), N = 140",
              [s for i, s in enumerate(mixed(7)) if KINDS[i % 4] == "two sections"])]
@@ -112,8 +114,7 @@ def main(argv=None) -> int:
     text = "\n".join([
         "# Rows the line kernel stops on: the loading path or the cold SQP? (issue 35, "
         "target 3)", "",
-        f"Measured {when}; {timing_note(start)} Command: `python benchmarks/"
-        f"cold_sqp_states.py --seed {a.seed} --force`; tol {TOL:g}.", "",
+        f"Measured {when}; {timing_note(start)} Command: `{cmd}`; tol {TOL:g}.", "",
         "Rows of sections on which the line kernel stops cold, solved by `lcpbench.solve` "
         "(the loading path) and by the compiled SQP in the link angles from the same cold "
         "start, judged by lcpbench's judge; same state: each wall's total force within the "

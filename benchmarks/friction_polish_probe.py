@@ -247,13 +247,15 @@ def probe(fs, sol, rng, tally) -> dict | None:
     return out
 
 
-def main() -> int:
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", default="results/friction/polish_probe.md")
     ap.add_argument("--force", action="store_true")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     out = Path(args.out)
     refuse_overwrite([out], args.force)
+    cmd = ("python benchmarks/friction_polish_probe.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     start = timing_start()
     t0 = time.perf_counter()
     rng = np.random.default_rng(1)
@@ -276,7 +278,7 @@ def main() -> int:
     lines = [
         "# Lemke's unconfirmed answers: conditioning or round-off? (issue 39, target 2)", "",
         f"{datetime.now(timezone.utc).strftime('%Y-%m-%d %H:%M UTC')}; "
-        f"`python benchmarks/friction_polish_probe.py --force`; {timing_note(start)} "
+        f"`{cmd}`; {timing_note(start)} "
         f"({time.perf_counter() - t0:.0f} s).", "",
         "The states of `benchmarks/friction_agreement.py`'s 100 paths whose last step Lemke "
         "(the default, `StepLemke`) answers but the exact oracle does not confirm, where its index set has an exact "

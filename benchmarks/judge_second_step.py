@@ -153,6 +153,8 @@ def main(argv=None) -> int:
     p.add_argument("--out", type=Path, default=OUT)
     p.add_argument("--force", action="store_true", help="overwrite committed results")
     a = p.parse_args(argv)
+    cmd = ("python benchmarks/judge_second_step.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     if a.dump:
         return dump(a.dump, a.workers)
     if a.out.exists() and not a.force:
@@ -216,8 +218,7 @@ def main(argv=None) -> int:
           f"judge step is taken only where the one-step estimate exceeds τ (*second step "
           f"settled* counts those; elsewhere the bound is the one-step estimate). "
           f"{elapsed:.0f} s on {a.workers} workers, load {load0[0]:.1f} → {load1[0]:.1f}.",
-          "", "    python benchmarks/judge_second_step.py "
-          + ("--before FILE " if a.before else "") + "--force", "",
+          "", "    " + cmd, "",
           "| run | scenes | success | wrong (converged, off) | bound reached | second step "
           "settled | bound < true error | min bound / error (total, node) |",
           "|---|---:|---:|---:|---:|---:|---:|---|"]
@@ -235,8 +236,8 @@ def main(argv=None) -> int:
         before = json.loads(a.before.read_text())
         now = [r for r in rows if r["label"].startswith("default ")] + rows_chan
         md += ["", "## The built-in default's answers against the code before the change", "",
-               f"Reactions of `lcpbench.solve(scene, tol=T)` against FILE = "
-               f"{a.before_label or a.before} (`--dump FILE`).", ""]
+               f"Reactions of `lcpbench.solve(scene, tol=T)` against those in the `--before` "
+               f"file ({a.before_label or a.before}, written by `--dump`).", ""]
         md += compare(before, now)
     a.out.parent.mkdir(parents=True, exist_ok=True)
     a.out.write_text("\n".join(md) + "\n")

@@ -176,6 +176,8 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
     a = p.parse_args(argv)
     refuse_overwrite([a.out], a.force)
+    cmd = (_env() + "python benchmarks/mixed_batch.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     start = timing_start()
     calls = {"100 mixed scenes": batch(lambda: mixed(a.seed)),
              "100 paper-grid scenes": batch(paper_grid)}
@@ -208,8 +210,8 @@ def main(argv=None) -> int:
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     text = "\n".join([
         "# solve_many on mixed scenes (issue 35, target 3)", "",
-        f"Measured {when}; {timing_note(start)} Command: `{_env()}python benchmarks/mixed_batch.py "
-        f"--rounds {a.rounds} --seed {a.seed} --force`. Target: 100 mixed scenes (elastic and "
+        f"Measured {when}; {timing_note(start)} Command: `{cmd}`. Target: 100 mixed scenes "
+        "(elastic and "
         "profiled walls, sections, channels) at ≥ 5,000 scenes/s, tol 1e-3. The clock times "
         "`solve_many` alone: each round's fresh scenes are constructed before it starts (their "
         "chains are built inside it; a wall profile's check, in its scene's constructor, "
