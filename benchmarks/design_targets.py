@@ -396,6 +396,8 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
     a = p.parse_args(argv)
     refuse_overwrite([a.out], a.force)
+    cmd = ("python benchmarks/design_targets.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     start = timing_start()
     t1, s1 = target1(a.scenes, a.seed)
     t1b, s1b = target1_more(a.more, a.seed)
@@ -404,8 +406,7 @@ def main(argv=None) -> int:
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     text = "\n".join([
         "# Sensitivities and inverse queries (issue 38, targets 1, 2 and 4)", "",
-        f"Measured {when}; {timing_note(start)} Command: `python benchmarks/design_targets.py "
-        f"--scenes {a.scenes} --seed {a.seed} --more {a.more} --rounds {a.rounds} --force`.", "",
+        f"Measured {when}; {timing_note(start)} Command: `{cmd}`.", "",
         "## Target 1: sensitivities against finite differences of solves", "",
         *_target1_text(s1, s1b, t1, t1b),
         "## Target 2: cost", "", *t2, "",

@@ -52,6 +52,8 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
     a = p.parse_args(argv)
     refuse_overwrite([a.out], a.force)
+    cmd = ("python benchmarks/fit_ei.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     cal = get_calibration(1)
     lo, hi = float(cal.pressure(90.0)), cal.p_max
     rng = np.random.default_rng(a.seed)
@@ -80,8 +82,7 @@ def main(argv=None) -> int:
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     text = "\n".join([
         "# Fitting EI to noisy force-pressure data (issue 38, target 3)", "",
-        f"Computed {when} by `python benchmarks/fit_ei.py --trials {a.trials} --seed {a.seed} "
-        f"--force` in {time.perf_counter() - t0:.0f} s. Data: m ∈ [8, 15] pressures uniform "
+        f"Computed {when} by `{cmd}` in {time.perf_counter() - t0:.0f} s. Data: m ∈ [8, 15] pressures uniform "
         f"in [{lo:.1f}, {hi:.1f}] kPa (actuator 1's calibration, θ from 90°), the model's "
         f"total force at EI = {EI_TRUE:g} N mm² (N = {N}, h = {H:g} mm, forward solves at "
         f"tol 1e-10) times 1 + {NOISE:g} z, z ~ N(0, 1). The fit starts from 32.01 N mm² "

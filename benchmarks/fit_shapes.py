@@ -73,6 +73,8 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
     a = p.parse_args(argv)
     refuse_overwrite([a.out], a.force)
+    cmd = ("python benchmarks/fit_shapes.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     rng = np.random.default_rng(a.seed)
     rows, cache, t0 = [], {}, time.perf_counter()
     for mult in (1, 5, 20):
@@ -95,8 +97,7 @@ def main(argv=None) -> int:
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     text = "\n".join([
         "# The fit from photographs on synthetic shapes (issue 38, item 3)", "",
-        f"Computed {when} by `python benchmarks/fit_shapes.py --trials {a.trials} --seed "
-        f"{a.seed} --force` in {time.perf_counter() - t0:.0f} s. Data (per trial): 6 free "
+        f"Computed {when} by `{cmd}` in {time.perf_counter() - t0:.0f} s. Data (per trial): 6 free "
         f"shapes at P = {', '.join(map(str, FREE))} kPa, measured θ = {SLOPE:g} P + "
         f"{INTERCEPT:g}° + {THETA_SD:g}° z; 2 pressed shapes at P = "
         f"{', '.join(map(str, PRESSED))} kPa: the model's centre line (N = {N}, a {H:g} mm "

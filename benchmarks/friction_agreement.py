@@ -137,16 +137,18 @@ class Recorder:
         return out
 
 
-def main() -> int:
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--paths", type=int, default=100)
     ap.add_argument("--seed", type=int, default=39)
     ap.add_argument("--tol", type=float, default=1e-8)
     ap.add_argument("--out", default="results/friction/agreement.md")
     ap.add_argument("--force", action="store_true")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     out = Path(args.out)
     refuse_overwrite([out], args.force)
+    cmd = ("python benchmarks/friction_agreement.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     start = timing_start()
     solvers = [s for s in SOLVERS if backends()[s].available()]
     missing = [s for s in SOLVERS if s not in solvers]
@@ -255,9 +257,6 @@ def main() -> int:
                     p[s][k] = max(p[s][k], v)
     total = time.perf_counter() - t_all
     note = timing_note(start)
-    cmd = ("python benchmarks/friction_agreement.py" + (f" --paths {args.paths}" if
-           args.paths != 100 else "") + (f" --seed {args.seed}" if args.seed != 39 else "")
-           + (f" --tol {args.tol:g}" if args.tol != 1e-8 else "") + " --force")
     lines = [
         "# The frictional step's back-ends agree (issue 39, target 2)", "",
         f"{datetime.now(timezone.utc).strftime('%Y-%m-%d %H:%M UTC')}; `{cmd}`; {note} "

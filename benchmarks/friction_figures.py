@@ -28,6 +28,7 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse
 import csv
+import sys
 import tempfile
 import time
 from datetime import datetime, timezone
@@ -87,12 +88,14 @@ def cycle_figure(out: Path) -> str:
             f"mN; every state converged: {all(bool(x.converged.all()) for x in cycles)}")
 
 
-def main() -> int:
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=ROOT / "results" / "friction")
     ap.add_argument("--force", action="store_true", help="overwrite committed results")
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     refuse_overwrite([a.out / f for f in FILES], a.force)
+    cmd = ("python benchmarks/friction_figures.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     a.out.mkdir(parents=True, exist_ok=True)
     start, t0 = timing_start(), time.perf_counter()
     notes = [forces_figure(a.out)]
@@ -103,8 +106,8 @@ def main() -> int:
     notes.append(cycle_figure(a.out))
     text = [
         "# Friction figures (issue 39)", "",
-        f"Written {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC by `python "
-        f"benchmarks/friction_figures.py --force` in {time.perf_counter() - t0:.0f} s; "
+        f"Written {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC by `{cmd}` in "
+        f"{time.perf_counter() - t0:.0f} s; "
         f"{timing_note(start)}", "",
         "| file | what |", "|---|---|",
         "| `forces-along-chain.png` | normal and tangential forces along the chain, stick "

@@ -26,6 +26,7 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_v] = "1"
 
 import argparse
+import sys
 import time
 from collections import Counter
 from datetime import datetime, timezone
@@ -74,16 +75,18 @@ def breaks_coulomb(res, rtol=1e-9, slip=1e-6) -> bool:
     return bool(broken_conditions(res, rtol, slip))
 
 
-def main() -> int:
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--paths", type=int, default=60)
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--tol", type=float, default=1e-8)
     ap.add_argument("--out", default=None, help="also write the counts here (markdown)")
     ap.add_argument("--force", action="store_true")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     if args.out:
         refuse_overwrite([args.out], args.force)
+    cmd = ("python benchmarks/friction_paths.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     start, t0 = timing_start(), time.perf_counter()
     rng = np.random.default_rng(args.seed)
     judge_rtol = JUDGE_SHARE * force_tol(args.tol)
@@ -125,9 +128,6 @@ def main() -> int:
         lines.append("  at 1e-9: " + "; ".join(f"{k} {', '.join(v)}" for k, v in where.items()))
     print("\n".join(lines))
     if args.out:
-        cmd = (f"python benchmarks/friction_paths.py --paths {args.paths} --seed {args.seed}"
-               + (f" --tol {args.tol:g}" if args.tol != 1e-8 else "")
-               + f" --out {args.out} --force")
         text = [
             "# Random frictional paths: converged answers that break Coulomb "
             "(issue 39, target 4)", "",

@@ -129,6 +129,8 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
     a = p.parse_args(argv)
     refuse_overwrite([a.out], a.force)
+    cmd = ("python benchmarks/friction_speed.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     start = timing_start()
     rows, ratios = [], []
     for name, scene in SCENES.items():
@@ -176,8 +178,7 @@ def main(argv=None) -> int:
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     text = "\n".join([
         "# Speed of the frictional solve and of pull-out (issue 39, target 5)", "",
-        f"Measured {when}; {timing_note(start)} Command: `python benchmarks/friction_speed.py "
-        f"--rounds {a.rounds} --force`. N = 140, sliders at both ends, μ 0.3 (the channel: "
+        f"Measured {when}; {timing_note(start)} Command: `{cmd}`. N = 140, sliders at both ends, μ 0.3 (the channel: "
         f"0.3 above, 0.1 below; the stenosis: the wall profile of benchmarks/scene_kinds.py, "
         f"its frictionless solve the compiled profile driver), each call at its defaults (`solve` and `solve_path`: tol "
         "1e-3, the paper's; `pull_out`: tol 1e-10, rtol 1e-6). Medians over rounds, interleaved; the "

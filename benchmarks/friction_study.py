@@ -30,6 +30,7 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse
 import json
+import sys
 import time
 from datetime import datetime, timezone
 from pathlib import Path
@@ -58,16 +59,18 @@ def cycle(actuator: str, h: float, mu: float, step_psi: float, links: int, tol: 
             "unloading": dn_f.tolist(), "converged": bool(c.converged.all())}
 
 
-def main() -> int:
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, default=ROOT / "results" / "friction")
     ap.add_argument("--links", type=int, default=40)
     ap.add_argument("--check-links", type=int, default=60)
     ap.add_argument("--tol", type=float, default=1e-9)
     ap.add_argument("--force", action="store_true", help="overwrite committed results")
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     md, js = a.out / "study.md", a.out / "study.json"
     refuse_overwrite([md, js], a.force)
+    cmd = ("python benchmarks/friction_study.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     a.out.mkdir(parents=True, exist_ok=True)
     start, t0 = timing_start(), time.perf_counter()
     data = {}
@@ -93,8 +96,8 @@ def main() -> int:
     paper = PAPER["fig24"]
     lines = [
         "# Wall friction and the paper's force error (issue 39, item 7)", "",
-        f"Written {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC by `python "
-        f"benchmarks/friction_study.py --force` in {time.perf_counter() - t0:.0f} s; "
+        f"Written {datetime.now(timezone.utc):%Y-%m-%d %H:%M} UTC by `{cmd}` in "
+        f"{time.perf_counter() - t0:.0f} s; "
         f"{timing_note(start)}", "",
         "Each of the paper's actuators (calibrations eqs. 40-42, EI 32.01 N mm², w 2.45e-4 "
         "N/mm, ℓ 30 mm) inflated from 0 to 25 psi in the paper's 2.5-psi steps in its "
@@ -134,7 +137,7 @@ def main() -> int:
         "near 25 psi), and a path ends at its first state that does not converge.", "",
     ]
     md.write_text("\n".join(lines))
-    js.write_text(json.dumps({"command": "python benchmarks/friction_study.py --force",
+    js.write_text(json.dumps({"command": cmd,
                               "links": a.links, "tol": a.tol, "mus": MUS,
                               "summary": summary, "check_links": a.check_links,
                               "summary_check": summary_check, "cycles": data}, indent=1))

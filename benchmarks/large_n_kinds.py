@@ -78,6 +78,8 @@ def main(argv=None) -> int:
     ap.add_argument("--force", action="store_true", help="overwrite OUT.md and .json")
     a = ap.parse_args(argv)
     refuse_overwrite([a.out + ".md", a.out + ".json"], a.force)
+    cmd = ("python benchmarks/large_n_kinds.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     load = os.getloadavg()
     rows = []
     for kind in KINDS:
@@ -88,11 +90,12 @@ def main(argv=None) -> int:
     with open(a.out + ".json", "w") as fh:
         json.dump({"load": load, "load_after": load_after, "tol": a.tol, "repeat": a.repeat,
                    "rows": rows}, fh, indent=1)
-    write_report(a.out + ".md", rows, a.tol, a.repeat, load, load_after)
+    write_report(a.out + ".md", rows, a.tol, a.repeat, load, load_after, cmd)
     return 0
 
 
-def write_report(path: str, rows: list[dict], tol: float, repeat: int, load, load_after):
+def write_report(path: str, rows: list[dict], tol: float, repeat: int, load, load_after,
+                 cmd: str):
     lines = [
         "# Large N by scene kind (issue 35, target 5)", "",
         "The paper's scene (θ = 150°, h = 3 mm) with elastic walls (k = 0.1 N/mm²), the "
@@ -101,8 +104,7 @@ def write_report(path: str, rows: list[dict], tol: float, repeat: int, load, loa
         f"(kind, N) in a fresh process, one BLAS thread, kernels loaded first, the best of "
         f"{repeat} solves. Peak RSS is the process's (its warm-up solves included). Target: "
         "< 2 s and < 500 MB at N = 10⁵, converged and accepted by lcpbench's judge.", "",
-        "    OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 python benchmarks/large_n_kinds.py "
-        "--force", "",
+        "    " + cmd, "",
         f"Load average (1, 5, 15 min) before: {', '.join(f'{x:.2f}' for x in load)}; after: "
         f"{', '.join(f'{x:.2f}' for x in load_after)} (2 cores, shared).", "",
         "| scene | N | time (s) | CPU (s) | peak RSS (MiB) | F (N) | converged | judge | "

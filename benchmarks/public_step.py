@@ -55,6 +55,8 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return 2
     refuse_overwrite([a.out], a.force)
+    cmd = ("python benchmarks/public_step.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     start = timing_start()
     result = lcpbench.solve(ActuatorScene(theta=150, height=3.0, links=140), tol=1e-10)
     step = assemble_step(result.scene.chain(), result.alpha)
@@ -79,8 +81,7 @@ def main(argv=None) -> int:
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     text = "\n".join([
         "# The public step call against Siconos Lemke (issue 35, target 4)", "",
-        f"Measured {when}; {timing_note(start)} Command: `python benchmarks/public_step.py "
-        f"--rounds {a.rounds} --force`. The N = 140 step at the paper scene's converged "
+        f"Measured {when}; {timing_note(start)} Command: `{cmd}`. The N = 140 step at the paper scene's converged "
         f"configuration ({step.size} free nodes), {a.rounds} interleaved rounds, wall time "
         f"of each public call from Python. Total force: {f1:.12g} N (active set) and "
         f"{f2:.12g} N (Siconos Lemke). Target: ≥ 20× Siconos Lemke.", "", *lines, ""])

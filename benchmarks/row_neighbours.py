@@ -180,6 +180,8 @@ def main(argv=None) -> int:
     ap.add_argument("--force", action="store_true", help="overwrite --out")
     args = ap.parse_args(argv)
     refuse_overwrite([args.out], args.force)
+    cmd = ("python benchmarks/row_neighbours.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     lcpbench.solve_many(of_kind(7, "two sections"), tol=1e-3)  # (compiled before the clocks)
     start = timing_start()
     lines = ["| batch | rows | took from_neighbour | both certified | same state | "
@@ -202,7 +204,7 @@ def main(argv=None) -> int:
                  f"{total['only_solve']} | | | |")
     text = ["# solve_many's rows started from a neighbouring row (issue 35, target 3)", "",
             f"Measured {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; "
-            f"{timing_note(start)} Command: `python benchmarks/row_neighbours.py --force`; "
+            f"{timing_note(start)} Command: `{cmd}`; "
             "tol 1e-3.",
             "", __doc__.split("\n\n")[1].replace("\n", " "), "", *lines, ""]
     if others:

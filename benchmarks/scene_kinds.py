@@ -93,6 +93,8 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
     a = p.parse_args(argv)
     refuse_overwrite([a.out], a.force)
+    cmd = ("python benchmarks/scene_kinds.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     start = timing_start()
     all_scenes = scenes()
     parts = []
@@ -101,8 +103,7 @@ def main(argv=None) -> int:
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     text = "\n".join([
         "# Every scene kind against the flat wall (issue 35, target 1)", "",
-        f"Measured {when}; {timing_note(start)} Command: `python benchmarks/scene_kinds.py "
-        f"--rounds {a.rounds} --force`. `lcpbench.solve` with the default back-end, θ = 150°, "
+        f"Measured {when}; {timing_note(start)} Command: `{cmd}`. `lcpbench.solve` with the default back-end, θ = 150°, "
         f"h = 3 mm, N = 140; {a.rounds} interleaved rounds after one warm-up round, in rotating order. "
         "Target: every kind within 2× of the flat wall. Times of different runs are not "
         "comparable, ratios are. Each scene object is solved again every round, so what a "

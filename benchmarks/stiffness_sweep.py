@@ -42,6 +42,8 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
     a = p.parse_args(argv)
     refuse_overwrite([a.out], a.force)
+    cmd = ("python benchmarks/stiffness_sweep.py "
+           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
     rows, refused = [], []
     for tol in (1e-9, 1e-10):
         for channel in (False, True):
@@ -63,7 +65,7 @@ def main(argv=None) -> int:
     when = time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime())
     text = "\n".join([
         "# Elastic walls from soft to rigid (issue 35, target 2)", "",
-        f"Computed {when} by `python benchmarks/stiffness_sweep.py --force`: θ = 150°, "
+        f"Computed {when} by `{cmd}`: θ = 150°, "
         f"h = 3 mm, k = 1e-3 … 1e10 N/mm² in half decades ({STIFFNESS.size} values), each "
         "a cold `lcpbench.solve` with the default back-end (the compiled kernel's "
         "compliance form, docs/elastic-walls.md). Target: every k converges, and at "
