@@ -35,7 +35,7 @@ import lcpbench
 from lcpbench.accuracy import LOWEST, driver_tol_for, held_to
 from lcpbench.bench.grid import PAPER_GRID
 from lcpbench.bench.jobs import reference_row
-from lcpbench.bench.machine import refuse_overwrite
+from lcpbench.bench.machine import command_line, refuse_overwrite
 from lcpbench.bench.metrics import error_of
 from lcpbench.model.judge import force_tol
 
@@ -74,8 +74,7 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
     a = p.parse_args(argv)
     refuse_overwrite([a.out], a.force)
-    cmd = ("python benchmarks/accuracy_translation.py "
-           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    cmd = command_line("accuracy_translation.py", argv)
     scenes = PAPER_GRID.scenes()
     refs = [reference_row(s)["total_force"] for s in scenes]
     head = ["| asked | tol (rad) | converged | continued at tol/100 | max error | "

@@ -36,7 +36,7 @@ from mixed_batch import KINDS, mixed
 
 import lcpbench
 from lcpbench import SectionedScene
-from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
+from lcpbench.bench.machine import command_line, refuse_overwrite, timing_note, timing_start
 from lcpbench.escalations import same_state
 from lcpbench.model.finish import finish
 from lcpbench.model.heavy_driver import run_heavy
@@ -100,8 +100,7 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
     a = p.parse_args(argv)
     refuse_overwrite([a.out], a.force)
-    cmd = ("python benchmarks/cold_sqp_states.py "
-           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    cmd = command_line("cold_sqp_states.py", argv)
     start = timing_start()
     sets = [("mixed batch (seed 7): two sections (θ, −θ), N = 140",
              [s for i, s in enumerate(mixed(7)) if KINDS[i % 4] == "two sections"])]

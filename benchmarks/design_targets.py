@@ -42,7 +42,7 @@ from perf import interleaved, wall  # (benchmarks/ is the script's directory)
 
 import lcpbench
 from lcpbench import ActuatorScene, SectionedScene
-from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
+from lcpbench.bench.machine import command_line, refuse_overwrite, timing_note, timing_start
 from lcpbench.model.sensitivity import sensitivities
 from lcpbench.problems.walls import WallProfile
 from lcpbench.studies.design import design
@@ -396,8 +396,7 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
     a = p.parse_args(argv)
     refuse_overwrite([a.out], a.force)
-    cmd = ("python benchmarks/design_targets.py "
-           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    cmd = command_line("design_targets.py", argv)
     start = timing_start()
     t1, s1 = target1(a.scenes, a.seed)
     t1b, s1b = target1_more(a.more, a.seed)

@@ -36,7 +36,7 @@ from scipy.special import erf
 
 import lcpbench
 from lcpbench import ActuatorScene
-from lcpbench.bench.machine import refuse_overwrite
+from lcpbench.bench.machine import command_line, refuse_overwrite
 from lcpbench.problems.calibrations import get_calibration
 from lcpbench.studies.fit import fit
 
@@ -52,8 +52,7 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
     a = p.parse_args(argv)
     refuse_overwrite([a.out], a.force)
-    cmd = ("python benchmarks/fit_ei.py "
-           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    cmd = command_line("fit_ei.py", argv)
     cal = get_calibration(1)
     lo, hi = float(cal.pressure(90.0)), cal.p_max
     rng = np.random.default_rng(a.seed)

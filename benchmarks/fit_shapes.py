@@ -31,7 +31,7 @@ import numpy as np
 
 import lcpbench
 from lcpbench import ActuatorScene
-from lcpbench.bench.machine import refuse_overwrite
+from lcpbench.bench.machine import command_line, refuse_overwrite
 from lcpbench.problems.calibrations import linear_calibration
 from lcpbench.vision.shapes_fit import Shape, fit_shapes, section_points
 
@@ -73,8 +73,7 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
     a = p.parse_args(argv)
     refuse_overwrite([a.out], a.force)
-    cmd = ("python benchmarks/fit_shapes.py "
-           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    cmd = command_line("fit_shapes.py", argv)
     rng = np.random.default_rng(a.seed)
     rows, cache, t0 = [], {}, time.perf_counter()
     for mult in (1, 5, 20):

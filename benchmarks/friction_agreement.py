@@ -44,7 +44,7 @@ import numpy as np
 
 import lcpbench
 from lcpbench import ActuatorScene
-from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
+from lcpbench.bench.machine import command_line, refuse_overwrite, timing_note, timing_start
 from lcpbench.model.friction_driver import NEAR
 from lcpbench.model.friction_solvers import step_runner
 from lcpbench.model.judge import NODE_SHARE as JUDGE_SHARE
@@ -147,8 +147,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     out = Path(args.out)
     refuse_overwrite([out], args.force)
-    cmd = ("python benchmarks/friction_agreement.py "
-           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    cmd = command_line("friction_agreement.py", argv)
     start = timing_start()
     solvers = [s for s in SOLVERS if backends()[s].available()]
     missing = [s for s in SOLVERS if s not in solvers]

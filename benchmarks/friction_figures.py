@@ -28,7 +28,6 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse
 import csv
-import sys
 import tempfile
 import time
 from datetime import datetime, timezone
@@ -38,7 +37,7 @@ import numpy as np
 
 import lcpbench
 from lcpbench.bench.friction_plot import plot_friction_forces, plot_load_cycle
-from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
+from lcpbench.bench.machine import command_line, refuse_overwrite, timing_note, timing_start
 from lcpbench.cli import main as cli
 from lcpbench.studies.load_cycle import load_cycle
 
@@ -94,8 +93,7 @@ def main(argv=None) -> int:
     ap.add_argument("--force", action="store_true", help="overwrite committed results")
     a = ap.parse_args(argv)
     refuse_overwrite([a.out / f for f in FILES], a.force)
-    cmd = ("python benchmarks/friction_figures.py "
-           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    cmd = command_line("friction_figures.py", argv)
     a.out.mkdir(parents=True, exist_ok=True)
     start, t0 = timing_start(), time.perf_counter()
     notes = [forces_figure(a.out)]

@@ -26,7 +26,6 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ[_v] = "1"
 
 import argparse
-import sys
 import time
 from collections import Counter
 from datetime import datetime, timezone
@@ -36,7 +35,7 @@ import numpy as np
 
 import lcpbench
 from lcpbench import ActuatorScene
-from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
+from lcpbench.bench.machine import command_line, refuse_overwrite, timing_note, timing_start
 from lcpbench.model.judge import NODE_SHARE as JUDGE_SHARE
 from lcpbench.model.judge import force_tol
 
@@ -85,8 +84,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     if args.out:
         refuse_overwrite([args.out], args.force)
-    cmd = ("python benchmarks/friction_paths.py "
-           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    cmd = command_line("friction_paths.py", argv)
     start, t0 = timing_start(), time.perf_counter()
     rng = np.random.default_rng(args.seed)
     judge_rtol = JUDGE_SHARE * force_tol(args.tol)

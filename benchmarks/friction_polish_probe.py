@@ -61,7 +61,7 @@ from pathlib import Path
 import numpy as np
 
 import lcpbench
-from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
+from lcpbench.bench.machine import command_line, refuse_overwrite, timing_note, timing_start
 from lcpbench.model.friction_lemke import (
     WARM_FEAS_RTOL,
     WARM_PIVOT_RTOL,
@@ -254,8 +254,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     out = Path(args.out)
     refuse_overwrite([out], args.force)
-    cmd = ("python benchmarks/friction_polish_probe.py "
-           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    cmd = command_line("friction_polish_probe.py", argv)
     start = timing_start()
     t0 = time.perf_counter()
     rng = np.random.default_rng(1)

@@ -46,7 +46,7 @@ from perf import interleaved
 import lcpbench
 import lcpbench.model.friction_lemke as driver
 from lcpbench import ActuatorScene
-from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
+from lcpbench.bench.machine import command_line, refuse_overwrite, timing_note, timing_start
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from scene_kinds import stenosis
@@ -129,8 +129,7 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
     a = p.parse_args(argv)
     refuse_overwrite([a.out], a.force)
-    cmd = ("python benchmarks/friction_speed.py "
-           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    cmd = command_line("friction_speed.py", argv)
     start = timing_start()
     rows, ratios = [], []
     for name, scene in SCENES.items():

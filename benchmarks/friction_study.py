@@ -30,7 +30,6 @@ for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse
 import json
-import sys
 import time
 from datetime import datetime, timezone
 from pathlib import Path
@@ -38,7 +37,7 @@ from pathlib import Path
 import numpy as np
 
 from lcpbench import ActuatorScene
-from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
+from lcpbench.bench.machine import command_line, refuse_overwrite, timing_note, timing_start
 from lcpbench.paper.data import PAPER
 from lcpbench.studies.load_cycle import load_cycle
 
@@ -69,8 +68,7 @@ def main(argv=None) -> int:
     a = ap.parse_args(argv)
     md, js = a.out / "study.md", a.out / "study.json"
     refuse_overwrite([md, js], a.force)
-    cmd = ("python benchmarks/friction_study.py "
-           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    cmd = command_line("friction_study.py", argv)
     a.out.mkdir(parents=True, exist_ok=True)
     start, t0 = timing_start(), time.perf_counter()
     data = {}

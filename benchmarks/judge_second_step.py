@@ -46,6 +46,7 @@ import numpy as np
 
 import lcpbench
 from lcpbench import ActuatorScene
+from lcpbench.bench.machine import command_line
 
 OUT = Path("results/judge-second-step.md")
 TARGETS = ("osqp", "clarabel", "proxsuite-dense", "proxsuite-sparse", "qpsolvers-piqp",
@@ -153,8 +154,7 @@ def main(argv=None) -> int:
     p.add_argument("--out", type=Path, default=OUT)
     p.add_argument("--force", action="store_true", help="overwrite committed results")
     a = p.parse_args(argv)
-    cmd = ("python benchmarks/judge_second_step.py "
-           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    cmd = command_line("judge_second_step.py", argv)
     if a.dump:
         return dump(a.dump, a.workers)
     if a.out.exists() and not a.force:

@@ -22,7 +22,7 @@ import subprocess
 import sys
 import time
 
-from lcpbench.bench.machine import refuse_overwrite
+from lcpbench.bench.machine import command_line, refuse_overwrite
 
 KINDS = ("elastic", "profile", "heavy channel")
 
@@ -78,8 +78,7 @@ def main(argv=None) -> int:
     ap.add_argument("--force", action="store_true", help="overwrite OUT.md and .json")
     a = ap.parse_args(argv)
     refuse_overwrite([a.out + ".md", a.out + ".json"], a.force)
-    cmd = ("python benchmarks/large_n_kinds.py "
-           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    cmd = command_line("large_n_kinds.py", argv)
     load = os.getloadavg()
     rows = []
     for kind in KINDS:

@@ -35,7 +35,7 @@ from scene_kinds import stenosis
 
 import lcpbench
 from lcpbench import ActuatorScene, SectionedScene
-from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
+from lcpbench.bench.machine import command_line, refuse_overwrite, timing_note, timing_start
 from lcpbench.problems.walls import WallProfile
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -176,8 +176,7 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
     a = p.parse_args(argv)
     refuse_overwrite([a.out], a.force)
-    cmd = (_env() + "python benchmarks/mixed_batch.py "
-           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    cmd = command_line("mixed_batch.py", argv, _env())
     start = timing_start()
     calls = {"100 mixed scenes": batch(lambda: mixed(a.seed)),
              "100 paper-grid scenes": batch(paper_grid)}

@@ -35,7 +35,7 @@ from perf import interleaved, wall  # (benchmarks/ is the script's directory)
 
 import lcpbench
 from lcpbench import ActuatorScene
-from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
+from lcpbench.bench.machine import command_line, refuse_overwrite, timing_note, timing_start
 from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.step_solver import solve_step, step_lcp
 from lcpbench.solvers.registry import available_backends
@@ -55,8 +55,7 @@ def main(argv=None) -> int:
               file=sys.stderr)
         return 2
     refuse_overwrite([a.out], a.force)
-    cmd = ("python benchmarks/public_step.py "
-           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    cmd = command_line("public_step.py", argv)
     start = timing_start()
     result = lcpbench.solve(ActuatorScene(theta=150, height=3.0, links=140), tol=1e-10)
     step = assemble_step(result.scene.chain(), result.alpha)

@@ -35,7 +35,7 @@ from mixed_batch import of_kind
 
 import lcpbench
 from lcpbench import SectionedScene
-from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
+from lcpbench.bench.machine import command_line, refuse_overwrite, timing_note, timing_start
 from lcpbench.escalations import same_state
 from lcpbench.model.energy_reference import minimise_energy
 
@@ -180,8 +180,7 @@ def main(argv=None) -> int:
     ap.add_argument("--force", action="store_true", help="overwrite --out")
     args = ap.parse_args(argv)
     refuse_overwrite([args.out], args.force)
-    cmd = ("python benchmarks/row_neighbours.py "
-           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    cmd = command_line("row_neighbours.py", argv)
     lcpbench.solve_many(of_kind(7, "two sections"), tol=1e-3)  # (compiled before the clocks)
     start = timing_start()
     lines = ["| batch | rows | took from_neighbour | both certified | same state | "

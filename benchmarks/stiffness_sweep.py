@@ -29,7 +29,7 @@ import numpy as np
 
 import lcpbench
 from lcpbench import ActuatorScene
-from lcpbench.bench.machine import refuse_overwrite
+from lcpbench.bench.machine import command_line, refuse_overwrite
 
 ROOT = Path(__file__).resolve().parents[1]
 STIFFNESS = 10.0 ** np.arange(-3.0, 10.25, 0.5)
@@ -42,8 +42,7 @@ def main(argv=None) -> int:
     p.add_argument("--force", action="store_true", help="overwrite a committed result")
     a = p.parse_args(argv)
     refuse_overwrite([a.out], a.force)
-    cmd = ("python benchmarks/stiffness_sweep.py "
-           + " ".join(argv if argv is not None else sys.argv[1:])).strip()
+    cmd = command_line("stiffness_sweep.py", argv)
     rows, refused = [], []
     for tol in (1e-9, 1e-10):
         for channel in (False, True):

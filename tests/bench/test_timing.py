@@ -2,12 +2,14 @@
 
 import json
 import os
+import shlex
 import sqlite3
 
 import pytest
 
 from lcpbench.bench.grid import Grid
 from lcpbench.bench.machine import (
+    command_line,
     machine_record,
     machine_section,
     overloaded,
@@ -184,3 +186,12 @@ def test_a_timing_script_keeps_existing_results_unless_forced(tmp_path, capsys):
     assert len(err.splitlines()) == 1 and str(kept) in err and "--force" in err
     refuse_overwrite([kept, new], force=True)  # told to: go on
     assert kept.read_text() == "committed"  # the guard itself writes nothing
+
+
+def test_the_recorded_command_runs_as_it_was_given():
+    """A benchmark's recorded command, split as a shell splits it, is the call that ran:
+    the environment prefix, the script, each argument whole (one with a space too)."""
+    got = command_line("mixed_batch.py", ["--rounds", "9", "--out", "/tmp/a b"], "LCPBENCH_AOT=0 ")
+    assert shlex.split(got) == ["LCPBENCH_AOT=0", "python", "benchmarks/mixed_batch.py",
+                                "--rounds", "9", "--out", "/tmp/a b"]
+    assert command_line("fit_ei.py", []) == "python benchmarks/fit_ei.py"

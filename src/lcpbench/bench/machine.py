@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import os
 import platform
+import shlex
 import sys
 from functools import lru_cache
 
@@ -134,6 +135,15 @@ def refuse_overwrite(paths, force: bool) -> None:
         print(f"error: {', '.join(there)} {verb} (results); pass --force to overwrite, or "
               "--out to write elsewhere", file=sys.stderr)
         raise SystemExit(2)
+
+
+def command_line(script: str, argv: list[str] | None, prefix: str = "") -> str:
+    """The command that ran a script of benchmarks/, as a reader runs it again:
+    ``prefix`` (settings of the environment, e.g. ``LCPBENCH_AOT=0 ``),
+    ``python benchmarks/SCRIPT`` and the arguments it was given (``argv``; None: this
+    process's own)."""
+    args = sys.argv[1:] if argv is None else argv
+    return f"{prefix}python benchmarks/{script} {shlex.join(args)}".strip()
 
 
 def timing_note(start: dict) -> str:
