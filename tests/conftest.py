@@ -34,9 +34,12 @@ settings.register_profile("repeatable", derandomize=True)
 settings.register_profile("explore", derandomize=False)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "repeatable"))
 
-# solver="auto" reads back-end selections cached in a results store; the tests
-# must not depend on whatever store the machine happens to hold.
-os.environ["LCPBENCH_STORE"] = os.path.join(os.path.dirname(__file__), "no-such-store.sqlite")
+# `lcpbench select` and the sweep read and write a results store; the tests must not
+# depend on whatever store the machine holds, nor share one between tests (or between the
+# two workers of the suite): a store in a folder that does not exist cannot be created, so
+# a test that forgets its own store (`--store`, tmp_path) fails at once.
+os.environ["LCPBENCH_STORE"] = os.path.join(os.path.dirname(__file__), "no-such-folder",
+                                            "store.sqlite")
 
 
 import pytest  # noqa: E402
@@ -56,3 +59,23 @@ def skip_escalations(monkeypatch):
                                 replace(ESCALATIONS[name], applies=lambda res, ctx: False))
 
     return skip
+
+
+def pytest_sessionstart(session):
+    """Where the suite runs in worker processes (pytest-xdist), the controller first runs
+    the solves whose kernels every worker loads (:func:`lcpbench.aot.representative_solves`),
+    so that on a fresh checkout they are compiled into numba's on-disk cache once, before
+    the workers start: numba's cache is not safe for two processes saving entries of one
+    kernel at the same moment (its index names a data file by the number of entries, so
+    both can write the same file and one index entry can name the other's code)."""
+    workers = getattr(session.config.option, "numprocesses", None)
+    if not workers or os.environ.get("PYTEST_XDIST_WORKER"):
+        return
+    from lcpbench import numba_cache
+    from lcpbench.aot import representative_solves
+
+    numba_cache.use_aot(False)  # the JIT kernels, whose cache the workers read
+    try:
+        representative_solves()
+    finally:
+        numba_cache.use_aot(None)
