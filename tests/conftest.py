@@ -14,6 +14,7 @@ run (a red run is reproducible, a green one is not luck). Set
 """
 
 import os
+import sys
 
 #: Thread-count variables of the BLAS/OpenMP builds numpy and the solvers use.
 BLAS_THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS",
@@ -74,6 +75,8 @@ def pytest_sessionstart(session):
     from lcpbench import numba_cache
     from lcpbench.aot import representative_solves
 
+    print("lcpbench: the kernels every worker loads, before the workers start (a fresh "
+          "checkout compiles them: about a minute)", file=sys.stderr, flush=True)
     numba_cache.use_aot(False)  # the JIT kernels, whose cache the workers read
     try:
         representative_solves()
