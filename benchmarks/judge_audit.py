@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from lcpbench import ActuatorScene
-from lcpbench.bench.machine import timing_note, timing_start
+from lcpbench.bench.machine import command_line, refuse_overwrite, timing_note, timing_start
 from lcpbench.bench.metrics import evaluate
 from lcpbench.bench.store import Store
 from lcpbench.bench.sweep import plan_sweep, sweep
@@ -80,10 +80,10 @@ def counts(evaluated, good_refs: set) -> dict[tuple[str, str], dict[str, int]]:
     return out
 
 
-def markdown(table: dict, args, elapsed: float, machine: str, wrong_examples: list) -> str:
+def markdown(table: dict, args, elapsed: float, machine: str, wrong_examples: list,
+             command: str) -> str:
     lines = [f"# Converged-but-wrong audit ({args.scenes} random scenes, seed {args.seed})", "",
-             "Made by `python benchmarks/judge_audit.py "
-             f"--scenes {args.scenes} --seed {args.seed} --profiles {' '.join(args.profiles)}`"
+             f"Made by `{command}`"
              f" in {elapsed / 60:.1f} min; {machine} \"wrong\" = marked converged but off the reference by more than "
              "the success rule min(1e-3, 100·tol) (docs/bench.md).", "",
              "| back-end | settings | accurate | wrong | not converged | no reference |",
@@ -111,7 +111,10 @@ def main(argv=None) -> int:
     ap.add_argument("--jobs", type=int, default=1)
     ap.add_argument("--time-limit", type=float, default=30.0, help="s per run")
     ap.add_argument("--out", default=None, help="write the markdown table here")
+    ap.add_argument("--force", action="store_true", help="overwrite an existing --out")
     args = ap.parse_args(argv)
+    if args.out:
+        refuse_overwrite([args.out, Path(args.out).with_suffix(".json")], args.force)
     scenes = random_scenes(args.scenes, args.seed)
     names = args.solvers or available_backends()
     jobs = plan_sweep(scenes, names, args.profiles, baselines=())
@@ -133,7 +136,8 @@ def main(argv=None) -> int:
     wrong = [f"{e.backend}/{e.settings} {e.row['scene']}: error {e.error:.2e}"
              for e in evaluated if e.row["converged"] and not e.success
              and math.isfinite(e.error)]
-    text = markdown(table, args, time.perf_counter() - t0, timing_note(start), wrong)
+    text = markdown(table, args, time.perf_counter() - t0, timing_note(start), wrong,
+                    command_line("judge_audit.py", argv))
     print(text)
     if args.out:
         Path(args.out).write_text(text)

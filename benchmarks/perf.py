@@ -51,7 +51,7 @@ import numpy as np
 import lcpbench
 from lcpbench import ActuatorScene
 from lcpbench.baseline import solve_baseline
-from lcpbench.bench.machine import refuse_overwrite
+from lcpbench.bench.machine import command_line, refuse_overwrite
 from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.compiled_driver import run as run_driver
 from lcpbench.model.dense import solve_paper_dense
@@ -459,12 +459,9 @@ def main(argv=None) -> int:
                       out.parent / f"{out.name}-scaling.png"], args.force)
     repeat = args.repeat or (3 if args.quick else 21)
     sizes = [100, 200, 400] if args.quick else SIZES
-    cmd = "python benchmarks/perf.py" + (" --quick" if args.quick else "") + (
-        f" --repeat {args.repeat}" if args.repeat else "") + (" --force" if args.force else "")
+    cmd = command_line("perf.py", argv)
     out.parent.mkdir(parents=True, exist_ok=True)
 
-    if args.issue19_only:
-        cmd += " --issue19-only"
     res = {"machine": machine(), "command": cmd}
     import perf_targets
     from compiled_core import cold_step
