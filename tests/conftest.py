@@ -80,5 +80,8 @@ def pytest_sessionstart(session):
     numba_cache.use_aot(False)  # the JIT kernels, whose cache the workers read
     try:
         representative_solves()
+    except Exception as exc:  # a broken solve is the tests' to report, not the session's
+        print(f"lcpbench: those solves failed ({type(exc).__name__}: {exc}); the workers "
+              "compile the kernels as they go", file=sys.stderr, flush=True)
     finally:
         numba_cache.use_aot(None)
