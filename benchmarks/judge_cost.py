@@ -54,7 +54,7 @@ import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 LINE = ROOT / "src/lcpbench/model/batch_kernel.py"
-IMPORT = "from .judge_kernel import SETTLED, STATS, judge_answer, split_net"
+IMPORT = "from .judge_kernel import SETTLED, STATS, judge_answer"
 CALL = "judged = judge_answer("
 BEFORE = "lcpbench_before"
 TOL = 1e-3
@@ -103,8 +103,7 @@ def line_kernel(where: Path, judge: str | None, twice: bool):
         raise SystemExit(f"{LINE} no longer has the judge's import or call line this script "
                          f"rewrites ({IMPORT!r}, {CALL!r})")
     if judge is not None:
-        line = line.replace(IMPORT, "from .judge_kernel import split_net\n"
-                            f"from {judge} import SETTLED, STATS, judge_answer")
+        line = line.replace(IMPORT, f"from {judge} import SETTLED, STATS, judge_answer")
     start = line.index(CALL)
     end = line.index(".copy())", start) + len(".copy())")
     call = line[start:end]

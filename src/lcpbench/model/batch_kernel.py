@@ -45,7 +45,8 @@ from .batch_verdict import accepted
 from .chain_kernel import free_heights
 from .compiled_dual import BAIL_NOT_PD  # the free step has no minimiser
 from .compiled_kernel import CONVERGED, LINE_SEARCH, MAX_OUTER, NO_FIT, contact_step, solve_chain
-from .judge_kernel import SETTLED, STATS, judge_answer, split_net
+from .judge_kernel import SETTLED, STATS, judge_answer
+from .wall_kernel import split_by_wall
 
 __all__ = ["ARC", "CONTACT", "CONVERGED", "FREE", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "SETTLED",
            "STATS", "STOPPED_FREE", "append_records", "solve_line", "store_solve",
@@ -158,7 +159,7 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
     bail code on the contact solve, or STOPPED_FREE on the wall-free search. ``cu``, ``cl``:
     the walls' compliances (empty: rigid walls); ``channel``: a lower wall too, each
     node's net reaction the nearer wall's (as the single solve's driver output splits it,
-    :func:`lcpbench.model.judge_exact.split_reactions`)."""
+    :func:`lcpbench.model.profile.split_reactions`)."""
     n = lo.size
     kind = _wall_free_kind(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
                            max_iter, request, free_lo, free_hi)
@@ -202,7 +203,7 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
     if code == CONVERGED:  # the judge, on the answer and the real walls
         up, down = R.copy(), np.zeros(n)
         if channel and kind != ARC:
-            split_net(o_u[row], R, hi, lo, True, up, down)
+            split_by_wall(R, o_u[row], hi, lo, True, up, down)
         judged = judge_answer(
             alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl, wall,
             channel, up, down, tol, recs[2, used - count:used].copy())

@@ -42,7 +42,6 @@ from ..solvers.base import Status
 from ..solvers.registry import DEFAULT
 from ..thresholds import GEOMETRY_SLACK, NEWTON_SWITCH
 from .chain import energy
-from .judge_exact import split_reactions
 from .kernel_call import applies, consecutive, profile_args, profile_layout
 from .newton import newton_step
 from .outer import (
@@ -60,6 +59,7 @@ from .outer import (
     step_failed,
     step_setup_time,
 )
+from .profile import split_reactions
 from .step import ContactStep, residuals_of, step_kernels
 
 ENGINE = "compiled driver"
@@ -222,7 +222,7 @@ class Profile:
 
     def split(self, upper, lower, net, u):
         """The upper and lower reactions of ``net`` with the walls ``upper``, ``lower``
-        at the nodes' x (:func:`~.judge_exact.split_reactions`)."""
+        at the nodes' x (:func:`~.profile.split_reactions`)."""
         chain = self.chain
         if chain.channel:
             chain = replace(chain, upper=upper, lower=lower)

@@ -118,8 +118,12 @@ from ..thresholds import (  # the rule's numbers, read by the judge kernel too
     NODE_SHARE,
 )
 from . import large_n
-from .judge_exact import JudgeStep, judge_step, split_reactions  # noqa: F401 (public names)
-from .profile import wall_rows, walls_at
+from .judge_exact import JudgeStep, judge_step  # noqa: F401 (public names)
+from .profile import (
+    split_reactions,  # noqa: F401 (public here)
+    wall_rows,
+    walls_at,
+)
 
 #: friction (issue 39): a node slides when its slip |s| > max(SLIP_FACTOR · tol · a,
 #: SLIP_FLOOR · ℓ) (a = ℓ/N; the floor: ten times Lemke's accepted residual on the

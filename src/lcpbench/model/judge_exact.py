@@ -36,7 +36,7 @@ from ..problems.scenes import Chain
 from ..thresholds import EPS, PIVOT_ROUNDS, ROUNDOFF_ULPS, STALL
 from . import large_n
 from .elastic import wall_springs
-from .profile import slope_load, walls_at
+from .profile import slope_load, split_reactions, walls_at
 
 #: the single pivots are capped at 2 × this many, not 2 per node: each round is an O(N)
 #: face solve, and a judge that cannot settle says so
@@ -62,22 +62,6 @@ class JudgeStep:
     term_size: float  # S = max_i (|H| |u| + |c|)_i (N): the terms of R = K g + z
     alpha_next: np.ndarray  # α̂', where the step moves the chain (eq. 21)
     contacts: tuple  # (upper, lower): the nodes it holds on (or by) each wall
-
-
-def split_reactions(chain: Chain, net: np.ndarray, u: np.ndarray):
-    """Upper and lower wall reactions from the net reaction ``net`` (N, + pushes down).
-
-    One wall: all of it is the upper wall's (a negative value is that wall
-    pulling). A channel: each node's reaction belongs to the wall it is nearer
-    to, with its sign kept, so a pulling wall stays visible.
-    """
-    net = np.asarray(net, dtype=float)
-    if not chain.channel:
-        return net.copy(), np.zeros_like(net)
-    with np.errstate(invalid="ignore"):  # inf - inf where a node reaches no wall
-        mid = 0.5 * (chain.upper + chain.lower)
-    near_upper = np.where(np.isfinite(mid), u >= mid, np.isfinite(chain.upper))
-    return np.where(near_upper, net, 0.0), np.where(near_upper, 0.0, -net)
 
 
 def _sizes(step, u):

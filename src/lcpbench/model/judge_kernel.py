@@ -76,6 +76,7 @@ from .judge_checks import (
     units,
     without_noise,
 )
+from .wall_kernel import split_by_wall
 
 TINY = np.finfo(np.float64).tiny
 
@@ -388,7 +389,7 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
     u, net, roundoff, ju, jlo = w[U], w[NET], w[ROUNDOFF], w[JU], w[JLO]
     fu, fl = without_noise(forces_upper, forces_lower, noise, settled)
     if settled:
-        split_net(u, net[:n], hi, lo, channel, ju, jlo)
+        split_by_wall(net[:n], u, hi, lo, channel, ju, jlo)
     floor_R = FLOOR_ULPS * EPS * S if settled else 0.0
     has_gap = np.isfinite(wall) or ku.size > 0  # (an upper wall: a gap to measure)
     res = certify_checks(alpha, a, jl, jr, k, rest, link_load, fs, lo, hi, L, F, cu, cl, wall,
@@ -422,7 +423,7 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
                                 rest, nodal_load)
     rho2, floor2 = np.nan, np.nan
     if rounds2 > 0:
-        split_net(u, net[:n], hi, lo, channel, ju, jlo)
+        split_by_wall(net[:n], u, hi, lo, channel, ju, jlo)
         for i in range(n):
             e_up[i], e_lo[i] = j1u[i] - ju[i], j1l[i] - jlo[i]
         rho2 = judge_contraction(dalpha, _predict(alpha1, u, w, fs, n, np.empty(links)))
@@ -434,19 +435,6 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
                                              floor2, F0, rounds2 > 0)
     stats[22] = rho2
     return SETTLED, stats, fu, fl, res
-
-
-@njit(cache=True)
-def split_net(u, net, hi, lo, channel, ju, jlo):
-    """The judge step's net reaction split by wall into ``ju``, ``jlo``
-    (model.judge.split_reactions): in a channel each node's to the nearer wall."""
-    for i in range(net.size):
-        if channel:
-            mid = 0.5 * (hi[i] + lo[i])
-            near = u[i] >= mid if np.isfinite(mid) else np.isfinite(hi[i])
-            ju[i], jlo[i] = (net[i], 0.0) if near else (0.0, -net[i])
-        else:
-            ju[i], jlo[i] = net[i], 0.0
 
 
 @njit(cache=True)

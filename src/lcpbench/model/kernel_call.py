@@ -156,10 +156,9 @@ def call_profile_kernel(chain: Chain, *, tol: float, max_outer: int,
             net = np.ascontiguousarray(net, dtype=float)
             if chain.channel:
                 u = np.ascontiguousarray(start.warm.u, dtype=float)
-                k.lagged_reactions(net, u, *wall_rows(chain, start_alpha)[2:4], True, mu_up,
-                                   mu_lo)
+                k.split_by_wall(net, u, *wall_rows(chain, start_alpha)[2:4], True, mu_up, mu_lo)
             else:
-                k.lagged_reactions(net, net, net, net, False, mu_up, mu_lo)
+                k.split_by_wall(net, net, net, net, False, mu_up, mu_lo)
     base = kernel_args(chain)
     t0 = time.perf_counter()
     got = k.solve_profile_chain(*base[:9], *profile_args(chain), float(tol), int(max_outer),

@@ -23,7 +23,7 @@ from ..problems.scenes import Chain
 from ..solvers.base import StepSolution
 from ..thresholds import ARMIJO_SHORTEST, LOCAL_CUT
 from .chain import alpha_from_heights, heights
-from .judge_exact import split_reactions
+from .profile import split_reactions
 from .step import ContactStep
 from .step_solver import step_residuals
 

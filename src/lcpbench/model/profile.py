@@ -110,6 +110,19 @@ def wall_rows(chain: Chain, alpha: np.ndarray, *, every_node: bool = False) -> t
     return out
 
 
+def split_reactions(chain: Chain, net: np.ndarray, u: np.ndarray):
+    """(upper, lower) wall reactions (N) from the net reactions ``net`` (+ pushes down) of
+    the free nodes at heights ``u``: :func:`lcpbench.model.wall_kernel.split_by_wall` on
+    the chain's wall rows (one wall: all of it the upper wall's, a negative value that wall
+    pulling; a channel: each node's to the nearer wall, its sign kept)."""
+    net = np.ascontiguousarray(net, dtype=float)
+    upper, lower = np.empty(net.size), np.empty(net.size)
+    f64 = np.ascontiguousarray
+    _kernel().split_by_wall(net, f64(u, dtype=float), f64(chain.upper, dtype=float),
+                            f64(chain.lower, dtype=float), bool(chain.channel), upper, lower)
+    return upper, lower
+
+
 def walls_at(chain: Chain, alpha: np.ndarray) -> Chain:
     """``chain`` with its wall rows at the profile heights of the nodes' x at α
     (:func:`wall_rows`). Rows stay where they are (a node with no row keeps ±inf); a

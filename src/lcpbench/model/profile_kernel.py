@@ -76,10 +76,9 @@ from .compiled_kernel import (
     solve_assembled,
     workspace,
 )
-from .wall_kernel import slope_load, walls_at
+from .wall_kernel import slope_load, split_by_wall, walls_at
 
-__all__ = ["CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "lagged_reactions",
-           "solve_profile_chain"]
+__all__ = ["CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "solve_profile_chain"]
 
 
 @njit(cache=True)
@@ -224,23 +223,6 @@ def penetration(sines, cosines, a, fs, walls, at):
 
 
 @njit(cache=True)
-def lagged_reactions(net, u, hi, lo, channel, mu_up, mu_lo):
-    """The lagged reactions μ̄, ν̄ (into ``mu_up``, ``mu_lo``) of the net reactions ``net``
-    at the node heights ``u``, split by wall as model.judge_exact.split_reactions: one
-    wall, all of it the upper wall's; a channel, each node's to the nearer of the walls
-    ``hi``, ``lo`` at the nodes' x, its sign kept. The solve's own, after each step, and a
-    warm start's, from the answer whose last step starts it
-    (:func:`lcpbench.model.kernel_call.call_profile_kernel`,
-    :mod:`lcpbench.model.profile_line`)."""
-    for i in range(net.size):
-        near_up = True
-        if channel:
-            mid = 0.5 * (hi[i] + lo[i])
-            near_up = u[i] >= mid if np.isfinite(mid) else np.isfinite(hi[i])
-        mu_up[i], mu_lo[i] = (net[i], 0.0) if near_up else (0.0, -net[i])
-
-
-@njit(cache=True)
 def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo_rows,
                         hi_rows, L, F, ku, cu_, kl, cl_, channel, tol, max_outer, start_alpha,
                         mu_up, mu_lo, max_iter, request):
@@ -325,7 +307,7 @@ def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, f
                                  energy(alpha, a, jl, jr, k, rest, link_load, sin_a))
         for i in range(n):  # the warm sets
             w_u[i], w_up[i], w_lo[i] = su[i], sigma[i] > 0, sigma[i] < 0
-        lagged_reactions(net, su, hs, ls, channel, mu_up, mu_lo)
+        split_by_wall(net, su, hs, ls, channel, mu_up, mu_lo)  # the lagged μ̄, ν̄
         flags = 7
         if dalpha < tol:
             if penetration(sin_a, cos_a, a, fs, walls, at) <= GEOMETRY_SLACK * L:

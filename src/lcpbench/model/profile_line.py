@@ -7,7 +7,7 @@ wall-free search has nothing to look for), in one call, by the functions of the 
 solve:
 
 1. the start's lagged reactions, the net reactions of the answer whose last step
-   warm-starts it (:func:`lcpbench.model.profile_kernel.lagged_reactions`, as
+   warm-starts it (:func:`lcpbench.model.wall_kernel.split_by_wall`, as
    :func:`lcpbench.model.kernel_call.call_profile_kernel` sets them);
 2. the profile kernel's solve (:func:`lcpbench.model.profile_kernel.solve_profile_chain`);
 3. the judge kernel's entry :func:`~lcpbench.model.judge_kernel.judge_walls` on the
@@ -38,7 +38,8 @@ from .batch_kernel import (
     store_verdict,
 )
 from .judge_kernel import judge_walls
-from .profile_kernel import lagged_reactions, solve_profile_chain
+from .profile_kernel import solve_profile_chain
+from .wall_kernel import split_by_wall
 
 __all__ = ["ARC", "CONTACT", "CONVERGED", "FREE", "SETTLED", "STATS", "STOPPED_FREE",
            "profile_attempt"]
@@ -60,7 +61,7 @@ def profile_attempt(row, start, net, u0, ra, a, jl, jr, k, rest, link_load, noda
     n = lo.size
     mu_up, mu_lo = np.zeros(n), np.zeros(n)
     if start.size and net.size == n and np.all(np.isfinite(net)):
-        lagged_reactions(net, u0, hi, lo, False, mu_up, mu_lo)
+        split_by_wall(net, u0, hi, lo, False, mu_up, mu_lo)
     no_springs = np.zeros(0)
     got = solve_profile_chain(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
                               ku, cu_, kl, cl_, False, tol, max_outer, start, mu_up, mu_lo,

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["slope_load", "wall_height", "walls_at"]
+__all__ = ["slope_load", "split_by_wall", "wall_height", "walls_at"]
 
 
 @njit(cache=True)
@@ -92,3 +92,20 @@ def slope_load(alpha, cosines, sines, fs, w, out):
     node = -first  # node 0 (free only without a left pin)
     if 0 <= node < n:
         out[node] -= p_next
+
+
+@njit(cache=True)
+def split_by_wall(net, u, hi, lo, channel, upper, lower):
+    """The net reactions ``net`` (N, + pushes down) of the free nodes at heights ``u``, split
+    by wall into ``upper`` and ``lower``: against one wall all of it is the upper wall's (a
+    negative value is that wall pulling); in a channel each node's belongs to the wall it
+    is nearer to, of those at its x (``hi``, ``lo``), with its sign kept, so a pulling wall
+    stays visible (a node whose walls' midpoint is not finite: the upper wall's where it has
+    one). The one split of the solve (the profile kernel's lagged reactions), the judge and
+    the results (:func:`lcpbench.model.profile.split_reactions`)."""
+    for i in range(net.size):
+        near_up = True
+        if channel:
+            mid = 0.5 * (hi[i] + lo[i])
+            near_up = u[i] >= mid if np.isfinite(mid) else np.isfinite(hi[i])
+        upper[i], lower[i] = (net[i], 0.0) if near_up else (0.0, -net[i])

@@ -22,10 +22,10 @@ from functools import partial
 import numpy as np
 
 from ..model.finish import finish
-from ..model.judge_exact import split_reactions
 from ..model.kernel_call import kernel_output
 from ..model.lazy_result import LAZY, LazyResult, lazy_result, materialize, stats_judge
 from ..model.outer import DriverOutput
+from ..model.profile import split_reactions
 from ..model.result import ContactResult
 from ..solvers.registry import DEFAULT, get_settings
 
