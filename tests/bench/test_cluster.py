@@ -76,25 +76,35 @@ def test_a_dask_sweep_resumes_after_a_sigkill_of_its_client(tmp_path):
     import sys
     import time
 
-    killed = tmp_path / "killed.sqlite"
-    cmd = [sys.executable, "-m", "lcpbench.cli", *RESUME_ARGS, "--store", str(killed)]
-    proc = subprocess.Popen(cmd, start_new_session=True, stdout=subprocess.DEVNULL,
-                            stderr=subprocess.DEVNULL)
-    try:
+    def orphans_killed(proc) -> None:  # the orphaned cluster of a killed client
+        try:
+            os.killpg(proc.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+
+    # where the poll saw the first row only after the last (a loaded machine can keep it
+    # off a core that long: the suite's other worker), the sweep runs again into a new
+    # store, up to three times
+    for attempt in range(3):
+        killed = tmp_path / f"killed-{attempt}.sqlite"
+        cmd = [sys.executable, "-m", "lcpbench.cli", *RESUME_ARGS, "--store", str(killed)]
+        proc = subprocess.Popen(cmd, start_new_session=True, stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL)
         deadline = time.monotonic() + 120
         while _count(killed) < 1 and proc.poll() is None and time.monotonic() < deadline:
             time.sleep(0.005)
         os.kill(proc.pid, signal.SIGKILL)  # the client only, mid-sweep
         proc.wait()
-        partial = _count(killed)
-        assert 1 <= partial < RESUME_RUNS, "the client was not killed in the middle"
+        if 1 <= _count(killed) < RESUME_RUNS:
+            break
+        orphans_killed(proc)
+    else:
+        raise AssertionError("the client was not killed in the middle in 3 attempts")
+    try:
         again = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
         assert again.returncode == 0, again.stderr
     finally:
-        try:  # the orphaned cluster of the killed client
-            os.killpg(proc.pid, signal.SIGKILL)
-        except ProcessLookupError:
-            pass
+        orphans_killed(proc)
     grid = Grid(theta=(120.0, 150.0), height=(3.0,), links=(20,))
     with Store(tmp_path / "serial.sqlite") as st:
         sweep(st, plan_sweep(grid, ["active-set", "lemke"], ["default"], baselines=()),
