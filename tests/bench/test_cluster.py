@@ -56,16 +56,6 @@ RESUME_ARGS = ["sweep", "--theta", "120,150", "--height", "3", "--links", "20",
 RESUME_RUNS = 2 * 2  # 2 scenes x 2 back-ends (and 2 references), one job a task
 
 
-def _count(path) -> int:
-    import sqlite3
-
-    try:
-        with sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=5) as db:
-            return db.execute("SELECT COUNT(*) FROM runs").fetchone()[0]
-    except sqlite3.Error:
-        return 0
-
-
 def test_a_dask_sweep_resumes_after_a_sigkill_of_its_client(tmp_path):
     """The client (the one store writer) is killed without warning after its first row;
     its cluster's processes are left orphaned until the end. The same command again
@@ -74,37 +64,22 @@ def test_a_dask_sweep_resumes_after_a_sigkill_of_its_client(tmp_path):
     import signal
     import subprocess
     import sys
-    import time
 
-    def orphans_killed(proc) -> None:  # the orphaned cluster of a killed client
-        try:
+    from sweep_kill import killed_after_first_run
+
+    def command(store):
+        return [sys.executable, "-m", "lcpbench.cli", *RESUME_ARGS, "--store", str(store)]
+
+    # the client only, mid-sweep: its cluster's processes are left orphaned
+    killed, proc = killed_after_first_run(command, tmp_path, RESUME_RUNS, group=False)
+    try:
+        again = subprocess.run(command(killed), capture_output=True, text=True, timeout=300)
+        assert again.returncode == 0, again.stderr
+    finally:
+        try:  # the orphaned cluster of the killed client
             os.killpg(proc.pid, signal.SIGKILL)
         except ProcessLookupError:
             pass
-
-    # where the poll saw the first row only after the last (a loaded machine can keep it
-    # off a core that long: the suite's other worker), the sweep runs again into a new
-    # store, up to three times
-    for attempt in range(3):
-        killed = tmp_path / f"killed-{attempt}.sqlite"
-        cmd = [sys.executable, "-m", "lcpbench.cli", *RESUME_ARGS, "--store", str(killed)]
-        proc = subprocess.Popen(cmd, start_new_session=True, stdout=subprocess.DEVNULL,
-                                stderr=subprocess.DEVNULL)
-        deadline = time.monotonic() + 120
-        while _count(killed) < 1 and proc.poll() is None and time.monotonic() < deadline:
-            time.sleep(0.005)
-        os.kill(proc.pid, signal.SIGKILL)  # the client only, mid-sweep
-        proc.wait()
-        if 1 <= _count(killed) < RESUME_RUNS:
-            break
-        orphans_killed(proc)
-    else:
-        raise AssertionError("the client was not killed in the middle in 3 attempts")
-    try:
-        again = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
-        assert again.returncode == 0, again.stderr
-    finally:
-        orphans_killed(proc)
     grid = Grid(theta=(120.0, 150.0), height=(3.0,), links=(20,))
     with Store(tmp_path / "serial.sqlite") as st:
         sweep(st, plan_sweep(grid, ["active-set", "lemke"], ["default"], baselines=()),

@@ -1,14 +1,11 @@
 """`lcpbench sweep` killed with SIGKILL and restarted gives the uninterrupted run's table."""
 
 import json
-import os
-import signal
-import sqlite3
 import subprocess
 import sys
-import time
 
 import pytest
+from sweep_kill import killed_after_first_run
 
 from lcpbench.bench.metrics import evaluate, summarise
 from lcpbench.bench.store import Store
@@ -25,14 +22,6 @@ TIMES = ("time_sgm_ms", "time_median_successes_ms", "time_sgm_rel", "speedup_vs_
 
 def _cmd(store):
     return [sys.executable, "-m", "lcpbench.cli", *ARGS, "--store", str(store)]
-
-
-def _count(path) -> int:
-    try:
-        with sqlite3.connect(f"file:{path}?mode=ro", uri=True, timeout=5) as db:
-            return db.execute("SELECT COUNT(*) FROM runs").fetchone()[0]
-    except sqlite3.Error:
-        return 0
 
 
 def _table(store_path, out):
@@ -52,31 +41,12 @@ def _table(store_path, out):
     return len(runs), stored, summary, report
 
 
-def _killed_in_the_middle(tmp_path, attempts: int = 3):
-    """A store of a sweep killed (SIGKILL, its workers too) once its first run is stored,
-    with some runs and not all. Where the poll saw the first run only after the last (a
-    loaded machine can keep it off a core that long: the suite's other worker), the sweep
-    is run again into a new store, up to ``attempts`` times."""
-    for attempt in range(attempts):
-        killed = tmp_path / f"killed-{attempt}.sqlite"
-        proc = subprocess.Popen(_cmd(killed), start_new_session=True,
-                                stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        deadline = time.monotonic() + 60
-        while _count(killed) < 1 and proc.poll() is None and time.monotonic() < deadline:
-            time.sleep(0.005)
-        os.killpg(proc.pid, signal.SIGKILL)  # the sweep and its workers, without warning
-        proc.wait()
-        if 1 <= _count(killed) < RUNS:
-            return killed
-    raise AssertionError(f"the sweep was not killed in the middle in {attempts} attempts")
-
-
 def test_sigkill_then_restart_gives_the_same_table(tmp_path):
     """Route against route: the rows must not depend on the executor or on a
     restart (determinism); the serial rows are checked against the sweep's
     reference, itself against the energy minimum, in tests/bench/test_sweep.py."""
     clean = tmp_path / "clean.sqlite"
-    killed = _killed_in_the_middle(tmp_path)
+    killed, _ = killed_after_first_run(_cmd, tmp_path, RUNS, group=True)
     # the uninterrupted sweep, in its own store (started after the kill: the poll above
     # shares the cores with fewer processes)
     whole = subprocess.Popen(_cmd(clean), stdout=subprocess.PIPE, stderr=subprocess.PIPE,
