@@ -51,7 +51,7 @@ import numpy as np
 import lcpbench
 from lcpbench import ActuatorScene
 from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
-from lcpbench.model.dense import solve_paper_dense
+from lcpbench.reference.dense import solve_paper_dense
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # python_overhead's replay
 

@@ -39,9 +39,9 @@ from perf import interleaved, machine, med, wall  # noqa: E402
 
 import lcpbench  # noqa: E402
 from lcpbench.model.compiled_driver import assemble_step  # noqa: E402
-from lcpbench.model.dense import solve_paper_dense  # noqa: E402
 from lcpbench.model.kernel_call import run_compiled, solve_kernel  # noqa: E402
 from lcpbench.model.step_solver import step_lcp  # noqa: E402
+from lcpbench.reference.dense import solve_paper_dense  # noqa: E402
 from lcpbench.solvers import available_backends, solve_lcp  # noqa: E402
 
 SCENE = dict(theta=150.0, height=3.0, links=140)

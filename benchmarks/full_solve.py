@@ -1,7 +1,7 @@
 """Time one full nonlinear contact solve: the paper's dense path against the banded path.
 
 Dense path: eqs. (3)–(31) assembled densely, A inverted, Lemke, the undamped Fig. 3
-iteration (lcpbench.model.dense.solve_paper_dense). Banded path: lcpbench.solve
+iteration (lcpbench.reference.dense.solve_paper_dense). Banded path: lcpbench.solve
 (energy-based pentadiagonal step, active-set QP, globalised driver). Same scene,
 same tolerance, same run; prints times and their ratio (the machine is shared:
 read the ratio, not the seconds).
@@ -24,7 +24,7 @@ import time
 
 import lcpbench
 from lcpbench.bench.machine import timing_note, timing_start
-from lcpbench.model.dense import solve_paper_dense
+from lcpbench.reference.dense import solve_paper_dense
 
 
 def best_of(fn, repeat):

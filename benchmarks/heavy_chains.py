@@ -2,7 +2,7 @@
 
 Each scene is solved by ``lcpbench.solve`` (default back-end and engine) and
 by the independent energy minimisation
-(:func:`lcpbench.model.energy_reference.minimise_energy`, SLSQP + Newton
+(:func:`lcpbench.reference.energy.minimise_energy`, SLSQP + Newton
 polish in the link angles). Reported: converged count, outer iterations,
 and the total-force difference to the reference (upper and lower wall, the
 larger), relative to max(|F_ref|, |F_ref lower|, EI/ℓ²). Half the scenes have one wall at +h (the chain hangs off
@@ -32,7 +32,7 @@ import numpy as np
 import lcpbench
 from lcpbench import ActuatorScene
 from lcpbench.bench.machine import timing_note, timing_start
-from lcpbench.model.energy_reference import minimise_energy
+from lcpbench.reference.energy import minimise_energy
 
 ELL, EI = 30.0, 32.01
 

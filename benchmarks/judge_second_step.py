@@ -6,7 +6,7 @@ Three measurements on the paper grid (θ 10…180° by 10, h 2…7 mm, N = 140):
    (min of the one-step and the two-step estimate, :mod:`lcpbench.model.judge_bound`)
    against the true error of the answer, in the total force and per node, both
    relative to the judge's F₀. The truth is the direct minimisation of the exact
-   energy (:func:`lcpbench.model.energy_reference.minimise_energy`, SLSQP polished
+   energy (:func:`lcpbench.reference.energy.minimise_energy`, SLSQP polished
    by Newton on its KKT system; started from the built-in answer at tol 1e-11, its
    KKT residual checked), which takes no contact step. Every answer the judge got
    as far as the bound is counted, accepted or not. Back-ends: OSQP, Clarabel,
@@ -68,7 +68,7 @@ def _scene(theta: float, height: float, channel: bool = False) -> ActuatorScene:
 
 def reference(key):
     """(key, R* upper, R* lower or None, KKT residual): the energy minimiser's reactions."""
-    from lcpbench.model.energy_reference import minimise_energy
+    from lcpbench.reference.energy import minimise_energy
 
     scene = _scene(*key)
     start = lcpbench.solve(scene, tol=1e-11, settings="high")

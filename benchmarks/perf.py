@@ -2,7 +2,7 @@
 
 1. Full nonlinear solve at N = 140 (θ = 150°, h = 3 mm, tol 1e-3): the fastest
    back-end against the paper-faithful dense path (eqs. 3-31, A⁻¹, Lemke,
-   undamped iteration: ``lcpbench.model.dense.solve_paper_dense``).
+   undamped iteration: ``lcpbench.reference.dense.solve_paper_dense``).
 2. The same solve against the paper's root-finding baseline (Appendix A,
    3N + 2 equations): analytic Jacobian with Powell's hybrid method, and the
    finite-difference Jacobian (as MATLAB's fsolve) with Levenberg-Marquardt
@@ -50,12 +50,12 @@ import numpy as np
 
 import lcpbench
 from lcpbench import ActuatorScene
-from lcpbench.baseline import solve_baseline
 from lcpbench.bench.machine import command_line, refuse_overwrite
 from lcpbench.model.compiled_driver import assemble_step
 from lcpbench.model.compiled_driver import run as run_driver
-from lcpbench.model.dense import solve_paper_dense
 from lcpbench.model.step_solver import solve_step, step_lcp, step_residuals
+from lcpbench.reference.dense import solve_paper_dense
+from lcpbench.reference.root_finding import solve_baseline
 from lcpbench.solvers import available_backends, get_backend, solve_lcp
 from lcpbench.solvers.banded import solve_banded_qp
 

@@ -34,9 +34,9 @@ from start_up import start_up, steady_state
 
 import lcpbench
 from lcpbench import ActuatorScene
-from lcpbench.baseline import solve_baseline
 from lcpbench.bench.grid import PAPER_GRID
-from lcpbench.model.dense import solve_paper_dense
+from lcpbench.reference.dense import solve_paper_dense
+from lcpbench.reference.root_finding import solve_baseline
 from lcpbench.studies.continuation import largest_difference, total_outer
 
 TOL = 1e-3

@@ -43,8 +43,8 @@ import lcpbench
 from lcpbench import ActuatorScene
 from lcpbench.api import solve_internal
 from lcpbench.bench.machine import timing_note, timing_start
-from lcpbench.model.energy_reference import minimise_energy
 from lcpbench.problems.walls import WallProfile, load_profile_csv
+from lcpbench.reference.energy import minimise_energy
 from lcpbench.solvers.registry import available_backends
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -37,7 +37,7 @@ import lcpbench
 from lcpbench import SectionedScene
 from lcpbench.bench.machine import command_line, refuse_overwrite, timing_note, timing_start
 from lcpbench.escalations import same_state
-from lcpbench.model.energy_reference import minimise_energy
+from lcpbench.reference.energy import minimise_energy
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -37,15 +37,15 @@ import numpy as np  # noqa: E402
 from scipy.linalg import null_space  # noqa: E402
 
 import lcpbench  # noqa: E402
-from lcpbench.model.energy_reference import (  # noqa: E402
+from lcpbench.problems.sections import SectionedScene  # noqa: E402
+from lcpbench.problems.walls import WallProfile  # noqa: E402
+from lcpbench.reference.energy import (  # noqa: E402
     WallRows,
     closure,
     energy_gradient,
     lagrangian_hessian,
     walls,
 )
-from lcpbench.problems.sections import SectionedScene  # noqa: E402
-from lcpbench.problems.walls import WallProfile  # noqa: E402
 
 OUT = Path(__file__).resolve().parents[1] / "results" / "stability"
 

@@ -5,7 +5,7 @@ the exact energy (:func:`lcpbench.model.chain.energy`) and the forward kinematic
 (:func:`lcpbench.model.chain.node_positions`), differenced numerically, and, for one
 contact step, its matrix and load (``step.bands``, ``step.linear``) with the KKT
 conditions written out here. :func:`energy_minimum` is the direct minimisation of the
-exact energy (:func:`lcpbench.model.energy_reference.minimise_energy`, SLSQP and a
+exact energy (:func:`lcpbench.reference.energy.minimise_energy`, SLSQP and a
 Newton polish on the KKT system; no contact step, driver or judge), cached per scene.
 Which tests use which oracle: docs/testing.md.
 """
@@ -16,7 +16,7 @@ import numpy as np
 import scipy.linalg as sl
 
 from lcpbench.model.chain import energy, node_positions
-from lcpbench.model.energy_reference import minimise_energy
+from lcpbench.reference.energy import minimise_energy
 
 
 @lru_cache(maxsize=64)

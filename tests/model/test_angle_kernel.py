@@ -5,7 +5,7 @@ densely (B = Dᵀ diag(k) D + diag(δ) from its definition, the closure and wall
 the prefix sums they are) and solved by enumerating the wall active sets, each by a
 dense KKT solve, keeping the one whose multipliers are ≥ 0 and whose other walls hold.
 The whole SQP is checked against an independent minimisation of the exact energy
-(SLSQP and a Newton polish, model/energy_reference.py) on a row of two sections whose
+(SLSQP and a Newton polish, reference/energy.py) on a row of two sections whose
 answer has links past the vertical.
 """
 
@@ -17,9 +17,9 @@ import pytest
 import lcpbench
 from lcpbench.model.angle_step import solve_in_angles
 from lcpbench.model.chain import node_positions
-from lcpbench.model.energy_reference import minimise_energy
 from lcpbench.numba_cache import jit_module
 from lcpbench.problems.sections import SectionedScene
+from lcpbench.reference.energy import minimise_energy
 
 # through the kernels' cache (a direct import would cache them beside their sources)
 ak = jit_module("lcpbench.model.angle_kernel")

@@ -1,7 +1,7 @@
 """The contact step: banded energy-based assembly against the paper's eqs. (3)–(31).
 
 Expected values come from the paper's own equations (assembled independently
-in lcpbench.model.dense), from statics by hand (the lumped weights), and from
+in lcpbench.reference.dense), from statics by hand (the lumped weights), and from
 finite differences of the exact energy.
 """
 
@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from lcpbench import ActuatorScene, CantileverScene
 from lcpbench.model.chain import alpha_from_heights, energy, heights
 from lcpbench.model.compiled_driver import assemble_step
-from lcpbench.model.dense import paper_step
+from lcpbench.reference.dense import paper_step
 from lcpbench.solvers.banded import solve_banded_qp
 from lcpbench.solvers.lemke import lemke
 

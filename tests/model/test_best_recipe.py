@@ -16,7 +16,6 @@ import lcpbench
 from lcpbench import ActuatorScene
 from lcpbench.errors import ProblemError
 from lcpbench.model.compiled_driver import assemble_step
-from lcpbench.model.energy_reference import minimise_energy
 from lcpbench.model.formulations import (
     Formulation,
     best_eps,
@@ -25,6 +24,7 @@ from lcpbench.model.formulations import (
     resolve_formulation,
 )
 from lcpbench.model.step_solver import solve_step
+from lcpbench.reference.energy import minimise_energy
 from lcpbench.solvers.base import Settings
 from lcpbench.solvers.judge import accept_tol
 from lcpbench.solvers.registry import available_backends, get_backend, get_settings

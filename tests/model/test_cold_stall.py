@@ -1,7 +1,7 @@
 """The solve kernel's stall rule: a cold solve whose line searches keep cutting the step
 stops early (compiled_kernel.BAIL_STALL) and is refused, so the loading path answers.
 
-The oracles: the energy minimisation (:mod:`lcpbench.model.energy_reference`, no
+The oracles: the energy minimisation (:mod:`lcpbench.reference.energy`, no
 linearisation, no driver) for the answers after the stop, beam theory for the
 cantilever, and the rule's own definition on the step records (every short step is
 one the line search cut to STALL_STEP or less). A cold start with a link past the
@@ -15,8 +15,8 @@ from known_answers import CANTILEVER_THEORY_FORCE, PAPER_SCENE
 
 from lcpbench import ActuatorScene, CantileverScene, SectionedScene, solve, solve_many
 from lcpbench.model import compiled
-from lcpbench.model.energy_reference import minimise_energy
 from lcpbench.model.kernel_call import BAIL_REASONS, call_kernel, solve_kernel
+from lcpbench.reference.energy import minimise_energy
 from lcpbench.thresholds import STALL_RUN, STALL_STEP
 
 #: the solve kernel's outcome codes (its module through numba_cache, as the package loads it)

@@ -9,7 +9,7 @@ from energy_oracle import assert_solved
 
 import lcpbench
 from lcpbench import ActuatorScene, solve
-from lcpbench.model.energy_reference import minimise_energy
+from lcpbench.reference.energy import minimise_energy
 
 
 def assert_certified(res, rel_torque=1e-6):

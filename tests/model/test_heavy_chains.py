@@ -1,5 +1,5 @@
 """Heavy chains (issue 19, target 8): wℓ³/EI up to 10⁴ converge, checked against an
-independent energy minimisation (SLSQP + Newton polish, model/energy_reference.py)."""
+independent energy minimisation (SLSQP + Newton polish, reference/energy.py)."""
 
 import numpy as np
 import pytest
@@ -7,7 +7,7 @@ import pytest
 import lcpbench
 from lcpbench import ActuatorScene, CantileverScene
 from lcpbench.model.angle_step import heavy, load_parameter, solve_in_angles
-from lcpbench.model.energy_reference import minimise_energy
+from lcpbench.reference.energy import minimise_energy
 
 ELL, EI = 30.0, 32.01
 

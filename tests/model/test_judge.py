@@ -1,7 +1,7 @@
 """lcpbench's result judge (issue 14): a wrong answer is never marked converged.
 
 Expected values come from an independent method, the direct minimisation of
-the exact energy (:mod:`lcpbench.model.energy_reference`, no linearisation, no
+the exact energy (:mod:`lcpbench.reference.energy`, no linearisation, no
 contact step), or from properties of the judge's own rules. The only outcomes
 allowed for any back-end are "accurate" (within the success rule
 min(1e-3, 100·tol) of the independent force) and "not converged".
@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 from lcpbench import ActuatorScene, solve
-from lcpbench.model.energy_reference import minimise_energy
 from lcpbench.model.judge import force_tol, judge
 from lcpbench.model.result import certify
+from lcpbench.reference.energy import minimise_energy
 from lcpbench.solvers import registry
 from lcpbench.solvers.registry import Backend, available_backends
 from lcpbench.thresholds import FORCE_TOL_CAP

@@ -4,7 +4,7 @@ Every number of :func:`lcpbench.model.judge.judge` comes from compiled functions
 (:mod:`lcpbench.model.judge_kernel`, :mod:`lcpbench.model.judge_bound`,
 :mod:`lcpbench.model.stability_kernel`). No test here compares two judges: the answers
 judged come from the direct minimisation of the exact energy
-(:func:`lcpbench.model.energy_reference.minimise_energy`: SLSQP and a Newton polish,
+(:func:`lcpbench.reference.energy.minimise_energy`: SLSQP and a Newton polish,
 no contact step, no lcpbench driver), which the judge must accept, and the same
 answers with a planted defect, which it must refuse by the check the defect breaks.
 The cantilever's answer is beam theory's too (eqs. 34-37).
@@ -17,9 +17,9 @@ import pytest
 from known_answers import CANTILEVER_THEORY_FORCE
 
 from lcpbench import ActuatorScene, CantileverScene
-from lcpbench.model.energy_reference import minimise_energy
 from lcpbench.model.judge import judge, judged_in
 from lcpbench.model.result import certify
+from lcpbench.reference.energy import minimise_energy
 
 #: the driver tolerance the energy answers are judged at: τ = 100 tol = 1e-4, well
 #: above the energy reference's own accuracy (its KKT check, 1e-9 dimensionless)

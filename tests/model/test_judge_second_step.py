@@ -3,7 +3,7 @@
 Expected values come from theory (a sequence that contracts linearly by ρ, whose
 limit is known, so the error of every term is known exactly) and from an
 independent method, the direct minimisation of the exact energy
-(:mod:`lcpbench.model.energy_reference`: no contact step, no judge).
+(:mod:`lcpbench.reference.energy`: no contact step, no judge).
 """
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 from lcpbench import ActuatorScene, solve
-from lcpbench.model.energy_reference import minimise_energy
 from lcpbench.numba_cache import kernel_module
+from lcpbench.reference.energy import minimise_energy
 from lcpbench.thresholds import RHO_MAX, RHO_MIN
 
 

@@ -18,12 +18,12 @@ import pytest
 from energy_oracle import assert_equilibrium
 
 from lcpbench import ActuatorScene, solve
-from lcpbench.model.energy_reference import minimise_energy
 from lcpbench.model.judge import force_tol, judge
 from lcpbench.model.large_driver import run_large
 from lcpbench.model.result import certify
 from lcpbench.model.step_solver import make_step_solver
 from lcpbench.problems.walls import WallProfile
+from lcpbench.reference.energy import minimise_energy
 
 N = 10_000
 #: the discretisation error of F at N = 2000, O(N⁻²): the chain's nodes on a curve

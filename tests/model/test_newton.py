@@ -12,8 +12,8 @@ import pytest
 from lcpbench import ActuatorScene, CantileverScene, solve
 from lcpbench.model.chain import alpha_from_heights, energy, heights
 from lcpbench.model.compiled_driver import assemble_step
-from lcpbench.model.energy_reference import minimise_energy
 from lcpbench.model.newton import geometric_bands, newton_step
+from lcpbench.reference.energy import minimise_energy
 
 
 def _dense(bands):

@@ -14,7 +14,7 @@ from energy_oracle import assert_solved
 import lcpbench
 import lcpbench.api as api
 from lcpbench import ActuatorScene
-from lcpbench.model.energy_reference import minimise_energy
+from lcpbench.reference.energy import minimise_energy
 
 
 @pytest.fixture

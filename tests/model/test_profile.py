@@ -1,5 +1,5 @@
 """Walls of any profile y = h(x) (issue 17, item 3), against the independent
-energy minimisation (model/energy_reference.py with h(x) rows, SLSQP + Newton
+energy minimisation (reference/energy.py with h(x) rows, SLSQP + Newton
 polish, no contact step) and against the flat-wall model.
 
 Expected values come from: the energy reference (an independent method), the
@@ -17,9 +17,9 @@ from lcpbench.api import solve_internal
 from lcpbench.jsonsafe import sanitise
 from lcpbench.model import profile as prof
 from lcpbench.model.chain import alpha_from_heights, heights, joint_moments, node_positions
-from lcpbench.model.energy_reference import minimise_energy
 from lcpbench.problems.scenes import ActuatorScene
 from lcpbench.problems.walls import WallProfile
+from lcpbench.reference.energy import minimise_energy
 
 LINKS = 40
 #: the issue's rule: 1e-6 relative total force (and shape, in units of ℓ)

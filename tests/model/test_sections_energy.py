@@ -1,6 +1,6 @@
 """Multi-section scenes: the LCP driver against an independent direct energy minimisation.
 
-The reference, :func:`lcpbench.model.energy_reference.minimise_energy`, minimises
+The reference, :func:`lcpbench.reference.energy.minimise_energy`, minimises
 the exact nonlinear energy of the chain with SLSQP and polishes by Newton on
 the KKT system: no linearisation, no contact step, no driver. Issue 17 asks
 for 1e-6 relative total force on at least 20 scenes of each new kind; the
@@ -16,8 +16,8 @@ from energy_oracle import assert_solved
 
 import lcpbench
 from lcpbench.api import solve_internal
-from lcpbench.model.energy_reference import minimise_energy
 from lcpbench.problems.sections import Section, SectionedScene, anchoring_actuator
+from lcpbench.reference.energy import minimise_energy
 
 SCENES_WITH_CONTACT = 24
 

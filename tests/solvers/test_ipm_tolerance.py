@@ -74,7 +74,7 @@ def test_piqp_at_high_settles_the_near_degenerate_rows(theta, height):
     # success-high.md): a node 2-3e-8 ℓ from the wall carrying 2-3e-8 F₀. Against the
     # direct minimisation of the exact energy (no contact step, no judge).
     import lcpbench
-    from lcpbench.model.energy_reference import minimise_energy
+    from lcpbench.reference.energy import minimise_energy
 
     if "qpsolvers-piqp" not in available_backends():
         pytest.skip("qpsolvers-piqp not installed")

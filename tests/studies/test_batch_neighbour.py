@@ -16,7 +16,7 @@ from energy_oracle import assert_solved
 
 import lcpbench
 from lcpbench import SectionedScene
-from lcpbench.model.energy_reference import minimise_energy
+from lcpbench.reference.energy import minimise_energy
 from lcpbench.studies.batch import NEIGHBOUR_DEG, NEIGHBOUR_MM, neighbouring_row, row_shape
 
 

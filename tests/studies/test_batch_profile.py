@@ -4,7 +4,7 @@ its results built when read (lcpbench.studies.batch_compiled.profile_line); othe
 scene by scene.
 
 Expected values come from the independent energy minimisation
-(model/energy_reference.py: SLSQP on the exact walls h(x), no contact step) and from
+(reference/energy.py: SLSQP on the exact walls h(x), no contact step) and from
 theory (an arc that clears the wall with no load has no contact).
 """
 
@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 import lcpbench
-from lcpbench.model.energy_reference import minimise_energy
 from lcpbench.problems.scenes import ActuatorScene
 from lcpbench.problems.walls import WallProfile
+from lcpbench.reference.energy import minimise_energy
 
 LINKS = 40
 #: tests/model/test_profile.py's rule: 1e-6 relative total force (and shape, in ℓ)

@@ -116,7 +116,7 @@ def test_a_failed_warm_start_is_redone_cold_and_its_cost_counted(monkeypatch):
 def test_newton_continuation_gives_the_energy_minimum_of_each_scene():
     """method="newton" continues too (its first warm step is a Newton step): each answer
     is the independent energy minimisation's, and the cold Newton answer's, to 1e-8."""
-    from lcpbench.model.energy_reference import minimise_energy
+    from lcpbench.reference.energy import minimise_energy
 
     kw = {"solver": "active-set", "tol": 1e-10, "method": "newton"}
     warm = solve_sequence(LINE[3:7], predictor="quadratic", **kw)

@@ -11,7 +11,7 @@ from energy_oracle import fd_kkt_residual, fd_unstable_directions
 import lcpbench
 from lcpbench.errors import ProblemError
 from lcpbench.model.chain import energy
-from lcpbench.model.energy_reference import minimise_energy
+from lcpbench.reference.energy import minimise_energy
 
 
 def _oracle_stable(scene, res):

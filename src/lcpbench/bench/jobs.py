@@ -245,7 +245,7 @@ class BaselineJob(Job):
         return self.minpack_method
 
     def _run(self, time_limit):
-        from ..baseline import solve_baseline
+        from ..reference.root_finding import solve_baseline
 
         scene = scene_from_key(self.scene)
         if ("baseline", "") not in _WARM:

@@ -11,7 +11,7 @@ the energy ½ Σ k (φ̂ − φ*)² − fᵀû is the quadratic
 
 Each joint touches three consecutive nodes, so H is pentadiagonal. In gap
 coordinates g = h̄ − û this is the paper's LCP: K = H and z = −K h̄ − c
-(eqs. 29–31). :mod:`lcpbench.model.dense` assembles the same K and z
+(eqs. 29–31). :mod:`lcpbench.reference.dense` assembles the same K and z
 literally from eqs. (3)–(31); a test checks they agree.
 
 The step is assembled once, compiled (:func:`lcpbench.model.compiled_driver.assemble_step`,

@@ -6,7 +6,8 @@ import pytest
 import lcpbench
 from lcpbench import ActuatorScene, CantileverScene
 from lcpbench.model.chain import energy
-from lcpbench.model.energy_reference import (
+from lcpbench.model.result import certify
+from lcpbench.reference.energy import (
     WallRows,
     closure,
     energy_gradient,
@@ -15,7 +16,6 @@ from lcpbench.model.energy_reference import (
     minimise_energy,
     walls,
 )
-from lcpbench.model.result import certify
 
 
 def _central(fun, alpha, h=1e-6):

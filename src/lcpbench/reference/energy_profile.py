@@ -1,6 +1,6 @@
 """The energy reference's wall rows for walls of any profile y = h(x).
 
-:mod:`lcpbench.model.energy_reference` minimises the exact energy over the
+:mod:`lcpbench.reference.energy` minimises the exact energy over the
 link angles α subject to the wall rows g_r(α) ≥ 0. With a profile the row of
 node k is
 
@@ -25,8 +25,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..model.chain import node_positions
 from ..problems.scenes import Chain
-from .chain import node_positions
 
 
 def _evaluate(chain: Chain, rows, x_nodes: np.ndarray):

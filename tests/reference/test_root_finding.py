@@ -8,8 +8,8 @@ from energy_oracle import energy_minimum
 from scipy.optimize import fsolve
 
 from lcpbench import ActuatorScene, CantileverScene, ProblemError, solve
-from lcpbench.baseline import BaselineSystem, solve_baseline
 from lcpbench.model.chain import node_positions, torque_residual
+from lcpbench.reference.root_finding import BaselineSystem, solve_baseline
 
 PAPER = {"theta": 150.0, "links": 140}  # Fig. 26 / 27: l = 30 mm, EI = 32.01 N mm^2, N = 140
 
@@ -185,7 +185,7 @@ def test_the_baseline_picks_its_own_n_by_the_sec_iii_d_rule():
     """links='auto' in the baseline: the first N (steps of 10) whose baseline
     force differs from N - 10's by < 0.01 %, checked on the baseline's own
     answers at N and N - 10 (and N - 10 failing the rule against N - 20)."""
-    from lcpbench.baseline import baseline_links
+    from lcpbench.reference.root_finding import baseline_links
 
     scene = ActuatorScene(theta=150.0, height=5.0)
     n = baseline_links(scene)

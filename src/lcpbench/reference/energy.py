@@ -11,7 +11,7 @@ equilibrium without any linearisation, as a reference to judge it by:
                y_k(α) − l_k ≥ 0                             (lower wall of a channel)
 
 or, for walls of any profile, h(x_k(α)) − y_k(α) ≥ 0 and y_k(α) − l(x_k(α)) ≥ 0
-(:mod:`lcpbench.model.energy_profile`: exact gradient and Hessian; the wall
+(:mod:`lcpbench.reference.energy_profile`: exact gradient and Hessian; the wall
 multipliers are then the vertical parts of the normal reactions)
 
 with φ the joint angles of :func:`~lcpbench.model.chain.joint_angles`, μ_i the
@@ -38,10 +38,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import minimize
 
+from ..model.chain import alpha_from_heights, energy, heights, joint_angles, node_positions
+from ..model.profile import walls_at
 from ..problems.scenes import Chain
-from .chain import alpha_from_heights, energy, heights, joint_angles, node_positions
 from .energy_profile import profile_wall_hessian, profile_walls
-from .profile import walls_at
 
 
 @dataclass
@@ -197,7 +197,7 @@ def walls(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The wall gaps g(α) ≥ 0 (mm) and their Jacobian (mm/rad), one row per reachable wall."""
     rows = WallRows.of(chain) if rows is None else rows
-    if chain.profiled_walls:  # h(x_k(α)): model/energy_profile.py
+    if chain.profiled_walls:  # h(x_k(α)): reference/energy_profile.py
         return profile_walls(chain, alpha, rows)
     _, y = node_positions(chain, alpha)
     g = rows.side * (rows.limit - y[rows.node])
@@ -222,7 +222,7 @@ def lagrangian_hessian(
     diag = np.zeros(chain.links)
     if eq_multiplier.size:
         diag += float(eq_multiplier[0]) * a_sin
-    if chain.profiled_walls:  # the walls' Hessians are not diagonal: model/energy_profile.py
+    if chain.profiled_walls:  # the walls' Hessians are not diagonal: reference/energy_profile.py
         return energy_hessian(chain, alpha) + np.diag(diag) \
             - profile_wall_hessian(chain, alpha, wall_multiplier, rows)
     diag -= ((wall_multiplier * rows.side) @ rows.mask(chain)) * a_sin
