@@ -10,7 +10,10 @@
   compensated (a line search compares energies of ~10⁵ terms to 1e-12 of their size),
   and the elastic walls' springs;
 - :func:`armijo`, :func:`energy_noise` — the sufficient-decrease test at one step
-  length, and the round-off it allows.
+  length, and the round-off it allows; :func:`energy_search`, the Armijo search on
+  the energy along a step in the heights (the solve kernel's and the compiled
+  driver's);
+- :func:`predict_alpha` — the linearised kinematics, eq. (21).
 
 The kernels call these in their loops; plain Python through
 :func:`lcpbench.numba_cache.kernel_module` (:func:`lcpbench.model.chain.energy`,
@@ -22,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..thresholds import ARMIJO_DECREASE, ENERGY_NOISE
+from ..thresholds import ARMIJO_DECREASE, ARMIJO_SHORTEST, ENERGY_NOISE
 
 
 @njit(cache=True)
@@ -95,6 +98,29 @@ def free_heights(u, alpha, a, fs):
 
 
 @njit(cache=True)
+def predict_alpha(su, n, origin, alpha0, inv, fs, alpha, out):
+    """α̂ of a step's answer ``su`` (its first ``n`` free nodes' heights) from the
+    linearised kinematics, eq. (21), written about u₀: α̂_i = α̂_i(u₀) +
+    (y_(i+1) − y_i) / (a cos α_i), y the heights less u₀ (``origin``; 0 at the
+    pinned nodes), ``alpha0`` α̂(u₀), ``inv`` 1/(a cos α); ``fs`` the shifted index
+    (node + 1) of the first free node. α̂ goes into ``out`` (not kept where ``out``
+    is empty) for the links of ``alpha``; returns max|α̂ − α|, the outer loops' step
+    size. The solve kernel, the profile kernel, the compiled driver and the judge
+    kernel call it."""
+    dalpha = prev = 0.0
+    keep = out.size > 0
+    for i in range(alpha.size):  # (``alpha0``, ``inv`` may be longer: workspace rows)
+        node = i + 1 - (fs - 1)
+        cur = su[node] - origin[node] if 0 <= node < n else 0.0
+        new = alpha0[i] + (cur - prev) * inv[i]
+        if keep:
+            out[i] = new
+        dalpha = max(dalpha, abs(new - alpha[i]))
+        prev = cur
+    return dalpha
+
+
+@njit(cache=True)
 def energy(alpha, a, jl, jr, k, rest, link_load, sines):
     """The chain's energy E (N·mm) at link angles α: ½ Σ_j k_j (φ_j − φ*_j)² minus the
     loads' work Σ_i P_i ȳ_i, both sums compensated.
@@ -157,3 +183,36 @@ def armijo(t, E_t, E, slope, noise, shortest):
         return t
     t *= 0.5
     return t if t >= shortest else 0.0
+
+
+@njit(cache=True)
+def energy_search(E, u, su, g_u, d, ut, alpha, trial, sin_t, cos_t, inv, noise, chain, lo,
+                  hi, cu, cl):
+    """Armijo's search on the exact energy E(α) plus the elastic walls' springs along
+    the heights u + t(su − u), from the heights ``u`` at α (energy ``E``, its gradient
+    in the heights ``g_u``): t = 1, halved until :func:`armijo` accepts it. ``chain`` =
+    (a, jl, jr, k, rest, link_load, fs); ``inv``: 1/(a cos α) of the step's
+    linearisation point (the branch of each link, :func:`fit_heights`); ``noise``: the
+    round-off allowed (:func:`energy_noise`). Writes ``d`` = su − u, ``ut`` (the last
+    heights tried), ``trial`` (α there), ``sin_t``, ``cos_t``. Returns (t, E(t)): t = 0
+    where no t >= ARMIJO_SHORTEST decreases the energy."""
+    a, jl, jr, k, rest, link_load, fs = chain
+    links, n = alpha.size, u.size
+    slope = 0.0
+    for i in range(n):  # the dot product, a loop (the same sum in every caller)
+        d[i] = su[i] - u[i]
+        slope += g_u[i] * d[i]
+    t = 1.0
+    while True:
+        for i in range(n):
+            ut[i] = u[i] + t * d[i]
+        E_t = np.nan
+        if fit_heights(trial, ut, alpha, a, fs, links, inv, sin_t, cos_t):
+            E_t = energy(trial, a, jl, jr, k, rest, link_load, sin_t) + wall_penalty(
+                ut, lo, hi, cu, cl, inv[:0])
+        step = armijo(t, E_t, E, slope, noise, ARMIJO_SHORTEST)
+        if step == t:
+            return t, E_t
+        if step == 0.0:
+            return 0.0, E_t
+        t = step

@@ -33,7 +33,6 @@ from numba import njit
 
 from ..linalg.ldl_kernel import refactor
 from ..thresholds import (
-    ARMIJO_SHORTEST,
     FLOOR_ULPS,
     NEWTON_SWITCH,
     STALL_RUN,
@@ -42,11 +41,12 @@ from ..thresholds import (
 )
 from .chain_kernel import (  # once (numba_cache)
     add_compensated,
-    armijo,
     energy,
     energy_noise,
+    energy_search,
     fit_heights,
     free_heights,
+    predict_alpha,
     wall_penalty,
 )
 from .compiled_dual import (
@@ -407,6 +407,7 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
     su, sigma, inv, alpha0, origin = wn[U], wn[SIG], wa[INV], wa[ALPHA0], wn[ORIG]
     d, ut, g_u = wn[DIR], wn[TRY], wn[GF]
     gp = (ws[7], jr[0], fs, links, origin, ws[2][0], k, rest, nodal_load)
+    chain = (a, jl, jr, k, rest, link_load, fs)
     short = 0  # outer steps running whose line search cut t to STALL_STEP or less
     for _ in range(max_outer):
         code, it = _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, cu, cl,
@@ -414,35 +415,15 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
                          cos_a, newton and near)
         if code != 0:  # (sigma unwritten where the walk never ran: zero, as the rest)
             return code, alpha.copy(), zero, zero, u.copy(), zero, rec, count, none, zero
-        dalpha = prev = 0.0
-        for i in range(links):  # predict_alpha, eq. (21), about u0
-            node = i + 1 - (fs - 1)
-            cur = su[node] - origin[node] if 0 <= node < n else 0.0
-            dalpha = max(dalpha, abs((alpha0[i] + (cur - prev) * inv[i]) - alpha[i]))
-            prev = cur
+        dalpha = predict_alpha(su, n, origin, alpha0, inv, fs, alpha, alpha[:0])
         grad_into(g_u, m, u, gp, ws[10])
         wall_penalty(u, lo, hi, cu, cl, g_u)  # (nothing where no wall yields)
-        slope = 0.0
-        for i in range(n):  # the dot product, a loop (see _max_abs)
-            d[i] = su[i] - u[i]
-            slope += g_u[i] * d[i]
-        noise = energy_noise(E, noise_k)
-        t = 1.0
-        while True:
-            for i in range(n):
-                ut[i] = u[i] + t * d[i]
-            E_t = np.nan
-            if fit_heights(trial, ut, alpha, a, fs, links, inv, sin_t, cos_t):
-                E_t = energy(trial, a, jl, jr, k, rest, link_load, sin_t) + wall_penalty(
-                    ut, lo, hi, cu, cl, none[:0])
-            step = armijo(t, E_t, E, slope, noise, ARMIJO_SHORTEST)
-            if step == t:
-                break
-            if step == 0.0:
-                rec, count = record_step(rec, count, it, 0.0, dalpha, E)
-                return (LINE_SEARCH, alpha.copy(), zero, zero, u.copy(), sigma.copy(), rec, count,
-                        none, zero)
-            t = step
+        t, E_t = energy_search(E, u, su, g_u, d, ut, alpha, trial, sin_t, cos_t, inv,
+                               energy_noise(E, noise_k), chain, lo, hi, cu, cl)
+        if t == 0.0:
+            rec, count = record_step(rec, count, it, 0.0, dalpha, E)
+            return (LINE_SEARCH, alpha.copy(), zero, zero, u.copy(), sigma.copy(), rec, count,
+                    none, zero)
         u[:] = ut
         alpha, trial, sin_a, sin_t, E = trial, alpha, sin_t, sin_a, E_t
         cos_a, cos_t = cos_t, cos_a

@@ -32,12 +32,11 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..thresholds import ARMIJO_SHORTEST
 from .chain_kernel import (  # once each
-    armijo,
     energy,
     energy_noise,
-    fit_heights,
+    energy_search,
+    predict_alpha,
     wall_penalty,
 )
 from .compiled_dual import grad_into, judge_step  # the solve kernel's, once (numba_cache)
@@ -199,18 +198,10 @@ def _gradient(u, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load):
 # -- the outer step (model.compiled_driver.run) --------------------------------------
 @njit(cache=True)
 def predict(su, alpha0, origin, inv, fs):
-    """α̂ of the step answer ``su`` from the linearised kinematics, eq. (21), written
-    about u₀ (``ContactStep.predict_alpha``): α̂_i = α̂_i(u₀) + (y_(i+1) − y_i) / (a cos α_i),
-    y the free nodes' heights less u₀ (0 at the pinned nodes); ``fs`` the shifted index
-    (node + 1) of the first free node."""
-    links, n = alpha0.size, su.size
-    out = np.empty(links)
-    prev = 0.0
-    for i in range(links):
-        node = i + 1 - (fs - 1)
-        cur = su[node] - origin[node] if 0 <= node < n else 0.0
-        out[i] = alpha0[i] + (cur - prev) * inv[i]
-        prev = cur
+    """α̂ of the step answer ``su`` (:func:`~.chain_kernel.predict_alpha`, eq. 21,
+    about u₀), for the Python driver."""
+    out = np.empty(alpha0.size)
+    predict_alpha(su, su.size, origin, alpha0, inv, fs, alpha0, out)
     return out
 
 
@@ -223,33 +214,18 @@ def advance(su, u, alpha, E, stiffness_sum, inv, alpha0, origin, phi_origin, coe
     ``cu``, ``cl``: the elastic walls' compliances (empty: rigid), whose springs'
     energy (:func:`~.chain_kernel.wall_penalty`) is part of the energy searched on."""
     links, n = alpha.size, u.size
-    dalpha, predicted = 0.0, predict(su, alpha0, origin, inv, fs)
-    for i in range(links):
-        dalpha = max(dalpha, abs(predicted[i] - alpha[i]))
-    d = su - u
-    if not np.all(np.isfinite(d)):
+    dalpha = predict_alpha(su, su.size, origin, alpha0, inv, fs, alpha, alpha[:0])
+    if not np.all(np.isfinite(su - u)):
         return np.nan, 0.0, alpha, E
     g = _gradient(u, coef, jr[0], fs, links, origin, phi_origin, k, rest, nodal_load)
     wall_penalty(u, lo, hi, cu, cl, g)  # (nothing where no wall yields)
-    slope = 0.0
-    for i in range(n):
-        slope += g[i] * d[i]
-    noise = energy_noise(E, stiffness_sum)
-    t = 1.0
-    while True:
-        trial = np.empty(links)
-        E_t = np.nan
-        ut = u + t * d
-        if fit_heights(trial, ut, alpha, a, fs, links, np.empty(0), np.empty(links),
-                       np.empty(links)):
-            E_t = energy(trial, a, jl, jr, k, rest, link_load, np.sin(trial)) + wall_penalty(
-                ut, lo, hi, cu, cl, np.empty(0))
-        step = armijo(t, E_t, E, slope, noise, ARMIJO_SHORTEST)
-        if step == t:
-            return dalpha, t, trial, E_t
-        if step == 0.0:
-            return dalpha, 0.0, alpha, E
-        t = step
+    trial = np.empty(links)
+    t, E_t = energy_search(E, u, su, g, np.empty(n), np.empty(n), alpha, trial, np.empty(links),
+                           np.empty(links), inv, energy_noise(E, stiffness_sum),
+                           (a, jl, jr, k, rest, link_load, fs), lo, hi, cu, cl)
+    if t == 0.0:
+        return dalpha, 0.0, alpha, E
+    return dalpha, t, trial, E_t
 
 
 # -- walls of any profile (model.profile_kernel's step, for any back-end) -----------
@@ -301,9 +277,7 @@ def profile_advance(su, u, alpha, inv, alpha0, origin, phi_origin, coef, fs, k, 
     lagged ones and F = EI/ℓ²): (max|Δα|, t, α(t), E(α(t)), the heights there); t = 0
     where the search found no decrease."""
     links, n = alpha.size, u.size
-    dalpha, predicted = 0.0, predict(su, alpha0, origin, inv, fs)
-    for i in range(links):
-        dalpha = max(dalpha, abs(predicted[i] - alpha[i]))
+    dalpha = predict_alpha(su, su.size, origin, alpha0, inv, fs, alpha, alpha[:0])
     if not np.all(np.isfinite(su)):
         return np.nan, 0.0, alpha, np.nan, u
     sin_a = np.sin(alpha)

@@ -35,6 +35,7 @@ from ..thresholds import (  # the rule's numbers, as model.judge reads them
     ROUNDOFF_ULPS,
     STALL,
 )
+from .chain_kernel import predict_alpha  # eq. (21), the kinematics' (not the step's)
 from .judge_bound import contraction, force_error_bound, judge_contraction, profile_rows
 from .judge_checks import (
     ALPHA0,
@@ -439,14 +440,6 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
 
 @njit(cache=True)
 def _predict(alpha, u, w, fs, n, out):
-    """ContactStep.predict_alpha, eq. (21), about u₀ (the step's rows ORIGIN, ALPHA0,
-    INV) into ``out``; returns max|α̂ − α|."""
-    origin, alpha0, inv = w[ORIGIN], w[ALPHA0], w[INV]
-    dalpha, prev = 0.0, 0.0
-    for i in range(alpha.size):
-        node = i + 1 - (fs - 1)
-        cur = u[node] - origin[node] if 0 <= node < n else 0.0
-        out[i] = alpha0[i] + (cur - prev) * inv[i]
-        dalpha = max(dalpha, abs(out[i] - alpha[i]))
-        prev = cur
-    return dalpha
+    """:func:`~.chain_kernel.predict_alpha` of the judge step's answer ``u`` (its rows
+    ORIGIN, ALPHA0, INV) into ``out``: max|α̂ − α|."""
+    return predict_alpha(u, n, w[ORIGIN], w[ALPHA0], w[INV], fs, alpha, out)

@@ -44,7 +44,13 @@ from ..thresholds import (
     PENALTY,
     START_PASSES,
 )
-from .chain_kernel import armijo, energy, energy_noise, fit_heights  # once (numba_cache)
+from .chain_kernel import (  # once (numba_cache)
+    armijo,
+    energy,
+    energy_noise,
+    fit_heights,
+    predict_alpha,
+)
 from .compiled_dual import (
     ALPHA,
     ALPHA0,
@@ -282,12 +288,7 @@ def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, f
         if code != 0:
             return (code, alpha.copy(), zero, zero, u.copy(), zero, rec, count, none, zero, zero,
                     zero)
-        dalpha = prev = 0.0
-        for i in range(links):  # predict_alpha, eq. (21), about u0
-            node = i + 1 - (fs - 1)
-            cur = su[node] - origin[node] if 0 <= node < n else 0.0
-            dalpha = max(dalpha, abs((alpha0[i] + (cur - prev) * inv[i]) - alpha[i]))
-            prev = cur
+        dalpha = predict_alpha(su, n, origin, alpha0, inv, fs, alpha, alpha[:0])
         net = wn[NET]
         big = F
         for i in range(n):
