@@ -42,7 +42,7 @@ from .chain_kernel import (  # once each
 from .compiled_dual import grad_into, judge_step  # the solve kernel's, once (numba_cache)
 from .compiled_kernel import banded_step  # the step
 from .profile_kernel import clipped_start, merit_search, penetration  # a profile's, once
-from .wall_kernel import slope_load, walls_at
+from .wall_kernel import lagged_load, walls_at
 
 
 # -- the step (model.step) ----------------------------------------------------------
@@ -259,12 +259,9 @@ def profile_assemble(alpha, a, jl, jr, k, rest, fs, nodal_load, walls, mu_up, mu
     sin_a, cos_a = np.sin(alpha), np.cos(alpha)
     at = _at(n)
     walls_at(sin_a, cos_a, a, fs, *walls, *at)
-    w, s, nl = np.empty(n), np.empty(n), np.empty(n)
-    for i in range(n):  # the lagged reactions' slope load, into the nodal load
-        w[i] = max(mu_up[i], 0.0) * at[4][i] - max(mu_lo[i], 0.0) * at[5][i]
-    slope_load(alpha, cos_a, sin_a, fs, w, s)
-    for i in range(n):
-        nl[i] = nodal_load[i] + s[i]
+    nl = np.empty(n)
+    lagged_load(alpha, cos_a, sin_a, fs, mu_up, mu_lo, at[4], at[5], nodal_load, np.empty(n),
+                np.empty(n), nl)
     return assemble(alpha, a, jl, jr, k, rest, fs, n, nl) + (at[3], at[2], nl)
 
 

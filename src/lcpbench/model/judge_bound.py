@@ -32,7 +32,7 @@ import numpy as np
 from numba import njit
 
 from ..thresholds import RHO_MAX, RHO_MIN, STEP_NOISE
-from .wall_kernel import slope_load, walls_at
+from .wall_kernel import lagged_load, walls_at
 
 __all__ = ["contraction", "force_error_bound", "judge_contraction", "profile_rows"]
 
@@ -139,6 +139,6 @@ def profile_rows(alpha, cosines, a, fs, hi, lo, wall, ku, cu_, kl, cl_, forces_u
             lo[i] = g_lo[i]
         g_up[i] = (g_up[i] if ku.size else wall) - yf[i]  # the exact gaps
         g_lo[i] = yf[i] - (g_lo[i] if kl.size else -wall)
-        load[i] = max(forces_upper[i], 0.0) * h1[i] - max(forces_lower[i], 0.0) * l1[i]
-    slope_load(alpha, cosines[:links], sines, fs, load, xf)
-    return hi, lo, nodal_load + xf, g_up, g_lo, h1, l1, h2, l2
+    lagged_load(alpha, cosines[:links], sines, fs, forces_upper, forces_lower, h1, l1, nodal_load,
+                yf, xf, load)
+    return hi, lo, load, g_up, g_lo, h1, l1, h2, l2

@@ -82,7 +82,7 @@ from .compiled_kernel import (
     solve_assembled,
     workspace,
 )
-from .wall_kernel import slope_load, split_by_wall, walls_at
+from .wall_kernel import lagged_load, split_by_wall, walls_at
 
 __all__ = ["CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "solve_profile_chain"]
 
@@ -276,11 +276,7 @@ def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, f
     for _ in range(max_outer):
         E = energy(alpha, a, jl, jr, k, rest, link_load, sin_a)
         walls_at(sin_a, cos_a, a, fs, *walls, *step_at)
-        for i in range(n):  # the lagged reactions' slope load, into the nodal load
-            w[i] = max(mu_up[i], 0.0) * h1[i] - max(mu_lo[i], 0.0) * l1[i]
-        slope_load(alpha, cos_a, sin_a, fs, w, s)
-        for i in range(n):
-            nl[i] = nodal_load[i] + s[i]
+        lagged_load(alpha, cos_a, sin_a, fs, mu_up, mu_lo, h1, l1, nodal_load, w, s, nl)
         assemble_into(alpha, a, jl, jr, k, rest, fs, n, nl, ws[6], wn[LIN], inv, ws[7], origin,
                       alpha0, ws[2][0], ws[2][1], ws[4], sin_a, cos_a, False)
         code, it = solve_assembled(n, ls, hs, L, F, no_c, no_c, w_u, w_up, w_lo, flags,

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["slope_load", "split_by_wall", "wall_height", "walls_at"]
+__all__ = ["lagged_load", "slope_load", "split_by_wall", "wall_height", "walls_at"]
 
 
 @njit(cache=True)
@@ -92,6 +92,19 @@ def slope_load(alpha, cosines, sines, fs, w, out):
     node = -first  # node 0 (free only without a left pin)
     if 0 <= node < n:
         out[node] -= p_next
+
+
+@njit(cache=True)
+def lagged_load(alpha, cosines, sines, fs, mu_up, mu_lo, h1, l1, nodal_load, w, s, out):
+    """The nodal load of a step against walls of any profile into ``out``: ``nodal_load``
+    plus the slope load s = J_xᵀ w (:func:`slope_load`) of the lagged reactions, w =
+    μ̄ h'(x) − ν̄ l'(x) with μ̄, ν̄ (``mu_up``, ``mu_lo``) clipped at 0; ``w``, ``s``
+    scratch. The profile kernel's step, the compiled driver's and the judge's."""
+    for i in range(w.size):
+        w[i] = max(mu_up[i], 0.0) * h1[i] - max(mu_lo[i], 0.0) * l1[i]
+    slope_load(alpha, cosines, sines, fs, w, s)
+    for i in range(w.size):
+        out[i] = nodal_load[i] + s[i]
 
 
 @njit(cache=True)

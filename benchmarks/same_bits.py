@@ -1,0 +1,265 @@
+"""Did a change move any answer? Answers recorded bit for bit, two trees compared.
+
+A refactoring of the solve (issue 35: each concept once) is meant to keep the
+answers. This records a corpus of answers of the tree on ``PYTHONPATH`` (or the
+installed one) and compares two such records; it also re-solves the default
+back-end's rows of ``results/sweep/runs.csv`` against their stored forces.
+
+    python benchmarks/same_bits.py record before.pkl     # on the old tree
+    python benchmarks/same_bits.py record after.pkl      # on the new one
+    python benchmarks/same_bits.py compare before.pkl after.pkl
+    python benchmarks/same_bits.py sweep                 # the committed sweep's rows
+
+The corpus (about 1,700 answers; ~4 min on one core):
+- ``solve_many`` on mixed batches (elastic and profiled walls, sections), the
+  paper's grid, random elastic walls (k from 1e-3 to 1e9 N/mm²) and channels;
+- ``solve`` and ``start="ramp"`` on rows of two and three sections, and past 180°;
+- channels, heavy channels, a stenosis and a profiled channel with the default
+  back-end, OSQP and Lemke (the compiled driver around a back-end);
+- large N (3000, 6000) with one wall, a channel and a wall profile;
+- friction: ``solve_path`` on a flat wall, a channel and a stenosis, pulled and
+  released.
+
+Each answer is recorded as (converged, reason, total force, forces, lower
+forces, α) with the arrays as bytes. ``compare`` counts the answers the same bit
+for bit and lists every other: a changed verdict, or the forces moved (with the
+judge's allowance τ F₀ where the answer was judged). ``sweep`` exits 1 if a
+row's force moved at all: the sweep's cold rows by ``lcpbench.solve``, its
+continuation rows by ``lcpbench sweep --solvers active-set --continuation
+adaptive`` into a temporary store.
+
+Nothing is written but the record named.
+"""
+
+# ruff: noqa: E402  (BLAS is pinned to one thread before numpy is imported)
+from __future__ import annotations
+
+import os
+
+for _v in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ[_v] = "1"
+
+import argparse
+import collections
+import csv
+import json
+import pickle
+import sqlite3
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+import lcpbench
+from lcpbench import ActuatorScene
+from lcpbench.problems.walls import WallProfile
+
+RUNS = HERE.parent / "results" / "sweep" / "runs.csv"
+
+
+def _bytes(x) -> bytes | None:
+    return None if x is None else np.asarray(x, dtype=float).tobytes()
+
+
+def answer(r) -> dict:
+    """What is compared of one answer (a ContactResult or a FrictionResult)."""
+    j = getattr(r, "judgement", None)
+    allowed = (float(j.force_tol * j.force_unit)
+               if j is not None and hasattr(j, "force_tol") else np.nan)
+    return dict(converged=bool(r.converged), reason=str(r.reason),
+                total_force=float(r.total_force), forces=_bytes(r.forces),
+                lower=_bytes(getattr(r, "forces_lower", None)),
+                alpha=_bytes(getattr(r, "alpha", None)), allowed=allowed)
+
+
+def _kept(out: dict, key, solve) -> None:
+    try:
+        out[key] = answer(solve())
+    except Exception as e:  # noqa: BLE001 (an error is an outcome to compare too)
+        out[key] = dict(error=repr(e))
+
+
+def corpus() -> dict:
+    """Every answer of the corpus, by key."""
+    import mixed_batch as mb
+    from cold_sqp_states import rows_of
+
+    out: dict = {}
+    for seed in (7, 8, 9, 11, 12, 13):
+        for i, r in enumerate(lcpbench.solve_many(mb.mixed(seed), tol=1e-3)):
+            out[("many-mixed", seed, i)] = answer(r)
+    for i, r in enumerate(lcpbench.solve_many(mb.paper_grid(), tol=1e-3)):
+        out[("many-grid", i)] = answer(r)
+    rng = np.random.default_rng(2027)
+    for b in range(2):
+        el = [ActuatorScene(theta=float(rng.uniform(60, 200)), height=float(rng.uniform(1.5, 5)),
+                            links=140, wall_stiffness=float(10 ** rng.uniform(-3, 9)))
+              for _ in range(100)]
+        ch = [ActuatorScene(theta=float(rng.uniform(60, 300)), height=float(rng.uniform(0.6, 5)),
+                            links=140, channel=True) for _ in range(100)]
+        for name, batch in (("many-el", el), ("many-ch", ch)):
+            for i, r in enumerate(lcpbench.solve_many(batch, tol=1e-3)):
+                out[(name, b, i)] = answer(r)
+    for seed in (7, 8, 11):
+        for i, s in enumerate(mb.of_kind(seed, "two sections")):
+            _kept(out, ("solve-row", seed, i), lambda s=s: lcpbench.solve(s))
+            _kept(out, ("ramp-row", seed, i), lambda s=s: lcpbench.solve(s, start="ramp"))
+    for k, (sections, channel) in enumerate(((2, False), (2, True), (3, False), (3, True))):
+        for i, s in enumerate(rows_of(100 + k, sections, channel, count=40)):
+            _kept(out, ("solve-rows", k, i), lambda s=s: lcpbench.solve(s))
+    for i in range(30):
+        s = ActuatorScene(theta=float(rng.uniform(190, 300)), height=float(rng.uniform(0.8, 4)),
+                          links=140, channel=bool(i % 2))
+        _kept(out, ("ramp-past180", i), lambda s=s: lcpbench.solve(s, start="ramp"))
+        _kept(out, ("solve-past180", i), lambda s=s: lcpbench.solve(s))
+    up = WallProfile.from_table([-5, 10, 14, 18, 35], [3.0, 3.0, 2.4, 3.0, 3.0])
+    rng = np.random.default_rng(5)
+    kinds = []
+    for _ in range(12):
+        th, h = float(rng.uniform(60, 170)), float(rng.uniform(1.0, 4))
+        kinds += [("channel", ActuatorScene(theta=th, height=h, links=140, channel=True)),
+                  ("heavy channel", ActuatorScene(theta=th, height=h, links=140, channel=True,
+                                                  weight=0.01)),
+                  ("stenosis", ActuatorScene(theta=th, height=3.0, links=140, wall_profile=up)),
+                  ("profiled channel", ActuatorScene(theta=th, height=3.0, links=140,
+                                                     channel=True, wall_profile=up,
+                                                     lower_profile=up.mirrored()))]
+    for tag, s in kinds:
+        for solver in ("auto", "osqp", "lemke"):
+            _kept(out, (tag, s.theta, solver), lambda s=s, v=solver: lcpbench.solve(
+                s, solver=v, tol=1e-6))
+    for i, r in enumerate(lcpbench.solve_many([s for _, s in kinds], tol=1e-3)):
+        out[("many-kinds", i)] = answer(r)
+    for theta in (150.0, 200.0):
+        for n in (3000, 6000):
+            for channel in (False, True):
+                for tag, prof in (("large", None), ("large profiled", up)):
+                    s = ActuatorScene(theta=theta, height=2.0, links=n, channel=channel,
+                                      wall_profile=prof)
+                    _kept(out, (tag, theta, n, channel), lambda s=s: lcpbench.solve(s, tol=1e-6))
+    states = [{}, {"pull": 0.05}, {"pull": 0.0}]
+    for tag, kw in (("friction flat", {}), ("friction channel", {"channel": True}),
+                    ("friction stenosis", {"wall_profile": up})):
+        for theta in (120.0, 150.0):
+            s = ActuatorScene(theta=theta, height=3.0, friction=0.3, left_end="slider",
+                              right_end="slider", **kw)
+            try:
+                for i, r in enumerate(lcpbench.solve_path(s, states)):
+                    out[(tag, theta, i)] = answer(r)
+            except Exception as e:  # noqa: BLE001
+                out[(tag, theta)] = dict(error=repr(e))
+    return out
+
+
+def _same(x: dict, y: dict) -> bool:
+    """The same answer, bit for bit (NaN equal to NaN)."""
+    return x.keys() == y.keys() and all(
+        x[f] == y[f] or (isinstance(x[f], float) and isinstance(y[f], float)
+                         and np.isnan(x[f]) and np.isnan(y[f])) for f in x)
+
+
+def compare(a: dict, b: dict) -> int:
+    """Print how the answers of ``b`` differ from ``a``'s; 0 where none moved."""
+    counts: collections.Counter = collections.Counter()
+    for key in sorted(set(a) | set(b), key=repr):
+        x, y = a.get(key), b.get(key)
+        group = key[0]
+        if x is None or y is None:
+            counts[(group, "only in one")] += 1
+            print("only in one:", key)
+        elif _same(x, y):
+            counts[(group, "same bits")] += 1
+        elif "error" in x or "error" in y or x["converged"] != y["converged"]:
+            counts[(group, "VERDICT")] += 1
+            print("verdict:", key, x.get("error", x.get("reason")), "->",
+                  y.get("error", y.get("reason")))
+        else:
+            moved = abs(x["total_force"] - y["total_force"])
+            allowed = np.fmax(x["allowed"], y["allowed"])  # (NaN where neither was judged)
+            state = "within tau F0" if moved <= allowed else "moved"
+            counts[(group, state)] += 1
+            print(f"{state}:", key, x["total_force"], "->", y["total_force"])
+    for k in sorted(counts):
+        print(*k, counts[k], sep="\t")
+    same = sum(v for (_, s), v in counts.items() if s == "same bits")
+    print(f"{same} of {sum(counts.values())} answers the same bit for bit")
+    return 0 if same == sum(counts.values()) else 1
+
+
+def sweep_rows(runs: Path) -> int:
+    """Re-solve the default back-end's rows of the committed sweep; 0 where every
+    total force is the stored one, bit for bit."""
+    rows = [r for r in csv.DictReader(runs.open()) if r["backend"] == "active-set"]
+    moved = same = 0
+    for r in rows:
+        if r["method"] != "globalised":
+            continue
+        d = json.loads(r["scene"])
+        s = ActuatorScene(theta=d["theta"], height=d["height"], links=d["links"],
+                          length=d["length"], EI=d["EI"], weight=d["weight"],
+                          channel=d["channel"])
+        F = float(lcpbench.solve(s, tol=float(r["tol"]), method="globalised").total_force)
+        if F == float(r["total_force"]):
+            same += 1
+        else:
+            moved += 1
+            print("moved:", r["method"], r["settings"], d["theta"], d["height"], r["total_force"],
+                  "->", F)
+    line = sorted({r["method"] for r in rows} - {"globalised"})
+    for method in line:  # the continuation rows: the sweep itself, into a temporary store
+        predictor = method.split("+")[1]
+        settings = sorted({r["settings"] for r in rows if r["method"] == method})
+        with tempfile.TemporaryDirectory() as tmp:
+            store = Path(tmp) / "store.sqlite"
+            subprocess.run([sys.executable, "-m", "lcpbench.cli", "sweep", "--solvers", "active-set",
+                            "--settings", ",".join(settings), "--continuation", predictor,
+                            "--baseline", "none", "--store", str(store), "--no-report",
+                            "--quiet", "--out", tmp], check=True, cwd=tmp,
+                           capture_output=True)
+            with sqlite3.connect(store) as con:
+                got = {(sc, st, m): F for sc, st, m, F in con.execute(
+                    "select scene, settings, method, total_force from runs "
+                    "where backend = 'active-set'")}
+        for r in rows:
+            if r["method"] != method:
+                continue
+            F = got.get((r["scene"], r["settings"], method))
+            if F is not None and float(F) == float(r["total_force"]):
+                same += 1
+            else:
+                moved += 1
+                print("moved:", method, r["settings"], r["theta"], r["height"],
+                      r["total_force"], "->", F)
+    print(f"{same} of {same + moved} default-back-end rows of {runs} the same bit for bit")
+    return 0 if moved == 0 else 1
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    sub = ap.add_subparsers(dest="what", required=True)
+    sub.add_parser("record", help="record the corpus's answers").add_argument("out", type=Path)
+    cmp_ = sub.add_parser("compare", help="compare two records")
+    cmp_.add_argument("before", type=Path)
+    cmp_.add_argument("after", type=Path)
+    sw = sub.add_parser("sweep", help="the committed sweep's default-back-end rows")
+    sw.add_argument("--runs", type=Path, default=RUNS)
+    args = ap.parse_args(argv)
+    if args.what == "record":
+        out = corpus()
+        with args.out.open("wb") as f:
+            pickle.dump(out, f)
+        print(f"{len(out)} answers ({sum(v.get('converged', False) for v in out.values())} "
+              f"converged) -> {args.out}")
+        return 0
+    if args.what == "compare":
+        return compare(*(pickle.loads(p.read_bytes()) for p in (args.before, args.after)))
+    return sweep_rows(args.runs)
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
