@@ -43,7 +43,8 @@ def grad_into(out, m, u, gp, T):
     """ContactStep.gradient, Jᵀ k (φ̂(u) − φ*) − f + T (u − u₀) about the
     linearisation point u₀, into ``out``; ``gp`` = (coef, b0, fs, links, origin,
     phi_origin, k, rest, nodal_load); T: the Newton step's geometric bands (zero for
-    a Gauss–Newton step: adding them changes nothing but the sign of a zero). Joint
+    a Gauss–Newton step: adding them changes nothing but the sign of a zero; with no
+    columns, not added: :meth:`~lcpbench.model.step.ContactStep.gradient`'s). Joint
     j's three columns are the nodes j + b0 − fs + (0, 1, 2); the interior rows are
     summed without the end tests, in the same order as the ends (and the
     reference's three passes)."""
@@ -70,18 +71,19 @@ def grad_into(out, m, u, gp, T):
             for c in range(3):
                 if 0 <= j - c < nj:
                     s += coef[j - c, c] * m[j - c]
-        d0 = u[i] - origin[i]
-        t = T[0, i] * d0
-        if i >= 1:
-            t += T[1, i - 1] * (u[i - 1] - origin[i - 1])
-        if i + 1 < n:
-            t += T[1, i] * (u[i + 1] - origin[i + 1])
-        out[i] = (s - load[i]) + t
+        out[i] = s - load[i]
+        if T.shape[1]:  # (no columns: no T, the step's numpy gradient's sum)
+            t = T[0, i] * (u[i] - origin[i])
+            if i >= 1:
+                t += T[1, i - 1] * (u[i - 1] - origin[i - 1])
+            if i + 1 < n:
+                t += T[1, i] * (u[i + 1] - origin[i + 1])
+            out[i] += t
     return out
 
 
 @njit(cache=True)
-def _grad_and_scale(out, size, m, ms, u, gp, T):
+def grad_and_scale(out, size, m, ms, u, gp, T):
     """:func:`grad_into` at u without and with ``scale`` (into ``out`` and ``size``),
     in one pass over the joints and one over the nodes: the same operations on the
     same numbers, so the same bits as the two calls (the certificate's pair)."""
@@ -106,19 +108,22 @@ def _grad_and_scale(out, size, m, ms, u, gp, T):
             if 0 <= j < nj:
                 s += coef[j, c] * m[j]
                 sa += abs(coef[j, c]) * ms[j]
-        d0 = u[i] - origin[i]
-        t = T[0, i] * d0
-        ta = abs(T[0, i]) * abs(d0)
-        if i >= 1:
-            d1 = u[i - 1] - origin[i - 1]
-            t += T[1, i - 1] * d1
-            ta += abs(T[1, i - 1]) * abs(d1)
-        if i + 1 < n:
-            d2 = u[i + 1] - origin[i + 1]
-            t += T[1, i] * d2
-            ta += abs(T[1, i]) * abs(d2)
-        out[i] = (s - load[i]) + t
-        size[i] = (sa + (abs(load[i]) + TINY)) + ta
+        out[i] = s - load[i]
+        size[i] = sa + (abs(load[i]) + TINY)
+        if T.shape[1]:  # (no columns: no T, as grad_into)
+            d0 = u[i] - origin[i]
+            t = T[0, i] * d0
+            ta = abs(T[0, i]) * abs(d0)
+            if i >= 1:
+                d1 = u[i - 1] - origin[i - 1]
+                t += T[1, i - 1] * d1
+                ta += abs(T[1, i - 1]) * abs(d1)
+            if i + 1 < n:
+                d2 = u[i + 1] - origin[i + 1]
+                t += T[1, i] * d2
+                ta += abs(T[1, i]) * abs(d2)
+            out[i] += t
+            size[i] += ta
 
 
 @njit(cache=True)
@@ -384,7 +389,7 @@ def certify(u, ru, rl, lo, hi, cu, cl, gp, grad, size, m, ms, T):
             return np.inf
     if n == 0:
         return 0.0
-    _grad_and_scale(grad, size, m, ms, u, gp, T)
+    grad_and_scale(grad, size, m, ms, u, gp, T)
     force, span = TINY, 1.0 + _max_abs(u)
     stat = feas = neg = comp = 0.0
     soft = cu.size == n

@@ -39,7 +39,11 @@ from .chain_kernel import (  # once each
     predict_alpha,
     wall_penalty,
 )
-from .compiled_dual import grad_into, judge_step  # the solve kernel's, once (numba_cache)
+from .compiled_dual import (  # the solve kernel's, once (numba_cache)
+    grad_and_scale,
+    grad_into,
+    judge_step,
+)
 from .compiled_kernel import banded_step  # the step
 from .profile_kernel import clipped_start, merit_search, penetration  # a profile's, once
 from .wall_kernel import lagged_load, walls_at
@@ -193,6 +197,26 @@ def _gradient(u, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load):
     return grad_into(np.empty(n), np.empty(coef.shape[0]), u,
                      (coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load),
                      np.zeros((2, n)))
+
+
+@njit(cache=True)
+def gradient(u, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load, T):
+    """:meth:`ContactStep.gradient <lcpbench.model.step.ContactStep.gradient>`: H u + c in
+    factored form, Jᵀ k (φ̂(u) − φ*) − f, plus T (u − u₀) where ``T`` has columns (the
+    Newton step's bands; none: the Gauss–Newton step) (:func:`~.compiled_dual.grad_into`)."""
+    return grad_into(np.empty(u.size), np.empty(coef.shape[0]), u,
+                     (coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load), T)
+
+
+@njit(cache=True)
+def gradient_scale(u, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load, T):
+    """The size of the terms :func:`gradient` sums, per node (the round-off tolerances'
+    scale; :func:`~.compiled_dual.grad_and_scale`)."""
+    n, nj = u.size, coef.shape[0]
+    size = np.empty(n)
+    grad_and_scale(np.empty(n), size, np.empty(nj), np.empty(nj), u,
+                   (coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load), T)
+    return size
 
 
 # -- the outer step (model.compiled_driver.run) --------------------------------------

@@ -117,11 +117,7 @@ class IncrementStep(ContactStep):
 
     heights: np.ndarray | None = None
 
-    def __post_init__(self):  # ContactStep's precomputed arrays serve its numpy only
-        f = np.asarray(self.free_nodes)
-        self._free = slice(int(f[0]) + 1, int(f[-1]) + 2)
-        b0, nj = int(self.base[0]), int(self.base.size)
-        self._cols = tuple(slice(b0 + k, b0 + k + nj) for k in range(3))
+    def __post_init__(self):  # its own gradient's work row (not ContactStep's arguments)
         self._m = np.empty(self.size)
 
     def __getattr__(self, name: str):

@@ -107,72 +107,33 @@ class ContactStep:
         return banded_matvec(self.bands, u)
 
     def __post_init__(self):
-        # Free nodes and joints are contiguous (assemble_step checks): slices, not
-        # index arrays, in the O(N) kernels below (at N ~ 100 each numpy call
-        # and each fancy index, not the arithmetic, is the cost).
-        f = np.asarray(self.free_nodes)
-        self._free = slice(int(f[0]) + 1, int(f[-1]) + 2) if f.size else slice(0, 0)
-        b0, nj = (int(self.base[0]), int(self.base.size)) if self.base.size else (0, 0)
-        self._cols = tuple(slice(b0 + k, b0 + k + nj) for k in range(3))
-        self._abs_coef = np.abs(self.coef)
-        self._phi_size = np.abs(self.phi_origin) + np.abs(self.rest_joint)
-        self._abs_load = np.abs(self.nodal_load) + np.finfo(float).tiny
-
-    def _J(self, du: np.ndarray, coef: np.ndarray | None = None) -> np.ndarray:
-        y = np.zeros(self.links + 2)
-        y[self._free] = du
-        c = self.coef if coef is None else coef
-        s0, s1, s2 = self._cols
-        out = c[:, 0] * y[s0]
-        out += c[:, 1] * y[s1]
-        out += c[:, 2] * y[s2]
-        return out
-
-    def _JT(self, m: np.ndarray, coef: np.ndarray | None = None) -> np.ndarray:
-        """Jᵀ m on the free nodes."""
-        g = np.zeros(self.links + 2)
-        c = self.coef if coef is None else coef
-        for k, sl in enumerate(self._cols):
-            g[sl] += c[:, k] * m
-        return g[self._free]
-
-    def joint_angles(self, u: np.ndarray) -> np.ndarray:
-        """φ̂ = φ̂(u₀) + J (u − u₀), the linearised joint angles at heights u.
-
-        Written about the linearisation point so that round-off scales with the
-        increment u − u₀, not with the heights themselves.
-        """
-        phi = self._J(u - self.origin)
-        phi += self.phi_origin
-        return phi
+        # the compiled gradient's arguments (free nodes and joints contiguous:
+        # assemble_step checks); T with no columns for the Gauss–Newton step
+        f, f64 = self.free_nodes, np.ascontiguousarray
+        T = (np.empty((2, 0)) if self.geometric is None
+             else f64(self.geometric[:2], dtype=float))
+        self._terms = (f64(self.coef, dtype=float), int(self.base[0]) if self.base.size else 0,
+                       int(f[0]) + 1 if f.size else 1, int(self.links),
+                       f64(self.origin, dtype=float), f64(self.phi_origin, dtype=float),
+                       f64(self.stiffness, dtype=float), f64(self.rest_joint, dtype=float),
+                       f64(self.nodal_load, dtype=float), T)
 
     def gradient(self, u: np.ndarray) -> np.ndarray:
-        """H u + c, computed in factored form Jᵀ k (φ̂(u) − φ*) − f.
+        """H u + c, computed in factored form Jᵀ k (φ̂(u) − φ*) − f (+ T (u − u₀) for
+        the Newton step), φ̂(u) = φ̂(u₀) + J (u − u₀) written about the linearisation
+        point (compiled: ``driver_kernel.gradient``).
 
         Equal to ``matvec(u) + linear`` in exact arithmetic, but it never forms
         the large, cancelling terms of H u: its round-off scales with the
         spring torques, not with |H||u|. At a solution it is minus the
         reactions (the upper wall pushes down).
         """
-        m = self.joint_angles(u)
-        m -= self.rest_joint
-        m *= self.stiffness
-        g = self._JT(m)
-        g -= self.nodal_load
-        if self.geometric is not None:  # the Newton step: + T (u − u₀)
-            g += banded_matvec(self.geometric, u - self.origin)
-        return g
+        return self.kernels().gradient(np.ascontiguousarray(u, dtype=float), *self._terms)
 
     def gradient_scale(self, u: np.ndarray) -> np.ndarray:
         """Size of the terms summed in :meth:`gradient` (for round-off tolerances)."""
-        m = self._J(np.abs(u - self.origin), self._abs_coef)
-        m += self._phi_size
-        m *= self.stiffness
-        g = self._JT(m, self._abs_coef)
-        g += self._abs_load
-        if self.geometric is not None:
-            g += banded_matvec(np.abs(self.geometric), np.abs(u - self.origin))
-        return g
+        return self.kernels().gradient_scale(np.ascontiguousarray(u, dtype=float),
+                                             *self._terms)
 
     def dense_hessian(self) -> np.ndarray:
         n = self.size
@@ -270,7 +231,8 @@ def residuals_of(values) -> dict:
 
 #: the entries of :mod:`.driver_kernel` the driver around a back-end calls from Python
 ENTRIES = ("assemble", "qp_form", "lcp_form", "from_lcp", "judge", "advance", "predict",
-           "profile_start", "profile_assemble", "profile_advance", "profile_on_walls")
+           "profile_start", "profile_assemble", "profile_advance", "profile_on_walls",
+           "gradient", "gradient_scale")
 
 
 def step_kernels():
