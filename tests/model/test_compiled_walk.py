@@ -82,7 +82,7 @@ def test_fused_gradient_and_term_size():
         g1, m = np.empty(n), np.empty(nj)
         dual.grad_into(g1, m, u, gp, T)
         f1, f2 = np.empty(n), np.empty(n)
-        dual._grad_and_scale(f1, f2, np.empty(nj), np.empty(nj), u, gp, T)
+        dual.grad_and_scale(f1, f2, np.empty(nj), np.empty(nj), u, gp, T)
         assert np.array_equal(f1, g1)
         # the size of the terms, ContactStep.gradient_scale written out in numpy:
         # |J| |u − u₀| + |φ₀| + |φ*| scaled by k, through |J|ᵀ, plus |f| and |T| |u − u₀|

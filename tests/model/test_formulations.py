@@ -52,12 +52,12 @@ def paper():
     return _step(ActuatorScene(theta=150, height=3, links=140))
 
 
-def _energy(chain, alpha):
-    """The step's energy in the free heights u, from eq. (21) written here: with y the
-    node heights (the pinned nodes at 0) and y₀ = Σ a sin α their values at α, the link
-    angles are α̂ = α + B (y − y₀), B the link differences over a cos α, the joint
-    angles φ̂ = α̂_right − α̂_left (the clamp's left angle 0), and
-    E = ½ Σ k (φ̂ − φ*)² − fᵀu. Returns E and ∇E as functions of u."""
+def _joint_map(chain, alpha):
+    """The linearised joint angles φ̂(u) = φ̂₀ + J u, from eq. (21) written here: with y
+    the node heights (the pinned nodes at 0) and y₀ = Σ a sin α their values at α, the
+    link angles are α̂ = α + B (y − y₀), B the link differences over a cos α, the joint
+    angles φ̂ = α̂_right − α̂_left (the clamp's left angle 0). Returns (φ̂₀, J) on the
+    free nodes."""
     N, a = chain.links, chain.link_length
     free = chain.free_nodes
     y0 = np.concatenate([[0.0], np.cumsum(a * np.sin(alpha))])
@@ -69,8 +69,13 @@ def _energy(chain, alpha):
         Jl[j, right] += 1.0
         if left >= 0:
             Jl[j, left] -= 1.0
-    phi0 = Jl @ (alpha - B @ y0)  # φ̂ at u = 0 (every node at 0)
-    Jf = Jl @ B[:, free]
+    return Jl @ (alpha - B @ y0), Jl @ B[:, free]
+
+
+def _energy(chain, alpha):
+    """The step's energy in the free heights u, E = ½ Σ k (φ̂ − φ*)² − fᵀu with φ̂ from
+    :func:`_joint_map` (eq. 21 written here). Returns E and ∇E as functions of u."""
+    phi0, Jf = _joint_map(chain, alpha)  # φ̂ at u = 0 (every node at 0), and J
     k, rest, f = chain.joint_stiffness, chain.rest_joint, chain.nodal_load
 
     def E(u):
@@ -185,7 +190,8 @@ def test_kkt_of_each_form_holds_with_the_reactions_as_multipliers(scene):
     assert np.max(np.abs(r2)) <= tol * np.max(np.abs(qp.P) @ np.abs(u / L))
     # F3: stationarity in (δũ, φ̂) with y = R/F on the bounds, y_rows = −k̃ (φ̂ − φ*)
     q3 = lifted_qp(step)
-    phi = step.joint_angles(u)
+    phi0, J = _joint_map(scene.chain(), step.alpha)
+    phi = phi0 + J @ u  # φ̂(u), eq. (21) written here
     x = np.r_[(u - step.origin) / L, phi]
     yr = -step.stiffness / (F * L) * (phi - step.rest_joint)
     y = np.r_[R / F, np.zeros(phi.size)]
@@ -257,12 +263,16 @@ def test_conditioning_grows_as_derived():
 
 
 def test_kinematic_matrix_is_the_steps_joint_map(small):
-    """J of F3 is the map of the step's joint angles: φ̂(u) − φ̂(u₀) = J (u − u₀)."""
+    """J of F3 is the map of the linearised joint angles, eq. (21) written here
+    (:func:`_joint_map`): φ̂(u) − φ̂(u₀) = J (u − u₀), and φ̂(u₀) is the step's."""
     rng = np.random.default_rng(3)
     du = rng.standard_normal(small.size) * 1e-2
     J = kinematic_matrix(small)
-    assert np.allclose(J @ du, small.joint_angles(small.origin + du) - small.phi_origin,
-                       rtol=0, atol=1e-13 * np.max(np.abs(J)) * np.max(np.abs(du)) * 10)
+    phi0, J_eq = _joint_map(ActuatorScene(theta=150, height=3, links=12).chain(), small.alpha)
+    scale = np.max(np.abs(J_eq))
+    assert np.allclose(J @ du, J_eq @ du, rtol=0, atol=1e-13 * scale * np.max(np.abs(du)) * 10)
+    assert np.allclose(phi0 + J_eq @ small.origin, small.phi_origin, rtol=0,
+                       atol=1e-13 * (1.0 + scale * np.max(np.abs(small.origin))))
 
 
 def test_names_labels_and_refusals():
