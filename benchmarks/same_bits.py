@@ -10,7 +10,7 @@ back-end's rows of ``results/sweep/runs.csv`` against their stored forces.
     python benchmarks/same_bits.py compare before.pkl after.pkl
     python benchmarks/same_bits.py sweep                 # the committed sweep's rows
 
-The corpus (about 1,700 answers; ~4 min on one core):
+The corpus (about 1,850 answers; ~5 min on one core):
 - ``solve_many`` on mixed batches (elastic and profiled walls, sections), the
   paper's grid, random elastic walls (k from 1e-3 to 1e9 N/mm²) and channels;
 - ``solve`` and ``start="ramp"`` on rows of two and three sections, and past 180°;
@@ -18,7 +18,8 @@ The corpus (about 1,700 answers; ~4 min on one core):
   back-end, OSQP and Lemke (the compiled driver around a back-end);
 - large N (3000, 6000) with one wall, a channel and a wall profile;
 - friction: ``solve_path`` on a flat wall, a channel and a stenosis, pulled and
-  released.
+  released; 40 random paths of 4 states as ``benchmarks/friction_paths.py`` draws
+  them (seed 39: every end condition, channels, μ 0.05–0.8).
 
 Each answer is recorded as (converged, reason, total force, forces, lower
 forces, α) with the arrays as bytes. ``compare`` counts the answers the same bit
@@ -153,6 +154,23 @@ def corpus() -> dict:
                     out[(tag, theta, i)] = answer(r)
             except Exception as e:  # noqa: BLE001
                 out[(tag, theta)] = dict(error=repr(e))
+    from friction_paths import ENDS  # the issue-39 audit's ends
+
+    rng = np.random.default_rng(39)
+    for index in range(40):  # random frictional paths, as benchmarks/friction_paths.py
+        channel = bool(rng.random() < 0.4)
+        ends = ENDS[rng.integers(7 if channel else 3)]
+        theta = float(rng.uniform(100, 170))
+        s = ActuatorScene(theta=theta, height=float(rng.uniform(1.0, 5.0)),
+                          links=int(rng.choice([20, 40])), channel=channel, left_end=ends[0],
+                          right_end=ends[1], friction=float(rng.uniform(0.05, 0.8)))
+        pull = float(rng.uniform(0.0, 0.15)) if ends[1] != "pinned" else 0.0
+        states = [{}, {"theta": theta + 10}, {"pull": pull}, {"pull": 0.0}]
+        try:
+            for i, r in enumerate(lcpbench.solve_path(s, states, tol=1e-8)):
+                out[("friction random", index, i)] = answer(r)
+        except Exception as e:  # noqa: BLE001
+            out[("friction random", index)] = dict(error=repr(e))
     return out
 
 

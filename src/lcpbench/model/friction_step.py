@@ -30,6 +30,7 @@ from numba import njit
 
 from ..linalg.ldl_kernel import refactor, resolve_columns
 from ..solvers.pivoting_kernel import DONE, support_pivots, symmetric_active_set
+from .compiled_dual import grad_into
 from .compiled_kernel import banded_step, geometric_bands
 
 
@@ -91,7 +92,8 @@ def step_arrays(alpha, a, jl, jr, k, rest, fs, n, nodal_load, pull, right_datum,
     storage) is the banded step's (:func:`lcpbench.model.compiled_kernel.banded_step`,
     i.e. :func:`lcpbench.model.compiled_driver.assemble_step`) plus the pull's curvature
     (:func:`add_pull_curvature`); f = −(H u₀ + c) at the linearisation point u₀
-    (``ContactStep.gradient(origin)``: Jᵀ k (φ̂(u₀) − φ*) − f_load, in its order) plus
+    (``ContactStep.gradient(origin)``: Jᵀ k (φ̂(u₀) − φ*) − f_load,
+    :func:`~lcpbench.model.compiled_dual.grad_into`) plus
     P ∂x_N/∂δ; D the slips' Jacobian (:func:`slip_jacobian`). ``fs``: the shifted
     index (node + 1) of the first free node, as the banded step's. With ``newton``, H
     also takes the springs' curvature T (:func:`lcpbench.model.compiled_kernel.
@@ -113,15 +115,12 @@ def step_arrays(alpha, a, jl, jr, k, rest, fs, n, nodal_load, pull, right_datum,
         if refactor(fac, trial, np.zeros(n, np.bool_), np.empty(0), 0, n):
             bands = trial
     D = slip_jacobian(alpha, first, n, right_datum)
-    links, nj = alpha.size, jr.size
-    b0 = jr[0]
-    g = np.zeros(links + 2)
-    for kk in range(3):  # Jᵀ m at u₀ (δu = 0: φ̂ = φ̂(u₀)), in ContactStep._JT's order
-        for j in range(nj):
-            g[b0 + kk + j] += coef[j, kk] * ((phi_origin[j] - rest[j]) * k[j])
-    f = np.empty(n)
+    links = alpha.size
+    f = grad_into(np.empty(n), np.empty(jr.size), origin,  # the step's gradient at u₀
+                  (coef, jr[0], fs, links, origin, phi_origin, k, rest, nodal_load),
+                  np.empty((2, 0)))
     for i in range(n):
-        f[i] = -(g[fs + i] - nodal_load[i])
+        f[i] = -f[i]
         if pull != 0.0:
             f[i] += pull * D[links, i]
     return bands, f, D, origin
