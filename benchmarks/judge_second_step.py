@@ -212,7 +212,7 @@ def main(argv=None) -> int:
     elapsed, load1 = time.perf_counter() - t0, os.getloadavg()
     md = ["# The judge's force error bound with a second judge step (issue 37, target 1)", "",
           f"Paper grid, {len(keys)} scenes (θ 10…180° by 10, h 2…7 mm, N = 140); truth: "
-          f"direct minimisation of the exact energy (model.energy_reference, KKT checked; "
+          f"direct minimisation of the exact energy (reference.energy, KKT checked; "
           f"{len(bad_refs)} scenes without a checked reference left out). Bound = min(one-"
           f"step, two-step), module docstring of lcpbench/model/judge_bound.py; the second "
           f"judge step is taken only where the one-step estimate exceeds τ (*second step "

@@ -10,7 +10,7 @@ of rows both ways, ``solve_many`` and ``solve`` per row, and counts: the rows th
 wall's total force within the judge's τ·F₀, ``escalations.same_state``), the verdict
 changes, and the time of each batch. A row certified by ``solve_many`` only is checked
 independently: the direct minimisation of its exact energy
-(``model.energy_reference.minimise_energy``, SLSQP and a Newton polish on the KKT system)
+(``reference.energy.minimise_energy``, SLSQP and a Newton polish on the KKT system)
 started from its answer must stay there, its total force within 1e-6 of F₀. Writes
 ``results/row-neighbours.md`` (``--out``; not overwritten unless ``--force``).
 

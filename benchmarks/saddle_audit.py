@@ -8,7 +8,7 @@ N = 140, the default solve at tol 1e-3), and random rows of 3-4 equal sections w
 signed angles (|θ_k| 20°-170°, h 2-8 mm, one wall or a channel, seed 36, the paper's
 density), and checks every certified answer with an
 independent second-order test: the dense Hessian of the Lagrangian from the energy
-reference (model.energy_reference.lagrangian_hessian, the SLSQP oracle's own
+reference (reference.energy.lagrangian_hessian, the SLSQP oracle's own
 closed-form derivatives), with λ from least-squares stationarity, reduced on the
 null space of the rows of the closure and of the walls that carry a reaction above
 the judge's contact threshold, and its eigenvalues. Writes

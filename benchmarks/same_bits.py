@@ -22,7 +22,8 @@ The corpus (about 1,850 answers; ~5 min on one core):
   them (seed 39: every end condition, channels, μ 0.05–0.8).
 
 Each answer is recorded as (converged, reason, total force, forces, lower
-forces, α) with the arrays as bytes. ``compare`` counts the answers the same bit
+forces, α, outer iterations; with friction the tangential forces, slips and
+stick) with the numbers as bytes (a zero's sign counts). ``compare`` counts the answers the same bit
 for bit and lists every other: a changed verdict, or the forces moved (with the
 judge's allowance τ F₀ where the answer was judged). ``sweep`` exits 1 if a
 row's force moved at all: the sweep's cold rows by ``lcpbench.solve``, its
@@ -73,9 +74,14 @@ def answer(r) -> dict:
     allowed = (float(j.force_tol * j.force_unit)
                if j is not None and hasattr(j, "force_tol") else np.nan)
     return dict(converged=bool(r.converged), reason=str(r.reason),
-                total_force=float(r.total_force), forces=_bytes(r.forces),
-                lower=_bytes(getattr(r, "forces_lower", None)),
-                alpha=_bytes(getattr(r, "alpha", None)), allowed=allowed)
+                total_force=float(r.total_force), total_bits=_bytes(r.total_force),
+                forces=_bytes(r.forces), lower=_bytes(getattr(r, "forces_lower", None)),
+                alpha=_bytes(getattr(r, "alpha", None)),
+                outer=getattr(r, "outer_iterations", None),
+                # a frictional answer's tangential forces, slips and stick
+                **{f: _bytes(getattr(r, f, None)) for f in ("tangential_forces", "slip",
+                                                            "stick")},
+                allowed=allowed)
 
 
 def _kept(out: dict, key, solve) -> None:
@@ -209,6 +215,15 @@ def compare(a: dict, b: dict) -> int:
     return 0 if same == sum(counts.values()) else 1
 
 
+def _same_tree_env() -> dict:
+    """The environment of a child process that imports this process's lcpbench (an
+    absolute ``PYTHONPATH``: a relative one, run from another directory, would reach
+    the installed tree instead)."""
+    here = str(Path(lcpbench.__file__).resolve().parent.parent)
+    return {**os.environ, "PYTHONPATH": os.pathsep.join(
+        [here, *filter(None, os.environ.get("PYTHONPATH", "").split(os.pathsep))])}
+
+
 def sweep_rows(runs: Path) -> int:
     """Re-solve the default back-end's rows of the committed sweep; 0 where every
     total force is the stored one, bit for bit."""
@@ -221,7 +236,8 @@ def sweep_rows(runs: Path) -> int:
         s = ActuatorScene(theta=d["theta"], height=d["height"], links=d["links"],
                           length=d["length"], EI=d["EI"], weight=d["weight"],
                           channel=d["channel"])
-        F = float(lcpbench.solve(s, tol=float(r["tol"]), method="globalised").total_force)
+        F = float(lcpbench.solve(s, tol=float(r["tol"]), method="globalised",
+                                 settings=r["settings"]).total_force)
         if F == float(r["total_force"]):
             same += 1
         else:
@@ -238,7 +254,7 @@ def sweep_rows(runs: Path) -> int:
                             "--settings", ",".join(settings), "--continuation", predictor,
                             "--baseline", "none", "--store", str(store), "--no-report",
                             "--quiet", "--out", tmp], check=True, cwd=tmp,
-                           capture_output=True)
+                           capture_output=True, env=_same_tree_env())
             with sqlite3.connect(store) as con:
                 got = {(sc, st, m): F for sc, st, m, F in con.execute(
                     "select scene, settings, method, total_force from runs "

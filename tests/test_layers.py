@@ -6,12 +6,17 @@
 - no private name (``_name``, not a dunder) imported from another module of
   lcpbench: a name another module needs is public where it is defined, or lives
   in the module that owns it. Importing a private *module* (``cli/_common.py``)
-  within its package is allowed; a private alias (``import x as _x``) too.
+  within its package is allowed; a private alias (``import x as _x``) too;
+- the energy minimisation, the tests' oracle (``reference/energy.py``), shares
+  only the chain's kinematics, energy and walls with the model: no contact step,
+  outer loop, judge or back-end, not through an import inside a function nor
+  through a kernel loaded by name.
 """
 
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 SRC = Path(__file__).resolve().parents[1] / "src" / "lcpbench"
@@ -147,3 +152,33 @@ def thresholds_defined_again() -> list[str]:
 
 def test_the_thresholds_are_defined_once():
     assert thresholds_defined_again() == []
+
+
+#: what the energy oracle may share with the model: the chain's kinematics and exact
+#: energy (and the elastic walls' springs in it), the walls' heights at x
+ORACLE_SHARES = {"lcpbench.model.chain", "lcpbench.model.elastic", "lcpbench.model.profile"}
+ORACLE_KERNELS = {"lcpbench.model.chain_kernel", "lcpbench.model.wall_kernel",
+                  "lcpbench.problems.table_kernel"}
+
+
+def reached(graph: dict[str, set[str]], roots: list[str]) -> set[str]:
+    """Every module of lcpbench that ``roots`` import, directly or not."""
+    seen: set[str] = set()
+    todo = list(roots)
+    while todo:
+        m = todo.pop()
+        if m not in seen:
+            seen.add(m)
+            todo += sorted(graph.get(m, ()))
+    return seen
+
+
+def test_the_energy_oracle_reaches_only_the_chain_and_its_walls():
+    graph = import_graph()
+    assert reached({"a": {"b"}, "b": {"c"}, "d": {"a"}}, ["a"]) == {"a", "b", "c"}
+    seen = reached(graph, ["lcpbench.reference.energy", "lcpbench.reference.energy_profile"])
+    model = {m for m in seen if m.startswith(("lcpbench.model.", "lcpbench.solvers"))}
+    assert model <= ORACLE_SHARES, sorted(model - ORACLE_SHARES)
+    loaded = {name for m in seen
+              for name in re.findall(r'kernel_module\(\s*"([^"]+)"', MODULES[m].read_text())}
+    assert loaded <= ORACLE_KERNELS, sorted(loaded - ORACLE_KERNELS)

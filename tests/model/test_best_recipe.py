@@ -5,7 +5,7 @@
 Checked here: the result's typed field ``eps`` says which ε the back-end was handed
 (the recipe's through "best", none otherwise at `default`), the step is still judged at
 `default`, and the answers agree with an oracle independent of every back-end: the
-direct minimisation of the exact energy (model.energy_reference, SLSQP with a Newton
+direct minimisation of the exact energy (reference.energy, SLSQP with a Newton
 polish of its KKT system).
 """
 

@@ -5,7 +5,7 @@ angles) before the loading path; only rows the loading path solved serve as neig
 Oracles: first principles (``energy_oracle.assert_solved``: forward kinematics, the
 walls, the reactions' signs and complementarity, stationarity by central differences of
 the exact energy), and for the state, the minimum of the exact energy followed along the
-load (:func:`_along_load`: SLSQP and a Newton polish, ``energy_reference.minimise_energy``,
+load (:func:`_along_load`: SLSQP and a Newton polish, ``reference.energy.minimise_energy``,
 at the bend angles s·θ in 4° steps, each started from the last), the state the
 pressurised actuator reaches, which the loading path is meant to find.
 """

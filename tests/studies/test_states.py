@@ -68,7 +68,7 @@ def test_a_solve_whose_starts_reach_two_stable_states_says_so(scene, tol):
     assert np.array_equal(answer.alpha, res.alpha)
     assert "2 reached" in res.summary() and "result.states" in res.retried("escaped")
     # each is a local minimum of the exact energy with the energy and force it reports:
-    # SLSQP on the exact energy (model.energy_reference), started from its angles,
+    # SLSQP on the exact energy (reference.energy), started from its angles,
     # stays there
     chain = scene.chain()
     for state in res.states:

@@ -70,7 +70,7 @@ def _baseline_certificate(scene, chain, res) -> dict:
 
 
 def baseline_row(scene, res) -> dict:
-    """The row of a :class:`~lcpbench.reference.BaselineResult`."""
+    """The row of a :class:`~lcpbench.reference.root_finding.BaselineResult`."""
     chain = scene.chain()
     gaps = chain.wall - res.y[chain.free_nodes]
     return {

@@ -72,7 +72,7 @@ def grad_into(out, m, u, gp, T):
                 if 0 <= j - c < nj:
                     s += coef[j - c, c] * m[j - c]
         out[i] = s - load[i]
-        if T.shape[1]:  # (no columns: no T, the step's numpy gradient's sum)
+        if T.shape[1]:  # (no columns: no T, ContactStep.gradient's Gauss–Newton step)
             t = T[0, i] * (u[i] - origin[i])
             if i >= 1:
                 t += T[1, i - 1] * (u[i - 1] - origin[i - 1])

@@ -134,15 +134,13 @@ class IncrementStep(ContactStep):
     def gradient(self, u: np.ndarray) -> np.ndarray:
         g = np.empty(self.size)
         _kernel().gradient(self.coef, self.stiffness, self.phi_origin, self.rest_joint,
-                           self.nodal_load, self.origin,
-                           np.ascontiguousarray(u, dtype=float), g, self._m)
+                           self.nodal_load, self.origin, self._heights(u), g, self._m)
         return g
 
     def gradient_scale(self, u: np.ndarray) -> np.ndarray:
         g = np.empty(self.size)
         _kernel().gradient_scale(self.coef, self.stiffness, self.phi_origin, self.rest_joint,
-                                 self.nodal_load, self.origin,
-                                 np.ascontiguousarray(u, dtype=float), g, self._m)
+                                 self.nodal_load, self.origin, self._heights(u), g, self._m)
         return g
 
 

@@ -16,8 +16,9 @@ literally from eqs. (3)–(31); a test checks they agree.
 
 The step is assembled once, compiled (:func:`lcpbench.model.compiled_driver.assemble_step`,
 the kernel of :mod:`lcpbench.model.driver_kernel` that the solve kernel's assembly
-is); this module holds the :class:`ContactStep` it fills, its numpy methods and its
-forms for the back-ends (the compiled ones of :mod:`lcpbench.model.driver_kernel`).
+is); this module holds the :class:`ContactStep` it fills, its methods (the gradient,
+its term sizes and eq. 21's α̂: the solve kernel's, compiled) and its forms for the
+back-ends (the compiled ones of :mod:`lcpbench.model.driver_kernel`).
 
 A :class:`ContactStep` is the bound-constrained QP
 
@@ -128,12 +129,11 @@ class ContactStep:
         spring torques, not with |H||u|. At a solution it is minus the
         reactions (the upper wall pushes down).
         """
-        return self.kernels().gradient(np.ascontiguousarray(u, dtype=float), *self._terms)
+        return self.kernels().gradient(self._heights(u), *self._terms)
 
     def gradient_scale(self, u: np.ndarray) -> np.ndarray:
         """Size of the terms summed in :meth:`gradient` (for round-off tolerances)."""
-        return self.kernels().gradient_scale(np.ascontiguousarray(u, dtype=float),
-                                             *self._terms)
+        return self.kernels().gradient_scale(self._heights(u), *self._terms)
 
     def dense_hessian(self) -> np.ndarray:
         n = self.size
@@ -161,10 +161,22 @@ class ContactStep:
 
     # -- back to the chain ----------------------------------------------------
     def predict_alpha(self, u: np.ndarray) -> np.ndarray:
-        """α̂ from the linearised kinematics, eq. (21), written about u₀."""
-        y = np.zeros(self.links + 1)
-        y[self.free_nodes] = u - self.origin
-        return self.alpha0 + np.diff(y) * self.inv_a_cos
+        """α̂ from the linearised kinematics, eq. (21), written about u₀ (compiled:
+        :func:`lcpbench.model.chain_kernel.predict_alpha`, every loop's)."""
+        u = self._heights(u)
+        return self.kernels().predict(u, np.ascontiguousarray(self.alpha0, dtype=float),
+                                      np.ascontiguousarray(self.origin, dtype=float),
+                                      np.ascontiguousarray(self.inv_a_cos, dtype=float),
+                                      int(self.free_nodes[0]) + 1)
+
+    def _heights(self, u) -> np.ndarray:
+        """``u`` as the kernels read it: the free nodes' heights, one float each (a
+        ValueError names a wrong length: the kernels do not check it)."""
+        u = np.ascontiguousarray(u, dtype=float)
+        if u.shape != (self.size,):
+            raise ValueError(f"u: the heights of the step's {self.size} free nodes, "
+                             f"got shape {u.shape}")
+        return u
 
     # -- the back-ends' forms, compiled (:mod:`.driver_kernel`) ----------------
     def kernels(self):

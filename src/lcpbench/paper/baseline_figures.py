@@ -1,6 +1,6 @@
 """Stages against the appendix's root-finding baseline: Figs. 26-27, Tables I-II, errata.
 
-The baseline is :func:`lcpbench.reference.solve_baseline`, the paper's
+The baseline is :func:`lcpbench.reference.root_finding.solve_baseline`, the paper's
 single-reaction model of 3N + 2 equations (appendix, Table I). Fig. 26
 measures the disagreement |R_LCP - R_NL| / (R_LCP + R_NL) x 100; Table II
 times both models at h = 1 mm; the errata stage bounds what the eq. (13)
