@@ -359,7 +359,7 @@ def test_the_clipped_start_stops_at_a_pass_that_changes_nothing():
     from lcpbench.model.kernel_call import kernel_args, profile_args
     from lcpbench.numba_cache import kernel_module
 
-    kern = kernel_module("lcpbench.model.profile_kernel", "solve_profile_chain")
+    kern = kernel_module("lcpbench.model.profile_kernel", "clipped_start")
     walls_at = kernel_module("lcpbench.model.wall_kernel", "walls_at").walls_at
     fit = kernel_module("lcpbench.model.chain_kernel", "fit_heights").fit_heights
     scene = ActuatorScene(theta=150, height=3.0, links=LINKS, wall_profile=bump(3, .8, 14, 3))

@@ -261,7 +261,7 @@ def stopped(chain: Chain, why: str) -> DriverOutput:
 
 def kernel_name(chain: Chain) -> str:
     """The kernel whose stop a reason names: the profile kernel against walls of any
-    profile (:mod:`.profile_kernel`), else the compiled solve kernel."""
+    profile (:func:`.compiled_kernel.solve_profile_chain`), else the compiled solve kernel."""
     return "the profile kernel" if chain.profiled_walls else "the compiled kernel"
 
 

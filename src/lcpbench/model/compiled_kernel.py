@@ -1,5 +1,9 @@
 """The default solve compiled: assembly, dual active set, line search, outer loop.
 
+The outer loop (:func:`outer_loop`) is one, on flat walls (:func:`solve_chain`) and on
+walls of any profile (:func:`solve_profile_chain`, with the merit, start and stop of
+:mod:`lcpbench.model.profile_kernel`).
+
 numba (``@njit(cache=True)``) versions of the numpy reference, line for line:
 :func:`banded_step` (the banded step of eqs. 20-31, the one assembly: every driver's,
 :func:`lcpbench.model.compiled_driver.assemble_step`),
@@ -34,6 +38,7 @@ from numba import njit
 from ..linalg.ldl_kernel import refactor
 from ..thresholds import (
     FLOOR_ULPS,
+    GEOMETRY_SLACK,
     NEWTON_SWITCH,
     STALL_RUN,
     STALL_STEP,
@@ -92,6 +97,8 @@ from .compiled_dual import (
     grad_into,
     judge_step,
 )
+from .profile_kernel import clipped_start, merit_search, penetration  # a profile's, once
+from .wall_kernel import lagged_load, split_by_wall, walls_at
 
 # outcome codes of solve_chain (the Python side turns them into reasons)
 CONVERGED, MAX_OUTER, LINE_SEARCH, NO_FIT = 0, 1, 2, 3
@@ -99,9 +106,11 @@ CONVERGED, MAX_OUTER, LINE_SEARCH, NO_FIT = 0, 1, 2, 3
 #: STALL_RUN outer steps running (kernel_call.BAIL_REASONS; the Python side treats it as
 #: the step refusals it stands in for, model.compiled.REFUSED_STEPS)
 BAIL_STALL = 16
+#: a wall without a table of cubic pieces (flat walls: :func:`solve_chain`)
+_NO_TABLE = np.empty((4, 0))
 __all__ = ["BAIL_CERT", "BAIL_JUDGE", "BAIL_LIMIT", "BAIL_NOT_PD", "BAIL_PRIMAL", "BAIL_REPEAT",
-           "BAIL_STALL", "CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "solve_chain",
-           "solve_step"]
+           "BAIL_STALL", "CONVERGED", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "outer_loop",
+           "solve_chain", "solve_profile_chain", "solve_step"]
 
 
 @njit(cache=True)
@@ -356,28 +365,71 @@ def _clipped_heights(u, alpha, a, fs, lo, hi):
 def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl,
                 tol, max_outer, start_alpha, warm_u, warm_up, warm_lo, warm_flags,
                 max_iter, request, newton=False):
-    """The globalised driver (model.compiled_driver.run) around the compiled step;
-    ``newton``: its Newton scheme (``method="newton"``), the exact Hessian H + T
-    where positive definite once the last step moved α by less than
-    NEWTON_SWITCH, or from a warm start's first step.
+    """:func:`outer_loop` on flat walls (the rows ``lo``, ``hi``; ``cu``, ``cl`` the
+    elastic walls' compliances, empty where no wall yields). Returns ``(code, alpha,
+    forces_upper, forces_lower, u, sigma, records, count, residuals, forces_net)``."""
+    got = outer_loop(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
+                     cu, cl, tol, max_outer, start_alpha, warm_u, warm_up, warm_lo, warm_flags,
+                     max_iter, request, newton, False, (hi, lo, cu[:0], _NO_TABLE, cu[:0],
+                                                        _NO_TABLE), False, cu[:0], cu[:0])
+    return got[0], got[1], got[2], got[3], got[4], got[5], got[6], got[7], got[8], got[9]
 
-    ``fs``: shifted index (node + 1) of the first free node; ``cu``, ``cl``: the
-    compliance 1/k (mm/N) of the upper and lower wall per free node (0: rigid), or
-    empty where no wall yields (elastic walls, model.elastic: the walls' springs join
-    the energy searched on); ``start_alpha`` empty for a cold start; ``warm_flags``: bit 0 ``warm_u``, bit 1 ``warm_up``,
-    bit 2 ``warm_lo`` are given (a continuation's last step).
 
-    A cold start (no ``start_alpha``, or one that does not fit between the walls) whose
-    line searches cut the step length to STALL_STEP or less STALL_RUN outer steps
-    running stops with BAIL_STALL, the answer not yet converged: its linearisation in
-    the heights is off by more than 1/STALL_STEP in the energy at every step (a link
-    near the vertical, where it divides by cos α); such a solve went on for 15-21 steps
-    to a refused step (BAIL_CERT, BAIL_JUDGE) or a face the walk could not solve, never
-    to an answer (thresholds.STALL_STEP). A warm start is never stopped so.
+@njit(cache=True)
+def solve_profile_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo_rows,
+                        hi_rows, L, F, ku, cu_, kl, cl_, channel, tol, max_outer, start_alpha,
+                        mu_up, mu_lo, max_iter, request):
+    """:func:`outer_loop` against walls of any profile: ``ku``, ``cu_`` (``kl``, ``cl_``)
+    the upper (lower) wall's table, empty for a flat wall; ``hi_rows``, ``lo_rows`` the
+    chain's rows (±inf: no wall at that node); ``channel``: reactions split between two
+    walls; ``mu_up``, ``mu_lo``: the starting lagged reactions (zeros cold; written).
+    Rigid walls, a cold start of the walk. Returns :func:`solve_chain`'s tuple plus the
+    walls at the answer's nodes (upper, lower)."""
+    n, none = lo_rows.size, np.empty(0)
+    return outer_loop(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo_rows,
+                      hi_rows, L, F, none, none, tol, max_outer, start_alpha, np.zeros(n),
+                      np.zeros(n, np.bool_), np.zeros(n, np.bool_), 0, max_iter, request, False,
+                      True, (hi_rows, lo_rows, ku, cu_, kl, cl_), channel, mu_up, mu_lo)
 
-    Returns ``(code, alpha, forces_upper, forces_lower, u, sigma, records,
-    count, residuals, forces_net)``; ``records`` rows: face solves, step
-    length t, max|Δα|, energy; ``sigma`` +1/−1 on the upper/lower walls.
+
+@njit(cache=True)
+def outer_loop(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl,
+               tol, max_outer, start_alpha, warm_u, warm_up, warm_lo, warm_flags, max_iter,
+               request, newton, profiled, walls, channel, mu_up, mu_lo):
+    """The globalised outer loop around the compiled step (model.compiled_driver.run, the
+    default back-end's, fused), on flat walls or (``profiled``) walls of any profile.
+
+    Flat walls (:func:`solve_chain`): each step's bounds are the rows ``lo``, ``hi``;
+    the Armijo search is on the exact energy plus the elastic walls' springs
+    (:func:`~.chain_kernel.energy_search`; ``cu``, ``cl``: the compliance 1/k (mm/N) of
+    the upper and lower wall per free node, 0 rigid, empty where no wall yields);
+    ``newton``: the Newton scheme (``method="newton"``), the exact Hessian H + T where
+    positive definite once the last step moved α by less than NEWTON_SWITCH, or from a
+    warm start's first step. A cold start (no ``start_alpha``, or one that does not fit
+    between the walls) whose line searches cut the step length to STALL_STEP or less
+    STALL_RUN outer steps running stops with BAIL_STALL, the answer not yet converged:
+    its linearisation in the heights is off by more than 1/STALL_STEP in the energy at
+    every step (a link near the vertical, where it divides by cos α); such a solve went
+    on for 15-21 steps to a refused step (BAIL_CERT, BAIL_JUDGE) or a face the walk
+    could not solve, never to an answer (thresholds.STALL_STEP). A warm start is never
+    stopped so.
+
+    Walls of any profile (:func:`solve_profile_chain`, :mod:`.profile_kernel`'s scheme;
+    ``walls`` = (hi rows, lo rows, the upper wall's table, the lower's)): each step's
+    bounds are the walls at the nodes' x, its load the lagged reactions' slope load
+    (:func:`~.wall_kernel.lagged_load`; ``mu_up``, ``mu_lo`` written step by step), the
+    search on the merit P (:func:`~.profile_kernel.merit_search`), the start clipped to
+    the walls at the nodes' x (:func:`~.profile_kernel.clipped_start`), the stop also
+    when the chain crosses no wall by more than GEOMETRY_SLACK ℓ; no Newton step and no
+    stall rule.
+
+    ``fs``: shifted index (node + 1) of the first free node; ``start_alpha`` empty for a
+    cold start; ``warm_flags``: bit 0 ``warm_u``, bit 1 ``warm_up``, bit 2 ``warm_lo``
+    are given (a continuation's last step). Returns ``(code, alpha, forces_upper,
+    forces_lower, u, sigma, records, count, residuals, forces_net, upper, lower)``;
+    ``records`` rows: face solves, step length t, max|Δα|, energy; ``sigma`` +1/−1 on
+    the upper/lower walls; ``upper``, ``lower`` the walls at the answer's nodes (empty
+    on flat walls).
     """
     n, links = lo.size, rest_alpha.size
     ws = workspace(n, links, jr.size, max_iter)
@@ -385,20 +437,39 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
     rec = np.empty((4, min(max_outer, 64)))
     count, zero, none, ok = 0, np.zeros(n), np.zeros(5), False
     alpha, trial, u = wa[ALPHA], wa[TRIAL], wn[OUT_U]
-    if start_alpha.size == links:  # a neighbour's answer, clipped to the walls
-        _clipped_heights(u, start_alpha, a, fs, lo, hi)
-        ok = fit_heights(alpha, u, start_alpha, a, fs, links, none[:0], wa[SIN_A], wa[COS_A])
-    near = ok and warm_flags != 0  # a neighbour's answer and its last step: near already
-    cold = not ok  # (the stall rule's: cold starts only)
-    if not ok:
-        warm_flags = 0
-        _clipped_heights(u, rest_alpha, a, fs, lo, hi)
-        ok = fit_heights(alpha, u, rest_alpha, a, fs, links, none[:0], wa[SIN_A], wa[COS_A])
-    if not ok:
-        return NO_FIT, rest_alpha.copy(), zero, zero, zero, zero, rec, count, none, zero
     sin_a, sin_t, cos_a, cos_t = wa[SIN_A], wa[SIN_T], wa[COS_A], wa[COS_T]
-    E = energy(alpha, a, jl, jr, k, rest, link_load, sin_a) + wall_penalty(u, lo, hi, cu, cl,
-                                                                       none[:0])
+    p = n if profiled else 0  # the walls at the nodes' x: the merit's, and the step's
+    rows = np.empty((13, p))  # (one allocation: the flat walls' solve pays for one)
+    at = (rows[0], rows[1], rows[2], rows[3], rows[4], rows[5], rows[6],
+          rows[7])  # x, y, upper, lower, h', l', h'', l''
+    step_at = (at[0], at[1], rows[8], rows[9], at[4], at[5], at[6], at[7])
+    yf, h1, l1, w, s = at[1], at[4], at[5], rows[10], rows[11]
+    hs, ls = (step_at[2], step_at[3]) if profiled else (hi, lo)  # the step's bounds
+    nl = rows[12] if profiled else nodal_load  # the step's load
+    chain = (a, jl, jr, k, rest, link_load, fs)
+    if profiled:
+        near = False
+        ok, cold = clipped_start(start_alpha, rest_alpha, a, fs, walls, alpha, u, sin_a,
+                                 cos_a, at)
+        if cold:
+            mu_up[:] = 0.0
+            mu_lo[:] = 0.0
+    else:
+        if start_alpha.size == links:  # a neighbour's answer, clipped to the walls
+            _clipped_heights(u, start_alpha, a, fs, lo, hi)
+            ok = fit_heights(alpha, u, start_alpha, a, fs, links, none[:0], sin_a, cos_a)
+        near = ok and warm_flags != 0  # a neighbour's answer and its last step: near already
+        cold = not ok  # (the stall rule's: cold starts only)
+        if not ok:
+            warm_flags = 0
+            _clipped_heights(u, rest_alpha, a, fs, lo, hi)
+            ok = fit_heights(alpha, u, rest_alpha, a, fs, links, none[:0], sin_a, cos_a)
+    if not ok:
+        return (NO_FIT, rest_alpha.copy(), zero, zero, zero, zero, rec, count, none, zero,
+                zero[:p], zero[:p])
+    E = energy(alpha, a, jl, jr, k, rest, link_load, sin_a)  # (+ the springs: flat walls)
+    if not profiled:
+        E += wall_penalty(u, lo, hi, cu, cl, none[:0])
     noise_k = 0.0
     for j in range(k.size):
         noise_k += abs(k[j])
@@ -406,35 +477,58 @@ def solve_chain(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, h
     w_u[:], w_up[:], w_lo[:] = warm_u, warm_up, warm_lo
     su, sigma, inv, alpha0, origin = wn[U], wn[SIG], wa[INV], wa[ALPHA0], wn[ORIG]
     d, ut, g_u = wn[DIR], wn[TRY], wn[GF]
-    gp = (ws[7], jr[0], fs, links, origin, ws[2][0], k, rest, nodal_load)
-    chain = (a, jl, jr, k, rest, link_load, fs)
+    gp = (ws[7], jr[0], fs, links, origin, ws[2][0], k, rest, nl)
     short = 0  # outer steps running whose line search cut t to STALL_STEP or less
     for _ in range(max_outer):
-        code, it = _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, lo, hi, L, F, cu, cl,
-                         w_u, w_up, w_lo, warm_flags, max_iter, request, ws, gp, sin_a,
-                         cos_a, newton and near)
+        if profiled:  # the walls at the nodes' x, the lagged reactions' slope load
+            walls_at(sin_a, cos_a, a, fs, *walls, *step_at)
+            lagged_load(alpha, cos_a, sin_a, fs, mu_up, mu_lo, h1, l1, nodal_load, w, s, nl)
+        code, it = _step(alpha, a, jl, jr, k, rest, fs, n, nl, ls, hs, L, F, cu, cl, w_u, w_up,
+                         w_lo, warm_flags, max_iter, request, ws, gp, sin_a, cos_a,
+                         newton and near)
         if code != 0:  # (sigma unwritten where the walk never ran: zero, as the rest)
-            return code, alpha.copy(), zero, zero, u.copy(), zero, rec, count, none, zero
+            return (code, alpha.copy(), zero, zero, u.copy(), zero, rec, count, none, zero,
+                    zero[:p], zero[:p])
         dalpha = predict_alpha(su, n, origin, alpha0, inv, fs, alpha, alpha[:0])
         grad_into(g_u, m, u, gp, ws[10])
-        wall_penalty(u, lo, hi, cu, cl, g_u)  # (nothing where no wall yields)
-        t, E_t = energy_search(E, u, su, g_u, d, ut, alpha, trial, sin_t, cos_t, inv,
-                               energy_noise(E, noise_k), chain, lo, hi, cu, cl)
+        full, E_t = False, 0.0
+        if profiled:  # the merit P, its weight σ from the largest reaction (at least F)
+            net = wn[NET]
+            big = F
+            for i in range(n):
+                big = max(big, max(abs(net[i]), max(mu_up[i], mu_lo[i])))
+            t, full = merit_search(E, u, su, g_u, d, ut, alpha, trial, sin_t, cos_t, inv,
+                                   dalpha, big, noise_k, chain, walls, mu_up, mu_lo, at, yf,
+                                   hs, ls)
+        else:  # the energy and the elastic walls' springs
+            wall_penalty(u, lo, hi, cu, cl, g_u)  # (nothing where no wall yields)
+            t, E_t = energy_search(E, u, su, g_u, d, ut, alpha, trial, sin_t, cos_t, inv,
+                                   energy_noise(E, noise_k), chain, lo, hi, cu, cl)
         if t == 0.0:
             rec, count = record_step(rec, count, it, 0.0, dalpha, E)
             return (LINE_SEARCH, alpha.copy(), zero, zero, u.copy(), sigma.copy(), rec, count,
-                    none, zero)
-        u[:] = ut
-        alpha, trial, sin_a, sin_t, E = trial, alpha, sin_t, sin_a, E_t
-        cos_a, cos_t = cos_t, cos_a
-        rec, count = record_step(rec, count, it, t, dalpha, E)
+                    none, zero, zero[:p], zero[:p])
         for i in range(n):
+            u[i] = su[i] if full else ut[i]
+        alpha, trial, sin_a, sin_t = trial, alpha, sin_t, sin_a
+        cos_a, cos_t = cos_t, cos_a
+        # (against a profile, the chain's own energy: the merit's parts at α are the next
+        # step's, at its walls)
+        E = energy(alpha, a, jl, jr, k, rest, link_load, sin_a) if profiled else E_t
+        rec, count = record_step(rec, count, it, t, dalpha, E)
+        for i in range(n):  # the warm sets
             w_u[i], w_up[i], w_lo[i] = su[i], sigma[i] > 0, sigma[i] < 0
+        if profiled:  # the lagged μ̄, ν̄
+            split_by_wall(wn[NET], su, hs, ls, channel, mu_up, mu_lo)
         warm_flags, near = 7, dalpha < NEWTON_SWITCH
-        if dalpha < tol:
+        if dalpha < tol and (not profiled or penetration(sin_a, cos_a, a, fs, walls, at)
+                             <= GEOMETRY_SLACK * L):
             return (CONVERGED, alpha.copy(), wn[RUP].copy(), wn[RLO].copy(), su.copy(),
-                    sigma.copy(), rec, count, ws[9].copy(), wn[NET].copy())
+                    sigma.copy(), rec, count, ws[9].copy(), wn[NET].copy(), at[2].copy(),
+                    at[3].copy())
         short = short + 1 if t <= STALL_STEP else 0
-        if cold and short >= STALL_RUN:
-            return BAIL_STALL, alpha.copy(), zero, zero, u.copy(), zero, rec, count, none, zero
-    return MAX_OUTER, alpha.copy(), zero, zero, u.copy(), zero, rec, count, none, zero
+        if cold and short >= STALL_RUN and not profiled:
+            return (BAIL_STALL, alpha.copy(), zero, zero, u.copy(), zero, rec, count, none,
+                    zero, zero[:p], zero[:p])
+    return (MAX_OUTER, alpha.copy(), zero, zero, u.copy(), zero, rec, count, none, zero,
+            zero[:p], zero[:p])

@@ -84,7 +84,7 @@ def consecutive(chain: Chain) -> bool:
 
 
 def profile_applies(backend: str, method: str, chain: Chain) -> bool:
-    """Whether the profile kernel (:func:`lcpbench.model.profile_kernel.solve_profile_chain`)
+    """Whether the profile kernel (:func:`lcpbench.model.compiled_kernel.solve_profile_chain`)
     runs this solve: the default back-end, the globalised scheme, a chain of consecutive
     joints and free nodes with a wall of any profile whose table of cubic pieces exists
     (:meth:`lcpbench.problems.walls.WallProfile.pieces`), below large N
@@ -139,11 +139,11 @@ def run_profile_compiled(chain: Chain, *, tol: float, max_outer: int = 200,
 
 def call_profile_kernel(chain: Chain, *, tol: float, max_outer: int,
                         start: DriverStart | None, settings) -> tuple[tuple, float, str]:
-    """One call of :func:`lcpbench.model.profile_kernel.solve_profile_chain` on the chain:
+    """One call of :func:`lcpbench.model.compiled_kernel.solve_profile_chain` on the chain:
     (its outputs, its wall time in s, the name of the back-end's settings). A warm
     ``start`` gives the starting shape and, from its last step's net reactions, the
     lagged reactions."""
-    k = kept(_PROFILE, "lcpbench.model.profile_kernel", "solve_profile_chain")
+    k = kept(_PROFILE, "lcpbench.model.compiled_kernel", "solve_profile_chain")
     n = chain.free_nodes.size
     max_iter, request, name = kernel_settings(settings, n)
     start_alpha, mu_up, mu_lo = _NO_START, np.zeros(n), np.zeros(n)

@@ -142,7 +142,7 @@ def _driver_kernel():
 def _profile_kernel():
     from ..numba_cache import kernel_module
 
-    return kernel_module("lcpbench.model.profile_kernel", "solve_profile_chain")
+    return kernel_module("lcpbench.model.profile_kernel", "merit_at")
 
 
 class WallTerms:

@@ -39,7 +39,7 @@ geometry, so a slow or stalled iteration is a status, never a wrong answer.
 
 The step is assembled once, compiled: :func:`lcpbench.model.driver_kernel.profile_assemble`
 (any back-end, :mod:`lcpbench.model.compiled_driver`), the profile kernel
-(:mod:`lcpbench.model.profile_kernel`, the default back-end) and the large-N driver
+(:func:`lcpbench.model.compiled_kernel.solve_profile_chain`, the default back-end) and the large-N driver
 (:mod:`lcpbench.model.large_driver`), all on the walls' tables
 (:mod:`lcpbench.model.wall_kernel`). This module hands a chain's walls to those
 compiled functions for the Python callers (the result, the judge, the large-N driver):

@@ -9,7 +9,7 @@ solve:
 1. the start's lagged reactions, the net reactions of the answer whose last step
    warm-starts it (:func:`lcpbench.model.wall_kernel.split_by_wall`, as
    :func:`lcpbench.model.kernel_call.call_profile_kernel` sets them);
-2. the profile kernel's solve (:func:`lcpbench.model.profile_kernel.solve_profile_chain`);
+2. the profile kernel's solve (:func:`lcpbench.model.compiled_kernel.solve_profile_chain`);
 3. the judge kernel's entry :func:`~lcpbench.model.judge_kernel.judge_walls` on the
    answer, and its verdict from the judge's numbers alone
    (:func:`lcpbench.model.batch_verdict.accepted`).
@@ -37,8 +37,8 @@ from .batch_kernel import (
     store_solve,
     store_verdict,
 )
+from .compiled_kernel import solve_profile_chain
 from .judge_kernel import judge_walls
-from .profile_kernel import solve_profile_chain
 from .wall_kernel import split_by_wall
 
 __all__ = ["ARC", "CONTACT", "CONVERGED", "FREE", "SETTLED", "STATS", "STOPPED_FREE",

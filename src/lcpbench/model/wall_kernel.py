@@ -4,7 +4,7 @@ at the nodes' x, and the slope load of the wall reactions.
 A wall is a table of cubic pieces (:mod:`lcpbench.problems.profile_table`):
 breakpoints ``knots`` and coefficients ``coef`` (4 × pieces, scipy's PPoly layout),
 continued flat outside the breakpoints. The solve's profile kernel
-(:mod:`lcpbench.model.profile_kernel`) and the judge kernel
+(:func:`lcpbench.model.compiled_kernel.outer_loop`) and the judge kernel
 (:mod:`lcpbench.model.judge_kernel`) both read the walls through these functions: the
 wall is the scene's data, as the chain's arrays are.
 """
