@@ -190,16 +190,6 @@ def judge(u, bands, linear, lo, hi, cu, cl, coef, b0, fs, links, origin, phi_ori
 
 
 @njit(cache=True)
-def _gradient(u, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load):
-    """ContactStep.gradient about the linearisation point (:func:`~.compiled_dual.grad_into`,
-    a Gauss–Newton step: T = 0)."""
-    n = u.size
-    return grad_into(np.empty(n), np.empty(coef.shape[0]), u,
-                     (coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load),
-                     np.zeros((2, n)))
-
-
-@njit(cache=True)
 def gradient(u, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load, T):
     """:meth:`ContactStep.gradient <lcpbench.model.step.ContactStep.gradient>`: H u + c in
     factored form, Jᵀ k (φ̂(u) − φ*) − f, plus T (u − u₀) where ``T`` has columns (the
@@ -241,7 +231,8 @@ def advance(su, u, alpha, E, stiffness_sum, inv, alpha0, origin, phi_origin, coe
     dalpha = predict_alpha(su, su.size, origin, alpha0, inv, fs, alpha, alpha[:0])
     if not np.all(np.isfinite(su - u)):
         return np.nan, 0.0, alpha, E
-    g = _gradient(u, coef, jr[0], fs, links, origin, phi_origin, k, rest, nodal_load)
+    g = gradient(u, coef, jr[0], fs, links, origin, phi_origin, k, rest, nodal_load,
+                 np.zeros((2, n)))  # (the Gauss–Newton step: T = 0, added)
     wall_penalty(u, lo, hi, cu, cl, g)  # (nothing where no wall yields)
     trial = np.empty(links)
     t, E_t = energy_search(E, u, su, g, np.empty(n), np.empty(n), alpha, trial, np.empty(links),
@@ -312,7 +303,8 @@ def profile_advance(su, u, alpha, inv, alpha0, origin, phi_origin, coef, fs, k, 
     noise_k = 0.0
     for j in range(k.size):
         noise_k += abs(k[j])
-    g = _gradient(u, coef, jr[0], fs, links, origin, phi_origin, k, rest, nodal_load)
+    g = gradient(u, coef, jr[0], fs, links, origin, phi_origin, k, rest, nodal_load,
+                 np.zeros((2, n)))  # (the Gauss–Newton step: T = 0, added)
     d, ut, trial = np.empty(n), np.empty(n), np.empty(links)
     sin_t, cos_t = np.empty(links), np.empty(links)
     chain = (a, jl, jr, k, rest, link_load, fs)
