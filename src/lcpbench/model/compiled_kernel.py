@@ -199,10 +199,7 @@ def _newton(alpha, a, jl, jr, k, rest, fs, n, bands, linear, origin, T, fac, non
     c − T u₀ into the step where H + T is positive definite (True); else T = 0
     and the Gauss–Newton step stands (False)."""
     geometric_bands(alpha, a, jl, jr, k, rest, fs, n, T, mu, sines, cosines)
-    for i in range(n):  # H + T, factored to test it (LAPACK's dpbtrf in the reference)
-        fac[0, i], fac[1, i], fac[2, i] = bands[0, i] + T[0, i], bands[1, i] + T[1, i], bands[2, i]
-        none[i] = False
-    if not refactor(fac, fac, none, mu[:0], 0, n):
+    if not positive_with(bands, T, fac, none, n):
         T[:] = 0.0
         return False
     for i in range(n):
@@ -216,6 +213,18 @@ def _newton(alpha, a, jl, jr, k, rest, fs, n, bands, linear, origin, T, fac, non
         bands[0, i] += T[0, i]
         bands[1, i] += T[1, i]
     return True
+
+
+@njit(cache=True)
+def positive_with(bands, T, fac, none, n):
+    """Whether H + T is positive definite (H in ``bands``, T's diagonal and
+    sub-diagonal): its LDLᵀ into ``fac`` (LAPACK's dpbtrf in the reference); ``none``
+    a scratch row. The Newton steps' test, the solve kernel's and the frictional
+    step's."""
+    for i in range(n):
+        fac[0, i], fac[1, i], fac[2, i] = bands[0, i] + T[0, i], bands[1, i] + T[1, i], bands[2, i]
+        none[i] = False
+    return refactor(fac, fac, none, fac[0, :0], 0, n)
 
 
 @njit(cache=True)

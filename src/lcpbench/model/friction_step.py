@@ -31,7 +31,7 @@ from numba import njit
 from ..linalg.ldl_kernel import refactor, resolve_columns
 from ..solvers.pivoting_kernel import DONE, support_pivots, symmetric_active_set
 from .compiled_dual import grad_into
-from .compiled_kernel import banded_step, geometric_bands
+from .compiled_kernel import banded_step, geometric_bands, positive_with
 
 
 @njit(cache=True)
@@ -107,13 +107,10 @@ def step_arrays(alpha, a, jl, jr, k, rest, fs, n, nodal_load, pull, right_datum,
         T = np.zeros((2, n))
         geometric_bands(alpha, a, jl, jr, k, rest, fs, n, T, np.empty(alpha.size),
                         np.sin(alpha), np.cos(alpha))
-        fac = np.empty((4, n))
-        trial = bands.copy()
-        for i in range(n):
-            trial[0, i] += T[0, i]
-            trial[1, i] += T[1, i]
-        if refactor(fac, trial, np.zeros(n, np.bool_), np.empty(0), 0, n):
-            bands = trial
+        if positive_with(bands, T, np.empty((4, n)), np.empty(n, np.bool_), n):
+            for i in range(n):
+                bands[0, i] += T[0, i]
+                bands[1, i] += T[1, i]
     D = slip_jacobian(alpha, first, n, right_datum)
     links = alpha.size
     f = grad_into(np.empty(n), np.empty(jr.size), origin,  # the step's gradient at u₀
