@@ -10,7 +10,7 @@ back-end's rows of ``results/sweep/runs.csv`` against their stored forces.
     python benchmarks/same_bits.py compare before.pkl after.pkl
     python benchmarks/same_bits.py sweep                 # the committed sweep's rows
 
-The corpus (about 1,850 answers; ~5 min on one core):
+The corpus (about 1,900 answers; ~5 min on one core):
 - ``solve_many`` on mixed batches (elastic and profiled walls, sections), the
   paper's grid, random elastic walls (k from 1e-3 to 1e9 N/mm²) and channels;
 - ``solve`` and ``start="ramp"`` on rows of two and three sections, and past 180°;
@@ -19,7 +19,10 @@ The corpus (about 1,850 answers; ~5 min on one core):
 - large N (3000, 6000) with one wall, a channel and a wall profile;
 - friction: ``solve_path`` on a flat wall, a channel and a stenosis, pulled and
   released; 40 random paths of 4 states as ``benchmarks/friction_paths.py`` draws
-  them (seed 39: every end condition, channels, μ 0.05–0.8).
+  them (seed 39: every end condition, channels, μ 0.05–0.8);
+- the Newton scheme on 30 random flat, channel and elastic scenes (default back-end
+  and OSQP), and the sensitivities of five answers (flat, channel, elastic, a
+  stenosis, a heavy chain).
 
 Each answer is recorded as (converged, reason, total force, forces, lower
 forces, α, outer iterations; with friction the tangential forces, slips and
@@ -160,6 +163,27 @@ def corpus() -> dict:
                     out[(tag, theta, i)] = answer(r)
             except Exception as e:  # noqa: BLE001
                 out[(tag, theta)] = dict(error=repr(e))
+    rng = np.random.default_rng(11)
+    for i in range(30):  # the Newton scheme (its test of H + T), flat, channel, elastic
+        kw = dict(theta=float(rng.uniform(40, 178)), height=float(rng.uniform(1, 5)),
+                  links=140)
+        if i % 3 == 1:
+            kw["channel"] = True
+        if i % 3 == 2:
+            kw["wall_stiffness"] = float(10 ** rng.uniform(-2, 6))
+        for solver in ("auto", "osqp"):
+            _kept(out, ("newton", i, solver), lambda kw=kw, v=solver: lcpbench.solve(
+                ActuatorScene(**kw), method="newton", tol=1e-8, solver=v))
+    for i, (theta, kw) in enumerate([(150.0, {}), (120.0, {"channel": True}),
+                                     (160.0, {"wall_stiffness": 10.0}),
+                                     (150.0, {"wall_profile": up}), (165.0, {"weight": 0.01})]):
+        try:  # the sensitivities of the answer (implicit differentiation)
+            sens = lcpbench.sensitivities(lcpbench.solve(ActuatorScene(
+                theta=theta, height=3.0, links=140, **kw), tol=1e-9))
+            out[("sensitivities", i)] = {k: _bytes(v) for k, v in sorted(
+                sens.total_force.items())}
+        except Exception as e:  # noqa: BLE001
+            out[("sensitivities", i)] = dict(error=repr(e))
     from friction_paths import ENDS  # the issue-39 audit's ends
 
     rng = np.random.default_rng(39)
@@ -198,16 +222,17 @@ def compare(a: dict, b: dict) -> int:
             print("only in one:", key)
         elif _same(x, y):
             counts[(group, "same bits")] += 1
-        elif "error" in x or "error" in y or x["converged"] != y["converged"]:
+        elif "error" in x or "error" in y or x.get("converged") != y.get("converged"):
             counts[(group, "VERDICT")] += 1
             print("verdict:", key, x.get("error", x.get("reason")), "->",
                   y.get("error", y.get("reason")))
         else:
-            moved = abs(x["total_force"] - y["total_force"])
-            allowed = np.fmax(x["allowed"], y["allowed"])  # (NaN where neither was judged)
+            moved = abs(x.get("total_force", np.nan) - y.get("total_force", np.nan))
+            # (NaN where neither was judged, or no force: a sensitivity; "moved")
+            allowed = np.fmax(x.get("allowed", np.nan), y.get("allowed", np.nan))
             state = "within tau F0" if moved <= allowed else "moved"
             counts[(group, state)] += 1
-            print(f"{state}:", key, x["total_force"], "->", y["total_force"])
+            print(f"{state}:", key, x.get("total_force"), "->", y.get("total_force"))
     for k in sorted(counts):
         print(*k, counts[k], sep="\t")
     same = sum(v for (_, s), v in counts.items() if s == "same bits")
