@@ -36,7 +36,7 @@ def test_a_flat_wall_takes_the_one_wall_kernel_route():
     for method in ("globalised", "newton"):
         plan = make_plan(chain, DEFAULT, method, "auto", 1e-3)
         assert (plan.route, plan.start, plan.engine, plan.judge) == \
-            ("one-wall kernel", "cold", "compiled", "compiled")
+            ("one-wall kernel", "cold", "compiled", "heights")
         assert plan.escalations == OWN
 
 
@@ -64,7 +64,7 @@ def test_from_large_n_the_increments_route():
     chain = ActuatorScene(**PAPER, links=large_n.LARGE_N).chain()
     assert large_n.takes(chain)
     plan = make_plan(chain, DEFAULT, "globalised", "auto", 1e-3)
-    assert (plan.route, plan.engine, plan.judge) == ("large N", "numpy", "numpy")
+    assert (plan.route, plan.engine, plan.judge) == ("large N", "numpy", "increments")
     assert plan.kernel_takes  # the wall-free search still runs in the kernel
     # already in increments: no retry in increments
     assert plan.escalations == OWN
@@ -86,7 +86,7 @@ def test_another_back_end():
     # a back-end's refusal stays its own; a saddle is left by every back-end
     assert (plan.route, plan.engine, plan.escalations) == \
         ("compiled driver", "compiled driver", ("escaped",))
-    assert plan.judge == "compiled"  # the judge kernel takes the chain, whoever solved
+    assert plan.judge == "heights"  # the judge kernel takes the chain, whoever solved
     assert make_plan(chain, "lemke", "globalised", "auto", 1e-3, scaled=False).route == \
         "compiled driver"  # the step's forms in the problem's units, the loop compiled
     assert make_plan(chain, "lemke", "newton", "auto", 1e-3).route == "compiled driver"
@@ -192,7 +192,7 @@ def test_the_result_says_what_ran():
     scene = ActuatorScene(**PAPER, links=40)
     res = lcpbench.solve(scene)
     assert (res.route, res.engine, res.judge, res.retries) == \
-        ("one-wall kernel", "compiled", "compiled", ())
+        ("one-wall kernel", "compiled", "heights", ())
     ref = lcpbench.solve(scene, method="undamped")  # an option of the compiled driver
     assert (ref.route, ref.engine) == ("compiled driver", "compiled driver")
     bumped = ActuatorScene(**PAPER, links=40, wall_profile=_bump())

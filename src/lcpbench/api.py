@@ -368,7 +368,7 @@ def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_ou
         "converged": bool(jk[2].accepted(settled, f64(st, dtype=float), tol)),
         "solver": DEFAULT, "method": method, "tol": tol, "time_s": elapsed,
         "pressure_limit": pressure_limit, "route": route, "engine": "compiled",
-        "judge": "compiled", "retries": ()},
+        "judge": "heights", "retries": ()},
         partial(build, judged=stats_judge(settled, kern.STATS, st, fu, fl, tres)))
 
 

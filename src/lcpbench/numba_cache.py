@@ -69,7 +69,8 @@ _HOLDERS: list = []  # callers' one-element caches of a kernel module (see held)
 #: (tests/model/test_kernel_cache.py checks that no file with ``@njit`` is missing)
 KERNEL_FILES = ("model/chain_kernel.py", "model/compiled_kernel.py", "model/compiled_dual.py", "model/judge_kernel.py",
                 "model/judge_bound.py", "model/judge_checks.py",
-                "model/driver_kernel.py", "model/large_kernel.py", "linalg/givens_kernel.py",
+                "model/driver_kernel.py", "model/large_kernel.py", "model/judge_exact_kernel.py",
+                "linalg/givens_kernel.py",
                 "linalg/face_kernel.py", "linalg/twisted_kernel.py",
                 "linalg/ldl_kernel.py", "model/batch_kernel.py", "model/batch_verdict.py",
                 "model/sensitivity_kernel.py", "model/sensitivity_profile_kernel.py",

@@ -101,9 +101,8 @@ class Plan:
     kernel_takes : whether the compiled kernels take the chain (a layout the solve
         kernel takes, whichever back-end): the wall-free search then runs compiled.
     judge : where the result judge takes its exact steps
-        (:func:`lcpbench.model.judge.judged_in`): "compiled" (the judge kernel, in node
-        heights, whatever back-end and engine) or "numpy" (in increments, from
-        ``LARGE_N`` links).
+        (:func:`lcpbench.model.judge.judged_in`): "heights" (the judge kernel, whatever
+        back-end and engine) or "increments" (from ``LARGE_N`` links); both compiled.
     fallback : the load path's cold plan (None for every other route).
     """
 
@@ -112,7 +111,7 @@ class Plan:
     escalations: tuple[str, ...]
     engine: str
     kernel_takes: bool = False
-    judge: str = "numpy"
+    judge: str = "increments"
     fallback: Plan | None = None
 
 

@@ -13,7 +13,7 @@ import sys
 
 import numpy as np
 import pytest
-from energy_oracle import assert_step_kkt
+from energy_oracle import assert_elastic_step_kkt, assert_step_kkt
 
 from lcpbench.linalg.saddle import TridiagonalFactor
 from lcpbench.model.compiled_driver import assemble_step
@@ -122,7 +122,7 @@ def test_large_n_answers_are_judged_by_the_judge_in_increments(monkeypatch):
 
     monkeypatch.setattr(judge_module.large_n, "increments_at", spy)
     res = lcpbench.solve(ActuatorScene(150, 3.0, links=LARGE_N), tol=1e-3)
-    assert res.judge == "numpy"
+    assert res.judge == "increments"
     assert LARGE_N - 1 in calls  # the judge's own step, in increments
 
 
@@ -131,7 +131,9 @@ def test_large_n_answers_are_judged_by_the_judge_in_increments(monkeypatch):
 def test_the_judges_primal_step_reaches_the_steps_solution(links, shrink, start):
     # the judge's own step in increments (model/judge_exact.py) against the dual walk
     # (solvers/banded.py), an independent method, on the same step in increments
-    from lcpbench.model.judge_exact import primal_step
+    from lcpbench.model.judge_checks import FREE, LO, UP
+    from lcpbench.model.judge_exact import kernel_step
+    from lcpbench.numba_cache import kernel_module
 
     chain = ActuatorScene(150, 3.0, links=links).chain()
     _, alpha = feasible_start(chain, chain.rest_alpha * shrink)
@@ -139,12 +141,15 @@ def test_the_judges_primal_step_reaches_the_steps_solution(links, shrink, start)
     ref = solve_banded_qp(step)
     assert ref.status is Status.SOLVED and np.count_nonzero(ref.active_upper) > 0
     n = step.size
-    up = np.isfinite(step.upper) if start == "all" else np.zeros(n, bool)
+    state = np.where(np.isfinite(step.upper), UP, FREE) if start == "all" else np.zeros(n)
+    state = state.astype(np.int64)
     scale = float(np.max(ref.forces_upper))
-    found = primal_step(step, up, np.zeros(n, bool), slack_of=lambda u: 1e-9 * scale + 0 * u,
-                        reach_of=lambda u: 1e-12 + 0 * u, cap=4 * n + 30)
-    assert found is not None
-    u, held_up, held_lo, rounds = found
+    u, net, roundoff, sizes = (np.empty(n) for _ in range(4))
+    # a wall releases its node where it pulls by more than 1e-9 of the largest force
+    rounds = kernel_module("lcpbench.model.judge_exact_kernel").primal_step(*kernel_step(step), np.zeros(n), 1e-9 * scale, state,
+                                   4 * n + 30, u, net, roundoff, sizes)[0]
+    assert rounds > 0
+    held_up, held_lo = state == UP, state == LO
     # the step's KKT conditions from its exact gradient (independent of both walks):
     # stationary off the wall, the wall pushing on its rows, feasible; to 1e-9 of the
     # gradient's terms (the walk's slack) and of the walls' span
@@ -160,3 +165,31 @@ def test_the_judges_primal_step_reaches_the_steps_solution(links, shrink, start)
     assert np.max(np.abs(u - ref.u)) <= 1e-8 * span
     net = -g
     assert abs(np.sum(net[held_up]) - np.sum(ref.forces_upper)) <= 1e-7 * np.sum(ref.forces_upper)
+
+
+@pytest.mark.parametrize("k,channel", [(0.1, False), (1e4, False), (10.0, True)])
+def test_the_judges_pivoting_with_springs_solves_the_elastic_step(k, channel):
+    # the judge's block principal pivoting in increments (model/judge_exact_kernel.py),
+    # the springs of the nodes on an elastic wall rotated into the twisted factor, from
+    # no contact: its answer meets the elastic step's stationarity, written out in
+    # energy_oracle (strictly convex: one minimiser)
+    from lcpbench.model.elastic import wall_springs
+    from lcpbench.model.judge_checks import FREE, LO, UP
+    from lcpbench.model.judge_exact import kernel_step
+
+    chain = ActuatorScene(150, 3.0, links=200, wall_stiffness=k, channel=channel).chain()
+    _, alpha = feasible_start(chain, chain.rest_alpha)
+    step = increments_at(chain, alpha)
+    n = step.size
+    state = np.full(n, FREE, dtype=np.int64)
+    u, net, roundoff, sizes = (np.empty(n) for _ in range(4))
+    k_up, k_lo = wall_springs(step)
+    rounds = kernel_module("lcpbench.model.judge_exact_kernel").pivot_step(
+        *kernel_step(step), k_up, k_lo, np.zeros(n), 0.0, state, 4 * n + 30, u, net,
+        roundoff, sizes)[0]
+    assert rounds > 1  # it pivoted: the unconstrained minimiser is through the wall
+    assert_elastic_step_kkt(step, u)
+    # the settled set is the nodes each spring holds (u beyond its wall)
+    assert np.array_equal(state == UP, u > step.upper)
+    assert np.array_equal(state == LO, u < step.lower)
+    assert (state == UP).any()

@@ -40,7 +40,7 @@ def probe(**env) -> dict:
 def test_the_default_solve_loads_no_scipy_linalg_sparse_or_numba_blas():
     light = probe()
     assert light["at_import"] == []
-    assert (light["engine"], light["judge"]) == ("compiled", "compiled")
+    assert (light["engine"], light["judge"]) == ("compiled", "heights")
     assert light["loaded"] == []
 
 

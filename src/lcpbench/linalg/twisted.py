@@ -90,14 +90,9 @@ class TwistedFactor(TridiagonalFactor):
             if spring.size or self._spring.size:  # a spring changed is a face changed
                 differ |= _springs(spring, self.n) != _springs(self._spring, self.n)
             changed = np.flatnonzero(differ)
-            if changed.size:
-                j0 = min(int(changed[0]) - 1, self._m)  # the top pass: from its first row
-                k0 = min(n - 2 - int(changed[-1]), n - self._m)  # the bottom's, mirrored
-                j0, k0 = max(j0, 0), max(k0, 0)
-                m = min(max((j0 + n - k0) // 2, 2), n - 2)
-            else:
-                j0, k0, m = self._m, n - self._m, self._m
-        return j0, k0, m
+            first, last = (int(changed[0]), int(changed[-1])) if changed.size else (0, -1)
+            j0, k0, m = _kernel().twist(first, last, self._m, n)
+        return int(j0), int(k0), int(m)
 
     def face_solve(self, fixed: np.ndarray, rhs: np.ndarray,
                    spring: np.ndarray | None = None) -> np.ndarray:

@@ -195,6 +195,20 @@ def resolve(R, B, tri, invR, invB, m, x):
 
 
 @njit(cache=True)
+def twist(first, last, m0, n):
+    """(j0, k0, m): where the top pass and the bottom pass restart, and the new twist,
+    for a face whose nodes ``first``..``last`` changed against the face factored last
+    (twisted at ``m0``; ``last`` < 0: none changed): the top pass from the row before
+    the first change (or the last twist, if earlier), the bottom pass from the mirror
+    of the row after the last change (or the last twist), and the twist between."""
+    if last < 0:
+        return m0, n - m0, m0
+    j0 = max(min(first - 1, m0), 0)
+    k0 = max(min(n - 2 - last, n - m0), 0)
+    return j0, k0, min(max((j0 + n - k0) // 2, 2), n - 2)
+
+
+@njit(cache=True)
 def face_solve(rows, rrows, fixed, rfixed, spring, rspring, R, filled, snap, B, bfilled,
                bsnap, tri, invR, invB, j0, k0, m, rhs, x):
     """x with H_face x = rhs (+ the springs, :func:`factor`), refined once with the

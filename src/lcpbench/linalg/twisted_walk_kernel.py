@@ -32,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .twisted_kernel import factor, twist_middle
+from .twisted_kernel import factor, twist, twist_middle
 
 # the walk's bookkeeping: picks, working-set keys, the twist window
 
@@ -132,12 +132,7 @@ def twist_window(chg, ctl, S, prev, n):
         if S[i] != prev[i]:
             first = min(first, i)
             last = max(last, i)
-    m0 = ctl[0]
-    if last >= 0:
-        j0 = max(min(first - 1, m0), 0)
-        k0 = max(min(n - 2 - last, n - m0), 0)
-        return j0, k0, min(max((j0 + n - k0) // 2, 2), n - 2)
-    return m0, n - m0, m0
+    return twist(first, last, ctl[0], n)
 
 
 @njit(cache=True)

@@ -31,7 +31,7 @@ def finish(scene, chain, out, *, solver: str, method: str, tol: float, elapsed: 
     where = judged_in(chain)
     if judged_by is None:
         judged_by = judge
-        if judge_args is not None and where == "compiled":
+        if judge_args is not None and where == "heights":
             judged_by = partial(judge, args=judge_args)
     res = build_result(scene, chain, out, solver=solver, method=method, tol=tol,
                        time_s=elapsed, judged_by=judged_by, route=route, engine=engine,

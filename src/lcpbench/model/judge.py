@@ -264,11 +264,11 @@ def takes(chain: Chain) -> bool:
 
 
 def judged_in(chain: Chain) -> str:
-    """Where :func:`judge` takes its exact steps: "numpy" in increments
+    """Where :func:`judge` takes its exact steps: "increments"
     (:mod:`lcpbench.model.judge_exact`, from ``LARGE_N`` links or a chain marked
-    ``increments``), else "compiled" (the judge kernel, in node heights); the
-    result's ``judge`` field."""
-    return "numpy" if large_n.applies(chain) else "compiled"
+    ``increments``), else "heights" (the judge kernel); the result's ``judge`` field.
+    Both are compiled."""
+    return "increments" if large_n.applies(chain) else "heights"
 
 
 def chain_args(chain: Chain, kernel_args: tuple | None = None) -> tuple:

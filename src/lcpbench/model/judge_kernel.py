@@ -162,7 +162,7 @@ def _grad(u, w, out, with_scale, n, fs, b0, nj, k, rest, nodal_load):
 
 
 @njit(cache=True)
-def _term_sizes(bands, linear, x, n, out):
+def term_sizes(bands, linear, x, n, out):
     """(|H| |x| + |c|)_i on the bands into ``out``: the size of the terms of each R_i
     (for round-off bounds)."""
     for i in range(n):
@@ -236,10 +236,76 @@ def _solve(fac, free, m, rhs, x):
         x[j] = t
 
 
+#: no per-node height sizes: every height rounds at the chain's length L (in heights)
+NO_SIZES = np.empty(0)
+
+
+@njit(cache=True)
+def pivot_test(state, change, u, net, scale, sizes, hi, lo, diag, L, height_size, pull,
+               roundoff):
+    """One round's test of the judge's block principal pivoting, in heights or in
+    increments (:mod:`lcpbench.model.judge_exact_kernel`), over the nodes of ``hi``.
+
+    ``net``: the gradient on entry, the net reaction R' = −gradient on return; per node
+    ``roundoff`` = the round-off of R' (a few ulps of its terms, ``scale``). A wall that
+    pulls by more than the slack max(round-off, ``pull``, a few ulps of the term size
+    S_i, ``sizes``) releases its node (``change`` 1: the upper wall, 2: the lower); a
+    free node more than its reach through a wall joins it (3: the upper, 4: the lower),
+    the reach max(a few ulps of |u| + the size its height rounds at, ``pull`` / H_ii
+    (``diag``)): the size is ``height_size`` per node, or (empty) the length ``L``.
+    Returns (how many change, the first that does, the largest round-off, max S_i)."""
+    count, first = 0, -1
+    worst, S = 0.0, 0.0
+    per_node = height_size.size > 0
+    for i in range(hi.size):
+        net[i] = -net[i]
+        roundoff[i] = ROUNDOFF_ULPS * EPS * scale[i]
+        size = sizes[i]
+        worst = max(worst, roundoff[i])
+        S = max(S, size)
+        slack = max(max(roundoff[i], pull), ROUNDOFF_ULPS * EPS * size)
+        rounds_at = height_size[i] if per_node else L
+        reach = max(ROUNDOFF_ULPS * EPS * (abs(u[i]) + rounds_at), pull / diag[i])
+        c = 0
+        if state[i] == UP:
+            if net[i] < -slack:
+                c = 1
+        elif state[i] == LO:
+            if net[i] > slack:
+                c = 2
+        elif u[i] > hi[i] + reach:
+            c = 3
+        elif u[i] < lo[i] - reach:
+            c = 4
+        change[i] = c
+        if c:
+            count += 1
+            if first < 0:
+                first = i
+    return count, first, worst, S
+
+
+@njit(cache=True)
+def pivot_exchange(state, change, n, count, first, best, stall):
+    """Júdice–Pires: every node :func:`pivot_test` names changes sides while their
+    number falls; after STALL rounds without progress only the first (Murty's least
+    index, finite for the P-matrix of a positive definite step). Returns (best, stall)."""
+    if count < best:
+        best, stall = count, 0
+    else:
+        stall += 1
+    for i in range(n):
+        if change[i] == 0 or (stall >= STALL and i != first):
+            continue
+        state[i] = FREE if change[i] <= 2 else (UP if change[i] == 3 else LO)
+    return best, stall
+
+
 @njit(cache=True)
 def _pivot(bands, fac, iw, lo, hi, cu, cl, L, pull, w, fs, b0, nj, k, rest, nodal_load):
-    """model.judge._pivot_step from the contact set ``iw[0]`` (FREE, UP, LO): (rounds or
-    0 if it did not settle, worst round-off, term size S); u, the net reaction and
+    """The judge step in heights by block principal pivoting (the rule of
+    :func:`pivot_test` and :func:`pivot_exchange`) from the contact set ``iw[0]`` (FREE,
+    UP, LO): (rounds or 0 if it did not settle, worst round-off, term size S); u, the net reaction and
     the round-off per wall node in rows U, NET, ROUNDOFF. ``cu``, ``cl``: the walls'
     compliances 1/k (0: rigid; empty: no wall yields); a node in contact with an
     elastic wall stays free, held by the wall's spring k (u − h)."""
@@ -277,46 +343,15 @@ def _pivot(bands, fac, iw, lo, hi, cu, cl, L, pull, w, fs, b0, nj, k, rest, noda
                 for p in range(nfree):
                     u[free[p]] -= x[p]
         _grad(u, w, net, True, n, fs, b0, nj, k, rest, nodal_load)
-        _term_sizes(bands, linear, u, n, sizes)
-        count, first = 0, -1
-        worst, S = 0.0, 0.0
-        for i in range(n):
-            net[i] = -net[i]
-            roundoff[i] = ROUNDOFF_ULPS * EPS * scale[i]
-            size = sizes[i]
-            worst = max(worst, roundoff[i])
-            S = max(S, size)
-            slack = max(max(roundoff[i], pull), ROUNDOFF_ULPS * EPS * size)
-            reach = max(ROUNDOFF_ULPS * EPS * (abs(u[i]) + L), pull / bands[0, i])
-            c = 0
-            if state[i] == UP:
-                if net[i] < -slack:
-                    c = 1
-            elif state[i] == LO:
-                if net[i] > slack:
-                    c = 2
-            elif u[i] > hi[i] + reach:
-                c = 3
-            elif u[i] < lo[i] - reach:
-                c = 4
-            change[i] = c
-            if c:
-                count += 1
-                if first < 0:
-                    first = i
+        term_sizes(bands, linear, u, n, sizes)
+        count, first, worst, S = pivot_test(state, change, u, net, scale, sizes, hi, lo,
+                                            bands[0], L, NO_SIZES, pull, roundoff)
         if count == 0:
             for i in range(n):
                 if state[i] == FREE:
                     roundoff[i] = 0.0
             return rounds, worst, S
-        if count < best:
-            best, stall = count, 0
-        else:
-            stall += 1
-        for i in range(n):
-            if change[i] == 0 or (stall >= STALL and i != first):
-                continue
-            state[i] = FREE if change[i] <= 2 else (UP if change[i] == 3 else LO)
+        best, stall = pivot_exchange(state, change, n, count, first, best, stall)
     return 0, 0.0, 0.0
 
 
@@ -372,7 +407,7 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
     _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, w, bands)
     origin, linear, noise, state = w[ORIGIN], w[LINEAR], w[NOISE], iw[0]
     _grad(origin, w, w[RHS], True, n, fs, b0, nj, k, rest, nodal_load)  # scale at u₀
-    _term_sizes(bands, linear, origin, n, w[SIZE])
+    term_sizes(bands, linear, origin, n, w[SIZE])
     scale0, size0 = w[SCALE], w[SIZE]
     for i in range(n):
         touch = max(eps_R / bands[0, i], 1e3 * EPS * L)

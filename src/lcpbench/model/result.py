@@ -135,7 +135,8 @@ class ContactResult:
         "compiled driver" (another back-end, the driver around it compiled) or
         "numpy", the last with why in parentheses where the plan's engine was
         another ("numpy (large N: ...)", "numpy (the compiled kernel stopped: ...)").
-    judge : the result judge that ran: "compiled" (the judge kernel) or "numpy".
+    judge : where the result judge took its exact steps: "heights" (the judge
+        kernel) or "increments" (from ``LARGE_N`` links, :mod:`lcpbench.model.judge_exact`).
     retries : the escalations that ran after the route, in order
         (:class:`Retry`: name and why); () where the first answer was kept.
     states : where the solve's starts reached more than one distinct stable state

@@ -98,7 +98,7 @@ def results(line: LineOutput) -> list[ContactResult | Stopped]:
         "forces_lower": lower[s], "total_force": totals[s], "outer_iterations": counts[s],
         "converged": conv[s], "solver": DEFAULT, "method": "globalised", "tol": tol,
         "time_s": t, "pressure_limit": None, "route": LINE_KERNEL, "engine": "compiled",
-        "judge": "compiled", "retries": ()}, partial(_built, line, s))
+        "judge": "heights", "retries": ()}, partial(_built, line, s))
         if not left[s] else _stopped(line, s) for s, scene in enumerate(line.scenes)]
 
 

@@ -1,0 +1,231 @@
+"""The result judge's exact contact step in increments, compiled (check 7 of
+:mod:`lcpbench.model.judge`; :func:`lcpbench.model.judge_exact.judge_step` assembles the
+step and reads the answer).
+
+One contact step in increments d = u − u₀ (:class:`lcpbench.model.large_n.IncrementStep`),
+solved exactly from a contact set, independent of every back-end:
+
+- rigid walls: the primal active set (Nocedal & Wright, Alg. 16.3; :func:`primal_step`);
+- elastic walls: block principal pivoting (the judge kernel's rule,
+  :func:`~.judge_kernel.pivot_test` and :func:`~.judge_kernel.pivot_exchange`), the
+  springs k (u − h) of the nodes on a yielding wall rotated into the factor as rows
+  √k eᵢ (nothing grows with k).
+
+Every face solve is on one twisted factor of the step's rows
+(:func:`lcpbench.linalg.twisted_kernel.face_solve`), refactored between the first and
+the last node that changed since the last face (:func:`face_solve`, the restart of
+:class:`lcpbench.linalg.twisted.TwistedFactor`): a pivot costs the rows it changes.
+
+Why the primal active set with rigid walls: block principal pivoting does not settle
+there. The answer's contacts are pairs of neighbouring nodes, and at the final α a pair
+has moved by one node. Releasing the outer node of a pair frees the chain's slope there,
+the span between the contacts passes through the wall (3,640 nodes at N = 10⁵) and the
+exchanges that follow cycle until the round cap. One change at a time from the answer's
+contact set, every iterate is feasible, a wall that pulls by more than the slack
+releases its node (the most negative, scaled by its slack), and a move towards the face
+minimiser stops at the first wall it meets, which joins the set.
+
+A node's state is FREE, UP or LO (:mod:`lcpbench.model.judge_checks`). Every function
+is ``@njit(cache=True)``; ``NUMBA_DISABLE_JIT=1`` runs them as plain Python.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..linalg.face_kernel import face_solve as top_face_solve
+from ..linalg.twisted_kernel import face_solve as twisted_face_solve
+from ..linalg.twisted_kernel import twist
+from ..thresholds import EPS, ROUNDOFF_ULPS
+from .judge_checks import FREE, LO, UP
+from .judge_kernel import pivot_exchange, pivot_test, term_sizes
+from .large_kernel import gradient, gradient_scale
+
+
+@njit(cache=True)
+def _sizes(step, u, grad, scale, sizes):
+    """``grad`` = the step's gradient at u, ``scale`` = the size of its terms, and per
+    node S_i = max((|H| |u| + |c|)_i, its gradient's terms): the terms of R = K g + z."""
+    coef, k, phi_origin, rest, load, origin, rows, rrows, bands, linear, m = step
+    gradient(coef, k, phi_origin, rest, load, origin, u, grad, m)
+    gradient_scale(coef, k, phi_origin, rest, load, origin, u, scale, m)
+    term_sizes(bands, linear, u, u.size, sizes)
+    for i in range(u.size):
+        sizes[i] = max(sizes[i], scale[i])
+
+
+@njit(cache=True)
+def new_face(n):
+    """A twisted factor's state for :func:`face_solve`: its arrays, the last face (its
+    fixed nodes and springs' √k) and ``ctl`` = (the last twist, whether there is one)."""
+    factor = (np.empty((3, n)), np.empty(n, np.bool_), np.empty((n, 4)), np.empty((3, n)),
+              np.empty(n, np.bool_), np.empty((n, 4)), np.zeros(3), np.empty(n), np.empty(n))
+    return factor, np.zeros(n, np.bool_), np.zeros(n), np.zeros(2, np.int64)
+
+
+@njit(cache=True)
+def face_solve(rows, rrows, face, fixed, root, rhs, x):
+    """x with (H + diag(root²))_face x = rhs, the ``fixed`` nodes held (identity rows),
+    ``root`` the springs' √k per node (0: none), on the twisted factor ``face``
+    (:func:`new_face`) refactored from the face of its last call between the first and
+    the last node that changed (:meth:`lcpbench.linalg.twisted.TwistedFactor._twist`).
+    Below five nodes, no twist: the QR from the top, without springs. False on a zero
+    pivot."""
+    factor, last_fixed, last_root, ctl = face
+    R, filled, snap, B, bfilled, bsnap, tri, inv_r, inv_b = factor
+    n = rhs.size
+    if n < 5:
+        for i in range(n):
+            if root[i] > 0.0:
+                return False
+        return top_face_solve(rows, fixed, R, filled, snap, inv_r, 0, rhs, x)
+    j0, k0, m = 0, 0, n // 2
+    if ctl[1]:
+        first, last = n, -1
+        for i in range(n):
+            if fixed[i] != last_fixed[i] or root[i] != last_root[i]:
+                first, last = min(first, i), i
+        j0, k0, m = twist(first, last, ctl[0], n)
+    ctl[1] = 0  # invalid until the factorisation succeeds
+    if not twisted_face_solve(rows, rrows, fixed, fixed[::-1].copy(), root, root[::-1].copy(),
+                              R, filled, snap, B, bfilled, bsnap, tri, inv_r, inv_b, j0, k0,
+                              m, rhs, x):
+        return False
+    last_fixed[:] = fixed
+    last_root[:] = root
+    ctl[0], ctl[1] = m, 1
+    return True
+
+
+@njit(cache=True)
+def _face_minimiser(step, face, lo, hi, state, u, grad, x, no_springs):
+    """u = the step's minimiser with the nodes of ``state`` UP / LO held on their walls,
+    refined once with the factored gradient. False on a zero pivot."""
+    coef, k, phi_origin, rest, load, origin, rows, rrows, bands, linear, m = step
+    n = u.size
+    fixed = state != FREE
+    for i in range(n):
+        u[i] = hi[i] if state[i] == UP else (lo[i] if state[i] == LO else origin[i])
+    if not fixed.all():
+        for _ in range(2):
+            gradient(coef, k, phi_origin, rest, load, origin, u, grad, m)
+            for i in range(n):
+                if fixed[i]:
+                    grad[i] = 0.0
+            if not face_solve(rows, rrows, face, fixed, no_springs, grad, x):
+                return False
+            for i in range(n):
+                if not fixed[i]:
+                    u[i] -= x[i]
+    return True
+
+
+@njit(cache=True)
+def primal_step(step, lo, hi, height_size, pull, state, cap, u, net, roundoff, sizes):
+    """The rigid walls' step by the primal active set from the contact set ``state``
+    (settled there on return): rounds (0: not settled within ``cap`` face solves), the
+    largest round-off, max S_i; u, the net reaction and the round-off per node in
+    ``u``, ``net``, ``roundoff``. Slack and reach as :func:`~.judge_kernel.pivot_test`."""
+    n = u.size
+    grad, scale, v, x = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
+    change, face, no_springs = np.empty(n, np.int64), new_face(n), np.zeros(n)
+    diag = step[8][0]
+    if not _face_minimiser(step, face, lo, hi, state, u, grad, x, no_springs):
+        return 0, 0.0, 0.0
+    for _ in range(cap):  # a feasible start: nodes through a wall join it
+        _sizes(step, u, net, scale, sizes)
+        pivot_test(state, change, u, net, scale, sizes, hi, lo, diag, 0.0, height_size, pull,
+                   roundoff)
+        joins = 0
+        for i in range(n):
+            if change[i] >= 3:
+                state[i] = UP if change[i] == 3 else LO
+                joins += 1
+        if joins == 0:
+            break
+        if not _face_minimiser(step, face, lo, hi, state, u, grad, x, no_springs):
+            return 0, 0.0, 0.0
+    else:
+        return 0, 0.0, 0.0
+    at_minimiser = True
+    for rounds in range(1, cap + 1):
+        if at_minimiser:  # the wall that pulls most, by its slack, releases its node
+            _sizes(step, u, net, scale, sizes)
+            worst, S = pivot_test(state, change, u, net, scale, sizes, hi, lo, diag, 0.0,
+                                  height_size, pull, roundoff)[2:]
+            i_pull, most = -1, -1.0
+            for i in range(n):  # net / slack < −1 (upper) or > 1 (lower): it pulls
+                if state[i] != FREE:
+                    slack = max(max(roundoff[i], pull), ROUNDOFF_ULPS * EPS * sizes[i])
+                    r = net[i] / slack if state[i] == UP else -net[i] / slack
+                    if r < most:
+                        i_pull, most = i, r
+            if i_pull < 0:
+                for i in range(n):
+                    if state[i] == FREE:
+                        roundoff[i] = 0.0
+                return rounds, worst, S
+            state[i_pull] = FREE
+        if not _face_minimiser(step, face, lo, hi, state, v, grad, x, no_springs):
+            return 0, 0.0, 0.0
+        t, j, onto = 1.0, -1, FREE  # the first wall on the way from u to v
+        for i in range(n):
+            d = v[i] - u[i]
+            if state[i] == FREE and d != 0.0:
+                w = hi[i] if d > 0.0 else lo[i]
+                if np.isfinite(w) and (w - u[i]) / d < t:
+                    t, j, onto = (w - u[i]) / d, i, (UP if d > 0.0 else LO)
+        if j >= 0:  # stop there: its node joins the wall
+            for i in range(n):
+                u[i] += max(t, 0.0) * (v[i] - u[i])
+            state[j] = onto
+            u[j] = hi[j] if onto == UP else lo[j]
+            at_minimiser = False
+        else:
+            u[:] = v
+            at_minimiser = True
+    return 0, 0.0, 0.0
+
+
+@njit(cache=True)
+def pivot_step(step, lo, hi, k_up, k_lo, height_size, pull, state, cap, u, net, roundoff,
+               sizes):
+    """The elastic walls' step by block principal pivoting from the contact set
+    ``state`` (settled there on return); returns and fills as :func:`primal_step`. A
+    node on a rigid wall is held on it; on an elastic wall it stays free, held by the
+    wall's spring k (u − h), as rows √k eᵢ of the twisted factor."""
+    coef, k, phi_origin, rest, load, origin, rows, rrows, bands, linear, m = step
+    n = u.size
+    grad, scale, x = np.empty(n), np.empty(n), np.empty(n)
+    change, face = np.empty(n, np.int64), new_face(n)
+    spring, root, wall = np.zeros(n), np.zeros(n), np.zeros(n)
+    fixed = np.empty(n, np.bool_)
+    best, stall = n + 1, 0
+    for rounds in range(1, cap + 1):
+        for i in range(n):
+            kk = k_up[i] if state[i] == UP else (k_lo[i] if state[i] == LO else 0.0)
+            spring[i] = kk if kk > 0.0 else 0.0
+            root[i] = np.sqrt(spring[i])
+            wall[i] = hi[i] if state[i] == UP else (lo[i] if state[i] == LO else 0.0)
+            fixed[i] = state[i] != FREE and not kk > 0.0
+            u[i] = wall[i] if fixed[i] else origin[i]
+        for _ in range(0 if fixed.all() else 2):  # solve, then refine (factored gradient)
+            gradient(coef, k, phi_origin, rest, load, origin, u, grad, m)
+            for i in range(n):
+                grad[i] = 0.0 if fixed[i] else grad[i] + spring[i] * (u[i] - wall[i])
+            if not face_solve(rows, rrows, face, fixed, root, grad, x):
+                return 0, 0.0, 0.0
+            for i in range(n):
+                if not fixed[i]:
+                    u[i] -= x[i]
+        _sizes(step, u, net, scale, sizes)
+        count, first, worst, S = pivot_test(state, change, u, net, scale, sizes, hi, lo,
+                                            bands[0], 0.0, height_size, pull, roundoff)
+        if count == 0:
+            for i in range(n):
+                if state[i] == FREE:
+                    roundoff[i] = 0.0
+            return rounds, worst, S
+        best, stall = pivot_exchange(state, change, n, count, first, best, stall)
+    return 0, 0.0, 0.0
