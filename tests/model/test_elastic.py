@@ -18,7 +18,8 @@ from lcpbench import ActuatorScene, CantileverScene
 from lcpbench.api import solve_internal
 from lcpbench.errors import ProblemError
 from lcpbench.model.compiled_driver import assemble_step
-from lcpbench.model.elastic import elastic_qp, force_lcp, heights_from_forces
+from lcpbench.model.elastic import elastic_qp
+from lcpbench.model.formulations import heights_from_reactions, reaction_lcp
 from lcpbench.model.judge import force_tol, judge
 from lcpbench.model.result import certify
 from lcpbench.model.step_solver import solve_step
@@ -57,7 +58,7 @@ def test_every_backend_runs_the_elastic_step_and_is_never_wrong(backend, referen
         assert abs(res.total_force - reference_force) <= force_tol(res.tol) * F0
 
 
-def test_force_lcp_of_a_rigid_step_is_solved_by_the_contact_lcps_answer():
+def test_the_reaction_lcp_of_a_rigid_step_is_solved_by_the_contact_lcps_answer():
     """With rigid walls the LCP in the reactions is the dual of the step's contact LCP
     (eqs. 28-31): the exact active set's reactions must solve it (w = M R + q >= 0,
     R >= 0, w'R = 0 to round-off), and give back its heights."""
@@ -65,13 +66,13 @@ def test_force_lcp_of_a_rigid_step_is_solved_by_the_contact_lcps_answer():
     chain = scene.chain()
     step = assemble_step(chain, chain.rest_alpha)
     exact = solve_step(step, "active-set", "high")
-    form = force_lcp(step)
-    R = exact.forces_net[form.upper_rows]
+    form = reaction_lcp(step, scaled=False)
+    R = exact.forces_net[form.nodes]
     w = form.M @ R + form.q
     scale = np.abs(form.q).max()
     assert R.min() >= -1e-9 * np.abs(R).max() and w.min() >= -1e-9 * scale
     assert abs(w @ R) <= 1e-9 * scale * np.abs(R).max()
-    np.testing.assert_allclose(heights_from_forces(step, form, R), exact.u,
+    np.testing.assert_allclose(heights_from_reactions(step, form, R, scaled=False), exact.u,
                                atol=1e-9 * scene.length)
 
 

@@ -32,7 +32,8 @@ The unknowns are interleaved node by node, so P stays banded: a pentadiagonal
 H gives a half-bandwidth of at most 8 (5 with one wall), and every solve is
 O(N).
 
-LCP back-ends get the LCP in the reactions (:func:`force_lcp`): z = R, w the
+LCP back-ends get the LCP in the reactions (F4 with the compliances,
+:func:`lcpbench.model.formulations.reaction_lcp`): z = R, w the
 compliant gaps g + R/k, M = W + diag(1/k) with W = H⁻¹ on the wall rows
 (signed for the lower wall). It is dense, as every LCP back-end's input is,
 built by banded solves, and symmetric positive definite where the walls are
@@ -52,7 +53,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..linalg import solveh_banded  # scipy.linalg at first use (a fast first solve)
 from ..problems.templates import wall_share
 
 if TYPE_CHECKING:
@@ -270,64 +270,6 @@ def elastic_qp(step, form: str = "spring") -> ElasticQP:
         react = np.isfinite(lower) | np.isfinite(upper)
     P.sum_duplicates()
     return ElasticQP(form, E, node, kind, react, P, E.T @ step.linear, lower, upper, _bands(P))
-
-
-@dataclass
-class ForceLCP:
-    """The elastic step as the LCP in the wall reactions (see :func:`force_lcp`).
-
-    z = (R_upper on ``upper_rows``, R_lower on ``lower_rows``) (N), w their
-    compliant gaps g + R/k (mm).
-    """
-
-    M: np.ndarray
-    q: np.ndarray
-    upper_rows: np.ndarray
-    lower_rows: np.ndarray
-
-    @property
-    def n_upper(self) -> int:
-        return self.upper_rows.size
-
-
-def force_lcp(step) -> ForceLCP:
-    """The step with compliance as an LCP in the reactions: w = M R + q, w the
-    compliant gaps, dense, symmetric positive (semi)definite.
-
-    With W = H⁻¹ on the wall rows (banded solves, O(N) each) and u₀ = −H⁻¹c the
-    wall-free heights, the heights are u = u₀ − W R_upper + W R_lower, so
-
-        M = [[W_uu + 1/k_u, −W_ul], [−W_lu, W_ll + 1/k_l]],
-        q = [upper − u₀; u₀ − lower].
-
-    M is positive definite where every wall is elastic (1/k > 0 on its
-    diagonal), PSD with rigid rows; no pair is degenerate off the walls (z = R
-    = 0 with w = the gap > 0), and projected Gauss–Seidel applies (M_ii > 0).
-    """
-    n = step.size
-    up = np.flatnonzero(np.isfinite(step.upper))
-    lo = np.flatnonzero(np.isfinite(step.lower))
-    rows = np.concatenate([up, lo])
-    E = np.zeros((n, rows.size + 1))
-    E[rows, np.arange(rows.size)] = 1.0
-    E[:, -1] = -step.linear
-    X = solveh_banded(step.bands, E, lower=True, check_finite=False)
-    W, u0 = X[rows, :-1], X[:, -1]
-    sign = np.concatenate([np.ones(up.size), -np.ones(lo.size)])  # + pushes down
-    cu, cl = compliances(step)
-    M = sign[:, None] * W * sign[None, :]
-    M[np.diag_indices_from(M)] += np.concatenate([cu[up], cl[lo]])
-    M = 0.5 * (M + M.T)
-    q = np.concatenate([step.upper[up] - u0[up], u0[lo] - step.lower[lo]])
-    return ForceLCP(M, q, up, lo)
-
-
-def heights_from_forces(step, form: ForceLCP, R: np.ndarray) -> np.ndarray:
-    """Free-node heights u with H u + c + R_upper − R_lower = 0 (one banded solve)."""
-    rhs = -np.asarray(step.linear, dtype=float).copy()
-    rhs[form.upper_rows] -= R[: form.n_upper]
-    rhs[form.lower_rows] += R[form.n_upper:]
-    return solveh_banded(step.bands, rhs, lower=True, check_finite=False)
 
 
 def scaled_qp(qp: ElasticQP, L: float, F: float):

@@ -19,7 +19,8 @@ import numpy as np
 from ..solvers.base import BoxQP, QPWarm, Settings, Status, StepSolution
 from ..solvers.lemke import too_large
 from ..solvers.registry import Backend
-from .elastic import elastic_qp, force_lcp, heights_from_forces, scaled_qp
+from .elastic import elastic_qp, scaled_qp
+from .formulations import heights_from_reactions, reaction_lcp
 
 
 def _nan(n: int, status: Status, message: str, **kw) -> StepSolution:
@@ -59,12 +60,14 @@ def run_elastic_step(backend: Backend, mod, step, s: Settings, scaled: bool,
         np.isfinite(step.lower)))
     if backend.storage == "dense" and (why := too_large(rows)):
         return _nan(step.size, Status.FAILED, why)
-    form = force_lcp(step)  # z = R (N), w = g + R/k (mm): scaled to EI/ℓ² and ℓ
+    # z = R (N), w = g + R/k (mm), the LCP in the reactions (F4 with the compliances):
+    # scaled to EI/ℓ² and ℓ
+    form = reaction_lcp(step, scaled=False)
     M, q = form.M * (F / L), form.q / L
     z0 = None
     if warm is not None and backend.warm_start and np.all(np.isfinite(warm.u)):
-        z0 = np.concatenate([warm.forces_upper[form.upper_rows],
-                             warm.forces_lower[form.lower_rows]]) / F
+        z0 = np.where(form.signs > 0, warm.forces_upper[form.nodes],
+                      warm.forces_lower[form.nodes]) / F
     build = time.perf_counter() - t0
     res = mod.solve_lcp(M, q, s, z0, **backend.options)
     if not np.all(np.isfinite(res.z)):
@@ -73,7 +76,6 @@ def run_elastic_step(backend: Backend, mod, step, s: Settings, scaled: bool,
                     solve_time=res.solve_time, build_time=build)
     R = np.asarray(res.z, float) * F
     net = np.zeros(step.size)
-    net[form.upper_rows] += R[: form.n_upper]
-    net[form.lower_rows] -= R[form.n_upper:]
-    return _answer(step, heights_from_forces(step, form, R), net, res, build,
+    np.add.at(net, form.nodes, form.signs * R)
+    return _answer(step, heights_from_reactions(step, form, R, scaled=False), net, res, build,
                    time_source=res.extra.get("time_source", "solver"))

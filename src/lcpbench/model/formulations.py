@@ -43,6 +43,7 @@ from ..linalg import sparse as sp
 from ..solvers.base import BoxQP, LinearQP, Settings, Status, StepSolution
 from ..solvers.equilibrate import equilibrate_lcp, equilibrate_qp, scale_qp, unscale_qp
 from ..solvers.runner import run_lcp
+from .elastic import compliances
 
 #: name -> (label, kind): "lcp" (a symmetric LCP, or the QP in z >= 0), "box" (a box
 #: QP), "rows" (a QP with linear rows: equalities and general inequalities)
@@ -237,7 +238,7 @@ def step_lcp(step, scaled: bool = True):
 def _rigid_only(step, what: str) -> None:
     if getattr(step, "elastic", False):
         raise ProblemError(f"{what}: this step has elastic walls; its forms are "
-                           "lcpbench.model.elastic.elastic_qp / force_lcp")
+                           "lcpbench.model.elastic.elastic_qp / reaction_lcp")
 
 
 def _free_shift(step) -> int:
@@ -305,8 +306,11 @@ class ReactionLCP:
 
 def reaction_lcp(step, scaled: bool = True) -> ReactionLCP:
     """F4 from the banded factor of H: W = G H̃⁻¹ Gᵀ, q = h̃ − G ũ_free with ũ_free
-    = −H̃⁻¹ c̃ the unconstrained minimiser (O(N m) for m wall rows)."""
-    _rigid(step)
+    = −H̃⁻¹ c̃ the unconstrained minimiser (O(N m) for m wall rows). With elastic
+    walls the compliances 1/k of the rows join W's diagonal: w is the compliant gap
+    g + R/k (:mod:`lcpbench.model.elastic`), and M is positive definite where every
+    wall yields."""
+    _in_heights(step)
     L, F = step_scales(step, scaled)
     nodes, sign = _signs(step)
     n, m = step.size, nodes.size
@@ -316,8 +320,12 @@ def reaction_lcp(step, scaled: bool = True) -> ReactionLCP:
     Y = solveh_banded(b, np.column_stack([Gt, -step.linear / F]), lower=True,
                       check_finite=False)
     W = Gt.T @ Y[:, :m]
+    M = 0.5 * (W + W.T)
+    if getattr(step, "elastic", False):
+        cu, cl = compliances(step)
+        M[np.diag_indices_from(M)] += np.where(sign > 0, cu[nodes], cl[nodes]) * (F / L)
     h = np.where(sign > 0, step.upper[nodes], -step.lower[nodes]) / L
-    return ReactionLCP(0.5 * (W + W.T), h - sign * Y[nodes, m], nodes, sign)
+    return ReactionLCP(M, h - sign * Y[nodes, m], nodes, sign)
 
 
 def heights_from_reactions(step, lcp: ReactionLCP, lam: np.ndarray,
@@ -370,6 +378,10 @@ def _rigid(step) -> None:
     if getattr(step, "elastic", False):
         raise ProblemError("a step with elastic walls has its own forms "
                            "(lcpbench.model.elastic)")
+    _in_heights(step)
+
+
+def _in_heights(step) -> None:
     if getattr(step, "factor", None) is not None:
         raise ProblemError("a step in increments (large N) has its own face solves; "
                            "the formulations take the height step")

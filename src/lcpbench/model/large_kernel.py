@@ -27,6 +27,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ..linalg.face_kernel import face_solve as _top_face_solve
 from ..linalg.twisted_kernel import face_solve as _face_solve
 from ..linalg.twisted_kernel import resolve as _resolve
 from ..thresholds import ROUNDOFF_ULPS  # a residual below it stays where the heights are
@@ -187,35 +188,36 @@ def trial_energy_at(alpha, sin_alpha, inv_a_cos, du, t, a, jl, jr, k, rest, link
 
 
 @njit(cache=True)
-def _block_solve(rows, idx, a, b, grad, u2):
-    """u2[idx[a:b]] −= H[block]⁻¹ grad there: one block of
-    :meth:`lcpbench.model.large_n.IncrementStep.solve_on` (the rows that touch it, the
-    nodes between held; a fresh twisted factor; the same arithmetic). False on a zero
-    pivot or a block too small for a twist (the caller runs the numpy reference)."""
+def block_solve(rows, idx, a, b, grad, u2):
+    """u2[idx[a:b]] −= H[block]⁻¹ grad there, one block of :func:`descend`: the rows
+    that touch it, the nodes beside it held, on a fresh twisted factor of those rows
+    (below five rows, no twist: the QR from the top, as
+    :class:`~lcpbench.linalg.saddle.TridiagonalFactor` takes it). False on a zero
+    pivot."""
     n = rows.shape[0]
     r0, r1 = max(idx[a] - 1, 0), min(idx[b - 1] + 1, n - 1)
     nb = r1 + 1 - r0
-    if nb < 5:
-        return False
     sub = rows[r0:r1 + 1].copy()
     sub[0, 0] = 0.0
     sub[nb - 1, 2] = 0.0
-    rsub = np.empty((nb, 3))
-    for j in range(nb):
-        for c in range(3):
-            rsub[nb - 1 - j, 2 - c] = sub[j, c]
     fixed = np.ones(nb, np.bool_)
     full = np.zeros(nb)
     for q in range(a, b):
         fixed[idx[q] - r0] = False
         full[idx[q] - r0] = grad[idx[q]]
-    rfixed = fixed[::-1].copy()
     x = np.empty(nb)
-    ok = _face_solve(sub, rsub, fixed, rfixed, x[:0], x[:0], np.empty((3, nb)),
-                     np.empty(nb, np.bool_),
-                     np.empty((nb, 4)), np.empty((3, nb)), np.empty(nb, np.bool_),
-                     np.empty((nb, 4)), np.zeros(3), np.empty(nb), np.empty(nb), 0, 0,
-                     nb // 2, full, x)
+    R, filled, snap, inv = np.empty((3, nb)), np.empty(nb, np.bool_), np.empty((nb, 4)), \
+        np.empty(nb)
+    if nb < 5:
+        ok = _top_face_solve(sub, fixed, R, filled, snap, inv, 0, full, x)
+    else:
+        rsub = np.empty((nb, 3))
+        for j in range(nb):
+            for c in range(3):
+                rsub[nb - 1 - j, 2 - c] = sub[j, c]
+        ok = _face_solve(sub, rsub, fixed, fixed[::-1].copy(), x[:0], x[:0], R, filled, snap,
+                         np.empty((3, nb)), np.empty(nb, np.bool_), np.empty((nb, 4)),
+                         np.zeros(3), inv, np.empty(nb), 0, 0, nb // 2, full, x)
     if not ok:
         return False
     for q in range(a, b):
@@ -224,11 +226,27 @@ def _block_solve(rows, idx, a, b, grad, u2):
 
 
 @njit(cache=True)
+def descend(rows, idx, grad, u2):
+    """u2[idx] −= H[idx, idx]⁻¹ grad[idx] (``idx`` sorted; H = AᵀA from the rows of A):
+    a row of A touches three consecutive nodes, so runs of ``idx`` two or more nodes
+    apart are independent blocks, each solved on the rows that touch it
+    (:func:`block_solve`): O(|idx|), not O(n). False on a zero pivot."""
+    a = 0
+    for q in range(1, idx.size + 1):
+        if q == idx.size or idx[q] - idx[q - 1] > 2:
+            if not block_solve(rows, idx, a, q, grad, u2):
+                return False
+            a = q
+    return True
+
+
+@njit(cache=True)
 def residuals(u, coef, k, phi_origin, rest, load, origin, rows, bands, linear, lo, hi, L, F):
     """:func:`lcpbench.model.step_solver.step_residuals` of a large-N step in increments
     (rigid walls): ``(ok, [natural, min_gap, min_reaction, complementarity, term_size],
-    R)``; not ok where the heights are not finite or the nodes with no wall row cannot
-    be re-solved here (the caller runs the numpy reference). The same sums as the
+    R)``; not ok where the heights are not finite, or the nodes with no wall row are
+    more than half (the reference re-solves them on the whole factor) or meet a zero
+    pivot (the caller runs the numpy reference). The same sums as the
     reference, except Σ g·r (complementarity, reported, not judged) summed in order."""
     n = u.size
     for i in range(n):
@@ -255,12 +273,8 @@ def residuals(u, coef, k, phi_origin, rest, load, origin, rows, bands, linear, l
         for i in range(n):  # a residual at round-off stays (see the reference)
             if abs(grad[i]) <= ROUNDOFF_ULPS * EPS * scale[i]:
                 grad[i] = 0.0
-        a = 0
-        for q in range(1, nfree + 1):  # runs of idx two or more nodes apart: blocks
-            if q == nfree or idx[q] - idx[q - 1] > 2:
-                if not _block_solve(rows, idx, a, q, grad, u2):
-                    return False, np.zeros(5), np.full(n, np.nan)
-                a = q
+        if not descend(rows, idx, grad, u2):  # the nodes with no wall row, by blocks
+            return False, np.zeros(5), np.full(n, np.nan)
     R = np.empty(n)
     gradient(coef, k, phi_origin, rest, load, origin, u2, R, m)
     for i in range(n):

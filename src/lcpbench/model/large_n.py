@@ -174,29 +174,19 @@ class IncrementStep(ContactStep):
                                      np.ascontiguousarray(u, dtype=float), int(rounds))
 
     def solve_on(self, idx: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-        """H[idx, idx]⁻¹ rhs. A row of A touches three consecutive nodes, so runs of
-        ``idx`` two or more nodes apart are independent blocks, each solved on the
-        rows that touch it (a twisted factor of those rows, the nodes between the
-        runs held): O(|idx|), not O(n) (the step judge re-solves the ~20 % of the
-        nodes that no wall reaches at every step). Many nodes: the whole factor."""
-        idx = np.asarray(idx)
+        """H[idx, idx]⁻¹ rhs. Few nodes: by the independent blocks of ``idx``, O(|idx|)
+        (compiled: :func:`~lcpbench.model.large_kernel.descend`; the step judge re-solves
+        the ~20 % of the nodes that no wall reaches at every step). Many nodes: the
+        whole factor."""
+        idx = np.ascontiguousarray(idx, dtype=np.int64)
         n = self.size
         if idx.size * 2 > n:
             return super().solve_on(idx, rhs)
-        rhs = np.asarray(rhs, dtype=float)
-        out = np.empty(idx.size)
-        cuts = np.flatnonzero(np.diff(idx) > 2) + 1
-        for a, b in zip(np.concatenate(([0], cuts)), np.concatenate((cuts, [idx.size]))):
-            r0, r1 = max(int(idx[a]) - 1, 0), min(int(idx[b - 1]) + 1, n - 1)
-            rows = self.factor.rows[r0:r1 + 1].copy()
-            rows[0, 0] = rows[-1, 2] = 0.0  # the nodes outside are held
-            fixed = np.ones(r1 + 1 - r0, bool)
-            fixed[idx[a:b] - r0] = False
-            full = np.zeros(fixed.size)
-            full[idx[a:b] - r0] = rhs[a:b]
-            sub = TwistedFactor.from_rows(rows, np.ascontiguousarray(rows[::-1, ::-1]))
-            out[a:b] = sub.face_solve(fixed, full)[idx[a:b] - r0]
-        return out
+        grad, d = np.zeros(n), np.zeros(n)
+        grad[idx] = rhs
+        if not _kernel().descend(self.factor.rows, idx, grad, d):
+            raise np.linalg.LinAlgError("a face of H is singular (zero pivot)")
+        return -d[idx]
 
 
 def _chain_arrays(chain: Chain) -> tuple:
