@@ -37,9 +37,14 @@ from numba import njit
 from ..linalg.face_kernel import face_solve as top_face_solve
 from ..linalg.twisted_kernel import face_solve as twisted_face_solve
 from ..linalg.twisted_kernel import twist
-from ..thresholds import EPS, ROUNDOFF_ULPS
 from .judge_checks import FREE, LO, UP
-from .judge_kernel import pivot_exchange, pivot_test, term_sizes
+from .judge_kernel import (
+    pivot_exchange,
+    pivot_settled,
+    pivot_slack,
+    pivot_test,
+    term_sizes,
+)
 from .large_kernel import gradient, gradient_scale
 
 
@@ -157,15 +162,12 @@ def primal_step(step, lo, hi, height_size, pull, state, cap, u, net, roundoff, s
             i_pull, most = -1, -1.0
             for i in range(n):  # net / slack < −1 (upper) or > 1 (lower): it pulls
                 if state[i] != FREE:
-                    slack = max(max(roundoff[i], pull), ROUNDOFF_ULPS * EPS * sizes[i])
+                    slack = pivot_slack(roundoff[i], pull, sizes[i])
                     r = net[i] / slack if state[i] == UP else -net[i] / slack
                     if r < most:
                         i_pull, most = i, r
             if i_pull < 0:
-                for i in range(n):
-                    if state[i] == FREE:
-                        roundoff[i] = 0.0
-                return rounds, worst, S
+                return pivot_settled(state, roundoff, rounds, worst, S)
             state[i_pull] = FREE
         if not _face_minimiser(step, face, lo, hi, state, v, grad, x, no_springs):
             return 0, 0.0, 0.0
@@ -223,9 +225,6 @@ def pivot_step(step, lo, hi, k_up, k_lo, height_size, pull, state, cap, u, net, 
         count, first, worst, S = pivot_test(state, change, u, net, scale, sizes, hi, lo,
                                             bands[0], 0.0, height_size, pull, roundoff)
         if count == 0:
-            for i in range(n):
-                if state[i] == FREE:
-                    roundoff[i] = 0.0
-            return rounds, worst, S
+            return pivot_settled(state, roundoff, rounds, worst, S)
         best, stall = pivot_exchange(state, change, n, count, first, best, stall)
     return 0, 0.0, 0.0

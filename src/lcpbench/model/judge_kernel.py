@@ -241,6 +241,14 @@ NO_SIZES = np.empty(0)
 
 
 @njit(cache=True)
+def pivot_slack(roundoff, pull, size):
+    """The pull (N) by which a wall must pull on its node before the judge releases it:
+    its reaction's round-off, ``pull``, or a few ulps of the term size S_i of R = K g + z,
+    whichever is largest (a sign within it is undecided, not a reason to pivot)."""
+    return max(max(roundoff, pull), ROUNDOFF_ULPS * EPS * size)
+
+
+@njit(cache=True)
 def pivot_test(state, change, u, net, scale, sizes, hi, lo, diag, L, height_size, pull,
                roundoff):
     """One round's test of the judge's block principal pivoting, in heights or in
@@ -263,7 +271,7 @@ def pivot_test(state, change, u, net, scale, sizes, hi, lo, diag, L, height_size
         size = sizes[i]
         worst = max(worst, roundoff[i])
         S = max(S, size)
-        slack = max(max(roundoff[i], pull), ROUNDOFF_ULPS * EPS * size)
+        slack = pivot_slack(roundoff[i], pull, size)
         rounds_at = height_size[i] if per_node else L
         reach = max(ROUNDOFF_ULPS * EPS * (abs(u[i]) + rounds_at), pull / diag[i])
         c = 0
@@ -299,6 +307,16 @@ def pivot_exchange(state, change, n, count, first, best, stall):
             continue
         state[i] = FREE if change[i] <= 2 else (UP if change[i] == 3 else LO)
     return best, stall
+
+
+@njit(cache=True)
+def pivot_settled(state, roundoff, rounds, worst, S):
+    """A settled judge step's (rounds, largest round-off, max S_i), its reactions'
+    round-off kept on the wall nodes only (0 on the free ones)."""
+    for i in range(state.size):
+        if state[i] == FREE:
+            roundoff[i] = 0.0
+    return rounds, worst, S
 
 
 @njit(cache=True)
@@ -347,10 +365,7 @@ def _pivot(bands, fac, iw, lo, hi, cu, cl, L, pull, w, fs, b0, nj, k, rest, noda
         count, first, worst, S = pivot_test(state, change, u, net, scale, sizes, hi, lo,
                                             bands[0], L, NO_SIZES, pull, roundoff)
         if count == 0:
-            for i in range(n):
-                if state[i] == FREE:
-                    roundoff[i] = 0.0
-            return rounds, worst, S
+            return pivot_settled(state, roundoff, rounds, worst, S)
         best, stall = pivot_exchange(state, change, n, count, first, best, stall)
     return 0, 0.0, 0.0
 
