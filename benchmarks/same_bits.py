@@ -16,7 +16,7 @@ The corpus (about 1,900 answers; ~5 min on one core):
 - ``solve`` and ``start="ramp"`` on rows of two and three sections, and past 180°;
 - channels, heavy channels, a stenosis and a profiled channel with the default
   back-end, OSQP and Lemke (the compiled driver around a back-end);
-- large N (3000, 6000) with one wall, a channel and a wall profile;
+- large N (3000, 6000) with one wall, a channel, a wall profile and elastic walls;
 - friction: ``solve_path`` on a flat wall, a channel and a stenosis, pulled and
   released; 40 random paths of 4 states as ``benchmarks/friction_paths.py`` draws
   them (seed 39: every end condition, channels, μ 0.05–0.8);
@@ -26,9 +26,10 @@ The corpus (about 1,900 answers; ~5 min on one core):
 
 Each answer is recorded as (converged, reason, total force, forces, lower
 forces, α, outer iterations; with friction the tangential forces, slips and
-stick) with the numbers as bytes (a zero's sign counts). ``compare`` counts the answers the same bit
-for bit and lists every other: a changed verdict, or the forces moved (with the
-judge's allowance τ F₀ where the answer was judged). ``sweep`` exits 1 if a
+stick; the judge's bounds, judge force, contractions and rounds) with the
+numbers as bytes (a zero's sign counts). ``compare`` counts the answers the same bit
+for bit and lists every other: a changed verdict, the judge's numbers moved, or the
+forces moved (with the judge's allowance τ F₀ where the answer was judged). ``sweep`` exits 1 if a
 row's force moved at all: the sweep's cold rows by ``lcpbench.solve``, its
 continuation rows by ``lcpbench sweep --solvers active-set --continuation
 adaptive`` into a temporary store.
@@ -84,7 +85,17 @@ def answer(r) -> dict:
                 # a frictional answer's tangential forces, slips and stick
                 **{f: _bytes(getattr(r, f, None)) for f in ("tangential_forces", "slip",
                                                             "stick")},
-                allowed=allowed)
+                allowed=allowed, judge=_judge_numbers(j))
+
+
+def _judge_numbers(j) -> bytes | None:
+    """The judge's own numbers of an answer, bit for bit: its force error bounds, its
+    step's total force, the contractions and its rounds (None: not judged so)."""
+    fields = ("force_error_bound", "node_error_bound", "judge_total_force", "contraction",
+              "judge_contraction", "judge_rounds")
+    if j is None or not hasattr(j, "force_error_bound"):
+        return None
+    return _bytes([np.nan if getattr(j, f, None) is None else getattr(j, f) for f in fields])
 
 
 def _kept(out: dict, key, solve) -> None:
@@ -152,6 +163,10 @@ def corpus() -> dict:
                     s = ActuatorScene(theta=theta, height=2.0, links=n, channel=channel,
                                       wall_profile=prof)
                     _kept(out, (tag, theta, n, channel), lambda s=s: lcpbench.solve(s, tol=1e-6))
+    for k in (0.1, 1e4):  # elastic walls at large N (the judge in increments from 4000)
+        for n in (3000, 6000):
+            s = ActuatorScene(theta=150.0, height=3.0, links=n, wall_stiffness=k)
+            _kept(out, ("large elastic", k, n), lambda s=s: lcpbench.solve(s, tol=1e-6))
     states = [{}, {"pull": 0.05}, {"pull": 0.0}]
     for tag, kw in (("friction flat", {}), ("friction channel", {"channel": True}),
                     ("friction stenosis", {"wall_profile": up})):
@@ -205,10 +220,14 @@ def corpus() -> dict:
 
 
 def _same(x: dict, y: dict) -> bool:
-    """The same answer, bit for bit (NaN equal to NaN)."""
-    return x.keys() == y.keys() and all(
+    """The same answer, bit for bit (NaN equal to NaN). The judge's numbers are compared
+    where both records have them (records older than the field lack it)."""
+    keys = x.keys() | y.keys()
+    if "judge" not in x.keys() & y.keys():
+        keys -= {"judge"}
+    return all(f in x and f in y and (
         x[f] == y[f] or (isinstance(x[f], float) and isinstance(y[f], float)
-                         and np.isnan(x[f]) and np.isnan(y[f])) for f in x)
+                         and np.isnan(x[f]) and np.isnan(y[f]))) for f in keys)
 
 
 def compare(a: dict, b: dict) -> int:
@@ -226,6 +245,9 @@ def compare(a: dict, b: dict) -> int:
             counts[(group, "VERDICT")] += 1
             print("verdict:", key, x.get("error", x.get("reason")), "->",
                   y.get("error", y.get("reason")))
+        elif _same({**x, "judge": None}, {**y, "judge": None}):
+            counts[(group, "judge's numbers moved")] += 1
+            print("judge's numbers moved:", key)
         else:
             moved = abs(x.get("total_force", np.nan) - y.get("total_force", np.nan))
             # (NaN where neither was judged, or no force: a sensitivity; "moved")

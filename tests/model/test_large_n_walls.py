@@ -43,10 +43,10 @@ def stenosis() -> WallProfile:
     return WallProfile.from_function(h, dh, name="stenosis")
 
 
-def _increments(scene, tol):
+def _increments(scene, tol, backend="auto"):
     """The scene's chain solved by the large-N driver whatever N (``increments``)."""
     chain = replace(scene.chain(), increments=True)
-    out = run_large(chain, make_step_solver(), tol=tol)
+    out = run_large(chain, make_step_solver(backend), tol=tol)
     assert out.converged, out.reason
     return out
 
@@ -58,6 +58,17 @@ def test_elastic_walls_in_increments_are_the_equilibrium_from_first_principles()
     assert float(np.sum(out.forces_upper)) > 0.0  # the chain indents the wall
     assert_equilibrium(scene, out.alpha, out.forces_upper, out.forces_lower,
                        stationarity=1e-6, wall_tol=1e-8)
+
+
+@pytest.mark.parametrize("backend", ["lemke", "pgs"])
+def test_an_lcp_back_end_takes_elastic_walls_in_increments(backend):
+    # the elastic step handed to an LCP back-end (the LCP in the reactions with the
+    # compliances) from a step in increments: R = k (y − h)₊ and E + springs stationary
+    scene = ActuatorScene(150, 3.0, links=60, wall_stiffness=0.1)
+    out = _increments(scene, 1e-8, backend)
+    assert float(np.sum(out.forces_upper)) > 0.0
+    assert_equilibrium(scene, out.alpha, out.forces_upper, out.forces_lower,
+                       stationarity=1e-5, wall_tol=1e-6)
 
 
 def test_a_profile_in_increments_matches_the_energy_minimisation():

@@ -309,8 +309,11 @@ def reaction_lcp(step, scaled: bool = True) -> ReactionLCP:
     = −H̃⁻¹ c̃ the unconstrained minimiser (O(N m) for m wall rows). With elastic
     walls the compliances 1/k of the rows join W's diagonal: w is the compliant gap
     g + R/k (:mod:`lcpbench.model.elastic`), and M is positive definite where every
-    wall yields."""
-    _in_heights(step)
+    wall yields. Rigid walls: the height step only (in increments the step has its own
+    face solves); elastic walls on any step, the banded factor of its H (the elastic
+    walls' hand-off to an LCP back-end, :mod:`lcpbench.model.elastic_step`)."""
+    if not getattr(step, "elastic", False):
+        _in_heights(step)
     L, F = step_scales(step, scaled)
     nodes, sign = _signs(step)
     n, m = step.size, nodes.size

@@ -95,8 +95,8 @@ the certificate and checks 3-6 and 8 (:mod:`lcpbench.model.judge_checks`), the f
 error bound (:mod:`lcpbench.model.judge_bound`) and the stability check
 (:mod:`lcpbench.model.stability_kernel`). The kernel takes its exact steps in node
 heights; where the solve is in increments (from ``LARGE_N`` links, or a chain marked
-``increments``) the judge's steps are too (:mod:`lcpbench.model.judge_exact`, numpy on
-the increments' tridiagonal factor), and the same certificate, checks and bound are
+``increments``) the judge's steps are too (:mod:`lcpbench.model.judge_exact`, compiled
+on the increments' tridiagonal factor), and the same certificate, checks and bound are
 computed on them. The judge shares no code with the solve kernel: it checks the answer,
 it does not repeat the solve.
 """

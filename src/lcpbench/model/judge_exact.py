@@ -37,8 +37,9 @@ LARGE_ROUNDS = 100
 class JudgeStep:
     """The judge's own contact step at the final α, solved exactly.
 
-    ``forces_upper``/``forces_lower``: its reactions R' (N); ``rounds``: block
-    principal pivoting rounds; ``dalpha``: max|α̂' − α| it would move the chain
+    ``forces_upper``/``forces_lower``: its reactions R' (N); ``rounds``: its pivoting
+    rounds (the primal active set's with rigid walls, block principal pivoting's with
+    elastic ones); ``dalpha``: max|α̂' − α| it would move the chain
     (to ``alpha_next``); ``contacts``: its settled contact set.
     """
 

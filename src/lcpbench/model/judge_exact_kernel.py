@@ -45,7 +45,7 @@ from .judge_kernel import (
     pivot_test,
     term_sizes,
 )
-from .large_kernel import gradient, gradient_scale
+from .large_kernel import descend, gradient, gradient_scale
 
 
 @njit(cache=True)
@@ -104,6 +104,27 @@ def face_solve(rows, rrows, face, fixed, root, rhs, x):
 
 
 @njit(cache=True)
+def _descend(step, face, fixed, grad, u, x, no_springs):
+    """u[free] −= H[free, free]⁻¹ grad[free] (``grad`` is overwritten): where at most half
+    the nodes are free, by their independent blocks
+    (:func:`~lcpbench.model.large_kernel.descend`), else on the whole restarted factor
+    (:meth:`lcpbench.model.large_n.IncrementStep.solve_on`'s choice). False on a zero
+    pivot."""
+    n = u.size
+    free = np.flatnonzero(~fixed)
+    if 2 * free.size <= n:
+        return descend(step[6], free, grad, u)
+    for i in range(n):
+        if fixed[i]:
+            grad[i] = 0.0
+    if not face_solve(step[6], step[7], face, fixed, no_springs, grad, x):
+        return False
+    for i in free:
+        u[i] -= x[i]
+    return True
+
+
+@njit(cache=True)
 def _face_minimiser(step, face, lo, hi, state, u, grad, x, no_springs):
     """u = the step's minimiser with the nodes of ``state`` UP / LO held on their walls,
     refined once with the factored gradient. False on a zero pivot."""
@@ -115,14 +136,8 @@ def _face_minimiser(step, face, lo, hi, state, u, grad, x, no_springs):
     if not fixed.all():
         for _ in range(2):
             gradient(coef, k, phi_origin, rest, load, origin, u, grad, m)
-            for i in range(n):
-                if fixed[i]:
-                    grad[i] = 0.0
-            if not face_solve(rows, rrows, face, fixed, no_springs, grad, x):
+            if not _descend(step, face, fixed, grad, u, x, no_springs):
                 return False
-            for i in range(n):
-                if not fixed[i]:
-                    u[i] -= x[i]
     return True
 
 
@@ -159,28 +174,36 @@ def primal_step(step, lo, hi, height_size, pull, state, cap, u, net, roundoff, s
             _sizes(step, u, net, scale, sizes)
             worst, S = pivot_test(state, change, u, net, scale, sizes, hi, lo, diag, 0.0,
                                   height_size, pull, roundoff)[2:]
-            i_pull, most = -1, -1.0
-            for i in range(n):  # net / slack < −1 (upper) or > 1 (lower): it pulls
+            # net / slack < −1 (upper) or > 1 (lower): it pulls; the first node of the
+            # most on each wall, the upper wall's on a tie
+            most_up, most_lo, i_up, i_lo = np.inf, np.inf, -1, -1
+            for i in range(n):
                 if state[i] != FREE:
                     slack = pivot_slack(roundoff[i], pull, sizes[i])
-                    r = net[i] / slack if state[i] == UP else -net[i] / slack
-                    if r < most:
-                        i_pull, most = i, r
-            if i_pull < 0:
+                    if state[i] == UP and net[i] / slack < most_up:
+                        most_up, i_up = net[i] / slack, i
+                    elif state[i] == LO and -net[i] / slack < most_lo:
+                        most_lo, i_lo = -net[i] / slack, i
+            if min(most_up, most_lo) >= -1.0:
                 return pivot_settled(state, roundoff, rounds, worst, S)
-            state[i_pull] = FREE
+            state[i_up if most_up <= most_lo else i_lo] = FREE
         if not _face_minimiser(step, face, lo, hi, state, v, grad, x, no_springs):
             return 0, 0.0, 0.0
-        t, j, onto = 1.0, -1, FREE  # the first wall on the way from u to v
+        # the first wall on the way from u to v (the first node of each wall, the upper
+        # wall's on a tie)
+        t_up, t_lo, j_up, j_lo = np.inf, np.inf, -1, -1
         for i in range(n):
             d = v[i] - u[i]
-            if state[i] == FREE and d != 0.0:
-                w = hi[i] if d > 0.0 else lo[i]
-                if np.isfinite(w) and (w - u[i]) / d < t:
-                    t, j, onto = (w - u[i]) / d, i, (UP if d > 0.0 else LO)
-        if j >= 0:  # stop there: its node joins the wall
+            if state[i] == FREE and d > 0.0 and np.isfinite(hi[i]) and (hi[i] - u[i]) / d < t_up:
+                t_up, j_up = (hi[i] - u[i]) / d, i
+            elif state[i] == FREE and d < 0.0 and np.isfinite(lo[i]) and \
+                    (lo[i] - u[i]) / d < t_lo:
+                t_lo, j_lo = (lo[i] - u[i]) / d, i
+        t = min(t_up, t_lo)
+        if t < 1.0:  # stop there: its node joins the wall
             for i in range(n):
                 u[i] += max(t, 0.0) * (v[i] - u[i])
+            j, onto = (j_up, UP) if t_up <= t_lo else (j_lo, LO)
             state[j] = onto
             u[j] = hi[j] if onto == UP else lo[j]
             at_minimiser = False
@@ -205,6 +228,7 @@ def pivot_step(step, lo, hi, k_up, k_lo, height_size, pull, state, cap, u, net, 
     fixed = np.empty(n, np.bool_)
     best, stall = n + 1, 0
     for rounds in range(1, cap + 1):
+        springs = False
         for i in range(n):
             kk = k_up[i] if state[i] == UP else (k_lo[i] if state[i] == LO else 0.0)
             spring[i] = kk if kk > 0.0 else 0.0
@@ -212,8 +236,13 @@ def pivot_step(step, lo, hi, k_up, k_lo, height_size, pull, state, cap, u, net, 
             wall[i] = hi[i] if state[i] == UP else (lo[i] if state[i] == LO else 0.0)
             fixed[i] = state[i] != FREE and not kk > 0.0
             u[i] = wall[i] if fixed[i] else origin[i]
+            springs = springs or spring[i] > 0.0
         for _ in range(0 if fixed.all() else 2):  # solve, then refine (factored gradient)
             gradient(coef, k, phi_origin, rest, load, origin, u, grad, m)
+            if not springs:
+                if not _descend(step, face, fixed, grad, u, x, root):
+                    return 0, 0.0, 0.0
+                continue
             for i in range(n):
                 grad[i] = 0.0 if fixed[i] else grad[i] + spring[i] * (u[i] - wall[i])
             if not face_solve(rows, rrows, face, fixed, root, grad, x):

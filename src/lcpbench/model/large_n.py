@@ -182,7 +182,7 @@ class IncrementStep(ContactStep):
         n = self.size
         if idx.size * 2 > n:
             return super().solve_on(idx, rhs)
-        grad, d = np.zeros(n), np.zeros(n)
+        grad, d = np.zeros(n), np.full(n, -0.0)  # −(−0 − x) is x, a zero's sign too
         grad[idx] = rhs
         if not _kernel().descend(self.factor.rows, idx, grad, d):
             raise np.linalg.LinAlgError("a face of H is singular (zero pivot)")

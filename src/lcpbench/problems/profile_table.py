@@ -42,11 +42,6 @@ MAX_PIECES = 1 << 18
 START_PIECES = 64
 
 
-def constant_pieces(value: float) -> tuple[np.ndarray, np.ndarray]:
-    """The table of a flat wall y = ``value``: one piece over [0, 1], continued flat."""
-    return np.array([0.0, 1.0]), np.array([[0.0], [0.0], [0.0], [float(value)]])
-
-
 def exact_pieces(knots, coef) -> tuple[np.ndarray, np.ndarray]:
     """A table from breakpoints and a (k+1, m) PPoly coefficient array of degree k <= 3
     (scipy's ``PPoly.x``, ``PPoly.c``), as contiguous float arrays of degree 3."""
