@@ -25,7 +25,6 @@ from ..problems.scenes import Chain
 from ..thresholds import EPS, PIVOT_ROUNDS, ROUNDOFF_ULPS
 from . import large_n
 from .elastic import wall_springs
-from .judge_checks import FREE, LO, UP
 from .profile import slope_load, split_reactions, walls_at
 
 #: the single pivots are capped at PIVOT_ROUNDS + 2 × this many, not 2 per node: each
@@ -80,10 +79,10 @@ def _pivot_step(step, up: np.ndarray, lo: np.ndarray, pull: float):
     so the LCP has one solution; the round cap only guards against cycling.
     """
     n = step.size
-    state = np.where(up, UP, np.where(lo, LO, FREE)).astype(np.int64)
+    kern = _kernel()  # (its node states: judge_checks', loaded with it, not at import)
+    state = np.where(up, kern.UP, np.where(lo, kern.LO, kern.FREE)).astype(np.int64)
     u, net, roundoff, sizes = (np.empty(n) for _ in range(4))
     cap = PIVOT_ROUNDS + 2 * LARGE_ROUNDS
-    kern = _kernel()
     if step.elastic:
         k_up, k_lo = (np.ascontiguousarray(k, dtype=float) for k in wall_springs(step))
         rounds, worst, S = kern.pivot_step(*kernel_step(step), k_up, k_lo, _wall_size(step),
@@ -93,7 +92,8 @@ def _pivot_step(step, up: np.ndarray, lo: np.ndarray, pull: float):
                                             state, cap, u, net, roundoff, sizes)
     if rounds == 0:
         return None
-    return u, net, int(rounds), roundoff, float(worst), float(S), (state == UP, state == LO)
+    return (u, net, int(rounds), roundoff, float(worst), float(S),
+            (state == kern.UP, state == kern.LO))
 
 
 def kernel_step(step) -> tuple:
