@@ -241,10 +241,12 @@ def descend(rows, idx, grad, u2):
 
 
 @njit(cache=True)
-def residuals(u, coef, k, phi_origin, rest, load, origin, rows, bands, linear, lo, hi, L, F):
-    """:func:`lcpbench.model.step_solver.step_residuals` of a large-N step in increments
-    (rigid walls): ``(ok, [natural, min_gap, min_reaction, complementarity, term_size],
-    R)``; not ok where the heights are not finite, or the nodes with no wall row are
+def residuals(u, coef, k, phi_origin, rest, load, origin, rows, bands, linear, lo, hi, cu,
+              cl, L, F):
+    """:func:`lcpbench.model.step_solver.step_residuals` of a large-N step in increments:
+    ``(ok, [natural, min_gap, min_reaction, complementarity, term_size], R)``, at elastic
+    walls of compliances ``cu``, ``cl`` (1/k; empty: rigid walls) with the compliant
+    gaps g + R/k (:func:`~.compiled_dual.wall_residuals`, every step's); not ok where the heights are not finite, or the nodes with no wall row are
     more than half (the reference re-solves them on the whole factor) or meet a zero
     pivot (the caller runs the numpy reference). The same sums as the
     reference, except Σ g·r (complementarity, reported, not judged) summed in order."""
@@ -279,8 +281,7 @@ def residuals(u, coef, k, phi_origin, rest, load, origin, rows, bands, linear, l
     gradient(coef, k, phi_origin, rest, load, origin, u2, R, m)
     for i in range(n):
         R[i] = -R[i]
-    rigid = np.empty(0)
-    return True, wall_residuals(u2, R, bands, linear, lo, hi, rigid, rigid, L, F), R
+    return True, wall_residuals(u2, R, bands, linear, lo, hi, cu, cl, L, F), R
 
 
 @njit(cache=True)

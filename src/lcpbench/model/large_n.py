@@ -34,6 +34,7 @@ import numpy as np
 from ..linalg.twisted import TwistedFactor
 from ..problems.scenes import Chain
 from .chain import joint_arrays
+from .elastic import compliances
 from .step import ContactStep, residuals_of
 
 
@@ -146,15 +147,16 @@ class IncrementStep(ContactStep):
 
     def compiled_residuals(self, u: np.ndarray):
         """step_residuals' ``(residuals, R)`` in one compiled call
-        (:func:`~lcpbench.model.large_kernel.residuals`, independent of the walk), or
-        None (the numpy reference decides). Rigid walls only: with elastic walls the
-        numpy reference (its compliant gaps g + R/k)."""
-        if self.upper_stiffness is not None or self.lower_stiffness is not None:
-            return None
+        (:func:`~lcpbench.model.large_kernel.residuals`, independent of the walk; at
+        elastic walls the compliant gaps g + R/k), or None (the numpy reference
+        decides)."""
+        none = np.empty(0)
+        cu, cl = (np.ascontiguousarray(c, dtype=float) for c in compliances(self)) \
+            if self.elastic else (none, none)
         ok, res, R = _kernel().residuals(
             np.ascontiguousarray(u, dtype=float), self.coef, self.stiffness, self.phi_origin,
             self.rest_joint, self.nodal_load, self.origin, self.factor.rows, self.bands,
-            self.linear, self.lower, self.upper, float(self.length_scale),
+            self.linear, self.lower, self.upper, cu, cl, float(self.length_scale),
             float(self.force_scale))
         if not ok:
             return None
