@@ -246,10 +246,12 @@ def residuals(u, coef, k, phi_origin, rest, load, origin, rows, bands, linear, l
     """:func:`lcpbench.model.step_solver.step_residuals` of a large-N step in increments:
     ``(ok, [natural, min_gap, min_reaction, complementarity, term_size], R)``, at elastic
     walls of compliances ``cu``, ``cl`` (1/k; empty: rigid walls) with the compliant
-    gaps g + R/k (:func:`~.compiled_dual.wall_residuals`, every step's); not ok where the heights are not finite, or the nodes with no wall row are
-    more than half (the reference re-solves them on the whole factor) or meet a zero
-    pivot (the caller runs the numpy reference). The same sums as the
-    reference, except Σ g·r (complementarity, reported, not judged) summed in order."""
+    gaps g + R/k (:func:`~.compiled_dual.wall_residuals`, every step's). Not ok where
+    the heights are not finite, or the nodes with no wall row are more than half (the
+    reference re-solves them on the whole factor) or meet a zero pivot: the caller runs
+    the numpy reference. The same sums as the reference, except Σ g·r
+    (complementarity, reported, not judged) summed in order, and at elastic walls R/k
+    for the reference's ((R/F)·F)/k."""
     n = u.size
     for i in range(n):
         if not np.isfinite(u[i]):
