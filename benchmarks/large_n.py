@@ -52,10 +52,11 @@ print(json.dumps({"N": N, "tol": tol, "driver_s": driver, "total_s": total, "cpu
 def _engine(r: dict) -> str:
     """What solved a row: the compiled kernel (node heights), increments on the tridiagonal
     factor (from LARGE_N links, or solved again there after the judge rejected the height
-    answer), or the numpy reference in heights; "(retried)" where lcpbench.solve solved a
+    answer), or what else ran (result.engine's first words); "(retried)" where lcpbench.solve solved a
     refused answer further (lcpbench.escalations: in increments, or continued at tol/10)."""
     e = r["engine"]
-    name = "compiled" if e == "compiled" else "increments" if "increments" in e else "numpy"
+    name = "compiled" if e == "compiled" else "increments" if "increments" in e else \
+        e.split(" (")[0]
     return f"{name} (retried)" if r.get("retried") else name
 
 

@@ -15,6 +15,7 @@ import lcpbench
 from lcpbench import ActuatorScene
 from lcpbench.escalations import ESCALATIONS, Context, escalate
 from lcpbench.model import angle_step, heavy_driver, large_n
+from lcpbench.model.compiled import ENGINES_RUN
 from lcpbench.model.result import Retry
 from lcpbench.plan import ROUTES, STARTS, make_plan
 from lcpbench.solvers.registry import DEFAULT, get_backend
@@ -64,7 +65,7 @@ def test_from_large_n_the_increments_route():
     chain = ActuatorScene(**PAPER, links=large_n.LARGE_N).chain()
     assert large_n.takes(chain)
     plan = make_plan(chain, DEFAULT, "globalised", "auto", 1e-3)
-    assert (plan.route, plan.engine, plan.judge) == ("large N", "numpy", "increments")
+    assert (plan.route, plan.engine, plan.judge) == ("large N", "increments driver", "increments")
     assert plan.kernel_takes  # the wall-free search still runs in the kernel
     # already in increments: no retry in increments
     assert plan.escalations == OWN
@@ -210,7 +211,7 @@ def _bump():
 @pytest.mark.parametrize("kw, how, engine", [
     (dict(links=40), dict(), "compiled"),
     (dict(links=40, channel=True), dict(), "compiled"),
-    (dict(links=30, weight=0.3), dict(), "numpy (SQP steps in the link angles"),
+    (dict(links=30, weight=0.3), dict(), "compiled SQP (SQP steps in the link angles"),
     (dict(links=40), dict(solver="lemke"), "compiled driver"),
     (dict(links=40), dict(method="undamped"), "compiled driver"),
     (dict(links=40, wall_profile=_bump()), dict(), "compiled"),
@@ -225,6 +226,7 @@ def test_the_planned_engine_is_the_one_drive_runs(kw, how, engine):
                      how.get("method", "globalised"), "auto", 1e-3)
     assert res.route == plan.route and res.engine.startswith(engine)
     assert res.engine.startswith(plan.engine) and res.judge == plan.judge
+    assert res.engine.split(" (")[0] in ENGINES_RUN  # one vocabulary, no "numpy"
 
 
 def test_the_json_says_what_ran():

@@ -281,7 +281,7 @@ def run_plan(plan: Plan, scene, ctx: Context, begin: DriverStart | None,
                                    max_outer=ctx.max_outer, method=ctx.method, args=args)
         else:
             out = solve_without_contact(chain, ctx.tol, ctx.max_outer, begin,
-                                        engine="compiled" if kernel else "numpy", args=args)
+                                        in_kernel=kernel, args=args)
             used = "compiled" if kernel else "compiled driver"
             if out is None:
                 out, used = drive(chain, ctx.make_step(), backend=ctx.backend,

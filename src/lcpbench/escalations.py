@@ -401,7 +401,7 @@ def from_neighbour(res: ContactResult, ctx: Context) -> tuple[ContactResult, str
     if out is None:
         res.time_s = elapsed
         return res, "SQP steps in the link angles from a neighbouring row did not converge"
-    again = _restart_judged(res, ctx, out, f"numpy (SQP steps in the link angles: "
+    again = _restart_judged(res, ctx, out, f"compiled SQP (SQP steps in the link angles: "
                             f"{_NEIGHBOUR})", elapsed)
     if again.converged:
         return again, f"the cold start was refused ({res.reason}); {_NEIGHBOUR}"

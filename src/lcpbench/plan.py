@@ -78,11 +78,11 @@ ROUTES = ("load path", "one-wall kernel", "channel kernel", "heavy SQP", "height
 #: The starts: from the free arc (cold), from a neighbour's answer (warm), along the
 #: loading path (ramp).
 STARTS = ("cold", "warm", "ramp")
-#: The engine each route plans for ("compiled", "compiled driver" or "numpy"; the
-#: result's ``engine`` says what ran).
+#: The engine each route plans for (one of :data:`lcpbench.model.compiled.ENGINES_RUN`;
+#: the result's ``engine`` says what ran).
 ENGINE = {"load path": "", "one-wall kernel": "compiled", "channel kernel": "compiled",
-          "heavy SQP": "numpy", "heights, then SQP": "", "profile kernel": "compiled",
-          "large N": "numpy",
+          "heavy SQP": "compiled SQP", "heights, then SQP": "", "profile kernel": "compiled",
+          "large N": "increments driver",
           "kernel": "compiled", "compiled driver": "compiled driver"}
 
 
@@ -96,8 +96,8 @@ class Plan:
     start : one of :data:`STARTS`.
     escalations : names in :data:`lcpbench.escalations.ESCALATIONS`, in its order: what
         may run on a refused answer.
-    engine : the engine the route plans for ("compiled", "compiled driver", "numpy";
-        the load path's and "heights, then SQP"'s are their steps' engine).
+    engine : the engine the route plans for (:data:`lcpbench.model.compiled.ENGINES_RUN`;
+        the load path's and "heights, then SQP"'s are their height steps' engine).
     kernel_takes : whether the compiled kernels take the chain (a layout the solve
         kernel takes, whichever back-end): the wall-free search then runs compiled.
     judge : where the result judge takes its exact steps
@@ -136,7 +136,7 @@ def make_plan(chain: Chain, backend: str, method: str, engine: str, tol: float,
                         if (neighbour or not e.needs_neighbour)
                         and e.planned(chain, backend, method, tol))
     used = ENGINE[route] or ("compiled" if _kernel(chain, backend, method, engine)
-                             else "numpy")
+                             else "compiled driver")
     return Plan(route, start, escalations, used, takes, judge)
 
 

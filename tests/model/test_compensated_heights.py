@@ -104,7 +104,7 @@ def test_the_step_closes_the_chain_with_the_exact_closure_error():
 @pytest.fixture(scope="module")
 def tight():
     res = solve(ActuatorScene(150.0, 3.0, links=N), tol=1e-9)
-    assert res.engine.startswith("numpy (large N")  # the increments path
+    assert res.engine.startswith("increments driver (large N")  # the increments path
     return res
 
 

@@ -48,6 +48,12 @@ from .outer import DriverOutput, DriverStart
 #: or ProblemError where neither applies). The numpy reference engine ("numpy") was
 #: removed: a kernel that stops falls back to compiled code (:func:`reference`).
 ENGINES = ("auto", "compiled")
+#: What ran, as ``result.engine`` begins (:func:`drive`): the solve kernel (the default
+#: back-end's outer loop fused in one compiled call), the compiled driver (another
+#: back-end's steps in Python, the loop's pieces compiled), the large-N driver in
+#: increments (its loop in Python, its steps compiled), the SQP in the link angles
+#: (compiled). No engine is numpy.
+ENGINES_RUN = ("compiled", "compiled driver", "increments driver", "compiled SQP")
 
 
 def check_engine(engine) -> str:
@@ -63,9 +69,11 @@ def check_engine(engine) -> str:
 def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "auto",
           tol: float, max_outer: int, method: str, start: DriverStart | None,
           args: tuple | None = None) -> tuple[DriverOutput, str]:
-    """The driver's answer and the engine that produced it ("compiled", "compiled
-    driver", or "numpy" for the Python drivers that remain: large N in increments,
-    heavy chains' SQP steps).
+    """The driver's answer and the engine that produced it (:data:`ENGINES_RUN`:
+    "compiled", "compiled driver", "increments driver" (large N: the outer loop in
+    Python, its steps on the tridiagonal factor compiled) or "compiled SQP" (a heavy
+    chain's SQP steps in the link angles), with why in parentheses where it was not the
+    plan's).
 
     The one place where the compiled kernel is chosen: a back-end other than the
     default runs the compiled driver (:mod:`.compiled_driver`) where it takes the
@@ -95,7 +103,7 @@ def drive(chain: Chain, step_solver, *, backend: str, settings, engine: str = "a
         if q >= angle_step.HEAVY:
             out = heavy_driver.run_heavy(chain, start, tol, max_outer)
             if out is not None and (own or heavy_driver.no_contact(out)):  # (its reason)
-                return out, "numpy (SQP steps in the link angles: a heavy chain)"
+                return out, "compiled SQP (SQP steps in the link angles: a heavy chain)"
         first = (min(max_outer, heavy_driver.FIRST_TRY) if own and q >= heavy_driver.MODERATE
                  else max_outer)
         out, used = _drive(chain, step_solver, backend=backend, settings=settings,
@@ -127,7 +135,7 @@ def _drive(chain: Chain, step_solver, *, backend: str, settings, engine: str,
             # its outer steps are not the answer's, its time is in the solve's)
             start = nested_start(chain, functools.partial(_coarse_solve, tol=tol))
         return (run_large(chain, step_solver, tol=tol, max_outer=max_outer, start=start),
-                "numpy (large N: increments on the tridiagonal factor)")
+                "increments driver (large N: increments on the tridiagonal factor)")
     if applies(backend, method, None if args is not None else chain):
         return run_kernel(chain, lambda: step_solver, settings=settings, tol=tol,
                           max_outer=max_outer, method=method, start=start, args=args)
@@ -240,7 +248,7 @@ def reference(chain: Chain, make_step: Callable[[], Callable], why: str, *, tol:
 
         return (run_large(replace(chain, increments=True), make_step(), tol=tol,
                           max_outer=max_outer, start=start),
-                f"numpy (increments on the tridiagonal factor; {kernel} "
+                f"increments driver (increments on the tridiagonal factor; {kernel} "
                 f"stopped: {why})")
     if why not in REFUSED_STEPS and not chain.elastic_walls:
         return (compiled_driver.run(chain, make_step(), tol=tol, max_outer=max_outer,

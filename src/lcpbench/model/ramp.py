@@ -161,7 +161,7 @@ def follow_load(scene, make_step, *, backend: str, settings, engine: str, tol: f
                 sqp = _in_angles(chain, start, last, tol, max_outer)
         if sqp is not None:
             out, in_angles = sqp, in_angles + 1
-            used = f"numpy (SQP steps in the link angles: {_WHY})"
+            used = f"compiled SQP (SQP steps in the link angles: {_WHY})"
         if not out.converged and start is not None:
             out, used = drive(chain, step_solver, start=None, **kw)
         if not out.converged:

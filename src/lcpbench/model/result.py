@@ -131,10 +131,13 @@ class ContactResult:
     route : the plan's route, the first solve (:data:`lcpbench.plan.ROUTES`; a batch's
         "line kernel" or "batch scene"); "" where no plan was made (a bare
         :func:`lcpbench.model.finish.finish`).
-    engine : what produced the answer returned: "compiled" (the solve kernel),
-        "compiled driver" (another back-end, the driver around it compiled) or
-        "numpy", the last with why in parentheses where the plan's engine was
-        another ("numpy (large N: ...)", "numpy (the compiled kernel stopped: ...)").
+    engine : what produced the answer returned
+        (:data:`lcpbench.model.compiled.ENGINES_RUN`): "compiled" (the solve kernel),
+        "compiled driver" (another back-end, the driver around it compiled),
+        "increments driver" (large N: the loop in Python, its steps on the
+        tridiagonal factor compiled) or "compiled SQP" (a heavy chain's SQP steps),
+        with why in parentheses where it was not the plan's ("increments driver (large
+        N: ...)", "compiled driver (the kernel stopped: ...)").
     judge : where the result judge took its exact steps: "heights" (the judge
         kernel) or "increments" (from ``LARGE_N`` links, :mod:`lcpbench.model.judge_exact`).
     retries : the escalations that ran after the route, in order

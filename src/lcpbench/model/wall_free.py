@@ -117,7 +117,7 @@ def _without_walls(chain: Chain) -> Chain:
 
 def solve_without_contact(chain: Chain, tol: float, max_outer: int,
                           start: DriverStart | None = None, *,
-                          engine: str = "numpy", args: tuple | None = None
+                          in_kernel: bool = False, args: tuple | None = None
                           ) -> DriverOutput | None:
     """The answer of a scene that touches no wall, found without any LCP (or None).
 
@@ -126,7 +126,7 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
     that search (one banded solve at the arc, ~0.1 ms at N = 140) already
     does: a heavy chain can sag off a wall its arc crosses.
 
-    ``engine="compiled"``: the search without walls runs in the compiled
+    ``in_kernel``: the search without walls runs in the compiled
     kernel (:func:`lcpbench.model.kernel_call.run_compiled` on the chain with its
     walls removed: the dual active set with no bounds is the banded solve of
     the free step, refined once); elsewhere, and where the kernel stops, the compiled
@@ -145,7 +145,7 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
     if overlap >= 0:  # the arc touches or crosses a wall
         if not loaded or overlap > SAG_BOUND * beam_sag(chain):
             return None
-        first = _first_free_heights(chain, args) if engine == "compiled" else None
+        first = _first_free_heights(chain, args) if in_kernel else None
         if first is None:
             if not applies("auto", "globalised", free_layout(chain)):
                 return None  # (a layout no compiled route takes: drive answers the scene)
@@ -165,7 +165,7 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
     if start is not None:  # a neighbour's shape (its contact set means nothing here)
         start = DriverStart(start.alpha, None)
     out = None
-    if engine == "compiled":
+    if in_kernel:
         from .kernel_call import run_compiled
 
         if args is not None:  # the same arrays, the walls removed

@@ -86,7 +86,7 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
         const["arrays"] = full[2:4] + (full[7],)
     args = kernel_args(chain, const["arrays"]) if kernel else None
     out = solve_without_contact(chain, tol, max_outer, start,
-                                engine="compiled" if kernel else "numpy", args=args)
+                                in_kernel=kernel, args=args)
     used = "compiled" if kernel else "compiled driver"
     if out is None and not kernel and profile_applies(DEFAULT, "globalised", chain):
         # a wall of any profile: the profile kernel, as model.compiled.drive runs it for
