@@ -2,7 +2,7 @@
 
 The solve kernel (``compiled_kernel.solve_chain``, without the Python around it)
 of a git revision (``--ref``, default ``main``: its ``model/compiled_kernel.py``
-and ``model/compiled_dual.py``, and what they import: ``model/chain_kernel.py``,
+and ``model/compiled_dual.py``, and what they import: the walk's ``solvers/dual_kernel.py``, ``model/chain_kernel.py``,
 ``thresholds.py``, the linalg kernels; copied into a package of their own with its
 own numba cache) against the working tree's, on
 the same chain arguments, interleaved in one process: CPU time per solve, one
@@ -35,7 +35,8 @@ from lcpbench.model.kernel_call import kernel_args, solve_kernel, warm_args  # n
 ROOT = Path(__file__).resolve().parent.parent
 PKG = "src/lcpbench"
 FILES = {"model": ["compiled_kernel.py", "compiled_dual.py", "chain_kernel.py"],
-         "linalg": ["ldl_kernel.py"], "": ["thresholds.py"]}  # where the ref has them
+         "solvers": ["dual_kernel.py"], "linalg": ["ldl_kernel.py"],
+         "": ["thresholds.py"]}  # where the ref has them (the walk: solvers/ from 2026-12-05)
 SCENES = {"paper N=140 θ=150° h=3": dict(theta=150.0, height=3.0, links=140),
           "channel N=140 θ=160° h=2": dict(theta=160.0, height=2.0, links=140, channel=True),
           "N=400 θ=150° h=3": dict(theta=150.0, height=3.0, links=400)}

@@ -19,7 +19,7 @@ Every numba kernel of lcpbench (:data:`KERNEL_FILES`) is imported through
 :func:`kernel_module` and cached under one directory named by a hash of all
 their sources (:func:`kernel_cache_dir`). numba invalidates a function's cache
 entry only when *its own* file changes, and kernels call each other across
-files (``compiled_kernel.py`` the dual walk of ``compiled_dual.py``,
+files (``compiled_kernel.py`` the dual walk of ``solvers/dual_kernel.py``,
 ``twisted_walk_kernel.py`` the twisted factor, which calls the face kernel): without the
 hash an edit of one file could leave another file's cached code running stale.
 Any edit of any kernel moves the directory, so every kernel compiles once
@@ -67,7 +67,8 @@ _USE_AOT: list = [None]  # use_aot's setting; None: the environment decides
 _HOLDERS: list = []  # callers' one-element caches of a kernel module (see held)
 #: every file of lcpbench with numba kernels, relative to the package
 #: (tests/model/test_kernel_cache.py checks that no file with ``@njit`` is missing)
-KERNEL_FILES = ("model/chain_kernel.py", "model/compiled_kernel.py", "model/compiled_dual.py", "model/judge_kernel.py",
+KERNEL_FILES = ("model/chain_kernel.py", "model/compiled_kernel.py", "model/compiled_dual.py",
+                "solvers/dual_kernel.py", "model/judge_kernel.py",
                 "model/judge_bound.py", "model/judge_checks.py",
                 "model/driver_kernel.py", "model/large_kernel.py", "model/judge_exact_kernel.py",
                 "linalg/givens_kernel.py",

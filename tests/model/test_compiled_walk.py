@@ -1,4 +1,4 @@
-"""The compiled dual walk's incremental bookkeeping (model/compiled_dual.py).
+"""The compiled dual walk's incremental bookkeeping (solvers/dual_kernel.py).
 
 The walk keeps its held nodes, picks and changed nodes as lists and computes
 r = g + H d₀ only where d₀ reaches; the certificate takes the gradient and its
@@ -26,6 +26,7 @@ from lcpbench.solvers.base import Status
 
 kernel = kernel_module("lcpbench.model.compiled_kernel", "solve_chain")
 dual = kernel_module("lcpbench.model.compiled_dual")
+walk = kernel_module("lcpbench.solvers.dual_kernel")
 
 
 def _perturbed(scene, seed):
@@ -80,7 +81,7 @@ def test_fused_gradient_and_term_size():
         T = np.zeros((2, n)) if not newton else rng.standard_normal((2, n))
         u = got[1] + 1e-3 * rng.standard_normal(n)
         g1, m = np.empty(n), np.empty(nj)
-        dual.grad_into(g1, m, u, gp, T)
+        walk.grad_into(g1, m, u, gp, T)
         f1, f2 = np.empty(n), np.empty(n)
         dual.grad_and_scale(f1, f2, np.empty(nj), np.empty(nj), u, gp, T)
         assert np.array_equal(f1, g1)

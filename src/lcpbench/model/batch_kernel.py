@@ -40,10 +40,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..solvers.dual_kernel import BAIL_NOT_PD  # the free step has no minimiser
 from ..thresholds import SAG_BOUND
 from .batch_verdict import accepted
 from .chain_kernel import free_heights
-from .compiled_dual import BAIL_NOT_PD  # the free step has no minimiser
 from .compiled_kernel import CONVERGED, LINE_SEARCH, MAX_OUTER, NO_FIT, contact_step, solve_chain
 from .judge_kernel import SETTLED, STATS, judge_answer
 from .wall_kernel import split_by_wall

@@ -1,11 +1,11 @@
-"""The dual active set of the compiled kernel (:mod:`lcpbench.model.compiled_kernel`).
+"""The compiled kernel's certificate and step residuals (:mod:`lcpbench.model.compiled_kernel`).
 
-numba versions of :func:`lcpbench.solvers.banded.solve_banded_qp` with
-``method="dual"`` (the walk with block additions, its refinement), of
-:func:`~lcpbench.solvers.banded.step_certificate` and of the judge's natural
-residual (:func:`lcpbench.model.step_solver.step_residuals`), on the step's bands
+numba versions of :func:`~lcpbench.solvers.banded.step_certificate` and of the judge's
+natural residual (:func:`lcpbench.model.step_solver.step_residuals`) on the step's bands
 H (the banded step of eqs. 20-31) and its linear term c, in the same order of
-operations as the reference where that is cheap. Every pass writes into work
+operations as the reference where that is cheap; the gradient with its term sizes
+(:func:`grad_and_scale`). The dual walk they certify is
+:func:`lcpbench.solvers.dual_kernel.dual_active_set`. Every pass writes into work
 arrays that :func:`lcpbench.model.compiled_kernel.solve_chain` allocates once.
 Loaded only through :func:`lcpbench.numba_cache.kernel_module` (see there).
 """
@@ -15,71 +15,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..linalg.ldl_kernel import refactor as _refactor  # the faces' LDLᵀ (one dependent
-from ..linalg.ldl_kernel import resolve as _resolve  # chain: a division, not a square root)
-from ..thresholds import TIE
+from ..linalg.ldl_kernel import refactor, resolve  # the faces' LDLᵀ
+from ..solvers.dual_kernel import TINY, grad_into, matvec_row, max_abs  # the walk's module
 
-EPS = np.finfo(np.float64).eps
-TINY = np.finfo(np.float64).tiny
-# the step left the path of the reference: the caller falls back (model.compiled.reference)
-BAIL_PRIMAL, BAIL_NOT_PD, BAIL_REPEAT, BAIL_LIMIT, BAIL_CERT, BAIL_JUDGE = 10, 11, 12, 13, 14, 15
-
-# Work arrays, allocated once per solve (compiled_kernel.workspace); no loop
-# allocates. Rows of ``wn`` (free nodes):
-U, G, SIG, WALL, D, RES, GF, RATIO, LIN, ORIG, RUP, RLO, NET, U2, OUT_U, DIR, TRY, WU, SHIFT, \
-    FSHIFT = range(20)
-# rows of ``wb``: the working set S, the face factored, the additions, the warm walls, the
-# nodes of S held *on* their wall (a rigid one; the others are held by its spring)
-S_, FACT, JUP, JLO, WUP, WLO, ROWS, PREV_UP, PREV_LO, ELIM = range(10)
 # rows of ``wa`` (links): 1 / (a cos α), α₀, the iterate α, the trial α, their sines
 # and cosines
 INV, ALPHA0, ALPHA, TRIAL, SIN_A, SIN_T, COS_A, COS_T = range(8)
-# splitmix64, for the hash of a working set
-M1, M2, M3 = np.uint64(0x9E3779B97F4A7C15), np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB)
-
-
-@njit(cache=True)
-def grad_into(out, m, u, gp, T):
-    """ContactStep.gradient, Jᵀ k (φ̂(u) − φ*) − f + T (u − u₀) about the
-    linearisation point u₀, into ``out``; ``gp`` = (coef, b0, fs, links, origin,
-    phi_origin, k, rest, nodal_load); T: the Newton step's geometric bands (zero for
-    a Gauss–Newton step: adding them changes nothing but the sign of a zero; with no
-    columns, not added: :meth:`~lcpbench.model.step.ContactStep.gradient`'s). Joint
-    j's three columns are the nodes j + b0 − fs + (0, 1, 2); the interior rows are
-    summed without the end tests, in the same order as the ends (and the
-    reference's three passes)."""
-    coef, b0, fs, links, origin, phi_origin, k, rest, load = gp
-    n, nj = u.size, coef.shape[0]
-    off = b0 - fs
-    for j in range(nj):  # J (u − u₀), then the moments
-        i = off + j
-        if i >= 0 and i + 2 < n:
-            s = ((coef[j, 0] * (u[i] - origin[i]) + coef[j, 1] * (u[i + 1] - origin[i + 1]))
-                 + coef[j, 2] * (u[i + 2] - origin[i + 2]))
-        else:
-            s = 0.0
-            for c in range(3):
-                du = u[i + c] - origin[i + c] if 0 <= i + c < n else 0.0
-                s = coef[j, c] * du if c == 0 else s + coef[j, c] * du
-        m[j] = ((s + phi_origin[j]) - rest[j]) * k[j]
-    for i in range(n):  # Jᵀ m, then + T (u − u₀) summed as linalg.banded_matvec
-        j = i - off
-        if j - 2 >= 0 and j < nj:
-            s = ((0.0 + coef[j, 0] * m[j]) + coef[j - 1, 1] * m[j - 1]) + coef[j - 2, 2] * m[j - 2]
-        else:
-            s = 0.0
-            for c in range(3):
-                if 0 <= j - c < nj:
-                    s += coef[j - c, c] * m[j - c]
-        out[i] = s - load[i]
-        if T.shape[1]:  # (no columns: no T, ContactStep.gradient's Gauss–Newton step)
-            t = T[0, i] * (u[i] - origin[i])
-            if i >= 1:
-                t += T[1, i - 1] * (u[i - 1] - origin[i - 1])
-            if i + 1 < n:
-                t += T[1, i] * (u[i + 1] - origin[i + 1])
-            out[i] += t
-    return out
 
 
 @njit(cache=True)
@@ -127,259 +68,6 @@ def grad_and_scale(out, size, m, ms, u, gp, T):
 
 
 @njit(cache=True)
-def matvec_row(bands, x, i, n, absolute):
-    """Row i of H x (of |H| |x| when ``absolute``), summed in the order of
-    solvers.banded._Banded.matvec."""
-    if absolute:
-        s = abs(bands[2, i - 2]) * abs(x[i - 2]) if i >= 2 else 0.0
-        s += abs(bands[1, i - 1]) * abs(x[i - 1]) if i >= 1 else 0.0
-        s += abs(bands[0, i]) * abs(x[i])
-        s += abs(bands[1, i]) * abs(x[i + 1]) if i + 1 < n else 0.0
-        s += abs(bands[2, i]) * abs(x[i + 2]) if i + 2 < n else 0.0
-        return s
-    s = bands[2, i - 2] * x[i - 2] if i >= 2 else 0.0
-    s += bands[1, i - 1] * x[i - 1] if i >= 1 else 0.0
-    s += bands[0, i] * x[i]
-    s += bands[1, i] * x[i + 1] if i + 1 < n else 0.0
-    s += bands[2, i] * x[i + 2] if i + 2 < n else 0.0
-    return s
-
-@njit(cache=True)
-def _max_abs(x):  # max|x| and the slope's dot product are loops: loading the cache then
-    m = 0.0  # needs neither numba's array reductions nor its BLAS (which import scipy)
-    for v in x:
-        m = max(m, abs(v))
-    return m
-
-
-@njit(cache=True)
-def _violation(u, bound, S, i, sign):
-    if S[i]:
-        return -np.inf
-    return u[i] - bound[i] if sign > 0 else bound[i] - u[i]
-
-
-@njit(cache=True)
-def _key(i, s):
-    """The working set's hash is the XOR of these over its nodes (splitmix64 of
-    (node, wall)); 0 off the walls, so a change of one node updates it in O(1)."""
-    if s == 0.0:
-        return np.uint64(0)
-    z = np.uint64(2 * i + (1 if s > 0 else 2)) * M1
-    z = (z ^ (z >> np.uint64(30))) * M2
-    z = (z ^ (z >> np.uint64(27))) * M3
-    return z ^ (z >> np.uint64(31))
-
-
-# -- the dual active set (solvers.banded._dual, _finish, step_certificate) ----------
-@njit(cache=True)
-def _run_picks(u, bound, S, slack, sign, picks, npick):
-    """:func:`lcpbench.solvers.banded._run_maxima` as a list: the deepest violation v > slack of every run of
-    consecutive violated nodes appended to ``picks`` (node + 1, with ``sign``: +
-    the upper wall, − the lower one); the new count."""
-    n = u.size
-    left, v = -np.inf, (_violation(u, bound, S, 0, sign) if n else 0.0)
-    for i in range(n):
-        right = _violation(u, bound, S, i + 1, sign) if i + 1 < n else -np.inf
-        if v > slack and v >= left and v > right:
-            picks[npick] = sign * (i + 1)
-            npick += 1
-        left, v = v, right
-    return npick
-
-
-@njit(cache=True)
-def _move(bands, d, u, g, s, n):
-    """u + s d and the gradient carried, g + s (g_face − g) with g_face = g + H d
-    (s = 1: u + d and g_face), in one pass, H d row by row as :func:`matvec_row` sums it
-    (the interior rows without its end tests); d is zeroed behind (the next face's
-    d₀ is zero off its held nodes)."""
-    full = s >= 1.0
-    for i in range(n):
-        if 2 <= i < n - 2:
-            hd = (((bands[2, i - 2] * d[i - 2] + bands[1, i - 1] * d[i - 1]) + bands[0, i] * d[i])
-                  + bands[1, i] * d[i + 1]) + bands[2, i] * d[i + 2]
-        else:
-            hd = matvec_row(bands, d, i, n, False)
-        gf = g[i] + hd
-        if full:
-            u[i] = u[i] + d[i]
-            g[i] = gf
-        else:
-            u[i] = u[i] + s * d[i]
-            g[i] = g[i] + s * (gf - g[i])
-        if i >= 2:
-            d[i - 2] = 0.0
-    for i in range(max(n - 2, 0), n):
-        d[i] = 0.0
-
-
-@njit(cache=True)
-def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, gp, ws):
-    """(code, face solves): code 0 at the optimum (after refinement); u, g and sigma
-    in the rows U, G, SIG of the work array ``ws[0]``.
-
-    ``cu``, ``cl``: the compliance 1/k (mm/N) of the upper and lower wall per node (0:
-    rigid), or empty where no wall yields. A node on an elastic wall is held by the
-    wall's spring, not on it: the face minimises Q(u) + ½ (u_i − h_i)² / c_i over it,
-    factored in the compliance form (:func:`lcpbench.linalg.ldl_kernel.refactor`), so
-    the walk is the rigid one's as c → 0 (the wall's reaction is −∂Q/∂u_i, never
-    (u_i − h_i)/c_i). A working set met before
-    (its hash in ``ws[8]``; a collision, at odds of 2⁻⁶⁴, only hands the solve to
-    the reference) stops the walk as the reference's list of sets does.
-
-    The reference's arithmetic, with its bookkeeping kept incremental: the held
-    nodes, the walls picked and the nodes changed since the last factorisation as
-    lists (``ws[11]``), r = g + H d₀ computed where d₀ reaches (d₀ lives on the held
-    nodes), the ratio test on the held nodes, the move in one pass."""
-    wn, wb, m, fac, seen, wi = ws[0], ws[1], ws[2][2], ws[5], ws[8], ws[11]
-    u, g, sigma, wall, d, r, gf, ratio = wn[U], wn[G], wn[SIG], wn[WALL], wn[D], wn[RES], wn[GF], \
-        wn[RATIO]
-    S, factored = wb[S_], wb[FACT]
-    held, picks, chg = wi[0], wi[1], wi[2]
-    n = linear.size
-    soft = cu.size == n and n > 0  # some wall yields: E (held on a wall) is not all of S
-    E = wb[ELIM] if soft else S
-    shift, fshift = wn[SHIFT], wn[FSHIFT]
-    cshift = shift if soft else shift[:0]
-    has_lo = warm = False
-    for i in range(n):
-        has_lo = has_lo or np.isfinite(lo[i])
-        warm = warm or warm_up[i] or warm_lo[i]
-        factored[i] = S[i] = E[i] = False  # the face ``fac`` holds (none fixed: H itself)
-        g[i] = sigma[i] = wall[i] = d[i] = shift[i] = fshift[i] = 0.0
-        u[i] = -linear[i]
-    if not _refactor(fac, bands, factored, cshift, 0, n):
-        return BAIL_NOT_PD, 0
-    _resolve(fac, u)
-    slack = 32 * EPS * (1.0 + _max_abs(u))
-    h, count, at_face_minimiser, it, refined = np.uint64(0), 0, True, 0, False
-    nheld = nchg = 0
-    while True:
-        if at_face_minimiser:
-            npick = 0
-            if warm:  # first, the warm contact set, where it is violated (S is empty)
-                warm = False
-                for i in range(n):
-                    if warm_up[i] and _violation(u, hi, S, i, 1) > slack:
-                        picks[npick] = i + 1
-                        npick += 1
-                    elif has_lo and warm_lo[i] and _violation(u, lo, S, i, -1) > slack:
-                        picks[npick] = -(i + 1)
-                        npick += 1
-            if npick == 0:
-                npick = _run_picks(u, hi, S, slack, 1, picks, 0)
-                if has_lo:
-                    npick = _run_picks(u, lo, S, slack, -1, picks, npick)
-                if npick == 0 and refined:  # no wall crossed by the refinement
-                    return 0, it
-                if npick == 0:  # the optimum: one refinement on the face just factored
-                    for i in range(n):
-                        if E[i]:
-                            u[i] = wall[i]
-                    grad_into(g, m, u, gp, ws[10])
-                    for i in range(n):
-                        r[i] = 0.0 if E[i] else g[i]
-                        if S[i] and not E[i]:  # the spring's pull on a node it holds
-                            r[i] += (u[i] - wall[i]) / shift[i]
-                    _resolve(fac, r)
-                    for i in range(n):
-                        gf[i] = g[i] - matvec_row(bands, r, i, n, False)
-                    for i in range(n):
-                        u[i] = u[i] - r[i]
-                        g[i] = gf[i]
-                    refined = True  # then the walls once more (solvers.banded._dual)
-                    continue
-            for q in range(count):
-                if seen[q] == h:  # the same working set
-                    return BAIL_REPEAT, it
-            if count == seen.size:  # a limit of face solves far above 20 n + 50: the
-                return BAIL_LIMIT, it  # reference walks on (the history is not grown)
-            seen[count] = h
-            count += 1
-            for q in range(npick):  # (a node violates one wall at a time; the upper first)
-                i = abs(picks[q]) - 1
-                if S[i]:
-                    continue
-                sigma[i] = 1.0 if picks[q] > 0 else -1.0
-                wall[i] = hi[i] if picks[q] > 0 else lo[i]
-                h ^= _key(i, sigma[i])
-                S[i] = True
-                if soft:
-                    shift[i] = cu[i] if picks[q] > 0 else cl[i]
-                    E[i] = not shift[i] > 0.0
-                held[nheld] = i
-                nheld += 1
-                chg[nchg] = i
-                nchg += 1
-        if it >= max_iter:
-            return BAIL_LIMIT, it
-        it += 1
-        # d₀: the held nodes onto their walls (d is zero elsewhere); r = g + H d₀ off S,
-        # where d₀ reaches it, else g
-        # (a node held by a spring keeps its row: r = g + H d₀ there, the spring's pull
-        # being zero at d₀)
-        for i in range(n):
-            r[i] = 0.0 if E[i] else g[i]
-        for q in range(nheld):
-            j = held[q]
-            d[j] = wall[j] - u[j]
-        for q in range(nheld):
-            j = held[q]
-            if d[j] != 0.0:
-                for i in range(max(j - 2, 0), min(j + 3, n)):
-                    if not E[i]:
-                        r[i] = g[i] + matvec_row(bands, d, i, n, False)
-        first, last = n, -1  # the nodes whose wall changed since the last factorisation
-        for q in range(nchg):
-            i = chg[q]
-            if S[i] != factored[i] or shift[i] != fshift[i]:
-                first, last = min(first, i), max(last, i)
-                factored[i] = S[i]
-                fshift[i] = shift[i]
-        nchg = 0
-        if first < n:
-            stop = last + 1  # after the change, the first two fixed nodes in a row
-            while stop + 1 < n and not (E[stop] and E[stop + 1]):
-                stop += 1
-            stop = min(stop + 2, n)
-            if not _refactor(fac, bands, E, cshift, max(0, first - 2), stop):
-                return BAIL_NOT_PD, it
-        _resolve(fac, r)
-        for i in range(n):
-            d[i] -= r[i]
-        s = np.inf  # the ratio test, on the held nodes (g_face = g + H d there)
-        for q in range(nheld):
-            j = held[q]
-            sg = sigma[j] * (g[j] + matvec_row(bands, d, j, n, False))
-            ratio[j] = np.inf
-            if sg > 0.0:
-                lam = max(-sigma[j] * g[j], 0.0)
-                ratio[j] = lam / (lam + sg)
-                s = min(s, ratio[j])
-        _move(bands, d, u, g, s, n)
-        if s < 1.0:
-            kept = 0
-            for q in range(nheld):
-                j = held[q]
-                if ratio[j] <= s + TIE:  # ties within round-off go together
-                    h ^= _key(j, sigma[j])
-                    sigma[j] = 0.0
-                    S[j] = E[j] = False
-                    shift[j] = 0.0
-                    chg[nchg] = j
-                    nchg += 1
-                else:
-                    held[kept] = j
-                    kept += 1
-            nheld = kept
-            at_face_minimiser = False
-            continue
-        at_face_minimiser = True
-        refined = False
-
-
-@njit(cache=True)
 def certify(u, ru, rl, lo, hi, cu, cl, gp, grad, size, m, ms, T):
     """The certificate's residual; ``grad``: the gradient at u (when finite); ``cu``,
     ``cl``: the walls' compliances (empty: rigid), whose gap is g + c R."""
@@ -390,7 +78,7 @@ def certify(u, ru, rl, lo, hi, cu, cl, gp, grad, size, m, ms, T):
     if n == 0:
         return 0.0
     grad_and_scale(grad, size, m, ms, u, gp, T)
-    force, span = TINY, 1.0 + _max_abs(u)
+    force, span = TINY, 1.0 + max_abs(u)
     stat = feas = neg = comp = 0.0
     soft = cu.size == n
     for i in range(n):
@@ -473,13 +161,13 @@ def judge_step(u, bands, linear, lo, hi, cu, cl, gp, L, F, out, R, u2, rows, fac
             R[:] = g0
         else:
             grad_into(R, m, u2, gp, T)
-        if not _refactor(fac, bands, rows, cu[:0], 0, n):
+        if not refactor(fac, bands, rows, cu[:0], 0, n):
             out[:] = 0.0
             return False
         for i in range(n):
             if rows[i]:
                 R[i] = 0.0
-        _resolve(fac, R)
+        resolve(fac, R)
         for i in range(n):
             if not rows[i]:
                 u2[i] -= R[i]

@@ -12,7 +12,7 @@ same small compiled overhead for every back-end:
   :func:`from_lcp`, the heights of an LCP answer;
 - :func:`judge`: :func:`lcpbench.model.step_solver.step_residuals`, lcpbench's
   residuals of the back-end's answer and R = K g + z: the solve kernel's judge and
-  gradient (:func:`~.compiled_dual.judge_step`, :func:`~.compiled_dual.grad_into`), so
+  gradient (:func:`~.compiled_dual.judge_step`, :func:`~lcpbench.solvers.dual_kernel.grad_into`), so
   every back-end is judged by the one copy;
 - :func:`advance`: max|α̂ − α| (eq. 21) and the Armijo search on the exact energy
   (:func:`lcpbench.model.chain_kernel.armijo`, :func:`~lcpbench.model.chain_kernel.energy`);
@@ -32,6 +32,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ..solvers.dual_kernel import grad_into  # the solve kernel's, once (numba_cache)
 from .chain_kernel import (  # once each
     energy,
     energy_noise,
@@ -39,11 +40,7 @@ from .chain_kernel import (  # once each
     predict_alpha,
     wall_penalty,
 )
-from .compiled_dual import (  # the solve kernel's, once (numba_cache)
-    grad_and_scale,
-    grad_into,
-    judge_step,
-)
+from .compiled_dual import grad_and_scale, judge_step
 from .compiled_kernel import banded_step  # the step
 from .profile_kernel import clipped_start, merit_search, penetration  # a profile's, once
 from .wall_kernel import lagged_load, walls_at
@@ -193,7 +190,7 @@ def judge(u, bands, linear, lo, hi, cu, cl, coef, b0, fs, links, origin, phi_ori
 def gradient(u, coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load, T):
     """:meth:`ContactStep.gradient <lcpbench.model.step.ContactStep.gradient>`: H u + c in
     factored form, Jᵀ k (φ̂(u) − φ*) − f, plus T (u − u₀) where ``T`` has columns (the
-    Newton step's bands; none: the Gauss–Newton step) (:func:`~.compiled_dual.grad_into`)."""
+    Newton step's bands; none: the Gauss–Newton step) (:func:`~lcpbench.solvers.dual_kernel.grad_into`)."""
     return grad_into(np.empty(u.size), np.empty(coef.shape[0]), u,
                      (coef, b0, fs, links, origin, phi_origin, k, rest, nodal_load), T)
 

@@ -29,8 +29,8 @@ import numpy as np
 from numba import njit
 
 from ..linalg.ldl_kernel import refactor, resolve_columns
+from ..solvers.dual_kernel import grad_into
 from ..solvers.pivoting_kernel import DONE, support_pivots, symmetric_active_set
-from .compiled_dual import grad_into
 from .compiled_kernel import banded_step, geometric_bands, positive_with
 
 
@@ -93,7 +93,7 @@ def step_arrays(alpha, a, jl, jr, k, rest, fs, n, nodal_load, pull, right_datum,
     i.e. :func:`lcpbench.model.compiled_driver.assemble_step`) plus the pull's curvature
     (:func:`add_pull_curvature`); f = −(H u₀ + c) at the linearisation point u₀
     (``ContactStep.gradient(origin)``: Jᵀ k (φ̂(u₀) − φ*) − f_load,
-    :func:`~lcpbench.model.compiled_dual.grad_into`) plus
+    :func:`~lcpbench.solvers.dual_kernel.grad_into`) plus
     P ∂x_N/∂δ; D the slips' Jacobian (:func:`slip_jacobian`). ``fs``: the shifted
     index (node + 1) of the first free node, as the banded step's. With ``newton``, H
     also takes the springs' curvature T (:func:`lcpbench.model.compiled_kernel.

@@ -30,9 +30,10 @@ from numba import njit
 from ..linalg.face_kernel import face_solve as _top_face_solve
 from ..linalg.twisted_kernel import face_solve as _face_solve
 from ..linalg.twisted_kernel import resolve as _resolve
+from ..solvers.dual_kernel import EPS
 from ..thresholds import ROUNDOFF_ULPS  # a residual below it stays where the heights are
 from .chain_kernel import add_compensated, energy, link_angle  # once (numba_cache)
-from .compiled_dual import EPS, wall_residuals
+from .compiled_dual import wall_residuals
 
 
 @njit(cache=True)

@@ -5,7 +5,7 @@ At the answer α with reactions R: the step assembled (the solve kernel's
 :func:`~lcpbench.model.compiled_kernel.geometric_bands`), the face of the answer's contact
 set factored by the walk's LDLᵀ (a rigid wall's node fixed, an elastic wall's held by
 its spring in the compliance form), and per parameter one right-hand side and one
-solve. ∂∇E/∂p is the energy gradient of :func:`~lcpbench.model.compiled_dual.grad_into`
+solve. ∂∇E/∂p is the energy gradient of :func:`~lcpbench.solvers.dual_kernel.grad_into`
 with the parameter's derivative in place of the joint stiffness, rest angles or loads
 (the gradient is linear in each). Loaded through :func:`lcpbench.numba_cache.kernel_module`.
 """
@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 from ..linalg.ldl_kernel import refactor, resolve
-from .compiled_dual import grad_into, matvec_row
+from ..solvers.dual_kernel import grad_into, matvec_row
 from .compiled_kernel import banded_step, geometric_bands
 
 #: the flat actuator's output rows (one θ, EI and weight row each): the layout of
