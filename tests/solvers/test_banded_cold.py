@@ -308,32 +308,40 @@ def test_empty_box_is_not_solved():
     assert solve_banded_qp(qp).status is not Status.SOLVED
 
 
-def test_a_wall_crossed_by_the_refinement_is_walked_on(monkeypatch):
+def test_a_wall_crossed_by_the_refinement_is_walked_on():
     """The walk decides on unrefined heights; where the refinement at its optimum
-    carries a free node through its wall (a grazing contact, the first solve off by
-    more than the slack: cond(H) ε |u|), the walk goes on and holds the node. The
-    first solve's error is put in by hand (1e-8 at node 2, the wall 1e-9 below the
-    free minimiser there); the answer is the KKT point written out with node 2 fixed."""
-    H = np.diag([4.0] * 5) + np.diag([-1.0] * 4, 1) + np.diag([-1.0] * 4, -1)
-    free_min = np.array([0.3, 0.7, 1.0, 0.7, 0.3])
-    wall = free_min[2] - 1e-9
-    qp = DenseBoxQP(H, -H @ free_min, [-INF] * 5, [INF, INF, wall, INF, INF])
-    exact = banded._Banded.solve
+    carries a free node through its wall (a grazing contact: the first solve off by
+    more than the slack, cond(H) ε |u|), the walk goes on and holds the node. H is the
+    squared second difference, cond(H) ~ 1.6e10; its first solve and its refinement
+    are computed here as the walk computes them (the banded LDLᵀ of linalg.ldl_kernel,
+    H u + c by the walk's matvec_row), and the refinement moves a node by far more than
+    the slack (round-off times cond(H)). A wall half-way between the two is not
+    violated before the refinement and is after: the answer holds that node, and is a
+    KKT point (the independent check)."""
+    from lcpbench.numba_cache import kernel_module
 
-    def off_by_round_off(self, rhs):
-        x = exact(self, rhs)
-        x[2] -= 1e-8  # below the wall: no violation seen before the refinement
-        return x
-
-    monkeypatch.setattr(banded._Banded, "solve", off_by_round_off)
-    u, grad, held_up, held_lo, _, why = banded._dual(qp, np.zeros(5, bool), np.zeros(5, bool),
-                                                      50)
-    assert why is None and held_up[2] and np.count_nonzero(held_up | held_lo) == 1
-    # KKT with node 2 on its wall: the free rows H u + c = 0, u_2 = wall, reaction ≥ 0
-    free = np.array([0, 1, 3, 4])
-    kkt = np.full(5, wall)
-    kkt[free] = np.linalg.solve(H[np.ix_(free, free)],
-                                -(qp.linear[free] + H[free, 2] * wall))
-    assert np.allclose(u, kkt, rtol=0, atol=1e-14)
-    assert -(H @ kkt + qp.linear)[2] > 0  # the wall pushes: a reaction, not a pull
-    assert np.max(np.abs(grad - (H @ u + qp.linear))[free]) <= 1e-14
+    ldl = kernel_module("lcpbench.linalg.ldl_kernel", "refactor")
+    walk = kernel_module("lcpbench.solvers.dual_kernel", "box_qp")
+    n = 120
+    D2 = np.diff(np.eye(n), 2, axis=0)
+    H = D2.T @ D2 + 1e-9 * np.eye(n)
+    c = -H @ np.sin(3 * np.linspace(0, 1, n))
+    qp = DenseBoxQP(H, c, np.full(n, -INF), np.full(n, INF))
+    fac = np.empty((4, n))
+    assert ldl.refactor(fac, qp.bands, np.zeros(n, bool), np.zeros(0), 0, n)
+    first = -c.copy()
+    ldl.resolve(fac, first)  # the walk's first solve
+    fix = np.array([walk.matvec_row(qp.bands, first, j, n, False) for j in range(n)]) + c
+    ldl.resolve(fac, fix)  # its refinement (H u + c summed as the walk sums it): u - fix
+    i = int(np.argmax(np.abs(fix)))
+    slack = 32 * np.finfo(float).eps * (1 + np.abs(first).max())
+    assert abs(fix[i]) > 1e3 * slack  # the premise: the refinement moves node i far
+    wall = first[i] - 0.5 * fix[i]  # between the first solve and the refined one
+    if fix[i] > 0:  # the refinement moves the node down, below a lower wall
+        qp.lower[i] = wall
+    else:  # up, above an upper wall
+        qp.upper[i] = wall
+    sol = solve_banded_qp(qp)
+    assert sol.status is Status.SOLVED, sol.message
+    assert (sol.active_lower | sol.active_upper)[i]  # held where the refinement took it
+    assert_kkt(qp, sol)

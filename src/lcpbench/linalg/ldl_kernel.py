@@ -14,7 +14,7 @@ unit lower triangular (two sub-diagonals) and D diagonal, into ``fac`` (4, n):
 The factorisation is a recurrence from column to column, so its cost is the
 latency of one column's dependent chain: here one division, one multiply and
 one subtraction (D_{j+1} = S_{j+1,j+1} − L_{j+1,j} S_{j+1,j}); the Cholesky
-factor (LAPACK's dpbtf2, which the numpy reference calls) puts a square root
+factor (LAPACK's dpbtf2) puts a square root
 and a division and two multiplies on it, about twice the time. The two agree
 to round-off, not bit for bit: both are backward stable for a positive
 definite H. The entries of the next columns are carried in registers.

@@ -17,7 +17,8 @@ solves were off by 0.4 % of the terms.)
 
 A *face* holds the ``fixed`` nodes (those on a wall): their columns leave A
 and the unit rows e_iᵀ join it, so RᵀR is H with the identity on the fixed
-rows and columns, as :class:`lcpbench.solvers.banded._Banded` factors it.
+rows and columns, as the dual walk's faces are
+(:func:`lcpbench.solvers.dual_kernel.face_factor`).
 """
 
 from __future__ import annotations
@@ -48,7 +49,7 @@ class TridiagonalFactor:
     stiffness : ndarray (n,)
         k, one per row of J (N·mm/rad).
 
-    The interface is that of :class:`lcpbench.solvers.banded._Banded`:
+    The interface of a step's own face solves (:func:`lcpbench.solvers.banded._dual`):
     ``face_solve(fixed, rhs)``, ``solve(rhs)``, ``resolve(rhs)`` (the last
     factor again) and ``matvec(x)``.
 

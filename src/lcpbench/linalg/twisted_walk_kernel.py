@@ -39,7 +39,7 @@ from .twisted_kernel import factor, twist, twist_middle
 @njit(cache=True)
 def violation(u, wall, S, side, i):
     """The violation of node i's wall (``side`` +1: u − upper, −1: lower − u); −inf on
-    held nodes (as the numpy walk's v)."""
+    held nodes."""
     if S[i]:
         return -np.inf
     return u[i] - wall[i] if side > 0 else wall[i] - u[i]
@@ -48,8 +48,10 @@ def violation(u, wall, S, side, i):
 @njit(cache=True)
 def _picks(u, wall, side, slack, S, reach, picks, npick):
     """Append to ``picks`` (node index; ``side`` in the sign) the nodes the walk adds on
-    this wall: :func:`lcpbench.solvers.gallop.gallop_picks` when ``reach`` > 0, else
-    :func:`lcpbench.solvers.banded._run_maxima`, in one pass without the v array.
+    this wall: galloping from the held nodes when ``reach`` > 0
+    (:mod:`lcpbench.solvers.compiled_walk`), else every run's deepest node (the picks
+    of :func:`lcpbench.solvers.dual_kernel.dual_active_set`), in one pass without the
+    v array.
     Returns the new count."""
     return picks_in(u, wall, side, slack, S, reach, picks, npick, 0, u.size - 1)
 
@@ -312,8 +314,8 @@ def walk(rows, rrows, R, filled, snap, B, bfilled, bsnap, tri, invR, invB, prev,
     primal method). Work: x, hd (n floats), S, rfixed (n bools), picks (2n ints), chg
     (3n ints), held, hl (n ints), ratio (n floats).
 
-    The bookkeeping is incremental (the numpy walk's ~20 full-length passes per face
-    were as costly as the face solve's own): violations are computed where they are
+    The bookkeeping is incremental (~20 full-length numpy passes per face were
+    as costly as the face solve's own): violations are computed where they are
     scanned, the working set's key is a sum of per-node hashes, the twist comes from
     the nodes changed since the last factorisation."""
     n = u.size

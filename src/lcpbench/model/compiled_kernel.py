@@ -4,24 +4,21 @@ The outer loop (:func:`outer_loop`) is one, on flat walls (:func:`solve_chain`) 
 walls of any profile (:func:`solve_profile_chain`, with the merit, start and stop of
 :mod:`lcpbench.model.profile_kernel`).
 
-numba (``@njit(cache=True)``) versions of the numpy reference, line for line:
-:func:`banded_step` (the banded step of eqs. 20-31, the one assembly: every driver's,
-:func:`lcpbench.model.compiled_driver.assemble_step`),
-:func:`lcpbench.solvers.banded.solve_banded_qp` with ``method="dual"`` (the walk, its
-refinement, :func:`~lcpbench.solvers.banded.step_certificate`), the judge's natural
-residual (:func:`lcpbench.model.step_solver.step_residuals`) and the globalised driver
-of :mod:`lcpbench.model.compiled_driver` (the Armijo rule on the exact energy, both
-:mod:`.chain_kernel`'s). The numpy modules are the readable reference and document
-the algorithm; this file repeats their arithmetic in the same order where that is cheap
-(sums, the band products), so both take the same path and agree to round-off
-(``tests/model/test_compiled.py``).
+Compiled (``@njit(cache=True)``): :func:`banded_step` (the banded step of eqs. 20-31,
+the one assembly: every driver's, :func:`lcpbench.model.compiled_driver.assemble_step`),
+the step solved by the dual walk (:func:`lcpbench.solvers.dual_kernel.dual_active_set`,
+the one walk: every back-end "active-set" call's too), its certificate and the judge's
+natural residual (:mod:`lcpbench.model.compiled_dual`), and the globalised outer loop
+(the Armijo rule on the exact energy, :mod:`.chain_kernel`'s; the compiled driver of
+:mod:`lcpbench.model.compiled_driver` runs the same pieces around another back-end).
 
-Two files: this one (the chain, the assembly, the outer loop) and
-:mod:`lcpbench.model.compiled_dual` (the dual active set, its certificate and the
-judge's residual). numba's on-disk cache of a function is invalidated only when *its
-own* file changes, so :func:`lcpbench.numba_cache.kernel_module` keeps the
-cache of both under a hash of both files' sources (a split kernel never runs stale
-code); import this module through it.
+Three files hold the solve: this one (the chain, the assembly, the outer loop),
+:mod:`lcpbench.model.compiled_dual` (the certificate and the judge's residual) and
+:mod:`lcpbench.solvers.dual_kernel` (the walk). numba's on-disk cache of a function is
+invalidated only when *its own* file changes, so
+:func:`lcpbench.numba_cache.kernel_module` keeps the cache of every kernel under a hash
+of all their sources (a split kernel never runs stale code); import this module
+through it.
 
 Nothing here decides "converged": the Python side builds the DriverOutput and judges it
 (:mod:`lcpbench.model.judge`). What the kernel cannot do (the primal safeguard, a face

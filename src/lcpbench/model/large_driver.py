@@ -61,7 +61,7 @@ from .profile import slope_load, wall_rows, wall_tables
 #: divides that by ~100 (docs/performance.md)
 NODE_SETTLED = 0.5
 EXTRA_STEPS = 4
-#: the next step's walk gallops from its warm contacts (:mod:`lcpbench.solvers.gallop`)
+#: the next step's walk gallops from its warm contacts (:mod:`lcpbench.solvers.compiled_walk`)
 #: from 1/REACH_SHARE of the nodes the contacts moved in this step on (the outer
 #: iteration contracts the moves by ~10-20 a step)
 REACH_SHARE = 16

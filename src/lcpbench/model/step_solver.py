@@ -195,8 +195,9 @@ def _compiled_step(step, s: Settings, warm: StepSolution | None) -> StepSolution
     """The default back-end's step in the solve kernel
     (:func:`lcpbench.model.compiled_kernel.solve_step`: the dual walk, its certificate
     and lcpbench's residuals, compiled), or None where it does not apply (a step in
-    increments, joints or free nodes not consecutive) or the kernel stopped where the
-    numpy active set goes on (a bail code): the caller runs the numpy one then."""
+    increments, joints or free nodes not consecutive) or the kernel stopped (a bail
+    code): the caller runs the back-end's own call then (the same walk, handing over to
+    the primal active set where it stops, :mod:`lcpbench.solvers.banded`)."""
     n = step.size
     free, base = step.free_nodes, step.base
     if (step.factor is not None or n == 0 or base.size == 0
@@ -235,7 +236,7 @@ def _no_newton(n: int) -> np.ndarray:
 
 def _warm_args(warm: StepSolution | None, n: int):
     """(heights, upper set, lower set, flags) of the kernel's warm start from a step
-    answer (the numpy active set's: its contact sets, else its heights)."""
+    answer (its contact sets, else its heights)."""
     u, up, lo, flags = np.zeros(n), np.zeros(n, bool), np.zeros(n, bool), 0
     if warm is None:
         return u, up, lo, flags

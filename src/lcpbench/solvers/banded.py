@@ -1,9 +1,10 @@
-"""Active-set methods for the contact step on its banded Hessian.
+"""Active-set methods for the contact step on its banded Hessian, and for any box QP.
 
 Solves ``min ½ uᵀHu + cᵀu  s.t.  lower <= u <= upper`` with H symmetric
 positive definite and banded (pentadiagonal for a
-:class:`~lcpbench.model.step.ContactStep`). Two exact, finite methods share the
-banded Cholesky solve of a face (O(N) per active-set change):
+:class:`~lcpbench.model.step.ContactStep`; any bandwidth for a QP or an LCP's
+``min ½ zᵀMz + qᵀz, z >= 0``). Two exact, finite methods, each solving one face
+per active-set change (O(N) on the contact step's bands):
 
 ``method="dual"`` (default): a dual active-set method (Goldfarb & Idnani,
 Math. Prog. 27, 1983, specialised to bounds). It starts from the unconstrained
@@ -12,7 +13,7 @@ minimises the Lagrangian for some reactions R >= 0 (H u + c + R_upper −
 R_lower = 0), so it is dual feasible and only the walls can be violated. Each iteration puts a
 *block* of violated nodes against their walls (the deepest node of every run
 of consecutive violated nodes; first, on a warm start, the previous contact
-set; at large N, warm-started, nodes galloping from the contacts, :mod:`.gallop`),
+set; at large N, warm-started, nodes galloping from the contacts, :mod:`.compiled_walk`),
 computes the minimiser on that face with one banded solve, and moves
 towards it until it gets there or a reaction would turn negative, in which
 case that wall is released (with every wall whose reaction reaches zero
@@ -26,7 +27,9 @@ wall at a few nodes, and the walk needs about as many face solves as that
 (6 on the paper's N = 140 step, where the primal method, started from the
 clipped unconstrained shape, needs 220 single changes). The gradient is
 carried along by increments on the bands; at the end one step of refinement
-with the step's exact, factored gradient gives the answer to round-off.
+with the step's exact, factored gradient gives the answer to round-off. The
+walk is compiled once (:func:`lcpbench.solvers.dual_kernel.dual_active_set`:
+the solve kernel's, and here every QP's, :func:`_dual`).
 
 ``method="primal"``: the primal active-set method (Nocedal & Wright, Alg.
 16.3): every iterate is feasible; each iteration minimises over the current
@@ -47,18 +50,16 @@ import time
 
 import numpy as np
 from scipy.linalg import LinAlgError, solveh_banded
-from scipy.linalg.lapack import dpbsv, dpbtrs
 
 from ..errors import ProblemError
 from ..linalg import dense_to_bands, sub_bands
-from ..thresholds import TIE, WALK_RTOL  # ties of the walk; its stationarity on a face
+from ..thresholds import WALK_RTOL  # ties of the walk; its stationarity on a face
 from . import compiled_walk
 from .base import Status, StepSolution
-from .gallop import gallop_picks
 
 EPS = np.finfo(float).eps
 METHODS = ("dual", "primal")
-#: the same in a galloping walk at large N (:mod:`.gallop`), whose mirror pairs differ
+#: the same in a galloping walk at large N (:mod:`.compiled_walk`), whose mirror pairs differ
 #: by its round-off, ~cond(J) ε ~ N² ε (1e-6 at N = 10⁵)
 TIE_LARGE = 1e-4
 
@@ -91,7 +92,7 @@ def solve_banded_qp(
         (default 20 n + 50).
     rtol : relative tolerance of the final certificate.
     reach : > 0: a step with its own face solves (large N), warm-started, gallops
-        from its contacts from this many nodes on (:mod:`.gallop`); 0: bisects.
+        from its contacts from this many nodes on (:mod:`.compiled_walk`); 0: bisects.
     method : "dual" (default) or "primal"; see the module docstring.
 
     Returns
@@ -150,229 +151,85 @@ def _warm_masks(step, start, active_upper, active_lower):
     return W_up, W_lo
 
 
-class _Banded:
-    """Scratch space for the dual walk on a banded H: products and face solves.
-
-    Both are written as a few whole-array numpy operations on strided views of
-    zero-padded buffers (at N ~ 100 the cost of a numpy call, not of the
-    arithmetic, is what counts).
-
-    ``matvec(x)``: H x. Row k of the (2b + 1, n) view ``shift`` holds x
-    shifted by k − b, row k of ``coef`` the matching diagonal of H.
-
-    ``face_solve(fixed, rhs)``: the Newton step on a face. H with the rows and
-    columns of the ``fixed`` nodes replaced by the identity (in lower banded
-    storage) is factored and solved with ``rhs`` (which must be zero on the
-    fixed nodes): one banded factorisation of the full size, without gathering
-    the free nodes. ``solve(rhs)`` solves with H itself. The last factor is
-    kept: ``resolve(rhs)`` solves again with it.
-    """
-
-    def __init__(self, bands: np.ndarray):
-        self.bands = bands
-        b = bands.shape[0] - 1
-        n = bands.shape[1]
-        coef = np.zeros((2 * b + 1, n))
-        coef[b] = bands[0]
-        for k in range(1, b + 1):
-            coef[b + k, : n - k] = bands[k, : n - k]  # H[i, i + k]
-            coef[b - k, k:] = bands[k, : n - k]  # H[i, i − k]
-        self.coef = coef
-        self.buf = np.zeros(n + 2 * b)
-        step = self.buf.strides[0]
-        self.shift = np.ndarray((2 * b + 1, n), buffer=self.buf, strides=(step, step))
-        self.keep = np.zeros(n + b)  # 1.0 on free nodes, zero padding
-        self.keep_pairs = np.ndarray((b + 1, n), buffer=self.keep, strides=(step, step))
-        self.b, self.n = b, n
-        self.factor = None
-
-    def matvec(self, x: np.ndarray) -> np.ndarray:
-        self.buf[self.b : self.b + self.n] = x
-        return np.add.reduce(self.coef * self.shift, axis=0)
-
-    def face_solve(self, fixed: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-        """Overwrites ``rhs``."""
-        keep = self.keep
-        keep[: self.n] = ~fixed
-        face = self.bands * (keep[: self.n] * self.keep_pairs)  # entry kept iff both free
-        face[0] += fixed
-        self.factor, x, info = dpbsv(face, rhs, lower=1, overwrite_ab=True, overwrite_b=True)
-        _check_info(info)
-        return x
-
-    def solve(self, rhs: np.ndarray) -> np.ndarray:
-        """H x = rhs, on no face (overwrites ``rhs``)."""
-        self.factor, x, info = dpbsv(self.bands, rhs, lower=1, overwrite_b=True)
-        _check_info(info)
-        return x
-
-    def resolve(self, rhs: np.ndarray) -> np.ndarray:
-        """Overwrites ``rhs``."""
-        x, info = dpbtrs(self.factor, rhs, lower=1, overwrite_b=True)
-        _check_info(info)
-        return x
-
-
-def _check_info(info: int) -> None:
-    if info > 0:
-        raise LinAlgError(f"{info}-th leading minor not positive definite")
-    if info < 0:
-        raise ValueError(f"illegal value in argument {-info} of a LAPACK call")
-
-
-def _run_maxima(v: np.ndarray, slack: float) -> np.ndarray:
-    """The deepest violation ``v > slack`` of every run of consecutive violated nodes."""
-    viol = v > slack
-    if not np.count_nonzero(viol):
-        return viol
-    # A node that is not violated has v <= slack < v of a violated neighbour, so it
-    # never wins the comparisons: v itself can stand in the padded buffer.
-    w = np.empty(v.size + 2)
-    w[0] = w[-1] = -np.inf
-    w[1:-1] = v
-    mid = w[1:-1]
-    return viol & (mid >= w[:-2]) & (mid > w[2:])
+_BOX_QP: list = []  # the compiled walk's entry (solvers/dual_kernel.py), once loaded
+_NO_T = np.zeros((2, 0))  # no curvature T: a Gauss–Newton step, or a QP
 
 
 def _dual(step, warm_up, warm_lo, max_iter, reach=0):
-    """The dual active-set walk.
+    """The dual active-set walk (the module's docstring), compiled.
 
-    Returns ``(u, grad, S_up, S_lo, face_solves, why)``; ``why`` is None when
-    it ended at the optimum (no wall violated; ``grad`` is then the gradient
-    at ``u``), else the reason it stopped (the caller hands over to the
-    primal method).
+    Returns ``(u, grad, S_up, S_lo, face_solves, why)``; ``why`` is None when it ended
+    at the optimum (no wall violated; ``grad`` is then the gradient at ``u``), else the
+    reason it stopped (the caller hands over to the primal method).
 
-    Every iterate satisfies H u + c = −σ λ with λ >= 0 on the working set
-    (σ = +1 upper wall, −1 lower wall, 0 free), so the gradient ``g`` is
-    carried along by increments (H times a step, on the bands) instead of
-    being recomputed; at the end one step of refinement with the exact,
-    factored gradient removes what the increments accumulated.
+    A step with its own face solves (the twisted factor at large N, in increments)
+    walks on them (:func:`lcpbench.solvers.compiled_walk.dual_walk`: galloping from a
+    warm contact set ``reach`` nodes on, its violations beyond the round-off of each
+    node's height, its refinement to round-off at every optimum). Any other QP walks in
+    one call of :func:`lcpbench.solvers.dual_kernel.box_qp`: its faces on the banded
+    LDLᵀ where H has at most two sub-diagonals (the contact step's), else on LAPACK's
+    Cholesky of their free block; its refinement with the contact step's exact gradient
+    where the step gives its joint stencil on contiguous nodes (:func:`_stencil`), else
+    with H u + c.
     """
-    lo, hi = step.lower, step.upper
-    n = step.size
-    # a step may bring its own face solves (the tridiagonal factor at large N)
-    H = getattr(step, "factor", None) or _Banded(step.bands)
-    matvec, face_solve = H.matvec, H.face_solve
-    has_lo = bool(np.count_nonzero(np.isfinite(lo)))
-    S = np.zeros(n, bool)  # the working set: nodes held against a wall
-    u = H.solve(-np.asarray(step.linear, dtype=float))  # the unconstrained minimiser
-    g = np.full(n, 0.0)  # the gradient there, up to round-off (written: see wall)
-    # violations at the round-off of the heights are not violations (the walls that
-    # matter are within a violation of u)
-    slack = 32 * EPS * (1.0 + float(np.max(np.abs(u), initial=0.0)))
-    # a step with its own face solves (large N, in increments): heights are refined to
-    # round-off at every optimum found, and a violation is one beyond the round-off of
-    # the node's own height (a height error δ costs ~16 EI δ / a³ of force)
-    own = getattr(step, "factor", None) is not None
-    refined = False
-    if own:
+    H = getattr(step, "factor", None)
+    if H is not None and hasattr(H, "walk") and step.size >= 5:
+        lo, hi = step.lower, step.upper
+        u = H.solve(-np.asarray(step.linear, dtype=float))  # the unconstrained minimiser
+        has_lo = bool(np.count_nonzero(np.isfinite(lo)))
+        # a violation is one beyond the round-off of the node's own height (a height
+        # error δ costs ~16 EI δ / a³ of force)
         slack = 32 * EPS * (np.abs(u) + np.where(np.isfinite(hi), np.abs(hi), 0.0)
                             + np.where(np.isfinite(lo), np.abs(lo), 0.0))
-    sigma = np.zeros(n)  # +1: held against the upper wall, −1: the lower one, 0: free
-    wall = np.full(n, 0.0)  # the wall height of each held node (written: np.zeros pages
-    # that are only read are slow to read in compiled loops)
-    warm = bool(np.count_nonzero(warm_up) or np.count_nonzero(warm_lo))
-    # large N, warm-started with a hint of how far the contacts move: gallop from them
-    # instead of bisecting the spans between them (:mod:`.gallop`)
-    reach = int(reach) if (own and warm) else 0
-    tie = TIE_LARGE if own else TIE
-    if own and compiled_walk.ENABLED and hasattr(H, "walk") and n >= 5:  # large N
-        return compiled_walk.dual_walk(step, H, u, slack, warm_up, warm_lo, has_lo,
-                                       max_iter, reach, tie, compiled_walk.refine_on_face)
-    seen: set[bytes] = set()
-    at_face_minimiser = True
-    it = 0
-    while True:
-        if at_face_minimiser:
-            v_up = u - hi
-            v_up[S] = -np.inf
-            v_lo = None
-            if has_lo:
-                v_lo = lo - u
-                v_lo[S] = -np.inf
-            J_up = J_lo = None
-            if warm:  # first, the warm contact set, where it is violated
-                warm = False
-                J_up = warm_up & (v_up > slack)
-                J_lo = (warm_lo & (v_lo > slack)) if has_lo else None
-                if not (np.count_nonzero(J_up) or (has_lo and np.count_nonzero(J_lo))):
-                    J_up = None
-            if J_up is None:
-                if reach:
-                    J_up = gallop_picks(v_up, slack, S, reach)
-                    J_lo = gallop_picks(v_lo, slack, S, reach) if has_lo else None
-                    reach *= 2
-                else:
-                    J_up = _run_maxima(v_up, slack)
-                    J_lo = _run_maxima(v_lo, slack) if has_lo else None
-                if not (np.count_nonzero(J_up) or (has_lo and np.count_nonzero(J_lo))):
-                    if refined and not own:  # no wall crossed by the refinement
-                        return u, g, sigma > 0, sigma < 0, it, None
-                    # the optimum: one step of refinement with the exact gradient, on
-                    # the face just factored
-                    u = np.where(S, wall, u)
-                    g = step.gradient(u)
-                    r = g.copy()
-                    r[S] = 0.0
-                    p = H.resolve(r)
-                    if own and not refined:  # refine, then look at the walls again
-                        u, g = compiled_walk.refine_on_face(step, H, S, u - p)
-                        refined = True
-                        continue
-                    if own:
-                        return u, g, sigma > 0, sigma < 0, it, None
-                    # then the walls once more: the unrefined heights carry the
-                    # round-off of the factor (cond(H) ε |u|), and a node the walk left
-                    # free may cross its wall once refined (a grazing contact)
-                    u, g = u - p, g - matvec(p)
-                    refined = True
-                    continue
-            held = np.flatnonzero(sigma)  # the working set, compactly
-            key = held.tobytes() + sigma[held].tobytes()
-            if key in seen:
-                return u, None, sigma > 0, sigma < 0, it, "a working set repeated (round-off)"
-            seen.add(key)
-            sigma[J_up] = 1.0
-            wall[J_up] = hi[J_up]
-            if has_lo:
-                J_lo &= ~J_up
-                sigma[J_lo] = -1.0
-                wall[J_lo] = lo[J_lo]
-            S = sigma != 0.0
-        if it >= max_iter:
-            return u, None, sigma > 0, sigma < 0, it, f"limit of {max_iter} face solves"
-        it += 1
-        # d: from u to the minimiser on the face S (S onto its walls, then Newton
-        # on the free nodes), as an increment
-        d = (wall - u) * S
-        r = g + matvec(d)
-        r[S] = 0.0
-        d -= face_solve(S, r)
-        g_face = g + matvec(d)
-        # the reactions there are −σ g_face; move towards it until one turns negative
-        # (only held nodes have reactions: the tests run on them, not on all n)
-        held = np.flatnonzero(S)
-        sg = sigma[held] * g_face[held]
-        fall = sg > 0.0
-        if np.count_nonzero(fall):
-            falling = held[fall]
-            lam = np.maximum(-sigma[falling] * g[falling], 0.0)
-            ratio = lam / (lam + sg[fall])
-            s = float(ratio.min())
-            if s < 1.0:
-                u = u + s * d
-                g = g + s * (g_face - g)
-                # release every wall whose reaction reaches zero here, ties within
-                # round-off included (a symmetric chain has its contacts in mirror pairs)
-                drop = falling[ratio <= s + tie]
-                sigma[drop] = 0.0
-                S[drop] = False
-                at_face_minimiser = False
-                continue
-        u = u + d
-        g = g_face
-        at_face_minimiser = True
-        refined = False
+        warm = bool(np.count_nonzero(warm_up) or np.count_nonzero(warm_lo))
+        return compiled_walk.dual_walk(step, H, u, slack, warm_up, warm_lo, has_lo, max_iter,
+                                       int(reach) if warm else 0, TIE_LARGE,
+                                       compiled_walk.refine_on_face)
+    return _compiled_dual(step, warm_up, warm_lo, max_iter)
+
+
+def _stencil(step):
+    """The contact step's joint stencil, as :func:`~lcpbench.solvers.dual_kernel.grad_into`
+    takes it (its exact gradient, the refinement's), and its curvature T; None for a QP,
+    a step in increments or one whose joints or free nodes are not contiguous."""
+    coef = getattr(step, "coef", None)
+    if coef is None or getattr(step, "factor", None) is not None:
+        return None
+    free, base = step.free_nodes, step.base
+    if not (free.size and base.size and free[-1] - free[0] == free.size - 1
+            and base[-1] - base[0] == base.size - 1):
+        return None
+    f64 = np.ascontiguousarray
+    T = _NO_T if step.geometric is None else f64(step.geometric[:2], dtype=float)
+    return (f64(coef, dtype=float), int(base[0]), int(free[0]) + 1, int(step.links),
+            *(f64(x, dtype=float) for x in (step.origin, step.phi_origin, step.stiffness,
+                                            step.rest_joint, step.nodal_load)), T)
+
+
+def _compiled_dual(step, warm_up, warm_lo, max_iter):
+    """:func:`_dual` in one call of :func:`lcpbench.solvers.dual_kernel.box_qp`."""
+    from ..numba_cache import kept  # numba: loads or compiles at first use
+
+    kern = kept(_BOX_QP, "lcpbench.solvers.dual_kernel", "box_qp")
+    n = step.size
+    f64 = np.ascontiguousarray
+    bands = f64(step.bands, dtype=float)
+    if bands.shape[0] < 3:  # a diagonal or tridiagonal H: the banded faces, zeros padded
+        bands = np.vstack((bands, np.zeros((3 - bands.shape[0], n))))
+    fac = np.empty((4, n)) if bands.shape[0] == 3 else np.empty((2, max(n, 2), n))
+    masks = (np.zeros(n, bool) if w is None else f64(w, dtype=bool) for w in (warm_up, warm_lo))
+    none = np.zeros(0)
+    stencil = _stencil(step) or (np.zeros((0, 3)), 0, 1, 0, none, none, none, none, none,
+                                 _NO_T)
+    code, it, u, g, sigma = kern.box_qp(bands, f64(step.linear, dtype=float),
+                                        f64(step.lower, dtype=float),
+                                        f64(step.upper, dtype=float), *masks, int(max_iter),
+                                        fac, *stencil)
+    if code == kern.BAIL_NOT_PD:
+        raise LinAlgError("a face of H is not positive definite")
+    why = ({kern.BAIL_REPEAT: "a working set repeated (round-off)",
+            kern.BAIL_LIMIT: f"limit of {max_iter} face solves"}.get(int(code)) if code else None)
+    return u, (g if why is None else None), sigma > 0, sigma < 0, int(it), why
 
 
 def _primal(step, start, W_up, W_lo, max_iter, t0, rtol, done=0) -> StepSolution:

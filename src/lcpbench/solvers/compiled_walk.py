@@ -1,16 +1,31 @@
 """The dual walk at large N with its loop compiled (:func:`lcpbench.linalg.twisted_walk_kernel.walk`).
 
 :func:`lcpbench.solvers.banded._dual` on a step with its own twisted factor
-(large N, in increments): the same walk — the warm contact set first, then
-nodes galloping from the contacts (:mod:`.gallop`) or the deepest node of
-each violated run, every move to a face minimiser one compiled face solve,
-the ratio test, the releases within ``tie`` — with the per-face bookkeeping
-(violations, picks, the working set's key, the twist, the ratio test; at
-N = 10⁵ about 20 full-length numpy passes, ~1–2 ms a face) in the same
-compiled call as the face solves. The refinement at every optimum it finds
-stays here, in numpy, with the step's exact factored gradient, as in
-:func:`~lcpbench.solvers.banded._dual`. ``numpy`` there stays the reference;
-tests check that both take the same path.
+(large N, in increments): the walk of :func:`lcpbench.solvers.dual_kernel.dual_active_set`
+— the warm contact set first, then nodes galloping from the contacts (below) or the
+deepest node of each violated run, every move to a face minimiser one compiled face
+solve, the ratio test, the releases within ``tie`` — with the per-face bookkeeping
+(violations, picks, the working set's key, the twist, the ratio test) in the same
+compiled call as the face solves. The refinement at every optimum it finds, with the
+step's exact factored gradient, is one compiled call too where the step has it
+(:meth:`lcpbench.model.large_n.IncrementStep.walk_refine`), else :func:`refine_on_face`.
+
+**Galloping** (:func:`lcpbench.linalg.twisted_walk_kernel.picks_in` with ``reach`` > 0).
+The walk may put *any* violated node against its wall: the dual objective rises on
+every move of non-zero length whichever violated node joins (Goldfarb & Idnani,
+1983), so the choice changes the path, never the answer. Its default choice is the
+deepest node of every run of consecutive violated nodes. At large N, warm-started
+from the last outer step's contact set, that choice bisects: when a point contact
+has moved by a few nodes, the warm face releases the old contact, the chain between
+two contacts bulges through the wall over thousands of nodes, and the deepest node
+is in the middle of the span; each halving costs two face solves (add, release),
+~2 log₂(span) in all, even for a move of one node (30 face solves at N = 10⁵).
+Galloping searches from the contacts instead: a run of violated nodes next to a held
+node (the contact it moved away from) gets the node ``reach`` nodes into the run,
+with ``reach`` = 1, 2, 4, … (doubled at every use within a walk); a run no longer
+than ``reach``, or with no held neighbour, gets its deepest node, as before. A move
+of k nodes then costs ~2 log₂ k face solves to overshoot it, and a bisection of the
+overshoot (at most ``reach`` nodes) after.
 """
 
 from __future__ import annotations
@@ -18,8 +33,6 @@ from __future__ import annotations
 import numpy as np
 from scipy.linalg import LinAlgError
 
-#: False: the numpy walk of :func:`~lcpbench.solvers.banded._dual` (the reference)
-ENABLED = True
 #: working sets remembered (their hashes) to see one repeat
 SEEN = 4096
 #: the refinement at an optimum in one compiled call where the step has it

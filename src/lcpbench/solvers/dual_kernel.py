@@ -1,4 +1,5 @@
-"""The dual active-set walk, compiled: :func:`dual_active_set`.
+"""The dual active-set walk, compiled: :func:`dual_active_set`, and its entry for any
+box QP, :func:`box_qp`.
 
 The walk of :func:`lcpbench.solvers.banded.solve_banded_qp` with ``method="dual"``
 (its module docstring: Goldfarb & Idnani specialised to bounds; the walk with block
@@ -6,11 +7,16 @@ additions, its refinement), on a QP's bands H (the banded step of eqs. 20-31 for
 contact step) and its linear term c, in the same order of operations as
 :func:`lcpbench.solvers.banded._dual` where that is cheap. Its faces are solved by the
 banded LDLᵀ of :mod:`lcpbench.linalg.ldl_kernel`, restarted at the first node a change
-reaches. The refinement at an optimum takes the contact step's exact gradient
-(:func:`grad_into`, ContactStep.gradient, from the step's joint stencil).
+reaches; those of a QP with wider bands (a dense LCP's M) by LAPACK's Cholesky of
+the free block (:func:`face_factor`: the choice is made by the factor's type when
+numba compiles, so the contact step's walk holds no LAPACK call). The refinement at
+an optimum takes the contact step's exact gradient (:func:`grad_into`,
+ContactStep.gradient, from the step's joint stencil), a QP's H u + c.
 
 The solve kernel (:mod:`lcpbench.model.compiled_kernel`) runs it inside its outer
-loop; :func:`lcpbench.model.step_solver.solve_step` on one step. Every pass writes
+loop; :func:`lcpbench.model.step_solver.solve_step` on one step; the back-end
+"active-set" (:mod:`lcpbench.solvers.banded`) on any other QP, and so
+``lcpbench.solvers.solve_lcp(M, q, solver="active-set")``, through :func:`box_qp`. Every pass writes
 into work arrays the caller allocates once (the rows below). Loaded only through
 :func:`lcpbench.numba_cache.kernel_module` (see there).
 """
@@ -87,7 +93,10 @@ def grad_into(out, m, u, gp, T):
 @njit(cache=True)
 def matvec_row(bands, x, i, n, absolute):
     """Row i of H x (of |H| |x| when ``absolute``), summed in the order of
-    solvers.banded._Banded.matvec."""
+    the rows of H from the left; H in lower band storage of any bandwidth b (two
+    sub-diagonals, the contact step's, written out)."""
+    if bands.shape[0] != 3:
+        return _matvec_row_wide(bands, x, i, n, absolute)
     if absolute:
         s = abs(bands[2, i - 2]) * abs(x[i - 2]) if i >= 2 else 0.0
         s += abs(bands[1, i - 1]) * abs(x[i - 1]) if i >= 1 else 0.0
@@ -100,6 +109,20 @@ def matvec_row(bands, x, i, n, absolute):
     s += bands[0, i] * x[i]
     s += bands[1, i] * x[i + 1] if i + 1 < n else 0.0
     s += bands[2, i] * x[i + 2] if i + 2 < n else 0.0
+    return s
+
+
+@njit(cache=True)
+def _matvec_row_wide(bands, x, i, n, absolute):
+    """:func:`matvec_row` for any bandwidth b: the sub-diagonals from the farthest, the
+    diagonal, the super-diagonals from the nearest."""
+    b = bands.shape[0] - 1
+    s = 0.0
+    for k in range(min(b, i), 0, -1):
+        s += abs(bands[k, i - k]) * abs(x[i - k]) if absolute else bands[k, i - k] * x[i - k]
+    s += abs(bands[0, i]) * abs(x[i]) if absolute else bands[0, i] * x[i]
+    for k in range(1, min(b, n - 1 - i) + 1):
+        s += abs(bands[k, i]) * abs(x[i + k]) if absolute else bands[k, i] * x[i + k]
     return s
 
 
@@ -132,8 +155,8 @@ def _key(i, s):
 
 @njit(cache=True)
 def _run_picks(u, bound, S, slack, sign, picks, npick):
-    """:func:`lcpbench.solvers.banded._run_maxima` as a list: the deepest violation v > slack of every run of
-    consecutive violated nodes appended to ``picks`` (node + 1, with ``sign``: +
+    """The deepest violation v > slack of every run of consecutive violated nodes
+    appended to ``picks`` (node + 1, with ``sign``: +
     the upper wall, − the lower one); the new count."""
     n = u.size
     left, v = -np.inf, (_violation(u, bound, S, 0, sign) if n else 0.0)
@@ -152,6 +175,9 @@ def _move(bands, d, u, g, s, n):
     (s = 1: u + d and g_face), in one pass, H d row by row as :func:`matvec_row` sums it
     (the interior rows without its end tests); d is zeroed behind (the next face's
     d₀ is zero off its held nodes)."""
+    if bands.shape[0] != 3:
+        _move_wide(bands, d, u, g, s, n)
+        return
     full = s >= 1.0
     for i in range(n):
         if 2 <= i < n - 2:
@@ -173,9 +199,108 @@ def _move(bands, d, u, g, s, n):
 
 
 @njit(cache=True)
+def _move_wide(bands, d, u, g, s, n):
+    """:func:`_move` for any bandwidth (every row of H d read before d is zeroed)."""
+    full = s >= 1.0
+    for i in range(n):
+        gf = g[i] + _matvec_row_wide(bands, d, i, n, False)
+        if full:
+            u[i] = u[i] + d[i]
+            g[i] = gf
+        else:
+            u[i] = u[i] + s * d[i]
+            g[i] = g[i] + s * (gf - g[i])
+    for i in range(n):
+        d[i] = 0.0
+
+
+@njit(cache=True)
+def _dense_factor(fac, bands, fixed):
+    """The Cholesky factor L of the face ``fixed`` of H (lower band storage ``bands``, any
+    bandwidth) on its free nodes, gathered (LAPACK's, numpy.linalg.cholesky), into
+    ``fac[0]``'s leading block; ``fac[1, 0]`` marks the free nodes, ``fac[1, 1]`` lists
+    them. False where the face is not positive definite. No node is held by a spring
+    here (the walk of a general QP, :func:`box_qp`)."""
+    n, b = fixed.size, bands.shape[0] - 1
+    f = 0
+    for i in range(n):
+        fac[1, 0, i] = 0.0 if fixed[i] else 1.0
+        if not fixed[i]:
+            fac[1, 1, f] = i
+            f += 1
+    if f == 0:
+        return True
+    A = np.empty((f, f))
+    for p in range(f):
+        i = int(fac[1, 1, p])
+        for q in range(p + 1):
+            j = int(fac[1, 1, q])
+            A[p, q] = bands[i - j, j] if i - j <= b else 0.0
+            A[q, p] = A[p, q]
+    try:
+        L = np.linalg.cholesky(A)
+    except Exception:  # (numba: LinAlgError) not positive definite
+        return False
+    fac[0, :f, :f] = L
+    return True
+
+
+@njit(cache=True)
+def _dense_resolve(fac, x):
+    """x ← the face's solve of x (:func:`_dense_factor`): L Lᵀ on the free nodes; a
+    fixed node's row is the identity's."""
+    n = x.size
+    f = 0
+    for i in range(n):
+        if fac[1, 0, i] > 0.0:
+            f += 1
+    L = fac[0]
+    y = np.empty(f)
+    for p in range(f):  # L y = x on the free nodes
+        s = x[int(fac[1, 1, p])]
+        for q in range(p):
+            s -= L[p, q] * y[q]
+        y[p] = s / L[p, p]
+    for p in range(f - 1, -1, -1):  # Lᵀ z = y
+        s = y[p]
+        for q in range(p + 1, f):
+            s -= L[q, p] * y[q]
+        y[p] = s / L[p, p]
+    for p in range(f):
+        x[int(fac[1, 1, p])] = y[p]
+
+
+@njit(cache=True)
+def face_factor(fac, bands, fixed, shift, c0, c1):
+    """Factor the face ``fixed`` of H: the banded LDLᵀ restarted at column ``c0``
+    (:func:`lcpbench.linalg.ldl_kernel.refactor`; a 2-D ``fac``, two sub-diagonals, the
+    contact step's) or the Cholesky of its free block (a 3-D ``fac``, any bandwidth,
+    :func:`_dense_factor`). The choice is by ``fac``'s type, made when numba compiles:
+    the banded walk's code holds no LAPACK call."""
+    if fac.ndim == 3:
+        return _dense_factor(fac, bands, fixed)
+    return _refactor(fac, bands, fixed, shift, c0, c1)
+
+
+@njit(cache=True)
+def face_resolve(fac, x):
+    """x ← the last factored face's solve of x (:func:`face_factor`)."""
+    if fac.ndim == 3:
+        _dense_resolve(fac, x)
+    else:
+        _resolve(fac, x)
+
+
+@njit(cache=True)
 def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, gp, ws):
     """(code, face solves): code 0 at the optimum (after refinement); u, g and sigma
     in the rows U, G, SIG of the work array ``ws[0]``.
+
+    ``bands``: H in lower band storage. Its faces are factored as ``ws[5]`` says
+    (:func:`face_factor`): the contact step's banded LDLᵀ (two sub-diagonals), or the
+    Cholesky of the free block (any bandwidth: :func:`box_qp`'s dense QPs). ``gp``: the
+    contact step's joint stencil, whose exact gradient (:func:`grad_into`) the
+    refinement takes; with no joints (a QP) the refinement takes H u + c.
 
     ``cu``, ``cl``: the compliance 1/k (mm/N) of the upper and lower wall per node (0:
     rigid), or empty where no wall yields. A node on an elastic wall is held by the
@@ -195,7 +320,8 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
         wn[RATIO]
     S, factored = wb[S_], wb[FACT]
     held, picks, chg = wi[0], wi[1], wi[2]
-    n = linear.size
+    n, b = linear.size, bands.shape[0] - 1
+    exact = gp[0].shape[0] > 0  # the contact step's exact gradient (else a QP's H u + c)
     soft = cu.size == n and n > 0  # some wall yields: E (held on a wall) is not all of S
     E = wb[ELIM] if soft else S
     shift, fshift = wn[SHIFT], wn[FSHIFT]
@@ -207,9 +333,9 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
         factored[i] = S[i] = E[i] = False  # the face ``fac`` holds (none fixed: H itself)
         g[i] = sigma[i] = wall[i] = d[i] = shift[i] = fshift[i] = 0.0
         u[i] = -linear[i]
-    if not _refactor(fac, bands, factored, cshift, 0, n):
+    if not face_factor(fac, bands, factored, cshift, 0, n):
         return BAIL_NOT_PD, 0
-    _resolve(fac, u)
+    face_resolve(fac, u)
     slack = 32 * EPS * (1.0 + max_abs(u))
     h, count, at_face_minimiser, it, refined = np.uint64(0), 0, True, 0, False
     nheld = nchg = 0
@@ -235,12 +361,16 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
                     for i in range(n):
                         if E[i]:
                             u[i] = wall[i]
-                    grad_into(g, m, u, gp, ws[10])
+                    if exact:  # the contact step's gradient from its joint stencil
+                        grad_into(g, m, u, gp, ws[10])
+                    else:  # a QP's: H u + c
+                        for i in range(n):
+                            g[i] = matvec_row(bands, u, i, n, False) + linear[i]
                     for i in range(n):
                         r[i] = 0.0 if E[i] else g[i]
                         if S[i] and not E[i]:  # the spring's pull on a node it holds
                             r[i] += (u[i] - wall[i]) / shift[i]
-                    _resolve(fac, r)
+                    face_resolve(fac, r)
                     for i in range(n):
                         gf[i] = g[i] - matvec_row(bands, r, i, n, False)
                     for i in range(n):
@@ -282,12 +412,18 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
         for q in range(nheld):
             j = held[q]
             d[j] = wall[j] - u[j]
+        moved = False
         for q in range(nheld):
             j = held[q]
-            if d[j] != 0.0:
-                for i in range(max(j - 2, 0), min(j + 3, n)):
+            if d[j] != 0.0 and b <= 2:  # the rows d₀ reaches, node by node
+                for i in range(max(j - b, 0), min(j + b + 1, n)):
                     if not E[i]:
                         r[i] = g[i] + matvec_row(bands, d, i, n, False)
+            moved = moved or d[j] != 0.0
+        if moved and b > 2:  # wide bands: every row once
+            for i in range(n):
+                if not E[i]:
+                    r[i] = g[i] + matvec_row(bands, d, i, n, False)
         first, last = n, -1  # the nodes whose wall changed since the last factorisation
         for q in range(nchg):
             i = chg[q]
@@ -301,9 +437,9 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
             while stop + 1 < n and not (E[stop] and E[stop + 1]):
                 stop += 1
             stop = min(stop + 2, n)
-            if not _refactor(fac, bands, E, cshift, max(0, first - 2), stop):
+            if not face_factor(fac, bands, E, cshift, max(0, first - 2), stop):
                 return BAIL_NOT_PD, it
-        _resolve(fac, r)
+        face_resolve(fac, r)
         for i in range(n):
             d[i] -= r[i]
         s = np.inf  # the ratio test, on the held nodes (g_face = g + H d there)
@@ -335,3 +471,28 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
             continue
         at_face_minimiser = True
         refined = False
+
+
+@njit(cache=True)
+def box_qp(bands, linear, lo, hi, warm_up, warm_lo, max_iter, fac, coef, b0, fs, links,
+           origin, phi_origin, k, rest, load, T):
+    """The walk on min ½ uᵀHu + cᵀu over lo <= u <= hi: H positive definite in lower
+    band storage ``bands`` (any bandwidth), c ``linear``; ``warm_up``, ``warm_lo``: a
+    contact set to start from (nodes put on their walls first where they are violated).
+    ``fac``: the faces' factor (:func:`face_factor`), 2-D (4, n) for H with two
+    sub-diagonals, 3-D (2, max(n, 2), n) for the Cholesky of the free block. ``coef`` ..
+    ``load``: a contact step's joint stencil (:func:`grad_into`'s ``gp``), ``T`` its
+    curvature (no columns: none), whose exact gradient the refinement takes; no rows in
+    ``coef``: a QP, refined with H u + c. Returns (code, face solves, u, the gradient
+    there, σ): code 0 at the optimum, else a bail code (BAIL_NOT_PD, BAIL_REPEAT,
+    BAIL_LIMIT)."""
+    n = linear.size
+    z = np.empty(0)
+    ws = (np.empty((20, n)), np.empty((10, n), np.bool_), np.empty((4, coef.shape[0])), z, z,
+          fac, z, z, np.empty(min(max_iter, 20 * n + 50) + 2, np.uint64), z, T,
+          np.empty((3, n), np.int64))
+    gp = (coef, b0, fs, links, origin, phi_origin, k, rest, load)
+    code, it = dual_active_set(bands, linear, lo, hi, z, z, warm_up, warm_lo, max_iter, gp,
+                               ws)
+    wn = ws[0]
+    return code, it, wn[U].copy(), wn[G].copy(), wn[SIG].copy()
