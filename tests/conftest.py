@@ -62,6 +62,18 @@ def skip_escalations(monkeypatch):
     return skip
 
 
+def _walk_on_any_qp():
+    """The active set on a bare LCP (``solvers.dual_kernel.box_qp``): its two kinds of
+    face, banded (a 3 × 3 M: two sub-diagonals) and dense (4 × 4), compiled once here
+    (not in the AOT module: the dense faces call LAPACK through numba)."""
+    import numpy as np
+
+    from lcpbench.solvers import solve_lcp
+
+    for n in (3, 4):
+        solve_lcp(np.eye(n) + 0.1, -np.ones(n), solver="active-set")
+
+
 def pytest_sessionstart(session):
     """Where the suite runs in worker processes (pytest-xdist), the controller first runs
     the solves whose kernels every worker loads (:func:`lcpbench.aot.representative_solves`),
@@ -80,6 +92,7 @@ def pytest_sessionstart(session):
     numba_cache.use_aot(False)  # the JIT kernels, whose cache the workers read
     try:
         representative_solves()
+        _walk_on_any_qp()
     except Exception as exc:  # a broken solve is the tests' to report, not the session's
         print(f"lcpbench: those solves failed ({type(exc).__name__}: {exc}); the workers "
               "compile the kernels as they go", file=sys.stderr, flush=True)

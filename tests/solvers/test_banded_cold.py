@@ -28,6 +28,7 @@ from lcpbench.solvers import banded
 from lcpbench.solvers.banded import solve_banded_qp
 from lcpbench.solvers.base import Status
 from lcpbench.solvers.enumeration import enumerate_lcp
+from lcpbench.solvers.runner import solve_lcp
 
 INF = np.inf
 
@@ -345,3 +346,32 @@ def test_a_wall_crossed_by_the_refinement_is_walked_on():
     assert sol.status is Status.SOLVED, sol.message
     assert (sol.active_lower | sol.active_upper)[i]  # held where the refinement took it
     assert_kkt(qp, sol)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_solve_lcp_active_set_is_the_enumerated_answer(seed):
+    """``solve_lcp(M, q, "active-set")`` on a dense symmetric positive definite M: the
+    compiled walk with its dense faces (M of full bandwidth; n = 3 has two
+    sub-diagonals, the banded faces), against the enumeration of the complementary
+    bases; solved by the walk itself, not by its fallback."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(3, 10))
+    A = rng.normal(size=(n, n))
+    M, q = A @ A.T / n + 0.05 * np.eye(n), rng.normal(size=n)
+    (exact,) = enumerate_lcp(M, q)  # M positive definite: one answer
+    sol = solve_lcp(M, q, "active-set")
+    assert sol.status is Status.SOLVED and sol.extra["backend"] == "active-set", sol.message
+    np.testing.assert_allclose(sol.z, exact, atol=1e-10)
+
+
+def test_solve_lcp_active_set_on_a_large_dense_lcp_is_complementary():
+    """n = 150, dense: the answer is complementary to round-off (lcpbench's residuals,
+    computed from z alone) and found by the walk itself."""
+    rng = np.random.default_rng(11)
+    A = rng.normal(size=(150, 150))
+    M, q = A @ A.T / 150 + 0.05 * np.eye(150), rng.normal(size=150)
+    sol = solve_lcp(M, q, "active-set")
+    assert sol.status is Status.SOLVED and sol.extra["backend"] == "active-set", sol.message
+    w = M @ sol.z + q
+    assert sol.z.min() >= 0.0 and w.min() >= -1e-12 * np.abs(q).max()
+    assert np.max(np.abs(sol.z * w)) <= 1e-12 * np.abs(q).max() * max(1.0, sol.z.max())

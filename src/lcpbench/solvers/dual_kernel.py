@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import numpy as np
 from numba import njit
+from numba.extending import overload
 
 from ..linalg.ldl_kernel import refactor as _refactor  # the faces' LDLᵀ (one dependent
 from ..linalg.ldl_kernel import resolve as _resolve  # chain: a division, not a square root)
@@ -92,11 +93,9 @@ def grad_into(out, m, u, gp, T):
 
 @njit(cache=True)
 def matvec_row(bands, x, i, n, absolute):
-    """Row i of H x (of |H| |x| when ``absolute``), summed in the order of
-    the rows of H from the left; H in lower band storage of any bandwidth b (two
-    sub-diagonals, the contact step's, written out)."""
-    if bands.shape[0] != 3:
-        return _matvec_row_wide(bands, x, i, n, absolute)
+    """Row i of H x (of |H| |x| when ``absolute``), H with two sub-diagonals in lower
+    band storage (the contact step's), its entries from the left
+    (:func:`_matvec_row_wide`: any bandwidth)."""
     if absolute:
         s = abs(bands[2, i - 2]) * abs(x[i - 2]) if i >= 2 else 0.0
         s += abs(bands[1, i - 1]) * abs(x[i - 1]) if i >= 1 else 0.0
@@ -175,9 +174,6 @@ def _move(bands, d, u, g, s, n):
     (s = 1: u + d and g_face), in one pass, H d row by row as :func:`matvec_row` sums it
     (the interior rows without its end tests); d is zeroed behind (the next face's
     d₀ is zero off its held nodes)."""
-    if bands.shape[0] != 3:
-        _move_wide(bands, d, u, g, s, n)
-        return
     full = s >= 1.0
     for i in range(n):
         if 2 <= i < n - 2:
@@ -271,24 +267,47 @@ def _dense_resolve(fac, x):
 
 
 @njit(cache=True)
+def dense_faces(fac):
+    """Whether the faces are the Cholesky of their free block (a 3-D ``fac``: H of any
+    bandwidth), not the banded LDLᵀ (2-D: two sub-diagonals). A constant of each
+    compiled version of the walk, so its other branches drop out of the code."""
+    return fac.ndim == 3
+
+
 def face_factor(fac, bands, fixed, shift, c0, c1):
     """Factor the face ``fixed`` of H: the banded LDLᵀ restarted at column ``c0``
     (:func:`lcpbench.linalg.ldl_kernel.refactor`; a 2-D ``fac``, two sub-diagonals, the
     contact step's) or the Cholesky of its free block (a 3-D ``fac``, any bandwidth,
-    :func:`_dense_factor`). The choice is by ``fac``'s type, made when numba compiles:
-    the banded walk's code holds no LAPACK call."""
+    :func:`_dense_factor`). Compiled, the choice is made by ``fac``'s type and the one
+    branch inlined into the walk (:func:`_face_factor_typed`): the banded walk's code
+    holds neither a LAPACK call nor an extra call."""
     if fac.ndim == 3:
         return _dense_factor(fac, bands, fixed)
     return _refactor(fac, bands, fixed, shift, c0, c1)
 
 
-@njit(cache=True)
 def face_resolve(fac, x):
     """x ← the last factored face's solve of x (:func:`face_factor`)."""
     if fac.ndim == 3:
         _dense_resolve(fac, x)
     else:
         _resolve(fac, x)
+
+
+@overload(face_factor, inline="always")
+def _face_factor_typed(fac, bands, fixed, shift, c0, c1):
+    """numba's :func:`face_factor`: the branch of ``fac``'s type."""
+    if fac.ndim == 3:
+        return lambda fac, bands, fixed, shift, c0, c1: _dense_factor(fac, bands, fixed)
+    return lambda fac, bands, fixed, shift, c0, c1: _refactor(fac, bands, fixed, shift, c0, c1)
+
+
+@overload(face_resolve, inline="always")
+def _face_resolve_typed(fac, x):
+    """numba's :func:`face_resolve`: the branch of ``fac``'s type."""
+    if fac.ndim == 3:
+        return lambda fac, x: _dense_resolve(fac, x)
+    return lambda fac, x: _resolve(fac, x)
 
 
 @njit(cache=True)
@@ -320,7 +339,8 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
         wn[RATIO]
     S, factored = wb[S_], wb[FACT]
     held, picks, chg = wi[0], wi[1], wi[2]
-    n, b = linear.size, bands.shape[0] - 1
+    n = linear.size
+    wide = dense_faces(fac)  # H of any bandwidth (else two sub-diagonals)
     exact = gp[0].shape[0] > 0  # the contact step's exact gradient (else a QP's H u + c)
     soft = cu.size == n and n > 0  # some wall yields: E (held on a wall) is not all of S
     E = wb[ELIM] if soft else S
@@ -365,14 +385,16 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
                         grad_into(g, m, u, gp, ws[10])
                     else:  # a QP's: H u + c
                         for i in range(n):
-                            g[i] = matvec_row(bands, u, i, n, False) + linear[i]
+                            g[i] = linear[i] + (_matvec_row_wide(bands, u, i, n, False) if wide
+                                                else matvec_row(bands, u, i, n, False))
                     for i in range(n):
                         r[i] = 0.0 if E[i] else g[i]
                         if S[i] and not E[i]:  # the spring's pull on a node it holds
                             r[i] += (u[i] - wall[i]) / shift[i]
                     face_resolve(fac, r)
                     for i in range(n):
-                        gf[i] = g[i] - matvec_row(bands, r, i, n, False)
+                        gf[i] = g[i] - (_matvec_row_wide(bands, r, i, n, False) if wide
+                                        else matvec_row(bands, r, i, n, False))
                     for i in range(n):
                         u[i] = u[i] - r[i]
                         g[i] = gf[i]
@@ -412,18 +434,20 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
         for q in range(nheld):
             j = held[q]
             d[j] = wall[j] - u[j]
-        moved = False
-        for q in range(nheld):
-            j = held[q]
-            if d[j] != 0.0 and b <= 2:  # the rows d₀ reaches, node by node
-                for i in range(max(j - b, 0), min(j + b + 1, n)):
-                    if not E[i]:
-                        r[i] = g[i] + matvec_row(bands, d, i, n, False)
-            moved = moved or d[j] != 0.0
-        if moved and b > 2:  # wide bands: every row once
+        if wide:  # every row once, where d₀ moved a held node
+            moved = False
+            for q in range(nheld):
+                moved = moved or d[held[q]] != 0.0
             for i in range(n):
-                if not E[i]:
-                    r[i] = g[i] + matvec_row(bands, d, i, n, False)
+                if moved and not E[i]:
+                    r[i] = g[i] + _matvec_row_wide(bands, d, i, n, False)
+        else:  # the rows d₀ reaches, node by node
+            for q in range(nheld):
+                j = held[q]
+                if d[j] != 0.0:
+                    for i in range(max(j - 2, 0), min(j + 3, n)):
+                        if not E[i]:
+                            r[i] = g[i] + matvec_row(bands, d, i, n, False)
         first, last = n, -1  # the nodes whose wall changed since the last factorisation
         for q in range(nchg):
             i = chg[q]
@@ -445,13 +469,17 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
         s = np.inf  # the ratio test, on the held nodes (g_face = g + H d there)
         for q in range(nheld):
             j = held[q]
-            sg = sigma[j] * (g[j] + matvec_row(bands, d, j, n, False))
+            sg = sigma[j] * (g[j] + (_matvec_row_wide(bands, d, j, n, False) if wide
+                                     else matvec_row(bands, d, j, n, False)))
             ratio[j] = np.inf
             if sg > 0.0:
                 lam = max(-sigma[j] * g[j], 0.0)
                 ratio[j] = lam / (lam + sg)
                 s = min(s, ratio[j])
-        _move(bands, d, u, g, s, n)
+        if wide:
+            _move_wide(bands, d, u, g, s, n)
+        else:
+            _move(bands, d, u, g, s, n)
         if s < 1.0:
             kept = 0
             for q in range(nheld):
