@@ -206,11 +206,29 @@ def _stencil(step):
                                             step.rest_joint, step.nodal_load)), T)
 
 
-def _compiled_dual(step, warm_up, warm_lo, max_iter):
-    """:func:`_dual` in one call of :func:`lcpbench.solvers.dual_kernel.box_qp`."""
+_LOADED: set = set()  # (kernel module, dense faces) whose machine code is loaded
+
+
+def _walk_kernel(dense: bool | None = None):
+    """The compiled walk (:mod:`lcpbench.solvers.dual_kernel`), loaded once; with
+    ``dense`` (True: the dense faces, False: the banded ones), that version's machine
+    code too, by a call on a one-node QP. The back-end's calls do this before their
+    clocks start: a first call's load (~40 ms from numba's cache) is not its solve."""
     from ..numba_cache import kept  # numba: loads or compiles at first use
 
     kern = kept(_BOX_QP, "lcpbench.solvers.dual_kernel", "box_qp")
+    if dense is not None and (id(kern), dense) not in _LOADED:
+        one, none, no = np.ones(1), np.zeros(0), np.zeros(1, bool)
+        kern.box_qp(np.ones((4 if dense else 3, 1)), one, -one, one, no, no, 50,
+                    np.empty((2, 2, 1)) if dense else np.empty((4, 1)), np.zeros((0, 3)),
+                    0, 1, 0, none, none, none, none, none, _NO_T)
+        _LOADED.add((id(kern), dense))
+    return kern
+
+
+def _compiled_dual(step, warm_up, warm_lo, max_iter):
+    """:func:`_dual` in one call of :func:`lcpbench.solvers.dual_kernel.box_qp`."""
+    kern = _walk_kernel()
     n = step.size
     f64 = np.ascontiguousarray
     bands = f64(step.bands, dtype=float)
@@ -403,6 +421,8 @@ def solve_step(step, settings, warm=None, **options) -> StepSolution:
     The method is scale-invariant (its tests are relative to the size of the
     terms that cancel), so it always works on the step in physical units.
     """
+    if getattr(step, "factor", None) is None:  # (else the twisted walk, compiled_walk)
+        _walk_kernel(np.shape(step.bands)[0] > 3)
     x, up, lo = _warm_sets(warm, step.size)
     max_iter = settings.max_iter if settings.max_iter else None
     return solve_banded_qp(step, start=x, active_upper=up, active_lower=lo, max_iter=max_iter,
@@ -419,6 +439,7 @@ def solve_qp(qp, settings, warm=None, **options):
     except (LinAlgError, ValueError) as exc:
         return QPResult.failure(qp.size, Status.FAILED, f"{type(exc).__name__}: {exc}")
     setup = time.perf_counter() - t0
+    _walk_kernel(prob.bands.shape[0] > 3)
     x, _, _ = _warm_sets(warm, qp.size)
     max_iter = settings.max_iter if settings.max_iter else None
     sol = solve_banded_qp(prob, start=x, max_iter=max_iter)
