@@ -9,9 +9,12 @@ from Python as a user calls them, interleaved:
 - ``solve_step(step, "siconos-lemke")`` (the dense LCP formed, Siconos' C Lemke, the
   same residuals);
 - ``lcpbench.solvers.runner.solve_lcp(M, q, "siconos-lemke")`` on the exported LCP
-  (M, q already formed: the C call and its residuals alone).
+  (M, q already formed: the C call and its residuals alone);
+- ``solve_lcp(M, q, "active-set")`` on the same LCP (issue 35, item 5: the compiled
+  walk, its faces LAPACK's Cholesky of their free block, M being dense).
 
-Both answers are checked against each other's forces (1e-9 relative) before timing.
+The answers are checked against each other (forces, and the LCP's z, 1e-9 relative)
+before timing.
 Writes ``results/public-step.md`` (``--out``; not overwritten without ``--force``).
 
     OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 python benchmarks/public_step.py --force
@@ -64,11 +67,16 @@ def main(argv=None) -> int:
     rows = np.isfinite(step.upper)
     f1, f2 = ours.forces_net[rows].sum(), theirs.forces_net[rows].sum()
     assert ours.solved and theirs.solved and abs(f1 - f2) <= 1e-9 * abs(f2), (f1, f2)
+    z_walk, z_lemke = solve_lcp(M, q, "active-set"), solve_lcp(M, q, "siconos-lemke")
+    assert z_walk.solved and z_walk.extra["backend"] == "active-set" and z_lemke.solved
+    assert np.max(np.abs(z_walk.z - z_lemke.z)) <= 1e-9 * np.max(np.abs(z_lemke.z))
     calls = {
         "solve_step(step, 'active-set') (compiled)": lambda: solve_step(step, "active-set"),
         "solve_step(step, 'siconos-lemke')": lambda: solve_step(step, "siconos-lemke"),
         "solve_lcp(M, q, 'siconos-lemke') (exported LCP)": lambda: solve_lcp(M, q,
                                                                              "siconos-lemke"),
+        "solve_lcp(M, q, 'active-set') (exported LCP, compiled walk)": lambda: solve_lcp(
+            M, q, "active-set"),
     }
     times = {name: g["times"] for name, g in interleaved(
         {name: wall(call) for name, call in calls.items()}, a.rounds).items()}
