@@ -53,7 +53,7 @@ from scipy.linalg import LinAlgError, solveh_banded
 
 from ..errors import ProblemError
 from ..linalg import dense_to_bands, sub_bands
-from ..thresholds import WALK_RTOL  # ties of the walk; its stationarity on a face
+from ..thresholds import WALK_RTOL  # the walk's stationarity on a face
 from . import compiled_walk
 from .base import Status, StepSolution
 
@@ -245,8 +245,10 @@ def _compiled_dual(step, warm_up, warm_lo, max_iter):
                                         fac, *stencil)
     if code == kern.BAIL_NOT_PD:
         raise LinAlgError("a face of H is not positive definite")
-    why = ({kern.BAIL_REPEAT: "a working set repeated (round-off)",
-            kern.BAIL_LIMIT: f"limit of {max_iter} face solves"}.get(int(code)) if code else None)
+    why = None if code == 0 else {
+        kern.BAIL_REPEAT: "a working set repeated (round-off)",
+        kern.BAIL_LIMIT: f"limit of {max_iter} face solves"}.get(int(code),
+                                                              f"the walk stopped (code {code})")
     return u, (g if why is None else None), sigma > 0, sigma < 0, int(it), why
 
 
