@@ -9,7 +9,8 @@ start and the end:
    result, certificate or audit around it).
 2. One cold contact step at the converged configuration: the kernel's step
    (assembly, dual walk, refinement, step certificate, judge residual; timed
-   around the call), the numpy active set (solver-reported, without assembly),
+   around the call), the active-set back-end's own call (``solve_banded_qp``: the same
+   compiled walk with Python around it; solver-reported, without assembly),
    and Siconos's Lemke (C) on the step's LCP where installed (solver-reported).
 3. Start-up, each in fresh processes (median of ``--starts``): ``import
    lcpbench`` (and whether it loaded numba), and the first solve of a process
@@ -88,7 +89,7 @@ def cold_step(scene, repeat: int) -> dict:
             np.zeros(n, bool), np.zeros(n, bool), 0, 20 * n + 50, 1e-6)
     form, M, q, _, _ = step_lcp(step, scaled=True)
 
-    def numpy_step():  # the numpy active set itself (solve_step's default is compiled)
+    def backend_step():  # the back-end's own call (solve_step's default is the kernel's)
         from lcpbench.solvers.banded import solve_banded_qp
 
         sol = solve_banded_qp(step)
@@ -96,7 +97,7 @@ def cold_step(scene, repeat: int) -> dict:
 
     contenders = {"compiled step (assembly + walk + certificate + judge)":
                   wall(lambda: k.contact_step(*args)),
-                  "numpy active set (solver-reported, no assembly)": numpy_step}
+                  "active-set back-end call (solver-reported, no assembly)": backend_step}
     if "siconos-lemke" in available_backends():
         def siconos():
             sol = solve_lcp(M, q, "siconos-lemke", "high")

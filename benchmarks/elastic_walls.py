@@ -72,7 +72,7 @@ def validation() -> str:
                     f"{err:.1e} | {res.max_indentation:.4g} | {res.converged} |")
     head = ("# Elastic walls: validation against a direct energy minimisation\n\n"
             f"{len(SCENES)} scenes, N = 40, lcpbench at tol 1e-10 rad (default back-end, "
-            "numpy engine) against an independent minimisation of the exact total energy "
+            "compiled) against an independent minimisation of the exact total energy "
             "with the Winkler walls' penalty ½ k a (y − h)₊² over the node heights "
             "(tests/model/test_elastic_reference.py: no lcpbench model code). Largest "
             f"relative error of the total force: **{worst:.1e}** (the test asks 1e-6).\n\n")

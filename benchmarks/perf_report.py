@@ -300,13 +300,9 @@ def notes(res: dict) -> list[str]:
         cold = t3["cold_before_after"]
         out += [
             f"* Target 3 ({t3['ratio']:.1f}× one by one, {t3['ratio_steady']:.1f}× in "
-            f"blocks). The cold active set needs {cold['after_solves']} face solves; each "
-            "is ~40 numpy calls on arrays of 139 numbers plus one LAPACK `dpbsv` through "
-            "scipy's wrapper, so the cost is per-call overhead (~0.5–1 µs each), not "
-            "arithmetic, and it grows when the caches are cold (one-by-one protocol). "
-            "What would reach 5× in both protocols: the walk in compiled code (Cython or "
-            "numba, not dependencies of lcpbench today) or LAPACK called without the f2py "
-            "wrapper.",
+            f"blocks). The cold step needs {cold['after_solves']} face solves of the "
+            "compiled walk (solvers/dual_kernel.py); what is left is the Python around "
+            "the call, and it grows when the caches are cold (one-by-one protocol).",
         ]
     if len(out) == 2:
         out.append("Every target is met.")

@@ -375,3 +375,37 @@ def test_solve_lcp_active_set_on_a_large_dense_lcp_is_complementary():
     w = M @ sol.z + q
     assert sol.z.min() >= 0.0 and w.min() >= -1e-12 * np.abs(q).max()
     assert np.max(np.abs(sol.z * w)) <= 1e-12 * np.abs(q).max() * max(1.0, sol.z.max())
+
+
+@settings(max_examples=30, deadline=None, derandomize=True)
+@given(st.integers(3, 8), st.integers(0, 2**32 - 1), st.booleans(), st.booleans())
+def test_a_qp_with_a_few_sub_diagonals_is_a_kkt_point(b, seed, two_sided, gram):
+    """H with 3–8 sub-diagonals and n >= 4 b (the walk's faces: the banded Cholesky
+    of the whole face, O(n b²), not the free block's): the answer is a KKT point
+    (:func:`assert_kkt`, from H, c and the bounds alone), the walk's own."""
+    rng = np.random.default_rng(seed)
+    width = 2 * b if gram else b  # (a Gram matrix B Bᵀ doubles B's bandwidth b)
+    n = int(rng.integers(4 * width, 12 * width))
+    H = random_banded_spd(rng, n, width, gram)
+    c = rng.normal(scale=5.0, size=n)
+    hi = np.where(rng.random(n) < 0.8, rng.normal(size=n), INF)
+    below = np.where(np.isfinite(hi), hi - rng.uniform(0.1, 3.0, size=n), rng.normal(size=n))
+    lo = np.where(two_sided & (rng.random(n) < 0.6), below, -INF)
+    qp = DenseBoxQP(H, c, lo, hi)
+    assert 3 <= qp.bands.shape[0] - 1 <= n // 4  # (the few-sub-diagonals faces)
+    sol = solve_banded_qp(qp)
+    assert sol.status is Status.SOLVED and "primal" not in sol.message, sol.message
+    assert_kkt(qp, sol)
+
+
+def test_an_elastic_step_is_refused_not_solved_as_rigid():
+    """The walk and its certificate take rigid walls: an elastic step handed to it
+    directly is a ProblemError naming the call that takes it (before, its rigid answer
+    was certified: no penetration where the springs give 0.5 mm)."""
+    chain = ActuatorScene(theta=150, height=3.0, links=40, wall_stiffness=0.1).chain()
+    step = assemble_step(chain, chain.rest_alpha)
+    assert step.elastic
+    with pytest.raises(ProblemError, match="solve_step"):
+        solve_banded_qp(step)
+    sol = solve_step(step, "active-set")  # the call that takes it: the springs give way
+    assert sol.solved and np.max(sol.u - step.upper) > 0.1

@@ -4,9 +4,8 @@ The walk's choice of which violated wall joins next changes its path, never
 its answer (the dual objective rises on every move): so the galloping walk is
 checked against the bisecting one (reach 0) and against the KKT conditions of
 the step, computed here from the step's own exact gradient; the whole solve
-against the previous path (no gallop, refined face solves, the old tie), within
-the judge's own error bounds. The compiled move is checked against the numpy
-move it replaces.
+against the bisecting walk (no reach hint, the small tie), within the judge's own
+error bounds.
 """
 
 from __future__ import annotations
@@ -123,7 +122,7 @@ def _old_path(monkeypatch):
 @pytest.mark.parametrize("theta,height", [(150.0, 3.0), (120.0, 2.0), (170.0, 4.0)])
 def test_new_path_gives_the_old_answer_at_n_1e4(monkeypatch, theta, height):
     """Route against route: at N = 10⁴ the energy oracle is out of reach (~N² terms per
-    answer); the old path is an independent walk to the same equilibrium, within the
+    answer); the bisecting walk takes another path to the same equilibrium, within the
     judge's bounds."""
     scene = ActuatorScene(theta, height, links=10000)
     new = lcpbench.solve(scene, tol=1e-3)

@@ -49,9 +49,8 @@ class TridiagonalFactor:
     stiffness : ndarray (n,)
         k, one per row of J (N·mm/rad).
 
-    The interface of a step's own face solves (:func:`lcpbench.solvers.banded._dual`):
-    ``face_solve(fixed, rhs)``, ``solve(rhs)``, ``resolve(rhs)`` (the last
-    factor again) and ``matvec(x)``.
+    Face solves of a face's ``fixed`` nodes: ``face_solve(fixed, rhs)``,
+    ``solve(rhs)``, ``resolve(rhs)`` (the last factor again) and ``matvec(x)``.
 
     ``restart=True`` (default): each face is refactored from its first change
     against the last face, in one compiled call (:mod:`.face_kernel`: the same

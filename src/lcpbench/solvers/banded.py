@@ -104,6 +104,10 @@ def solve_banded_qp(
     """
     if method not in METHODS:
         raise ProblemError(f"method must be one of {METHODS}, got {method!r}")
+    if getattr(step, "elastic", False) and getattr(step, "factor", None) is None:
+        raise ProblemError("step: its walls are elastic (the gap g + R/k) and this walk "
+                           "and its certificate take rigid walls; solve it with "
+                           "lcpbench.model.step_solver.solve_step(step, 'active-set')")
     t0 = time.perf_counter()
     lo, hi = step.lower, step.upper
     n = step.size
@@ -234,7 +238,13 @@ def _compiled_dual(step, warm_up, warm_lo, max_iter):
     bands = f64(step.bands, dtype=float)
     if bands.shape[0] < 3:  # a diagonal or tridiagonal H: the banded faces, zeros padded
         bands = np.vstack((bands, np.zeros((3 - bands.shape[0], n))))
-    fac = np.empty((4, n)) if bands.shape[0] == 3 else np.empty((2, max(n, 2), n))
+    b = bands.shape[0] - 1
+    if b == 2:  # the contact step's: the banded LDLᵀ, restarted at a face's first change
+        fac = np.empty((4, n))
+    elif 4 * b <= n:  # a few more: the banded Cholesky of the whole face, O(n b²)
+        fac = np.empty((2, b + 1, n))
+    else:  # wide: LAPACK's Cholesky of the free block
+        fac = np.empty((2, max(n, 2), n))
     masks = (np.zeros(n, bool) if w is None else f64(w, dtype=bool) for w in (warm_up, warm_lo))
     none = np.zeros(0)
     stencil = _stencil(step) or (np.zeros((0, 3)), 0, 1, 0, none, none, none, none, none,
@@ -245,10 +255,9 @@ def _compiled_dual(step, warm_up, warm_lo, max_iter):
                                         fac, *stencil)
     if code == kern.BAIL_NOT_PD:
         raise LinAlgError("a face of H is not positive definite")
-    why = None if code == 0 else {
-        kern.BAIL_REPEAT: "a working set repeated (round-off)",
-        kern.BAIL_LIMIT: f"limit of {max_iter} face solves"}.get(int(code),
-                                                              f"the walk stopped (code {code})")
+    stops = {kern.BAIL_REPEAT: "a working set repeated (round-off)",
+             kern.BAIL_LIMIT: f"limit of {max_iter} face solves (or of the walk's history)"}
+    why = None if code == 0 else stops.get(int(code), f"the walk stopped (code {code})")
     return u, (g if why is None else None), sigma > 0, sigma < 0, int(it), why
 
 

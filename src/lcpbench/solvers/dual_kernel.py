@@ -4,20 +4,20 @@ box QP, :func:`box_qp`.
 The walk of :func:`lcpbench.solvers.banded.solve_banded_qp` with ``method="dual"``
 (its module docstring: Goldfarb & Idnani specialised to bounds; the walk with block
 additions, its refinement), on a QP's bands H (the banded step of eqs. 20-31 for the
-contact step) and its linear term c, in the same order of operations as
-:func:`lcpbench.solvers.banded._dual` where that is cheap. Its faces are solved by the
+contact step) and its linear term c. Its faces are solved by the
 banded LDLᵀ of :mod:`lcpbench.linalg.ldl_kernel`, restarted at the first node a change
-reaches; those of a QP with wider bands (a dense LCP's M) by LAPACK's Cholesky of
-the free block (:func:`face_factor`: the choice is made by the factor's type when
-numba compiles, so the contact step's walk holds no LAPACK call). The refinement at
+reaches; those of a QP with a few more sub-diagonals by the banded Cholesky of the
+whole face, and of a wide one (a dense LCP's M) by LAPACK's Cholesky of the free
+block (:func:`face_factor`: the choice is made by the factor's type when numba
+compiles, so the contact step's walk holds neither a LAPACK call nor an extra call). The refinement at
 an optimum takes the contact step's exact gradient (:func:`grad_into`,
 ContactStep.gradient, from the step's joint stencil), a QP's H u + c.
 
 The solve kernel (:mod:`lcpbench.model.compiled_kernel`) runs it inside its outer
 loop; :func:`lcpbench.model.step_solver.solve_step` on one step; the back-end
 "active-set" (:mod:`lcpbench.solvers.banded`) on any other QP, and so
-``lcpbench.solvers.solve_lcp(M, q, solver="active-set")``, through :func:`box_qp`. Every pass writes
-into work arrays the caller allocates once (the rows below). Loaded only through
+``lcpbench.solvers.solve_lcp(M, q, solver="active-set")``, through :func:`box_qp`.
+Every pass writes into work arrays the caller allocates once (the rows below). Loaded only through
 :func:`lcpbench.numba_cache.kernel_module` (see there).
 """
 
@@ -33,11 +33,11 @@ from ..thresholds import TIE
 
 EPS = np.finfo(np.float64).eps
 TINY = np.finfo(np.float64).tiny
-# the step left the path of the reference: the caller falls back (model.compiled.reference)
+# the step stopped: the caller falls back (model.compiled.reference; banded: the primal)
 BAIL_PRIMAL, BAIL_NOT_PD, BAIL_REPEAT, BAIL_LIMIT, BAIL_CERT, BAIL_JUDGE = 10, 11, 12, 13, 14, 15
 
 # Work arrays, allocated once per solve (model.compiled_kernel.workspace); no loop
-# allocates. Rows of ``wn`` (free nodes):
+# allocates but the free block of the dense faces (box_qp). Rows of ``wn`` (free nodes):
 U, G, SIG, WALL, D, RES, GF, RATIO, LIN, ORIG, RUP, RLO, NET, U2, OUT_U, DIR, TRY, WU, SHIFT, \
     FSHIFT = range(20)
 # rows of ``wb``: the working set S, the face factored, the additions, the warm walls, the
@@ -55,8 +55,7 @@ def grad_into(out, m, u, gp, T):
     a Gauss–Newton step: adding them changes nothing but the sign of a zero; with no
     columns, not added: :meth:`~lcpbench.model.step.ContactStep.gradient`'s). Joint
     j's three columns are the nodes j + b0 − fs + (0, 1, 2); the interior rows are
-    summed without the end tests, in the same order as the ends (and the
-    reference's three passes)."""
+    summed without the end tests, in the same order as the ends (three passes)."""
     coef, b0, fs, links, origin, phi_origin, k, rest, load = gp
     n, nj = u.size, coef.shape[0]
     off = b0 - fs
@@ -211,6 +210,80 @@ def _move_wide(bands, d, u, g, s, n):
 
 
 @njit(cache=True)
+def _wide_factor(fac, bands, fixed):
+    """The banded Cholesky L of the face ``fixed`` of H (b = bands.shape[0] − 1
+    sub-diagonals; a fixed node's row and column the identity's), O(n b²), into
+    ``fac[0]`` (row k: L[j + k, j]); ``fac[1, 0]`` marks the free nodes. False where the
+    face is not positive definite."""
+    n, b = fixed.size, bands.shape[0] - 1
+    L = fac[0]
+    for j in range(n):
+        fac[1, 0, j] = 0.0 if fixed[j] else 1.0
+    for j in range(n):
+        if fixed[j]:
+            L[0, j] = 1.0
+            for k in range(1, b + 1):
+                L[k, j] = 0.0
+            continue
+        s = bands[0, j]
+        for p in range(max(j - b, 0), j):
+            s -= L[j - p, p] * L[j - p, p]
+        if not s > 0.0:
+            return False
+        d = np.sqrt(s)
+        L[0, j] = d
+        for k in range(1, b + 1):
+            i = j + k
+            if i >= n or fixed[i]:
+                L[k, j] = 0.0
+                continue
+            t = bands[k, j]
+            for p in range(max(i - b, 0), j):
+                t -= L[i - p, p] * L[j - p, p]
+            L[k, j] = t / d
+    return True
+
+
+@njit(cache=True)
+def _wide_resolve(fac, x):
+    """x ← the face's solve of x (:func:`_wide_factor`): L Lᵀ, banded."""
+    n, L = x.size, fac[0]
+    b = L.shape[0] - 1
+    for j in range(n):
+        s = x[j]
+        for p in range(max(j - b, 0), j):
+            s -= L[j - p, p] * x[p]
+        x[j] = s / L[0, j]
+    for j in range(n - 1, -1, -1):
+        s = x[j]
+        for k in range(1, min(b, n - 1 - j) + 1):
+            s -= L[k, j] * x[j + k]
+        x[j] = s / L[0, j]
+
+
+@njit(cache=True)
+def _free_block_factor(fac, bands, fixed, shift):
+    """The faces of H with more than two sub-diagonals: the banded Cholesky where
+    ``fac`` is (2, b + 1, n) with b + 1 < n (:func:`_wide_factor`, O(n b²)), else
+    LAPACK's Cholesky of the free block (:func:`_dense_factor`). No node is held by a
+    spring on these faces: springs (``shift``) are refused (False)."""
+    if shift.size:
+        return False
+    if fac.shape[1] < fixed.size:
+        return _wide_factor(fac, bands, fixed)
+    return _dense_factor(fac, bands, fixed)
+
+
+@njit(cache=True)
+def _free_block_resolve(fac, x):
+    """x ← the solve of the last face :func:`_free_block_factor` factored."""
+    if fac.shape[1] < x.size:
+        _wide_resolve(fac, x)
+    else:
+        _dense_resolve(fac, x)
+
+
+@njit(cache=True)
 def _dense_factor(fac, bands, fixed):
     """The Cholesky factor L of the face ``fixed`` of H (lower band storage ``bands``, any
     bandwidth) on its free nodes, gathered (LAPACK's, numpy.linalg.cholesky), into
@@ -282,14 +355,14 @@ def face_factor(fac, bands, fixed, shift, c0, c1):
     branch inlined into the walk (:func:`_face_factor_typed`): the banded walk's code
     holds neither a LAPACK call nor an extra call."""
     if fac.ndim == 3:
-        return _dense_factor(fac, bands, fixed)
+        return _free_block_factor(fac, bands, fixed, shift)
     return _refactor(fac, bands, fixed, shift, c0, c1)
 
 
 def face_resolve(fac, x):
     """x ← the last factored face's solve of x (:func:`face_factor`)."""
     if fac.ndim == 3:
-        _dense_resolve(fac, x)
+        _free_block_resolve(fac, x)
     else:
         _resolve(fac, x)
 
@@ -298,7 +371,8 @@ def face_resolve(fac, x):
 def _face_factor_typed(fac, bands, fixed, shift, c0, c1):
     """numba's :func:`face_factor`: the branch of ``fac``'s type."""
     if fac.ndim == 3:
-        return lambda fac, bands, fixed, shift, c0, c1: _dense_factor(fac, bands, fixed)
+        return lambda fac, bands, fixed, shift, c0, c1: _free_block_factor(fac, bands, fixed,
+                                                                           shift)
     return lambda fac, bands, fixed, shift, c0, c1: _refactor(fac, bands, fixed, shift, c0, c1)
 
 
@@ -306,7 +380,7 @@ def _face_factor_typed(fac, bands, fixed, shift, c0, c1):
 def _face_resolve_typed(fac, x):
     """numba's :func:`face_resolve`: the branch of ``fac``'s type."""
     if fac.ndim == 3:
-        return lambda fac, x: _dense_resolve(fac, x)
+        return lambda fac, x: _free_block_resolve(fac, x)
     return lambda fac, x: _resolve(fac, x)
 
 
@@ -328,9 +402,9 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
     the walk is the rigid one's as c → 0 (the wall's reaction is −∂Q/∂u_i, never
     (u_i − h_i)/c_i). A working set met before
     (its hash in ``ws[8]``; a collision, at odds of 2⁻⁶⁴, only hands the solve to
-    the reference) stops the walk as the reference's list of sets does.
+    the caller's fall-back) stops the walk.
 
-    The reference's arithmetic, with its bookkeeping kept incremental: the held
+    Its bookkeeping is incremental: the held
     nodes, the walls picked and the nodes changed since the last factorisation as
     lists (``ws[11]``), r = g + H d₀ computed where d₀ reaches (d₀ lives on the held
     nodes), the ratio test on the held nodes, the move in one pass."""
@@ -404,7 +478,7 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
                 if seen[q] == h:  # the same working set
                     return BAIL_REPEAT, it
             if count == seen.size:  # a limit of face solves far above 20 n + 50: the
-                return BAIL_LIMIT, it  # reference walks on (the history is not grown)
+                return BAIL_LIMIT, it  # caller's fall-back goes on (the history is not grown)
             seen[count] = h
             count += 1
             for q in range(npick):  # (a node violates one wall at a time; the upper first)
@@ -508,7 +582,9 @@ def box_qp(bands, linear, lo, hi, warm_up, warm_lo, max_iter, fac, coef, b0, fs,
     band storage ``bands`` (any bandwidth), c ``linear``; ``warm_up``, ``warm_lo``: a
     contact set to start from (nodes put on their walls first where they are violated).
     ``fac``: the faces' factor (:func:`face_factor`), 2-D (4, n) for H with two
-    sub-diagonals, 3-D (2, max(n, 2), n) for the Cholesky of the free block. ``coef`` ..
+    sub-diagonals (the banded LDLᵀ), 3-D (2, b + 1, n) with b + 1 < n for H with b
+    sub-diagonals (the banded Cholesky of the whole face), 3-D (2, max(n, 2), n) for the
+    Cholesky of the free block (H wide, a dense LCP's M). ``coef`` ..
     ``load``: a contact step's joint stencil (:func:`grad_into`'s ``gp``), ``T`` its
     curvature (no columns: none), whose exact gradient the refinement takes; no rows in
     ``coef``: a QP, refined with H u + c. Returns (code, face solves, u, the gradient
