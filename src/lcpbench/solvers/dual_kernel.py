@@ -29,6 +29,7 @@ from numba.extending import overload
 
 from ..linalg.ldl_kernel import refactor as _refactor  # the faces' LDLᵀ (one dependent
 from ..linalg.ldl_kernel import resolve as _resolve  # chain: a division, not a square root)
+from ..linalg.wide_face_kernel import free_block_factor, free_block_resolve  # wider H's faces
 from ..thresholds import TIE
 
 EPS = np.finfo(np.float64).eps
@@ -210,136 +211,6 @@ def _move_wide(bands, d, u, g, s, n):
 
 
 @njit(cache=True)
-def _wide_factor(fac, bands, fixed):
-    """The banded Cholesky L of the face ``fixed`` of H (b = bands.shape[0] − 1
-    sub-diagonals; a fixed node's row and column the identity's), O(n b²), into
-    ``fac[0]`` (row k: L[j + k, j]); ``fac[1, 0]`` marks the free nodes. False where the
-    face is not positive definite."""
-    n, b = fixed.size, bands.shape[0] - 1
-    L = fac[0]
-    for j in range(n):
-        fac[1, 0, j] = 0.0 if fixed[j] else 1.0
-    for j in range(n):
-        if fixed[j]:
-            L[0, j] = 1.0
-            for k in range(1, b + 1):
-                L[k, j] = 0.0
-            continue
-        s = bands[0, j]
-        for p in range(max(j - b, 0), j):
-            s -= L[j - p, p] * L[j - p, p]
-        if not s > 0.0:
-            return False
-        d = np.sqrt(s)
-        L[0, j] = d
-        for k in range(1, b + 1):
-            i = j + k
-            if i >= n or fixed[i]:
-                L[k, j] = 0.0
-                continue
-            t = bands[k, j]
-            for p in range(max(i - b, 0), j):
-                t -= L[i - p, p] * L[j - p, p]
-            L[k, j] = t / d
-    return True
-
-
-@njit(cache=True)
-def _wide_resolve(fac, x):
-    """x ← the face's solve of x (:func:`_wide_factor`): L Lᵀ, banded."""
-    n, L = x.size, fac[0]
-    b = L.shape[0] - 1
-    for j in range(n):
-        s = x[j]
-        for p in range(max(j - b, 0), j):
-            s -= L[j - p, p] * x[p]
-        x[j] = s / L[0, j]
-    for j in range(n - 1, -1, -1):
-        s = x[j]
-        for k in range(1, min(b, n - 1 - j) + 1):
-            s -= L[k, j] * x[j + k]
-        x[j] = s / L[0, j]
-
-
-@njit(cache=True)
-def _free_block_factor(fac, bands, fixed, shift):
-    """The faces of H with more than two sub-diagonals: the banded Cholesky where
-    ``fac`` is (2, b + 1, n) with b + 1 < n (:func:`_wide_factor`, O(n b²)), else
-    LAPACK's Cholesky of the free block (:func:`_dense_factor`). No node is held by a
-    spring on these faces: springs (``shift``) are refused (False)."""
-    if shift.size:
-        return False
-    if fac.shape[1] < fixed.size:
-        return _wide_factor(fac, bands, fixed)
-    return _dense_factor(fac, bands, fixed)
-
-
-@njit(cache=True)
-def _free_block_resolve(fac, x):
-    """x ← the solve of the last face :func:`_free_block_factor` factored."""
-    if fac.shape[1] < x.size:
-        _wide_resolve(fac, x)
-    else:
-        _dense_resolve(fac, x)
-
-
-@njit(cache=True)
-def _dense_factor(fac, bands, fixed):
-    """The Cholesky factor L of the face ``fixed`` of H (lower band storage ``bands``, any
-    bandwidth) on its free nodes, gathered (LAPACK's, numpy.linalg.cholesky), into
-    ``fac[0]``'s leading block; ``fac[1, 0]`` marks the free nodes, ``fac[1, 1]`` lists
-    them. False where the face is not positive definite. No node is held by a spring
-    here (the walk of a general QP, :func:`box_qp`)."""
-    n, b = fixed.size, bands.shape[0] - 1
-    f = 0
-    for i in range(n):
-        fac[1, 0, i] = 0.0 if fixed[i] else 1.0
-        if not fixed[i]:
-            fac[1, 1, f] = i
-            f += 1
-    if f == 0:
-        return True
-    A = np.empty((f, f))
-    for p in range(f):
-        i = int(fac[1, 1, p])
-        for q in range(p + 1):
-            j = int(fac[1, 1, q])
-            A[p, q] = bands[i - j, j] if i - j <= b else 0.0
-            A[q, p] = A[p, q]
-    try:
-        L = np.linalg.cholesky(A)
-    except Exception:  # (numba: LinAlgError) not positive definite
-        return False
-    fac[0, :f, :f] = L
-    return True
-
-
-@njit(cache=True)
-def _dense_resolve(fac, x):
-    """x ← the face's solve of x (:func:`_dense_factor`): L Lᵀ on the free nodes; a
-    fixed node's row is the identity's."""
-    n = x.size
-    f = 0
-    for i in range(n):
-        if fac[1, 0, i] > 0.0:
-            f += 1
-    L = fac[0]
-    y = np.empty(f)
-    for p in range(f):  # L y = x on the free nodes
-        s = x[int(fac[1, 1, p])]
-        for q in range(p):
-            s -= L[p, q] * y[q]
-        y[p] = s / L[p, p]
-    for p in range(f - 1, -1, -1):  # Lᵀ z = y
-        s = y[p]
-        for q in range(p + 1, f):
-            s -= L[q, p] * y[q]
-        y[p] = s / L[p, p]
-    for p in range(f):
-        x[int(fac[1, 1, p])] = y[p]
-
-
-@njit(cache=True)
 def dense_faces(fac):
     """Whether the faces are the Cholesky of their free block (a 3-D ``fac``: H of any
     bandwidth), not the banded LDLᵀ (2-D: two sub-diagonals). A constant of each
@@ -350,19 +221,20 @@ def dense_faces(fac):
 def face_factor(fac, bands, fixed, shift, c0, c1):
     """Factor the face ``fixed`` of H: the banded LDLᵀ restarted at column ``c0``
     (:func:`lcpbench.linalg.ldl_kernel.refactor`; a 2-D ``fac``, two sub-diagonals, the
-    contact step's) or the Cholesky of its free block (a 3-D ``fac``, any bandwidth,
-    :func:`_dense_factor`). Compiled, the choice is made by ``fac``'s type and the one
-    branch inlined into the walk (:func:`_face_factor_typed`): the banded walk's code
-    holds neither a LAPACK call nor an extra call."""
+    contact step's) or a wider H's face (a 3-D ``fac``, any bandwidth:
+    :func:`lcpbench.linalg.wide_face_kernel.free_block_factor`). Compiled, the choice is
+    made by ``fac``'s type and the one branch inlined into the walk
+    (:func:`_face_factor_typed`): the banded walk's code holds neither a LAPACK call nor
+    an extra call."""
     if fac.ndim == 3:
-        return _free_block_factor(fac, bands, fixed, shift)
+        return free_block_factor(fac, bands, fixed, shift)
     return _refactor(fac, bands, fixed, shift, c0, c1)
 
 
 def face_resolve(fac, x):
     """x ← the last factored face's solve of x (:func:`face_factor`)."""
     if fac.ndim == 3:
-        _free_block_resolve(fac, x)
+        free_block_resolve(fac, x)
     else:
         _resolve(fac, x)
 
@@ -371,7 +243,7 @@ def face_resolve(fac, x):
 def _face_factor_typed(fac, bands, fixed, shift, c0, c1):
     """numba's :func:`face_factor`: the branch of ``fac``'s type."""
     if fac.ndim == 3:
-        return lambda fac, bands, fixed, shift, c0, c1: _free_block_factor(fac, bands, fixed,
+        return lambda fac, bands, fixed, shift, c0, c1: free_block_factor(fac, bands, fixed,
                                                                            shift)
     return lambda fac, bands, fixed, shift, c0, c1: _refactor(fac, bands, fixed, shift, c0, c1)
 
@@ -380,7 +252,7 @@ def _face_factor_typed(fac, bands, fixed, shift, c0, c1):
 def _face_resolve_typed(fac, x):
     """numba's :func:`face_resolve`: the branch of ``fac``'s type."""
     if fac.ndim == 3:
-        return lambda fac, x: _free_block_resolve(fac, x)
+        return lambda fac, x: free_block_resolve(fac, x)
     return lambda fac, x: _resolve(fac, x)
 
 
