@@ -155,17 +155,23 @@ def test_symmetric_pair_released_together():
 
 
 # -- random SPD banded problems against enumeration --------------------------------
-@settings(max_examples=60, deadline=None, derandomize=True)
-@given(st.integers(1, 7), st.integers(1, 3), st.integers(0, 2**32 - 1), st.booleans(),
-       st.booleans())
-def test_random_banded_against_face_enumeration(n, b, seed, two_sided, gram):
-    rng = np.random.default_rng(seed)
+def random_box_qp(rng, n, b, gram, two_sided):
+    """A random box QP: H of bandwidth b (:func:`random_banded_spd`), most nodes with an
+    upper wall, some (``two_sided``) with a lower one too."""
     H = random_banded_spd(rng, n, b, gram)
     c = rng.normal(scale=5.0, size=n)
     hi = np.where(rng.random(n) < 0.8, rng.normal(size=n), INF)
     below = np.where(np.isfinite(hi), hi - rng.uniform(0.1, 3.0, size=n), rng.normal(size=n))
     lo = np.where(two_sided & (rng.random(n) < 0.6), below, -INF)
-    qp = DenseBoxQP(H, c, lo, hi)
+    return DenseBoxQP(H, c, lo, hi)
+
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(st.integers(1, 7), st.integers(1, 3), st.integers(0, 2**32 - 1), st.booleans(),
+       st.booleans())
+def test_random_banded_against_face_enumeration(n, b, seed, two_sided, gram):
+    qp = random_box_qp(np.random.default_rng(seed), n, b, gram, two_sided)
     ref = brute_force(qp)
     for method in banded.METHODS:
         sol = solve_banded_qp(qp, method=method)
@@ -386,12 +392,7 @@ def test_a_qp_with_a_few_sub_diagonals_is_a_kkt_point(b, seed, two_sided, gram):
     rng = np.random.default_rng(seed)
     width = 2 * b if gram else b  # (a Gram matrix B Bᵀ doubles B's bandwidth b)
     n = int(rng.integers(4 * width, 12 * width))
-    H = random_banded_spd(rng, n, width, gram)
-    c = rng.normal(scale=5.0, size=n)
-    hi = np.where(rng.random(n) < 0.8, rng.normal(size=n), INF)
-    below = np.where(np.isfinite(hi), hi - rng.uniform(0.1, 3.0, size=n), rng.normal(size=n))
-    lo = np.where(two_sided & (rng.random(n) < 0.6), below, -INF)
-    qp = DenseBoxQP(H, c, lo, hi)
+    qp = random_box_qp(rng, n, width, gram, two_sided)
     assert 3 <= qp.bands.shape[0] - 1 <= n // 4  # (the few-sub-diagonals faces)
     sol = solve_banded_qp(qp)
     assert sol.status is Status.SOLVED and "primal" not in sol.message, sol.message
