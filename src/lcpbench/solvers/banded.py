@@ -171,8 +171,8 @@ def _dual(step, warm_up, warm_lo, max_iter, reach=0):
     warm contact set ``reach`` nodes on, its violations beyond the round-off of each
     node's height, its refinement to round-off at every optimum). Any other QP walks in
     one call of :func:`lcpbench.solvers.dual_kernel.box_qp`: its faces on the banded
-    LDLᵀ where H has at most two sub-diagonals (the contact step's), else on LAPACK's
-    Cholesky of their free block; its refinement with the contact step's exact gradient
+    LDLᵀ where H has at most two sub-diagonals (the contact step's), else on the banded
+    Cholesky of the whole face (4 b <= n) or LAPACK's of its free block; its refinement with the contact step's exact gradient
     where the step gives its joint stencil on contiguous nodes (:func:`_stencil`), else
     with H u + c.
     """

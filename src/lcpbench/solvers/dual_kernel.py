@@ -212,8 +212,9 @@ def _move_wide(bands, d, u, g, s, n):
 
 @njit(cache=True)
 def dense_faces(fac):
-    """Whether the faces are the Cholesky of their free block (a 3-D ``fac``: H of any
-    bandwidth), not the banded LDLᵀ (2-D: two sub-diagonals). A constant of each
+    """Whether the faces are a wider H's (a 3-D ``fac``, any bandwidth:
+    :mod:`lcpbench.linalg.wide_face_kernel`), not the banded LDLᵀ (2-D: two
+    sub-diagonals). A constant of each
     compiled version of the walk, so its other branches drop out of the code."""
     return fac.ndim == 3
 
@@ -262,8 +263,8 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
     in the rows U, G, SIG of the work array ``ws[0]``.
 
     ``bands``: H in lower band storage. Its faces are factored as ``ws[5]`` says
-    (:func:`face_factor`): the contact step's banded LDLᵀ (two sub-diagonals), or the
-    Cholesky of the free block (any bandwidth: :func:`box_qp`'s dense QPs). ``gp``: the
+    (:func:`face_factor`): the contact step's banded LDLᵀ (two sub-diagonals), or a
+    wider H's (any bandwidth, :func:`box_qp`'s QPs: :mod:`lcpbench.linalg.wide_face_kernel`). ``gp``: the
     contact step's joint stencil, whose exact gradient (:func:`grad_into`) the
     refinement takes; with no joints (a QP) the refinement takes H u + c.
 
