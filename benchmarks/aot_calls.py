@@ -49,7 +49,7 @@ def calls() -> dict:
             setattr(aot, entry, plain)
             args = captured[label]
             raw = getattr(aot._module, f"{name.rsplit('.', 1)[-1]}__{entry}")  # build_aot's
-            jit = getattr(numba_cache.jit_module(name, entry), entry)
+            jit = getattr(numba_cache.jit_module(name), entry)
             jit(*args)  # loaded and compiled outside the clock
             out[f"{label} checked"] = lambda f=plain, a=args: f(*a)
             out[f"{label} raw"] = lambda f=raw, a=args: f(*a)

@@ -39,7 +39,7 @@ START = ("import time; P, T = time.process_time, time.perf_counter; c0, t0 = P()
 NAMES = ("import_wall_s", "import_cpu_s", "first_wall_s", "first_cpu_s", "second_wall_s",
          "second_cpu_s")
 HAS_AOT = ("from lcpbench import numba_cache as n; "
-           "print(n.aot_kernels('lcpbench.model.compiled_kernel', 'solve_chain') is not None)")
+           "print(n.aot_kernels('lcpbench.model.compiled_kernel') is not None)")
 
 
 def _fresh(code: str, **env) -> list[str]:

@@ -74,6 +74,7 @@ KERNEL_FILES = ("model/chain_kernel.py", "model/compiled_kernel.py", "model/comp
                 "linalg/givens_kernel.py",
                 "linalg/face_kernel.py", "linalg/twisted_kernel.py",
                 "linalg/ldl_kernel.py", "linalg/wide_face_kernel.py", "model/batch_kernel.py", "model/batch_verdict.py",
+                "model/wall_free_kernel.py",
                 "model/sensitivity_kernel.py", "model/sensitivity_profile_kernel.py",
                 "model/angle_kernel.py", "model/path_kernel.py",
                 "linalg/band_lu_kernel.py", "problems/table_kernel.py",
@@ -149,15 +150,15 @@ def kernel_module(name: str, entry: str | None = None):
     if found is None:
         if entry is not None:
             _ENTRIES.setdefault(name, set()).add(entry)
-        found = aot_kernels(name, entry) or jit_module(name, entry)
+        found = aot_kernels(name) or jit_module(name)
         _LOADED[name] = found
     return found
 
 
-def jit_module(name: str, entry: str | None = None):
+def jit_module(name: str):
     """The numba module ``name`` (imports numba; loads or compiles it) under the
-    kernels' cache directory (:func:`kernels_dir`), its dispatcher ``entry`` hooked
-    to :func:`light_cache_load`, once per process."""
+    kernels' cache directory (:func:`kernels_dir`), every dispatcher it defines (each
+    a Python caller may call) hooked to :func:`light_cache_load`, once per process."""
     module = _JIT.get(name)
     if module is None:
         from numba.core import config  # numba's locator reads it at each @njit
@@ -168,8 +169,9 @@ def jit_module(name: str, entry: str | None = None):
             module = importlib.import_module(name)
         finally:
             config.CACHE_DIR = saved
-        if entry is not None:
-            light_cache_load(getattr(module, entry))
+        for fn in vars(module).values():  # every kernel of it a Python caller may call
+            if getattr(getattr(fn, "py_func", None), "__module__", None) == name:
+                light_cache_load(fn)
         _JIT[name] = module
     return module
 
@@ -213,7 +215,7 @@ def held(holder: list) -> list:
     return holder
 
 
-def aot_kernels(name: str, entry: str | None = None) -> AotKernels | None:
+def aot_kernels(name: str) -> AotKernels | None:
     """The AOT module's functions of kernel module ``name``, or None (no module for
     these kernels on this machine, turned off, or it does not import: then one
     warning, and the JIT serves)."""
@@ -226,7 +228,7 @@ def aot_kernels(name: str, entry: str | None = None) -> AotKernels | None:
         return None
     found = _AOT_KERNELS.get(name)
     if found is None or found._module is not lib[0]:
-        found = _AOT_KERNELS[name] = AotKernels(name, entry, lib[0], lib[1]["modules"][name])
+        found = _AOT_KERNELS[name] = AotKernels(name, lib[0], lib[1]["modules"][name])
     return found
 
 
@@ -284,22 +286,22 @@ class AotKernels:
     a new specialisation. Any name the AOT module lacks comes from the JIT module
     (:func:`jit_module`, which imports numba)."""
 
-    def __init__(self, name: str, entry: str | None, module, spec: dict):
+    def __init__(self, name: str, module, spec: dict):
         self.__name__ = name
-        self._entry, self._module = entry, module
+        self._module = module
         self.__dict__.update({k: tuple(v) if isinstance(v, list) else v
                               for k, v in spec["constants"].items()})
         for fn_name, fn in spec["functions"].items():
-            setattr(self, fn_name, _checked(getattr(module, fn["symbol"]), fn, name, entry,
+            setattr(self, fn_name, _checked(getattr(module, fn["symbol"]), fn, name,
                                             fn_name))
 
     def __getattr__(self, attr: str):  # only for names not set above
         if attr.startswith("__"):
             raise AttributeError(attr)
-        return getattr(jit_module(self.__name__, self._entry), attr)
+        return getattr(jit_module(self.__name__), attr)
 
 
-def _checked(aot, fn: dict, name: str, entry: str | None, fn_name: str):
+def _checked(aot, fn: dict, name: str, fn_name: str):
     """``aot`` behind a check of its arguments' types (see :class:`AotKernels`).
 
     The check is one generated expression (as :mod:`dataclasses` generates its
@@ -311,7 +313,7 @@ def _checked(aot, fn: dict, name: str, entry: str | None, fn_name: str):
 
     kinds, names, defaults = fn["args"], fn["names"], fn["defaults"]
     env = {"aot": aot, "_nd": np.ndarray, "_f8": np.float64, "_i8": np.int64, "_b1": np.bool_,
-           "slow": _slow(aot, fn, name, entry, fn_name)}
+           "slow": _slow(aot, fn, name, fn_name)}
     conds = []
     for i, (x, kind) in enumerate(zip(names, kinds, strict=True)):
         if kind == "f8":
@@ -336,7 +338,7 @@ def _checked(aot, fn: dict, name: str, entry: str | None, fn_name: str):
     return call
 
 
-def _slow(aot, fn: dict, name: str, entry: str | None, fn_name: str):
+def _slow(aot, fn: dict, name: str, fn_name: str):
     """The check of :func:`_checked` by equality (a dtype equal but not identical):
     ``aot`` where the arguments fit, else the JIT module's function."""
     import numpy as np
@@ -357,7 +359,7 @@ def _slow(aot, fn: dict, name: str, entry: str | None, fn_name: str):
     def slow(*args):
         if fits(args):
             return aot(*args)
-        return getattr(jit_module(name, entry), fn_name)(*args)
+        return getattr(jit_module(name), fn_name)(*args)
 
     return slow
 

@@ -196,7 +196,7 @@ def test_a_missing_module_is_silent(served_from, tmp_path):
     served_from(str(tmp_path / "nothing-here"))
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        assert numba_cache.aot_kernels(SOLVE, "solve_chain") is None
+        assert numba_cache.aot_kernels(SOLVE) is None
         assert lcpbench.solve(lcpbench.ActuatorScene(theta=150, height=3.0,
                                                      links=40)).converged
 
@@ -206,11 +206,11 @@ def test_lcpbench_aot_0_turns_it_off(aot_build, monkeypatch):
     monkeypatch.setenv("LCPBENCH_AOT_DIR", aot_build[0])
     numba_cache.use_aot(None)
     try:
-        assert numba_cache.aot_kernels(SOLVE, "solve_chain") is not None
+        assert numba_cache.aot_kernels(SOLVE) is not None
         for var, value in (("LCPBENCH_AOT", "0"), ("LCPBENCH_NUMBA_FULL_LOAD", "1")):
             monkeypatch.setenv(var, value)
             numba_cache.use_aot(None)
-            assert numba_cache.aot_kernels(SOLVE, "solve_chain") is None
+            assert numba_cache.aot_kernels(SOLVE) is None
             monkeypatch.delenv(var)
     finally:
         numba_cache.use_aot(None)
@@ -224,7 +224,7 @@ def test_arguments_that_do_not_fit_the_signature_go_to_the_jit(monkeypatch):
             "names": ["x", "n", "t", "flag"], "defaults": [False]}
     monkeypatch.setitem(numba_cache._JIT, "fake.kernels",
                         type("M", (), {"f": staticmethod(lambda *a: ("jit", a))}))
-    f = numba_cache._checked(lambda *a: ("aot", a), spec, "fake.kernels", None, "f")
+    f = numba_cache._checked(lambda *a: ("aot", a), spec, "fake.kernels", "f")
     x = np.zeros(4)
     assert f(x, 3, 1.0) == ("aot", (x, 3, 1.0, False))  # the default filled in
     assert f(x, np.int64(3), np.float64(1.0), flag=np.bool_(True))[0] == "aot"

@@ -71,7 +71,7 @@ def test_the_kernels_are_cached_under_a_hash_of_all_their_files(tmp_path):
     b.write_text("y = 2\n")  # an edit of the second file alone moves the cache
     assert kernel_cache_dir([a, b], str(tmp_path)) != first
     assert first.startswith(str(tmp_path / "lcpbench-numba"))
-    k = jit_module("lcpbench.model.compiled_kernel", "solve_chain")
+    k = jit_module("lcpbench.model.compiled_kernel")
     here = Path(compiled.__file__).parent.parent
     where = kernel_cache_dir([here / f for f in KERNEL_FILES + CONSTANT_FILES],
                              config.CACHE_DIR)

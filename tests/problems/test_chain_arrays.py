@@ -49,8 +49,6 @@ def _kept_values_are_their_definitions(chain) -> None:
         assert np.array_equal(d["_nodal_load"], chain.nodal_load)
     if "_total_load" in d:
         assert d["_total_load"] == float(np.sum(np.abs(chain.link_load)))
-    if "_loaded" in d:
-        assert d["_loaded"] == bool(np.count_nonzero(chain.link_load))
 
 
 @pytest.mark.parametrize("kw", [

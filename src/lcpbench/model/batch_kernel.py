@@ -41,75 +41,44 @@ import numpy as np
 from numba import njit
 
 from ..solvers.dual_kernel import BAIL_NOT_PD  # the free step has no minimiser
-from ..thresholds import SAG_BOUND
 from .batch_verdict import accepted
 from .chain_kernel import free_heights
 from .compiled_kernel import CONVERGED, LINE_SEARCH, MAX_OUTER, NO_FIT, contact_step, solve_chain
 from .judge_kernel import SETTLED, STATS, judge_answer
+from .wall_free_kernel import ARC, CONTACT, FAR, FIRST_STEP, FREE, arc_kind, wall_overlap
 from .wall_kernel import split_by_wall
 
 __all__ = ["ARC", "CONTACT", "CONVERGED", "FREE", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "SETTLED",
            "STATS", "STOPPED_FREE", "append_records", "solve_line", "store_solve",
            "store_verdict"]
-# what an attempt is (o_kind): a contact solve, the wall-free search's answer, the arc
-CONTACT, FREE, ARC = 0, 1, 2
 #: o_code of an attempt the wall-free search stopped on (its compiled step where the
 #: numpy one would go on, or the search's solve kernel): no bail code of a contact solve
 STOPPED_FREE = -1
 
 
 @njit(cache=True)
-def _overlap(u, lo, hi):
-    """model.wall_free.wall_overlap: max(max(u − upper), max(lower − u))."""
-    up, dn = -np.inf, -np.inf
-    for i in range(u.size):
-        up = max(up, u[i] - hi[i])
-        dn = max(dn, lo[i] - u[i])
-    return max(up, dn)
-
-
-@njit(cache=True)
 def _wall_free_kind(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
                     max_iter, request, free_lo, free_hi):
-    """The tests of solve_without_contact before its search: ARC (the arc is the answer),
-    FREE (search without walls), CONTACT (none: the contact solve), or -1 (the compiled
-    free step stopped where the numpy one would not: the caller's path)."""
+    """What an attempt is (:func:`~.wall_free_kernel.arc_kind`): ARC (the arc is the
+    answer), FREE (search without walls), CONTACT (the contact solve), where the arc
+    touches a wall as the first free step (the compiled step with no walls) says, or
+    STOPPED_FREE where that step stopped as the free step would not (the caller's path)."""
     n = lo.size
-    total = 0.0
-    for i in range(link_load.size):
-        total += abs(link_load[i])
-    loaded = total > 0.0
-    sag = 5.0 / 384.0 * total * L / F
-    mid = n // 2  # arc_far_past_wall: the middle free node alone
-    wall = hi[mid]
-    if np.isfinite(wall):
-        y = 0.0
-        for i in range(mid + fs - 1):
-            y += np.sin(ra[i])
-        y *= a
-        bound = SAG_BOUND * sag if loaded else 0.0
-        if y - wall > bound + 1e-9 * (L + abs(wall)):
-            return CONTACT
-    u = np.empty(n)
-    free_heights(u, ra, a, fs)
-    over = _overlap(u, lo, hi)
-    if over >= 0:
-        if not loaded or over > SAG_BOUND * sag:
-            return CONTACT
-        z = np.zeros(n)
-        b = np.zeros(n, np.bool_)
-        got = contact_step(ra, a, jl, jr, k, rest, fs, n, nodal_load, free_lo, free_hi, L, F,
-                            z[:0], z[:0], z, b, b, 0, max_iter, request)
-        if got[0] == BAIL_NOT_PD:
-            return CONTACT
-        if got[0] != 0:
-            return -1
-        if not _overlap(got[1], lo, hi) < 0:
-            return CONTACT
-        return FREE
-    if not loaded:
-        return ARC
-    return FREE
+    nodes = np.arange(fs - 1, fs - 1 + n)
+    kind = arc_kind(ra, a, nodes, link_load, lo, hi, L, F)
+    if kind == FAR:
+        return CONTACT
+    if kind != FIRST_STEP:
+        return kind
+    z = np.zeros(n)
+    b = np.zeros(n, np.bool_)
+    got = contact_step(ra, a, jl, jr, k, rest, fs, n, nodal_load, free_lo, free_hi, L, F,
+                        z[:0], z[:0], z, b, b, 0, max_iter, request)
+    if got[0] == BAIL_NOT_PD:
+        return CONTACT
+    if got[0] != 0:
+        return STOPPED_FREE
+    return FREE if wall_overlap(got[1], lo, hi) < 0 else CONTACT
 
 
 @njit(cache=True)
@@ -182,7 +151,7 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
                 return False, recs, used
             u = np.empty(n)
             free_heights(u, got[1], a, fs)
-            if got[0] == CONVERGED and _overlap(u, lo, hi) < 0:
+            if got[0] == CONVERGED and wall_overlap(u, lo, hi) < 0:
                 code = CONVERGED
             else:
                 kind = CONTACT

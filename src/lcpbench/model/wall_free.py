@@ -5,12 +5,12 @@ With a load (gravity) the unconstrained shape is the equilibrium of the chain
 without walls, found by the same globalised driver (Fig. 3, line-searched)
 with each step a banded solve of K u = −z (eq. 30 with no reactions); if it
 clears every wall it is the answer. Otherwise the scene is solved with its
-walls.
+walls. The tests that decide which (:func:`~.wall_free_kernel.arc_kind`) are compiled
+once, for this module and the batch kernel's lines.
 """
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import replace
 
@@ -18,56 +18,48 @@ import numpy as np
 from numpy.linalg import LinAlgError  # scipy.linalg's LinAlgError is this class
 
 from ..linalg import solveh_banded
+from ..numba_cache import kernel_module
 from ..problems.scenes import Chain
 from ..solvers.base import Status, StepSolution
-from ..thresholds import SAG_BOUND  # the arc will not sag off a wall it crosses by more
 from . import compiled_driver, large_n
-from .angle_step import heavy, total_load
+from .angle_step import heavy
 from .chain import heights
-from .kernel_call import applies
+from .kernel_call import applies, kernel_args
 from .outer import DriverOutput, DriverStart
 from .profile import walls_at
+
+
+def _tests():
+    """The compiled wall-free tests (:mod:`.wall_free_kernel`), loaded once."""
+    return kernel_module("lcpbench.model.wall_free_kernel", "arc_kind")
 
 
 def wall_overlap(chain: Chain, u: np.ndarray) -> float:
     """How far free-node heights ``u`` cross the walls (mm; < 0: strictly
     between them; NaN if u has a NaN)."""
-    return float(max(np.max(u - chain.upper), np.max(chain.lower - u)))
+    return float(_tests().wall_overlap(u, chain.lower, chain.upper))
 
 
-def beam_sag(chain: Chain) -> float:
-    """5 w ℓ⁴ / (384 EI) for the chain's total load (EI = force_scale · ℓ²), mm."""
-    load = total_load(chain)
-    return 5.0 / 384.0 * load * chain.length / chain.force_scale
+def _arc_arrays(chain: Chain) -> tuple:
+    """(α, a, free nodes, link loads, lower, upper, ℓ, F) of the chain's arc, as the
+    compiled tests take them: the kernel's arrays."""
+    args = kernel_args(chain)
+    nodes = np.ascontiguousarray(chain.free_nodes, dtype=np.int64)
+    return (args[0], args[1], nodes, args[6], args[9], args[10], args[11], args[12])
 
 
-def arc_far_past_wall(chain: Chain, loaded: bool) -> bool:
-    """A cheap sufficient test that :func:`solve_without_contact` finds nothing: the
-    arc's middle free node alone crosses the upper wall by more than the bound of
-    the search (0 with no load, ``SAG_BOUND`` times :func:`beam_sag` with one), with
-    a margin far above round-off. False says nothing (the full test runs)."""
-    f = chain.free_nodes
-    if not f.size:
-        return False
-    i = f.size // 2
-    wall = float(chain.upper[i])
-    if not math.isfinite(wall):
-        return False
-    # (np.add.reduce: ndarray.sum without its Python wrapper, the same sum)
-    y = chain.link_length * float(np.add.reduce(np.sin(chain.rest_alpha[:int(f[i])])))
-    bound = SAG_BOUND * beam_sag(chain) if loaded else 0.0
-    return y - wall > bound + 1e-9 * (chain.length + abs(wall))  # (a margin over round-off)
-
-
-def loaded_chain(chain: Chain) -> bool:
-    """Whether a link of the chain carries a load (kept with the chain)."""
-    return chain.derived("_loaded", lambda: np.count_nonzero(chain.link_load) > 0)
+def arc_kind(chain: Chain) -> int:
+    """What the chain's arc says of its scene before any step
+    (:func:`lcpbench.model.wall_free_kernel.arc_kind`; kept with the chain)."""
+    return chain.derived("_arc_kind", lambda: int(_tests().arc_kind(*_arc_arrays(chain))))
 
 
 def arc_far(chain: Chain) -> bool:
-    """:func:`arc_far_past_wall` of the chain with its load (kept with the chain)."""
-    return chain.derived("_arc_far_past_wall",
-                         lambda: arc_far_past_wall(chain, loaded_chain(chain)))
+    """A cheap sufficient test that :func:`solve_without_contact` finds nothing: the
+    arc's middle free node alone crosses the upper wall by more than the search could
+    sag it off (:func:`lcpbench.model.wall_free_kernel.arc_far_past_wall`). False says
+    nothing."""
+    return arc_kind(chain) == _tests().FAR
 
 
 def free_step(step, warm) -> StepSolution:
@@ -137,14 +129,14 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
     n = chain.free_nodes.size
     if heavy(chain):  # links past the vertical: the angle steps (model/heavy_driver.py)
         return None
-    loaded = loaded_chain(chain)
-    if arc_far(chain):
-        return None  # what the test below finds, from one node
-    overlap = chain.derived("_arc_overlap",
-                            lambda: wall_overlap(chain, heights(chain, chain.rest_alpha)))
-    if overlap >= 0:  # the arc touches or crosses a wall
-        if not loaded or overlap > SAG_BOUND * beam_sag(chain):
-            return None
+    k, kind = _tests(), arc_kind(chain)
+    if kind in (k.FAR, k.CONTACT):
+        return None
+    if kind == k.ARC:
+        return DriverOutput(chain.rest_alpha.copy(), np.zeros(n), np.zeros(n), True,
+                            "no contact: the unconstrained arc clears every wall and there "
+                            "is no load")
+    if kind == k.FIRST_STEP:  # the arc touches a wall the load may sag it off
         first = _first_free_heights(chain, args) if in_kernel else None
         if first is None:
             if not applies("auto", "globalised", free_layout(chain)):
@@ -152,10 +144,6 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
             first = free_step(compiled_driver.assemble_step(chain, chain.rest_alpha), None).u
         if not wall_overlap(chain, first) < 0:  # NaN (no minimiser) included
             return None
-    elif not loaded:
-        return DriverOutput(chain.rest_alpha.copy(), np.zeros(n), np.zeros(n), True,
-                            "no contact: the unconstrained arc clears every wall and there "
-                            "is no load")
     if large_n.applies(chain):
         # the search's steps are banded solves in heights, whose round-off grows as N⁴:
         # at N = 10⁴ its equilibrium is 1e-4 F₀ off per node, which the judge rejects;

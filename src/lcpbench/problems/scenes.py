@@ -195,7 +195,7 @@ _CHAIN_FIELDS = tuple(f.name for f in fields(Chain))
 #: the values a chain derives (:meth:`Chain.derived`) from its layout, walls and load,
 #: not from its rest shape: :meth:`Chain.with_rest_shape` keeps them
 LAYOUT_DERIVED = ("_angle_problem", "_free_nodes_below", "_in_reach", "_kernel_layout",
-                  "_loaded", "_nodal_load", "_total_load")
+                  "_nodal_load", "_total_load")
 
 STIFFNESS_RANGE = (1e-9, 1e12)  # N/mm per mm of wall (Winkler k); inf = rigid
 

@@ -53,12 +53,10 @@ def uniform_load(n: int, load: float) -> dict:
     - ``_nodal_load``: :attr:`Chain.nodal_load` (half of each link's load to each end:
       an interior node gets ½μ + ½μ, summed as the property sums them);
     - ``_total_load``: Σ|μ_i| (:func:`lcpbench.model.angle_step.total_load`, the same
-      numpy sum);
-    - ``_loaded``: whether a link carries a load (``lcpbench.model.wall_free``).
+      numpy sum).
     """
     return {"_nodal_load": filled(n - 1, (0.0 + 0.5 * load) + 0.5 * load).copy(),
-            "_total_load": _total(n, load, math.copysign(1.0, load)),
-            "_loaded": load != 0.0}
+            "_total_load": _total(n, load, math.copysign(1.0, load))}
 
 
 @functools.lru_cache(maxsize=64)
