@@ -19,8 +19,9 @@ in order:
    warm set; each scene is solved on its own walls (its own row of ``cu``, ``cl``):
    only the start is shared;
 2. the wall-free search of :func:`lcpbench.model.wall_free.solve_without_contact`
-   (its tests; the first free step is the compiled step with no walls,
-   :func:`~lcpbench.model.compiled_kernel.contact_step`, the numpy one's twin);
+   (its tests, :func:`~lcpbench.model.wall_free_kernel.arc_kind`, which it calls too;
+   the first free step is the compiled step with no walls,
+   :func:`~lcpbench.model.compiled_kernel.contact_step`);
 3. the solve kernel's entry :func:`~lcpbench.model.compiled_kernel.solve_chain`;
 4. the judge kernel's entry :func:`~lcpbench.model.judge_kernel.judge_answer` on the
    answer, and its verdict from the judge's numbers alone
@@ -59,10 +60,10 @@ STOPPED_FREE = -1
 @njit(cache=True)
 def _wall_free_kind(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
                     max_iter, request, free_lo, free_hi):
-    """What an attempt is (:func:`~.wall_free_kernel.arc_kind`): ARC (the arc is the
-    answer), FREE (search without walls), CONTACT (the contact solve), where the arc
-    touches a wall as the first free step (the compiled step with no walls) says, or
-    STOPPED_FREE where that step stopped as the free step would not (the caller's path)."""
+    """What an attempt is: ARC (the arc is the answer), FREE (the search without walls)
+    or CONTACT (the contact solve), as :func:`~.wall_free_kernel.arc_kind` says; where it
+    leaves it to the first step without walls (the compiled step with no walls), as that
+    step says, or STOPPED_FREE where that step stopped (the caller's path)."""
     n = lo.size
     nodes = np.arange(fs - 1, fs - 1 + n)
     kind = arc_kind(ra, a, nodes, link_load, lo, hi, L, F)
