@@ -132,9 +132,9 @@ def parts(med, repeat: int) -> dict:
         "scene.chain() (kept: the second call)": scene.chain,
         "building the chain of a new scene": lambda: fresh.pop().chain(),
         "wall-free check (a contact scene: no search; again, its tests kept)": lambda:
-            solve_without_contact(chain, TOL, 200, None, in_kernel=True, args=args),
+            solve_without_contact(chain, TOL, 200, None, args=args),
         "wall-free check of a new scene's chain": lambda: solve_without_contact(
-            fresh_chains.pop(), TOL, 200, None, in_kernel=True),
+            fresh_chains.pop(), TOL, 200, None),
         "solve kernel alone (solve_chain, 4 outer iterations)": lambda: k.solve_chain(*raw),
         "run_compiled (kernel + DriverOutput)": lambda: run_compiled(chain, tol=TOL, args=args),
         "judge kernel alone (judge_answer)": lambda: jk.judge_answer(

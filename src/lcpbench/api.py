@@ -280,9 +280,8 @@ def run_plan(plan: Plan, scene, ctx: Context, begin: DriverStart | None,
             out, used = run_kernel(chain, ctx.make_step, settings=ctx.settings, tol=ctx.tol,
                                    max_outer=ctx.max_outer, method=ctx.method, args=args)
         else:
-            out = solve_without_contact(chain, ctx.tol, ctx.max_outer, begin,
-                                        in_kernel=kernel, args=args)
-            used = "compiled" if kernel else "compiled driver"
+            out = solve_without_contact(chain, ctx.tol, ctx.max_outer, begin, args=args)
+            used = "compiled"  # (the wall-free tests and search are compiled)
             if out is None:
                 out, used = drive(chain, ctx.make_step(), backend=ctx.backend,
                                   settings=ctx.settings, engine=ctx.engine, tol=ctx.tol,

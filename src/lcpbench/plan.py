@@ -99,7 +99,7 @@ class Plan:
     engine : the engine the route plans for (:data:`lcpbench.model.compiled.ENGINES_RUN`;
         the load path's and "heights, then SQP"'s are their height steps' engine).
     kernel_takes : whether the compiled kernels take the chain (a layout the solve
-        kernel takes, whichever back-end): the wall-free search then runs compiled.
+        kernel takes, whichever back-end): the route's calls share its arrays.
     judge : where the result judge takes its exact steps
         (:func:`lcpbench.model.judge.judged_in`): "heights" (the judge kernel, whatever
         back-end and engine) or "increments" (from ``LARGE_N`` links); both compiled.

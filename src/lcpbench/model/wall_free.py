@@ -11,20 +11,16 @@ once, for this module and the batch kernel's lines.
 
 from __future__ import annotations
 
-import time
 from dataclasses import replace
 
 import numpy as np
-from numpy.linalg import LinAlgError  # scipy.linalg's LinAlgError is this class
 
-from ..linalg import solveh_banded
 from ..numba_cache import kernel_module
 from ..problems.scenes import Chain
-from ..solvers.base import Status, StepSolution
-from . import compiled_driver, large_n
+from . import large_n
 from .angle_step import heavy
 from .chain import heights
-from .kernel_call import applies, kernel_args
+from .kernel_call import applies, kernel_args, run_compiled
 from .outer import DriverOutput, DriverStart
 from .profile import walls_at
 
@@ -62,30 +58,13 @@ def arc_far(chain: Chain) -> bool:
     return arc_kind(chain) == _tests().FAR
 
 
-def free_step(step, warm) -> StepSolution:
-    """The step of a chain with no walls: its unconstrained minimiser (a banded
-    solve, refined once; no LCP). ``warm`` is ignored."""
-    t0 = time.perf_counter()
-    n = step.size
-    try:  # solved, then refined once with the factored gradient (as the compiled kernel,
-        # whose dual active set with no bounds is this solve): cond(K) ~ 1e8 at N = 140
-        u = step.unconstrained_minimiser()
-        u -= solveh_banded(step.bands, step.gradient(u), lower=True, check_finite=False)
-        status = Status.SOLVED
-    except (LinAlgError, ValueError):  # not positive definite: no minimiser
-        u, status = np.full(n, np.nan), Status.FAILED
-    return StepSolution(u, np.zeros(n), np.zeros(n), status, 0, time.perf_counter() - t0)
-
-
 def _first_free_heights(chain: Chain, args: tuple | None) -> np.ndarray | None:
-    """:func:`free_step` of the step at the arc, in the solve kernel (its contact step
-    with no walls: the dual active set with no bounds is the banded solve, refined);
-    None where the kernel does not take the chain or its step stops."""
-    from .kernel_call import cold_start, kernel_args, solve_kernel
+    """The first step without walls, at the arc: the solve kernel's contact step with no
+    walls (the dual active set with no bounds is the banded solve, refined); None where
+    it stops (no minimiser: K is not positive definite)."""
+    from .kernel_call import cold_start, solve_kernel
 
     if args is None:
-        if not applies("auto", "globalised", chain):
-            return None
         args = kernel_args(chain)
     n = chain.free_nodes.size
     k = solve_kernel()
@@ -108,8 +87,7 @@ def _without_walls(chain: Chain) -> Chain:
 
 
 def solve_without_contact(chain: Chain, tol: float, max_outer: int,
-                          start: DriverStart | None = None, *,
-                          in_kernel: bool = False, args: tuple | None = None
+                          start: DriverStart | None = None, *, args: tuple | None = None
                           ) -> DriverOutput | None:
     """The answer of a scene that touches no wall, found without any LCP (or None).
 
@@ -118,13 +96,12 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
     that search (one banded solve at the arc, ~0.1 ms at N = 140) already
     does: a heavy chain can sag off a wall its arc crosses.
 
-    ``in_kernel``: the search without walls runs in the compiled
-    kernel (:func:`lcpbench.model.kernel_call.run_compiled` on the chain with its
-    walls removed: the dual active set with no bounds is the banded solve of
-    the free step, refined once); elsewhere, and where the kernel stops, the compiled
-    driver around :func:`free_step` (:func:`lcpbench.model.compiled_driver.run`).
-    ``args``: the chain's :func:`lcpbench.model.kernel_call.kernel_args`, when the
-    caller has them.
+    The search runs in the solve kernel on the chain with its walls removed
+    (:func:`lcpbench.model.kernel_call.run_compiled`: the dual active set with no bounds
+    is the banded solve of the free step, refined once), whatever its walls (a wall
+    profile too); None where the kernel does not take that chain (joints or free nodes
+    not consecutive) or stops: the scene is then solved with its walls. ``args``: the
+    chain's :func:`lcpbench.model.kernel_call.kernel_args`, when the caller has them.
     """
     n = chain.free_nodes.size
     if heavy(chain):  # links past the vertical: the angle steps (model/heavy_driver.py)
@@ -136,35 +113,25 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
         return DriverOutput(chain.rest_alpha.copy(), np.zeros(n), np.zeros(n), True,
                             "no contact: the unconstrained arc clears every wall and there "
                             "is no load")
+    free = free_layout(chain)
+    if not applies("auto", "globalised", free):
+        return None  # (a layout no compiled route takes: drive answers the scene)
     if kind == k.FIRST_STEP:  # the arc touches a wall the load may sag it off
-        first = _first_free_heights(chain, args) if in_kernel else None
-        if first is None:
-            if not applies("auto", "globalised", free_layout(chain)):
-                return None  # (a layout no compiled route takes: drive answers the scene)
-            first = free_step(compiled_driver.assemble_step(chain, chain.rest_alpha), None).u
-        if not wall_overlap(chain, first) < 0:  # NaN (no minimiser) included
+        first = _first_free_heights(chain, args)
+        if first is None or not wall_overlap(chain, first) < 0:
             return None
     if large_n.applies(chain):
         # the search's steps are banded solves in heights, whose round-off grows as N⁴:
         # at N = 10⁴ its equilibrium is 1e-4 F₀ off per node, which the judge rejects;
         # the increment driver solves it (with no contact in its steps)
         return None
-    free = free_layout(chain)
     if start is not None:  # a neighbour's shape (its contact set means nothing here)
         start = DriverStart(start.alpha, None)
-    out = None
-    if in_kernel:
-        from .kernel_call import run_compiled
-
-        if args is not None:  # the same arrays, the walls removed
-            args = (*args[:9], free.lower, free.upper, *args[11:])
-        out = run_compiled(free, tol=tol, max_outer=max_outer, start=start, args=args)[0]
-    if out is None:  # the compiled driver around the free step (no kernel, or it stopped)
-        if not applies("auto", "globalised", free):
-            return None  # (a layout no compiled route takes: drive answers the scene)
-        out = compiled_driver.run(free, free_step, tol=tol, max_outer=max_outer, start=start)
-    if not (out.converged and wall_overlap(walls_at(chain, out.alpha),
-                                           heights(chain, out.alpha)) < 0):
+    if args is not None:  # the same arrays, the walls removed
+        args = (*args[:9], free.lower, free.upper, *args[11:])
+    out = run_compiled(free, tol=tol, max_outer=max_outer, start=start, args=args)[0]
+    if out is None or not (out.converged and wall_overlap(walls_at(chain, out.alpha),
+                                                          heights(chain, out.alpha)) < 0):
         return None
     out.reason = ("no contact: the equilibrium without walls clears every wall (found by "
                   "banded solves, no LCP)")

@@ -85,9 +85,8 @@ def _solve_one(scene, tol: float, max_outer: int, settings: str,
         full = kernel_args(chain)
         const["arrays"] = full[2:4] + (full[7],)
     args = kernel_args(chain, const["arrays"]) if kernel else None
-    out = solve_without_contact(chain, tol, max_outer, start,
-                                in_kernel=kernel, args=args)
-    used = "compiled" if kernel else "compiled driver"
+    out = solve_without_contact(chain, tol, max_outer, start, args=args)
+    used = "compiled"  # (the wall-free tests and search are compiled)
     if out is None and not kernel and profile_applies(DEFAULT, "globalised", chain):
         # a wall of any profile: the profile kernel, as model.compiled.drive runs it for
         # this chain (no SQP steps: they take flat walls only), the step solver made only
