@@ -14,6 +14,7 @@ from energy_oracle import assert_solved
 import lcpbench
 import lcpbench.api as api
 from lcpbench import ActuatorScene
+from lcpbench.problems.walls import WallProfile
 from lcpbench.reference.energy import minimise_energy
 
 
@@ -39,6 +40,13 @@ CLEAR = [
                  id="channel-clears"),
     # the arc crosses the wall at h = 3 mm, the heavy chain sags below it
     pytest.param({"theta": 150, "height": 3, "links": 40, "weight": 0.05}, id="heavy-sags-off"),
+    # a wall profile (a stenosis at x = 14 mm): the search runs on the chain without walls
+    pytest.param({"theta": 30, "height": 3, "links": 40, "wall_profile": WallProfile.from_table(
+        [0, 10, 14, 18, 30], [3.0, 3.0, 2.4, 3.0, 3.0])}, id="profile-clears"),
+    pytest.param({"theta": 150, "height": 3, "links": 40, "weight": 0.05,
+                  "wall_profile": WallProfile.from_table([0, 10, 14, 18, 30],
+                                                         [3.0, 3.0, 2.6, 3.0, 3.0])},
+                 id="heavy-sags-off-a-profile"),
 ]
 
 
