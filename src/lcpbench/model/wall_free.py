@@ -38,10 +38,12 @@ def wall_overlap(chain: Chain, u: np.ndarray) -> float:
 
 def _arc_arrays(chain: Chain) -> tuple:
     """(α, a, free nodes, link loads, lower, upper, ℓ, F) of the chain's arc, as the
-    compiled tests take them: the kernel's arrays."""
-    args = kernel_args(chain)
-    nodes = np.ascontiguousarray(chain.free_nodes, dtype=np.int64)
-    return (args[0], args[1], nodes, args[6], args[9], args[10], args[11], args[12])
+    compiled tests take them (the chain's own arrays where they are already so)."""
+    f64 = np.ascontiguousarray
+    return (f64(chain.rest_alpha, dtype=float), float(chain.link_length),
+            f64(chain.free_nodes, dtype=np.int64), f64(chain.link_load, dtype=float),
+            f64(chain.lower, dtype=float), f64(chain.upper, dtype=float),
+            float(chain.length), float(chain.force_scale))
 
 
 def arc_kind(chain: Chain) -> int:
