@@ -74,7 +74,7 @@ KERNEL_FILES = ("model/chain_kernel.py", "model/compiled_kernel.py", "model/comp
                 "linalg/givens_kernel.py",
                 "linalg/face_kernel.py", "linalg/twisted_kernel.py",
                 "linalg/ldl_kernel.py", "linalg/wide_face_kernel.py", "model/batch_kernel.py", "model/batch_verdict.py",
-                "model/wall_free_kernel.py",
+                "model/wall_free_kernel.py", "model/predictor_kernel.py",
                 "model/sensitivity_kernel.py", "model/sensitivity_profile_kernel.py",
                 "model/angle_kernel.py", "model/path_kernel.py",
                 "linalg/band_lu_kernel.py", "problems/table_kernel.py",

@@ -1,7 +1,7 @@
 """Scattered scenes of one kin in solve_many: a scene that no answer of its own plane
 predicts (no answer on its line in θ or at its θ) starts from the nearest answer of
 its kin (the same scene but for θ, h and the walls' stiffness; studies.batch._kin,
-rule 5 of the line kernel's predictor, model.batch_kernel._predict); each scene is
+rule 5 of the predictor, model.predictor_kernel.predict_start); each scene is
 solved on its own walls, a failed warm start is redone cold, and a channel bent past
 180° (several stable states) starts cold.
 
@@ -108,7 +108,7 @@ def test_the_kernels_rule_5_takes_the_nearest_answer_of_the_kin(seed):
     from lcpbench.numba_cache import kernel_module
     from lcpbench.studies.continuation import POINTS, Solved
 
-    k = kernel_module("lcpbench.model.batch_kernel")
+    k = kernel_module("lcpbench.model.predictor_kernel")
     rng = random.Random(seed)
     m, links = 40, 5
     stiffness = [np.inf, 50.0, 5.0, 0.5]
@@ -127,8 +127,8 @@ def test_the_kernels_rule_5_takes_the_nearest_answer_of_the_kin(seed):
     fakes = [_fake(bool(o), bool(t), a) for o, t, a in zip(ok, touch, alphas)]
     fired = 0
     for s in range(m):
-        start, base = k._predict(s, theta, height, plane, kin, where, ok, touch, alphas,
-                                 POINTS["adaptive"], True)
+        start, base = k.predict_start(s, theta, height, plane, kin, where, ok, touch, alphas,
+                                      POINTS["adaptive"], True)
         if solved.predict(scenes[s]) is None:
             cand = [i for i in range(s) if ok[i] and kin[s] >= 0 and kin[i] == kin[s]]
             if not cand:

@@ -1,15 +1,14 @@
 """A continuation line in one kernel call (lcpbench.model.batch_kernel, studies.batch_line).
 
 Each scene of the batch must be what one ``lcpbench.solve`` gives from the same start
-(the start chosen by the Python predictor, Solved, from the batch's own answers
-before it); the kernel's port of the predictor must choose as Solved does; the
-results, built when read, must carry what a single solve's carry.
+(the start chosen by Solved from the batch's own answers before it: the one compiled
+predictor, model/predictor_kernel.py, which the line kernel calls too); the results,
+built when read, must carry what a single solve's carry.
 """
 
 import dataclasses
 import pickle
 import random
-from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -22,7 +21,7 @@ from lcpbench.model.chain import node_positions
 from lcpbench.studies.batch import continuation_order
 from lcpbench.studies.batch_line import takes_line
 from lcpbench.studies.batch_result import LineResult
-from lcpbench.studies.continuation import Solved, new_solved, warm_or_cold
+from lcpbench.studies.continuation import new_solved, warm_or_cold
 
 
 def paper_scenes(links=140):
@@ -87,52 +86,6 @@ def test_results_are_built_when_read_and_carry_what_a_solve_carries():
     moved = dataclasses.replace(batch[0], alpha=batch[0].alpha + 0.0)
     assert moved.steps == batch[0].steps
     assert "converged" in repr(batch[0]) and batch[0].to_dict()["converged"]
-
-
-def _fake(converged, touches, alpha):
-    return SimpleNamespace(converged=converged, alpha=alpha, forces_lower=None,
-                           forces=np.array([1.0 if touches else 0.0]))
-
-
-@pytest.mark.parametrize("seed", range(6))
-@pytest.mark.parametrize("predictor", ["adaptive", "quadratic", "previous"])
-def test_the_kernels_predictor_chooses_as_solved(seed, predictor):
-    """Random histories on two planes (rigid and elastic walls; repeated scenes, answers
-    that failed or touch): the kernel's prediction has the same base and the same α as
-    Solved.predict, which predicts from the scene's own plane only.
-
-    Route against route: the kernel's port of the predictor must choose as the Python
-    predictor (Solved) does; a prediction is a choice, with no oracle."""
-    from lcpbench.numba_cache import kernel_module
-    from lcpbench.studies.continuation import POINTS
-
-    k = kernel_module("lcpbench.model.batch_kernel")
-    rng = random.Random(seed)
-    thetas = [90.0 + 7.5 * i for i in range(8)]
-    heights = [2.0, 2.5, 3.0, 4.0]
-    m, links = 40, 5
-    stiffness = [np.inf, 50.0]
-    plane = np.array([rng.randrange(2) for _ in range(m)], np.int64)
-    scenes = [ActuatorScene(theta=rng.choice(thetas), height=rng.choice(heights), links=links,
-                            wall_stiffness=stiffness[p]) for p in plane]
-    ok = np.array([rng.random() < 0.8 for _ in range(m)])
-    touch = np.array([rng.random() < 0.6 for _ in range(m)])
-    alphas = np.array([np.sin(np.arange(links) + s.theta / 30) * s.height
-                       + 0.01 * rng.random() for s in scenes])
-    theta = np.array([s.theta for s in scenes])
-    height = np.array([s.height for s in scenes])
-    solved = Solved(POINTS[predictor], predictor == "adaptive")
-    fakes = [_fake(bool(o), bool(t), a) for o, t, a in zip(ok, touch, alphas)]
-    for s in range(m):
-        want = solved.predict(scenes[s])
-        start, base = k._predict(s, theta, height, plane, np.full(m, -1), np.zeros((m, 0)),
-                                 ok, touch, alphas, POINTS[predictor], predictor == "adaptive")
-        if want is None:
-            assert base == -1 and start.size == 0
-        else:
-            assert fakes[base] is want[1]
-            assert np.allclose(start, want[0], rtol=1e-12, atol=1e-12)
-        solved.add(scenes[s], fakes[s])
 
 
 def test_mixed_batches_fall_back_per_plane_in_the_callers_order():

@@ -14,14 +14,8 @@ from energy_oracle import assert_solved
 
 import lcpbench
 from lcpbench import ActuatorScene
-from lcpbench.studies.continuation import (
-    Solved,
-    best_degree,
-    extrapolations,
-    largest_difference,
-    new_solved,
-    predict,
-)
+from lcpbench.numba_cache import kernel_module
+from lcpbench.studies.continuation import Solved, largest_difference, new_solved, predict
 
 N = 30
 
@@ -124,16 +118,22 @@ def test_extrapolations_and_the_adaptive_degree():
     c = rng.standard_normal((3, 4))
     f = lambda t: c[0] + c[1] * (t / 100) + c[2] * (t / 100) ** 2  # noqa: E731
     ts = [150.0, 140.0, 125.0, 110.0, 90.0, 85.0]  # unequal steps
-    rows = extrapolations(160.0, ts, [f(t) for t in ts])
+    k = kernel_module("lcpbench.model.predictor_kernel")
+    m = len(ts)
+
+    def extrapolations(t, values):
+        return k.extrapolations(t, np.array(ts), np.array(values), m)
+
+    rows = extrapolations(160.0, [f(t) for t in ts])
     assert np.array_equal(rows[0], f(150.0))
     assert np.allclose(rows[2:], f(160.0), rtol=0, atol=1e-12)
     assert not np.allclose(rows[1], f(160.0), atol=1e-6)
-    assert np.allclose(best_degree(rows), f(160.0), atol=1e-12)
+    assert np.allclose(k.best_degree(rows, m), f(160.0), atol=1e-12)
     # the farther answers off the parabola (a change of regime, or their own truncation):
     # the degrees that use them change the extrapolation more than the parabola's own
     # correction does, so the choice stops at the parabola
     off = [f(t) + (1.0 if i >= 3 else 0.0) for i, t in enumerate(ts)]
-    assert np.allclose(best_degree(extrapolations(160.0, ts, off)), f(160.0), atol=1e-12)
+    assert np.allclose(k.best_degree(extrapolations(160.0, off), m), f(160.0), atol=1e-12)
 
 
 def plane():

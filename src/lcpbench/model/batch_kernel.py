@@ -9,9 +9,8 @@ has no answer to predict it from, from the nearest answer of its kin). For each 
 in order:
 
 1. the start, as :class:`lcpbench.studies.continuation.Solved` chooses it (its
-   rules 1-4 and the ``adaptive`` choice of degree, :func:`_predict`); the
-   Lagrange weights are the same products in the same order, the weighted sums
-   are loops (numpy's are BLAS products: the prediction agrees to round-off);
+   rules 1-4 and the ``adaptive`` choice of degree: the same compiled
+   :func:`~lcpbench.model.predictor_kernel.predict_start`);
    where those rules find no answer (none of its plane on its line in θ or at its
    θ), rule 5: the nearest accepted answer of its kin (``kin``, ``where``: the
    scenes the same but for θ, h and the walls' stiffness, with their coordinates;
@@ -46,6 +45,7 @@ from .batch_verdict import accepted
 from .chain_kernel import free_heights
 from .compiled_kernel import CONVERGED, LINE_SEARCH, MAX_OUTER, NO_FIT, contact_step, solve_chain
 from .judge_kernel import SETTLED, STATS, judge_answer
+from .predictor_kernel import predict_start
 from .wall_free_kernel import ARC, CONTACT, FAR, FIRST_STEP, FREE, arc_kind, wall_overlap
 from .wall_kernel import split_by_wall
 
@@ -183,168 +183,6 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
 
 
 @njit(cache=True)
-def _nearest(s, by_h, theta, height, plane, ok, touch, most, idx, val):
-    """Solved's _nearest over the accepted answers before ``s`` of its plane (``plane``:
-    each row's): on its line in θ (``by_h``) or at its θ (the other lines); nearest
-    first, the latest answer per value, all touching a wall as the nearest does. Fills
-    ``idx``, ``val``; the count."""
-    at = theta[s] if by_h else height[s]
-    vals = np.empty(s)
-    ids = np.empty(s, np.int64)
-    c = 0
-    for i in range(s):
-        if not ok[i] or plane[i] != plane[s]:
-            continue
-        if by_h:
-            if height[i] != height[s]:
-                continue
-            v = theta[i]
-        else:
-            if theta[i] != theta[s]:
-                continue
-            v = height[i]
-        if v == at:
-            continue
-        j = 0
-        while j < c and vals[j] != v:
-            j += 1
-        vals[j], ids[j] = v, i
-        if j == c:
-            c += 1
-    for i in range(1, c):  # sort by value (insertion)
-        v, w = vals[i], ids[i]
-        j = i - 1
-        while j >= 0 and vals[j] > v:
-            vals[j + 1], ids[j + 1] = vals[j], ids[j]
-            j -= 1
-        vals[j + 1], ids[j + 1] = v, w
-    hi = 0
-    while hi < c and vals[hi] < at:
-        hi += 1
-    lo = hi - 1
-    got = 0
-    while got < most and (lo >= 0 or hi < c):
-        if hi >= c or (lo >= 0 and at - vals[lo] <= vals[hi] - at):
-            v, i, lo = vals[lo], ids[lo], lo - 1
-        else:
-            v, i, hi = vals[hi], ids[hi], hi + 1
-        if got and touch[i] != touch[idx[0]]:
-            break
-        idx[got], val[got] = i, v
-        got += 1
-    return got
-
-
-@njit(cache=True)
-def _extrapolations(t, ts, values, m):
-    """continuation.extrapolations: row j, the polynomial through the first j + 1 points
-    at t (the Lagrange weights of continuation._weights, in its order)."""
-    d = np.empty(m)
-    for i in range(m):
-        d[i] = t - ts[i]
-    W = np.zeros((m, m))
-    W[0, 0] = 1.0
-    for j in range(1, m):
-        for i in range(j):
-            W[j, i] = W[j - 1, i] * d[j] / (d[j] - d[i])
-        p = 1.0
-        for q in range(j):
-            p = p * (d[q] / (d[q] - d[j]))
-        W[j, j] = p
-    cols = values.shape[1]
-    ps = np.zeros((m, cols))
-    for j in range(m):
-        for i in range(m):
-            w = W[j, i]
-            for c in range(cols):
-                ps[j, c] += w * values[i, c]
-    return ps
-
-
-@njit(cache=True)
-def _best_degree(ps, m):
-    """continuation.best_degree: the row after the smallest change max|p_(j+1) − p_j|."""
-    if m < 3:
-        return ps[m - 1]
-    best, at = np.inf, 0
-    for j in range(m - 1):
-        worst = 0.0
-        for c in range(ps.shape[1]):
-            worst = max(worst, abs(ps[j + 1, c] - ps[j, c]))
-        if worst < best:
-            best, at = worst, j
-    return ps[at + 1]
-
-
-@njit(cache=True)
-def _predict(s, theta, height, plane, kin, where, ok, touch, alphas, most, adaptive):
-    """Solved.predict for scene ``s`` (from the answers of its plane, its rules 1-4), and
-    where they find none (no answer of its plane on its line in θ or at its θ), 5. the
-    nearest answer of its kin as it is (:func:`_nearest_kin`): (start α, index of the
-    answer whose last step warm-starts it); index −1: a cold start."""
-    links = alphas.shape[1]
-    none = np.empty(0)
-    if most == 0:
-        return none, -1
-    li, lv = np.empty(most, np.int64), np.empty(most)
-    ai, av = np.empty(1, np.int64), np.empty(1)
-    nl = _nearest(s, True, theta, height, plane, ok, touch, most, li, lv)
-    na = _nearest(s, False, theta, height, plane, ok, touch, 1, ai, av)
-    line_touches = nl > 0 and touch[li[0]]
-    if na and not touch[ai[0]] and not line_touches:  # 1.
-        return alphas[ai[0]].copy(), ai[0]
-    if line_touches and nl < most and na and touch[ai[0]]:  # 2.
-        other_h = av[0]
-        ts, diff, c = np.empty(nl), np.empty((nl, links)), 0
-        for q in range(nl):
-            o = -1
-            for i in range(s):  # the latest accepted answer at (other_h, θ_q)
-                if ok[i] and plane[i] == plane[s] and height[i] == other_h \
-                        and theta[i] == lv[q]:
-                    o = i
-            if o < 0 or not touch[o]:
-                break
-            ts[c] = lv[q]
-            diff[c] = alphas[li[q]] - alphas[o]
-            c += 1
-        if c:
-            ps = _extrapolations(theta[s], ts, diff, c)
-            return alphas[ai[0]] + ps[c - 1], li[0]
-    if nl:  # 3.
-        vals = np.empty((nl, links))
-        for q in range(nl):
-            vals[q] = alphas[li[q]]
-        ps = _extrapolations(theta[s], lv, vals, nl)
-        return (_best_degree(ps, nl) if adaptive else ps[nl - 1]).copy(), li[0]
-    if na:  # 4.
-        return alphas[ai[0]].copy(), ai[0]
-    i = _nearest_kin(s, kin, where, ok)  # 5.
-    if i >= 0:
-        return alphas[i].copy(), i
-    return none, -1
-
-
-@njit(cache=True)
-def _nearest_kin(s, kin, where, ok):
-    """Rule 5 of :func:`_predict`: the accepted answer before ``s`` of its kin (``kin``:
-    each row's, −1 none; scenes the same but for θ, h and the walls' stiffness) nearest
-    to it in the coordinates ``where`` (a row each, Euclidean), the first of equals; −1
-    where the scene has no kin or none is solved."""
-    if kin[s] < 0:
-        return -1
-    best, at = np.inf, -1
-    for i in range(s):
-        if not ok[i] or kin[i] != kin[s]:
-            continue
-        d = 0.0
-        for c in range(where.shape[1]):
-            d += (where[i, c] - where[s, c]) ** 2
-        if d < best:
-            best, at = d, i
-    return at
-
-
-@njit(cache=True)
 def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, cu, cl, L, F,
                wall, channel,
                theta, height, plane, kin, where, tol, max_outer, max_iter, request, most, adaptive,
@@ -363,7 +201,7 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
     a scene is predicted from the answers of its own plane only, so several planes in
     one call give the answers of a call per plane. ``kin``, ``where``: each scene's kin
     (−1: none) and coordinates, for a scene none of its plane's answers predicts
-    (:func:`_predict`'s rule 5; ``kin`` all −1: a call per plane's answers). Where the
+    (:func:`~.predictor_kernel.predict_start`'s rule 5; ``kin`` all −1: a call per plane's answers). Where the
     solve kernel stops on a scene alone in its plane (no other scene's start depends on it), ``kept[s]`` is −1,
     ``o_code[s]`` says where it stopped (:func:`_attempt`), and the call goes on: the
     caller solves that scene by itself."""
@@ -381,8 +219,8 @@ def solve_line(rest_alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi
     outs = (o_code, o_kind, o_alpha, o_R, o_rup, o_rlo, o_u, o_sig, o_res, o_off, o_count,
             j_code, j_stats, j_fu, j_fl, j_tres, conv)
     for s in range(m):
-        start, b = _predict(s, theta, height, plane, kin, where, ok, touch, alphas, most,
-                            adaptive)
+        start, b = predict_start(s, theta, height, plane, kin, where, ok, touch, alphas, most,
+                                 adaptive)
         base[s], failed[s] = b, -1
         w_u, w_up, w_lo, flags = zf, zb, zb, 0
         if b >= 0 and o_kind[kept[b]] != ARC:  # the base's last contact step

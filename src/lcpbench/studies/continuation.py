@@ -14,8 +14,6 @@ Measured on the paper grid (``benchmarks/perf_targets.py`` → results/perf.md,
 
 from __future__ import annotations
 
-import bisect
-import functools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import fields, replace
@@ -69,11 +67,10 @@ class Solved:
     def __init__(self, most: int = 3, adaptive: bool = False) -> None:
         self.most = most
         self.adaptive = adaptive
-        # per plane (the scene's fields but θ and h): its answers by h then θ, and by θ
-        # then h, each as (result, touches a wall); converged answers only
+        # per plane (the scene's fields but θ and h): its converged answers in order
         self._planes: dict = {}
 
-    def _plane(self, scene, make: bool = False) -> tuple[dict, dict] | None:
+    def _plane(self, scene, make: bool = False) -> _Plane | None:
         if not isinstance(scene, ActuatorScene):
             return None
         key = _plane_key(scene)
@@ -82,7 +79,7 @@ class Solved:
                        _Unhashed(key))
         plane = self._planes.get(key)
         if plane is None and make:
-            plane = self._planes[key] = ({}, {})
+            plane = self._planes[key] = _Plane()
         return plane
 
     def add(self, scene: ActuatorScene, res: ContactResult) -> None:
@@ -90,44 +87,64 @@ class Solved:
         scene: ignored)."""
         plane = self._plane(scene, make=True) if res.converged else None
         if plane is not None:
-            entry = (res, touches(res))
-            for lines, at, v in ((plane[0], scene.height, scene.theta),
-                                 (plane[1], scene.theta, scene.height)):
-                line = lines.setdefault(at, ({}, []))
-                if v not in line[0]:
-                    bisect.insort(line[1], v)
-                line[0][v] = entry
+            plane.add(scene.theta, scene.height, res)
 
     def predict(self, scene: ActuatorScene) -> tuple[np.ndarray, ContactResult] | None:
         """(α to start ``scene`` from, the answer whose last contact step warm-starts
-        it), or None: start cold."""
+        it), or None: start cold. The rules above are
+        :func:`lcpbench.model.predictor_kernel.predict_start` (compiled, the line
+        kernel's too) on the arrays of the scene's plane."""
         plane = self._plane(scene) if self.most else None
-        if plane is None:
+        if plane is None or not plane.results:
             return None
-        th, h = scene.theta, scene.height
-        by_h, by_theta = plane
-        line = _nearest(by_h.get(h), th, self.most)
-        across = _nearest(by_theta.get(th), h, 1)
-        line_touches = bool(line) and line[0][2]
-        if across and not across[0][2] and not line_touches:  # 1.
-            return across[0][1].alpha, across[0][1]
-        if line_touches and len(line) < self.most and across and across[0][2]:  # 2.
-            other = by_h[across[0][0]][0]
-            ts, diff = [], []
-            for t, r, _ in line:
-                o = other.get(t)
-                if o is None or not o[1]:
-                    break
-                ts.append(t)
-                diff.append(r.alpha - o[0].alpha)
-            if diff:
-                return across[0][1].alpha + extrapolations(th, ts, diff)[-1], line[0][1]
-        if line:  # 3.
-            ps = extrapolations(th, [p[0] for p in line], [p[1].alpha for p in line])
-            return (best_degree(ps) if self.adaptive else ps[-1]), line[0][1]
-        if across:  # 4.
-            return across[0][1].alpha, across[0][1]
-        return None
+        return plane.predict(scene.theta, scene.height, self.most, self.adaptive)
+
+
+class _Plane:
+    """The converged answers of one plane, in the order added: their θ, h, whether
+    each touches a wall and α (a row each, grown by doubling), as
+    :func:`~lcpbench.model.predictor_kernel.predict_start` reads them (one plane: its
+    planes all 0, no kin), a spare row for the scene to predict."""
+
+    def __init__(self) -> None:
+        self.results: list[ContactResult] = []
+        self.rows = 0
+
+    def _room(self, links: int) -> None:
+        """A row for one more answer and a spare row past it (the scene predicted)."""
+        count = len(self.results)
+        if count + 2 <= self.rows:
+            return
+        rows = max(8, 2 * (count + 2))
+        grown = (np.empty(rows), np.empty(rows), np.zeros(rows, np.bool_),
+                 np.empty((rows, links)))
+        if count:
+            for new, old in zip(grown, (self.theta, self.height, self.touch, self.alphas),
+                                strict=True):
+                new[:count] = old[:count]
+        self.theta, self.height, self.touch, self.alphas = grown
+        self.plane, self.kin = np.zeros(rows, np.int64), np.full(rows, -1, np.int64)
+        self.ok, self.where = np.ones(rows, np.bool_), np.zeros((rows, 0))
+        self.rows = rows
+
+    def add(self, theta: float, height: float, res: ContactResult) -> None:
+        self._room(res.alpha.size)
+        i = len(self.results)
+        self.theta[i], self.height[i], self.touch[i] = theta, height, touches(res)
+        self.alphas[i] = res.alpha
+        self.results.append(res)
+
+    def predict(self, theta: float, height: float, most: int,
+                adaptive: bool) -> tuple[np.ndarray, ContactResult] | None:
+        from ..numba_cache import kernel_module  # numba at the first prediction
+
+        s = len(self.results)
+        self.theta[s], self.height[s] = theta, height
+        k = kernel_module("lcpbench.model.predictor_kernel", "predict_start")
+        start, base = k.predict_start(s, self.theta, self.height, self.plane, self.kin,
+                                      self.where, self.ok, self.touch, self.alphas,
+                                      int(most), bool(adaptive))
+        return None if base < 0 else (start, self.results[base])
 
 
 #: what makes two actuator scenes lie in one plane of θ and h
@@ -148,57 +165,6 @@ def _hashable(key) -> bool:
     except TypeError:
         return False
     return True
-
-
-def _nearest(line: tuple[dict, list] | None, at: float, most: int) -> list:
-    """The answers of ``line`` (({θ or h: (result, touches)}, its keys sorted)) other
-    than at ``at``, nearest first, at most ``most``, all touching a wall as the
-    nearest does or all not: [(value, result, touches)]."""
-    if line is None:
-        return []
-    entries, keys = line
-    hi = bisect.bisect_left(keys, at)
-    lo, hi = hi - 1, hi + (hi < len(keys) and keys[hi] == at)
-    out: list = []
-    while len(out) < most and (lo >= 0 or hi < len(keys)):
-        if hi >= len(keys) or (lo >= 0 and at - keys[lo] <= keys[hi] - at):
-            v, lo = keys[lo], lo - 1
-        else:
-            v, hi = keys[hi], hi + 1
-        r, t = entries[v]
-        if out and t != out[0][2]:
-            break
-        out.append((v, r, t))
-    return out
-
-
-def extrapolations(t: float, ts: Sequence[float], values: Sequence[np.ndarray]) -> np.ndarray:
-    """Row j: the polynomial through the first j + 1 of the points (ts[i], values[i])
-    (distinct ts; Lagrange), evaluated at t."""
-    return _weights(tuple(t - x for x in ts)) @ np.array(values, dtype=float)
-
-
-@functools.lru_cache(maxsize=512)  # a grid repeats a few patterns of steps
-def _weights(d: tuple[float, ...]) -> np.ndarray:
-    """Row j: the Lagrange weights at t of the first j + 1 points, from d_i = t − t_i."""
-    m = len(d)
-    row = [1.0] + [0.0] * (m - 1)
-    rows = [row]
-    for j in range(1, m):  # one more point: each weight gains the factor of point j
-        row = [w * d[j] / (d[j] - d[i]) for i, w in enumerate(row[:j])]
-        row.append(math.prod(d[k] / (d[k] - d[j]) for k in range(j)))
-        row += [0.0] * (m - j - 1)
-        rows.append(row)
-    return np.array(rows)
-
-
-def best_degree(ps: np.ndarray) -> np.ndarray:
-    """Of successive extrapolations ``ps`` (rows, one more point each), the one after
-    the smallest change max|p_{j+1} − p_j|."""
-    if len(ps) < 3:
-        return ps[-1]
-    change = ps[1:] - ps[:-1]
-    return ps[int(np.abs(change, out=change).max(axis=1).argmin()) + 1]
 
 
 def predict(history: list[tuple[ActuatorScene, ContactResult]], scene: ActuatorScene,
