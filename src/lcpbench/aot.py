@@ -9,7 +9,8 @@ with their dispatchers' signatures, into one extension module beside the cache
 solve without importing numba (see :mod:`lcpbench.numba_cache`).
 
 The solves: the paper's actuator (cold, and a continuation of three scenes,
-which passes the warm-start arrays), its channel, a cantilever, and a row of two
+which passes the warm-start arrays), its channel, a cantilever, a loaded arc on its
+wall (the wall-free search's first step), and a row of two
 sections along its loading path (``start="ramp"``: the walk of height steps and the
 SQP in the link angles), so the entries see the types of each kind of call the
 kernels take.
@@ -38,6 +39,9 @@ def representative_solves() -> None:
     solve(scene)
     solve(ActuatorScene(theta=150, height=3.0, channel=True))
     solve(CantileverScene())
+    # a loaded arc on the wall (h = 8 mm): the first step without walls decides whether
+    # the load sags it off (model.wall_free_kernel.first_step_kind)
+    solve(ActuatorScene(theta=150, height=8.0, links=40))
     solve_many([ActuatorScene(theta=t, height=3.0) for t in (140, 150, 160)])
     # the loading path: its height steps in one call (path_kernel.walk_heights), its
     # steps near the vertical by the SQP in the link angles (angle_kernel)

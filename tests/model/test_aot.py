@@ -80,6 +80,9 @@ def test_the_build_exports_the_solve_and_judge_kernels(aot_build):
     assert "judge_answer" in info["modules"][JUDGE]["functions"]
     # the loading path's walk (aot.representative_solves' row of sections, start="ramp")
     assert "walk_heights" in info["modules"][PATH]["functions"]
+    # the wall-free tests and the first step without walls (a loaded arc on the wall)
+    wall_free = info["modules"]["lcpbench.model.wall_free_kernel"]["functions"]
+    assert {"arc_kind", "first_step_kind", "wall_overlap"} <= set(wall_free)
     assert json.loads((Path(where) / "manifest.json").read_text()) == json.loads(
         json.dumps(info))
     assert (Path(where) / info["file"]).exists()

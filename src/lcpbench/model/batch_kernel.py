@@ -40,46 +40,47 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..solvers.dual_kernel import BAIL_NOT_PD  # the free step has no minimiser
 from .batch_verdict import accepted
 from .chain_kernel import free_heights
-from .compiled_kernel import CONVERGED, LINE_SEARCH, MAX_OUTER, NO_FIT, contact_step, solve_chain
+from .compiled_kernel import CONVERGED, LINE_SEARCH, MAX_OUTER, NO_FIT, solve_chain
 from .judge_kernel import SETTLED, STATS, judge_answer
 from .predictor_kernel import predict_start
-from .wall_free_kernel import ARC, CONTACT, FAR, FIRST_STEP, FREE, arc_kind, wall_overlap
+from .wall_free_kernel import (
+    ARC,
+    CONTACT,
+    FAR,
+    FIRST_STEP,
+    FREE,
+    STOPPED,
+    arc_kind,
+    first_step_kind,
+    wall_overlap,
+)
 from .wall_kernel import split_by_wall
 
 __all__ = ["ARC", "CONTACT", "CONVERGED", "FREE", "LINE_SEARCH", "MAX_OUTER", "NO_FIT", "SETTLED",
            "STATS", "STOPPED_FREE", "append_records", "solve_line", "store_solve",
            "store_verdict"]
-#: o_code of an attempt the wall-free search stopped on (its compiled step where the
-#: numpy one would go on, or the search's solve kernel): no bail code of a contact solve
-STOPPED_FREE = -1
+#: o_code of an attempt the wall-free search stopped on (its first step without walls,
+#: or the search's solve kernel): no bail code of a contact solve
+STOPPED_FREE = STOPPED
 
 
 @njit(cache=True)
 def _wall_free_kind(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
-                    max_iter, request, free_lo, free_hi):
+                    max_iter, request):
     """What an attempt is: ARC (the arc is the answer), FREE (the search without walls)
-    or CONTACT (the contact solve), as :func:`~.wall_free_kernel.arc_kind` says; where it
-    leaves it to the first step without walls (the compiled step with no walls), as that
-    step says, or STOPPED_FREE where that step stopped (the caller's path)."""
-    n = lo.size
-    nodes = np.arange(fs - 1, fs - 1 + n)
-    kind = arc_kind(ra, a, nodes, link_load, lo, hi, L, F)
+    or CONTACT (the contact solve), as :func:`~.wall_free_kernel.arc_kind` says and,
+    where it leaves it to the first step without walls,
+    :func:`~.wall_free_kernel.first_step_kind`; STOPPED_FREE where that step stopped
+    (the caller's path)."""
+    kind = arc_kind(ra, a, np.arange(fs - 1, fs - 1 + lo.size), link_load, lo, hi, L, F)
     if kind == FAR:
         return CONTACT
-    if kind != FIRST_STEP:
-        return kind
-    z = np.zeros(n)
-    b = np.zeros(n, np.bool_)
-    got = contact_step(ra, a, jl, jr, k, rest, fs, n, nodal_load, free_lo, free_hi, L, F,
-                        z[:0], z[:0], z, b, b, 0, max_iter, request)
-    if got[0] == BAIL_NOT_PD:
-        return CONTACT
-    if got[0] != 0:
-        return STOPPED_FREE
-    return FREE if wall_overlap(got[1], lo, hi) < 0 else CONTACT
+    if kind == FIRST_STEP:
+        return first_step_kind(ra, a, jl, jr, k, rest, fs, nodal_load, lo, hi, L, F,
+                               max_iter, request)
+    return kind
 
 
 @njit(cache=True)
@@ -132,7 +133,7 @@ def _attempt(row, start, w_u, w_up, w_lo, flags, ra, a, jl, jr, k, rest, link_lo
     :func:`lcpbench.model.profile.split_reactions`)."""
     n = lo.size
     kind = _wall_free_kind(ra, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
-                           max_iter, request, free_lo, free_hi)
+                           max_iter, request)
     if kind < 0:
         o_code[row] = STOPPED_FREE
         return False, recs, used

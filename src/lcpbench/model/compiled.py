@@ -305,7 +305,7 @@ def direct(chain: Chain) -> bool:
     (:func:`lcpbench.model.large_n.applies`) nor loaded enough for SQP steps in the
     angles (:data:`~lcpbench.model.heavy_driver.MODERATE`, below
     :data:`~lcpbench.model.angle_step.HEAVY`), and its arc crosses the wall too far for
-    the wall-free search (:func:`~lcpbench.model.wall_free.arc_far_past_wall`). The
+    the wall-free search (:func:`~lcpbench.model.wall_free_kernel.arc_far_past_wall`). The
     route :func:`lcpbench.solve` takes without the calls in between (tests compare)."""
     return (applies(DEFAULT, "globalised", chain) and not large_n.applies(chain)
             and not heavy(chain) and wall_free.arc_far(chain))

@@ -242,19 +242,9 @@ def residuals_of(values) -> dict:
 
 
 #: the entries of :mod:`.driver_kernel` the driver around a back-end calls from Python
-ENTRIES = ("assemble", "qp_form", "lcp_form", "from_lcp", "judge", "advance", "predict",
-           "profile_start", "profile_assemble", "profile_advance", "profile_on_walls",
-           "gradient", "gradient_scale")
-
-
 def step_kernels():
-    """The compiled step's module, :mod:`.driver_kernel` (numba imported, its entries
+    """The compiled step's module, :mod:`.driver_kernel` (numba imported, its kernels
     loaded from the cache lightly, at the first call)."""
-    from ..numba_cache import kernel_module, light_cache_load  # numba at the first use
+    from ..numba_cache import kernel_module  # numba at the first use
 
-    kd = kernel_module("lcpbench.model.driver_kernel", "assemble")
-    if not getattr(kd, "_all_light", False):  # every entry loads from the cache lightly
-        for name in ENTRIES[1:]:
-            light_cache_load(getattr(kd, name))
-        kd._all_light = True
-    return kd
+    return kernel_module("lcpbench.model.driver_kernel", "assemble")

@@ -33,7 +33,9 @@ def _tests():
 def wall_overlap(chain: Chain, u: np.ndarray) -> float:
     """How far free-node heights ``u`` cross the walls (mm; < 0: strictly
     between them; NaN if u has a NaN)."""
-    return float(_tests().wall_overlap(u, chain.lower, chain.upper))
+    f64 = np.ascontiguousarray
+    return float(_tests().wall_overlap(f64(u, dtype=float), f64(chain.lower, dtype=float),
+                                       f64(chain.upper, dtype=float)))
 
 
 def _arc_arrays(chain: Chain) -> tuple:
@@ -58,23 +60,6 @@ def arc_far(chain: Chain) -> bool:
     sag it off (:func:`lcpbench.model.wall_free_kernel.arc_far_past_wall`). False says
     nothing."""
     return arc_kind(chain) == _tests().FAR
-
-
-def _first_free_heights(chain: Chain, args: tuple | None) -> np.ndarray | None:
-    """The first step without walls, at the arc: the solve kernel's contact step with no
-    walls (the dual active set with no bounds is the banded solve, refined); None where
-    it stops (no minimiser: K is not positive definite)."""
-    from .kernel_call import cold_start, solve_kernel
-
-    if args is None:
-        args = kernel_args(chain)
-    n = chain.free_nodes.size
-    k = solve_kernel()
-    free = free_layout(chain)
-    got = k.contact_step(chain.rest_alpha, args[1], args[2], args[3], args[4], args[5], args[8],
-                         n, args[7], free.lower, free.upper, args[11], args[12], args[13],
-                         args[14], *cold_start(n)[1:], 20 * n + 50, 1e-6)
-    return got[1].copy() if got[0] == 0 else None
 
 
 def free_layout(chain: Chain) -> Chain:
@@ -118,19 +103,20 @@ def solve_without_contact(chain: Chain, tol: float, max_outer: int,
     free = free_layout(chain)
     if not applies("auto", "globalised", free):
         return None  # (a layout no compiled route takes: drive answers the scene)
-    if kind == k.FIRST_STEP:  # the arc touches a wall the load may sag it off
-        first = _first_free_heights(chain, args)
-        if first is None or not wall_overlap(chain, first) < 0:
-            return None
     if large_n.applies(chain):
         # the search's steps are banded solves in heights, whose round-off grows as N⁴:
         # at N = 10⁴ its equilibrium is 1e-4 F₀ off per node, which the judge rejects;
         # the increment driver solves it (with no contact in its steps)
         return None
+    if args is None:
+        args = kernel_args(chain)
+    if kind == k.FIRST_STEP and k.first_step_kind(  # the load may sag the arc off a wall
+            args[0], args[1], args[2], args[3], args[4], args[5], args[8], args[7], args[9],
+            args[10], args[11], args[12], 20 * n + 50, 1e-6) != k.FREE:
+        return None
     if start is not None:  # a neighbour's shape (its contact set means nothing here)
         start = DriverStart(start.alpha, None)
-    if args is not None:  # the same arrays, the walls removed
-        args = (*args[:9], free.lower, free.upper, *args[11:])
+    args = (*args[:9], free.lower, free.upper, *args[11:])  # the same arrays, no walls
     out = run_compiled(free, tol=tol, max_outer=max_outer, start=start, args=args)[0]
     if out is None or not (out.converged and wall_overlap(walls_at(chain, out.alpha),
                                                           heights(chain, out.alpha)) < 0):
