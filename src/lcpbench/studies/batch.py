@@ -294,7 +294,7 @@ KIN_THETA_MAX = 180.0
 def _kin(scenes: list, planes: list[list[int]]) -> tuple[np.ndarray, np.ndarray]:
     """Each scene's kin (an index from 0; −1: none) and its coordinates (θ, h, log10 k
     over :data:`KIN_SCALES`), for the line kernel's rule 5
-    (:func:`lcpbench.model.batch_kernel._predict`): a scene none of whose plane's answers
+    (:func:`lcpbench.model.predictor_kernel.predict_start`): a scene none of whose plane's answers
     is on its line in θ or at its θ starts from the nearest answer of its kin (its own
     walls solved; only the start is shared). ``planes``: :func:`_planes` of ``scenes``
     (a plane lies in one kin). None: a scene in a channel bent past
