@@ -75,11 +75,11 @@ def arc_kind(alpha, a, nodes, link_load, lo, hi, L, F):
     """What the scene of the arc α (link length ``a``, free ``nodes``, loads
     ``link_load``, walls ``lo``, ``hi`` at the free nodes, length ``L``, force scale
     ``F``) is before any step: FAR where :func:`arc_far_past_wall` says so; CONTACT
-    where the arc touches or crosses a wall and no load could sag it off (it crosses by more than
-    SAG_BOUND times :func:`beam_sag`); ARC where it clears every wall with no load;
-    FREE where it clears them with a load (the search without walls); FIRST_STEP where
-    it touches or crosses a wall by less than the sag bound (a heavy chain can sag off
-    a wall its arc crosses)."""
+    where the arc touches or crosses a wall and no load could sag it off (none, or it
+    crosses by more than SAG_BOUND times :func:`beam_sag`); ARC where it clears every
+    wall with no load; FREE where it clears them with a load (the search without
+    walls); FIRST_STEP where it touches or crosses a wall by less than the sag bound (a
+    heavy chain can sag off a wall its arc crosses)."""
     sag = beam_sag(link_load, L, F)
     loaded = False  # a link carries a load (whatever its sag: it may underflow)
     for i in range(link_load.size):

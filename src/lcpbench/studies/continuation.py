@@ -103,8 +103,8 @@ class Solved:
 class _Plane:
     """The converged answers of one plane, in the order added: their θ, h, whether
     each touches a wall and α (a row each, grown by doubling), as
-    :func:`~lcpbench.model.predictor_kernel.predict_start` reads them (one plane: its
-    planes all 0, no kin), a spare row for the scene to predict."""
+    :func:`~lcpbench.model.predictor_kernel.predict_start` reads them (one plane: the
+    plane indices all 0, no kin), and a spare row for the scene to predict."""
 
     def __init__(self) -> None:
         self.results: list[ContactResult] = []
