@@ -14,8 +14,9 @@ solve:
    answer, and its verdict from the judge's numbers alone
    (:func:`lcpbench.model.batch_verdict.accepted`).
 
-The start itself is the caller's (:class:`lcpbench.studies.continuation.Solved`, in
-numpy: the same bits as the scene-by-scene loop's). Its outputs go to a row of the
+The start itself is the caller's (:class:`lcpbench.studies.continuation.Solved`, the
+compiled predictor :func:`lcpbench.model.predictor_kernel.predict_start`: the same bits
+as the scene-by-scene loop's). Its outputs go to a row of the
 flat-wall line kernel's arrays (:func:`lcpbench.model.batch_kernel.solve_line`), read
 by the same code (:mod:`lcpbench.studies.batch_result`). Where the profile kernel stops
 (a bail code) the caller solves the line scene by scene.
