@@ -16,6 +16,9 @@ The corpus (about 1,900 answers; ~5 min on one core):
 - ``solve`` and ``start="ramp"`` on rows of two and three sections, and past 180°;
 - channels, heavy channels, a stenosis and a profiled channel with the default
   back-end, OSQP and Lemke (the compiled driver around a back-end);
+- the wall-free path (arcs clear of flat, elastic, channel and profiled walls, loaded
+  arcs on them), with the default back-end and Lemke, and a profiled line solved by
+  continuation (``solve_sequence``);
 - large N (3000, 6000) with one wall, a channel, a wall profile and elastic walls;
 - friction: ``solve_path`` on a flat wall, a channel and a stenosis, pulled and
   released; 40 random paths of 4 states as ``benchmarks/friction_paths.py`` draws
@@ -64,6 +67,7 @@ sys.path.insert(0, str(HERE))
 import lcpbench
 from lcpbench import ActuatorScene
 from lcpbench.problems.walls import WallProfile
+from lcpbench.studies.continuation import solve_sequence
 
 RUNS = HERE.parent / "results" / "sweep" / "runs.csv"
 
@@ -156,6 +160,23 @@ def corpus() -> dict:
                 s, solver=v, tol=1e-6))
     for i, r in enumerate(lcpbench.solve_many([s for _, s in kinds], tol=1e-3)):
         out[("many-kinds", i)] = answer(r)
+    # the wall-free path: arcs that clear their walls and loaded arcs on a wall (the
+    # first step without walls decides), flat, elastic, channel and profiled walls, with
+    # the default back-end and Lemke; a profiled line by continuation (Solved)
+    for theta in (30.0, 60.0, 150.0):
+        for h in (3.0, 8.0):
+            for tag, kw in (("flat", {}), ("channel", {"channel": True}),
+                            ("elastic", {"wall_stiffness": 5.0}), ("profile", {
+                                "wall_profile": WallProfile.from_table(
+                                    [-5, 10, 14, 18, 35], [h, h, 0.8 * h, h, h])})):
+                s = ActuatorScene(theta=theta, height=h, links=140, **kw)
+                for solver in ("auto", "lemke"):
+                    _kept(out, ("wall-free", tag, theta, h, solver),
+                          lambda s=s, v=solver: lcpbench.solve(s, solver=v, tol=1e-8))
+    line = [ActuatorScene(theta=t, height=3.0, links=140, wall_profile=up)
+            for t in (20.0, 40.0, 60.0, 100.0, 130.0, 150.0, 160.0, 170.0)]
+    for i, r in enumerate(solve_sequence(line, predictor="adaptive", tol=1e-6)):
+        out[("wall-free line", i)] = answer(r)
     for theta in (150.0, 200.0):
         for n in (3000, 6000):
             for channel in (False, True):
