@@ -9,7 +9,8 @@ with their dispatchers' signatures, into one extension module beside the cache
 solve without importing numba (see :mod:`lcpbench.numba_cache`).
 
 The solves: the paper's actuator (cold, and a continuation of three scenes,
-which passes the warm-start arrays), its channel, a cantilever, a loaded arc on its
+which passes the warm-start arrays, in one line kernel call and scene by scene), its
+channel, a cantilever, a loaded arc on its
 wall (the wall-free search's first step), and a row of two
 sections along its loading path (``start="ramp"``: the walk of height steps and the
 SQP in the link angles), so the entries see the types of each kind of call the
@@ -34,6 +35,7 @@ def representative_solves() -> None:
     from .problems.scenes import ActuatorScene
     from .problems.sections import SectionedScene
     from .studies.batch import solve_many
+    from .studies.continuation import solve_sequence
 
     scene = ActuatorScene(theta=150, height=3.0)
     solve(scene)
@@ -43,6 +45,9 @@ def representative_solves() -> None:
     # the load sags it off (model.wall_free_kernel.first_step_kind)
     solve(ActuatorScene(theta=150, height=8.0, links=40))
     solve_many([ActuatorScene(theta=t, height=3.0) for t in (140, 150, 160)])
+    # a continuation scene by scene: Solved's predictions from Python
+    # (model.predictor_kernel.predict_start; solve_many's lines call it compiled)
+    solve_sequence([ActuatorScene(theta=t, height=3.0) for t in (140, 150, 160)])
     # the loading path: its height steps in one call (path_kernel.walk_heights), its
     # steps near the vertical by the SQP in the link angles (angle_kernel)
     solve(SectionedScene(sections=[(170.0, 15.0), (-170.0, 15.0)], height=2.0, links=140),

@@ -83,6 +83,8 @@ def test_the_build_exports_the_solve_and_judge_kernels(aot_build):
     # the wall-free tests and the first step without walls (a loaded arc on the wall)
     wall_free = info["modules"]["lcpbench.model.wall_free_kernel"]["functions"]
     assert {"arc_kind", "first_step_kind", "wall_overlap"} <= set(wall_free)
+    # the continuation predictor, which Solved calls from Python
+    assert "predict_start" in info["modules"]["lcpbench.model.predictor_kernel"]["functions"]
     assert json.loads((Path(where) / "manifest.json").read_text()) == json.loads(
         json.dumps(info))
     assert (Path(where) / info["file"]).exists()

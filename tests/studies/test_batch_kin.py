@@ -104,7 +104,10 @@ def test_the_kernels_rule_5_takes_the_nearest_answer_of_the_kin(seed):
     scene's own plane predicts nothing (Solved's rules 1-4 find no answer on its line or
     at its θ), the kernel starts it from the accepted answer of its kin before it
     nearest in ``where`` (found here by enumeration; the first of equals), as it is;
-    with no kin, or none solved, cold."""
+    with no kin, or none solved, cold. Where its plane predicts, the kernel's start is
+    Solved's: the planes interleaved in one call are kept apart as Solved's dict of
+    planes keeps them (route against route for that part: both run predict_start, and
+    what is compared is the separation of the planes, not the prediction)."""
     from lcpbench.numba_cache import kernel_module
     from lcpbench.studies.continuation import POINTS, Solved
 
@@ -129,7 +132,10 @@ def test_the_kernels_rule_5_takes_the_nearest_answer_of_the_kin(seed):
     for s in range(m):
         start, base = k.predict_start(s, theta, height, plane, kin, where, ok, touch, alphas,
                                       POINTS["adaptive"], True)
-        if solved.predict(scenes[s]) is None:
+        own = solved.predict(scenes[s])
+        if own is not None:  # rules 1-4, from the scene's own plane alone, as Solved keeps it
+            assert fakes[base] is own[1] and np.array_equal(start, own[0])
+        else:
             cand = [i for i in range(s) if ok[i] and kin[s] >= 0 and kin[i] == kin[s]]
             if not cand:
                 assert base == -1 and start.size == 0

@@ -29,7 +29,7 @@ def nearest_answers(s, by_h, theta, height, plane, ok, touch, most, idx, val):
     at = theta[s] if by_h else height[s]
     vals = np.empty(s)
     ids = np.empty(s, np.int64)
-    c = 0
+    n = 0
     for i in range(s):
         if not ok[i] or plane[i] != plane[s]:
             continue
@@ -43,19 +43,19 @@ def nearest_answers(s, by_h, theta, height, plane, ok, touch, most, idx, val):
             v = height[i]
         if v == at:
             continue
-        j = 0
-        while j < c and vals[j] != v:
-            j += 1
-        vals[j], ids[j] = v, i
-        if j == c:
+        vals[n], ids[n] = v, i
+        n += 1
+    order = np.argsort(vals[:n], kind="mergesort")  # stable: equal values in the order added
+    c = 0
+    sv, si = np.empty(n), np.empty(n, np.int64)
+    for q in range(n):
+        v, i = vals[order[q]], ids[order[q]]
+        if c and sv[c - 1] == v:
+            si[c - 1] = i  # the latest answer per value
+        else:
+            sv[c], si[c] = v, i
             c += 1
-    for i in range(1, c):  # sort by value (insertion)
-        v, w = vals[i], ids[i]
-        j = i - 1
-        while j >= 0 and vals[j] > v:
-            vals[j + 1], ids[j + 1] = vals[j], ids[j]
-            j -= 1
-        vals[j + 1], ids[j + 1] = v, w
+    vals, ids = sv, si
     hi = 0
     while hi < c and vals[hi] < at:
         hi += 1

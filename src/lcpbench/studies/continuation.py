@@ -93,7 +93,8 @@ class Solved:
         """(α to start ``scene`` from, the answer whose last contact step warm-starts
         it), or None: start cold. The rules above are
         :func:`lcpbench.model.predictor_kernel.predict_start` (compiled, the line
-        kernel's too) on the arrays of the scene's plane."""
+        kernel's too) on the arrays of the scene's plane, whose spare row it writes (a
+        Solved is not for two threads at once)."""
         plane = self._plane(scene) if self.most else None
         if plane is None or not plane.results:
             return None
@@ -136,7 +137,7 @@ class _Plane:
 
     def predict(self, theta: float, height: float, most: int,
                 adaptive: bool) -> tuple[np.ndarray, ContactResult] | None:
-        from ..numba_cache import kernel_module  # numba at the first prediction
+        from ..numba_cache import kernel_module  # (not at import: numba, or the AOT module)
 
         s = len(self.results)
         self.theta[s], self.height[s] = theta, height
