@@ -103,7 +103,7 @@ def accuracy(step, links: int, up_to: int) -> dict:
     return out
 
 
-def render(data: dict, links: str, machine: str) -> str:
+def render(data: dict, command: str, machine: str) -> str:
     """The markdown of the results ``data`` (N -> {"cond", "accuracy"})."""
     forms = ("gaps", "heights", "lifted", "reactions", "angles")
     lines = ["| N | " + " | ".join(f"cond {f}" for f in forms) + " |",
@@ -130,7 +130,7 @@ def render(data: dict, links: str, machine: str) -> str:
             acc.append(f"| {n} | {f} | `{r['backend']}` | {r['status']} | {r['error']:.1e} | "
                        f"{'—' if nat is None else f'{nat:.1e}'} | {r['time_s']:.2f} |")
     return (f"# Conditioning of the formulations (θ = 150°, h = 3 mm)\n\n"
-            f"Command: `python benchmarks/formulation_conditioning.py --links {links}`. "
+            f"Command: `{command}`. "
             f"Each step at its converged configuration, nondimensionalised as handed to a "
             f"back-end. Derivation: docs/formulations.md.\n\nMachine: {machine}"
             f"\n\n" + "\n".join(lines) + f"\n\nFitted growth: {', '.join(slopes)}.\n\n"
@@ -152,7 +152,7 @@ def main(argv=None) -> None:
 
     import lcpbench
     from lcpbench import ActuatorScene
-    from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
+    from lcpbench.bench.machine import command_line, refuse_overwrite, timing_note, timing_start
     from lcpbench.model.compiled_driver import assemble_step
 
     out = Path(a.out)
@@ -174,7 +174,7 @@ def main(argv=None) -> None:
         step = assemble_step(scene.chain(), np.asarray(res.alpha))
         data[n] = {"cond": conditioning(step), "accuracy": accuracy(step, n, a.accuracy_up_to)}
         print(n, json.dumps(data[n]), flush=True)
-    text = render(data, a.links, timing_note(start))
+    text = render(data, command_line("formulation_conditioning.py", argv), timing_note(start))
     md.parent.mkdir(parents=True, exist_ok=True)
     md.write_text(text)
     js.write_text(json.dumps({str(k): v for k, v in data.items()}, indent=1) + "\n")

@@ -68,7 +68,7 @@ def main(argv=None) -> None:
 
     import lcpbench
     from lcpbench import ActuatorScene
-    from lcpbench.bench.machine import refuse_overwrite, timing_note, timing_start
+    from lcpbench.bench.machine import command_line, refuse_overwrite, timing_note, timing_start
     from lcpbench.model.compiled_driver import assemble_step
     from lcpbench.solvers.base import PROFILES
     from lcpbench.solvers.pgs import pgs
@@ -102,7 +102,7 @@ def main(argv=None) -> None:
                             f"{need:.3g} | {sol.extra.get('rate', float('nan')):.8f} | "
                             f"{sol.status.value} |")
     text = ("# PGS and PSOR: the predicted rate against the measured one\n\n"
-            f"Command: `python benchmarks/pgs_rate.py --links {a.links}`. θ = 150°, "
+            f"Command: `{command_line('pgs_rate.py', argv)}`. θ = 150°, "
             "h = 3 mm, the step at its answer. ρ: spectral radius of SOR(ω) on the block "
             "of the rows positive at the exact answer (Gauss–Seidel at ω = 1); measured: "
             "the residual's mean contraction per sweep over PGS's last sweeps.\n\n"
