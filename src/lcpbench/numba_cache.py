@@ -71,6 +71,7 @@ KERNEL_FILES = ("model/chain_kernel.py", "model/compiled_kernel.py", "model/comp
                 "solvers/dual_kernel.py", "model/judge_kernel.py",
                 "model/judge_bound.py", "model/judge_checks.py",
                 "model/driver_kernel.py", "model/large_kernel.py", "model/judge_exact_kernel.py",
+                "model/judge_pivot.py",
                 "linalg/givens_kernel.py",
                 "linalg/face_kernel.py", "linalg/twisted_kernel.py",
                 "linalg/ldl_kernel.py", "linalg/wide_face_kernel.py", "model/batch_kernel.py", "model/batch_verdict.py",

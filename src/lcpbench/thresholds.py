@@ -50,6 +50,10 @@ STEP_NOISE = 1e4 * EPS
 #: for the single pivots after STALL rounds without fewer infeasible nodes)
 PIVOT_ROUNDS = 30
 STALL = 3
+#: in increments (model.judge_exact_kernel) the judge step's rounds are capped at
+#: PIVOT_ROUNDS + 2 × this many, not 2 per node: each round is an O(N) face solve, and a
+#: judge that cannot settle says so
+LARGE_ROUNDS = 100
 
 # --- the outer loop ----------------------------------------------------------------
 

@@ -28,7 +28,7 @@ def _judge_reason(*, last_step_ok: bool = True, bound: float = 4e-7) -> str:
     faults are its force error bound ``bound`` and, optionally, an inexact last step."""
     from lcpbench.numba_cache import kernel_module
 
-    names = kernel_module("lcpbench.model.judge_checks", "answer_checks").STATS
+    names = kernel_module("lcpbench.model.judge_checks", "certify_checks").STATS
     numbers = {name: 0.0 for name in names}  # every other check passes
     numbers.update(tau=TAU, F0=1.0, eps_R=1.0, comp_allowed=1.0, pen=1.0, closure_allowed=1.0,
                    total=bound, node_allowed=1.0, judge_total_force=0.5)

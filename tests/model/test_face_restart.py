@@ -9,8 +9,6 @@ written out on the step's numbers.
 
 from __future__ import annotations
 
-import sys
-
 import numpy as np
 import pytest
 from energy_oracle import assert_elastic_step_kkt, assert_step_kkt
@@ -108,31 +106,45 @@ def test_large_n_answers_are_judged_by_the_judge_in_increments(monkeypatch):
     # the judge kernel's exact step is in heights on the Cholesky of H (round-off ~ N⁴);
     # from LARGE_N the judge takes its step in increments on the tridiagonal factor
     import lcpbench
-    from lcpbench.model import judge_exact as judge_module  # the judge's steps in increments
+    from lcpbench.model import judge as judge_module
     from lcpbench.model.large_n import LARGE_N
 
     calls = []
-    orig = judge_module.large_n.increments_at  # the step in increments
+    kernel = judge_module._kernel()
 
-    def spy(chain, alpha, *args, **kwargs):  # the driver may bind it too: count the judge's
-        step = orig(chain, alpha, *args, **kwargs)
-        if sys._getframe(1).f_code.co_filename.endswith("judge_exact.py"):
-            calls.append(step.size)
-        return step
+    class Spy:  # the judge kernel, its entry's last argument (increments) recorded
+        def __getattr__(self, name):
+            return getattr(kernel, name)
 
-    monkeypatch.setattr(judge_module.large_n, "increments_at", spy)
+        def judge_walls(self, *args):
+            calls.append(args[-1])
+            return kernel.judge_walls(*args)
+
+    monkeypatch.setattr(judge_module, "_kernel", Spy)
     res = lcpbench.solve(ActuatorScene(150, 3.0, links=LARGE_N), tol=1e-3)
-    assert res.judge == "increments"
-    assert LARGE_N - 1 in calls  # the judge's own step, in increments
+    assert res.judge == "increments" and res.converged
+    assert calls == [True]  # the judge's own steps, in increments
+    assert res.judgement.judge_rounds >= 1  # its step settled
+
+
+def _kernel_step(step) -> tuple:
+    """``(arrays, lower, upper)``: a step in increments as the judge's pivots take it
+    (model/judge_exact_kernel.py; the factored gradient's arguments, the rows of A and
+    their mirror, the bands, the linear term and a work row; the walls about u₀)."""
+    f64 = np.ascontiguousarray
+    arrays = tuple(f64(x, dtype=float) for x in (
+        step.coef, step.stiffness, step.phi_origin, step.rest_joint, step.nodal_load,
+        step.origin, step.factor.rows, step.factor.rrows, step.bands, step.linear))
+    return arrays + (np.empty(step.size),), f64(step.lower, dtype=float), f64(step.upper,
+                                                                             dtype=float)
 
 
 @pytest.mark.parametrize("links,shrink,start", [(60, 1.0, "none"), (60, 0.9, "all"),
                                                  (4200, 1.0, "none")])
 def test_the_judges_primal_step_reaches_the_steps_solution(links, shrink, start):
-    # the judge's own step in increments (model/judge_exact.py) against the dual walk
+    # the judge's own step in increments (model/judge_exact_kernel.py) against the dual walk
     # (solvers/banded.py), an independent method, on the same step in increments
     from lcpbench.model.judge_checks import FREE, LO, UP
-    from lcpbench.model.judge_exact import kernel_step
     from lcpbench.numba_cache import kernel_module
 
     chain = ActuatorScene(150, 3.0, links=links).chain()
@@ -146,7 +158,7 @@ def test_the_judges_primal_step_reaches_the_steps_solution(links, shrink, start)
     scale = float(np.max(ref.forces_upper))
     u, net, roundoff, sizes = (np.empty(n) for _ in range(4))
     # a wall releases its node where it pulls by more than 1e-9 of the largest force
-    rounds = kernel_module("lcpbench.model.judge_exact_kernel").primal_step(*kernel_step(step), np.zeros(n), 1e-9 * scale, state,
+    rounds = kernel_module("lcpbench.model.judge_exact_kernel").primal_step(*_kernel_step(step), np.zeros(n), 1e-9 * scale, state,
                                    4 * n + 30, u, net, roundoff, sizes)[0]
     assert rounds > 0
     held_up, held_lo = state == UP, state == LO
@@ -175,7 +187,6 @@ def test_the_judges_pivoting_with_springs_solves_the_elastic_step(k, channel):
     # energy_oracle (strictly convex: one minimiser)
     from lcpbench.model.elastic import wall_springs
     from lcpbench.model.judge_checks import FREE, LO, UP
-    from lcpbench.model.judge_exact import kernel_step
 
     chain = ActuatorScene(150, 3.0, links=200, wall_stiffness=k, channel=channel).chain()
     _, alpha = feasible_start(chain, chain.rest_alpha)
@@ -185,7 +196,7 @@ def test_the_judges_pivoting_with_springs_solves_the_elastic_step(k, channel):
     u, net, roundoff, sizes = (np.empty(n) for _ in range(4))
     k_up, k_lo = wall_springs(step)
     rounds = kernel_module("lcpbench.model.judge_exact_kernel").pivot_step(
-        *kernel_step(step), k_up, k_lo, np.zeros(n), 0.0, state, 4 * n + 30, u, net,
+        *_kernel_step(step), k_up, k_lo, np.zeros(n), 0.0, state, 4 * n + 30, u, net,
         roundoff, sizes)[0]
     assert rounds > 1  # it pivoted: the unconstrained minimiser is through the wall
     assert_elastic_step_kkt(step, u)

@@ -41,7 +41,8 @@ judge step holds a node in contact by the wall's spring instead of on it.
    spring torques (TORQUE_PER_RAD, TORQUE_FLOOR).
 7. **force error bound**: lcpbench takes contact steps itself, solved exactly by
    block principal pivoting, independent of every back-end
-   (:mod:`lcpbench.model.judge_kernel`; in increments :mod:`lcpbench.model.judge_exact`):
+   (:mod:`lcpbench.model.judge_kernel`; in increments
+   :mod:`lcpbench.model.judge_exact_kernel`):
    the *judge step* at the final α from the answer's contact set (forces F_{k+1}),
    and a second one at α₁, where the first moves the chain, from the first's contact
    set (F_{k+2}). If the answer's forces are F_k and the outer iteration contracts
@@ -95,9 +96,9 @@ the certificate and checks 3-6 and 8 (:mod:`lcpbench.model.judge_checks`), the f
 error bound (:mod:`lcpbench.model.judge_bound`) and the stability check
 (:mod:`lcpbench.model.stability_kernel`). The kernel takes its exact steps in node
 heights; where the solve is in increments (from ``LARGE_N`` links, or a chain marked
-``increments``) the judge's steps are too (:mod:`lcpbench.model.judge_exact`, compiled
-on the increments' tridiagonal factor), and the same certificate, checks and bound are
-computed on them. The judge shares no code with the solve kernel: it checks the answer,
+``increments``) the same kernel takes them in increments, on their twisted tridiagonal
+factor (:func:`lcpbench.model.judge_exact_kernel.increments_step`), and the same
+certificate, checks and bound follow. The judge shares no code with the solve kernel: it checks the answer,
 it does not repeat the solve.
 """
 
@@ -118,11 +119,9 @@ from ..thresholds import (  # the rule's numbers, read by the judge kernel too
     NODE_SHARE,
 )
 from . import large_n
-from .judge_exact import JudgeStep, judge_step  # noqa: F401 (public names)
 from .profile import (
     split_reactions,  # noqa: F401 (public here)
     wall_rows,
-    walls_at,
 )
 
 #: friction (issue 39): a node slides when its slip |s| > max(SLIP_FACTOR · tol · a,
@@ -265,9 +264,9 @@ def takes(chain: Chain) -> bool:
 
 def judged_in(chain: Chain) -> str:
     """Where :func:`judge` takes its exact steps: "increments"
-    (:mod:`lcpbench.model.judge_exact`, from ``LARGE_N`` links or a chain marked
-    ``increments``), else "heights" (the judge kernel); the result's ``judge`` field.
-    Both are compiled."""
+    (:func:`lcpbench.model.judge_exact_kernel.increments_step`, from ``LARGE_N`` links or a
+    chain marked ``increments``), else "heights"; the result's ``judge`` field. The one
+    judge kernel takes either."""
     return "increments" if large_n.applies(chain) else "heights"
 
 
@@ -288,6 +287,7 @@ def chain_args(chain: Chain, kernel_args: tuple | None = None) -> tuple:
 
 
 _contiguous = np.ascontiguousarray
+_NO_TABLES = (np.zeros(0), np.zeros((4, 0)), np.zeros(0), np.zeros((4, 0)))  # flat walls
 
 
 def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
@@ -301,7 +301,7 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
     :class:`~lcpbench.model.result.Certificate` of the answer, or a callable
     ``(upper, lower) -> Certificate`` that the judge calls on the reactions it
     reports (round-off set to zero), used where the judge kernel does not make its
-    own (a driver that did not converge, a judge in increments); the one it used is
+    own (a driver that did not converge, a chain it does not take); the one it used is
     ``judgement.certificate``. ``args``: the chain's :func:`chain_args`, when the
     caller has them already.
     """
@@ -314,17 +314,18 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
         return _unjudged(chain, forces_upper, forces_lower, tol=tol,
                          driver_converged=driver_converged, driver_reason=driver_reason,
                          certificate=certificate)
-    if large:
-        return _judge_in_increments(chain, alpha, forces_upper, forces_lower, tol=tol,
-                                    driver_reason=driver_reason,
-                                    step_statuses=step_statuses, step_sizes=step_sizes)
     k = _kernel()
     if args is None:
         args = chain_args(chain)
-    entry = k.judge_walls if len(args) > 16 else k.judge_answer
-    code, st, fu, fl, res = entry(
-        _contiguous(alpha, dtype=float), *args, _contiguous(forces_upper, dtype=float),
-        _contiguous(forces_lower, dtype=float), float(tol), np.array(step_sizes, dtype=float))
+    f64 = _contiguous
+    answer = (f64(forces_upper, dtype=float), f64(forces_lower, dtype=float), float(tol),
+              np.array(step_sizes, dtype=float))
+    if large or len(args) > 16:  # (flat walls: empty tables)
+        tables = _NO_TABLES if len(args) == 16 else ()
+        code, st, fu, fl, res = k.judge_walls(f64(alpha, dtype=float), *args, *tables, *answer,
+                                              large)
+    else:
+        code, st, fu, fl, res = k.judge_answer(f64(alpha, dtype=float), *args, *answer)
     return verdict_from_stats(code == k.SETTLED, dict(zip(k.STATS, st.tolist(), strict=True)),
                               fu, fl, res, tol=tol, driver_reason=driver_reason,
                               step_statuses=step_statuses)
@@ -375,68 +376,6 @@ def _unjudged(chain: Chain, forces_upper: np.ndarray, forces_lower: np.ndarray, 
     verdict.certificate = (certificate(forces_upper, forces_lower) if callable(certificate)
                            else certificate)
     return verdict
-
-
-_NO_TABLES = (np.zeros(0), np.zeros((4, 0)), np.zeros(0), np.zeros((4, 0)))  # flat walls
-
-
-def _checks_kernel():
-    """The judge's certificate and checks (:mod:`lcpbench.model.judge_checks`)."""
-    from ..numba_cache import kernel_module
-
-    return kernel_module("lcpbench.model.judge_checks", "answer_checks")
-
-
-def _judge_in_increments(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
-                         forces_lower: np.ndarray, *, tol: float, driver_reason: str,
-                         step_statuses: list[str], step_sizes: list[float]) -> Judgement:
-    """:func:`judge` with its exact steps in increments (:func:`~.judge_exact.judge_step`),
-    its certificate and checks from the judge kernel's
-    (:func:`lcpbench.model.judge_checks.answer_checks`), its force error bound from
-    :mod:`lcpbench.model.judge_bound`: the same numbers as the judge kernel's."""
-    ck, f64 = _checks_kernel(), _contiguous
-    args = chain_args(chain)
-    if len(args) == 16:  # flat walls
-        args = (*args, *_NO_TABLES)
-    up, lo = f64(forces_upper, dtype=float), f64(forces_lower, dtype=float)
-    _, F0, eps_R = ck.units(up, lo, float(chain.force_scale), float(tol))
-    js = judge_step(walls_at(chain, alpha), alpha, pull=eps_R, forces=(forces_upper,
-                                                                        forces_lower))
-    settled = js is not None
-    noise, S = (js.noise, js.term_size) if settled else (np.zeros(up.size), 0.0)
-    st, fu, fl, res = ck.answer_checks(f64(alpha, dtype=float), *args, up, lo, float(tol),
-                                       f64(noise, dtype=float), float(S), settled)
-    s = dict(zip(ck.STATS, st.tolist(), strict=True))
-    if settled:
-        rho = contraction_estimate(step_sizes, js.dalpha)
-        kern = _bound_kernel()
-        d_up, d_lo = (f64(x, dtype=float) for x in (fu - js.forces_upper,
-                                                    fl - js.forces_lower))
-        zero = np.zeros_like(d_up)
-        total, node = kern.force_error_bound(d_up, d_lo, zero, zero, rho, np.nan,
-                                             _floor(js, F0), np.nan, F0, False)
-        js2, rho2 = None, np.nan
-        if not total <= s["tau"]:  # the second judge step, at α₁ where the first moves
-            # the chain, from its contacts (where the one-step estimate passes, it can only
-            # lower the bound)
-            js2 = judge_step(walls_at(chain, js.alpha_next), js.alpha_next, pull=eps_R,
-                             forces=(js.forces_upper, js.forces_lower), contacts=js.contacts)
-        if js2 is not None:
-            rho2 = float(kern.judge_contraction(js.dalpha, js2.dalpha))
-            total, node = kern.force_error_bound(
-                d_up, d_lo, *(f64(x, dtype=float) for x in (
-                    js.forces_upper - js2.forces_upper, js.forces_lower - js2.forces_lower)),
-                rho, rho2, _floor(js, F0), _floor(js2, F0), F0, True)
-        s.update(total=float(total), node=float(node), rho=rho, judge_rho=rho2,
-                 judge_total_force=float(np.sum(js.forces_upper)), rounds=js.rounds)
-    return verdict_from_stats(settled, s, fu, fl, res, tol=tol, driver_reason=driver_reason,
-                              step_statuses=step_statuses)
-
-
-def _floor(js: JudgeStep, F0: float) -> float:
-    """A judge step's own round-off, relative to F₀: its wall reactions', and the residual
-    left on the free nodes, which the chain carries to the walls."""
-    return (float(np.sum(js.roundoff)) + js.worst_roundoff) / F0
 
 
 def unstable_directions(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,

@@ -1,10 +1,9 @@
 """The result judge's force error bound (check 7 of :mod:`lcpbench.model.judge`), compiled.
 
-Written once in numba and called by every judge path: the judge kernel
-(:mod:`lcpbench.model.judge_kernel`, the small-N answers, the batch) calls these
-functions from compiled code, the judge in increments (large N,
-:mod:`lcpbench.model.judge_exact`) from Python through
-:func:`lcpbench.numba_cache.kernel_module`.
+Written once in numba and called by the one judge kernel
+(:func:`lcpbench.model.judge_kernel.judge_walls`, its steps in heights or in increments)
+from compiled code, and by the large-N driver's contraction estimate from Python
+(:func:`lcpbench.model.judge.contraction_estimate`).
 
 The judge takes two exact contact steps of its own: the first at the answer's
 final α (reactions R_{k+1}), the second at α₁, where the first step moves the

@@ -8,9 +8,8 @@ complementarity, the right pin's closure and the joint torques' balance, with th
 walls' normal reactions on a wall profile), the sign, complementarity and
 penetration checks and the second-order check
 (:mod:`lcpbench.model.stability_kernel`), written once: the judge kernel
-(:func:`lcpbench.model.judge_kernel.judge_walls`, whose exact steps are in node
-heights) calls :func:`certify_checks` after its first step, and :func:`answer_checks`
-takes them from Python for the judge in increments (:mod:`lcpbench.model.judge_exact`).
+(:func:`lcpbench.model.judge_kernel.judge_walls`, its exact steps in node heights or in
+increments) calls :func:`certify_checks` after its first step.
 Also the layout of the judge's work array (one allocation per call, :data:`ROWS`)
 and the names of the numbers it returns (:data:`STATS`).
 """
@@ -21,8 +20,6 @@ import numpy as np
 from numba import njit
 
 from ..thresholds import (  # the rule's numbers, as model.judge reads them
-    EPS,
-    FLOOR_ULPS,
     FORCE_TOL_CAP,
     FORCE_TOL_PER_RAD,
     GEOMETRY_TOL,
@@ -31,7 +28,6 @@ from ..thresholds import (  # the rule's numbers, as model.judge reads them
     NODE_SHARE,
 )
 from .chain_kernel import add_compensated  # once (numba_cache)
-from .judge_bound import profile_rows
 from .stability_kernel import CHECKED, unstable_directions_at
 
 #: names of the entries of the ``stats`` array that :func:`judge_answer` returns
@@ -227,35 +223,3 @@ def certify_checks(alpha, a, jl, jr, k, rest, link_load, fs, lo, hi, L, F, cu, c
                                                k_lo, h1, l1, h2, l2, eps_R, pinned_right)
     stats[21] = unstable if code == CHECKED else 0.0
     return res
-
-
-@njit(cache=True)
-def answer_checks(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl,
-                  wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower, tol, noise, S,
-                  settled):
-    """The judge kernel's certificate and checks (:func:`certify_checks`) of an answer whose
-    exact judge step was taken elsewhere (in increments, model.judge_exact): the reactions
-    within ``noise`` (per node, N) of zero set to zero where that step ``settled``,
-    ``S`` its term size max_i (|H||u| + |c|)_i (N). The arguments before them are
-    :func:`lcpbench.model.judge_kernel.judge_walls`' (flat walls: empty tables).
-
-    Returns ``(stats, forces_upper, forces_lower, torque_residual)``, ``stats`` named
-    by :data:`STATS`, NaN from "total" on (the force error bound's) but "node_allowed"."""
-    links = alpha.size
-    tau, F0, eps_R = units(forces_upper, forces_lower, F, tol)
-    stats = np.full(len(STATS), np.nan)
-    w = np.empty((ROWS, links + 2))
-    positions(alpha, a, w)
-    profiled = ku.size > 0 or kl.size > 0
-    h1 = l1 = h2 = l2 = g_up = g_lo = np.empty(0)
-    if profiled:  # the walls at the nodes' x
-        hi, lo, _, g_up, g_lo, h1, l1, h2, l2 = profile_rows(
-            alpha, w[COS], a, fs, hi, lo, wall, ku, cu_, kl, cl_, forces_upper, forces_lower,
-            nodal_load)
-    fu, fl = without_noise(forces_upper, forces_lower, noise, settled)
-    floor_R = FLOOR_ULPS * EPS * S if settled else 0.0
-    has_gap = np.isfinite(wall) or ku.size > 0  # (an upper wall: a gap to measure)
-    res = certify_checks(alpha, a, jl, jr, k, rest, link_load, fs, lo, hi, L, F, cu, cl, wall,
-                         channel, has_gap, profiled, g_up, g_lo, h1, l1, h2, l2, fu, fl, w,
-                         floor_R, tau, F0, eps_R, stats)
-    return stats, fu, fl, res

@@ -1,13 +1,15 @@
 """The result judge's exact contact step in increments, compiled (check 7 of
-:mod:`lcpbench.model.judge`; :func:`lcpbench.model.judge_exact.judge_step` assembles the
-step and reads the answer).
+:mod:`lcpbench.model.judge`): :func:`increments_step`, which the one judge kernel
+(:func:`lcpbench.model.judge_kernel.judge_walls`) takes in place of its step in node
+heights from ``LARGE_N`` links or on a chain marked ``increments``.
 
-One contact step in increments d = u − u₀ (:class:`lcpbench.model.large_n.IncrementStep`),
-solved exactly from a contact set, independent of every back-end:
+One contact step in increments d = u − u₀ (:class:`lcpbench.model.large_n.IncrementStep`,
+assembled by :func:`lcpbench.model.large_kernel.assemble_into`), solved exactly from a
+contact set, independent of every back-end:
 
 - rigid walls: the primal active set (Nocedal & Wright, Alg. 16.3; :func:`primal_step`);
 - elastic walls: block principal pivoting (the judge kernel's rule,
-  :func:`~.judge_kernel.pivot_test` and :func:`~.judge_kernel.pivot_exchange`), the
+  :func:`~.judge_pivot.pivot_test` and :func:`~.judge_pivot.pivot_exchange`), the
   springs k (u − h) of the nodes on a yielding wall rotated into the factor as rows
   √k eᵢ (nothing grows with k).
 
@@ -37,15 +39,17 @@ from numba import njit
 from ..linalg.face_kernel import face_solve as top_face_solve
 from ..linalg.twisted_kernel import face_solve as twisted_face_solve
 from ..linalg.twisted_kernel import twist
+from ..thresholds import EPS, LARGE_ROUNDS, PIVOT_ROUNDS, ROUNDOFF_ULPS
+from .chain_kernel import predict_alpha  # eq. (21), the kinematics' (not the step's)
 from .judge_checks import FREE, LO, UP
-from .judge_kernel import (
+from .judge_pivot import (
     pivot_exchange,
     pivot_settled,
     pivot_slack,
     pivot_test,
     term_sizes,
 )
-from .large_kernel import descend, gradient, gradient_scale
+from .large_kernel import assemble_into, descend, gradient, gradient_scale
 
 
 @njit(cache=True)
@@ -104,6 +108,29 @@ def face_solve(rows, rrows, face, fixed, root, rhs, x):
 
 
 @njit(cache=True)
+def free_count(fixed):
+    """How many nodes are not ``fixed`` (a loop: numba's array reductions would load
+    numba.np.arraymath, and with it scipy.linalg, at the judge kernel's first call)."""
+    count = 0
+    for i in range(fixed.size):
+        if not fixed[i]:
+            count += 1
+    return count
+
+
+@njit(cache=True)
+def _free_nodes(fixed):
+    """The indices of the nodes not ``fixed``, ascending."""
+    free = np.empty(free_count(fixed), np.int64)
+    p = 0
+    for i in range(fixed.size):
+        if not fixed[i]:
+            free[p] = i
+            p += 1
+    return free
+
+
+@njit(cache=True)
 def _descend(step, face, fixed, grad, u, x, no_springs):
     """u[free] −= H[free, free]⁻¹ grad[free] (``grad`` is overwritten): where at most half
     the nodes are free, by their independent blocks
@@ -111,7 +138,7 @@ def _descend(step, face, fixed, grad, u, x, no_springs):
     (:meth:`lcpbench.model.large_n.IncrementStep.solve_on`'s choice). False on a zero
     pivot."""
     n = u.size
-    free = np.flatnonzero(~fixed)
+    free = _free_nodes(fixed)
     if 2 * free.size <= n:
         return descend(step[6], free, grad, u)
     for i in range(n):
@@ -133,7 +160,7 @@ def _face_minimiser(step, face, lo, hi, state, u, grad, x, no_springs):
     fixed = state != FREE
     for i in range(n):
         u[i] = hi[i] if state[i] == UP else (lo[i] if state[i] == LO else origin[i])
-    if not fixed.all():
+    if free_count(fixed):
         for _ in range(2):
             gradient(coef, k, phi_origin, rest, load, origin, u, grad, m)
             if not _descend(step, face, fixed, grad, u, x, no_springs):
@@ -237,7 +264,7 @@ def pivot_step(step, lo, hi, k_up, k_lo, height_size, pull, state, cap, u, net, 
             fixed[i] = state[i] != FREE and not kk > 0.0
             u[i] = wall[i] if fixed[i] else origin[i]
             springs = springs or spring[i] > 0.0
-        for _ in range(0 if fixed.all() else 2):  # solve, then refine (factored gradient)
+        for _ in range(2 if free_count(fixed) else 0):  # solve, then refine (factored gradient)
             gradient(coef, k, phi_origin, rest, load, origin, u, grad, m)
             if not springs:
                 if not _descend(step, face, fixed, grad, u, x, root):
@@ -257,3 +284,73 @@ def pivot_step(step, lo, hi, k_up, k_lo, height_size, pull, state, cap, u, net, 
             return pivot_settled(state, roundoff, rounds, worst, S)
         best, stall = pivot_exchange(state, change, n, count, first, best, stall)
     return 0, 0.0, 0.0
+
+
+@njit(cache=True)
+def increments_step(alpha, a, k, rest, load, lower, upper, cu, cl, fs, pull, forces_upper,
+                    forces_lower, from_forces, from_state, state, u, net, roundoff, noise,
+                    alpha_next):
+    """The judge's exact contact step at α in increments d = u − u₀ (assembled by
+    :func:`~lcpbench.model.large_kernel.assemble_into`, the walls ``lower``/``upper`` and the
+    nodal ``load`` at α as given: a profile's at the nodes' x, with its slope load), for
+    :func:`lcpbench.model.judge_kernel.judge_walls`.
+
+    It starts from the nodes whose gap costs less than ``pull`` (N) of force to close (or
+    is within the round-off of its height), and, ``from_forces`` (a wall profile: the
+    answer sits on the walls at the x of its last step), the nodes whose reaction
+    ``forces_upper``/``forces_lower`` exceeds ``pull``; ``from_state``: from the contact
+    set in ``state`` instead (the second judge step starts from the first's), nodes on a
+    wall of this step only. A node on both walls starts on the nearer. Rigid walls: the
+    primal active set (:func:`primal_step`); walls with a compliance 1/k > 0 (``cu``,
+    ``cl``; empty: none yields): block principal pivoting (:func:`pivot_step`).
+
+    Returns ``(rounds, largest round-off, S, max|α̂ − α|)``, rounds 0 where it did not
+    settle; fills the settled ``state``, the node heights u = u₀ + d, the net reactions,
+    their round-off (wall nodes only), the ``noise`` of an answer's R = K g + z per node
+    (a few ulps of its gradient's terms at u₀) and α̂ (``alpha_next``, eq. 21)."""
+    nl = alpha.size
+    n = nl - 1
+    inv_a_cos, alpha0, sin_alpha = np.empty(nl), np.empty(nl), np.empty(nl)
+    coef, rows, rrows = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
+    heights, phi_origin, linear, lo, hi = (np.empty(n), np.empty(n), np.empty(n),
+                                           np.empty(n), np.empty(n))
+    bands, m, zero, sizes = np.empty((3, n)), np.empty(n), np.zeros(n), np.empty(n)
+    assemble_into(alpha, a, k, np.sqrt(k), rest, load, lower, upper, inv_a_cos, coef, heights,
+                  alpha0, phi_origin, bands, linear, lo, hi, rows, rrows, sin_alpha, m)
+    step = (coef, k, phi_origin, rest, load, zero, rows, rrows, bands, linear, m)
+    gradient_scale(coef, k, phi_origin, rest, load, zero, zero, noise, m)
+    wall_size = np.empty(n)  # |wall| about u₀: what a node's increment rounds at
+    for i in range(n):
+        noise[i] = ROUNDOFF_ULPS * EPS * noise[i]
+        wall_size[i] = max(abs(hi[i]) if np.isfinite(hi[i]) else 0.0,
+                           abs(lo[i]) if np.isfinite(lo[i]) else 0.0)
+        touch = max(pull / bands[0, i], ROUNDOFF_ULPS * EPS * (abs(heights[i]) + wall_size[i]))
+        if from_state:
+            on_up = state[i] == UP and np.isfinite(hi[i])
+            on_lo = state[i] == LO and np.isfinite(lo[i])
+        else:
+            on_up, on_lo = hi[i] <= touch, -lo[i] <= touch
+            if from_forces:
+                on_up = on_up or (forces_upper[i] > pull and np.isfinite(hi[i]))
+                on_lo = on_lo or (forces_lower[i] > pull and np.isfinite(lo[i]))
+        up = on_up and (not on_lo or hi[i] <= -lo[i])  # the nearer wall
+        state[i] = UP if up else (LO if on_lo else FREE)
+    soft = False  # a wall that yields: its springs k = 1/c where it has a node
+    k_up, k_lo = np.zeros(n), np.zeros(n)
+    for i in range(cu.size):
+        soft = soft or cu[i] > 0.0 or cl[i] > 0.0
+        k_up[i] = 1.0 / cu[i] if cu[i] > 0.0 and np.isfinite(hi[i]) else 0.0
+        k_lo[i] = 1.0 / cl[i] if cl[i] > 0.0 and np.isfinite(lo[i]) else 0.0
+    cap = PIVOT_ROUNDS + 2 * LARGE_ROUNDS
+    if soft:
+        rounds, worst, S = pivot_step(step, lo, hi, k_up, k_lo, wall_size, pull, state, cap,
+                                      u, net, roundoff, sizes)
+    else:
+        rounds, worst, S = primal_step(step, lo, hi, wall_size, pull, state, cap, u, net,
+                                       roundoff, sizes)
+    if rounds == 0:
+        return 0, 0.0, 0.0, 0.0
+    dalpha = predict_alpha(u, n, zero, alpha0, inv_a_cos, fs, alpha, alpha_next)
+    for i in range(n):
+        u[i] += heights[i]
+    return rounds, worst, S, dalpha

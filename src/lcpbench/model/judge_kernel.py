@@ -33,7 +33,6 @@ from ..thresholds import (  # the rule's numbers, as model.judge reads them
     FLOOR_ULPS,
     PIVOT_ROUNDS,
     ROUNDOFF_ULPS,
-    STALL,
 )
 from .chain_kernel import predict_alpha  # eq. (21), the kinematics' (not the step's)
 from .judge_bound import contraction, force_error_bound, judge_contraction, profile_rows
@@ -77,6 +76,8 @@ from .judge_checks import (
     units,
     without_noise,
 )
+from .judge_exact_kernel import increments_step
+from .judge_pivot import NO_SIZES, pivot_exchange, pivot_settled, pivot_test, term_sizes
 from .wall_kernel import split_by_wall
 
 TINY = np.finfo(np.float64).tiny
@@ -162,23 +163,6 @@ def _grad(u, w, out, with_scale, n, fs, b0, nj, k, rest, nodal_load):
 
 
 @njit(cache=True)
-def term_sizes(bands, linear, x, n, out):
-    """(|H| |x| + |c|)_i on the bands into ``out``: the size of the terms of each R_i
-    (for round-off bounds)."""
-    for i in range(n):
-        s = abs(bands[0, i]) * abs(x[i])
-        if i - 1 >= 0:
-            s += abs(bands[1, i - 1]) * abs(x[i - 1])
-        if i + 1 < n:
-            s += abs(bands[1, i]) * abs(x[i + 1])
-        if i - 2 >= 0:
-            s += abs(bands[2, i - 2]) * abs(x[i - 2])
-        if i + 2 < n:
-            s += abs(bands[2, i]) * abs(x[i + 2])
-        out[i] = s + abs(linear[i])
-
-
-@njit(cache=True)
 def _factor(bands, free, m, fac, spring):
     """H[free, free] + diag(spring) = L D Lᵀ (bandwidth 2, no square roots) into fac:
     the unit L's sub-diagonals in rows 1-2, 1 / D in row 3; False if it is not
@@ -236,87 +220,31 @@ def _solve(fac, free, m, rhs, x):
         x[j] = t
 
 
-#: no per-node height sizes: every height rounds at the chain's length L (in heights)
-NO_SIZES = np.empty(0)
-
-
 @njit(cache=True)
-def pivot_slack(roundoff, pull, size):
-    """The pull (N) by which a wall must pull on its node before the judge releases it:
-    its reaction's round-off, ``pull``, or a few ulps of the term size S_i of R = K g + z,
-    whichever is largest (a sign within it is undecided, not a reason to pivot)."""
-    return max(max(roundoff, pull), ROUNDOFF_ULPS * EPS * size)
-
-
-@njit(cache=True)
-def pivot_test(state, change, u, net, scale, sizes, hi, lo, diag, L, height_size, pull,
-               roundoff):
-    """One round's test of the judge's block principal pivoting, in heights or in
-    increments (:mod:`lcpbench.model.judge_exact_kernel`), over the nodes of ``hi``.
-
-    ``net``: the gradient on entry, the net reaction R' = −gradient on return; per node
-    ``roundoff`` = the round-off of R' (a few ulps of its terms, ``scale``). A wall that
-    pulls by more than the slack max(round-off, ``pull``, a few ulps of the term size
-    S_i, ``sizes``) releases its node (``change`` 1: the upper wall, 2: the lower); a
-    free node more than its reach through a wall joins it (3: the upper, 4: the lower),
-    the reach max(a few ulps of |u| + the size its height rounds at, ``pull`` / H_ii
-    (``diag``)): the size is ``height_size`` per node, or (empty) the length ``L``.
-    Returns (how many change, the first that does, the largest round-off, max S_i)."""
-    count, first = 0, -1
-    worst, S = 0.0, 0.0
-    per_node = height_size.size > 0
-    for i in range(hi.size):
-        net[i] = -net[i]
-        roundoff[i] = ROUNDOFF_ULPS * EPS * scale[i]
-        size = sizes[i]
-        worst = max(worst, roundoff[i])
-        S = max(S, size)
-        slack = pivot_slack(roundoff[i], pull, size)
-        rounds_at = height_size[i] if per_node else L
-        reach = max(ROUNDOFF_ULPS * EPS * (abs(u[i]) + rounds_at), pull / diag[i])
-        c = 0
-        if state[i] == UP:
-            if net[i] < -slack:
-                c = 1
-        elif state[i] == LO:
-            if net[i] > slack:
-                c = 2
-        elif u[i] > hi[i] + reach:
-            c = 3
-        elif u[i] < lo[i] - reach:
-            c = 4
-        change[i] = c
-        if c:
-            count += 1
-            if first < 0:
-                first = i
-    return count, first, worst, S
-
-
-@njit(cache=True)
-def pivot_exchange(state, change, n, count, first, best, stall):
-    """Júdice–Pires: every node :func:`pivot_test` names changes sides while their
-    number falls; after STALL rounds without progress only the first (Murty's least
-    index, finite for the P-matrix of a positive definite step). Returns (best, stall)."""
-    if count < best:
-        best, stall = count, 0
-    else:
-        stall += 1
+def _heights_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, w, bands, fac, iw, lo, hi, cu,
+                  cl, L, eps_R, profiled, forces_upper, forces_lower):
+    """The judge step at α in node heights (on the Cholesky of H), from the answer's
+    contact set: the nodes within reach of a wall (``eps_R`` of force, or 1e3 ulps of the
+    length L), and (``profiled``) the nodes whose reaction exceeds ``eps_R``; row NOISE
+    the round-off of an answer's R = K g + z per node. Returns :func:`_pivot`'s."""
+    nj = jr.size
+    b0 = jr[0]
+    _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, w, bands)
+    origin, linear, noise, state = w[ORIGIN], w[LINEAR], w[NOISE], iw[0]
+    _grad(origin, w, w[RHS], True, n, fs, b0, nj, k, rest, nodal_load)  # scale at u₀
+    term_sizes(bands, linear, origin, n, w[SIZE])
+    scale0, size0 = w[SCALE], w[SIZE]
     for i in range(n):
-        if change[i] == 0 or (stall >= STALL and i != first):
-            continue
-        state[i] = FREE if change[i] <= 2 else (UP if change[i] == 3 else LO)
-    return best, stall
-
-
-@njit(cache=True)
-def pivot_settled(state, roundoff, rounds, worst, S):
-    """A settled judge step's (rounds, largest round-off, max S_i), its reactions'
-    round-off kept on the wall nodes only (0 on the free ones)."""
-    for i in range(state.size):
-        if state[i] == FREE:
-            roundoff[i] = 0.0
-    return rounds, worst, S
+        touch = max(eps_R / bands[0, i], 1e3 * EPS * L)
+        on_up = hi[i] - origin[i] <= touch
+        on_lo = origin[i] - lo[i] <= touch
+        noise[i] = ROUNDOFF_ULPS * EPS * (scale0[i] if on_up or on_lo else size0[i])
+        if profiled:  # on the wall at the x of its last step: its loaded nodes start on it
+            on_up = on_up or (forces_upper[i] > eps_R and np.isfinite(hi[i]))
+            on_lo = on_lo or (forces_lower[i] > eps_R and np.isfinite(lo[i]))
+        up = on_up and (not on_lo or hi[i] - origin[i] <= origin[i] - lo[i])
+        state[i] = UP if up else (LO if on_lo else FREE)
+    return _pivot(bands, fac, iw, lo, hi, cu, cl, L, eps_R, w, fs, b0, nj, k, rest, nodal_load)
 
 
 @njit(cache=True)
@@ -377,12 +305,13 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
     no_table = (np.empty(0), np.empty((4, 0)))
     return judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu,
                        cl, wall, channel, *no_table, *no_table, forces_upper, forces_lower, tol,
-                       step_sizes)
+                       step_sizes, False)
 
 
 @njit(cache=True)
 def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl,
-                wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower, tol, step_sizes):
+                wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower, tol, step_sizes,
+                increments):
     """model.judge.judge's numbers for an answer whose driver converged.
 
     ``fs``: shifted index (node + 1) of the first free node; ``F`` the force
@@ -418,24 +347,17 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
         hi, lo, nodal_load, g_up, g_lo, h1, l1, h2, l2 = profile_rows(
             alpha, w[COS], a, fs, hi0, lo0, wall, ku, cu_, kl, cl_, forces_upper,
             forces_lower, nodal0)
-    # the judge step at α, from the answer's contact set
-    _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, w, bands)
-    origin, linear, noise, state = w[ORIGIN], w[LINEAR], w[NOISE], iw[0]
-    _grad(origin, w, w[RHS], True, n, fs, b0, nj, k, rest, nodal_load)  # scale at u₀
-    term_sizes(bands, linear, origin, n, w[SIZE])
-    scale0, size0 = w[SCALE], w[SIZE]
-    for i in range(n):
-        touch = max(eps_R / bands[0, i], 1e3 * EPS * L)
-        on_up = hi[i] - origin[i] <= touch
-        on_lo = origin[i] - lo[i] <= touch
-        noise[i] = ROUNDOFF_ULPS * EPS * (scale0[i] if on_up or on_lo else size0[i])
-        if profiled:  # on the wall at the x of its last step: its loaded nodes start on it
-            on_up = on_up or (forces_upper[i] > eps_R and np.isfinite(hi[i]))
-            on_lo = on_lo or (forces_lower[i] > eps_R and np.isfinite(lo[i]))
-        up = on_up and (not on_lo or hi[i] - origin[i] <= origin[i] - lo[i])
-        state[i] = UP if up else (LO if on_lo else FREE)
-    rounds, worst, S = _pivot(bands, fac, iw, lo, hi, cu, cl, L, eps_R, w, fs, b0, nj, k, rest,
-                              nodal_load)
+    alpha1 = np.empty(links)  # α̂, where the judge step moves the chain (eq. 21)
+    noise, state, dalpha, dalpha2 = w[NOISE], iw[0], 0.0, 0.0
+    if increments:  # the judge step at α in increments, from the answer's contact set
+        rounds, worst, S, dalpha = increments_step(
+            alpha, a, k, rest, nodal_load, lo, hi, cu, cl, fs, eps_R, forces_upper,
+            forces_lower, profiled, False, state, w[U, :n], w[NET, :n], w[ROUNDOFF, :n],
+            noise[:n], alpha1)
+    else:  # in heights
+        rounds, worst, S = _heights_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, w, bands,
+                                         fac, iw, lo, hi, cu, cl, L, eps_R, profiled,
+                                         forces_upper, forces_lower)
     settled = rounds > 0
     u, net, roundoff, ju, jlo = w[U], w[NET], w[ROUNDOFF], w[JU], w[JLO]
     fu, fl = without_noise(forces_upper, forces_lower, noise, settled)
@@ -448,8 +370,8 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
                          floor_R, tau, F0, eps_R, stats)
     if not settled:
         return NOT_SETTLED, stats, fu, fl, res
-    alpha1 = np.empty(links)
-    dalpha = _predict(alpha, u, w, fs, n, alpha1)
+    if not increments:
+        dalpha = _predict(alpha, u, w, fs, n, alpha1)
     rho = contraction(step_sizes, dalpha)
     # the second judge step, at α₁ where the first moves the chain, from its contact set
     d_up, d_lo, j1u, j1l = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
@@ -469,15 +391,23 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
     if profiled:  # its walls at the nodes' new x, the first step's reactions lagged
         hi, lo, nodal_load = profile_rows(alpha1, w[COS], a, fs, hi0, lo0, wall, ku, cu_,
                                           kl, cl_, j1u, j1l, nodal0)[:3]
-    _step(alpha1, a, jl, jr, k, rest, fs, n, nodal_load, w, bands)
-    rounds2, worst2, _ = _pivot(bands, fac, iw, lo, hi, cu, cl, L, eps_R, w, fs, b0, nj, k,
-                                rest, nodal_load)
+    alpha2 = np.empty(links)
+    if increments:  # from the first step's contact set (iw[0], as it settled)
+        rounds2, worst2, _, dalpha2 = increments_step(
+            alpha1, a, k, rest, nodal_load, lo, hi, cu, cl, fs, eps_R, j1u, j1l, False, True,
+            state, w[U, :n], w[NET, :n], w[ROUNDOFF, :n], w[RHS, :n], alpha2)
+    else:
+        _step(alpha1, a, jl, jr, k, rest, fs, n, nodal_load, w, bands)
+        rounds2, worst2, _ = _pivot(bands, fac, iw, lo, hi, cu, cl, L, eps_R, w, fs, b0, nj, k,
+                                    rest, nodal_load)
     rho2, floor2 = np.nan, np.nan
     if rounds2 > 0:
         split_by_wall(net[:n], u, hi, lo, channel, ju, jlo)
         for i in range(n):
             e_up[i], e_lo[i] = j1u[i] - ju[i], j1l[i] - jlo[i]
-        rho2 = judge_contraction(dalpha, _predict(alpha1, u, w, fs, n, np.empty(links)))
+        if not increments:
+            dalpha2 = _predict(alpha1, u, w, fs, n, alpha2)
+        rho2 = judge_contraction(dalpha, dalpha2)
         floor2 = worst2
         for i in range(n):
             floor2 += roundoff[i]

@@ -139,7 +139,8 @@ class ContactResult:
         with why in parentheses where it was not the plan's ("increments driver (large
         N: ...)", "compiled driver (the kernel stopped: ...)").
     judge : where the result judge took its exact steps: "heights" (the judge
-        kernel) or "increments" (from ``LARGE_N`` links, :mod:`lcpbench.model.judge_exact`).
+        kernel) or "increments" (from ``LARGE_N`` links: the same kernel, its steps in
+        increments, :func:`lcpbench.model.judge_exact_kernel.increments_step`).
     retries : the escalations that ran after the route, in order
         (:class:`Retry`: name and why); () where the first answer was kept.
     states : where the solve's starts reached more than one distinct stable state
