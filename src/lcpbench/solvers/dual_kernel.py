@@ -140,6 +140,23 @@ def _violation(u, bound, S, i, sign):
     return u[i] - bound[i] if sign > 0 else bound[i] - u[i]
 
 
+def _wrapping(f):
+    """``f``, whose uint64 products wrap modulo 2⁶⁴: compiled they wrap silently; as plain
+    Python (``NUMBA_DISABLE_JIT=1``) numpy's scalars wrap the same but warn of overflow,
+    silenced here (the same numbers either way)."""
+    from numba import config
+
+    if not config.DISABLE_JIT:
+        return f
+
+    def wrapped(*args):
+        with np.errstate(over="ignore"):
+            return f(*args)
+
+    return wrapped
+
+
+@_wrapping
 @njit(cache=True)
 def _key(i, s):
     """The working set's hash is the XOR of these over its nodes (splitmix64 of
