@@ -173,7 +173,7 @@ def primal_step(step, lo, hi, height_size, pull, state, cap, u, net, roundoff, s
     """The rigid walls' step by the primal active set from the contact set ``state``
     (settled there on return): rounds (0: not settled within ``cap`` face solves), the
     largest round-off, max S_i; u, the net reaction and the round-off per node in
-    ``u``, ``net``, ``roundoff``. Slack and reach as :func:`~.judge_kernel.pivot_test`."""
+    ``u``, ``net``, ``roundoff``. Slack and reach as :func:`~.judge_pivot.pivot_test`."""
     n = u.size
     grad, scale, v, x = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
     change, face, no_springs = np.empty(n, np.int64), new_face(n), np.zeros(n)

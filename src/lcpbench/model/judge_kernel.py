@@ -2,27 +2,39 @@
 error bound (check 7 of :mod:`lcpbench.model.judge`).
 
 :func:`judge_walls` (:func:`judge_answer` on flat walls) takes every number of
-:func:`lcpbench.model.judge.judge` for a converged driver answer, in node heights:
-the judge's own contact step at the final α (assembled from the energy of the
-chain, solved exactly by block principal pivoting from the answer's contact set:
-Júdice–Pires, then Murty's least index), the round-off of the reactions, the
-certificate and checks 3-6 and 8 (:mod:`lcpbench.model.judge_checks`), and, where the
-one-step estimate of the force error exceeds τ, the judge's second exact step at α₁,
-where its first moves the chain, from the first's contact set; the force error bound
-from the two (:mod:`lcpbench.model.judge_bound`). :mod:`lcpbench.model.judge` turns
-the numbers returned here into the :class:`~lcpbench.model.judge.Judgement` and its
-reasons; ``NUMBA_DISABLE_JIT=1`` runs the same functions as plain Python.
+:func:`lcpbench.model.judge.judge` for a converged driver answer: the judge's own
+contact step at the final α, solved exactly from the answer's contact set, the
+round-off of the reactions, the certificate and checks 3-6 and 8
+(:mod:`lcpbench.model.judge_checks`), and, where the one-step estimate of the force
+error exceeds τ, the judge's second exact step at α₁, where its first moves the chain,
+from the first's contact set; the force error bound from the two
+(:mod:`lcpbench.model.judge_bound`). Its steps are in one of two formulations:
+
+- in node heights (here): assembled from the energy of the chain, solved by block
+  principal pivoting (Júdice–Pires, then Murty's least index; the rule in
+  :mod:`lcpbench.model.judge_pivot`) on the Cholesky of H, whose round-off grows as N⁴;
+- in increments d = u − u₀ (``increments``: from ``LARGE_N`` links or on a chain marked
+  ``increments``), :func:`lcpbench.model.judge_exact_kernel.increments_step`: assembled
+  by :func:`lcpbench.model.large_kernel.assemble_into` (the large-N driver's assembly),
+  solved on its twisted tridiagonal factor by the primal active set (rigid walls) or
+  block principal pivoting (elastic walls).
+
+:mod:`lcpbench.model.judge` turns the numbers returned here into the
+:class:`~lcpbench.model.judge.Judgement` and its reasons; ``NUMBA_DISABLE_JIT=1`` runs
+the same functions as plain Python.
 
 Independent of the solve kernel (:mod:`lcpbench.model.compiled_kernel`): the judge
-step is block principal pivoting, not the dual active set, on its own assembly;
-nothing here is imported from that file and nothing there from here. The banded
-factorisation below is textbook arithmetic (LDLᵀ for bandwidth 2, no square roots).
-Its work arrays are one allocation per call (rows :data:`~.judge_checks.ROWS`).
+step is block principal pivoting or the primal active set, not the dual active set;
+in heights on its own assembly; nothing here is imported from that file and nothing
+there from here. The banded factorisation below is textbook arithmetic (LDLᵀ for
+bandwidth 2, no square roots). Its work arrays are one allocation per call (rows
+:data:`~.judge_checks.ROWS`).
 
-The chain must have consecutive joints and contiguous free nodes (the
-layouts the solve kernel takes, :func:`lcpbench.model.kernel_call.applies`).
+The chain must have consecutive joints and contiguous free nodes (the layouts the
+solve kernel takes, :func:`lcpbench.model.kernel_call.applies`); in increments also
+joint j joining links j, j + 1 with both ends pinned
+(:func:`lcpbench.model.large_n.layout_fits`).
 """
-
 from __future__ import annotations
 
 import numpy as np
@@ -322,7 +334,8 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
     the upper (lower) wall's table of cubic pieces (:mod:`lcpbench.model.wall_kernel`;
     empty: flat), whose heights at the nodes' x replace ``hi`` (``lo``) on their rows,
     and whose slope carries the answer's reactions' horizontal parts (the checks of the
-    exact profile problem, model.profile).
+    exact profile problem, model.profile); ``increments``: the judge steps in increments
+    (:func:`~.judge_exact_kernel.increments_step`), else in node heights.
 
     Returns ``(code, stats, forces_upper, forces_lower, torque_residual)``:
     ``code`` SETTLED or NOT_SETTLED (the judge step did not settle), ``stats``
