@@ -355,10 +355,9 @@ def _one_wall(scene, chain, args: tuple | None, make_step, *, tol: float, max_ou
         return build(judged=partial(judge, args=judge_args))
     alpha, rec, count, R = got[1], got[6], got[7], got[9]
     kern, f64 = jk[1], _contiguous  # (numpy's own float64: the AOT kernels' quick check)
-    answer = (f64(alpha, dtype=float), *judge_args, f64(R, dtype=float).copy(),
-              np.zeros(R.size), tol, f64(rec[2, :count], dtype=float).copy())
-    settled_code, st, fu, fl, tres = (kern.judge_walls(*answer, False) if profile  # (in heights)
-                                      else kern.judge_answer(*answer))
+    settled_code, st, fu, fl, tres = (kern.judge_walls if profile else kern.judge_answer)(
+        f64(alpha, dtype=float), *judge_args, f64(R, dtype=float).copy(), np.zeros(R.size), tol,
+        f64(rec[2, :count], dtype=float).copy())
     settled = bool(settled_code == kern.SETTLED)
     forces = fu if settled else R.copy()  # build_result's: the judge's R, else the driver's
     return lazy_result(LazyResult, {

@@ -322,8 +322,8 @@ def judge(chain: Chain, alpha: np.ndarray, forces_upper: np.ndarray,
               np.array(step_sizes, dtype=float))
     if large or len(args) > 16:  # (flat walls: empty tables)
         tables = _NO_TABLES if len(args) == 16 else ()
-        code, st, fu, fl, res = k.judge_walls(f64(alpha, dtype=float), *args, *tables, *answer,
-                                              large)
+        entry = k.judge_in_increments if large else k.judge_walls
+        code, st, fu, fl, res = entry(f64(alpha, dtype=float), *args, *tables, *answer)
     else:
         code, st, fu, fl, res = k.judge_answer(f64(alpha, dtype=float), *args, *answer)
     return verdict_from_stats(code == k.SETTLED, dict(zip(k.STATS, st.tolist(), strict=True)),

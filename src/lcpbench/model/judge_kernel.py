@@ -38,7 +38,8 @@ joint j joining links j, j + 1 with both ends pinned
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.extending import overload
 
 from ..thresholds import (  # the rule's numbers, as model.judge reads them
     EPS,
@@ -317,13 +318,33 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
     no_table = (np.empty(0), np.empty((4, 0)))
     return judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu,
                        cl, wall, channel, *no_table, *no_table, forces_upper, forces_lower, tol,
-                       step_sizes, False)
+                       step_sizes)
 
 
 @njit(cache=True)
 def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl,
-                wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower, tol, step_sizes,
-                increments):
+                wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower, tol, step_sizes):
+    """:func:`judge_numbers`, the judge's steps in node heights."""
+    return judge_numbers(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
+                         cu, cl, wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower,
+                         tol, step_sizes, False)
+
+
+@njit(cache=True)
+def judge_in_increments(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
+                        cu, cl, wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower,
+                        tol, step_sizes):
+    """:func:`judge_numbers`, the judge's steps in increments (from ``LARGE_N`` links or on
+    a chain marked ``increments``)."""
+    return judge_numbers(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
+                         cu, cl, wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower,
+                         tol, step_sizes, True)
+
+
+@njit(cache=True)
+def judge_numbers(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl,
+                  wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower, tol, step_sizes,
+                  increments):
     """model.judge.judge's numbers for an answer whose driver converged.
 
     ``fs``: shifted index (node + 1) of the first free node; ``F`` the force
@@ -335,7 +356,9 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
     empty: flat), whose heights at the nodes' x replace ``hi`` (``lo``) on their rows,
     and whose slope carries the answer's reactions' horizontal parts (the checks of the
     exact profile problem, model.profile); ``increments``: the judge steps in increments
-    (:func:`~.judge_exact_kernel.increments_step`), else in node heights.
+    (:func:`~.judge_exact_kernel.increments_step`), else in node heights, a constant of
+    each compiled version (:func:`judge_walls`, :func:`judge_in_increments`), so that it
+    holds the code of one formulation (:func:`judge_step`).
 
     Returns ``(code, stats, forces_upper, forces_lower, torque_residual)``:
     ``code`` SETTLED or NOT_SETTLED (the judge step did not settle), ``stats``
@@ -345,8 +368,6 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
     """
     n = lo.size
     links = alpha.size
-    nj = jr.size
-    b0 = jr[0]
     tau, F0, eps_R = units(forces_upper, forces_lower, F, tol)
     stats = np.full(len(STATS), np.nan)
     w = np.empty((ROWS, links + 2))
@@ -361,16 +382,10 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
             alpha, w[COS], a, fs, hi0, lo0, wall, ku, cu_, kl, cl_, forces_upper,
             forces_lower, nodal0)
     alpha1 = np.empty(links)  # α̂, where the judge step moves the chain (eq. 21)
-    noise, state, dalpha, dalpha2 = w[NOISE], iw[0], 0.0, 0.0
-    if increments:  # the judge step at α in increments, from the answer's contact set
-        rounds, worst, S, dalpha = increments_step(
-            alpha, a, k, rest, nodal_load, lo, hi, cu, cl, fs, eps_R, forces_upper,
-            forces_lower, profiled, False, state, w[U, :n], w[NET, :n], w[ROUNDOFF, :n],
-            noise[:n], alpha1)
-    else:  # in heights
-        rounds, worst, S = _heights_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, w, bands,
-                                         fac, iw, lo, hi, cu, cl, L, eps_R, profiled,
-                                         forces_upper, forces_lower)
+    noise = w[NOISE]
+    rounds, worst, S, dalpha = judge_step(increments, False, alpha, a, jl, jr, k, rest, fs,
+                                          nodal_load, lo, hi, cu, cl, L, eps_R, profiled,
+                                          forces_upper, forces_lower, w, bands, fac, iw, alpha1)
     settled = rounds > 0
     u, net, roundoff, ju, jlo = w[U], w[NET], w[ROUNDOFF], w[JU], w[JLO]
     fu, fl = without_noise(forces_upper, forces_lower, noise, settled)
@@ -383,8 +398,6 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
                          floor_R, tau, F0, eps_R, stats)
     if not settled:
         return NOT_SETTLED, stats, fu, fl, res
-    if not increments:
-        dalpha = _predict(alpha, u, w, fs, n, alpha1)
     rho = contraction(step_sizes, dalpha)
     # the second judge step, at α₁ where the first moves the chain, from its contact set
     d_up, d_lo, j1u, j1l = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
@@ -404,22 +417,14 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
     if profiled:  # its walls at the nodes' new x, the first step's reactions lagged
         hi, lo, nodal_load = profile_rows(alpha1, w[COS], a, fs, hi0, lo0, wall, ku, cu_,
                                           kl, cl_, j1u, j1l, nodal0)[:3]
-    alpha2 = np.empty(links)
-    if increments:  # from the first step's contact set (iw[0], as it settled)
-        rounds2, worst2, _, dalpha2 = increments_step(
-            alpha1, a, k, rest, nodal_load, lo, hi, cu, cl, fs, eps_R, j1u, j1l, False, True,
-            state, w[U, :n], w[NET, :n], w[ROUNDOFF, :n], w[RHS, :n], alpha2)
-    else:
-        _step(alpha1, a, jl, jr, k, rest, fs, n, nodal_load, w, bands)
-        rounds2, worst2, _ = _pivot(bands, fac, iw, lo, hi, cu, cl, L, eps_R, w, fs, b0, nj, k,
-                                    rest, nodal_load)
+    rounds2, worst2, _, dalpha2 = judge_step(increments, True, alpha1, a, jl, jr, k, rest, fs,
+                                             nodal_load, lo, hi, cu, cl, L, eps_R, profiled,
+                                             j1u, j1l, w, bands, fac, iw, np.empty(links))
     rho2, floor2 = np.nan, np.nan
     if rounds2 > 0:
         split_by_wall(net[:n], u, hi, lo, channel, ju, jlo)
         for i in range(n):
             e_up[i], e_lo[i] = j1u[i] - ju[i], j1l[i] - jlo[i]
-        if not increments:
-            dalpha2 = _predict(alpha1, u, w, fs, n, alpha2)
         rho2 = judge_contraction(dalpha, dalpha2)
         floor2 = worst2
         for i in range(n):
@@ -429,6 +434,63 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
                                              floor2, F0, rounds2 > 0)
     stats[22] = rho2
     return SETTLED, stats, fu, fl, res
+
+
+def judge_step(increments, second, alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu, cl,
+               L, pull, profiled, forces_upper, forces_lower, w, bands, fac, iw, alpha_next):
+    """The judge's contact step at α, the first (``second`` False: from the answer's
+    contact set, its reactions ``forces_upper``/``forces_lower``) or the second (from the
+    first's settled set, ``iw[0]``; the forces the first step's): in node heights
+    (:func:`_heights_step`, :func:`_pivot`) or ``increments``
+    (:func:`~.judge_exact_kernel.increments_step`). u, the net reactions, their round-off
+    and the answer's noise in the rows of ``w``, α̂ in ``alpha_next``. Returns (rounds, 0
+    where it did not settle, the largest round-off, S, max|α̂ − α|).
+
+    Compiled, ``increments`` is a constant (the overload below takes its literal value),
+    so each version of :func:`judge_numbers` holds one formulation's code; as plain Python
+    (``NUMBA_DISABLE_JIT=1``) this chooses at run time."""
+    return (_step_in_increments if increments else _step_in_heights)(
+        increments, second, alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu, cl, L,
+        pull, profiled, forces_upper, forces_lower, w, bands, fac, iw, alpha_next)
+
+
+@overload(judge_step)
+def _judge_step_typed(increments, second, alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi,
+                      cu, cl, L, pull, profiled, forces_upper, forces_lower, w, bands, fac, iw,
+                      alpha_next):
+    if isinstance(increments, types.BooleanLiteral):
+        return _step_in_increments if increments.literal_value else _step_in_heights
+    return None
+
+
+def _step_in_heights(increments, second, alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi,
+                     cu, cl, L, pull, profiled, forces_upper, forces_lower, w, bands, fac, iw,
+                     alpha_next):
+    """:func:`judge_step` in node heights (the second from the first's settled set)."""
+    n = lo.size
+    if second:
+        _step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, w, bands)
+        rounds, worst, S = _pivot(bands, fac, iw, lo, hi, cu, cl, L, pull, w, fs, jr[0],
+                                  jr.size, k, rest, nodal_load)
+    else:
+        rounds, worst, S = _heights_step(alpha, a, jl, jr, k, rest, fs, n, nodal_load, w,
+                                         bands, fac, iw, lo, hi, cu, cl, L, pull, profiled,
+                                         forces_upper, forces_lower)
+    if rounds == 0:
+        return rounds, worst, S, 0.0
+    return rounds, worst, S, _predict(alpha, w[U], w, fs, n, alpha_next)
+
+
+def _step_in_increments(increments, second, alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi,
+                        cu, cl, L, pull, profiled, forces_upper, forces_lower, w, bands, fac,
+                        iw, alpha_next):
+    """:func:`judge_step` in increments: the second starts from the first's settled set and
+    leaves the answer's noise (row NOISE) as the first wrote it."""
+    n = lo.size
+    noise = w[RHS, :n] if second else w[NOISE, :n]
+    return increments_step(alpha, a, k, rest, nodal_load, lo, hi, cu, cl, fs, pull,
+                           forces_upper, forces_lower, profiled and not second, second, iw[0],
+                           w[U, :n], w[NET, :n], w[ROUNDOFF, :n], noise, alpha_next)
 
 
 @njit(cache=True)

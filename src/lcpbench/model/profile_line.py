@@ -82,7 +82,7 @@ def profile_attempt(row, start, net, u0, ra, a, jl, jr, k, rest, link_load, noda
         judged = judge_walls(
             alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, no_springs,
             no_springs, wall, False, ku, cu_, kl, cl_, R.copy(), np.zeros(n), tol,
-            recs[2, used - count:used].copy(), False)
+            recs[2, used - count:used].copy())
         ok = store_verdict(row, judged, tol, j_code, j_stats, j_fu, j_fl, j_tres)
     conv[row] = ok
     return True, recs, used
