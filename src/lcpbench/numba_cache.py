@@ -79,7 +79,7 @@ KERNEL_FILES = ("model/chain_kernel.py", "model/compiled_kernel.py", "model/comp
                 "model/sensitivity_kernel.py", "model/sensitivity_profile_kernel.py",
                 "model/angle_kernel.py", "model/path_kernel.py",
                 "linalg/band_lu_kernel.py", "problems/table_kernel.py",
-                "linalg/twisted_walk_kernel.py", "model/stability_kernel.py",
+                "linalg/twisted_walk_kernel.py", "linalg/walk_key.py", "model/stability_kernel.py",
                 "model/wall_kernel.py", "model/profile_kernel.py", "model/profile_line.py",
                 "model/friction_step.py", "model/friction_outer.py",
                 "model/friction_primal.py", "model/friction_polish.py",

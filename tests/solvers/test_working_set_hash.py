@@ -1,4 +1,4 @@
-"""The dual walk's working-set hash (solvers/dual_kernel._key) is splitmix64 of (node, wall),
+"""The dual walks' working-set key (linalg/walk_key.walk_key) is splitmix64 of (node, wall),
 written out here from its definition with Python integers modulo 2⁶⁴ (the oracle), compiled
 and as plain Python (``NUMBA_DISABLE_JIT=1``, the debugging path), where numpy's uint64
 scalars wrap the same but would warn of overflow."""
@@ -31,13 +31,15 @@ def expected(i: int, s: float) -> int:
 def test_the_compiled_hash_is_splitmix64_of_node_and_wall():
     from lcpbench.numba_cache import kernel_module
 
-    key = kernel_module("lcpbench.solvers.dual_kernel")._key
+    key = kernel_module("lcpbench.linalg.walk_key").walk_key
     assert [int(key(i, s)) for i, s in CASES] == [expected(i, s) for i, s in CASES]
 
 
 def test_the_plain_python_hash_is_the_same_without_an_overflow_warning():
-    code = ("from lcpbench.solvers.dual_kernel import _key; "
-            f"print([int(_key(i, s)) for i, s in {CASES!r}])")
+    # the plain-Python path needs NUMBA_DISABLE_JIT=1 before numba is imported: a fresh
+    # interpreter imports the kernel file itself (not through kernel_module)
+    code = ("from lcpbench.linalg.walk_key import walk_key; "
+            f"print([int(walk_key(i, s)) for i, s in {CASES!r}])")
     env = dict(os.environ, NUMBA_DISABLE_JIT="1", OPENBLAS_NUM_THREADS="1")
     out = subprocess.run([sys.executable, "-W", "error::RuntimeWarning", "-c", code],
                          capture_output=True, text=True, env=env, timeout=120)

@@ -33,6 +33,7 @@ import numpy as np
 from numba import njit
 
 from .twisted_kernel import factor, twist, twist_middle
+from .walk_key import walk_key  # the working set's key (both walks')
 
 # the walk's bookkeeping: picks, working-set keys, the twist window
 
@@ -138,25 +139,16 @@ def twist_window(chg, ctl, S, prev, n):
 
 
 @njit(cache=True)
-def mix_key(i, side):
-    """A 64-bit mix of (node, side) (splitmix64); the working set's key is their sum."""
-    z = np.uint64(2 * i + (1 if side > 0 else 0)) + np.uint64(0x9E3779B97F4A7C15)
-    z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-    return z ^ (z >> np.uint64(31))
-
-
-@njit(cache=True)
 def set_node(i, side, value, sigma, wall, S, rfixed, chg, ctl, key):
     """Node i onto its wall (side ±1, wall height ``value``) or off it (side 0);
     returns the working set's key after the change."""
     n = S.size
     if sigma[i] != 0.0:
-        key -= mix_key(i, sigma[i])
+        key ^= walk_key(i, sigma[i])
     sigma[i] = side
     if side != 0.0:
         wall[i] = value
-        key += mix_key(i, side)
+        key ^= walk_key(i, side)
     S[i] = side != 0.0
     rfixed[n - 1 - i] = S[i]
     chg[ctl[6]] = i
@@ -316,7 +308,7 @@ def walk(rows, rrows, R, filled, snap, B, bfilled, bsnap, tri, invR, invB, prev,
 
     The bookkeeping is incremental (~20 full-length numpy passes per face were
     as costly as the face solve's own): violations are computed where they are
-    scanned, the working set's key is a sum of per-node hashes, the twist comes from
+    scanned, the working set's key is the XOR of per-node keys, the twist comes from
     the nodes changed since the last factorisation."""
     n = u.size
     key = np.uint64(0)
@@ -324,7 +316,7 @@ def walk(rows, rrows, R, filled, snap, B, bfilled, bsnap, tri, invR, invB, prev,
         S[i] = sigma[i] != 0.0
         rfixed[n - 1 - i] = S[i]
         if S[i]:
-            key += mix_key(i, sigma[i])
+            key ^= walk_key(i, sigma[i])
         hd[i] = 0.0
     ctl[6] = 0
     at_minimiser = True

@@ -29,6 +29,7 @@ from numba.extending import overload
 
 from ..linalg.ldl_kernel import refactor as _refactor  # the faces' LDLᵀ (one dependent
 from ..linalg.ldl_kernel import resolve as _resolve  # chain: a division, not a square root)
+from ..linalg.walk_key import walk_key  # the working set's key (both walks')
 from ..linalg.wide_face_kernel import free_block_factor, free_block_resolve  # wider H's faces
 from ..thresholds import TIE
 
@@ -44,8 +45,6 @@ U, G, SIG, WALL, D, RES, GF, RATIO, LIN, ORIG, RUP, RLO, NET, U2, OUT_U, DIR, TR
 # rows of ``wb``: the working set S, the face factored, the additions, the warm walls, the
 # nodes of S held *on* their wall (a rigid one; the others are held by its spring)
 S_, FACT, JUP, JLO, WUP, WLO, ROWS, PREV_UP, PREV_LO, ELIM = range(10)
-# splitmix64, for the hash of a working set
-M1, M2, M3 = np.uint64(0x9E3779B97F4A7C15), np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB)
 
 
 @njit(cache=True)
@@ -138,35 +137,6 @@ def _violation(u, bound, S, i, sign):
     if S[i]:
         return -np.inf
     return u[i] - bound[i] if sign > 0 else bound[i] - u[i]
-
-
-def _wrapping(f):
-    """``f``, whose uint64 products wrap modulo 2⁶⁴: compiled they wrap silently; as plain
-    Python (``NUMBA_DISABLE_JIT=1``) numpy's scalars wrap the same but warn of overflow,
-    silenced here (the same numbers either way)."""
-    from numba import config
-
-    if not config.DISABLE_JIT:
-        return f
-
-    def wrapped(*args):
-        with np.errstate(over="ignore"):
-            return f(*args)
-
-    return wrapped
-
-
-@_wrapping
-@njit(cache=True)
-def _key(i, s):
-    """The working set's hash is the XOR of these over its nodes (splitmix64 of
-    (node, wall)); 0 off the walls, so a change of one node updates it in O(1)."""
-    if s == 0.0:
-        return np.uint64(0)
-    z = np.uint64(2 * i + (1 if s > 0 else 2)) * M1
-    z = (z ^ (z >> np.uint64(30))) * M2
-    z = (z ^ (z >> np.uint64(27))) * M3
-    return z ^ (z >> np.uint64(31))
 
 
 @njit(cache=True)
@@ -377,7 +347,7 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
                     continue
                 sigma[i] = 1.0 if picks[q] > 0 else -1.0
                 wall[i] = hi[i] if picks[q] > 0 else lo[i]
-                h ^= _key(i, sigma[i])
+                h ^= walk_key(i, sigma[i])
                 S[i] = True
                 if soft:
                     shift[i] = cu[i] if picks[q] > 0 else cl[i]
@@ -449,7 +419,7 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
             for q in range(nheld):
                 j = held[q]
                 if ratio[j] <= s + TIE:  # ties within round-off go together
-                    h ^= _key(j, sigma[j])
+                    h ^= walk_key(j, sigma[j])
                     sigma[j] = 0.0
                     S[j] = E[j] = False
                     shift[j] = 0.0
