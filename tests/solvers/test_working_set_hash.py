@@ -1,7 +1,7 @@
-"""The dual walks' working-set key (linalg/walk_key.walk_key) is splitmix64 of (node, wall),
-written out here from its definition with Python integers modulo 2⁶⁴ (the oracle), compiled
-and as plain Python (``NUMBA_DISABLE_JIT=1``, the debugging path), where numpy's uint64
-scalars wrap the same but would warn of overflow."""
+"""The dual walks' working-set key (linalg/walk_key.walk_key) is the splitmix64 finaliser
+of (2i + 1 or 2)·γ, written out here from the published finaliser with Python integers
+modulo 2⁶⁴ (the oracle), compiled and as plain Python (``NUMBA_DISABLE_JIT=1``, the
+debugging path), where numpy's uint64 scalars wrap the same but would warn of overflow."""
 
 from __future__ import annotations
 
@@ -12,9 +12,12 @@ import sys
 MASK = (1 << 64) - 1
 
 
-def splitmix64(x: int) -> int:
-    """splitmix64's finaliser of x (Steele, Lea & Flood 2014), on Python integers."""
-    z = (x * 0x9E3779B97F4A7C15) & MASK
+GAMMA = 0x9E3779B97F4A7C15  # splitmix64's increment, the golden ratio in 64 bits
+
+
+def finaliser(z: int) -> int:
+    """splitmix64's output function (Steele, Lea & Flood 2014; Stafford's mix variant 13),
+    on Python integers."""
     z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & MASK
     z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & MASK
     return z ^ (z >> 31)
@@ -25,10 +28,10 @@ CASES = [(0, 1.0), (0, -1.0), (7, 1.0), (123456, -2.5), (10**6, 1.0), (3, 0.0)]
 
 def expected(i: int, s: float) -> int:
     """The key of node i on the upper (s > 0, 2i + 1) or lower (2i + 2) wall; 0 off them."""
-    return 0 if s == 0.0 else splitmix64(2 * i + (1 if s > 0 else 2))
+    return 0 if s == 0.0 else finaliser(((2 * i + (1 if s > 0 else 2)) * GAMMA) & MASK)
 
 
-def test_the_compiled_hash_is_splitmix64_of_node_and_wall():
+def test_the_compiled_key_is_the_splitmix64_finaliser_of_node_and_wall():
     from lcpbench.numba_cache import kernel_module
 
     key = kernel_module("lcpbench.linalg.walk_key").walk_key

@@ -91,13 +91,14 @@ docs/solvers.md; their values in :mod:`lcpbench.thresholds`.
 number it judges by comes from compiled functions, called from Python through
 :func:`lcpbench.numba_cache.kernel_module` (``NUMBA_DISABLE_JIT=1`` runs the same
 functions as plain Python, the debugging path): the judge kernel
-(:func:`lcpbench.model.judge_kernel.judge_walls`: its own assembly and exact steps),
+(:mod:`lcpbench.model.judge_kernel`: its own assembly and exact steps),
 the certificate and checks 3-6 and 8 (:mod:`lcpbench.model.judge_checks`), the force
 error bound (:mod:`lcpbench.model.judge_bound`) and the stability check
 (:mod:`lcpbench.model.stability_kernel`). The kernel takes its exact steps in node
 heights; where the solve is in increments (from ``LARGE_N`` links, or a chain marked
-``increments``) the same kernel takes them in increments, on their twisted tridiagonal
-factor (:func:`lcpbench.model.judge_exact_kernel.increments_step`), and the same
+``increments``) the same kernel takes them in increments (its entry
+``judge_in_increments``), on their twisted tridiagonal factor
+(:func:`lcpbench.model.judge_exact_kernel.increments_step`), and the same
 certificate, checks and bound follow. The judge shares no code with the solve kernel: it checks the answer,
 it does not repeat the solve.
 """

@@ -1,7 +1,7 @@
 """The result judge's force error bound (check 7 of :mod:`lcpbench.model.judge`), compiled.
 
 Written once in numba and called by the one judge kernel
-(:func:`lcpbench.model.judge_kernel.judge_walls`, its steps in heights or in increments)
+(:mod:`lcpbench.model.judge_kernel`, its steps in heights or in increments)
 from compiled code, and by the large-N driver's contraction estimate from Python
 (:func:`lcpbench.model.judge.contraction_estimate`).
 

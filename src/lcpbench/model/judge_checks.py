@@ -8,7 +8,7 @@ complementarity, the right pin's closure and the joint torques' balance, with th
 walls' normal reactions on a wall profile), the sign, complementarity and
 penetration checks and the second-order check
 (:mod:`lcpbench.model.stability_kernel`), written once: the judge kernel
-(:func:`lcpbench.model.judge_kernel.judge_walls`, its exact steps in node heights or in
+(:mod:`lcpbench.model.judge_kernel`, its exact steps in node heights or in
 increments) calls :func:`certify_checks` after its first step.
 Also the layout of the judge's work array (one allocation per call, :data:`ROWS`)
 and the names of the numbers it returns (:data:`STATS`).

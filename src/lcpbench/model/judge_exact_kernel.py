@@ -1,7 +1,7 @@
 """The result judge's exact contact step in increments, compiled (check 7 of
 :mod:`lcpbench.model.judge`): :func:`increments_step`, which the one judge kernel
-(:func:`lcpbench.model.judge_kernel.judge_walls`) takes in place of its step in node
-heights from ``LARGE_N`` links or on a chain marked ``increments``.
+(its entry :func:`lcpbench.model.judge_kernel.judge_in_increments`) takes in place of its
+step in node heights from ``LARGE_N`` links or on a chain marked ``increments``.
 
 One contact step in increments d = u − u₀ (:class:`lcpbench.model.large_n.IncrementStep`,
 assembled by :func:`lcpbench.model.large_kernel.assemble_into`), solved exactly from a
@@ -293,7 +293,7 @@ def increments_step(alpha, a, k, rest, load, lower, upper, cu, cl, fs, pull, for
     """The judge's exact contact step at α in increments d = u − u₀ (assembled by
     :func:`~lcpbench.model.large_kernel.assemble_into`, the walls ``lower``/``upper`` and the
     nodal ``load`` at α as given: a profile's at the nodes' x, with its slope load), for
-    :func:`lcpbench.model.judge_kernel.judge_walls`.
+    :func:`lcpbench.model.judge_kernel.judge_in_increments`.
 
     It starts from the nodes whose gap costs less than ``pull`` (N) of force to close (or
     is within the round-off of its height), and, ``from_forces`` (a wall profile: the

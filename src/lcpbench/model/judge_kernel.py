@@ -1,7 +1,8 @@
 """The result judge's exact steps, compiled: the judge's own contact steps and the force
 error bound (check 7 of :mod:`lcpbench.model.judge`).
 
-:func:`judge_walls` (:func:`judge_answer` on flat walls) takes every number of
+:func:`judge_walls` (:func:`judge_answer` on flat walls) and :func:`judge_in_increments`,
+entries of one body (:func:`_judge_numbers`), take every number of
 :func:`lcpbench.model.judge.judge` for a converged driver answer: the judge's own
 contact step at the final α, solved exactly from the answer's contact set, the
 round-off of the reactions, the certificate and checks 3-6 and 8
@@ -13,11 +14,11 @@ from the first's contact set; the force error bound from the two
 - in node heights (here): assembled from the energy of the chain, solved by block
   principal pivoting (Júdice–Pires, then Murty's least index; the rule in
   :mod:`lcpbench.model.judge_pivot`) on the Cholesky of H, whose round-off grows as N⁴;
-- in increments d = u − u₀ (``increments``: from ``LARGE_N`` links or on a chain marked
-  ``increments``), :func:`lcpbench.model.judge_exact_kernel.increments_step`: assembled
-  by :func:`lcpbench.model.large_kernel.assemble_into` (the large-N driver's assembly),
-  solved on its twisted tridiagonal factor by the primal active set (rigid walls) or
-  block principal pivoting (elastic walls).
+- in increments d = u − u₀ (:func:`judge_in_increments`: from ``LARGE_N`` links or on a
+  chain marked ``increments``), :func:`lcpbench.model.judge_exact_kernel.increments_step`:
+  assembled by :func:`lcpbench.model.large_kernel.assemble_into` (the large-N driver's
+  assembly), solved on its twisted tridiagonal factor by the primal active set (rigid
+  walls) or block principal pivoting (elastic walls).
 
 :mod:`lcpbench.model.judge` turns the numbers returned here into the
 :class:`~lcpbench.model.judge.Judgement` and its reasons; ``NUMBA_DISABLE_JIT=1`` runs
@@ -324,8 +325,8 @@ def judge_answer(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L
 @njit(cache=True)
 def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl,
                 wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower, tol, step_sizes):
-    """:func:`judge_numbers`, the judge's steps in node heights."""
-    return judge_numbers(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
+    """:func:`_judge_numbers`, the judge's steps in node heights."""
+    return _judge_numbers(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
                          cu, cl, wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower,
                          tol, step_sizes, False)
 
@@ -334,15 +335,15 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
 def judge_in_increments(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
                         cu, cl, wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower,
                         tol, step_sizes):
-    """:func:`judge_numbers`, the judge's steps in increments (from ``LARGE_N`` links or on
+    """:func:`_judge_numbers`, the judge's steps in increments (from ``LARGE_N`` links or on
     a chain marked ``increments``)."""
-    return judge_numbers(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
+    return _judge_numbers(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
                          cu, cl, wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower,
                          tol, step_sizes, True)
 
 
 @njit(cache=True)
-def judge_numbers(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl,
+def _judge_numbers(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl,
                   wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower, tol, step_sizes,
                   increments):
     """model.judge.judge's numbers for an answer whose driver converged.
@@ -447,7 +448,7 @@ def judge_step(increments, second, alpha, a, jl, jr, k, rest, fs, nodal_load, lo
     where it did not settle, the largest round-off, S, max|α̂ − α|).
 
     Compiled, ``increments`` is a constant (the overload below takes its literal value),
-    so each version of :func:`judge_numbers` holds one formulation's code; as plain Python
+    so each version of :func:`_judge_numbers` holds one formulation's code; as plain Python
     (``NUMBA_DISABLE_JIT=1``) this chooses at run time."""
     return (_step_in_increments if increments else _step_in_heights)(
         increments, second, alpha, a, jl, jr, k, rest, fs, nodal_load, lo, hi, cu, cl, L,
