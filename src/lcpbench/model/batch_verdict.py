@@ -3,9 +3,9 @@ kernel, the one-wall route of a single solve, :func:`lcpbench.api.solve`, and
 :func:`lcpbench.model.judge.failed_checks`, which call it from Python).
 
 :func:`failed` says which checks of :mod:`lcpbench.model.judge` fail, as bits in the
-order of its reasons, given the numbers the judge kernel
-(:func:`lcpbench.model.judge_kernel.judge_walls`) returns; :func:`accepted` is that none does. The rule is written here
-once: :func:`lcpbench.model.judge.failed_checks` writes the reason of each bit set.
+order of its reasons, given the numbers the judge kernel's entries
+(:mod:`lcpbench.model.judge_kernel`) return; :func:`accepted` is that none does. The
+rule is written here once: :func:`lcpbench.model.judge.failed_checks` writes the reason of each bit set.
 A NaN in a number passes checks 3-6 (as it did when the rule was written twice; the
 total and per-node bounds and the stability count fail on a NaN). Check 2 (the last step SOLVED) is the caller's:
 every contact step of the compiled solve is "solved" (the solve kernel stops on any

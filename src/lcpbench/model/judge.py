@@ -99,8 +99,8 @@ heights; where the solve is in increments (from ``LARGE_N`` links, or a chain ma
 ``increments``) the same kernel takes them in increments (its entry
 ``judge_in_increments``), on their twisted tridiagonal factor
 (:func:`lcpbench.model.judge_exact_kernel.increments_step`), and the same
-certificate, checks and bound follow. The judge shares no code with the solve kernel: it checks the answer,
-it does not repeat the solve.
+certificate, checks and bound follow. The judge shares no code with the solve kernel:
+it checks the answer, it does not repeat the solve.
 """
 
 from __future__ import annotations
