@@ -144,6 +144,20 @@ PAPER_SCENE = {"theta": 150, "height": 3.0, "links": 140}
 CANTILEVER_THEORY_FORCE = 7.69e-3
 
 
+def stenosis():
+    """A Gaussian narrowing of 0.8 mm at x = 14 mm, 3 mm wide, of the 3 mm wall (the
+    stenosis of benchmarks/scene_kinds.py)."""
+    from lcpbench.problems.walls import WallProfile
+
+    def h(x):
+        return 3.0 - 0.8 * np.exp(-((x - 14.0) / 3.0) ** 2)
+
+    def dh(x):
+        return 0.8 * 2 * (x - 14.0) / 9.0 * np.exp(-((x - 14.0) / 3.0) ** 2)
+
+    return WallProfile.from_function(h, dh, name="stenosis")
+
+
 # -- the Siconos collection -----------------------------------------------------------
 #: Siconos's LCP test problems (a copy of its numerics data files).
 SICONOS_LCP_DIR = HERE / "data" / "siconos-lcp"

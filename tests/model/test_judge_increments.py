@@ -16,6 +16,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from energy_oracle import assert_elastic_step_kkt, assert_step_kkt
+from known_answers import stenosis
 
 from lcpbench import ActuatorScene
 from lcpbench.model.kernel_call import kernel_args
@@ -24,18 +25,6 @@ from lcpbench.model.large_n import increments_at
 from lcpbench.model.profile import slope_load, wall_rows
 from lcpbench.model.step_solver import make_step_solver
 from lcpbench.numba_cache import kernel_module
-from lcpbench.problems.walls import WallProfile
-
-
-def _stenosis() -> WallProfile:
-    """A Gaussian narrowing of 0.8 mm at x = 14 mm, 3 mm wide."""
-    def h(x):
-        return 3.0 - 0.8 * np.exp(-((x - 14.0) / 3.0) ** 2)
-
-    def dh(x):
-        return 0.8 * 2 * (x - 14.0) / 9.0 * np.exp(-((x - 14.0) / 3.0) ** 2)
-
-    return WallProfile.from_function(h, dh, name="stenosis")
 
 
 def _kernel():
@@ -48,7 +37,7 @@ SCENES = {
     "channel": dict(channel=True),
     "elastic": dict(wall_stiffness=0.1),
     "stiff elastic channel": dict(wall_stiffness=1e4, channel=True),
-    "stenosis": dict(wall_profile=_stenosis()),
+    "stenosis": dict(wall_profile=stenosis()),
 }
 
 

@@ -16,13 +16,13 @@ from dataclasses import replace
 import numpy as np
 import pytest
 from energy_oracle import assert_equilibrium
+from known_answers import stenosis
 
 from lcpbench import ActuatorScene, solve
 from lcpbench.model.judge import force_tol, judge
 from lcpbench.model.large_driver import run_large
 from lcpbench.model.result import certify
 from lcpbench.model.step_solver import make_step_solver
-from lcpbench.problems.walls import WallProfile
 from lcpbench.reference.energy import minimise_energy
 
 N = 10_000
@@ -30,17 +30,6 @@ N = 10_000
 #: of curvature κ sit a² κ / 8 off it, a = ℓ/N; 1e-7–1e-6 of F at N = 2000 (the
 #: same order as the rigid flat wall's, results/large-n.md), N = 10⁴ 25x closer
 DISCRETISATION = 2e-6
-
-
-def stenosis() -> WallProfile:
-    """A Gaussian narrowing of 0.8 mm at x = 14 mm, 3 mm wide (benchmarks/scene_kinds.py)."""
-    def h(x):
-        return 3.0 - 0.8 * np.exp(-((x - 14.0) / 3.0) ** 2)
-
-    def dh(x):
-        return 0.8 * 2 * (x - 14.0) / 9.0 * np.exp(-((x - 14.0) / 3.0) ** 2)
-
-    return WallProfile.from_function(h, dh, name="stenosis")
 
 
 def _increments(scene, tol, backend="auto"):

@@ -10,6 +10,7 @@ theory (an arc that clears the wall with no load has no contact).
 
 import numpy as np
 import pytest
+from known_answers import stenosis
 
 import lcpbench
 from lcpbench.problems.scenes import ActuatorScene
@@ -19,16 +20,6 @@ from lcpbench.reference.energy import minimise_energy
 LINKS = 40
 #: tests/model/test_profile.py's rule: 1e-6 relative total force (and shape, in ℓ)
 REL = 1e-6
-
-
-def stenosis():
-    def h(x):
-        return 3.0 - 0.8 * np.exp(-((x - 14.0) / 3.0) ** 2)
-
-    def dh(x):
-        return 0.8 * 2 * (x - 14.0) / 9.0 * np.exp(-((x - 14.0) / 3.0) ** 2)
-
-    return WallProfile.from_function(h, dh, name="stenosis")
 
 
 def bump():
