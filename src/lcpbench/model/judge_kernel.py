@@ -327,8 +327,8 @@ def judge_walls(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L,
                 wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower, tol, step_sizes):
     """:func:`_judge_numbers`, the judge's steps in node heights."""
     return _judge_numbers(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
-                         cu, cl, wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower,
-                         tol, step_sizes, False)
+                          cu, cl, wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower,
+                          tol, step_sizes, False)
 
 
 @njit(cache=True)
@@ -338,14 +338,14 @@ def judge_in_increments(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo
     """:func:`_judge_numbers`, the judge's steps in increments (from ``LARGE_N`` links or on
     a chain marked ``increments``)."""
     return _judge_numbers(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F,
-                         cu, cl, wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower,
-                         tol, step_sizes, True)
+                          cu, cl, wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower,
+                          tol, step_sizes, True)
 
 
 @njit(cache=True)
-def _judge_numbers(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu, cl,
-                  wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower, tol, step_sizes,
-                  increments):
+def _judge_numbers(alpha, a, jl, jr, k, rest, link_load, nodal_load, fs, lo, hi, L, F, cu,
+                   cl, wall, channel, ku, cu_, kl, cl_, forces_upper, forces_lower, tol,
+                   step_sizes, increments):
     """model.judge.judge's numbers for an answer whose driver converged.
 
     ``fs``: shifted index (node + 1) of the first free node; ``F`` the force
