@@ -489,9 +489,11 @@ def _step_in_increments(increments, second, alpha, a, jl, jr, k, rest, fs, nodal
     leaves the answer's noise (row NOISE) as the first wrote it."""
     n = lo.size
     noise = w[RHS, :n] if second else w[NOISE, :n]
+    # (bool(second): a run-time flag there, so that the step compiles once, not once per
+    # literal value of ``second``)
     return increments_step(alpha, a, k, rest, nodal_load, lo, hi, cu, cl, fs, pull,
-                           forces_upper, forces_lower, profiled and not second, second, iw[0],
-                           w[U, :n], w[NET, :n], w[ROUNDOFF, :n], noise, alpha_next)
+                           forces_upper, forces_lower, profiled and not second, bool(second),
+                           iw[0], w[U, :n], w[NET, :n], w[ROUNDOFF, :n], noise, alpha_next)
 
 
 @njit(cache=True)
