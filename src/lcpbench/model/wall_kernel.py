@@ -118,7 +118,9 @@ def split_by_wall(net, u, hi, lo, channel, upper, lower):
     the results (:func:`lcpbench.model.profile.split_reactions`)."""
     for i in range(net.size):
         near_up = True
-        if channel:
-            mid = 0.5 * (hi[i] + lo[i])
-            near_up = u[i] >= mid if np.isfinite(mid) else np.isfinite(hi[i])
+        if channel:  # (both walls finite first: inf − inf warns as plain Python)
+            near_up = np.isfinite(hi[i])
+            if near_up and np.isfinite(lo[i]):
+                mid = 0.5 * (hi[i] + lo[i])
+                near_up = u[i] >= mid if np.isfinite(mid) else True
         upper[i], lower[i] = (net[i], 0.0) if near_up else (0.0, -net[i])
