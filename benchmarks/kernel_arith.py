@@ -37,7 +37,7 @@ PKG = "src/lcpbench"
 FILES = {"model": ["compiled_kernel.py", "compiled_dual.py", "chain_kernel.py",
                    "profile_kernel.py", "wall_kernel.py"],
          "solvers": ["dual_kernel.py"],
-         "linalg": ["ldl_kernel.py", "wide_face_kernel.py", "walk_key.py"],
+         "linalg": ["ldl_kernel.py", "wide_face_kernel.py", "walk_key.py", "walk_picks.py"],
          "": ["thresholds.py"]}  # where the ref has them (the walk: solvers/ from 2026-12-05)
 SCENES = {"paper N=140 θ=150° h=3": dict(theta=150.0, height=3.0, links=140),
           "channel N=140 θ=160° h=2": dict(theta=160.0, height=2.0, links=140, channel=True),

@@ -24,11 +24,11 @@ from lcpbench.thresholds import TIE
 
 
 def gallop_picks(v, slack, held, reach):
-    """The walk's picks (linalg.twisted_walk_kernel.picks_in) on violations ``v`` of an
+    """The walk's picks (linalg.walk_picks.picks_in) on violations ``v`` of an
     upper wall at 0 (u = v), as a mask."""
     from lcpbench.numba_cache import kernel_module
 
-    kern = kernel_module("lcpbench.linalg.twisted_walk_kernel", "walk")
+    kern = kernel_module("lcpbench.linalg.walk_picks", "picks_in")
     n = v.size
     picks = np.zeros(2 * n, np.int64)
     u = np.where(held, 0.0, v)

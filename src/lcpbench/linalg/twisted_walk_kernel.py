@@ -34,73 +34,9 @@ from numba import njit
 
 from .twisted_kernel import factor, twist, twist_middle
 from .walk_key import walk_key  # the working set's key (both walks')
+from .walk_picks import picks_in, warm_picks  # the pick rule (both walks')
 
 # the walk's bookkeeping: picks, working-set keys, the twist window
-
-@njit(cache=True)
-def violation(u, wall, S, side, i):
-    """The violation of node i's wall (``side`` +1: u − upper, −1: lower − u); −inf on
-    held nodes."""
-    if S[i]:
-        return -np.inf
-    return u[i] - wall[i] if side > 0 else wall[i] - u[i]
-
-
-@njit(cache=True)
-def _picks(u, wall, side, slack, S, reach, picks, npick):
-    """Append to ``picks`` (node index; ``side`` in the sign) the nodes the walk adds on
-    this wall: galloping from the held nodes when ``reach`` > 0
-    (:mod:`lcpbench.solvers.compiled_walk`), else every run's deepest node (the picks
-    of :func:`lcpbench.solvers.dual_kernel.dual_active_set`), in one pass without the
-    v array.
-    Returns the new count."""
-    return picks_in(u, wall, side, slack, S, reach, picks, npick, 0, u.size - 1)
-
-
-@njit(cache=True)
-def picks_in(u, wall, side, slack, S, reach, picks, npick, start, stop):
-    """:func:`_picks` scanning nodes ``start`` .. ``stop`` only (:func:`walk` passes the
-    violated range: every violated node lies there, so the same runs and the same
-    picks)."""
-    n = u.size
-    i = start
-    while i <= stop:
-        if not violation(u, wall, S, side, i) > slack[i]:
-            i += 1
-            continue
-        a = i
-        while i + 1 < n and violation(u, wall, S, side, i + 1) > slack[i + 1]:
-            i += 1
-        b = i
-        if reach > 0:
-            left = a >= 1 and S[a - 1]
-            right = b + 1 < n and S[b + 1]
-            if (left or right) and b - a + 1 > reach:
-                if left:
-                    picks[npick] = side * (a + reach - 1 + 1)
-                    npick += 1
-                if right and not (left and b - reach + 1 == a + reach - 1):
-                    picks[npick] = side * (b - reach + 1 + 1)
-                    npick += 1
-                i += 1
-                continue
-            best = a  # the run's deepest node (the first of equal ones)
-            for k in range(a + 1, b + 1):
-                if violation(u, wall, S, side, k) > violation(u, wall, S, side, best):
-                    best = k
-            picks[npick] = side * (best + 1)
-            npick += 1
-        else:  # every local maximum of the run (v_i >= v_{i-1}, v_i > v_{i+1})
-            for k in range(a, b + 1):
-                vk = violation(u, wall, S, side, k)
-                lft = violation(u, wall, S, side, k - 1) if k >= 1 else -np.inf
-                rgt = violation(u, wall, S, side, k + 1) if k + 1 < n else -np.inf
-                if vk >= lft and vk > rgt:
-                    picks[npick] = side * (k + 1)
-                    npick += 1
-        i += 1
-    return npick
-
 
 @njit(cache=True)
 def add_picks(picks, npick, seen, key, hi, lo, sigma, wall, S, rfixed, chg, ctl):
@@ -251,7 +187,7 @@ def _update(A, S, wall, u, g, x, step, hi, lo, has_lo, slack):
     """u += step d and g += step (g_face − g) (step 1: g = g_face), g_face = g + Aᵀ(A d),
     d = d₀ − x, in one pass (d and A d in registers). Returns the first and last node
     (−1 when none) off S whose wall the new u violates beyond ``slack`` (at step 1:
-    the range the next picks scan; :func:`picks_in`)."""
+    the range the next picks scan; :func:`lcpbench.linalg.walk_picks.picks_in`)."""
     n = u.size
     first, last = n, -1
     # window: d at i, i + 1 (d0, d1); A d at i − 1, i (ym, y0)
@@ -326,13 +262,7 @@ def walk(rows, rrows, R, filled, snap, B, bfilled, bsnap, tri, invR, invB, prev,
             npick = 0
             if ctl[3]:  # first, the warm contact set, where it is violated
                 ctl[3] = 0
-                for i in range(n):
-                    if warm_up[i] and violation(u, hi, S, 1, i) > slack[i]:
-                        picks[npick] = i + 1
-                        npick += 1
-                    elif has_lo and warm_lo[i] and violation(u, lo, S, -1, i) > slack[i]:
-                        picks[npick] = -(i + 1)
-                        npick += 1
+                npick = warm_picks(u, hi, lo, has_lo, S, slack, warm_up, warm_lo, picks)
             if npick == 0:
                 if vlast >= 0:  # the violated nodes lie in vfirst .. vlast
                     npick = picks_in(u, hi, 1, slack, S, ctl[2], picks, 0, vfirst, vlast)

@@ -10,7 +10,7 @@ compiled call as the face solves. The refinement at every optimum it finds, with
 step's exact factored gradient, is one compiled call too where the step has it
 (:meth:`lcpbench.model.large_n.IncrementStep.walk_refine`), else :func:`refine_on_face`.
 
-**Galloping** (:func:`lcpbench.linalg.twisted_walk_kernel.picks_in` with ``reach`` > 0).
+**Galloping** (:func:`lcpbench.linalg.walk_picks.picks_in` with ``reach`` > 0).
 The walk may put *any* violated node against its wall: the dual objective rises on
 every move of non-zero length whichever violated node joins (Goldfarb & Idnani,
 1983), so the choice changes the path, never the answer. Its default choice is the

@@ -30,6 +30,7 @@ from numba.extending import overload
 from ..linalg.ldl_kernel import refactor as _refactor  # the faces' LDLᵀ (one dependent
 from ..linalg.ldl_kernel import resolve as _resolve  # chain: a division, not a square root)
 from ..linalg.walk_key import walk_key  # the working set's key (both walks')
+from ..linalg.walk_picks import picks_in, warm_picks  # the pick rule (both walks')
 from ..linalg.wide_face_kernel import free_block_factor, free_block_resolve  # wider H's faces
 from ..thresholds import TIE
 
@@ -130,29 +131,6 @@ def max_abs(x):  # max|x| and the slope's dot product are loops: loading the cac
     for v in x:
         m = max(m, abs(v))
     return m
-
-
-@njit(cache=True)
-def _violation(u, bound, S, i, sign):
-    if S[i]:
-        return -np.inf
-    return u[i] - bound[i] if sign > 0 else bound[i] - u[i]
-
-
-@njit(cache=True)
-def _run_picks(u, bound, S, slack, sign, picks, npick):
-    """The deepest violation v > slack of every run of consecutive violated nodes
-    appended to ``picks`` (node + 1, with ``sign``: +
-    the upper wall, − the lower one); the new count."""
-    n = u.size
-    left, v = -np.inf, (_violation(u, bound, S, 0, sign) if n else 0.0)
-    for i in range(n):
-        right = _violation(u, bound, S, i + 1, sign) if i + 1 < n else -np.inf
-        if v > slack and v >= left and v > right:
-            picks[npick] = sign * (i + 1)
-            npick += 1
-        left, v = v, right
-    return npick
 
 
 @njit(cache=True)
@@ -290,7 +268,7 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
     if not face_factor(fac, bands, factored, cshift, 0, n):
         return BAIL_NOT_PD, 0
     face_resolve(fac, u)
-    slack = 32 * EPS * (1.0 + max_abs(u))
+    slack = np.full(1, 32 * EPS * (1.0 + max_abs(u)))  # one for every node
     h, count, at_face_minimiser, it, refined = np.uint64(0), 0, True, 0, False
     nheld = nchg = 0
     while True:
@@ -298,17 +276,11 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
             npick = 0
             if warm:  # first, the warm contact set, where it is violated (S is empty)
                 warm = False
-                for i in range(n):
-                    if warm_up[i] and _violation(u, hi, S, i, 1) > slack:
-                        picks[npick] = i + 1
-                        npick += 1
-                    elif has_lo and warm_lo[i] and _violation(u, lo, S, i, -1) > slack:
-                        picks[npick] = -(i + 1)
-                        npick += 1
-            if npick == 0:
-                npick = _run_picks(u, hi, S, slack, 1, picks, 0)
+                npick = warm_picks(u, hi, lo, has_lo, S, slack, warm_up, warm_lo, picks)
+            if npick == 0:  # then every run's local maxima (no galloping: reach 0)
+                npick = picks_in(u, hi, 1, slack, S, 0, picks, 0, 0, n - 1)
                 if has_lo:
-                    npick = _run_picks(u, lo, S, slack, -1, picks, npick)
+                    npick = picks_in(u, lo, -1, slack, S, 0, picks, npick, 0, n - 1)
                 if npick == 0 and refined:  # no wall crossed by the refinement
                     return 0, it
                 if npick == 0:  # the optimum: one refinement on the face just factored
