@@ -2,9 +2,10 @@
 
 Both walks add, at a face minimiser, the warm contact set's violated nodes first, then
 every local maximum (v_i ≥ v_{i−1}, v_i > v_{i+1}) of the violations v beyond the
-slack. The walk in heights has one slack for every node (an array of size 1), the walk
-at large N one per node: the same rule either way. The oracle is that definition,
-evaluated here with numpy on random violations with ties, held nodes and a lower wall.
+slack (a slack per node: the walk in heights has the same for every node, the walk at
+large N its own). The oracle is that definition, evaluated here with numpy on random
+violations with ties, held nodes and a lower wall, over the whole chain and over a
+range that holds every violated node.
 """
 
 from __future__ import annotations
@@ -46,10 +47,15 @@ def test_picks_are_the_local_maxima_beyond_the_slack(case, side, slack):
     held = held.astype(bool)
     u = wall + side * levels  # v = levels off the held nodes
     n = u.size
-    want = local_maxima(violations(u, wall, held, side), slack)
-    for slacks in (np.full(1, slack), np.full(n, slack)):  # one slack, or one per node
-        picks = np.zeros(2 * n, np.int64)
-        count = KERN.picks_in(u, wall, side, slacks, held, 0, picks, 0, 0, n - 1)
+    v = violations(u, wall, held, side)
+    want = local_maxima(v, slack)
+    picks = np.zeros(2 * n, np.int64)
+    count = KERN.picks_in(u, wall, side, np.full(n, slack), held, 0, picks, 0, 0, n - 1)
+    assert np.array_equal(picks[:count], side * (want + 1))
+    over = np.flatnonzero(v > slack)  # the large-N walk scans the violated range only
+    if over.size:
+        count = KERN.picks_in(u, wall, side, np.full(n, slack), held, 0, picks, 0,
+                              over[0], over[-1])
         assert np.array_equal(picks[:count], side * (want + 1))
 
 
@@ -60,8 +66,8 @@ def test_per_node_slack_is_read_per_node():
     picks = np.zeros(10, np.int64)
     count = KERN.picks_in(v, np.zeros(5), 1, slacks, held, 0, picks, 0, 0, 4)
     assert list(picks[:count]) == list(local_maxima(v, slacks) + 1) == [4]
-    count = KERN.picks_in(v, np.zeros(5), 1, np.zeros(1), held, 0, picks, 0, 0, 4)
-    assert list(picks[:count]) == [1, 4]  # one slack of 0 for every node: node 0 too
+    count = KERN.picks_in(v, np.zeros(5), 1, np.zeros(5), held, 0, picks, 0, 0, 4)
+    assert list(picks[:count]) == [1, 4]  # a slack of 0 at every node: node 0 too
 
 
 def test_warm_picks_take_the_violated_warm_nodes_in_order():
@@ -72,9 +78,9 @@ def test_warm_picks_take_the_violated_warm_nodes_in_order():
     warm_lo = np.array([False, False, True, False, False, True])
     held = np.array([False, False, False, True, False, False])
     picks = np.zeros(12, np.int64)
-    count = KERN.warm_picks(u, hi, lo, True, held, np.full(1, 0.1), warm_up, warm_lo, picks)
+    count = KERN.warm_picks(u, hi, lo, True, held, np.full(6, 0.1), warm_up, warm_lo, picks)
     # node 0 above its upper wall, 2 and 5 below the lower one; 1 within the slack,
     # 3 held, 4 not in the warm set
     assert list(picks[:count]) == [1, -3, -6]
-    assert KERN.warm_picks(u, hi, lo, False, held, np.full(1, 0.1), warm_up, warm_lo,
+    assert KERN.warm_picks(u, hi, lo, False, held, np.full(6, 0.1), warm_up, warm_lo,
                            picks) == 1

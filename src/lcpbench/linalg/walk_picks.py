@@ -9,10 +9,9 @@ the galloping picks next to the held nodes (:func:`picks_in`;
 :mod:`lcpbench.solvers.compiled_walk`). A pick is node + 1, signed: + the upper wall,
 − the lower one.
 
-Both walks call it: the walk in node heights
-(:func:`lcpbench.solvers.dual_kernel.dual_active_set`, one slack for every node:
-``slack`` of size 1) and the walk on a twisted factor at large N
-(:func:`lcpbench.linalg.twisted_walk_kernel.walk`, a slack per node).
+Both walks call it, with a slack per node: the walk in node heights
+(:func:`lcpbench.solvers.dual_kernel.dual_active_set`, the same for every node) and the
+walk on a twisted factor at large N (:func:`lcpbench.linalg.twisted_walk_kernel.walk`).
 """
 
 from __future__ import annotations
@@ -31,22 +30,15 @@ def violation(u, wall, S, side, i):
 
 
 @njit(cache=True)
-def slack_at(slack, i):
-    """Node i's slack: ``slack[i]``, or the one slack ``slack[0]`` of a walk that has
-    one for every node (size 1)."""
-    return slack[i] if slack.size > 1 else slack[0]
-
-
-@njit(cache=True)
 def warm_picks(u, hi, lo, has_lo, S, slack, warm_up, warm_lo, picks):
     """The warm contact set's nodes (``warm_up``, ``warm_lo``) whose wall is violated
     beyond the slack written to ``picks``, in node order; their count."""
     npick = 0
     for i in range(u.size):
-        if warm_up[i] and violation(u, hi, S, 1, i) > slack_at(slack, i):
+        if warm_up[i] and violation(u, hi, S, 1, i) > slack[i]:
             picks[npick] = i + 1
             npick += 1
-        elif has_lo and warm_lo[i] and violation(u, lo, S, -1, i) > slack_at(slack, i):
+        elif has_lo and warm_lo[i] and violation(u, lo, S, -1, i) > slack[i]:
             picks[npick] = -(i + 1)
             npick += 1
     return npick
@@ -59,40 +51,41 @@ def picks_in(u, wall, side, slack, S, reach, picks, npick, start, stop):
     run's local maxima of v, or with ``reach`` > 0 the galloping picks. Returns the new
     count."""
     n = u.size
+    if reach <= 0:  # every local maximum beyond the slack, v in a sliding window
+        left = violation(u, wall, S, side, start - 1) if start >= 1 else -np.inf
+        v = violation(u, wall, S, side, start) if start <= stop else 0.0
+        for i in range(start, stop + 1):
+            right = violation(u, wall, S, side, i + 1) if i + 1 < n else -np.inf
+            if v > slack[i] and v >= left and v > right:
+                picks[npick] = side * (i + 1)
+                npick += 1
+            left, v = v, right
+        return npick
     i = start
     while i <= stop:
-        if not violation(u, wall, S, side, i) > slack_at(slack, i):
+        if not violation(u, wall, S, side, i) > slack[i]:
             i += 1
             continue
         a = i
-        while i + 1 < n and violation(u, wall, S, side, i + 1) > slack_at(slack, i + 1):
+        while i + 1 < n and violation(u, wall, S, side, i + 1) > slack[i + 1]:
             i += 1
         b = i
-        if reach > 0:
-            left = a >= 1 and S[a - 1]
-            right = b + 1 < n and S[b + 1]
-            if (left or right) and b - a + 1 > reach:
-                if left:
-                    picks[npick] = side * (a + reach - 1 + 1)
-                    npick += 1
-                if right and not (left and b - reach + 1 == a + reach - 1):
-                    picks[npick] = side * (b - reach + 1 + 1)
-                    npick += 1
-                i += 1
-                continue
-            best = a  # the run's deepest node (the first of equal ones)
-            for k in range(a + 1, b + 1):
-                if violation(u, wall, S, side, k) > violation(u, wall, S, side, best):
-                    best = k
-            picks[npick] = side * (best + 1)
-            npick += 1
-        else:  # every local maximum of the run (v_i >= v_{i-1}, v_i > v_{i+1})
-            for k in range(a, b + 1):
-                vk = violation(u, wall, S, side, k)
-                lft = violation(u, wall, S, side, k - 1) if k >= 1 else -np.inf
-                rgt = violation(u, wall, S, side, k + 1) if k + 1 < n else -np.inf
-                if vk >= lft and vk > rgt:
-                    picks[npick] = side * (k + 1)
-                    npick += 1
+        left = a >= 1 and S[a - 1]
+        right = b + 1 < n and S[b + 1]
+        if (left or right) and b - a + 1 > reach:
+            if left:
+                picks[npick] = side * (a + reach - 1 + 1)
+                npick += 1
+            if right and not (left and b - reach + 1 == a + reach - 1):
+                picks[npick] = side * (b - reach + 1 + 1)
+                npick += 1
+            i += 1
+            continue
+        best = a  # the run's deepest node (the first of equal ones)
+        for k in range(a + 1, b + 1):
+            if violation(u, wall, S, side, k) > violation(u, wall, S, side, best):
+                best = k
+        picks[npick] = side * (best + 1)
+        npick += 1
         i += 1
     return npick

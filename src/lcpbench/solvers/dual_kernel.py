@@ -268,7 +268,7 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
     if not face_factor(fac, bands, factored, cshift, 0, n):
         return BAIL_NOT_PD, 0
     face_resolve(fac, u)
-    slack = np.full(1, 32 * EPS * (1.0 + max_abs(u)))  # one for every node
+    slack = np.full(n, 32 * EPS * (1.0 + max_abs(u)))  # the same for every node
     h, count, at_face_minimiser, it, refined = np.uint64(0), 0, True, 0, False
     nheld = nchg = 0
     while True:
