@@ -52,8 +52,10 @@ def picks_in(u, wall, side, slack, S, reach, picks, npick, start, stop):
     count."""
     n = u.size
     if reach <= 0:  # every local maximum beyond the slack, v in a sliding window
+        if start > stop:
+            return npick
         left = violation(u, wall, S, side, start - 1) if start >= 1 else -np.inf
-        v = violation(u, wall, S, side, start) if start <= stop else 0.0
+        v = violation(u, wall, S, side, start)
         for i in range(start, stop + 1):
             right = violation(u, wall, S, side, i + 1) if i + 1 < n else -np.inf
             if v > slack[i] and v >= left and v > right:

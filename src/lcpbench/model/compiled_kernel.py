@@ -117,7 +117,7 @@ def workspace(n, links, nj, max_iter):
     """The solve's work arrays, uninitialised: every entry is written before it is
     read (each pass sets its rows; the walk its lists and the hashes it compares),
     so nothing is zeroed that is not read (``seen`` alone holds 20 n + 50 hashes)."""
-    return (np.empty((20, n)), np.empty((10, n), np.bool_), np.empty((4, nj)),
+    return (np.empty((21, n)), np.empty((10, n), np.bool_), np.empty((4, nj)),
             np.empty((8, links)), np.empty((5, links + 2)), np.empty((4, n)),
             np.empty((3, n)), np.empty((nj, 3)),
             np.empty(min(max_iter, 20 * n + 50) + 2, np.uint64), np.empty(5), np.empty((2, n)),

@@ -11,8 +11,9 @@ Math. Prog. 27, 1983, specialised to bounds). It starts from the unconstrained
 minimiser (all reactions zero) and walks in the reactions: every iterate
 minimises the Lagrangian for some reactions R >= 0 (H u + c + R_upper −
 R_lower = 0), so it is dual feasible and only the walls can be violated. Each iteration puts a
-*block* of violated nodes against their walls (the deepest node of every run
-of consecutive violated nodes; first, on a warm start, the previous contact
+*block* of violated nodes against their walls (every local maximum of the
+violations in each run of violated nodes, :mod:`lcpbench.linalg.walk_picks`;
+first, on a warm start, the previous contact
 set; at large N, warm-started, nodes galloping from the contacts, :mod:`.compiled_walk`),
 computes the minimiser on that face with one banded solve, and moves
 towards it until it gets there or a reaction would turn negative, in which

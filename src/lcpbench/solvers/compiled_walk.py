@@ -3,7 +3,7 @@
 :func:`lcpbench.solvers.banded._dual` on a step with its own twisted factor
 (large N, in increments): the walk of :func:`lcpbench.solvers.dual_kernel.dual_active_set`
 — the warm contact set first, then nodes galloping from the contacts (below) or the
-deepest node of each violated run, every move to a face minimiser one compiled face
+local maxima of each violated run (:mod:`lcpbench.linalg.walk_picks`), every move to a face minimiser one compiled face
 solve, the ratio test, the releases within ``tie`` — with the per-face bookkeeping
 (violations, picks, the working set's key, the twist, the ratio test) in the same
 compiled call as the face solves. The refinement at every optimum it finds, with the
@@ -13,8 +13,9 @@ step's exact factored gradient, is one compiled call too where the step has it
 **Galloping** (:func:`lcpbench.linalg.walk_picks.picks_in` with ``reach`` > 0).
 The walk may put *any* violated node against its wall: the dual objective rises on
 every move of non-zero length whichever violated node joins (Goldfarb & Idnani,
-1983), so the choice changes the path, never the answer. Its default choice is the
-deepest node of every run of consecutive violated nodes. At large N, warm-started
+1983), so the choice changes the path, never the answer. Its default choice is
+every local maximum of the violations in each run of consecutive violated nodes
+(along a wall with one bulge, the deepest node). At large N, warm-started
 from the last outer step's contact set, that choice bisects: when a point contact
 has moved by a few nodes, the warm face releases the old contact, the chain between
 two contacts bulges through the wall over thousands of nodes, and the deepest node
@@ -23,7 +24,7 @@ is in the middle of the span; each halving costs two face solves (add, release),
 Galloping searches from the contacts instead: a run of violated nodes next to a held
 node (the contact it moved away from) gets the node ``reach`` nodes into the run,
 with ``reach`` = 1, 2, 4, … (doubled at every use within a walk); a run no longer
-than ``reach``, or with no held neighbour, gets its deepest node, as before. A move
+than ``reach``, or with no held neighbour, gets its deepest node. A move
 of k nodes then costs ~2 log₂ k face solves to overshoot it, and a bisection of the
 overshoot (at most ``reach`` nodes) after.
 """

@@ -42,7 +42,7 @@ BAIL_PRIMAL, BAIL_NOT_PD, BAIL_REPEAT, BAIL_LIMIT, BAIL_CERT, BAIL_JUDGE = 10, 1
 # Work arrays, allocated once per solve (model.compiled_kernel.workspace); no loop
 # allocates but the free block of the dense faces (box_qp). Rows of ``wn`` (free nodes):
 U, G, SIG, WALL, D, RES, GF, RATIO, LIN, ORIG, RUP, RLO, NET, U2, OUT_U, DIR, TRY, WU, SHIFT, \
-    FSHIFT = range(20)
+    FSHIFT, SLACK = range(21)
 # rows of ``wb``: the working set S, the face factored, the additions, the warm walls, the
 # nodes of S held *on* their wall (a rigid one; the others are held by its spring)
 S_, FACT, JUP, JLO, WUP, WLO, ROWS, PREV_UP, PREV_LO, ELIM = range(10)
@@ -268,7 +268,8 @@ def dual_active_set(bands, linear, lo, hi, cu, cl, warm_up, warm_lo, max_iter, g
     if not face_factor(fac, bands, factored, cshift, 0, n):
         return BAIL_NOT_PD, 0
     face_resolve(fac, u)
-    slack = np.full(n, 32 * EPS * (1.0 + max_abs(u)))  # the same for every node
+    slack = wn[SLACK]  # the picks' slack, the same for every node (walk_picks: one per node)
+    slack[:] = 32 * EPS * (1.0 + max_abs(u))
     h, count, at_face_minimiser, it, refined = np.uint64(0), 0, True, 0, False
     nheld = nchg = 0
     while True:
@@ -424,7 +425,7 @@ def box_qp(bands, linear, lo, hi, warm_up, warm_lo, max_iter, fac, coef, b0, fs,
     BAIL_LIMIT)."""
     n = linear.size
     z = np.empty(0)
-    ws = (np.empty((20, n)), np.empty((10, n), np.bool_), np.empty((4, coef.shape[0])), z, z,
+    ws = (np.empty((21, n)), np.empty((10, n), np.bool_), np.empty((4, coef.shape[0])), z, z,
           fac, z, z, np.empty(min(max_iter, 20 * n + 50) + 2, np.uint64), z, T,
           np.empty((3, n), np.int64))
     gp = (coef, b0, fs, links, origin, phi_origin, k, rest, load)
