@@ -3,8 +3,9 @@
 :func:`lcpbench.solvers.banded._dual` on a step with its own twisted factor
 (large N, in increments): the walk of :func:`lcpbench.solvers.dual_kernel.dual_active_set`
 — the warm contact set first, then nodes galloping from the contacts (below) or the
-local maxima of each violated run (:mod:`lcpbench.linalg.walk_picks`), every move to a face minimiser one compiled face
-solve, the ratio test, the releases within ``tie`` — with the per-face bookkeeping
+local maxima of each violated run (:mod:`lcpbench.linalg.walk_picks`), every move to
+a face minimiser one compiled face solve, the ratio test, the releases within
+``tie`` — with the per-face bookkeeping
 (violations, picks, the working set's key, the twist, the ratio test) in the same
 compiled call as the face solves. The refinement at every optimum it finds, with the
 step's exact factored gradient, is one compiled call too where the step has it
