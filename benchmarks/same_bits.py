@@ -10,7 +10,7 @@ back-end's rows of ``results/sweep/runs.csv`` against their stored forces.
     python benchmarks/same_bits.py compare before.pkl after.pkl
     python benchmarks/same_bits.py sweep                 # the committed sweep's rows
 
-The corpus (about 1,900 answers; ~5 min on one core):
+The corpus (about 2,300 answers; ~5 min on one core):
 - ``solve_many`` on mixed batches (elastic and profiled walls, sections), the
   paper's grid, random elastic walls (k from 1e-3 to 1e9 N/mm²) and channels;
 - ``solve`` and ``start="ramp"`` on rows of two and three sections, and past 180°;
@@ -25,7 +25,9 @@ The corpus (about 1,900 answers; ~5 min on one core):
   them (seed 39: every end condition, channels, μ 0.05–0.8);
 - the Newton scheme on 30 random flat, channel and elastic scenes (default back-end
   and OSQP), and the sensitivities of five answers (flat, channel, elastic, a
-  stenosis, a heavy chain).
+  stenosis, a heavy chain);
+- the active set on 200 random box QPs of every face kind (banded, a few more
+  sub-diagonals, dense) and on 100 dense LCPs (``solve_lcp``).
 
 Each answer is recorded as (converged, reason, total force, forces, lower
 forces, α, outer iterations; with friction the tangential forces, slips and
@@ -237,7 +239,44 @@ def corpus() -> dict:
                 out[("friction random", index, i)] = answer(r)
         except Exception as e:  # noqa: BLE001
             out[("friction random", index)] = dict(error=repr(e))
+    active_set_qps(out)
     return out
+
+
+def active_set_qps(out: dict) -> None:
+    """The active set on QPs of every face kind (the solves above reach only the contact
+    step's banded faces): the back-end on 200 random box QPs of bandwidth 1, 2 (the
+    banded LDLᵀ), 3–6 (the banded Cholesky of a face) and dense (LAPACK's Cholesky of
+    the free block), and ``solve_lcp(M, q, solver="active-set")`` on 100 dense LCPs."""
+    import scipy.sparse as sp
+
+    from lcpbench.solvers import banded, solve_lcp
+    from lcpbench.solvers.base import BoxQP, Settings
+
+    rng = np.random.default_rng(3)
+    for case in range(200):  # H symmetric, banded, diagonally dominant: positive definite
+        n = int(rng.integers(2, 80))
+        b = max(1, min(int(rng.choice([1, 2, 3, 4, 6, n - 1])), n - 1))
+        A = rng.standard_normal((n, n))
+        H = np.triu(np.tril(A + A.T, b), -b)
+        np.fill_diagonal(H, np.abs(H).sum(axis=1) + 0.1)
+        bands = np.zeros((b + 1, n))
+        for k in range(b + 1):
+            bands[k, :n - k] = np.diagonal(H, -k)
+        lo = np.where(rng.random(n) < 0.3, -np.inf, -rng.random(n))
+        hi = np.where(rng.random(n) < 0.3, np.inf, rng.random(n))
+        qp = BoxQP(sp.csc_matrix(H), 3 * rng.standard_normal(n), lo, hi, bands)
+        r = banded.solve_qp(qp, Settings("default", None))
+        out[("active-set box QP", b if b <= 6 else "dense", case)] = dict(
+            converged=str(r.status), reason=str(r.message), x=_bytes(r.x), y=_bytes(r.y),
+            outer=r.iterations)
+    for case in range(100):
+        n = int(rng.integers(2, 60))
+        A = rng.standard_normal((n, n))
+        sol = solve_lcp(A @ A.T + 0.1 * np.eye(n), rng.standard_normal(n),
+                        solver="active-set")
+        out[("active-set LCP", case)] = dict(converged=str(sol.status), z=_bytes(sol.z),
+                                             outer=getattr(sol, "iterations", None))
 
 
 def _same(x: dict, y: dict) -> bool:
