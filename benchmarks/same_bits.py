@@ -269,14 +269,14 @@ def active_set_qps(out: dict) -> None:
         r = banded.solve_qp(qp, Settings("default", None))
         out[("active-set box QP", b if b <= 6 else "dense", case)] = dict(
             converged=str(r.status), reason=str(r.message), x=_bytes(r.x), y=_bytes(r.y),
-            outer=r.iterations)
+            iterations=r.iterations)
     for case in range(100):
         n = int(rng.integers(2, 60))
         A = rng.standard_normal((n, n))
         sol = solve_lcp(A @ A.T + 0.1 * np.eye(n), rng.standard_normal(n),
                         solver="active-set")
         out[("active-set LCP", case)] = dict(converged=str(sol.status), z=_bytes(sol.z),
-                                             outer=getattr(sol, "iterations", None))
+                                             iterations=getattr(sol, "iterations", None))
 
 
 def _same(x: dict, y: dict) -> bool:
