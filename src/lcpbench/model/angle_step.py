@@ -86,12 +86,13 @@ def in_reach(chain: Chain) -> bool:
 
 
 def _in_reach(chain: Chain) -> bool:
-    if chain.elastic_walls or chain.profiled_walls:
+    if chain.elastic_walls or chain.profiled_walls or chain.links > MAX_LINKS:
         return False
+    if chain.consecutive:  # the scene built this layout (Chain.consecutive says so)
+        return True
     jl, jr = chain.joint_links[:, 0], chain.joint_links[:, 1]
-    adjacent = bool(np.all(jl == jr - 1) and np.all(chain.free_nodes == np.arange(
+    return bool(np.all(jl == jr - 1) and np.all(chain.free_nodes == np.arange(
         1, chain.free_nodes.size + 1)))
-    return adjacent and chain.links <= MAX_LINKS
 
 
 def heavy(chain: Chain) -> bool:
