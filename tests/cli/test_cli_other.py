@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
 
 from lcpbench.cli import main
 
@@ -87,17 +90,62 @@ def test_progress_has_one_bar_per_phase_and_counts_expected_failures(tmp_path):
     bar.close()
 
 
-def test_a_first_use_says_the_kernels_compile_and_later_uses_do_not(tmp_path, monkeypatch,
-                                                                    capsys):
-    # the notice follows the kernels' cache directory: absent, one line; present, none
-    import lcpbench.numba_cache as nc
-    from lcpbench.cli import _first_use_notice
+def test_one_bar_follows_each_sweep_it_is_handed(tmp_path):
+    # select runs two sweeps on one bar (the first probe, then the rest): each sweep's
+    # count starts again at 1 of its own total, and the bar must show that count, not
+    # run past its first total
+    from lcpbench.bench.jobs import RunJob
+    from lcpbench.cli._common import ProgressBar
 
-    monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
-    monkeypatch.setattr(nc, "kernels_dir", lambda: str(tmp_path / "not-yet"))
-    _first_use_notice()
-    err = capsys.readouterr().err
-    assert len(err.splitlines()) == 1 and "compiling the solve kernels" in err
-    (tmp_path / "not-yet").mkdir()
-    _first_use_notice()
-    assert capsys.readouterr().err == ""
+    bar = ProgressBar()
+    job = RunJob("s1", "active-set", "high", 1e-9)
+    for done in (1, 2, 3, 4):
+        bar.update(done, 4, job, {"status": "solved"})
+    assert (bar.bar.n, bar.bar.total) == (4, 4)
+    for done in (1, 2):
+        bar.update(done, 12, job, {"status": "solved"})
+    assert (bar.bar.n, bar.bar.total) == (2, 12)
+    bar.update(7, 9, job, {"status": "solved"})  # a resumed sweep: 6 of 9 already in
+    assert (bar.bar.n, bar.bar.total) == (7, 9)
+    bar.close()
+
+
+TINY_KERNEL = """
+from numba import njit
+
+
+@njit(cache=True)
+def twice(x):
+    return 2.0 * x
+"""
+
+CALL_TINY_KERNEL = """
+import sys
+
+from numba.core import config
+
+config.CACHE_DIR = sys.argv[1]
+sys.path.insert(0, sys.argv[2])
+import tiny_kernel
+from lcpbench import numba_cache
+from lcpbench.cli import _first_use_notice
+
+numba_cache.light_cache_load(tiny_kernel.twice)  # as jit_module hooks every kernel
+_first_use_notice()
+assert tiny_kernel.twice(2.0) == 4.0 and tiny_kernel.twice(3.0) == 6.0
+"""
+
+
+def test_a_first_compile_says_so_once_and_a_cached_kernel_says_nothing(tmp_path):
+    # a real numba kernel in a cache of its own: the first process compiles it (one
+    # line, whatever it calls after), the second loads it from the cache (no line)
+    (tmp_path / "tiny_kernel.py").write_text(TINY_KERNEL)
+    cmd = [sys.executable, "-c", CALL_TINY_KERNEL, str(tmp_path / "cache"), str(tmp_path)]
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_DISABLE_JIT",
+                                                            "LCPBENCH_NUMBA_FULL_LOAD")}
+    first = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=120)
+    assert first.returncode == 0, first.stderr
+    assert first.stderr.count("compiling kernels") == 1, first.stderr
+    again = subprocess.run(cmd, capture_output=True, text=True, env=env, timeout=120)
+    assert again.returncode == 0, again.stderr
+    assert "compiling" not in again.stderr, again.stderr

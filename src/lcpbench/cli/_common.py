@@ -196,6 +196,10 @@ class ProgressBar:
         self.expected = 0
 
     def _bar(self, phase: str, done: int, total: int):
+        bar = self.bars.get(phase)
+        if bar is not None and not self.phases and (bar.total != total or bar.n != done - 1):
+            bar.reset(total=total)  # another sweep on this bar (select probes twice)
+            bar.update(done - 1)
         if phase not in self.bars:
             if self.phases:
                 size = self.phases.get(phase, 0)
@@ -231,8 +235,9 @@ class ProgressBar:
             self.expected += is_expected(job.backend, job.settings,
                                          str(row.get("status")), run=row)
         if phase != "references":
+            # (at least: the report counts those its references show expected too)
             self.bar.set_postfix_str(f"{job.backend} {job.settings}; not solved "
-                                     f"{self.failed} ({self.expected} expected)",
+                                     f"{self.failed} (at least {self.expected} expected)",
                                      refresh=False)
         self.bar.update(1)
 

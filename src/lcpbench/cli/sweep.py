@@ -361,7 +361,11 @@ def cmd_sweep(args) -> int:
         along = (f" by {args.continuation} continuation along {lines} line(s) in theta"
                  if args.continuation else "")
         mine = store.count(sweep_id=sweep_id)
-        print(f"{mine} runs computed by this sweep, {plan.rows_done} already in {args.store} "
+        refs = sum(j.size for j in jobs if isinstance(j, ReferenceJob))
+        refs_new = sum(j.size for j in plan.todo if isinstance(j, ReferenceJob))
+        print(f"{mine} runs computed by this sweep, {plan.rows_done - (refs - refs_new)} "
+              f"already in {args.store}; references: {refs_new} computed, "
+              f"{refs - refs_new} already in the store "
               f"({len(scenes)} scenes x {len(solvers)} back-ends x {len(settings)} settings"
               f"{f' x {len(methods)} drivers' if len(methods) > 1 else ''}{along}"
               f" + {len(baselines)} baseline(s) + references; {jobs_n} worker(s), "
