@@ -366,6 +366,22 @@ def _slow(aot, fn: dict, name: str, fn_name: str):
     return slow
 
 
+_ON_COMPILE: list = []  # what to call once, at the first kernel this process compiles
+
+
+def on_compile(notice) -> None:
+    """Call ``notice()`` once, when this process first finds a kernel missing from the
+    cache (numba then compiles it: seconds to a minute; the command line prints a line).
+    ``None`` removes it."""
+    _ON_COMPILE[:] = [] if notice is None else [notice]
+
+
+def compiling() -> None:
+    """A kernel is about to be compiled: the :func:`on_compile` notice, once."""
+    if _ON_COMPILE:
+        _ON_COMPILE.pop()()
+
+
 def light_cache_load(dispatcher) -> bool:
     """Make ``dispatcher`` (an ``@njit(cache=True)`` function) load from the cache
     without refreshing numba's target context; False where that is not possible."""
@@ -389,7 +405,11 @@ def light_cache_load(dispatcher) -> bool:
                 found = load(sig, target_context)
         except Exception:  # anything unexpected: numba's own loader decides
             found = None
-        return found if found is not None else full(sig, target_context)
+        if found is None:
+            found = full(sig, target_context)
+            if found is None:  # not in the cache: numba compiles it now
+                compiling()
+        return found
 
     light._lcpbench_light = True  # type: ignore[attr-defined]
     cache.load_overload = light

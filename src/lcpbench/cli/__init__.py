@@ -105,15 +105,15 @@ NO_KERNELS = ("solvers", "report", "export", "compile", "vision")
 
 
 def _first_use_notice() -> None:
-    """One line on stderr when this install's kernels are not compiled yet: the first
-    solve compiles them (about a minute on two cores), which would look like a hang."""
-    import os
+    """One line on stderr when this process first compiles a kernel (one not yet in
+    numba's cache for this install: the first solve of a kind, seconds to a minute on
+    two cores), which would look like a hang (:func:`lcpbench.numba_cache.on_compile`)."""
+    from ..numba_cache import on_compile
 
-    from ..numba_cache import kernels_dir
-
-    if os.environ.get("NUMBA_DISABLE_JIT", "0") == "0" and not os.path.isdir(kernels_dir()):
-        print("lcpbench: compiling the solve kernels for this install (once, about a minute "
-              "on two cores; `lcpbench compile` does it ahead of time)", file=sys.stderr)
+    on_compile(lambda: print(
+        "lcpbench: compiling kernels for this install (once per kind of solve, up to about "
+        "a minute on two cores; `lcpbench compile` builds the solve kernels ahead of "
+        "time)", file=sys.stderr, flush=True))
 
 
 def main(argv: list[str] | None = None) -> int:
