@@ -107,6 +107,7 @@ def test_one_bar_follows_each_sweep_it_is_handed(tmp_path):
     assert (bar.bar.n, bar.bar.total) == (2, 12)
     bar.update(7, 9, job, {"status": "solved"})  # a resumed sweep: 6 of 9 already in
     assert (bar.bar.n, bar.bar.total) == (7, 9)
+    assert bar.bar.initial == 6  # stored rows count as done, not in the rate (its ETA)
     bar.close()
 
 
@@ -133,6 +134,7 @@ from lcpbench.cli import _first_use_notice
 numba_cache.light_cache_load(tiny_kernel.twice)  # as jit_module hooks every kernel
 _first_use_notice()
 assert tiny_kernel.twice(2.0) == 4.0 and tiny_kernel.twice(3.0) == 6.0
+assert tiny_kernel.twice(2) == 4.0  # a second signature: compiled too, no second line
 """
 
 

@@ -151,3 +151,7 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into `head` and the like
         sys.stderr.close()
         return 0
+    finally:  # the notice is this command's: a process that goes on compiles silently
+        from ..numba_cache import on_compile
+
+        on_compile(None)

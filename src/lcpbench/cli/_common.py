@@ -198,8 +198,9 @@ class ProgressBar:
     def _bar(self, phase: str, done: int, total: int):
         bar = self.bars.get(phase)
         if bar is not None and not self.phases and (bar.total != total or bar.n != done - 1):
-            bar.reset(total=total)  # another sweep on this bar (select probes twice)
-            bar.update(done - 1)
+            bar.reset(total=total)  # another sweep on this bar (select probes twice):
+            bar.initial = bar.n = done - 1  # its stored rows, not in its rate (as at start)
+            bar.refresh()
         if phase not in self.bars:
             if self.phases:
                 size = self.phases.get(phase, 0)
